@@ -1,0 +1,133 @@
+"""What every device model is: clock-driven, commanded by named actions, observed by snapshot.
+
+A model never reads the wall clock, sleeps, opens sockets or starts threads. The runtime calls
+``step(now_us)`` with the simulated time (integer microseconds since the rig started), applies
+commands between steps with :meth:`DeviceModel.apply`, reads :meth:`snapshot` for views and
+drains the events the model emitted.
+
+Actions are declared as data (:class:`Action`, :class:`Param`) so that the scenario loader can
+check a scenario before running it, and the UI can list what a device accepts, without either
+knowing device logic. ``apply("press_cnf", {...})`` calls the model's ``cmd_press_cnf``.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from devices.events import Event, EventQueue
+
+
+class CommandError(ValueError):
+    """A command the device cannot take: unknown action, bad argument, value out of range."""
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    type: type  # int, float, bool or str
+    required: bool = True
+    default: Any = None
+    low: float | None = None
+    high: float | None = None
+    choices: tuple[Any, ...] | None = None
+    doc: str = ""
+
+    def check(self, value: Any) -> Any:
+        if self.type is float and isinstance(value, int) and not isinstance(value, bool):
+            value = float(value)
+        if self.type is int and isinstance(value, str):
+            value = _parse_int(self.name, value)
+        if not isinstance(value, self.type) or (self.type is int and isinstance(value, bool)):
+            raise CommandError(f"'{self.name}' must be {self.type.__name__}, got {value!r}")
+        if self.low is not None and value < self.low:
+            raise CommandError(f"'{self.name}' = {value!r} is below {self.low}")
+        if self.high is not None and value > self.high:
+            raise CommandError(f"'{self.name}' = {value!r} is above {self.high}")
+        if self.choices is not None and value not in self.choices:
+            allowed = ", ".join(repr(c) for c in self.choices)
+            raise CommandError(f"'{self.name}' = {value!r} is not one of {allowed}")
+        return value
+
+
+def _parse_int(name: str, text: str) -> int:
+    try:
+        return int(text, 0)
+    except ValueError:
+        raise CommandError(f"'{name}' must be an integer, got {text!r}") from None
+
+
+@dataclass(frozen=True)
+class Action:
+    name: str
+    doc: str
+    params: tuple[Param, ...] = ()
+    module: str = "none"  # "none", "optional" or "required": may the target name a module?
+
+    def check_args(self, args: Mapping[str, Any]) -> dict[str, Any]:
+        known = {p.name: p for p in self.params}
+        unknown = sorted(set(args) - set(known))
+        if unknown:
+            raise CommandError(f"action '{self.name}' takes no argument {', '.join(unknown)} "
+                               f"(it takes: {', '.join(known) or 'nothing'})")
+        out: dict[str, Any] = {}
+        for p in self.params:
+            if p.name in args:
+                out[p.name] = p.check(args[p.name])
+            elif p.required:
+                raise CommandError(f"action '{self.name}' needs '{p.name}'")
+            else:
+                out[p.name] = p.default
+        return out
+
+
+@dataclass
+class DeviceModel:
+    """Base of the device models: identity, simulated time, seeded randomness, event queue."""
+
+    device_id: str
+    rng: random.Random = field(default_factory=lambda: random.Random(0))
+    now_us: int = 0
+    events: EventQueue = field(default_factory=EventQueue)
+
+    ACTIONS: ClassVar[Mapping[str, Action]] = {}
+    KIND: ClassVar[str] = "device"
+
+    def step(self, now_us: int) -> None:
+        """Advance to simulated time ``now_us`` (never backwards)."""
+        if now_us < self.now_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self.now_us})")
+        self.now_us = now_us
+
+    def snapshot(self) -> dict[str, Any]:
+        raise NotImplementedError  # abstract: every model reports its own state
+
+    def emit(self, event: Event) -> None:
+        self.events.put(event)
+
+    def drain_events(self) -> list[Event]:
+        return self.events.drain()
+
+    def check_command(self, action: str, args: Mapping[str, Any],
+                      module: int | None = None) -> dict[str, Any]:
+        spec = self.ACTIONS.get(action)
+        if spec is None:
+            raise CommandError(f"{self.KIND} '{self.device_id}' has no action '{action}' "
+                               f"(it has: {', '.join(sorted(self.ACTIONS))})")
+        if module is not None and spec.module == "none":
+            raise CommandError(f"action '{action}' takes the device, not a module: "
+                               f"write '{self.device_id}'")
+        if module is None and spec.module == "required":
+            raise CommandError(f"action '{action}' needs a module: write "
+                               f"'{self.device_id}/N'")
+        return spec.check_args(args)
+
+    def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        """Run a named action now; raises CommandError for anything the device refuses."""
+        kwargs = self.check_command(action, args, module)
+        handler = getattr(self, f"cmd_{action}")
+        if self.ACTIONS[action].module != "none":
+            kwargs["module"] = module
+        return handler(**kwargs)

@@ -1,0 +1,167 @@
+"""Typed events that device models emit, stamped with simulated time.
+
+Every event renders to one JSON-able record with the stable schema of the scenario runner:
+``{"t": <simulated seconds>, "device": <id>, "event": <kind>, ...}``. Keys beyond those three
+belong to the event kind and are part of the public schema (issue 2 §4): change them only with
+a migration note.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+US_PER_S = 1_000_000
+
+
+def fmt_hex(value: int, width: int) -> str:
+    """``0xFF00`` style: upper-case digits, fixed width, as TwinCAT and the seeds print them."""
+    return f"0x{value:0{width}X}"
+
+
+def fmt_bytes(data: bytes) -> str:
+    """Bytes in transmission order, byte 0 first, two upper-case hex digits each."""
+    return " ".join(f"{b:02X}" for b in data)
+
+
+@dataclass(frozen=True)
+class Event:
+    t_us: int
+    device: str
+    kind: ClassVar[str] = "event"
+
+    def fields(self) -> dict[str, Any]:
+        return {}
+
+    def to_record(self) -> dict[str, Any]:
+        return {"t": self.t_us / US_PER_S, "device": self.device, "event": self.kind,
+                **self.fields()}
+
+
+@dataclass(frozen=True)
+class StateChanged(Event):
+    """A state machine moved (EtherCAT ESM, CiA 402, NMT, DC, ...)."""
+
+    from_state: str = ""
+    to_state: str = ""
+    machine: str = ""  # empty for the device's main state machine (the EtherCAT ESM)
+    kind: ClassVar[str] = "state"
+
+    def fields(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"from": self.from_state, "to": self.to_state}
+        if self.machine:
+            out["machine"] = self.machine
+        return out
+
+
+@dataclass(frozen=True)
+class EmergencySent(Event):
+    """A CoE / CANopen emergency: error code, error register, manufacturer bytes."""
+
+    code: int = 0
+    register: int = 0
+    data: bytes = b""
+    kind: ClassVar[str] = "emergency"
+
+    def fields(self) -> dict[str, Any]:
+        return {"code": fmt_hex(self.code, 4), "register": fmt_hex(self.register, 2),
+                "data": fmt_bytes(self.data)}
+
+
+@dataclass(frozen=True)
+class AlStatusChanged(Event):
+    """The AL status code register (0x134) took a new value."""
+
+    code: int = 0
+    kind: ClassVar[str] = "al_status"
+
+    def fields(self) -> dict[str, Any]:
+        return {"code": fmt_hex(self.code, 4)}
+
+
+@dataclass(frozen=True)
+class LedChanged(Event):
+    """An LED changed pattern (ETG.1300 names, see devices.leds.LedPattern)."""
+
+    led: str = ""
+    pattern: str = ""
+    kind: ClassVar[str] = "led"
+
+    def fields(self) -> dict[str, Any]:
+        return {"led": self.led, "pattern": self.pattern}
+
+
+@dataclass(frozen=True)
+class AlarmChanged(Event):
+    """A device alarm was raised or cleared (code as the device's manual numbers it)."""
+
+    code: str = ""
+    name: str = ""
+    active: bool = True
+    module: int = 0
+    kind: ClassVar[str] = "alarm"
+
+    def fields(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"code": self.code, "name": self.name, "active": self.active}
+        if self.module:
+            out["module"] = self.module
+        return out
+
+
+@dataclass(frozen=True)
+class LogLine(Event):
+    """A line of a logger (the EtherCAT master's, in TwinCAT style, or a device's own)."""
+
+    text: str = ""
+    port: int = 0
+    kind: ClassVar[str] = "log"
+
+    def fields(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"text": self.text}
+        if self.port:
+            out["port"] = self.port
+        return out
+
+
+@dataclass(frozen=True)
+class Caption(Event):
+    text: str = ""
+    kind: ClassVar[str] = "caption"
+
+    def fields(self) -> dict[str, Any]:
+        return {"text": self.text}
+
+
+@dataclass(frozen=True)
+class Checkpoint(Event):
+    name: str = ""
+    kind: ClassVar[str] = "checkpoint"
+
+    def fields(self) -> dict[str, Any]:
+        return {"name": self.name}
+
+
+@dataclass(frozen=True)
+class ValueRead(Event):
+    """Answer of a scenario ``read`` step (an object or register read)."""
+
+    address: str = ""
+    value: Any = None
+    kind: ClassVar[str] = "read"
+
+    def fields(self) -> dict[str, Any]:
+        return {"address": self.address, "value": self.value}
+
+
+@dataclass
+class EventQueue:
+    """The events a model emitted since the runtime last drained them."""
+
+    items: list[Event] = field(default_factory=list)
+
+    def put(self, event: Event) -> None:
+        self.items.append(event)
+
+    def drain(self) -> list[Event]:
+        out, self.items = self.items, []
+        return out

@@ -1,0 +1,49 @@
+"""LED indicator patterns and their timings (ETG.1300 "Indicator and labeling").
+
+The phase of every pattern is taken from the simulated clock, not from when the pattern
+started, so that all LEDs of a rig blink in step (as ETG.1300 asks of RUN and ERR) and a
+screenshot at a given simulated time is always the same picture. See docs/leds.md.
+"""
+
+from __future__ import annotations
+
+import enum
+
+
+class LedPattern(enum.Enum):
+    OFF = "off"
+    ON = "on"
+    FLICKERING = "flickering"
+    BLINKING = "blinking"
+    SINGLE_FLASH = "single_flash"
+    DOUBLE_FLASH = "double_flash"
+    TRIPLE_FLASH = "triple_flash"
+
+
+# (on_ms, off_ms, on_ms, off_ms, ...) for one period, starting lit. ETG.1300 §5:
+# flickering 50/50 ms (10 Hz), blinking 200/200 ms (2.5 Hz), single flash 200 on 1000 off,
+# double flash 200 on 200 off 200 on 1000 off, triple flash likewise with three flashes.
+PATTERN_TIMING_MS: dict[LedPattern, tuple[int, ...]] = {
+    LedPattern.FLICKERING: (50, 50),
+    LedPattern.BLINKING: (200, 200),
+    LedPattern.SINGLE_FLASH: (200, 1000),
+    LedPattern.DOUBLE_FLASH: (200, 200, 200, 1000),
+    LedPattern.TRIPLE_FLASH: (200, 200, 200, 200, 200, 1000),
+}
+
+
+def is_lit(pattern: LedPattern, t_us: int) -> bool:
+    """Whether an LED showing ``pattern`` is lit at simulated time ``t_us``."""
+    if pattern is LedPattern.OFF:
+        return False
+    if pattern is LedPattern.ON:
+        return True
+    timing = PATTERN_TIMING_MS[pattern]
+    phase_ms = (t_us // 1000) % sum(timing)
+    lit = True
+    for span in timing:
+        if phase_ms < span:
+            return lit
+        phase_ms -= span
+        lit = not lit
+    return False  # unreachable: the spans sum to the period
