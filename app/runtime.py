@@ -1,0 +1,165 @@
+"""The live runtime: one simulation thread owns the rig; everyone else talks to it by message.
+
+viser callbacks, protocol servers and the CLI never touch a model. They call
+:meth:`Runtime.command` (a named device action) or :meth:`Runtime.submit` (any function that
+needs the models, e.g. a Modbus request) and get a ``concurrent.futures.Future``; the
+simulation thread runs queued work at step boundaries, in arrival order. Views read the latest
+:class:`Frame` and the bounded event journal; both are published by the simulation thread.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import queue
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import Future
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+from app.rig import Rig
+from devices.events import Event
+
+logger = logging.getLogger(__name__)
+
+T = TypeVar("T")
+
+MAX_CATCH_UP_US = 200_000  # beyond this lag the clock slips instead of racing to catch up
+JOURNAL_LENGTH = 20_000
+
+
+@dataclass(frozen=True)
+class Frame:
+    """What views read: the rig's state at one simulated instant."""
+
+    seq: int
+    t_us: int
+    snapshot: dict[str, Any]
+
+
+class Runtime:
+    def __init__(self, rig: Rig, speed: float = 1.0, publish_hz: float = 30.0) -> None:
+        self.rig = rig
+        self._speed = speed
+        self._paused = False
+        self._publish_period = 1.0 / publish_hz
+        self._work: queue.Queue[tuple[Callable[[], Any], Future[Any]]] = queue.Queue()
+        self._lock = threading.Lock()
+        self._journal: collections.deque[tuple[int, Event]] = collections.deque(
+            maxlen=JOURNAL_LENGTH)
+        self._event_seq = 0
+        self._frame = Frame(0, rig.clock.now_us, rig.snapshot())
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._listeners: list[Callable[[list[Event]], None]] = []
+
+    # ---- control -------------------------------------------------------------------------
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._run, name="fieldrig-sim", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+
+    @property
+    def speed(self) -> float:
+        return self._speed
+
+    def set_speed(self, speed: float) -> None:
+        if not 0 < speed <= 1000:
+            raise ValueError(f"speed must be in (0, 1000], got {speed}")
+        self._speed = speed
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    def set_paused(self, paused: bool) -> None:
+        self._paused = paused
+
+    # ---- messages to the simulation thread -----------------------------------------------
+    def submit(self, fn: Callable[[], T]) -> Future[T]:
+        """Run ``fn`` in the simulation thread at the next step boundary."""
+        fut: Future[T] = Future()
+        self._work.put((fn, fut))
+        return fut
+
+    def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Future[Any]:
+        """Apply a device action; the future holds its result or its CommandError/SdoAbort."""
+        return self.submit(lambda: self.rig.apply(target, action, dict(args or {})))
+
+    def add_listener(self, fn: Callable[[list[Event]], None]) -> None:
+        """``fn(events)`` runs in the simulation thread after each batch; keep it quick."""
+        self._listeners.append(fn)
+
+    # ---- what views read ------------------------------------------------------------------
+    @property
+    def frame(self) -> Frame:
+        with self._lock:
+            return self._frame
+
+    def events_since(self, seq: int) -> tuple[int, list[Event]]:
+        """Events journalled after ``seq`` and the sequence number to ask from next time."""
+        with self._lock:
+            return self._event_seq, [e for s, e in self._journal if s > seq]
+
+    # ---- the simulation thread ------------------------------------------------------------
+    def _run(self) -> None:
+        wall0 = time.monotonic()
+        sim0 = self.rig.clock.now_us
+        next_publish = 0.0
+        while not self._stop.is_set():
+            batch = self._drain_work()
+            now = time.monotonic()
+            if self._paused:
+                wall0, sim0 = now, self.rig.clock.now_us
+            else:
+                target = sim0 + int((now - wall0) * 1e6 * self._speed)
+                if target - self.rig.clock.now_us > MAX_CATCH_UP_US:
+                    sim0 = self.rig.clock.now_us
+                    wall0 = now
+                    target = sim0
+                while self.rig.clock.now_us + self.rig.clock.step_us <= target:
+                    batch.extend(self.rig.step())
+                    batch.extend(self._drain_work())
+            if batch:
+                self._journal_events(batch)
+            if now >= next_publish:
+                self._publish()
+                next_publish = now + self._publish_period
+            time.sleep(0.001)
+
+    def _drain_work(self) -> list[Event]:
+        events: list[Event] = []
+        while True:
+            try:
+                fn, fut = self._work.get_nowait()
+            except queue.Empty:
+                return events
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                fut.set_result(fn())
+            except Exception as exc:  # delivered to the caller, never kills the simulation
+                fut.set_exception(exc)
+            events.extend(self.rig.take_events())
+
+    def _journal_events(self, events: list[Event]) -> None:
+        with self._lock:
+            for event in events:
+                self._event_seq += 1
+                self._journal.append((self._event_seq, event))
+        for fn in self._listeners:
+            try:
+                fn(events)
+            except Exception:
+                logger.exception("event listener failed")
+
+    def _publish(self) -> None:
+        snap = self.rig.snapshot()
+        with self._lock:
+            self._frame = Frame(self._frame.seq + 1, self.rig.clock.now_us, snap)
