@@ -1,0 +1,124 @@
+"""Command line: ``python -m app`` serves the dashboard; ``python -m app scenario run FILE``.
+
+Stable flags (issue 2): ``--host`` (default 127.0.0.1), ``--port`` (default 8080), ``--rig``.
+Bad input (a broken rig or scenario file, a bad flag) prints one line and exits 2, with no
+traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+import threading
+from pathlib import Path
+from typing import Any
+
+from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
+from app.scenario import ScenarioError, load_scenario, run_scenario
+
+EXIT_BAD_INPUT = 2
+EXIT_SCENARIO_FAILED = 1
+
+
+def _serve_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m app",
+                                description="FieldRig: serve the dashboard of a virtual rig. "
+                                            "Subcommand: 'scenario run FILE'.")
+    _rig_flags(p)
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=int, default=8080, help="dashboard port (default 8080)")
+    p.add_argument("--speed", type=float, default=1.0,
+                   help="simulated seconds per wall second (default 1.0)")
+    p.add_argument("--run-for", type=float, default=None, metavar="SECONDS",
+                   help="stop after this many wall seconds (for smoke tests)")
+    return p
+
+
+def _scenario_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m app scenario",
+                                description="Run a scenario headless, as fast as possible, and "
+                                            "print its events as JSON lines.")
+    sub = p.add_subparsers(dest="verb", required=True)
+    run = sub.add_parser("run", help="run a scenario file")
+    run.add_argument("file", help="scenario TOML file")
+    run.add_argument("--out", default=None, help="directory for events.jsonl")
+    run.add_argument("--quiet", action="store_true", help="do not print events on stdout")
+    _rig_flags(run, default=None)
+    return p
+
+
+def _rig_flags(p: argparse.ArgumentParser, default: Any = str(DEFAULT_RIG)) -> None:
+    p.add_argument("--rig", default=default,
+                   help="rig file (TOML); default: the embedded default rig"
+                   if default else "rig file; default: the scenario's own, else the default")
+    p.add_argument("--state-dir", default="var",
+                   help="where device flash files live (default ./var)")
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    try:
+        if argv[:1] == ["scenario"]:
+            return _scenario(_scenario_parser().parse_args(argv[1:]))
+        return _serve(_serve_parser().parse_args(argv))
+    except (RigConfigError, ScenarioError) as exc:
+        print(f"fieldrig: error: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+def _scenario(args: argparse.Namespace) -> int:
+    scenario = load_scenario(args.file)
+    rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
+    rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
+    result = run_scenario(scenario, rig)
+    lines = [json.dumps(e.to_record(), default=str) for e in result.events]
+    if not args.quiet:
+        sys.stdout.write("".join(line + "\n" for line in lines))
+    if args.out:
+        out = Path(args.out)
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "events.jsonl").write_text("".join(line + "\n" for line in lines),
+                                          encoding="utf-8")
+    for failure in result.failures:
+        print(f"fieldrig: scenario step failed: {failure}", file=sys.stderr)
+    return EXIT_SCENARIO_FAILED if result.failures else 0
+
+
+def _serve(args: argparse.Namespace) -> int:
+    import viser
+
+    from app.runtime import Runtime
+    from app.ui.dashboard import Dashboard
+
+    if not 0 < args.port < 65536:
+        raise RigConfigError("--port", "", f"{args.port} is not a TCP port")
+    rig = build_rig(load_rig_spec(args.rig), state_dir=args.state_dir)
+    runtime = Runtime(rig, speed=args.speed)
+    server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
+    dashboard = Dashboard(server, runtime)
+    runtime.start()
+    dashboard.start()
+    _power_on(runtime)
+    print(f"FieldRig: rig '{rig.name}' at http://{args.host}:{args.port} "
+          f"(Ctrl-C to stop)", flush=True)
+    stop = threading.Event()
+    try:
+        stop.wait(args.run_for)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        dashboard.stop()
+        runtime.stop()
+        server.stop()
+    return 0
+
+
+def _power_on(runtime: Any) -> None:
+    """A served rig starts powered, as a rig on a bench does when its supply is switched on."""
+    for device_id, info in runtime.rig.describe().items():
+        if "power" in info["actions"]:
+            runtime.command(device_id, "power", {"on": True})

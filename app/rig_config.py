@@ -1,0 +1,230 @@
+"""Rig files: TOML in, a checked :class:`RigSpec` out, then a live :class:`~app.rig.Rig`.
+
+Every error names the file, the key (``fastcat[0].modules[3]``) and the reason, so the CLI can
+print one line and exit 2. TOML is parsed with :mod:`tomllib`: nothing in a rig file is ever
+executed. See docs/rig-file.md for the format.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import random
+import tomllib
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from app.clock import SimClock
+from app.flash_file import FileFlash
+from app.rig import Rig
+from devices.device import DeviceModel
+from devices.flash import FlashStore, MemoryFlash
+
+DEFAULT_RIG = Path(__file__).resolve().parent.parent / "static" / "rigs" / "default.toml"
+MAX_MODULES = 16  # seed 000 §2
+MEMORY = ":memory:"
+
+
+class RigConfigError(ValueError):
+    def __init__(self, source: str, key: str, reason: str) -> None:
+        self.source, self.key, self.reason = source, key, reason
+        where = f"{source}: {key}" if key else source
+        super().__init__(f"{where}: {reason}")
+
+
+@dataclass(frozen=True)
+class ModuleSpec:
+    type: str
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class FastCatSpec:
+    id: str
+    modules: tuple[ModuleSpec, ...]
+    rotary_switch: int = 1
+    master_address: int = 1
+    flash: str = MEMORY
+    box_name: str = ""
+
+
+@dataclass(frozen=True)
+class RigSpec:
+    source: str
+    name: str = "rig"
+    seed: int = 0
+    step_us: int = 1000
+    epoch: dt.datetime = dt.datetime(2019, 11, 12, 14, 51, 30)
+    retry_interval_us: int = 2_000_000
+    fastcats: tuple[FastCatSpec, ...] = ()
+
+
+class _Table:
+    """A TOML table being read: typed getters that know their key path, and leftovers check."""
+
+    def __init__(self, source: str, path: str, data: Any) -> None:
+        if not isinstance(data, Mapping):
+            raise RigConfigError(source, path, f"must be a table, got {type(data).__name__}")
+        self.source, self.path, self.data = source, path, dict(data)
+        self.used: set[str] = set()
+
+    def key(self, name: str) -> str:
+        return f"{self.path}.{name}" if self.path else name
+
+    def get(self, name: str, kind: type | tuple[type, ...], default: Any = None,
+            check: Callable[[Any], str | None] | None = None) -> Any:
+        self.used.add(name)
+        if name not in self.data:
+            if default is _REQUIRED:
+                raise RigConfigError(self.source, self.key(name), "is required")
+            return default
+        value = self.data[name]
+        kinds = kind if isinstance(kind, tuple) else (kind,)
+        if isinstance(value, bool) and bool not in kinds:
+            value = None  # TOML booleans are not numbers here
+        if kind is float and isinstance(value, int):
+            value = float(value)
+        if not isinstance(value, kinds):
+            names = " or ".join(k.__name__ for k in kinds)
+            raise RigConfigError(self.source, self.key(name),
+                                 f"must be {names}, got {self.data[name]!r}")
+        problem = check(value) if check else None
+        if problem:
+            raise RigConfigError(self.source, self.key(name), problem)
+        return value
+
+    def finish(self) -> None:
+        unknown = sorted(set(self.data) - self.used)
+        if unknown:
+            raise RigConfigError(self.source, self.key(unknown[0]),
+                                 f"unknown key (known here: {', '.join(sorted(self.used))})")
+
+
+_REQUIRED = object()
+
+
+def _in_range(low: float, high: float) -> Callable[[Any], str | None]:
+    return lambda v: None if low <= v <= high else f"must be between {low} and {high}, got {v}"
+
+
+def load_rig_spec(path: str | Path) -> RigSpec:
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise RigConfigError(source, "", f"cannot read rig file: {exc.strerror or exc}") from None
+    return parse_rig_spec(text, source)
+
+
+def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise RigConfigError(source, "", f"not valid TOML: {exc}") from None
+    top = _Table(source, "", data)
+    rig = _Table(source, "rig", top.get("rig", dict, {}))
+    name = rig.get("name", str, "rig")
+    seed = rig.get("seed", int, 0, _in_range(0, 2**63 - 1))
+    step_ms = rig.get("step_ms", float, 1.0, _in_range(0.1, 100))
+    epoch_text = rig.get("epoch", (str, dt.datetime), None)
+    rig.finish()
+    epoch = RigSpec.epoch
+    if isinstance(epoch_text, dt.datetime):
+        epoch = epoch_text.replace(tzinfo=None)
+    elif epoch_text is not None:
+        try:
+            epoch = dt.datetime.fromisoformat(epoch_text)
+        except ValueError:
+            raise RigConfigError(source, "rig.epoch", f"not an ISO date-time: {epoch_text!r}") \
+                from None
+    master = _Table(source, "master", top.get("master", dict, {}))
+    retry_s = master.get("retry_interval_s", float, 2.0, _in_range(0.01, 3600))
+    master.finish()
+    fastcats = tuple(_fastcat(source, i, t)
+                     for i, t in enumerate(top.get("fastcat", list, [])))
+    top.finish()
+    ids = [f.id for f in fastcats]
+    for i, device_id in enumerate(ids):
+        if device_id in ids[:i] or device_id == "master":
+            raise RigConfigError(source, f"fastcat[{i}].id", f"duplicate device id {device_id!r}")
+    return RigSpec(source=source, name=name, seed=seed, step_us=round(step_ms * 1000),
+                   epoch=epoch, retry_interval_us=round(retry_s * 1e6), fastcats=fastcats)
+
+
+def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
+    from devices.fastcat.catalog import CATALOG
+
+    t = _Table(source, f"fastcat[{i}]", data)
+    device_id = t.get("id", str, "fastcat" if i == 0 else _REQUIRED,
+                      lambda v: None if v.replace("_", "").replace("-", "").isalnum()
+                      else "use letters, digits, '-' and '_' only")
+    modules_raw = t.get("modules", list, _REQUIRED)
+    if len(modules_raw) > MAX_MODULES:
+        raise RigConfigError(source, t.key("modules"),
+                             f"{len(modules_raw)} modules: a FastCAT takes at most "
+                             f"{MAX_MODULES} (seed 000 §2)")
+    modules = []
+    for j, raw in enumerate(modules_raw):
+        key = f"{t.key('modules')}[{j}]"
+        if isinstance(raw, str):
+            mtype, options = raw, {}
+        elif isinstance(raw, Mapping):
+            options = dict(raw)
+            mtype = options.pop("type", None)
+            if not isinstance(mtype, str):
+                raise RigConfigError(source, key, "a module table needs type = \"<name>\"")
+        else:
+            raise RigConfigError(source, key, f"must be a module name or a table, got {raw!r}")
+        if mtype not in CATALOG:
+            raise RigConfigError(source, key, f"unknown module type {mtype!r} "
+                                              f"(known: {', '.join(CATALOG)})")
+        modules.append(ModuleSpec(mtype, options))
+    spec = FastCatSpec(
+        id=device_id,
+        modules=tuple(modules),
+        rotary_switch=t.get("rotary_switch", int, 1, _in_range(1, 15)),
+        master_address=t.get("master_address", int, 1, _in_range(1, 15)),
+        flash=t.get("flash", str, MEMORY),
+        box_name=t.get("box_name", str, ""),
+    )
+    t.finish()
+    return spec
+
+
+def _flash(spec_flash: str, state_dir: Path) -> FlashStore:
+    if spec_flash == MEMORY:
+        return MemoryFlash()
+    path = Path(spec_flash)
+    return FileFlash(path if path.is_absolute() else state_dir / path)
+
+
+def build_rig(spec: RigSpec, state_dir: str | Path = "var") -> Rig:
+    """Construct the device models of a checked spec; model refusals become RigConfigError."""
+    from devices.fastcat.coupler import FastCat
+    from devices.master import EtherCatMaster
+
+    state = Path(state_dir)
+    rng = random.Random(spec.seed)
+    devices: dict[str, DeviceModel] = {}
+    slaves: list[FastCat] = []
+    for i, fc in enumerate(spec.fastcats):
+        position = i + 1
+        try:
+            device = FastCat(
+                fc.id, random.Random(rng.getrandbits(64)),
+                modules=[(m.type, dict(m.options)) for m in fc.modules],
+                rotary_switch=fc.rotary_switch, flash=_flash(fc.flash, state),
+                master_address=fc.master_address,
+                box_name=fc.box_name or f"Box {position} (FastCAT)",
+                station_address=1000 + position)
+        except ValueError as exc:
+            raise RigConfigError(spec.source, f"fastcat[{i}]", str(exc)) from None
+        devices[fc.id] = device
+        slaves.append(device)
+    if slaves:
+        devices["master"] = EtherCatMaster(
+            "master", random.Random(rng.getrandbits(64)), slaves=slaves,
+            retry_interval_us=spec.retry_interval_us, epoch=spec.epoch)
+    return Rig(name=spec.name, devices=devices, clock=SimClock(step_us=spec.step_us),
+               seed=spec.seed)

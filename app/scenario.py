@@ -1,0 +1,226 @@
+"""Scenarios: TOML files of steps at simulated times, checked before they run.
+
+A step is one of
+- ``caption = "text"`` — narration shown to the audience;
+- ``checkpoint = "name"`` — a named instant (screenshots are taken there);
+- ``target = "fastcat/2"`` + ``action = "unplug"`` + the action's arguments as further keys.
+
+Each step has ``at = <seconds>`` (absolute simulated time) or ``after = <seconds>`` (relative to
+the previous step); ``expect_error = true`` marks a command that must be refused (e.g. writing a
+read-only object, for training). See docs/scenarios.md.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Callable, Iterator, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from app.rig import Rig
+from app.rig_config import RigConfigError
+from devices.device import CommandError
+from devices.events import Caption, Checkpoint, Event, LogLine, ValueRead
+from devices.od import SdoAbort
+
+US = 1_000_000
+_STEP_KEYS = {"at", "after", "target", "action", "caption", "checkpoint", "expect_error"}
+
+
+class ScenarioError(ValueError):
+    pass
+
+
+@dataclass(frozen=True)
+class Step:
+    number: int  # 1-based, in file order
+    t_us: int
+    kind: str  # "command", "caption", "checkpoint"
+    target: str = ""
+    action: str = ""
+    args: dict[str, Any] = field(default_factory=dict)
+    text: str = ""
+    expect_error: bool = False
+
+
+@dataclass(frozen=True)
+class Scenario:
+    source: str
+    name: str
+    description: str
+    rig: str | None  # rig file path, resolved; None = the default rig
+    steps: tuple[Step, ...]
+    end_us: int
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"{source}: cannot read scenario: {exc.strerror or exc}") from None
+    return parse_scenario(text, source, base_dir=Path(path).resolve().parent)
+
+
+def parse_scenario(text: str, source: str = "<scenario>",
+                   base_dir: Path | None = None) -> Scenario:
+    def fail(key: str, reason: str) -> ScenarioError:
+        return ScenarioError(f"{source}: {key}: {reason}" if key else f"{source}: {reason}")
+
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise fail("", f"not valid TOML: {exc}") from None
+    unknown = sorted(set(data) - {"scenario", "step"})
+    if unknown:
+        raise fail(unknown[0], "unknown key (a scenario has [scenario] and [[step]] tables)")
+    head = data.get("scenario", {})
+    if not isinstance(head, Mapping):
+        raise fail("scenario", "must be a table")
+    bad = sorted(set(head) - {"name", "description", "rig", "duration_s"})
+    if bad:
+        raise fail(f"scenario.{bad[0]}", "unknown key (known: name, description, rig, "
+                                         "duration_s)")
+    name = _typed(head, "name", str, Path(source).stem, fail, "scenario.name")
+    description = _typed(head, "description", str, "", fail, "scenario.description")
+    rig = _typed(head, "rig", str, None, fail, "scenario.rig")
+    if rig is not None and base_dir is not None and not Path(rig).is_absolute():
+        rig = str((base_dir / rig).resolve())
+    duration = _typed(head, "duration_s", float, None, fail, "scenario.duration_s")
+    raw_steps = data.get("step", [])
+    if not isinstance(raw_steps, list):
+        raise fail("step", "must be an array of tables: write [[step]]")
+    steps = list(_steps(raw_steps, fail))
+    last = max((s.t_us for s in steps), default=0)
+    end = round(duration * US) if duration is not None else last + US
+    if end < last:
+        raise fail("scenario.duration_s", f"ends at {end / US} s, before the last step at "
+                                          f"{last / US} s")
+    ordered = tuple(sorted(steps, key=lambda s: (s.t_us, s.number)))
+    return Scenario(source, name, description, rig, ordered, end)
+
+
+def _typed(table: Mapping[str, Any], key: str, kind: type, default: Any,
+           fail: Callable[[str, str], ScenarioError], path: str) -> Any:
+    if key not in table:
+        return default
+    value = table[key]
+    if kind is float and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    if not isinstance(value, kind) or (kind is not bool and isinstance(value, bool)):
+        raise fail(path, f"must be {kind.__name__}, got {table[key]!r}")
+    return value
+
+
+def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> Iterator[Step]:
+    t_us = 0
+    for i, raw in enumerate(raw_steps):
+        key = f"step[{i}]"
+        if not isinstance(raw, Mapping):
+            raise fail(key, "must be a table")
+        if "at" in raw and "after" in raw:
+            raise fail(key, "give 'at' or 'after', not both")
+        if "at" in raw:
+            at = _typed(raw, "at", float, 0.0, fail, f"{key}.at")
+            if at < 0:
+                raise fail(f"{key}.at", "must not be negative")
+            t_us = round(at * US)
+        else:
+            after = _typed(raw, "after", float, 0.0, fail, f"{key}.after")
+            if after < 0:
+                raise fail(f"{key}.after", "must not be negative")
+            t_us += round(after * US)
+        expect_error = _typed(raw, "expect_error", bool, False, fail, f"{key}.expect_error")
+        kinds = [k for k in ("caption", "checkpoint", "action") if k in raw]
+        if len(kinds) != 1:
+            raise fail(key, "needs exactly one of caption, checkpoint, action")
+        if kinds[0] in ("caption", "checkpoint"):
+            extra = sorted(set(raw) - {"at", "after", kinds[0]})
+            if extra:
+                raise fail(f"{key}.{extra[0]}", f"unknown key for a {kinds[0]} step")
+            text = _typed(raw, kinds[0], str, "", fail, f"{key}.{kinds[0]}")
+            if not text:
+                raise fail(f"{key}.{kinds[0]}", "must not be empty")
+            yield Step(i + 1, t_us, kinds[0], text=text)
+            continue
+        target = _typed(raw, "target", str, None, fail, f"{key}.target")
+        if target is None:
+            raise fail(key, "a command step needs target = \"device\" or \"device/N\"")
+        action = _typed(raw, "action", str, "", fail, f"{key}.action")
+        args = {k: v for k, v in raw.items() if k not in _STEP_KEYS}
+        yield Step(i + 1, t_us, "command", target=target, action=action, args=args,
+                   expect_error=expect_error)
+
+
+def check_against(scenario: Scenario, rig: Rig) -> None:
+    """Refuse a scenario whose commands the rig would not take, before anything runs."""
+    for step in scenario.steps:
+        if step.kind != "command":
+            continue
+        try:
+            rig.check(step.target, step.action, step.args)
+        except CommandError as exc:
+            raise ScenarioError(f"{scenario.source}: step {step.number} (at "
+                                f"{step.t_us / US:g} s): {exc}") from None
+
+
+@dataclass
+class ScenarioRun:
+    events: list[Event]
+    failures: list[str]
+
+
+def run_scenario(scenario: Scenario, rig: Rig,
+                 on_step: Callable[[Step, Rig], None] | None = None) -> ScenarioRun:
+    """Run headless, as fast as possible. ``on_step`` sees each step after it was applied."""
+    check_against(scenario, rig)
+    events: list[Event] = []
+    failures: list[str] = []
+    for step in scenario.steps:
+        events.extend(rig.run_until(step.t_us))
+        events.extend(_apply(step, rig, failures))
+        if on_step is not None:
+            on_step(step, rig)
+    events.extend(rig.run_until(scenario.end_us))
+    return ScenarioRun(events, failures)
+
+
+def _apply(step: Step, rig: Rig, failures: list[str]) -> list[Event]:
+    now = rig.clock.now_us
+    if step.kind == "caption":
+        return [Caption(now, "scenario", text=step.text)]
+    if step.kind == "checkpoint":
+        return [Checkpoint(now, "scenario", name=step.text)]
+    out: list[Event] = []
+    try:
+        result = rig.apply(step.target, step.action, step.args)
+    except (CommandError, SdoAbort) as exc:
+        out.extend(rig.take_events())
+        if step.expect_error:
+            out.append(LogLine(now, "scenario", text=f"step {step.number}: refused as "
+                                                      f"expected: {exc}"))
+        else:
+            failures.append(f"step {step.number} (at {now / US:g} s): {exc}")
+            out.append(LogLine(now, "scenario", text=f"step {step.number} failed: {exc}"))
+        return out
+    out.extend(rig.take_events())
+    if step.expect_error:
+        failures.append(f"step {step.number} (at {now / US:g} s): expected an error, "
+                        f"the command was accepted")
+    if step.action.startswith("read"):
+        out.append(ValueRead(now, step.target, address=_address(step.args), value=result))
+    return out
+
+
+def _address(args: Mapping[str, Any]) -> str:
+    return ":".join(str(args[k]) for k in ("index", "sub", "register", "parameter", "address")
+                    if k in args)
+
+
+def scenario_rig_path(scenario: Scenario, override: str | None) -> str | None:
+    return override if override is not None else scenario.rig
+
+
+__all__ = ["RigConfigError", "Scenario", "ScenarioError", "Step", "load_scenario",
+           "parse_scenario", "run_scenario"]
