@@ -46,16 +46,22 @@ def _scenario_parser() -> argparse.ArgumentParser:
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, help="directory for events.jsonl")
     run.add_argument("--quiet", action="store_true", help="do not print events on stdout")
-    _rig_flags(run, default=None)
+    _rig_flags(run, serving=False)
     return p
 
 
-def _rig_flags(p: argparse.ArgumentParser, default: Any = str(DEFAULT_RIG)) -> None:
-    p.add_argument("--rig", default=default,
-                   help="rig file (TOML); default: the embedded default rig"
-                   if default else "rig file; default: the scenario's own, else the default")
-    p.add_argument("--state-dir", default="var",
-                   help="where device flash files live (default ./var)")
+def _rig_flags(p: argparse.ArgumentParser, serving: bool = True) -> None:
+    if serving:
+        p.add_argument("--rig", default=str(DEFAULT_RIG),
+                       help="rig file (TOML); default: the embedded default rig")
+        p.add_argument("--state-dir", default="var",
+                       help="where device flash files live (default ./var)")
+    else:
+        p.add_argument("--rig", default=None,
+                       help="rig file; default: the scenario's own, else the default rig")
+        p.add_argument("--state-dir", default=None,
+                       help="keep device flash files here; default: in memory, so every run "
+                            "starts from the same factory state")
 
 
 def main(argv: list[str] | None = None) -> int:

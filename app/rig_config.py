@@ -192,19 +192,23 @@ def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
     return spec
 
 
-def _flash(spec_flash: str, state_dir: Path) -> FlashStore:
-    if spec_flash == MEMORY:
+def _flash(spec_flash: str, state_dir: Path | None) -> FlashStore:
+    if spec_flash == MEMORY or state_dir is None:
         return MemoryFlash()
     path = Path(spec_flash)
     return FileFlash(path if path.is_absolute() else state_dir / path)
 
 
-def build_rig(spec: RigSpec, state_dir: str | Path = "var") -> Rig:
-    """Construct the device models of a checked spec; model refusals become RigConfigError."""
+def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
+    """Construct the device models of a checked spec; model refusals become RigConfigError.
+
+    ``state_dir=None`` keeps every flash in memory: a scenario run then starts from the same
+    factory state every time, whatever earlier runs stored.
+    """
     from devices.fastcat.coupler import FastCat
     from devices.master import EtherCatMaster
 
-    state = Path(state_dir)
+    state = Path(state_dir) if state_dir is not None else None
     rng = random.Random(spec.seed)
     devices: dict[str, DeviceModel] = {}
     slaves: list[FastCat] = []

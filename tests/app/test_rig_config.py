@@ -1,0 +1,65 @@
+"""Rig files: one clear error naming file, key and reason (issue 2 §2)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from app.rig_config import DEFAULT_RIG, RigConfigError, load_rig_spec, parse_rig_spec
+
+GOOD = """
+[rig]
+name = "bench"
+seed = 7
+[[fastcat]]
+id = "fc"
+modules = ["DB16", {type = "AI8TC"}]
+"""
+
+
+def test_default_rig_parses() -> None:
+    spec = load_rig_spec(DEFAULT_RIG)
+    assert spec.fastcats[0].id == "fastcat"
+    assert [m.type for m in spec.fastcats[0].modules][:2] == ["DB16", "DI16"]
+
+
+def test_good_rig() -> None:
+    spec = parse_rig_spec(GOOD, "bench.toml")
+    assert spec.name == "bench" and spec.seed == 7 and spec.step_us == 1000
+    assert [m.type for m in spec.fastcats[0].modules] == ["DB16", "AI8TC"]
+
+
+@pytest.mark.parametrize(("text", "key", "reason"), [
+    ("[rig]\ncolour = 1\n", "rig.colour", "unknown key"),
+    ("bogus = 1\n", "bogus", "unknown key"),
+    ("[[fastcat]]\nmodules = [\"DB17\"]\n", "fastcat[0].modules[0]", "unknown module type 'DB17'"),
+    ("[[fastcat]]\nmodules = [" + ", ".join(['"DI16"'] * 17) + "]\n", "fastcat[0].modules",
+     "at most 16"),
+    ("[[fastcat]]\nmodules = []\nrotary_switch = 0\n", "fastcat[0].rotary_switch",
+     "between 1 and 15"),
+    ("[[fastcat]]\nmodules = []\nrotary_switch = \"one\"\n", "fastcat[0].rotary_switch",
+     "must be int"),
+    ("[[fastcat]]\nmodules = []\nrotary_switch = true\n", "fastcat[0].rotary_switch",
+     "must be int"),
+    ("[[fastcat]]\nrotary_switch = 2\n", "fastcat[0].modules", "is required"),
+    ("[[fastcat]]\nmodules = [{options = 1}]\n", "fastcat[0].modules[0]", "needs type"),
+    ("[[fastcat]]\nmodules = [3]\n", "fastcat[0].modules[0]", "module name or a table"),
+    ("[rig]\nstep_ms = 0\n", "rig.step_ms", "between"),
+    ("[rig]\nepoch = \"yesterday\"\n", "rig.epoch", "ISO date-time"),
+    ("[[fastcat]]\nid = \"a\"\nmodules = []\n[[fastcat]]\nid = \"a\"\nmodules = []\n",
+     "fastcat[1].id", "duplicate"),
+    ("[rig\n", "", "not valid TOML"),
+])
+def test_errors_name_file_key_reason(text: str, key: str, reason: str) -> None:
+    with pytest.raises(RigConfigError) as info:
+        parse_rig_spec(text, "bad.toml")
+    assert info.value.source == "bad.toml"
+    assert info.value.key == key
+    assert reason in info.value.reason
+    assert str(info.value).startswith("bad.toml: ")
+
+
+def test_missing_file(tmp_path: Path) -> None:
+    with pytest.raises(RigConfigError, match="cannot read rig file"):
+        load_rig_spec(tmp_path / "nope.toml")
