@@ -1,0 +1,93 @@
+"""The runtime: commands cross threads by message and run at step boundaries."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import pytest
+
+from app.clock import SimClock
+from app.rig import Rig
+from app.runtime import Runtime
+from devices.device import Action, CommandError, DeviceModel, Param
+from devices.events import LogLine
+
+
+@dataclass
+class Counter(DeviceModel):
+    """A device that counts its steps and logs on command (test double for the runtime)."""
+
+    steps: int = 0
+    thread: str = ""
+    ACTIONS: ClassVar[dict[str, Action]] = {
+        "say": Action("say", "log a line", (Param("text", str),)),
+    }
+
+    def step(self, now_us: int) -> None:
+        super().step(now_us)
+        self.steps += 1
+        self.thread = threading.current_thread().name
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"steps": self.steps}
+
+    def cmd_say(self, text: str) -> str:
+        self.emit(LogLine(self.now_us, self.device_id, text=text))
+        return text.upper()
+
+
+@pytest.fixture
+def runtime():
+    rig = Rig("t", {"c": Counter("c")}, SimClock(step_us=1000))
+    rt = Runtime(rig, speed=20.0, publish_hz=200)
+    rt.start()
+    yield rt
+    rt.stop()
+
+
+def test_command_runs_in_simulation_thread_and_returns(runtime: Runtime) -> None:
+    assert runtime.command("c", "say", {"text": "hi"}).result(timeout=5) == "HI"
+    assert runtime.rig.devices["c"].thread == "fieldrig-sim"
+
+
+def test_command_error_reaches_caller_and_simulation_goes_on(runtime: Runtime) -> None:
+    with pytest.raises(CommandError, match="no action 'jump'"):
+        runtime.command("c", "jump").result(timeout=5)
+    with pytest.raises(CommandError, match="no device 'x'"):
+        runtime.command("x", "say", {"text": "a"}).result(timeout=5)
+    before = runtime.submit(lambda: runtime.rig.clock.now_us).result(timeout=5)
+    deadline = time.monotonic() + 5
+    while runtime.submit(lambda: runtime.rig.clock.now_us).result(timeout=5) <= before:
+        assert time.monotonic() < deadline, "simulation stopped after a bad command"
+
+
+def test_events_are_journalled_in_order(runtime: Runtime) -> None:
+    seq0, _ = runtime.events_since(0)
+    for word in ("a", "b", "c"):
+        runtime.command("c", "say", {"text": word})
+    runtime.submit(lambda: None).result(timeout=5)
+    deadline = time.monotonic() + 5
+    texts: list[str] = []
+    while len(texts) < 3 and time.monotonic() < deadline:
+        _, events = runtime.events_since(seq0)
+        texts = [e.text for e in events if isinstance(e, LogLine)]
+    assert texts == ["a", "b", "c"]
+
+
+def test_frames_advance_and_pause_freezes_time(runtime: Runtime) -> None:
+    deadline = time.monotonic() + 5
+    while runtime.frame.snapshot["devices"]["c"]["steps"] == 0:
+        assert time.monotonic() < deadline
+    runtime.set_paused(True)
+    frozen = runtime.submit(lambda: runtime.rig.clock.now_us).result(timeout=5)
+    time.sleep(0.05)
+    assert runtime.submit(lambda: runtime.rig.clock.now_us).result(timeout=5) == frozen
+    runtime.set_paused(False)
+
+
+def test_speed_is_checked(runtime: Runtime) -> None:
+    with pytest.raises(ValueError):
+        runtime.set_speed(0)
