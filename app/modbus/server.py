@@ -1,0 +1,217 @@
+"""The drives' Modbus line served with pymodbus on TCP: MBAP framing, or RTU framing over TCP.
+
+pymodbus does the transport, the framing and the CRC; the drive's application layer is
+:func:`app.modbus.pdu.serve_line`, run in the simulation thread through ``submit`` (the server's
+asyncio loop never touches a model). Two small hooks below pymodbus's public API keep the seed's
+"exception 02 only, otherwise no reply" (seed 004 ch.2 "Eccezioni"); docs/modbus.md says why:
+
+- :class:`_RawDecoder` hands every de-framed PDU over as raw bytes, so pymodbus never decodes,
+  validates or answers a request itself (its own decoder answers exception 01 to an unknown
+  function code and exception 04 to an unknown unit id);
+- :class:`_DriveRequestHandler` takes each request when it is framed and answers it (or not)
+  from our outcome, instead of pymodbus's shared ``last_pdu`` slot.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import concurrent.futures
+import logging
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
+
+from pymodbus.exceptions import ModbusIOException
+from pymodbus.framer import FramerType
+from pymodbus.pdu import DecodePDU, ModbusPDU
+from pymodbus.server import ModbusTcpServer
+from pymodbus.server.requesthandler import ServerRequestHandler
+from pymodbus.transaction import TransactionManager
+
+from app.modbus.pdu import ModbusDrive, Outcome, Reply, Silence, serve_line
+
+logger = logging.getLogger(__name__)
+
+T = TypeVar("T")
+Submit = Callable[[Callable[[], T]], "concurrent.futures.Future[T]"]
+
+FRAMERS = {"socket": FramerType.SOCKET, "rtu": FramerType.RTU}
+SAVE_REPLY_POLL_S = 0.02
+SAVE_REPLY_GIVE_UP_S = 30.0  # a save lasts "a few seconds" (ch.2); past this the reply is lost
+
+
+class _RawPdu(ModbusPDU):
+    """A PDU carried as bytes: requests as they came, replies as the PDU layer built them."""
+
+    def __init__(self, frame: bytes, dev_id: int = 0, transaction_id: int = 0) -> None:
+        super().__init__(dev_id=dev_id, transaction_id=transaction_id)
+        self.frame = bytes(frame)
+        self.function_code = frame[0]
+
+    def encode(self) -> bytes:
+        return self.frame[1:]  # the framer writes the function code itself
+
+
+class _RawDecoder(DecodePDU):
+    """Keeps pymodbus's function-code table for RTU frame sizing, but never decodes a PDU."""
+
+    def __init__(self) -> None:
+        super().__init__(is_server=True)
+
+    def decode(self, frame: bytes) -> ModbusPDU | None:
+        return _RawPdu(frame) if frame else None
+
+
+class _DriveRequestHandler(ServerRequestHandler):
+    """One client connection; every framed request goes to ``answer``, nothing else replies."""
+
+    def __init__(self, server: _DriveTcpServer) -> None:
+        super().__init__(server, None, None, None)
+        self._answer = server.answer
+
+    def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
+        # pymodbus frames one request per call; take every complete one in the buffer, so that
+        # a request sent right behind a (never answered) broadcast is not left waiting.
+        used = 0
+        while used < len(data):
+            try:
+                step = TransactionManager.callback_data(self, data[used:], addr)
+            except ModbusIOException:
+                return len(data)  # unreadable: discarded, no reply (pymodbus: exception 01)
+            request, self.last_pdu = self.last_pdu, None  # pymodbus's handler never sees it
+            used += step
+            if isinstance(request, _RawPdu):
+                self._answer(self, request, addr)
+            if not step or request is None:
+                break
+        return used
+
+
+class _DriveTcpServer(ModbusTcpServer):
+    def __init__(self, address: tuple[str, int], framer: FramerType,
+                 answer: Callable[[_DriveRequestHandler, _RawPdu, tuple | None], None]) -> None:
+        # No datastore: no request ever reaches one. broadcast_enable stays off so that unit
+        # id 0 reaches our line handler, which applies broadcasts itself.
+        super().__init__([], framer=framer, address=address)
+        self.decoder = _RawDecoder()
+        self.answer = answer
+
+    def callback_new_connection(self) -> _DriveRequestHandler:
+        return _DriveRequestHandler(self)
+
+
+class DriveModbusServer:
+    """The Modbus line of ``drives`` on ``host:port`` (port 0: any free port, see ``.port``)."""
+
+    def __init__(self, drives: Sequence[ModbusDrive], submit: Submit, host: str = "127.0.0.1",
+                 port: int = 5020, framer: str = "socket") -> None:
+        if framer not in FRAMERS:
+            raise ValueError(f"framer must be one of {', '.join(FRAMERS)}, got {framer!r}")
+        self._drives = list(drives)
+        self._submit = submit
+        self.host = host
+        self.port = port
+        self.framer = framer
+        self._server: _DriveTcpServer | None = None
+        self._tasks: set[asyncio.Task[None]] = set()
+        self._thread: threading.Thread | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._stop_event: asyncio.Event | None = None
+
+    # ---- asyncio API ---------------------------------------------------------------------
+    async def start(self) -> None:
+        server = _DriveTcpServer((self.host, self.port), FRAMERS[self.framer], self._answer)
+        await server.serve_forever(background=True)  # raises RuntimeError if it cannot listen
+        self._server = server
+        sockets = getattr(server.transport, "sockets", None) or []
+        if sockets:
+            self.port = sockets[0].getsockname()[1]
+        logger.info("Modbus (%s framing) on %s:%d for node(s) %s", self.framer, self.host,
+                    self.port, ", ".join(str(d.node_id) for d in self._drives) or "none")
+
+    async def stop(self) -> None:
+        for task in list(self._tasks):
+            task.cancel()
+        if self._tasks:
+            await asyncio.gather(*self._tasks, return_exceptions=True)
+        if self._server is not None:
+            await self._server.shutdown()
+            self._server = None
+
+    # ---- thread API (the runtime's) ------------------------------------------------------
+    def start_in_thread(self, timeout: float = 5.0) -> None:
+        """Serve from a daemon thread with its own loop; returns once listening."""
+        ready = threading.Event()
+        failure: list[BaseException] = []
+        self._thread = threading.Thread(target=self._thread_main, args=(ready, failure),
+                                        name=f"modbus-{self.port}", daemon=True)
+        self._thread.start()
+        if not ready.wait(timeout):
+            raise TimeoutError("Modbus server did not start")
+        if failure:
+            self._thread.join(timeout)
+            raise failure[0]
+
+    def stop_in_thread(self, timeout: float = 5.0) -> None:
+        if self._loop is not None and self._stop_event is not None:
+            self._loop.call_soon_threadsafe(self._stop_event.set)
+        if self._thread is not None:
+            self._thread.join(timeout)
+            self._thread = None
+
+    def _thread_main(self, ready: threading.Event, failure: list[BaseException]) -> None:
+        async def main() -> None:
+            self._loop = asyncio.get_running_loop()
+            self._stop_event = asyncio.Event()
+            try:
+                await self.start()
+            except BaseException as exc:
+                failure.append(exc)
+                ready.set()
+                return
+            ready.set()
+            await self._stop_event.wait()
+            await self.stop()
+
+        asyncio.run(main())
+
+    # ---- one request ---------------------------------------------------------------------
+    def _answer(self, handler: _DriveRequestHandler, request: _RawPdu,
+                addr: tuple | None) -> None:
+        task = asyncio.get_running_loop().create_task(self._serve(handler, request, addr))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _serve(self, handler: _DriveRequestHandler, request: _RawPdu,
+                     addr: tuple | None) -> None:
+        unit, frame = request.dev_id, request.frame
+        try:
+            outcome: Outcome = await self._in_sim(lambda: serve_line(self._drives, unit, frame))
+        except Exception:  # a model fault must not take the line down: the drive stays silent
+            logger.exception("Modbus request %s to unit %d failed", frame.hex(" "), unit)
+            return
+        if isinstance(outcome, Silence):
+            logger.debug("unit %d %s: no reply (%s)", unit, frame.hex(" "), outcome.reason)
+            return
+        if isinstance(outcome, Reply) and outcome.after_save and not await self._saved(unit):
+            return
+        if handler.transport is None:
+            return  # the client went away meanwhile
+        reply = _RawPdu(outcome.pdu, dev_id=unit, transaction_id=request.transaction_id)
+        handler.pdu_send(reply, addr)
+
+    async def _saved(self, unit: int) -> bool:
+        """Wait until the drive at ``unit`` answers again after a save (ch.2, save method 1)."""
+        deadline = time.monotonic() + SAVE_REPLY_GIVE_UP_S
+        while time.monotonic() < deadline:
+            if await self._in_sim(lambda: any(d.responding and d.node_id == unit
+                                              for d in self._drives)):
+                return True
+            await asyncio.sleep(SAVE_REPLY_POLL_S)
+        logger.warning("drive %d still saving after %.0f s: reply dropped", unit,
+                       SAVE_REPLY_GIVE_UP_S)
+        return False
+
+    async def _in_sim(self, fn: Callable[[], Any]) -> Any:
+        return await asyncio.wrap_future(self._submit(fn))
