@@ -1,0 +1,403 @@
+"""The FastCAT EtherCAT coupler (seed 000): power, internal-bus scan, CNF, ESM, alarms, LEDs.
+
+One internal-bus exchange per ``step``. The rail holds the modules in slot order (``None`` for
+an empty slot); the last scan numbers the modules that answered 1..n along the bus, and that
+numbering is what the object dictionary, the emergency byte 0 and the 0x80XX codes use.
+Every alarm is a *cause* (injected by an operator or physical: a module that does not answer,
+the Ethernet cable, the Tbus supply, a module's own alarm); only the first cause is latched
+(§7), and a Reset fault or a resync clears it only when its cause is gone.
+Behaviour and choices: docs/fastcat-coupler.md.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import random
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from devices.device import Action, DeviceModel
+from devices.ethercat import AlState
+from devices.events import StateChanged
+from devices.fastcat.alarms import COUPLER, MODULE, Alarm
+from devices.fastcat.catalog import module_type
+from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
+from devices.fastcat.esm import Esm, request_refusal
+from devices.fastcat.faults import FaultsMixin
+from devices.fastcat.leds_fastcat import (
+    LedBank,
+    err_led,
+    link_led,
+    module_led_patterns,
+    module_light,
+    run_led,
+)
+from devices.fastcat.modules import IoModule
+from devices.fastcat.objects import MAX_MODULES, build_od
+from devices.fastcat.rail import COUPLER_ACTIONS, MODULE_ACTIONS, RailMixin
+from devices.flash import FlashError, FlashStore, MemoryFlash
+from devices.od import ObjectDictionary
+
+logger = logging.getLogger(__name__)
+
+CNF_BUTTON = "cnf_button"  # StateChanged.machine of the button: released / pressed
+CNF_PROCEDURE = "cnf"  # StateChanged.machine of the procedure: idle, resetting, scanning, ...
+ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this recently
+UDINT_MAX = 0xFFFF_FFFF
+
+
+class FastCat(FaultsMixin, RailMixin, DeviceModel):
+    KIND = "fastcat"
+    ACTIONS: ClassVar[Mapping[str, Action]] = {**MODULE_ACTIONS, **COUPLER_ACTIONS}
+
+    def __init__(self, device_id: str, rng: random.Random,
+                 modules: list[tuple[str, Mapping[str, Any]]], rotary_switch: int = 1,
+                 flash: FlashStore | None = None, master_address: int = 1,
+                 box_name: str = "Box 1 (FastCAT)", station_address: int = 1001) -> None:
+        super().__init__(device_id=device_id, rng=rng)
+        if len(modules) > MAX_MODULES:
+            raise ValueError(f"{len(modules)} modules: a FastCAT takes at most {MAX_MODULES} "
+                             f"(seed 000 §2)")
+        if not 1 <= rotary_switch <= 15:
+            raise ValueError(f"rotary switch {rotary_switch}: the FastCAT switch reads 1..15 "
+                             f"(seed 000 §6.19)")
+        self.rail: list[IoModule | None] = [
+            self._new_module(name, options, slot) for slot, (name, options)
+            in enumerate(modules, start=1)]
+        self.shelf: dict[int, IoModule] = {}  # last module unplugged from each slot
+        self.flash = flash if flash is not None else MemoryFlash()
+        self.stored = self._load_stored()
+        self.rotary_switch = rotary_switch
+        self.master_address = master_address
+        self.box_name = box_name
+        self.station_address = station_address
+        self.serial = self.rng.getrandbits(32)
+        self.link = True
+        self.tbus_low = False
+        self.injected: list[Alarm] = []
+        self.esm = Esm(self.emit, device_id)
+        self.cnf = CnfButton()
+        self.leds = LedBank(device_id)
+        self.cnf_phase = ScanPhase.IDLE
+        self.powered = False
+        self._power_up_state()
+        self.cmd_power(True)
+
+    # ---- construction and power -----------------------------------------------------------
+    def _new_module(self, name: str, options: Mapping[str, Any] | None, slot: int) -> IoModule:
+        try:
+            mtype = module_type(name)
+        except KeyError as exc:
+            raise ValueError(f"slot {slot}: {exc.args[0]}") from None
+        try:
+            return IoModule(mtype, random.Random(self.rng.getrandbits(64)), dict(options or {}))
+        except ValueError as exc:
+            raise ValueError(f"slot {slot} ({name}): {exc}") from None
+
+    def _load_stored(self) -> list[str] | None:
+        raw = self.flash.load()
+        if raw is None:
+            return None
+        try:
+            names = json.loads(raw.decode("utf-8"))
+            if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
+                raise ValueError("not a list of module names")
+            for name in names:
+                module_type(name)
+        except (ValueError, KeyError, UnicodeDecodeError) as exc:
+            logger.warning("%s: unreadable stored configuration ignored: %s",
+                           self.device_id, exc)
+            return None
+        return names
+
+    def _power_up_state(self) -> None:
+        self.rotary_read = self.rotary_switch  # §6.20: read like a switch, at power-up
+        self.address_check = 0
+        self.reset_bit = 0
+        self.alarm: Alarm | None = None
+        self.edge_causes: list[Alarm] = []  # one-shot causes (a failed flash write)
+        self.raised: list[Alarm] = []  # alarms the modules raised, cause still present
+        self.fresh_raised: list[Alarm] = []  # raised during this exchange
+        self.address_fault = False
+        self.mailbox: list[bytes] = []
+        self.last_frame_us: int | None = None
+        self.scan: BusScan | None = None
+        self.scan_found: list[IoModule] = []
+        self.booted = False
+        self.detected: list[tuple[int, str]] = []  # (rail slot, type) per module number
+        self.bound: list[IoModule] = []  # the module instance each module number talks to
+        self.comm_errors: list[int] = []
+        self.od: ObjectDictionary | None = None
+
+    def cmd_power(self, on: bool) -> None:
+        if on == self.powered:
+            return
+        self.powered = on
+        if on:
+            self._power_up_state()
+            for module in self.modules():
+                module.reset()
+            self._start_scan(cnf=False)
+        else:
+            self.scan = None
+            self.cnf.release(self.now_us)
+            self.esm.drop_to_init(self.now_us)
+            self._clear_alarm()
+            self.od = None
+            self.detected, self.bound = [], []
+        self._refresh()
+
+    def modules(self) -> list[IoModule]:
+        return [m for m in self.rail if m is not None]
+
+    # ---- the master's side ----------------------------------------------------------------
+    @property
+    def al_state(self) -> AlState:
+        return self.esm.state
+
+    @property
+    def al_status(self) -> int:
+        return self.esm.register
+
+    @property
+    def al_status_code(self) -> int:
+        return self.esm.code
+
+    def reachable(self) -> bool:
+        return self.powered and self.link
+
+    def exchange_frame(self, now_us: int) -> None:
+        """The master's frame passed through this slave (drives the LINK LED)."""
+        if self.reachable():
+            self.last_frame_us = now_us
+
+    def take_emergencies(self) -> list[bytes]:
+        """Emergency data queued in the mailbox; it runs from PREOP on (ETG.1000.6)."""
+        if not self.reachable() or self.esm.state is AlState.INIT:
+            return []
+        out, self.mailbox = self.mailbox, []
+        return out
+
+    def request_state(self, target: AlState) -> None:
+        """AL control write. The answer is in ``al_status`` / ``al_status_code``."""
+        if not self.reachable():
+            return
+        now, esm = self.now_us, self.esm
+        if target is esm.state:
+            esm.accept(target, now)  # the same state again acknowledges the error flag
+            return
+        esm.requested = target
+        refusal = request_refusal(esm.state, target)
+        if refusal is not None:
+            esm.refuse(refusal, now)
+        elif target is AlState.INIT:
+            esm.accept(target, now)
+            self._start_scan(cnf=False)  # §3: a scan on every return to INIT
+        elif esm.state is AlState.INIT:
+            if self.scan is None:  # else INIT -> PREOP completes when the scan ends
+                esm.accept(target, now)
+        elif target in (AlState.SAFEOP, AlState.OP) and self.alarm is not None:
+            esm.refuse(self.alarm.refusal_code, now)
+        elif target is AlState.OP and self.address_check and self._address_mismatch():
+            self.address_fault = True  # §6.19: checked on the transition to OP
+            self._evaluate_alarms()
+        else:
+            esm.accept(target, now)
+        self._refresh()
+
+    # ---- stepping ---------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        dt_us = now_us - self.now_us
+        super().step(now_us)
+        if not self.powered:
+            return
+        if self.cnf.release_due(now_us):
+            self._on_cnf_release()
+        if self.scan is not None:
+            self._advance_scan(self.scan)
+        elif self.booted:
+            self._exchange(dt_us)
+        self._evaluate_alarms()
+        self._refresh()
+
+    def _exchange(self, dt_us: int) -> None:
+        outputs_enabled = self.esm.state is AlState.OP and self.alarm is None
+        self._rebind()
+        for n, module in enumerate(self.bound, start=1):
+            if self._answers(n):
+                module.step(dt_us, outputs_enabled)
+                self.fresh_raised.extend(Alarm(MODULE, code, n)
+                                         for code in module.take_raised_alarms())
+            else:  # §6.18: a failed exchange on the internal bus
+                self.comm_errors[n - 1] = min(UDINT_MAX, self.comm_errors[n - 1] + 1)
+
+    def _answers(self, n: int) -> bool:
+        slot = self.detected[n - 1][0]
+        module = self.rail[slot - 1] if slot <= len(self.rail) else None
+        return module is self.bound[n - 1] and module.responds()
+
+    def _rebind(self) -> None:
+        """A module of the detected type put back in a detected slot answers at that address:
+        the coupler talks to the bus position, not to one particular module."""
+        changed = False
+        for n, (slot, name) in enumerate(self.detected, start=1):
+            module = self.rail[slot - 1] if slot <= len(self.rail) else None
+            if module is not None and module is not self.bound[n - 1] \
+                    and module.mtype.name == name:
+                self.bound[n - 1] = module
+                changed = True
+        if changed:
+            self.od = build_od(self, self.bound, self.serial)
+
+    # ---- scan and CNF ---------------------------------------------------------------------
+    def _start_scan(self, cnf: bool) -> None:
+        self.scan_found = [m for m in self.rail if m is not None and m.responds()]
+        slots = tuple(self.rail.index(m) + 1 for m in self.scan_found)
+        self.scan = BusScan(self.now_us, slots, cnf=cnf)
+
+    def _advance_scan(self, scan: BusScan) -> None:
+        if not scan.detected_applied and scan.scanned(self.now_us):
+            scan.detected_applied = True
+            self.detected = [(slot, m.mtype.name) for slot, m in zip(scan.slots,
+                                                                     self.scan_found,
+                                                                     strict=True)]
+            self.bound = list(self.scan_found)
+            self.raised = []  # module numbers change with the new scan
+            self.comm_errors = [0] * len(self.bound)
+            self.od = build_od(self, self.bound, self.serial)
+        if scan.finished(self.now_us):
+            if scan.cnf:
+                self._store_configuration()
+            self.scan = None
+            self.booted = True
+            self._try_reset(resync=True)  # the master took the line through INIT
+            self._evaluate_alarms()
+            if self.esm.state is AlState.INIT and self.esm.requested is AlState.PREOP:
+                self.esm.accept(AlState.PREOP, self.now_us)
+
+    def _store_configuration(self) -> None:
+        names = [name for _slot, name in self.detected]
+        try:
+            self.flash.save(json.dumps(names).encode("utf-8"))
+        except FlashError as exc:
+            logger.info("%s: configuration not stored: %s", self.device_id, exc)
+            self.edge_causes.append(Alarm(COUPLER, 0x11))  # §7.5 SAVE_FLASH
+            return
+        self.stored = names
+
+    def cmd_press_cnf(self) -> None:
+        self._press_cnf(None)
+
+    def cmd_release_cnf(self) -> None:
+        self._on_cnf_release()
+
+    def cmd_hold_cnf(self, seconds: float) -> None:
+        self._press_cnf(round(seconds * 1_000_000))
+
+    def _press_cnf(self, hold_us: int | None) -> None:
+        if not self.powered:
+            return  # a dead coupler does not read its button
+        was_pressed = self.cnf.pressed
+        self.cnf.press(self.now_us, hold_us=hold_us)
+        if not was_pressed:
+            self.emit(StateChanged(self.now_us, self.device_id, from_state="released",
+                                   to_state="pressed", machine=CNF_BUTTON))
+
+    def _on_cnf_release(self) -> None:
+        held = self.cnf.release(self.now_us)
+        if held is None:
+            return
+        self.emit(StateChanged(self.now_us, self.device_id, from_state="pressed",
+                               to_state="released", machine=CNF_BUTTON))
+        if not self.powered or not CnfButton.long_enough(held):
+            return  # §2: a press shorter than three seconds does nothing
+        if self.scan is not None and self.scan.cnf:
+            return
+        self.esm.drop_to_init(self.now_us)
+        for module in self.modules():
+            module.reset()  # §2: "il coupler resetta tutti i moduli presenti sul bus interno"
+        self._start_scan(cnf=True)
+        self._refresh()
+
+    # ---- object dictionary --------------------------------------------------------------
+    def od_comm_errors(self, n: int) -> int:
+        return self.comm_errors[n - 1] if n <= len(self.comm_errors) else 0
+
+    def od_address_check(self) -> int:
+        return self.address_check
+
+    def od_set_address_check(self, value: int) -> None:
+        self.address_check = int(value)
+
+    def od_rotary(self) -> int:
+        return self.rotary_read
+
+    # ---- what the outside sees --------------------------------------------------------------
+    def _refresh(self) -> None:
+        """After any change: modules' alarm flag (§7), CNF phase, LED patterns."""
+        for module in self.modules():
+            module.in_alarm = self.powered and self.alarm is not None
+        scan = self.scan
+        phase = scan.phase(self.now_us) if scan is not None and scan.cnf else ScanPhase.IDLE
+        if phase is not self.cnf_phase:
+            self.emit(StateChanged(self.now_us, self.device_id, from_state=self.cnf_phase.value,
+                                   to_state=phase.value, machine=CNF_PROCEDURE))
+            self.cnf_phase = phase
+        self._refresh_leds()
+
+    def _refresh_leds(self) -> None:
+        now = self.now_us
+        activity = self.last_frame_us is not None and \
+            now - self.last_frame_us <= ACTIVITY_WINDOW_US
+        wanted = {"RUN": run_led(self.powered, self.esm.state),
+                  "ERR": err_led(self.powered, self.alarm, self.esm.error),
+                  "LINK": link_led(self.powered, self.link, activity)}
+        for slot, module in enumerate(self.rail, start=1):
+            if module is not None:
+                light = module_light(self.powered and module.responds(), slot, self.scan,
+                                     now, addressed=module in self.bound,
+                                     in_alarm=self.alarm is not None)
+                wanted.update(module_led_patterns(slot, light))
+        self.leds.update(now, wanted, self.emit)
+
+    # ---- views ------------------------------------------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        alarm = self.alarm
+        scan = self.scan
+        return {
+            "kind": self.KIND, "id": self.device_id, "powered": self.powered,
+            "esm": self.esm.state.label, "requested": self.esm.requested.label,
+            "al_status": self.esm.register, "al_status_code": self.esm.code,
+            "station_address": self.station_address, "rotary_switch": self.rotary_switch,
+            "rotary_read": self.rotary_read, "address_check": bool(self.address_check),
+            "fault_active": alarm is not None, "emergency_data": self.od_emergency_word(),
+            "alarm": None if alarm is None else {
+                "table": alarm.table, "code": alarm.code, "name": alarm.info.symbol,
+                "description": alarm.info.description, "module": alarm.module,
+                "resettable": alarm.resettable,
+                "cause_present": alarm in self._present_causes()},
+            "injected": [{"fault": a.info.symbol, "module": a.module or None}
+                         for a in self.injected],
+            "link": self.link, "tbus_low": self.tbus_low,
+            "cnf": {"pressed": self.cnf.pressed,
+                    "held_s": self.cnf.held_us(self.now_us) / 1_000_000,
+                    "phase": self.cnf_phase.value},
+            "scan": {"active": scan is not None,
+                     "done": scan.recognised(self.now_us) if scan is not None
+                     else len(self.detected),
+                     "total": len(scan.slots) if scan is not None else len(self.detected)},
+            "leds": self.leds.snapshot(),
+            "rail": [self._slot_snapshot(slot, m) for slot, m in enumerate(self.rail, start=1)],
+            "stored_config": None if self.stored is None else list(self.stored),
+            "detected": [name for _slot, name in self.detected],
+        }
+
+    def _slot_snapshot(self, slot: int, module: IoModule | None) -> dict[str, Any]:
+        if module is None:
+            return {"slot": slot, "type": None}
+        numbers = [n for n, m in enumerate(self.bound, start=1)
+                   if m is module and self.detected[n - 1][0] == slot]
+        return {**module.snapshot(), "slot": slot, "type": module.mtype.name,
+                "detected_as": self.detected[numbers[0] - 1][1] if numbers else None,
+                "module_number": numbers[0] if numbers else None}

@@ -1,0 +1,214 @@
+"""Alarm causes and the alarm latch of the FastCAT coupler (seed 000 §7, §7.5, §7.6).
+
+An alarm *cause* is a condition present now: injected by an operator, or physical (a module
+that does not answer, the Ethernet cable, the Tbus supply, a module's own alarm, the result of
+the last scan). The coupler latches the first cause it finds (§7: "il primo allarme ricevuto,
+che è la causa scatenante"), sends one emergency, puts every module in alarm and, in SAFEOP or
+OP, falls back to PREOP with the 0x80XX code of §7.7. Later causes send nothing while an alarm
+is latched. A Reset fault edge (§6.17) clears a resettable alarm, a resync (the line taken
+through INIT) any alarm, in both cases only once its cause is gone; the next present cause is
+then latched with a new emergency. Cause -> code mapping: docs/fastcat-coupler.md.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from devices.device import CommandError
+from devices.ethercat import AlState
+from devices.events import AlarmChanged, EmergencySent, Event, fmt_hex
+from devices.fastcat.alarms import (
+    COUPLER,
+    EMERGENCY_CODE,
+    EMERGENCY_REGISTER,
+    MODULE,
+    Alarm,
+    parse_fault,
+)
+from devices.fastcat.catalog import module_type
+from devices.fastcat.objects import MAX_MODULES
+
+if TYPE_CHECKING:
+    from devices.fastcat.cnf import BusScan
+    from devices.fastcat.esm import Esm
+    from devices.fastcat.modules import IoModule
+
+MAX_ANALOG_MODULES = 8  # §2 "al massimo 8 moduli analogici"
+MAILBOX_DEPTH = 16  # emergencies kept for the master while its mailbox is not running
+
+
+class FaultsMixin:
+    """Alarm handling of :class:`~devices.fastcat.coupler.FastCat`."""
+
+    # Provided by FastCat (declared for type checkers).
+    device_id: str
+    now_us: int
+    powered: bool
+    booted: bool
+    link: bool
+    tbus_low: bool
+    scan: BusScan | None
+    esm: Esm
+    alarm: Alarm | None
+    injected: list[Alarm]
+    edge_causes: list[Alarm]
+    raised: list[Alarm]
+    fresh_raised: list[Alarm]
+    address_fault: bool
+    address_check: int
+    rotary_read: int
+    master_address: int
+    reset_bit: int
+    mailbox: list[bytes]
+    rail: list[IoModule | None]
+    detected: list[tuple[int, str]]
+    bound: list[IoModule]
+    stored: list[str] | None
+
+    if TYPE_CHECKING:  # defined by DeviceModel / FastCat; stubs here would shadow them
+        def emit(self, event: Event) -> None: ...
+        def modules(self) -> list[IoModule]: ...
+        def _answers(self, n: int) -> bool: ...
+        def _refresh(self) -> None: ...
+
+    def _present_causes(self) -> list[Alarm]:
+        """Every alarm cause present now, in the order the coupler would report them."""
+        causes = [*self.edge_causes, *self.injected]
+        if not self.link:
+            causes.append(Alarm(COUPLER, 0x13))
+        if self.booted:
+            causes.extend(self._scan_causes())
+        if self.address_fault and self.address_check and self._address_mismatch():
+            causes.append(Alarm(COUPLER, 0x12))
+        for n, (slot, name) in enumerate(self.detected, start=1):
+            if not self._answers(n):
+                module = self.rail[slot - 1] if slot <= len(self.rail) else None
+                changed = module is not None and module.mtype.name != name
+                causes.append(Alarm(COUPLER, 0x01 if changed else 0x04, n))
+        if self.tbus_low and self.detected:
+            causes.append(Alarm(MODULE, 0x0C, 1))  # §7.6 LOW_VOLTAGE, byte 0 = first module
+        for n, module in enumerate(self.bound, start=1):
+            if self._answers(n):
+                causes.extend(Alarm(MODULE, code, n) for code in sorted(module.physical_alarms()))
+        causes.extend(self.fresh_raised)  # raised this exchange: an event, latch it as such
+        causes.extend(a for a in self.raised if a.module <= len(self.bound)
+                      and self._answers(a.module)
+                      and self.bound[a.module - 1].cause_present(a.code))
+        return causes
+
+    def _scan_causes(self) -> list[Alarm]:
+        names = [name for _slot, name in self.detected]
+        out = []
+        if not names:
+            out.append(Alarm(COUPLER, 0x10))  # §7.5 NO_MOD
+        if self.stored is not None:
+            for i in range(max(len(names), len(self.stored))):
+                if i >= len(names):
+                    out.append(Alarm(COUPLER, 0x02, i + 1))  # §7.5 MODULE_NO_PRES
+                    break
+                if i >= len(self.stored) or names[i] != self.stored[i]:
+                    out.append(Alarm(COUPLER, 0x01, i + 1))  # §7.5 MODULE_CHANGED
+                    break
+        analog = [n for n, name in enumerate(names, start=1)
+                  if module_type(name).counts_as_analog]
+        if len(analog) > MAX_ANALOG_MODULES:  # §7.5 0x15: byte 0 = the 8th analog module
+            out.append(Alarm(COUPLER, 0x15, analog[MAX_ANALOG_MODULES - 1]))
+        return out
+
+    def _address_mismatch(self) -> bool:
+        return self.rotary_read != self.master_address
+
+    def _evaluate_alarms(self) -> None:
+        if not self.powered or self.scan is not None or not self.booted:
+            return
+        if self.alarm is None:  # while one is latched, later causes report nothing (§7)
+            causes = self._present_causes()
+            if causes:
+                self._latch(causes[0])
+        # A module alarm raised while another is latched stays pending while its cause lasts.
+        fresh, self.fresh_raised = self.fresh_raised, []
+        self.raised = [a for a in dict.fromkeys([*self.raised, *fresh])
+                       if a == self.alarm or self._module_cause(a)]
+
+    def _module_cause(self, alarm: Alarm) -> bool:
+        n = alarm.module
+        return 0 < n <= len(self.bound) and self._answers(n) \
+            and self.bound[n - 1].cause_present(alarm.code)
+
+    def _latch(self, alarm: Alarm) -> None:
+        """§7: the first alarm is the one reported; every module goes into alarm."""
+        now = self.now_us
+        self.alarm = alarm
+        if alarm in self.edge_causes:
+            self.edge_causes.remove(alarm)
+        for module in self.modules():
+            module.in_alarm = True
+        info = alarm.info
+        self.emit(AlarmChanged(now, self.device_id, code=fmt_hex(alarm.code, 2),
+                               name=info.symbol, active=True, module=alarm.module))
+        self.emit(EmergencySent(now, self.device_id, code=EMERGENCY_CODE,
+                                register=EMERGENCY_REGISTER, data=alarm.data))
+        self.mailbox = [*self.mailbox, alarm.data][-MAILBOX_DEPTH:]
+        if self.esm.state in (AlState.SAFEOP, AlState.OP):  # §7.7: OP -> PREOP, 0x80XX
+            self.esm.fall(AlState.PREOP, alarm.al_status_code, now)
+
+    def _try_reset(self, resync: bool) -> bool:
+        """Reset fault (§6.17) or resync (§7): only a resettable alarm, only without cause."""
+        alarm = self.alarm
+        if alarm is None or (not resync and not alarm.resettable):
+            return False
+        if alarm in self._present_causes():
+            return False
+        self._clear_alarm()
+        if alarm in self.raised:
+            self.raised.remove(alarm)
+        if alarm == Alarm(COUPLER, 0x12):
+            self.address_fault = False
+        return True
+
+    def _clear_alarm(self) -> None:
+        alarm, self.alarm = self.alarm, None
+        for module in self.modules():
+            module.in_alarm = False
+        if alarm is not None:
+            self.emit(AlarmChanged(self.now_us, self.device_id, code=fmt_hex(alarm.code, 2),
+                                   name=alarm.info.symbol, active=False, module=alarm.module))
+
+    def cmd_inject_fault(self, fault: str, module: int | None) -> None:
+        alarm = self._fault(fault, module)
+        if alarm not in self.injected:
+            self.injected.append(alarm)
+
+    def cmd_clear_fault(self, fault: str, module: int | None) -> None:
+        alarm = self._fault(fault, module)
+        if alarm not in self.injected:
+            now = ", ".join(f"{a.info.symbol}@{a.module}" for a in self.injected) or "none"
+            raise CommandError(f"{alarm.info.symbol} on module {alarm.module} is not injected "
+                               f"(injected: {now})")
+        self.injected.remove(alarm)
+
+    def _fault(self, fault: str, module: int | None) -> Alarm:
+        row = parse_fault(fault)
+        if row.table == MODULE and module is None:
+            raise CommandError(f"{row.symbol} is a module alarm (§7.6): target "
+                               f"'{self.device_id}/N'")
+        if module is not None and not 1 <= module <= MAX_MODULES:
+            raise CommandError(f"module {module}: modules are numbered 1..{MAX_MODULES}")
+        return Alarm(row.table, row.code, module or 0)
+
+    def od_fault_active(self) -> bool:
+        return self.alarm is not None
+
+    def od_reset_fault(self) -> int:
+        return self.reset_bit
+
+    def od_set_reset_fault(self, value: int) -> None:
+        rising = bool(value) and not self.reset_bit
+        self.reset_bit = int(bool(value))
+        if rising and self._try_reset(resync=False):  # §6.17: the rising edge resets
+            self._evaluate_alarms()
+            self._refresh()
+
+    def od_emergency_word(self) -> int:
+        return self.alarm.word if self.alarm is not None else 0
+

@@ -1,0 +1,171 @@
+"""The coupler's operator actions: the actions table and the physical causes on the rail.
+
+Targets are ``fastcat`` (the coupler) or ``fastcat/N``: N is the rail position, which is the
+module number the seed counts from 1 as long as the rail has no empty slot (a module missing
+in the middle shifts the bus numbering of the ones after it, as on the real internal bus).
+Module-level actions of :class:`~devices.fastcat.modules.IoModule` are forwarded to the module
+at rail position N. Mapping of causes to alarm codes: docs/fastcat-coupler.md.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Mapping
+from dataclasses import replace
+from typing import TYPE_CHECKING, Any
+
+from devices.device import Action, CommandError, Param
+from devices.fastcat.catalog import CATALOG, module_type
+from devices.fastcat.modules import IoModule
+from devices.fastcat.objects import MAX_MODULES
+from devices.od import ObjectDictionary
+
+if TYPE_CHECKING:
+    from devices.flash import FlashStore
+
+_SLOT = Param("other", int, low=1, high=MAX_MODULES, doc="the other rail position")
+
+COUPLER_ACTIONS: dict[str, Action] = {a.name: a for a in (
+    Action("power", "Switch the coupler supply on or off", (Param("on", bool),)),
+    Action("press_cnf", "Press the CNF button and keep it down (§2)"),
+    Action("release_cnf", "Release CNF: held for 3 s or more, it resets the modules, scans "
+                          "the internal bus and stores the configuration (§2)"),
+    Action("hold_cnf", "Press CNF now and release it after this many seconds (§2)",
+           (Param("seconds", float, low=0.0, high=60.0),)),
+    Action("inject_fault", "Make an alarm cause present: a §7.5 / §7.6 symbol (e.g. "
+                           "MISSING_NODE_ANSWER, TARATURA) or coupler:0xNN / module:0xNN; "
+                           "the target module is byte 0 of the emergency",
+           (Param("fault", str),), module="optional"),
+    Action("clear_fault", "Remove an injected cause (the alarm stays latched until reset)",
+           (Param("fault", str),), module="optional"),
+    Action("set_reset_fault", "Write the Reset fault bit 0x5200:1; a rising edge resets a "
+                              "resettable alarm whose cause is gone (§6.17, §7)",
+           (Param("on", bool),)),
+    Action("write_object", "Write an object (access rights enforced, §6)",
+           (Param("index", int, low=0, high=0xFFFF), Param("sub", int, low=0, high=0xFF),
+            Param("value", int))),
+    Action("read_object", "Read an object (§6)",
+           (Param("index", int, low=0, high=0xFFFF), Param("sub", int, low=0, high=0xFF))),
+    Action("set_rotary", "Turn the address rotary switch (1..15); the coupler reads it at "
+                         "power-up (§6.19, §6.20)", (Param("value", int, low=1, high=15),)),
+    Action("unplug", "Take the module at this rail position off the rail", module="required"),
+    Action("plug", "Put a module of this type on the empty rail position",
+           (Param("type", str, choices=tuple(CATALOG)),), module="required"),
+    Action("swap", "Swap the modules at two rail positions", (_SLOT,), module="required"),
+    Action("module_power", "Switch one module's supply", (Param("on", bool),),
+           module="required"),
+    Action("tbus_voltage", "Internal-bus (Tbus) supply low or normal (module code 0x0C)",
+           (Param("low", bool),)),
+    Action("link", "Plug or unplug the EtherCAT cable (coupler code 0x13)",
+           (Param("connected", bool),)),
+)}
+
+# IoModule actions, addressed as fastcat/N; the coupler's own names win on a clash.
+MODULE_ACTIONS: dict[str, Action] = {
+    name: replace(action, module="required") for name, action in IoModule.ACTIONS.items()
+    if name not in COUPLER_ACTIONS}
+
+
+class RailMixin:
+    """Rail and operator commands of :class:`~devices.fastcat.coupler.FastCat`."""
+
+    # Provided by FastCat (declared for type checkers).
+    rail: list[IoModule | None]
+    shelf: dict[int, IoModule]
+    powered: bool
+    rng: random.Random
+    device_id: str
+    tbus_low: bool
+    link: bool
+    rotary_switch: int
+    od: ObjectDictionary | None
+    flash: FlashStore
+
+    def check_command(self, action: str, args: Mapping[str, Any],
+                      module: int | None = None) -> dict[str, Any]:
+        if action == "write_object" and isinstance(args.get("value"), bool):
+            args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
+        return super().check_command(action, args, module)  # type: ignore[misc]
+
+    def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        if action in MODULE_ACTIONS:
+            self.check_command(action, args, module)
+            return self.rail_module(module).apply(action, args)
+        return super().apply(action, args, module)  # type: ignore[misc]
+
+    def rail_module(self, slot: int | None) -> IoModule:
+        if slot is None or not 1 <= slot <= len(self.rail) or self.rail[slot - 1] is None:
+            raise CommandError(f"{self.device_id}: no module at rail position {slot} "
+                               f"(rail: {self._rail_text()})")
+        module = self.rail[slot - 1]
+        assert module is not None
+        return module
+
+    def _rail_text(self) -> str:
+        return ", ".join(f"{i}={m.mtype.name if m else '-'}" for i, m in
+                         enumerate(self.rail, start=1)) or "empty"
+
+    def cmd_unplug(self, module: int) -> None:
+        taken = self.rail_module(module)
+        taken.plugged = False
+        taken.in_alarm = False
+        self.shelf[module] = taken
+        self.rail[module - 1] = None
+
+    def cmd_plug(self, module: int, type: str) -> None:
+        if module <= len(self.rail) and self.rail[module - 1] is not None:
+            raise CommandError(f"{self.device_id}: rail position {module} is taken by a "
+                               f"{self.rail[module - 1].mtype.name}: unplug it first")
+        mtype = module_type(type)
+        back = self.shelf.get(module)
+        if back is not None and back.mtype is mtype:  # the same module put back
+            new = self.shelf.pop(module)
+        else:
+            new = IoModule(mtype, random.Random(self.rng.getrandbits(64)))
+        new.plugged = True
+        if self.powered:
+            new.reset()  # it powers up from the Tbus
+        self.rail.extend([None] * (module - len(self.rail)))
+        self.rail[module - 1] = new
+
+    def cmd_swap(self, module: int, other: int) -> None:
+        if module == other:
+            raise CommandError(f"swap: rail position {module} with itself")
+        top = max(module, other)
+        self.rail.extend([None] * (top - len(self.rail)))
+        a, b = self.rail[module - 1], self.rail[other - 1]
+        if a is None and b is None:
+            raise CommandError(f"swap: rail positions {module} and {other} are both empty")
+        self.rail[module - 1], self.rail[other - 1] = b, a
+
+    def cmd_module_power(self, module: int, on: bool) -> None:
+        target = self.rail_module(module)
+        if on and not target.powered and self.powered:
+            target.reset()
+        target.powered = on
+
+    def cmd_tbus_voltage(self, low: bool) -> None:
+        self.tbus_low = low
+
+    def cmd_link(self, connected: bool) -> None:
+        self.link = connected
+
+    def cmd_set_rotary(self, value: int) -> None:
+        self.rotary_switch = value  # read at the next power-up, like the real switch
+
+    def cmd_write_object(self, index: int, sub: int, value: int) -> None:
+        self._require_od().write(index, sub, value)
+
+    def cmd_read_object(self, index: int, sub: int) -> Any:
+        return self._require_od().read(index, sub)
+
+    def cmd_set_reset_fault(self, on: bool) -> None:
+        self._require_od().write(0x5200, 1, int(on))
+
+    def _require_od(self) -> ObjectDictionary:
+        if not self.powered:
+            raise CommandError(f"{self.device_id} is not powered")
+        if self.od is None:
+            raise CommandError(f"{self.device_id}: the object dictionary is generated at the "
+                               f"end of the first internal-bus scan (§5); wait for it")
+        return self.od
