@@ -184,12 +184,11 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
         if not self.reachable():
             return
         now, esm = self.now_us, self.esm
-        if target is esm.state:
-            esm.accept(target, now)  # the same state again acknowledges the error flag
-            return
         esm.requested = target
         refusal = request_refusal(esm.state, target)
-        if refusal is not None:
+        if target is esm.state:
+            esm.accept(target, now)  # the same state again acknowledges the error flag
+        elif refusal is not None:
             esm.refuse(refusal, now)
         elif target is AlState.INIT:
             esm.accept(target, now)

@@ -90,6 +90,17 @@ def test_esm_requests(current: AlState, target: AlState) -> None:
         assert bench.fc.snapshot()["leds"]["ERR"] == "blinking"  # ETG.1300: refused
 
 
+def test_requesting_the_current_state_acknowledges_the_error() -> None:
+    """ETG.1000.6: the master acknowledges the error flag by requesting the state again."""
+    bench = Bench()
+    bench.to_state(AlState.PREOP)
+    bench.fc.request_state(AlState.OP)  # PREOP -> OP is not a transition: 0x0011
+    assert (bench.fc.al_status, bench.fc.al_status_code) == (0x12, 0x0011)
+    bench.fc.request_state(AlState.PREOP)
+    assert (bench.fc.al_status, bench.fc.al_status_code) == (0x02, 0)
+    assert bench.fc.snapshot()["leds"]["ERR"] == "off"
+
+
 @pytest.mark.parametrize(("state", "run"), [
     (AlState.INIT, "off"), (AlState.PREOP, "blinking"), (AlState.SAFEOP, "single_flash"),
     (AlState.OP, "on"),
