@@ -1,0 +1,87 @@
+"""Events as text log lines: the entity they go under, a readable line and a log level.
+
+Levels (issue 6): an emergency or an active alarm is a warning or an error, everything else is
+information. Codes print as the event schema prints them (``0xFF00``), with the meaning from
+the shared code tables where the rig has one (AL status codes, seed 000 §7.7).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from app.recording.signals import device_path, state_lane
+from devices.ethercat import describe_al_status_code
+from devices.events import Event
+
+INFO, WARN, ERROR = "INFO", "WARN", "ERROR"
+
+
+def _state(r: dict[str, Any]) -> str:
+    machine = r.get("machine") or "state"
+    return f"{machine}: {r['from']} -> {r['to']}"
+
+
+def _emergency(r: dict[str, Any]) -> str:
+    return f"EMCY {r['code']} register {r['register']} data [{r['data']}]"
+
+
+def _al_status(r: dict[str, Any]) -> str:
+    return f"AL status code {r['code']}: {describe_al_status_code(int(r['code'], 16))}"
+
+
+def _alarm(r: dict[str, Any]) -> str:
+    where = f" (module {r['module']})" if r.get("module") else ""
+    what = "raised" if r["active"] else "cleared"
+    return f"alarm {r['code']} {r['name']} {what}{where}"
+
+
+def _log(r: dict[str, Any]) -> str:
+    return f"[port {r['port']}] {r['text']}" if r.get("port") else str(r["text"])
+
+
+FORMATS: dict[str, Callable[[dict[str, Any]], str]] = {
+    "state": _state,
+    "emergency": _emergency,
+    "al_status": _al_status,
+    "led": lambda r: f"LED {r['led']}: {r['pattern']}",
+    "alarm": _alarm,
+    "log": _log,
+    "caption": lambda r: f"caption: {r['text']}",
+    "checkpoint": lambda r: f"checkpoint: {r['name']}",
+    "read": lambda r: f"read {r['address']} = {r['value']}"
+                      + (f" ({r['hex']})" if r.get("hex") else ""),
+}
+
+
+def level(event: Event, record: dict[str, Any]) -> str:
+    if event.kind == "alarm":
+        return ERROR if record["active"] else INFO
+    if event.kind == "emergency":
+        # Error code 0x0000 is the "error reset / no error" emergency (DS301): good news.
+        return INFO if int(record["code"], 16) == 0 else WARN
+    if event.kind == "al_status":
+        return INFO if int(record["code"], 16) == 0 else WARN
+    return INFO
+
+
+def text(event: Event, record: dict[str, Any]) -> str:
+    fmt = FORMATS.get(event.kind)
+    if fmt is None:
+        extra = ", ".join(f"{k}={v}" for k, v in record.items()
+                          if k not in ("t", "device", "event"))
+        return f"{event.kind}: {extra}" if extra else event.kind
+    return fmt(record)
+
+
+def log_path(event: Event) -> str:
+    return device_path(event.device, "events")
+
+
+def lane_change(event: Event, record: dict[str, Any]) -> tuple[str, str] | None:
+    """(lane path, new value) when the event moves a state lane (a state machine, an LED)."""
+    if event.kind == "state":
+        return state_lane(event.device, record.get("machine", "")), str(record["to"])
+    if event.kind == "led":
+        return device_path(event.device, "led", record["led"]), str(record["pattern"])
+    return None

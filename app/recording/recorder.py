@@ -1,0 +1,296 @@
+"""Record a rig to a Rerun file: events as text logs, states as lanes, signals as scalars.
+
+Everything is on the timeline ``sim_time`` (a duration: simulated time since the rig started),
+never on the wall clock, so a recording of a scenario is the same however fast it ran.
+
+Recording must not slow the simulation (issue 6). Nothing is sent per simulation step: the
+recorder buffers rows in memory and sends each entity's rows as one column batch
+(``send_columns``, ~40 us per call whatever its length) every ``flush_period_us`` of simulated
+time or ``max_buffered_rows`` rows. Snapshots are sampled every ``sample_period_us`` of
+simulated time, not every 1 ms step; events are recorded with their own time stamps, so a
+state or LED change is exact even between samples. See docs/recording.md.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+import rerun as rr
+
+from app.recording import event_text
+from app.recording.blueprint import TIMELINE, lane_style, rig_blueprint, series_style
+from app.recording.signals import SeriesInfo, Signal, rig_signals, state_values
+from devices.events import Event
+
+if TYPE_CHECKING:
+    from app.rig import Rig
+    from app.runtime import Runtime
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_SAMPLE_PERIOD_US = 10_000  # 100 Hz: 5 samples per half period of a flickering LED
+DEFAULT_FLUSH_PERIOD_US = 5_000_000  # each send costs ~2 KB of chunk header per entity
+DEFAULT_MAX_BUFFERED_ROWS = 20_000
+
+
+@dataclass
+class _Column:
+    """Rows of one entity waiting to be sent: times (us) and one value per row."""
+
+    times: list[int] = field(default_factory=list)
+    values: list[Any] = field(default_factory=list)
+    levels: list[str] = field(default_factory=list)  # text logs only
+    width: int = 0  # scalars only: series per row
+    last: Any = None  # scalars only: the last row kept
+    held_us: int | None = None  # scalars only: time of the last sample equal to ``last``
+
+    def add_sample(self, t_us: int, row: tuple[float, ...]) -> bool:
+        """Keep a sample only when it differs from the last one kept; before it, keep the
+        last equal sample too, so a plot holds the old value up to the change instead of
+        ramping across the gap. Returns whether a row was added."""
+        if row == self.last:
+            self.held_us = t_us
+            return False
+        self.hold()
+        self.times.append(t_us)
+        self.values.append(row)
+        self.last = row
+        return True
+
+    def hold(self) -> None:
+        """Keep the pending equal sample (at a change, a flush, the end)."""
+        if self.held_us is not None:
+            self.times.append(self.held_us)
+            self.values.append(self.last)
+            self.held_us = None
+
+    def take(self) -> tuple[np.ndarray, list[Any], list[str]]:
+        times = np.array(self.times, dtype="timedelta64[us]")
+        out = times, self.values, self.levels
+        self.times, self.values, self.levels = [], [], []
+        return out
+
+
+class RigRecorder:
+    """One Rerun recording of one rig, written to ``path`` (a ``.rrd`` file).
+
+    Thread-safe: the simulation thread calls :meth:`observe`; any thread may call
+    :meth:`flush` (e.g. a download button) or :meth:`close`.
+    """
+
+    def __init__(self, path: str | Path, application_id: str = "fieldrig",
+                 recording_id: str | None = None, *,
+                 sample_period_us: int = DEFAULT_SAMPLE_PERIOD_US,
+                 flush_period_us: int = DEFAULT_FLUSH_PERIOD_US,
+                 max_buffered_rows: int = DEFAULT_MAX_BUFFERED_ROWS,
+                 blueprint: bool = True) -> None:
+        if sample_period_us <= 0 or flush_period_us <= 0 or max_buffered_rows <= 0:
+            raise ValueError("sample period, flush period and buffer size must be positive")
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.sample_period_us = sample_period_us
+        self.flush_period_us = flush_period_us
+        self.max_buffered_rows = max_buffered_rows
+        self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
+        self._rec.set_sinks(rr.FileSink(str(self.path)))
+        self._lock = threading.Lock()
+        self._scalars: dict[str, _Column] = {}
+        self._texts: dict[str, _Column] = {}
+        self._lanes: dict[str, _Column] = {}
+        self._lane_now: dict[str, str] = {}  # last value sent or buffered per lane
+        self._styled: dict[str, SeriesInfo] = {}  # entity -> the style it was given
+        self._buffered = 0
+        self._next_sample_us: int | None = None  # None: sample at the first chance
+        self._last_flush_us = 0
+        self._send_blueprint = blueprint
+        self._named = False
+        self._closed = False
+
+    # ---- what the simulation side calls ----------------------------------------------------
+    def sample_due(self, t_us: int) -> bool:
+        """Whether a snapshot taken at ``t_us`` would be recorded (take one only then)."""
+        return self._next_sample_us is None or t_us >= self._next_sample_us
+
+    def observe(self, t_us: int, snapshot: Mapping[str, Any] | None,
+                events: Iterable[Event]) -> None:
+        """Record ``events`` (each at its own time) and, if given, the rig ``snapshot``
+        (:meth:`app.rig.Rig.snapshot`) as a sample at ``t_us``."""
+        with self._lock:
+            if self._closed:
+                return
+            for event in events:
+                self._event(event)
+            if snapshot is not None:
+                self._sample(t_us, snapshot)
+            if (t_us - self._last_flush_us >= self.flush_period_us
+                    or self._buffered >= self.max_buffered_rows):
+                self._send_buffers()
+                self._last_flush_us = t_us
+
+    # ---- what owners call ------------------------------------------------------------------
+    def flush(self, timeout_s: float = 10.0) -> None:
+        """Send everything buffered and wait until it is in the file."""
+        with self._lock:
+            if self._closed:
+                return
+            self._send_buffers(hold=True)
+        self._rec.flush(timeout_sec=timeout_s)
+
+    def recording_bytes(self) -> bytes:
+        """The recording so far, as a file the viewer opens (for a download button)."""
+        self.flush()
+        return self.path.read_bytes()
+
+    def close(self) -> None:
+        """Send what is buffered, finish the file (with its footer) and stop recording."""
+        with self._lock:
+            if self._closed:
+                return
+            self._send_buffers(hold=True)
+            self._closed = True
+        self._rec.flush()
+        self._rec.disconnect()
+        logger.info("recording written to %s", self.path)
+
+    def __enter__(self) -> RigRecorder:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # ---- buffering ---------------------------------------------------------------------------
+    def _event(self, event: Event) -> None:
+        record = event.to_record()
+        column = self._texts.setdefault(event_text.log_path(event), _Column())
+        column.times.append(event.t_us)
+        column.values.append(event_text.text(event, record))
+        column.levels.append(event_text.level(event, record))
+        self._buffered += 1
+        lane = event_text.lane_change(event, record)
+        if lane is not None:
+            self._lane(lane[0], event.t_us, lane[1], exact=True)
+
+    def _lane(self, path: str, t_us: int, value: str, exact: bool = False) -> None:
+        """A lane keeps changes only. Events (``exact``) carry the time of the change; samples
+        catch the initial state and anything no event reported. When a live runtime hands
+        over a batch's events after a sample already showed the change, the buffered row
+        moves back to the event's time."""
+        if self._lane_now.get(path) == value:
+            column = self._lanes[path]
+            if exact and column.times and column.values[-1] == value and t_us < column.times[-1]:
+                column.times[-1] = t_us
+            return
+        if path not in self._lane_now:
+            style = lane_style(path)
+            if style is not None:
+                self._rec.log(path, style, static=True)
+        self._lane_now[path] = value
+        column = self._lanes.setdefault(path, _Column())
+        column.times.append(t_us)
+        column.values.append(value)
+        self._buffered += 1
+
+    def _sample(self, t_us: int, snapshot: Mapping[str, Any]) -> None:
+        if not self._named:
+            self._start(snapshot, t_us)
+        for device_id, snap in (snapshot.get("devices") or {}).items():
+            for path, value in state_values(device_id, snap):
+                self._lane(path, t_us, value)
+        for _device, signal in rig_signals(snapshot, t_us):
+            self._scalar(t_us, signal)
+        period = self.sample_period_us
+        self._next_sample_us = (t_us // period + 1) * period  # stay on a regular grid
+
+    def _start(self, snapshot: Mapping[str, Any], t_us: int) -> None:
+        self._named = True
+        if snapshot.get("rig"):
+            self._rec.send_recording_name(str(snapshot["rig"]))
+        if self._send_blueprint:
+            self._rec.send_blueprint(rig_blueprint(snapshot, t_us))
+
+    def _scalar(self, t_us: int, signal: Signal) -> None:
+        column = self._scalars.get(signal.path)
+        if column is None:
+            column = self._scalars[signal.path] = _Column(width=len(signal.values))
+        elif column.width != len(signal.values):
+            # The module behind this entity changed (another type plugged): the rows sent
+            # so far keep their width; a new column starts with the new one.
+            self._send_scalars(signal.path, column)
+            column.width, column.last, column.held_us = len(signal.values), None, None
+        styled = self._styled.get(signal.path)
+        if styled is not signal.info and styled != signal.info:  # cached: usually the same
+            self._rec.log(signal.path, series_style(signal), static=True)
+            self._styled[signal.path] = signal.info
+        if column.add_sample(t_us, signal.values):
+            self._buffered += 1
+
+    # ---- sending -----------------------------------------------------------------------------
+    def _send_scalars(self, path: str, column: _Column, hold: bool = False) -> None:
+        if hold:
+            column.hold()  # the plot reaches this instant, not only the last change
+        if not column.times:
+            return
+        times, rows, _ = column.take()
+        values = np.array(rows, dtype=np.float64).reshape(len(rows), column.width)
+        self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
+                               columns=rr.Scalars.columns(scalars=values))
+
+    def _send_buffers(self, hold: bool = False) -> None:
+        """Send every buffered row, one ``send_columns`` per entity that has rows. ``hold``
+        also sends each signal's pending unchanged sample (at an explicit flush and at the
+        end); periodic flushes leave it pending so a quiet signal costs nothing."""
+        for path, column in self._scalars.items():
+            self._send_scalars(path, column, hold)
+        for path, column in self._texts.items():
+            if column.times:
+                times, texts, levels = column.take()
+                self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
+                                       columns=rr.TextLog.columns(text=texts, level=levels))
+        for path, column in self._lanes.items():
+            if column.times:
+                times, states, _ = column.take()
+                self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
+                                       columns=rr.StateChange.columns(state=states))
+        self._buffered = 0
+
+
+def attach_to_runtime(runtime: Runtime, recorder: RigRecorder) -> None:
+    """Record a live runtime. Everything runs in the simulation thread, where the rig may be
+    read: events after each batch (each at its own time), and a snapshot whenever a sample is
+    due. Samples need a hook that runs after every simulation step (``add_step_listener``,
+    see docs/recording.md "Live sessions"); without one they are taken after batches with
+    events only."""
+    rig = runtime.rig
+
+    def on_batch(events: list[Event]) -> None:
+        t_us = rig.clock.now_us
+        due = not per_step and recorder.sample_due(t_us)
+        recorder.observe(t_us, rig.snapshot() if due else None, events)
+
+    def on_step(t_us: int) -> None:
+        if recorder.sample_due(t_us):
+            recorder.observe(t_us, rig.snapshot(), [])
+
+    add_step_listener = getattr(runtime, "add_step_listener", None)
+    per_step = add_step_listener is not None
+    if add_step_listener is not None:
+        add_step_listener(on_step)
+    runtime.add_listener(on_batch)
+    # The state before the first batch (and the blueprint) even if nothing happens for a while.
+    runtime.submit(lambda: recorder.observe(rig.clock.now_us, rig.snapshot(), []))
+
+
+def scenario_observer(recorder: RigRecorder) -> Callable[[Rig, list[Event]], None]:
+    """A per-simulation-step hook for a headless run: ``hook(rig, events_of_the_step)``."""
+
+    def on_tick(rig: Rig, events: list[Event]) -> None:
+        t_us = rig.clock.now_us
+        recorder.observe(t_us, rig.snapshot() if recorder.sample_due(t_us) else None, events)
+
+    return on_tick

@@ -1,0 +1,184 @@
+"""What a rig snapshot contributes to a recording: sampled scalar signals and state lanes.
+
+Kept apart from the recorder so that the blueprint lays out exactly the entities the recorder
+writes: both ask :func:`device_signals` for the same list. Extractors are chosen by the
+snapshot's ``kind`` (a table, :data:`EXTRACTORS`); a kind without one still gets its LEDs and
+state lanes, so a new device shows up in recordings before it has its own extractor.
+
+This runs at every sample (100 times per simulated second by default), so everything about an
+entity except its values (path, series names, plot) is built once and cached.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from dataclasses import dataclass
+from typing import Any, NamedTuple
+
+from devices.leds import LedPattern, is_lit
+
+ROOT = "rig"
+
+# Snapshot keys that hold a state machine's current state, and the lane (StateChanged.machine)
+# they feed; "" is the device's main state machine (for EtherCAT slaves, the ESM).
+STATE_KEYS: dict[str, str] = {"esm": "", "ds402_state": "ds402"}
+
+# Drive signals recorded from a servo snapshot (issue 6: position, velocity, following error).
+DRIVE_SIGNALS = ("position", "velocity", "following_error")
+
+# LED colours for the plots, by the colour in the LED's name (ETG.1300: RUN green, ERR red;
+# FastCAT module LEDs are "<slot>.red" / "<slot>.yellow").
+LED_RGBA = {"red": 0xE53935FF, "yellow": 0xFBC02DFF, "green": 0x43A047FF}
+
+_PATTERNS = {p.value: p for p in LedPattern}
+
+
+@dataclass(frozen=True)
+class SeriesInfo:
+    """How an entity's series are named and plotted; the same for all its samples."""
+
+    names: tuple[str, ...]
+    view: str  # title of the plot it belongs to; entities with one title share a plot
+    step: bool = False  # digital-like: draw as steps, not as a ramp between samples
+    colors: tuple[int, ...] | None = None
+
+
+class Signal(NamedTuple):
+    """One entity's sample: a row of values (one per series) under an entity path."""
+
+    path: str
+    values: tuple[float, ...]
+    info: SeriesInfo
+
+    @property
+    def view(self) -> str:
+        return self.info.view
+
+
+@functools.lru_cache(maxsize=4096)
+def device_path(device_id: str, *parts: object) -> str:
+    return "/".join([ROOT, device_id, *(str(p) for p in parts)])
+
+
+def state_lane(device_id: str, machine: str) -> str:
+    """Entity path of a state machine's lane: ``rig/<device>/state[/<machine>]``."""
+    return device_path(device_id, "state", machine) if machine else device_path(device_id,
+                                                                                "state")
+
+
+def led_lane(device_id: str, led: str) -> str:
+    return device_path(device_id, "led", led)
+
+
+@functools.lru_cache(maxsize=1024)
+def led_color(led: str) -> int:
+    name = led.rsplit(".", 1)[-1].lower()
+    if name in LED_RGBA:
+        return LED_RGBA[name]
+    return LED_RGBA["red"] if name.startswith("err") else LED_RGBA["green"]
+
+
+@functools.lru_cache(maxsize=1024)
+def _led_info(device_id: str, led: str) -> SeriesInfo:
+    return SeriesInfo((led,), f"{device_id} LEDs (lit)", step=True, colors=(led_color(led),))
+
+
+@functools.lru_cache(maxsize=4096)
+def _series(prefix: str, count: int, view: str, step: bool = False) -> SeriesInfo:
+    """Series ``"di 1"``, ``"di 2"``, ...: channels numbered as printed on the module (the
+    ``channel`` parameter of the FastCAT actions counts from 1)."""
+    return SeriesInfo(tuple(f"{prefix} {ch}" for ch in range(1, count + 1)), view, step)
+
+
+@functools.lru_cache(maxsize=1024)
+def _single(name: str, view: str) -> SeriesInfo:
+    return SeriesInfo((name,), view)
+
+
+def _num(value: Any) -> float:
+    if value is None:
+        return math.nan
+    try:
+        return float(value)  # bools too: True -> 1.0
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def _row(values: Iterable[Any]) -> tuple[float, ...]:
+    try:
+        return tuple(map(float, values))
+    except (TypeError, ValueError):
+        return tuple(_num(v) for v in values)
+
+
+def led_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    """LEDs as lit (1) / dark (0) at ``t_us``, from the pattern the snapshot shows."""
+    for led, name in (snap.get("leds") or {}).items():
+        pattern = _PATTERNS.get(name)
+        if pattern is None:
+            continue  # not an ETG.1300 pattern name: nothing sensible to plot
+        yield Signal(device_path(device_id, "led", led), (1.0 if is_lit(pattern, t_us) else 0.0,),
+                     _led_info(device_id, led))
+
+
+def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str, str]]:
+    """(lane path, value) of every state machine and LED pattern the snapshot shows."""
+    for key, machine in STATE_KEYS.items():
+        if isinstance(snap.get(key), str):
+            yield state_lane(device_id, machine), snap[key]
+    for led, pattern in (snap.get("leds") or {}).items():
+        if isinstance(pattern, str):
+            yield led_lane(device_id, led), pattern
+
+
+_FASTCAT_IO = (("di", "digital", True), ("do", "digital", True),
+               ("ai", "analog in (raw)", False), ("ao", "analog out (raw)", False))
+_FASTCAT_ENCODER = (("position", "encoder position"), ("rpm", "encoder rpm"))
+
+
+def _fastcat(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    """The rail's process data: digital in/out as 0/1, analog raw codes, encoder counts."""
+    for i, module in enumerate(snap.get("rail") or []):
+        slot = module.get("slot", i + 1)
+        mtype = module.get("type")
+        for key, title, step in _FASTCAT_IO:
+            values = module.get(key)
+            if values:
+                yield Signal(device_path(device_id, "io", slot, key), _row(values),
+                             _series(key, len(values), f"{device_id} {slot} {mtype} {title}",
+                                     step))
+        encoders = module.get("encoders")
+        if encoders:
+            for key, title in _FASTCAT_ENCODER:
+                yield Signal(device_path(device_id, "io", slot, key),
+                             _row(e.get(key) for e in encoders),
+                             _series(f"{key} encoder", len(encoders),
+                                     f"{device_id} {slot} {mtype} {title}"))
+
+
+def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    for key in DRIVE_SIGNALS:
+        if key in snap:
+            yield Signal(device_path(device_id, "drive", key), (_num(snap[key]),),
+                         _single(key, f"{device_id} {key.replace('_', ' ')}"))
+
+
+Extractor = Callable[[str, Mapping[str, Any], int], Iterator[Signal]]
+
+EXTRACTORS: dict[str, Extractor] = {"fastcat": _fastcat, "servo": _servo}
+
+
+def device_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    """Every sampled signal of one device snapshot: its LEDs, then its kind's own signals."""
+    yield from led_signals(device_id, snap, t_us)
+    extractor = EXTRACTORS.get(str(snap.get("kind", "")))
+    if extractor is not None:
+        yield from extractor(device_id, snap, t_us)
+
+
+def rig_signals(snapshot: Mapping[str, Any], t_us: int) -> Iterator[tuple[str, Signal]]:
+    for device_id, snap in (snapshot.get("devices") or {}).items():
+        for signal in device_signals(device_id, snap, t_us):
+            yield device_id, signal
