@@ -1,0 +1,164 @@
+"""Alarm codes of the drive, their effect and the 0x603F error codes, as data.
+
+Sources: seed 004 ch. 3 "Codici di Allarme" (codes 1-10, 13-16, 22-26 with meaning and action),
+ch. 5 "Codici allarmi specifici" (0x603F table; adds 11, 12, 20, 21 and the fieldbus codes
+30-35 for EtherCAT) and ch. 6 (30-34 for Profinet, with "Resettabile" NO for 30-33).
+An action printed "Asse rilasciato immediatamente" releases the axis at once (torque off);
+where the action is blank or "-" the model stops the axis on the emergency ramp before torque
+goes off (docs/servo-drive.md §Alarms).
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+GENERIC_ERROR_CODE = 0x1000  # DS402 "generic error", for the codes ch. 5 prints "-" or omits
+
+
+class Effect(enum.Enum):
+    RELEASE = "axis released immediately"
+    STOP = "none printed: stop on the emergency ramp, then torque off"
+
+
+@dataclass(frozen=True)
+class AlarmSpec:
+    code: int
+    name: str
+    description: str
+    effect: Effect
+    error_code: int | None  # 0x603F sub0; None where the seed prints none
+    resettable: bool = True
+
+    @property
+    def error_code_or_generic(self) -> int:
+        return self.error_code if self.error_code is not None else GENERIC_ERROR_CODE
+
+    def as_dict(self) -> dict[str, object]:
+        return {"code": self.code, "name": self.name, "description": self.description,
+                "effect": self.effect.value}
+
+
+R, N = Effect.RELEASE, Effect.STOP
+_DRIVE_ALARMS: tuple[AlarmSpec, ...] = (
+    AlarmSpec(1, "IGBT", "IGBT module: overcurrent, overtemperature or short circuit", R,
+              0x2340),
+    AlarmSpec(2, "MOTOR_THERMAL", "motor overtemperature", N, 0x7120),
+    AlarmSpec(3, "MOTOR_CURRENT", "excessive motor current", R, 0x2310),
+    AlarmSpec(4, "OVERVOLTAGE", "excessive voltage on the DC power bus", R, 0x3210),
+    AlarmSpec(5, "UNDERVOLTAGE", "DC power bus voltage below the minimum", N, 0x3220),
+    AlarmSpec(6, "DRIVE_THERMAL", "drive overtemperature", N, 0x4310),
+    AlarmSpec(7, "HARDWARE", "hardware fault (DSP processor in fault)", N, 0x5220),
+    AlarmSpec(8, "POSITION_SENSOR", "position sensor (resolver or encoder) malfunction", R,
+              0x7300),
+    AlarmSpec(9, "FLASH", "non-volatile memory (flash) malfunction", R, 0x5500),
+    AlarmSpec(10, "BRAKING_RESISTOR", "excessive braking resistor intervention", N, 0x7110),
+    AlarmSpec(11, "NETWORK_COMMUNICATION", "network communication error", N, 0x7500),
+    AlarmSpec(12, "HOMING_OPERATION", "error during the homing operation", N, 0x7320),
+    AlarmSpec(13, "NETWORK", "network communication error", N, 0x7500),
+    AlarmSpec(14, "HOMING", "homing error: homing not completed correctly", R, 0x7320),
+    AlarmSpec(15, "OVERFLOW", "overflow in the positioning system", N, 0x5500),
+    AlarmSpec(16, "FOLLOWING_ERROR", "maximum position following error exceeded for longer "
+              "than the timeout", R, 0x8611),
+    AlarmSpec(20, "LS1", "negative limit switch (LS1) reached", N, 0x8612),
+    AlarmSpec(21, "LS2", "positive limit switch (LS2) reached", N, 0x8612),
+    AlarmSpec(22, "ABS_ENCODER_HOMING", "absolute encoder zeroing not done", R, None),
+    AlarmSpec(23, "ABS_ENCODER_ALIGNMENT", "motor alignment with the absolute encoder not done",
+              R, 0x7300),
+    AlarmSpec(24, "ABS_ENCODER_COMMUNICATION", "communication with the absolute encoder failed",
+              R, 0x7300),
+    AlarmSpec(25, "AXIS_MOVING_AT_POWER_ON", "axis found moving at power-on (absolute encoder)",
+              R, 0x7300),
+    AlarmSpec(26, "MODE_NOT_ALLOWED", "operating mode not compatible with an external encoder",
+              R, 0x5114),
+)
+
+# Ch. 5 (EtherCAT); used for Modbus and CANopen too, whose chapters print no 30-35 table.
+_FIELDBUS_ALARMS: tuple[AlarmSpec, ...] = (
+    AlarmSpec(30, "INTERNAL_COMM_TIMEOUT", "drive internal communication timeout", N, None),
+    AlarmSpec(31, "INTERNAL_COMM_1", "drive internal communication error 1", N, 0x7500),
+    AlarmSpec(32, "INTERNAL_COMM_2", "drive internal communication error 2", N, 0x7500),
+    AlarmSpec(33, "PDO_MAPPING", "PDO mapping not done correctly", N, 0x6320),
+    AlarmSpec(34, "SYNC_TIMEOUT", "synchronisation timeout with the EtherCAT master", N, 0x8700),
+    AlarmSpec(35, "ECAT_EEPROM", "EtherCAT EEPROM load error at start-up", N, 0x5530),
+)
+
+# Ch. 6 (Profinet): 30-33 not resettable, 34 resettable with control word 0x08.
+_PROFINET_ALARMS: tuple[AlarmSpec, ...] = (
+    AlarmSpec(30, "INTERNAL_COMM_TIMEOUT", "drive internal communication timeout", N, None,
+              resettable=False),
+    AlarmSpec(31, "PROFINET_INIT_1", "Profinet interface initialisation error, phase 1", N,
+              0x7500, resettable=False),
+    AlarmSpec(32, "PROFINET_INIT_2", "Profinet interface initialisation error, phase 2", N,
+              0x7500, resettable=False),
+    AlarmSpec(33, "PROFINET_NOT_STARTED", "Profinet fieldbus did not start correctly", N,
+              0x6320, resettable=False),
+    AlarmSpec(34, "PROFINET_SYNC_TIMEOUT", "synchronisation timeout with the Profinet master", N,
+              0x8700),
+)
+del R, N
+
+DRIVE_ALARMS: dict[int, AlarmSpec] = {a.code: a for a in _DRIVE_ALARMS}
+
+
+def alarm_table(fieldbus: str) -> dict[int, AlarmSpec]:
+    """Every alarm the drive can raise with the given fieldbus (c9 latched at power-up)."""
+    bus = _PROFINET_ALARMS if fieldbus == "profinet" else _FIELDBUS_ALARMS
+    return {**DRIVE_ALARMS, **{a.code: a for a in bus}}
+
+
+def lookup(fieldbus: str, key: int | str) -> AlarmSpec:
+    """An alarm by code (16, "16") or name ("FOLLOWING_ERROR"), or KeyError with the choices."""
+    table = alarm_table(fieldbus)
+    if isinstance(key, str):
+        text = key.strip()
+        if text.isdigit():
+            key = int(text)
+        else:
+            for spec in table.values():
+                if spec.name == text.upper():
+                    return spec
+            raise KeyError(f"no alarm named {key!r}")
+    if key not in table:
+        raise KeyError(f"no alarm {key} (codes: {', '.join(str(c) for c in sorted(table))})")
+    return table[key]
+
+
+@dataclass
+class AlarmBank:
+    """Latched alarms in the order they came, and the causes still present.
+
+    A cause is what keeps an alarm from being reset: an injected fault until it is cleared, or a
+    condition the model sees (e.g. a flash write that failed). Event alarms (following error,
+    limit switch, homing error) have no lasting cause once the axis is released.
+    """
+
+    latched: list[int]
+    causes: set[int]
+
+    @classmethod
+    def empty(cls) -> AlarmBank:
+        return cls([], set())
+
+    @property
+    def active(self) -> int:
+        """alarm_code R46: the first alarm still latched, 0 when none."""
+        return self.latched[0] if self.latched else 0
+
+    def latch(self, code: int, lasting_cause: bool) -> bool:
+        """Latch an alarm; True when it was not latched before."""
+        if lasting_cause:
+            self.causes.add(code)
+        if code in self.latched:
+            return False
+        self.latched.append(code)
+        return True
+
+    def remove_cause(self, code: int) -> None:
+        self.causes.discard(code)
+
+    def reset(self, table: dict[int, AlarmSpec]) -> list[int]:
+        """Alarm reset: drop the resettable alarms whose cause is gone; return them."""
+        cleared = [c for c in self.latched if c not in self.causes and table[c].resettable]
+        self.latched = [c for c in self.latched if c not in cleared]
+        return cleared

@@ -1,0 +1,59 @@
+"""How a rig sets up one servo drive: keypad defaults, mechanics and wiring."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from devices.servo.parameters import C9_BY_FIELDBUS
+from devices.servo.plant import AxisGeometry
+
+
+@dataclass(frozen=True)
+class DriveConfig:
+    """One drive in a rig. Positions are user units at ``feed_constant`` units per motor turn."""
+
+    #: c7 at first power-up (1..99; a Modbus line addresses 1..90, seed 004 ch. 2)
+    node_id: int = 1
+    #: c9 at first power-up: "modbus" (3), "canopen" (5), "ethercat" (11), "profinet" (13)
+    fieldbus: str = "modbus"
+    #: R02 at first power-up, and the scale of the axis positions below
+    feed_constant: int = 6000
+    neg_limit: float = -60_000.0  # negative limit switch, active at and below
+    pos_limit: float = 660_000.0  # positive limit switch, active at and above
+    home_switch: float = -3_000.0  # home switch, active at and above
+    marker_offset: float = 1_500.0  # one encoder marker per motor turn, the first one here
+    start_position: float = 0.0  # where the carriage stands at power-on
+    end_margin_turns: float = 1.0  # mechanical end stops beyond the limit switches
+    max_speed_rpm: float = 3000.0  # the motor's rated speed (d3 = 100 % of it)
+    position_lag_ms: float = 2.0  # position loop time constant at i1 = 50 %
+    load_inertia: float = 1.0  # load / motor inertia (scales the current readings o1..o3)
+    quick_stop_decel: float = 200.0  # emergency ramp at f3 = 50 %, rev/s^2
+    ten_wired: bool = True  # TEN wired to 24 V (seed 004 ch. 2 example)
+    ien_wired: bool = True  # IEN wired to 24 V
+    parameters: Mapping[str, int] = field(default_factory=dict)  # keypad values at first power-up
+    registers: Mapping[int, int] = field(default_factory=dict)  # register values likewise
+
+    def __post_init__(self) -> None:
+        if not 1 <= self.node_id <= 99:
+            raise ValueError(f"node_id {self.node_id} is outside 1..99 (parameter c7)")
+        if self.fieldbus not in C9_BY_FIELDBUS:
+            raise ValueError(f"fieldbus {self.fieldbus!r} is not one of "
+                             f"{', '.join(C9_BY_FIELDBUS)}")
+        if not 1 <= self.feed_constant <= 0x3FFFF:
+            raise ValueError(f"feed_constant {self.feed_constant} is outside 1..0x3FFFF (R02)")
+        if not self.neg_limit < self.pos_limit:
+            raise ValueError("neg_limit must be below pos_limit")
+        if not self.neg_limit < self.start_position < self.pos_limit:
+            raise ValueError("start_position must lie between the limit switches")
+        for name in ("max_speed_rpm", "position_lag_ms", "quick_stop_decel", "end_margin_turns"):
+            if getattr(self, name) <= 0:
+                raise ValueError(f"{name} must be positive")
+        if self.load_inertia < 0:
+            raise ValueError("load_inertia must not be negative")
+
+    def geometry(self) -> AxisGeometry:
+        """The axis in motor turns (the plant's unit)."""
+        f = float(self.feed_constant)
+        return AxisGeometry(self.neg_limit / f, self.pos_limit / f, self.home_switch / f,
+                            self.marker_offset / f, self.end_margin_turns)

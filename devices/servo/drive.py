@@ -1,0 +1,424 @@
+"""The servo drive: one state behind the register view (R00..R133, parameters) and the CiA 402
+object dictionary, a motor that moves, alarms, digital I/O and the flash.
+
+Seed 004 ch. 1-5, digest §5. docs/servo-drive.md explains the choices made where the seed is
+ambiguous. The drive advances in ticks of at most 1 ms of simulated time.
+"""
+
+from __future__ import annotations
+
+import logging
+import random
+from typing import Any
+
+from devices.device import CommandError, DeviceModel
+from devices.events import LogLine
+from devices.flash import FlashStore
+from devices.servo import control, ds402
+from devices.servo.actions import DriveActions
+from devices.servo.alarms import AlarmBank, AlarmSpec, Effect, alarm_table
+from devices.servo.config import DriveConfig
+from devices.servo.display import display_text
+from devices.servo.ds402 import Command, State
+from devices.servo.errors import AccessError
+from devices.servo.io import INPUT_NAMES, LatchFilter, input_word, output_levels
+from devices.servo.modes import MODE_CLASSES, Mode
+from devices.servo.motion import Trajectory
+from devices.servo.od_map import IndirectAccess, build_object_dictionary
+from devices.servo.parameters import (
+    FIELDBUS_BY_C9,
+    PARAMETERS,
+    SAVE_COMMAND_ADDRESS,
+    SAVE_COMMAND_VALUE,
+    parameter_spec,
+)
+from devices.servo.plant import Plant
+from devices.servo.readings import CurrentMeter, DriveReadings
+from devices.servo.registers import (
+    DISABLED_32,
+    MODE_NAMES,
+    REGISTERS,
+    R,
+    register_spec,
+)
+from devices.servo.saving import DriveFlash
+from devices.servo.statemachine import DriveStateMachine
+
+__all__ = ["DriveConfig", "ServoDrive"]
+
+logger = logging.getLogger(__name__)
+
+TICK_US = 1_000
+BOOT_US = 50_000  # Not ready to switch on -> Switch on disabled after the self test
+SWITCHES = ("neg_limit", "pos_limit", "home")
+
+
+class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, DeviceModel):
+    KIND = "servo"
+
+    def __init__(self, device_id: str, rng: random.Random, config: DriveConfig,
+                 flash: FlashStore) -> None:
+        super().__init__(device_id=device_id, rng=rng)
+        self.config, self.flash = config, flash
+        self.geometry = config.geometry()
+        start = config.start_position / config.feed_constant
+        self.plant = Plant(self.geometry, start)
+        self.trajectory = Trajectory(start)
+        self.wired: dict[str, bool] = {"ten": config.ten_wired, "ien": config.ien_wired}
+        self.meter = CurrentMeter()
+        self.powered = False
+        self.state = State.NOT_READY_TO_SWITCH_ON
+        self.params: dict[int, int] = {}
+        self.regs: dict[int, int] = {}
+        self.latched_at_power_up: dict[str, int] = {}
+        self.master_rpm = 0.0
+        self.analog_volts = 0.0
+        self._t_us = 0
+        self._reset_runtime()
+        self.indirect = IndirectAccess(self)
+        self.od = build_object_dictionary(self)
+        self._power_up()
+
+    # ---- power -----------------------------------------------------------------------------
+    def _reset_runtime(self) -> None:
+        self.cw = 0
+        self.ien_cmd = False
+        self.cw_source = "register"
+        self.alarms = AlarmBank.empty()
+        self.latch = LatchFilter()
+        self.latched_flag = False
+        self.homed = False
+        self.ip_set_point = 0
+        self.saving_until: int | None = None
+        self.save_pending: str | None = None
+        self.save_trigger: str | None = None
+        self.save_done = self.load_done = False
+        self._save_blob = b""
+        self._fe_ms = 0.0
+        self._was_allowed = False
+        self._fault_effect = Effect.RELEASE
+        self._levels: dict[str, bool] = {}
+        self.mode_logic: Mode = MODE_CLASSES[1]()
+
+    def _power_up(self) -> None:
+        self._reset_runtime()
+        self.params, self.regs = self._first_power_up_values()
+        bad_flash = self._load_image(self.flash.load(), include_mode=True)
+        self.latched_at_power_up = {name: self.params[parameter_spec(addr).address]
+                                    for name, addr in (("c7", 20), ("c9", 22), ("n1", 40),
+                                                       ("d8", 8))}
+        self.powered = True
+        self.boot_until = self._t_us + BOOT_US
+        self.theta_zero = self.plant.theta
+        self.trajectory.hold(self.plant.theta)
+        self.mode_logic = MODE_CLASSES[self.mode]()
+        self._levels = self.input_levels()
+        self.log(f"power on: c7 = {self.node_id}, c9 = {self.latched_at_power_up['c9']} "
+                 f"({self.fieldbus})")
+        if bad_flash:
+            self.log(f"flash content rejected: {bad_flash}")
+            self.raise_alarm(9)
+
+    def _power_down(self) -> None:
+        if self.saving:
+            self.log("power off during a flash save: the flash keeps its previous content")
+        self.mode_logic.halted(self)
+        self._set_state(State.NOT_READY_TO_SWITCH_ON, 0)
+        self.powered = False
+        self.saving_until = None
+        self.log("power off")
+
+    @property
+    def responding(self) -> bool:
+        """False while powered off or saving to flash (the drive does not answer, ch. 2)."""
+        return self.powered and not self.saving
+
+    @property
+    def saving(self) -> bool:
+        return self.saving_until is not None
+
+    @property
+    def node_id(self) -> int:
+        return self.latched_at_power_up["c7"]
+
+    @property
+    def fieldbus(self) -> str:
+        return FIELDBUS_BY_C9.get(self.latched_at_power_up["c9"], "none")
+
+    @property
+    def alarm_table(self) -> dict[int, AlarmSpec]:
+        return alarm_table(self.fieldbus)
+
+    # ---- register / parameter view ------------------------------------------------------------
+    @property
+    def mode(self) -> int:
+        return self.regs[R.MODES_OF_OPERATION]
+
+    def reg(self, n: int) -> int:
+        return self.regs[n]
+
+    def is_register(self, n: int) -> bool:
+        return isinstance(n, int) and n in REGISTERS
+
+    def parameter_addresses(self) -> list[int]:
+        return sorted(PARAMETERS)
+
+    def is_parameter(self, address: int) -> bool:
+        return address in PARAMETERS or address == SAVE_COMMAND_ADDRESS
+
+    def read_register(self, n: int) -> int:
+        register_spec(n)
+        live = self.live_register(n)
+        return live if live is not None else self.regs[n]
+
+    def write_register(self, n: int, value: int) -> None:
+        spec = register_spec(n)
+        if not spec.writable:
+            raise AccessError("readonly", f"R{n:02d} {spec.name} is read-only")
+        value = spec.check(value)
+        self._require_power()
+        if n == R.CONTROL_WORD:
+            self._write_control_register(value)
+        elif n == R.MODES_OF_OPERATION:
+            self.set_mode(value)
+        else:
+            self.regs[n] = value
+            if n == R.TARGET_POSITION and self.mode == 7:
+                self.ip_set_point = value
+
+    def read_parameter(self, address: int) -> int:
+        if address == SAVE_COMMAND_ADDRESS:
+            return 0
+        spec = parameter_spec(address)
+        live = self.live_parameter(spec.name)
+        return live if live is not None else self.params[address]
+
+    def write_parameter(self, address: int, value: int) -> None:
+        if address == SAVE_COMMAND_ADDRESS:
+            self.write_save_command(value)
+            return
+        spec = parameter_spec(address)
+        if not spec.writable:
+            raise AccessError("readonly", f"parameter {spec.name} is read-only")
+        value = spec.check(value)
+        self._require_power()
+        self.params[address] = value
+
+    def write_save_command(self, value: int) -> None:
+        """0x3802 = 0x0011 (FC 06, or FC 16 as the 32-bit 0x00000011): save to flash."""
+        if value != SAVE_COMMAND_VALUE:
+            raise AccessError("value", f"0x{SAVE_COMMAND_ADDRESS:04X} takes only "
+                                       f"0x{SAVE_COMMAND_VALUE:04X} (save to flash)")
+        self._require_power()
+        self.request_save("0x3802 = 0x0011")
+
+    def _require_power(self) -> None:
+        if not self.powered:
+            raise CommandError(f"servo '{self.device_id}' is powered off")
+
+    def input_level(self, name: str) -> bool:
+        """The level at the input: the wiring (set_input), or the carriage on a switch."""
+        if name in SWITCHES:
+            return self.input_levels()[name]
+        return self.wired.get(name, False)
+
+    def input_levels(self) -> dict[str, bool]:
+        levels = {name: self.wired.get(name, False) for name in INPUT_NAMES}
+        for name, actuated in zip(SWITCHES, self.geometry.switches(self.plant.theta),
+                                  strict=True):
+            levels[name] = levels[name] or actuated
+        return levels
+
+    @property
+    def motion_enabled(self) -> bool:
+        """Ien_st: in operation, with the Ien_cmd command and the IEN consent."""
+        return self.state is State.OPERATION_ENABLED and self.ien_cmd \
+            and self.input_level("ien") and self.input_level("ten")
+
+    @property
+    def motion_allowed(self) -> bool:
+        return self.motion_enabled and not self.cw & ds402.CW_HALT
+
+    @property
+    def following_error_exceeded(self) -> bool:
+        window = self.regs[R.FOLLOWING_ERROR_WINDOW]
+        return window != DISABLED_32 and abs(self.following_error_user) > window
+
+    def log(self, text: str) -> None:
+        self.emit(LogLine(self.now_us, self.device_id, text=text))
+
+    def set_ip_set_point(self, value: int) -> None:
+        """0x60C1:1, user units: taken at the next interpolation period (or Sync)."""
+        self._require_power()
+        self.ip_set_point = value
+
+    def set_ip_set_point_16(self, value: int) -> None:
+        """0x2002: the low 16 bits; the set-point moves to the nearest value with those bits."""
+        self._require_power()
+        delta = (value - self.ip_set_point) & 0xFFFF
+        self.ip_set_point += delta - 0x10000 if delta >= 0x8000 else delta
+
+    def velocity_sensor(self) -> int:
+        """0x6069: increments/s of an 8192-pulse sensor; with 0x6040 bit 12, the master's speed
+        in increments/ms (ch. 4)."""
+        if self.cw & ds402.CW_MASTER_SPEED:
+            value = self.master_speed_incr_ms
+        else:
+            value = self.plant.omega * 8192.0
+        return int(max(-0x8000_0000, min(0x7FFF_FFFF, round(value))))
+
+    def set_mode(self, mode: int) -> None:
+        if mode not in MODE_NAMES:
+            raise AccessError("value", f"mode {mode} is not one of "
+                                       f"{', '.join(str(m) for m in MODE_NAMES)}")
+        self._require_power()
+        if mode == self.mode:
+            return
+        self.mode_logic.halted(self)
+        self.regs[R.MODES_OF_OPERATION] = mode
+        self.mode_logic = MODE_CLASSES[mode]()
+        self.mode_logic.enter(self)
+        self._was_allowed = False
+        self.log(f"mode {mode} ({MODE_NAMES[mode]})")
+
+    # ---- time -------------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        if now_us < self._t_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self._t_us})")
+        while self._t_us < now_us:
+            dt_us = min(TICK_US, now_us - self._t_us)
+            self._t_us += dt_us
+            self.now_us = self._t_us
+            self._tick(dt_us / 1e6)
+        self.now_us = now_us
+
+    def _tick(self, dt: float) -> None:
+        lag = self.position_lag_s
+        if not self.powered:
+            self.plant.step(dt, None, lag)
+            self.trajectory.hold(self.plant.theta, self.plant.omega)
+            return
+        if self.state is State.NOT_READY_TO_SWITCH_ON and self._t_us >= self.boot_until:
+            self._transition(Command.SELF_TEST_DONE)
+        self.indirect.step(self._t_us)
+        self._update_saving()
+        self._evaluate()
+        theta_before, velocity_before = self.plant.theta, self.trajectory.velocity
+        self._move(dt, lag)
+        self.meter.update(self, (self.trajectory.velocity - velocity_before) / dt, dt)
+        levels = self.input_levels()
+        changes = self._changes(self._levels, levels, theta_before, self.plant.theta)
+        if levels["start"] and not self._levels.get("start", False):
+            self.mode_logic.on_start_input(self)
+        self._levels = levels
+        confirmed = self.latch.update(levels["latch"], self._t_us, self.position_user)
+        if confirmed is not None:
+            self.regs[R.LATCHED_POSITION] = confirmed
+            self.latched_flag = True
+        self.mode_logic.observe(self, changes)
+        self._check_limits(levels)
+        self._check_following_error(dt)
+        if abs((self.plant.theta - self.theta_zero) * self.feed) > 0x7FFF_FFFF:
+            self.raise_alarm(15)  # the position no longer fits R06 (S32)
+
+    def _move(self, dt: float, lag: float) -> None:
+        if not self.state.in_torque:
+            if self._was_allowed:
+                self.mode_logic.halted(self)
+                self._was_allowed = False
+            self.plant.step(dt, None, lag)
+            self.trajectory.hold(self.plant.theta, self.plant.omega)
+            return
+        if self.state is State.OPERATION_ENABLED:
+            allowed = self.motion_allowed
+            if allowed:
+                self.mode_logic.step(self, dt)
+            elif self._was_allowed:
+                self.mode_logic.halted(self)
+                halting = self.motion_enabled  # halt bit: profile deceleration
+                self.trajectory.stop(self.limits() if halting else self.quick_stop_limits())
+            self._was_allowed = allowed
+        self.trajectory.advance(dt)
+        self.plant.step(dt, self.trajectory.position, lag)
+        standstill = self.trajectory.idle and self.trajectory.velocity == 0.0
+        if standstill and self.state is State.QUICK_STOP_ACTIVE:
+            self._transition(Command.STANDSTILL)
+        elif standstill and self.state is State.FAULT_REACTION_ACTIVE:
+            self._transition(Command.FAULT_REACTION_DONE)
+
+    def _changes(self, before: dict[str, bool], after: dict[str, bool], theta0: float,
+                 theta1: float) -> list[tuple[str, bool, float]]:
+        """Switch edges and markers of this tick, each at the position it happened."""
+        g = self.geometry
+        edges = {"neg_limit": g.neg_limit, "pos_limit": g.pos_limit, "home": g.home_switch}
+        found = []
+        for name in SWITCHES:
+            if before.get(name, after[name]) != after[name]:
+                edge = edges[name]
+                at = edge if min(theta0, theta1) <= edge <= max(theta0, theta1) else theta1
+                found.append((name, after[name], at))
+        found += [("marker", True, m) for m in g.markers_between(theta0, theta1)]
+        return sorted(found, key=lambda change: abs(change[2] - theta0))
+
+    def _check_limits(self, levels: dict[str, bool]) -> None:
+        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
+        if self.state is not State.OPERATION_ENABLED or getattr(self.mode_logic, "busy", False):
+            return
+        velocity = self.trajectory.velocity
+        if levels["neg_limit"] and velocity < 0.0:
+            self.raise_alarm(20)
+        elif levels["pos_limit"] and velocity > 0.0:
+            self.raise_alarm(21)
+
+    def _check_following_error(self, dt: float) -> None:
+        """Alarm 16: |following error| > R03 for longer than R04 ms (R03 = 0xFFFFFFFF: off)."""
+        if self.state is State.OPERATION_ENABLED and self.following_error_exceeded:
+            self._fe_ms += dt * 1e3
+            if self._fe_ms > self.regs[R.FOLLOWING_ERROR_TIMEOUT]:
+                self._fe_ms = 0.0
+                self.raise_alarm(16)
+        else:
+            self._fe_ms = 0.0
+
+    # ---- outputs and status -----------------------------------------------------------------
+    def status_flags(self) -> control.StatusFlags:
+        levels = self.input_levels()
+        mode_flags = self.mode_logic.flags(self) if self.powered else {}
+        stopping = self.state in (State.QUICK_STOP_ACTIVE, State.FAULT_REACTION_ACTIVE) or (
+            self.state is State.OPERATION_ENABLED and not self.motion_allowed
+            and not self.trajectory.idle)
+        return control.StatusFlags(
+            state=self.state, mode=self.mode, motion_enabled=self.motion_enabled,
+            stopping=stopping, latched=self.latched_flag, latch_input=levels["latch"],
+            target_reached=self.powered and self.mode_logic.target_reached(self),
+            limit_active=levels["neg_limit"] or levels["pos_limit"],
+            save_done=self.save_done, load_done=self.load_done,
+            velocity_forced_zero=not self.motion_enabled, **mode_flags)
+
+    @property
+    def status_register(self) -> int:
+        return control.register_status(self.status_flags())
+
+    @property
+    def statusword(self) -> int:
+        return control.cia402_status(self.status_flags())
+
+    def outputs(self) -> dict[str, bool]:
+        if not self.powered:
+            return dict.fromkeys(("end_of_job", "out1", "brake", "near_target"), False)
+        primary = {"end_of_job": self.mode_logic.end_of_job(self),
+                   "near_target": self.mode_logic.near_target(self),
+                   "brake": self.state.in_torque}  # 24 V releases the brake
+        return output_levels(primary, self.regs[R.DIGITAL_OUT_MASK], self.regs[R.DIGITAL_OUTPUTS])
+
+    @property
+    def display(self) -> str:
+        return display_text(self.powered, self.saving, self.alarms.active, self.state.in_torque)
+
+    @property
+    def input_register(self) -> int:
+        return input_word(self.input_levels())
+
+    def snapshot(self) -> dict[str, Any]:
+        return self.build_snapshot()
+

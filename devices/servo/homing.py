@@ -1,0 +1,143 @@
+"""Homing methods (R18 / 0x6098) as data, and the sequence that runs one.
+
+Seed 004 ch. 4 "Modo Homing": method 34 searches the marker in the positive direction at the
+slow speed (0x6099:2) with the homing acceleration (0x609A); the fast speed is not used; after
+homing with home offset -1000 the actual position reads 1000, i.e. the home point takes the
+position -home_offset. The Modbus example (ch. 2) uses method 33 (0x21), the marker in the
+negative direction. The switch methods follow DSP 402 ch. 13 for the hardware of
+:mod:`devices.servo.plant` (limit switches, a positive home switch); docs/servo-drive.md
+§Homing lists them. Searches for a switch run at the fast speed, searches for the marker or a
+switch edge at the slow one.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass
+
+
+class Until(enum.Enum):
+    """The signal change that ends a search phase."""
+
+    NEG_LIMIT_ON = ("neg_limit", True)
+    NEG_LIMIT_OFF = ("neg_limit", False)
+    POS_LIMIT_ON = ("pos_limit", True)
+    POS_LIMIT_OFF = ("pos_limit", False)
+    HOME_ON = ("home", True)
+    HOME_OFF = ("home", False)
+    MARKER = ("marker", True)
+
+    @property
+    def signal(self) -> str:
+        return self.value[0]
+
+    @property
+    def level(self) -> bool:
+        return self.value[1]
+
+
+@dataclass(frozen=True)
+class Phase:
+    direction: int  # +1 positive, -1 negative
+    fast: bool  # fast (switch search) or slow (marker / edge search) speed
+    until: Until
+
+
+@dataclass(frozen=True)
+class HomingMethod:
+    number: int
+    description: str
+    phases: tuple[Phase, ...]  # when the home switch is off at the start
+    phases_on_home: tuple[Phase, ...] | None = None  # when it is on (methods 3, 4, 19, 20)
+    limits: frozenset[str] = frozenset()  # limit switches the method itself searches
+
+    def plan(self, home_switch_on: bool) -> tuple[Phase, ...]:
+        if home_switch_on and self.phases_on_home is not None:
+            return self.phases_on_home
+        return self.phases
+
+
+P, U = Phase, Until
+NEG, POS = frozenset({"neg_limit"}), frozenset({"pos_limit"})
+METHODS: dict[int, HomingMethod] = {m.number: m for m in (
+    HomingMethod(1, "negative limit switch, then the marker",
+                 (P(-1, True, U.NEG_LIMIT_ON), P(+1, False, U.NEG_LIMIT_OFF),
+                  P(+1, False, U.MARKER)), limits=NEG),
+    HomingMethod(2, "positive limit switch, then the marker",
+                 (P(+1, True, U.POS_LIMIT_ON), P(-1, False, U.POS_LIMIT_OFF),
+                  P(-1, False, U.MARKER)), limits=POS),
+    HomingMethod(3, "home switch, the marker below its edge",
+                 (P(+1, True, U.HOME_ON), P(-1, False, U.HOME_OFF), P(-1, False, U.MARKER)),
+                 (P(-1, False, U.HOME_OFF), P(-1, False, U.MARKER))),
+    HomingMethod(4, "home switch, the marker above its edge",
+                 (P(+1, True, U.HOME_ON), P(+1, False, U.MARKER)),
+                 (P(-1, True, U.HOME_OFF), P(+1, False, U.HOME_ON), P(+1, False, U.MARKER))),
+    HomingMethod(17, "negative limit switch edge",
+                 (P(-1, True, U.NEG_LIMIT_ON), P(+1, False, U.NEG_LIMIT_OFF)), limits=NEG),
+    HomingMethod(18, "positive limit switch edge",
+                 (P(+1, True, U.POS_LIMIT_ON), P(-1, False, U.POS_LIMIT_OFF)), limits=POS),
+    HomingMethod(19, "home switch edge, approached from above",
+                 (P(+1, True, U.HOME_ON), P(-1, False, U.HOME_OFF)),
+                 (P(-1, False, U.HOME_OFF),)),
+    HomingMethod(20, "home switch edge, approached from below",
+                 (P(+1, True, U.HOME_ON), P(-1, False, U.HOME_OFF), P(+1, False, U.HOME_ON)),
+                 (P(-1, True, U.HOME_OFF), P(+1, False, U.HOME_ON))),
+    HomingMethod(33, "marker in the negative direction", (P(-1, False, U.MARKER),)),
+    HomingMethod(34, "marker in the positive direction", (P(+1, False, U.MARKER),)),
+    HomingMethod(35, "the current position", ()),
+)}
+del P, U
+
+
+class HomingStatus(enum.Enum):
+    IDLE = "idle"
+    SEARCHING = "searching"
+    RETURNING = "returning to the home point"
+    ATTAINED = "attained"
+    INTERRUPTED = "interrupted"
+    ERROR = "error"
+
+
+@dataclass
+class HomingRun:
+    """One homing, phase by phase. The drive feeds it the signal changes it sees."""
+
+    method: HomingMethod
+    phases: tuple[Phase, ...]
+    index: int = 0
+    home: float | None = None  # motor position of the home point once found
+
+    @classmethod
+    def start(cls, method: HomingMethod, home_switch_on: bool) -> HomingRun:
+        return cls(method, method.plan(home_switch_on))
+
+    @property
+    def phase(self) -> Phase | None:
+        return self.phases[self.index] if self.index < len(self.phases) else None
+
+    def skip_satisfied(self, levels: dict[str, bool], position: float) -> None:
+        """Phases whose switch condition already holds end at once (e.g. already on NL)."""
+        while (phase := self.phase) is not None and phase.until is not Until.MARKER \
+                and levels[phase.until.signal] == phase.until.level:
+            self.index += 1
+        if self.phase is None and self.home is None:
+            self.home = position
+
+    def observe(self, changes: list[tuple[str, bool, float]]) -> bool:
+        """Signal changes of one step (signal, new level, position); True when a phase ended."""
+        ended = False
+        for signal, level, position in changes:
+            phase = self.phase
+            if phase is None:
+                break
+            if phase.until.signal == signal and phase.until.level == level:
+                self.index += 1
+                ended = True
+                if self.phase is None:
+                    self.home = position
+        return ended
+
+    def unexpected_limit(self, changes: list[tuple[str, bool, float]]) -> bool:
+        """A limit switch came on that this method does not search: the homing fails."""
+        return any(level and signal in ("neg_limit", "pos_limit")
+                   and signal not in self.method.limits for signal, level, _ in changes)

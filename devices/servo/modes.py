@@ -1,0 +1,402 @@
+"""Modes of operation (R01 / 0x6060): what each one does with the demand position.
+
+Seed 004 ch. 1 (R00 / R05 mode bits), ch. 2 "I/O digitali" (Start, Select, End of Job,
+Target per mode) and ch. 4 (objects of each mode, worked examples). The drive calls a mode's
+hooks; a mode only plans the :class:`~devices.servo.motion.Trajectory` and keeps its own flags.
+Halt, quick stop and the hardware consents are the drive's business: a mode's ``step`` runs
+only while motion is allowed, and ``halted`` tells it that a stop took over.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, ClassVar
+
+from devices.servo import ds402
+from devices.servo.homing import METHODS, HomingRun, HomingStatus
+from devices.servo.motion import Limits
+from devices.servo.registers import DISABLED_16, R
+
+if TYPE_CHECKING:
+    from devices.servo.drive import ServoDrive
+
+Changes = list[tuple[str, bool, float]]
+
+
+class Mode:
+    number: ClassVar[int] = 0
+
+    def enter(self, d: ServoDrive) -> None:
+        d.trajectory.stop(d.limits())
+
+    def torque_on(self, d: ServoDrive) -> None:
+        """The axis just went into torque, standing where it is."""
+
+    def on_controlword(self, d: ServoDrive, rising: int, falling: int) -> None:
+        """Edges of the controlword (0x6040 view) while this mode is active."""
+
+    def on_start_input(self, d: ServoDrive) -> None:
+        """Rising edge of the Start input (CN2 pin 1)."""
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        """Motion is allowed: plan the trajectory for this tick."""
+
+    def halted(self, d: ServoDrive) -> None:
+        """Motion stopped being allowed (halt, quick stop, IEN, torque off, alarm)."""
+
+    def observe(self, d: ServoDrive, changes: Changes) -> None:
+        """Signal changes after the motor moved this tick."""
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {}
+
+    def end_of_job(self, d: ServoDrive) -> bool:
+        return False
+
+    def near_target(self, d: ServoDrive) -> bool:
+        return False
+
+    def target_reached(self, d: ServoDrive) -> bool:
+        return d.trajectory.idle and d.trajectory.velocity == 0.0
+
+
+class Positioner(Mode):
+    """Mode 1: point to point, absolute or incremental, buffered or on the fly."""
+
+    number = 1
+
+    def __init__(self) -> None:
+        self.move_target: int | None = None  # user units
+        self.pending: int | None = None
+        self.last_target: int | None = None
+        self.eoj = False
+        self.sp_ack = False
+
+    def enter(self, d: ServoDrive) -> None:
+        super().enter(d)
+        self.move_target = self.pending = None
+        self.last_target = d.position_user
+
+    def torque_on(self, d: ServoDrive) -> None:
+        self.move_target = self.pending = None
+        self.last_target = d.position_user
+
+    def on_controlword(self, d: ServoDrive, rising: int, falling: int) -> None:
+        if rising & ds402.CW_NEW_SET_POINT:
+            self.new_set_point(d)
+        if falling & ds402.CW_NEW_SET_POINT:
+            self.sp_ack = False
+
+    def on_start_input(self, d: ServoDrive) -> None:
+        self.new_set_point(d)
+
+    def new_set_point(self, d: ServoDrive) -> None:
+        if not d.motion_allowed:
+            return
+        value = d.reg(R.AUX_IN_1) if d.input_level("select") else d.reg(R.TARGET_POSITION)
+        if d.cw & ds402.CW_RELATIVE:
+            base = self.last_target if self.last_target is not None else d.position_user
+            value += base
+        self.sp_ack = not d.set_point_taken()  # the register view's Pos_str clears itself
+        self.last_target = value
+        if self.move_target is not None and not d.trajectory.idle \
+                and not d.cw & ds402.CW_CHANGE_IMMEDIATELY:
+            self.pending = value  # finishes the current move first; sp_rdy drops
+        else:
+            self.pending = None
+            self.go(d, value)
+
+    def go(self, d: ServoDrive, target: int) -> None:
+        self.move_target, self.eoj = target, False
+        d.trajectory.move_to(d.user_to_rev(target), d.limits())
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        if self.pending is not None and d.trajectory.idle:
+            target, self.pending = self.pending, None
+            self.go(d, target)
+        if self.move_target is not None and not self.eoj and d.trajectory.at_target \
+                and not d.following_error_exceeded:
+            self.eoj = True
+
+    def halted(self, d: ServoDrive) -> None:
+        self.move_target = self.pending = None
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {"set_point_ready": self.pending is None, "set_point_ack": self.sp_ack,
+                "end_of_job": self.eoj, "following_error": d.following_error_exceeded}
+
+    def end_of_job(self, d: ServoDrive) -> bool:
+        return self.eoj
+
+    def near_target(self, d: ServoDrive) -> bool:
+        window = d.reg(R.TARGET_WINDOW)
+        return self.move_target is not None and abs(self.move_target - d.position_user) < window
+
+    def target_reached(self, d: ServoDrive) -> bool:
+        return super().target_reached(d) and (self.move_target is None or self.eoj)
+
+
+class PulsePositioner(Positioner):
+    """Mode -1: each pulse of the pulse input is a new start (docs/servo-drive.md §Modes)."""
+
+    number = -1
+
+    def pulses(self, d: ServoDrive, count: int) -> None:
+        if not d.motion_allowed or count == 0:
+            return
+        quantum = d.reg(R.FEED_CONSTANT) * d.reg(R.GEAR_RATIO_NUMERATOR) \
+            / (d.reg(R.GEAR_RATIO_DIVISOR) * d.reg(R.MASTER_ENCODER_INCREMENTS))
+        base = self.last_target if self.last_target is not None else d.position_user
+        self.last_target = round(base + count * quantum)
+        self.pending = None
+        self.go(d, self.last_target)
+
+
+class SpeedMonitor:
+    """Velocity window (R14/R15, 0x606D/E) and threshold (R16/R17, 0x606F/0x6070) timers."""
+
+    def __init__(self) -> None:
+        self.in_window_ms = 0.0
+        self.below_threshold_ms = 0.0
+
+    def update(self, d: ServoDrive, target: float, dt: float) -> None:
+        actual = d.velocity_user
+        self.in_window_ms = self.in_window_ms + dt * 1e3 \
+            if abs(target - actual) <= d.reg(R.VELOCITY_WINDOW) else 0.0
+        self.below_threshold_ms = self.below_threshold_ms + dt * 1e3 \
+            if abs(actual) <= d.reg(R.VELOCITY_THRESHOLD) else 0.0
+
+    def reached(self, d: ServoDrive) -> bool:
+        if d.reg(R.VELOCITY_WINDOW) == DISABLED_16:
+            return d.trajectory.cruising
+        return self.in_window_ms >= d.reg(R.VELOCITY_WINDOW_TIME)
+
+    def zero_speed(self, d: ServoDrive) -> bool:
+        if d.reg(R.VELOCITY_THRESHOLD) == DISABLED_16:
+            return False
+        return self.below_threshold_ms >= d.reg(R.VELOCITY_THRESHOLD_TIME)
+
+
+class Velocity(Mode):
+    """Mode 3: run at target_velocity (R13 / 0x60FF), or aux_in_1 (R30) with Select high."""
+
+    number = 3
+
+    def __init__(self) -> None:
+        self.commanded: float | None = None
+        self.monitor = SpeedMonitor()
+
+    def target_user(self, d: ServoDrive) -> float:
+        return d.reg(R.AUX_IN_1) if d.input_level("select") else d.reg(R.TARGET_VELOCITY)
+
+    def enter(self, d: ServoDrive) -> None:
+        super().enter(d)
+        self.commanded = None
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        target = self.target_user(d)
+        if target != self.commanded:
+            self.commanded = target
+            vmax = d.motor_vmax_rev
+            velocity = max(-vmax, min(vmax, d.speed_to_rev(target)))
+            d.trajectory.run_at(velocity, d.limits(vmax=vmax))
+        self.monitor.update(d, target, dt)
+
+    def halted(self, d: ServoDrive) -> None:
+        self.commanded = None
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {"zero_speed": self.monitor.zero_speed(d)}
+
+    def end_of_job(self, d: ServoDrive) -> bool:
+        return self.commanded is not None and d.trajectory.cruising
+
+    def target_reached(self, d: ServoDrive) -> bool:
+        if self.commanded is None:
+            return super().target_reached(d)
+        return self.monitor.reached(d)
+
+
+class AnalogReference(Velocity):
+    """Mode -127: speed from the analog reference, +-10 V = +-Vmax (d3). End of Job low."""
+
+    number = -127
+
+    def target_user(self, d: ServoDrive) -> float:
+        return d.analog_volts / 10.0 * d.motor_vmax_rev * d.reg(R.FEED_CONSTANT)
+
+    def end_of_job(self, d: ServoDrive) -> bool:
+        return False
+
+
+class Homing(Mode):
+    """Mode 6: controlword bit 4 (R00 bit 6) 0 -> 1 starts, 1 -> 0 interrupts."""
+
+    number = 6
+
+    def __init__(self) -> None:
+        self.status = HomingStatus.IDLE
+        self.run: HomingRun | None = None
+
+    def on_controlword(self, d: ServoDrive, rising: int, falling: int) -> None:
+        if rising & ds402.CW_NEW_SET_POINT:
+            self.begin(d)
+        elif falling & ds402.CW_NEW_SET_POINT and self.busy:
+            self.interrupt(d, "start bit cleared")
+
+    @property
+    def busy(self) -> bool:
+        return self.status in (HomingStatus.SEARCHING, HomingStatus.RETURNING)
+
+    def begin(self, d: ServoDrive) -> None:
+        if not d.motion_allowed:
+            return
+        d.homed = False
+        method = METHODS.get(d.reg(R.HOMING_METHOD))
+        if method is None:
+            self.fail(d, f"homing method {d.reg(R.HOMING_METHOD)} is not supported")
+            return
+        levels = d.input_levels()
+        self.status = HomingStatus.SEARCHING
+        self.run = HomingRun.start(method, levels["home"])
+        self.run.skip_satisfied(levels, d.plant.theta)
+        d.log(f"homing method {method.number} ({method.description}) started")
+        self.next_phase(d)
+
+    def limits(self, d: ServoDrive, speed_user: float) -> Limits:
+        acc = d.accel_to_rev(d.reg(R.HOMING_ACCELERATION))
+        return Limits(abs(d.speed_to_rev(speed_user)), acc, acc)
+
+    def next_phase(self, d: ServoDrive) -> None:
+        assert self.run is not None
+        phase = self.run.phase
+        slow = d.reg(R.HOMING_SLOW_SPEED)
+        if phase is None:
+            assert self.run.home is not None
+            d.set_home(self.run.home)
+            self.status = HomingStatus.RETURNING
+            d.trajectory.move_to(self.run.home, self.limits(d, slow))
+            return
+        speed = abs(d.reg(R.HOMING_FAST_SPEED)) if phase.fast else slow
+        lim = self.limits(d, speed)
+        d.trajectory.run_at(phase.direction * lim.vmax, lim)
+
+    def observe(self, d: ServoDrive, changes: Changes) -> None:
+        if self.status is not HomingStatus.SEARCHING or self.run is None:
+            return
+        if self.run.unexpected_limit(changes):
+            self.fail(d, "a limit switch the method does not search was hit")
+        elif self.run.observe(changes):
+            self.next_phase(d)
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        if self.status is HomingStatus.RETURNING and d.trajectory.at_target \
+                and abs(d.following_error_user) < 0.5:  # the home point reads exactly
+            self.status = HomingStatus.ATTAINED
+            d.homed = True
+            d.log(f"homing attained, position {d.position_user}")
+
+    def halted(self, d: ServoDrive) -> None:
+        if self.busy:
+            self.interrupt(d, "motion stopped")
+
+    def interrupt(self, d: ServoDrive, why: str) -> None:
+        self.status = HomingStatus.INTERRUPTED
+        d.trajectory.stop(d.limits())
+        d.log(f"homing interrupted: {why}")
+
+    def fail(self, d: ServoDrive, why: str) -> None:
+        self.status = HomingStatus.ERROR
+        d.log(f"homing error: {why}")
+        d.raise_alarm(14)
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {"homing_attained": self.status is HomingStatus.ATTAINED,
+                "homing_error": self.status in (HomingStatus.ERROR, HomingStatus.INTERRUPTED)}
+
+    def end_of_job(self, d: ServoDrive) -> bool:
+        return self.status is HomingStatus.ATTAINED
+
+    def target_reached(self, d: ServoDrive) -> bool:
+        return not self.busy and super().target_reached(d)
+
+
+class Interpolator(Mode):
+    """Mode 7: a set-point per interpolation period (R47 / 0x60C2:1, ms), linear in between."""
+
+    number = 7
+
+    def __init__(self) -> None:
+        self.active = False
+        self.previous = self.next = 0.0
+        self.elapsed = 0.0
+
+    def period_s(self, d: ServoDrive) -> float:
+        return max(d.reg(R.IP_TIME_UNITS), 1) / 1e3
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        wanted = bool(d.cw & ds402.CW_NEW_SET_POINT)
+        if wanted and not self.active:
+            self.active, self.elapsed = True, 0.0
+            self.previous = self.next = d.trajectory.position
+        elif not wanted and self.active:
+            self.active = False
+            d.trajectory.stop(d.limits())
+        if not self.active:
+            return
+        period = self.period_s(d)
+        self.elapsed += dt
+        while self.elapsed >= period - 1e-12:
+            self.elapsed -= period
+            self.previous, self.next = self.next, d.user_to_rev(d.ip_set_point)
+        share = min(self.elapsed / period, 1.0)
+        d.trajectory.hold(self.previous + (self.next - self.previous) * share,
+                          (self.next - self.previous) / period)
+
+    def sync(self, d: ServoDrive) -> None:
+        """A bus Sync: take the set-point now and restart the period."""
+        if self.active:
+            self.previous, self.next = d.trajectory.position, d.user_to_rev(d.ip_set_point)
+            self.elapsed = 0.0
+
+    def halted(self, d: ServoDrive) -> None:
+        self.active = False
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {"ip_active": self.active, "following_error": d.following_error_exceeded}
+
+
+class ElectronicAxis(Mode):
+    """Mode -2: the slave follows the master encoder through the gear ratio R25 / R26."""
+
+    number = -2
+
+    def __init__(self) -> None:
+        self.engaged = False
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        engaged = d.input_level("start") and bool(d.cw & ds402.CW_AXIS_START)
+        if engaged:
+            ratio = d.reg(R.GEAR_RATIO_NUMERATOR) / d.reg(R.GEAR_RATIO_DIVISOR)
+            master_rev_s = d.master_rpm / 60.0
+            d.trajectory.hold(d.trajectory.position + master_rev_s * ratio * dt,
+                              master_rev_s * ratio)
+        elif self.engaged:
+            d.trajectory.stop(d.limits())  # "held in torque": stop, then stand still
+        self.engaged = engaged
+
+    def halted(self, d: ServoDrive) -> None:
+        self.engaged = False
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {"axis_started": self.engaged}
+
+
+class SaveLoad(Mode):
+    """Mode -50: R00 bit 5 0 -> 1 saves to flash, bit 6 0 -> 1 loads (the drive does both)."""
+
+    number = -50
+
+
+MODE_CLASSES: dict[int, type[Mode]] = {cls.number: cls for cls in (
+    Positioner, Velocity, Homing, Interpolator, PulsePositioner, ElectronicAxis, SaveLoad,
+    AnalogReference)}

@@ -1,0 +1,80 @@
+"""The motor, its load and the axis they move: what the drive controls and what it senses.
+
+Positions are motor revolutions from the rig's origin. The axis has a negative and a positive
+limit switch (active at and beyond their positions), a home switch active from its position
+upwards (a "positive" home switch in DSP 402 homing terms) and one encoder marker per motor
+turn; mechanical end stops sit ``end_margin`` turns beyond the limit switches. In torque the
+motor follows the demand with a first-order lag (the position loop, time constant ``lag``);
+released it coasts down. A jammed load does not move at all.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+COAST_TIME_CONSTANT_S = 0.2  # a released motor's speed decays with this time constant
+STOPPED_REV_S = 1e-4  # a coasting motor slower than this has stopped
+SETTLED_REV = 1e-7  # closer than this the position loop has settled (well below 1 user unit)
+
+
+@dataclass(frozen=True)
+class AxisGeometry:
+    neg_limit: float
+    pos_limit: float
+    home_switch: float
+    marker_offset: float  # a marker at marker_offset + k for every integer k
+    end_margin: float = 1.0
+
+    @property
+    def end_stops(self) -> tuple[float, float]:
+        return self.neg_limit - self.end_margin, self.pos_limit + self.end_margin
+
+    def switches(self, theta: float) -> tuple[bool, bool, bool]:
+        """(negative limit, positive limit, home switch) as the carriage actuates them."""
+        return theta <= self.neg_limit, theta >= self.pos_limit, theta >= self.home_switch
+
+    def markers_between(self, a: float, b: float) -> list[float]:
+        """Marker positions crossed going from a to b, in the order they are met.
+
+        Going up a marker at m is crossed when a < m <= b, going down when b <= m < a.
+        """
+        off = self.marker_offset
+        if b > a:
+            ks = range(math.floor(a - off) + 1, math.floor(b - off) + 1)
+        elif b < a:
+            ks = range(math.ceil(a - off) - 1, math.ceil(b - off) - 1, -1)
+        else:
+            return []
+        return [off + k for k in ks]
+
+
+class Plant:
+    def __init__(self, geometry: AxisGeometry, position: float = 0.0) -> None:
+        self.geometry = geometry
+        self.theta = position
+        self.omega = 0.0
+        self.jammed = False
+        self.blocked = False  # against an end stop
+
+    def step(self, dt: float, demand: float | None, lag: float) -> None:
+        """Advance dt seconds following ``demand`` (None: no torque, the motor coasts)."""
+        before = self.theta
+        if self.jammed:
+            self.omega = 0.0
+            return
+        if demand is None:
+            self.omega *= math.exp(-dt / COAST_TIME_CONSTANT_S)
+            if abs(self.omega) < STOPPED_REV_S:
+                self.omega = 0.0
+            new = self.theta + self.omega * dt
+        else:
+            gain = 1.0 - math.exp(-dt / lag) if lag > 0.0 else 1.0
+            new = self.theta + (demand - self.theta) * gain
+            if abs(demand - new) < SETTLED_REV:
+                new = demand
+        low, high = self.geometry.end_stops
+        self.blocked = not low <= new <= high
+        self.theta = min(max(new, low), high)
+        if demand is not None or self.blocked:
+            self.omega = (self.theta - before) / dt if dt > 0.0 else 0.0

@@ -1,0 +1,172 @@
+"""What the drive measures and reports: positions in user units, live registers, currents and
+the snapshot the dashboard draws from."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any
+
+from devices.servo import control, ds402
+from devices.servo.io import INPUT_NAMES
+from devices.servo.motion import Limits, Shape
+from devices.servo.registers import MODE_NAMES, R
+
+if TYPE_CHECKING:
+    from devices.servo.drive import ServoDrive
+
+S32_MAX = 0x7FFF_FFFF
+S16_MAX = 0x7FFF
+RMS_TIME_CONSTANT_S = 1.0
+JAM_CURRENT = 200.0  # % of nominal the motor draws pushing a jammed load
+
+
+def _clamp(value: float, limit: int) -> int:
+    return int(max(-limit - 1, min(limit, round(value))))
+
+
+class CurrentMeter:
+    """o1 instantaneous current, o2 RMS current, o3 overload (% of I2T), all in % of nominal."""
+
+    def __init__(self) -> None:
+        self.instant = self.rms = self.overload = 0.0
+        self._mean_square = 0.0
+
+    def update(self, d: ServoDrive, accel: float, dt: float) -> None:
+        if d.state.in_torque:
+            inertia = 1.0 + d.config.load_inertia
+            torque = 5.0 + 50.0 * abs(accel) / d.config.quick_stop_decel * inertia
+            if d.plant.jammed or d.plant.blocked:
+                torque += JAM_CURRENT * min(abs(d.following_error_user) / d.feed, 1.0)
+            self.instant = min(torque, 3.0 * d.params[5])  # d5 caps the current
+        else:
+            self.instant = 0.0
+        k = 1.0 - math.exp(-dt / RMS_TIME_CONSTANT_S)
+        self._mean_square += (self.instant ** 2 - self._mean_square) * k
+        self.rms = math.sqrt(self._mean_square)
+        self.overload = min(100.0 * (self.rms / 100.0) ** 2, 999.0)
+
+
+class DriveReadings:
+    """Mixin of :class:`~devices.servo.drive.ServoDrive`: measured values and the snapshot."""
+
+    @property
+    def position_user(self: ServoDrive) -> int:
+        """position_actual_value (R06 / 0x6064)."""
+        return _clamp((self.plant.theta - self.theta_zero) * self.feed, S32_MAX)
+
+    @property
+    def velocity_user(self: ServoDrive) -> float:
+        return self.plant.omega * self.feed
+
+    @property
+    def following_error_user(self: ServoDrive) -> float:
+        return (self.trajectory.position - self.plant.theta) * self.feed
+
+    @property
+    def position_lag_s(self: ServoDrive) -> float:
+        """The position loop's time constant: i1 = 50 % gives the configured lag."""
+        return self.config.position_lag_ms / 1e3 * 50.0 / self.params[35]
+
+    @property
+    def master_speed_incr_ms(self: ServoDrive) -> float:
+        return self.master_rpm / 60.0 * self.regs[R.MASTER_ENCODER_INCREMENTS] / 1e3
+
+    # ---- units and limits the modes use -------------------------------------------------------
+    @property
+    def feed(self: ServoDrive) -> int:
+        return max(self.regs[R.FEED_CONSTANT], 1)  # a feed of 0 counts as 1 unit per turn
+
+    def user_to_rev(self: ServoDrive, position: float) -> float:
+        return self.theta_zero + position / self.feed
+
+    def speed_to_rev(self: ServoDrive, speed: float) -> float:
+        return speed / self.feed
+
+    def accel_to_rev(self: ServoDrive, accel: float) -> float:
+        """Accelerations are user units / s / ms (seed 004 ch. 4, 0x6092)."""
+        return accel * 1e3 / self.feed
+
+    @property
+    def motor_vmax_rev(self: ServoDrive) -> float:
+        """d3 % of the motor's rated speed, in rev/s."""
+        return self.config.max_speed_rpm * self.params[3] / 100.0 / 60.0
+
+    def limits(self: ServoDrive, vmax: float | None = None) -> Limits:
+        if vmax is None:
+            vmax = min(self.speed_to_rev(self.regs[R.PROFILE_VELOCITY]), self.motor_vmax_rev)
+        return Limits(vmax, self.accel_to_rev(self.regs[R.PROFILE_ACCELERATION]),
+                      self.accel_to_rev(self.regs[R.PROFILE_DECELERATION]),
+                      Shape(self.regs[R.MOTION_PROFILE_TYPE]),
+                      self.regs[R.ACCELERATION_JERK] / 100.0,
+                      self.regs[R.DECELERATION_JERK] / 100.0)
+
+    def quick_stop_limits(self: ServoDrive) -> Limits:
+        decel = self.config.quick_stop_decel * self.params[13] / 50.0  # f3, emergency ramp
+        return Limits(self.motor_vmax_rev, decel, decel)
+
+    def set_home(self: ServoDrive, home: float) -> None:
+        """The home point reads -home_offset (ch. 4: offset -1000 -> position 1000)."""
+        self.theta_zero = home + self.regs[R.HOME_OFFSET] / self.feed
+
+    def live_register(self: ServoDrive, n: int) -> int | None:
+        if n == R.STATUS_WORD:
+            return self.status_register
+        if n == R.POSITION_ACTUAL_VALUE:
+            return self.position_user
+        if n == R.VELOCITY_ACTUAL_VALUE:
+            return _clamp(self.velocity_user, S32_MAX)
+        if n == R.VELOCITY_MASTER_SENSOR:
+            return _clamp(self.master_speed_incr_ms, S16_MAX)
+        if n == R.ALARM_CODE:
+            return self.alarms.active
+        if n == R.DIGITAL_INPUTS:
+            return self.input_register
+        if n == R.SPEED_RPM:
+            return _clamp(self.plant.omega * 60.0, S32_MAX)
+        return None
+
+    def live_parameter(self: ServoDrive, name: str) -> int | None:
+        meter = self.meter
+        values = {"o1": meter.instant, "o2": meter.rms, "o3": meter.overload}
+        return round(values[name]) if name in values else None
+
+    def error_code(self: ServoDrive) -> int:
+        """0x603F: the error code of the alarm in R46, 0 without alarm (ch. 5 table)."""
+        code = self.alarms.active
+        return self.alarm_table[code].error_code_or_generic if code else 0
+
+    def build_snapshot(self: ServoDrive) -> dict[str, Any]:
+        r05, sw = self.status_register, self.statusword
+        levels = self.input_levels()
+        code = self.alarms.active
+        alarm = self.alarm_table[code].as_dict() if code else None
+        f = self.config.feed_constant
+        return {
+            "kind": "servo", "id": self.device_id, "powered": self.powered,
+            "responding": self.responding, "fieldbus": self.fieldbus, "node_id": self.node_id,
+            "ds402_state": self.state.label, "controlword": self.cw, "statusword": sw,
+            "control_register": self.regs[R.CONTROL_WORD], "status_register": r05,
+            "status_bits": {name: bool(r05 >> bit & 1)
+                            for bit, name in control.status_bit_names(self.mode).items()},
+            "statusword_bits": {name: bool(sw >> bit & 1)
+                                for bit, name in ds402.STATUSWORD_BITS.items()},
+            "mode": self.mode, "mode_name": MODE_NAMES[self.mode],
+            "position": (self.plant.theta - self.theta_zero) * self.feed,
+            "position_counts": self.position_user,
+            "velocity": self.velocity_user, "following_error": self.following_error_user,
+            "target": self.regs[R.TARGET_POSITION],
+            "target_velocity": self.regs[R.TARGET_VELOCITY],
+            "ten": levels["ten"], "ien": levels["ien"],
+            "inputs": {name: levels[name] for name in INPUT_NAMES},
+            "outputs": self.outputs(), "alarm": alarm, "alarms": list(self.alarms.latched),
+            "error_code": self.error_code(), "display": self.display, "saving": self.saving,
+            "save_pending": self.save_pending is not None, "homed": self.homed,
+            "jammed": self.plant.jammed,
+            "limits": {"neg": levels["neg_limit"], "pos": levels["pos_limit"],
+                       "home": levels["home"]},
+            "axis": {"neg_limit": self.config.neg_limit, "pos_limit": self.config.pos_limit,
+                     "home_switch": self.config.home_switch,
+                     "carriage": self.plant.theta * f, "motor_turns": self.plant.theta},
+            "current": {"o1": round(self.meter.instant), "o2": round(self.meter.rms),
+                        "o3": round(self.meter.overload)},
+        }

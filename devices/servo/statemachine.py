@@ -1,0 +1,136 @@
+"""The control words and the CiA 402 state machine of the drive, and its alarms.
+
+Both control words (R00 register view, 0x6040 CiA 402 view) end up in one controlword that the
+state machine of :mod:`devices.servo.ds402` evaluates. Seed 004 ch. 1 (R00 bits), ch. 2 (the
+example sequences 8, 3, 0x43, 0, 0x23), ch. 3 (alarm actions), ch. 4 (enable sequence, reset
+through bit 7), ch. 5 (reset by 0x80 on 0x6040), ch. 6 (reset by 0x08 on the control word).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+from devices.events import AlarmChanged, StateChanged
+from devices.servo import control, ds402
+from devices.servo.alarms import Effect
+from devices.servo.ds402 import TRANSITIONS, Command, State
+from devices.servo.registers import R
+
+if TYPE_CHECKING:
+    from devices.servo.drive import ServoDrive
+
+logger = logging.getLogger(__name__)
+
+
+class DriveStateMachine:
+    """Mixin of :class:`~devices.servo.drive.ServoDrive`."""
+
+    # ---- control words --------------------------------------------------------------------------
+    def _write_control_register(self: ServoDrive, value: int) -> None:
+        rising = value & ~self.regs[R.CONTROL_WORD]
+        self.regs[R.CONTROL_WORD] = value
+        self.ien_cmd = bool(value & control.IEN_CMD)
+        self.cw_source = "register"
+        self._apply_controlword(control.controlword_from_register(value, self.mode))
+        if self.mode in control.SAVE_LOAD:  # after the torque bits: 0x20 saves with torque off
+            if rising & control.BIT5:
+                self.request_save("mode -50, control word bit 5")
+            if rising & control.BIT6:
+                self.load_from_flash()
+
+    def write_controlword(self: ServoDrive, value: int) -> None:
+        """0x6040 from a CiA 402 master (CANopen, CoE, a scenario)."""
+        self._require_power()
+        self.ien_cmd = True
+        self.cw_source = "cia402"
+        self.regs[R.CONTROL_WORD] = control.register_from_controlword(value, self.mode, True)
+        self._apply_controlword(value)
+
+    def _apply_controlword(self: ServoDrive, new: int) -> None:
+        old, self.cw = self.cw, new
+        rising, falling = new & ~old, old & ~new
+        if rising & ds402.CW_FAULT_RESET:
+            self._fault_reset()
+        if rising & ds402.CW_LATCH_RESET:
+            self.latched_flag = False
+        self._evaluate()
+        self.mode_logic.on_controlword(self, rising, falling)
+
+    def set_point_taken(self: ServoDrive) -> bool:
+        """Pos_str returns to 0 by itself (ch. 2); True when it did (register view only)."""
+        if self.cw_source != "register" or self.mode not in control.POSITIONER:
+            return False
+        self.regs[R.CONTROL_WORD] &= ~control.BIT5
+        self.cw &= ~ds402.CW_NEW_SET_POINT
+        return True
+
+    # ---- CiA 402 state machine ------------------------------------------------------------------
+    def _transition(self: ServoDrive, command: Command) -> bool:
+        found = TRANSITIONS.get((self.state, command))
+        if found is None:
+            return False
+        self._set_state(*found)
+        return True
+
+    def _set_state(self: ServoDrive, new: State, number: int) -> None:
+        old, self.state = self.state, new
+        if old is new:
+            return
+        self.emit(StateChanged(self.now_us, self.device_id, from_state=old.label,
+                               to_state=new.label))
+        logger.debug("%s: %s -> %s (transition %d)", self.device_id, old.label, new.label,
+                     number)
+        if new is State.OPERATION_ENABLED:
+            self.trajectory.hold(self.plant.theta)
+            self._was_allowed = False
+            self.mode_logic.torque_on(self)
+        elif new is State.QUICK_STOP_ACTIVE:
+            self.trajectory.stop(self.quick_stop_limits())
+        elif new is State.FAULT_REACTION_ACTIVE:
+            if self._fault_effect is Effect.RELEASE or not old.in_torque:
+                self._transition(Command.FAULT_REACTION_DONE)
+            else:
+                self.trajectory.stop(self.quick_stop_limits())
+
+    def _evaluate(self: ServoDrive) -> None:
+        """Apply the controlword's level command and the hardware consent TEN."""
+        if not self.powered or self.saving:
+            return
+        if not self.input_level("ten"):
+            self._transition(Command.TORQUE_LOST)
+        command = ds402.decode(self.cw)
+        if command is None:
+            return
+        for _ in range(4):
+            step = command
+            if step is Command.ENABLE_OPERATION and self.state is State.SWITCH_ON_DISABLED \
+                    and self.cw_source == "register":
+                step = Command.SHUTDOWN  # Ten_cmd goes all the way into torque (2, 3, 4)
+            if step is Command.ENABLE_OPERATION and self.state is State.SWITCHED_ON \
+                    and not self.input_level("ten"):
+                return
+            if not self._transition(step):
+                return
+
+    # ---- alarms ------------------------------------------------------------------------------
+    def raise_alarm(self: ServoDrive, code: int, lasting: bool = False) -> None:
+        spec = self.alarm_table[code]
+        if self.alarms.latch(code, lasting):
+            self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code), name=spec.name,
+                                   active=True))
+            self.log(f"alarm {code} {spec.name}: {spec.description} ({spec.effect.value})")
+        if self.state not in (State.FAULT_REACTION_ACTIVE, State.FAULT):
+            self._fault_effect = spec.effect
+            self.mode_logic.halted(self)
+            self._transition(Command.FAULT)
+
+    def _fault_reset(self: ServoDrive) -> None:
+        for code in self.alarms.reset(self.alarm_table):
+            spec = self.alarm_table[code]
+            self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code), name=spec.name,
+                                   active=False))
+        if self.alarms.latched:
+            self.log(f"alarm reset refused: alarm {self.alarms.active} persists")
+        elif self.state is State.FAULT:
+            self._transition(Command.FAULT_RESET)

@@ -1,0 +1,143 @@
+"""Save to flash (seed 004 ch. 2, ch. 4 "Salvataggio", ch. 5 0x2007), power-up latching of c7
+and c9, the 7-segment display during a save."""
+
+from __future__ import annotations
+
+import pytest
+from servo_helpers import CANOPEN_ENABLE, make_sim
+
+from devices.flash import MemoryFlash
+from devices.servo import flashsave
+from devices.servo.drive import DriveConfig
+from devices.servo.ds402 import State
+
+
+@pytest.mark.parametrize("trigger", ["mode-50", "0x3802", "0x1010", "0x2007", "action"])
+def test_every_trigger_saves_and_survives_a_new_drive(trigger: str) -> None:
+    flash = MemoryFlash()
+    sim = make_sim(flash=flash)
+    sim.drive.write_parameter(1, 80)
+    sim.w(12, 4321)
+    sim.w(18, 35)
+    if trigger == "mode-50":
+        sim.w(1, -50)
+        sim.w(0, 0x20)
+    elif trigger == "0x3802":
+        sim.drive.write_parameter(0x3802, 0x11)
+    elif trigger == "0x1010":
+        sim.drive.od.write(0x1010, 1, 0x65766173)
+    elif trigger == "0x2007":
+        sim.drive.od.write(0x2007, 0, 0x11)
+    else:
+        sim.drive.apply("save", {})
+    assert sim.drive.display == "--"
+    assert not sim.drive.responding
+    took = sim.run_until(lambda: sim.drive.responding, 10_000)
+    assert took == pytest.approx(flashsave.SAVE_DURATION_US / 1000, abs=2)
+    assert sim.drive.display == "Fr"
+    assert flash.writes == 1
+    fresh = make_sim(flash=flash)
+    assert fresh.drive.read_parameter(1) == 80
+    assert fresh.drive.read_register(12) == 4321
+    assert fresh.drive.read_register(18) == 35
+    assert fresh.drive.read_register(1) == (-50 if trigger == "mode-50" else 1)
+
+
+def test_save_with_torque_on_completes_when_torque_goes_off() -> None:
+    """Ch. 4: "verrà portata a termine solo quando verrà disabilitato il motore"."""
+    sim = make_sim()
+    sim.w(0, 0x03)
+    sim.drive.write_parameter(0x3802, 0x11)
+    assert sim.drive.responding and not sim.drive.saving
+    sim.run(500)
+    assert sim.flash.writes == 0
+    sim.w(0, 0x00)
+    assert sim.drive.saving
+    sim.run_until(lambda: sim.drive.responding, 5_000)
+    assert sim.flash.writes == 1
+
+
+def test_canopen_save_sequence_ends_in_ready_to_switch_on() -> None:
+    """Ch. 4: 0x0002, 0x1010:1 = 0x65766173, 0x0006, wait for statusword bit 0."""
+    sim = make_sim()
+    sim.cw(*CANOPEN_ENABLE)
+    sim.cw(0x0002)
+    sim.drive.od.write(0x1010, 1, 0x65766173)
+    sim.cw(0x0006)
+    assert sim.drive.statusword & 0x0001 == 0  # still saving
+    took = sim.run_until(lambda: sim.drive.statusword & 0x0001, 5_000)
+    assert took == pytest.approx(3000, abs=5)
+    assert sim.drive.state is State.READY_TO_SWITCH_ON
+
+
+def test_power_cut_during_a_save_keeps_the_old_content() -> None:
+    flash = MemoryFlash()
+    sim = make_sim(flash=flash)
+    sim.w(12, 1111)
+    sim.drive.apply("save", {})
+    sim.run(3100)
+    sim.w(12, 2222)
+    sim.drive.apply("save", {})
+    sim.run(1000)
+    sim.drive.apply("power", {"on": False})
+    sim.run(5000)
+    sim.drive.apply("power", {"on": True})
+    sim.run(100)
+    assert sim.drive.read_register(12) == 1111
+    assert flash.writes == 1
+
+
+def test_failed_flash_write_raises_alarm_9() -> None:
+    flash = MemoryFlash(fail=True)
+    sim = make_sim(flash=flash)
+    sim.drive.apply("save", {})
+    sim.run(3100)
+    assert sim.drive.read_register(46) == 9
+
+
+def test_corrupt_flash_at_power_up_raises_alarm_9_and_uses_defaults() -> None:
+    sim = make_sim(flash=MemoryFlash(b'{"format": "fieldrig-servo/1", "parameters": '
+                                     b'{"d1": 500}, "registers": {}}'))
+    assert sim.drive.read_register(46) == 9
+    assert sim.drive.read_parameter(1) == 20
+
+
+def test_bad_save_values_are_refused() -> None:
+    from devices.od import SdoAbort
+    from devices.servo.errors import AccessError
+    sim = make_sim()
+    with pytest.raises(AccessError):
+        sim.drive.write_parameter(0x3802, 0x12)
+    with pytest.raises(SdoAbort):
+        sim.drive.od.write(0x1010, 1, 0x12345678)
+    with pytest.raises(SdoAbort):
+        sim.drive.od.write(0x2007, 0, 0x10)
+    assert not sim.drive.saving
+
+
+def test_node_number_and_fieldbus_are_read_at_power_up_only() -> None:
+    """Ch. 2: "Il numero nodo è letto solamente all'accensione del drive"."""
+    flash = MemoryFlash()
+    sim = make_sim(DriveConfig(node_id=1), flash=flash)
+    sim.drive.write_parameter(20, 7)  # c7
+    sim.drive.write_parameter(22, 5)  # c9 = CANopen
+    assert (sim.drive.node_id, sim.drive.fieldbus) == (1, "modbus")
+    assert sim.drive.read_parameter(20) == 7
+    sim.drive.apply("power", {"on": False})
+    sim.drive.apply("power", {"on": True})
+    assert (sim.drive.node_id, sim.drive.fieldbus) == (1, "modbus")  # not saved: lost
+    sim.drive.write_parameter(20, 7)
+    sim.drive.write_parameter(22, 5)
+    sim.drive.apply("save", {})
+    sim.run(3100)
+    sim.drive.apply("power", {"on": False})
+    sim.drive.apply("power", {"on": True})
+    assert (sim.drive.node_id, sim.drive.fieldbus) == (7, "canopen")
+
+
+def test_powered_off_drive_does_not_respond() -> None:
+    sim = make_sim()
+    sim.drive.apply("power", {"on": False})
+    assert not sim.drive.responding
+    assert sim.drive.display == ""
+    assert sim.drive.snapshot()["powered"] is False

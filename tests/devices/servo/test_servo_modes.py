@@ -1,0 +1,341 @@
+"""Modes of operation (R01 / 0x6060), with the seed 004 ch. 4 worked examples where there are
+some and the ch. 2 "I/O digitali" rules for Start, Select and End of Job."""
+
+from __future__ import annotations
+
+import pytest
+from servo_helpers import CANOPEN_ENABLE, Sim, make_sim
+
+from devices.servo import ds402
+from devices.servo.drive import DriveConfig
+
+EOJ = 0x40
+
+
+def _od(sim: Sim, *writes: tuple[int, int, int]) -> None:
+    for index, sub, value in writes:
+        sim.drive.od.write(index, sub, value)
+
+
+def test_positioner_canopen_example_incremental_then_absolute() -> None:
+    """Ch. 4 "Modo posizionatore": 200 rpm, 100 ms ramps, +10 turns then 5 turns absolute."""
+    sim = make_sim()
+    _od(sim, (0x6092, 1, 6000), (0x6081, 0, 20000), (0x6083, 0, 200), (0x6084, 0, 200),
+        (0x6060, 0, 1))
+    sim.cw(*CANOPEN_ENABLE)
+    _od(sim, (0x607A, 0, 60000))
+    sim.cw(0x004F, 0x005F)
+    assert sim.drive.statusword & ds402.SW_MODE_12  # set-point acknowledged
+    sim.run(100)  # "100 ms per passare da 0 a 200 r.p.m."
+    assert sim.drive.read_register(73) == pytest.approx(200, abs=3)
+    took = sim.run_until(lambda: sim.drive.statusword & ds402.SW_TARGET_REACHED, 5_000)
+    assert took == pytest.approx(3000, abs=30)  # 10 turns at 200 rpm + one ramp
+    sim.run(20)
+    assert sim.drive.od.read(0x6064, 0) == 60000
+    _od(sim, (0x607A, 0, 30000))
+    sim.cw(0x000F, 0x001F)
+    sim.run_until(lambda: sim.drive.statusword & ds402.SW_TARGET_REACHED, 5_000)
+    sim.run(20)
+    assert sim.drive.od.read(0x6064, 0) == 30000
+
+
+def _positioner(sim: Sim, target: int = 60000) -> None:
+    sim.w(12, 20000)
+    sim.w(10, 200)
+    sim.w(11, 200)
+    sim.w(0, 0x03)
+    sim.w(9, target)
+
+
+def test_positioner_buffers_a_set_point_without_update_on_the_fly() -> None:
+    """Upd_mod = 0: the new set-point waits for the end of the move (sp_rdy = 0 meanwhile)."""
+    sim = make_sim()
+    _positioner(sim)
+    sim.w(0, 0x23)
+    sim.run(500)
+    sim.w(9, 10000)
+    sim.w(0, 0x23)
+    assert sim.r05 & 0x20 == 0  # sp_rdy: the buffer is full
+    sim.run_until(lambda: sim.drive.position_user >= 59_999, 5_000)
+    sim.run_until(lambda: sim.r05 & EOJ, 5_000)
+    sim.run(20)
+    assert sim.drive.position_user == 10000
+    assert sim.r05 & 0x20
+
+
+def test_positioner_updates_the_set_point_on_the_fly() -> None:
+    """Upd_mod = 1 (R00 bit 6): the axis turns round at once and never reaches 60000."""
+    sim = make_sim()
+    _positioner(sim)
+    sim.w(0, 0x23)
+    sim.run(500)
+    sim.w(9, 10000)
+    sim.w(0, 0x63)
+    peak = 0
+    while not sim.r05 & EOJ:
+        sim.run(5)
+        peak = max(peak, sim.drive.position_user)
+    sim.run(20)
+    assert peak < 20000
+    assert sim.drive.position_user == 10000
+
+
+def test_incremental_set_points_add_up() -> None:
+    """Inc_mod (R00 bit 7): each start moves by R09 from the previous target."""
+    sim = make_sim()
+    _positioner(sim, target=1500)
+    for _ in range(3):
+        sim.w(0, 0xA3)
+        sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    sim.run(20)
+    assert sim.drive.position_user == 4500
+
+
+def test_select_input_takes_aux_in_1_and_start_input_starts() -> None:
+    """Select high: the target is R30 aux_in_1; the Start input's rising edge starts (ch. 2)."""
+    sim = make_sim()
+    _positioner(sim)
+    sim.w(30, -2500)
+    sim.drive.apply("set_input", {"name": "select", "value": True})
+    sim.drive.apply("set_input", {"name": "start", "value": True})
+    sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    sim.run(20)
+    assert sim.drive.position_user == -2500
+
+
+@pytest.mark.parametrize("profile", [0, -1, -2])
+def test_profiles_reach_the_target_with_the_same_ramp_time(profile: int) -> None:
+    """R27 / 0x6086: 0 trapezoidal, -1 S, -2 sine; the mean ramp acceleration is R10."""
+    sim = make_sim()
+    sim.w(27, profile)
+    _positioner(sim, target=30000)
+    sim.w(0, 0x23)
+    sim.run(100)
+    assert sim.drive.trajectory.velocity * 6000 == pytest.approx(20000, rel=1e-6)
+    took = sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    assert took == pytest.approx(1500 + 100 - 101, abs=10)
+    sim.run(20)
+    assert sim.drive.position_user == 30000
+
+
+def test_near_to_target_output() -> None:
+    """Out 3 "Near to target": low at the start, high within target_window (R61)."""
+    sim = make_sim()
+    sim.w(61, 1000)
+    _positioner(sim, target=30000)
+    sim.w(0, 0x23)
+    assert not sim.drive.outputs()["near_target"]
+    sim.run_until(lambda: sim.drive.outputs()["near_target"], 3_000)
+    assert 29_000 <= sim.drive.position_user < 30000
+    assert not sim.drive.outputs()["end_of_job"]
+
+
+def test_velocity_canopen_example() -> None:
+    """Ch. 4 "Modo controllo di velocità": feed 60, 200 ms from 0 to 1000 rpm."""
+    sim = make_sim()
+    _od(sim, (0x6092, 1, 60), (0x6083, 0, 5), (0x6084, 0, 5), (0x6060, 0, 3))
+    sim.cw(*CANOPEN_ENABLE)
+    _od(sim, (0x60FF, 0, 1000))
+    sim.run(100)
+    assert sim.drive.read_register(73) == pytest.approx(500, abs=10)
+    assert not sim.drive.outputs()["end_of_job"]
+    sim.run(110)
+    assert sim.drive.read_register(73) == 1000
+    assert sim.drive.outputs()["end_of_job"]  # target speed of the generator reached
+    sim.run(20)
+    assert sim.drive.statusword & ds402.SW_TARGET_REACHED  # velocity window
+
+
+def test_velocity_select_and_zero_speed() -> None:
+    """Select picks aux_in_1 (R30); R05 bit 7 "velocità nulla" after the threshold time."""
+    sim = make_sim()
+    sim.w(1, 3)
+    sim.w(30, 3000)
+    sim.w(13, 600)
+    sim.w(0, 0x03)
+    sim.run(200)
+    assert sim.drive.read_register(8) == pytest.approx(600, abs=2)
+    assert sim.r05 & 0x80 == 0
+    sim.drive.apply("set_input", {"name": "select", "value": True})
+    sim.run(300)
+    assert sim.drive.read_register(8) == pytest.approx(3000, abs=2)
+    sim.w(30, 0)
+    sim.run(300)
+    assert sim.r05 & 0x80
+    assert sim.drive.statusword & ds402.SW_MODE_12
+
+
+def _homing_sim(start: float = 0.0, method: int = 34, offset: int = 0) -> Sim:
+    cfg = DriveConfig(neg_limit=-18000, pos_limit=18000, home_switch=2400, marker_offset=1500,
+                      start_position=start)
+    sim = make_sim(cfg)
+    for n, v in ((18, method), (19, offset), (20, 12000), (21, 3000), (22, 2000)):
+        sim.w(n, v)
+    return sim
+
+
+def _home(sim: Sim) -> None:
+    sim.w(1, 6)
+    sim.w(0, 0x03)
+    sim.w(0, 0x43)
+    sim.run_until(lambda: sim.r05 & 0xC0, 20_000, tick_ms=5)
+
+
+def test_homing_canopen_example_offset_minus_1000_reads_1000() -> None:
+    """Ch. 4 "Modo Homing": method 34, offset -1000 -> "la posizione attuale varrà 1000"."""
+    sim = make_sim()
+    _od(sim, (0x6092, 1, 6000), (0x6098, 0, 34), (0x607C, 0, -1000),
+        (0x6099, 2, 1000), (0x6060, 0, 6))
+    sim.cw(*CANOPEN_ENABLE)
+    sim.cw(0x000F, 0x001F)
+    assert sim.drive.statusword & 0x3000 == 0  # not completed yet
+    sim.run_until(lambda: sim.drive.statusword & 0x3000, 10_000)
+    assert sim.drive.statusword & 0x3000 == 0x1000  # bit 12 = 1, bit 13 = 0: success
+    assert sim.drive.od.read(0x6064, 0) == 1000
+    assert sim.drive.plant.theta == pytest.approx(0.25, abs=0.5 / 6000)  # the first marker above 0
+    sim.cw(0x000F)
+    assert sim.drive.state.label == "Operation enabled"  # "l'asse rimane fermo in coppia"
+
+
+# method -> {carriage start: home point}, in rig units: limits at -18000 / 18000, home switch
+# active from 2400 up, markers at 1500 + k * 6000
+HOME_POINTS: dict[int, dict[float, float]] = {
+    1: {0: -16500, 5000: -16500},  # first marker above the negative limit switch
+    2: {0: 13500, 5000: 13500},  # first marker below the positive limit switch
+    3: {0: 1500, 5000: 1500},  # the marker below the home switch edge
+    4: {0: 7500, 5000: 7500},  # the marker above the edge
+    17: {0: -18000, 5000: -18000},
+    18: {0: 18000, 5000: 18000},
+    19: {0: 2400, 5000: 2400},
+    20: {0: 2400, 5000: 2400},
+    33: {0: -4500, 5000: 1500},
+    34: {0: 1500, 5000: 7500},
+    35: {0: 0, 5000: 5000},
+}
+
+
+@pytest.mark.parametrize("method", sorted(HOME_POINTS))
+@pytest.mark.parametrize("start", [0.0, 5000.0])
+def test_homing_methods(method: int, start: float) -> None:
+    """Supported methods (docs/servo-drive.md §Homing) find their home point from either side
+    of the home switch, and the home point reads -home_offset."""
+    sim = _homing_sim(start=start, method=method, offset=-250)
+    _home(sim)
+    assert sim.r05 & 0xC0 == 0x40, "Homing ok, no homing error"
+    assert sim.drive.plant.theta * 6000 == pytest.approx(HOME_POINTS[method][start], abs=0.5)
+    assert sim.drive.position_user == 250
+    assert sim.drive.homed and sim.drive.outputs()["end_of_job"]
+
+
+def test_homing_method_33_modbus_example() -> None:
+    """Ch. 2 example: method 0x21 searches the marker in the negative direction."""
+    sim = _homing_sim(method=33)
+    _home(sim)
+    assert sim.drive.plant.theta * 6000 == pytest.approx(-4500, abs=0.5)
+    assert sim.drive.position_user == 0
+
+
+def test_unsupported_homing_method_is_a_homing_error() -> None:
+    sim = _homing_sim(method=7)
+    _home(sim)
+    assert sim.r05 & 0x80  # homing error
+    assert sim.drive.read_register(46) == 14
+    assert sim.drive.statusword & 0x3000 == 0x2000
+
+
+def test_homing_interrupted_by_clearing_the_start_bit() -> None:
+    """Bit 12 = 0, bit 13 = 1: "homing interrotto" (ch. 4)."""
+    sim = _homing_sim(method=33)
+    sim.w(1, 6)
+    sim.w(0, 0x03)
+    sim.w(0, 0x43)
+    sim.run(200)
+    sim.w(0, 0x03)
+    assert sim.drive.statusword & 0x3000 == 0x2000
+    assert sim.drive.read_register(46) == 0  # interrupted, not an alarm
+
+
+def test_homing_hitting_an_unexpected_limit_switch_fails() -> None:
+    cfg = DriveConfig(neg_limit=-18000, pos_limit=18000, home_switch=30000)
+    sim = make_sim(cfg)
+    for n, v in ((18, 3), (20, 12000), (22, 1000)):
+        sim.w(n, v)
+    _home(sim)
+    assert sim.drive.read_register(46) == 14
+
+
+def test_interpolator_follows_a_set_point_per_period() -> None:
+    """Mode 7: 0x60C2:1 = 2 ms; each period the drive takes 0x60C1:1 and moves linearly."""
+    sim = make_sim()
+    _od(sim, (0x60C2, 1, 2), (0x6060, 0, 7))
+    sim.cw(*CANOPEN_ENABLE)
+    sim.cw(0x001F)
+    assert sim.drive.statusword & ds402.SW_MODE_12  # interpolator active
+    for k in range(1, 501):
+        _od(sim, (0x60C1, 1, 10 * k))
+        sim.run(2)
+    assert sim.drive.trajectory.velocity * 6000 == pytest.approx(5000)  # 10 units / 2 ms
+    sim.run(50)
+    assert sim.drive.position_user == 5000
+    sim.cw(0x000F)
+    assert not sim.drive.statusword & ds402.SW_MODE_12
+
+
+def test_pulse_positioner_each_pulse_is_a_new_start() -> None:
+    """Mode -1: R24 pulses per motor turn through R25 / R26; End of Job like the positioner."""
+    sim = make_sim()
+    sim.w(12, 6000)
+    sim.w(24, 1000)
+    sim.w(25, 2)
+    sim.w(26, 1)
+    sim.w(1, -1)
+    sim.w(0, 0x03)
+    sim.drive.apply("pulses", {"count": 250})
+    assert sim.r05 & EOJ == 0
+    sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    sim.run(20)
+    assert sim.drive.position_user == 3000  # 250 pulses * 6000 * 2 / 1000
+
+
+def test_electronic_axis_follows_the_master_when_started() -> None:
+    """Mode -2: locked to the master with the Start input high and the start bit (ch. 2)."""
+    sim = make_sim()
+    sim.w(25, 2)
+    sim.w(26, 1)
+    sim.w(1, -2)
+    sim.drive.apply("master_encoder", {"rpm": 300.0})
+    sim.w(0, 0x43)
+    sim.run(100)
+    assert sim.drive.read_register(73) == 0  # Start input low: held in torque
+    sim.drive.apply("set_input", {"name": "start", "value": True})
+    sim.run(100)
+    assert sim.drive.read_register(73) == 600
+    assert sim.r05 & 0x40  # axis started
+    assert sim.drive.read_register(23) == round(300 / 60 * 4096 / 1000)
+    assert not sim.drive.outputs()["end_of_job"]  # always low in mode -2
+
+
+def test_save_load_mode_loads_from_flash() -> None:
+    """Mode -50: bit 5 saves, bit 6 0 -> 1 loads registers and parameters (R05 bit 6)."""
+    sim = make_sim()
+    sim.w(12, 1234)
+    sim.w(1, -50)
+    sim.w(0, 0x20)
+    sim.run_until(lambda: sim.drive.responding, 5_000)
+    sim.w(12, 999)
+    sim.w(0, 0x00)
+    sim.w(0, 0x40)
+    assert sim.drive.read_register(12) == 1234
+    assert sim.r05 & 0x40
+    assert sim.drive.mode == -50
+
+
+def test_analog_reference() -> None:
+    """Mode -127: +-10 V is +-Vmax (d3 % of the motor speed); End of Job always low."""
+    sim = make_sim()
+    sim.w(1, -127)
+    sim.drive.apply("analog_input", {"volts": 5.0})
+    sim.w(0, 0x03)
+    sim.run(1000)
+    assert sim.drive.read_register(73) == 750  # 3000 rpm * 50 % * 5 V / 10 V
+    assert not sim.drive.outputs()["end_of_job"]
