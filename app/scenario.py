@@ -214,8 +214,14 @@ def _apply(step: Step, rig: Rig, failures: list[str]) -> list[Event]:
 
 
 def _address(args: Mapping[str, Any]) -> str:
-    return ":".join(str(args[k]) for k in ("index", "sub", "register", "parameter", "address")
-                    if k in args)
+    """``0x5400:0`` for an object, the register or parameter as written otherwise."""
+    parts = []
+    for key in ("index", "sub", "register", "parameter", "address"):
+        if key in args:
+            value = args[key]
+            parts.append(f"0x{value:04X}" if key == "index" and isinstance(value, int)
+                         else str(value))
+    return ":".join(parts)
 
 
 def scenario_rig_path(scenario: Scenario, override: str | None) -> str | None:

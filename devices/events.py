@@ -150,7 +150,10 @@ class ValueRead(Event):
     kind: ClassVar[str] = "read"
 
     def fields(self) -> dict[str, Any]:
-        return {"address": self.address, "value": self.value}
+        out: dict[str, Any] = {"address": self.address, "value": self.value}
+        if isinstance(self.value, int) and not isinstance(self.value, bool):
+            out["hex"] = f"0x{self.value & 0xFFFFFFFF:08X}"
+        return out
 
 
 @dataclass

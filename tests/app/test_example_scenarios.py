@@ -1,0 +1,149 @@
+"""The example scenarios run from the CLI and their events match seed 000 (issue 2 §4)."""
+
+from __future__ import annotations
+
+import itertools
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from app.cli import main
+
+ROOT = Path(__file__).resolve().parents[2]
+SCENARIOS = sorted((ROOT / "static" / "scenarios").glob("*.toml"))
+
+
+def run(name: str, capsys: pytest.CaptureFixture[str], tmp_path: Path) -> list[dict]:
+    out = tmp_path / name
+    rc = main(["scenario", "run", str(ROOT / "static" / "scenarios" / f"{name}.toml"),
+               "--out", str(out)])
+    printed = capsys.readouterr().out
+    assert rc == 0
+    assert (out / "events.jsonl").read_text() == printed
+    return [json.loads(line) for line in printed.splitlines()]
+
+
+def without(records: list[dict], *kinds: str) -> list[dict]:
+    return [r for r in records if r["event"] not in kinds]
+
+
+@pytest.mark.parametrize("path", SCENARIOS, ids=lambda p: p.stem)
+def test_every_example_is_deterministic(path: Path, capsys, tmp_path) -> None:
+    first = run(path.stem, capsys, tmp_path)
+    second = run(path.stem, capsys, tmp_path)
+    assert first == second
+    assert {"t", "device", "event"} <= set(first[0])
+    assert any(r["event"] == "checkpoint" for r in first)
+
+
+def test_module_lost_in_op_matches_seed_7_1_and_7_7(capsys, tmp_path) -> None:
+    records = run("module_lost_in_op", capsys, tmp_path)
+    emcy = [r for r in records if r["event"] == "emergency"]
+    assert emcy[0] | {"t": 0} == {"t": 0, "device": "fastcat", "event": "emergency",
+                                  "code": "0xFF00", "register": "0x81",
+                                  "data": "02 00 00 04 00"}
+    t0 = emcy[0]["t"]
+    assert {"t": t0, "device": "fastcat", "event": "al_status", "code": "0x8204"} in records
+    assert {"t": t0, "device": "fastcat", "event": "state", "from": "OP", "to": "PREOP"} \
+        in records
+    logs = [r for r in records if r["event"] == "log" and r["device"] == "master"]
+    box = "'Box 1 (FastCAT)' (1001): "
+    assert [(round(r["t"] - t0, 3), r["text"]) for r in logs[:4]] == [
+        (0.0, box + "CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00')."),
+        (0.0, box + "abnormal state change (from 'OP' to 'PREOP') with code 0x8204. "
+                    "Try to go back to 'OP'..."),
+        (0.141, box + "'PREOP to SAFEOP' failed! Error: 'check device state for SAFEOP'. "
+                      "AL Status '0x0012' read and '0x0004' expected. AL Status Code '0x8204'"),
+        (0.141, box + "state change aborted (requested 'OP', back to 'PREOP')."),
+    ]
+    reads = [r for r in records if r["event"] == "read"]
+    assert reads[0]["address"] == "0x5400:0" and reads[0]["hex"] == "0x04000002"
+    # Reset fault while the module is still missing does nothing (§7: only once the cause is
+    # gone); after it is plugged back the same reset clears the alarm and OP comes back.
+    cleared = [r for r in records if r["event"] == "alarm" and not r["active"]]
+    assert len(cleared) == 1 and cleared[0]["t"] == 10.5
+    states = [(r["from"], r["to"]) for r in records
+              if r["event"] == "state" and r["device"] == "fastcat" and "machine" not in r]
+    assert states[-2:] == [("PREOP", "SAFEOP"), ("SAFEOP", "OP")]
+
+
+def test_cnf_scan_lights_reds_in_order_then_yellows(capsys, tmp_path) -> None:
+    records = run("cnf_scan", capsys, tmp_path)
+    release = next(r["t"] for r in records if r["event"] == "state"
+                   and r.get("machine") == "cnf_button" and r["to"] == "released"
+                   and r["t"] > 7)
+    reds = [(r["t"], r["led"]) for r in records if r["event"] == "led"
+            and r["led"].endswith(".red") and r["pattern"] == "on" and r["t"] > release]
+    assert [led for _, led in reds] == [f"{n}.red" for n in range(1, 8)]
+    gaps = {round(b - a, 3) for (a, _), (b, _) in itertools.pairwise(reds)}
+    assert gaps == {0.25}
+    yellows = [r for r in records if r["event"] == "led" and r["led"].endswith(".yellow")
+               and r["pattern"] == "blinking" and r["t"] > release]
+    assert len(yellows) == 7 and min(y["t"] for y in yellows) > reds[-1][0]
+    # the 1 s press at 5.5 s changed nothing but the button itself
+    short = [r for r in records if 5.5 <= r["t"] < 7.0 and r["device"] == "fastcat"]
+    assert {r.get("machine") for r in short} == {"cnf_button"}
+
+
+def test_config_mismatch_at_power_up(capsys, tmp_path) -> None:
+    records = run("config_mismatch", capsys, tmp_path)
+    after_power = [r for r in records if r["t"] >= 14.0]
+    emcy = next(r for r in after_power if r["event"] == "emergency")
+    assert emcy["data"] == "02 00 00 01 00"  # module 2 differs: CO_E_MODULE_CHANGED
+    assert {"led": "ERR", "pattern": "blinking"}.items() <= next(
+        r for r in after_power if r["event"] == "led" and r["led"] == "ERR").items()
+    at_checkpoint = [r for r in records if r["event"] == "state" and "machine" not in r
+                     and r["device"] == "fastcat" and 14.0 <= r["t"] <= 20.0]
+    assert ("SAFEOP", "OP") not in {(r["from"], r["to"]) for r in at_checkpoint}
+    assert any(r["event"] == "al_status" and r["code"] == "0x0052" for r in after_power)
+    relearnt = [r for r in records if r["t"] > 20.5 and r["event"] == "state"
+                and "machine" not in r and r["device"] == "fastcat"]
+    assert relearnt[-1]["to"] == "OP"
+
+
+def test_ax2_homing_sets_home_offset_and_done_bit(capsys, tmp_path) -> None:
+    records = run("ax2_homing", capsys, tmp_path)
+    status, position = [r for r in records if r["event"] == "read"]
+    assert status["address"] == "0x6660:0" and status["value"] & 0x1000
+    # homed at the first zero mark after 5.2 s, then counting on at 2048 pulses/rev, 60 rpm
+    assert position["address"] == "0x6560:1" and 1000 <= position["value"] < 1000 + 2048 * 1.3
+    assert not [r for r in records if r["event"] == "emergency"]
+
+
+def test_ax2_zero_mark_missing_alarm_after_one_and_a_half_turns(capsys, tmp_path) -> None:
+    records = run("ax2_zero_mark_missing", capsys, tmp_path)
+    emcy = [r for r in records if r["event"] == "emergency"]
+    assert [e["data"] for e in emcy] == ["07 00 14 00 00"]
+    assert 6.5 <= emcy[0]["t"] <= 6.51  # 1.5 turns at 60 rpm after the command at 5.0 s
+    assert any(r["event"] == "alarm" and not r["active"] for r in records)
+
+
+def test_too_many_analog_modules(capsys, tmp_path) -> None:
+    records = run("too_many_analog", capsys, tmp_path)
+    emcy = [r for r in records if r["event"] == "emergency"]
+    assert [e["data"] for e in emcy] == ["09 00 00 15 00"]  # 8th analog module at position 9
+
+
+def test_bad_scenario_exits_2_with_one_line(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[step]]\nat = 1\ntarget = "fastcat"\naction = "fly"\n')
+    proc = subprocess.run([sys.executable, "-m", "app", "scenario", "run", str(bad)],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert "step 1" in proc.stderr and "no action 'fly'" in proc.stderr
+
+
+def test_bad_rig_exits_2_with_one_line(tmp_path: Path) -> None:
+    bad = tmp_path / "rig.toml"
+    bad.write_text('[[fastcat]]\nmodules = ["DB16", "XX9"]\n')
+    proc = subprocess.run([sys.executable, "-m", "app", "--rig", str(bad), "--run-for", "0"],
+                          capture_output=True, text=True, cwd=ROOT)
+    assert proc.returncode == 2
+    assert proc.stderr.strip() == (f"fieldrig: error: {bad}: fastcat[0].modules[1]: unknown "
+                                   "module type 'XX9' (known: DB16, DI16, DO82, DO16, AI8D, "
+                                   "AI8C, AI8TC, AI8PT100, AI8PT1000, AB4P4, AB4D4, AB4C4, AI4D, "
+                                   "AI4C, AO4, AO4H, AI4P, AI8M, AB4M4, AX2)")
