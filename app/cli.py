@@ -34,6 +34,8 @@ def _serve_parser() -> argparse.ArgumentParser:
                    help="simulated seconds per wall second (default 1.0)")
     p.add_argument("--run-for", type=float, default=None, metavar="SECONDS",
                    help="stop after this many wall seconds (for smoke tests)")
+    p.add_argument("--record", default=None, metavar="PATH",
+                   help="record the session to a rerun file (.rrd)")
     return p
 
 
@@ -46,6 +48,8 @@ def _scenario_parser() -> argparse.ArgumentParser:
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, help="directory for events.jsonl")
     run.add_argument("--quiet", action="store_true", help="do not print events on stdout")
+    run.add_argument("--record", default=None, metavar="PATH",
+                     help="also record the run to a rerun file (.rrd)")
     _rig_flags(run, serving=False)
     return p
 
@@ -80,7 +84,16 @@ def _scenario(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.file)
     rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
     rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
-    result = run_scenario(scenario, rig)
+    if args.record:
+        from app.recording import RigRecorder, scenario_observer
+
+        recorder = RigRecorder(args.record)
+        try:
+            result = run_scenario(scenario, rig, on_tick=scenario_observer(recorder))
+        finally:
+            recorder.close()
+    else:
+        result = run_scenario(scenario, rig)
     lines = [json.dumps(e.to_record(), default=str) for e in result.events]
     if not args.quiet:
         sys.stdout.write("".join(line + "\n" for line in lines))
@@ -104,6 +117,12 @@ def _serve(args: argparse.Namespace) -> int:
         raise RigConfigError("--port", "", f"{args.port} is not a TCP port")
     rig = build_rig(load_rig_spec(args.rig), state_dir=args.state_dir)
     runtime = Runtime(rig, speed=args.speed)
+    recorder = None
+    if args.record:
+        from app.recording import RigRecorder, attach_to_runtime
+
+        recorder = RigRecorder(args.record)
+        attach_to_runtime(runtime, recorder)
     server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
     dashboard = Dashboard(server, runtime)
     runtime.start()
@@ -120,6 +139,8 @@ def _serve(args: argparse.Namespace) -> int:
         dashboard.stop()
         runtime.stop()
         server.stop()
+        if recorder is not None:
+            recorder.close()
     return 0
 
 

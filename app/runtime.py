@@ -54,6 +54,7 @@ class Runtime:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._listeners: list[Callable[[list[Event]], None]] = []
+        self._step_listeners: list[Callable[[int], None]] = []
 
     # ---- control -------------------------------------------------------------------------
     def start(self) -> None:
@@ -96,6 +97,10 @@ class Runtime:
         """``fn(events)`` runs in the simulation thread after each batch; keep it quick."""
         self._listeners.append(fn)
 
+    def add_step_listener(self, fn: Callable[[int], None]) -> None:
+        """``fn(now_us)`` runs in the simulation thread after every step; keep it very quick."""
+        self._step_listeners.append(fn)
+
     # ---- what views read ------------------------------------------------------------------
     @property
     def frame(self) -> Frame:
@@ -125,6 +130,8 @@ class Runtime:
                     target = sim0
                 while self.rig.clock.now_us + self.rig.clock.step_us <= target:
                     batch.extend(self.rig.step())
+                    for fn in self._step_listeners:
+                        fn(self.rig.clock.now_us)
                     batch.extend(self._drain_work())
             if batch:
                 self._journal_events(batch)

@@ -171,19 +171,41 @@ class ScenarioRun:
     failures: list[str]
 
 
+Tick = Callable[[Rig, list[Event]], None]
+
+
 def run_scenario(scenario: Scenario, rig: Rig,
-                 on_step: Callable[[Step, Rig], None] | None = None) -> ScenarioRun:
-    """Run headless, as fast as possible. ``on_step`` sees each step after it was applied."""
+                 on_step: Callable[[Step, Rig], None] | None = None,
+                 on_tick: Tick | None = None) -> ScenarioRun:
+    """Run headless, as fast as possible.
+
+    ``on_step`` sees each scenario step after it was applied; ``on_tick`` sees the rig after
+    every simulation step (and after each applied step) with the events it produced.
+    """
     check_against(scenario, rig)
     events: list[Event] = []
     failures: list[str] = []
     for step in scenario.steps:
-        events.extend(rig.run_until(step.t_us))
-        events.extend(_apply(step, rig, failures))
+        events.extend(_run_until(rig, step.t_us, on_tick))
+        applied = _apply(step, rig, failures)
+        if on_tick is not None:
+            on_tick(rig, applied)
+        events.extend(applied)
         if on_step is not None:
             on_step(step, rig)
-    events.extend(rig.run_until(scenario.end_us))
+    events.extend(_run_until(rig, scenario.end_us, on_tick))
     return ScenarioRun(events, failures)
+
+
+def _run_until(rig: Rig, t_us: int, on_tick: Tick | None) -> list[Event]:
+    if on_tick is None:
+        return rig.run_until(t_us)
+    events: list[Event] = []
+    while rig.clock.now_us + rig.clock.step_us <= t_us:
+        step_events = rig.step()
+        on_tick(rig, step_events)
+        events.extend(step_events)
+    return events
 
 
 def _apply(step: Step, rig: Rig, failures: list[str]) -> list[Event]:

@@ -147,3 +147,16 @@ def test_bad_rig_exits_2_with_one_line(tmp_path: Path) -> None:
                                    "module type 'XX9' (known: DB16, DI16, DO82, DO16, AI8D, "
                                    "AI8C, AI8TC, AI8PT100, AI8PT1000, AB4P4, AB4D4, AB4C4, AI4D, "
                                    "AI4C, AO4, AO4H, AI4P, AI8M, AB4M4, AX2)")
+
+
+def test_scenario_record_flag_writes_a_verified_recording(capsys, tmp_path) -> None:
+    """``--record`` (issue 6) leaves the printed events unchanged and writes a valid .rrd."""
+    plain = run("module_lost_in_op", capsys, tmp_path)
+    rrd = tmp_path / "run.rrd"
+    rc = main(["scenario", "run", str(ROOT / "static/scenarios/module_lost_in_op.toml"),
+               "--record", str(rrd)])
+    recorded = [json.loads(line) for line in capsys.readouterr().out.splitlines()]
+    assert rc == 0 and recorded == plain
+    verify = subprocess.run([sys.executable, "-m", "rerun", "rrd", "verify", str(rrd)],
+                            capture_output=True, text=True)
+    assert verify.returncode == 0, verify.stderr

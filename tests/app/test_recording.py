@@ -422,9 +422,6 @@ def test_attach_to_runtime_records_a_live_rig(tmp_path: Path) -> None:
     assert not math.isnan(rows(chunks, "rig/fastcat/io/4/ai", "Scalars:scalars")[0][1][0])
 
 
-@pytest.mark.xfail(strict=True, reason="Runtime calls listeners only for batches with events; "
-                   "sampling a quiet rig needs a per-step hook in app/runtime.py (docs/"
-                   "recording.md, 'Live sessions')")
 def test_live_recording_samples_a_quiet_rig(tmp_path: Path) -> None:
     """In OP nothing happens, yet LINK flickers (ETG.1300, 50/50 ms): the samples show it."""
     path = tmp_path / "quiet.rrd"
