@@ -36,6 +36,11 @@ def _serve_parser() -> argparse.ArgumentParser:
                    help="stop after this many wall seconds (for smoke tests)")
     p.add_argument("--record", default=None, metavar="PATH",
                    help="record the session to a rerun file (.rrd)")
+    p.add_argument("--modbus-port", type=int, default=5020,
+                   help="TCP port of the drives' Modbus line, bound to --host (default 5020)")
+    p.add_argument("--modbus-framer", choices=("socket", "rtu"), default="socket",
+                   help="Modbus TCP ('socket') or RTU frames over TCP ('rtu', as the real "
+                        "drive speaks RTU)")
     return p
 
 
@@ -113,8 +118,9 @@ def _serve(args: argparse.Namespace) -> int:
     from app.runtime import Runtime
     from app.ui.dashboard import Dashboard
 
-    if not 0 < args.port < 65536:
-        raise RigConfigError("--port", "", f"{args.port} is not a TCP port")
+    for flag, port in (("--port", args.port), ("--modbus-port", args.modbus_port)):
+        if not 0 < port < 65536:
+            raise RigConfigError(flag, "", f"{port} is not a TCP port")
     rig = build_rig(load_rig_spec(args.rig), state_dir=args.state_dir)
     runtime = Runtime(rig, speed=args.speed)
     recorder = None
@@ -128,6 +134,7 @@ def _serve(args: argparse.Namespace) -> int:
     runtime.start()
     dashboard.start()
     _power_on(runtime)
+    modbus = _start_modbus(runtime, args)
     print(f"FieldRig: rig '{rig.name}' at http://{args.host}:{args.port} "
           f"(Ctrl-C to stop)", flush=True)
     stop = threading.Event()
@@ -136,12 +143,30 @@ def _serve(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         pass
     finally:
+        if modbus is not None:
+            modbus.stop_in_thread()
         dashboard.stop()
         runtime.stop()
         server.stop()
         if recorder is not None:
             recorder.close()
     return 0
+
+
+def _start_modbus(runtime: Any, args: argparse.Namespace) -> Any:
+    """The drives' Modbus line (pymodbus), when the rig has drives; None otherwise."""
+    from app.modbus.server import DriveModbusServer
+    from devices.servo.drive import ServoDrive
+
+    drives = [d for d in runtime.rig.devices.values() if isinstance(d, ServoDrive)]
+    if not drives:
+        return None
+    server = DriveModbusServer(drives, runtime.submit, host=args.host, port=args.modbus_port,
+                               framer=args.modbus_framer)
+    server.start_in_thread()
+    print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{args.modbus_port}",
+          flush=True)
+    return server
 
 
 def _power_on(runtime: Any) -> None:

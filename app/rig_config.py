@@ -50,6 +50,13 @@ class FastCatSpec:
 
 
 @dataclass(frozen=True)
+class ServoSpec:
+    id: str
+    settings: dict[str, Any]  # DriveConfig keyword arguments, checked against its fields
+    flash: str = MEMORY
+
+
+@dataclass(frozen=True)
 class RigSpec:
     source: str
     name: str = "rig"
@@ -58,6 +65,7 @@ class RigSpec:
     epoch: dt.datetime = dt.datetime(2019, 11, 12, 14, 51, 30)
     retry_interval_us: int = 2_000_000
     fastcats: tuple[FastCatSpec, ...] = ()
+    servos: tuple[ServoSpec, ...] = ()
 
 
 class _Table:
@@ -143,13 +151,24 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
     master.finish()
     fastcats = tuple(_fastcat(source, i, t)
                      for i, t in enumerate(top.get("fastcat", list, [])))
+    servos = tuple(_servo(source, i, t) for i, t in enumerate(top.get("servo", list, [])))
     top.finish()
-    ids = [f.id for f in fastcats]
-    for i, device_id in enumerate(ids):
-        if device_id in ids[:i] or device_id == "master":
-            raise RigConfigError(source, f"fastcat[{i}].id", f"duplicate device id {device_id!r}")
+    keyed = [(f"fastcat[{i}].id", f.id) for i, f in enumerate(fastcats)]
+    keyed += [(f"servo[{i}].id", s.id) for i, s in enumerate(servos)]
+    seen: set[str] = {"master", "scenario"}
+    for key, device_id in keyed:
+        if device_id in seen:
+            raise RigConfigError(source, key, f"duplicate or reserved device id {device_id!r}")
+        seen.add(device_id)
+    modbus_nodes = [(i, s.settings.get("node_id", 1)) for i, s in enumerate(servos)
+                    if s.settings.get("fieldbus", "modbus") == "modbus"]
+    for j, (i, node) in enumerate(modbus_nodes):
+        if node in [n for _, n in modbus_nodes[:j]]:
+            raise RigConfigError(source, f"servo[{i}].node_id",
+                                 f"node {node} is already used on the Modbus line")
     return RigSpec(source=source, name=name, seed=seed, step_us=round(step_ms * 1000),
-                   epoch=epoch, retry_interval_us=round(retry_s * 1e6), fastcats=fastcats)
+                   epoch=epoch, retry_interval_us=round(retry_s * 1e6), fastcats=fastcats,
+                   servos=servos)
 
 
 def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
@@ -192,6 +211,47 @@ def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
     return spec
 
 
+def _servo(source: str, i: int, data: Any) -> ServoSpec:
+    import dataclasses
+
+    from devices.servo.config import DriveConfig
+
+    t = _Table(source, f"servo[{i}]", data)
+    device_id = t.get("id", str, "drive" if i == 0 else _REQUIRED,
+                      lambda v: None if v.replace("_", "").replace("-", "").isalnum()
+                      else "use letters, digits, '-' and '_' only")
+    flash = t.get("flash", str, MEMORY)
+    settings: dict[str, Any] = {}
+    for f in dataclasses.fields(DriveConfig):
+        default = f.default if f.default is not dataclasses.MISSING else None
+        if isinstance(default, bool):
+            kind: type | tuple[type, ...] = bool
+        elif isinstance(default, float):
+            kind = float
+        elif isinstance(default, int):
+            kind = int
+        elif isinstance(default, str):
+            kind = str
+        else:
+            kind = dict
+        if f.name in t.data:
+            settings[f.name] = t.get(f.name, kind)
+        else:
+            t.used.add(f.name)
+    if "registers" in settings:
+        try:
+            settings["registers"] = {int(k): v for k, v in settings["registers"].items()}
+        except ValueError:
+            raise RigConfigError(source, t.key("registers"),
+                                 "keys are register numbers (\"2\" = R02)") from None
+    t.finish()
+    try:
+        DriveConfig(**settings)
+    except (ValueError, TypeError) as exc:
+        raise RigConfigError(source, f"servo[{i}]", str(exc)) from None
+    return ServoSpec(device_id, settings, flash)
+
+
 def _flash(spec_flash: str, state_dir: Path | None) -> FlashStore:
     if spec_flash == MEMORY or state_dir is None:
         return MemoryFlash()
@@ -226,6 +286,13 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
             raise RigConfigError(spec.source, f"fastcat[{i}]", str(exc)) from None
         devices[fc.id] = device
         slaves.append(device)
+    for servo in spec.servos:
+        from devices.servo.config import DriveConfig
+        from devices.servo.drive import ServoDrive
+
+        devices[servo.id] = ServoDrive(servo.id, random.Random(rng.getrandbits(64)),
+                                       DriveConfig(**servo.settings),
+                                       _flash(servo.flash, state))
     if slaves:
         devices["master"] = EtherCatMaster(
             "master", random.Random(rng.getrandbits(64)), slaves=slaves,

@@ -21,6 +21,9 @@ modules = ["DB16", {type = "AI8TC"}]
 def test_default_rig_parses() -> None:
     spec = load_rig_spec(DEFAULT_RIG)
     assert spec.fastcats[0].id == "fastcat"
+    # issue 3: one drive on Modbus at node 1 with TEN and IEN wired
+    wanted = {"fieldbus": "modbus", "node_id": 1, "ten_wired": True, "ien_wired": True}
+    assert wanted.items() <= spec.servos[0].settings.items()
     assert [m.type for m in spec.fastcats[0].modules][:2] == ["DB16", "DI16"]
 
 
@@ -50,6 +53,13 @@ def test_good_rig() -> None:
     ("[[fastcat]]\nid = \"a\"\nmodules = []\n[[fastcat]]\nid = \"a\"\nmodules = []\n",
      "fastcat[1].id", "duplicate"),
     ("[rig\n", "", "not valid TOML"),
+    ("[[servo]]\nnode_id = 0\n", "servo[0]", "outside 1..99"),
+    ("[[servo]]\nfieldbus = \"profibus\"\n", "servo[0]", "not one of"),
+    ("[[servo]]\nfeed_constant = 1.5\n", "servo[0].feed_constant", "must be int"),
+    ("[[servo]]\nwheels = 4\n", "servo[0].wheels", "unknown key"),
+    ("[[servo]]\nid = \"a\"\n[[servo]]\nid = \"b\"\n", "servo[1].node_id",
+     "already used on the Modbus line"),
+    ("[[servo]]\nid = \"master\"\n", "servo[0].id", "reserved"),
 ])
 def test_errors_name_file_key_reason(text: str, key: str, reason: str) -> None:
     with pytest.raises(RigConfigError) as info:
