@@ -23,9 +23,9 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Protocol
 
+from devices.device import CommandError
 from devices.servo.errors import AccessError
 from devices.servo.parameters import SAVE_COMMAND_ADDRESS as SAVE_ADDRESS
-from devices.servo.parameters import SAVE_COMMAND_VALUE as SAVE_COMMAND
 from devices.servo.registers import REGISTER_BASE  # R00 at 0x8000 ... R133 at 0x8085
 
 logger = logging.getLogger(__name__)
@@ -39,6 +39,7 @@ MAX_READ_QUANTITY = 125  # ch.2 "Codice 03": quantity of registers 1 to 125 (0x7
 
 # Parameter e3 ("Parametro Eccezioni", address 58) = 9 moves the map for Siemens PLCs
 # (ch.2 "Estensione della mappatura"): d1 at 40001 + 1 = 0x9C42, R00 at 44097 + 0 = 0xAC41.
+MODBUS = "modbus"  # drive.fieldbus when c9 = 3
 E3_ADDRESS = 58
 E3_SIEMENS_MAP = 9
 SIEMENS_PARAMETER_BASE = 40001
@@ -46,7 +47,11 @@ SIEMENS_REGISTER_BASE = 44097
 
 
 class ModbusDrive(Protocol):
-    """What the PDU layer needs from a drive (devices.servo.drive.ServoDrive)."""
+    """What the PDU layer needs from a drive (devices.servo.drive.ServoDrive).
+
+    ``write_parameter(0x3802, 0x0011)`` is the save command; ``fieldbus`` is the bus c9 chose
+    at power-up.
+    """
 
     @property
     def node_id(self) -> int: ...
@@ -66,7 +71,8 @@ class ModbusDrive(Protocol):
 
     def parameter_addresses(self) -> list[int]: ...
 
-    def request_save(self) -> None: ...
+    @property
+    def fieldbus(self) -> str: ...
 
 
 # ---- outcomes --------------------------------------------------------------------------------
@@ -115,7 +121,7 @@ def serve_line(drives: Sequence[ModbusDrive], unit_id: int, pdu: bytes) -> Outco
     """Serve one request addressed to ``unit_id`` on a line holding ``drives``."""
     if unit_id == BROADCAST_UNIT:
         return _broadcast(drives, pdu)
-    listening = [d for d in drives if d.responding and d.node_id == unit_id]
+    listening = [d for d in _on_line(drives) if d.node_id == unit_id]
     if not listening:
         return Silence(f"no drive answers unit id {unit_id}")
     if len(listening) > 1:
@@ -129,10 +135,15 @@ def _broadcast(drives: Sequence[ModbusDrive], pdu: bytes) -> Silence:
     # della rete"); FC 03 may not ("Con questa funzione non è ammesso il broadcast").
     if not pdu or pdu[0] not in (FC_WRITE_SINGLE_REGISTER, FC_WRITE_MULTIPLE_REGISTERS):
         return Silence("broadcast of a function that may not be broadcast")
-    for drive in drives:
-        if drive.responding:
-            serve_pdu(drive, pdu)
+    for drive in _on_line(drives):
+        serve_pdu(drive, pdu)
     return Silence("broadcast: never answered")
+
+
+def _on_line(drives: Sequence[ModbusDrive]) -> list[ModbusDrive]:
+    """The drives that listen now: c9 = 3 at power-up (ch.2 "Configurazione della rete"),
+    powered and not saving to flash."""
+    return [d for d in drives if d.responding and d.fieldbus == MODBUS]
 
 
 # ---- one drive -------------------------------------------------------------------------------
@@ -203,6 +214,8 @@ def _call(fn: Callable[[], int | None]) -> int | None:
         if exc.kind == "address":
             raise _IllegalAddress(str(exc)) from None
         raise _Discard(f"{exc.kind}: {exc}") from None
+    except CommandError as exc:  # e.g. powered off between two requests: no reply
+        raise _Discard(str(exc)) from None
 
 
 def _read(fn: Callable[[], int]) -> int:
@@ -336,9 +349,8 @@ def _write_register(drive: ModbusDrive, n: int, raw: int, reply: bytes) -> Reply
 
 
 def _save(drive: ModbusDrive, value: int) -> None:
-    if value != SAVE_COMMAND:
-        raise _Discard(f"0x{SAVE_ADDRESS:04X} takes 0x{SAVE_COMMAND:04X} only, got 0x{value:X}")
-    _call(lambda: drive.request_save())
+    """0x0011 at 0x3802 saves; the drive refuses any other value (then: no reply)."""
+    _call(lambda: drive.write_parameter(SAVE_ADDRESS, value))
 
 
 _HANDLERS: dict[int, Callable[[ModbusDrive, bytes], Outcome]] = {

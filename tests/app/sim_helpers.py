@@ -143,6 +143,7 @@ class Cell:
 class FakeDrive:
     node_id: int = 1
     responding: bool = True
+    fieldbus: str = "modbus"
     registers: dict[int, Cell] = field(default_factory=dict)
     parameters: dict[int, Cell] = field(default_factory=dict)
     saves: int = 0
@@ -192,10 +193,12 @@ class FakeDrive:
         return self._cell(self.parameters, address).value
 
     def write_parameter(self, address: int, value: int) -> None:
+        if address == 0x3802:  # the save command (ch.2 "Salvataggio su flash")
+            if value != 0x0011:
+                raise AccessError("value", "0x3802 takes 0x0011 only")
+            self._start_save()
+            return
         self._write(self._cell(self.parameters, address), value)
-
-    def request_save(self) -> None:
-        self._start_save()
 
     def step(self, now_us: int) -> None:
         self.now_us = now_us

@@ -13,6 +13,8 @@ import pytest
 from sim_helpers import FakeDrive
 
 from app.modbus.pdu import Exception02, Reply, Silence, serve_line, serve_pdu
+from devices.flash import MemoryFlash
+from devices.servo.drive import DriveConfig, ServoDrive
 
 h = bytes.fromhex
 
@@ -342,3 +344,159 @@ def test_siemens_map(drive: FakeDrive, request_: str, reply: str) -> None:
 def test_siemens_map_replaces_the_normal_one(drive: FakeDrive, request_: str) -> None:
     drive.parameters[58].value = 9
     assert run(drive, request_) == Exception02(h(request_)[0])
+
+
+def test_a_drive_on_another_fieldbus_is_not_on_the_line(line: list[FakeDrive]) -> None:
+    """c9 picks the fieldbus at power-up; only c9 = 3 speaks Modbus (ch.2 "Configurazione")."""
+    line[1].fieldbus = "canopen"
+    assert isinstance(serve_line(line, 5, h("03 0001 0001")), Silence)
+    serve_line(line, 0, h("06 0003 000A"))
+    assert [d.read_parameter(3) for d in line] == [10, 50]
+
+
+# ---- the same rules on the real drive model -----------------------------------------------------
+class Clock:
+    """Steps one drive 1 ms at a time, as the runtime does."""
+
+    def __init__(self, drive: ServoDrive) -> None:
+        self.drive, self.now_us = drive, 0
+
+    def run(self, us: int) -> None:
+        for _ in range(us // 1000):
+            self.now_us += 1000
+            self.drive.step(self.now_us)
+
+    def until(self, predicate, within_us: int) -> int:
+        start = self.now_us
+        while not predicate():
+            assert self.now_us - start < within_us, "condition not met in time"
+            self.run(1000)
+        return self.now_us - start
+
+
+@pytest.fixture
+def servo() -> tuple[ServoDrive, Clock]:
+    d = ServoDrive("servo", random.Random(1), DriveConfig(node_id=1), MemoryFlash())
+    clock = Clock(d)
+    clock.run(100_000)  # past the power-on self test
+    return d, clock
+
+
+def ask(d: ServoDrive, request_: str):
+    return serve_line([d], 1, h(request_))
+
+
+def test_real_drive_answers_the_seed_read_of_d1_d3(servo) -> None:
+    """ch.2 "Codice 0x03": the defaults of d1..d3 are the example's 20, 50, 50."""
+    d, _ = servo
+    assert ask(d, "03 0001 0003") == Reply(h("03 06 0014 0032 0032"))
+
+
+@pytest.mark.parametrize("request_, register, stored", [
+    ("06 8009 FFCE", 9, -50),  # target_position (S32): sign extension
+    ("06 8009 7FFF", 9, 0x7FFF),
+    ("10 8009 0002 04 FFFF FFCE", 9, -50),
+    ("10 8009 0002 04 8000 0000", 9, -0x8000_0000),
+    ("06 8003 FFFF", 3, 0xFFFF_FFFF),  # following_error_window: 0xFFFFFFFF disables the check
+    ("10 8003 0002 04 FFFF FFFF", 3, 0xFFFF_FFFF),
+    ("06 8001 FFCE", 1, -50),  # mode -50 by FC 06: 0xFFCE sign-extends to -50
+    ("10 8001 0001 02 0003", 1, 3),
+])
+def test_real_drive_register_writes(servo, request_: str, register: int, stored: int) -> None:
+    d, _ = servo
+    assert isinstance(ask(d, request_), Reply)
+    assert d.read_register(register) == stored
+
+
+@pytest.mark.parametrize("request_", [
+    "06 8000 8000",  # control word: 0xFFFF8000 after sign extension is out of 0..0xFFFF
+    "06 8005 0000",  # status word: read-only
+    "10 8006 0002 04 0000 0001",  # position_actual_value: read-only
+    "10 802E 0002 04 0000 0000",  # alarm_code: read-only
+    "06 8001 0002",  # mode 2 does not exist
+    "10 8002 0002 04 0004 0000",  # feed_constant above 0x3FFFF
+    "06 0003 0064",  # d3 = 100
+    "06 0051 0000",  # o1: read-only
+    "06 3802 0012",
+    "10 3802 0002 04 0001 0011",
+    "10 8009 0003 06 0000 0000 0000",
+])
+def test_real_drive_refusals_are_silent_and_change_nothing(servo, request_: str) -> None:
+    d, _ = servo
+    before = d.snapshot()
+    assert isinstance(ask(d, request_), Silence)
+    assert d.snapshot() == before
+
+
+@pytest.mark.parametrize("request_", ["03 0000 0001", "03 0017 0001", "03 8086 0002",
+                                      "06 0064 0001", "10 8086 0002 04 0000 0000"])
+def test_real_drive_illegal_addresses(servo, request_: str) -> None:
+    d, _ = servo
+    before = d.snapshot()
+    assert ask(d, request_) == Exception02(h(request_)[0])
+    assert d.snapshot() == before
+
+
+def test_real_drive_on_canopen_is_not_on_the_modbus_line() -> None:
+    """c9 = 5 (CANopen) at power-up: the drive does not speak Modbus."""
+    d = ServoDrive("servo", random.Random(1), DriveConfig(node_id=1, fieldbus="canopen"),
+                   MemoryFlash())
+    Clock(d).run(100_000)
+    assert isinstance(ask(d, "03 0001 0003"), Silence)
+
+
+def test_real_drive_read_r00_r01(servo) -> None:
+    """ch.2: quantity 4 from 0x8000 = R00 then R01, high words first."""
+    d, _ = servo
+    ask(d, "10 8000 0002 04 0000 0008")
+    ask(d, "10 8001 0002 04 0000 0006")
+    assert ask(d, "03 8000 0004") == Reply(h("03 08 0000 0008 0000 0006"))
+
+
+def test_real_drive_seed_positioner_example(servo) -> None:
+    """ch.2 "Esempio di configurazione dell'asse in modalità posizionatore", node 01: set-up,
+    homing (method 0x21), then a move to 0x1770: position_actual_value 6000, End of Job."""
+    d, clock = servo
+    setup = ["8002 0000 003C", "800A 0000 0064", "800B 0000 0064", "800C 0000 03E8",
+             "801B 0000 0000", "8012 0000 0021", "8013 0000 0000", "8015 0000 000A",
+             "8016 0000 0064", "8000 0000 0008", "8001 0000 0006", "8000 0000 0003",
+             "8000 0000 0043"]
+    for item in setup:
+        address, value = item[:4], item[5:]
+        assert ask(d, f"10 {address} 0002 04 {value}") == Reply(h(f"10 {address} 0002"))
+    clock.until(lambda: d.read_register(5) & 0x40, 60_000_000)  # bit 6: homing OK
+    assert ask(d, "03 8006 0002") == Reply(h("03 04 0000 0000"))  # home offset 0
+    for item in ["8000 0000 0000", "8001 0000 0001", "8009 0000 1770", "8000 0000 0003",
+                 "8000 0000 0023"]:
+        address, value = item[:4], item[5:]
+        assert ask(d, f"10 {address} 0002 04 {value}") == Reply(h(f"10 {address} 0002"))
+    clock.run(10_000)
+    clock.until(lambda: d.read_register(5) & 0x40, 60_000_000)  # bit 6: End of Job
+    assert ask(d, "03 8006 0002") == Reply(h("03 04 0000 1770"))
+    assert d.outputs()["end_of_job"]
+
+
+@pytest.mark.parametrize("request_, reply", [
+    ("06 3802 0011", "06 3802 0011"),
+    ("10 3802 0002 04 0000 0011", "10 3802 0002"),
+])
+def test_real_drive_save_second_method(servo, request_: str, reply: str) -> None:
+    """ch.2: the reply comes at once, then the drive is silent for the few seconds of the save,
+    and the flash holds the new d3 afterwards."""
+    d, clock = servo
+    ask(d, "06 0003 000A")
+    assert ask(d, request_) == Reply(h(reply))
+    assert isinstance(ask(d, "03 0003 0001"), Silence)
+    took = clock.until(lambda: d.responding, 10_000_000)
+    assert 1_000_000 <= took <= 5_000_000  # "qualche secondo", "inferiore ai 5 secondi"
+    assert d.flash.load() is not None and b'"d3": 10' in d.flash.load()
+
+
+def test_real_drive_save_first_method(servo) -> None:
+    """ch.2 "Primo metodo": mode -50 then control word 0x20 (torque off); the reply waits for
+    the end of the save."""
+    d, clock = servo
+    assert ask(d, "10 8001 0002 04 FFFF FFCE") == Reply(h("10 8001 0002"))
+    assert ask(d, "10 8000 0002 04 0000 0020") == Reply(h("10 8000 0002"), after_save=True)
+    clock.until(lambda: d.responding, 10_000_000)
+    assert d.flash.load() is not None
