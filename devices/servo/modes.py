@@ -93,9 +93,9 @@ class Positioner(Mode):
         if not d.motion_allowed:
             return
         value = d.reg(R.AUX_IN_1) if d.input_level("select") else d.reg(R.TARGET_POSITION)
-        if d.cw & ds402.CW_RELATIVE:
-            base = self.last_target if self.last_target is not None else d.position_user
-            value += base
+        if d.cw & ds402.CW_RELATIVE:  # from the last target, or from here after a stop
+            has_base = self.move_target is not None and self.last_target is not None
+            value += self.last_target if has_base else d.position_user
         self.sp_ack = not d.set_point_taken()  # the register view's Pos_str clears itself
         self.last_target = value
         if self.move_target is not None and not d.trajectory.idle \

@@ -56,12 +56,14 @@ class Plant:
         self.omega = 0.0
         self.jammed = False
         self.blocked = False  # against an end stop
+        self._last_demand: float | None = None
 
     def step(self, dt: float, demand: float | None, lag: float) -> None:
         """Advance dt seconds following ``demand`` (None: no torque, the motor coasts)."""
         before = self.theta
         if self.jammed:
             self.omega = 0.0
+            self._last_demand = demand
             return
         if demand is None:
             self.omega *= math.exp(-dt / COAST_TIME_CONSTANT_S)
@@ -69,10 +71,14 @@ class Plant:
                 self.omega = 0.0
             new = self.theta + self.omega * dt
         else:
-            gain = 1.0 - math.exp(-dt / lag) if lag > 0.0 else 1.0
-            new = self.theta + (demand - self.theta) * gain
+            # exact response of a first-order lag to a demand ramping linearly over the step
+            previous = self._last_demand if self._last_demand is not None else demand
+            rate = (demand - previous) / dt if dt > 0.0 else 0.0
+            decay = math.exp(-dt / lag) if lag > 0.0 else 0.0
+            new = demand - rate * lag + (self.theta - previous + rate * lag) * decay
             if abs(demand - new) < SETTLED_REV:
                 new = demand
+        self._last_demand = demand
         low, high = self.geometry.end_stops
         self.blocked = not low <= new <= high
         self.theta = min(max(new, low), high)
