@@ -14,19 +14,19 @@ from typing import Any
 from devices.device import CommandError, DeviceModel
 from devices.events import LogLine
 from devices.flash import FlashStore
-from devices.servo import control, ds402
+from devices.servo import ds402
 from devices.servo.actions import DriveActions
 from devices.servo.alarms import AlarmBank, AlarmSpec, Effect, alarm_table
 from devices.servo.config import DriveConfig
-from devices.servo.display import display_text
 from devices.servo.ds402 import Command, State
 from devices.servo.errors import AccessError
-from devices.servo.io import INPUT_NAMES, LatchFilter, input_word, output_levels
+from devices.servo.io import INPUT_NAMES, LatchFilter
 from devices.servo.modes import MODE_CLASSES, Mode
 from devices.servo.motion import Trajectory
 from devices.servo.od_map import IndirectAccess, build_object_dictionary
 from devices.servo.parameters import (
     FIELDBUS_BY_C9,
+    PARAMETER_BY_NAME,
     PARAMETERS,
     SAVE_COMMAND_ADDRESS,
     SAVE_COMMAND_VALUE,
@@ -104,9 +104,8 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         self._reset_runtime()
         self.params, self.regs = self._first_power_up_values()
         bad_flash = self._load_image(self.flash.load(), include_mode=True)
-        self.latched_at_power_up = {name: self.params[parameter_spec(addr).address]
-                                    for name, addr in (("c7", 20), ("c9", 22), ("n1", 40),
-                                                       ("d8", 8))}
+        self.latched_at_power_up = {name: self.params[PARAMETER_BY_NAME[name].address]
+                                    for name in ("c7", "c9", "n1", "d8")}
         self.powered = True
         self.boot_until = self._t_us + BOOT_US
         self.theta_zero = self.plant.theta
@@ -362,7 +361,7 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
 
     def _check_limits(self, levels: dict[str, bool]) -> None:
         """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
-        if self.state is not State.OPERATION_ENABLED or getattr(self.mode_logic, "busy", False):
+        if self.state is not State.OPERATION_ENABLED or self.mode_logic.busy:
             return
         velocity = self.trajectory.velocity
         if levels["neg_limit"] and velocity < 0.0:
@@ -380,45 +379,5 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         else:
             self._fe_ms = 0.0
 
-    # ---- outputs and status -----------------------------------------------------------------
-    def status_flags(self) -> control.StatusFlags:
-        levels = self.input_levels()
-        mode_flags = self.mode_logic.flags(self) if self.powered else {}
-        stopping = self.state in (State.QUICK_STOP_ACTIVE, State.FAULT_REACTION_ACTIVE) or (
-            self.state is State.OPERATION_ENABLED and not self.motion_allowed
-            and not self.trajectory.idle)
-        return control.StatusFlags(
-            state=self.state, mode=self.mode, motion_enabled=self.motion_enabled,
-            stopping=stopping, latched=self.latched_flag, latch_input=levels["latch"],
-            target_reached=self.powered and self.mode_logic.target_reached(self),
-            limit_active=levels["neg_limit"] or levels["pos_limit"],
-            save_done=self.save_done, load_done=self.load_done,
-            velocity_forced_zero=not self.motion_enabled, **mode_flags)
-
-    @property
-    def status_register(self) -> int:
-        return control.register_status(self.status_flags())
-
-    @property
-    def statusword(self) -> int:
-        return control.cia402_status(self.status_flags())
-
-    def outputs(self) -> dict[str, bool]:
-        if not self.powered:
-            return dict.fromkeys(("end_of_job", "out1", "brake", "near_target"), False)
-        primary = {"end_of_job": self.mode_logic.end_of_job(self),
-                   "near_target": self.mode_logic.near_target(self),
-                   "brake": self.state.in_torque}  # 24 V releases the brake
-        return output_levels(primary, self.regs[R.DIGITAL_OUT_MASK], self.regs[R.DIGITAL_OUTPUTS])
-
-    @property
-    def display(self) -> str:
-        return display_text(self.powered, self.saving, self.alarms.active, self.state.in_torque)
-
-    @property
-    def input_register(self) -> int:
-        return input_word(self.input_levels())
-
     def snapshot(self) -> dict[str, Any]:
         return self.build_snapshot()
-

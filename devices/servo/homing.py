@@ -14,6 +14,15 @@ from __future__ import annotations
 
 import enum
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+from devices.servo import ds402
+from devices.servo.mode_base import Changes, Mode
+from devices.servo.motion import Limits
+from devices.servo.registers import R
+
+if TYPE_CHECKING:
+    from devices.servo.drive import ServoDrive
 
 
 class Until(enum.Enum):
@@ -141,3 +150,95 @@ class HomingRun:
         """A limit switch came on that this method does not search: the homing fails."""
         return any(level and signal in ("neg_limit", "pos_limit")
                    and signal not in self.method.limits for signal, level, _ in changes)
+
+
+class Homing(Mode):
+    """Mode 6: controlword bit 4 (R00 bit 6) 0 -> 1 starts, 1 -> 0 interrupts."""
+
+    number = 6
+
+    def __init__(self) -> None:
+        self.status = HomingStatus.IDLE
+        self.run: HomingRun | None = None
+
+    def on_controlword(self, d: ServoDrive, rising: int, falling: int) -> None:
+        if rising & ds402.CW_NEW_SET_POINT:
+            self.begin(d)
+        elif falling & ds402.CW_NEW_SET_POINT and self.busy:
+            self.interrupt(d, "start bit cleared")
+
+    @property
+    def busy(self) -> bool:
+        return self.status in (HomingStatus.SEARCHING, HomingStatus.RETURNING)
+
+    def begin(self, d: ServoDrive) -> None:
+        if not d.motion_allowed:
+            return
+        d.homed = False
+        method = METHODS.get(d.reg(R.HOMING_METHOD))
+        if method is None:
+            self.fail(d, f"homing method {d.reg(R.HOMING_METHOD)} is not supported")
+            return
+        levels = d.input_levels()
+        self.status = HomingStatus.SEARCHING
+        self.run = HomingRun.start(method, levels["home"])
+        self.run.skip_satisfied(levels, d.plant.theta)
+        d.log(f"homing method {method.number} ({method.description}) started")
+        self.next_phase(d)
+
+    def limits(self, d: ServoDrive, speed_user: float) -> Limits:
+        acc = d.accel_to_rev(d.reg(R.HOMING_ACCELERATION))
+        return Limits(abs(d.speed_to_rev(speed_user)), acc, acc)
+
+    def next_phase(self, d: ServoDrive) -> None:
+        assert self.run is not None
+        phase = self.run.phase
+        slow = d.reg(R.HOMING_SLOW_SPEED)
+        if phase is None:
+            assert self.run.home is not None
+            d.set_home(self.run.home)
+            self.status = HomingStatus.RETURNING
+            d.trajectory.move_to(self.run.home, self.limits(d, slow))
+            return
+        speed = abs(d.reg(R.HOMING_FAST_SPEED)) if phase.fast else slow
+        lim = self.limits(d, speed)
+        d.trajectory.run_at(phase.direction * lim.vmax, lim)
+
+    def observe(self, d: ServoDrive, changes: Changes) -> None:
+        if self.status is not HomingStatus.SEARCHING or self.run is None:
+            return
+        if self.run.unexpected_limit(changes):
+            self.fail(d, "a limit switch the method does not search was hit")
+        elif self.run.observe(changes):
+            self.next_phase(d)
+
+    def step(self, d: ServoDrive, dt: float) -> None:
+        if self.status is HomingStatus.RETURNING and d.trajectory.at_target \
+                and abs(d.following_error_user) < 0.5:  # the home point reads exactly
+            self.status = HomingStatus.ATTAINED
+            d.homed = True
+            d.log(f"homing attained, position {d.position_user}")
+
+    def halted(self, d: ServoDrive) -> None:
+        if self.busy:
+            self.interrupt(d, "motion stopped")
+
+    def interrupt(self, d: ServoDrive, why: str) -> None:
+        self.status = HomingStatus.INTERRUPTED
+        d.trajectory.stop(d.limits())
+        d.log(f"homing interrupted: {why}")
+
+    def fail(self, d: ServoDrive, why: str) -> None:
+        self.status = HomingStatus.ERROR
+        d.log(f"homing error: {why}")
+        d.raise_alarm(14)
+
+    def flags(self, d: ServoDrive) -> dict[str, bool]:
+        return {"homing_attained": self.status is HomingStatus.ATTAINED,
+                "homing_error": self.status in (HomingStatus.ERROR, HomingStatus.INTERRUPTED)}
+
+    def end_of_job(self, d: ServoDrive) -> bool:
+        return self.status is HomingStatus.ATTAINED
+
+    def target_reached(self, d: ServoDrive) -> bool:
+        return not self.busy and super().target_reached(d)

@@ -7,7 +7,9 @@ import math
 from typing import TYPE_CHECKING, Any
 
 from devices.servo import control, ds402
-from devices.servo.io import INPUT_NAMES
+from devices.servo.display import display_text
+from devices.servo.ds402 import State
+from devices.servo.io import INPUT_NAMES, input_word, output_levels
 from devices.servo.motion import Limits, Shape
 from devices.servo.registers import MODE_NAMES, R
 
@@ -134,6 +136,45 @@ class DriveReadings:
         """0x603F: the error code of the alarm in R46, 0 without alarm (ch. 5 table)."""
         code = self.alarms.active
         return self.alarm_table[code].error_code_or_generic if code else 0
+
+    # ---- status words, outputs, snapshot ------------------------------------------------------
+    def status_flags(self: ServoDrive) -> control.StatusFlags:
+        levels = self.input_levels()
+        mode_flags = self.mode_logic.flags(self) if self.powered else {}
+        stopping = self.state in (State.QUICK_STOP_ACTIVE, State.FAULT_REACTION_ACTIVE) or (
+            self.state is State.OPERATION_ENABLED and not self.motion_allowed
+            and not self.trajectory.idle)
+        return control.StatusFlags(
+            state=self.state, mode=self.mode, motion_enabled=self.motion_enabled,
+            stopping=stopping, latched=self.latched_flag, latch_input=levels["latch"],
+            target_reached=self.powered and self.mode_logic.target_reached(self),
+            limit_active=levels["neg_limit"] or levels["pos_limit"],
+            save_done=self.save_done, load_done=self.load_done,
+            velocity_forced_zero=not self.motion_enabled, **mode_flags)
+
+    @property
+    def status_register(self: ServoDrive) -> int:
+        return control.register_status(self.status_flags())
+
+    @property
+    def statusword(self: ServoDrive) -> int:
+        return control.cia402_status(self.status_flags())
+
+    def outputs(self: ServoDrive) -> dict[str, bool]:
+        if not self.powered:
+            return dict.fromkeys(("end_of_job", "out1", "brake", "near_target"), False)
+        primary = {"end_of_job": self.mode_logic.end_of_job(self),
+                   "near_target": self.mode_logic.near_target(self),
+                   "brake": self.state.in_torque}  # 24 V releases the brake
+        return output_levels(primary, self.regs[R.DIGITAL_OUT_MASK], self.regs[R.DIGITAL_OUTPUTS])
+
+    @property
+    def display(self: ServoDrive) -> str:
+        return display_text(self.powered, self.saving, self.alarms.active, self.state.in_torque)
+
+    @property
+    def input_register(self: ServoDrive) -> int:
+        return input_word(self.input_levels())
 
     def build_snapshot(self: ServoDrive) -> dict[str, Any]:
         r05, sw = self.status_register, self.statusword
