@@ -339,3 +339,36 @@ def test_analog_reference() -> None:
     sim.run(1000)
     assert sim.drive.read_register(73) == 750  # 3000 rpm * 50 % * 5 V / 10 V
     assert not sim.drive.outputs()["end_of_job"]
+
+
+def test_canopen_full_example_homing_then_interpolator() -> None:
+    """Ch. 4 "Esempio completo di asse gestito con interpolatore" (without the PDO set-up)."""
+    sim = make_sim()
+    od = sim.drive.od
+    _od(sim, (0x6092, 1, 6000), (0x60C2, 1, 1), (0x6098, 0, 34), (0x607C, 0, -1000),
+        (0x6099, 2, 1000))
+    for value, address in ((80, 1), (20, 2)):  # d1 = 80, d2 = 20 through 0x2000
+        _od(sim, (0x2000, 2, value), (0x2000, 1, address))
+        sim.run_until(lambda: od.read(0x2000, 1) == 0, 100)
+    assert (sim.drive.read_parameter(1), sim.drive.read_parameter(2)) == (80, 20)
+    sim.cw(*CANOPEN_ENABLE)
+    _od(sim, (0x6060, 0, 6))
+    sim.cw(0x001F)
+    sim.run_until(lambda: sim.drive.statusword & 0x3000, 10_000)
+    sim.cw(0x000F)  # "L'asse rimane fermo in coppia"
+    assert sim.drive.position_user == 1000 and sim.drive.state.label == "Operation enabled"
+    _od(sim, (0x6060, 0, 7))
+    sim.cw(0x001F)
+    for k in range(1, 1001):  # 1 ms period: +6 units per ms = 1 turn/s, for 1 s
+        _od(sim, (0x60C1, 1, 1000 + 6 * k))
+        sim.drive.apply("sync", {})
+        sim.run(1)
+    assert sim.drive.read_register(73) == 60
+    sim.run(10)
+    assert sim.drive.position_user == 7000
+    sim.cw(0x000F)  # normal stop: interpolator off, held in torque
+    sim.run(10)
+    assert sim.drive.state.label == "Operation enabled" and sim.drive.read_register(8) == 0
+    sim.cw(0x0002)  # release
+    sim.run(10)
+    assert sim.drive.read_register(5) & 0x01 == 0
