@@ -118,7 +118,7 @@ class Runtime:
         sim0 = self.rig.clock.now_us
         next_publish = 0.0
         while not self._stop.is_set():
-            batch = self._drain_work()
+            self._journal_events(self._drain_work())
             now = time.monotonic()
             if self._paused:
                 wall0, sim0 = now, self.rig.clock.now_us
@@ -129,12 +129,12 @@ class Runtime:
                     wall0 = now
                     target = sim0
                 while self.rig.clock.now_us + self.rig.clock.step_us <= target:
-                    batch.extend(self.rig.step())
+                    # Each step's events reach the listeners before the step listeners run,
+                    # so an observer never sees a sample ahead of the events that led to it.
+                    self._journal_events(self.rig.step())
                     for fn in self._step_listeners:
                         fn(self.rig.clock.now_us)
-                    batch.extend(self._drain_work())
-            if batch:
-                self._journal_events(batch)
+                    self._journal_events(self._drain_work())
             if now >= next_publish:
                 self._publish()
                 next_publish = now + self._publish_period
@@ -156,6 +156,8 @@ class Runtime:
             events.extend(self.rig.take_events())
 
     def _journal_events(self, events: list[Event]) -> None:
+        if not events:
+            return
         with self._lock:
             for event in events:
                 self._event_seq += 1
