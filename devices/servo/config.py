@@ -5,8 +5,10 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from devices.servo.parameters import C9_BY_FIELDBUS
+from devices.servo.errors import AccessError
+from devices.servo.parameters import C9_BY_FIELDBUS, PARAMETER_BY_NAME
 from devices.servo.plant import AxisGeometry
+from devices.servo.registers import register_spec
 
 
 @dataclass(frozen=True)
@@ -51,6 +53,22 @@ class DriveConfig:
                 raise ValueError(f"{name} must be positive")
         if self.load_inertia < 0:
             raise ValueError("load_inertia must not be negative")
+        for name, value in self.parameters.items():
+            spec = PARAMETER_BY_NAME.get(str(name).lower())
+            if spec is None:
+                raise ValueError(f"parameters: there is no parameter {name!r}")
+            try:
+                spec.check(value)
+            except AccessError as exc:
+                raise ValueError(f"parameters: {exc}") from None
+        for number, value in self.registers.items():
+            try:
+                spec = register_spec(number)
+                spec.check(value)
+            except AccessError as exc:
+                raise ValueError(f"registers: {exc}") from None
+            if not spec.writable or number == 0:
+                raise ValueError(f"registers: R{number:02d} {spec.name} cannot be preset")
 
     def geometry(self) -> AxisGeometry:
         """The axis in motor turns (the plant's unit)."""

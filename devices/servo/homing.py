@@ -1,4 +1,4 @@
-"""Homing methods (R18 / 0x6098) as data, and the sequence that runs one.
+"""Homing methods (R18 / 0x6098) as data, the sequence that runs one, and mode 6 itself.
 
 Seed 004 ch. 4 "Modo Homing": method 34 searches the marker in the positive direction at the
 slow speed (0x6099:2) with the homing acceleration (0x609A); the fast speed is not used; after

@@ -183,7 +183,7 @@ class AnalogReference(Velocity):
     number = -127
 
     def target_user(self, d: ServoDrive) -> float:
-        return d.analog_volts / 10.0 * d.motor_vmax_rev * d.reg(R.FEED_CONSTANT)
+        return d.analog_volts / 10.0 * d.motor_vmax_rev * d.feed
 
     def end_of_job(self, d: ServoDrive) -> bool:
         return False

@@ -74,7 +74,7 @@ class DriveFlash:
     def _first_power_up_values(self: ServoDrive) -> tuple[dict[int, int], dict[int, int]]:
         cfg = self.config
         params = default_parameters({"c7": cfg.node_id, "c9": C9_BY_FIELDBUS[cfg.fieldbus],
-                                     **cfg.parameters})
+                                     **{k.lower(): v for k, v in cfg.parameters.items()}})
         regs = default_registers({int(R.FEED_CONSTANT): cfg.feed_constant, **cfg.registers})
         return params, regs
 

@@ -141,3 +141,17 @@ def test_powered_off_drive_does_not_respond() -> None:
     assert not sim.drive.responding
     assert sim.drive.display == ""
     assert sim.drive.snapshot()["powered"] is False
+
+
+def test_rig_values_for_first_power_up() -> None:
+    """A rig can preset keypad parameters and registers; bad ones are refused up front."""
+    sim = make_sim(DriveConfig(parameters={"D3": 80}, registers={12: 5000}, feed_constant=60))
+    assert sim.drive.read_parameter(3) == 80
+    assert sim.drive.read_register(12) == 5000
+    assert sim.drive.read_register(2) == 60
+    for bad in ({"parameters": {"zz": 1}}, {"parameters": {"d1": 0}},
+                {"registers": {200: 1}}, {"registers": {5: 1}},
+                {"registers": {27: 3}}, {"node_id": 0}, {"fieldbus": "profibus"},
+                {"start_position": 1e9}):
+        with pytest.raises(ValueError):
+            DriveConfig(**bad)
