@@ -1,0 +1,158 @@
+"""The CANopen adapter: python-can on one side, the drives' CANopen nodes on the other.
+
+Thin on purpose: every CANopen behaviour lives in devices/canopen (pure, clock-driven). This
+module only moves frames:
+
+- in: a python-can ``Notifier`` thread receives a frame and hands it to the simulation thread
+  with ``submit(fn)`` (the runtime runs it at the next step boundary); there the nodes'
+  ``receive`` queue it on their bus line.
+- out: :meth:`CanOpenBus.on_step` runs in the simulation thread after every step (a runtime
+  step listener) and sends what the nodes finished transmitting by then, so a frame leaves
+  when its simulated time has come; several nodes on one adapter also hear each other.
+
+Interfaces (``--can-interface``): ``virtual`` (python-can's in-process bus, the default),
+``udp_multicast`` (other processes on this machine: ``--can-channel GROUP[:PORT]``, default
+239.74.163.2:43113), ``socketcan`` (a real or vcan interface where the host has one, e.g.
+``can0``). udp_multicast delivers a sender's own datagrams back to it; the adapter drops those
+echoes. docs/canopen.md has the details.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import threading
+import time
+from collections import deque
+from collections.abc import Callable, Sequence
+from concurrent.futures import Future
+from typing import Any, Protocol
+
+import can
+
+from devices.canopen.bus_timing import CanFrame
+from devices.canopen.node import CanOpenNode
+
+logger = logging.getLogger(__name__)
+
+INTERFACES = ("virtual", "udp_multicast", "socketcan")
+DEFAULT_CHANNEL = {"virtual": "fieldrig-can", "udp_multicast": "239.74.163.2",
+                   "socketcan": "can0"}
+UDP_DEFAULT_PORT = 43113  # python-can's default
+ECHO_TTL_S = 2.0  # an own datagram not seen back by then is forgotten
+_GROUP_PORT = re.compile(r"^(?P<group>\d+\.\d+\.\d+\.\d+):(?P<port>\d+)$")
+
+
+class CanBusError(RuntimeError):
+    """The CAN interface cannot be opened (a message for the command line)."""
+
+
+class StepSource(Protocol):
+    def add_step_listener(self, fn: Callable[[int], None]) -> None: ...
+
+
+def open_bus(interface: str, channel: str | None = None) -> can.BusABC:
+    """A python-can bus for ``--can-interface`` / ``--can-channel``."""
+    if interface not in INTERFACES:
+        raise CanBusError(f"CAN interface {interface!r} is not one of {', '.join(INTERFACES)}")
+    channel = channel or DEFAULT_CHANNEL[interface]
+    kwargs: dict[str, Any] = {}
+    if interface == "udp_multicast":
+        match = _GROUP_PORT.match(channel)
+        if match:
+            channel, kwargs["port"] = match["group"], int(match["port"])
+        kwargs.setdefault("port", UDP_DEFAULT_PORT)
+        kwargs["fd"] = False
+    try:
+        return can.Bus(interface=interface, channel=channel, **kwargs)
+    except (can.CanError, OSError, ImportError, ValueError) as exc:
+        raise CanBusError(f"cannot open CAN interface {interface} channel {channel}: {exc}") \
+            from exc
+
+
+class CanOpenBus:
+    """One CAN bus shared by some CANopen nodes of the rig."""
+
+    def __init__(self, nodes: Sequence[CanOpenNode],
+                 submit: Callable[[Callable[[], Any]], Future[Any]],
+                 interface: str = "virtual", channel: str | None = None) -> None:
+        self.nodes = list(nodes)
+        self.submit = submit
+        self.interface = interface
+        self.channel = channel or DEFAULT_CHANNEL.get(interface, "")
+        self.bus: can.BusABC | None = None
+        self._notifier: can.Notifier | None = None
+        self._echo = interface == "udp_multicast"
+        self._echo_lock = threading.Lock()
+        self._echoes: deque[tuple[float, tuple[int, bool, bytes]]] = deque()
+        self.sent = self.received = self.send_errors = 0
+
+    # ---- life cycle ----------------------------------------------------------------------
+    def attach(self, runtime: StepSource) -> None:
+        runtime.add_step_listener(self.on_step)
+
+    def start(self) -> None:
+        self.bus = open_bus(self.interface, self.channel)
+        self._notifier = can.Notifier(self.bus, [self._on_message], timeout=0.1)
+
+    def stop(self) -> None:
+        if self._notifier is not None:
+            self._notifier.stop(timeout=1.0)
+            self._notifier = None
+        if self.bus is not None:
+            self.bus.shutdown()
+            self.bus = None
+
+    # ---- simulation thread ---------------------------------------------------------------
+    def on_step(self, now_us: int) -> None:
+        """Send what the nodes finished transmitting by ``now_us`` (simulation thread)."""
+        for node in self.nodes:
+            for frame in node.take_frames():
+                for other in self.nodes:
+                    if other is not node:
+                        other.receive(frame.can_id, frame.data, frame.rtr)
+                self._send(frame)
+
+    def _send(self, frame: CanFrame) -> None:
+        if self.bus is None:
+            return
+        msg = can.Message(arbitration_id=frame.can_id, data=frame.data,
+                          is_remote_frame=frame.rtr, is_extended_id=False,
+                          dlc=frame.length)
+        if self._echo:
+            key = (frame.can_id, frame.rtr, bytes(frame.data))
+            with self._echo_lock:
+                self._echoes.append((time.monotonic(), key))
+        try:
+            self.bus.send(msg, timeout=0.05)
+            self.sent += 1
+        except can.CanError as exc:
+            self.send_errors += 1
+            logger.warning("CAN send failed (%s): %s", self.interface, exc)
+
+    # ---- receiving thread ----------------------------------------------------------------
+    def _on_message(self, msg: can.Message) -> None:
+        if msg.is_error_frame or msg.is_extended_id or msg.is_fd:
+            return  # CANopen here is CAN 2.0A: 11-bit identifiers only
+        data = bytes(msg.data)
+        if self._echo and self._own_echo((msg.arbitration_id, msg.is_remote_frame, data)):
+            return
+        self.received += 1
+        can_id, rtr, dlc = msg.arbitration_id, msg.is_remote_frame, msg.dlc
+        self.submit(lambda: self._deliver(can_id, data, rtr, dlc))
+
+    def _deliver(self, can_id: int, data: bytes, rtr: bool, dlc: int) -> None:
+        for node in self.nodes:
+            node.receive(can_id, data, rtr, dlc)
+
+    def _own_echo(self, key: tuple[int, bool, bytes]) -> bool:
+        """True (once) for a datagram this adapter sent: the oldest matching one is used up."""
+        with self._echo_lock:
+            now = time.monotonic()
+            while self._echoes and now - self._echoes[0][0] > ECHO_TTL_S:
+                self._echoes.popleft()
+            for i, (_, sent) in enumerate(self._echoes):
+                if sent == key:
+                    del self._echoes[i]
+                    return True
+            return False

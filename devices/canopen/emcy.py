@@ -1,0 +1,105 @@
+"""Emergency messages, the error register 0x1001 and the error history 0x1003.
+
+Seed 004 ch. 4 "Emergency Message": eight bytes — error code (2), error register (1), vendor
+field (5); the code classes of DS 301 (2xxx current, 3xxx voltage, 4xxx temperature, 8xxx
+monitoring, ...); the error register bits (0 generic, 1 current, 2 voltage, 3 temperature,
+4 communication, 5 device profile, 7 manufacturer); "simultaneously with the emergency
+message the device writes the error code into [1003]". The drive's 0x1003 has one entry (the
+table prints sub 0 and sub 1 only) and sub 0 takes only 0, which clears sub 1 too.
+
+A drive alarm is sent with its 0x603F code (ch. 5 table, :mod:`devices.servo.alarms`); the
+vendor field carries the alarm number (R46) in its first byte. When the last alarm is reset
+the drive sends the DS 301 "error reset" emergency 0x0000.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections import deque
+from dataclasses import dataclass, field
+
+EMCY_BASE = 0x080
+ERROR_RESET = 0x0000
+LIFE_GUARD_ERROR = 0x8130  # DS 301: life guard error or heartbeat error
+PDO_LENGTH_ERROR = 0x8210  # DS 301: PDO not processed due to length error
+
+REG_GENERIC = 0x01
+REG_CURRENT = 0x02
+REG_VOLTAGE = 0x04
+REG_TEMPERATURE = 0x08
+REG_COMMUNICATION = 0x10
+REG_PROFILE = 0x20
+REG_MANUFACTURER = 0x80
+
+# (first code, last code, error register bit): the DS 301 classes of the ch. 4 tables. Codes of
+# other classes (50xx device hardware, 6xxx software, 70xx modules) set the generic bit only.
+REGISTER_BIT_BY_CODE: tuple[tuple[int, int, int], ...] = (
+    (0x2000, 0x2FFF, REG_CURRENT),
+    (0x3000, 0x3FFF, REG_VOLTAGE),
+    (0x4000, 0x4FFF, REG_TEMPERATURE),
+    (0x8100, 0x82FF, REG_COMMUNICATION),  # 81xx communication, 82xx protocol
+    (0x8300, 0x8FFF, REG_PROFILE),  # 86xx positioning (DSP 402), 87xx sync controller
+    (0xFF00, 0xFFFF, REG_MANUFACTURER),
+)
+
+
+def register_bits(code: int) -> int:
+    """Error register bits of one active error code (generic always)."""
+    if code == ERROR_RESET:
+        return 0
+    for low, high, bit in REGISTER_BIT_BY_CODE:
+        if low <= code <= high:
+            return REG_GENERIC | bit
+    return REG_GENERIC
+
+
+def payload(code: int, register: int, vendor: bytes = b"") -> bytes:
+    """The eight data bytes: code (little endian), register, five vendor bytes."""
+    if len(vendor) > 5:
+        raise ValueError("the vendor field is five bytes")
+    return struct.pack("<HB", code, register) + vendor.ljust(5, b"\0")
+
+
+@dataclass
+class ErrorHistory:
+    """0x1003 with one entry: sub 0 = number of errors (0/1), sub 1 = the latest."""
+
+    latest: int = 0
+    count: int = 0
+
+    def record(self, code: int, info: int = 0) -> None:
+        """DS 301 layout of an entry: error code in bits 0-15, additional info in 16-31."""
+        self.latest = (info & 0xFFFF) << 16 | code
+        self.count = 1
+
+    def clear(self) -> None:
+        self.latest = self.count = 0
+
+
+@dataclass
+class EmcyProducer:
+    """Emergencies waiting for the bus, spaced by the inhibit time 0x1015 (x 100 us)."""
+
+    inhibit_100us: int = 0
+    last_sent_us: int | None = None
+    pending: deque[tuple[bytes, int]] = field(default_factory=deque)
+
+    def queue(self, data: bytes, ready_us: int) -> None:
+        self.pending.append((data, ready_us))
+
+    def due(self, now_us: int) -> tuple[bytes, int] | None:
+        """The next emergency and the instant it may leave, if that is by ``now_us``."""
+        if not self.pending:
+            return None
+        data, at = self.pending[0]
+        if self.last_sent_us is not None:
+            at = max(at, self.last_sent_us + self.inhibit_100us * 100)
+        if at > now_us:
+            return None
+        self.pending.popleft()
+        self.last_sent_us = at
+        return data, at
+
+    def reset(self) -> None:
+        self.pending.clear()
+        self.last_sent_us = None

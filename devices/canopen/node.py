@@ -1,0 +1,444 @@
+"""The drive's CANopen node: NMT slave, SDO server, PDOs, SYNC, EMCY, heartbeat and guarding.
+
+Seed 004 ch. 4 "Implementazioni nel Drive". A pure, clock-driven model: the runtime steps it
+right after its drive (same instant), hands it received frames with :meth:`receive`, and takes
+the frames it sent with :meth:`take_frames`, each stamped with the simulated instant it left
+the bus. Every frame — received or sent — first waits for and occupies the node's
+:class:`~devices.canopen.bus_timing.CanLine` at the bit rate of parameter n1.
+
+The node follows its drive: it speaks only while the drive is powered and c9 was 5 (CANopen)
+at the drive's power-up; c7 (node-ID) and n1 (bit rate) are those latched then. Its events
+(NMT state, emergencies) are the drive's: they carry the drive's device id.
+"""
+
+from __future__ import annotations
+
+import logging
+import random
+from collections import deque
+from typing import Any, ClassVar
+
+from devices.canopen import emcy as em
+from devices.canopen.bus_timing import CanFrame, CanLine, bitrate_of_n1
+from devices.canopen.comm_objects import (
+    DEVICE_NAME,
+    SYNC_COB_ID,
+    build_comm_objects,
+    build_profile_extras,
+)
+from devices.canopen.decode import Context, describe
+from devices.canopen.dictionary import CanOpenDictionary
+from devices.canopen.eds import build_canopen_od
+from devices.canopen.guarding import Heartbeat, NodeGuard
+from devices.canopen.nmt import (
+    BOOT_UP_CODE,
+    HEARTBEAT_BASE,
+    NMT_COB_ID,
+    NmtCommand,
+    NmtState,
+    Service,
+    allows,
+    next_state,
+    parse_command,
+)
+from devices.canopen.pdo import ASYNC_TYPES, Pdo, split_entry
+from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
+from devices.device import CommandError, DeviceModel
+from devices.events import EmergencySent, StateChanged, fmt_bytes
+from devices.od import AbortCode, SdoAbort
+from devices.servo.drive import ServoDrive
+
+logger = logging.getLogger(__name__)
+
+BOOT_US = 50_000  # Initialisation after power-up: the drive's self test, then boot-up
+RESET_COMMUNICATION_US = 5_000  # Initialisation after an NMT reset communication
+FRAME_LOG = 200  # frames the bus monitor keeps
+FRAMES_IN_SNAPSHOT = 60
+OUTBOX = 4096  # frames kept for an adapter that does not drain them (headless runs)
+NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
+
+
+class CanOpenNode(DeviceModel):
+    KIND = "canopen"
+    ACTIONS: ClassVar[dict] = {}
+
+    def __init__(self, device_id: str, drive: ServoDrive, rng: random.Random | None = None,
+                 device_name: str = DEVICE_NAME) -> None:
+        super().__init__(device_id=device_id, rng=rng or random.Random(0))
+        self.drive = drive
+        self.device_name = device_name
+        self.active = False
+        self.state = NmtState.INITIALISATION
+        self.node_id = drive.node_id
+        self.bitrate = bitrate_of_n1(drive.latched_at_power_up["n1"])
+        self.line = CanLine(self.bitrate)
+        self.outbox: deque[CanFrame] = deque(maxlen=OUTBOX)
+        self.frame_log: deque[dict[str, Any]] = deque(maxlen=FRAME_LOG)
+        self.last_sdo = self.last_pdo = ""
+        self.counts = {"rx": 0, "tx": 0, "syncs": 0}
+        self.bus_load = 0.0
+        self._load_mark = (0, 0)  # (second, busy us then)
+        self._boot_at: int | None = None
+        self._power_seen: object | None = None
+        self._known_alarms: list[int] = []
+        self._t = 0  # the instant being processed (a frame's end, or the step)
+        self._canopen_od: Any = None
+        self._reset_communication()
+
+    # ---- communication parameters (DS 301 Reset-Communication) ---------------------------
+    def _reset_communication(self) -> None:
+        self.sync_cob_id = SYNC_COB_ID
+        self.cycle_period_us = 0
+        self.emcy_cob_id = em.EMCY_BASE + self.node_id
+        self.emcy = em.EmcyProducer()
+        self.history = em.ErrorHistory()
+        self.life_guard_error = False
+        self.heartbeat = Heartbeat()
+        self.guard = NodeGuard()
+        self.rpdos = [Pdo.default(n, True, self.node_id) for n in range(1, 5)]
+        self.tpdos = [Pdo.default(n, False, self.node_id) for n in range(1, 5)]
+        self.dictionary = CanOpenDictionary(build_comm_objects(self), self.drive.od,
+                                            build_profile_extras())
+        if self._canopen_od is None:
+            self._canopen_od = build_canopen_od(self.dictionary, self.node_id)
+        self.sdo = SdoChannel(self.node_id, self.dictionary, self._canopen_od, self._send_now)
+        self._by_rx_id = {p.can_id: p for p in self.rpdos}
+
+    # ---- what the comm objects call -------------------------------------------------------
+    @property
+    def heartbeat_ms(self) -> int:
+        return self.heartbeat.period_ms
+
+    def set_heartbeat(self, period_ms: int) -> None:
+        self.heartbeat.set_period(period_ms, self._t)
+
+    def set_guard_time(self, ms: int) -> None:
+        self.guard.guard_time_ms = ms
+        if not ms:
+            self.guard.reset()
+
+    def set_life_time_factor(self, factor: int) -> None:
+        self.guard.life_time_factor = factor
+
+    def clear_history(self, value: int) -> None:
+        if value != 0:  # "al sub0 può essere scritto solo col valore 0"
+            raise SdoAbort(AbortCode.VALUE_RANGE, 0x1003, 0)
+        self.history.clear()
+
+    @property
+    def error_register(self) -> int:
+        reg = 0
+        if self.drive.powered:
+            table = self.drive.alarm_table
+            for code in self.drive.alarms.latched:
+                reg |= em.register_bits(table[code].error_code_or_generic)
+        if self.life_guard_error:
+            reg |= em.register_bits(em.LIFE_GUARD_ERROR)
+        return reg
+
+    # ---- the bus side ----------------------------------------------------------------------
+    def receive(self, can_id: int, data: bytes = b"", rtr: bool = False,
+                dlc: int | None = None) -> None:
+        """A frame from the bus, offered now; the node sees it once it is through the line."""
+        if not self.active:
+            return
+        frame = CanFrame(can_id, bytes(data), rtr, dlc if rtr and dlc is not None else -1)
+        self.line.offer(frame, self.now_us)
+
+    def take_frames(self) -> list[CanFrame]:
+        """The frames the node finished sending, oldest first."""
+        out = list(self.outbox)
+        self.outbox.clear()
+        return out
+
+    # ---- time -----------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        super().step(now_us)
+        self._t = now_us
+        self._follow_power(now_us)
+        if not self.active:
+            return
+        if self._boot_at is not None and now_us >= self._boot_at:
+            self._boot(self._boot_at)
+        self._wire(now_us)
+        if self.state is not NmtState.INITIALISATION:
+            self._timers(now_us)
+        self._wire(now_us)
+        second = now_us // 1_000_000
+        if second != self._load_mark[0]:
+            busy = self.line.busy_us_total
+            self.bus_load = (busy - self._load_mark[1]) / 1e6
+            self._load_mark = (second, busy)
+
+    def _follow_power(self, now_us: int) -> None:
+        seen = self.drive.latched_at_power_up if self.drive.powered else None
+        if seen is self._power_seen:
+            return
+        self._power_seen = seen
+        self.line.clear()
+        self._known_alarms = []
+        was_active, self.active = self.active, False
+        if seen is not None and self.drive.fieldbus == "canopen":
+            self.active = True
+            self.node_id = self.drive.node_id
+            self.bitrate = bitrate_of_n1(self.drive.latched_at_power_up["n1"])
+            self.line = CanLine(self.bitrate, busy_until_us=now_us)
+            self._enter_initialisation(now_us, now_us + BOOT_US)
+        elif was_active:  # powered off, or c9 no longer CANopen: silent from now on
+            self.state = NmtState.INITIALISATION
+            self._boot_at = None
+
+    def _enter_initialisation(self, t: int, boot_at: int) -> None:
+        self._set_state(NmtState.INITIALISATION, t)
+        self._reset_communication()
+        self._boot_at = boot_at
+
+    def _boot(self, t_us: int) -> None:
+        """End of Initialisation: the boot-up message, then Pre-operational."""
+        self._boot_at = None
+        self._t = t_us
+        self._send(HEARTBEAT_BASE + self.node_id, bytes((BOOT_UP_CODE,)), t_us)
+        self._set_state(NmtState.PRE_OPERATIONAL, t_us)
+        if self.heartbeat.period_ms:
+            self.heartbeat.set_period(self.heartbeat.period_ms, t_us)
+
+    def _wire(self, now_us: int) -> None:
+        while (frame := self.line.next_done(now_us)) is not None:
+            self._log(frame)
+            if frame.rx:
+                self._t = frame.t_us
+                self._handle(frame)
+            else:
+                self.outbox.append(frame)
+
+    def _timers(self, now_us: int) -> None:
+        self._t = now_us
+        at = self.heartbeat.due(now_us)
+        if at is not None and allows(self.state, Service.GUARDING):
+            self._send(HEARTBEAT_BASE + self.node_id, bytes((self.state.code,)), at)
+        expired = self.guard.check(now_us)
+        if expired is not None:
+            self.life_guard_error = True  # "L'EMCY non viene resettato"
+            self._emergency(em.LIFE_GUARD_ERROR, b"", expired)
+        self._watch_alarms(now_us)
+        while (due := self.emcy.due(now_us)) is not None:
+            data, at = due
+            self._send(self.emcy_cob_id & 0x7FF, data, at)
+            self.emit(EmergencySent(at, self.drive.device_id, code=int.from_bytes(data[:2],
+                      "little"), register=data[2], data=data[3:]))
+        if self.state is NmtState.OPERATIONAL:
+            for pdo in self.tpdos:
+                if pdo.valid and pdo.trans_type in ASYNC_TYPES:
+                    self._async_tpdo(pdo, now_us)
+
+    # ---- received frames -------------------------------------------------------------------
+    def _handle(self, frame: CanFrame) -> None:
+        can_id, data, t = frame.can_id, frame.data, frame.t_us
+        if self.state is NmtState.INITIALISATION:
+            return
+        if can_id == NMT_COB_ID and not frame.rtr:
+            command = parse_command(data, self.node_id)
+            if command is not None:
+                self._nmt(command, t)
+        elif can_id == HEARTBEAT_BASE + self.node_id and frame.rtr:
+            self._guard_request(t)
+        elif frame.rtr:
+            self._pdo_request(can_id, t)
+        elif can_id == SDO_RX_BASE + self.node_id and allows(self.state, Service.SDO):
+            self.sdo.on_request(data)
+        elif can_id == self.sync_cob_id & 0x7FF and allows(self.state, Service.SYNC):
+            self._sync(t)
+        elif can_id in self._by_rx_id and allows(self.state, Service.PDO):
+            self._rpdo(self._by_rx_id[can_id], data, t)
+
+    def _nmt(self, command: NmtCommand, t: int) -> None:
+        new = next_state(self.state, command)
+        if new is None:
+            return
+        if command is NmtCommand.RESET_NODE:
+            # Reset-Application: profile and manufacturer values back to their power-on
+            # values (the last saved ones): the drive restarts as at power-up.
+            self.drive.apply("power", {"on": False})
+            self.drive.apply("power", {"on": True})
+            self._follow_power(t)
+        elif command is NmtCommand.RESET_COMMUNICATION:
+            self._enter_initialisation(t, t + RESET_COMMUNICATION_US)
+        else:
+            self._set_state(new, t)
+
+    def _set_state(self, new: NmtState, t: int) -> None:
+        old, self.state = self.state, new
+        if old is new:
+            return
+        self.emit(StateChanged(t, self.drive.device_id, from_state=old.label,
+                               to_state=new.label, machine="nmt"))
+        if new is NmtState.OPERATIONAL:
+            for pdo in (*self.rpdos, *self.tpdos):
+                pdo.restart()
+
+    def _guard_request(self, t: int) -> None:
+        self.guard.request(t)
+        bit = self.guard.answer_bit(self.heartbeat.period_ms != 0)
+        if bit is not None:
+            self._send(HEARTBEAT_BASE + self.node_id, bytes((self.state.code | bit,)), t)
+
+    def _sync(self, t: int) -> None:
+        """SYNC: synchronous RPDOs take effect, the drive syncs, synchronous TPDOs go out."""
+        self.counts["syncs"] += 1
+        operational = self.state is NmtState.OPERATIONAL
+        if operational:
+            for pdo in self.rpdos:
+                if pdo.valid and pdo.synchronous and pdo.buffered is not None:
+                    data, pdo.buffered = pdo.buffered, None
+                    self._apply_rpdo(pdo, data)
+        try:
+            self.drive.apply("sync", {})
+        except CommandError as exc:  # saving to flash
+            logger.debug("%s: SYNC not taken: %s", self.drive.device_id, exc)
+        if not operational:
+            return
+        for pdo in self.tpdos:
+            if not (pdo.valid and pdo.synchronous):
+                continue
+            data = self._pack(pdo)
+            if data is None:
+                continue
+            if pdo.trans_type == 0:
+                if data != pdo.last_data:
+                    self._send_pdo(pdo, data, t)
+            else:
+                pdo.syncs += 1
+                if pdo.syncs >= pdo.trans_type:
+                    pdo.syncs = 0
+                    self._send_pdo(pdo, data, t)
+
+    def _rpdo(self, pdo: Pdo, data: bytes, t: int) -> None:
+        if len(data) < pdo.length:  # DS 301: not processed, EMCY 0x8210
+            self._emergency(em.PDO_LENGTH_ERROR, b"", t, transient=True)
+            return
+        if pdo.synchronous:
+            pdo.buffered = data  # "attuati al Sync immediatamente successivo"
+        else:
+            self._apply_rpdo(pdo, data)
+
+    def _apply_rpdo(self, pdo: Pdo, data: bytes) -> None:
+        for index, sub, value in pdo.unpack(data, self.dictionary.entry):
+            try:
+                self.dictionary.write(index, sub, value)
+            except SdoAbort as exc:
+                logger.info("%s: %s: %s", self.drive.device_id, pdo.name, exc)
+
+    def _pdo_request(self, can_id: int, t: int) -> None:
+        """A remote request for a TPDO (COB-ID bit 30 clear): the current data at once."""
+        if self.state is not NmtState.OPERATIONAL:
+            return
+        for pdo in self.tpdos:
+            if pdo.valid and pdo.can_id == can_id and not pdo.cob_id & 0x4000_0000:
+                data = self._pack(pdo)
+                if data is not None:
+                    self._send_pdo(pdo, data, t)
+
+    # ---- transmitted frames ----------------------------------------------------------------
+    def _async_tpdo(self, pdo: Pdo, now_us: int) -> None:
+        data = self._pack(pdo)
+        if data is None:
+            return
+        last = pdo.last_sent_us
+        event = data != pdo.last_data
+        timer = bool(pdo.event_timer_ms) and last is not None \
+            and now_us >= last + pdo.event_timer_ms * 1000
+        inhibited = last is not None and now_us - last <= pdo.inhibit_100us * 100
+        if (event or timer) and not inhibited:
+            self._send_pdo(pdo, data, now_us)
+
+    def _pack(self, pdo: Pdo) -> bytes | None:
+        try:
+            return pdo.pack(self.dictionary.entry, self.dictionary.peek)
+        except (SdoAbort, CommandError) as exc:
+            logger.debug("%s: %s not packed: %s", self.drive.device_id, pdo.name, exc)
+            return None
+
+    def _send_pdo(self, pdo: Pdo, data: bytes, t: int) -> None:
+        pdo.last_sent_us, pdo.last_data = t, data
+        self._send(pdo.can_id, data, t)
+
+    def _emergency(self, code: int, vendor: bytes, t: int, transient: bool = False,
+                   info: int = 0) -> None:
+        if code != em.ERROR_RESET:
+            self.history.record(code, info)
+        register = self.error_register | (em.register_bits(code) if transient else 0)
+        if allows(self.state, Service.EMCY) and not self.emcy_cob_id & 0x8000_0000:
+            self.emcy.queue(em.payload(code, register, vendor), t)
+
+    def _watch_alarms(self, now_us: int) -> None:
+        """A newly latched alarm -> EMCY with its 0x603F code; none left -> error reset."""
+        latched = list(self.drive.alarms.latched)
+        table = self.drive.alarm_table
+        for code in latched:
+            if code not in self._known_alarms:
+                self._emergency(table[code].error_code_or_generic, bytes((code,)), now_us,
+                                info=code)
+        if self._known_alarms and not latched:
+            self._emergency(em.ERROR_RESET, b"", now_us)
+        self._known_alarms = latched
+
+    def _send(self, can_id: int, data: bytes, t: int) -> None:
+        self.line.offer(CanFrame(can_id, data, rx=False), t)
+
+    def _send_now(self, can_id: int, data: bytes) -> None:
+        """SDO answers: at the instant the request finished."""
+        self._send(can_id, data, self._t)
+
+    # ---- views ----------------------------------------------------------------------------
+    def _context(self) -> Context:
+        return Context(sync_id=self.sync_cob_id & 0x7FF, pdo_text=self._pdo_text)
+
+    def _pdo_text(self, can_id: int, data: bytes) -> str | None:
+        for pdo in (*self.rpdos, *self.tpdos):
+            if pdo.valid and pdo.can_id == can_id:
+                return f"{pdo.name} {self._pdo_values(pdo, data)}"
+        return None
+
+    def _pdo_values(self, pdo: Pdo, data: bytes) -> str:
+        parts, offset = [], 0
+        for value in pdo.mapped:
+            index, sub, bits = split_entry(value)
+            chunk = data[offset:offset + bits // 8]
+            offset += bits // 8
+            parts.append(f"0x{index:04X}:{sub:02X}={int.from_bytes(chunk, 'little'):#x}"
+                         if len(chunk) == bits // 8 else f"0x{index:04X}:{sub:02X}=?")
+        return " ".join(parts) or fmt_bytes(data)
+
+    def _log(self, frame: CanFrame) -> None:
+        kind, text = describe(frame.can_id, frame.data, frame.rtr, self._context())
+        direction = "rx" if frame.rx else "tx"
+        self.counts[direction] += 1
+        entry = {"t": frame.t_us / 1e6, "dir": direction, "id": f"0x{frame.can_id:03X}",
+                 "dlc": frame.length, "data": "R" if frame.rtr else fmt_bytes(frame.data),
+                 "kind": kind, "text": text}
+        self.frame_log.append(entry)
+        if kind == "SDO":
+            self.last_sdo = text
+        elif kind == "PDO":
+            self.last_pdo = text
+
+    def snapshot(self) -> dict[str, Any]:
+        return {
+            "kind": self.KIND, "drive": self.drive.device_id, "active": self.active,
+            "node_id": self.node_id, "bitrate": self.bitrate,
+            "nmt": self.state.label if self.active else NO_STATE,
+            "heartbeat_ms": self.heartbeat.period_ms,
+            "guard_time_ms": self.guard.guard_time_ms,
+            "life_time_factor": self.guard.life_time_factor,
+            "life_guard_error": self.life_guard_error,
+            "error_register": self.error_register if self.active else 0,
+            "error_history": [f"0x{self.history.latest:08X}"] if self.history.count else [],
+            "sync_cob_id": f"0x{self.sync_cob_id:08X}", "emcy_cob_id": f"0x{self.emcy_cob_id:08X}",
+            "rpdo": [p.describe() for p in self.rpdos],
+            "tpdo": [p.describe() for p in self.tpdos],
+            "last_sdo": self.last_sdo, "last_pdo": self.last_pdo,
+            "frames": list(self.frame_log)[-FRAMES_IN_SNAPSHOT:],
+            "bus": {**self.counts, "load": round(self.bus_load, 4),
+                    "dropped": self.line.dropped},
+        }
+

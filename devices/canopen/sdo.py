@@ -1,0 +1,127 @@
+"""The SDO server: the ``canopen`` library's SdoServer, fed one request at a time.
+
+canopen.sdo.server.SdoServer does the protocol (expedited and segmented transfers, toggle bit,
+aborts); it expects a node with ``get_data`` / ``set_data`` and a network with
+``send_message``. :class:`SdoChannel` is both: reads and writes go to the node's dictionary
+(access and range checks, DS 301 abort codes from devices.od), and answers go back to the node,
+which puts them on its bus line at the simulated instant the request finished.
+
+What the shim adds, each for a reason the library leaves open:
+
+- The length rule of the drive (seed 004 ch. 4 "Servizio SDO": "Lo slave accetta ogni tipo di
+  SDO, anche se il master non indica la lunghezza dei dati spediti"): an expedited download
+  without the size bit brings four bytes; the object takes as many as it is wide. A download
+  with a size takes up to the object's width (shorter data is extended, so the ch. 4 example
+  "write object 2000, sub 2, value: u8 40" works on the 16-bit object); more bytes than the
+  object holds abort with 0x06070012.
+- A segmented download to a missing or read-only object aborts at the initiate request, not
+  after the last segment (the library checks only at the end).
+- The library's abort needs the index of the transfer: for a request it cannot parse it would
+  fail before answering, so the index is set from the request first.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from canopen.objectdictionary import ObjectDictionary as CanopenDictionary
+from canopen.sdo.exceptions import SdoAbortedError
+from canopen.sdo.server import SdoServer
+
+from devices.canopen.dictionary import CanOpenDictionary
+from devices.od import AbortCode, DataType, OdEntry, SdoAbort, encode
+
+SDO_RX_BASE = 0x600  # client -> server (request)
+SDO_TX_BASE = 0x580  # server -> client (response)
+_CCS_DOWNLOAD, _CCS_UPLOAD = 0x20, 0x40
+_EXPEDITED, _SIZE_GIVEN = 0x02, 0x01
+_SIGNED = frozenset({DataType.INTEGER8, DataType.INTEGER16, DataType.INTEGER32})
+_WIDTH = {DataType.BOOLEAN: 1, DataType.INTEGER8: 1, DataType.UNSIGNED8: 1,
+          DataType.INTEGER16: 2, DataType.UNSIGNED16: 2, DataType.INTEGER32: 4,
+          DataType.UNSIGNED32: 4}
+
+
+class _Network:
+    """What SdoServer calls to answer."""
+
+    def __init__(self, send: Callable[[int, bytes], None]) -> None:
+        self._send = send
+
+    def send_message(self, can_id: int, data: bytes | bytearray) -> None:
+        self._send(can_id, bytes(data))
+
+
+def decode_download(entry: OdEntry, data: bytes, size_given: bool) -> Any:
+    """The value a download carries, by the drive's length rule (see the module docstring)."""
+    if entry.dtype is DataType.VISIBLE_STRING:
+        return data.decode("latin-1")
+    width = _WIDTH[entry.dtype]
+    if not size_given:
+        data = data[:width]
+    if len(data) > width:
+        raise SdoAbort(AbortCode.LENGTH_TOO_HIGH, entry.index, entry.sub)
+    if not data:
+        raise SdoAbort(AbortCode.LENGTH_TOO_LOW, entry.index, entry.sub)
+    return int.from_bytes(data, "little", signed=entry.dtype in _SIGNED)
+
+
+class SdoChannel:
+    """One SDO server channel (the drive has "1 server, 0 client", ch. 4)."""
+
+    def __init__(self, node_id: int, dictionary: CanOpenDictionary,
+                 object_dictionary: CanopenDictionary,
+                 send: Callable[[int, bytes], None]) -> None:
+        self.dictionary = dictionary
+        self.object_dictionary = object_dictionary  # SdoServer's Mapping side reads it
+        self.rx_cobid, self.tx_cobid = SDO_RX_BASE + node_id, SDO_TX_BASE + node_id
+        self.server = SdoServer(self.rx_cobid, self.tx_cobid, self)
+        self.server.network = _Network(send)  # type: ignore[assignment]
+        self._size_given = True
+
+    def on_request(self, data: bytes) -> None:
+        """One request frame (8 bytes; a shorter one is padded, "accetta ogni tipo di SDO")."""
+        if not data:
+            return
+        request = bytes(data[:8]).ljust(8, b"\0")
+        command, ccs = request[0], request[0] & 0xE0
+        if ccs in (_CCS_DOWNLOAD, _CCS_UPLOAD):
+            self.server._index = int.from_bytes(request[1:3], "little")
+            self.server._subindex = request[3]
+        elif self.server._index is None:
+            self.server._index, self.server._subindex = 0, 0
+        if ccs == _CCS_DOWNLOAD:
+            self._size_given = bool(command & _SIZE_GIVEN) or not command & _EXPEDITED
+            if not command & _EXPEDITED and not self._initiate_segmented(request):
+                return
+        self.server.on_request(self.rx_cobid, request, 0.0)
+
+    def _initiate_segmented(self, request: bytes) -> bool:
+        index, sub = int.from_bytes(request[1:3], "little"), request[3]
+        try:
+            entry = self.dictionary.entry(index, sub)
+            if not entry.access.writable:
+                raise SdoAbort(AbortCode.READ_ONLY, index, sub)
+        except SdoAbort as exc:
+            self.server.abort(int(exc.code))
+            return False
+        return True
+
+    # ---- what SdoServer calls ------------------------------------------------------------
+    def get_data(self, index: int, subindex: int, check_readable: bool = False) -> bytes:
+        try:
+            entry = self.dictionary.entry(index, subindex)
+            return encode(entry.dtype, self.dictionary.read(index, subindex))
+        except SdoAbort as exc:
+            raise SdoAbortedError(int(exc.code)) from None
+
+    def set_data(self, index: int, subindex: int, data: bytes | bytearray,
+                 check_writable: bool = False) -> None:
+        try:
+            entry = self.dictionary.entry(index, subindex)
+            if not entry.access.writable:
+                raise SdoAbort(AbortCode.READ_ONLY, index, subindex)
+            value = decode_download(entry, bytes(data), self._size_given)
+            self.dictionary.write(index, subindex, value)
+        except SdoAbort as exc:
+            raise SdoAbortedError(int(exc.code)) from None

@@ -1,0 +1,103 @@
+"""Emergency messages from drive alarms (seed 004 ch. 4 "Emergency Message": code, error
+register [1001], vendor field; history [1003]; COB-ID [1014]; ch. 5 table of 0x603F codes).
+"""
+
+from __future__ import annotations
+
+import pytest
+from canopen_bench import hexs, make_bench
+
+from devices.canopen import emcy as em
+from devices.canopen.nmt import NmtCommand
+from devices.servo.alarms import alarm_table
+
+ALARMS = sorted(alarm_table("canopen").values(), key=lambda a: a.code)
+
+
+def _emcys(bench) -> list:
+    return [f for f in bench.take() if f.can_id == 0x081]
+
+
+@pytest.mark.parametrize("alarm", ALARMS, ids=lambda a: f"{a.code}-{a.name}")
+def test_injected_alarm_arrives_as_emcy_with_its_603F_code(alarm) -> None:
+    bench = make_bench()
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": str(alarm.code)})
+    bench.run(5)
+    code = alarm.error_code_or_generic
+    register = em.register_bits(code)
+    frames = _emcys(bench)
+    expected = em.payload(code, register, bytes((alarm.code,)))
+    assert [hexs(f.data) for f in frames] == [hexs(expected)]
+    assert bench.read(0x1001) == register
+    assert bench.read(0x1003, 1) == alarm.code << 16 | code
+    event = bench.kinds("emergency")[-1]
+    assert event["code"] == f"0x{code:04X}" and event["device"] == "servo"
+
+
+@pytest.mark.parametrize(("code", "bits"), [
+    (0x2310, 0x03), (0x3210, 0x05), (0x4310, 0x09), (0x8130, 0x11), (0x8611, 0x21),
+    (0x5500, 0x01), (0x7300, 0x01), (0x1000, 0x01), (0xFF01, 0x81), (0x0000, 0x00),
+])
+def test_error_register_bits_by_code_class(code: int, bits: int) -> None:
+    """Bit 0 generic with every error; 1 current (2xxx), 2 voltage (3xxx), 3 temperature
+    (4xxx), 4 communication (81xx, 82xx), 5 device profile (86xx, 87xx), 7 manufacturer."""
+    assert em.register_bits(code) == bits
+
+
+def test_reset_sends_error_reset_and_clears_the_register() -> None:
+    """Alarm 16, cause removed, reset with 0x6040 bit 7 (0x0080): EMCY 0x0000, 0x1001 = 0."""
+    bench = make_bench()
+    bench.drive.apply("inject_alarm", {"code": "16"})
+    bench.run(5)
+    bench.drive.apply("clear_alarm", {"code": "16"})
+    bench.take()
+    bench.ok(0x6040, 0, 0x0000, 2)
+    bench.ok(0x6040, 0, 0x0080, 2)
+    bench.run(5)
+    assert [hexs(f.data) for f in _emcys(bench)] == ["00 00 00 00 00 00 00 00"]
+    assert bench.read(0x1001) == 0
+    assert bench.read(0x1003, 1) == 0x0010_8611  # the history keeps it
+
+
+def test_inhibit_time_spaces_emergencies() -> None:
+    """0x1015 in 100 us: two alarms at once leave 50 ms apart."""
+    bench = make_bench()
+    bench.ok(0x1015, 0, 500, 2)
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": "2"})
+    bench.drive.apply("inject_alarm", {"code": "6"})
+    bench.run(100)
+    times = [f.t_us for f in _emcys(bench)]
+    assert len(times) == 2 and times[1] - times[0] >= 50_000
+
+
+@pytest.mark.parametrize(("setup", "sent"), [
+    ("invalid", False),  # 0x1014 bit 31: no emergency object
+    ("stopped", False),  # Stopped: only NMT and guarding
+    ("operational", True),
+])
+def test_when_emergencies_leave(setup: str, sent: bool) -> None:
+    bench = make_bench()
+    if setup == "invalid":
+        bench.ok(0x1014, 0, 0x8000_0081, 4)
+    elif setup == "stopped":
+        bench.nmt(NmtCommand.STOP)
+    else:
+        bench.nmt(NmtCommand.START)
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": "16"})
+    bench.run(5)
+    assert bool(_emcys(bench)) is sent
+    assert bench.node.history.latest == 0x0010_8611  # recorded either way
+
+
+def test_alarm_at_power_up_is_sent_after_boot_up() -> None:
+    """A flash that does not load raises alarm 9 at power-up: its EMCY follows the boot-up."""
+    bench = make_bench(boot=False)
+    bench.flash.save(b"not a drive image")
+    bench.drive.apply("power", {"on": False})
+    bench.drive.apply("power", {"on": True})
+    bench.run(60)
+    frames = [(f.can_id, hexs(f.data)) for f in bench.take()]
+    assert frames[-2:] == [(0x701, "00"), (0x081, "00 55 01 09 00 00 00 00")]

@@ -1,0 +1,110 @@
+"""Heartbeat and node guarding (seed 004 ch. 4 "Node Monitoring via Node-Guarding or Heartbeat
+Messages", "Note sui servizi di Guard", example "Abilitazione e disabilitazione del servizio
+node guarding").
+"""
+
+from __future__ import annotations
+
+import pytest
+from canopen_bench import hexs, make_bench
+
+from devices.canopen.nmt import NmtCommand
+
+
+def _heartbeats(bench, ms: float) -> list:
+    bench.take()
+    bench.run(ms)
+    return [f for f in bench.take() if f.can_id == 0x701]
+
+
+def test_heartbeat_seed_example_4000_ms() -> None:
+    """"2B 17 10 00 A0 0F 00 00" -> "60 17 10 00 00 00 00 00"; then one heartbeat every
+    4 s with the state byte (0x7F pre-operational, 0x05 operational), bit 7 constant 0."""
+    bench = make_bench(n1=8)
+    assert bench.sdo("2B 17 10 00 A0 0F 00 00") == "60 17 10 00 00 00 00 00"
+    written = bench.t_us
+    beats = _heartbeats(bench, 8_500)
+    assert [hexs(f.data) for f in beats] == ["7F", "7F"]
+    first = beats[0].t_us - written
+    assert 3_995_000 <= first <= 4_001_000
+    assert beats[1].t_us - beats[0].t_us == 4_000_000  # exact period, simulated time
+    bench.nmt(NmtCommand.START)
+    assert {hexs(f.data) for f in _heartbeats(bench, 8_000)} == {"05"}
+    bench.nmt(NmtCommand.STOP)
+    assert {hexs(f.data) for f in _heartbeats(bench, 8_000)} == {"04"}
+
+
+def test_heartbeat_zero_disables() -> None:
+    """"Il valore 0 disattiva il meccanismo dell'heartbeat"."""
+    bench = make_bench()
+    bench.ok(0x1017, 0, 100, 2)
+    assert len(_heartbeats(bench, 1_000)) == 10
+    bench.ok(0x1017, 0, 0, 2)
+    assert _heartbeats(bench, 1_000) == []
+
+
+def _guard_answers(bench, count: int) -> list[str]:
+    out = []
+    for _ in range(count):
+        bench.take()
+        bench.send(0x701, rtr=True, dlc=1)
+        bench.run(3)
+        out += [hexs(f.data) for f in bench.take() if f.can_id == 0x701]
+    return out
+
+
+@pytest.mark.parametrize(("guard_ms", "heartbeat_ms", "answers"), [
+    (500, 0, ["7F", "FF", "7F", "FF"]),  # guarding: the toggle bit alternates, first 0
+    (500, 1000, ["7F", "7F", "7F", "7F"]),  # heartbeat on: "senza variare il toggle bit"
+    (0, 1000, ["7F", "7F", "7F", "7F"]),
+    (0, 0, []),  # neither active: no answer
+])
+def test_guarding_answers(guard_ms: int, heartbeat_ms: int, answers: list[str]) -> None:
+    bench = make_bench()
+    bench.ok(0x100C, 0, guard_ms, 2)
+    bench.ok(0x1017, 0, heartbeat_ms, 2)
+    assert _guard_answers(bench, 4) == answers
+
+
+def test_guarding_answers_a_remote_request_with_dlc_zero() -> None:
+    """"La risposta viene inviata anche se il campo DLC nella richiesta è posto a zero"."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 500, 2)
+    bench.take()
+    bench.send(0x701, rtr=True, dlc=0)
+    bench.run(3)
+    assert [hexs(f.data) for f in bench.take()] == ["7F"]
+
+
+def test_life_guarding_emcy_once_not_reset() -> None:
+    """Seed example: guard time 500 ms, life time factor 2. Without remote requests for
+    1 s the drive sends an EMCY (0x8130, communication bit); when requests resume it answers
+    again; "L'EMCY non viene resettato": no error-reset EMCY, 0x1001 keeps bit 4."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 500, 2)
+    bench.ok(0x100D, 0, 2, 1)
+    assert _guard_answers(bench, 1) == ["7F"]
+    start = bench.node.guard.last_request_us
+    bench.take()
+    bench.run(2_500)
+    emcys = [f for f in bench.take() if f.can_id == 0x081]
+    assert [hexs(f.data) for f in emcys] == ["30 81 11 00 00 00 00 00"]
+    assert 1_000_000 < emcys[0].t_us - start <= 1_002_000  # life time, then the frame
+    assert _guard_answers(bench, 2) == ["FF", "7F"]
+    bench.run(500)
+    assert [f for f in bench.take() if f.can_id == 0x081] == []
+    assert bench.read(0x1001) == 0x11
+    assert bench.read(0x1003, 1) == 0x8130
+
+
+def test_guarding_off_stops_life_guarding() -> None:
+    """Seed example "Disabilitazione del node guarding": 100C = 0, 100D = 0."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 500, 2)
+    bench.ok(0x100D, 0, 2, 1)
+    _guard_answers(bench, 1)
+    bench.ok(0x100C, 0, 0, 2)
+    bench.ok(0x100D, 0, 0, 1)
+    bench.take()
+    bench.run(3_000)
+    assert [f for f in bench.take() if f.can_id == 0x081] == []

@@ -1,0 +1,191 @@
+"""PDO mapping rules and transmission types (seed 004 ch. 4 "Note sui servizi ... Servizio SDO"
+(mapping rules), "Servizio PDO" (types), "Process data exchange with PDOs", and the
+interpolator example "Modo interpolatore" with its SYNC + RPDO loop).
+"""
+
+from __future__ import annotations
+
+import itertools
+import struct
+
+import pytest
+from canopen_bench import CANOPEN_ENABLE, hexs, make_bench
+
+from devices.canopen.nmt import NmtCommand
+
+OK = "ok"
+
+
+def _abort(answer: str) -> str:
+    if answer.startswith("60"):
+        return OK
+    assert answer.startswith("80"), answer
+    return f"0x{int.from_bytes(bytes.fromhex(answer)[4:8], 'little'):08X}"
+
+
+@pytest.mark.parametrize(("writes", "result"), [
+    # the seed's interpolator mapping (1600) and feedback mapping (1A00, sub 2 for the second)
+    ([(0x1600, 0, 0, 1), (0x1600, 1, 0x60C10120, 4), (0x1600, 2, 0x60400010, 4),
+      (0x1600, 0, 2, 1)], OK),
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x60640020, 4), (0x1A00, 2, 0x60410010, 4),
+      (0x1A00, 0, 2, 1)], OK),
+    # as printed ("1A00, sub 1" twice): sub 2 stays empty, so two entries cannot be enabled
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x60640020, 4), (0x1A00, 1, 0x60410010, 4),
+      (0x1A00, 0, 2, 1)], "0x06040041"),
+    # an entry while the PDO has entries: NumOfEntries to 0 first
+    ([(0x1A00, 1, 0x60640020, 4)], "0x06010000"),
+    # existence, mappability, direction, length
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x50000020, 4)], "0x06040041"),
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x20000108, 4)], "0x06040041"),  # 0x2000:1 "NO map."
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x60410020, 4)], "0x06040041"),  # SW is 16 bits
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x60600008, 4)], "0x06040041"),  # wo object in a TPDO
+    ([(0x1600, 0, 0, 1), (0x1600, 1, 0x60410010, 4)], "0x06040041"),  # ro object in an RPDO
+    # "una lunghezza massima di 8 Byte": 12 bytes refused when enabled
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x60640020, 4), (0x1A00, 2, 0x606C0020, 4),
+      (0x1A00, 3, 0x60690020, 4), (0x1A00, 0, 3, 1)], "0x06040042"),
+    ([(0x1A00, 0, 9, 1)], "0x06090031"),
+    # DS 301 dummy entries: RPDO only
+    ([(0x1600, 0, 0, 1), (0x1600, 1, 0x00050008, 4), (0x1600, 2, 0x60400010, 4),
+      (0x1600, 0, 2, 1)], OK),
+    ([(0x1A00, 0, 0, 1), (0x1A00, 1, 0x00050008, 4)], "0x06040041"),
+])
+def test_mapping_rules(writes: list[tuple[int, int, int, int]], result: str) -> None:
+    bench = make_bench()
+    answers = [_abort(bench.write(index, sub, value, size)) for index, sub, value, size in writes]
+    assert answers[:-1] == [OK] * (len(writes) - 1)
+    assert answers[-1] == result
+
+
+def _tpdos(bench, can_id: int = 0x181) -> list:
+    return [f for f in bench.take() if f.can_id == can_id]
+
+
+def _started(**kw) -> object:
+    bench = make_bench(**kw)
+    bench.nmt(NmtCommand.START)
+    bench.run(5)
+    bench.take()
+    return bench
+
+
+@pytest.mark.parametrize("n", [1, 2, 4])
+def test_synchronous_cyclic_every_n_syncs(n: int) -> None:
+    """"Se Type vale n, compreso tra 1 e 240, il TPDO ... viene spedito ogni n Sync"."""
+    bench = make_bench()
+    bench.ok(0x1800, 2, n, 1)
+    bench.nmt(NmtCommand.START)
+    bench.take()
+    for _ in range(8):
+        bench.send(0x080)
+        bench.run(5)
+    frames = _tpdos(bench)
+    assert len(frames) == 8 // n
+    assert all(hexs(f.data) == "40 86" for f in frames)  # statusword 0x8640: switch on disabled
+
+
+def test_synchronous_acyclic_only_after_an_event() -> None:
+    """Type 0: "viene inviato al Sync successivo il verificarsi di uno specifico evento"."""
+    bench = make_bench()
+    bench.ok(0x1800, 2, 0, 1)
+    bench.nmt(NmtCommand.START)
+    bench.take()
+    counts = []
+    for cw in (None, None, 0x0006, None):
+        if cw is not None:
+            bench.ok(0x6040, 0, cw, 2)
+        bench.send(0x080)
+        bench.run(5)
+        counts.append(len(_tpdos(bench)))
+    assert counts == [1, 0, 1, 0]
+
+
+def test_asynchronous_event_timer() -> None:
+    """Type 255 with an event timer: sent on the timer even without a change."""
+    bench = make_bench()
+    bench.ok(0x1800, 5, 100, 2)
+    bench.nmt(NmtCommand.START)
+    bench.take()
+    bench.run(1_000)
+    times = [f.t_us for f in _tpdos(bench)]
+    assert len(times) in (10, 11)
+    assert {b - a for a, b in itertools.pairwise(times)} == {100_000}
+
+
+def test_asynchronous_on_change_with_inhibit_time() -> None:
+    """Sent on a change of the mapped data, never within the inhibit time (x 100 us) of the
+    previous one: "deve essere passato un tempo superiore a InhibitTime"."""
+    bench = make_bench()
+    bench.ok(0x1801, 1, 0x281, 4)  # TPDO2: statusword + modes of operation display
+    bench.ok(0x1801, 3, 200, 2)  # 20 ms
+    bench.nmt(NmtCommand.START)
+    bench.take()
+    for i in range(20):  # a new mode every 5 ms
+        bench.ok(0x6060, 0, (1, 3)[i % 2], 1)
+        bench.run(3)
+    times = [f.t_us for f in _tpdos(bench, 0x281)]
+    assert len(times) >= 3
+    assert min(b - a for a, b in itertools.pairwise(times)) > 20_000
+
+
+def test_asynchronous_rpdo_applies_at_once_synchronous_at_the_next_sync() -> None:
+    """"Se Type è uguale a 254 o 255 gli RPDO ... vengono attuati appena ricevuti";
+    "0..240 ... al Sync immediatamente successivo alla loro ricezione"."""
+    bench = _started()
+    bench.send(0x201, struct.pack("<Hi", 0x0006, 0))
+    bench.run(2)
+    assert bench.drive.cw == 0x0006
+    bench.nmt(NmtCommand.ENTER_PRE_OPERATIONAL)
+    bench.ok(0x1400, 2, 1, 1)
+    bench.nmt(NmtCommand.START)
+    bench.send(0x201, struct.pack("<Hi", 0x0007, 0))
+    bench.run(5)
+    assert bench.drive.cw == 0x0006
+    bench.send(0x080)
+    bench.run(2)
+    assert bench.drive.cw == 0x0007
+
+
+def test_rpdo_shorter_than_its_mapping_is_not_processed() -> None:
+    """DS 301: EMCY 0x8210, "PDO not processed due to length error"."""
+    bench = _started()
+    bench.send(0x201, bytes((0x06, 0x00)))  # 2 bytes, mapping needs 6
+    bench.run(3)
+    assert bench.drive.cw == 0
+    assert [hexs(f.data) for f in bench.take() if f.can_id == 0x081] == \
+        ["10 82 11 00 00 00 00 00"]
+
+
+def test_seed_interpolator_example_sync_and_rpdo_loop() -> None:
+    """Ch. 4 "Modo interpolatore": 60C2.1 = 1 ms, mode 7, RPDO1 = set-point + controlword
+    synchronous, TPDO1 = position + statusword on every Sync, NMT start, enable, 0x001F,
+    then every cycle a Sync and PDO 1 (set-point, controlword)."""
+    bench = make_bench()
+    for index, sub, value, size in (
+            (0x6092, 1, 6000, 4), (0x60C2, 1, 1, 1), (0x6060, 0, 7, 1),
+            (0x1400, 2, 1, 1), (0x1600, 0, 0, 1), (0x1600, 1, 0x60C10120, 4),
+            (0x1600, 2, 0x60400010, 4), (0x1600, 0, 2, 1),
+            (0x1800, 2, 1, 1), (0x1A00, 0, 0, 1), (0x1A00, 1, 0x60640020, 4),
+            (0x1A00, 2, 0x60410010, 4), (0x1A00, 0, 2, 1)):
+        bench.ok(index, sub, value, size)
+    bench.nmt(NmtCommand.START)
+    for cw in CANOPEN_ENABLE:
+        bench.ok(0x6040, 0, cw, 2)
+    start = bench.read(0x6064)
+    bench.ok(0x60C1, 1, start, 4)  # the set-point where the axis stands, before 0x1F
+    bench.ok(0x6040, 0, 0x001F, 2)
+    bench.take()
+    set_point = start
+    for _ in range(600):
+        bench.send(0x080)
+        set_point += 10
+        bench.send(0x201, struct.pack("<iH", set_point, 0x001F))
+        bench.run(1)
+    bench.run(20)
+    feedback = [struct.unpack("<iH", f.data) for f in bench.take() if f.can_id == 0x181]
+    assert len(feedback) >= 595  # one TPDO per Sync
+    positions = [p for p, _ in feedback]
+    assert positions == sorted(positions)
+    assert positions[-1] - start > 5_000  # the TPDO shows the position sampled at the Sync
+    # the last RPDO waits for a Sync that never comes: the axis holds the one before
+    assert abs(bench.read(0x6064) - (set_point - 10)) <= 2
+    assert feedback[-1][1] & 0x106F == 0x1027  # operation enabled, bit 12: ip active
