@@ -1,0 +1,1 @@
+"""TRS-CAT EtherCAT remote I/O (seed 001): pure model. Behaviour and choices: docs/trscat.md."""

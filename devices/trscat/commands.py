@@ -1,0 +1,273 @@
+"""Operator and scenario actions of the TRS-CAT, declared as data, and their handlers.
+
+Targets: ``trscat`` is the TRS-CAT itself (slot 0, its 16 integrated lines); ``trscat/N`` is
+expansion N (slot N, 1..7), as 0xF030 / 0xF050 number them (§9.3.2). Field actions act on the
+terminals (what a sensor, a load or a supply does), never on the device's logic; the PLC side
+is ``set_output`` / ``write_object``, which write what the master sends.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from devices.device import Action, CommandError, Param
+from devices.ethercat import AlState
+from devices.od import AbortCode, ObjectDictionary, SdoAbort
+from devices.trscat.alarms import FaultKey, TrsBus
+from devices.trscat.catalog import (
+    EXPANSIONS,
+    MAX_EXPANSIONS,
+    IoShape,
+    expansion_kind,
+    limit_violation,
+)
+from devices.trscat.diagnostics import FAULTS, Target, parse_fault
+from devices.trscat.io import SlotIo
+from devices.trscat.objects import refuse_in_state
+from devices.trscat.sync import MODE_BY_NAME, SyncMode, SyncUnit
+
+if TYPE_CHECKING:
+    from devices.trscat.catalog import ModuleKind
+    from devices.trscat.diagnostics import DiagHistory
+    from devices.trscat.esm import Esm
+
+_CHANNEL = Param("channel", int, low=1, high=16, doc="channel, from 1")
+_FAULT = Param("fault", str, doc="a seed 001 §9.3.7 code (0x3220) or name (FIELD_SUPPLY)")
+SENSOR_ON_V = 24.0  # set_input(on=True): a PNP sensor puts the field voltage on the terminal
+
+ACTIONS: dict[str, Action] = {a.name: a for a in (
+    Action("power", "Switch the logic supply Vdd (§10.2); off clears every volatile state",
+           (Param("on", bool),)),
+    Action("field_supply", "Voltage on the +24Vdc field terminals (§10.3); outside 18..30 V "
+                           "the +24V LED is off and 0x3220 is raised (§6.2, §8.4)",
+           (Param("volts", float, low=0.0, high=40.0),)),
+    Action("link", "Plug or unplug the EtherCAT cable on port in or out",
+           (Param("port", str, choices=("in", "out")), Param("connected", bool))),
+    Action("set_input", "A sensor drives the line to 24 V (on) or 0 V (off) (§3, §4)",
+           (_CHANNEL, Param("on", bool)), module="optional"),
+    Action("set_input_voltage", "Voltage a sensor puts on the line: <= 10 V is 0, >= 14 V "
+                                "is 1, in between the level does not change (§4)",
+           (_CHANNEL, Param("volts", float, low=0.0, high=40.0)), module="optional"),
+    Action("set_load", "Current the load on the line draws when the output is on; above "
+                       "0.5 A the output protection switches it off (§4)",
+           (_CHANNEL, Param("amps", float, low=0.0, high=100.0)), module="optional"),
+    Action("set_analog_input", "Voltage on a TRS-AN-E input (+-10 V)",
+           (_CHANNEL, Param("volts", float, low=-12.0, high=12.0)), module="required"),
+    Action("set_input_word", "Value of a data word of a TRS-XX-E / AC-E / KK-E",
+           (_CHANNEL, Param("value", int, low=0, high=0xFFFF)), module="required"),
+    Action("set_output", "What the PLC writes to an output (the RxPDO image, 0x7ss0:channel)",
+           (_CHANNEL, Param("value", int, low=-0x8000, high=0xFFFF)), module="optional"),
+    Action("unplug", "Take expansion N off the TRS bus (with power on: forbidden by §7, "
+                     "a TRS bus communication error)", module="required"),
+    Action("plug", "Put an expansion at position N (seen at the next power-up, §9.2)",
+           (Param("type", str, choices=tuple(EXPANSIONS)),), module="required"),
+    Action("inject_fault", "Make an application error cause present (§9.3.7); the slot is "
+                           "the target module (none = the TRS-CAT)", (_FAULT,),
+           module="optional"),
+    Action("clear_fault", "Remove an injected cause (the TRS bus stays down after 0x7100, "
+                          "0x7500, 0x6100 until power-off)", (_FAULT,), module="optional"),
+    Action("drop_frames", "The next N master frames never reach SM2 (lost / CRC error)",
+           (Param("count", int, low=0, high=1_000_000),)),
+    Action("lose_sync0", "Stop or restore the SYNC0 pulses (§9.1.1)", (Param("lost", bool),)),
+    Action("frame_jitter", "Frames arrive up to this many us late; one that invades the "
+                           "calc+copy time misses its SYNC0 (§9.1.1)",
+           (Param("us", int, low=0, high=100_000),)),
+    Action("set_sync_mode", "Write 0x1C32:1 / 0x1C33:1 in PRE-OP: dc or free_run (§9.1.1)",
+           (Param("mode", str, choices=tuple(MODE_BY_NAME)),)),
+    Action("acknowledge_messages", "Write 0x10F3:3 = 0x10F3:2, as a master acknowledging "
+                                   "every diagnosis message (§9.3.7)"),
+    Action("write_object", "Write an object (access rights enforced, §9.3)",
+           (Param("index", int, low=0, high=0xFFFF), Param("sub", int, low=0, high=0xFF),
+            Param("value", int))),
+    Action("read_object", "Read an object (§9.3)",
+           (Param("index", int, low=0, high=0xFFFF), Param("sub", int, low=0, high=0xFF))),
+)}
+
+
+class CommandsMixin:
+    """Operator commands of :class:`~devices.trscat.device.TrsCat`."""
+
+    # Provided by TrsCat (declared for type checkers).
+    device_id: str
+    powered: bool
+    field_v: float
+    link_in: bool
+    link_out: bool
+    bus: TrsBus
+    rail: list[SlotIo | None]
+    detected: list[ModuleKind]
+    injected: list[FaultKey]
+    sync: SyncUnit
+    diag: DiagHistory
+    esm: Esm
+    od: ObjectDictionary | None
+
+    if TYPE_CHECKING:  # defined by TrsCat
+        def cmd_power(self, on: bool) -> None: ...
+        def write_object(self, index: int, sub: int, value: Any) -> None: ...
+        def read_object(self, index: int, sub: int) -> Any: ...
+        def _log(self, text: str) -> None: ...
+
+    def check_command(self, action: str, args: Mapping[str, Any],
+                      module: int | None = None) -> dict[str, Any]:
+        if action == "write_object" and isinstance(args.get("value"), bool):
+            args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
+        return super().check_command(action, args, module)  # type: ignore[misc]
+
+    # ---- slots and channels -------------------------------------------------------------------
+    def slot_io(self, module: int | None) -> SlotIo:
+        slot = module or 0
+        io = self.rail[slot] if slot < len(self.rail) else None
+        if io is None:
+            raise CommandError(f"{self.device_id}: no expansion at position {slot} "
+                               f"(rail: {self._rail_text()})")
+        return io
+
+    def _rail_text(self) -> str:
+        return ", ".join(f"{s}={io.kind.short if io else '-'}"
+                         for s, io in enumerate(self.rail))
+
+    def _channel(self, io: SlotIo, channel: int, shapes: tuple[IoShape, ...],
+                 outputs: bool = False) -> int:
+        if io.kind.shape not in shapes:
+            raise CommandError(f"{io.kind.name} has no {' / '.join(s.value for s in shapes)} "
+                               f"channels")
+        count = io.kind.outputs if outputs else io.kind.inputs
+        if not 1 <= channel <= count:
+            raise CommandError(f"{io.kind.name}: channel {channel} outside 1..{count}")
+        return channel - 1
+
+    # ---- field side ---------------------------------------------------------------------------
+    def cmd_field_supply(self, volts: float) -> None:
+        self.field_v = volts
+
+    def cmd_link(self, port: str, connected: bool) -> None:
+        if port == "in":
+            self.link_in = connected
+        else:
+            self.link_out = connected
+
+    def cmd_set_input(self, channel: int, on: bool, module: int | None) -> None:
+        self.cmd_set_input_voltage(channel, SENSOR_ON_V if on else 0.0, module)
+
+    def cmd_set_input_voltage(self, channel: int, volts: float, module: int | None) -> None:
+        io = self.slot_io(module)
+        io.lines[self._channel(io, channel, (IoShape.DIGITAL,))].external_v = volts
+
+    def cmd_set_load(self, channel: int, amps: float, module: int | None) -> None:
+        io = self.slot_io(module)
+        io.lines[self._channel(io, channel, (IoShape.DIGITAL,))].load_a = amps
+
+    def cmd_set_analog_input(self, channel: int, volts: float, module: int) -> None:
+        io = self.slot_io(module)
+        io.analog_in_v[self._channel(io, channel, (IoShape.ANALOG,))] = volts
+
+    def cmd_set_input_word(self, channel: int, value: int, module: int) -> None:
+        io = self.slot_io(module)
+        io.words_in[self._channel(io, channel, (IoShape.WORDS,))] = value
+
+    def cmd_set_output(self, channel: int, value: int, module: int | None) -> None:
+        io = self.slot_io(module)
+        ch = self._channel(io, channel, tuple(IoShape), outputs=True)
+        self.od_set_output(module or 0, ch, value)
+
+    def od_set_output(self, slot: int, channel: int, value: int) -> None:
+        io = self.rail[slot]
+        assert io is not None
+        low, high = {IoShape.DIGITAL: (0, 1), IoShape.ANALOG: (-0x8000, 0x7FFF),
+                     IoShape.WORDS: (0, 0xFFFF)}[io.kind.shape]
+        if not low <= value <= high:
+            raise CommandError(f"{io.kind.name} output {channel + 1}: {value} outside "
+                               f"{low}..{high}")
+        io.plc[channel] = value
+
+    def cmd_unplug(self, module: int) -> None:
+        self.slot_io(module)
+        self.rail[module] = None
+        if self.powered:
+            self._log(f"expansion {module} unplugged with power on (not allowed, §7)")
+
+    def cmd_plug(self, module: int, type: str) -> None:
+        if module > MAX_EXPANSIONS:
+            raise CommandError(f"a TRS-CAT has expansion positions 1..{MAX_EXPANSIONS} (§5)")
+        if module < len(self.rail) and self.rail[module] is not None:
+            raise CommandError(f"{self.device_id}: position {module} holds a "
+                               f"{self.rail[module].kind.name}: unplug it first")
+        kind = expansion_kind(type)
+        kinds = [io.kind for io in self.rail[1:] if io is not None] + [kind]
+        violation = limit_violation(kinds)
+        if violation is not None:
+            raise CommandError(violation)
+        self.rail.extend([None] * (module + 1 - len(self.rail)))
+        self.rail[module] = SlotIo.new(kind)
+        if self.powered:
+            self._log(f"expansion {module} plugged with power on (not allowed, §7): "
+                      f"detected at the next power-up")
+
+    # ---- faults -------------------------------------------------------------------------------
+    def _fault_key(self, text: str, module: int | None) -> FaultKey:
+        fault = parse_fault(text)
+        if fault.target is Target.DEVICE:
+            if module is not None:
+                raise CommandError(f"{fault.name} is a fault of the TRS-CAT itself: target "
+                                   f"'{self.device_id}'")
+            return fault.name, None
+        io = self.slot_io(module)
+        if fault.target is Target.ANALOG and io.kind is not EXPANSIONS["TRS-AN-E"]:
+            raise CommandError(f"{fault.name} (0x{fault.code:04X}) is a TRS-AN-E fault; "
+                               f"position {module or 0} is a {io.kind.name}")
+        return fault.name, module or 0
+
+    def cmd_inject_fault(self, fault: str, module: int | None) -> None:
+        key = self._fault_key(fault, module)
+        if key not in self.injected:
+            self.injected.append(key)
+
+    def cmd_clear_fault(self, fault: str, module: int | None) -> None:
+        key = self._fault_key(fault, module)
+        if key not in self.injected:
+            now = ", ".join(f"{n}@{s}" if s is not None else n for n, s in self.injected)
+            raise CommandError(f"{FAULTS[key[0]].name} is not injected there "
+                               f"(injected: {now or 'none'})")
+        self.injected.remove(key)
+
+    def cmd_drop_frames(self, count: int) -> None:
+        self.sync.drop_frames = count
+
+    def cmd_lose_sync0(self, lost: bool) -> None:
+        self.sync.sync0_lost = lost
+
+    def cmd_frame_jitter(self, us: int) -> None:
+        self.sync.jitter_us = us
+
+    # ---- the master's side, as actions ----------------------------------------------------------
+    def cmd_set_sync_mode(self, mode: str) -> None:
+        self.cmd_write_object(0x1C32, 1, int(MODE_BY_NAME[mode]))
+
+    def cmd_acknowledge_messages(self) -> None:
+        self.cmd_write_object(0x10F3, 3, self.diag.newest)
+
+    def cmd_write_object(self, index: int, sub: int, value: int) -> None:
+        self.write_object(index, sub, value)
+
+    def cmd_read_object(self, index: int, sub: int) -> Any:
+        return self.read_object(index, sub)
+
+    def require_od(self) -> ObjectDictionary:
+        if not self.powered:
+            raise CommandError(f"{self.device_id} is not powered")
+        if self.od is None:
+            raise CommandError(f"{self.device_id}: the object dictionary exists once the "
+                               f"power-up detection of the TRS bus is over (§9.2 INIT)")
+        return self.od
+
+    def od_set_sync_mode(self, value: int) -> None:
+        if self.esm.state is not AlState.PREOP:
+            raise refuse_in_state(0x1C32, 1)
+        try:
+            mode = SyncMode(value)
+        except ValueError:
+            raise SdoAbort(AbortCode.VALUE_RANGE, 0x1C32, 1) from None
+        self.sync.mode = mode
+

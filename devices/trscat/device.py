@@ -1,0 +1,328 @@
+"""The TRS-CAT remote I/O (seed 001): logic supply, TRS bus, ESM, sync, I/O, LEDs, snapshot.
+
+Slot 0 is the integrated module (16 bidirectional lines), slots 1..7 the TRS-nn-E expansions
+in bus order. At power-up the device reads the TRS bus configuration (0xF050, §9.2 INIT); the
+master writes 0xF030 in PRE-OP and the PREOP -> SAFEOP transition compares them (§9.3.2).
+Local cycles (sampling, debounce, outputs) run on SYNC0 in DC-SYNC or every 500 us in
+FREE-RUN (devices/trscat/sync.py). A communication error in OP sends the device to SAFE-OP
+with the error flag, its outputs following 0xF700 / 0xF701 / 0xF710 (devices/trscat/outputs.py).
+Behaviour and choices: docs/trscat.md.
+"""
+
+from __future__ import annotations
+
+import logging
+import random
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
+
+from devices.device import Action, DeviceModel
+from devices.ethercat import AlState
+from devices.od import AbortCode, ObjectDictionary, SdoAbort
+from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
+from devices.trscat.catalog import (
+    BY_IDENT,
+    INTEGRATED,
+    MAX_EXPANSIONS,
+    MAX_SLOTS,
+    ModuleKind,
+    expansion_kind,
+    ident_allowed_at,
+    limit_violation,
+)
+from devices.trscat.commands import ACTIONS, CommandsMixin
+from devices.trscat.diagnostics import AppFault, DiagHistory
+from devices.trscat.esm import SM_WATCHDOG, Esm
+from devices.trscat.indicators import LedBank, LedInputs, wanted_patterns
+from devices.trscat.io import SlotIo, field_in_range
+from devices.trscat.objects import build_od, refuse_in_state
+from devices.trscat.sync import MODE_BY_NAME, SyncUnit
+from devices.trscat.transitions import OutputMode, TransitionsMixin
+
+logger = logging.getLogger(__name__)
+
+DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
+DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
+ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently
+
+
+class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, DeviceModel):
+    KIND = "trscat"
+    ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+
+    def __init__(self, device_id: str, rng: random.Random, expansions: Sequence[str] = (),
+                 sync_mode: str = "dc", configured: Sequence[str] | None = None,
+                 field_supply_v: float = 24.0, out_link: bool = False,
+                 box_name: str = "Box 2 (TRS-CAT)", station_address: int = 1002) -> None:
+        super().__init__(device_id=device_id, rng=rng)
+        kinds = _expansion_list(expansions, "expansion")
+        self.startup_f030 = None if configured is None else \
+            [INTEGRATED, *_expansion_list(configured, "configured expansion")]
+        if str(sync_mode).lower() not in MODE_BY_NAME:
+            raise ValueError(f"sync_mode {sync_mode!r}: the TRS-CAT runs 'dc' (DC-SYNC, "
+                             f"default) or 'free_run' (seed 001 §9.1.1)")
+        if not 0.0 <= float(field_supply_v) <= 40.0:
+            raise ValueError(f"field_supply_v {field_supply_v}: give 0..40 V (24 V nominal, "
+                             f"seed 001 §3)")
+        self.sync_mode_default = MODE_BY_NAME[str(sync_mode).lower()]
+        self.rail: list[SlotIo | None] = [SlotIo.new(INTEGRATED),
+                                          *(SlotIo.new(k) for k in kinds)]
+        self.box_name = box_name
+        self.station_address = station_address
+        self.serial = self.rng.getrandbits(32)
+        self.link_in = True
+        self.link_out = out_link
+        self.field_v = float(field_supply_v)
+        self.injected: list[FaultKey] = []
+        self.esm = Esm(self.emit, device_id)
+        self.leds = LedBank(device_id)
+        self.powered = False
+        self.bus = TrsBus.OFF
+        self._power_up_state()
+        self.cmd_power(True)
+
+    def _power_up_state(self) -> None:
+        """Everything volatile, as the logic supply comes (or goes)."""
+        self.detect_done_us = 0
+        self.detected: list[ModuleKind] = []
+        self.f030 = [1, INTEGRATED.ident] + [0] * (MAX_SLOTS - 1)  # §9.3.2 defaults
+        self.f050 = [0] * (MAX_SLOTS + 1)
+        self.error_values = [0] * MAX_SLOTS  # §9.3.5: 0 at reset
+        self.error_modes = [0] * MAX_SLOTS
+        self.sysok_mask = 0  # §9.3.6: 0 at reset
+        self.sync = SyncUnit(mode=self.sync_mode_default, next_free_us=self.now_us)
+        self.sync_state = self.sync.state
+        self.diag = DiagHistory()
+        self.active: dict[FaultKey, AppFault] = {}
+        self.shutdown: FaultKey | None = None
+        self.deadlocked = False
+        self.config_error: int | None = None
+        self.out_mode = OutputMode.SAFE
+        self.error_out: dict[int, list[int]] = {}
+        self.last_sm_event_us: int | None = None
+        self.last_frame_us: int | None = None
+        self.mailbox: list[bytes] = []
+        self.od: ObjectDictionary | None = None
+        for io in self.rail:
+            if io is not None:
+                io.reset()
+
+    def cmd_power(self, on: bool) -> None:
+        if on == self.powered:
+            return
+        self.clear_all_alarms()
+        self.powered = on
+        self._power_up_state()
+        if on:
+            slots = 1 + len(self._chain())
+            self.detect_done_us = self.now_us + DETECT_BASE_US + DETECT_PER_SLOT_US * slots
+            self._set_bus(TrsBus.DETECTING)
+        else:
+            self.esm.reset(self.now_us)
+            self._set_bus(TrsBus.OFF)
+        self._refresh()
+
+    def _chain(self) -> list[ModuleKind]:
+        """The expansions the TRS bus reaches: in order, up to the first empty position."""
+        out = []
+        for io in self.rail[1:]:
+            if io is None:
+                break
+            out.append(io.kind)
+        return out
+
+    # ---- the master's side ----------------------------------------------------------------
+    @property
+    def al_state(self) -> AlState:
+        return self.esm.state
+
+    @property
+    def al_status(self) -> int:
+        return self.esm.register
+
+    @property
+    def al_status_code(self) -> int:
+        return self.esm.code
+
+    def reachable(self) -> bool:
+        return self.powered and self.link_in
+
+    def exchange_frame(self, now_us: int) -> None:
+        """One process-data frame of the master passed through (an SM2 event)."""
+        if not self.reachable():
+            return
+        self.last_frame_us = now_us
+        if self.sync.frame(now_us, self.rng) and self.esm.state in (AlState.SAFEOP, AlState.OP):
+            self._latch_outputs(now_us)
+
+    def take_emergencies(self) -> list[bytes]:
+        """8-byte CoE emergencies in the mailbox; it runs from PRE-OP on."""
+        if not self.reachable() or self.esm.state is AlState.INIT:
+            return []
+        out, self.mailbox = self.mailbox, []
+        return out
+
+    def read_object(self, index: int, sub: int) -> Any:
+        """SDO upload (raises SdoAbort with the DS301 code)."""
+        return self.require_od().read(index, sub)
+
+    def write_object(self, index: int, sub: int, value: Any) -> None:
+        """SDO download (raises SdoAbort with the DS301 code)."""
+        self.require_od().write(index, sub, value)
+        self._refresh()
+
+    # ---- stepping ---------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        super().step(now_us)
+        if not self.powered:
+            return
+        if self.bus is TrsBus.DETECTING and now_us >= self.detect_done_us:
+            self._finish_detection()
+        for t, sm_event in self.sync.cycles_until(now_us):
+            if sm_event and self.esm.state in (AlState.SAFEOP, AlState.OP):
+                self._latch_outputs(t)
+            self._local_cycle()
+        self._check_sync()
+        if self.esm.state is AlState.OP and self.check_outputs() is not None:
+            self._fall_on_comm_error(SM_WATCHDOG)
+        self._evaluate_alarms()
+        self._refresh()
+
+    def _finish_detection(self) -> None:
+        self.detected = [INTEGRATED, *self._chain()]
+        self.f050 = [len(self.detected), *(k.ident for k in self.detected)]
+        self.f050 += [0] * (MAX_SLOTS + 1 - len(self.f050))
+        self._set_bus(TrsBus.RUNNING)
+        self._rebuild_od()
+        if self.esm.state is AlState.INIT and self.esm.requested is AlState.PREOP:
+            self._enter(AlState.PREOP)
+
+    def _latch_outputs(self, t_us: int) -> None:
+        for io in self.rail:
+            if io is not None:
+                io.latched = list(io.plc)
+        self.last_sm_event_us = t_us
+
+    def _local_cycle(self) -> None:
+        for slot, io in enumerate(self.rail):
+            if io is None:
+                continue
+            serviced = self.serviced(slot)
+            working = serviced and not self.slot_fault(slot, frozenset({"AN_PLUS_12V",
+                                                                        "AN_MINUS_12V"}))
+            io.cycle(self._slot_outputs(slot, io), self._slot_field_v(slot), working)
+
+    def _slot_outputs(self, slot: int, io: SlotIo) -> list[int]:
+        if self.out_mode is OutputMode.NORMAL:
+            return io.latched
+        if self.out_mode is OutputMode.ERROR:
+            return self.error_out.get(slot, [0] * io.kind.outputs)
+        return [0] * io.kind.outputs
+
+    def _slot_field_v(self, slot: int) -> float:
+        """Expansions take the field supply from the TRS bus (§10.3) unless their own fails."""
+        return 0.0 if ("FIELD_SUPPLY", slot) in self.injected else self.field_v
+
+    # ---- object dictionary ------------------------------------------------------------------
+    def _rebuild_od(self) -> None:
+        configured = [BY_IDENT.get(self.f030[s]) for s in range(1, self.f030[0] + 1)]
+        self.od = build_od(self, configured, self.detected)
+
+    def _write_f030_list(self, kinds: Sequence[ModuleKind]) -> None:
+        self.f030 = [len(kinds), *(k.ident for k in kinds)]
+        self.f030 += [0] * (MAX_SLOTS + 1 - len(self.f030))
+        self._rebuild_od()
+
+    def od_write_f030(self, sub: int, value: int) -> None:
+        """§9.3.2: written by the master in PRE-OP only; the PDO assignment follows."""
+        if self.esm.state is not AlState.PREOP:
+            raise refuse_in_state(0xF030, sub)
+        if sub > 0 and value != 0 and not ident_allowed_at(sub, value):
+            raise SdoAbort(AbortCode.VALUE_RANGE, 0xF030, sub)
+        self.f030[sub] = value
+        self._rebuild_od()
+
+    def od_acknowledge(self, value: int) -> None:
+        try:
+            self.diag.acknowledge(int(value))
+        except ValueError:
+            raise SdoAbort(AbortCode.VALUE_RANGE, 0x10F3, 3) from None
+
+    def od_input(self, slot: int, channel: int) -> int:
+        io = self.rail[slot] if slot < len(self.rail) else None
+        return io.inputs[channel] if io is not None and io.kind is self.detected[slot] else 0
+
+    def od_output(self, slot: int, channel: int) -> int:
+        io = self.rail[slot] if slot < len(self.rail) else None
+        return io.plc[channel] if io is not None and io.kind is self.detected[slot] else 0
+
+    # ---- what the outside sees --------------------------------------------------------------
+    def _refresh(self) -> None:
+        if self.powered:
+            self._sync_event()
+        now = self.now_us
+        activity = self.last_frame_us is not None and now - self.last_frame_us <= \
+            ACTIVITY_WINDOW_US
+        base = self.rail[0]
+        assert base is not None
+        self.leds.update(now, wanted_patterns(LedInputs(
+            powered=self.powered, state=self.esm.state, error=self.esm.error,
+            deadlocked=self.deadlocked, link_in=self.link_in, link_out=self.link_out,
+            activity=activity, bus_running=self.bus is TrsBus.RUNNING,
+            field_ok=field_in_range(self.field_v),
+            io_levels=tuple(line.level for line in base.lines))), self.emit)
+
+    def snapshot(self) -> dict[str, Any]:
+        sync = self.sync
+        return {
+            "kind": self.KIND, "id": self.device_id, "powered": self.powered,
+            "esm": self.esm.state.label, "requested": self.esm.requested.label,
+            "al_status": self.esm.register, "al_status_code": self.esm.code,
+            "box_name": self.box_name, "station_address": self.station_address,
+            "leds": self.leds.snapshot(),
+            "links": {"in": self.link_in, "out": self.link_out},
+            "field_supply_v": self.field_v, "field_ok": field_in_range(self.field_v),
+            "trs_bus": {"state": self.bus.value, "current_a": round(self.bus_current_a(), 3),
+                        "communication_ok": self.od_bus_ok(2), "voltage_ok": self.od_bus_ok(3),
+                        "current_ok": self.od_bus_ok(4)},
+            "sync": {"mode": sync.mode.label, "sync_control": sync.mode.sync_control,
+                     "state": sync.state.value, "cycle_ns": sync.cycle_ns,
+                     "sm_event_missed": sync.sm_missed, "sync_error": sync.sync_error,
+                     "sync0_lost": sync.sync0_lost, "jitter_us": sync.jitter_us},
+            "outputs_mode": self.out_mode.value, "deadlocked": self.deadlocked,
+            "f030": list(self.f030), "f050": list(self.f050),
+            "diag_status": self.od_diag_status() if self.detected else 0,
+            "error_values": list(self.error_values), "error_modes": list(self.error_modes),
+            "sysok_mask": self.sysok_mask,
+            "slots": [self._slot_snapshot(s, io) for s, io in enumerate(self.rail)],
+            "alarms": [{"code": f"0x{f.code:04X}", "name": name, "slot": slot}
+                       for (name, slot), f in self.active.items()],
+            "injected": [{"fault": name, "slot": slot} for name, slot in self.injected],
+            "diagnosis": self.diag.snapshot(),
+        }
+
+    def _slot_snapshot(self, slot: int, io: SlotIo | None) -> dict[str, Any]:
+        if io is None:
+            return {"slot": slot, "type": None}
+        detected = self.detected[slot].name if slot < len(self.detected) else None
+        return {"slot": slot, "type": io.kind.name, "ident": f"0x{io.kind.ident:08X}",
+                "detected_as": detected, "serviced": self.serviced(slot),
+                **io.snapshot()}
+
+
+def _expansion_list(names: Sequence[str], what: str) -> list[ModuleKind]:
+    if isinstance(names, str):
+        raise ValueError(f"{what}s: give a list of names, not {names!r}")
+    if len(names) > MAX_EXPANSIONS:
+        raise ValueError(f"{len(names)} {what}s: a TRS-CAT takes at most {MAX_EXPANSIONS} "
+                         f"(seed 001 §5)")
+    kinds = []
+    for n, name in enumerate(names, start=1):
+        try:
+            kinds.append(expansion_kind(name))
+        except KeyError as exc:
+            raise ValueError(f"{what} {n}: {exc.args[0]}") from None
+    violation = limit_violation(kinds)
+    if violation is not None:
+        raise ValueError(f"{what}s: {violation}")
+    return kinds

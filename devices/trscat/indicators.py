@@ -1,0 +1,101 @@
+"""Which pattern each TRS-CAT LED shows (seed 001 §8), and the bank that reports changes.
+
+RUN, ERROR and LINK-ACT follow ETG.1300 (§8.1); BUS green on = TRS bus active (§8.2), off at
+start-up and after an irreversible TRS bus error; the yellow I/O LEDs show the logic state of
+their line (§8.3); +24Vdc green on = field supply present and in range (§8.4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+from devices.ethercat import AlState
+from devices.events import Event, LedChanged
+from devices.leds import LedPattern
+from devices.trscat.esm import ErrorKind
+
+RUN = "RUN"
+ERROR = "ERROR"
+LINK_IN = "LINK-ACT IN"
+LINK_OUT = "LINK-ACT OUT"
+BUS = "BUS"
+FIELD = "+24V"
+IO_LED = "I/O {}"  # §10: the terminals are labelled I/O 1 .. I/O 16
+
+# ETG.1300 RUN indicator.
+RUN_BY_STATE: dict[AlState, LedPattern] = {
+    AlState.INIT: LedPattern.OFF,
+    AlState.PREOP: LedPattern.BLINKING,
+    AlState.SAFEOP: LedPattern.SINGLE_FLASH,
+    AlState.OP: LedPattern.ON,
+    AlState.BOOT: LedPattern.FLICKERING,
+}
+
+# ETG.1300 ERR indicator: blinking = invalid configuration (a refused request), single flash =
+# local error (the device left OP on its own: sync error), double flash = process-data
+# watchdog timeout, on = application controller failure (0x6100 deadlock).
+ERROR_BY_KIND: dict[ErrorKind, LedPattern] = {
+    ErrorKind.NONE: LedPattern.OFF,
+    ErrorKind.REFUSED: LedPattern.BLINKING,
+    ErrorKind.LOCAL: LedPattern.SINGLE_FLASH,
+    ErrorKind.WATCHDOG: LedPattern.DOUBLE_FLASH,
+    ErrorKind.APPLICATION: LedPattern.ON,
+}
+
+
+def _on(lit: bool) -> LedPattern:
+    return LedPattern.ON if lit else LedPattern.OFF
+
+
+def link_led(powered: bool, link: bool, activity: bool) -> LedPattern:
+    """ETG.1300 L/A: off = no link, flickering = link and traffic, on = link, no traffic."""
+    if not powered or not link:
+        return LedPattern.OFF
+    return LedPattern.FLICKERING if activity else LedPattern.ON
+
+
+@dataclass(frozen=True)
+class LedInputs:
+    powered: bool
+    state: AlState
+    error: ErrorKind
+    deadlocked: bool
+    link_in: bool
+    link_out: bool
+    activity: bool
+    bus_running: bool
+    field_ok: bool
+    io_levels: tuple[bool, ...]
+
+
+def wanted_patterns(s: LedInputs) -> dict[str, LedPattern]:
+    if not s.powered:
+        off = dict.fromkeys((RUN, ERROR, LINK_IN, LINK_OUT, BUS, FIELD), LedPattern.OFF)
+        off.update({IO_LED.format(n): LedPattern.OFF for n in range(1, len(s.io_levels) + 1)})
+        return off
+    error = LedPattern.ON if s.deadlocked else ERROR_BY_KIND[s.error]
+    out = {RUN: RUN_BY_STATE[s.state], ERROR: error,
+           LINK_IN: link_led(True, s.link_in, s.activity),
+           LINK_OUT: link_led(True, s.link_out, s.activity and s.link_out),
+           BUS: _on(s.bus_running), FIELD: _on(s.field_ok)}
+    out.update({IO_LED.format(n): _on(level) for n, level in enumerate(s.io_levels, start=1)})
+    return out
+
+
+@dataclass
+class LedBank:
+    """The last pattern of every LED; emits LedChanged only when a pattern changes."""
+
+    device: str
+    patterns: dict[str, LedPattern] = field(default_factory=dict)
+
+    def update(self, t_us: int, wanted: Mapping[str, LedPattern],
+               emit: Callable[[Event], None]) -> None:
+        for name, pattern in wanted.items():
+            if self.patterns.get(name, LedPattern.OFF) is not pattern:
+                emit(LedChanged(t_us, self.device, led=name, pattern=pattern.value))
+            self.patterns[name] = pattern
+
+    def snapshot(self) -> dict[str, str]:
+        return {name: pattern.value for name, pattern in self.patterns.items()}

@@ -1,0 +1,124 @@
+"""Outputs on a communication error in OP: 0xF700 / 0xF701 per slot kind (seed 001 §9.3.5)
+and the 0xF710 SysOK mask (§9.3.6), as rules and through the device."""
+
+from __future__ import annotations
+
+import pytest
+from trscat_bench import Bench
+
+from devices.ethercat import AlState
+from devices.trscat.catalog import EXPANSIONS, INTEGRATED
+from devices.trscat.outputs import outputs_on_error
+
+IO_E, AN_E, AC_E, XX_E, KK_E = (EXPANSIONS[n] for n in
+                                ("TRS-IO-E", "TRS-AN-E", "TRS-AC-E", "TRS-XX-E", "TRS-KK-E"))
+HELD16 = [1, 0] * 8
+
+# (kind, held, ErrorMode, ErrorVal, expected) — §9.3.5 per kind.
+RULES = [
+    # integrated / TRS-IO-E: each ErrorMode bit: 0 = hold, 1 = the ErrorVal bit.
+    (INTEGRATED, HELD16, 0x0000, 0xFFFF, HELD16),  # reset default: hold (pre-01.20 default)
+    (INTEGRATED, HELD16, 0xFFFF, 0x0000, [0] * 16),
+    (INTEGRATED, HELD16, 0xFFFF, 0xFFFF, [1] * 16),
+    (INTEGRATED, HELD16, 0x000F, 0x0006, [0, 1, 1, 0, *HELD16[4:]]),
+    (IO_E, HELD16, 0x8001, 0x8000, [0, *HELD16[1:15], 1]),
+    # TRS-AN-E / generic standard: only ErrorMode 0xFFFF uses ErrorVal, for every output.
+    (AN_E, [100, -200], 0xFFFF, 0x1234, [0x1234, 0x1234]),
+    (AN_E, [100, -200], 0xFFFF, 0xFC18, [-1000, -1000]),  # U16 ErrorVal on INT16 outputs
+    (AN_E, [100, -200], 0xFFFE, 0x1234, [100, -200]),  # any other value: hold
+    (AN_E, [100, -200], 0x0000, 0x1234, [100, -200]),
+    (XX_E, [7], 0xFFFF, 0xBEEF, [0xBEEF]),
+    (XX_E, [7], 0x00FF, 0xBEEF, [7]),
+    # TRS-AC-E / generic smart: the objects are ignored, always hold.
+    (AC_E, [1, 2, 3, 4], 0xFFFF, 0, [1, 2, 3, 4]),
+    (KK_E, [1, 2, 3, 4], 0xFFFF, 0xFFFF, [1, 2, 3, 4]),
+]
+
+
+@pytest.mark.parametrize(("kind", "held", "mode", "value", "expected"), RULES,
+                         ids=[f"{r[0].short}-{r[2]:04X}-{r[3]:04X}" for r in RULES])
+def test_error_rules(kind, held, mode, value, expected) -> None:
+    """§9.3.5 per expansion kind."""
+    assert outputs_on_error(kind, held, mode, value) == expected
+
+
+@pytest.mark.parametrize(("mode", "value", "sysok", "expected"), [
+    (0x0000, 0x0000, 0x0001, [0, *HELD16[1:]]),  # SysOK bit 1: logic 0
+    (0xFFFF, 0xFFFF, 0x0003, [0, 0] + [1] * 14),  # overrides 0xF700 / 0xF701
+    (0x0000, 0x0000, 0x0000, HELD16),  # 0 at reset: hold
+])
+def test_sysok_mask_overrides(mode: int, value: int, sysok: int, expected: list[int]) -> None:
+    """§9.3.6: a 1 in 0xF710 forces that integrated output to 0 whatever 0xF700/0xF701 say."""
+    assert outputs_on_error(INTEGRATED, HELD16, mode, value, sysok) == expected
+
+
+def test_sysok_mask_is_for_the_integrated_module_only() -> None:
+    """§9.3.6: the SysOK property is for the outputs of the integrated expansion."""
+    assert outputs_on_error(IO_E, HELD16, 0, 0, sysok_mask=0xFFFF) == HELD16
+
+
+# ---- through the device ----------------------------------------------------------------------
+def _op_with_pattern(**kw) -> Bench:
+    bench = Bench(["IO-E", "AN-E", "KK-E"], configured=["IO-E", "AN-E", "KK-E"], **kw)
+    bench.to_state(AlState.OP)
+    for ch in range(1, 17):
+        bench.apply("set_output", channel=ch, value=ch % 2)
+        bench.apply("set_output", module=1, channel=ch, value=1)
+    bench.apply("set_output", module=2, channel=1, value=300)
+    bench.apply("set_output", module=3, channel=4, value=9)
+    bench.run(0.005)
+    return bench
+
+
+def test_comm_error_in_op_defaults_to_hold() -> None:
+    """§9.3.5: with 0 everywhere (reset default) every output keeps its last value."""
+    bench = _op_with_pattern()
+    held = [list(io.applied) for io in bench.trs.rail]
+    bench.apply("link", port="in", connected=False)
+    bench.run(0.01)
+    assert bench.trs.al_state is AlState.SAFEOP and bench.trs.al_status == 0x14
+    assert [io.applied for io in bench.trs.rail] == held
+
+
+def test_comm_error_in_op_uses_the_objects() -> None:
+    """§9.3.5 / §9.3.6 on a sync error in OP: each slot by its kind, SysOK over all."""
+    bench = _op_with_pattern()
+    bench.write(0xF701, 1, 0x00F0)  # integrated: I/O 5..8 take ErrorVal0
+    bench.write(0xF700, 1, 0x00A0)  # bits 4..7 = 0, 1, 0, 1 (held there: 1, 0, 1, 0)
+    bench.write(0xF710, 1, 0x0001)  # I/O 1 forced to 0
+    bench.write(0xF701, 2, 0x0001)  # TRS-IO-E: output 1 takes ErrorVal1 bit 0 = 0
+    bench.write(0xF701, 3, 0xFFFF)  # TRS-AN-E: all outputs take ErrorVal2
+    bench.write(0xF700, 3, 0x0064)
+    bench.write(0xF701, 4, 0xFFFF)  # TRS-KK-E: ignored
+    bench.apply("drop_frames", count=10)
+    bench.run(0.01)
+    assert bench.trs.al_state is AlState.SAFEOP and bench.trs.al_status_code == 0x001A
+    base, io_e, an_e, kk_e = (io.applied for io in bench.trs.rail)
+    assert base[:8] == [0, 0, 1, 0, 0, 1, 0, 1]
+    assert base[8:] == [1, 0] * 4
+    assert io_e == [0] + [1] * 15
+    assert an_e == [100, 100]
+    assert kk_e == [0, 0, 0, 9]
+    assert bench.trs.snapshot()["outputs_mode"] == "error"
+
+
+def test_requested_safeop_is_the_safe_state_not_the_error_values() -> None:
+    """§9.2: a SAFE-OP the master asks for puts the outputs in the safe state (off); the
+    0xF700 / 0xF701 values are for the communication errors only (§9.3.5)."""
+    bench = _op_with_pattern()
+    bench.write(0xF701, 1, 0xFFFF)
+    bench.write(0xF700, 1, 0xFFFF)
+    bench.request(AlState.SAFEOP)
+    bench.run(0.003)
+    assert bench.trs.rail[0].applied == [0] * 16
+
+
+def test_back_to_op_follows_the_master_again() -> None:
+    bench = _op_with_pattern()
+    bench.apply("drop_frames", count=5)
+    bench.run(0.01)
+    assert bench.trs.al_state is AlState.SAFEOP
+    bench.request(AlState.OP)
+    bench.run(0.003)
+    assert bench.trs.al_state is AlState.OP
+    assert bench.trs.rail[0].applied == [ch % 2 for ch in range(1, 17)]
