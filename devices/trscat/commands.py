@@ -153,11 +153,15 @@ class CommandsMixin:
 
     def cmd_set_input_voltage(self, channel: int, volts: float, module: int | None) -> None:
         io = self.slot_io(module)
-        io.lines[self._channel(io, channel, (IoShape.DIGITAL,))].external_v = volts
+        ch = self._channel(io, channel, (IoShape.DIGITAL,))
+        assert io.lines is not None
+        io.lines.set_external(ch, volts)
 
     def cmd_set_load(self, channel: int, amps: float, module: int | None) -> None:
         io = self.slot_io(module)
-        io.lines[self._channel(io, channel, (IoShape.DIGITAL,))].load_a = amps
+        ch = self._channel(io, channel, (IoShape.DIGITAL,))
+        assert io.lines is not None
+        io.lines.set_load(ch, amps)
 
     def cmd_set_analog_input(self, channel: int, volts: float, module: int) -> None:
         io = self.slot_io(module)

@@ -76,6 +76,7 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, DeviceModel):
         self.injected: list[FaultKey] = []
         self.esm = Esm(self.emit, device_id)
         self.leds = LedBank(device_id)
+        self._led_inputs: LedInputs | None = None
         self.powered = False
         self.bus = TrsBus.OFF
         self._power_up_state()
@@ -264,13 +265,16 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, DeviceModel):
         activity = self.last_frame_us is not None and now - self.last_frame_us <= \
             ACTIVITY_WINDOW_US
         base = self.rail[0]
-        assert base is not None
-        self.leds.update(now, wanted_patterns(LedInputs(
+        assert base is not None and base.lines is not None
+        inputs = LedInputs(
             powered=self.powered, state=self.esm.state, error=self.esm.error,
             deadlocked=self.deadlocked, link_in=self.link_in, link_out=self.link_out,
             activity=activity, bus_running=self.bus is TrsBus.RUNNING,
-            field_ok=field_in_range(self.field_v),
-            io_levels=tuple(line.level for line in base.lines))), self.emit)
+            field_ok=field_in_range(self.field_v), io_mask=base.lines.level,
+            io_count=base.lines.count)
+        if inputs != self._led_inputs:  # the patterns are a function of these inputs only
+            self._led_inputs = inputs
+            self.leds.update(now, wanted_patterns(inputs), self.emit)
 
     def snapshot(self) -> dict[str, Any]:
         sync = self.sync

@@ -44,6 +44,13 @@ ERROR_BY_KIND: dict[ErrorKind, LedPattern] = {
 }
 
 
+def _io_names(count: int) -> tuple[str, ...]:
+    return _IO_NAMES[:count]
+
+
+_IO_NAMES = tuple(IO_LED.format(n) for n in range(1, 17))
+
+
 def _on(lit: bool) -> LedPattern:
     return LedPattern.ON if lit else LedPattern.OFF
 
@@ -66,20 +73,22 @@ class LedInputs:
     activity: bool
     bus_running: bool
     field_ok: bool
-    io_levels: tuple[bool, ...]
+    io_mask: int  # logic levels of the integrated lines, bit n = I/O n + 1
+    io_count: int = 16
 
 
 def wanted_patterns(s: LedInputs) -> dict[str, LedPattern]:
     if not s.powered:
         off = dict.fromkeys((RUN, ERROR, LINK_IN, LINK_OUT, BUS, FIELD), LedPattern.OFF)
-        off.update({IO_LED.format(n): LedPattern.OFF for n in range(1, len(s.io_levels) + 1)})
+        off.update(dict.fromkeys(_io_names(s.io_count), LedPattern.OFF))
         return off
     error = LedPattern.ON if s.deadlocked else ERROR_BY_KIND[s.error]
     out = {RUN: RUN_BY_STATE[s.state], ERROR: error,
            LINK_IN: link_led(True, s.link_in, s.activity),
            LINK_OUT: link_led(True, s.link_out, s.activity and s.link_out),
            BUS: _on(s.bus_running), FIELD: _on(s.field_ok)}
-    out.update({IO_LED.format(n): _on(level) for n, level in enumerate(s.io_levels, start=1)})
+    out.update({name: _on(bool(s.io_mask >> i & 1))
+                for i, name in enumerate(_io_names(s.io_count))})
     return out
 
 

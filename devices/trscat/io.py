@@ -4,6 +4,9 @@ Seed 001 §3 (16 bidirectional PNP lines, high-side driver, debounce of 4 sample
 thresholds 0..10 V = 0, 14..24 V = 1; 0.5 A per output, short-circuit and overload
 protection), §6.2 (field supply 18..30 V), §10.3 (8 A on the TRS bus). One sample per local
 cycle of the module (devices/trscat/sync.py decides when a local cycle runs).
+
+The lines of a slot are bit masks (bit n = line n + 1): a local cycle is a few integer
+operations whatever the number of lines, which keeps a rig with several TRS-CATs real time.
 """
 
 from __future__ import annotations
@@ -29,23 +32,6 @@ def field_in_range(volts: float) -> bool:
     return FIELD_MIN_V <= volts <= FIELD_MAX_V
 
 
-@dataclass
-class Debounce:
-    """§3: a new input state is taken when it has lasted 4 consecutive samples."""
-
-    value: bool = False
-    run: int = 0  # consecutive samples that differ from ``value``
-
-    def sample(self, raw: bool) -> bool:
-        if raw == self.value:
-            self.run = 0
-        else:
-            self.run += 1
-            if self.run >= DEBOUNCE_SAMPLES:
-                self.value, self.run = raw, 0
-        return self.value
-
-
 def logic_level(volts: float, previous: bool) -> bool:
     """§4 thresholds; between 10 and 14 V the level is undefined: the last one is kept."""
     if volts <= INPUT_LOW_MAX_V:
@@ -55,32 +41,98 @@ def logic_level(volts: float, previous: bool) -> bool:
     return previous
 
 
+def bits(mask: int, count: int) -> list[int]:
+    return [(mask >> i) & 1 for i in range(count)]
+
+
+def to_mask(values: list[int]) -> int:
+    out = 0
+    for i, v in enumerate(values):
+        if v:
+            out |= 1 << i
+    return out
+
+
 @dataclass
-class Line:
-    """One bidirectional terminal (§3): the module's high-side driver or the field drives it."""
+class LineBank:
+    """The bidirectional terminals of one slot (§3): the module's high-side driver or the
+    field (a sensor) drives each of them; the module samples them through the debounce."""
 
-    external_v: float = 0.0  # what a sensor puts on the terminal when the driver is off
-    load_a: float = 0.0  # current the load draws when the driver is on
-    command: bool = False  # what the module asks of its driver
-    driving: bool = False  # the driver really on (field supply ok, no protection trip)
-    tripped: bool = False  # short circuit / overload protection active (§4)
-    level: bool = False  # logic level on the terminal now
-    debounce: Debounce = field(default_factory=Debounce)
+    count: int
+    external_v: list[float] = field(default_factory=list)  # what a sensor puts on a line
+    load_a: list[float] = field(default_factory=list)  # what a load draws when driven
+    ext_high: int = 0  # sensor >= 14 V
+    ext_band: int = 0  # sensor in the undefined band: the line keeps its level
+    overload: int = 0  # load above 0.5 A: the protection trips if driven (§4)
+    driving: int = 0  # driver really on (field supply ok, not tripped)
+    tripped: int = 0
+    level: int = 0  # logic level on the terminals now
+    history: tuple[int, ...] = (0,) * (DEBOUNCE_SAMPLES - 1)  # the previous raw samples
+    value: int = 0  # debounced (§3)
+    current_a: float = 0.0  # drawn by the driven lines
 
-    def drive(self, command: bool, field_v: float) -> None:
-        self.command = command
-        powered = field_in_range(field_v)
-        self.tripped = command and powered and self.load_a > OUTPUT_MAX_A
-        self.driving = command and powered and not self.tripped
-        volts = field_v if self.driving else self.external_v
-        self.level = logic_level(volts, self.level)
+    def __post_init__(self) -> None:
+        self.external_v = self.external_v or [0.0] * self.count
+        self.load_a = self.load_a or [0.0] * self.count
+        self.full = (1 << self.count) - 1
+        self._recompute_field()
 
-    @property
-    def current_a(self) -> float:
-        return self.load_a if self.driving else 0.0
+    def set_external(self, line: int, volts: float) -> None:
+        self.external_v[line] = volts
+        self._recompute_field()
 
-    def sample(self) -> bool:
-        return self.debounce.sample(self.level)
+    def set_load(self, line: int, amps: float) -> None:
+        self.load_a[line] = amps
+        self._recompute_field()
+        self.current_a = self._current(self.driving)
+
+    def _recompute_field(self) -> None:
+        high = band = over = 0
+        for i, (volts, amps) in enumerate(zip(self.external_v, self.load_a, strict=True)):
+            if volts >= INPUT_HIGH_MIN_V:
+                high |= 1 << i
+            elif volts > INPUT_LOW_MAX_V:
+                band |= 1 << i
+            if amps > OUTPUT_MAX_A:
+                over |= 1 << i
+        self.ext_high, self.ext_band, self.overload = high, band, over
+
+    def _current(self, driving: int) -> float:
+        return sum(a for i, a in enumerate(self.load_a) if driving >> i & 1)
+
+    def drive(self, command: int, powered: bool) -> None:
+        """The outputs ``command`` (mask) with the field supply ``powered`` or not."""
+        drv = command & ~self.overload & self.full if powered else 0
+        self.tripped = command & self.overload if powered else 0
+        if drv != self.driving:
+            self.current_a = self._current(drv)
+        self.driving = drv
+        free = self.full & ~drv  # lines left to the field
+        self.level = drv | (free & (self.ext_high | (self.ext_band & self.level)))
+
+    def sample(self) -> int:
+        """§3: a line takes a new state when its last 4 samples all show it."""
+        raw = self.level
+        seen_high = raw
+        seen_any = raw
+        for past in self.history:
+            seen_high &= past
+            seen_any |= past
+        self.value = (self.value | seen_high) & ~(self.full & ~seen_any)
+        self.history = (*self.history[1:], raw)
+        return self.value
+
+    def reset(self) -> None:
+        """Power-up: driver off, debounce restarted at 0; the field (sensors, loads) stays."""
+        self.driving = self.tripped = self.value = 0
+        self.current_a = 0.0
+        self.history = (0,) * (DEBOUNCE_SAMPLES - 1)
+        self.level = self.ext_high
+
+    def snapshot(self) -> list[dict[str, Any]]:
+        return [{"level": bool(self.level >> i & 1), "external_v": self.external_v[i],
+                 "load_a": self.load_a[i], "driving": bool(self.driving >> i & 1),
+                 "tripped": bool(self.tripped >> i & 1)} for i in range(self.count)]
 
 
 def volts_to_counts(volts: float) -> int:
@@ -102,33 +154,34 @@ class SlotIo:
     """
 
     kind: ModuleKind
-    lines: list[Line] = field(default_factory=list)
+    lines: LineBank | None = None
     analog_in_v: list[float] = field(default_factory=list)
     words_in: list[int] = field(default_factory=list)
     plc: list[int] = field(default_factory=list)
-    latched: list[int] = field(default_factory=list)  # the outputs of the last SM2 event
+    latched: list[int] = field(default_factory=list)
     applied: list[int] = field(default_factory=list)
     inputs: list[int] = field(default_factory=list)
 
     @classmethod
     def new(cls, kind: ModuleKind) -> SlotIo:
         digital = kind.shape is IoShape.DIGITAL
-        return cls(kind, lines=[Line() for _ in range(kind.inputs if digital else 0)],
-                   analog_in_v=[0.0] * (kind.inputs if kind.shape is IoShape.ANALOG else 0),
-                   words_in=[0] * (kind.inputs if kind.shape is IoShape.WORDS else 0),
-                   plc=[0] * kind.outputs, latched=[0] * kind.outputs,
-                   applied=[0] * kind.outputs, inputs=[0] * kind.inputs)
+        io = cls(kind, lines=LineBank(kind.inputs) if digital else None,
+                 analog_in_v=[0.0] * (kind.inputs if kind.shape is IoShape.ANALOG else 0),
+                 words_in=[0] * (kind.inputs if kind.shape is IoShape.WORDS else 0))
+        io.reset()
+        return io
 
     def reset(self) -> None:
         """Power-up (or power-down): process images cleared, debounce restarted. What the
         field does to the terminals (sensor voltages, loads) is not the module's and stays."""
         outs, ins = self.kind.outputs, self.kind.inputs
-        self.plc, self.latched, self.applied, self.inputs = [0] * outs, [0] * outs, \
-            [0] * outs, [0] * ins
-        for line in self.lines:
-            line.command = line.driving = line.tripped = False
-            line.level = logic_level(line.external_v, False)
-            line.debounce = Debounce()
+        self.plc, self.latched, self.applied = [0] * outs, [0] * outs, [0] * outs
+        self.inputs = [0] * ins
+        self._zeros_out, self._zeros_in = [0] * outs, [0] * ins
+        self._applied_mask = 0
+        self._inputs_mask = 0
+        if self.lines is not None:
+            self.lines.reset()
 
     def cycle(self, outputs: list[int], field_v: float, working: bool) -> None:
         """One local cycle: drive ``outputs``, then sample the inputs.
@@ -136,30 +189,34 @@ class SlotIo:
         ``working`` False (TRS bus down, or the module's own supply fault): the outputs are
         off and the TxPDO image reads 0. The terminals still follow the field.
         """
-        self.applied = list(outputs) if working else [0] * self.kind.outputs
-        shape = self.kind.shape
-        if shape is IoShape.DIGITAL:
-            for line, out in zip(self.lines, self.applied, strict=True):
-                line.drive(bool(out), field_v)
-            sampled = [int(line.sample()) for line in self.lines]
-        elif shape is IoShape.ANALOG:
-            sampled = [volts_to_counts(v) for v in self.analog_in_v]
+        applied = outputs if working else self._zeros_out
+        if applied != self.applied:
+            self.applied = list(applied)
+            self._applied_mask = to_mask(self.applied)
+        lines = self.lines
+        if lines is not None:
+            lines.drive(self._applied_mask, field_in_range(field_v))
+            sampled = lines.sample()  # the terminals are sampled (and lit) bus or no bus
+            value = sampled if working else 0
+            if value != self._inputs_mask:
+                self._inputs_mask = value
+                self.inputs = bits(value, lines.count)
+        elif not working:
+            self.inputs = self._zeros_in
+        elif self.kind.shape is IoShape.ANALOG:
+            self.inputs = [volts_to_counts(v) for v in self.analog_in_v]
         else:
-            sampled = list(self.words_in)
-        self.inputs = sampled if working else [0] * self.kind.inputs
+            self.inputs = list(self.words_in)
 
     def field_current_a(self) -> float:
-        return sum(line.current_a for line in self.lines)
+        return self.lines.current_a if self.lines is not None else 0.0
 
     def snapshot(self) -> dict[str, Any]:
         out: dict[str, Any] = {"outputs_plc": list(self.plc), "outputs": list(self.applied),
                                "inputs": list(self.inputs)}
-        shape = self.kind.shape
-        if shape is IoShape.DIGITAL:
-            out["lines"] = [{"level": ln.level, "external_v": ln.external_v, "load_a": ln.load_a,
-                             "driving": ln.driving, "tripped": ln.tripped}
-                            for ln in self.lines]
-        elif shape is IoShape.ANALOG:
+        if self.lines is not None:
+            out["lines"] = self.lines.snapshot()
+        elif self.kind.shape is IoShape.ANALOG:
             out["analog_in_v"] = list(self.analog_in_v)
             out["analog_out_v"] = [round(counts_to_volts(c), 4) for c in self.applied]
         else:

@@ -168,12 +168,12 @@ class SyncUnit:
         while self.next_sync0_us <= now_us:
             t = self.next_sync0_us
             self.next_sync0_us += self.cycle_us
-            if self.sync0_lost:
-                continue
-            self.sync0_seen = True
             deadline = t - CALC_COPY_NS // NS_PER_US
             taken = [a for a in self.arrivals if a <= deadline]
             self.arrivals = [a for a in self.arrivals if a > deadline]
+            if self.sync0_lost:
+                continue  # no SYNC0: the frames that came are overwritten by the next ones
+            self.sync0_seen = True
             self.sm_missed = 0 if taken else self.sm_missed + 1
             out.append((t, bool(taken)))
         return out

@@ -10,8 +10,7 @@ from devices.ethercat import AlState
 from devices.trscat.catalog import EXPANSIONS, INTEGRATED
 from devices.trscat.io import (
     DEBOUNCE_SAMPLES,
-    Debounce,
-    Line,
+    LineBank,
     SlotIo,
     counts_to_volts,
     field_in_range,
@@ -20,20 +19,36 @@ from devices.trscat.io import (
 )
 
 
+def _sensor(bank: LineBank, line: int, on: bool) -> None:
+    bank.set_external(line, 24.0 if on else 0.0)
+    bank.drive(0, True)
+
+
 @pytest.mark.parametrize("pulse", range(1, 7))
 def test_debounce_needs_four_samples(pulse: int) -> None:
     """§3: an input is taken when it has stayed in the new state for 4 samples."""
-    deb = Debounce()
-    seen = [deb.sample(True) for _ in range(pulse)]
-    expected = [n >= DEBOUNCE_SAMPLES for n in range(1, pulse + 1)]
-    assert seen == expected
+    bank = LineBank(16)
+    _sensor(bank, 5, True)
+    seen = [bank.sample() for _ in range(pulse)]
+    assert seen == [0x20 if n >= DEBOUNCE_SAMPLES else 0 for n in range(1, pulse + 1)]
 
 
-def test_debounce_restarts_on_a_bounce() -> None:
-    """§3: three samples high, one low, then it needs four high samples again."""
-    deb = Debounce()
-    trace = [deb.sample(x) for x in (1, 1, 1, 0, 1, 1, 1, 1)]
-    assert trace == [False] * 7 + [True]
+@pytest.mark.parametrize(("trace", "expected"), [
+    ((1, 1, 1, 0, 1, 1, 1, 1), (0, 0, 0, 0, 0, 0, 0, 1)),  # a bounce restarts the count
+    ((1, 1, 1, 1, 0, 0, 0, 1), (0, 0, 0, 1, 1, 1, 1, 1)),  # three low samples are not enough
+    ((1, 1, 1, 1, 0, 0, 0, 0), (0, 0, 0, 1, 1, 1, 1, 0)),
+])
+def test_debounce_traces(trace: tuple[int, ...], expected: tuple[int, ...]) -> None:
+    """§3, sample by sample on one line, while another line does the opposite (the lines of a
+    slot debounce independently)."""
+    bank = LineBank(16)
+    got = []
+    for raw in trace:
+        _sensor(bank, 0, bool(raw))
+        _sensor(bank, 15, not raw)
+        value = bank.sample()
+        got.append(value & 1)
+    assert tuple(got) == expected
     assert DEBOUNCE_SAMPLES == 4
 
 
@@ -58,18 +73,31 @@ def test_field_supply_range(volts: float, ok: bool) -> None:
     (0.0, True, False), (0.5, True, False), (0.51, False, True), (50.0, False, True)])
 def test_output_protection(load: float, driving: bool, tripped: bool) -> None:
     """§4: 0.5 A per output, protected against short circuit and overload."""
-    line = Line(load_a=load)
-    line.drive(True, 24.0)
-    assert (line.driving, line.tripped) == (driving, tripped)
-    assert line.level is driving  # a tripped output leaves the line to the field (0 V)
-    assert line.current_a == (load if driving else 0.0)
+    bank = LineBank(16)
+    bank.set_load(2, load)
+    bank.drive(0b100, True)
+    assert (bool(bank.driving), bool(bank.tripped)) == (driving, tripped)
+    assert bool(bank.level) is driving  # a tripped output leaves the line to the field (0 V)
+    assert bank.current_a == (load if driving else 0.0)
 
 
 def test_output_needs_the_field_supply() -> None:
     """§3: the field supply is required to switch the outputs on."""
-    line = Line()
-    line.drive(True, 0.0)
-    assert not line.driving and not line.level
+    bank = LineBank(16)
+    bank.drive(0xFFFF, False)
+    assert bank.driving == 0 and bank.level == 0
+
+
+def test_undefined_band_keeps_the_level() -> None:
+    """§4: a sensor at 12 V after the output was on: the line stays at 1."""
+    bank = LineBank(16)
+    bank.set_external(0, 12.0)
+    bank.drive(1, True)
+    bank.drive(0, True)
+    assert bank.level == 1
+    bank.set_external(0, 9.0)
+    bank.drive(0, True)
+    assert bank.level == 0
 
 
 def test_bidirectional_line_reads_its_own_output() -> None:
@@ -83,11 +111,12 @@ def test_bidirectional_line_reads_its_own_output() -> None:
 
 def test_bus_down_sends_zero_and_drives_nothing() -> None:
     io = SlotIo.new(INTEGRATED)
-    io.lines[0].external_v = 24.0
+    assert io.lines is not None
+    io.lines.set_external(0, 24.0)
     for _ in range(DEBOUNCE_SAMPLES):
         io.cycle([1] * 16, 24.0, working=False)
     assert io.applied == [0] * 16 and io.inputs == [0] * 16
-    assert io.lines[0].level  # the sensor still drives the terminal (its LED shows it)
+    assert io.lines.level == 1  # the sensor still drives the terminal (its LED shows it)
 
 
 @pytest.mark.parametrize(("volts", "counts"), [
