@@ -1,0 +1,336 @@
+"""The Festo CPX-E-EC bus module (seed 002): supplies, switches, ESM, process data, diagnosis.
+
+One model for the bus module and the CPX-E I/O modules behind it. The built-in master drives
+it through the Slave protocol of devices/master.py (``request_state``, ``exchange_frame``,
+``take_emergencies``, ...); a master's CoE access, the scenario and the dashboard go through
+``write_object`` / ``read_object``. What the seed leaves open, and why the model does what it
+does, is in docs/cpx-e-ec.md.
+"""
+
+from __future__ import annotations
+
+import random
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
+
+from devices.cpx.actions import ACTIONS, OperatorMixin
+from devices.cpx.addressing import AddressSpace, assign_addresses, check_configuration
+from devices.cpx.catalog import ModuleType, module_type
+from devices.cpx.diagnosis import Diagnosis
+from devices.cpx.esm import SM_WATCHDOG, SYNC_ERROR, ErrorKind, Esm
+from devices.cpx.faults import Injected
+from devices.cpx.history import DiagHistory
+from devices.cpx.indicators import wanted_leds
+from devices.cpx.leds import LedBank
+from devices.cpx.modules import CpxModule, ModuleFault, Monitors
+from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
+from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
+from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
+from devices.device import Action, DeviceModel
+from devices.ethercat import AlState
+from devices.events import AlarmChanged, LogLine, fmt_hex
+from devices.od import ObjectDictionary
+
+SUPPLY_NOMINAL_V = 24.0  # Tab. 29: U_EL/SEN 24 V DC +- 25 %
+SUPPLY_MIN_V = 18.0  # ... below this: undervoltage (FieldRig uses the same band for U_OUT)
+BROWNOUT_V = 10.0  # FieldRig: the electronics stop below this
+BRIDGING_US = 20_000  # Tab. 29: mains buffering time 20 ms
+ACTIVITY_WINDOW_US = 50_000  # LA IN / LA OUT flicker while frames passed this recently
+SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per good one
+SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
+
+
+class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
+    KIND = "cpx_e_ec"
+    ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+
+    def __init__(self, device_id: str, rng: random.Random,
+                 modules: Sequence[str | tuple[str, Mapping[str, Any]]] = (),
+                 rotary_switch: int = 0, dil1: bool = False, dil2: bool = False,
+                 history_flags: int = 0x0000, out_connected: bool = False,
+                 box_name: str = "Box 3 (CPX-E-EC)", station_address: int = 1003) -> None:
+        super().__init__(device_id=device_id, rng=rng)
+        self.modules: list[CpxModule] = []
+        for number, item in enumerate(modules, start=1):
+            name, options = (item, {}) if isinstance(item, str) else item
+            try:
+                mtype = module_type(name)
+                self.modules.append(CpxModule.build(number, mtype, options or {}))
+            except (KeyError, ValueError) as exc:
+                raise ValueError(f"module {number}: {exc.args[0]}") from None
+        self.switches = Switches(check_rotary(rotary_switch), dil1, dil2)
+        check_configuration(BUS_MODULE[self.switches.mode], [m.mtype for m in self.modules])
+        if history_flags & ~0x001F:
+            raise ValueError(f"history_flags 0x{history_flags:04X}: 0x10F3:5 takes bits 0-4 "
+                             f"(seed 002 Tab. 18, 19)")
+        self.history_flags = history_flags
+        self.box_name = box_name
+        self.station_address = station_address
+        self.serial = self.rng.getrandbits(32)
+        self.default_ranges = [list(m.ranges) for m in self.modules]
+        self.el_sen_v = 0.0
+        self.out_v = SUPPLY_NOMINAL_V
+        self.link_in = True
+        self.link_out = out_connected
+        self.injected: list[Injected] = []
+        self.esm = Esm(self.emit, device_id)
+        self.leds = LedBank(device_id)
+        self.powered = False
+        self.low_since_us: int | None = None
+        self._clear_runtime()
+        self.cmd_power(True)
+
+    # ---- power, start ---------------------------------------------------------------------
+    def _clear_runtime(self) -> None:
+        self.bus = CpxModule(0, BUS_MODULE[self.switches.active_mode])
+        self.units: list[CpxModule] = [self.bus, *self.modules]
+        self.history = DiagHistory(flags=self.history_flags)
+        self.diagnosis = Diagnosis(self.device_id, self.emit, self.history,
+                                   self._filter_no_error)
+        self.od: ObjectDictionary | None = None
+        self.space: AddressSpace | None = None
+        self.space_error: str = ""
+        self.f030_written = False
+        self.boot_failed = False
+        self.power_on_us = self.now_us
+        self.last_frame_us: int | None = None
+        self.last_pd_us = self.now_us
+        self.sync_counter = 0
+
+    def _start(self) -> None:
+        """Power-up or restart: switches and modules read, dictionary built, INIT (§2.1.7)."""
+        self.switches.read_at_start()
+        self._clear_runtime()
+        for module, ranges in zip(self.modules, self.default_ranges, strict=True):
+            module.reset(ranges)
+        try:
+            self.space = check_configuration(self.bus.mtype, [m.mtype for m in self.modules])
+        except ValueError as exc:  # a DIL change can push the terminal past 64 bytes
+            self.space_error = str(exc)
+            self.emit(LogLine(self.now_us, self.device_id, text=self.space_error))
+            self.space = AddressSpace.of(self.bus.mtype, [m.mtype for m in self.modules])
+        self.boot_failed = self.has_fault("booting_error")
+        self.od = build_od(self)
+        self.esm.reset(self.now_us)
+
+    def _stop(self) -> None:
+        for error in self.diagnosis.active:
+            cpx = error.cause.error
+            self.emit(AlarmChanged(self.now_us, self.device_id, code=fmt_hex(cpx.text_id, 4),
+                                   name=cpx.symbol, active=False, module=error.fault.module))
+        self.esm.reset(self.now_us)
+        self._clear_runtime()
+
+    def _set_powered(self, on: bool) -> None:
+        if on == self.powered:
+            return
+        self.powered = on
+        if on:
+            self._start()
+        else:
+            self._stop()
+        self._refresh_leds()
+
+    @property
+    def application_runs(self) -> bool:
+        """The application controller runs the CPX-E system (not bootloader, not failed)."""
+        return self.powered and not self.boot_failed and not self.has_fault("ac_failure") and \
+            self.switches.active_mode is not DiagMode.BOOTLOADER
+
+    # ---- the master's side ----------------------------------------------------------------
+    @property
+    def al_state(self) -> AlState:
+        return self.esm.state
+
+    @property
+    def al_status(self) -> int:
+        return self.esm.register
+
+    @property
+    def al_status_code(self) -> int:
+        return self.esm.code
+
+    @property
+    def explicit_device_id(self) -> int:
+        return self.switches.explicit_device_id if self.powered else 0
+
+    def reachable(self) -> bool:
+        return self.powered and self.link_in
+
+    def exchange_frame(self, now_us: int) -> None:
+        """One process-data cycle of the master passed through this slave."""
+        if not self.reachable():
+            return
+        self.last_frame_us = now_us
+        if self.has_fault("watchdog") or not self.application_runs:
+            return  # the frame passes the ESC, but no process data reach the application
+        self.last_pd_us = now_us
+        if self.esm.state in (AlState.SAFEOP, AlState.OP):
+            missed = self.has_fault("sync_error")
+            self.sync_counter = min(SYNC_COUNTER_CAP, self.sync_counter + SYNC_MISSED_STEP) \
+                if missed else max(0, self.sync_counter - 1)
+
+    def take_emergencies(self) -> list[bytes]:
+        """8-byte emergencies (§2.5.3) queued in the mailbox; it runs from PREOP on."""
+        if not self.reachable() or self.esm.state is AlState.INIT:
+            return []
+        out, self.diagnosis.mailbox = self.diagnosis.mailbox, []
+        return out
+
+    # ---- stepping -------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        dt_us = now_us - self.now_us
+        super().step(now_us)
+        self._follow_supply()
+        if not self.powered:
+            return
+        for module in self.modules:
+            module.step(dt_us)
+        if self.application_runs:
+            self._supervise()
+            self._process_data()
+            self._diagnose()
+        self._refresh_leds()
+
+    def _follow_supply(self) -> None:
+        """U_EL/SEN: the electronics ride through dips shorter than 20 ms (Tab. 29)."""
+        alive = self.el_sen_v >= BROWNOUT_V
+        if alive:
+            self.low_since_us = None
+            self._set_powered(True)
+            return
+        if not self.powered:
+            return
+        if self.low_since_us is None:
+            self.low_since_us = self.now_us
+        if self.now_us - self.low_since_us >= BRIDGING_US:
+            self._set_powered(False)
+
+    def _supervise(self) -> None:
+        """OP -> SAFEOP on the Sync Manager watchdog or a sync error (Tab. 12)."""
+        if self.esm.state is not AlState.OP:
+            return
+        if self.now_us - self.last_pd_us > WATCHDOG_US:
+            self.esm.fall(AlState.SAFEOP, ErrorKind.WATCHDOG, SM_WATCHDOG, self.now_us)
+            self.emit(LogLine(self.now_us, self.device_id, text="Sync Manager watchdog: no "
+                              "process data for 100 ms, OP -> SAFEOP"))
+        elif self.sync_counter > SYNC_ERROR_COUNTER_LIMIT:
+            self.esm.fall(AlState.SAFEOP, ErrorKind.SYNC, SYNC_ERROR, self.now_us)
+            self.emit(LogLine(self.now_us, self.device_id, text="sync error counter over "
+                              "0x10F1:2, OP -> SAFEOP"))
+
+    def _process_data(self) -> None:
+        state = self.esm.state
+        supply_ok = self.u_out_ok
+        for module in self.modules:
+            module.drive_outputs(self._output_values(module), supply_ok)
+            if state in (AlState.SAFEOP, AlState.OP):  # Tab. 11: inputs from SAFEOP on
+                module.sample_inputs()
+        if state in (AlState.SAFEOP, AlState.OP):
+            self._bus_inputs()
+
+    def _output_values(self, module: CpxModule) -> list[int]:
+        """OP: what the PLC wrote. Otherwise 0x2400:7 decides (Tab. 11: in SAFEOP the
+        outputs do not keep their state): 0 all off, 1 hold the last state, 2 failsafe."""
+        if self.esm.state is AlState.OP:
+            module.held = list(module.out_values)
+            return module.out_values
+        mode = int(self.od.peek(0x2400, 7)) if self.od is not None else 0
+        if mode == 1:
+            return module.held
+        if mode == 2:
+            return module.failsafe
+        return [0] * len(module.out_values)
+
+    def _bus_inputs(self) -> None:
+        mode = self.switches.active_mode
+        if mode is DiagMode.STATUS_BITS:
+            bits = self.diagnosis.status_bits
+            self.bus.in_values = [bits >> i & 1 for i in range(8)]
+        elif mode is DiagMode.IO_DIAGNOSIS:
+            self.bus.in_values = [self.diagnosis.interface_word(self.bus.out_values[0])]
+
+    @property
+    def u_out_ok(self) -> bool:
+        return self.out_v >= SUPPLY_MIN_V and not self.has_fault("undervoltage_out")
+
+    @property
+    def u_el_sen_ok(self) -> bool:
+        return self.el_sen_v >= SUPPLY_MIN_V and not self.has_fault("undervoltage_el_sen")
+
+    def _diagnose(self) -> None:
+        od = self.od
+        assert od is not None
+        monitors = Monitors(scs=bool(od.peek(0x2400, 2)), sco=bool(od.peek(0x2400, 3)),
+                            v_out=bool(od.peek(0x2400, 4)))
+        faults: list[tuple[ModuleFault, ModuleType]] = []
+        if not self.u_el_sen_ok:
+            faults.append((ModuleFault(0, "undervoltage_el_sen"), self.bus.mtype))
+        for module in self.modules:
+            faults.extend((f, module.mtype) for f in module.faults(monitors, self.u_out_ok))
+        self.diagnosis.update(faults, self.now_us, self._t_ns())
+
+    def _t_ns(self) -> int:
+        """Tab. 16 time stamp: time since the bus module started, in ns."""
+        return (self.now_us - self.power_on_us) * 1000
+
+    def _filter_no_error(self) -> bool:
+        return self.od is not None and bool(self.od.peek(0x2401, 0))
+
+    def has_fault(self, name: str) -> bool:
+        return any(f.name == name for f in self.injected)
+
+    # ---- LEDs -----------------------------------------------------------------------------
+    def _refresh_leds(self) -> None:
+        self.leds.update(self.now_us, wanted_leds(self), self.emit)
+
+    def traffic(self) -> bool:
+        return self.last_frame_us is not None and \
+            self.now_us - self.last_frame_us <= ACTIVITY_WINDOW_US
+
+    def master_silent(self) -> bool:
+        """No frame for a watchdog time: "no connection to the master / master inactive"."""
+        last = self.last_frame_us if self.last_frame_us is not None else self.power_on_us
+        return self.now_us - last > WATCHDOG_US
+
+    # ---- object dictionary callbacks ------------------------------------------------------
+    def od_error_register(self) -> int:
+        return self.diagnosis.error_register
+
+    def od_status_register(self) -> int:
+        return self.diagnosis.status_bits
+
+    def od_history_message(self, sub: int) -> str:
+        message = self.history.message(sub)
+        return "" if message is None else message.encode().hex(" ").upper()
+
+    def od_f030_written(self, _value: Any) -> None:
+        self.f030_written = True
+
+    def od_unique_id(self) -> str:
+        return f"{self.serial:08X}"
+
+    # ---- views ----------------------------------------------------------------------------
+    def snapshot(self) -> dict[str, Any]:
+        mtypes = [m.mtype for m in self.modules]
+        return {
+            "kind": self.KIND, "id": self.device_id, "powered": self.powered,
+            "esm": self.esm.state.label, "requested": self.esm.requested.label,
+            "al_status": self.esm.register, "al_status_code": self.esm.code,
+            "box_name": self.box_name, "station_address": self.station_address,
+            "explicit_device_id": self.explicit_device_id,
+            "leds": self.leds.channel_patterns(), "led_states": self.leds.snapshot(),
+            "switches": self.switches.snapshot(),
+            "supply": {"el_sen_v": self.el_sen_v, "out_v": self.out_v,
+                       "el_sen_ok": self.u_el_sen_ok, "out_ok": self.u_out_ok},
+            "ports": {"in": self.link_in, "out": self.link_out, "traffic": self.traffic()},
+            "application": self.application_runs, "boot_failed": self.boot_failed,
+            "bus_module": self.bus.snapshot(),
+            "modules": [m.snapshot() for m in self.modules],
+            "addresses": [a.row() for a in assign_addresses(self.bus.mtype, mtypes)],
+            "address_space": self.space.snapshot() if self.space else None,
+            "space_error": self.space_error,
+            "diagnosis": self.diagnosis.snapshot(), "history": self.history.snapshot(),
+            "f030_written": self.f030_written, "sync_counter": self.sync_counter,
+            "injected": [f.label() for f in self.injected],
+        }

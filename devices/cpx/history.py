@@ -1,0 +1,155 @@
+"""The diagnosis history, object 0x10F3 (seed 002 §2.5.2, Tab. 14, 18, 19; ETG.1020).
+
+64 messages in subindices 6 ... 69, a ring. Sub 5 "Flags": bit 0 sends every new message also
+as an emergency (Tab. 19), bit 4 chooses the mode (Tab. 18): 0 = Overwrite (the oldest message
+is overwritten once 64 are stored), 1 = Acknowledge (with 64 unacknowledged messages new ones
+are lost). Bits 1-3 (disable info / warning / error messages) and the device-owned bit 5
+(a message was overwritten or discarded) are ETG.1020's, which the seed's object follows.
+Sub 3 takes the subindex of the newest message the master acknowledges; writing 0 clears
+the history (in Acknowledge mode only the acknowledged messages, once one was). "New Message
+Available" (sub 4) falls when the newest message is read (Overwrite) or acknowledged
+(Acknowledge).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from devices.cpx.codes import DiagType
+from devices.cpx.messages import DiagMessage
+from devices.od import AbortCode, SdoAbort
+
+INDEX = 0x10F3
+MAX_MESSAGES = 64  # §2.5.2 / Tab. 14 sub 1
+FIRST_SUB = 6
+FLAG_EMERGENCY = 0x0001  # Tab. 19: bit 0
+FLAG_DISABLE_INFO = 0x0002  # ETG.1020 bits 1-3
+FLAG_DISABLE_WARNING = 0x0004
+FLAG_DISABLE_ERROR = 0x0008
+FLAG_ACKNOWLEDGE = 0x0010  # Tab. 18: bit 4
+FLAG_OVERWRITE_DISCARD = 0x0020  # ETG.1020 bit 5, set by the device
+WRITABLE_FLAGS = 0x001F
+DISABLE_FLAG: dict[DiagType, int] = {DiagType.INFO: FLAG_DISABLE_INFO,
+                                     DiagType.WARNING: FLAG_DISABLE_WARNING,
+                                     DiagType.ERROR: FLAG_DISABLE_ERROR}
+
+
+@dataclass
+class DiagHistory:
+    flags: int = 0x0000  # Tab. 14: default 0x0000 (emergency off, Overwrite mode)
+    slots: list[DiagMessage | None] = field(default_factory=lambda: [None] * MAX_MESSAGES)
+    newest: int = 0  # subindex of the newest message, 0 = none
+    acknowledged: int = 0  # subindex of the newest acknowledged message, 0 = none
+    count: int = 0
+    new_message: bool = False
+    lost: int = 0  # messages discarded in Acknowledge mode (for the view)
+
+    @property
+    def acknowledge_mode(self) -> bool:
+        return bool(self.flags & FLAG_ACKNOWLEDGE)
+
+    @property
+    def emergency_enabled(self) -> bool:
+        return bool(self.flags & FLAG_EMERGENCY)
+
+    @property
+    def sub0(self) -> int:
+        """Highest subindex in use (5 with an empty history, as ETG.1020 counts it)."""
+        return FIRST_SUB - 1 + self.count
+
+    def unacknowledged(self) -> int:
+        if self.count == 0:
+            return 0
+        if self.acknowledged == 0:
+            return self.count
+        return (self.newest - self.acknowledged) % MAX_MESSAGES
+
+    def add(self, message: DiagMessage) -> bool:
+        """Store a new message; False when the flags filter it or Acknowledge mode is full."""
+        if self.flags & DISABLE_FLAG[message.dtype]:
+            return False
+        if self.acknowledge_mode and self.unacknowledged() >= MAX_MESSAGES:
+            self.flags |= FLAG_OVERWRITE_DISCARD  # Tab. 18: "new messages ... are lost"
+            self.lost += 1
+            return False
+        pos = 0 if self.count == 0 else (self.newest - FIRST_SUB + 1) % MAX_MESSAGES
+        if self.slots[pos] is not None:
+            if not self.acknowledge_mode:
+                self.flags |= FLAG_OVERWRITE_DISCARD
+            if self.acknowledged == FIRST_SUB + pos:
+                self.acknowledged = 0
+        self.slots[pos] = message
+        self.newest = FIRST_SUB + pos
+        self.count = min(MAX_MESSAGES, self.count + 1)
+        self.new_message = True
+        return True
+
+    def message(self, sub: int) -> DiagMessage | None:
+        if not FIRST_SUB <= sub < FIRST_SUB + MAX_MESSAGES:
+            raise SdoAbort(AbortCode.NO_SUBINDEX, INDEX, sub)
+        return self.slots[sub - FIRST_SUB]
+
+    def read(self, sub: int) -> DiagMessage | None:
+        """A master's read of a message subindex (the side effect of ETG.1020)."""
+        if sub > self.sub0:
+            raise SdoAbort(AbortCode.NO_SUBINDEX, INDEX, sub)
+        found = self.message(sub)
+        if sub == self.newest and not self.acknowledge_mode:
+            self.new_message = False
+        return found
+
+    def write_acknowledged(self, value: int) -> None:
+        if value == 0:
+            self._clear()
+            return
+        if not FIRST_SUB <= value <= self.sub0:
+            raise SdoAbort(AbortCode.VALUE_RANGE, INDEX, 3)
+        self.acknowledged = value
+        self.flags &= ~FLAG_OVERWRITE_DISCARD
+        if self.acknowledge_mode and value == self.newest:
+            self.new_message = False
+
+    def write_flags(self, value: int) -> None:
+        if value & ~(WRITABLE_FLAGS | FLAG_OVERWRITE_DISCARD):
+            raise SdoAbort(AbortCode.VALUE_RANGE, INDEX, 5)
+        self.flags = (value & WRITABLE_FLAGS) | (self.flags & FLAG_OVERWRITE_DISCARD)
+
+    def ordered(self) -> list[tuple[int, DiagMessage]]:
+        """(subindex, message), oldest first."""
+        if self.count == 0:
+            return []
+        start = (self.newest - FIRST_SUB + 1) % MAX_MESSAGES if self.count == MAX_MESSAGES \
+            else 0
+        out = []
+        for k in range(self.count):
+            pos = (start + k) % MAX_MESSAGES
+            message = self.slots[pos]
+            assert message is not None
+            out.append((FIRST_SUB + pos, message))
+        return out
+
+    def _clear(self) -> None:
+        # ETG.1020: Acknowledge mode keeps the unacknowledged messages, unless none was
+        # acknowledged yet; then, as in Overwrite mode, everything goes.
+        keep: list[DiagMessage] = []
+        if self.acknowledge_mode and self.acknowledged:
+            keep = [m for _sub, m in self.ordered()[self.count - self.unacknowledged():]]
+        self.slots = [None] * MAX_MESSAGES
+        for pos, message in enumerate(keep):
+            self.slots[pos] = message
+        self.count = len(keep)
+        self.newest = FIRST_SUB + len(keep) - 1 if keep else 0
+        self.acknowledged = 0
+        self.new_message = bool(keep)
+        self.flags &= ~FLAG_OVERWRITE_DISCARD
+
+    def snapshot(self) -> dict[str, object]:
+        return {"flags": self.flags, "mode": "acknowledge" if self.acknowledge_mode
+                else "overwrite", "emergency": self.emergency_enabled,
+                "newest": self.newest, "acknowledged": self.acknowledged,
+                "new_message": self.new_message, "count": self.count, "lost": self.lost,
+                "overwrite_discard": bool(self.flags & FLAG_OVERWRITE_DISCARD),
+                "messages": [{"sub": sub, "type": m.dtype.name.lower(),
+                              "text_id": f"0x{m.text_id:04X}", "text": m.text(),
+                              "t_ns": m.timestamp_ns, "bytes": m.encode().hex(" ").upper()}
+                             for sub, m in self.ordered()]}

@@ -1,0 +1,146 @@
+"""The CPX-E-EC's answers to AL control requests: which transition checks what.
+
+INIT -> PREOP: an application must run (not the bootloader of Tab. 6, no booting error of
+Tab. 12: AL status code 0x0014) and the mailbox sync managers SM0 / SM1 must be valid
+(0x0016). PREOP -> SAFEOP: the process-data sync managers SM2 / SM3 (0x0017, 0x001D, 0x001E,
+with the Text-IDs 0x0011 ... 0x0013 of Tab. 17 in the history), the 64-byte address space
+(§2.2), the bus-cycle measurement (0x000F, a warning) and the ident check, 0xF030 against
+0xF050 (0x0070 with Text-ID 0x3800; skipped with 0x3801 when the PLC did not write 0xF030).
+SAFEOP -> OP: process data arrive (Sync Manager watchdog, 0x001B) and the sync events are
+not missed (0x001A). Downward requests, INIT and BOOT are always taken.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from devices.cpx.catalog import MAX_INPUT_BYTES
+from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_IDENT_FAILED, TEXT_IDENT_SKIPPED, DiagType
+from devices.cpx.esm import (
+    IDENT_MISMATCH,
+    INVALID_INPUT_CONFIG,
+    INVALID_MAILBOX_PREOP,
+    INVALID_OUTPUT_CONFIG,
+    INVALID_SM_CONFIG,
+    NO_VALID_FIRMWARE,
+    SM_WATCHDOG,
+    SYNC_ERROR,
+    ErrorKind,
+    request_refusal,
+)
+from devices.cpx.faults import SM_FAULT_TEXT
+from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT
+from devices.ethercat import AlState
+from devices.od import DataType
+
+if TYPE_CHECKING:
+    from devices.cpx.device import CpxEEc
+
+WATCHDOG_US = 100_000  # Sync Manager watchdog, the ESC default (ETG.1000)
+# A sync manager configuration error: Text-ID -> the value the master wrote (FieldRig: an
+# odd start address, a size one byte too long, a disabled sync manager).
+SM_BAD_VALUE = {0x0011: 0x1001, 0x0012: 0x0081, 0x0013: 0x0000}
+
+
+class TransitionsMixin:
+    """``request_state`` of :class:`~devices.cpx.device.CpxEEc` and its checks."""
+
+    def request_state(self: CpxEEc, target: AlState) -> None:
+        """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
+        if not self.reachable() or self.has_fault("ac_failure"):
+            return  # the ESC takes the request, but no application answers it (Tab. 12)
+        now, esm = self.now_us, self.esm
+        esm.requested = target
+        refusal = request_refusal(esm.state, target)
+        if target is esm.state:
+            esm.accept(target, now)  # the same state again acknowledges the error flag
+        elif refusal is not None:
+            esm.refuse(refusal, now)
+        elif target in (AlState.INIT, AlState.BOOT) or _down(esm.state, target):
+            esm.accept(target, now)
+        else:
+            refused = self._transition_check(esm.state, target)
+            if refused is None:
+                esm.accept(target, now)
+            elif isinstance(refused, tuple):
+                esm.refuse(refused[0], now, refused[1])
+            else:
+                esm.refuse(refused, now)
+        self._refresh_leds()
+
+    def _transition_check(self: CpxEEc, current: AlState,
+                          target: AlState) -> int | tuple[int, ErrorKind] | None:
+        """The checks of an upward transition: None, or the AL status code (with the error
+        kind when it is not an invalid configuration)."""
+        if current is AlState.INIT and target is AlState.PREOP:
+            if not self.application_runs:
+                return NO_VALID_FIRMWARE
+            return self._sm_check((0, 1))
+        if current is AlState.SAFEOP and target is AlState.OP:  # outputs must be valid
+            if self.now_us - self.last_pd_us > WATCHDOG_US:
+                return SM_WATCHDOG, ErrorKind.WATCHDOG
+            if self.sync_counter > SYNC_ERROR_COUNTER_LIMIT:
+                return SYNC_ERROR, ErrorKind.SYNC
+            return None
+        if current is AlState.PREOP and target is AlState.SAFEOP:
+            code = self._sm_check((2, 3))
+            if code is not None:
+                return code
+            if self.space is not None and self.space_error:  # more than 64 bytes (§2.2)
+                return INVALID_INPUT_CONFIG if self.space.input_bytes > MAX_INPUT_BYTES \
+                    else INVALID_OUTPUT_CONFIG
+            if self.has_fault("bus_cycle_time"):
+                self._report(TEXT_BUS_CYCLE, DiagType.WARNING)
+            return self._ident_check()
+        return None
+
+    def _sm_check(self: CpxEEc, sync_managers: tuple[int, ...]) -> int | None:
+        for fault in self.injected:
+            if fault.name in SM_FAULT_TEXT and fault.sm in sync_managers:
+                text_id = SM_FAULT_TEXT[fault.name]
+                self._report(text_id, DiagType.ERROR,
+                             ((DataType.UNSIGNED8, fault.sm),
+                              (DataType.UNSIGNED16, SM_BAD_VALUE[text_id])))
+                if fault.sm in (0, 1):
+                    return INVALID_MAILBOX_PREOP
+                if fault.name == "sm_invalid_size":
+                    return INVALID_OUTPUT_CONFIG if fault.sm == 2 else \
+                        INVALID_INPUT_CONFIG
+                return INVALID_SM_CONFIG
+        return None
+
+    def _ident_check(self: CpxEEc) -> int | None:
+        """0xF030 (written by the PLC in PREOP) against 0xF050 (Tab. 17 0x3800 / 0x3801)."""
+        wrong = self._ident_mismatch()
+        if wrong is not None:
+            self._report(TEXT_IDENT_FAILED, DiagType.ERROR, ((DataType.UNSIGNED8, wrong),))
+            return IDENT_MISMATCH
+        if not self.f030_written or self.has_fault("f030_not_written"):
+            self._report(TEXT_IDENT_SKIPPED, DiagType.WARNING)
+        return None
+
+    def _ident_mismatch(self: CpxEEc) -> int | None:
+        """The CPX module number of the first configured module that is not the detected one."""
+        injected = [f.module or 0 for f in self.injected if f.name == "module_ident_mismatch"]
+        if injected:
+            return min(injected)
+        if not self.f030_written or self.has_fault("f030_not_written") or self.od is None:
+            return None
+        count = int(self.od.peek(0xF030, 0))
+        configured = [int(self.od.peek(0xF030, sub)) for sub in range(1, count + 1)]
+        detected = [u.mtype.ident for u in self.units]
+        for number in range(max(len(configured), len(detected))):
+            want = configured[number] if number < len(configured) else None
+            have = detected[number] if number < len(detected) else None
+            if want != have:
+                return number
+        return None
+
+    def _report(self: CpxEEc, text_id: int, dtype: DiagType,
+                params: tuple[tuple[DataType, int], ...] = ()) -> None:
+        self.diagnosis.report(text_id, dtype, self.now_us, self._t_ns(), params)
+
+
+def _down(current: AlState, target: AlState) -> bool:
+    order = (AlState.INIT, AlState.PREOP, AlState.SAFEOP, AlState.OP)
+    return current in order and target in order and order.index(target) < order.index(current)

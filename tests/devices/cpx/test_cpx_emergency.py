@@ -1,0 +1,161 @@
+"""The 8-byte emergency and the error / status registers (seed 002 §2.5.3, Tab. 20-26;
+status bits §2.4.2)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from cpx_bench import Bench, tab9
+
+from devices.cpx.codes import (
+    CAUSES,
+    CPX_ERRORS,
+    EMCY_CODES,
+    ERROR_REGISTER_BITS,
+    STATUS_BITS,
+    emcy_code_for,
+)
+from devices.cpx.messages import emergency_frame, parse_emergency
+from devices.ethercat import AlState
+
+TAB21 = {0x0000: "No error", 0x1000: "General system error",
+         0x2320: "Short circuit at the outputs", 0x2330: "Load dump (wire break)",
+         0x3120: "Input voltage too low", 0x3320: "Output voltage too low",
+         0x5000: "Hardware error (all errors > 128)"}
+
+
+def test_tab20_byte_layout() -> None:
+    """Tab. 20: code LE in bytes 0-1, 0x1001 in 2, 0x1002 in 3, module 4, CPX error 5,
+    reserved 6, additional information 7."""
+    frame = emergency_frame(0x2320, 0x03, 0x22, 2, 2, 0x05)
+    assert frame == bytes((0x20, 0x23, 0x03, 0x22, 0x02, 0x02, 0x00, 0x05))
+    assert parse_emergency(frame)["code"] == 0x2320
+
+
+def test_tab21_codes() -> None:
+    assert EMCY_CODES == TAB21
+    with pytest.raises(ValueError, match=r"Tab\. 21"):
+        emergency_frame(0xFF00, 0, 0, 0, 0, 0)
+
+
+def test_tab22_tab23_bits() -> None:
+    assert ERROR_REGISTER_BITS == {0: "Generic Error", 1: "Current", 2: "Voltage",
+                                   4: "Communication Error", 7: "Manufacturer specific"}
+    assert [STATUS_BITS[b] for b in range(8)] == [
+        "Error at valve terminal", "Error at output", "Error at input",
+        "Error at analog or technology module", "Undervoltage", "Short circuit/overload",
+        "Wire break", "Other error"]
+
+
+def test_errors_above_128_are_hardware_errors() -> None:
+    """Tab. 21: 0x5000 for every CPX error number > 128."""
+    for cause in CAUSES.values():
+        assert (emcy_code_for(cause) == 0x5000) == (cause.cpx_error > 128)
+    assert CPX_ERRORS[2].text == "Short circuit/overload"  # Tab. 16
+
+
+# (name, modules, actions to cause it, expected emergency fields)
+CASES: list[tuple[str, list[Any], list[tuple[str, int | None, dict[str, Any]]],
+                  dict[str, int]]] = [
+    ("output short circuit (KZA)", ["8DO"],
+     [("write_object", None, {"index": 0x7001, "sub": 4, "value": 1}),
+      ("short_circuit", 1, {"channel": 3, "on": True})],
+     {"code": 0x2320, "register": 0x03, "status_bits": 0x22, "module": 1, "cpx_error": 2,
+      "info": 3}),
+    ("sensor supply short circuit (KZS)", ["16DI"],
+     [("short_circuit", 1, {"on": True})],
+     {"code": 0x2320, "register": 0x03, "status_bits": 0x24, "module": 1, "cpx_error": 2,
+      "info": 0}),
+    ("wire break, 4-20 mA input", [("4AI-U-I", {"ranges": "4-20mA"})],
+     [("set_analog", 1, {"channel": c, "value": 12.0}) for c in range(4)]
+     + [("wire_break", 1, {"channel": 1, "on": True})],
+     {"code": 0x2330, "register": 0x81, "status_bits": 0x48, "module": 1, "cpx_error": 3,
+      "info": 1}),
+    ("U_OUT undervoltage", ["8DO"], [("supply", None, {"out": 15.0})],
+     {"code": 0x3320, "register": 0x05, "status_bits": 0x12, "module": 1, "cpx_error": 8,
+      "info": 0}),
+    ("U_EL/SEN undervoltage", ["16DI"], [("supply", None, {"el_sen": 17.0})],
+     {"code": 0x3120, "register": 0x05, "status_bits": 0x14, "module": 0, "cpx_error": 8,
+      "info": 0}),
+    ("module failure", ["16DI"], [("inject_fault", 1, {"fault": "module_failure"})],
+     {"code": 0x5000, "register": 0x81, "status_bits": 0x84, "module": 1, "cpx_error": 129,
+      "info": 0}),
+]
+
+
+@pytest.mark.parametrize(("name", "modules", "actions", "expected"), CASES,
+                         ids=[c[0] for c in CASES])
+def test_physical_cause_to_emergency(name: str, modules: list[Any],
+                                     actions: list[tuple[str, int | None, dict[str, Any]]],
+                                     expected: dict[str, int]) -> None:
+    """Cause -> Tab. 21 code, Tab. 22 register, Tab. 23 status bits, Tab. 24-26 bytes."""
+    bench = Bench(modules, history_flags=0x0001).to_op()
+    for action, module, args in actions:
+        bench.apply(action, module=module, **args)
+    since = len(bench.events)
+    bench.run(0.01)
+    sent = bench.records("emergency", since)
+    assert len(sent) == 1, sent
+    frame = bytes.fromhex(f"{sent[0]['code'][4:6]} {sent[0]['code'][2:4]} "
+                          f"{sent[0]['register'][2:]} {sent[0]['data']}")
+    assert parse_emergency(frame) == expected
+    assert bench.apply("read_object", index=0x1001, sub=0) == expected["register"]
+    assert bench.apply("read_object", index=0x1002, sub=0) == expected["status_bits"]
+
+
+def test_no_emergency_unless_enabled() -> None:
+    """Tab. 19: 0x10F3:5 bit 0 = 0 (the default) sends no emergency; the history still
+    stores the message."""
+    bench = tab9().to_op()
+    bench.apply("short_circuit", module=1, on=True)
+    bench.run(0.01)
+    assert bench.records("emergency") == []
+    assert bench.cpx.history.count >= 1
+    bench.apply("write_object", index=0x10F3, sub=5, value=0x0001)
+    bench.apply("short_circuit", module=1, on=False)
+    bench.run(0.01)
+    assert [r["code"] for r in bench.records("emergency")] == ["0x0000"]  # no error left
+
+
+def test_emergencies_reach_the_master() -> None:
+    """8-byte frames through the mailbox: taken by the master from PREOP on."""
+    bench = Bench(["8DO"], master=False, history_flags=0x0001)
+    bench.apply("supply", out=12.0)
+    bench.run(0.01)
+    assert bench.cpx.take_emergencies() == []  # INIT: the mailbox does not run
+    bench.cpx.request_state(AlState.PREOP)
+    frames = bench.cpx.take_emergencies()
+    assert [len(f) for f in frames] == [8]
+    assert frames[0][:2] == bytes((0x20, 0x33))  # 0x3320
+    assert bench.cpx.take_emergencies() == []
+
+
+def test_status_bits_as_inputs() -> None:
+    """§2.4.2: with status bits on, the 8 bits are the bus module's inputs I0 ... I7; the
+    CPX system's example "short circuit at the output" sets bits 5 and 1."""
+    bench = tab9().to_op()
+    assert bench.cpx.bus.in_values == [0] * 8
+    bench.apply("write_object", index=0x7003, sub=1, value=1)
+    bench.apply("short_circuit", module=3, channel=0, on=True)
+    bench.run(0.01)
+    assert bench.cpx.bus.in_values == [0, 1, 0, 0, 0, 1, 0, 0]
+    assert [bench.apply("read_object", index=0x6000, sub=s) for s in range(1, 9)] == \
+        [0, 1, 0, 0, 0, 1, 0, 0]
+
+
+def test_short_is_seen_only_with_the_output_on_and_monitored() -> None:
+    """KZA is detected while the output draws current; 0x2400:3 Monitor SCO off hides it,
+    the output is switched off all the same."""
+    bench = tab9().to_op()
+    bench.apply("short_circuit", module=2, channel=0, on=True)
+    bench.run(0.01)
+    assert bench.cpx.diagnosis.active == []
+    bench.apply("write_object", index=0x7002, sub=1, value=1)
+    bench.run(0.01)
+    assert [e.fault.cause for e in bench.cpx.diagnosis.active] == ["short_circuit_outputs"]
+    assert bench.cpx.modules[1].driven[0] == 0
+    bench.apply("write_object", index=0x2400, sub=3, value=0)
+    bench.run(0.01)
+    assert bench.cpx.diagnosis.active == []
+    assert bench.cpx.modules[1].driven[0] == 0

@@ -1,0 +1,200 @@
+"""Diagnosis history 0x10F3 and its message format (seed 002 §2.5.2, Tab. 14-19)."""
+
+from __future__ import annotations
+
+import pytest
+from cpx_bench import Bench, tab9
+
+from devices.cpx.codes import (
+    CPX_TEXT_ID_BASE,
+    DIAG_CODE_CPX,
+    TEXT_IDS,
+    DiagType,
+    diag_code,
+)
+from devices.cpx.history import (
+    FIRST_SUB,
+    FLAG_ACKNOWLEDGE,
+    FLAG_DISABLE_INFO,
+    FLAG_EMERGENCY,
+    FLAG_OVERWRITE_DISCARD,
+    MAX_MESSAGES,
+    DiagHistory,
+)
+from devices.cpx.messages import MESSAGE_BYTES, DiagMessage, channel_param
+from devices.od import AbortCode, DataType, SdoAbort
+
+# Tab. 15, as printed.
+TAB15 = bytes.fromhex("02 00 00 E1 02 02 02 37 1F C5 9D 61 31 00 00 00 05 00 02 05 00 80")
+TAB15_MESSAGE = DiagMessage(0xE100_0002, DiagType.ERROR, 0x3702, 0x31_619D_C51F,
+                            ((DataType.UNSIGNED8, 2), (DataType.UNSIGNED8, 0x80)))
+
+
+def msg(n: int, dtype: DiagType = DiagType.ERROR) -> DiagMessage:
+    return DiagMessage(diag_code(DIAG_CODE_CPX, 2), dtype, CPX_TEXT_ID_BASE + 2, n,
+                       ((DataType.UNSIGNED8, n % 256),))
+
+
+def test_tab15_example_encodes_byte_for_byte() -> None:
+    """Tab. 15 / Tab. 16: diag code, flags, Text-ID, time stamp, two UNSIGNED8 parameters;
+    the BYTE[23] entry (Tab. 14) pads the 22 bytes with a zero."""
+    raw = TAB15_MESSAGE.encode()
+    assert len(raw) == MESSAGE_BYTES == 23
+    assert raw == TAB15 + b"\x00"
+
+
+def test_tab16_fields_decode() -> None:
+    """Tab. 16: CPX error 2 (short circuit) marked E1, 2 parameters, type 2, Text-ID 0x3702,
+    module 2, channel 0x80 (output channel 0)."""
+    m = DiagMessage.decode(TAB15 + b"\x00")
+    assert m == TAB15_MESSAGE
+    assert m.diag_code >> 24 == DIAG_CODE_CPX and m.diag_code & 0xFF == 2
+    assert m.flags == 0x0202 and m.text_id == 0x3702
+    assert channel_param(0, output=True) == 0x80
+    assert "Short circuit" in m.text()
+
+
+@pytest.mark.parametrize("text_id", sorted(TEXT_IDS))
+def test_tab17_text_ids(text_id: int) -> None:
+    """Tab. 17: the EtherCAT Text-IDs of the ESI file, with their English text."""
+    m = DiagMessage(diag_code(0xE8, 0x1000), DiagType.ERROR, text_id, 0)
+    assert TEXT_IDS[text_id][1] in m.text()
+    assert DiagMessage.decode(m.encode()) == m
+
+
+def test_sub_layout_and_defaults() -> None:
+    """Tab. 14: max 64 messages, flags 0x0000, messages from sub 6."""
+    bench = Bench(master=False)
+    read = lambda sub: bench.apply("read_object", index=0x10F3, sub=sub)  # noqa: E731
+    assert read(1) == MAX_MESSAGES == 64
+    assert read(5) == 0x0000
+    assert (read(0), read(2), read(3), read(4)) == (5, 0, 0, False)
+
+
+def test_overwrite_mode_keeps_the_last_64() -> None:
+    """Tab. 18 bit 4 = 0: once 64 messages are stored the oldest is overwritten."""
+    h = DiagHistory()
+    for n in range(MAX_MESSAGES + 5):
+        assert h.add(msg(n))
+    ordered = h.ordered()
+    assert len(ordered) == MAX_MESSAGES
+    assert [m.timestamp_ns for _s, m in ordered] == list(range(5, MAX_MESSAGES + 5))
+    assert h.newest == FIRST_SUB + 4 and h.sub0 == FIRST_SUB + MAX_MESSAGES - 1
+    assert h.flags & FLAG_OVERWRITE_DISCARD
+
+
+def test_acknowledge_mode_loses_new_messages_when_64_are_unacknowledged() -> None:
+    """Tab. 18 bit 4 = 1: with 64 unacknowledged messages new ones are lost."""
+    h = DiagHistory(flags=FLAG_ACKNOWLEDGE)
+    for n in range(MAX_MESSAGES):
+        assert h.add(msg(n))
+    assert not h.add(msg(99))
+    assert h.lost == 1 and h.flags & FLAG_OVERWRITE_DISCARD
+    assert [m.timestamp_ns for _s, m in h.ordered()][-1] == MAX_MESSAGES - 1
+    h.write_acknowledged(FIRST_SUB + 9)  # the first ten acknowledged: ten places free
+    for n in range(10):
+        assert h.add(msg(100 + n))
+    assert not h.add(msg(200))
+    assert h.unacknowledged() == MAX_MESSAGES
+
+
+def test_new_message_available_in_both_modes() -> None:
+    """Sub 4: Overwrite mode - falls when the newest message is read; Acknowledge mode -
+    falls when the newest message is acknowledged."""
+    h = DiagHistory()
+    h.add(msg(1))
+    h.add(msg(2))
+    assert h.new_message
+    h.read(FIRST_SUB)
+    assert h.new_message
+    h.read(FIRST_SUB + 1)
+    assert not h.new_message
+    h = DiagHistory(flags=FLAG_ACKNOWLEDGE)
+    h.add(msg(1))
+    h.add(msg(2))
+    h.read(FIRST_SUB + 1)
+    assert h.new_message
+    h.write_acknowledged(FIRST_SUB)
+    assert h.new_message
+    h.write_acknowledged(FIRST_SUB + 1)
+    assert not h.new_message
+
+
+def test_writing_zero_to_sub3_clears() -> None:
+    """ETG.1020: 0 in sub 3 clears the history; Acknowledge mode keeps what is not
+    acknowledged."""
+    h = DiagHistory()
+    for n in range(3):
+        h.add(msg(n))
+    h.write_acknowledged(0)
+    assert h.count == 0 and h.newest == 0 and h.sub0 == 5 and not h.new_message
+    h = DiagHistory(flags=FLAG_ACKNOWLEDGE)
+    for n in range(5):
+        h.add(msg(n))
+    h.write_acknowledged(FIRST_SUB + 1)
+    h.write_acknowledged(0)
+    assert [m.timestamp_ns for _s, m in h.ordered()] == [2, 3, 4]
+    assert h.newest == FIRST_SUB + 2 and h.new_message
+
+
+@pytest.mark.parametrize("value", [1, 5, FIRST_SUB + 3])
+def test_acknowledging_a_missing_message_is_refused(value: int) -> None:
+    h = DiagHistory()
+    h.add(msg(0))
+    with pytest.raises(SdoAbort) as info:
+        h.write_acknowledged(value)
+    assert info.value.code is AbortCode.VALUE_RANGE
+
+
+def test_flags_bits_and_disable_filters() -> None:
+    """Sub 5: bits 0 and 4 (Tab. 18, 19) and ETG.1020's disable bits 1-3 are written; bit 5
+    is the device's; other bits are refused."""
+    h = DiagHistory()
+    h.write_flags(FLAG_EMERGENCY | FLAG_ACKNOWLEDGE | FLAG_DISABLE_INFO)
+    assert h.emergency_enabled and h.acknowledge_mode
+    assert not h.add(msg(1, DiagType.INFO))
+    assert h.add(msg(2, DiagType.WARNING))
+    with pytest.raises(SdoAbort):
+        h.write_flags(0x0100)
+
+
+def test_reading_past_sub0_is_refused() -> None:
+    bench = Bench(master=False)
+    with pytest.raises(SdoAbort) as info:
+        bench.apply("read_object", index=0x10F3, sub=FIRST_SUB)
+    assert info.value.code is AbortCode.NO_SUBINDEX
+
+
+def test_short_circuit_message_on_the_device_matches_tab15() -> None:
+    """§2.5.2: a short circuit at output 0 of module 2 (the CPX-E-8DO of the §2.3.2 system)
+    is stored as the Tab. 15 message, with the device's own time stamp."""
+    bench = tab9().to_op()
+    bench.apply("write_object", index=0x7002, sub=1, value=1)
+    bench.apply("short_circuit", module=2, channel=0, on=True)
+    shorted_at = bench.now
+    bench.run(0.01)
+    newest = bench.apply("read_object", index=0x10F3, sub=2)
+    raw = bytes.fromhex(bench.apply("read_object", index=0x10F3, sub=newest))
+    assert raw[:8] == TAB15[:8]  # diag code, flags, Text-ID
+    assert raw[16:] == TAB15[16:] + b"\x00"  # parameters: module 2, channel 0x80
+    # seen at the next 1 ms cycle; ns since the bus module started (Tab. 16 [4])
+    assert DiagMessage.decode(raw).timestamp_ns == (shorted_at + 1000) * 1000
+    assert bench.apply("read_object", index=0x10F3, sub=4) is False  # read: newest seen
+
+
+def test_error_going_is_an_info_message_unless_filtered() -> None:
+    """0x2401 "Filter No Error": 0 stores the 'no error' message (CPX error 0), else not."""
+    bench = tab9().to_op()
+    bench.apply("short_circuit", module=1, on=True)
+    bench.run(0.01)
+    bench.apply("short_circuit", module=1, on=False)
+    bench.run(0.01)
+    last = bench.cpx.history.ordered()[-1][1]
+    assert (last.dtype, last.text_id, last.diag_code) == (DiagType.INFO, 0x3700, 0xE100_0000)
+    count = bench.cpx.history.count
+    bench.apply("write_object", index=0x2401, sub=0, value=1)
+    bench.apply("short_circuit", module=1, on=True)
+    bench.run(0.01)
+    bench.apply("short_circuit", module=1, on=False)
+    bench.run(0.01)
+    assert bench.cpx.history.count == count + 1  # the error, not its end

@@ -1,0 +1,214 @@
+"""The CPX-E-EC's LEDs (seed 002 §2.1.6, §2.4.1 Tab. 11-13), each row driven by its cause."""
+
+from __future__ import annotations
+
+import pytest
+from cpx_bench import Bench, tab9
+
+from devices.cpx.leds import (
+    ERROR_PRIORITY,
+    ERROR_TABLE,
+    LINK_TABLE,
+    RUN_TABLE,
+    Colour,
+    ErrorShows,
+    LedState,
+    LinkShows,
+    RunShows,
+    channels,
+)
+from devices.ethercat import AlState
+from devices.leds import LedPattern
+
+P = LedPattern
+
+# Tab. 11 as printed: (shows, pattern, colour).
+TAB11 = [(RunShows.OP, P.ON, Colour.GREEN), (RunShows.PREOP, P.BLINKING, Colour.GREEN),
+         (RunShows.SAFEOP, P.SINGLE_FLASH, Colour.GREEN),
+         (RunShows.BOOT, P.FLICKERING, Colour.GREEN),
+         (RunShows.BOOTLOADER, P.ON, Colour.ORANGE), (RunShows.INIT, P.OFF, Colour.GREEN)]
+# Tab. 12 as printed.
+TAB12 = [(ErrorShows.AC_FAILURE, P.ON, Colour.RED),
+         (ErrorShows.INVALID_CONFIGURATION, P.BLINKING, Colour.RED),
+         (ErrorShows.SYNC_ERROR, P.SINGLE_FLASH, Colour.RED),
+         (ErrorShows.WATCHDOG, P.DOUBLE_FLASH, Colour.RED),
+         (ErrorShows.RESERVED, P.TRIPLE_FLASH, Colour.RED),
+         (ErrorShows.BOOTING_ERROR, P.FLICKERING, Colour.RED),
+         (ErrorShows.BOOTLOADER, P.ON, Colour.ORANGE), (ErrorShows.NONE, P.OFF, Colour.RED)]
+# Tab. 13.
+TAB13 = [(LinkShows.LINK, P.ON), (LinkShows.TRAFFIC, P.FLICKERING), (LinkShows.NO_LINK, P.OFF)]
+
+
+@pytest.mark.parametrize(("shows", "pattern", "colour"), TAB11)
+def test_tab11(shows: RunShows, pattern: LedPattern, colour: Colour) -> None:
+    assert RUN_TABLE[shows] == LedState(pattern, colour)
+
+
+@pytest.mark.parametrize(("shows", "pattern", "colour"), TAB12)
+def test_tab12(shows: ErrorShows, pattern: LedPattern, colour: Colour) -> None:
+    assert ERROR_TABLE[shows] == LedState(pattern, colour)
+
+
+@pytest.mark.parametrize(("shows", "pattern"), TAB13)
+def test_tab13(shows: LinkShows, pattern: LedPattern) -> None:
+    assert LINK_TABLE[shows] == LedState(pattern, Colour.GREEN)
+
+
+def test_triple_flash_is_reserved() -> None:
+    """Tab. 12: "зарезервировано" - no cause of the model shows it."""
+    assert ErrorShows.RESERVED not in ERROR_PRIORITY
+
+
+def test_orange_is_a_channel_of_its_own() -> None:
+    assert channels("Run", LedState(P.ON, Colour.ORANGE)) == {"Run": P.OFF, "Run.orange": P.ON}
+    assert channels("Run", LedState(P.BLINKING, Colour.GREEN)) == {
+        "Run": P.BLINKING, "Run.orange": P.OFF}
+    assert channels("PS", LedState(P.ON, Colour.GREEN)) == {"PS": P.ON}
+
+
+@pytest.mark.parametrize(("state", "pattern"), [
+    (AlState.INIT, "off"), (AlState.PREOP, "blinking"), (AlState.SAFEOP, "single_flash"),
+    (AlState.OP, "on"), (AlState.BOOT, "flickering")])
+def test_run_follows_the_esm(state: AlState, pattern: str) -> None:
+    """Tab. 11, driven by AL control requests as a master makes them."""
+    bench = Bench(master=False)
+    path = {AlState.INIT: [], AlState.PREOP: [AlState.PREOP], AlState.BOOT: [AlState.BOOT],
+            AlState.SAFEOP: [AlState.PREOP, AlState.SAFEOP],
+            AlState.OP: [AlState.PREOP, AlState.SAFEOP, AlState.OP]}[state]
+    for target in path:
+        bench.cpx.request_state(target)
+        bench.cpx.exchange_frame(bench.now)
+    assert bench.cpx.al_state is state
+    assert bench.led_state("Run") == (pattern, "green")
+
+
+def test_error_off_in_op_and_leds_change_only_on_change() -> None:
+    bench = tab9().to_op()
+    bench.run(0.2)
+    assert bench.led_state("Error") == ("off", "red")
+    since = len(bench.events)
+    bench.run(1.0)
+    assert bench.records("led", since) == []
+
+
+def test_error_on_application_controller_failure() -> None:
+    bench = tab9().to_op()
+    bench.apply("inject_fault", fault="ac_failure")
+    bench.run(0.01)
+    assert bench.led_state("Error") == ("on", "red")
+    bench.apply("clear_fault", fault="ac_failure")  # the controller restarts
+    bench.to_op()
+    assert bench.led_state("Error") == ("off", "red")
+
+
+@pytest.mark.parametrize("cause", ["cable", "no master", "refused"])
+def test_error_blinking_invalid_configuration_or_no_link(cause: str) -> None:
+    """Tab. 12 blinking: cable / connection broken, no master, master inactive, invalid
+    configuration."""
+    if cause == "cable":
+        bench = tab9().to_op()
+        bench.apply("cable", port="in", connected=False)
+        bench.run(0.01)
+        assert bench.led("LA IN") == "off"
+    elif cause == "no master":
+        bench = tab9(master=False)
+        bench.run(0.2)
+    else:
+        bench = tab9(master=False)
+        bench.apply("inject_fault", fault="sm_invalid_size", sm=3)
+        bench.cpx.request_state(AlState.PREOP)
+        bench.cpx.request_state(AlState.SAFEOP)
+        bench.cpx.exchange_frame(bench.now)
+        bench.step()
+        bench.cpx.exchange_frame(bench.now)
+    assert bench.led_state("Error") == ("blinking", "red")
+
+
+def test_error_single_flash_on_sync_error() -> None:
+    """Tab. 12: unsolicited OP -> SAFEOP because of a sync error."""
+    bench = tab9().to_op()
+    bench.apply("inject_fault", fault="sync_error")
+    bench.run_until(lambda: bench.cpx.al_state is AlState.SAFEOP, 1.0)
+    assert (bench.cpx.al_status, bench.cpx.al_status_code) == (0x14, 0x001A)
+    assert bench.led_state("Error") == ("single_flash", "red")
+
+
+def test_error_double_flash_on_watchdog() -> None:
+    """Tab. 12: Sync Manager watchdog, 100 ms without process data."""
+    bench = tab9().to_op()
+    bench.apply("inject_fault", fault="watchdog")
+    start = bench.now
+    bench.run_until(lambda: bench.cpx.al_state is AlState.SAFEOP, 1.0)
+    assert 100_000 < bench.now - start <= 102_000
+    assert bench.cpx.al_status_code == 0x001B
+    assert bench.led_state("Error") == ("double_flash", "red")
+
+
+def test_error_flickering_on_booting_error() -> None:
+    """Tab. 12: flash checksum of the application controller, found at the next start."""
+    bench = tab9().to_op()
+    bench.apply("inject_fault", fault="booting_error")
+    bench.run(0.05)
+    assert bench.led_state("Error") == ("off", "red")
+    bench.apply("restart")
+    bench.run(0.5)
+    assert bench.led_state("Error") == ("flickering", "red")
+    assert bench.cpx.al_state is AlState.INIT and bench.cpx.al_status_code == 0x0014
+
+
+def test_la_in_and_la_out() -> None:
+    """Tab. 13: on = link, flickering = traffic, off = no link."""
+    bench = tab9(master=False, out_connected=True)
+    bench.step()
+    assert (bench.led("LA IN"), bench.led("LA OUT")) == ("on", "on")
+    bench.cpx.exchange_frame(bench.now)
+    bench.step()
+    assert (bench.led("LA IN"), bench.led("LA OUT")) == ("flickering", "flickering")
+    bench.run(0.1)
+    assert bench.led("LA IN") == "on"
+    bench.apply("cable", port="out", connected=False)
+    assert bench.led("LA OUT") == "off"
+
+
+def test_system_leds() -> None:
+    """§2.1.6: PS (U_EL/SEN), PL (U_OUT), SF (system fault), M (forcing)."""
+    bench = tab9().to_op()
+    assert [bench.led(n) for n in ("PS", "PL", "SF", "M")] == ["on", "on", "off", "off"]
+    bench.apply("supply", el_sen=17.0, out=15.0)
+    bench.run(0.01)
+    assert (bench.led("PS"), bench.led("PL")) == ("blinking", "blinking")
+    assert bench.led("SF") == "double_flash"  # undervoltage: class 2
+    bench.apply("supply", el_sen=24.0, out=0.0)
+    bench.run(0.01)
+    assert (bench.led("PS"), bench.led("PL")) == ("on", "off")
+    bench.apply("supply", out=24.0)
+    bench.apply("inject_fault", module=1, fault="module_failure")
+    bench.run(0.01)
+    assert bench.led("SF") == "triple_flash"  # CPX error > 128: class 3
+    bench.apply("force", module=2, channel=0, value=1)
+    bench.run(0.01)
+    assert bench.led("M") == "on"
+    assert bench.cpx.modules[1].driven[0] == 1
+    bench.apply("force", module=2, channel=0)
+    bench.run(0.01)
+    assert bench.led("M") == "off"
+
+
+def test_power_off_darkens_everything_after_20_ms() -> None:
+    """Tab. 29: 20 ms bridging of a supply failure."""
+    bench = tab9().to_op()
+    bench.apply("power", on=False)
+    bench.run(0.019)
+    assert bench.cpx.powered and bench.led("Run") == "on"
+    bench.run(0.002)
+    assert not bench.cpx.powered
+    assert set(bench.cpx.snapshot()["leds"].values()) == {"off"}
+
+
+def test_a_short_dip_is_bridged() -> None:
+    bench = tab9().to_op()
+    bench.apply("supply", el_sen=0.0)
+    bench.run(0.015)
+    bench.apply("supply", el_sen=24.0)
+    bench.run(0.1)
+    assert bench.cpx.powered and bench.cpx.al_state is AlState.OP
