@@ -11,7 +11,6 @@ Behaviour and choices: docs/trscat.md.
 
 from __future__ import annotations
 
-import logging
 import random
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
@@ -38,8 +37,6 @@ from devices.trscat.io import SlotIo, field_in_range
 from devices.trscat.objects import build_od, refuse_in_state
 from devices.trscat.sync import MODE_BY_NAME, SyncUnit
 from devices.trscat.transitions import OutputMode, TransitionsMixin
-
-logger = logging.getLogger(__name__)
 
 DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus

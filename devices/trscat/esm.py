@@ -27,8 +27,9 @@ INVALID_DC_SYNC = 0x0030
 MODULE_IDENT_MISMATCH = 0x0070  # 0xF030 != 0xF050 at PS (§9.2; code of seed 000 §7.7)
 
 # §9.2: what the device verifies on each transition, in this order (device methods).
+# INIT -> PREOP has no check that refuses: it waits for the power-up detection (§9.2 INIT).
 TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
-    (AlState.INIT, AlState.PREOP): ("check_not_deadlocked",),
+    (AlState.INIT, AlState.PREOP): (),
     (AlState.PREOP, AlState.SAFEOP): ("check_not_deadlocked", "check_dc", "check_idents"),
     (AlState.SAFEOP, AlState.OP): ("check_sync", "check_outputs"),
 }

@@ -146,7 +146,8 @@ class TransitionsMixin:
         if reason is None:
             return None
         code = _DC_REFUSAL[reason]
-        self.report(check_message(code, CHECK_TEXT[code], self.now_us * 1000))
+        if self.esm.code != code:  # one message per episode, not per retry of the master
+            self.report(check_message(code, CHECK_TEXT[code], self.now_us * 1000))
         return code
 
     def check_idents(self) -> int | None:

@@ -86,7 +86,11 @@ def test_injected_faults(name: str, module: int | None, expansions: list[str], s
     if fault.deadlock:
         assert bench.trs.al_state is AlState.PREOP and bench.leds()["ERROR"] == "on"
         bench.request(AlState.SAFEOP)
-        assert bench.trs.al_state is AlState.PREOP
+        assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.PREOP, 0x0001)
+        bench.request(AlState.INIT)  # down is allowed, and back to PRE-OP: the deadlock
+        bench.request(AlState.PREOP)
+        bench.request(AlState.SAFEOP)
+        assert bench.trs.al_state is AlState.PREOP and bench.leds()["ERROR"] == "on"
     elif name != "CONFIG_ERROR":
         assert bench.trs.al_state is AlState.OP  # "continua ad essere operativo su EtherCAT"
 

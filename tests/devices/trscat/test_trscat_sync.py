@@ -166,7 +166,8 @@ def test_dc_cycle_below_minimum_refuses_safeop(step_us: int, code: int | None) -
         assert bench.read(0x1C32, 2) == step_us * 1000
     else:
         assert bench.trs.al_state is AlState.PREOP and bench.trs.al_status_code == code
-        assert bench.messages()[-1]["code"] == "0x002E"
+        bench.request(AlState.SAFEOP)  # a master retrying: one message per episode
+        assert [m["code"] for m in bench.messages()] == ["0x002E"]
 
 
 def test_dc_without_frames_refuses_safeop() -> None:
