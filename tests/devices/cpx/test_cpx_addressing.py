@@ -14,6 +14,7 @@ from devices.cpx.catalog import (
     MAX_IO_MODULES,
     module_type,
 )
+from devices.ethercat import AlState
 
 # §2.3.2 Tab. 9 exactly (the OCR's "10 ... 17" is I0 ... I7, "064 ... 071" is O64 ... O71).
 TAB9 = [
@@ -122,3 +123,15 @@ def test_the_seed_modules_are_in_the_catalog() -> None:
         "CPX-E-16DI", "CPX-E-8DO", "CPX-E-1CI"}
     assert BUS_PLAIN.module_code == "222/37" and BUS_PLAIN.short == "E-EC"  # Tab. 28
     assert BUS_PLAIN.ident >> 16 == 222 << 8 | 37
+
+
+def test_a_dil_change_past_64_bytes_refuses_safeop() -> None:
+    """§2.2: diagnosis switched on at the DIL switches can push a full terminal past the
+    64-byte space; the bus module then refuses PREOP -> SAFEOP (docs/cpx-e-ec.md)."""
+    bench = Bench(["4AI-U-I"] * 8, master=False)
+    bench.apply("set_dil", dil1=False, dil2=True)
+    bench.apply("restart")
+    assert "64 input bytes" in bench.cpx.snapshot()["space_error"]
+    bench.cpx.request_state(AlState.PREOP)
+    bench.cpx.request_state(AlState.SAFEOP)
+    assert (bench.cpx.al_state, bench.cpx.al_status_code) == (AlState.PREOP, 0x001E)
