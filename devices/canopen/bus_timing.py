@@ -8,7 +8,10 @@ four in the stuffed part (SOF up to the CRC). We count that worst case, as bus-l
 an 8-byte frame takes 135 bit times: 135 us at 1 Mbit/s, 1.08 ms at 125 kbit/s.
 
 :class:`CanLine` is the wire: one frame at a time, a waiting frame starts when the line is
-free, and among frames waiting at that instant the lowest identifier wins arbitration. A
+free, and among the frames the transmitters offer at that instant the lowest identifier wins
+arbitration. There are two transmitters: the node, whose waiting frames compete by identifier
+(its highest-priority frame is always offered), and the rest of the bus (the master), whose
+frames leave in the order it sent them (one transmit queue, as a master's driver keeps it). A
 frame that started is never pre-empted. Both directions share the line: a master's request
 must finish before the drive can see it, and the drive's answer then queues like any frame.
 """
@@ -17,6 +20,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -77,17 +81,24 @@ class CanLine:
     bitrate: int
     busy_until_us: int = 0
     busy_us_total: int = 0
-    _waiting: list[_Waiting] = field(default_factory=list)
+    _waiting: list[_Waiting] = field(default_factory=list)  # the node's frames (a heap)
+    _incoming: deque[_Waiting] = field(default_factory=deque)  # the master's, in order
     _on_wire: tuple[int, CanFrame] | None = None  # (end time, frame)
     _seq: Iterator[int] = field(default_factory=itertools.count)
     dropped: int = 0
 
     def offer(self, frame: CanFrame, ready_us: int) -> bool:
         """Queue a frame that wants the bus from ``ready_us``; False when the line is full."""
-        if len(self._waiting) >= MAX_WAITING:
+        if len(self._waiting) + len(self._incoming) >= MAX_WAITING:
             self.dropped += 1
             return False
-        heapq.heappush(self._waiting, _Waiting(ready_us, frame.can_id, next(self._seq), frame))
+        waiting = _Waiting(ready_us, frame.can_id, next(self._seq), frame)
+        if frame.rx:
+            ready_us = max(ready_us, self._incoming[-1].ready_us) if self._incoming else ready_us
+            waiting.ready_us = ready_us
+            self._incoming.append(waiting)
+        else:
+            heapq.heappush(self._waiting, waiting)
         return True
 
     def duration_us(self, frame: CanFrame) -> int:
@@ -109,16 +120,26 @@ class CanLine:
         return CanFrame(frame.can_id, frame.data, frame.rtr, frame.dlc, end_us, frame.rx)
 
     def _start_next(self, now_us: int) -> bool:
-        if not self._waiting:
+        firsts = [q[0].ready_us for q in (self._waiting, self._incoming) if q]
+        if not firsts:
             return False
-        start = max(self.busy_until_us, self._waiting[0].ready_us)
+        start = max(self.busy_until_us, min(firsts))
         if start > now_us:
             return False
-        # Arbitration among the frames waiting at ``start``: lowest identifier, then first come.
+        # Arbitration at ``start``: the node offers its lowest identifier, the master the
+        # head of its queue; the lower identifier wins.
+        offers = []
         ready = [w for w in self._waiting if w.ready_us <= start]
-        winner = min(ready, key=lambda w: (w.can_id, w.seq))
-        self._waiting.remove(winner)
-        heapq.heapify(self._waiting)
+        if ready:
+            offers.append(min(ready, key=lambda w: (w.can_id, w.seq)))
+        if self._incoming and self._incoming[0].ready_us <= start:
+            offers.append(self._incoming[0])
+        winner = min(offers, key=lambda w: (w.can_id, w.seq))
+        if winner.frame.rx:
+            self._incoming.popleft()
+        else:
+            self._waiting.remove(winner)
+            heapq.heapify(self._waiting)
         duration = self.duration_us(winner.frame)
         self.busy_until_us = start + duration
         self.busy_us_total += duration
@@ -127,9 +148,10 @@ class CanLine:
 
     @property
     def waiting(self) -> int:
-        return len(self._waiting) + (self._on_wire is not None)
+        return len(self._waiting) + len(self._incoming) + (self._on_wire is not None)
 
     def clear(self) -> None:
         """Power off: whatever was queued or on the wire is lost."""
         self._waiting.clear()
+        self._incoming.clear()
         self._on_wire = None

@@ -77,3 +77,17 @@ def test_125_kbit_is_visibly_slower_than_1_mbit() -> None:
     slow, fast = twenty_reads(4), twenty_reads(8)
     assert slow >= 2 * fast  # 1 ms steps blur the 8x of the wire, but not to equality
     assert slow >= 20 * 2 * 1080
+
+
+def test_the_master_frames_keep_their_order_node_frames_compete() -> None:
+    """The master's queue is first in, first out (a SYNC sent after an RPDO stays after it);
+    between the master's next frame and the node's, the lower identifier wins."""
+    line = CanLine(1_000_000)
+    line.offer(CanFrame(0x201, bytes(6), rx=True), 0)
+    line.offer(CanFrame(0x080, b"", rx=True), 0)
+    line.offer(CanFrame(0x181, bytes(2), rx=False), 0)
+    line.offer(CanFrame(0x0FF, bytes(2), rx=False), 0)
+    order = []
+    while (frame := line.next_done(10_000)) is not None:
+        order.append(frame.can_id)
+    assert order == [0x0FF, 0x181, 0x201, 0x080]
