@@ -219,11 +219,13 @@ class OperatorMixin:
         if present:
             if entry not in self.injected:
                 self.injected.append(entry)
+                self.faults_changed()
             return
         if entry not in self.injected:
             now = ", ".join(f.label() for f in self.injected) or "none"
             raise CommandError(f"{entry.label()} is not injected (injected: {now})")
         self.injected.remove(entry)
+        self.faults_changed()
         if spec.name == "ac_failure" and self.powered:
             self.cmd_restart()  # the application controller starts again
 

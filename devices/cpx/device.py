@@ -73,6 +73,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
         self.link_in = True
         self.link_out = out_connected
         self.injected: list[Injected] = []
+        self.fault_names: frozenset[str] = frozenset()
         self.esm = Esm(self.emit, device_id)
         self.leds = LedBank(device_id)
         self.powered = False
@@ -118,6 +119,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
             cpx = error.cause.error
             self.emit(AlarmChanged(self.now_us, self.device_id, code=fmt_hex(cpx.text_id, 4),
                                    name=cpx.symbol, active=False, module=error.fault.module))
+        self._outputs_dead()
         self.esm.reset(self.now_us)
         self._clear_runtime()
 
@@ -190,7 +192,14 @@ class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
             self._supervise()
             self._process_data()
             self._diagnose()
+        else:
+            self._outputs_dead()
         self._refresh_leds()
+
+    def _outputs_dead(self) -> None:
+        """No application (or no power): the modules get no output data, all switch off."""
+        for module in self.modules:
+            module.drive_outputs([0] * len(module.out_values), supply_ok=False)
 
     def _follow_supply(self) -> None:
         """U_EL/SEN: the electronics ride through dips shorter than 20 ms (Tab. 29)."""
@@ -278,7 +287,10 @@ class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
         return self.od is not None and bool(self.od.peek(0x2401, 0))
 
     def has_fault(self, name: str) -> bool:
-        return any(f.name == name for f in self.injected)
+        return name in self.fault_names
+
+    def faults_changed(self) -> None:
+        self.fault_names = frozenset(f.name for f in self.injected)
 
     # ---- LEDs -----------------------------------------------------------------------------
     def _refresh_leds(self) -> None:

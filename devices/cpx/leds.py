@@ -160,6 +160,8 @@ class LedBank:
     def update(self, t_us: int, wanted: Mapping[str, LedState],
                emit: Callable[[Event], None]) -> None:
         for name, state in wanted.items():
+            if self.states[name] is state:  # table entries: the same object when unchanged
+                continue
             before = channels(name, self.states[name])
             for channel, pattern in channels(name, state).items():
                 if before[channel] is not pattern:

@@ -237,3 +237,19 @@ def test_io_diagnostic_interface() -> None:
     bench.apply("write_object", index=0x7000, sub=1, value=1937)  # no read request
     bench.step()
     assert bench.apply("read_object", index=0x6000, sub=1) == 0
+
+
+def test_outputs_die_with_the_application() -> None:
+    """No power or no application controller: nothing drives the outputs."""
+    bench = tab9().to_op()
+    bench.apply("write_object", index=0x7002, sub=1, value=1)
+    bench.step()
+    dout = bench.cpx.modules[1]
+    assert dout.driven[0] == 1 and dout.energised[0]
+    bench.apply("inject_fault", fault="ac_failure")
+    bench.step()
+    assert dout.driven[0] == 0 and not dout.energised[0]
+    bench.apply("clear_fault", fault="ac_failure")
+    bench.apply("power", on=False)
+    bench.run(0.03)
+    assert dout.driven == [0] * 8 and not any(dout.energised)
