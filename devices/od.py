@@ -24,6 +24,7 @@ class DataType(enum.IntEnum):
     UNSIGNED16 = 0x0006
     UNSIGNED32 = 0x0007
     VISIBLE_STRING = 0x0009
+    OCTET_STRING = 0x000A
 
     @property
     def short(self) -> str:
@@ -35,6 +36,7 @@ _SHORT = {
     DataType.BOOLEAN: "BOOL", DataType.INTEGER8: "SINT", DataType.INTEGER16: "INT",
     DataType.INTEGER32: "DINT", DataType.UNSIGNED8: "USINT", DataType.UNSIGNED16: "UINT",
     DataType.UNSIGNED32: "UDINT", DataType.VISIBLE_STRING: "STRING",
+    DataType.OCTET_STRING: "ARRAY OF BYTE",
 }
 
 # (struct format, min, max) of the numeric types.
@@ -147,6 +149,10 @@ class OdEntry:
     setter: Setter | None = None  # called after checks with the new value
 
     def check_value(self, value: Any) -> Any:
+        if self.dtype is DataType.OCTET_STRING:
+            if not isinstance(value, bytes | bytearray):
+                raise SdoAbort(AbortCode.TYPE_MISMATCH, self.index, self.sub)
+            return bytes(value)
         if self.dtype is DataType.VISIBLE_STRING:
             if not isinstance(value, str):
                 raise SdoAbort(AbortCode.TYPE_MISMATCH, self.index, self.sub)
@@ -170,16 +176,22 @@ class OdEntry:
             return 1
         if self.dtype is DataType.VISIBLE_STRING:
             return 8 * len(str(self.default))
+        if self.dtype is DataType.OCTET_STRING:
+            return 8 * len(bytes(self.default))
         return 8 * struct.calcsize(_NUMERIC[self.dtype][0])
 
 
 def encode(dtype: DataType, value: Any) -> bytes:
+    if dtype is DataType.OCTET_STRING:
+        return bytes(value)
     if dtype is DataType.VISIBLE_STRING:
         return str(value).encode("latin-1")
     return struct.pack(_NUMERIC[dtype][0], int(value))
 
 
 def decode(dtype: DataType, raw: bytes) -> Any:
+    if dtype is DataType.OCTET_STRING:
+        return bytes(raw)
     if dtype is DataType.VISIBLE_STRING:
         return raw.decode("latin-1")
     fmt = _NUMERIC[dtype][0]
