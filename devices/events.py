@@ -85,10 +85,14 @@ class LedChanged(Event):
 
     led: str = ""
     pattern: str = ""
+    color: str = ""  # only for multi-colour LEDs (e.g. the CPX-E-EC's green/orange Run)
     kind: ClassVar[str] = "led"
 
     def fields(self) -> dict[str, Any]:
-        return {"led": self.led, "pattern": self.pattern}
+        out: dict[str, Any] = {"led": self.led, "pattern": self.pattern}
+        if self.color:
+            out["color"] = self.color
+        return out
 
 
 @dataclass(frozen=True)
