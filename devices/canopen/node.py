@@ -26,10 +26,11 @@ from devices.canopen.comm_objects import (
     build_comm_objects,
     build_profile_extras,
 )
-from devices.canopen.decode import Context, describe
+from devices.canopen.decode import Context
 from devices.canopen.dictionary import CanOpenDictionary
 from devices.canopen.eds import build_canopen_od
 from devices.canopen.guarding import Heartbeat, NodeGuard
+from devices.canopen.monitor import BusMonitor, pdo_text
 from devices.canopen.nmt import (
     BOOT_UP_CODE,
     HEARTBEAT_BASE,
@@ -41,10 +42,11 @@ from devices.canopen.nmt import (
     next_state,
     parse_command,
 )
-from devices.canopen.pdo import ASYNC_TYPES, Pdo, split_entry
+from devices.canopen.pdo import ASYNC_TYPES, Pdo
+from devices.canopen.process_data import ProcessData
 from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
-from devices.device import CommandError, DeviceModel
-from devices.events import EmergencySent, StateChanged, fmt_bytes
+from devices.device import DeviceModel
+from devices.events import EmergencySent, StateChanged
 from devices.od import AbortCode, SdoAbort
 from devices.servo.drive import ServoDrive
 
@@ -52,13 +54,12 @@ logger = logging.getLogger(__name__)
 
 BOOT_US = 50_000  # Initialisation after power-up: the drive's self test, then boot-up
 RESET_COMMUNICATION_US = 5_000  # Initialisation after an NMT reset communication
-FRAME_LOG = 200  # frames the bus monitor keeps
 FRAMES_IN_SNAPSHOT = 60
 OUTBOX = 4096  # frames kept for an adapter that does not drain them (headless runs)
 NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
 
 
-class CanOpenNode(DeviceModel):
+class CanOpenNode(ProcessData, DeviceModel):
     KIND = "canopen"
     ACTIONS: ClassVar[dict] = {}
 
@@ -73,9 +74,8 @@ class CanOpenNode(DeviceModel):
         self.bitrate = bitrate_of_n1(drive.latched_at_power_up["n1"])
         self.line = CanLine(self.bitrate)
         self.outbox: deque[CanFrame] = deque(maxlen=OUTBOX)
-        self.frame_log: deque[dict[str, Any]] = deque(maxlen=FRAME_LOG)
-        self.last_sdo = self.last_pdo = ""
-        self.counts = {"rx": 0, "tx": 0, "syncs": 0}
+        self.monitor = BusMonitor()
+        self.syncs = 0
         self.bus_load = 0.0
         self._load_mark = (0, 0)  # (second, busy us then)
         self._boot_at: int | None = None
@@ -282,86 +282,6 @@ class CanOpenNode(DeviceModel):
         if bit is not None:
             self._send(HEARTBEAT_BASE + self.node_id, bytes((self.state.code | bit,)), t)
 
-    def _sync(self, t: int) -> None:
-        """SYNC: synchronous RPDOs take effect, the drive syncs, synchronous TPDOs go out."""
-        self.counts["syncs"] += 1
-        operational = self.state is NmtState.OPERATIONAL
-        if operational:
-            for pdo in self.rpdos:
-                if pdo.valid and pdo.synchronous and pdo.buffered is not None:
-                    data, pdo.buffered = pdo.buffered, None
-                    self._apply_rpdo(pdo, data)
-        try:
-            self.drive.apply("sync", {})
-        except CommandError as exc:  # saving to flash
-            logger.debug("%s: SYNC not taken: %s", self.drive.device_id, exc)
-        if not operational:
-            return
-        for pdo in self.tpdos:
-            if not (pdo.valid and pdo.synchronous):
-                continue
-            data = self._pack(pdo)
-            if data is None:
-                continue
-            if pdo.trans_type == 0:
-                if data != pdo.last_data:
-                    self._send_pdo(pdo, data, t)
-            else:
-                pdo.syncs += 1
-                if pdo.syncs >= pdo.trans_type:
-                    pdo.syncs = 0
-                    self._send_pdo(pdo, data, t)
-
-    def _rpdo(self, pdo: Pdo, data: bytes, t: int) -> None:
-        if len(data) < pdo.length:  # DS 301: not processed, EMCY 0x8210
-            self._emergency(em.PDO_LENGTH_ERROR, b"", t, transient=True)
-            return
-        if pdo.synchronous:
-            pdo.buffered = data  # "attuati al Sync immediatamente successivo"
-        else:
-            self._apply_rpdo(pdo, data)
-
-    def _apply_rpdo(self, pdo: Pdo, data: bytes) -> None:
-        for index, sub, value in pdo.unpack(data, self.dictionary.entry):
-            try:
-                self.dictionary.write(index, sub, value)
-            except SdoAbort as exc:
-                logger.info("%s: %s: %s", self.drive.device_id, pdo.name, exc)
-
-    def _pdo_request(self, can_id: int, t: int) -> None:
-        """A remote request for a TPDO (COB-ID bit 30 clear): the current data at once."""
-        if self.state is not NmtState.OPERATIONAL:
-            return
-        for pdo in self.tpdos:
-            if pdo.valid and pdo.can_id == can_id and not pdo.cob_id & 0x4000_0000:
-                data = self._pack(pdo)
-                if data is not None:
-                    self._send_pdo(pdo, data, t)
-
-    # ---- transmitted frames ----------------------------------------------------------------
-    def _async_tpdo(self, pdo: Pdo, now_us: int) -> None:
-        data = self._pack(pdo)
-        if data is None:
-            return
-        last = pdo.last_sent_us
-        event = data != pdo.last_data
-        timer = bool(pdo.event_timer_ms) and last is not None \
-            and now_us >= last + pdo.event_timer_ms * 1000
-        inhibited = last is not None and now_us - last <= pdo.inhibit_100us * 100
-        if (event or timer) and not inhibited:
-            self._send_pdo(pdo, data, now_us)
-
-    def _pack(self, pdo: Pdo) -> bytes | None:
-        try:
-            return pdo.pack(self.dictionary.entry, self.dictionary.peek)
-        except (SdoAbort, CommandError) as exc:
-            logger.debug("%s: %s not packed: %s", self.drive.device_id, pdo.name, exc)
-            return None
-
-    def _send_pdo(self, pdo: Pdo, data: bytes, t: int) -> None:
-        pdo.last_sent_us, pdo.last_data = t, data
-        self._send(pdo.can_id, data, t)
-
     def _emergency(self, code: int, vendor: bytes, t: int, transient: bool = False,
                    info: int = 0) -> None:
         if code != em.ERROR_RESET:
@@ -390,37 +310,10 @@ class CanOpenNode(DeviceModel):
         self._send(can_id, data, self._t)
 
     # ---- views ----------------------------------------------------------------------------
-    def _context(self) -> Context:
-        return Context(sync_id=self.sync_cob_id & 0x7FF, pdo_text=self._pdo_text)
-
-    def _pdo_text(self, can_id: int, data: bytes) -> str | None:
-        for pdo in (*self.rpdos, *self.tpdos):
-            if pdo.valid and pdo.can_id == can_id:
-                return f"{pdo.name} {self._pdo_values(pdo, data)}"
-        return None
-
-    def _pdo_values(self, pdo: Pdo, data: bytes) -> str:
-        parts, offset = [], 0
-        for value in pdo.mapped:
-            index, sub, bits = split_entry(value)
-            chunk = data[offset:offset + bits // 8]
-            offset += bits // 8
-            parts.append(f"0x{index:04X}:{sub:02X}={int.from_bytes(chunk, 'little'):#x}"
-                         if len(chunk) == bits // 8 else f"0x{index:04X}:{sub:02X}=?")
-        return " ".join(parts) or fmt_bytes(data)
-
     def _log(self, frame: CanFrame) -> None:
-        kind, text = describe(frame.can_id, frame.data, frame.rtr, self._context())
-        direction = "rx" if frame.rx else "tx"
-        self.counts[direction] += 1
-        entry = {"t": frame.t_us / 1e6, "dir": direction, "id": f"0x{frame.can_id:03X}",
-                 "dlc": frame.length, "data": "R" if frame.rtr else fmt_bytes(frame.data),
-                 "kind": kind, "text": text}
-        self.frame_log.append(entry)
-        if kind == "SDO":
-            self.last_sdo = text
-        elif kind == "PDO":
-            self.last_pdo = text
+        pdos = (*self.rpdos, *self.tpdos)
+        self.monitor.record(frame, Context(sync_id=self.sync_cob_id & 0x7FF,
+                                           pdo_text=lambda i, d: pdo_text(pdos, i, d)))
 
     def snapshot(self) -> dict[str, Any]:
         return {
@@ -436,9 +329,9 @@ class CanOpenNode(DeviceModel):
             "sync_cob_id": f"0x{self.sync_cob_id:08X}", "emcy_cob_id": f"0x{self.emcy_cob_id:08X}",
             "rpdo": [p.describe() for p in self.rpdos],
             "tpdo": [p.describe() for p in self.tpdos],
-            "last_sdo": self.last_sdo, "last_pdo": self.last_pdo,
-            "frames": list(self.frame_log)[-FRAMES_IN_SNAPSHOT:],
-            "bus": {**self.counts, "load": round(self.bus_load, 4),
-                    "dropped": self.line.dropped},
+            "last_sdo": self.monitor.last_sdo, "last_pdo": self.monitor.last_pdo,
+            "frames": self.monitor.recent(FRAMES_IN_SNAPSHOT),
+            "bus": {**self.monitor.counts, "syncs": self.syncs,
+                    "load": round(self.bus_load, 4), "dropped": self.line.dropped},
         }
 

@@ -78,10 +78,10 @@ def test_services_per_state(state: NmtState, sdo: bool, pdo: bool, sync: bool) -
         bench.nmt(step)
     answer = bench.request(0x601, h("40 41 60 00 00 00 00 00"), 0x581, timeout_ms=10)
     assert (answer is not None) is sdo
-    syncs = bench.node.counts["syncs"]
+    syncs = bench.node.syncs
     bench.send(0x080)
     bench.run(2)
-    assert (bench.node.counts["syncs"] > syncs) is sync
+    assert (bench.node.syncs > syncs) is sync
     bench.send(0x201, h("06 00 00 00 00 00"))  # RPDO1: controlword 0x0006 + set-point
     bench.run(5)
     assert (bench.drive.cw == 0x0006) is pdo
