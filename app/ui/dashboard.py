@@ -1,0 +1,241 @@
+"""The viser dashboard of a rig: 3D DIN rail, control panel, state, event log, objects.
+
+Threading (docs/dashboard.md): the runtime's simulation thread owns the models. viser runs
+callbacks in its own threads; they only queue commands (``app.ui.commands``). The dashboard
+has one update thread that, about 30 times a second, reads the runtime's latest frame and new
+events and writes what changed into the server-level handles inside ``server.atomic()``, so
+every browser sees the same rig and one frame's changes arrive together.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+import urllib.parse
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import viser
+import viser.theme
+
+from app.runtime import Runtime
+from app.ui.commands import CommandSender
+from app.ui.panels.control import ControlPanel, FaultOption
+from app.ui.panels.event_log import EventLogPanel
+from app.ui.panels.modules import ModulePanel
+from app.ui.panels.object_dictionary import ObjectDictionaryPanel
+from app.ui.panels.state import StatePanel
+from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
+from app.ui.style import CSS
+from devices.events import US_PER_S, Caption
+
+logger = logging.getLogger(__name__)
+
+UPDATE_HZ = 30.0
+RIGHT_WIDTH = 320  # viser's control_width="medium"
+LEFT_WIDTH = 400
+MIN_FRAMED_SLOTS = 8  # the camera frames at least this many slots: a short rail stays put
+# The 3D view between the docked panels of a 1280x720 window is about 580 x 670 px.
+VIEW_ASPECT = (1280 - LEFT_WIDTH - RIGHT_WIDTH) / 670
+CAMERA_MARGIN = 0.4
+CAMERA_RISE = 0.12  # camera height over the rail centre, per unit of distance
+RAIL_SPACING = BODY_H + 2.0  # vertical distance between the rails of several couplers
+CAMERA_FOV_DEG = 50.0
+
+TITLE_SVG = (
+    "<svg xmlns='http://www.w3.org/2000/svg' width='132' height='32'>"
+    "<text x='2' y='23' font-family='DejaVu Sans, Arial, sans-serif' font-size='20' "
+    "font-weight='700' fill='#1f4f8f'>FieldRig</text></svg>")
+
+
+def fault_options() -> list[FaultOption]:
+    """The fault dropdown's rows, straight from the coupler's tables (seed 000 §7.5, §7.6)."""
+    from devices.fastcat.alarms import CODE_TABLES
+
+    return [FaultOption(row.table, row.code, row.symbol, row.description)
+            for table in CODE_TABLES.values() for row in table.values()]
+
+
+def code_name(table: str, code: int) -> str | None:
+    from devices.fastcat.alarms import CODE_TABLES
+
+    row = CODE_TABLES.get(table, {}).get(code)
+    return row.symbol if row is not None else None
+
+
+def _kind_ids(described: Mapping[str, Mapping[str, Any]], kind: str) -> list[str]:
+    return [device_id for device_id, info in described.items() if info["kind"] == kind]
+
+
+class Dashboard:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime) -> None:
+        self.server = server
+        self.runtime = runtime
+        described = runtime.rig.describe()
+        self.fastcat_ids = _kind_ids(described, "fastcat")
+        self.master_id = next(iter(_kind_ids(described, "master")), None)
+        if not self.fastcat_ids:
+            raise ValueError(f"rig '{runtime.rig.name}' has no FastCAT: nothing to show")
+        # The panels drive the first coupler; every coupler gets its rail in the 3D view.
+        self.device_id = self.fastcat_ids[0]
+        self._sender = CommandSender(runtime)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._event_seq = 0
+        self._frame_seq = -1
+        self._t_us = -1
+        self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
+        self._configure_look()
+        self._build_gui(described)
+        self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING)
+                        for i, d in enumerate(self.fastcat_ids)]
+        for scene in self._scenes:
+            scene.build_coupler()
+        frame_slots = [len(self._device_snap(runtime.frame.snapshot, d).get("rail") or [])
+                       for d in self.fastcat_ids]
+        self._frame_camera(max(frame_slots), len(self._scenes))
+        center = self._camera_center
+        # Scenario narration (Caption events), above the rail: what a screenshot should say.
+        self._caption = server.scene.add_label(
+            "/caption", "", position=(center[0], -BODY_D, BODY_H / 2 + 1.3),
+            anchor="bottom-center", font_screen_scale=1.1, visible=False)
+
+    # ---- construction -------------------------------------------------------------------
+    def _configure_look(self) -> None:
+        gui = self.server.gui
+        image = viser.theme.TitlebarImage(
+            image_url_light="data:image/svg+xml;utf8," + urllib.parse.quote(TITLE_SVG),
+            image_url_dark=None, image_alt="FieldRig", href=None)
+        gui.configure_theme(titlebar_content=viser.theme.TitlebarConfig(buttons=(), image=image),
+                            dark_mode=False, show_logo=False, show_share_button=False,
+                            brand_color=(31, 79, 143), control_width="medium")
+        # The control panel's width is the theme's "medium" (20 em = 320 px). A set_width on
+        # the main panel races with the theme message in the browser (seen: 300 or 320 px
+        # from one load to the next), so the theme alone sets it.
+        gui.main_panel.dock_right()
+        self.server.scene.set_up_direction("+z")
+        # Flat, even light from the front: LED colours read true, screenshots are stable.
+        scene = self.server.scene
+        scene.configure_environment_map(hdri=None)
+        scene.configure_default_lights(enabled=False, cast_shadow=False)
+        scene.add_light_ambient("/light/ambient", intensity=1.6)
+        scene.add_light_directional("/light/front", intensity=1.4, position=(0.0, -10.0, 6.0))
+
+    def _build_gui(self, described: Mapping[str, Mapping[str, Any]]) -> None:
+        from devices.fastcat.catalog import CATALOG
+
+        actions = described[self.device_id]["actions"]
+        rotary = actions.get("set_rotary")
+        rotary_param = rotary.params[0] if rotary is not None and rotary.params else None
+        rotary_range = (int(rotary_param.low if rotary_param and rotary_param.low is not None
+                            else 0),
+                        int(rotary_param.high if rotary_param and rotary_param.high is not None
+                            else 15))
+        gui = self.server.gui
+        gui.add_html(CSS)
+        self.control = ControlPanel(self.server, self._sender, self.device_id, fault_options(),
+                                    rotary_range, self.master_id)
+        self.modules = ModulePanel(self.server, self.runtime, self._sender, self.device_id,
+                                   actions, list(CATALOG))
+        side = gui.add_panel()
+        with side.add_tab("State", viser.Icon.GAUGE):
+            self.state = StatePanel(self.server, code_name)
+            gui.add_markdown("**Event log**")
+            self.log = EventLogPanel(self.server, self.fastcat_ids, self._timestamp_fn())
+        with side.add_tab("Objects", viser.Icon.LIST_DETAILS):
+            self.objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender,
+                                                 self.device_id)
+        side.dock_left()
+        side.set_width(LEFT_WIDTH)
+        self._side = side
+
+    def _timestamp_fn(self) -> Callable[[int], str]:
+        """The master logger's clock for device rows, so that all rows read alike."""
+        from devices.master import twincat_timestamp
+
+        master = self.runtime.rig.devices.get(self.master_id) if self.master_id else None
+        epoch = getattr(master, "epoch", None)
+        if epoch is None:  # no master in the rig: simulated seconds
+            return lambda t_us: f"{t_us / US_PER_S:.3f} s"
+        return lambda t_us: twincat_timestamp(epoch, t_us)
+
+    def _frame_camera(self, slots: int, rails: int) -> None:
+        """Fit the rail(s) into the 3D view between the docked panels, looking at the front
+        from slightly above (the top faces give depth; labels stay square to the eye)."""
+        length = rail_length(max(slots, MIN_FRAMED_SLOTS))
+        height = BODY_H + (rails - 1) * RAIL_SPACING
+        center = (rail_length(slots) / 2, 0.0, -(rails - 1) * RAIL_SPACING / 2)
+        half_tan = math.tan(math.radians(CAMERA_FOV_DEG) / 2)
+        distance = BODY_D / 2 + max((length / 2 + CAMERA_MARGIN) / (half_tan * VIEW_ASPECT),
+                                    (height / 2 + CAMERA_MARGIN) / half_tan)
+        cam = self.server.initial_camera
+        cam.fov = math.radians(CAMERA_FOV_DEG)
+        cam.look_at = center
+        cam.position = (center[0], -distance, center[2] + distance * CAMERA_RISE)
+        cam.up = (0.0, 0.0, 1.0)
+        self._camera_center = center
+
+    # ---- running ------------------------------------------------------------------------
+    def start(self) -> None:
+        self._thread = threading.Thread(target=self._run, name="fieldrig-dashboard",
+                                        daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=5)
+
+    def _run(self) -> None:
+        period = 1.0 / UPDATE_HZ
+        while not self._stop.is_set():
+            started = time.monotonic()
+            try:
+                self.tick()
+            except Exception:  # a view bug must not freeze the dashboard for good
+                logger.exception("dashboard update failed")
+            self._stop.wait(max(0.0, period - (time.monotonic() - started)))
+
+    @staticmethod
+    def _device_snap(snapshot: Mapping[str, Any], device_id: str | None) -> dict[str, Any]:
+        return dict((snapshot.get("devices") or {}).get(device_id or "", {}) or {})
+
+    def tick(self) -> None:
+        """One view update: new events into the log, changed values into the handles."""
+        with self._lock:
+            frame = self.runtime.frame
+            self._event_seq, events = self.runtime.events_since(self._event_seq)
+            self.log.add_events(events)
+            captions = [e.text for e in events if isinstance(e, Caption)]
+            fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events
+            self._frame_seq, self._t_us = frame.seq, frame.t_us
+            with self.server.atomic():
+                if captions:
+                    self._caption.text = captions[-1]
+                    self._caption.visible = True
+                if fresh:
+                    snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
+                    for scene, snap in zip(self._scenes, snaps, strict=True):
+                        scene.update(snap, frame.t_us)
+                    main = snaps[0]
+                    master = self._device_snap(frame.snapshot, self.master_id)
+                    self.state.update(main, master, frame.t_us)
+                    self.control.update(main)
+                    self.modules.update(main)
+                    self.log.update(master)
+                self.objects.tick()
+
+    @property
+    def rendered_seq(self) -> int:
+        """Sequence number of the last frame written to the handles (tests wait on it)."""
+        return self._frame_seq
+
+    def scene_colors(self) -> dict[str, tuple[int, int, int]]:
+        """LED colours shown for the first coupler (tests)."""
+        return self._scenes[0].led_colors()
+
+    def scene_slots(self) -> dict[int, str | None]:
+        """Module types drawn on the first coupler's rail (tests)."""
+        return self._scenes[0].drawn_slots()

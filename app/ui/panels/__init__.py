@@ -1,0 +1,1 @@
+"""The dashboard's GUI panels: control, state, event log, object dictionary."""

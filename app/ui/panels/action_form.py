@@ -1,0 +1,119 @@
+"""A form generated from a device's action table: pick an action, fill its parameters, apply.
+
+The FastCAT's module actions (set an input, an analog value, an encoder fault, ...) are data
+(:class:`devices.device.Action` / :class:`~devices.device.Param`), so the dashboard lists them
+without knowing device logic, and a module action added to a model appears here unchanged.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.ui.commands import notify
+from devices.device import Action, CommandError, Param
+
+# Called with (client, action name, args) when the user applies the form.
+Apply = Callable[[viser.ClientHandle | None, str, dict[str, Any]], None]
+
+
+def _widget(gui: viser.GuiApi, p: Param) -> Any:
+    hint = p.doc or None
+    if p.choices:
+        options = tuple(str(c) for c in p.choices)
+        initial = str(p.default) if p.default is not None and str(p.default) in options else None
+        return gui.add_dropdown(p.name, options, initial_value=initial, hint=hint)
+    if p.type is bool:
+        return gui.add_checkbox(p.name, bool(p.default), hint=hint)
+    if p.type in (int, float):
+        initial = p.default if p.default is not None else (p.low if p.low is not None else 0)
+        step = 1 if p.type is int else None
+        return gui.add_number(p.name, p.type(initial), min=p.low, max=p.high, step=step,
+                              hint=hint)
+    return gui.add_text(p.name, "" if p.default is None else str(p.default), hint=hint)
+
+
+def _value(p: Param, handle: Any) -> Any:
+    value = handle.value
+    if p.choices:
+        for choice in p.choices:
+            if str(choice) == value:
+                return choice
+    if p.type is int:
+        return int(value)
+    if p.type is float:
+        return float(value)
+    return value
+
+
+class ActionForm:
+    def __init__(self, gui: viser.GuiApi, actions: Mapping[str, Action], apply: Apply,
+                 label: str = "Action") -> None:
+        self._gui = gui
+        self._actions = dict(sorted(actions.items()))
+        self._apply = apply
+        names = tuple(self._actions) or ("(none)",)
+        self._choice = gui.add_dropdown(label, names)
+        self._params = gui.add_folder("Parameters", expand_by_default=True)
+        self._button = gui.add_button("Apply", disabled=not self._actions)
+        self._widgets: list[tuple[Param, Any]] = []
+        self._built_for: str | None = None
+        self._lock = threading.Lock()  # built from callbacks and from the dashboard thread
+        self._build()
+
+        @self._choice.on_update
+        def _(event: viser.GuiEvent) -> None:
+            self._build()
+
+        @self._button.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.submit(event.client)
+
+    def restrict(self, names: Sequence[str]) -> None:
+        """Offer only these actions (those the selected module accepts)."""
+        options = tuple(n for n in self._actions if n in set(names)) or ("(none)",)
+        if tuple(self._choice.options) != options:
+            keep = self._choice.value if self._choice.value in options else options[0]
+            self._choice.options = options
+            self._choice.value = keep
+        self._button.disabled = options == ("(none)",)
+        self._build()
+
+    def _build(self) -> None:
+        with self._lock:
+            name = self._choice.value
+            if name == self._built_for:
+                return
+            self._built_for = name
+            for _p, handle in self._widgets:
+                handle.remove()
+            self._widgets = []
+            action = self._actions.get(name)
+            if action is None:
+                self._params.visible = False
+                return
+            self._choice.hint = action.doc or None
+            with self._params:
+                self._widgets = [(p, _widget(self._gui, p)) for p in action.params]
+            self._params.visible = bool(self._widgets)
+
+    def submit(self, client: viser.ClientHandle | None) -> None:
+        name = self._choice.value
+        if name not in self._actions:
+            return
+        with self._lock:
+            widgets = list(self._widgets)
+        try:
+            args = {p.name: _value(p, h) for p, h in widgets}
+        except (TypeError, ValueError) as exc:
+            notify(client, name, f"bad parameter: {exc}", error=True)
+            return
+        try:
+            self._actions[name].check_args(args)
+        except CommandError as exc:
+            notify(client, f"{name} refused", str(exc), error=True)
+            return
+        self._apply(client, name, args)

@@ -1,0 +1,206 @@
+"""Coupler controls: power, CNF, fault injection, Reset fault, rotary switch, training causes.
+
+Every callback only queues a device action (``CommandSender``); what the device then does
+shows in the state panel and the 3D view of every browser. Widgets are server-level, so a
+click in one browser moves the same widget in the others.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import viser
+
+from app.ui.commands import CommandSender
+from app.ui.panels.widgets import Mirror, from_user, set_options
+
+CNF_HOLD_S = 3.0  # seed 000 §2: "almeno tre secondi"
+CNF_PRESS_S = 3.5  # the button's press: comfortably past the threshold
+CNF_SHORT_S = 1.0  # a press that must do nothing (training)
+COUPLER_TARGET = "coupler (no module)"
+RESET_FAULT = (0x5200, 1)  # seed 000 §6.17
+MASTER_TARGETS = ("INIT", "PREOP", "SAFEOP", "OP")
+
+
+@dataclass(frozen=True)
+class FaultOption:
+    table: str  # "coupler" (§7.5, byte 3) or "module" (§7.6, byte 2)
+    code: int
+    name: str
+    description: str
+
+    @property
+    def label(self) -> str:
+        return f"0x{self.code:02X} {self.name} — {self.description}"
+
+    @property
+    def ref(self) -> str:
+        """How inject_fault/clear_fault name it without ambiguity: ``coupler:0x04``."""
+        return f"{self.table}:0x{self.code:02X}"
+
+
+TABLE_LABELS = {"coupler": "coupler codes (§7.5)", "module": "module codes (§7.6)"}
+
+
+def module_options(rail: Sequence[Mapping[str, Any]]) -> list[str]:
+    """``"2 DI16"`` per slot (``"8 (empty)"`` for an empty one): the slot number leads."""
+    return [f"{e['slot']} {e.get('type') or '(empty)'}" for e in rail]
+
+
+def fault_targets(rail: Sequence[Mapping[str, Any]]) -> list[str]:
+    """``"2 DI16"`` per module the coupler numbered (the module number of the emergency's byte
+    0, which skips empty rail positions); rail positions before the first scan."""
+    numbered = [(e["module_number"], e["type"]) for e in rail if e.get("module_number")]
+    if not numbered:
+        numbered = [(e["slot"], e["type"]) for e in rail if e.get("type")]
+    return [f"{n} {t}" for n, t in numbered]
+
+
+def option_slot(option: str) -> int | None:
+    head = option.split(" ", 1)[0]
+    return int(head) if head.isdigit() else None
+
+
+class ControlPanel:
+    def __init__(self, server: viser.ViserServer, sender: CommandSender, device_id: str,
+                 faults: Sequence[FaultOption], rotary_range: tuple[int, int],
+                 master_id: str | None = None) -> None:
+        self._send = sender.send
+        self._id = device_id
+        self._faults = {t: [f for f in faults if f.table == t] for t in TABLE_LABELS}
+        gui = server.gui
+
+        with gui.add_folder("Power and CNF"):
+            self._power = gui.add_checkbox("Power", False, hint="24 V supply of the coupler")
+            press = gui.add_button(f"Press CNF ({CNF_PRESS_S:g} s)", icon=viser.Icon.HAND_FINGER)
+            short = gui.add_button(f"Tap CNF ({CNF_SHORT_S:g} s)",
+                                   hint="shorter than 3 s: the coupler must ignore it")
+            self._hold = gui.add_checkbox("Hold CNF", False,
+                                          hint="CNF pressed while checked; release after 3 s")
+            self._cnf_progress = gui.add_progress_bar(0.0, color="blue")
+            self._power_mirror = Mirror(self._power)
+            self._hold_mirror = Mirror(self._hold)
+
+        with gui.add_folder("Faults"):
+            self._table = gui.add_dropdown("Table", tuple(TABLE_LABELS.values()))
+            self._fault = gui.add_dropdown("Fault", self._fault_labels("coupler"))
+            self._target = gui.add_dropdown("Target", (COUPLER_TARGET,))
+            actions = gui.add_button_group("Injection", ("Inject", "Clear"))
+            self._reset = gui.add_checkbox("Reset fault", False,
+                                           hint="0x5200:1; the rising edge resets the alarm")
+
+        with gui.add_folder("Address and causes", expand_by_default=False):
+            low, high = rotary_range
+            self._rotary = gui.add_slider("Rotary switch", min=low, max=high, step=1,
+                                          initial_value=max(low, 1))
+            self._link = gui.add_checkbox("EtherCAT cable in", True)
+            self._tbus_low = gui.add_checkbox("Tbus supply low", False)
+            self._rotary_mirror = Mirror(self._rotary)
+            self._link_mirror = Mirror(self._link)
+            self._tbus_mirror = Mirror(self._tbus_low)
+
+        if master_id is not None:
+            self._master_controls(gui, master_id)
+
+        @self._power.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                self._send(event.client, self._id, "power", {"on": self._power.value})
+
+        @press.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self._send(event.client, self._id, "hold_cnf", {"seconds": CNF_PRESS_S})
+
+        @short.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self._send(event.client, self._id, "hold_cnf", {"seconds": CNF_SHORT_S})
+
+        @self._hold.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                action = "press_cnf" if self._hold.value else "release_cnf"
+                self._send(event.client, self._id, action)
+
+        @self._table.on_update
+        def _(event: viser.GuiEvent) -> None:
+            set_options(self._fault, self._fault_labels(self._table_key()))
+
+        @actions.on_click
+        def _(event: viser.GuiEvent) -> None:
+            fault = self._selected_fault()
+            if fault is None:
+                return
+            verb = "inject_fault" if actions.value == "Inject" else "clear_fault"
+            module = option_slot(self._target.value)  # byte 0 of the emergency (§7)
+            target = self._id if module is None else f"{self._id}/{module}"
+            self._send(event.client, target, verb, {"fault": fault.ref})
+
+        @self._reset.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                index, sub = RESET_FAULT
+                self._send(event.client, self._id, "write_object",
+                           {"index": index, "sub": sub, "value": int(self._reset.value)})
+
+        @self._rotary.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                self._send(event.client, self._id, "set_rotary",
+                           {"value": int(self._rotary.value)})
+
+        @self._link.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                self._send(event.client, self._id, "link", {"connected": self._link.value})
+
+        @self._tbus_low.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                self._send(event.client, self._id, "tbus_voltage", {"low": self._tbus_low.value})
+
+    def _master_controls(self, gui: viser.GuiApi, master_id: str) -> None:
+        """The built-in master: a resync (the only reset of codes above 0x7F, §7.5)."""
+        with gui.add_folder("EtherCAT master", expand_by_default=False):
+            resync = gui.add_button("Resync", hint="every slave through INIT and back; resets "
+                                                   "alarms whose cause is gone (§7)")
+            target = gui.add_dropdown("Target state", MASTER_TARGETS, initial_value="OP")
+
+        @resync.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self._send(event.client, master_id, "resync")
+
+        @target.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                self._send(event.client, master_id, "set_target", {"state": target.value})
+
+    def _table_key(self) -> str:
+        for key, label in TABLE_LABELS.items():
+            if label == self._table.value:
+                return key
+        return "coupler"
+
+    def _fault_labels(self, table: str) -> tuple[str, ...]:
+        return tuple(f.label for f in self._faults[table]) or ("(no codes)",)
+
+    def _selected_fault(self) -> FaultOption | None:
+        for fault in self._faults[self._table_key()]:
+            if fault.label == self._fault.value:
+                return fault
+        return None
+
+    def update(self, snap: Mapping[str, Any]) -> None:
+        self._power_mirror.follow(bool(snap.get("powered")))
+        cnf = snap.get("cnf") or {}
+        self._hold_mirror.follow(bool(cnf.get("pressed")))
+        held = float(cnf.get("held_s", 0.0)) if cnf.get("pressed") else 0.0
+        progress = round(min(100.0, 100.0 * held / CNF_HOLD_S))
+        if self._cnf_progress.value != progress:
+            self._cnf_progress.value = progress
+        if "rotary_switch" in snap:
+            self._rotary_mirror.follow(int(snap["rotary_switch"]))
+        self._link_mirror.follow(bool(snap.get("link", True)))
+        self._tbus_mirror.follow(bool(snap.get("tbus_low", False)))
+        set_options(self._target, [COUPLER_TARGET, *fault_targets(snap.get("rail") or [])])

@@ -1,0 +1,119 @@
+"""The event log, laid out like the TwinCAT logger: Server (port) | Timestamp | Message.
+
+Rows come from two places: the built-in master's logger lines (its snapshot's ``log``, with
+the AMS port 65535 and the TwinCAT timestamp the master printed) and the device events a
+technician also wants in the same list (ESM state changes, emergencies, alarms raised and
+cleared, scenario captions), stamped with the same clock. Newest first, bounded.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Callable, Iterable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import viser
+
+from app.ui.style import esc
+from devices.events import (
+    US_PER_S,
+    AlarmChanged,
+    Caption,
+    EmergencySent,
+    Event,
+    StateChanged,
+)
+
+MAX_ROWS = 50
+_ERROR_WORDS = ("emergency", "failed", "abnormal", "aborted", "error")
+
+# simulated microseconds -> "12/11/2019 14.51.30 421 ms"
+Timestamp = Callable[[int], str]
+
+
+@dataclass(frozen=True)
+class LogRow:
+    t_us: int
+    order: int  # arrival order, to keep lines of one instant as they were logged
+    server: str
+    timestamp: str
+    message: str
+    error: bool
+
+
+def event_message(event: Event) -> tuple[str, bool] | None:
+    """The log text of a device event, and whether it reads as an error; None to skip it."""
+    record = event.to_record()
+    if isinstance(event, StateChanged):
+        if event.machine == "cnf_button":
+            return f"CNF button {event.to_state}", False
+        if event.machine:
+            what = "CNF procedure" if event.machine == "cnf" else event.machine
+            return f"{what}: {event.from_state} -> {event.to_state}", False
+        return f"ESM state change '{event.from_state}' -> '{event.to_state}'", False
+    if isinstance(event, EmergencySent):
+        return (f"Emergency sent (code {record['code']}, register {record['register']}, "
+                f"data {record['data']})"), True
+    if isinstance(event, AlarmChanged):
+        where = f" module {event.module}" if event.module else ""
+        verb = "raised" if event.active else "cleared"
+        return f"alarm {event.code} {event.name}{where} {verb}", event.active
+    if isinstance(event, Caption):
+        return f"» {event.text}", False
+    return None
+
+
+def render_rows(rows: Iterable[LogRow]) -> str:
+    body = "".join(
+        f'<tr class="{"fr-err" if r.error else ""}"><td class="fr-srv">{esc(r.server)}</td>'
+        f'<td class="fr-ts">{"<br>".join(esc(p) for p in r.timestamp.split(" ", 1))}</td>'
+        f"<td>{esc(r.message)}</td></tr>"
+        for r in rows)
+    if not body:
+        body = '<tr><td colspan="3" class="fr-muted">no messages yet</td></tr>'
+    # Timestamp column: the date and the time of day on two lines, as narrow as they get.
+    return ('<div class="fr-log-wrap"><table class="fr-log" id="fr-log"><colgroup>'
+            '<col style="width:4.8em"><col style="width:10.4em"><col></colgroup><thead><tr>'
+            '<th>Server</th><th>Timestamp</th>'
+            f'<th>Message</th></tr></thead><tbody>{body}</tbody></table></div>')
+
+
+class EventLogPanel:
+    def __init__(self, server: viser.ViserServer, device_ids: Iterable[str],
+                 timestamp: Timestamp) -> None:
+        self._devices = set(device_ids)
+        self._timestamp = timestamp
+        self._device_rows: collections.deque[LogRow] = collections.deque(maxlen=MAX_ROWS)
+        self._order = 0
+        self._html = server.gui.add_html(render_rows([]))
+        self._last = ""
+
+    def add_events(self, events: Iterable[Event]) -> None:
+        for event in events:
+            if event.device not in self._devices and not isinstance(event, Caption):
+                continue
+            found = event_message(event)
+            if found is None:
+                continue
+            text, error = found
+            self._order += 1
+            self._device_rows.append(LogRow(event.t_us, self._order, event.device,
+                                            self._timestamp(event.t_us), text, error))
+
+    def update(self, master_snap: Mapping[str, Any] | None) -> None:
+        rows = list(self._device_rows)
+        for i, line in enumerate((master_snap or {}).get("log", [])[-MAX_ROWS:]):
+            text = str(line.get("text", ""))
+            rows.append(LogRow(
+                round(float(line.get("t", 0.0)) * US_PER_S), -MAX_ROWS + i,
+                f"({line.get('port', '')})", str(line.get("timestamp", "")), text,
+                any(w in text.lower() for w in _ERROR_WORDS)))
+        # Newest first; the master's lines of an instant come after the device's own events
+        # (the master reads them a cycle later), hence the negative order for master lines
+        # only breaks ties among themselves.
+        rows.sort(key=lambda r: (r.t_us, r.server.startswith("("), r.order), reverse=True)
+        content = render_rows(rows[:MAX_ROWS])
+        if content != self._last:
+            self._html.content = content
+            self._last = content

@@ -1,0 +1,214 @@
+"""Module controls: pick a slot, unplug / plug / swap it, power it, drive its I/O and encoders.
+
+What an operator does to the rail with their hands (seed 000 §2: modules can be plugged,
+unplugged and swapped; the coupler notices at the next scan or, in OP, at once) goes through
+the FastCAT's module actions on the target ``<device>/<slot>``. AX2 modules get an encoder
+section: shaft speed per encoder and the zero-cycle command bits of 0x7600 (§6.30, bits 12 /
+13), written with ``write_object`` like a PLC would write its output.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.runtime import Runtime
+from app.ui.commands import CommandSender
+from app.ui.panels.action_form import ActionForm
+from app.ui.panels.control import module_options, option_slot
+from app.ui.panels.widgets import Mirror, from_user, set_options
+from app.ui.style import esc
+from devices.device import Action
+
+ENCODER_COMMAND_BASE = 0x7600  # §6.30, per module: + 0x10 * (N - 1)
+ZERO_CYCLE_BITS = (0x1000, 0x2000)  # §6.30: bit 12 encoder 1, bit 13 encoder 2
+# Module actions with their own widgets here; the rest go to the generated form.
+DEDICATED = frozenset({"unplug", "plug", "swap", "module_power", "set_shaft_speed"})
+
+
+def module_index(base: int, slot: int) -> int:
+    """Seed 000 §6: per-module objects at base + 0x10 * (N - 1)."""
+    return base + 0x10 * (slot - 1)
+
+
+def encoder_text(entry: Mapping[str, Any]) -> str:
+    rows = []
+    for k, enc in enumerate(entry.get("encoders") or [], start=1):
+        state = "homing" if enc.get("homing") else ("homed" if enc.get("homed") else "not homed")
+        faults = ", ".join(enc.get("faults") or []) or "no fault"
+        rpm = float(enc.get("rpm", 0.0))
+        rows.append(f"<tr><th>enc {k}</th><td>{esc(enc.get('position', 0))} "
+                    f"· {rpm:g} rpm · {esc(state)} · {esc(faults)}</td></tr>")
+    return f'<table class="fr-kv">{"".join(rows)}</table>' if rows else ""
+
+
+def _speed_params(action: Action | None) -> tuple[str, str] | None:
+    """(encoder param, rpm param) of set_shaft_speed, found by type: int = which, float = rpm."""
+    if action is None:
+        return None
+    ints = [p.name for p in action.params if p.type is int]
+    floats = [p.name for p in action.params if p.type is float]
+    return (ints[0], floats[0]) if len(ints) == 1 and len(floats) == 1 else None
+
+
+class ModulePanel:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
+                 device_id: str, actions: Mapping[str, Action],
+                 catalog: Sequence[str]) -> None:
+        self._runtime = runtime
+        self._sender = sender
+        self._id = device_id
+        self._rail: list[Mapping[str, Any]] = []
+        module_actions = {n: a for n, a in actions.items() if a.module != "none"}
+        self._speed = _speed_params(module_actions.get("set_shaft_speed"))
+        gui = server.gui
+
+        with gui.add_folder("Modules"):
+            self._module = gui.add_dropdown("Module", ("1",), hint="slot number and type")
+            rail_ops = gui.add_button_group("Rail", ("Unplug", "Plug", "Swap"))
+            self._plug_type = gui.add_dropdown("Plug type", tuple(catalog))
+            self._swap_with = gui.add_dropdown("Swap with", ("1",))
+            self._powered = gui.add_checkbox("Module powered", True)
+            self._powered_mirror = Mirror(self._powered)
+
+        with gui.add_folder("Encoder (AX2)", visible=False) as self._encoder_folder:
+            self._encoder_state = gui.add_html("")
+            self._encoder = gui.add_dropdown("Encoder", ("1", "2"))
+            self._rpm = gui.add_number("Shaft speed (rpm)", 60.0, step=1.0)
+            set_speed = gui.add_button("Set shaft speed", disabled=self._speed is None)
+            self._zero = [gui.add_checkbox(f"Zero-cycle command enc {k + 1}", False,
+                                           hint=f"0x7600 bit {12 + k}; the rising edge starts "
+                                                "the zero cycle")
+                          for k in range(2)]
+            self._zero_mirrors = [Mirror(box) for box in self._zero]
+
+        with gui.add_folder("Module I/O", expand_by_default=False):
+            extra = {n: a for n, a in module_actions.items() if n not in DEDICATED}
+            self._form = ActionForm(gui, extra, self._apply_form)
+        self._available: list[str] | None = None  # the selected module's actions, when read
+        self._available_lock = threading.Lock()
+
+        @self._module.on_update
+        def _(event: viser.GuiEvent) -> None:
+            self._powered_mirror.forget()
+            self._selection_changed()
+
+        @rail_ops.on_click
+        def _(event: viser.GuiEvent) -> None:
+            target = self._target()
+            if target is None:
+                return
+            if rail_ops.value == "Unplug":
+                self._sender.send(event.client, target, "unplug")
+            elif rail_ops.value == "Plug":
+                self._sender.send(event.client, target, "plug", {"type": self._plug_type.value})
+            else:
+                other = option_slot(self._swap_with.value)
+                self._sender.send(event.client, target, "swap", {"other": other})
+
+        @self._powered.on_update
+        def _(event: viser.GuiEvent) -> None:
+            target = self._target()
+            if from_user(event) and target is not None:
+                self._sender.send(event.client, target, "module_power",
+                                  {"on": self._powered.value})
+
+        @set_speed.on_click
+        def _(event: viser.GuiEvent) -> None:
+            target = self._target()
+            if target is None or self._speed is None:
+                return
+            which, rpm = self._speed
+            self._sender.send(event.client, target, "set_shaft_speed",
+                              {which: int(self._encoder.value), rpm: float(self._rpm.value)})
+
+        for k, box in enumerate(self._zero):
+            box.on_update(lambda event, k=k: self._zero_cycle(event, k))
+
+    # ---- helpers ------------------------------------------------------------------------
+    def _slot(self) -> int | None:
+        return option_slot(str(self._module.value))
+
+    def _target(self) -> str | None:
+        slot = self._slot()
+        return None if slot is None else f"{self._id}/{slot}"
+
+    def _entry(self) -> Mapping[str, Any] | None:
+        slot = self._slot()
+        return next((e for e in self._rail if e.get("slot") == slot), None)
+
+    def _apply_form(self, client: viser.ClientHandle | None, action: str,
+                    args: dict[str, Any]) -> None:
+        target = self._target()
+        if target is not None:
+            self._sender.send(client, target, action, args)
+
+    def _zero_cycle(self, event: viser.GuiEvent, k: int) -> None:
+        """Set or clear one zero-cycle bit of 0x7600, keeping the other bits (invert flags)."""
+        slot = self._slot()
+        if not from_user(event) or slot is None:
+            return
+        index, bit, on = module_index(ENCODER_COMMAND_BASE, slot), ZERO_CYCLE_BITS[k], \
+            bool(self._zero[k].value)
+        rig = self._runtime.rig
+
+        def read_modify_write() -> int:
+            word = int(rig.apply(self._id, "read_object", {"index": index, "sub": 0}))
+            word = word | bit if on else word & ~bit
+            rig.apply(self._id, "write_object", {"index": index, "sub": 0, "value": word})
+            return word
+
+        self._sender.submit(event.client, f"0x{index:04X} zero-cycle command", read_modify_write)
+
+    def _selection_changed(self) -> None:
+        """Show the encoder section only for an AX2; ask the model which module actions the
+        selected module takes (its type decides) for the generated form."""
+        entry = self._entry()
+        self._encoder_folder.visible = bool(entry and entry.get("encoders") is not None)
+        for mirror in self._zero_mirrors:
+            mirror.forget()
+        slot = self._slot()
+        if slot is None or not (entry and entry.get("type")):
+            self._set_available([])
+            return
+        device = self._id
+
+        def read() -> list[str]:
+            return list(self._runtime.rig.device(device).rail_module(slot).available_actions())
+
+        self._sender.submit(None, "module actions", read, done=self._set_available)
+
+    def _set_available(self, names: list[str]) -> None:
+        with self._available_lock:
+            self._available = names
+
+    # ---- per frame ----------------------------------------------------------------------
+    def update(self, snap: Mapping[str, Any]) -> None:
+        rail = list(snap.get("rail") or [])
+        changed = [(e.get("slot"), e.get("type"), e.get("encoders") is not None)
+                   for e in rail] != [(e.get("slot"), e.get("type"),
+                                       e.get("encoders") is not None) for e in self._rail]
+        self._rail = rail
+        if changed:
+            options = module_options(rail)
+            set_options(self._module, options)
+            set_options(self._swap_with, options)
+            self._selection_changed()
+        with self._available_lock:
+            available, self._available = self._available, None
+        if available is not None:
+            self._form.restrict(available)
+        entry = self._entry()
+        if entry is None:
+            return
+        self._powered_mirror.follow(bool(entry.get("powered", True)))
+        if entry.get("encoders") is not None:
+            command = int(entry.get("command", 0))  # 0x7600 as the module holds it
+            for k, mirror in enumerate(self._zero_mirrors):
+                mirror.follow(bool(command & ZERO_CYCLE_BITS[k]))
+            html = encoder_text(entry)
+            if self._encoder_state.content != html:
+                self._encoder_state.content = html

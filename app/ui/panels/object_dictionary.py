@@ -1,0 +1,220 @@
+"""The object-dictionary view: the FastCAT's objects (seed 000 §6) with live values.
+
+The table is read in the simulation thread (``runtime.submit``) from the model's ``od`` — on
+"Refresh" and every few seconds — and rendered here, filtered by a text box. Writes go through
+the device's ``write_object`` action like any master write, so access rights and value ranges
+are enforced by the model, and an SdoAbort comes back as a notification to the writer.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import threading
+import time
+from collections.abc import Sequence
+from concurrent.futures import Future
+from dataclasses import dataclass
+from typing import Any
+
+import viser
+
+from app.runtime import Runtime
+from app.ui.commands import CommandSender, notify
+from app.ui.style import esc
+from devices.device import CommandError
+
+logger = logging.getLogger(__name__)
+
+REFRESH_S = 2.0
+MAX_SHOWN = 200
+NO_OD = ("no object dictionary now: the FastCAT generates it at the end of the internal-bus "
+         "scan (seed 000 §5); power it on and wait for the scan")
+
+
+@dataclass(frozen=True)
+class OdRow:
+    index: int
+    sub: int
+    name: str
+    dtype: str
+    access: str
+    value: Any
+
+    @property
+    def address(self) -> str:
+        return f"0x{self.index:04X}:{self.sub}"
+
+
+def read_rows(device: Any) -> list[OdRow]:
+    """All entries of ``device.od`` with their current values (simulation thread only);
+    empty while the device has no dictionary (a FastCAT builds it after its first scan)."""
+    od = getattr(device, "od", None)
+    rows: list[OdRow] = []
+    if od is None:
+        return rows
+    for e in od:
+        try:
+            value = od.peek(e.index, e.sub)
+        except Exception as exc:  # a getter failing must not hide the rest of the table
+            value = f"<{type(exc).__name__}>"
+        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, e.access.value, value))
+    return rows
+
+
+def format_value(value: Any, dtype: str) -> str:
+    if isinstance(value, bool):
+        return str(int(value))
+    if isinstance(value, int):
+        if dtype in ("UDINT", "UINT") and value > 9:
+            return f"{value} (0x{value:0{8 if dtype == 'UDINT' else 4}X})"
+        return str(value)
+    if isinstance(value, str):
+        return f'"{value}"'
+    return str(value)
+
+
+def matches(row: OdRow, needle: str) -> bool:
+    """Substring of ``index:sub`` or of the name; ``0x2104`` (0x + four hex digits) also
+    finds the per-module family base + 0x10 * (N - 1) (seed 000 §6: "0x2104-0x21F4")."""
+    if not needle:
+        return True
+    n = needle.lower()
+    if re.fullmatch(r"0x[0-9a-f]{4}", n):
+        base = int(n, 16)
+        if base <= row.index <= base + 0xF0 and (row.index - base) % 0x10 == 0:
+            return True
+    n = n.removeprefix("0x")
+    return n in f"{row.index:04x}:{row.sub}" or n in row.name.lower()
+
+
+def render(rows: Sequence[OdRow], needle: str) -> str:
+    shown = [r for r in rows if matches(r, needle.strip())]
+    body = "".join(
+        f"<tr><td>{esc(r.address)}</td><td>{esc(r.name)}</td><td>{esc(r.dtype)}</td>"
+        f"<td>{esc(r.access)}</td><td>{esc(format_value(r.value, r.dtype))}</td></tr>"
+        for r in shown[:MAX_SHOWN])
+    more = ""
+    if len(shown) > MAX_SHOWN:
+        more = (f'<p class="fr-muted">{len(shown) - MAX_SHOWN} more objects: '
+                "narrow the filter.</p>")
+    if not shown:
+        why = "no object matches" if rows else NO_OD
+        body = f'<tr><td colspan="5" class="fr-muted">{esc(why)}</td></tr>'
+    return ('<div class="fr-od-wrap"><table class="fr-od" id="fr-od"><thead><tr>'
+            "<th>Index:Sub</th><th>Name</th><th>Type</th><th>Access</th><th>Value</th>"
+            f"</tr></thead><tbody>{body}</tbody></table></div>{more}")
+
+
+def parse_address(text: str) -> tuple[int, int]:
+    """``0x5200:1`` / ``5200:1`` / ``0x5400`` (sub 0) -> (index, sub); hex index, decimal sub."""
+    index_text, _, sub_text = text.strip().partition(":")
+    try:
+        index = int(index_text.strip().removeprefix("0x").removeprefix("0X"), 16)
+        sub = int(sub_text.strip() or "0", 0)
+    except ValueError:
+        raise CommandError(f"object {text!r} is not INDEX:SUB (e.g. 0x5200:1)") from None
+    return index, sub
+
+
+def parse_value(text: str) -> int | str:
+    text = text.strip()
+    if text.lower() in ("true", "false"):
+        return int(text.lower() == "true")
+    try:
+        return int(text, 0)
+    except ValueError:
+        return text  # VISIBLE_STRING objects; the model answers a type mismatch otherwise
+
+
+class ObjectDictionaryPanel:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
+                 device_id: str) -> None:
+        self._runtime = runtime
+        self._sender = sender
+        self._device_id = device_id
+        self._lock = threading.Lock()
+        self._rows: list[OdRow] | None = None
+        self._dirty = False
+        self._pending = False
+        self._next_refresh = 0.0
+        self._last = ""
+        gui = server.gui
+        self._filter = gui.add_text("Filter", "", hint="index (5400, 0x2104) or name")
+        refresh = gui.add_button("Refresh", icon=viser.Icon.REFRESH)
+        self._address = gui.add_text("Object", "0x5200:1", hint="INDEX:SUB, index in hex")
+        self._value = gui.add_text("Value", "1", hint="decimal, 0x.. hex, true/false")
+        buttons = gui.add_button_group("Access", ("Read", "Write"))
+        self._table = gui.add_html(render([], ""))
+
+        @self._filter.on_update
+        def _(event: viser.GuiEvent) -> None:
+            with self._lock:
+                self._dirty = True
+
+        @refresh.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.request(event.client)
+
+        @buttons.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self._access(event.client, buttons.value)
+
+    def _access(self, client: viser.ClientHandle | None, verb: str) -> None:
+        try:
+            index, sub = parse_address(self._address.value)
+        except CommandError as exc:
+            notify(client, "Object address", str(exc), error=True)
+            return
+        address = f"0x{index:04X}:{sub}"
+        if verb == "Read":
+            self._sender.send(client, self._device_id, "read_object",
+                              {"index": index, "sub": sub},
+                              done=lambda v: notify(client, f"{address} read", f"value = {v!r}"))
+            return
+        value = parse_value(self._value.value)
+        self._sender.send(client, self._device_id, "write_object",
+                          {"index": index, "sub": sub, "value": value},
+                          done=lambda _r: (notify(client, f"{address} written",
+                                                  f"value = {value!r}"),
+                                           self.request(None)))
+
+    def request(self, client: viser.ClientHandle | None) -> None:
+        """Read the dictionary in the simulation thread; the table updates on the next tick."""
+        with self._lock:
+            if self._pending:
+                return
+            self._pending = True
+        device_id = self._device_id
+        future = self._runtime.submit(lambda: read_rows(self._runtime.rig.device(device_id)))
+        future.add_done_callback(lambda f: self._received(client, f))
+
+    def _received(self, client: viser.ClientHandle | None, future: Future[list[OdRow]]) -> None:
+        exc = future.exception()
+        with self._lock:
+            self._pending = False
+            if exc is None:
+                self._rows, self._dirty = future.result(), True
+        if exc is not None:
+            logger.warning("reading the object dictionary of %s failed: %s", self._device_id, exc)
+            notify(client, "Object dictionary", f"could not read it: {exc}", error=True)
+
+    def tick(self, now: float | None = None) -> None:
+        """From the dashboard thread: periodic refresh, and re-render when rows or filter
+        changed (rendering stays out of the simulation thread)."""
+        now = time.monotonic() if now is None else now
+        if now >= self._next_refresh:
+            self._next_refresh = now + REFRESH_S
+            self.request(None)
+        with self._lock:
+            if not self._dirty or self._rows is None:
+                return
+            rows, self._dirty = self._rows, False
+        content = render(rows, self._filter.value)
+        if content != self._last:
+            self._table.content = content
+            self._last = content
+
+    def row_count(self) -> int:
+        with self._lock:
+            return len(self._rows or [])

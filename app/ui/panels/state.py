@@ -1,0 +1,136 @@
+"""The state panel: what a commissioning engineer reads off the coupler and the master.
+
+ESM state, Fault active (0x5100:1), emergency data (0x5400), AL status and AL status code with
+their meaning (seed 000 §7.7; manufacturer codes 0x80XX decoded as module number in byte 1 and
+coupler code in byte 0), the latched alarm, CNF phase and scan progress. One server-level HTML
+handle: every browser sees the same text, rewritten only when it changes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import viser
+
+from app.ui.style import badge, esc, kv_table
+from devices.ethercat import MANUFACTURER_AREA, AlState, describe_al_status_code
+
+# (table, code) -> symbolic name, e.g. ("coupler", 0x04) -> "MISSING_NODE_ANSWER".
+CodeName = Callable[[str, int], str | None]
+
+
+def al_status_text(value: int) -> str:
+    """AL status register: state in bits 0..3, error indication in bit 4 (0x12 = PREOP+err)."""
+    state_bits = value & 0x0F
+    try:
+        name = AlState(state_bits).name
+    except ValueError:
+        name = f"state 0x{state_bits:X}"
+    return f"{name} + error" if value & 0x10 else name
+
+
+def al_code_text(code: int, code_name: CodeName) -> str:
+    """The meaning of an AL status code; 0x80XX names the module and the coupler code."""
+    text = describe_al_status_code(code)
+    if code >= MANUFACTURER_AREA:
+        module, coupler_code = (code >> 8) & 0x7F, code & 0xFF
+        name = code_name("coupler", coupler_code)
+        what = f"coupler code 0x{coupler_code:02X}" + (f" {name}" if name else "")
+        where = f"module {module}" if module else "coupler"
+        return f"{where}: {what}"
+    return text
+
+
+def alarm_text(alarm: Mapping[str, Any] | None) -> str:
+    if not alarm:
+        return badge("none", "ok")
+    where = f", module {alarm['module']}" if alarm.get("module") else ""
+    notes = ["resettable" if alarm.get("resettable") else "needs a resync"]
+    notes.append("cause present" if alarm.get("cause_present") else "cause gone")
+    title = f"0x{int(alarm['code']):02X} {alarm.get('name', '')}"
+    return (f"{badge(title, 'bad')}"
+            f" <span>{esc(alarm.get('table', ''))}{esc(where)}</span><br>"
+            f"{esc(alarm.get('description', ''))}"
+            f" <span class=\"fr-muted\">({esc('; '.join(notes))})</span>")
+
+
+def rotary_text(snap: Mapping[str, Any]) -> str:
+    """The switch position, and what the coupler read at power-up when that differs (§6.20)."""
+    switch, read = snap.get("rotary_switch", "?"), snap.get("rotary_read")
+    text = str(switch)
+    if read is not None and read != switch:
+        text += f" (0x5302 = {read}, read at power-up)"
+    return text + f", address check {'on' if snap.get('address_check') else 'off'}"
+
+
+def state_rows(snap: Mapping[str, Any], code_name: CodeName) -> list[tuple[str, str]]:
+    esm = str(snap.get("esm", "?"))
+    requested = str(snap.get("requested", esm))
+    esm_html = badge(esm, "ok" if esm == "OP" else "warn")
+    if requested != esm:
+        esm_html += f' <span class="fr-muted">requested {esc(requested)}</span>'
+    if not snap.get("powered"):
+        esm_html = badge("power off", "muted")
+    fault = bool(snap.get("fault_active"))
+    al_status = int(snap.get("al_status", 0))
+    al_code = int(snap.get("al_status_code", 0))
+    cnf = snap.get("cnf") or {}
+    scan = snap.get("scan") or {}
+    phase = str(cnf.get("phase", "idle"))
+    if cnf.get("pressed"):
+        phase = f"pressed {float(cnf.get('held_s', 0.0)):.1f} s"
+    if scan.get("active"):
+        phase += f", scan {scan.get('done', 0)}/{scan.get('total', 0)}"
+    stored = snap.get("stored_config")
+    detected = snap.get("detected")
+    if stored is None:
+        config = badge("none stored", "warn")
+    elif detected is not None and list(stored) != list(detected):
+        config = badge("differs from flash", "bad")
+    else:
+        config = badge("matches flash", "ok")
+    causes = []
+    if not snap.get("link", True):
+        causes.append("EtherCAT cable out")
+    if snap.get("tbus_low"):
+        causes.append("Tbus supply low")
+    return [
+        ("ESM state", esm_html),
+        ("Fault active", badge("TRUE", "bad") if fault else badge("FALSE", "ok")),
+        ("0x5400", esc(f"0x{int(snap.get('emergency_data', 0)):08X}")),
+        ("AL status", esc(f"0x{al_status:04X} {al_status_text(al_status)}")),
+        ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code, code_name)}")),
+        ("Alarm", alarm_text(snap.get("alarm"))),
+        ("CNF", esc(phase)),
+        ("Configuration", config),
+        ("Rotary switch", esc(rotary_text(snap))),
+        ("Causes", esc(", ".join(causes)) if causes else '<span class="fr-muted">none</span>'),
+    ]
+
+
+def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: int) -> str:
+    """``Box 1 (FastCAT) · station 1001 · t = 12.3 s`` (the master knows the box name)."""
+    station = snap.get("station_address")
+    names = [s.get("name") for s in (master_snap or {}).get("slaves", [])
+             if s.get("station_address") == station]
+    name = names[0] if names and names[0] else str(snap.get("id", "FastCAT"))
+    # Simulated time in tenths: the text changes 10 times a second at most, and a paused
+    # rig shows a fixed value (screenshots).
+    return (f'<p class="fr-title"><b>{esc(name)}</b> · station {esc(station)} · '
+            f'<span class="fr-muted">t = {t_us // 100_000 / 10:.1f} s</span></p>')
+
+
+class StatePanel:
+    def __init__(self, server: viser.ViserServer, code_name: CodeName) -> None:
+        self._code_name = code_name
+        self._html = server.gui.add_html(kv_table([("ESM state", "-")], "fr-state"))
+        self._last = ""
+
+    def update(self, snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None = None,
+               t_us: int = 0) -> None:
+        content = title(snap, master_snap, t_us) + kv_table(state_rows(snap, self._code_name),
+                                                           "fr-state")
+        if content != self._last:
+            self._html.content = content
+            self._last = content

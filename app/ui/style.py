@@ -1,0 +1,59 @@
+"""The dashboard's CSS and small HTML helpers (one <style> element, injected once).
+
+viser renders ``add_html`` content with innerHTML, so a <style> element placed in the first
+panel styles every table of the dashboard. Class names carry an ``fr-`` prefix so they never
+collide with viser's own (Mantine) classes.
+"""
+
+from __future__ import annotations
+
+import html
+
+CSS = """
+<style>
+.fr-title { font-size: 0.9em; margin: 0 0 4px 0; }
+.fr-kv { width: 100%; border-collapse: collapse; font-size: 0.82em; }
+.fr-kv th { text-align: left; font-weight: 600; color: #555; padding: 2px 6px 2px 0;
+            white-space: nowrap; vertical-align: top; width: 38%; }
+.fr-kv td { padding: 2px 0; font-family: ui-monospace, Menlo, Consolas, monospace;
+            vertical-align: top; word-break: break-word; }
+.fr-badge { display: inline-block; padding: 0 6px; border-radius: 3px; font-weight: 700;
+            font-family: ui-monospace, Menlo, Consolas, monospace; }
+.fr-ok { background: #d9f2df; color: #1d6b32; }
+.fr-bad { background: #fbd5d5; color: #a11616; }
+.fr-warn { background: #fdefc3; color: #7a5600; }
+.fr-muted { color: #888; }
+.fr-log { width: 100%; border-collapse: collapse; font-size: 0.72em; table-layout: fixed;
+          font-family: ui-monospace, Menlo, Consolas, monospace; }
+.fr-log th { text-align: left; background: #eef0f3; color: #333; padding: 2px 4px;
+             position: sticky; top: 0; font-family: system-ui, sans-serif; }
+.fr-log td { padding: 2px 4px; border-bottom: 1px solid #eceef1; vertical-align: top;
+             word-break: break-word; }
+.fr-log td.fr-srv { color: #555; white-space: nowrap; overflow: hidden; }
+.fr-log td.fr-ts { color: #555; white-space: nowrap; overflow: hidden; }
+.fr-log tr.fr-err td { color: #a11616; }
+.fr-log-wrap { max-height: 330px; overflow-y: auto; border: 1px solid #e3e5e8; }
+.fr-od { width: 100%; border-collapse: collapse; font-size: 0.72em;
+         font-family: ui-monospace, Menlo, Consolas, monospace; }
+.fr-od th { text-align: left; background: #eef0f3; padding: 2px 4px; position: sticky; top: 0;
+            font-family: system-ui, sans-serif; }
+.fr-od td { padding: 1px 4px; border-bottom: 1px solid #eceef1; word-break: break-word; }
+.fr-od td:nth-child(1), .fr-od td:nth-child(3), .fr-od td:nth-child(4) { white-space: nowrap; }
+.fr-od-wrap { max-height: 420px; overflow-y: auto; border: 1px solid #e3e5e8; }
+</style>
+"""
+
+
+def esc(value: object) -> str:
+    return html.escape(str(value), quote=True)
+
+
+def badge(text: str, tone: str) -> str:
+    """``tone`` is ok, bad, warn or muted."""
+    return f'<span class="fr-badge fr-{tone}">{esc(text)}</span>'
+
+
+def kv_table(rows: list[tuple[str, str]], table_id: str) -> str:
+    """A two-column table; values are HTML already (escape them with :func:`esc`)."""
+    body = "".join(f"<tr><th>{esc(k)}</th><td>{v}</td></tr>" for k, v in rows)
+    return f'<table class="fr-kv" id="{esc(table_id)}">{body}</table>'
