@@ -1,0 +1,5 @@
+"""The viser dashboard of a rig (docs/dashboard.md)."""
+
+from app.ui.dashboard import Dashboard
+
+__all__ = ["Dashboard"]
