@@ -189,3 +189,17 @@ def test_seed_interpolator_example_sync_and_rpdo_loop() -> None:
     # the last RPDO waits for a Sync that never comes: the axis holds the one before
     assert abs(bench.read(0x6064) - (set_point - 10)) <= 2
     assert feedback[-1][1] & 0x106F == 0x1027  # operation enabled, bit 12: ip active
+
+
+def test_remote_request_for_a_tpdo() -> None:
+    """A remote frame on TPDO1's COB-ID (bit 30 clear) gets the current data in Operational."""
+    bench = _started()
+    bench.send(0x181, rtr=True, dlc=2)
+    bench.run(2)
+    assert [hexs(f.data) for f in bench.take() if f.can_id == 0x181] == ["40 86"]
+    bench.ok(0x1800, 1, 0x4000_0181, 4)  # RTR not allowed (the PDO starts over: one event)
+    bench.run(5)
+    bench.take()
+    bench.send(0x181, rtr=True, dlc=2)
+    bench.run(2)
+    assert [f for f in bench.take() if f.can_id == 0x181] == []
