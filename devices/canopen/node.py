@@ -221,6 +221,8 @@ class CanOpenNode(ProcessData, DeviceModel):
             self.life_guard_error = True  # "L'EMCY non viene resettato"
             self._emergency(em.LIFE_GUARD_ERROR, b"", expired)
         self._watch_alarms(now_us)
+        if not allows(self.state, Service.EMCY):  # stopped meanwhile: they never leave
+            self.emcy.reset()
         while (due := self.emcy.due(now_us)) is not None:
             data, at = due
             self._send(self.emcy_cob_id & 0x7FF, data, at)

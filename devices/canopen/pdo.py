@@ -57,6 +57,7 @@ DEFAULT_TPDO_MAPS: tuple[tuple[int, ...], ...] = (
 DEFAULT_TYPE = 255
 VALID_AT_POWER_UP = 1  # PDO number
 
+_NOT_NUMBERS = frozenset({DataType.VISIBLE_STRING, DataType.OCTET_STRING})
 Lookup = Callable[[int, int], OdEntry]  # raises SdoAbort when the object does not exist
 
 
@@ -183,7 +184,7 @@ class Pdo:
         except SdoAbort:
             raise refuse from None
         usable = obj.access.writable if self.receive else obj.access.readable
-        if not (obj.pdo_mappable and usable) or obj.dtype is DataType.VISIBLE_STRING:
+        if not (obj.pdo_mappable and usable) or obj.dtype in _NOT_NUMBERS:
             raise refuse
         if bits != obj.bit_length or bits % 8:
             raise refuse

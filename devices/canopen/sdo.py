@@ -56,6 +56,8 @@ def decode_download(entry: OdEntry, data: bytes, size_given: bool) -> Any:
     """The value a download carries, by the drive's length rule (see the module docstring)."""
     if entry.dtype is DataType.VISIBLE_STRING:
         return data.decode("latin-1")
+    if entry.dtype is DataType.OCTET_STRING:
+        return data
     width = _WIDTH[entry.dtype]
     if not size_given:
         data = data[:width]
