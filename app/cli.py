@@ -38,6 +38,13 @@ def _serve_parser() -> argparse.ArgumentParser:
                    help="record the session to a rerun file (.rrd)")
     p.add_argument("--modbus-port", type=int, default=5020,
                    help="TCP port of the drives' Modbus line, bound to --host (default 5020)")
+    p.add_argument("--can-interface", choices=("virtual", "udp_multicast", "socketcan"),
+                   default="virtual",
+                   help="the drives' CAN bus: 'virtual' (in this process), 'udp_multicast' "
+                        "(another process on this machine can be the master), 'socketcan'")
+    p.add_argument("--can-channel", default=None,
+                   help="virtual: a name; udp_multicast: GROUP[:PORT] (default "
+                        "239.74.163.2:43113, loopback only); socketcan: e.g. can0")
     p.add_argument("--modbus-framer", choices=("socket", "rtu"), default="socket",
                    help="Modbus TCP ('socket') or RTU frames over TCP ('rtu', as the real "
                         "drive speaks RTU)")
@@ -135,6 +142,7 @@ def _serve(args: argparse.Namespace) -> int:
     dashboard.start()
     _power_on(runtime)
     modbus = _start_modbus(runtime, args)
+    canbus = _start_canopen(runtime, args)
     print(f"FieldRig: rig '{rig.name}' at http://{args.host}:{args.port} "
           f"(Ctrl-C to stop)", flush=True)
     stop = threading.Event()
@@ -145,6 +153,8 @@ def _serve(args: argparse.Namespace) -> int:
     finally:
         if modbus is not None:
             modbus.stop_in_thread()
+        if canbus is not None:
+            canbus.stop()
         dashboard.stop()
         runtime.stop()
         server.stop()
@@ -167,6 +177,23 @@ def _start_modbus(runtime: Any, args: argparse.Namespace) -> Any:
     print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{args.modbus_port}",
           flush=True)
     return server
+
+
+def _start_canopen(runtime: Any, args: argparse.Namespace) -> Any:
+    """The drives' CAN bus (python-can), when the rig has CANopen nodes; None otherwise."""
+    from app.canopen_bus import CanBusError, CanOpenBus
+    from devices.canopen.node import CanOpenNode
+
+    nodes = [d for d in runtime.rig.devices.values() if isinstance(d, CanOpenNode)]
+    if not nodes:
+        return None
+    bus = CanOpenBus(nodes, runtime.submit, args.can_interface, args.can_channel)
+    bus.attach(runtime)
+    try:
+        bus.start()
+    except CanBusError as exc:
+        raise RigConfigError("--can-interface", "", str(exc)) from None
+    return bus
 
 
 def _power_on(runtime: Any) -> None:

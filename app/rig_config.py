@@ -155,7 +155,7 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
     top.finish()
     keyed = [(f"fastcat[{i}].id", f.id) for i, f in enumerate(fastcats)]
     keyed += [(f"servo[{i}].id", s.id) for i, s in enumerate(servos)]
-    seen: set[str] = {"master", "scenario"}
+    seen: set[str] = {"master", "scenario"} | {f"{s.id}-can" for s in servos}
     for key, device_id in keyed:
         if device_id in seen:
             raise RigConfigError(source, key, f"duplicate or reserved device id {device_id!r}")
@@ -287,12 +287,17 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
         devices[fc.id] = device
         slaves.append(device)
     for servo in spec.servos:
+        from devices.canopen.node import CanOpenNode
         from devices.servo.config import DriveConfig
         from devices.servo.drive import ServoDrive
 
-        devices[servo.id] = ServoDrive(servo.id, random.Random(rng.getrandbits(64)),
-                                       DriveConfig(**servo.settings),
-                                       _flash(servo.flash, state))
+        drive = ServoDrive(servo.id, random.Random(rng.getrandbits(64)),
+                           DriveConfig(**servo.settings), _flash(servo.flash, state))
+        devices[servo.id] = drive
+        # The drive's CANopen side: silent unless c9 chose CANopen at the drive's power-up,
+        # so a trainee who sets c9 = 5, saves and power-cycles sees the node boot.
+        can_id = f"{servo.id}-can"
+        devices[can_id] = CanOpenNode(can_id, drive, random.Random(rng.getrandbits(64)))
     if slaves:
         devices["master"] = EtherCatMaster(
             "master", random.Random(rng.getrandbits(64)), slaves=slaves,

@@ -43,6 +43,7 @@ class Runtime:
     def __init__(self, rig: Rig, speed: float = 1.0, publish_hz: float = 30.0) -> None:
         self.rig = rig
         self._speed = speed
+        self._rebase = False
         self._paused = False
         self._publish_period = 1.0 / publish_hz
         self._work: queue.Queue[tuple[Callable[[], Any], Future[Any]]] = queue.Queue()
@@ -74,6 +75,7 @@ class Runtime:
         if not 0 < speed <= 1000:
             raise ValueError(f"speed must be in (0, 1000], got {speed}")
         self._speed = speed
+        self._rebase = True  # the new speed counts from now, not from the start
 
     @property
     def paused(self) -> bool:
@@ -120,6 +122,9 @@ class Runtime:
         while not self._stop.is_set():
             self._journal_events(self._drain_work())
             now = time.monotonic()
+            if self._rebase:
+                self._rebase = False
+                wall0, sim0 = now, self.rig.clock.now_us
             if self._paused:
                 wall0, sim0 = now, self.rig.clock.now_us
             else:
