@@ -91,3 +91,14 @@ def test_frames_advance_and_pause_freezes_time(runtime: Runtime) -> None:
 def test_speed_is_checked(runtime: Runtime) -> None:
     with pytest.raises(ValueError):
         runtime.set_speed(0)
+
+
+def test_lowering_the_speed_does_not_freeze_the_clock(runtime: Runtime) -> None:
+    """A new speed counts from the moment it is set (a slower clock must not wait for wall
+    time to catch up with the faster past)."""
+    time.sleep(0.3)  # 6 simulated seconds at 20x
+    runtime.set_speed(1.0)
+    start = runtime.submit(lambda: runtime.rig.clock.now_us).result(timeout=5)
+    time.sleep(0.3)
+    later = runtime.submit(lambda: runtime.rig.clock.now_us).result(timeout=5)
+    assert later - start >= 100_000
