@@ -15,6 +15,7 @@ import threading
 import time
 import urllib.parse
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import viser
@@ -29,6 +30,7 @@ from app.ui.panels.object_dictionary import ObjectDictionaryPanel
 from app.ui.panels.state import StatePanel
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
 from app.ui.style import CSS
+from devices.device import Action
 from devices.events import US_PER_S, Caption
 
 logger = logging.getLogger(__name__)
@@ -65,6 +67,23 @@ def code_name(table: str, code: int) -> str | None:
     return row.symbol if row is not None else None
 
 
+def _param_range(action: Action | None, default: tuple[int, int]) -> tuple[int, int]:
+    """(low, high) of an action's first parameter, e.g. set_rotary(value 1..15)."""
+    param = action.params[0] if action is not None and action.params else None
+    if param is None or param.low is None or param.high is None:
+        return default
+    return int(param.low), int(param.high)
+
+
+@dataclass(frozen=True)
+class _Panels:
+    control: ControlPanel
+    modules: ModulePanel
+    state: StatePanel
+    log: EventLogPanel
+    objects: ObjectDictionaryPanel
+
+
 def _kind_ids(described: Mapping[str, Mapping[str, Any]], kind: str) -> list[str]:
     return [device_id for device_id, info in described.items() if info["kind"] == kind]
 
@@ -76,10 +95,8 @@ class Dashboard:
         described = runtime.rig.describe()
         self.fastcat_ids = _kind_ids(described, "fastcat")
         self.master_id = next(iter(_kind_ids(described, "master")), None)
-        if not self.fastcat_ids:
-            raise ValueError(f"rig '{runtime.rig.name}' has no FastCAT: nothing to show")
         # The panels drive the first coupler; every coupler gets its rail in the 3D view.
-        self.device_id = self.fastcat_ids[0]
+        self.device_id = self.fastcat_ids[0] if self.fastcat_ids else None
         self._sender = CommandSender(runtime)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -88,14 +105,20 @@ class Dashboard:
         self._t_us = -1
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
         self._configure_look()
-        self._build_gui(described)
+        self._panels: _Panels | None = None
+        if self.device_id is not None:
+            self._panels = self._build_gui(described, self.device_id)
+        else:  # other device kinds have no view yet: say so instead of failing
+            logger.warning("rig '%s' has no FastCAT: the dashboard shows nothing", runtime.rig.name)
+            self.server.gui.add_markdown(f"Rig **{runtime.rig.name}** has no FastCAT coupler: "
+                                         "this dashboard shows FastCAT rigs only.")
         self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING)
                         for i, d in enumerate(self.fastcat_ids)]
         for scene in self._scenes:
             scene.build_coupler()
         frame_slots = [len(self._device_snap(runtime.frame.snapshot, d).get("rail") or [])
                        for d in self.fastcat_ids]
-        self._frame_camera(max(frame_slots), len(self._scenes))
+        self._frame_camera(max(frame_slots, default=0), max(len(self._scenes), 1))
         center = self._camera_center
         # Scenario narration (Caption events), above the rail: what a screenshot should say.
         self._caption = server.scene.add_label(
@@ -123,33 +146,26 @@ class Dashboard:
         scene.add_light_ambient("/light/ambient", intensity=1.6)
         scene.add_light_directional("/light/front", intensity=1.4, position=(0.0, -10.0, 6.0))
 
-    def _build_gui(self, described: Mapping[str, Mapping[str, Any]]) -> None:
+    def _build_gui(self, described: Mapping[str, Mapping[str, Any]], device_id: str) -> _Panels:
         from devices.fastcat.catalog import CATALOG
 
-        actions = described[self.device_id]["actions"]
-        rotary = actions.get("set_rotary")
-        rotary_param = rotary.params[0] if rotary is not None and rotary.params else None
-        rotary_range = (int(rotary_param.low if rotary_param and rotary_param.low is not None
-                            else 0),
-                        int(rotary_param.high if rotary_param and rotary_param.high is not None
-                            else 15))
+        actions = described[device_id]["actions"]
         gui = self.server.gui
         gui.add_html(CSS)
-        self.control = ControlPanel(self.server, self._sender, self.device_id, fault_options(),
-                                    rotary_range, self.master_id)
-        self.modules = ModulePanel(self.server, self.runtime, self._sender, self.device_id,
-                                   actions, list(CATALOG))
+        control = ControlPanel(self.server, self._sender, device_id, fault_options(),
+                               _param_range(actions.get("set_rotary"), (1, 15)), self.master_id)
+        modules = ModulePanel(self.server, self.runtime, self._sender, device_id, actions,
+                              list(CATALOG))
         side = gui.add_panel()
         with side.add_tab("State", viser.Icon.GAUGE):
-            self.state = StatePanel(self.server, code_name)
+            state = StatePanel(self.server, code_name)
             gui.add_markdown("**Event log**")
-            self.log = EventLogPanel(self.server, self.fastcat_ids, self._timestamp_fn())
+            log = EventLogPanel(self.server, self.fastcat_ids, self._timestamp_fn())
         with side.add_tab("Objects", viser.Icon.LIST_DETAILS):
-            self.objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender,
-                                                 self.device_id)
+            objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender, device_id)
         side.dock_left()
         side.set_width(LEFT_WIDTH)
-        self._side = side
+        return _Panels(control, modules, state, log, objects)
 
     def _timestamp_fn(self) -> Callable[[int], str]:
         """The master logger's clock for device rows, so that all rows read alike."""
@@ -207,7 +223,9 @@ class Dashboard:
         with self._lock:
             frame = self.runtime.frame
             self._event_seq, events = self.runtime.events_since(self._event_seq)
-            self.log.add_events(events)
+            panels = self._panels
+            if panels is not None:
+                panels.log.add_events(events)
             captions = [e.text for e in events if isinstance(e, Caption)]
             fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events
             self._frame_seq, self._t_us = frame.seq, frame.t_us
@@ -219,13 +237,20 @@ class Dashboard:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
                     for scene, snap in zip(self._scenes, snaps, strict=True):
                         scene.update(snap, frame.t_us)
-                    main = snaps[0]
-                    master = self._device_snap(frame.snapshot, self.master_id)
-                    self.state.update(main, master, frame.t_us)
-                    self.control.update(main)
-                    self.modules.update(main)
-                    self.log.update(master)
-                self.objects.tick()
+                    if panels is not None:
+                        main = snaps[0]
+                        master = self._device_snap(frame.snapshot, self.master_id)
+                        panels.state.update(main, master, frame.t_us)
+                        panels.control.update(main)
+                        panels.modules.update(main)
+                        panels.log.update(master)
+                if panels is not None:
+                    panels.objects.tick()
+
+    @property
+    def caption(self) -> str:
+        """The scenario caption shown above the rail ("" before the first one)."""
+        return self._caption.text if self._caption.visible else ""
 
     @property
     def rendered_seq(self) -> int:

@@ -23,7 +23,7 @@ from app.ui.panels.object_dictionary import (
 from app.ui.panels.state import al_code_text, al_status_text, state_rows
 from app.ui.rail_scene import LED_OFF, LIT, led_color, module_led_legend, slot_ranges
 from devices.device import CommandError
-from devices.events import AlarmChanged, EmergencySent, LedChanged, StateChanged
+from devices.events import AlarmChanged, Caption, EmergencySent, LedChanged, StateChanged
 from devices.fastcat.alarms import CODE_TABLES, COUPLER_CODES, MODULE_CODES
 from devices.leds import PATTERN_TIMING_MS, LedPattern
 
@@ -177,6 +177,15 @@ def test_scene_leds_follow_simulated_time(live: LiveDashboard) -> None:
         seen.add(lit)
         assert live.dashboard.scene_colors()["5.red"] == LIT["red"]
     assert seen == {True, False}
+
+
+def test_scenario_caption_shows_above_the_rail(live: LiveDashboard) -> None:
+    assert live.dashboard.caption == ""
+    # A scenario played into the runtime journals its captions like device events.
+    live.runtime._journal_events([Caption(live.runtime.frame.t_us, "scenario",
+                                          text="Module 2 stops answering")])
+    live.advance(0.1)
+    assert live.dashboard.caption == "Module 2 stops answering"
 
 
 def is_lit_blinking(t_us: int) -> bool:

@@ -199,6 +199,8 @@ class ControlPanel:
         progress = round(min(100.0, 100.0 * held / CNF_HOLD_S))
         if self._cnf_progress.value != progress:
             self._cnf_progress.value = progress
+            # Green once the hold is long enough: releasing now starts the CNF procedure.
+            self._cnf_progress.color = "green" if held >= CNF_HOLD_S else "blue"
         if "rotary_switch" in snap:
             self._rotary_mirror.follow(int(snap["rotary_switch"]))
         self._link_mirror.follow(bool(snap.get("link", True)))
