@@ -112,7 +112,29 @@ class Runtime:
     def events_since(self, seq: int) -> tuple[int, list[Event]]:
         """Events journalled after ``seq`` and the sequence number to ask from next time."""
         with self._lock:
-            return self._event_seq, [e for s, e in self._journal if s > seq]
+            newer: list[Event] = []
+            for s, e in reversed(self._journal):  # cost grows with the new events only
+                if s <= seq:
+                    break
+                newer.append(e)
+            newer.reverse()
+            return self._event_seq, newer
+
+    def journal(self, events: list[Event]) -> None:
+        """Add events that did not come from a model (captions of a scenario played live)."""
+        self.submit(lambda: self._journal_events(list(events)))
+
+    def advance(self, duration_us: int) -> Future[None]:
+        """Step the rig by ``duration_us`` now, in the simulation thread (for a paused rig:
+        tests and screenshot tooling step it to an exact instant, then read the frame)."""
+        def run() -> None:
+            end = self.rig.clock.now_us + duration_us
+            while self.rig.clock.now_us + self.rig.clock.step_us <= end:
+                self._journal_events(self.rig.step())
+                for fn in self._step_listeners:
+                    fn(self.rig.clock.now_us)
+            self._publish()
+        return self.submit(run)
 
     # ---- the simulation thread ------------------------------------------------------------
     def _run(self) -> None:

@@ -29,7 +29,6 @@ from PIL import Image, ImageChops
 from app.rig import Rig
 from app.runtime import Runtime
 from app.ui.dashboard import Dashboard
-from devices.events import Event
 
 CHROMIUM = "/usr/bin/chromium"
 LAUNCH_ARGS = [
@@ -89,17 +88,7 @@ class LiveDashboard:
     def advance(self, seconds: float) -> None:
         """Step the paused simulation by exactly ``seconds``, in the simulation thread, with
         the events journalled as the running runtime would, then let the view catch up."""
-        rig, runtime = self.runtime.rig, self.runtime
-
-        def run() -> None:
-            target = rig.clock.now_us + round(seconds * 1_000_000)
-            events: list[Event] = []
-            while rig.clock.now_us + rig.clock.step_us <= target:
-                events.extend(rig.step())
-            # The runtime has no public "step while paused" yet: journal like its loop does.
-            runtime._journal_events(events)
-
-        runtime.submit(run).result(timeout=WALL_TIMEOUT_S * 3)
+        self.runtime.advance(round(seconds * 1_000_000)).result(timeout=WALL_TIMEOUT_S * 3)
         self.settle()
 
     def settle(self) -> None:

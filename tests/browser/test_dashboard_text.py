@@ -182,8 +182,8 @@ def test_scene_leds_follow_simulated_time(live: LiveDashboard) -> None:
 def test_scenario_caption_shows_above_the_rail(live: LiveDashboard) -> None:
     assert live.dashboard.caption == ""
     # A scenario played into the runtime journals its captions like device events.
-    live.runtime._journal_events([Caption(live.runtime.frame.t_us, "scenario",
-                                          text="Module 2 stops answering")])
+    live.runtime.journal([Caption(live.runtime.frame.t_us, "scenario",
+                                  text="Module 2 stops answering")])
     live.advance(0.1)
     assert live.dashboard.caption == "Module 2 stops answering"
 
