@@ -57,6 +57,15 @@ class ServoSpec:
 
 
 @dataclass(frozen=True)
+class SlaveSpec:
+    """A TRS-CAT or CPX-E-EC on the EtherCAT line: constructor keywords, checked by kind."""
+
+    kind: str  # "trscat" or "cpx"
+    id: str
+    settings: dict[str, Any]
+
+
+@dataclass(frozen=True)
 class RigSpec:
     source: str
     name: str = "rig"
@@ -66,6 +75,8 @@ class RigSpec:
     retry_interval_us: int = 2_000_000
     fastcats: tuple[FastCatSpec, ...] = ()
     servos: tuple[ServoSpec, ...] = ()
+    slaves: tuple[SlaveSpec, ...] = ()
+    line: tuple[str, ...] = ()  # EtherCAT line order (device ids); default: file order by kind
 
 
 class _Table:
@@ -148,13 +159,17 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
                 from None
     master = _Table(source, "master", top.get("master", dict, {}))
     retry_s = master.get("retry_interval_s", float, 2.0, _in_range(0.01, 3600))
+    line = master.get("line", list, None)
     master.finish()
     fastcats = tuple(_fastcat(source, i, t)
                      for i, t in enumerate(top.get("fastcat", list, [])))
     servos = tuple(_servo(source, i, t) for i, t in enumerate(top.get("servo", list, [])))
+    slaves = tuple(_slave(source, kind, i, t) for kind in _SLAVE_KEYS
+                   for i, t in enumerate(top.get(kind, list, [])))
     top.finish()
     keyed = [(f"fastcat[{i}].id", f.id) for i, f in enumerate(fastcats)]
     keyed += [(f"servo[{i}].id", s.id) for i, s in enumerate(servos)]
+    keyed += [(f"{s.kind}.id", s.id) for s in slaves]
     seen: set[str] = {"master", "scenario"} | {f"{s.id}-can" for s in servos}
     for key, device_id in keyed:
         if device_id in seen:
@@ -166,9 +181,22 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
         if node in [n for _, n in modbus_nodes[:j]]:
             raise RigConfigError(source, f"servo[{i}].node_id",
                                  f"node {node} is already used on the Modbus line")
+    on_line = [f.id for f in fastcats] + [s.id for s in slaves]
+    if line is None:
+        line = on_line
+    else:
+        for j, device_id in enumerate(line):
+            if device_id not in on_line:
+                raise RigConfigError(source, f"master.line[{j}]",
+                                     f"{device_id!r} is not an EtherCAT slave of this rig "
+                                     f"(slaves: {', '.join(on_line) or 'none'})")
+        if sorted(line) != sorted(on_line):
+            missing = sorted(set(on_line) - set(line)) or sorted(line)
+            raise RigConfigError(source, "master.line",
+                                 f"must name every EtherCAT slave once ({', '.join(missing)})")
     return RigSpec(source=source, name=name, seed=seed, step_us=round(step_ms * 1000),
                    epoch=epoch, retry_interval_us=round(retry_s * 1e6), fastcats=fastcats,
-                   servos=servos)
+                   servos=servos, slaves=slaves, line=tuple(line))
 
 
 def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
@@ -209,6 +237,27 @@ def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
     )
     t.finish()
     return spec
+
+
+# Keys a rig file may give each slave kind, with their TOML types (constructor keywords).
+_SLAVE_KEYS: dict[str, dict[str, type | tuple[type, ...]]] = {
+    "trscat": {"expansions": list, "sync_mode": str, "configured": list,
+               "field_supply_v": float, "box_name": str},
+    "cpx": {"modules": list, "rotary_switch": int, "dil1": bool, "dil2": bool,
+            "history_flags": int, "box_name": str},
+}
+
+
+def _slave(source: str, kind: str, i: int, data: Any) -> SlaveSpec:
+    t = _Table(source, f"{kind}[{i}]", data)
+    device_id = t.get("id", str, kind if i == 0 else _REQUIRED,
+                      lambda v: None if v.replace("_", "").replace("-", "").isalnum()
+                      else "use letters, digits, '-' and '_' only")
+    settings = {key: t.get(key, kinds) for key, kinds in _SLAVE_KEYS[kind].items()
+                if key in t.data}
+    t.used.update(_SLAVE_KEYS[kind])
+    t.finish()
+    return SlaveSpec(kind, device_id, settings)
 
 
 def _servo(source: str, i: int, data: Any) -> ServoSpec:
@@ -259,6 +308,27 @@ def _flash(spec_flash: str, state_dir: Path | None) -> FlashStore:
     return FileFlash(path if path.is_absolute() else state_dir / path)
 
 
+def _build_slave(spec: RigSpec, slave: SlaveSpec, rng: random.Random, position: int,
+                 last: bool) -> DeviceModel:
+    from devices.cpx.device import CpxEEc
+    from devices.trscat.device import TrsCat
+
+    settings = dict(slave.settings)
+    try:
+        if slave.kind == "trscat":
+            settings.setdefault("box_name", f"Box {position} (TRS-CAT)")
+            return TrsCat(slave.id, rng, out_link=not last, station_address=1000 + position,
+                          **settings)
+        settings.setdefault("box_name", f"Box {position} (CPX-E-EC)")
+        modules = [m if isinstance(m, str) else (m.get("type"), {k: v for k, v in m.items()
+                                                                 if k != "type"})
+                   for m in settings.pop("modules", [])]
+        return CpxEEc(slave.id, rng, modules=modules, out_connected=not last,
+                      station_address=1000 + position, **settings)
+    except (ValueError, TypeError) as exc:
+        raise RigConfigError(spec.source, slave.kind, str(exc)) from None
+
+
 def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
     """Construct the device models of a checked spec; model refusals become RigConfigError.
 
@@ -271,9 +341,9 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
     state = Path(state_dir) if state_dir is not None else None
     rng = random.Random(spec.seed)
     devices: dict[str, DeviceModel] = {}
-    slaves: list[FastCat] = []
+    slaves: dict[str, Any] = {}
     for i, fc in enumerate(spec.fastcats):
-        position = i + 1
+        position = spec.line.index(fc.id) + 1
         try:
             device = FastCat(
                 fc.id, random.Random(rng.getrandbits(64)),
@@ -285,7 +355,12 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
         except ValueError as exc:
             raise RigConfigError(spec.source, f"fastcat[{i}]", str(exc)) from None
         devices[fc.id] = device
-        slaves.append(device)
+        slaves[fc.id] = device
+    for slave in spec.slaves:
+        position = spec.line.index(slave.id) + 1
+        devices[slave.id] = slaves[slave.id] = _build_slave(
+            spec, slave, random.Random(rng.getrandbits(64)), position,
+            last=position == len(spec.line))
     for servo in spec.servos:
         from devices.canopen.node import CanOpenNode
         from devices.servo.config import DriveConfig
@@ -300,7 +375,8 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
         devices[can_id] = CanOpenNode(can_id, drive, random.Random(rng.getrandbits(64)))
     if slaves:
         devices["master"] = EtherCatMaster(
-            "master", random.Random(rng.getrandbits(64)), slaves=slaves,
+            "master", random.Random(rng.getrandbits(64)),
+            slaves=[slaves[device_id] for device_id in spec.line],
             retry_interval_us=spec.retry_interval_us, epoch=spec.epoch)
     return Rig(name=spec.name, devices=devices, clock=SimClock(step_us=spec.step_us),
                seed=spec.seed)

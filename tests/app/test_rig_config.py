@@ -60,6 +60,10 @@ def test_good_rig() -> None:
     ("[[servo]]\nid = \"a\"\n[[servo]]\nid = \"b\"\n", "servo[1].node_id",
      "already used on the Modbus line"),
     ("[[servo]]\nid = \"master\"\n", "servo[0].id", "reserved"),
+    ("[[trscat]]\nexpansions = \"TRS-IO-E\"\n", "trscat[0].expansions", "must be list"),
+    ("[[cpx]]\nfoo = 1\n", "cpx[0].foo", "unknown key"),
+    ("[master]\nline = [\"x\"]\n[[cpx]]\n", "master.line[0]", "not an EtherCAT slave"),
+    ("[master]\nline = []\n[[cpx]]\n", "master.line", "every EtherCAT slave once"),
 ])
 def test_errors_name_file_key_reason(text: str, key: str, reason: str) -> None:
     with pytest.raises(RigConfigError) as info:
@@ -73,3 +77,22 @@ def test_errors_name_file_key_reason(text: str, key: str, reason: str) -> None:
 def test_missing_file(tmp_path: Path) -> None:
     with pytest.raises(RigConfigError, match="cannot read rig file"):
         load_rig_spec(tmp_path / "nope.toml")
+
+
+def test_ethercat_line_rig_builds_in_line_order() -> None:
+    """Issue 5: master -> FastCAT -> TRS-CAT -> CPX-E-EC, station addresses 1001.. in order."""
+    from app.rig_config import build_rig
+
+    rig = build_rig(load_rig_spec(DEFAULT_RIG.parent / "ethercat_line.toml"), state_dir=None)
+    master = rig.devices["master"].snapshot()
+    assert [(s["name"], s["station_address"]) for s in master["slaves"]] == [
+        ("Box 1 (FastCAT)", 1001), ("Box 2 (TRS-CAT)", 1002), ("Box 3 (CPX-E-EC)", 1003)]
+
+
+def test_bad_slave_configuration_is_one_clear_error() -> None:
+    from app.rig_config import build_rig
+
+    spec = parse_rig_spec('[[cpx]]\nmodules = ["CPX-E-99XX"]\n', "bad.toml")
+    with pytest.raises(RigConfigError) as info:
+        build_rig(spec, state_dir=None)
+    assert info.value.key == "cpx" and "CPX-E-99XX" in info.value.reason
