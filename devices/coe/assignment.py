@@ -1,0 +1,151 @@
+"""The drive's PDOs on EtherCAT: the eight default PDOs, 0x1C12 / 0x1C13, the slots.
+
+Seed 004 ch. 5 "PDO": "Attivi in totale 8 PDO di cui 4 in trasmissione e 4 in ricezione"
+(0x1600..0x1603, 0x1A00..0x1A03 with the contents below); "come default, attraverso gli
+oggetti 0x1C12 e 0x1C13, sono selezionati gli oggetti 0x1600 e 0x1A02 per l'interpolazione in
+posizione (modes of operation = 7)". "Mappatura dinamica PDO": 0x1C12 (RxPDO assign) and
+0x1C13 (TxPDO assign) select "una qualunque configurazione possibile fra i pdo di default";
+other contents are made by editing 0x1600..0x1603 / 0x1A00..0x1A03 first, then 0x1C12 /
+0x1C13. "Utilizzo degli Slots": Position / Interpolated / Velocity Mode, and 0x6060 = 8 CSP.
+
+The PDO records and their mapping rules are the CANopen node's (:class:`devices.canopen.pdo.Pdo`,
+ch. 4, which ch. 5 refers to: "Riferirsi alle caratteristiche del livello applicativo CANOpen");
+their default contents are the ch. 5 table, which the CANopen node uses too.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+from devices.canopen.pdo import (
+    DEFAULT_RPDO_MAPS,
+    DEFAULT_TPDO_MAPS,
+    MAX_ENTRIES,
+    Pdo,
+    split_entry,
+)
+from devices.od import AbortCode, SdoAbort
+
+RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
+RX_MAP_FIRST, TX_MAP_FIRST = 0x1600, 0x1A00
+PDOS_PER_DIRECTION = 4
+DEFAULT_RX = (0x1600,)  # ch. 5 "Nota importante": 0x1600 + 0x1A02, interpolated (mode 7)
+DEFAULT_TX = (0x1A02,)
+
+
+@dataclass(frozen=True)
+class Slot:
+    """A TwinCAT slot of the ESI file (ch. 5 "Utilizzo degli Slots")."""
+
+    name: str
+    description: str  # as TwinCAT's Module Description column prints it
+    mode: int  # 0x6060 for it
+    rx: int
+    tx: int
+
+
+# Ch. 5 "Utilizzo degli Slots". CSP (0x6060 = 8) has no slot of its own in the seed; it takes
+# the Position Mode PDOs (controlword + 0x607A target position, statusword + 0x6064): the
+# target position is what a CSP master sends every cycle (docs/ethercat-coe.md §CSP).
+SLOTS: dict[str, Slot] = {s.name: s for s in (
+    Slot("position", "Position Mode", 1, 0x1602, 0x1A02),
+    Slot("interpolated", "Profile Interpolated Mode", 7, 0x1600, 0x1A02),
+    Slot("velocity", "Profile Velocity Mode", 3, 0x1603, 0x1A03),
+    Slot("csp", "Cyclic Synchronous Position Mode", 8, 0x1602, 0x1A02),
+)}
+DEFAULT_SLOT = "interpolated"  # "Di default sarà impostata la modalità Interpolated Mode"
+
+
+def default_pdos(receive: bool) -> list[Pdo]:
+    """The four PDOs of one direction with the ch. 5 contents (no COB-IDs on EtherCAT)."""
+    maps = DEFAULT_RPDO_MAPS if receive else DEFAULT_TPDO_MAPS
+    return [Pdo(n + 1, receive, cob_id=0, entries=[*m, *[0] * (MAX_ENTRIES - len(m))], count=len(m))
+            for n, m in enumerate(maps)]
+
+
+@dataclass
+class Assignment:
+    """0x1C12 or 0x1C13: sub 0 = count, subs 1..4 = the assigned PDO indices, in order.
+
+    Changed as a mapping is (ETG.1000.6 / DS 301): sub 0 = 0, the entries, then sub 0 = n;
+    an entry written while sub 0 is not 0 aborts 0x06010000.
+    """
+
+    index: int
+    first: int  # 0x1600 or 0x1A00
+    entries: list[int] = field(default_factory=lambda: [0] * PDOS_PER_DIRECTION)
+    count: int = 0
+
+    @classmethod
+    def default(cls, receive: bool) -> Assignment:
+        index, first, pdos = (RX_ASSIGN, RX_MAP_FIRST, DEFAULT_RX) if receive else \
+            (TX_ASSIGN, TX_MAP_FIRST, DEFAULT_TX)
+        out = cls(index, first)
+        out.assign(pdos)
+        return out
+
+    @property
+    def assigned(self) -> list[int]:
+        return self.entries[:self.count]
+
+    def allowed(self, pdo_index: int) -> bool:
+        return self.first <= pdo_index < self.first + PDOS_PER_DIRECTION
+
+    def set_entry(self, sub: int, value: int) -> None:
+        if self.count != 0:
+            raise SdoAbort(AbortCode.UNSUPPORTED_ACCESS, self.index, sub)
+        if value != 0 and not self.allowed(value):  # only the default PDOs exist
+            raise SdoAbort(AbortCode.VALUE_RANGE, self.index, sub)
+        self.entries[sub - 1] = value
+
+    def set_count(self, value: int) -> None:
+        if value > PDOS_PER_DIRECTION:
+            raise SdoAbort(AbortCode.VALUE_TOO_HIGH, self.index, 0)
+        chosen = self.entries[:value]
+        if 0 in chosen or len(set(chosen)) != len(chosen):
+            raise SdoAbort(AbortCode.VALUE_RANGE, self.index, 0)
+        self.count = value
+
+    def assign(self, pdo_indices: Sequence[int]) -> None:
+        """The whole sequence at once, as a configuration tool writes it."""
+        self.set_count(0)
+        for sub, value in enumerate(pdo_indices, start=1):
+            self.set_entry(sub, value)
+        self.set_count(len(pdo_indices))
+
+
+def assigned_pdos(assignment: Assignment, pdos: Sequence[Pdo]) -> list[Pdo]:
+    return [pdos[i - assignment.first] for i in assignment.assigned]
+
+
+def mapping_problem(assignment: Assignment, pdos: Sequence[Pdo], receive: bool) -> str | None:
+    """Why an assignment cannot be used for process data, or None (checked at PREOP -> SAFEOP).
+
+    An assigned PDO must map something; and an output object may appear only once among the
+    assigned RxPDOs: the default RxPDOs all carry the controlword, so two of them together
+    would write 0x6040 twice per cycle (docs/ethercat-coe.md §PDO assignment).
+    """
+    seen: set[tuple[int, int]] = set()
+    for pdo in assigned_pdos(assignment, pdos):
+        if pdo.count == 0:
+            return f"0x{pdo.map_index:04X} is assigned but maps nothing"
+        if not receive:
+            continue
+        for entry in pdo.mapped:
+            index, sub, _bits = split_entry(entry)
+            if index < 0x1000:  # DS 301 dummy entries may repeat
+                continue
+            if (index, sub) in seen:
+                return f"0x{index:04X}:{sub} is mapped twice in the assigned RxPDOs"
+            seen.add((index, sub))
+    return None
+
+
+def slot_of(rx: Assignment, tx: Assignment, mode: int) -> str | None:
+    """The slot whose PDOs are assigned (Position and CSP share theirs: the mode decides)."""
+    found = [s for s in SLOTS.values() if rx.assigned == [s.rx] and tx.assigned == [s.tx]]
+    for slot in found:
+        if slot.mode == mode:
+            return slot.name
+    return found[0].name if found else None

@@ -1,0 +1,400 @@
+"""The servo drive's EtherCAT side: a CoE slave in the rig's EtherCAT line (seed 004 ch. 5).
+
+``DriveEcatSlave`` wraps a :class:`~devices.servo.drive.ServoDrive` and is a slave of
+:class:`devices.master.EtherCatMaster` (the ``Slave`` protocol). It is on the line only while
+the drive is powered and c9 was 11 (EtherCAT) at the drive's power-up ("Parametro drive C9 =
+11 (modalità ethercat)"; no node number: "è lo stesso ethercat che definisce l'indirizzamento").
+Stepped after its drive and before the master, like the CANopen node.
+
+- ESM (devices/coe/esm.py): mailbox from PREOP, the PDO assignment checked at PREOP -> SAFEOP
+  (a bad one refuses with 0x0025 / 0x0024 and raises the drive's alarm 33 "mappatura pdo non
+  eseguita correttamente"), outputs needed for SAFEOP -> OP, no BOOT.
+- Process data: the master's frame (``exchange_frame``) carries the outputs image a PLC set
+  with ``write_outputs``; it is applied in OP only, through the same object dictionary as an
+  SDO, and it is the drive's Sync (SM-Synchron). Inputs are valid from SAFEOP. No frame for
+  the SM watchdog time in OP: back to SAFEOP with 0x001B and alarm 34 (sync timeout).
+- Mailbox: SDO upload / download / info over the dictionary of devices/coe/objects.py;
+  emergencies with the 0x603F codes (8-byte frames).
+
+Its events carry the drive's device id (ESM moves with ``machine: "esm"``, AL status codes,
+emergencies, LEDs), as the CANopen node's do. Choices: docs/ethercat-coe.md.
+"""
+
+from __future__ import annotations
+
+import logging
+import random
+from collections import deque
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+from devices.canopen.dictionary import CanOpenDictionary
+from devices.canopen.pdo import split_entry
+from devices.coe import mailbox, process_image
+from devices.coe.actions import ACTIONS, SlaveActions
+from devices.coe.assignment import Assignment, assigned_pdos, default_pdos, mapping_problem
+from devices.coe.csp import Csp
+from devices.coe.emergency import EmergencyMailbox
+from devices.coe.esm import (
+    INVALID_INPUT_MAPPING,
+    INVALID_OUTPUT_MAPPING,
+    NO_VALID_OUTPUTS,
+    RANK,
+    SM_WATCHDOG,
+    TRANSITION_CHECKS,
+    ErrorKind,
+    Esm,
+    request_refusal,
+)
+from devices.coe.leds import LedInputs, wanted_patterns
+from devices.coe.objects import build_coe_dictionary
+from devices.device import Action, CommandError, DeviceModel
+from devices.ethercat import AlState, describe_al_status_code
+from devices.events import EmergencySent
+from devices.od import OdEntry, SdoAbort
+from devices.servo.drive import ServoDrive
+from devices.trscat.indicators import LedBank
+
+logger = logging.getLogger(__name__)
+
+ETHERCAT = "ethercat"  # drive.fieldbus for c9 = 11
+BOX_NAME = "Drive 1 (SelemaDriveECAT)"  # TwinCAT's name for it (ch. 5: "Drive 5 (Selema...)")
+SM_WATCHDOG_US = 100_000  # ESC default SM watchdog (0x0420 = 1000 x 100 us)
+ACTIVITY_WINDOW_US = 50_000  # L/A flickers while a frame passed this recently
+MAPPING_ALARM = 33  # ch. 5: "Errore mappatura pdo non eseguita correttamente"
+SYNC_TIMEOUT_ALARM = 34  # ch. 5: "Timeout sincronizzazione con il Master ECAT"
+QUICK_STOP = 0x0002  # ch. 4 "rilascio asse": the drive stops and leaves torque
+SDO_LOG = 20
+OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
+
+
+class DriveEcatSlave(SlaveActions, DeviceModel):
+    KIND = "servo_ecat"
+    ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+
+    def __init__(self, device_id: str, drive: ServoDrive, rng: random.Random | None = None,
+                 box_name: str = BOX_NAME, station_address: int = 1001) -> None:
+        super().__init__(device_id=device_id, rng=rng or random.Random(0))
+        self.drive = drive
+        self.box_name = box_name
+        self.station_address = station_address
+        self.serial = self.rng.getrandbits(32)
+        self.link = True
+        self.on_line = False
+        self.esm = Esm(self.emit, drive.device_id)
+        self.csp = Csp(drive)
+        self.emergencies = EmergencyMailbox()
+        self.leds = LedBank(drive.device_id)
+        self.sdo_log: deque[dict[str, Any]] = deque(maxlen=SDO_LOG)
+        self._led_inputs: LedInputs | None = None
+        self._power_seen: object | None = None
+        self._reset()
+        self._follow_power()
+        self._refresh()
+
+    def _reset(self) -> None:
+        """Power-on values of the EtherCAT side."""
+        self.rx_pdos, self.tx_pdos = default_pdos(True), default_pdos(False)
+        self.rx_assign, self.tx_assign = Assignment.default(True), Assignment.default(False)
+        self.csp.selected = False
+        self.emergencies.reset()
+        self.last_frame_us: int | None = None
+        self.outputs: bytes | None = None  # the image the master's PLC writes
+        self.applied: bytes | None = None  # the last image applied to the drive
+        self.inputs: bytes | None = None
+        self._inputs_due = False  # a frame passed since the inputs were last packed
+        self.pd_control = False  # outputs applied since OP was entered
+        self.frames = 0
+        self.dictionary: CanOpenDictionary = build_coe_dictionary(self)
+
+    @property
+    def od(self) -> CanOpenDictionary:
+        """What the object-dictionary view lists (the dictionary a CoE master sees)."""
+        return self.dictionary
+
+    def dictionary_entry(self, index: int, sub: int) -> OdEntry:
+        return self.dictionary.entry(index, sub)
+
+    # ---- the master's side (devices.master.Slave) ---------------------------------------------
+    @property
+    def al_state(self) -> AlState:
+        return self.esm.state
+
+    @property
+    def al_status(self) -> int:
+        return self.esm.register
+
+    @property
+    def al_status_code(self) -> int:
+        return self.esm.code
+
+    def reachable(self) -> bool:
+        return self.on_line and self.link
+
+    def request_state(self, target: AlState) -> None:
+        """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
+        if not self.reachable():
+            return
+        now, esm, current = self.now_us, self.esm, self.esm.state
+        esm.requested = target
+        refusal = request_refusal(current, target)
+        if refusal is not None:
+            esm.refuse(refusal, now)
+        elif target is current or RANK[target] < RANK[current]:
+            if current is AlState.OP and target is not AlState.OP:
+                self._leave_op()
+            esm.accept(target, now)  # the same state again acknowledges the error flag
+            if not esm.at_least(AlState.SAFEOP):
+                self.inputs, self._inputs_due = None, False
+        else:
+            code = self._run_checks(current, target)
+            if code is not None:
+                esm.refuse(code, now)
+            else:
+                self._enter(target)
+        self._refresh()
+
+    def take_emergencies(self) -> list[bytes]:
+        """8-byte CoE emergencies (code LE16, register, 5 bytes); the mailbox runs from PREOP."""
+        if not self.reachable() or not self.esm.at_least(AlState.PREOP):
+            return []
+        return self.emergencies.take()
+
+    def exchange_frame(self, now_us: int) -> None:
+        """One cyclic frame of the master passed (the SM2 / SM3 events)."""
+        if not self.reachable():
+            return
+        self.last_frame_us = now_us
+        self.frames += 1
+        if self.esm.state is AlState.OP and self.outputs is not None:
+            self._apply_outputs(self.outputs)
+        self._inputs_due = self.esm.at_least(AlState.SAFEOP)
+
+    # ---- process data ----------------------------------------------------------------------
+    @property
+    def rx_assigned(self) -> list:
+        return assigned_pdos(self.rx_assign, self.rx_pdos)
+
+    @property
+    def tx_assigned(self) -> list:
+        return assigned_pdos(self.tx_assign, self.tx_pdos)
+
+    def write_outputs(self, data: bytes) -> None:
+        """The outputs image the master sends from its next frame on (the PLC's variables)."""
+        expected = process_image.size(self.rx_assigned)
+        if len(data) != expected:
+            raise CommandError(f"the outputs image of '{self.box_name}' is {expected} bytes "
+                               f"(0x1C12: {self._names(self.rx_assign)}), got {len(data)}")
+        self.outputs = bytes(data)
+
+    def read_inputs(self) -> bytes | None:
+        """The inputs image of the last frame; None below SAFEOP (no valid inputs).
+
+        Packed when read, once per frame: the statusword costs about what a drive step does,
+        and the rig's readers (a PLC, the panel) read between steps, at the frame's instant.
+        """
+        if not (self.reachable() and self.esm.at_least(AlState.SAFEOP)):
+            return None
+        if self._inputs_due:
+            self._inputs_due = False
+            self.inputs = self._pack_inputs()
+        return self.inputs
+
+    def cycle(self, outputs: bytes | None, now_us: int) -> bytes | None:
+        """One master cycle: outputs in (None = keep the image), frame, inputs out."""
+        if outputs is not None:
+            self.write_outputs(outputs)
+        self.exchange_frame(now_us)
+        return self.read_inputs()
+
+    def _apply_outputs(self, data: bytes) -> None:
+        lookup = self.dictionary.entry
+        for index, sub, value in process_image.unpack(self.rx_assigned, data, lookup):
+            try:
+                self.dictionary.write(index, sub, value)
+            except SdoAbort as exc:
+                logger.info("%s: output 0x%04X:%d not applied: %s", self.drive.device_id, index,
+                            sub, exc)
+        self.applied, self.pd_control = data, True
+        if self.drive.mode == 7 and self.drive.responding:  # interpolated or CSP: SM-Synchron
+            self.drive.apply("sync", {})
+
+    def _pack_inputs(self) -> bytes | None:
+        try:
+            return process_image.pack(self.tx_assigned, self.dictionary.entry,
+                                      self.dictionary.peek)
+        except (SdoAbort, CommandError) as exc:
+            logger.debug("%s: inputs not packed: %s", self.drive.device_id, exc)
+            return None
+
+    def configuration_changed(self) -> None:
+        """A PDO mapping or assignment changed (PREOP): the images start over."""
+        self.outputs = self.applied = self.inputs = None
+        self._inputs_due = False
+
+    # ---- ESM ----------------------------------------------------------------------------------
+    def _run_checks(self, current: AlState, target: AlState) -> int | None:
+        for name in TRANSITION_CHECKS.get((current, target), ()):
+            code = getattr(self, name)()
+            if code is not None:
+                return code
+        return None
+
+    def check_output_mapping(self) -> int | None:
+        return self._check_mapping(self.rx_assign, self.rx_pdos, True, INVALID_OUTPUT_MAPPING)
+
+    def check_input_mapping(self) -> int | None:
+        return self._check_mapping(self.tx_assign, self.tx_pdos, False, INVALID_INPUT_MAPPING)
+
+    def _check_mapping(self, assignment: Assignment, pdos: list, receive: bool,
+                       code: int) -> int | None:
+        problem = mapping_problem(assignment, pdos, receive)
+        if problem is None:
+            return None
+        if self.esm.code != code:  # one message per refusal episode, not per retry
+            self.drive.log(f"EtherCAT: PDO mapping refused at PREOP -> SAFEOP: {problem}")
+        self.drive.raise_alarm(MAPPING_ALARM, lasting=True)
+        return code
+
+    def check_outputs(self) -> int | None:
+        """SAFEOP -> OP: the master must be sending process data (SM2) already."""
+        if not self.rx_assigned:
+            return None
+        last = self.last_frame_us
+        return NO_VALID_OUTPUTS if last is None or self.now_us - last > SM_WATCHDOG_US else None
+
+    def _enter(self, target: AlState) -> None:
+        if target is AlState.SAFEOP:
+            self.drive.alarms.remove_cause(MAPPING_ALARM)  # a valid mapping passed
+            self._inputs_due = True
+        if target is AlState.OP:
+            self.pd_control = False
+        self.esm.accept(target, self.now_us)
+
+    def _leave_op(self) -> None:
+        """Outputs go to their safe state: a drive under process-data control stops."""
+        if self.pd_control and self.drive.responding:
+            try:
+                self.dictionary.write(0x6040, 0, QUICK_STOP)
+            except SdoAbort as exc:
+                logger.info("%s: quick stop on leaving OP refused: %s", self.drive.device_id, exc)
+        self.pd_control = False
+
+    def _check_watchdog(self) -> None:
+        if self.esm.state is not AlState.OP or not self.rx_assigned:
+            return
+        last = self.last_frame_us
+        if last is not None and self.now_us - last <= SM_WATCHDOG_US:
+            return
+        self.drive.log("EtherCAT: SM watchdog expired (no process data): OP -> SAFEOP")
+        self.drive.raise_alarm(SYNC_TIMEOUT_ALARM)
+        self._leave_op()
+        self.esm.fall(AlState.SAFEOP, SM_WATCHDOG, ErrorKind.WATCHDOG, self.now_us)
+
+    # ---- time ---------------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        super().step(now_us)
+        self._follow_power()
+        if self.on_line:
+            self._check_watchdog()
+            if self.esm.at_least(AlState.PREOP):
+                for frame in self.emergencies.watch(self.drive):
+                    self.emit(EmergencySent(now_us, self.drive.device_id,
+                                            code=int.from_bytes(frame[:2], "little"),
+                                            register=frame[2], data=frame[3:]))
+        self._refresh()
+
+    def _follow_power(self) -> None:
+        """On the line while the drive is powered with c9 = 11 latched at its power-up."""
+        seen = self.drive.latched_at_power_up if self.drive.powered else None
+        if seen is self._power_seen:
+            return
+        self._power_seen = seen
+        if self.on_line or self.esm.state is not AlState.INIT:
+            self.esm.reset(self.now_us)
+        self.on_line = seen is not None and self.drive.fieldbus == ETHERCAT
+        self._reset()
+
+    # ---- mailbox ------------------------------------------------------------------------------
+    def _mailbox(self) -> CanOpenDictionary:
+        if not self.reachable():
+            raise mailbox.MailboxClosed(f"'{self.box_name}' is not on the EtherCAT line "
+                                        "(drive off, c9 != 11 at power-up, or no link)")
+        if not self.esm.at_least(AlState.PREOP):
+            raise mailbox.MailboxClosed(f"'{self.box_name}' is in INIT: no mailbox yet")
+        return self.dictionary
+
+    def sdo_upload(self, index: int, sub: int) -> bytes:
+        try:
+            data = mailbox.upload(self._mailbox(), index, sub)
+        except SdoAbort as exc:
+            self._log_sdo("upload", index, sub, abort=exc)
+            raise
+        self._log_sdo("upload", index, sub, data=data)
+        return data
+
+    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
+        try:
+            mailbox.download(self._mailbox(), index, sub, data)
+        except SdoAbort as exc:
+            self._log_sdo("download", index, sub, data=data, abort=exc)
+            raise
+        self._log_sdo("download", index, sub, data=data)
+        self._refresh()
+
+    def sdo_info(self, index: int | None = None, sub: int = 0) -> Any:
+        """SDO Information: the object list (no index), or one entry's description."""
+        od = self._mailbox()
+        return mailbox.object_list(od) if index is None else \
+            mailbox.entry_description(od, index, sub)
+
+    def _log_sdo(self, op: str, index: int, sub: int, data: bytes = b"",
+                 abort: SdoAbort | None = None) -> None:
+        self.sdo_log.append({"t": self.now_us / 1e6, "op": op, "address": f"0x{index:04X}:{sub}",
+                             "data": data.hex(" ").upper(),
+                             "abort": f"0x{int(abort.code):08X}" if abort else None})
+
+    # ---- views --------------------------------------------------------------------------------
+    def _refresh(self) -> None:
+        now = self.now_us
+        activity = self.last_frame_us is not None and now - self.last_frame_us <= \
+            ACTIVITY_WINDOW_US
+        inputs = LedInputs(on_line=self.on_line, link=self.link, activity=activity,
+                           state=self.esm.state, error=self.esm.error,
+                           drive_alarm=self.on_line and bool(self.drive.alarms.latched))
+        if inputs != self._led_inputs:
+            self._led_inputs = inputs
+            self.leds.update(now, wanted_patterns(inputs), self.emit)
+
+    @staticmethod
+    def _names(assignment: Assignment) -> str:
+        return ", ".join(f"0x{i:04X}" for i in assignment.assigned) or "nothing"
+
+    def _pdo_view(self, pdos: list, assignment: Assignment) -> list[dict[str, Any]]:
+        return [{"index": f"0x{p.map_index:04X}", "assigned": p.map_index in assignment.assigned,
+                 "mapping": [f"0x{i:04X}:{s:02X}/{b}" for i, s, b in map(split_entry, p.mapped)]}
+                for p in pdos]
+
+    def snapshot(self) -> dict[str, Any]:
+        esm, inputs = self.esm, self.read_inputs()
+        return {
+            "kind": self.KIND, "id": self.device_id, "drive": self.drive.device_id,
+            "on_line": self.on_line, "link": self.link, "box_name": self.box_name,
+            "station_address": self.station_address,
+            "esm": esm.state.label if self.on_line else OFF, "requested": esm.requested.label,
+            "al_status": esm.register, "al_status_code": esm.code,
+            "al_status_text": describe_al_status_code(esm.code), "error": esm.error.value,
+            "leds": self.leds.snapshot(), "slot": self.slot(), "csp": self.csp.active,
+            "mode_display": self.csp.mode_display(),
+            "rx_assign": [f"0x{i:04X}" for i in self.rx_assign.assigned],
+            "tx_assign": [f"0x{i:04X}" for i in self.tx_assign.assigned],
+            "rx_pdos": self._pdo_view(self.rx_pdos, self.rx_assign),
+            "tx_pdos": self._pdo_view(self.tx_pdos, self.tx_assign),
+            "outputs": self.applied.hex(" ").upper() if self.applied is not None else None,
+            "inputs": inputs.hex(" ").upper() if inputs is not None else None,
+            "process_data_control": self.pd_control, "frames": self.frames,
+            "error_register": self.dictionary.peek(0x1001, 0),
+            "last_emergency": f"0x{self.emergencies.history.latest & 0xFFFF:04X}"
+            if self.emergencies.history.count else None,
+            "sdo": list(self.sdo_log),
+        }

@@ -1,0 +1,226 @@
+"""The drive's EtherCAT state machine (seed 004 ch. 5 "Stati macchina", "Transizioni"; AL status
+codes of seed 000 §7.7; ETG.1000.6 transitions; ETG.1300 indicators as ch. 5 refers to them).
+"""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+from coe_bench import CIA402_ENABLE, make_bench
+
+from devices.coe.drive_slave import DriveEcatSlave
+from devices.coe.mailbox import MailboxClosed
+from devices.ethercat import AlState
+from devices.master import EtherCatMaster
+
+INIT, PREOP, SAFEOP, OP = AlState.INIT, AlState.PREOP, AlState.SAFEOP, AlState.OP
+BOOT = AlState.BOOT
+PATH = {INIT: (), PREOP: (PREOP,), SAFEOP: (PREOP, SAFEOP), OP: (PREOP, SAFEOP, OP)}
+
+# (from, requested) -> AL status code of the refusal; every other pair is accepted.
+# ETG.1000.6: no skipping upwards; ch. 5: "BOOT ... Nota: non presente nel drive".
+REFUSED = {
+    (INIT, SAFEOP): 0x0011, (INIT, OP): 0x0011, (PREOP, OP): 0x0011,
+    (INIT, BOOT): 0x0013, (PREOP, BOOT): 0x0013, (SAFEOP, BOOT): 0x0013, (OP, BOOT): 0x0013,
+}
+
+
+@pytest.mark.parametrize("start", [INIT, PREOP, SAFEOP, OP])
+@pytest.mark.parametrize("target", [INIT, PREOP, SAFEOP, OP, BOOT])
+def test_requests_accepted_or_refused_with_the_al_code(start: AlState, target: AlState) -> None:
+    bench = make_bench()
+    bench.go(*PATH[start])
+    assert bench.slave.al_state is start
+    bench.go(target)
+    code = REFUSED.get((start, target))
+    if code is None:
+        assert (bench.slave.al_state, bench.slave.al_status) == (target, int(target))
+        assert bench.slave.al_status_code == 0
+    else:
+        assert bench.slave.al_state is start
+        assert bench.slave.al_status == int(start) | 0x10  # error indication
+        assert bench.slave.al_status_code == code
+
+
+def test_a_refusal_is_acknowledged_by_requesting_the_current_state() -> None:
+    bench = make_bench()
+    bench.go(INIT, OP)
+    assert bench.slave.al_status == 0x11
+    bench.go(INIT)
+    assert (bench.slave.al_status, bench.slave.al_status_code) == (0x01, 0)
+
+
+def test_esm_events_carry_the_drive_id_and_the_esm_machine() -> None:
+    bench = make_bench()
+    bench.go(PREOP, SAFEOP, OP, OP, BOOT)
+    states = [(e["device"], e["from"], e["to"], e["machine"]) for e in bench.kinds("state")
+              if e.get("machine") == "esm"]
+    assert states == [("servo", "INIT", "PREOP", "esm"), ("servo", "PREOP", "SAFEOP", "esm"),
+                      ("servo", "SAFEOP", "OP", "esm")]
+    assert [e["code"] for e in bench.kinds("al_status")] == ["0x0013"]
+
+
+def test_mailbox_only_from_preop() -> None:
+    """Ch. 5: INIT "Nessuna comunicazione con AL"; PREOP "Disponibile la comunicazione via
+    Mailbox (SDO)"."""
+    bench = make_bench()
+    with pytest.raises(MailboxClosed):
+        bench.read(0x1018, 1)
+    bench.go(PREOP)
+    assert bench.read(0x1018, 1) == 0x0000078F
+    bench.go(INIT)
+    with pytest.raises(MailboxClosed):
+        bench.read(0x1018, 1)
+
+
+def test_inputs_valid_from_safeop_outputs_applied_only_in_op() -> None:
+    """Ch. 5: PREOP no process data; SAFEOP "disponibile solo per gli input"; OP both."""
+    bench = make_bench()
+    bench.go(PREOP)
+    bench.slave.write_outputs(b"\x06\x00\x00\x00\x00\x00")
+    bench.run(2)
+    assert bench.slave.read_inputs() is None
+    bench.go(SAFEOP)
+    bench.run(2)
+    assert bench.inputs("<Hi") == (bench.drive.statusword, bench.drive.position_user)
+    assert bench.drive.cw == 0  # outputs not applied in SAFEOP
+    bench.go(OP)
+    bench.run(2)
+    assert bench.drive.cw == 0x0006
+    assert bench.drive.state.label == "Ready to switch on"
+
+
+def test_safeop_to_op_needs_process_data_from_the_master() -> None:
+    bench = make_bench()
+    bench.cycling = False
+    bench.run(150)  # the last frame is older than the SM watchdog time
+    bench.go(PREOP, SAFEOP, OP)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (SAFEOP, 0x0019)
+    bench.cycling = True
+    bench.run(1)
+    bench.go(OP)
+    assert bench.slave.al_state is OP
+
+
+def test_sm_watchdog_drops_to_safeop_and_raises_alarm_34() -> None:
+    """No process data in OP for the SM watchdog time (100 ms): SAFEOP + 0x001B, error LED
+    double flash (ETG.1300), and the drive's alarm 34 "Timeout sincronizzazione con il Master
+    ECAT" (ch. 5) with its 0x603F code 0x8700."""
+    bench = make_bench()
+    bench.go(PREOP, SAFEOP, OP)
+    bench.cycling = False
+    bench.run(100)
+    assert bench.slave.al_state is OP
+    bench.run(2)
+    assert (bench.slave.al_state, bench.slave.al_status) == (SAFEOP, 0x14)
+    assert bench.slave.al_status_code == 0x001B
+    assert bench.slave.leds.patterns["Error"].value == "double_flash"
+    assert bench.drive.alarms.latched == [34]
+    assert bench.read(0x603F) == 0x8700
+
+
+def test_leaving_op_under_process_data_control_stops_the_drive() -> None:
+    bench = make_bench()
+    bench.up_to(OP)
+    for value in CIA402_ENABLE:
+        bench.outputs("<Hi", value, 0, ms=2)
+    assert bench.drive.state.label == "Operation enabled"
+    bench.go(SAFEOP)
+    bench.run(300)
+    assert bench.drive.state.label == "Switch on disabled"  # quick stop, then released
+
+
+def test_leaving_op_without_process_data_control_leaves_the_drive_alone() -> None:
+    bench = make_bench()
+    bench.up_to(PREOP)
+    bench.cw(*CIA402_ENABLE)
+    bench.go(SAFEOP, OP, SAFEOP)
+    bench.run(50)
+    assert bench.drive.state.label == "Operation enabled"
+
+
+@pytest.mark.parametrize(("state", "pattern"), [
+    (INIT, "off"), (PREOP, "blinking"), (SAFEOP, "single_flash"), (OP, "on")])
+def test_status_led_follows_the_esm(state: AlState, pattern: str) -> None:
+    """Ch. 5: Status "Se sempre acceso ethercat è in operational mode" (ETG.1300 RUN)."""
+    bench = make_bench()
+    bench.go(*PATH[state])
+    bench.run(1)
+    assert bench.slave.leds.snapshot()["Status"] == pattern
+
+
+def test_error_led_blinks_on_a_refusal_and_is_on_with_a_drive_alarm() -> None:
+    bench = make_bench()
+    bench.go(PREOP, OP)
+    assert bench.slave.leds.snapshot()["Error"] == "blinking"
+    bench.go(PREOP)
+    bench.drive.apply("inject_alarm", {"code": "2"})
+    bench.run(1)
+    assert bench.slave.leds.snapshot()["Error"] == "on"
+
+
+def test_silent_unless_c9_was_ethercat_at_power_up() -> None:
+    """Ch. 5: "Parametro drive C9 = 11 (modalità ethercat)", read at power-up (ch. 2, 4)."""
+    bench = make_bench(fieldbus="modbus")
+    assert not bench.slave.reachable()
+    bench.go(PREOP)
+    assert bench.slave.al_state is INIT
+    assert bench.slave.leds.snapshot()["L/A"] == "off"
+    bench.drive.apply("write_parameter", {"parameter": "c9", "value": 11})
+    bench.run(1)
+    assert not bench.slave.reachable()  # latched at power-up only
+    bench.drive.apply("save", {})
+    bench.run(3100)
+    bench.drive.apply("power", {"on": False})
+    bench.run(1)
+    bench.drive.apply("power", {"on": True})
+    bench.run(60)
+    assert bench.slave.reachable()
+    bench.go(PREOP)
+    assert bench.slave.al_state is PREOP
+
+
+def test_power_off_takes_the_slave_to_init_and_power_on_restores_the_defaults() -> None:
+    bench = make_bench()
+    bench.go(PREOP)
+    bench.write(0x1C13, 0, 0, 1)
+    bench.go(SAFEOP, OP)
+    bench.drive.apply("power", {"on": False})
+    bench.run(1)
+    assert (bench.slave.al_state, bench.slave.reachable()) == (INIT, False)
+    bench.drive.apply("power", {"on": True})
+    bench.run(60)
+    bench.go(PREOP)
+    assert bench.read(0x1C13, 0) == 1
+
+
+def test_pulled_cable_the_master_loses_the_slave_and_brings_it_back() -> None:
+    """With the built-in master: the slave in OP, the cable pulled, the SM watchdog drops it to
+    SAFEOP; with the cable back the master finds it in SAFEOP and takes it back to OP."""
+    bench = make_bench()
+    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
+                            retry_interval_us=200_000)
+    bench.cycling = False  # the master's frames now
+    for _ in range(1000):
+        bench.step()
+        master.step(bench.t_us)
+    assert bench.slave.al_state is OP
+    assert bench.slave.station_address == 1001
+    bench.slave.apply("link", {"connected": False})
+    for _ in range(200):
+        bench.step()
+        master.step(bench.t_us)
+    assert bench.slave.al_state is SAFEOP and bench.slave.al_status_code == 0x001B
+    bench.slave.apply("link", {"connected": True})
+    for _ in range(1000):
+        bench.step()
+        master.step(bench.t_us)
+    assert bench.slave.al_state is OP
+    assert bench.drive.alarms.latched == [34]  # the drive still shows why it stopped
+
+
+def test_slave_protocol_of_the_master() -> None:
+    slave: DriveEcatSlave = make_bench().slave
+    assert slave.box_name == "Drive 1 (SelemaDriveECAT)"
+    assert slave.reachable() and slave.al_state is INIT and slave.take_emergencies() == []
