@@ -30,7 +30,7 @@ from typing import Any, ClassVar
 
 from devices.canopen.dictionary import CanOpenDictionary
 from devices.canopen.pdo import split_entry
-from devices.coe import mailbox, process_image
+from devices.coe import process_image
 from devices.coe.actions import ACTIONS, SlaveActions
 from devices.coe.assignment import Assignment, assigned_pdos, default_pdos, mapping_problem
 from devices.coe.csp import Csp
@@ -47,6 +47,7 @@ from devices.coe.esm import (
     request_refusal,
 )
 from devices.coe.leds import LedInputs, wanted_patterns
+from devices.coe.mailbox import SdoServices
 from devices.coe.objects import build_coe_dictionary
 from devices.device import Action, CommandError, DeviceModel
 from devices.ethercat import AlState, describe_al_status_code
@@ -68,7 +69,7 @@ SDO_LOG = 20
 OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
 
 
-class DriveEcatSlave(SlaveActions, DeviceModel):
+class DriveEcatSlave(SlaveActions, SdoServices, DeviceModel):
     KIND = "servo_ecat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -314,45 +315,6 @@ class DriveEcatSlave(SlaveActions, DeviceModel):
             self.esm.reset(self.now_us)
         self.on_line = seen is not None and self.drive.fieldbus == ETHERCAT
         self._reset()
-
-    # ---- mailbox ------------------------------------------------------------------------------
-    def _mailbox(self) -> CanOpenDictionary:
-        if not self.reachable():
-            raise mailbox.MailboxClosed(f"'{self.box_name}' is not on the EtherCAT line "
-                                        "(drive off, c9 != 11 at power-up, or no link)")
-        if not self.esm.at_least(AlState.PREOP):
-            raise mailbox.MailboxClosed(f"'{self.box_name}' is in INIT: no mailbox yet")
-        return self.dictionary
-
-    def sdo_upload(self, index: int, sub: int) -> bytes:
-        try:
-            data = mailbox.upload(self._mailbox(), index, sub)
-        except SdoAbort as exc:
-            self._log_sdo("upload", index, sub, abort=exc)
-            raise
-        self._log_sdo("upload", index, sub, data=data)
-        return data
-
-    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
-        try:
-            mailbox.download(self._mailbox(), index, sub, data)
-        except SdoAbort as exc:
-            self._log_sdo("download", index, sub, data=data, abort=exc)
-            raise
-        self._log_sdo("download", index, sub, data=data)
-        self._refresh()
-
-    def sdo_info(self, index: int | None = None, sub: int = 0) -> Any:
-        """SDO Information: the object list (no index), or one entry's description."""
-        od = self._mailbox()
-        return mailbox.object_list(od) if index is None else \
-            mailbox.entry_description(od, index, sub)
-
-    def _log_sdo(self, op: str, index: int, sub: int, data: bytes = b"",
-                 abort: SdoAbort | None = None) -> None:
-        self.sdo_log.append({"t": self.now_us / 1e6, "op": op, "address": f"0x{index:04X}:{sub}",
-                             "data": data.hex(" ").upper(),
-                             "abort": f"0x{int(abort.code):08X}" if abort else None})
 
     # ---- views --------------------------------------------------------------------------------
     def _refresh(self) -> None:

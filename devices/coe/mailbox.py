@@ -14,14 +14,17 @@ aborts 0x06070012). Refusals are :class:`devices.od.SdoAbort` with the DS 301 co
 
 from __future__ import annotations
 
+from collections import deque
 from typing import TYPE_CHECKING, Any
 
 from devices.canopen.sdo import decode_download
 from devices.device import CommandError
+from devices.ethercat import AlState
 from devices.od import AbortCode, SdoAbort, encode
 
 if TYPE_CHECKING:
     from devices.canopen.dictionary import CanOpenDictionary
+    from devices.coe.drive_slave import DriveEcatSlave
 
 
 class MailboxClosed(CommandError):
@@ -54,3 +57,47 @@ def entry_description(dictionary: CanOpenDictionary, index: int, sub: int) -> di
     return {"index": index, "sub": sub, "name": entry.name, "data_type": int(entry.dtype),
             "type": entry.dtype.short, "bit_length": entry.bit_length,
             "access": entry.access.value, "pdo_mappable": entry.pdo_mappable}
+
+
+class SdoServices:
+    """Mixin of :class:`~devices.coe.drive_slave.DriveEcatSlave`: the mailbox's SDO side."""
+
+    sdo_log: deque[dict[str, Any]]
+
+    def _mailbox(self: DriveEcatSlave) -> CanOpenDictionary:
+        if not self.reachable():
+            raise MailboxClosed(f"'{self.box_name}' is not on the EtherCAT line (drive off, "
+                                "c9 != 11 at power-up, or no link)")
+        if not self.esm.at_least(AlState.PREOP):
+            raise MailboxClosed(f"'{self.box_name}' is in INIT: no mailbox yet")
+        return self.dictionary
+
+    def sdo_upload(self: DriveEcatSlave, index: int, sub: int) -> bytes:
+        try:
+            data = upload(self._mailbox(), index, sub)
+        except SdoAbort as exc:
+            self._log_sdo("upload", index, sub, abort=exc)
+            raise
+        self._log_sdo("upload", index, sub, data=data)
+        return data
+
+    def sdo_download(self: DriveEcatSlave, index: int, sub: int, data: bytes) -> None:
+        try:
+            download(self._mailbox(), index, sub, data)
+        except SdoAbort as exc:
+            self._log_sdo("download", index, sub, data=data, abort=exc)
+            raise
+        self._log_sdo("download", index, sub, data=data)
+        self._refresh()
+
+    def sdo_info(self: DriveEcatSlave, index: int | None = None, sub: int = 0) -> Any:
+        """SDO Information: the object list (no index), or one entry's description."""
+        od = self._mailbox()
+        return object_list(od) if index is None else entry_description(od, index, sub)
+
+    def _log_sdo(self: DriveEcatSlave, op: str, index: int, sub: int, data: bytes = b"",
+                 abort: SdoAbort | None = None) -> None:
+        """The panel's "last SDO" lines, failures included."""
+        self.sdo_log.append({"t": self.now_us / 1e6, "op": op, "address": f"0x{index:04X}:{sub}",
+                             "data": data.hex(" ").upper(),
+                             "abort": f"0x{int(abort.code):08X}" if abort else None})

@@ -4,6 +4,7 @@ codes of seed 000 §7.7; ETG.1000.6 transitions; ETG.1300 indicators as ch. 5 re
 
 from __future__ import annotations
 
+import json
 import random
 
 import pytest
@@ -224,3 +225,13 @@ def test_slave_protocol_of_the_master() -> None:
     slave: DriveEcatSlave = make_bench().slave
     assert slave.box_name == "Drive 1 (SelemaDriveECAT)"
     assert slave.reachable() and slave.al_state is INIT and slave.take_emergencies() == []
+
+
+def test_snapshot_is_plain_data() -> None:
+    bench = make_bench()
+    bench.up_to(OP)
+    snap = json.loads(json.dumps(bench.slave.snapshot()))
+    assert (snap["esm"], snap["slot"], snap["rx_assign"], snap["tx_assign"]) == \
+        ("OP", "interpolated", ["0x1600"], ["0x1A02"])
+    assert snap["inputs"] == "40 86 00 00 00 00"  # 0x8640, the fresh drive's statusword
+    assert make_bench(fieldbus="canopen").slave.snapshot()["esm"] == "Off"

@@ -10,6 +10,7 @@ import struct
 import pytest
 from coe_bench import CIA402_ENABLE, make_bench
 
+from devices.coe import process_image
 from devices.coe.assignment import SLOTS
 from devices.device import CommandError
 from devices.ethercat import AlState
@@ -238,8 +239,6 @@ def test_modes_of_operation_through_process_data() -> None:
 
 def test_image_layout_as_twincat_shows_it() -> None:
     """Ch. 5 TwinCAT "Process Data": 0x1A02 = 0x6041 at offset 0.0, 0x6064 at 2.0, size 6.0."""
-    from devices.coe import process_image
-
     slave = make_bench().slave
     rows = process_image.layout(slave.tx_assigned)
     assert [(r.index, r.offset, r.bits) for r in rows] == [(0x6041, 0, 16), (0x6064, 2, 32)]
