@@ -170,7 +170,8 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
     keyed = [(f"fastcat[{i}].id", f.id) for i, f in enumerate(fastcats)]
     keyed += [(f"servo[{i}].id", s.id) for i, s in enumerate(servos)]
     keyed += [(f"{s.kind}.id", s.id) for s in slaves]
-    seen: set[str] = {"master", "scenario"} | {f"{s.id}-can" for s in servos}
+    seen: set[str] = {"master", "scenario"} | {f"{s.id}-can" for s in servos} | \
+        {f"{s.id}-ecat" for s in servos}
     for key, device_id in keyed:
         if device_id in seen:
             raise RigConfigError(source, key, f"duplicate or reserved device id {device_id!r}")
@@ -181,7 +182,10 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
         if node in [n for _, n in modbus_nodes[:j]]:
             raise RigConfigError(source, f"servo[{i}].node_id",
                                  f"node {node} is already used on the Modbus line")
-    on_line = [f.id for f in fastcats] + [s.id for s in slaves]
+    # A drive whose rig file says fieldbus = "ethercat" is cabled into the line (its CoE slave);
+    # every drive keeps its CANopen node, silent unless c9 chose CANopen at power-up.
+    on_line = [f.id for f in fastcats] + [s.id for s in slaves] + [
+        f"{s.id}-ecat" for s in servos if s.settings.get("fieldbus") == "ethercat"]
     if line is None:
         line = on_line
     else:
@@ -335,6 +339,7 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
     ``state_dir=None`` keeps every flash in memory: a scenario run then starts from the same
     factory state every time, whatever earlier runs stored.
     """
+    from devices.coe.drive_slave import DriveEcatSlave
     from devices.fastcat.coupler import FastCat
     from devices.master import EtherCatMaster
 
@@ -373,6 +378,13 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
         # so a trainee who sets c9 = 5, saves and power-cycles sees the node boot.
         can_id = f"{servo.id}-can"
         devices[can_id] = CanOpenNode(can_id, drive, random.Random(rng.getrandbits(64)))
+        ecat_id = f"{servo.id}-ecat"
+        if ecat_id in spec.line:
+            position = spec.line.index(ecat_id) + 1
+            # A string seed: adding a drive to the line leaves every other device's draws.
+            devices[ecat_id] = slaves[ecat_id] = DriveEcatSlave(
+                ecat_id, drive, random.Random(f"{spec.seed}/{ecat_id}"),
+                box_name=f"Drive {position} (SelemaDriveECAT)", station_address=1000 + position)
     if slaves:
         devices["master"] = EtherCatMaster(
             "master", random.Random(rng.getrandbits(64)),

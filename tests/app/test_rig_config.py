@@ -86,7 +86,8 @@ def test_ethercat_line_rig_builds_in_line_order() -> None:
     rig = build_rig(load_rig_spec(DEFAULT_RIG.parent / "ethercat_line.toml"), state_dir=None)
     master = rig.devices["master"].snapshot()
     assert [(s["name"], s["station_address"]) for s in master["slaves"]] == [
-        ("Box 1 (FastCAT)", 1001), ("Box 2 (TRS-CAT)", 1002), ("Box 3 (CPX-E-EC)", 1003)]
+        ("Box 1 (FastCAT)", 1001), ("Box 2 (TRS-CAT)", 1002), ("Box 3 (CPX-E-EC)", 1003),
+        ("Drive 4 (SelemaDriveECAT)", 1004)]
 
 
 def test_bad_slave_configuration_is_one_clear_error() -> None:
