@@ -71,6 +71,8 @@ class SlaveLink:
 
 def next_state(current: AlState, target: AlState) -> AlState:
     """One ESM step from ``current`` toward ``target`` (down: straight there)."""
+    if current is AlState.BOOT:  # BOOT is left only through INIT (ETG.1000.6)
+        return AlState.INIT
     if _RANK[target] <= _RANK[current]:
         return target
     return next(s for s, r in _RANK.items() if r == _RANK[current] + 1)

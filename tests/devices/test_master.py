@@ -190,3 +190,12 @@ def test_log_history_is_bounded() -> None:
     for _ in range(LOG_LENGTH + 10):
         bench.master._log(bench.fc, "x")
     assert len(bench.master.log) == LOG_LENGTH
+
+
+def test_a_slave_in_boot_is_taken_through_init() -> None:
+    """ETG.1000.6: BOOT -> INIT is the only way out of BOOT (the CPX-E-EC has a BOOT state)."""
+    from devices.ethercat import AlState
+    from devices.master import next_state
+
+    assert next_state(AlState.BOOT, AlState.OP) is AlState.INIT
+    assert next_state(AlState.INIT, AlState.OP) is AlState.PREOP
