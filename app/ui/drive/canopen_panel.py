@@ -1,0 +1,223 @@
+"""CANopen in the dashboard: the CANopen tab (NMT state, heartbeat, a decoded frame log like a
+bus monitor, the PDO mapping) and a small master in the control panel, so a trainee can bring
+the drive up from the browser.
+
+Everything shown comes from the CANopen node's snapshot (devices/canopen/node.py,
+docs/canopen.md): ``nmt``, ``heartbeat_ms``, guarding, ``error_register``, ``rpdo`` /
+``tpdo`` with their mappings, ``last_sdo`` / ``last_pdo`` and the last decoded frames. The
+master's frames (``canopen_master``) go to the node in the simulation thread, as if they came
+off the bus; the node answers on its line at the n1 bit rate, and both directions appear in the
+log. They do not leave the process: a master on ``--can-interface udp_multicast`` does not see
+them (docs/dashboard.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.runtime import Runtime
+from app.ui.commands import CommandSender, notify
+from app.ui.drive import canopen_master as cm
+from app.ui.drive.drive_state import FIELDBUS_NAMES
+from app.ui.style import badge, esc, kv_table
+from devices.device import CommandError
+from devices.od import SdoAbort
+
+FRAME_ROWS = 60
+KIND_CLASS = {"EMCY": "fr-emcy"}
+
+NodeId = Callable[[], str | None]  # the selected drive's CANopen node (device id), if any
+
+
+def nmt_badge(state: str) -> str:
+    tone = {"Operational": "ok", "Pre-operational": "warn", "Stopped": "bad"}.get(state, "muted")
+    return badge(state, tone)
+
+
+def status_rows(node: Mapping[str, Any], drive: Mapping[str, Any]) -> list[tuple[str, str]]:
+    heartbeat = int(node.get("heartbeat_ms", 0))
+    guard, factor = int(node.get("guard_time_ms", 0)), int(node.get("life_time_factor", 0))
+    guarding = f"{guard} ms x {factor}" if guard else "off"
+    if node.get("life_guard_error"):
+        guarding += " · life guard error"
+    bus = node.get("bus") or {}
+    history = ", ".join(node.get("error_history") or []) or "empty"
+    return [
+        ("NMT state", nmt_badge(str(node.get("nmt", "Off")))),
+        ("CiA 402 state", esc(drive.get("ds402_state", "?"))),
+        ("Heartbeat", esc((f"0x1017 = {heartbeat} ms" if heartbeat else "0x1017 = 0 (off)")
+                          + f" · guarding {guarding}")),
+        ("Error register", esc(f"0x{int(node.get('error_register', 0)):02X} · 0x1003: "
+                               f"{history}")),
+        ("Bus", esc(f"rx {bus.get('rx', 0)} · tx {bus.get('tx', 0)} · SYNC "
+                    f"{bus.get('syncs', 0)} · load {100 * float(bus.get('load', 0.0)):.1f}%")),
+        ("Last SDO", esc(node.get("last_sdo") or "-")),
+        ("Last PDO", esc(node.get("last_pdo") or "-")),
+    ]
+
+
+def status_html(node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any]) -> str:
+    rate = int(node.get("bitrate", 0)) // 1000
+    head = (f'<p class="fr-title"><b>{esc(node_id)}</b> · node {esc(node.get("node_id"))} · '
+            f"{rate} kbit/s (n1)</p>")
+    if not node.get("active"):
+        bus = str(drive.get("fieldbus", "?"))
+        reason = "the drive is powered off" if not drive.get("powered") else \
+            f"the drive speaks {FIELDBUS_NAMES.get(bus, bus)} (c9 read at power-up)"
+        return head + ('<p class="fr-muted fr-note" id="fr-can-off">CANopen is silent: '
+                       f"{esc(reason)}. Set c9 = 5 (CANopen), save to flash and switch the "
+                       "drive off and on.</p>")
+    return head + kv_table(status_rows(node, drive), "fr-can")
+
+
+def frames_html(frames: Sequence[Mapping[str, Any]], rows: int = FRAME_ROWS) -> str:
+    """The bus monitor, newest first: time | dir | COB-ID | type | data | meaning."""
+    body = "".join(
+        f'<tr class="{"fr-rx" if f.get("dir") == "rx" else ""} '
+        f'{KIND_CLASS.get(str(f.get("kind")), "")}"><td>{float(f.get("t", 0.0)):.3f}</td>'
+        f'<td>{esc(f.get("dir", ""))}</td><td>{esc(f.get("id", ""))}</td>'
+        f'<td>{esc(f.get("kind", ""))}</td><td>{esc(f.get("data", ""))}</td>'
+        f'<td>{esc(f.get("text", ""))}</td></tr>'
+        for f in list(frames)[::-1][:rows])
+    if not body:
+        body = '<tr><td colspan="6" class="fr-muted">no frames yet</td></tr>'
+    return ('<div class="fr-frames-wrap"><table class="fr-frames" id="fr-frames"><colgroup>'
+            '<col style="width:4.1em"><col style="width:2em"><col style="width:3.9em">'
+            '<col style="width:4.5em"><col style="width:8.2em"><col></colgroup><thead><tr>'
+            '<th>time</th><th title="rx: to the drive, tx: from the drive">dir</th>'
+            '<th>COB-ID</th><th>type</th><th>data</th><th>meaning</th></tr></thead>'
+            f"<tbody>{body}</tbody></table></div>")
+
+
+def pdo_html(node: Mapping[str, Any]) -> str:
+    rows = []
+    for pdo in [*(node.get("rpdo") or []), *(node.get("tpdo") or [])]:
+        extra = ""
+        if pdo.get("event_timer_ms"):
+            extra = f", timer {pdo['event_timer_ms']} ms"
+        if pdo.get("inhibit_100us"):
+            extra += f", inhibit {int(pdo['inhibit_100us']) / 10:g} ms"
+        cls = "" if pdo.get("valid") else "fr-off"
+        rows.append(f'<tr class="{cls}"><td>{esc(pdo.get("pdo", ""))}</td>'
+                    f'<td>{esc(pdo.get("can_id", ""))}{"" if pdo.get("valid") else " off"}</td>'
+                    f'<td>{esc(pdo.get("type", ""))}{esc(extra)}</td>'
+                    f'<td>{esc(" ".join(pdo.get("mapping") or []) or "-")}</td></tr>')
+    return ('<table class="fr-pdo" id="fr-pdo"><thead><tr><th>PDO</th><th>COB-ID</th>'
+            f'<th>type</th><th>mapping (index:sub/bits)</th></tr></thead><tbody>{"".join(rows)}'
+            "</tbody></table>")
+
+
+class CanOpenMaster:
+    """The master's controls (in the control panel): NMT, 0x6040 over SDO, heartbeat, SDO."""
+
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
+                 node_id: NodeId) -> None:
+        self._runtime = runtime
+        self._sender = sender
+        self._node_id = node_id
+        self.sent = 0  # frames handed to the node so far (tests wait on it)
+        gui = server.gui
+        with gui.add_folder("CANopen master"):
+            self._nmt = gui.add_dropdown("NMT command", tuple(cm.NMT_COMMANDS))
+            send_nmt = gui.add_button("Send NMT", hint="COB-ID 0: command, node-ID")
+            names = list(cm.CONTROLWORD_COMMANDS)
+            cw_a = gui.add_button_group("0x6040 (SDO)", tuple(names[:3]))
+            cw_b = gui.add_button_group("0x6040 more", tuple(names[3:]))
+            self._heartbeat = gui.add_number("Heartbeat (ms)", 1000, min=0, max=65535, step=1)
+            set_hb = gui.add_button("Set heartbeat", hint="SDO download 0x1017:0")
+            self._object = gui.add_text("SDO object", "0x6041:0")
+            self._value = gui.add_text("SDO value", "0")
+            sdo = gui.add_button_group("SDO", ("Upload", "Download"))
+
+        @send_nmt.on_click
+        def _(event: viser.GuiEvent) -> None:
+            command = cm.NMT_COMMANDS.get(self._nmt.value)
+            if command is not None:
+                self._send(event.client, "NMT", lambda node: cm.nmt(command, node))
+
+        def controlword(event: viser.GuiEvent, value: str) -> None:
+            cw = cm.CONTROLWORD_COMMANDS[value]
+            index, sub = cm.CONTROLWORD
+            self._send(event.client, f"0x6040 = 0x{cw:04X}",
+                       lambda node: cm.sdo_download(node, index, sub, cw, 2))
+
+        cw_a.on_click(lambda event: controlword(event, cw_a.value))
+        cw_b.on_click(lambda event: controlword(event, cw_b.value))
+
+        @set_hb.on_click
+        def _(event: viser.GuiEvent) -> None:
+            ms = int(self._heartbeat.value)
+            index, sub = cm.HEARTBEAT
+            self._send(event.client, "0x1017",
+                       lambda node: cm.sdo_download(node, index, sub, ms, 2))
+
+        @sdo.on_click
+        def _(event: viser.GuiEvent) -> None:
+            try:
+                index, sub = cm.parse_object(self._object.value)
+                value = cm.parse_int(self._value.value) if sdo.value == "Download" else 0
+            except ValueError as exc:
+                notify(event.client, "SDO", f"bad input: {exc}", error=True)
+                return
+            if sdo.value == "Upload":
+                self._send(event.client, "SDO upload",
+                           lambda node: cm.sdo_upload(node, index, sub))
+            else:
+                self._send(event.client, "SDO download",
+                           lambda node: cm.sdo_download(node, index, sub, value,
+                                                        self._object_size(index, sub)))
+
+    # ---- sending (simulation thread) --------------------------------------------------------
+    def _device(self) -> Any:
+        device_id = self._node_id()
+        return self._runtime.rig.devices.get(device_id) if device_id else None
+
+    def _object_size(self, index: int, sub: int) -> int:
+        """Bytes of an object (simulation thread); 4 for one the node does not have, so that
+        the node answers with its abort."""
+        node = self._device()
+        try:
+            size = node.dictionary.entry(index, sub).bit_length // 8
+        except (AttributeError, SdoAbort):
+            return 4
+        return size if 1 <= size <= 4 else 4
+
+    def _send(self, client: viser.ClientHandle | None, label: str,
+              build: Callable[[int], cm.Frame]) -> None:
+        def run() -> None:
+            node = self._device()
+            if node is None or not getattr(node, "active", False):
+                raise CommandError("the drive's CANopen node is silent (c9 is not CANopen, "
+                                   "or the drive is off)")
+            frame = build(int(node.node_id))
+            node.receive(frame.can_id, frame.data)
+            self.sent += 1
+
+        self._sender.submit(client, f"CANopen {label}", run)
+
+
+
+class CanOpenMonitor:
+    """The CANopen tab (left panel): status, the frame log, the PDO mapping."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        gui = server.gui
+        self._status = gui.add_html(status_html("", {}, {}))
+        gui.add_markdown("**Frame log** (newest first)")
+        self._frames = gui.add_html(frames_html([]))
+        gui.add_markdown("**PDO mapping**")
+        self._pdos = gui.add_html(pdo_html({}))
+        self._last: dict[str, str] = {}
+
+    def update(self, node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any]) -> None:
+        self._show("status", self._status, status_html(node_id, node, drive))
+        self._show("frames", self._frames, frames_html(node.get("frames") or []))
+        self._show("pdos", self._pdos, pdo_html(node))
+
+    def _show(self, key: str, handle: Any, content: str) -> None:
+        if self._last.get(key) != content:
+            handle.content = content
+            self._last[key] = content

@@ -1,0 +1,268 @@
+"""Servo drive controls: power, TEN / IEN, torque, mode, moves, jog, homing, alarms, load jam,
+registers and parameters, fieldbus and flash.
+
+Every control is a drive action (devices/servo/actions.py), queued through ``CommandSender``;
+a sequence that must not be split (the positioner's Move, velocity with a new target) runs as
+one function in the simulation thread. Labels are unique across the dashboard ("Drive power",
+"Inject alarm") so that they never clash with the coupler's controls.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import viser
+
+from app.runtime import Runtime
+from app.ui.commands import CommandSender
+from app.ui.drive.drive_state import FIELDBUS_NAMES
+from app.ui.panels.action_form import ActionForm
+from app.ui.panels.widgets import Mirror, from_user, set_options
+from app.ui.style import esc
+from devices.device import Action
+from devices.servo import control
+from devices.servo.alarms import alarm_table
+from devices.servo.parameters import FIELDBUS_BY_C9, PARAMETER_BY_NAME, PARAMETERS
+from devices.servo.registers import MODE_NAMES, REGISTERS, R
+
+Target = Callable[[], str]
+
+MODE_OPTIONS = tuple(f"{mode} {name}" for mode, name in MODE_NAMES.items())
+REGISTER_OPTIONS = tuple(f"R{n:02d} {spec.name}" for n, spec in sorted(REGISTERS.items()))
+PARAMETER_OPTIONS = tuple(f"{spec.name} {spec.meaning}" for spec in PARAMETERS.values())
+FIELDBUS_OPTIONS = tuple(f"{code} {FIELDBUS_NAMES[name]}"
+                         for code, name in FIELDBUS_BY_C9.items())
+START_BITS = control.BIT5 | control.BIT6 | control.BIT7  # R00 bits 5..7: mode specific
+JOG = {"Jog -": -1, "Jog 0": 0, "Jog +": 1}
+
+
+def alarm_options(fieldbus: str) -> tuple[str, ...]:
+    """``"16 FOLLOWING_ERROR — maximum position ..."`` for every alarm of the drive with this
+    fieldbus (ch. 3, ch. 5; ch. 6 for Profinet)."""
+    return tuple(f"{a.code} {a.name} — {a.description}"
+                 for a in sorted(alarm_table(fieldbus).values(), key=lambda a: a.code))
+
+
+def leading_int(option: str) -> int:
+    """The number an option starts with: ``"-127 analog reference"`` -> -127."""
+    return int(option.split(" ", 1)[0])
+
+
+def register_of(option: str) -> int:
+    return int(option.split(" ", 1)[0][1:])
+
+
+def register_option(n: int) -> str:
+    return next(o for o in REGISTER_OPTIONS if register_of(o) == n)
+
+
+def mode_option(mode: Any) -> str | None:
+    return next((o for o in MODE_OPTIONS if leading_int(o) == mode), None)
+
+
+class DrivePanel:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
+                 target: Target, actions: Mapping[str, Action]) -> None:
+        self._runtime = runtime
+        self._sender = sender
+        self._target = target
+        self._fieldbus = "modbus"
+        self._result_lock = threading.Lock()
+        self._result = ""  # parked by a read's future (simulation thread), shown by update()
+        self._shown_result: str | None = None
+        gui = server.gui
+
+        with gui.add_folder("Drive power and torque"):
+            self._power = gui.add_checkbox("Drive power", True, hint="the drive's supply")
+            self._ten = gui.add_checkbox("TEN (24 V)", True, hint="hardware torque enable")
+            self._ien = gui.add_checkbox("IEN (24 V)", True, hint="hardware motion enable")
+            torque = gui.add_button_group("Torque", ("Enable", "Disable"))
+            reset = gui.add_button("Alarm reset", hint="a 0 -> 1 -> 0 pulse of the reset bit")
+        with gui.add_folder("Motion"):
+            self._mode = gui.add_dropdown("Mode", MODE_OPTIONS)
+            self._position = gui.add_number("Target position", 0, step=1,
+                                            min=-0x8000_0000, max=0x7FFF_FFFF)
+            self._relative = gui.add_checkbox("Relative", False, hint="Inc_mod: from the "
+                                              "last target")
+            moves = gui.add_button_group("Positioner", ("Move", "Start", "Stop"))
+            home = gui.add_button("Home", hint="mode 6 with R18 method, R19 offset, "
+                                               "R20 / R21 speeds")
+            self._velocity = gui.add_number("Target velocity", 1000, step=1,
+                                            min=-0x8000_0000, max=0x7FFF_FFFF)
+            run = gui.add_button("Run at velocity", hint="mode 3, R13 = target velocity")
+            jog = gui.add_button_group("Jog", tuple(JOG))
+        with gui.add_folder("Alarms and load"):
+            self._alarm = gui.add_dropdown("Alarm", alarm_options(self._fieldbus))
+            alarm_ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
+            self._jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
+                                         "following error, alarm 16")
+        with gui.add_folder("Registers and parameters", expand_by_default=False):
+            self._register = gui.add_dropdown("Register", REGISTER_OPTIONS,
+                                              initial_value=register_option(R.PROFILE_VELOCITY))
+            self._register_value = gui.add_number("Register value", 0, step=1,
+                                                  min=-0x8000_0000, max=0xFFFF_FFFF)
+            reg_ops = gui.add_button_group("Register access", ("Read register",
+                                                               "Write register"))
+            self._parameter = gui.add_dropdown("Parameter", PARAMETER_OPTIONS)
+            self._parameter_value = gui.add_number("Parameter value", 0, step=1, min=0,
+                                                   max=0xFFFF)
+            par_ops = gui.add_button_group("Parameter access", ("Read param.", "Write param."))
+            self._result_html = gui.add_html('<p class="fr-muted">-</p>')
+        with gui.add_folder("Fieldbus and flash", expand_by_default=False):
+            self._c9 = gui.add_dropdown("Fieldbus (c9)", FIELDBUS_OPTIONS)
+            c7 = PARAMETER_BY_NAME["c7"]
+            self._c7 = gui.add_number("Node (c7)", 1, min=c7.low, max=c7.high, step=1)
+            write_bus = gui.add_button("Write c9 and c7")
+            save = gui.add_button("Save to flash", hint="only without torque; a few seconds")
+            gui.add_html('<p class="fr-muted" style="font-size:0.75em">c9, c7 and n1 are read '
+                         "at power-up: write, save, then switch Drive power off and on.</p>")
+        with gui.add_folder("Other drive actions", expand_by_default=False):
+            self._form = ActionForm(gui, actions, self._apply, label="Drive action")
+
+        self._mirrors = {name: Mirror(handle) for name, handle in (
+            ("powered", self._power), ("ten", self._ten), ("ien", self._ien),
+            ("jammed", self._jam), ("mode", self._mode), ("c9", self._c9),
+            ("c7", self._c7))}
+
+        def user(handle: Any, send: Callable[[viser.GuiEvent], None]) -> None:
+            handle.on_update(lambda event: send(event) if from_user(event) else None)
+
+        user(self._power, lambda e: self._do(e, "power", on=self._power.value))
+        user(self._ten, lambda e: self._do(e, "set_input", name="ten", value=self._ten.value))
+        user(self._ien, lambda e: self._do(e, "set_input", name="ien", value=self._ien.value))
+        user(self._jam, lambda e: self._do(e, "jam_load", active=self._jam.value))
+        user(self._mode, lambda e: self._do(e, "set_mode", mode=leading_int(self._mode.value)))
+        torque.on_click(lambda e: self._do(e, "enable", on=torque.value == "Enable"))
+        reset.on_click(lambda e: self._do(e, "alarm_reset"))
+        home.on_click(lambda e: self._do(e, "home"))
+        jog.on_click(lambda e: self._do(e, "jog", direction=JOG[jog.value]))
+        moves.on_click(lambda e: self._positioner(e, moves.value))
+        run.on_click(lambda e: self._run_velocity(e))
+        alarm_ops.on_click(lambda e: self._do(
+            e, "inject_alarm" if alarm_ops.value == "Inject alarm" else "clear_alarm",
+            code=str(leading_int(self._alarm.value))))
+        reg_ops.on_click(lambda e: self._register_access(e, reg_ops.value))
+        par_ops.on_click(lambda e: self._parameter_access(e, par_ops.value))
+        write_bus.on_click(lambda e: self._write_fieldbus(e))
+        save.on_click(lambda e: self._do(e, "save"))
+
+    # ---- commands -----------------------------------------------------------------------
+    def _do(self, event: viser.GuiEvent, action: str, **args: Any) -> None:
+        self._sender.send(event.client, self._target(), action, args)
+
+    def _apply(self, client: viser.ClientHandle | None, action: str,
+               args: dict[str, Any]) -> None:
+        self._sender.send(client, self._target(), action, args)
+
+    def _sequence(self, event: viser.GuiEvent, label: str,
+                  steps: Callable[[Callable[..., Any]], Any],
+                  done: Callable[[Any], None] | None = None) -> None:
+        """Run ``steps(apply)`` in the simulation thread: no other command in between."""
+        target = self._target()
+        rig = self._runtime.rig
+
+        def run() -> Any:
+            return steps(lambda action, **args: rig.apply(target, action, args))
+
+        self._sender.submit(event.client, f"{target}: {label}", run, done=done)
+
+    def _positioner(self, event: viser.GuiEvent, button: str) -> None:
+        if button == "Start":
+            self._do(event, "start")
+            return
+        if button == "Stop":
+            self._do(event, "stop")
+            return
+        position, relative = int(self._position.value), bool(self._relative.value)
+
+        def steps(apply: Callable[..., Any]) -> None:
+            # As the seed's Modbus example does before 0x23: the start bits low first, so
+            # that the start is a rising edge in both views whatever the last mode left.
+            if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 1:
+                apply("set_mode", mode=1)
+            r00 = int(apply("read_register", register=R.CONTROL_WORD))
+            if r00 & (START_BITS | control.STP_CMD):
+                apply("control_register", value=r00 & ~(START_BITS | control.STP_CMD))
+            apply("move", target=position, relative=relative)
+
+        self._sequence(event, "move", steps)
+
+    def _run_velocity(self, event: viser.GuiEvent) -> None:
+        velocity = int(self._velocity.value)
+
+        def steps(apply: Callable[..., Any]) -> None:
+            if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 3:
+                apply("set_mode", mode=3)
+            apply("write_register", register=R.TARGET_VELOCITY, value=velocity)
+
+        self._sequence(event, "velocity", steps)
+
+    def _park(self, text: str) -> None:
+        with self._result_lock:
+            self._result = text
+
+    def _register_access(self, event: viser.GuiEvent, button: str) -> None:
+        option = self._register.value
+        n = register_of(option)
+        if button == "Write register":
+            value = int(self._register_value.value)
+            self._sender.send(event.client, self._target(), "write_register",
+                              {"register": n, "value": value},
+                              done=lambda _r: self._park(f"{option} = {value} written"))
+        else:
+            self._sender.send(event.client, self._target(), "read_register", {"register": n},
+                              done=lambda r: self._park(f"{option} = {r}"))
+
+    def _parameter_access(self, event: viser.GuiEvent, button: str) -> None:
+        name = self._parameter.value.split(" ", 1)[0]
+        if button == "Write param.":
+            value = int(self._parameter_value.value)
+            self._sender.send(event.client, self._target(), "write_parameter",
+                              {"parameter": name, "value": value},
+                              done=lambda _r: self._park(f"{name} = {value} written"))
+        else:
+            self._sender.send(event.client, self._target(), "read_parameter",
+                              {"parameter": name}, done=lambda r: self._park(f"{name} = {r}"))
+
+    def _write_fieldbus(self, event: viser.GuiEvent) -> None:
+        c9, c7 = leading_int(self._c9.value), int(self._c7.value)
+
+        def steps(apply: Callable[..., Any]) -> None:
+            apply("write_parameter", parameter="c9", value=c9)
+            apply("write_parameter", parameter="c7", value=c7)
+
+        self._sequence(event, "c9 / c7", steps, done=lambda _r: self._park(
+            f"c9 = {c9}, c7 = {c7} written: save, then power the drive off and on"))
+
+    # ---- view -----------------------------------------------------------------------------
+    def update(self, snap: Mapping[str, Any]) -> None:
+        fieldbus = str(snap.get("fieldbus", self._fieldbus))
+        if fieldbus != self._fieldbus:  # Profinet numbers 30..33 differently (ch. 6)
+            self._fieldbus = fieldbus
+            set_options(self._alarm, list(alarm_options(fieldbus)))
+        self._mirrors["powered"].follow(bool(snap.get("powered")))
+        self._mirrors["ten"].follow(bool(snap.get("ten")))
+        self._mirrors["ien"].follow(bool(snap.get("ien")))
+        self._mirrors["jammed"].follow(bool(snap.get("jammed")))
+        option = mode_option(snap.get("mode"))
+        if option is not None:
+            self._mirrors["mode"].follow(option)
+        bus = next((o for o in FIELDBUS_OPTIONS
+                    if FIELDBUS_BY_C9.get(leading_int(o)) == fieldbus), None)
+        if bus is not None:  # what the drive latched at power-up
+            self._mirrors["c9"].follow(bus)
+        if snap.get("node_id") is not None:
+            self._mirrors["c7"].follow(int(snap["node_id"]))
+        with self._result_lock:
+            result = self._result
+        if result != self._shown_result:
+            self._result_html.content = ('<p id="fr-drive-result" class="fr-note">'
+                                         f"<code>{esc(result)}</code></p>")
+            self._shown_result = result
+
+    def forget(self) -> None:
+        """Another drive was selected: take its values into the widgets."""
+        for mirror in self._mirrors.values():
+            mirror.forget()

@@ -1,0 +1,277 @@
+"""The Drive tab's text: state, both status words bit by bit, control words, the drive's log.
+
+What a commissioning engineer reads off a servo drive (seed 004; docs/servo-drive.md): the CiA
+402 state and the 7-segment display, the mode, position / velocity / following error, the
+alarm with its description and effect, the hardware consents TEN / IEN, the CN2 outputs and
+the axis switches; then the register-mode status word R05 (ch. 1 quick reference, names per
+mode) and the CiA 402 statusword 0x6041 (ch. 4) bit by bit. Pure functions of the snapshot, and
+small panels that rewrite their HTML only when it changes.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import viser
+
+from app.ui.style import badge, esc, kv_table
+from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
+from devices.servo import control, ds402
+from devices.servo.registers import MODE_NAMES
+
+FIELDBUS_NAMES = {"modbus": "Modbus RTU", "canopen": "CANopen", "ethercat": "EtherCAT",
+                  "profinet": "Profinet"}
+
+# R05 bits in words (ch. 1 "Status Word"); the names are the quick reference's.
+R05_MEANING = {
+    "Ten_st": "in torque", "Ien_st": "motion enabled", "Stp_st": "stop ramp running",
+    "Alm_st": "in alarm", "Ltc_st": "position latched", "sp_rdy": "ready for a set-point",
+    "EOJ": "End of Job", "Following_error": "following error", "Zero_velocity": "zero speed",
+    "Homing_ok": "homing OK", "Homing_error": "homing error", "Ip_st": "interpolator active",
+    "Axis_started": "electronic axis started", "Save_done": "save done",
+    "Load_done": "load done",
+}
+R05_ALERT = frozenset({"Alm_st", "Following_error", "Homing_error"})
+
+# 0x6041 in short words for the grid (the full DSP 402 names are the cells' tooltips).
+SW_SHORT = {
+    0: "ready to switch on", 1: "switched on", 2: "operation enabled", 3: "fault",
+    4: "voltage enabled", 5: "quick stop", 6: "switch on disabled", 7: "warning",
+    8: "latch input", 9: "remote", 10: "target reached", 11: "limit active",
+    12: "mode specific", 13: "mode specific", 14: "latched position",
+    15: "velocity forced 0",
+}
+# Bits 12 / 13 depend on the mode (DSP 402; docs/servo-drive.md, status word table).
+SW_MODE_SPECIFIC: dict[int, dict[int, str]] = {
+    1: {12: "set-point acknowledge", 13: "following error"},
+    -1: {12: "set-point acknowledge", 13: "following error"},
+    3: {12: "speed = 0"},
+    6: {12: "homing attained", 13: "homing error"},
+    7: {12: "ip mode active"},
+}
+SW_ALERT = frozenset({3, 7, 11})
+LOG_ROWS = 12
+
+
+def mode_text(mode: Any) -> str:
+    try:
+        return f"{int(mode)} {MODE_NAMES[int(mode)]}"
+    except (KeyError, TypeError, ValueError):
+        return str(mode)
+
+
+def fieldbus_text(snap: Mapping[str, Any]) -> str:
+    bus = str(snap.get("fieldbus", "?"))
+    return f"{FIELDBUS_NAMES.get(bus, bus)} node {snap.get('node_id', '?')}"
+
+
+def title(drive_id: str, snap: Mapping[str, Any], t_us: int) -> str:
+    """``drive · Modbus RTU node 1 · t = 12.3 s`` (tenths: stable in a paused rig)."""
+    return (f'<p class="fr-title"><b>{esc(drive_id)}</b> · {esc(fieldbus_text(snap))} · '
+            f'<span class="fr-muted">t = {t_us // 100_000 / 10:.1f} s</span></p>')
+
+
+def state_badge(snap: Mapping[str, Any]) -> str:
+    if not snap.get("powered"):
+        return badge("power off", "muted")
+    state = str(snap.get("ds402_state", "?"))
+    tone = "ok" if state == "Operation enabled" else "bad" if "ault" in state else "warn"
+    html = badge(state, tone)
+    if snap.get("saving"):
+        html += " " + badge("saving to flash", "warn")
+    elif snap.get("save_pending"):
+        html += ' <span class="fr-muted">save waits for torque off</span>'
+    return html
+
+
+def alarm_html(snap: Mapping[str, Any]) -> str:
+    alarm = snap.get("alarm")
+    if not alarm:
+        return badge("none", "ok")
+    name = f"{alarm.get('code')} {alarm.get('name', '')}"
+    html = (f"{badge(name, 'bad')}<br>{esc(alarm.get('description', ''))} "
+            f"<span class=\"fr-muted\">({esc(alarm.get('effect', ''))})</span>")
+    others = [a for a in snap.get("alarms") or [] if a != alarm.get("code")]
+    if others:
+        html += f'<br><span class="fr-muted">also latched: {esc(others)}</span>'
+    return html
+
+
+def _on(flag: Any, on: str = "on", off: str = "off") -> str:
+    return on if flag else off
+
+
+def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
+    outputs = snap.get("outputs") or {}
+    limits = snap.get("limits") or {}
+    velocity = float(snap.get("velocity", 0.0))
+    fe = float(snap.get("following_error", 0.0))
+    position = (f"<b>{esc(snap.get('position_counts', 0))}</b> "
+                f"<span class=\"fr-muted\">target {esc(snap.get('target', 0))}</span>")
+    if snap.get("homed"):
+        position += " " + badge("homed", "ok")
+    consents = f"TEN {_on(snap.get('ten'))} · IEN {_on(snap.get('ien'))}"
+    if snap.get("jammed"):
+        consents += " · " + badge("load jammed", "bad")
+    else:
+        consents = esc(consents)
+    return [
+        ("CiA 402 state", state_badge(snap) + ' <span class="fr-muted">display</span> '
+         f'<b>{esc(snap.get("display", "") or "(dark)")}</b>'),
+        ("Mode", esc(mode_text(snap.get("mode")))),
+        ("Position", position),
+        ("Velocity", esc(f"{velocity:.0f} u/s · following error {fe:.1f}")),
+        ("Alarm", alarm_html(snap)),
+        ("TEN / IEN", consents),
+        ("Outputs", esc(f"End of Job {_on(outputs.get('end_of_job'))} · Near to target "
+                        f"{_on(outputs.get('near_target'))} · Brake "
+                        f"{_on(outputs.get('brake'), 'released', 'held')}")),
+        ("Switches", esc(f"NL {_on(limits.get('neg'))} · home {_on(limits.get('home'))} · "
+                         f"PL {_on(limits.get('pos'))}")),
+    ]
+
+
+# ---- status and control words, bit by bit --------------------------------------------------
+def bit_grid(caption: str, value: int, names: Mapping[int, tuple[str, str]],
+             bits: int, alert: Iterable[int] = (), columns: int = 4) -> str:
+    """A grid of ``bits`` cells, bit 0 first: number and short name, lit when set.
+    ``names`` maps a bit to (short text, tooltip)."""
+    alert = set(alert)
+    cells = []
+    for bit in range(bits):
+        short, full = names.get(bit, ("", f"bit {bit}"))
+        on = bool(value >> bit & 1)
+        cls = ("fr-on" + (" fr-alert" if bit in alert else "")) if on else ""
+        cells.append(f'<td class="{cls}" title="{esc(full)}"><b>{bit}</b>{esc(short)}</td>')
+    rows = "".join("<tr>" + "".join(cells[i:i + columns]) + "</tr>"
+                   for i in range(0, bits, columns))
+    return (f'<table class="fr-bits"><caption>{esc(caption)} '
+            f"<span>0x{value:0{(bits + 3) // 4}X}</span></caption>{rows}</table>")
+
+
+def r05_names(mode: int) -> dict[int, tuple[str, str]]:
+    return {bit: (name, f"{name}: {R05_MEANING.get(name, name)}")
+            for bit, name in control.status_bit_names(mode).items()}
+
+
+def r05_alert(mode: int) -> set[int]:
+    return {bit for bit, name in control.status_bit_names(mode).items() if name in R05_ALERT}
+
+
+def statusword_names(mode: int) -> dict[int, tuple[str, str]]:
+    names = {bit: (SW_SHORT[bit], ds402.STATUSWORD_BITS[bit]) for bit in SW_SHORT}
+    for bit, text in SW_MODE_SPECIFIC.get(mode, {}).items():
+        names[bit] = (text, f"{ds402.STATUSWORD_BITS[bit]}: {text}")
+    return names
+
+
+def statusword_alert(mode: int) -> set[int]:
+    extra = {13} if 13 in SW_MODE_SPECIFIC.get(mode, {}) else set()
+    return set(SW_ALERT) | extra
+
+
+def set_bits(value: int, names: Mapping[int, str]) -> str:
+    on = [names.get(bit, f"bit {bit}") for bit in range(16) if value >> bit & 1]
+    return ", ".join(on) or "none"
+
+
+def control_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
+    mode = int(snap.get("mode", 1))
+    r00 = int(snap.get("control_register", 0))
+    cw = int(snap.get("controlword", 0))
+    return [
+        ("R00 control", esc(f"0x{r00:04X}: {set_bits(r00, control.control_bit_names(mode))}")),
+        ("0x6040", esc(f"0x{cw:04X}: {set_bits(cw, ds402.CONTROLWORD_BITS)}")),
+    ]
+
+
+def words_html(snap: Mapping[str, Any]) -> str:
+    mode = int(snap.get("mode", 1))
+    return (bit_grid("R05 status word", int(snap.get("status_register", 0)), r05_names(mode),
+                     8, r05_alert(mode))
+            + bit_grid("0x6041 statusword", int(snap.get("statusword", 0)),
+                       statusword_names(mode), 16, statusword_alert(mode))
+            + kv_table(control_rows(snap), "fr-drive-cw"))
+
+
+# ---- the drive's own log --------------------------------------------------------------------
+def event_text(event: Event) -> tuple[str, bool] | None:
+    """A drive or CANopen-node event in words, and whether it reads as an error."""
+    if isinstance(event, StateChanged):
+        machine = {"": "CiA 402", "nmt": "NMT"}.get(event.machine, event.machine)
+        return f"{machine}: {event.from_state} -> {event.to_state}", False
+    if isinstance(event, AlarmChanged):
+        verb = "raised" if event.active else "cleared"
+        return f"alarm {event.code} {event.name} {verb}", event.active
+    if isinstance(event, EmergencySent):
+        record = event.to_record()
+        return f"EMCY {record['code']} register {record['register']} data {record['data']}", \
+            True
+    if isinstance(event, LogLine):
+        return event.text, "fail" in event.text.lower()
+    return None
+
+
+class DriveLog:
+    """The last drive events, newest first (the dashboard's event log shows the coupler's)."""
+
+    def __init__(self, rows: int = LOG_ROWS) -> None:
+        self._rows: collections.deque[tuple[int, str, str, bool]] = collections.deque(
+            maxlen=rows)
+
+    def add(self, events: Iterable[Event]) -> None:
+        for event in events:
+            found = event_text(event)
+            if found is not None:
+                self._rows.append((event.t_us, event.device, *found))
+
+    def html(self, device: str) -> str:
+        rows = [r for r in reversed(self._rows) if r[1] == device]
+        if not rows:
+            return '<p class="fr-muted fr-drive-log">no drive events yet</p>'
+        items = "".join(f'<li class="{"fr-err" if err else ""}">{t / US_PER_S:8.3f} s '
+                        f"{esc(text)}</li>" for t, _, text, err in rows)
+        return f'<ul class="fr-drive-log" id="fr-drive-log">{items}</ul>'
+
+    def clear(self) -> None:
+        self._rows.clear()
+
+
+class _Html:
+    """One HTML handle that is rewritten only when its content changes."""
+
+    def __init__(self, server: viser.ViserServer, content: str) -> None:
+        self.handle = server.gui.add_html(content)
+        self._last = content
+
+    def show(self, content: str) -> None:
+        if content != self._last:
+            self.handle.content = content
+            self._last = content
+
+
+class DriveStatePanel:
+    """Title and state table (above the plots)."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self._html = _Html(server, kv_table([("CiA 402 state", "-")], "fr-drive"))
+
+    def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
+        self._html.show(title(drive_id, snap, t_us) + kv_table(state_rows(snap), "fr-drive"))
+
+
+class StatusWordsPanel:
+    """Both status words bit by bit, the control words, and the drive's log (below the
+    plots)."""
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self._words = _Html(server, "")
+        server.gui.add_markdown("**Drive log**")
+        self._log_html = _Html(server, DriveLog().html(""))
+        self.log = DriveLog()
+
+    def update(self, drive_id: str, snap: Mapping[str, Any]) -> None:
+        self._words.show(words_html(snap))
+        self._log_html.show(self.log.html(drive_id))

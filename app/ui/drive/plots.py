@@ -1,0 +1,128 @@
+"""Live plots of the drive: position, velocity and following error over simulated time.
+
+Samples are taken in the simulation thread, every :data:`SAMPLE_US` of *simulated* time (a
+runtime step listener reading the drive's snapshot), not from the frames the view receives:
+a paused rig advanced by 20 s in one go still gets a full curve, and a screenshot at a given
+simulated instant always shows the same plot. The dashboard thread sends the last
+:data:`WINDOW_S` seconds to the uPlot charts a few times a second.
+"""
+
+from __future__ import annotations
+
+import collections
+import threading
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import numpy as np
+import viser
+
+SAMPLE_US = 20_000  # 50 samples per simulated second
+WINDOW_S = 20.0  # the plots show the last 20 simulated seconds
+SEND_PERIOD_S = 0.25  # wall time between two updates of the charts
+PLOT_HEIGHT = 64  # pixels of one chart without its time axis
+TIME_AXIS_HEIGHT = 28
+VALUE_AXIS_WIDTH = 70  # room for "-600,000"
+
+# (snapshot key, title, colour)
+SIGNALS: tuple[tuple[str, str, str], ...] = (
+    ("position_counts", "Position (user units)", "#1f4f8f"),
+    ("velocity", "Velocity (user units / s)", "#1d8b4a"),
+    ("following_error", "Following error (user units)", "#c0392b"),
+)
+
+SnapshotFn = Callable[[], Mapping[str, Any] | None]
+
+
+class DriveSampler:
+    """A ring of (t, position, velocity, following error), filled in the simulation thread."""
+
+    def __init__(self, snapshot: SnapshotFn, window_s: float = WINDOW_S) -> None:
+        self._snapshot = snapshot
+        self._lock = threading.Lock()
+        self._rows: collections.deque[tuple[float, ...]] = collections.deque(
+            maxlen=int(window_s * 1e6 / SAMPLE_US) + 1)
+        self._next_us: int | None = None
+        self.version = 0  # bumps with every sample: the view sends only when it moved
+        self.active = True
+
+    def on_step(self, now_us: int) -> None:
+        """Runtime step listener (simulation thread): one sample every SAMPLE_US."""
+        if not self.active:
+            return
+        if self._next_us is None:  # samples on multiples of SAMPLE_US: the same every run
+            self._next_us = -(-now_us // SAMPLE_US) * SAMPLE_US
+        if now_us < self._next_us:
+            return
+        self._next_us = now_us - now_us % SAMPLE_US + SAMPLE_US
+        snap = self._snapshot()
+        if not snap:
+            return
+        row = (now_us / 1e6, *(float(snap.get(key, 0.0) or 0.0) for key, _, _ in SIGNALS))
+        with self._lock:
+            self._rows.append(row)
+            self.version += 1
+
+    def reset(self) -> None:
+        """Forget the samples (another drive was selected); called from the view."""
+        with self._lock:
+            self._rows.clear()
+            self.version += 1
+
+    def columns(self) -> tuple[np.ndarray, ...]:
+        """(t, position, velocity, following error) as arrays, oldest first."""
+        with self._lock:
+            rows = list(self._rows)
+        if not rows:
+            return tuple(np.zeros(0) for _ in range(len(SIGNALS) + 1))
+        data = np.asarray(rows, dtype=np.float64)
+        return tuple(data[:, i] for i in range(data.shape[1]))
+
+
+class DrivePlots:
+    """Three small uPlot charts sharing the time axis (simulated seconds)."""
+
+    def __init__(self, server: viser.ViserServer, sampler: DriveSampler) -> None:
+        self._sampler = sampler
+        self._sent_version = -1
+        self._sent_at = 0.0
+        empty = (np.zeros(1), np.zeros(1))
+        last = len(SIGNALS) - 1
+        # One time axis for the three, under the last chart: the others are shorter by it.
+        self._charts = [
+            server.gui.add_uplot(
+                empty, ({"label": "t (s)"},
+                        {"label": label.split(" (")[0], "stroke": colour, "width": 1.5}),
+                title=label, height=PLOT_HEIGHT + (TIME_AXIS_HEIGHT if i == last else 0),
+                legend={"show": False}, cursor={"show": False},
+                scales={"x": {"time": False}},
+                axes=({"show": i == last, "size": TIME_AXIS_HEIGHT}, {"size": VALUE_AXIS_WIDTH}),
+                padding=(8, 12, 6, 0))
+            for i, (_key, label, colour) in enumerate(SIGNALS)]
+
+    def update(self, now: float, t_us: int, force: bool = False) -> bool:
+        """Send new samples when there are some and the last send is SEND_PERIOD_S old
+        (``now`` is wall time); True when the charts were written."""
+        version = self._sampler.version
+        if version == self._sent_version:
+            return False
+        if not force and now - self._sent_at < SEND_PERIOD_S:
+            return False
+        columns = self._sampler.columns()
+        if len(columns[0]) == 0:
+            return False
+        t_end = max(float(columns[0][-1]), t_us / 1e6)
+        x_range = (max(0.0, t_end - WINDOW_S), max(t_end, WINDOW_S))
+        for chart, values in zip(self._charts, columns[1:], strict=True):
+            chart.scales = {"x": {"time": False, "auto": False, "range": x_range}}
+            chart.data = (columns[0], values)
+        self._sent_version, self._sent_at = version, now
+        return True
+
+    def caught_up(self) -> bool:
+        """True when the charts hold every sample taken so far (tests)."""
+        return self._sent_version == self._sampler.version
+
+    def drawn_points(self) -> int:
+        """Samples in the charts now (tests)."""
+        return len(self._charts[0].data[0]) if self._sent_version >= 0 else 0
