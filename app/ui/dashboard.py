@@ -15,6 +15,7 @@ import threading
 import time
 import urllib.parse
 from collections.abc import Callable, Mapping
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,6 +24,7 @@ import viser.theme
 
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
+from app.ui.drive.view import DriveView, axes_height
 from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
@@ -44,6 +46,7 @@ VIEW_ASPECT = (1280 - LEFT_WIDTH - RIGHT_WIDTH) / 670
 CAMERA_MARGIN = 0.4
 CAMERA_RISE = 0.12  # camera height over the rail centre, per unit of distance
 RAIL_SPACING = BODY_H + 2.0  # vertical distance between the rails of several couplers
+AXIS_GAP = 1.1  # from the lowest rail's bottom to the servo axes (its LED legend in between)
 CAMERA_FOV_DEG = 50.0
 
 TITLE_SVG = (
@@ -95,6 +98,9 @@ class Dashboard:
         described = runtime.rig.describe()
         self.fastcat_ids = _kind_ids(described, "fastcat")
         self.master_id = next(iter(_kind_ids(described, "master")), None)
+        self.drive_ids = _kind_ids(described, "servo")
+        self._side: Any = None  # the left panel, once built
+        self._control_tabs: Any = None  # FastCAT | Servo drive in the control panel
         # The panels drive the first coupler; every coupler gets its rail in the 3D view.
         self.device_id = self.fastcat_ids[0] if self.fastcat_ids else None
         self._sender = CommandSender(runtime)
@@ -108,17 +114,31 @@ class Dashboard:
         self._panels: _Panels | None = None
         if self.device_id is not None:
             self._panels = self._build_gui(described, self.device_id)
-        else:  # other device kinds have no view yet: say so instead of failing
-            logger.warning("rig '%s' has no FastCAT: the dashboard shows nothing", runtime.rig.name)
-            self.server.gui.add_markdown(f"Rig **{runtime.rig.name}** has no FastCAT coupler: "
-                                         "this dashboard shows FastCAT rigs only.")
+        elif not self.drive_ids:  # other device kinds have no view yet: say so, do not fail
+            logger.warning("rig '%s' has no FastCAT and no servo drive: the dashboard shows "
+                           "nothing", runtime.rig.name)
+            self.server.gui.add_markdown(f"Rig **{runtime.rig.name}** has no FastCAT coupler "
+                                         "and no servo drive: this dashboard shows those only.")
         self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING)
                         for i, d in enumerate(self.fastcat_ids)]
         for scene in self._scenes:
             scene.build_coupler()
         frame_slots = [len(self._device_snap(runtime.frame.snapshot, d).get("rail") or [])
                        for d in self.fastcat_ids]
-        self._frame_camera(max(frame_slots, default=0), max(len(self._scenes), 1))
+        # ---- servo drives (app/ui/drive): tabs, controls, one axis each under the rails ---
+        self._drives: DriveView | None = None
+        below = 0.0
+        if self.drive_ids:
+            rails, height = len(self._scenes), axes_height(len(self.drive_ids))
+            if rails:  # under the lowest rail
+                top = -(rails - 1) * RAIL_SPACING - BODY_H / 2 - AXIS_GAP
+                below = AXIS_GAP + height
+            else:  # where the rail would be
+                top, below = BODY_H / 2, max(height - BODY_H, 0.0)
+            self._drives = self._build_drives(described, top, max(frame_slots, default=0))
+        # A rig with drives only frames their axes (as wide as an 8-slot rail).
+        slots = max(frame_slots, default=MIN_FRAMED_SLOTS if self.drive_ids else 0)
+        self._frame_camera(slots, max(len(self._scenes), 1), below)
         center = self._camera_center
         # Scenario narration (Caption events), above the rail: what a screenshot should say.
         self._caption = server.scene.add_label(
@@ -152,11 +172,13 @@ class Dashboard:
         actions = described[device_id]["actions"]
         gui = self.server.gui
         gui.add_html(CSS)
-        control = ControlPanel(self.server, self._sender, device_id, fault_options(),
-                               _param_range(actions.get("set_rotary"), (1, 15)), self.master_id)
-        modules = ModulePanel(self.server, self.runtime, self._sender, device_id, actions,
-                              list(CATALOG))
-        side = gui.add_panel()
+        with self._control_tab("FastCAT", viser.Icon.CPU):
+            control = ControlPanel(self.server, self._sender, device_id, fault_options(),
+                                   _param_range(actions.get("set_rotary"), (1, 15)),
+                                   self.master_id)
+            modules = ModulePanel(self.server, self.runtime, self._sender, device_id, actions,
+                                  list(CATALOG))
+        side = self._side = gui.add_panel()
         with side.add_tab("State", viser.Icon.GAUGE):
             state = StatePanel(self.server, code_name)
             gui.add_markdown("**Event log**")
@@ -166,6 +188,29 @@ class Dashboard:
         side.dock_left()
         side.set_width(LEFT_WIDTH)
         return _Panels(control, modules, state, log, objects)
+
+    def _control_tab(self, label: str, icon: Any) -> AbstractContextManager[Any]:
+        """A tab of the control panel when the rig has drives too, else the panel itself."""
+        if not (self.drive_ids and self.fastcat_ids):
+            return nullcontext()
+        if self._control_tabs is None:
+            self._control_tabs = self.server.gui.add_tab_group()
+        return self._control_tabs.add_tab(label, icon)
+
+    def _build_drives(self, described: Mapping[str, Mapping[str, Any]], top: float,
+                      slots: int) -> DriveView:
+        """The servo drives' tabs, controls and axes (app/ui/drive, docs/dashboard.md)."""
+        side = self._side
+        if side is None:  # no FastCAT: the drive tabs get the left panel to themselves
+            self.server.gui.add_html(CSS)
+            side = self._side = self.server.gui.add_panel()
+        with self._control_tab("Servo drive", viser.Icon.ENGINE):
+            view = DriveView(self.server, self.runtime, self._sender, described, self.drive_ids,
+                             side, top, rail_length(max(slots, MIN_FRAMED_SLOTS)))
+        if self._panels is None:
+            side.dock_left()
+            side.set_width(LEFT_WIDTH)
+        return view
 
     def _timestamp_fn(self) -> Callable[[int], str]:
         """The master logger's clock for device rows, so that all rows read alike."""
@@ -177,12 +222,13 @@ class Dashboard:
             return lambda t_us: f"{t_us / US_PER_S:.3f} s"
         return lambda t_us: twincat_timestamp(epoch, t_us)
 
-    def _frame_camera(self, slots: int, rails: int) -> None:
+    def _frame_camera(self, slots: int, rails: int, below: float = 0.0) -> None:
         """Fit the rail(s) into the 3D view between the docked panels, looking at the front
-        from slightly above (the top faces give depth; labels stay square to the eye)."""
+        from slightly above (the top faces give depth; labels stay square to the eye).
+        ``below``: height the servo axes add under the lowest rail."""
         length = rail_length(max(slots, MIN_FRAMED_SLOTS))
-        height = BODY_H + (rails - 1) * RAIL_SPACING
-        center = (rail_length(slots) / 2, 0.0, -(rails - 1) * RAIL_SPACING / 2)
+        height = BODY_H + (rails - 1) * RAIL_SPACING + below
+        center = (rail_length(slots) / 2, 0.0, -(rails - 1) * RAIL_SPACING / 2 - below / 2)
         half_tan = math.tan(math.radians(CAMERA_FOV_DEG) / 2)
         distance = BODY_D / 2 + max((length / 2 + CAMERA_MARGIN) / (half_tan * VIEW_ASPECT),
                                     (height / 2 + CAMERA_MARGIN) / half_tan)
@@ -201,6 +247,8 @@ class Dashboard:
 
     def stop(self) -> None:
         self._stop.set()
+        if self._drives is not None:
+            self._drives.stop()
         if self._thread is not None:
             self._thread.join(timeout=5)
 
@@ -226,6 +274,8 @@ class Dashboard:
             panels = self._panels
             if panels is not None:
                 panels.log.add_events(events)
+            if self._drives is not None:
+                self._drives.add_events(events)
             captions = [e.text for e in events if isinstance(e, Caption)]
             fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events
             self._frame_seq, self._t_us = frame.seq, frame.t_us
@@ -244,13 +294,22 @@ class Dashboard:
                         panels.control.update(main)
                         panels.modules.update(main)
                         panels.log.update(master)
+                    if self._drives is not None:
+                        self._drives.update(frame)
                 if panels is not None:
                     panels.objects.tick()
+                if self._drives is not None:
+                    self._drives.tick(time.monotonic(), frame.t_us)
 
     @property
     def caption(self) -> str:
         """The scenario caption shown above the rail ("" before the first one)."""
         return self._caption.text if self._caption.visible else ""
+
+    @property
+    def drives(self) -> DriveView | None:
+        """The servo drives' part of the dashboard (tests)."""
+        return self._drives
 
     @property
     def rendered_seq(self) -> int:
