@@ -1,0 +1,208 @@
+"""Modbus fuzzing over the real TCP server (DriveModbusServer), MBAP and RTU-over-TCP framing.
+
+Two phases per framing, each request on a connection of its own (many at once):
+
+1. exact: well-framed ADUs around fuzzed PDUs that change nothing (reads, and writes the drive
+   rejects). The drives' state is therefore the same before every request, so each answer is
+   known in advance from the pure layer: the bytes on the wire must be exactly that reply, that
+   exception 02, or nothing; and the drives end as they started.
+2. broken framing: bad MBAP headers (protocol id, length), bad CRCs, truncated ADUs, garbage.
+   Whatever comes back must be a well-formed frame carrying a response or exception 02; the
+   server keeps answering (a probe on a fresh connection gets its reply: no crash, no hang).
+
+The server reaches the drives through a one-thread executor (a simulation thread that does not
+step): every request is served in that thread, as in the runtime, and nothing varies with time.
+Sizes: 240 exact + 120 broken per framing in CI; 3,000 + 1,500 with ``--full``.
+"""
+
+from __future__ import annotations
+
+import copy
+import random
+import selectors
+import socket
+import time
+from collections.abc import Iterator
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+
+import pytest
+from fuzz_modbus import FC03, FC06, FC16, line_state, requests
+from pymodbus.framer import FramerRTU
+
+from app.modbus.pdu import Outcome, Reply, Silence, serve_line
+from app.modbus.server import DriveModbusServer
+from devices.flash import MemoryFlash
+from devices.servo.drive import DriveConfig, ServoDrive
+
+SEED = 7
+NODES = (1, 5)
+BATCH = 40  # connections open at once
+REPLY_WAIT_S = 10.0  # generous: a loaded CI machine; silence is judged after every reply came
+QUIET_S = 0.3  # after the last expected reply: time for an unexpected one to show up
+PROBE = bytes.fromhex("03 8005 0002")  # R05 status word of node 1
+
+
+def _pristine() -> list[ServoDrive]:
+    drives = [ServoDrive(f"servo{n}", random.Random(n), DriveConfig(node_id=n), MemoryFlash())
+              for n in NODES]
+    for drive in drives:
+        drive.step(100_000)  # past the power-on self test
+    return drives
+
+
+def _exact_cases(rng: random.Random, template: list[ServoDrive], n: int
+                 ) -> list[tuple[int, bytes, Outcome]]:
+    """(unit, PDU, outcome) for fuzzed requests that leave the line as it was."""
+    start = line_state(template)
+    work = copy.deepcopy(template)
+    cases: list[tuple[int, bytes, Outcome]] = []
+    for unit, pdu in requests(rng, 50 * n, NODES):
+        if not pdu:
+            continue  # an empty PDU cannot be framed
+        outcome = serve_line(work, unit, pdu)
+        if line_state(work) != start:
+            work = copy.deepcopy(template)  # it changed the line: not for this phase
+            continue
+        cases.append((unit, pdu, outcome))
+        if len(cases) == n:
+            break
+    return cases
+
+
+# ---- framing ---------------------------------------------------------------------------------
+def _adu(framer: str, unit: int, pdu: bytes, tid: int) -> bytes:
+    if framer == "rtu":
+        body = bytes((unit,)) + pdu
+        return body + FramerRTU.compute_CRC(body).to_bytes(2, "big")
+    return tid.to_bytes(2, "big") + b"\0\0" + (len(pdu) + 1).to_bytes(2, "big") + \
+        bytes((unit,)) + pdu
+
+
+def _broken_adu(rng: random.Random, framer: str, unit: int, pdu: bytes, tid: int) -> bytes:
+    adu = bytearray(_adu(framer, unit, pdu, tid))
+    roll = rng.random()
+    if roll < 0.25:
+        return bytes(rng.randrange(256) for _ in range(rng.randint(1, 40)))
+    if roll < 0.5:
+        return bytes(adu[:rng.randrange(1, len(adu))])
+    if framer == "rtu":
+        adu[-1 - rng.randrange(2)] ^= 1 << rng.randrange(8)  # CRC error
+    elif roll < 0.75:
+        adu[2:4] = rng.randrange(1, 0x10000).to_bytes(2, "big")  # protocol id not 0
+    else:
+        adu[4:6] = rng.randrange(0x10000).to_bytes(2, "big")  # length that lies
+    return bytes(adu)
+
+
+def _pdu_of(framer: str, frame: bytes) -> bytes | None:
+    """The PDU of a reply frame, None if the frame itself is malformed."""
+    if framer == "rtu":
+        if len(frame) < 4 or FramerRTU.compute_CRC(frame[:-2]).to_bytes(2, "big") != frame[-2:]:
+            return None
+        return frame[1:-2]
+    if len(frame) < 8 or frame[2:4] != b"\0\0" or int.from_bytes(frame[4:6], "big") != \
+            len(frame) - 6:
+        return None
+    return frame[7:]
+
+
+def _well_formed_reply(pdu: bytes) -> bool:
+    """A response or exception 02 of FC 03 / 06 / 16, by shape alone."""
+    if len(pdu) == 2 and pdu[0] in (0x83, 0x86, 0x90):
+        return pdu[1] == 0x02
+    if pdu[:1] == bytes((FC03,)):
+        return len(pdu) >= 3 and pdu[1] % 2 == 0 and len(pdu) == 2 + pdu[1]
+    return pdu[:1] in (bytes((FC06,)), bytes((FC16,))) and len(pdu) == 5
+
+
+# ---- the line --------------------------------------------------------------------------------
+@contextmanager
+def _served(framer: str, drives: list[ServoDrive]) -> Iterator[DriveModbusServer]:
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="fuzz-sim") as sim:
+        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer=framer)
+        server.start_in_thread()
+        try:
+            yield server
+        finally:
+            server.stop_in_thread()
+
+
+def _exchange(port: int, frames: list[bytes], expect_reply: list[bool]) -> list[bytes]:
+    """Each frame on its own connection, all at once; the bytes that came back on each."""
+    socks = [socket.create_connection(("127.0.0.1", port), timeout=REPLY_WAIT_S)
+             for _ in frames]
+    got = [b""] * len(frames)
+    with selectors.DefaultSelector() as sel:
+        for i, (sock, frame) in enumerate(zip(socks, frames, strict=True)):
+            sock.sendall(frame)
+            sock.setblocking(False)
+            sel.register(sock, selectors.EVENT_READ, i)
+        deadline = time.monotonic() + REPLY_WAIT_S
+        quiet_from: float | None = None
+        while True:
+            now = time.monotonic()
+            if quiet_from is None and all(got[i] or not e for i, e in enumerate(expect_reply)):
+                quiet_from = now
+            end = deadline if quiet_from is None else min(deadline, quiet_from + QUIET_S)
+            if now >= end or not sel.get_map():
+                break
+            for key, _ in sel.select(end - now):
+                chunk = key.fileobj.recv(512)  # type: ignore[union-attr]
+                got[key.data] += chunk
+                if not chunk:
+                    sel.unregister(key.fileobj)
+    for sock in socks:
+        sock.close()
+    return got
+
+
+def _chunks(items: list, size: int) -> Iterator[list]:
+    for i in range(0, len(items), size):
+        yield items[i:i + size]
+
+
+@pytest.mark.parametrize("framer", ["socket", "rtu"])
+def test_exact_answers_over_tcp(framer: str, full: bool) -> None:
+    rng = random.Random(SEED)
+    template = _pristine()
+    cases = _exact_cases(rng, template, 3_000 if full else 240)
+    drives = copy.deepcopy(template)
+    start = line_state(template)
+    kinds: set[str] = set()
+    with _served(framer, drives) as server:
+        for batch in _chunks(list(enumerate(cases)), BATCH):
+            frames = [_adu(framer, unit, pdu, 1 + i) for i, (unit, pdu, _o) in batch]
+            expect = [not isinstance(o, Silence) for _i, (_u, _p, o) in batch]
+            got = _exchange(server.port, frames, expect)
+            for (i, (unit, pdu, outcome)), answer in zip(batch, got, strict=True):
+                kinds.add(type(outcome).__name__)
+                want = b"" if isinstance(outcome, Silence) else \
+                    _adu(framer, unit, outcome.pdu, 1 + i)
+                assert answer == want, (f"#{i} unit {unit} {pdu.hex(' ')}: got "
+                                        f"{answer.hex(' ')}, expected {want.hex(' ')}")
+    assert line_state(drives) == start
+    assert kinds == {"Reply", "Exception02", "Silence"}
+
+
+@pytest.mark.parametrize("framer", ["socket", "rtu"])
+def test_broken_framing_over_tcp(framer: str, full: bool) -> None:
+    rng = random.Random(SEED + 1)
+    drives = _pristine()
+    cases = list(requests(rng, 1_500 if full else 120, NODES))
+    frames = [_broken_adu(rng, framer, unit, pdu or b"\x03", 1 + i)
+              for i, (unit, pdu) in enumerate(cases)]
+    with _served(framer, drives) as server:
+        for batch in _chunks(frames, BATCH):
+            got = _exchange(server.port, batch, [False] * len(batch))
+            for frame, answer in zip(batch, got, strict=True):
+                if not answer:
+                    continue
+                pdu = _pdu_of(framer, answer)
+                assert pdu is not None and _well_formed_reply(pdu), \
+                    f"{frame.hex(' ')} -> malformed answer {answer.hex(' ')}"
+        # still serving: a probe on a fresh connection gets the right answer
+        probe = _exchange(server.port, [_adu(framer, 1, PROBE, 0xBEEF)], [True])[0]
+    want = serve_line(drives, 1, PROBE)  # the server is gone: this thread may touch the drives
+    assert isinstance(want, Reply)
+    assert probe == _adu(framer, 1, want.pdu, 0xBEEF)
