@@ -136,3 +136,15 @@ def test_snapshot_has_the_agreed_keys() -> None:
     assert snap["kind"] == "servo" and snap["display"] == "Fr"
     import json
     json.dumps(snap)
+
+
+def test_move_after_homing_starts() -> None:
+    """After homing R00 still holds bit 6 (the homing start); in mode 1 that bit reads as the
+    same new-set-point bit as the start, so ``move`` must clear it first to give an edge."""
+    sim = make_sim()
+    d = sim.drive
+    d.apply("enable", {"on": True})
+    d.apply("home", {})
+    sim.run_until(lambda: d.homed, 30_000, tick_ms=10)
+    d.apply("move", {"target": 6000})
+    sim.run_until(lambda: d.read_register(6) == 6000, 30_000, tick_ms=10)
