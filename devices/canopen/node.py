@@ -45,7 +45,7 @@ from devices.canopen.nmt import (
 from devices.canopen.pdo import ASYNC_TYPES, Pdo
 from devices.canopen.process_data import ProcessData
 from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
-from devices.device import DeviceModel
+from devices.device import Action, CommandError, DeviceModel, Param
 from devices.events import EmergencySent, StateChanged
 from devices.od import AbortCode, SdoAbort
 from devices.servo.drive import ServoDrive
@@ -61,7 +61,14 @@ NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
 
 class CanOpenNode(ProcessData, DeviceModel):
     KIND = "canopen"
-    ACTIONS: ClassVar[dict] = {}
+    ACTIONS: ClassVar[dict] = {
+        "frame": Action("frame", "A frame from a CANopen master on the bus (NMT, SYNC, SDO, "
+                        "RPDO, ...): COB-ID and data bytes in hex, byte 0 first",
+                        (Param("cob_id", int, low=0, high=0x7FF),
+                         Param("data", str, required=False, default="",
+                               doc="e.g. '2B 17 10 00 A0 0F 00 00'"),
+                         Param("rtr", bool, required=False, default=False))),
+    }
 
     def __init__(self, device_id: str, drive: ServoDrive, rng: random.Random | None = None,
                  device_name: str = DEVICE_NAME) -> None:
@@ -144,6 +151,15 @@ class CanOpenNode(ProcessData, DeviceModel):
             return
         frame = CanFrame(can_id, bytes(data), rtr, dlc if rtr and dlc is not None else -1)
         self.line.offer(frame, self.now_us)
+
+    def cmd_frame(self, cob_id: int, data: str, rtr: bool) -> None:
+        try:
+            raw = bytes.fromhex(data)
+        except ValueError:
+            raise CommandError(f"data {data!r} is not hex bytes (e.g. '2B 17 10 00')") from None
+        if len(raw) > 8:
+            raise CommandError(f"a CAN frame carries at most 8 data bytes, got {len(raw)}")
+        self.receive(cob_id, raw, rtr=rtr, dlc=len(raw) if rtr else None)
 
     def take_frames(self) -> list[CanFrame]:
         """The frames the node finished sending, oldest first."""
