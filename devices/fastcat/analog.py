@@ -3,6 +3,10 @@
 All formulas are in docs/fastcat-modules.md. Integers where the module works in ADC/DAC codes;
 the first-order filter state is a float, advanced in whole milliseconds so that the result
 depends only on simulated time, not on how the runtime slices it.
+
+Speed (docs/performance.md): a step whose inputs are those of the previous step and after which
+nothing moved is a fixed point, so the next identical step is skipped. Inputs are compared
+by value, not tracked by setters, so that no way of changing them can be missed.
 """
 
 from __future__ import annotations
@@ -162,6 +166,12 @@ class AnalogInputs:
         self.cold_junction_c = COLD_JUNCTION_DEFAULT_C
         self.pot_supply_short = False
         self._filters = [InputFilter() for _ in range(self.count)]
+        self._seen: tuple[Any, ...] = ()  # the inputs _law was computed from
+        self._law: list[tuple[int, int] | None] = [None] * self.count  # (target, coefficient)
+        # Per channel: the step length for which the filter sits at a fixed point of its law.
+        self._fixed: list[int | None] = [None] * self.count
+        self._still_dt: int | None = None  # a step of this length moved no channel
+        self.still = False  # the last step was skipped as a repeat of a step that moved nothing
         self.reset()
 
     def reset(self) -> None:
@@ -172,6 +182,8 @@ class AnalogInputs:
         self.tc_types = [0] * self.count  # 0x200B
         for ch in range(self.count):
             self._filters[ch].settle(self.target(ch))
+        self._fixed = [None] * self.count
+        self._still_dt = None
 
     def kind(self, ch: int) -> AiKind:
         if self.configurable:
@@ -202,10 +214,37 @@ class AnalogInputs:
         if value != self.types[ch]:
             self.types[ch] = value
             self._filters[ch].settle(self.target(ch))  # a new range, not a step to filter
+            self._fixed[ch] = self._still_dt = None
+
+    def _inputs(self) -> tuple[Any, ...]:
+        """Every value the targets and the filter coefficients are computed from."""
+        return (self.field, self.cold_junction_c, self.pot_supply_short, self.filter_all,
+                self.filters, self.types, self.tc_types, self.wired)
 
     def step(self, dt_us: int) -> None:
-        for ch in range(self.count):
-            self._filters[ch].advance(self.target(ch), self.coeff(ch), dt_us)
+        inputs = self._inputs()
+        self.still = False
+        if inputs != self._seen:
+            self._seen = tuple(list(v) if isinstance(v, list) else v for v in inputs)
+            law = [(self.target(ch), self.coeff(ch)) for ch in range(self.count)]
+            self._fixed = [f if new == old else None
+                           for f, new, old in zip(self._fixed, law, self._law, strict=True)]
+            self._law = law  # type: ignore[assignment]
+        elif dt_us == self._still_dt:
+            self.still = True
+            return  # every filter sits at its fixed point for this step length
+        moved = False
+        fixed = self._fixed
+        for ch, (filt, law) in enumerate(zip(self._filters, self._law, strict=True)):
+            if fixed[ch] == dt_us:
+                continue  # the same step again leaves this channel where it is
+            y, rem = filt.y, filt._rem_us
+            filt.advance(*law, dt_us)  # type: ignore[misc]
+            if filt.y != y or filt._rem_us != rem:
+                moved, fixed[ch] = True, None
+            else:
+                fixed[ch] = dt_us
+        self._still_dt = None if moved else dt_us
 
     def physical_alarms(self) -> set[int]:
         if self.pot_supply_short and any(
@@ -268,6 +307,9 @@ class AnalogOutputs:
         self.bits = mtype.ao_bits
         self.full = ao_full_scale(mtype.ao_bits)
         self.overload = False  # physical: outputs wired into an overload (kept across resets)
+        self._seen_targets: list[int] | None = None  # 0x7400 that _goal was computed from
+        self._goal: list[int] = []  # the DAC codes the outputs ramp to
+        self.still = False  # the last step changed nothing and would not in a repeat
         self.reset()
 
     def reset(self) -> None:
@@ -277,12 +319,21 @@ class AnalogOutputs:
         self._rem_us = 0
 
     def step(self, dt_us: int, outputs_enabled: bool) -> None:
-        ms, self._rem_us = divmod(self._rem_us + dt_us, US_PER_MS)
+        ms, rem = divmod(self._rem_us + dt_us, US_PER_MS)
+        self.still = rem == self._rem_us  # whole milliseconds: the remainder stays
+        self._rem_us = rem
         if not outputs_enabled or self.overload:
-            self.actual = [0] * self.count  # safe state / protection: at once, no ramp
+            if any(self.actual):
+                self.actual = [0] * self.count  # safe state / protection: at once, no ramp
+                self.still = False
             return
-        for ch in range(self.count):
-            target = min(self.full, max(-self.full, self.targets[ch]))  # DAC saturates
+        if self.targets != self._seen_targets:
+            self._seen_targets = list(self.targets)
+            self._goal = [min(self.full, max(-self.full, t)) for t in self.targets]  # saturates
+        elif self.actual == self._goal:
+            return  # on target: a ramp (0x200A is unsigned) has nowhere to go
+        self.still = False
+        for ch, target in enumerate(self._goal):
             self.actual[ch] = ramp_toward(self.actual[ch], target, self.ramps[ch], ms)
 
     def physical_alarms(self) -> set[int]:

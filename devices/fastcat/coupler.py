@@ -20,7 +20,8 @@ from typing import Any, ClassVar
 from devices.device import Action, DeviceModel
 from devices.ethercat import AlState
 from devices.events import StateChanged
-from devices.fastcat.alarms import COUPLER, MODULE, Alarm
+from devices.fastcat.alarms import COUPLER, Alarm
+from devices.fastcat.bus import BusMixin
 from devices.fastcat.catalog import module_type
 from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
 from devices.fastcat.esm import Esm, request_refusal
@@ -44,10 +45,9 @@ logger = logging.getLogger(__name__)
 CNF_BUTTON = "cnf_button"  # StateChanged.machine of the button: released / pressed
 CNF_PROCEDURE = "cnf"  # StateChanged.machine of the procedure: idle, resetting, scanning, ...
 ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this recently
-UDINT_MAX = 0xFFFF_FFFF
 
 
-class FastCat(FaultsMixin, RailMixin, DeviceModel):
+class FastCat(BusMixin, FaultsMixin, RailMixin, DeviceModel):
     KIND = "fastcat"
     ACTIONS: ClassVar[Mapping[str, Action]] = {**MODULE_ACTIONS, **COUPLER_ACTIONS}
 
@@ -76,6 +76,17 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
         self.link = True
         self.tbus_low = False
         self.injected: list[Alarm] = []
+        # Speed (docs/performance.md). A step is skipped when it would repeat one that changed
+        # nothing: _settled = (step length, LINK activity) of that step; _touched = something
+        # may have changed since (a command, an AL control write, an object write);
+        # _modules_touched = a module's inputs may have (a command, a module object write).
+        self._touched, self._modules_touched, self._settled = True, True, None
+        self._bus_still = False
+        # Derived tables with what they were computed from (bus.py, faults.py, LEDs).
+        self._bus_key, self._bus, self._rebound_for, self._answering = (), [], None, None
+        self._exchange_key: tuple[int, bool] | None = None
+        self._scan_causes_key: tuple[Any, ...] | None = None
+        self._led_key: tuple[Any, ...] = ()
         self.esm = Esm(self.emit, device_id)
         self.cnf = CnfButton()
         self.leds = LedBank(device_id)
@@ -174,13 +185,14 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
 
     def take_emergencies(self) -> list[bytes]:
         """Emergency data queued in the mailbox; it runs from PREOP on (ETG.1000.6)."""
-        if not self.reachable() or self.esm.state is AlState.INIT:
+        if not self.mailbox or not self.reachable() or self.esm.state is AlState.INIT:
             return []
         out, self.mailbox = self.mailbox, []
         return out
 
     def request_state(self, target: AlState) -> None:
         """AL control write. The answer is in ``al_status`` / ``al_status_code``."""
+        self._touched = True
         if not self.reachable():
             return
         now, esm = self.now_us, self.esm
@@ -211,43 +223,39 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
         super().step(now_us)
         if not self.powered:
             return
+        if not self._touched and self._settled == (dt_us, self._activity(now_us)):
+            return  # the same inputs as a step that changed nothing: nothing changes
+        touched = self._modules_touched
+        self._touched, self._modules_touched, self._bus_still = False, False, False
+        queued = len(self.events.items)
         if self.cnf.release_due(now_us):
             self._on_cnf_release()
         if self.scan is not None:
+            self._exchange_key = None  # no cycle: the next one starts afresh
             self._advance_scan(self.scan)
         elif self.booted:
-            self._exchange(dt_us)
+            self._exchange(dt_us, touched)
         self._evaluate_alarms()
         self._refresh()
+        self._answering = None  # valid only inside this step
+        settled = (self._bus_still and self.scan is None and not self.cnf.pressed
+                   and not self.raised and not self.fresh_raised
+                   and len(self.events.items) == queued)
+        self._settled = (dt_us, self._activity(now_us)) if settled else None
 
-    def _exchange(self, dt_us: int) -> None:
-        outputs_enabled = self.esm.state is AlState.OP and self.alarm is None
-        self._rebind()
-        for n, module in enumerate(self.bound, start=1):
-            if self._answers(n):
-                module.step(dt_us, outputs_enabled)
-                self.fresh_raised.extend(Alarm(MODULE, code, n)
-                                         for code in module.take_raised_alarms())
-            else:  # §6.18: a failed exchange on the internal bus
-                self.comm_errors[n - 1] = min(UDINT_MAX, self.comm_errors[n - 1] + 1)
+    def _touch(self, module: bool) -> None:
+        """An object write: by the master, an SDO client or a command."""
+        self._touched = True
+        if module:
+            self._modules_touched = True
 
-    def _answers(self, n: int) -> bool:
-        slot = self.detected[n - 1][0]
-        module = self.rail[slot - 1] if slot <= len(self.rail) else None
-        return module is self.bound[n - 1] and module.responds()
+    def _build_od(self) -> None:
+        """The object dictionary of the modules now bound; writes into it touch the model."""
+        self.od = build_od(self, self.bound, self.serial, self._touch)
 
-    def _rebind(self) -> None:
-        """A module of the detected type put back in a detected slot answers at that address:
-        the coupler talks to the bus position, not to one particular module."""
-        changed = False
-        for n, (slot, name) in enumerate(self.detected, start=1):
-            module = self.rail[slot - 1] if slot <= len(self.rail) else None
-            if module is not None and module is not self.bound[n - 1] \
-                    and module.mtype.name == name:
-                self.bound[n - 1] = module
-                changed = True
-        if changed:
-            self.od = build_od(self, self.bound, self.serial)
+    def _activity(self, now_us: int) -> bool:
+        """LINK traffic: the master sent a frame within the activity window."""
+        return self.last_frame_us is not None and now_us - self.last_frame_us <= ACTIVITY_WINDOW_US
 
     # ---- scan and CNF ---------------------------------------------------------------------
     def _start_scan(self, cnf: bool) -> None:
@@ -264,7 +272,7 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
             self.bound = list(self.scan_found)
             self.raised = []  # module numbers change with the new scan
             self.comm_errors = [0] * len(self.bound)
-            self.od = build_od(self, self.bound, self.serial)
+            self._build_od()
         if scan.finished(self.now_us):
             if scan.cnf:
                 self._store_configuration()
@@ -335,8 +343,10 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
     # ---- what the outside sees --------------------------------------------------------------
     def _refresh(self) -> None:
         """After any change: modules' alarm flag (§7), CNF phase, LED patterns."""
-        for module in self.modules():
-            module.in_alarm = self.powered and self.alarm is not None
+        in_alarm = self.powered and self.alarm is not None
+        for module in self.rail:
+            if module is not None:
+                module.in_alarm = in_alarm
         scan = self.scan
         phase = scan.phase(self.now_us) if scan is not None and scan.cnf else ScanPhase.IDLE
         if phase is not self.cnf_phase:
@@ -346,16 +356,23 @@ class FastCat(FaultsMixin, RailMixin, DeviceModel):
         self._refresh_leds()
 
     def _refresh_leds(self) -> None:
-        now = self.now_us
-        activity = self.last_frame_us is not None and \
-            now - self.last_frame_us <= ACTIVITY_WINDOW_US
-        wanted = {"RUN": run_led(self.powered, self.esm.state),
-                  "ERR": err_led(self.powered, self.alarm, self.esm.error),
-                  "LINK": link_led(self.powered, self.link, activity)}
-        for slot, module in enumerate(self.rail, start=1):
+        now, rail, powered, scan = self.now_us, self.rail, self.powered, self.scan
+        activity = self._activity(now)
+        alive = [m is not None and powered and m.responds() for m in rail]
+        head = (powered, self.esm.state, self.alarm, self.esm.error, self.link, activity,
+                None if scan is None else (scan, scan.phase(now), scan.recognised(now)))
+        last = self._led_key
+        if last and last[0] == head and last[1] == rail and last[2] == self.bound \
+                and last[3] == alive:
+            return  # the patterns depend on nothing else: no change
+        self._led_key = (head, list(rail), list(self.bound), alive)
+        wanted = {"RUN": run_led(powered, self.esm.state),
+                  "ERR": err_led(powered, self.alarm, self.esm.error),
+                  "LINK": link_led(powered, self.link, activity)}
+        for slot, module in enumerate(rail, start=1):
             if module is not None:
-                light = module_light(self.powered and module.responds(), slot, self.scan,
-                                     now, addressed=module in self.bound,
+                light = module_light(alive[slot - 1], slot, scan, now,
+                                     addressed=module in self.bound,
                                      in_alarm=self.alarm is not None)
                 wanted.update(module_led_patterns(slot, light))
         self.leds.update(now, wanted, self.emit)

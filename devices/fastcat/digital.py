@@ -3,6 +3,8 @@
 Channel numbers here are 0-based; objects and actions count from 1 like the seed. DB16
 channels are outputs when their group of 4 is set to 1 in 0x2004; an output channel reads
 back its own driven state in 0x6000, so a shorted output shows up as a read-back mismatch.
+The outputs are recomputed only when one of their inputs differs from the last step's
+(docs/performance.md).
 """
 
 from __future__ import annotations
@@ -25,6 +27,9 @@ class DigitalIo:
         # Physical world (kept across module resets).
         self.field = [False] * self.channels  # what the field puts on input terminals
         self.shorted = [False] * self.channels  # output wired into a short
+        self._seen_enabled: bool | None = None  # the inputs of the last step: enable flag,
+        self._seen: tuple[list[bool], ...] = ()  # groups, command, short
+        self.still = False  # the last step changed nothing and found the inputs unchanged
         self.reset()
 
     def reset(self) -> None:
@@ -32,6 +37,7 @@ class DigitalIo:
         self.command = [False] * self.channels  # 0x7000
         self.driven = [False] * self.channels  # what the output stage puts on the terminal
         self.readback_fault = False
+        self._seen_enabled = None
 
     def is_input_channel(self, ch: int) -> bool:
         """May the field drive this terminal (an input, or a DB16 channel of any group)?"""
@@ -48,6 +54,12 @@ class DigitalIo:
 
     def step(self, outputs_enabled: bool) -> None:
         """Outputs follow 0x7000 only while enabled; otherwise the safe state is all off."""
+        self.still = outputs_enabled is self._seen_enabled \
+            and (self.groups, self.command, self.shorted) == self._seen
+        if self.still:
+            return  # same inputs, same outputs
+        self._seen_enabled = outputs_enabled
+        self._seen = (list(self.groups), list(self.command), list(self.shorted))
         fault = False
         for ch in range(self.channels):
             on = outputs_enabled and self.is_output_now(ch) and self.command[ch]

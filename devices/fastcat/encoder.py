@@ -124,6 +124,18 @@ class EncoderInput:
     def counting(self) -> bool:
         return not self.disabled and "signal_lost" not in self.faults
 
+    @property
+    def turning(self) -> bool:
+        return self._rate != 0
+
+    def rest(self) -> bool:
+        """A step of a shaft standing still: no pulse, no mark, no noise draw (``step`` with
+        a zero rate, without the arithmetic). True when it changed nothing."""
+        if self.last_mark_dir and not self.counting:
+            self.last_mark_dir = 0
+            return False
+        return True
+
     def step(self, dt_us: int, invert: bool, rng: random.Random) -> None:
         old = self.theta
         adv, self._rem = divmod(self._rate * dt_us + self._rem, US_PER_S)
@@ -212,6 +224,7 @@ class Ax2:
         self._in_alarm = in_alarm
         self.command = 0  # 0x7600
         self._seen_command = 0
+        self.still = False  # the last step changed nothing and would not in a repeat
 
     def reset(self) -> None:
         for enc in self.inputs:
@@ -231,15 +244,25 @@ class Ax2:
         return word
 
     def step(self, dt_us: int, rng: random.Random) -> list[int]:
+        enc1, enc2 = self.inputs
+        if self.command == self._seen_command and not enc1.turning and not enc2.turning:
+            still1 = enc1.rest()  # the usual case: shafts still, no new command bit
+            self.still = enc2.rest() and still1
+            return []
+        self.still = False
         rising = self.command & ~self._seen_command
         self._seen_command = self.command
         raised: list[int] = []
         for enc in self.inputs:
             if rising & CMD_ZERO_CYCLE[enc.k]:
                 enc.arm_zero_cycle()
-            enc.step(dt_us, self.inverted(enc.k), rng)
-            raised += enc.raised
-            enc.raised = []
+            if enc.turning:
+                enc.step(dt_us, self.inverted(enc.k), rng)
+            else:
+                enc.rest()  # 0 <= remainder < 1 s: a zero rate moves nothing
+            if enc.raised:
+                raised += enc.raised
+                enc.raised = []
         return raised
 
     def physical_alarms(self) -> set[int]:

@@ -12,7 +12,8 @@ then latched with a new emergency. Cause -> code mapping: docs/fastcat-coupler.m
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
 from devices.device import CommandError
 from devices.ethercat import AlState
@@ -64,39 +65,57 @@ class FaultsMixin:
     detected: list[tuple[int, str]]
     bound: list[IoModule]
     stored: list[str] | None
+    _scan_causes_key: tuple[Any, ...] | None  # (detected, stored, causes) of the last call
+    _answering: list[bool] | None  # who answered this step's exchange (None outside a step)
 
     if TYPE_CHECKING:  # defined by DeviceModel / FastCat; stubs here would shadow them
         def emit(self, event: Event) -> None: ...
         def modules(self) -> list[IoModule]: ...
         def _answers(self, n: int) -> bool: ...
+        def _bus_table(self) -> list[IoModule | None]: ...
         def _refresh(self) -> None: ...
 
     def _present_causes(self) -> list[Alarm]:
         """Every alarm cause present now, in the order the coupler would report them."""
-        causes = [*self.edge_causes, *self.injected]
-        if not self.link:
-            causes.append(Alarm(COUPLER, 0x13))
-        if self.booted:
-            causes.extend(self._scan_causes())
-        if self.address_fault and self.address_check and self._address_mismatch():
-            causes.append(Alarm(COUPLER, 0x12))
-        for n, (slot, name) in enumerate(self.detected, start=1):
-            if not self._answers(n):
-                module = self.rail[slot - 1] if slot <= len(self.rail) else None
-                changed = module is not None and module.mtype.name != name
-                causes.append(Alarm(COUPLER, 0x01 if changed else 0x04, n))
-        if self.tbus_low and self.detected:
-            causes.append(Alarm(MODULE, 0x0C, 1))  # §7.6 LOW_VOLTAGE, byte 0 = first module
-        for n, module in enumerate(self.bound, start=1):
-            if self._answers(n):
-                causes.extend(Alarm(MODULE, code, n) for code in sorted(module.physical_alarms()))
-        causes.extend(self.fresh_raised)  # raised this exchange: an event, latch it as such
-        causes.extend(a for a in self.raised if a.module <= len(self.bound)
-                      and self._answers(a.module)
-                      and self.bound[a.module - 1].cause_present(a.code))
-        return causes
+        return list(self._causes())
 
-    def _scan_causes(self) -> list[Alarm]:
+    def _causes(self) -> Iterator[Alarm]:
+        """The causes in report order, lazily: the latch needs only the first one."""
+        yield from self.edge_causes
+        yield from self.injected
+        if not self.link:
+            yield Alarm(COUPLER, 0x13)
+        if self.booted:
+            yield from self._scan_causes()
+        if self.address_fault and self.address_check and self._address_mismatch():
+            yield Alarm(COUPLER, 0x12)
+        bus = self._bus_table()
+        answering = self._answering  # this step's exchange, else as _answers(n):
+        if answering is None:
+            answering = [m is not None and m.responds() for m in bus]
+        if not all(answering):
+            for n, (slot, name) in enumerate(self.detected, start=1):
+                if not answering[n - 1]:
+                    module = self.rail[slot - 1] if slot <= len(self.rail) else None
+                    changed = module is not None and module.mtype.name != name
+                    yield Alarm(COUPLER, 0x01 if changed else 0x04, n)
+        if self.tbus_low and self.detected:
+            yield Alarm(MODULE, 0x0C, 1)  # §7.6 LOW_VOLTAGE, byte 0 = first module
+        for n, module in enumerate(bus, start=1):
+            if answering[n - 1]:
+                for code in module.physical_alarm_codes():  # type: ignore[union-attr]
+                    yield Alarm(MODULE, code, n)
+        yield from self.fresh_raised  # raised this exchange: an event, latch it as such
+        for a in self.raised:
+            if a.module <= len(self.bound) and answering[a.module - 1] \
+                    and self.bound[a.module - 1].cause_present(a.code):
+                yield a
+
+    def _scan_causes(self) -> tuple[Alarm, ...]:
+        """Causes in the last scan's result; they change only with ``detected`` / ``stored``."""
+        key = self._scan_causes_key
+        if key is not None and key[0] is self.detected and key[1] == self.stored:
+            return key[2]
         names = [name for _slot, name in self.detected]
         out = []
         if not names:
@@ -113,7 +132,9 @@ class FaultsMixin:
                   if module_type(name).counts_as_analog]
         if len(analog) > MAX_ANALOG_MODULES:  # §7.5 0x15: byte 0 = the 8th analog module
             out.append(Alarm(COUPLER, 0x15, analog[MAX_ANALOG_MODULES - 1]))
-        return out
+        stored = None if self.stored is None else list(self.stored)
+        self._scan_causes_key = (self.detected, stored, tuple(out))
+        return tuple(out)
 
     def _address_mismatch(self) -> bool:
         return self.rotary_read != self.master_address
@@ -122,13 +143,15 @@ class FaultsMixin:
         if not self.powered or self.scan is not None or not self.booted:
             return
         if self.alarm is None:  # while one is latched, later causes report nothing (§7)
-            causes = self._present_causes()
-            if causes:
-                self._latch(causes[0])
+            first = next(self._causes(), None)
+            if first is not None:
+                self._latch(first)
         # A module alarm raised while another is latched stays pending while its cause lasts.
-        fresh, self.fresh_raised = self.fresh_raised, []
-        self.raised = [a for a in dict.fromkeys([*self.raised, *fresh])
-                       if a == self.alarm or self._module_cause(a)]
+        fresh = self.fresh_raised
+        if fresh or self.raised:
+            self.fresh_raised = []
+            self.raised = [a for a in dict.fromkeys([*self.raised, *fresh])
+                           if a == self.alarm or self._module_cause(a)]
 
     def _module_cause(self, alarm: Alarm) -> bool:
         n = alarm.module

@@ -129,6 +129,7 @@ class IoModule:
         self.failed = False  # electronics dead: does not answer on the Tbus
         self.calibrated = True
         self._outputs_enabled = False
+        self.still = False  # the last step changed nothing and a repeat would change nothing
         self._raised: list[int] = []
         has_digital = mtype.digital_inputs or mtype.digital_outputs
         self.digital = DigitalIo(mtype) if has_digital else None
@@ -136,6 +137,8 @@ class IoModule:
         self.ao = AnalogOutputs(mtype) if mtype.ao else None
         self.ax2 = Ax2((PPR_DEFAULT, PPR_DEFAULT), lambda: self.in_alarm) \
             if mtype.encoders else None
+        self._part_list = tuple(p for p in (self.digital, self.ai, self.ao, self.ax2)
+                                if p is not None)
         self._apply_options(dict(options or {}))
 
     # --- options ---------------------------------------------------------------------------
@@ -185,9 +188,9 @@ class IoModule:
     def responds(self) -> bool:
         return self.plugged and self.powered and not self.failed
 
-    def _parts(self) -> list[Any]:
+    def _parts(self) -> tuple[Any, ...]:
         """The module's channel blocks, in PDO order: digital, analog in, analog out, encoders."""
-        return [p for p in (self.digital, self.ai, self.ao, self.ax2) if p is not None]
+        return self._part_list
 
     def add_objects(self, od: ObjectDictionary, n: int) -> None:
         for part in self._parts():
@@ -205,17 +208,27 @@ class IoModule:
         if dt_us < 0:
             raise ValueError(f"{self.mtype.name}: negative time step {dt_us} us")
         self._outputs_enabled = outputs_enabled
+        still = True
         if self.digital is not None:
             self.digital.step(outputs_enabled)
+            still = self.digital.still
         if self.ai is not None:
             self.ai.step(dt_us)
+            still = still and self.ai.still
         if self.ao is not None:
             self.ao.step(dt_us, outputs_enabled)
+            still = still and self.ao.still
         if self.ax2 is not None:
-            self._raised += self.ax2.step(dt_us, self.rng)
+            raised = self.ax2.step(dt_us, self.rng)
+            if raised:
+                self._raised += raised
+            still = still and self.ax2.still
+        self.still = still
 
     def take_raised_alarms(self) -> list[int]:
         """Edge alarms (AX2 count 0x10/0x11, zero cycle 0x14/0x15) since the last call."""
+        if not self._raised:
+            return []
         raised = list(dict.fromkeys(self._raised))
         self._raised = []
         return raised
@@ -229,6 +242,16 @@ class IoModule:
             codes.add(CODE_NOT_CALIBRATED)
         return codes
 
+    def physical_alarm_codes(self) -> tuple[int, ...]:
+        """``sorted(physical_alarms())``; answered at once in the usual case where no part
+        has any of the conditions its level alarms need (the coupler asks every step)."""
+        dig, ai, ao, ax2 = self.digital, self.ai, self.ao, self.ax2
+        if (self.calibrated and (dig is None or not dig.readback_fault)
+                and (ai is None or not ai.pot_supply_short) and (ao is None or not ao.overload)
+                and (ax2 is None or not (ax2.inputs[0].faults or ax2.inputs[1].faults))):
+            return ()
+        return tuple(sorted(self.physical_alarms()))
+
     def cause_present(self, code: int) -> bool:
         if code in self.physical_alarms():
             return True
@@ -240,6 +263,7 @@ class IoModule:
             part.reset()
         self._raised = []
         self._outputs_enabled = False
+        self.still = False
 
     # --- operator actions ------------------------------------------------------------------
     def available_actions(self) -> list[str]:

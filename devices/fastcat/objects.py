@@ -7,7 +7,8 @@ ambiguous rows are in docs/fastcat-coupler.md.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from functools import partial
 from typing import TYPE_CHECKING, Any, Protocol
 
 from devices.od import Access, DataType, ObjectDictionary, OdEntry
@@ -52,16 +53,33 @@ def pdo_entry(index: int, sub: int, bit_length: int) -> int:
     return index << 16 | sub << 8 | bit_length
 
 
-def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int) -> ObjectDictionary:
-    """``modules``: the detected modules in bus order (module n = ``modules[n - 1]``)."""
+def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
+             on_write: Callable[[bool], None] | None = None) -> ObjectDictionary:
+    """``modules``: the detected modules in bus order (module n = ``modules[n - 1]``).
+    ``on_write(module)`` is called before every write that reaches the model (an entry's
+    setter); ``module`` says whether the entry is a module's object or the coupler's own."""
     od = ObjectDictionary()
     _identity(od, serial)
     _pdos(od, modules)
     _coupler_objects(od, coupler, len(modules))
     _module_lists(od, modules)
+    coupler_keys = {(entry.index, entry.sub) for entry in od}
     for n, module in enumerate(modules, start=1):
         module.add_objects(od, n)
+    if on_write is not None:
+        for entry in od:
+            if entry.setter is not None:
+                module_object = (entry.index, entry.sub) not in coupler_keys
+                entry.setter = _announced(entry.setter, partial(on_write, module_object))
     return od
+
+
+def _announced(setter: Callable[[Any], None], on_write: Callable[[], None]
+               ) -> Callable[[Any], None]:
+    def write(value: Any) -> None:
+        on_write()
+        setter(value)
+    return write
 
 
 def _ro(od: ObjectDictionary, index: int, sub: int, name: str, dtype: DataType, value: Any,

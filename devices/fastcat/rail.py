@@ -80,6 +80,8 @@ class RailMixin:
     rotary_switch: int
     od: ObjectDictionary | None
     flash: FlashStore
+    _touched: bool
+    _modules_touched: bool
 
     def check_command(self, action: str, args: Mapping[str, Any],
                       module: int | None = None) -> dict[str, Any]:
@@ -88,6 +90,7 @@ class RailMixin:
         return super().check_command(action, args, module)  # type: ignore[misc]
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        self._touched = self._modules_touched = True  # a full next step (FastCat.step)
         if action in MODULE_ACTIONS:
             self.check_command(action, args, module)
             return self.rail_module(module).apply(action, args)
