@@ -358,7 +358,10 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, DeviceModel):
     def _refresh_leds(self) -> None:
         now, rail, powered, scan = self.now_us, self.rail, self.powered, self.scan
         activity = self._activity(now)
-        alive = [m is not None and powered and m.responds() for m in rail]
+        if self._answering is not None and rail == self._bus:
+            alive = self._answering  # in a step, with every module on the bus: the same list
+        else:
+            alive = [m is not None and powered and m.responds() for m in rail]
         head = (powered, self.esm.state, self.alarm, self.esm.error, self.link, activity,
                 None if scan is None else (scan, scan.phase(now), scan.recognised(now)))
         last = self._led_key

@@ -159,6 +159,8 @@ class EncoderInput:
             return []
         rev = self.real_ppr * SUB
         ka, kb = old // rev, new // rev
+        if kb == ka:
+            return []  # the usual step: within one revolution
         if kb > ka:
             return [(k * self.real_ppr, 1) for k in range(ka + 1, kb + 1)]
         return [(k * self.real_ppr - 1, -1) for k in range(ka, kb, -1)]
