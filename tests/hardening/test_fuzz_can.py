@@ -33,6 +33,12 @@ VALUE_CODES = {AbortCode.LENGTH_TOO_HIGH, AbortCode.LENGTH_TOO_LOW, AbortCode.VA
                AbortCode.GENERAL, AbortCode.CANNOT_STORE, AbortCode.CANNOT_STORE_LOCAL,
                AbortCode.CANNOT_STORE_STATE, AbortCode.UNSUPPORTED_ACCESS,
                AbortCode.NOT_MAPPABLE, AbortCode.PDO_TOO_LONG}
+# 0x2000 (parameter access), 0x2005 / 0x2006 (variables by address): a write names another
+# parameter or register, which may be read-only or missing (seed 004 ch. 4 "Procedura per la
+# lettura e la scrittura dei parametri"; devices/servo/od_map.py IndirectAccess)
+INDIRECT = frozenset({0x2000, 0x2005, 0x2006})
+TARGET_CODES = {AbortCode.READ_ONLY, AbortCode.WRITE_ONLY, AbortCode.NO_OBJECT,
+                AbortCode.NO_SUBINDEX}
 # ccs of a request -> what may answer it besides an abort
 CCS_DOWNLOAD_SEGMENT, CCS_DOWNLOAD, CCS_UPLOAD, CCS_UPLOAD_SEGMENT = 0x00, 0x20, 0x40, 0x60
 CCS_ABORT, CCS_BLOCK_UPLOAD, CCS_BLOCK_DOWNLOAD, CCS_INVALID = 0x80, 0xA0, 0xC0, 0xE0
@@ -136,7 +142,8 @@ def _judge_sdo(node: CanOpenNode, request: bytes, answer: bytes) -> str | None:
         if must is not None:
             return None if aborted and code == must else f"expected abort 0x{must:08X}"
         if aborted:
-            return None if write and code in VALUE_CODES else f"unexpected abort 0x{code:08X}"
+            allowed = VALUE_CODES | (TARGET_CODES if index in INDIRECT else set())
+            return None if write and code in allowed else f"unexpected abort 0x{code:08X}"
         if write:
             return None if answer[0] == 0x60 else "a download not confirmed with 0x60"
         return _judge_upload(node, index, sub, answer)
