@@ -53,8 +53,9 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("alarm_reset", "alarm reset: a 0 -> 1 -> 0 pulse of the control word's reset bit"),
     Action("start", "start in the active mode (positioning, homing, interpolation, axis)"),
     Action("stop", "stop on the deceleration ramp and hold (Stp_cmd)"),
-    Action("move", "positioner: go to a target (absolute, or incremental)", (
-        Param("target", int, low=-0x8000_0000, high=0x7FFF_FFFF),
+    # "position", not "target": in a scenario step "target" names the device.
+    Action("move", "positioner: go to a position (absolute, or incremental)", (
+        Param("position", int, low=-0x8000_0000, high=0x7FFF_FFFF),
         Param("relative", bool, False, False))),
     Action("jog", "velocity mode at -/+ profile_velocity, 0 stops", (
         Param("direction", int, choices=(-1, 0, 1)),)),
@@ -188,11 +189,11 @@ class DriveActions:
         self._powered()
         self.write_register(R.CONTROL_WORD, self.regs[R.CONTROL_WORD] | control.STP_CMD)
 
-    def cmd_move(self: ServoDrive, target: int, relative: bool) -> None:
+    def cmd_move(self: ServoDrive, position: int, relative: bool) -> None:
         self._powered()
         if self.mode not in control.POSITIONER:
             self.set_mode(1)
-        self.write_register(R.TARGET_POSITION, target)
+        self.write_register(R.TARGET_POSITION, position)
         # Clear the mode bits 5..7 first (after homing R00 still holds bit 6, which reads as
         # the same new-set-point bit), so the start below is a fresh 0 -> 1 edge, as the
         # seed's example does after homing (CW = 3, then 0x23).

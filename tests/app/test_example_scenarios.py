@@ -160,3 +160,15 @@ def test_scenario_record_flag_writes_a_verified_recording(capsys, tmp_path) -> N
     verify = subprocess.run([sys.executable, "-m", "rerun", "rrd", "verify", str(rrd)],
                             capture_output=True, text=True)
     assert verify.returncode == 0, verify.stderr
+
+
+def test_drive_jammed_load_raises_alarm_16_and_recovers(capsys, tmp_path) -> None:
+    """Issue 3: scenario steps for drives (register write, move, jam, alarm reset) and the
+    foundation's event schema; seed 004 ch. 3 alarm 16 (following error)."""
+    records = [r for r in run("drive_jammed_load", capsys, tmp_path) if r["device"] == "drive"]
+    alarms = [(r["t"], r["code"], r["active"]) for r in records if r["event"] == "alarm"]
+    assert [(code, active) for _, code, active in alarms] == [("16", True), ("16", False)]
+    assert 2.0 < alarms[0][0] < 4.0 and alarms[1][0] == 6.5
+    states = [r["to"] for r in records if r["event"] == "state"]
+    assert "Fault" in states and states[-1] == "Operation enabled"
+    assert [r["value"] for r in records if r["event"] == "read"] == [24000]

@@ -185,7 +185,7 @@ class DrivePanel:
             r00 = int(apply("read_register", register=R.CONTROL_WORD))
             if r00 & (START_BITS | control.STP_CMD):
                 apply("control_register", value=r00 & ~(START_BITS | control.STP_CMD))
-            apply("move", target=position, relative=relative)
+            apply("move", position=position, relative=relative)
 
         self._sequence(event, "move", steps)
 

@@ -34,7 +34,7 @@ def test_every_action_has_a_handler() -> None:
     ("analog_input", {"volts": 10.5}),
     ("write_object", {"index": 0x6041, "sub": 0, "value": 1}),
     ("write_object", {"index": 0x6066, "sub": 0, "value": 0x2000}),
-    ("move", {"target": 1 << 31}),
+    ("move", {"position": 1 << 31}),
     ("no_such_action", {}),
 ])
 def test_bad_commands_are_refused_and_change_nothing(action: str, args: dict) -> None:
@@ -58,7 +58,7 @@ def test_enable_move_stop_and_alarm_reset() -> None:
     d = sim.drive
     d.apply("enable", {"on": True})
     assert d.read_register(0) == 0x03 and d.state is State.OPERATION_ENABLED
-    d.apply("move", {"target": 12000})
+    d.apply("move", {"position": 12000})
     sim.run(500)
     d.apply("stop", {})
     assert d.read_register(0) & 0x04  # Stp_cmd
@@ -68,7 +68,7 @@ def test_enable_move_stop_and_alarm_reset() -> None:
     assert d.read_register(8) == 0
     stopped_at = d.position_user
     assert 0 < stopped_at < 12000
-    d.apply("move", {"target": 3000, "relative": True})  # clears Stp_cmd; from where it stands
+    d.apply("move", {"position": 3000, "relative": True})  # clears Stp_cmd; from where it stands
     sim.run_until(lambda: d.read_register(5) & 0x40, 5_000)
     sim.run(20)
     assert d.position_user == stopped_at + 3000
@@ -146,5 +146,5 @@ def test_move_after_homing_starts() -> None:
     d.apply("enable", {"on": True})
     d.apply("home", {})
     sim.run_until(lambda: d.homed, 30_000, tick_ms=10)
-    d.apply("move", {"target": 6000})
+    d.apply("move", {"position": 6000})
     sim.run_until(lambda: d.read_register(6) == 6000, 30_000, tick_ms=10)
