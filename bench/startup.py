@@ -63,16 +63,18 @@ def one_run(browser: Any) -> Run:
     with tempfile.TemporaryDirectory(prefix="fieldrig-startup-") as state_dir:
         context = browser.new_context(viewport={"width": 1280, "height": 720})
         page = context.new_page()
+        log = Path(state_dir) / "stderr.txt"
         t0 = time.monotonic()
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "app", "--port", str(port), "--modbus-port",
-             str(modbus_port), "--state-dir", state_dir, "--run-for", str(TIMEOUT_S),
-             "--can-channel", f"startup-{port}"],
-            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        with log.open("w") as stderr:  # a file, not a pipe nobody reads while it runs
+            proc = subprocess.Popen(
+                [sys.executable, "-m", "app", "--port", str(port), "--modbus-port",
+                 str(modbus_port), "--state-dir", state_dir, "--run-for", str(TIMEOUT_S),
+                 "--can-channel", f"startup-{port}"],
+                cwd=ROOT, stdout=subprocess.DEVNULL, stderr=stderr)
         try:
             while not _listening(port):
                 if proc.poll() is not None:
-                    raise RuntimeError(f"python -m app exited: {proc.stderr.read()}")  # type: ignore[union-attr]
+                    raise RuntimeError(f"python -m app exited: {log.read_text()}")
                 if time.monotonic() - t0 > TIMEOUT_S:
                     raise RuntimeError("python -m app did not listen")
                 time.sleep(0.01)

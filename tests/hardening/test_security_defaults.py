@@ -95,16 +95,19 @@ def _igmp_devices(group: str) -> list[str]:
 def _serve(tmp: Path, *flags: str) -> Listeners:
     """Start ``python -m app`` with ``flags``, read its listeners from the kernel, stop it."""
     port, modbus_port = _free_port(), _free_port()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "app", "--port", str(port), "--modbus-port", str(modbus_port),
-         "--state-dir", str(tmp / "state"), "--run-for", str(START_TIMEOUT_S), *flags],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    log = tmp / "stderr.txt"
+    with log.open("w") as stderr:  # a file, not a pipe nobody reads while it runs
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "app", "--port", str(port), "--modbus-port",
+             str(modbus_port), "--state-dir", str(tmp / "state"), "--run-for",
+             str(START_TIMEOUT_S), *flags], cwd=ROOT, stdout=subprocess.PIPE, stderr=stderr,
+            text=True)
     try:
         assert proc.stdout is not None
         deadline = time.monotonic() + START_TIMEOUT_S
         while True:  # the dashboard line is printed once every listener is up
             line = proc.stdout.readline()
-            assert line, f"python -m app ended: {proc.stderr.read() if proc.stderr else ''}"
+            assert line, f"python -m app ended: {log.read_text()}"
             if line.startswith("FieldRig: rig"):
                 break
             assert time.monotonic() < deadline
