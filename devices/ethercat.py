@@ -7,6 +7,7 @@ seed 001 §9.2 and seed 004 ch. 5 (ESM), digest §1.8 and §6.1.
 from __future__ import annotations
 
 import enum
+import struct
 
 
 class AlState(enum.IntEnum):
@@ -104,6 +105,22 @@ AL_STATUS_CODES: dict[int, str] = {
     0x0082: "The slave temperature is too low",
     0x0083: "The slave temperature is too high",
 }
+
+def emergency_frame(code: int, register: int, data: bytes) -> bytes:
+    """A CoE emergency as it travels in the mailbox: error code (little endian), error
+    register, 5 manufacturer bytes (ETG.1000.6 / DS301; seed 000 §7, seed 002 §2.5.3)."""
+    if len(data) > 5:
+        raise ValueError(f"an emergency carries at most 5 data bytes, got {len(data)}")
+    return struct.pack("<HB", code, register) + bytes(data).ljust(5, b"\x00")
+
+
+def parse_emergency_frame(frame: bytes) -> tuple[int, int, bytes]:
+    """(error code, error register, 5 data bytes) of an 8-byte emergency frame."""
+    if len(frame) != 8:
+        raise ValueError(f"an emergency frame has 8 bytes, got {len(frame)}")
+    code, register = struct.unpack_from("<HB", frame)
+    return code, register, bytes(frame[3:])
+
 
 MANUFACTURER_AREA = 0x8000  # seed 000 §7.7: "Inizio dell'area manufacturer"
 

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Protocol
 
 from devices.device import Action, DeviceModel, Param
-from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState
+from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState, parse_emergency_frame
 from devices.events import LogLine
 
 TWINCAT_PORT = 65535  # seed 000 §7.1 / §7.7: "Server (porta) (65535)"
@@ -51,7 +51,7 @@ class Slave(Protocol):
     def al_status_code(self) -> int: ...
     def reachable(self) -> bool: ...
     def request_state(self, target: AlState) -> None: ...
-    def take_emergencies(self) -> list[bytes]: ...
+    def take_emergencies(self) -> list[bytes]: ...  # 8-byte frames (emergency_frame)
     def exchange_frame(self, now_us: int) -> None: ...
 
 
@@ -135,8 +135,9 @@ class EtherCatMaster(DeviceModel):
         if not link.present:  # found (again): start from whatever state it is in
             link.present, link.believed, link.next_try_us = True, slave.al_state, now
         slave.exchange_frame(now)
-        for data in slave.take_emergencies():
-            self._log(slave, EMERGENCY_TEXT.format(code=0xFF00, register=0x81,
+        for frame in slave.take_emergencies():
+            code, register, data = parse_emergency_frame(frame)
+            self._log(slave, EMERGENCY_TEXT.format(code=code, register=register,
                                                    data=" ".join(f"{b:02x}" for b in data)))
         if link.pending is not None:
             self._check(link)

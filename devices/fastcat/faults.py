@@ -16,7 +16,7 @@ from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 from devices.device import CommandError
-from devices.ethercat import AlState
+from devices.ethercat import AlState, emergency_frame
 from devices.events import AlarmChanged, EmergencySent, Event, fmt_hex
 from devices.fastcat.alarms import (
     COUPLER,
@@ -171,7 +171,8 @@ class FaultsMixin:
                                name=info.symbol, active=True, module=alarm.module))
         self.emit(EmergencySent(now, self.device_id, code=EMERGENCY_CODE,
                                 register=EMERGENCY_REGISTER, data=alarm.data))
-        self.mailbox = [*self.mailbox, alarm.data][-MAILBOX_DEPTH:]
+        frame = emergency_frame(EMERGENCY_CODE, EMERGENCY_REGISTER, alarm.data)
+        self.mailbox = [*self.mailbox, frame][-MAILBOX_DEPTH:]
         if self.esm.state in (AlState.SAFEOP, AlState.OP):  # §7.7: OP -> PREOP, 0x80XX
             self.esm.fall(AlState.PREOP, alarm.al_status_code, now)
 

@@ -414,7 +414,7 @@ def test_link_loss() -> None:
     assert not bench.fc.reachable() and bench.fc.snapshot()["leds"]["LINK"] == "off"
     assert bench.fc.take_emergencies() == []
     bench.apply("link", connected=True)
-    assert bench.fc.take_emergencies() == [bytes.fromhex("0000001300")]
+    assert bench.fc.take_emergencies() == [bytes.fromhex("00FF81" "0000001300")]  # 8-byte frame
 
 
 def test_no_module_on_the_bus() -> None:

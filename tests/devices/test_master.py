@@ -199,3 +199,13 @@ def test_a_slave_in_boot_is_taken_through_init() -> None:
 
     assert next_state(AlState.BOOT, AlState.OP) is AlState.INIT
     assert next_state(AlState.INIT, AlState.OP) is AlState.PREOP
+
+
+def test_emergency_frames_are_logged_with_their_own_code() -> None:
+    """Every slave hands the master 8-byte frames; the log prints code and register from the
+    frame (seed 000 §7.1 format), not a FastCAT constant."""
+    from devices.ethercat import emergency_frame, parse_emergency_frame
+
+    frame = emergency_frame(0x2320, 0x03, bytes.fromhex("0200030000"))
+    assert frame == bytes.fromhex("20230302 00030000".replace(" ", ""))
+    assert parse_emergency_frame(frame) == (0x2320, 0x03, bytes.fromhex("0200030000"))
