@@ -3,7 +3,7 @@
 Issue 7 "Hardening": no crash, no hang, each answer a correct response, exception 02 or the
 documented silence (seed 004 ch.2 "Eccezioni": only 02 is ever answered), and nothing rejected
 changes a drive. Two drives share the line (nodes 1 and 5, as in tests/app); the simulation
-advances between requests so saves finish and the drives move. Sizes: 10,000 requests in CI,
+advances between requests so saves finish and the drives move. Sizes: 6,000 requests in CI,
 120,000 with ``--full``.
 """
 
@@ -18,7 +18,7 @@ from devices.flash import MemoryFlash
 from devices.servo.drive import DriveConfig, ServoDrive
 
 SEED = 20240707
-REDUCED, FULL = 10_000, 120_000
+REDUCED, FULL = 6_000, 120_000
 NODES = (1, 5)
 STEP_EVERY = 40  # requests between two simulation advances
 BOOT_US = 100_000

@@ -6,7 +6,7 @@ app.flash_file.FileFlash again and again; this test kills it with SIGKILL, most 
 0-5 ms after it announced a write, sometimes at any moment. After each kill the file must load
 without error and hold the content of the last completed write or of the write that was under
 way (only the new one once that write was reported done); the next process started on the file
-must load that content into the device and accept it. Rounds per device: 6 in CI, 60 with
+must load that content into the device and accept it. Rounds per device: 4 in CI, 60 with
 ``--full``.
 """
 
@@ -78,7 +78,7 @@ def test_killed_writer_leaves_old_or_new_content(kind: str, full: bool, tmp_path
     values: dict[str, Any] = {"none": None}  # content hash -> what the content says
     on_disk = "none"
     kills_inside = 0
-    for round_no in range(60 if full else 6):
+    for round_no in range(60 if full else 4):
         child = Child(kind, path)
         loaded = child.next()
         # the device loaded what the file holds, and accepted it
