@@ -48,6 +48,10 @@ class FileFlash:
         blob = _HEADER.pack(MAGIC, len(data), zlib.crc32(data)) + data
         try:
             self.path.parent.mkdir(parents=True, exist_ok=True)
+            # A writer killed mid-save leaves its temporary file; one device has one writer,
+            # so any such file is stale: remove it rather than let them pile up.
+            for stale in self.path.parent.glob(f".{self.path.name}.*"):
+                stale.unlink(missing_ok=True)
             fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", dir=self.path.parent)
             try:
                 with os.fdopen(fd, "wb") as fh:

@@ -324,9 +324,15 @@ def _build_slave(spec: RigSpec, slave: SlaveSpec, rng: random.Random, position: 
             return TrsCat(slave.id, rng, out_link=not last, station_address=1000 + position,
                           **settings)
         settings.setdefault("box_name", f"Box {position} (CPX-E-EC)")
-        modules = [m if isinstance(m, str) else (m.get("type"), {k: v for k, v in m.items()
-                                                                 if k != "type"})
-                   for m in settings.pop("modules", [])]
+        modules: list[Any] = []
+        for j, m in enumerate(settings.pop("modules", [])):
+            if isinstance(m, str):
+                modules.append(m)
+            elif isinstance(m, Mapping) and isinstance(m.get("type"), str):
+                modules.append((m["type"], {k: v for k, v in m.items() if k != "type"}))
+            else:
+                raise RigConfigError(spec.source, f"{slave.kind}.modules[{j}]",
+                                     f"must be a module name or a table with type, got {m!r}")
         return CpxEEc(slave.id, rng, modules=modules, out_connected=not last,
                       station_address=1000 + position, **settings)
     except (ValueError, TypeError) as exc:

@@ -53,6 +53,7 @@ class Runtime:
         self._event_seq = 0
         self._frame = Frame(0, rig.clock.now_us, rig.snapshot())
         self._stop = threading.Event()
+        self._wake = threading.Event()  # set by submit(): queued work runs without a nap
         self._thread: threading.Thread | None = None
         self._listeners: list[Callable[[list[Event]], None]] = []
         self._step_listeners: list[Callable[[int], None]] = []
@@ -64,6 +65,7 @@ class Runtime:
 
     def stop(self) -> None:
         self._stop.set()
+        self._wake.set()
         if self._thread is not None:
             self._thread.join(timeout=5)
 
@@ -89,6 +91,7 @@ class Runtime:
         """Run ``fn`` in the simulation thread at the next step boundary."""
         fut: Future[T] = Future()
         self._work.put((fn, fut))
+        self._wake.set()
         return fut
 
     def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Future[Any]:
@@ -152,9 +155,10 @@ class Runtime:
             else:
                 target = sim0 + int((now - wall0) * 1e6 * self._speed)
                 if target - self.rig.clock.now_us > MAX_CATCH_UP_US:
-                    sim0 = self.rig.clock.now_us
-                    wall0 = now
-                    target = sim0
+                    # Too far behind (a slow machine, a speed the CPU cannot give): run at
+                    # most MAX_CATCH_UP_US now and let the clock slip for the rest.
+                    target = self.rig.clock.now_us + MAX_CATCH_UP_US
+                    sim0, wall0 = target, now
                 while self.rig.clock.now_us + self.rig.clock.step_us <= target:
                     # Each step's events reach the listeners before the step listeners run,
                     # so an observer never sees a sample ahead of the events that led to it.
@@ -165,7 +169,8 @@ class Runtime:
             if now >= next_publish:
                 self._publish()
                 next_publish = now + self._publish_period
-            time.sleep(0.001)
+            self._wake.wait(0.001)
+            self._wake.clear()
 
     def _drain_work(self) -> list[Event]:
         events: list[Event] = []

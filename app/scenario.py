@@ -101,6 +101,9 @@ def parse_scenario(text: str, source: str = "<scenario>",
     return Scenario(source, name, description, rig, ordered, end)
 
 
+MAX_SECONDS = 10 * 24 * 3600.0  # ten simulated days: far beyond any scenario
+
+
 def _typed(table: Mapping[str, Any], key: str, kind: type, default: Any,
            fail: Callable[[str, str], ScenarioError], path: str) -> Any:
     if key not in table:
@@ -110,6 +113,8 @@ def _typed(table: Mapping[str, Any], key: str, kind: type, default: Any,
         value = float(value)
     if not isinstance(value, kind) or (kind is not bool and isinstance(value, bool)):
         raise fail(path, f"must be {kind.__name__}, got {table[key]!r}")
+    if kind is float and not -MAX_SECONDS <= value <= MAX_SECONDS:  # also refuses nan
+        raise fail(path, f"{value!r} is not a time within {MAX_SECONDS:g} s")
     return value
 
 

@@ -75,3 +75,5 @@ def test_killed_writer_leaves_old_or_new(tmp_path: Path, delay: float) -> None:
     data = FileFlash(path).load()
     assert data is not None and len(data) == 8 * 20000
     assert data == data[:8] * 20000  # one whole generation, not a mix
+    FileFlash(path).save(b"next")  # the next save clears what the killed writer left
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dev.flash"]
