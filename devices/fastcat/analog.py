@@ -168,9 +168,10 @@ class AnalogInputs:
         self._filters = [InputFilter() for _ in range(self.count)]
         self._seen: tuple[Any, ...] = ()  # the inputs _law was computed from
         self._law: list[tuple[int, int] | None] = [None] * self.count  # (target, coefficient)
-        # Per channel: the step length for which the filter sits at a fixed point of its law.
-        self._fixed: list[int | None] = [None] * self.count
-        self._still_dt: int | None = None  # a step of this length moved no channel
+        # The channels a step of _active_dt may still move; the others sit at a fixed point
+        # of their law for that step length.
+        self._active: list[int] = list(range(self.count))
+        self._active_dt: int | None = None
         self.still = False  # the last step was skipped as a repeat of a step that moved nothing
         self.reset()
 
@@ -182,8 +183,7 @@ class AnalogInputs:
         self.tc_types = [0] * self.count  # 0x200B
         for ch in range(self.count):
             self._filters[ch].settle(self.target(ch))
-        self._fixed = [None] * self.count
-        self._still_dt = None
+        self._active_dt = None  # every channel again
 
     def kind(self, ch: int) -> AiKind:
         if self.configurable:
@@ -214,37 +214,30 @@ class AnalogInputs:
         if value != self.types[ch]:
             self.types[ch] = value
             self._filters[ch].settle(self.target(ch))  # a new range, not a step to filter
-            self._fixed[ch] = self._still_dt = None
-
-    def _inputs(self) -> tuple[Any, ...]:
-        """Every value the targets and the filter coefficients are computed from."""
-        return (self.field, self.cold_junction_c, self.pot_supply_short, self.filter_all,
-                self.filters, self.types, self.tc_types, self.wired)
+            self._active_dt = None
 
     def step(self, dt_us: int) -> None:
-        inputs = self._inputs()
-        self.still = False
+        # Every value the targets and the filter coefficients are computed from:
+        inputs = (self.field, self.cold_junction_c, self.pot_supply_short, self.filter_all,
+                  self.filters, self.types, self.tc_types, self.wired)
+        active = self._active
         if inputs != self._seen:
             self._seen = tuple(list(v) if isinstance(v, list) else v for v in inputs)
             law = [(self.target(ch), self.coeff(ch)) for ch in range(self.count)]
-            self._fixed = [f if new == old else None
-                           for f, new, old in zip(self._fixed, law, self._law, strict=True)]
+            changed = {ch for ch in range(self.count) if law[ch] != self._law[ch]}
             self._law = law  # type: ignore[assignment]
-        elif dt_us == self._still_dt:
-            self.still = True
-            return  # every filter sits at its fixed point for this step length
-        moved = False
-        fixed = self._fixed
-        for ch, (filt, law) in enumerate(zip(self._filters, self._law, strict=True)):
-            if fixed[ch] == dt_us:
-                continue  # the same step again leaves this channel where it is
+            active = sorted(changed.union(active))
+        if dt_us != self._active_dt:
+            active, self._active_dt = list(range(self.count)), dt_us
+        self.still = not active
+        moving = []
+        for ch in active:
+            filt = self._filters[ch]
             y, rem = filt.y, filt._rem_us
-            filt.advance(*law, dt_us)  # type: ignore[misc]
+            filt.advance(*self._law[ch], dt_us)  # type: ignore[misc]
             if filt.y != y or filt._rem_us != rem:
-                moved, fixed[ch] = True, None
-            else:
-                fixed[ch] = dt_us
-        self._still_dt = None if moved else dt_us
+                moving.append(ch)  # a channel that did not move is at a fixed point
+        self._active = moving
 
     def physical_alarms(self) -> set[int]:
         if self.pot_supply_short and any(
