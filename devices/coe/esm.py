@@ -14,17 +14,17 @@ drive's main state machine is CiA 402.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
-from devices.ethercat import AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
-from devices.events import AlStatusChanged, Event, StateChanged
+from devices import esm
+from devices.ethercat import AlState
 
 MACHINE = "esm"
 
-NO_ERROR = 0x0000
-INVALID_STATE_CHANGE = 0x0011  # a request outside ALLOWED_TRANSITIONS
-BOOTSTRAP_NOT_SUPPORTED = 0x0013  # ch. 5: BOOT "non presente nel drive"
+NO_ERROR = esm.NO_ERROR
+INVALID_STATE_CHANGE = esm.INVALID_STATE_CHANGE  # a request outside ALLOWED_TRANSITIONS
+BOOTSTRAP_NOT_SUPPORTED = esm.BOOTSTRAP_NOT_SUPPORTED  # ch. 5: BOOT "non presente nel drive"
 NO_VALID_OUTPUTS = 0x0019  # SAFEOP -> OP without process data from the master
 SM_WATCHDOG = 0x001B  # OP: no process data for the SM watchdog time
 INVALID_INPUT_MAPPING = 0x0024  # PREOP -> SAFEOP: a TxPDO assignment that cannot work
@@ -39,8 +39,7 @@ TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
     (AlState.SAFEOP, AlState.OP): ("check_outputs",),
 }
 
-RANK: dict[AlState, int] = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2,
-                            AlState.OP: 3}
+RANK = esm.RANK
 
 
 class ErrorKind(enum.Enum):
@@ -52,65 +51,15 @@ class ErrorKind(enum.Enum):
     WATCHDOG = "watchdog"  # ... because the process data stopped (SM watchdog)
 
 
-def request_refusal(current: AlState, target: AlState) -> int | None:
-    """The AL status code of a request the ESM table forbids, or None when it is allowed."""
-    if target is AlState.BOOT:
-        return BOOTSTRAP_NOT_SUPPORTED
-    if target is current or (current, target) in ALLOWED_TRANSITIONS:
-        return None
-    return INVALID_STATE_CHANGE
+request_refusal = esm.request_refusal  # ch. 5, no BOOT: 0x0013; outside the table: 0x0011
 
 
 @dataclass
-class Esm:
-    emit: Callable[[Event], None]
-    device: str
-    state: AlState = AlState.INIT
-    requested: AlState = AlState.INIT
+class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
-    code: int = NO_ERROR
-
-    @property
-    def register(self) -> int:
-        """AL status register 0x0130: the state, + 0x10 while the error flag is set."""
-        flag = AL_STATUS_ERROR_FLAG if self.error is not ErrorKind.NONE else 0
-        return int(self.state) | flag
-
-    def at_least(self, state: AlState) -> bool:
-        return RANK[self.state] >= RANK[state]
-
-    def accept(self, target: AlState, t_us: int) -> None:
-        """A requested transition done: the error flag is acknowledged, the code cleared."""
-        self.requested = target
-        self.error = ErrorKind.NONE
-        self._set_code(NO_ERROR, t_us)
-        self._move(target, t_us)
-
-    def refuse(self, code: int, t_us: int) -> None:
-        """A requested transition refused: stay, raise the error flag, say why."""
-        self.error = ErrorKind.REFUSED
-        self._set_code(code, t_us)
+    kinds: ClassVar[type[ErrorKind]] = ErrorKind
+    machine: ClassVar[str] = MACHINE  # ESM moves are ``state`` events with machine "esm"
 
     def fall(self, target: AlState, code: int, kind: ErrorKind, t_us: int) -> None:
         """Leave the state on the slave's own initiative: error flag + code."""
-        self.error = kind
-        self._set_code(code, t_us)
-        self._move(target, t_us)
-
-    def reset(self, t_us: int) -> None:
-        """The ESC lost its supply (the drive was switched off): INIT, no error."""
-        self.requested = AlState.INIT
-        self.error = ErrorKind.NONE
-        self._set_code(NO_ERROR, t_us)
-        self._move(AlState.INIT, t_us)
-
-    def _set_code(self, code: int, t_us: int) -> None:
-        if code != self.code:
-            self.code = code
-            self.emit(AlStatusChanged(t_us, self.device, code=code))
-
-    def _move(self, target: AlState, t_us: int) -> None:
-        if target is not self.state:
-            before, self.state = self.state, target
-            self.emit(StateChanged(t_us, self.device, from_state=before.label,
-                                   to_state=target.label, machine=MACHINE))
+        self.fall_to(target, kind, code, t_us)

@@ -9,15 +9,15 @@ state (Tab. 11: "Bootstrap: the bus module receives a firmware update"), reached
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
+from devices import esm
 from devices.cpx.leds import ErrorShows
-from devices.ethercat import AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
-from devices.events import AlStatusChanged, Event, StateChanged
+from devices.ethercat import ALLOWED_TRANSITIONS, AlState
 
-NO_ERROR = 0x0000
-INVALID_STATE_CHANGE = 0x0011
+NO_ERROR = esm.NO_ERROR
+INVALID_STATE_CHANGE = esm.INVALID_STATE_CHANGE
 NO_VALID_FIRMWARE = 0x0014  # bootloader mode or a booting error: no application runs
 INVALID_MAILBOX_PREOP = 0x0016  # SM0 / SM1 refused at INIT -> PREOP
 INVALID_SM_CONFIG = 0x0017
@@ -50,57 +50,14 @@ ERROR_LED: dict[ErrorKind, ErrorShows] = {
 
 def request_refusal(current: AlState, target: AlState) -> int | None:
     """The AL status code for a request the transition table forbids, else None."""
-    if target is current or (current, target) in TRANSITIONS:
-        return None
-    return INVALID_STATE_CHANGE
+    return esm.request_refusal(current, target, TRANSITIONS, has_boot=True)
 
 
 @dataclass
-class Esm:
-    emit: Callable[[Event], None]
-    device: str
-    state: AlState = AlState.INIT
-    requested: AlState = AlState.INIT
+class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
-    code: int = NO_ERROR
-
-    @property
-    def register(self) -> int:
-        """AL status (0x0130): the state, plus 0x10 while the error flag is set."""
-        flag = AL_STATUS_ERROR_FLAG if self.error is not ErrorKind.NONE else 0
-        return int(self.state) | flag
-
-    def accept(self, target: AlState, t_us: int) -> None:
-        self.requested = target
-        self.error = ErrorKind.NONE
-        self._set_code(NO_ERROR, t_us)
-        self._move(target, t_us)
-
-    def refuse(self, code: int, t_us: int, kind: ErrorKind = ErrorKind.REFUSED) -> None:
-        """Stay, raise the error flag; ``kind`` says which Error LED pattern tells why."""
-        self.error = kind
-        self._set_code(code, t_us)
+    kinds: ClassVar[type[ErrorKind]] = ErrorKind
 
     def fall(self, target: AlState, kind: ErrorKind, code: int, t_us: int) -> None:
         """Leave the state on the slave's own initiative (watchdog, sync error)."""
-        self.error = kind
-        self._set_code(code, t_us)
-        self._move(target, t_us)
-
-    def reset(self, t_us: int) -> None:
-        """INIT without an error (power-up, restart of the application controller)."""
-        self.requested = AlState.INIT
-        self.error = ErrorKind.NONE
-        self._set_code(NO_ERROR, t_us)
-        self._move(AlState.INIT, t_us)
-
-    def _set_code(self, code: int, t_us: int) -> None:
-        if code != self.code:
-            self.code = code
-            self.emit(AlStatusChanged(t_us, self.device, code=code))
-
-    def _move(self, target: AlState, t_us: int) -> None:
-        if target is not self.state:
-            before, self.state = self.state, target
-            self.emit(StateChanged(t_us, self.device, from_state=before.label,
-                                   to_state=target.label))
+        self.fall_to(target, kind, code, t_us)

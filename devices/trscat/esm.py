@@ -8,16 +8,16 @@ named in :data:`TRANSITION_CHECKS`; each returns None or the AL status code that
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
-from devices.ethercat import AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
-from devices.events import AlStatusChanged, Event, StateChanged
+from devices import esm
+from devices.ethercat import AlState
 
-NO_ERROR = 0x0000
+NO_ERROR = esm.NO_ERROR
 UNSPECIFIED_ERROR = 0x0001  # deadlock after 0x6100 (the seed names no AL status code)
-INVALID_STATE_CHANGE = 0x0011
-BOOTSTRAP_NOT_SUPPORTED = 0x0013  # §9.2 has no BOOT state
+INVALID_STATE_CHANGE = esm.INVALID_STATE_CHANGE
+BOOTSTRAP_NOT_SUPPORTED = esm.BOOTSTRAP_NOT_SUPPORTED  # §9.2 has no BOOT state
 NO_VALID_OUTPUTS = 0x0019
 SYNC_ERROR = 0x001A  # SM events missed up to 0x10F1:2
 SM_WATCHDOG = 0x001B
@@ -54,60 +54,14 @@ FALL_KIND: dict[int, ErrorKind] = {
 }
 
 
-def request_refusal(current: AlState, target: AlState) -> int | None:
-    """The AL status code for a request the ESM table forbids, or None when it is allowed."""
-    if target is AlState.BOOT:
-        return BOOTSTRAP_NOT_SUPPORTED
-    if target is current or (current, target) in ALLOWED_TRANSITIONS:
-        return None
-    return INVALID_STATE_CHANGE
+request_refusal = esm.request_refusal  # no BOOT (§9.2): 0x0013; outside the table: 0x0011
 
 
 @dataclass
-class Esm:
-    emit: Callable[[Event], None]
-    device: str
-    state: AlState = AlState.INIT
-    requested: AlState = AlState.INIT
+class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
-    code: int = NO_ERROR
-
-    @property
-    def register(self) -> int:
-        """AL status register 0x0130: the state, + 0x10 while the error flag is set."""
-        flag = AL_STATUS_ERROR_FLAG if self.error is not ErrorKind.NONE else 0
-        return int(self.state) | flag
-
-    def accept(self, target: AlState, t_us: int) -> None:
-        self.requested = target
-        self.error = ErrorKind.NONE
-        self._set_code(NO_ERROR, t_us)
-        self._move(target, t_us)
-
-    def refuse(self, code: int, t_us: int) -> None:
-        self.error = ErrorKind.REFUSED
-        self._set_code(code, t_us)
+    kinds: ClassVar[type[ErrorKind]] = ErrorKind
 
     def fall(self, target: AlState, code: int, t_us: int) -> None:
         """Leave the state on the device's own initiative: error flag + code."""
-        self.error = FALL_KIND.get(code, ErrorKind.LOCAL)
-        self._set_code(code, t_us)
-        self._move(target, t_us)
-
-    def reset(self, t_us: int) -> None:
-        """Power off: INIT, no error."""
-        self.requested = AlState.INIT
-        self.error = ErrorKind.NONE
-        self._set_code(NO_ERROR, t_us)
-        self._move(AlState.INIT, t_us)
-
-    def _set_code(self, code: int, t_us: int) -> None:
-        if code != self.code:
-            self.code = code
-            self.emit(AlStatusChanged(t_us, self.device, code=code))
-
-    def _move(self, target: AlState, t_us: int) -> None:
-        if target is not self.state:
-            before, self.state = self.state, target
-            self.emit(StateChanged(t_us, self.device, from_state=before.label,
-                                   to_state=target.label))
+        self.fall_to(target, FALL_KIND.get(code, ErrorKind.LOCAL), code, t_us)

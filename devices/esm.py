@@ -1,0 +1,110 @@
+"""The EtherCAT state machine's state holder, shared by every slave model: AL status and code.
+
+The state, the requested state, why the error flag is set and the AL status code, and the
+events they emit. What a slave allows (which checks a transition runs) is decided in its own
+package, which also keeps its own ``ErrorKind`` enum: it drives that device's ERR LED
+(ETG.1300). Requests outside the ETG.1000.6 transition table
+(devices.ethercat.ALLOWED_TRANSITIONS) answer the seed 000 §7.7 codes below.
+"""
+
+from __future__ import annotations
+
+import enum
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import ClassVar, Generic, TypeVar
+
+from devices.ethercat import AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
+from devices.events import AlStatusChanged, Event, StateChanged
+
+# §7.7 codes for requests the ESM itself refuses.
+NO_ERROR = 0x0000
+INVALID_STATE_CHANGE = 0x0011  # "Invalid requested state change"
+BOOTSTRAP_NOT_SUPPORTED = 0x0013  # "Bootstrap not supported" (a slave without a BOOT state)
+
+# Order of the states a slave steps up through (BOOT is outside it).
+RANK: dict[AlState, int] = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2,
+                            AlState.OP: 3}
+
+K = TypeVar("K", bound=enum.Enum)
+
+
+def request_refusal(current: AlState, target: AlState,
+                    transitions: frozenset[tuple[AlState, AlState]] = ALLOWED_TRANSITIONS,
+                    *, has_boot: bool = False) -> int | None:
+    """The AL status code for a request the transition table forbids, or None when allowed.
+
+    A slave without a BOOT state (``has_boot`` False) answers any request for BOOT with
+    0x0013; one with BOOT finds it in its own ``transitions``.
+    """
+    if target is AlState.BOOT and not has_boot:
+        return BOOTSTRAP_NOT_SUPPORTED
+    if target is current or (current, target) in transitions:
+        return None
+    return INVALID_STATE_CHANGE
+
+
+@dataclass
+class Esm(Generic[K]):
+    """One slave's ESM. A subclass names its ``ErrorKind`` enum in ``kinds`` (members NONE and
+    REFUSED at least) and redeclares ``error`` with that enum's NONE as the default."""
+
+    emit: Callable[[Event], None]
+    device: str
+    state: AlState = AlState.INIT
+    requested: AlState = AlState.INIT
+    error: K = None  # type: ignore[assignment]  # each subclass: its ErrorKind.NONE
+    code: int = NO_ERROR
+
+    kinds: ClassVar[type[enum.Enum]]
+    machine: ClassVar[str] = ""  # StateChanged.machine; empty for the device's main machine
+
+    @property
+    def error_flag(self) -> bool:
+        return self.error is not self.kinds.NONE
+
+    @property
+    def register(self) -> int:
+        """AL status register 0x0130: the state, plus 0x10 while the error flag is set."""
+        return int(self.state) | (AL_STATUS_ERROR_FLAG if self.error_flag else 0)
+
+    def at_least(self, state: AlState) -> bool:
+        return RANK[self.state] >= RANK[state]
+
+    def accept(self, target: AlState, t_us: int) -> None:
+        """A requested transition done: the error flag is acknowledged, the code cleared."""
+        self.requested = target
+        self.error = self.kinds.NONE  # type: ignore[assignment]
+        self._set_code(NO_ERROR, t_us)
+        self._move(target, t_us)
+
+    def refuse(self, code: int, t_us: int, kind: K | None = None) -> None:
+        """A requested transition refused: stay, raise the error flag, report why.
+
+        ``kind`` (default REFUSED) says which ERR LED pattern tells why."""
+        self.error = self.kinds.REFUSED if kind is None else kind  # type: ignore[assignment]
+        self._set_code(code, t_us)
+
+    def fall_to(self, target: AlState, kind: K, code: int, t_us: int) -> None:
+        """Leave the state on the slave's own initiative: error flag (``kind``) + code."""
+        self.error = kind
+        self._set_code(code, t_us)
+        self._move(target, t_us)
+
+    def reset(self, t_us: int) -> None:
+        """Back to INIT without an error (power loss or power-up, restart)."""
+        self.requested = AlState.INIT
+        self.error = self.kinds.NONE  # type: ignore[assignment]
+        self._set_code(NO_ERROR, t_us)
+        self._move(AlState.INIT, t_us)
+
+    def _set_code(self, code: int, t_us: int) -> None:
+        if code != self.code:
+            self.code = code
+            self.emit(AlStatusChanged(t_us, self.device, code=code))
+
+    def _move(self, target: AlState, t_us: int) -> None:
+        if target is not self.state:
+            before, self.state = self.state, target
+            self.emit(StateChanged(t_us, self.device, from_state=before.label,
+                                   to_state=target.label, machine=self.machine))
