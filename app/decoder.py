@@ -1,0 +1,414 @@
+"""Codes in, plain language out: emergencies, AL status codes, EMCY codes, SDO aborts.
+
+A pure function over the devices' own code tables (nothing is copied here): paste what a
+logger, a bus monitor or the state panel shows and get every reading the tables allow, each
+named with the device family and the seed section it comes from. One number can mean several
+things (0x0011 is an AL status code and a CPX-E Text-ID; 0x7500 is an EMCY code of the drive
+and of the TRS-CAT): all readings are listed, the family says which device would send it.
+
+Accepted input (case and ``0x`` prefixes do not matter):
+
+- an emergency as the master logs it: ``FF00 81 02 00 00 04 00`` (code, register, data), the
+  TwinCAT line ``CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00')`` or the raw 8-byte CAN frame
+  ``00 FF 81 02 00 00 04 00`` (code little endian); an 8-byte SDO abort frame ``80 ...``;
+- one number: an AL status code (``0x8204``, ``0x0052``), an EMCY / 0x603F code (``8130``), an
+  SDO abort code (``0x06020000``), a FastCAT 0x5400 word (``0x04000002``), an ETG.1020 Diag
+  Code (``0xE8007500``), a CPX-E Text-ID (``0x3702``), a FastCAT alarm code (``0x04``);
+- a name: ``MISSING_NODE_ANSWER``, ``CO_E_TARATURA``, ``coupler:0x04``, ``FOLLOWING_ERROR``,
+  or a drive alarm number ``alarm 16`` (the drive's display shows it in decimal).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from devices.canopen import emcy as ds301
+from devices.cpx import codes as cpx
+from devices.cpx.messages import parse_emergency
+from devices.device import CommandError
+from devices.ethercat import AL_STATUS_CODES
+from devices.events import fmt_hex
+from devices.fastcat import alarms as fastcat
+from devices.od import ABORT_TEXT, AbortCode
+from devices.servo import alarms as servo
+from devices.trscat.diagnostics import DIAG_CODE_MANUFACTURER, FAULTS
+
+# Families: which device (or protocol layer) a reading belongs to.
+ETHERCAT = "EtherCAT AL status"
+FASTCAT = "FastCAT"
+SERVO = "Servo drive"
+TRSCAT = "TRS-CAT"
+CPX = "CPX-E-EC"
+CANOPEN = "CANopen (DS 301)"
+SDO = "SDO abort"
+
+MAX_FASTCAT_MODULE = 16  # seed 000 §2: at most 16 modules on a coupler
+
+# DS 301 error register 0x1001 bit names (seed 004 ch. 4), keyed by devices.canopen.emcy's bits.
+_REGISTER_NAMES = {
+    ds301.REG_GENERIC: "generic error", ds301.REG_CURRENT: "current",
+    ds301.REG_VOLTAGE: "voltage", ds301.REG_TEMPERATURE: "temperature",
+    ds301.REG_COMMUNICATION: "communication", ds301.REG_PROFILE: "device profile",
+    ds301.REG_MANUFACTURER: "manufacturer specific",
+}
+_CANOPEN_CODES = {  # the DS 301 codes the CANopen node itself sends (devices/canopen/emcy.py)
+    ds301.ERROR_RESET: "Error reset: no error is active any more",
+    ds301.LIFE_GUARD_ERROR: "Life guard or heartbeat error: the master stopped guarding the "
+                            "node (no guard request within life time factor x guard time)",
+    ds301.PDO_LENGTH_ERROR: "PDO not processed: its length does not match the mapping",
+}
+_SERVO_FIELDBUSES = ("modbus", "profinet")  # their tables differ in alarms 30-35
+_SERVO_EFFECT = {  # seed 004 ch. 3 "Azione", in the words of docs/servo-drive.md §Alarms
+    servo.Effect.RELEASE: "the axis is released at once (torque off)",
+    servo.Effect.STOP: "the axis stops on the emergency ramp, then torque goes off",
+}
+
+
+@dataclass(frozen=True)
+class Meaning:
+    family: str  # which device or protocol layer reads the code this way
+    title: str  # what the code is, with its value: "AL status code 0x8204"
+    text: str  # the plain-language meaning
+    source: str  # the seed section (or standard) the table comes from
+
+
+class DecodeError(ValueError):
+    """The text is not a code, a frame or a name the tables know."""
+
+
+# ---- entry point -------------------------------------------------------------------------
+def decode(text: str) -> list[Meaning]:
+    """Every reading of ``text``; DecodeError when it is not something to look up at all."""
+    raw = text.strip()
+    if not raw:
+        raise DecodeError("nothing to decode: paste a code, an emergency or a name")
+    logged = re.search(r"Hex:\s*([0-9A-Fa-f ,]+)", raw)  # the TwinCAT emergency line
+    if logged:
+        raw = logged.group(1)
+    quoted = re.search(r"Code\s*'(0x[0-9A-Fa-f]+)'", raw)  # "AL Status Code '0x8204'"
+    if quoted:
+        raw = quoted.group(1)
+    alarm = re.fullmatch(r"(?:drive\s*)?alarm\s*(\d{1,3})", raw, re.IGNORECASE)
+    if alarm:
+        return _drive_alarm_number(int(alarm.group(1)))
+    tokens = [t for t in re.split(r"[\s,;]+", raw) if t]
+    numbers = [_hex(t) for t in tokens]
+    if any(n is None for n in numbers):
+        if len(tokens) == 1 or ":" in raw:
+            return _name(raw)
+        raise DecodeError(f"{raw!r}: give hex bytes (e.g. FF00 81 02 00 00 04 00), one code or "
+                          "one name")
+    values = [n for n in numbers if n is not None]
+    widths = [len(_digits(t)) for t in tokens]
+    if len(values) == 1:
+        return _number(values[0], widths[0])
+    return _frame(values, widths)
+
+
+def _digits(token: str) -> str:
+    t = token.lower()
+    t = t[2:] if t.startswith("0x") else t
+    return t[:-1] if t.endswith("h") else t
+
+
+def _hex(token: str) -> int | None:
+    digits = _digits(token)
+    if not digits or not re.fullmatch(r"[0-9a-f]+", digits):
+        return None
+    return int(digits, 16)
+
+
+# ---- frames ------------------------------------------------------------------------------
+def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
+    if len(values) == 8 and all(w <= 2 for w in widths):
+        frame = bytes(values)
+        if frame[0] == 0x80:  # DS 301 "abort transfer" command specifier
+            index = int.from_bytes(frame[1:3], "little")
+            code = int.from_bytes(frame[4:8], "little")
+            where = f"object {fmt_hex(index, 4)}:{frame[3]:02X}"
+            return [_replace_title(m, f"{m.title} on {where}") for m in _abort(code)] or [
+                Meaning(SDO, f"SDO abort frame on {where}",
+                        f"abort code {fmt_hex(code, 8)} is not in DS 301", "DS 301")]
+        return emergency(int.from_bytes(frame[:2], "little"), frame[2], frame[3:])
+    if widths[0] >= 3 and len(widths) >= 2 and all(w <= 2 for w in widths[1:]) \
+            and all(v <= 0xFF for v in values[1:]) and values[0] <= 0xFFFF:
+        return emergency(values[0], values[1], bytes(values[2:]))
+    raise DecodeError("bytes not understood: an emergency is 'CODE REG B0 B1 B2 B3 B4' "
+                      "(e.g. FF00 81 02 00 00 04 00) or the 8 bytes of a CAN frame")
+
+
+def _sentence(text: str) -> str:
+    return text if text.endswith((".", "!", "?")) else text + "."
+
+
+def _replace_title(m: Meaning, title: str) -> Meaning:
+    return Meaning(m.family, title, m.text, m.source)
+
+
+def register_text(register: int) -> str:
+    """``0x81: generic error, manufacturer specific`` (DS 301 0x1001)."""
+    names = [name for bit, name in _REGISTER_NAMES.items() if register & bit]
+    return f"{fmt_hex(register, 2)}: {', '.join(names) if names else 'no error'}"
+
+
+def emergency(code: int, register: int, data: bytes) -> list[Meaning]:
+    """An emergency: error code, error register (0x1001), manufacturer bytes."""
+    found: list[Meaning] = []
+    if code == fastcat.EMERGENCY_CODE and len(data) >= 4:
+        found.extend(_fastcat_emergency(register, data))
+    found.extend(_servo_emcy(code, data[:1]))
+    found.extend(_trscat_emcy(code, data[:1]))
+    found.extend(_cpx_emcy(code, register, data))
+    found.extend(_canopen_emcy(code))
+    if not found:
+        found.append(_emcy_class(code))
+    reg = f" Error register {register_text(register)}."
+    return [Meaning(m.family, m.title, m.text + reg, m.source) for m in found]
+
+
+def _fastcat_emergency(register: int, data: bytes) -> list[Meaning]:
+    """Seed 000 §7: byte 0 module, byte 2 module code (§7.6), byte 3 coupler code (§7.5)."""
+    module, module_code, coupler_code = data[0], data[2], data[3]
+    title = f"FastCAT emergency {fmt_hex(fastcat.EMERGENCY_CODE, 4)} (device specific)"
+    if coupler_code and coupler_code in fastcat.COUPLER_CODES:
+        return [_fastcat_alarm(fastcat.COUPLER_CODES[coupler_code], module, title)]
+    if module_code and module_code in fastcat.MODULE_CODES:
+        return [_fastcat_alarm(fastcat.MODULE_CODES[module_code], module, title)]
+    if not module_code and not coupler_code:
+        return [Meaning(FASTCAT, title, "No alarm code in the data bytes.", "seed 000 §7")]
+    return [Meaning(FASTCAT, title, f"Codes {fmt_hex(module_code, 2)} / "
+                    f"{fmt_hex(coupler_code, 2)} are not in the seed's tables.", "seed 000 §7")]
+
+
+def _fastcat_alarm(row: fastcat.AlarmCode, module: int | None, title: str) -> Meaning:
+    """``module``: byte 0 of the emergency data (0 = the coupler); None when not known."""
+    where = "" if module is None else (f" on module {module}" if module
+                                       else " on the coupler itself (module 0)")
+    reset = ("cleared by Reset fault (0x5200:1) once the cause is gone" if row.resettable
+             else "not resettable: the coupler needs a resync")
+    section = "§7.5" if row.table == fastcat.COUPLER else "§7.6"
+    return Meaning(FASTCAT, title,
+                   f"{row.table.capitalize()} alarm {fmt_hex(row.code, 2)} {row.symbol}{where}: "
+                   f"{row.description}. It is {reset}.", f"seed 000 §7, {section}")
+
+
+def _servo_emcy(code: int, vendor: bytes) -> list[Meaning]:
+    """Seed 004 ch. 5: each drive alarm sends its 0x603F code, the alarm number in byte 0."""
+    specs = [s for s in _drive_specs() if s.error_code_or_generic == code]
+    if vendor and any(s.code == vendor[0] for s in specs):
+        specs = [s for s in specs if s.code == vendor[0]]
+    return [Meaning(SERVO, f"Drive error code {fmt_hex(code, 4)} (0x603F)",
+                    f"Alarm {s.code} {s.name}: {s.description}; {_SERVO_EFFECT[s.effect]}"
+                    f"{'' if s.resettable else '; not resettable'}.", "seed 004 ch. 3, ch. 5")
+            for s in specs]
+
+
+def _trscat_emcy(code: int, vendor: bytes) -> list[Meaning]:
+    slot = f" (slot {vendor[0]})" if vendor and vendor[0] else ""
+    out = []
+    for fault in FAULTS.values():
+        if fault.code == code:
+            effect = []
+            if fault.bus_shutdown:
+                effect.append("the TRS bus shuts down until the logic supply is switched off")
+            if fault.deadlock:
+                effect.append("the ESM falls back to PRE-OP and stays there")
+            tail = f"; {'; '.join(effect)}" if effect else ""
+            out.append(Meaning(TRSCAT, f"TRS-CAT application error {fmt_hex(code, 4)}",
+                               f"{fault.text}{slot}{tail}.", "seed 001 §9.3.7"))
+    return out
+
+
+def _cpx_emcy(code: int, register: int, data: bytes) -> list[Meaning]:
+    """Seed 002 Tab. 20-23: status bits, module, CPX error number in bytes 3-5 of the frame."""
+    if code not in cpx.EMCY_CODES:
+        return []
+    text = _sentence(cpx.EMCY_CODES[code])
+    if len(data) == 5 and code != cpx.EMCY_NO_ERROR:
+        fields = parse_emergency(code.to_bytes(2, "little") + bytes((register,)) + data)
+        bits = [cpx.STATUS_BITS[b] for b in range(8) if fields["status_bits"] >> b & 1]
+        error = cpx.CPX_ERRORS.get(fields["cpx_error"])
+        what = error.text if error else f"CPX error number {fields['cpx_error']}"
+        text += (f" Module {fields['module']}, {what}"
+                 f"{'; status: ' + ', '.join(bits) if bits else ''}.")
+    return [Meaning(CPX, f"CPX-E emergency code {fmt_hex(code, 4)}", text,
+                    "seed 002 §2.5.3 Tab. 20-23")]
+
+
+def _canopen_emcy(code: int) -> list[Meaning]:
+    if code not in _CANOPEN_CODES:
+        return []
+    return [Meaning(CANOPEN, f"EMCY code {fmt_hex(code, 4)}", _sentence(_CANOPEN_CODES[code]),
+                    "DS 301, seed 004 ch. 4")]
+
+
+def _emcy_class(code: int) -> Meaning:
+    """No table has the code: say at least which DS 301 class it belongs to."""
+    bits = ds301.register_bits(code) & ~ds301.REG_GENERIC
+    name = _REGISTER_NAMES.get(bits, "generic")
+    return Meaning(CANOPEN, f"EMCY code {fmt_hex(code, 4)}",
+                   f"Not in any device table here; its DS 301 class is '{name}'.",
+                   "DS 301, seed 004 ch. 4")
+
+
+# ---- single numbers ----------------------------------------------------------------------
+def _number(value: int, digits: int) -> list[Meaning]:
+    found: list[Meaning] = []
+    if value > 0xFFFF or digits > 4:
+        found.extend(_abort(value))
+        found.extend(_fastcat_word(value))
+        found.extend(_diag_code(value))
+        if not found:
+            raise DecodeError(f"{fmt_hex(value, 8)} is in none of the tables (SDO abort codes, "
+                              "0x5400, ETG.1020 Diag Codes)")
+        return found
+    found.extend(al_status(value))
+    found.extend(_servo_emcy(value, b""))
+    found.extend(_trscat_emcy(value, b""))
+    found.extend(_cpx_emcy(value, 0, b""))
+    found.extend(_canopen_emcy(value))
+    found.extend(_cpx_text_id(value))
+    if digits <= 2:
+        found.extend(_fastcat_code(value))
+    if not found:
+        found.append(_emcy_class(value))
+    return found
+
+
+def al_status(code: int) -> list[Meaning]:
+    """Seed 000 §7.7: the ETG codes, and the FastCAT's 0x80XX (module in byte 1, coupler code
+    in byte 0; a module alarm leaves byte 0 at 0)."""
+    if code in AL_STATUS_CODES:
+        return [Meaning(ETHERCAT, f"AL status code {fmt_hex(code, 4)}",
+                        _sentence(AL_STATUS_CODES[code]), "seed 000 §7.7")]
+    if code < fastcat.AL_STATUS_MANUFACTURER:
+        return []
+    module, coupler_code = code >> 8 & 0x7F, code & 0xFF
+    if module > MAX_FASTCAT_MODULE:
+        return []
+    title = f"AL status code {fmt_hex(code, 4)} (manufacturer area)"
+    where = f"module {module}" if module else "the coupler itself (module 0)"
+    if coupler_code == 0:
+        if not module:
+            return []
+        return [Meaning(FASTCAT, title, f"FastCAT: a module alarm on {where}; the module code "
+                        "is in byte 2 of the emergency and of 0x5400.", "seed 000 §7.7")]
+    row = fastcat.COUPLER_CODES.get(coupler_code)
+    if row is None:
+        return []
+    return [Meaning(FASTCAT, title, f"FastCAT: {where}, coupler code "
+                    f"{fmt_hex(coupler_code, 2)} {row.symbol}: {row.description}.",
+                    "seed 000 §7.5, §7.7")]
+
+
+def _abort(code: int) -> list[Meaning]:
+    try:
+        abort = AbortCode(code)
+    except ValueError:
+        return []
+    return [Meaning(SDO, f"SDO abort code {fmt_hex(code, 8)}", _sentence(ABORT_TEXT[abort]),
+                    "DS 301, seed 004 ch. 4")]
+
+
+def _fastcat_word(word: int) -> list[Meaning]:
+    """0x5400 (seed 000 §6.23): emergency data bytes 0..3 as a little-endian UDINT."""
+    if word > 0xFFFF_FFFF:
+        return []
+    data = word.to_bytes(4, "little")
+    module, spare, module_code, coupler_code = data
+    if spare or bool(module_code) == bool(coupler_code) or module > MAX_FASTCAT_MODULE:
+        return []
+    row = (fastcat.COUPLER_CODES.get(coupler_code) if coupler_code
+           else fastcat.MODULE_CODES.get(module_code))
+    if row is None:
+        return []
+    found = _fastcat_alarm(row, module, f"FastCAT 0x5400 = {fmt_hex(word, 8)}")
+    return [Meaning(FASTCAT, found.title, found.text, "seed 000 §6.23, " + found.source)]
+
+
+def _diag_code(value: int) -> list[Meaning]:
+    """ETG.1020 Diag Codes of 0x10F3 messages: the top byte says what the low bytes hold."""
+    marker, low = value >> 24, value & 0xFFFF
+    title = f"Diag Code {fmt_hex(value, 8)}"
+    if value >> 16 != marker << 8:  # bits 16..23 are zero in every code the devices write
+        return []
+    if marker == cpx.DIAG_CODE_DS401:
+        inner = [*_servo_emcy(low, b""), *_trscat_emcy(low, b""), *_cpx_emcy(low, 0, b""),
+                 *_canopen_emcy(low)] or [_emcy_class(low)]
+        return [Meaning(m.family, f"{title}: emergency code {fmt_hex(low, 4)}", m.text,
+                        "ETG.1020, " + m.source) for m in inner]
+    if marker == cpx.DIAG_CODE_CPX:
+        error = cpx.CPX_ERRORS.get(low)
+        text = error.text if error else ("no error" if low == 0 else "not in the tables")
+        return [Meaning(CPX, f"{title}: CPX error number {low}", text + ".",
+                        "seed 002 §2.5.2 Tab. 16")]
+    if value >> 24 == DIAG_CODE_MANUFACTURER >> 24:
+        return [Meaning(TRSCAT, f"{title}: manufacturer specific", m.text, m.source)
+                for m in al_status(low)]
+    return []
+
+
+def _cpx_text_id(value: int) -> list[Meaning]:
+    if cpx.CPX_TEXT_ID_BASE <= value <= cpx.CPX_TEXT_ID_BASE + 0xFF:
+        number = value - cpx.CPX_TEXT_ID_BASE
+        error = cpx.CPX_ERRORS.get(number)
+        text = error.text if error else ("no error (the fault has gone)" if number == 0
+                                         else "not in the tables")
+        return [Meaning(CPX, f"CPX-E Text-ID {fmt_hex(value, 4)}: CPX error number {number}",
+                        text + ".", "seed 002 §2.5.2 Tab. 17")]
+    if value in cpx.TEXT_IDS:
+        return [Meaning(CPX, f"CPX-E Text-ID {fmt_hex(value, 4)}",
+                        _sentence(cpx.TEXT_IDS[value][1]), "seed 002 §2.5.2 Tab. 17")]
+    return []
+
+
+def _fastcat_code(code: int) -> list[Meaning]:
+    """A bare FastCAT code: the coupler table and the module table both number from 0x01."""
+    return [_fastcat_alarm(table[code], None, f"FastCAT {table[code].label}")
+            for table in (fastcat.COUPLER_CODES, fastcat.MODULE_CODES) if code in table]
+
+
+# ---- names -------------------------------------------------------------------------------
+def _drive_specs() -> list[servo.AlarmSpec]:
+    """Every drive alarm of every fieldbus table, once (alarms 30-35 differ by fieldbus)."""
+    found: dict[tuple[int, str], servo.AlarmSpec] = {}
+    for bus in _SERVO_FIELDBUSES:
+        for spec in servo.alarm_table(bus).values():
+            found.setdefault((spec.code, spec.name), spec)
+    return list(found.values())
+
+
+def _drive_alarm(spec: servo.AlarmSpec) -> Meaning:
+    return Meaning(SERVO, f"Drive alarm {spec.code} {spec.name}",
+                   f"{spec.description.capitalize()}; {_SERVO_EFFECT[spec.effect]}; 0x603F code "
+                   f"{fmt_hex(spec.error_code_or_generic, 4)}"
+                   f"{'' if spec.resettable else '; not resettable'}.", "seed 004 ch. 3, ch. 5")
+
+
+def _drive_alarm_number(number: int) -> list[Meaning]:
+    found = [_drive_alarm(s) for s in _drive_specs() if s.code == number]
+    if not found:
+        raise DecodeError(f"the drive has no alarm {number} (seed 004 ch. 3, ch. 5)")
+    return found
+
+
+def _name(text: str) -> list[Meaning]:
+    found: list[Meaning] = []
+    try:
+        row = fastcat.parse_fault(text)
+    except CommandError:
+        row = None
+    if row is not None:
+        found.append(_fastcat_alarm(row, None, f"FastCAT {row.label}"))
+    wanted = text.strip().upper()
+    found.extend(_drive_alarm(s) for s in _drive_specs() if s.name == wanted)
+    fault = FAULTS.get(wanted)
+    if fault is not None:
+        found.extend(m for m in _trscat_emcy(fault.code, b"") if m.text.startswith(fault.text))
+    for error in cpx.CPX_ERRORS.values():
+        if error.symbol == wanted:
+            found.extend(_cpx_text_id(error.text_id))
+    if not found:
+        raise DecodeError(f"{text!r} is no code and no alarm name the tables know")
+    return found
