@@ -144,6 +144,14 @@ class Dashboard:
         self._caption = server.scene.add_label(
             "/caption", "", position=(center[0], -BODY_D, BODY_H / 2 + 1.3),
             anchor="bottom-center", font_screen_scale=1.1, visible=False)
+        # ---- scenario player, code decoder (app/ui/panels/scenario_player.py, decoder.py) ----
+        from app.ui.panels.decoder import DecoderPanel
+        from app.ui.panels.scenario_player import ScenarioPlayerPanel
+
+        with self._control_tab("Scenario", viser.Icon.PLAYER_PLAY):
+            self.scenario_player = ScenarioPlayerPanel(server, runtime, self._caption)
+        self.decoder = DecoderPanel(server, runtime, self._side)
+        # ---- end of scenario player, code decoder ----
 
     # ---- construction -------------------------------------------------------------------
     def _configure_look(self) -> None:
@@ -300,6 +308,8 @@ class Dashboard:
                     panels.objects.tick()
                 if self._drives is not None:
                     self._drives.tick(time.monotonic(), frame.t_us)
+                self.scenario_player.update(frame)  # scenario player, code decoder
+                self.decoder.update()
 
     @property
     def caption(self) -> str:

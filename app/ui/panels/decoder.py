@@ -1,0 +1,117 @@
+"""The code decoder panel: paste a code, or pick one the rig just reported, read its meaning.
+
+The meaning comes from :func:`app.decoder.decode` (the devices' own tables). The "Reported"
+dropdown lists the latest emergencies, AL status codes and alarms of the runtime's journal,
+newest first: picking one decodes it, so a code seen in the log is one click away. The answer
+is server-level, like the rest of the dashboard: every browser sees the last decoded code.
+"""
+
+from __future__ import annotations
+
+import collections
+from collections.abc import Iterable
+from typing import Any
+
+import viser
+
+from app.decoder import DecodeError, Meaning, decode
+from app.runtime import Runtime
+from app.ui.panels.widgets import from_user
+from app.ui.style import esc
+from devices.events import AlarmChanged, AlStatusChanged, EmergencySent, Event, fmt_bytes
+
+NONE = "(nothing reported yet)"
+PICK = "(pick a reported code)"
+MAX_REPORTED = 20
+RESULT_ID = "fr-decoded"
+
+
+def reported_code(event: Event) -> tuple[str, str] | None:
+    """(picker label, text to decode) for an event that carries a code; None otherwise."""
+    at = f"{event.t_us / 1e6:.3f} s {event.device}"
+    if isinstance(event, EmergencySent):
+        text = f"{event.code:04X} {event.register:02X} {fmt_bytes(event.data)}".strip()
+        return f"{at} emergency {text}", text
+    if isinstance(event, AlStatusChanged) and event.code:
+        text = f"0x{event.code:04X}"
+        return f"{at} AL status code {text}", text
+    if isinstance(event, AlarmChanged) and event.active:
+        return f"{at} alarm {event.code} {event.name}", event.name or event.code
+    return None
+
+
+def result_html(query: str, meanings: Iterable[Meaning] | None, error: str = "") -> str:
+    if error:
+        body = f'<span style="color:#a11616">{esc(error)}</span>'
+    elif meanings is None:
+        body = ('<span class="fr-muted">Paste an emergency (FF00 81 02 00 00 04 00), an AL '
+                "status code (0x8204), an EMCY or 0x603F code (8130), an SDO abort code "
+                "(0x06020000) or an alarm name, or pick a code the rig reported.</span>")
+    else:
+        body = "".join(
+            f'<div style="margin:0 0 6px 0"><b>{esc(m.title)}</b> '
+            f'<span class="fr-muted">{esc(m.family)} &middot; {esc(m.source)}</span><br>'
+            f"{esc(m.text)}</div>" for m in meanings)
+    head = f'<div class="fr-muted">{esc(query)}</div>' if query else ""
+    return f'<div id="{RESULT_ID}" style="font-size:0.82em">{head}{body}</div>'
+
+
+class DecoderPanel:
+    """``side``: the dashboard's left panel (the decoder gets a tab there); None puts it in a
+    folder of the current container instead."""
+
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, side: Any = None) -> None:
+        self._runtime = runtime
+        self._seq = 0
+        self._reported: collections.deque[tuple[str, str]] = collections.deque(
+            maxlen=MAX_REPORTED)
+        gui = server.gui
+        container = (side.add_tab("Codes") if side is not None
+                     else gui.add_folder("Code decoder", expand_by_default=False))
+        with container:
+            self._input = gui.add_text("Code", initial_value="")
+            self._button = gui.add_button("Decode", icon=viser.Icon.SEARCH)
+            self._picker = gui.add_dropdown("Reported", (NONE,), initial_value=NONE)
+            self._result = gui.add_html(result_html("", None))
+        self._input.on_update(self._on_input)
+        self._button.on_click(lambda event: self.show(str(self._input.value)))
+        self._picker.on_update(self._on_pick)
+
+    def show(self, text: str) -> list[Meaning]:
+        """Decode ``text`` into the result block (what a click does); returns the readings."""
+        query = text.strip()
+        if not query:
+            self._result.content = result_html("", None)
+            return []
+        try:
+            meanings = decode(query)
+        except DecodeError as exc:
+            self._result.content = result_html(query, None, str(exc))
+            return []
+        self._result.content = result_html(query, meanings)
+        return meanings
+
+    def _on_input(self, event: viser.GuiEvent) -> None:
+        if from_user(event):
+            self.show(str(self._input.value))
+
+    def _on_pick(self, event: viser.GuiEvent) -> None:
+        if not from_user(event):
+            return
+        text = dict(self._reported).get(str(self._picker.value))
+        if text is not None:
+            self._input.value = text
+            self.show(text)
+
+    # ---- the dashboard's update thread -----------------------------------------------------
+    def update(self) -> None:
+        """Take the codes of the events journalled since the last call."""
+        self._seq, events = self._runtime.events_since(self._seq)
+        fresh = [found for found in map(reported_code, events) if found is not None]
+        if not fresh:
+            return
+        self._reported.extend(fresh)
+        labels = [PICK, *(label for label, _ in reversed(self._reported))]
+        current = str(self._picker.value)
+        self._picker.options = tuple(labels)
+        self._picker.value = current if current in labels else PICK

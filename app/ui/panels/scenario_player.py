@@ -1,0 +1,184 @@
+"""The scenario player panel: pick a scenario of ``static/scenarios/``, play, pause, step,
+restart, speed 0.25x..10x, and what is on now (step, caption, failures).
+
+The callbacks run in viser's thread pool and only call :class:`app.player.Player`, which hands
+the work to the simulation thread. Captions reach the 3D view as Caption events of the
+runtime's journal (the dashboard shows them above the rail); this panel repeats the current one
+with the step it belongs to. The status block carries ``data-frame`` (the runtime frame the
+dashboard wrote with it), ``data-t-us``, ``data-applied`` and ``data-generation``: headless
+screenshot tooling waits on them to know that the browser has received a given frame
+(app/screenshots.py).
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import viser
+
+from app.player import Player, PlayerView, Status, describe_step
+from app.rig import Rig
+from app.rig_config import DEFAULT_RIG, RigConfigError
+from app.runtime import Frame, Runtime
+from app.scenario import Scenario, ScenarioError, load_scenario
+from app.ui.commands import notify
+from app.ui.panels.widgets import from_user
+from app.ui.style import esc
+
+logger = logging.getLogger(__name__)
+
+SCENARIO_DIR = DEFAULT_RIG.parent.parent / "scenarios"
+CHOOSE = "(choose a scenario)"
+SPEEDS = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
+PLAY, PAUSE, STEP, RESTART = "Play", "Pause", "Step", "Restart"
+STATUS_ID = "fr-player"
+
+
+@dataclass(frozen=True)
+class Entry:
+    label: str  # what the picker shows: the scenario's name
+    path: Path
+
+
+def library(directory: Path = SCENARIO_DIR) -> list[Entry]:
+    """The scenarios of ``directory`` by name (file stem added when two share a name); a file
+    that does not load is left out with a warning, not shown broken."""
+    found: list[tuple[str, Path]] = []
+    for path in sorted(directory.glob("*.toml")):
+        try:
+            found.append((load_scenario(path).name, path))
+        except ScenarioError as exc:
+            logger.warning("scenario left out of the picker: %s", exc)
+    names = [n for n, _ in found]
+    return [Entry(n if names.count(n) == 1 else f"{n} ({p.stem})", p) for n, p in found]
+
+
+def speed_label(speed: float) -> str:
+    return f"{speed:g}x"
+
+
+def status_html(view: PlayerView, frame: Frame) -> str:
+    scenario, t_us = view.scenario, frame.t_us
+    marker = (f'id="{STATUS_ID}" data-frame="{frame.seq}" data-t-us="{t_us}" '
+              f'data-applied="{view.applied}" data-generation="{view.generation}" '
+              f'data-status="{view.status.name.lower()}"')
+    if scenario is None:
+        return (f'<div {marker} style="font-size:0.85em"><span class="fr-muted">No scenario '
+                f"loaded. Pick one and press Play: the rig restarts factory-fresh and the "
+                f"scenario drives it.</span></div>")
+    total = len(scenario.steps)
+    lines = [f"<b>{esc(scenario.name)}</b> &middot; {esc(view.status.value)} &middot; "
+             f"t = {t_us / 1e6:.1f} s of {scenario.end_us / 1e6:g} s",
+             f"step {view.applied} of {total}"
+             + (f" &middot; next {esc(describe_step(view.next_step))}"
+                if view.next_step is not None else "")]
+    if view.caption:
+        lines.append(f'<span style="font-style:italic">&raquo; {esc(view.caption)}</span>')
+    if view.checkpoint:
+        lines.append(f'<span class="fr-muted">checkpoint {esc(view.checkpoint)}</span>')
+    lines.extend(f'<span style="color:#a11616">{esc(f)}</span>' for f in view.failures)
+    return f'<div {marker} style="font-size:0.85em">{"<br>".join(lines)}</div>'
+
+
+class ScenarioPlayerPanel:
+    """Build inside the container it belongs to (a tab or the control panel)."""
+
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, caption: Any = None,
+                 directory: Path = SCENARIO_DIR, default_rig: Path = DEFAULT_RIG) -> None:
+        self.player = Player(runtime, default_rig)
+        self._runtime = runtime
+        self._caption = caption  # the dashboard's caption label: hidden on a (re)load
+        self._entries = {e.label: e for e in library(directory)}
+        self._loaded: Path | None = None
+        self._busy = threading.Lock()  # one playback command at a time, in click order
+        gui = server.gui
+        with gui.add_folder("Scenario player"):
+            self._pick = gui.add_dropdown("Scenario", (CHOOSE, *self._entries),
+                                          initial_value=CHOOSE)
+            self._buttons = gui.add_button_group("Playback", (PLAY, PAUSE, STEP, RESTART))
+            initial = min(SPEEDS, key=lambda s: abs(s - runtime.speed))
+            self._speed = gui.add_dropdown("Speed", tuple(speed_label(s) for s in SPEEDS),
+                                           initial_value=speed_label(initial))
+            self._status = gui.add_html(status_html(self.player.view(), runtime.frame))
+        self._last = ""
+        self._buttons.on_click(self._on_button)
+        self._speed.on_update(self._on_speed)
+
+    # ---- callbacks (viser's threads) -------------------------------------------------------
+    def _on_button(self, event: viser.GuiEvent) -> None:
+        if not from_user(event):
+            return
+        choice = str(event.target.value)
+        with self._busy:
+            self._run(event.client, choice)
+
+    def _run(self, client: viser.ClientHandle | None, choice: str) -> None:
+        try:
+            if choice == PLAY:
+                self._play()
+            elif choice == PAUSE:
+                self.player.pause()
+            elif choice == STEP:
+                self._ensure_loaded()
+                self.player.step()
+            elif choice == RESTART:
+                self._ensure_loaded(force=True)
+        except (ScenarioError, RigConfigError, ValueError) as exc:
+            notify(client, f"Scenario: {choice} refused", str(exc), error=True)
+
+    def _on_speed(self, event: viser.GuiEvent) -> None:
+        if not from_user(event):
+            return
+        try:
+            self.player.set_speed(float(str(self._speed.value).rstrip("x")))
+        except ValueError as exc:
+            notify(event.client, "Speed refused", str(exc), error=True)
+
+    def _play(self) -> None:
+        self._ensure_loaded(restart_finished=True)
+        self.player.play()
+
+    def _ensure_loaded(self, force: bool = False, restart_finished: bool = False) -> None:
+        """Load the picked scenario when it is not the one loaded (or when asked to)."""
+        entry = self._entries.get(str(self._pick.value))
+        if entry is None:
+            if self._loaded is None:
+                raise ScenarioError("pick a scenario first")
+            path = self._loaded
+        else:
+            path = entry.path
+        finished = self.player.view().status is Status.FINISHED
+        if force or path != self._loaded or (restart_finished and finished):
+            self.load(load_scenario(path), path)
+
+    def load(self, scenario: Scenario, path: Path | None = None, fresh: Rig | None = None) -> None:
+        """Load ``scenario`` (on ``fresh``, see :meth:`app.player.Player.load`)."""
+        if self._caption is not None:  # the last run's narration is over (before the load:
+            self._caption.visible = False  # a caption at 0 s comes with the load itself)
+        self.player.load(scenario, fresh)
+        self._loaded = path if path is not None else Path(scenario.source)
+        self._show_picked(scenario, self._loaded)
+
+    def _show_picked(self, scenario: Scenario, path: Path) -> None:
+        """The picker names the loaded scenario, also one loaded from elsewhere (the CLI)."""
+        label = next((e.label for e in self._entries.values()
+                      if e.path.resolve() == path.resolve()), None)
+        if label is None:
+            label = scenario.name if scenario.name not in self._entries else f"{path}"
+            self._entries[label] = Entry(label, path)
+            self._pick.options = (CHOOSE, *self._entries)
+        if self._pick.value != label:
+            self._pick.value = label
+
+    # ---- the dashboard's update thread -----------------------------------------------------
+    def update(self, frame: Frame) -> None:
+        """``frame``: the one the dashboard is writing (the marker names it)."""
+        content = status_html(self.player.view(), frame)
+        if content != self._last:
+            self._status.content = content
+            self._last = content
+
