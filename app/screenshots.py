@@ -1,0 +1,277 @@
+"""Headless screenshots of a scenario, for CI (docs/scenarios.md "Screenshots for CI").
+
+``python -m app scenario run FILE --out DIR --screenshots`` serves the dashboard on a free
+loopback port with the simulation *paused*, opens it in headless Chromium (Debian's, driven by
+Playwright; never a Playwright browser download), plays the scenario step by step with the
+dashboard's own scenario player, and at each checkpoint writes ``DIR/<NN>-<name>.png``; the
+events go to ``DIR/events.jsonl``, the same lines ``scenario run`` prints.
+
+What makes two runs give the same pictures: a fixed 1280x720 viewport at device pixel ratio 1
+(and viser's ``fixedDpr``, so slow software WebGL does not lower the resolution), the camera
+the dashboard sets, the mouse parked on the title bar, the "Software WebGL" notice closed, and
+the simulation standing still at the checkpoint's simulated instant, so LEDs are caught at the
+same phase of their blinking. A picture is taken once the browser shows the frame of that
+instant (the player panel's ``data-frame`` marker) and has painted it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import logging
+import re
+import socket
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import viser
+
+from app.player import Status
+from app.rig import Rig
+from app.runtime import Runtime
+from app.scenario import Scenario, ScenarioError, Step
+from app.ui.dashboard import Dashboard
+from app.ui.panels.scenario_player import STATUS_ID
+from devices.events import Event
+
+logger = logging.getLogger(__name__)
+
+CHROMIUM = "/usr/bin/chromium"
+LAUNCH_ARGS = (
+    "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+    "--disable-component-update", "--disable-sync", "--no-first-run",
+    "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+)
+VIEWPORT = {"width": 1280, "height": 720}
+WALL_TIMEOUT_S = 60.0
+PAINT_PAUSE_MS = 300  # after the frame arrived: labels and HTML settle, then the canvas paints
+POINTER_PARK = (640, 12)  # on the title bar: no hover outline, no tooltip
+
+
+class ScreenshotError(ScenarioError):
+    """The browser side failed (no Chromium, a page that never connects): one line for the
+    CLI, like a bad scenario file."""
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def wait_until(predicate: Callable[[], Any], what: str,
+               timeout: float = WALL_TIMEOUT_S) -> Any:
+    deadline = time.monotonic() + timeout
+    while True:
+        value = predicate()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise ScreenshotError(f"timed out after {timeout:g} s waiting for {what}")
+        time.sleep(0.02)
+
+
+@dataclass
+class ServedRig:
+    """A rig in a paused runtime behind a dashboard on a free loopback port."""
+
+    runtime: Runtime
+    server: viser.ViserServer
+    dashboard: Dashboard
+    url: str
+
+    @classmethod
+    def start(cls, rig: Rig) -> ServedRig:
+        runtime = Runtime(rig)
+        runtime.set_paused(True)
+        port = free_port()
+        with contextlib.redirect_stdout(sys.stderr):  # viser's banner: stdout is for events
+            server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
+        dashboard = Dashboard(server, runtime)
+        runtime.start()
+        dashboard.start()
+        return cls(runtime, server, dashboard, f"http://127.0.0.1:{port}")
+
+    def advance(self, seconds: float) -> None:
+        """Step the paused rig by exactly ``seconds`` of simulated time."""
+        self.runtime.advance(round(seconds * 1_000_000)).result(timeout=WALL_TIMEOUT_S)
+
+    def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Any:
+        return self.runtime.command(target, action, args).result(timeout=WALL_TIMEOUT_S)
+
+    def stop(self) -> None:
+        self.dashboard.stop()
+        self.runtime.stop()
+        with contextlib.redirect_stdout(sys.stderr):
+            self.server.stop()
+
+
+class Chromium:
+    """Headless Chromium through Playwright; a context manager."""
+
+    def __init__(self, executable: str = CHROMIUM) -> None:
+        if not Path(executable).exists():
+            raise ScreenshotError(f"{executable} is missing: install Debian's chromium "
+                                  "(apt-get install -y chromium)")
+        from playwright.sync_api import sync_playwright
+
+        self._playwright = sync_playwright().start()
+        try:
+            self.browser = self._playwright.chromium.launch(executable_path=executable,
+                                                            args=list(LAUNCH_ARGS))
+        except Exception:
+            self._playwright.stop()
+            raise
+
+    def open(self, served: ServedRig, show_player: bool = False) -> DashboardPage:
+        context = self.browser.new_context(viewport=VIEWPORT, device_scale_factor=1)
+        page = DashboardPage(context.new_page(), served)
+        page.load(show_player)
+        return page
+
+    def close(self) -> None:
+        self.browser.close()
+        self._playwright.stop()
+
+    def __enter__(self) -> Chromium:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+@dataclass
+class DashboardPage:
+    page: Any  # playwright Page
+    served: ServedRig
+
+    def load(self, show_player: bool = False) -> None:
+        """Open the dashboard; ``show_player``: leave the control panel on the Scenario tab
+        (the narration, the step and the time in the picture)."""
+        clients = len(self.served.server.get_clients())
+        # viser lowers the canvas resolution when software WebGL is slow; fixedDpr pins it.
+        self.page.goto(f"{self.served.url}/?fixedDpr=1")
+        # Connected = the 3D canvas runs and has sent its first camera message (viser).
+        wait_until(lambda: len(self.served.server.get_clients()) > clients,
+                   "the browser to connect")
+        toast = self.page.locator(".mantine-Notification-root", has_text="Software WebGL")
+        try:
+            toast.first.wait_for(timeout=15_000)
+        except Exception:  # a machine with a GPU shows no such notice
+            logger.info("no software-WebGL notice to close")
+        else:
+            toast.first.locator("button").click()
+            toast.first.wait_for(state="detached", timeout=15_000)
+        self._mount_player(stay=show_player)
+        self.page.mouse.move(*POINTER_PARK)
+
+    def _mount_player(self, stay: bool) -> None:
+        """The browser builds a tab's content when the tab is first shown: show the Scenario
+        tab (its status block is the frame marker :meth:`sync` reads), then go back unless
+        ``stay``."""
+        tab = self.page.get_by_role("tab", name="Scenario", exact=True)
+        if not tab.count():
+            return  # no tabs: the player sits in the control panel itself
+        tabs = tab.locator("xpath=ancestor::*[@role='tablist'][1]")
+        selected = tabs.locator("[role=tab][aria-selected=true]").first.inner_text().strip()
+        tab.click()
+        self.page.locator(f"#{STATUS_ID}").wait_for(state="attached",
+                                                    timeout=WALL_TIMEOUT_S * 1000)
+        if not stay:
+            tabs.get_by_role("tab", name=selected, exact=True).click()
+
+    def sync(self) -> None:
+        """Wait until the page shows the runtime's current frame, then until it painted it."""
+        seq = self.served.runtime.frame.seq
+        wait_until(lambda: self.served.dashboard.rendered_seq >= seq, "the dashboard update")
+        self.page.wait_for_function(
+            "a => { const m = document.getElementById(a.id);"
+            " return m !== null && Number(m.dataset.frame) >= a.seq; }",
+            arg={"id": STATUS_ID, "seq": seq}, timeout=WALL_TIMEOUT_S * 1000)
+        self.page.evaluate("() => new Promise(r => requestAnimationFrame("
+                           "() => requestAnimationFrame(r)))")
+        self.page.mouse.move(*POINTER_PARK)
+        self.page.wait_for_timeout(PAINT_PAUSE_MS)
+
+    def screenshot(self, path: Path) -> Path:
+        self.sync()
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.page.screenshot(path=str(path))
+        return path
+
+    def close(self) -> None:
+        self.page.context.close()
+
+
+@dataclass
+class ScreenshotRun:
+    """Like :class:`app.scenario.ScenarioRun`, plus the pictures written."""
+
+    events: list[Event]
+    failures: list[str]
+    images: list[Path] = field(default_factory=list)
+
+
+def image_name(number: int, checkpoint: str) -> str:
+    """``03-in_alarm.png``: numbered in scenario order, the name made file-safe."""
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", checkpoint).strip("_.") or "checkpoint"
+    return f"{number:02d}-{safe}.png"
+
+
+def event_lines(events: list[Event]) -> str:
+    """The JSON lines of ``scenario run`` (app/cli.py)."""
+    return "".join(json.dumps(e.to_record(), default=str) + "\n" for e in events)
+
+
+def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
+                         record: str | None = None,
+                         chromium: str = CHROMIUM) -> ScreenshotRun:
+    """Play ``scenario`` on the untouched ``rig`` in a served dashboard; one PNG per checkpoint
+    and ``events.jsonl`` into ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    served = ServedRig.start(rig)
+    events: list[Event] = []
+    served.runtime.add_listener(events.extend)  # every journalled batch, in order
+    recorder = None
+    if record:
+        from app.recording import RigRecorder, attach_to_runtime
+
+        recorder = RigRecorder(record)
+        attach_to_runtime(served.runtime, recorder)
+    images: list[Path] = []
+    failures: list[str] = []
+    try:
+        with Chromium(chromium) as browser:
+            page = browser.open(served, show_player=True)
+            panel = served.dashboard.scenario_player
+            panel.load(scenario, fresh=rig)
+            player = panel.player
+            done = 0
+            while True:
+                view = player.view()
+                for step in scenario.steps[done:view.applied]:
+                    if step.kind == "checkpoint":
+                        images.append(_shoot(page, out, len(images) + 1, step))
+                done = view.applied
+                if view.status is Status.FINISHED:
+                    failures = list(view.failures)
+                    break
+                player.step()
+            page.close()
+    finally:
+        served.stop()
+        if recorder is not None:
+            recorder.close()
+    (out / "events.jsonl").write_text(event_lines(events), encoding="utf-8")
+    return ScreenshotRun(events, failures, images)
+
+
+def _shoot(page: DashboardPage, out: Path, number: int, step: Step) -> Path:
+    path = page.screenshot(out / image_name(number, step.text))
+    logger.info("checkpoint '%s' at %.3f s -> %s", step.text, step.t_us / 1e6, path)
+    return path
