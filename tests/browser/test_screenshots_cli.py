@@ -19,6 +19,7 @@ from PIL import Image
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.scenario import load_scenario, run_scenario
 from app.screenshots import event_lines, image_name, run_with_screenshots
+from app.testing import fieldrig  # noqa: F401  (the plugin's fixture, as users get it)
 
 pytestmark = pytest.mark.browser
 
@@ -80,3 +81,34 @@ def test_the_command_line(tmp_path: Path) -> None:
     assert done.returncode == 0, done.stderr
     assert sorted(p.name for p in out.iterdir()) == [*NAMES, "events.jsonl"]
     assert (out / "events.jsonl").read_text(encoding="utf-8") == reference_lines()
+
+
+# ---- app.testing: the helper users import in their own tests (README example) ---------------
+def readme_example(tmp_path: Path) -> tuple[bool, list[str], Path]:
+    from app.testing import rig_session
+
+    with rig_session("static/rigs/default.toml") as rig:  # paused at t = 0
+        rig.command("fastcat", "power", on=True)
+        rig.advance(4.0)  # exactly 4 simulated seconds: the line is in OP
+        rig.command("fastcat/2", "unplug")  # seed 000 §7.7: module 2 stops answering
+        rig.advance(1.0)
+        fault = bool(rig.snapshot("fastcat")["fault_active"])
+        codes = [e.to_record()["code"] for e in rig.events("al_status")]
+        return fault, codes, rig.screenshot(tmp_path / "alarm.png")
+
+
+def test_rig_session_as_in_the_readme(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.chdir(ROOT)  # the README's paths are relative to the checkout
+    with ThreadPoolExecutor(1) as pool:  # a Playwright of its own (see shoot())
+        fault, codes, picture = pool.submit(readme_example, tmp_path).result(timeout=300)
+    assert fault and "0x8204" in codes
+    with Image.open(picture) as image:
+        assert image.size == (1280, 720)
+
+
+def test_fieldrig_fixture_and_play(fieldrig) -> None:  # noqa: F811 (the imported fixture)
+    rig = fieldrig()
+    failures = rig.play(SCENARIO)
+    assert failures == [] and rig.t == load_scenario(SCENARIO).end_us / 1e6
+    checkpoints = [e.to_record()["name"] for e in rig.events("checkpoint")]
+    assert checkpoints == ["op", "in_alarm", "recovered"]
