@@ -21,7 +21,7 @@ Accepted input (case and ``0x`` prefixes do not matter):
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
@@ -127,7 +127,7 @@ def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
             index = int.from_bytes(frame[1:3], "little")
             code = int.from_bytes(frame[4:8], "little")
             where = f"object {fmt_hex(index, 4)}:{frame[3]:02X}"
-            return [_replace_title(m, f"{m.title} on {where}") for m in _abort(code)] or [
+            return [replace(m, title=f"{m.title} on {where}") for m in _abort(code)] or [
                 Meaning(SDO, f"SDO abort frame on {where}",
                         f"abort code {fmt_hex(code, 8)} is not in DS 301", "DS 301")]
         return emergency(int.from_bytes(frame[:2], "little"), frame[2], frame[3:])
@@ -140,10 +140,6 @@ def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
 
 def _sentence(text: str) -> str:
     return text if text.endswith((".", "!", "?")) else text + "."
-
-
-def _replace_title(m: Meaning, title: str) -> Meaning:
-    return Meaning(m.family, title, m.text, m.source)
 
 
 def register_text(register: int) -> str:
@@ -164,7 +160,7 @@ def emergency(code: int, register: int, data: bytes) -> list[Meaning]:
     if not found:
         found.append(_emcy_class(code))
     reg = f" Error register {register_text(register)}."
-    return [Meaning(m.family, m.title, m.text + reg, m.source) for m in found]
+    return [replace(m, text=m.text + reg) for m in found]
 
 
 def _fastcat_emergency(register: int, data: bytes) -> list[Meaning]:
@@ -324,7 +320,7 @@ def _fastcat_word(word: int) -> list[Meaning]:
     if row is None:
         return []
     found = _fastcat_alarm(row, module, f"FastCAT 0x5400 = {fmt_hex(word, 8)}")
-    return [Meaning(FASTCAT, found.title, found.text, "seed 000 §6.23, " + found.source)]
+    return [replace(found, source="seed 000 §6.23, " + found.source)]
 
 
 def _diag_code(value: int) -> list[Meaning]:
@@ -336,15 +332,15 @@ def _diag_code(value: int) -> list[Meaning]:
     if marker == cpx.DIAG_CODE_DS401:
         inner = [*_servo_emcy(low, b""), *_trscat_emcy(low, b""), *_cpx_emcy(low, 0, b""),
                  *_canopen_emcy(low)] or [_emcy_class(low)]
-        return [Meaning(m.family, f"{title}: emergency code {fmt_hex(low, 4)}", m.text,
-                        "ETG.1020, " + m.source) for m in inner]
+        return [replace(m, title=f"{title}: emergency code {fmt_hex(low, 4)}",
+                        source="ETG.1020, " + m.source) for m in inner]
     if marker == cpx.DIAG_CODE_CPX:
         error = cpx.CPX_ERRORS.get(low)
         text = error.text if error else ("no error" if low == 0 else "not in the tables")
         return [Meaning(CPX, f"{title}: CPX error number {low}", text + ".",
                         "seed 002 §2.5.2 Tab. 16")]
     if value >> 24 == DIAG_CODE_MANUFACTURER >> 24:
-        return [Meaning(TRSCAT, f"{title}: manufacturer specific", m.text, m.source)
+        return [replace(m, family=TRSCAT, title=f"{title}: manufacturer specific")
                 for m in al_status(low)]
     return []
 

@@ -34,7 +34,7 @@ from devices.events import fmt_bytes
 from devices.fastcat import alarms as fastcat
 from devices.od import ABORT_TEXT, AbortCode
 from devices.servo import alarms as servo
-from devices.trscat.diagnostics import FAULTS
+from devices.trscat.diagnostics import FAULTS, check_message
 from devices.trscat.diagnostics import emergency_frame as trs_frame
 
 FASTCAT_ROWS = [row for table in fastcat.CODE_TABLES.values() for row in table.values()]
@@ -234,3 +234,12 @@ def test_register_bits() -> None:
 def test_not_a_code(text: str) -> None:
     with pytest.raises(DecodeError):
         decode(text)
+
+
+@pytest.mark.parametrize("code", [0x0017, 0x001A, 0x0035], ids=lambda c: f"0x{c:04X}")
+def test_trscat_check_message_diag_code(code: int) -> None:
+    """Seed 001 §9.3.7: a refused SM / DC check is a 0x10F3 message whose Diag Code holds the
+    AL status code in the manufacturer area (devices/trscat/diagnostics.check_message)."""
+    diag = check_message(code, "check", 0).diag_code
+    m = one(decode(f"0x{diag:08X}"), TRSCAT)
+    assert m.text.rstrip(".") == AL_STATUS_CODES[code].rstrip(".")
