@@ -6,7 +6,9 @@ numbering is what the object dictionary, the emergency byte 0 and the 0x80XX cod
 Every alarm is a *cause* (injected by an operator or physical: a module that does not answer,
 the Ethernet cable, the Tbus supply, a module's own alarm); only the first cause is latched
 (§7), and a Reset fault or a resync clears it only when its cause is gone.
-Behaviour and choices: docs/fastcat-coupler.md.
+Behaviour and choices: docs/fastcat-coupler.md. A step that would repeat a step in which nothing
+changed is skipped; state changes from outside come through ``apply``, ``request_state`` and the
+object dictionary, which mark the model touched (docs/performance.md).
 """
 
 from __future__ import annotations
