@@ -62,6 +62,9 @@ def _scenario_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="do not print events on stdout")
     run.add_argument("--record", default=None, metavar="PATH",
                      help="also record the run to a rerun file (.rrd)")
+    run.add_argument("--screenshots", action="store_true",
+                     help="serve the dashboard, play the scenario in headless Chromium and "
+                          "write one PNG per checkpoint into --out (docs/scenarios.md)")
     _rig_flags(run, serving=False)
     return p
 
@@ -96,7 +99,13 @@ def _scenario(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.file)
     rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
     rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
-    if args.record:
+    if args.screenshots:
+        if not args.out:
+            raise ScenarioError("--screenshots needs --out DIR")
+        from app.screenshots import run_with_screenshots
+
+        result = run_with_screenshots(scenario, rig, args.out, record=args.record)
+    elif args.record:
         from app.recording import RigRecorder, scenario_observer
 
         recorder = RigRecorder(args.record)

@@ -26,8 +26,7 @@ from pathlib import Path
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
-from app.scenario import Scenario, ScenarioError, Step, check_against
-from app.scenario import _apply as apply_step
+from app.scenario import Scenario, ScenarioError, Step, apply_step, check_against
 from devices.events import Event
 
 logger = logging.getLogger(__name__)

@@ -192,7 +192,7 @@ def run_scenario(scenario: Scenario, rig: Rig,
     failures: list[str] = []
     for step in scenario.steps:
         events.extend(_run_until(rig, step.t_us, on_tick))
-        applied = _apply(step, rig, failures)
+        applied = apply_step(step, rig, failures)
         if on_tick is not None:
             on_tick(rig, applied)
         events.extend(applied)
@@ -213,7 +213,7 @@ def _run_until(rig: Rig, t_us: int, on_tick: Tick | None) -> list[Event]:
     return events
 
 
-def _apply(step: Step, rig: Rig, failures: list[str]) -> list[Event]:
+def apply_step(step: Step, rig: Rig, failures: list[str]) -> list[Event]:
     now = rig.clock.now_us
     if step.kind == "caption":
         return [Caption(now, "scenario", text=step.text)]
