@@ -108,3 +108,23 @@ class Esm(Generic[K]):
             before, self.state = self.state, target
             self.emit(StateChanged(t_us, self.device, from_state=before.label,
                                    to_state=target.label, machine=self.machine))
+
+
+class AlStatusView:
+    """What a master reads of a slave's ESM: the state, the AL status register (0x0130) and
+    the AL status code (0x0134). Every EtherCAT slave model holds its ``esm`` and mixes this
+    in (devices.master.Slave)."""
+
+    esm: Esm
+
+    @property
+    def al_state(self) -> AlState:
+        return self.esm.state
+
+    @property
+    def al_status(self) -> int:
+        return self.esm.register
+
+    @property
+    def al_status_code(self) -> int:
+        return self.esm.code

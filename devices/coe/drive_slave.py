@@ -50,6 +50,7 @@ from devices.coe.leds import LedInputs, wanted_patterns
 from devices.coe.mailbox import SdoServices
 from devices.coe.objects import build_coe_dictionary
 from devices.device import Action, CommandError, DeviceModel
+from devices.esm import AlStatusView
 from devices.ethercat import AlState, describe_al_status_code
 from devices.events import EmergencySent
 from devices.od import OdEntry, SdoAbort
@@ -69,7 +70,7 @@ SDO_LOG = 20
 OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
 
 
-class DriveEcatSlave(SlaveActions, SdoServices, DeviceModel):
+class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
     KIND = "servo_ecat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -117,18 +118,6 @@ class DriveEcatSlave(SlaveActions, SdoServices, DeviceModel):
         return self.dictionary.entry(index, sub)
 
     # ---- the master's side (devices.master.Slave) ---------------------------------------------
-    @property
-    def al_state(self) -> AlState:
-        return self.esm.state
-
-    @property
-    def al_status(self) -> int:
-        return self.esm.register
-
-    @property
-    def al_status_code(self) -> int:
-        return self.esm.code
-
     def reachable(self) -> bool:
         return self.on_line and self.link
 

@@ -27,6 +27,7 @@ from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
 from devices.device import Action, DeviceModel
+from devices.esm import AlStatusView
 from devices.ethercat import AlState
 from devices.events import AlarmChanged, LogLine, fmt_hex
 from devices.od import ObjectDictionary
@@ -40,7 +41,7 @@ SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per
 SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
 
 
-class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
+class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
     KIND = "cpx_e_ec"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -140,18 +141,6 @@ class CpxEEc(TransitionsMixin, OperatorMixin, DeviceModel):
             self.switches.active_mode is not DiagMode.BOOTLOADER
 
     # ---- the master's side ----------------------------------------------------------------
-    @property
-    def al_state(self) -> AlState:
-        return self.esm.state
-
-    @property
-    def al_status(self) -> int:
-        return self.esm.register
-
-    @property
-    def al_status_code(self) -> int:
-        return self.esm.code
-
     @property
     def explicit_device_id(self) -> int:
         return self.switches.explicit_device_id if self.powered else 0

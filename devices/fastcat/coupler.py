@@ -20,6 +20,7 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from devices.device import Action, DeviceModel
+from devices.esm import AlStatusView
 from devices.ethercat import AlState
 from devices.events import StateChanged
 from devices.fastcat.alarms import COUPLER, Alarm
@@ -49,7 +50,7 @@ CNF_PROCEDURE = "cnf"  # StateChanged.machine of the procedure: idle, resetting,
 ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this recently
 
 
-class FastCat(BusMixin, FaultsMixin, RailMixin, DeviceModel):
+class FastCat(BusMixin, FaultsMixin, RailMixin, AlStatusView, DeviceModel):
     KIND = "fastcat"
     ACTIONS: ClassVar[Mapping[str, Action]] = {**MODULE_ACTIONS, **COUPLER_ACTIONS}
 
@@ -165,18 +166,6 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, DeviceModel):
         return [m for m in self.rail if m is not None]
 
     # ---- the master's side ----------------------------------------------------------------
-    @property
-    def al_state(self) -> AlState:
-        return self.esm.state
-
-    @property
-    def al_status(self) -> int:
-        return self.esm.register
-
-    @property
-    def al_status_code(self) -> int:
-        return self.esm.code
-
     def reachable(self) -> bool:
         return self.powered and self.link
 

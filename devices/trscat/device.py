@@ -16,6 +16,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from devices.device import Action, DeviceModel
+from devices.esm import AlStatusView
 from devices.ethercat import AlState
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
@@ -43,7 +44,7 @@ DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
 ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently
 
 
-class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, DeviceModel):
+class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceModel):
     KIND = "trscat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -130,18 +131,6 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, DeviceModel):
         return out
 
     # ---- the master's side ----------------------------------------------------------------
-    @property
-    def al_state(self) -> AlState:
-        return self.esm.state
-
-    @property
-    def al_status(self) -> int:
-        return self.esm.register
-
-    @property
-    def al_status_code(self) -> int:
-        return self.esm.code
-
     def reachable(self) -> bool:
         return self.powered and self.link_in
 
