@@ -114,7 +114,9 @@ class Player:
         ScenarioError / RigConfigError before anything changes when the scenario does not fit.
         """
         if fresh is None:
-            fresh = build_rig(load_rig_spec(self.rig_path(scenario)))
+            # Flash in memory, as `scenario run` has it: a played scenario starts from the
+            # factory state and never writes the served rig's flash files.
+            fresh = build_rig(load_rig_spec(self.rig_path(scenario)), state_dir=None)
         check_against(scenario, fresh)
         if fresh is not self.runtime.rig:
             why = compatible(self.runtime.rig, fresh)

@@ -339,11 +339,12 @@ def _build_slave(spec: RigSpec, slave: SlaveSpec, rng: random.Random, position: 
         raise RigConfigError(spec.source, slave.kind, str(exc)) from None
 
 
-def build_rig(spec: RigSpec, state_dir: str | Path | None = "var") -> Rig:
+def build_rig(spec: RigSpec, state_dir: str | Path | None = None) -> Rig:
     """Construct the device models of a checked spec; model refusals become RigConfigError.
 
-    ``state_dir=None`` keeps every flash in memory: a scenario run then starts from the same
-    factory state every time, whatever earlier runs stored.
+    ``state_dir=None`` (the default) keeps every flash in memory: a scenario run or a test then
+    starts from the same factory state every time, whatever earlier runs stored. The served
+    dashboard passes ``--state-dir`` so that a stored configuration survives a restart.
     """
     from devices.coe.drive_slave import DriveEcatSlave
     from devices.fastcat.coupler import FastCat
