@@ -34,8 +34,12 @@ def test_pick_play_caption_pause_step_restart(live: LiveDashboard, page) -> None
     page.get_by_role("tab", name="Scenario", exact=True).click()
     assert "No scenario loaded" in player_text(page)
     choose(page, "Scenario", SCENARIO)
-    choose(page, "Speed", "10x")
-    wait_until(lambda: live.runtime.speed == 10.0, what="speed 10x")
+    # 1x leaves ten wall seconds between the caption (6 s) and the end (16 s) for the Pause
+    # click: at 10x a loaded machine let the scenario finish first ("finished", not "paused").
+    choose(page, "Speed", "2x")
+    wait_until(lambda: live.runtime.speed == 2.0, what="speed 2x")
+    choose(page, "Speed", "1x")
+    wait_until(lambda: live.runtime.speed == 1.0, what="speed 1x")
 
     page.get_by_role("button", name="Play", exact=True).click()
     wait_until(lambda: player.view().status is Status.PLAYING, what="playing")
