@@ -1,0 +1,55 @@
+"""What the wire process needs to know about one slave: identity, mailbox, SMs, PDOs.
+
+Built by process A from the device models (their 0x1018 and PDO mapping) and handed to
+process B, which turns it into an SII EEPROM image and register defaults; the ESI export
+uses the same data. Plain frozen dataclasses so they pickle across the spawn boundary.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class PdoEntry:
+    index: int
+    sub: int
+    bits: int
+    name: str
+
+
+@dataclass(frozen=True)
+class Pdo:
+    index: int
+    name: str
+    entries: tuple[PdoEntry, ...]
+
+
+@dataclass(frozen=True)
+class SyncManager:
+    """SM0..SM3 as in SII category 41 (start, length, control, enable)."""
+
+    start: int
+    length: int
+    control: int
+    enable: int
+
+
+@dataclass(frozen=True)
+class SlaveDescription:
+    device_id: str
+    name: str  # SII string 1: the name SOEM shows
+    vendor_id: int
+    product_code: int
+    revision: int
+    serial: int
+    group: str  # for the ESI
+    order_code: str  # for the ESI
+    # rx offset, rx size, tx offset, tx size (None: no mailbox)
+    mailbox: tuple[int, int, int, int] | None
+    coe_details: int  # SII GENERAL byte 5
+    sync_managers: tuple[SyncManager, ...]
+    rx_pdos: tuple[Pdo, ...]
+    tx_pdos: tuple[Pdo, ...]
+    dc_supported: bool
+    fmmu_count: int = 3

@@ -1,0 +1,30 @@
+"""Messages between process A (the app, models) and process B (the wire, ESCs).
+
+Each message is a tuple whose first item is one of the tags below, sent over a
+`multiprocessing.connection.Connection`. Positions are 0-based line positions.
+"""
+
+from __future__ import annotations
+
+# B -> A
+READY = "ready"  # ("ready", iface)
+AL_CONTROL = "al_control"  # ("al_control", pos, value): raw 0x0120 write
+MAILBOX = "mailbox"  # ("mailbox", pos, data): complete SM0 message, header included
+OUTPUTS = "outputs"  # ("outputs", pos, data): SM2 image after a master write changed it
+CYCLE = "cycle"  # ("cycle", {pos: n_frames}): exchanges per slave, at most every 10 ms
+DC = "dc"  # ("dc", pos, {"activation", "sync0_cycle_ns", "start_time_ns"})
+STATS = "stats"  # ("stats", {"frames", "lrw", "cycle_us", "wkc_errors"}), every 100 ms
+ERROR = "error"  # ("error", text)
+
+# A -> B
+AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0x0134
+MAILBOX_REPLY = "mailbox_reply"  # ("mailbox_reply", pos, data): queued for SM1, in order
+INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
+LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
+STOP = "stop"  # ("stop",)
+
+B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, STATS, ERROR)
+A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, STOP)
+
+CYCLE_REPORT_S = 0.010  # "cycle" at most this often
+STATS_REPORT_S = 0.100  # "stats" this often
