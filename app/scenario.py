@@ -3,6 +3,8 @@
 A step is one of
 - ``caption = "text"`` — narration shown to the audience;
 - ``checkpoint = "name"`` — a named instant (screenshots are taken there);
+- ``focus = "trscat"`` or ``"fastcat:2"`` — the dashboard's camera moves to that device (or
+  module); the device must be in the rig;
 - ``target = "fastcat/2"`` + ``action = "unplug"`` + the action's arguments as further keys.
 
 Each step has ``at = <seconds>`` (absolute simulated time) or ``after = <seconds>`` (relative to
@@ -20,8 +22,9 @@ from typing import Any
 
 from app.rig import Rig
 from app.rig_config import RigConfigError
+from app.targets import parse_target
 from devices.device import CommandError
-from devices.events import Caption, Checkpoint, Event, LogLine, ValueRead
+from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
 from devices.od import SdoAbort
 
 US = 1_000_000
@@ -36,7 +39,7 @@ class ScenarioError(ValueError):
 class Step:
     number: int  # 1-based, in file order
     t_us: int
-    kind: str  # "command", "caption", "checkpoint"
+    kind: str  # "command", "caption", "checkpoint", "focus"
     target: str = ""
     action: str = ""
     args: dict[str, Any] = field(default_factory=dict)
@@ -137,9 +140,17 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
                 raise fail(f"{key}.after", "must not be negative")
             t_us += round(after * US)
         expect_error = _typed(raw, "expect_error", bool, False, fail, f"{key}.expect_error")
-        kinds = [k for k in ("caption", "checkpoint", "action") if k in raw]
+        kinds = [k for k in ("caption", "checkpoint", "focus", "action") if k in raw]
         if len(kinds) != 1:
-            raise fail(key, "needs exactly one of caption, checkpoint, action")
+            raise fail(key, "needs exactly one of caption, checkpoint, action (or focus)")
+        if kinds[0] == "focus":
+            extra = sorted(set(raw) - {"at", "after", "focus"})
+            if extra:
+                raise fail(f"{key}.{extra[0]}", "unknown key for a focus step")
+            focus = _typed(raw, "focus", str, "", fail, f"{key}.focus")
+            where = _focus_target(focus, fail, f"{key}.focus")
+            yield Step(i + 1, t_us, "focus", target=where, text=where)
+            continue
         if kinds[0] in ("caption", "checkpoint"):
             extra = sorted(set(raw) - {"at", "after", kinds[0]})
             if extra:
@@ -158,12 +169,24 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
                    expect_error=expect_error)
 
 
+def _focus_target(text: str, fail: Callable[[str, str], ScenarioError], path: str) -> str:
+    """``device`` or ``device:N`` (``device/N`` is accepted, as command targets write it)."""
+    try:
+        device, module = parse_target(text.replace(":", "/", 1))
+    except CommandError as exc:
+        raise fail(path, f"{exc} (focus: 'device' or 'device:N')") from None
+    return device if module is None else f"{device}:{module}"
+
+
 def check_against(scenario: Scenario, rig: Rig) -> None:
     """Refuse a scenario whose commands the rig would not take, before anything runs."""
     for step in scenario.steps:
-        if step.kind != "command":
+        if step.kind not in ("command", "focus"):
             continue
         try:
+            if step.kind == "focus":
+                rig.device(step.target.split(":", 1)[0])
+                continue
             rig.check(step.target, step.action, step.args)
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: step {step.number} (at "
@@ -219,6 +242,8 @@ def apply_step(step: Step, rig: Rig, failures: list[str]) -> list[Event]:
         return [Caption(now, "scenario", text=step.text)]
     if step.kind == "checkpoint":
         return [Checkpoint(now, "scenario", name=step.text)]
+    if step.kind == "focus":
+        return [Focus(now, "scenario", target=step.target)]
     out: list[Event] = []
     try:
         result = rig.apply(step.target, step.action, step.args)

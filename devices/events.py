@@ -146,6 +146,18 @@ class Checkpoint(Event):
 
 
 @dataclass(frozen=True)
+class Focus(Event):
+    """A scenario points the audience at a device (``"trscat"``) or one of its modules
+    (``"fastcat:2"``): the dashboard moves the camera there."""
+
+    target: str = ""
+    kind: ClassVar[str] = "focus"
+
+    def fields(self) -> dict[str, Any]:
+        return {"target": self.target}
+
+
+@dataclass(frozen=True)
 class ValueRead(Event):
     """Answer of a scenario ``read`` step (an object or register read)."""
 
