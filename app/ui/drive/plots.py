@@ -50,6 +50,10 @@ class DriveSampler:
         """Runtime step listener (simulation thread): one sample every SAMPLE_US."""
         if not self.active:
             return
+        if self._next_us is not None and now_us < self._next_us - SAMPLE_US:
+            # The clock went back (a scenario loaded, the rig restarted): a fresh timeline.
+            self._next_us = None
+            self.reset()
         if self._next_us is None:  # samples on multiples of SAMPLE_US: the same every run
             self._next_us = -(-now_us // SAMPLE_US) * SAMPLE_US
         if now_us < self._next_us:
