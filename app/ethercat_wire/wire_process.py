@@ -1,0 +1,166 @@
+"""Process B: one raw AF_PACKET socket (EtherType 0x88A4) and the emulated ESC line behind it.
+
+Started by the bridge (process A) with
+    multiprocessing.get_context("spawn").Process(target=run, args=(iface, descriptions, conn))
+Frames are answered at once from the ESCs' memory (no round trip to A per frame); what the
+devices must decide goes to A over `conn` (app/ethercat_wire/messages.py) and A's answers are
+applied between frames. A poll loop on the socket and the connection, nothing else.
+"""
+
+from __future__ import annotations
+
+import logging
+import select
+import socket
+import time
+from multiprocessing.connection import Connection
+
+from app.ethercat_wire import dc, messages, sii
+from app.ethercat_wire.datagrams import ETHERTYPE, FrameError
+from app.ethercat_wire.description import SlaveDescription
+from app.ethercat_wire.esc import Esc, Line
+
+logger = logging.getLogger(__name__)
+
+SOL_PACKET = 263
+PACKET_IGNORE_OUTGOING = 23  # Linux >= 4.20: our own answers do not come back to us
+PACKET_OUTGOING = 4
+FRAME_BUFFER = 2048
+POLL_MS = 10
+
+
+def build_line(descriptions: list[SlaveDescription], outbox: list[tuple],
+               clock: dc.DcClock | None = None) -> Line:
+    clock = clock or dc.DcClock()
+    escs = [Esc(pos, desc, sii.build(desc), clock, outbox)
+            for pos, desc in enumerate(descriptions)]
+    return Line(escs, outbox)
+
+
+def open_socket(iface: str) -> socket.socket:
+    sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE))
+    sock.bind((iface, ETHERTYPE))
+    try:
+        sock.setsockopt(SOL_PACKET, PACKET_IGNORE_OUTGOING, 1)
+    except OSError:
+        logger.info("PACKET_IGNORE_OUTGOING not available: filtering our own frames by type")
+    sock.setblocking(False)
+    return sock
+
+
+class Stats:
+    """Counters reported to A: cumulative frames, process-data frames, WKC errors, and the
+    mean interval between process-data frames over the last report period (the cycle)."""
+
+    def __init__(self) -> None:
+        self.last_pd = 0
+        self.last_t = time.monotonic()
+
+    def report(self, line: Line) -> dict:
+        now = time.monotonic()
+        n = line.pd_frames - self.last_pd
+        cycle_us = (now - self.last_t) * 1e6 / n if n else 0.0
+        self.last_pd, self.last_t = line.pd_frames, now
+        return {"frames": line.frames, "lrw": line.pd_frames, "cycle_us": round(cycle_us, 1),
+                "wkc_errors": line.wkc_errors}
+
+
+def apply_message(line: Line, msg: tuple) -> bool:
+    """Apply one message from A; False on ("stop",)."""
+    tag = msg[0]
+    if tag == messages.STOP:
+        return False
+    esc = line.escs[msg[1]]
+    if tag == messages.AL_STATUS:
+        esc.set_al_status(msg[2], msg[3])
+    elif tag == messages.MAILBOX_REPLY:
+        esc.queue_mailbox(msg[2])
+    elif tag == messages.INPUTS:
+        esc.set_inputs(msg[2])
+    elif tag == messages.LINK:
+        line.set_link(msg[1], bool(msg[2]))
+    else:
+        logger.warning("unknown message from process A: %r", tag)
+    return True
+
+
+def cycle_counts(line: Line) -> dict[int, int]:
+    counts = {}
+    for esc in line.escs:
+        if esc.exchanges:
+            counts[esc.position] = esc.exchanges
+            esc.exchanges = 0
+    return counts
+
+
+def run(iface: str, descriptions: list[SlaveDescription], conn: Connection) -> None:
+    """The wire process: serve frames on `iface` until A says stop or the pipe closes."""
+    logging.basicConfig(level=logging.INFO, format="wire %(levelname)s %(message)s")
+    outbox: list[tuple] = []
+    line = build_line(list(descriptions), outbox)
+    try:
+        sock = open_socket(iface)
+    except OSError as exc:
+        conn.send((messages.ERROR, f"cannot open a raw socket on {iface}: {exc}"))
+        return
+    conn.send((messages.READY, iface))
+    try:
+        serve(sock, line, conn, outbox)
+    finally:
+        sock.close()
+
+
+def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]) -> None:
+    poller = select.poll()
+    poller.register(sock.fileno(), select.POLLIN)
+    poller.register(conn.fileno(), select.POLLIN)
+    buf = bytearray(FRAME_BUFFER)
+    view = memoryview(buf)
+    stats = Stats()
+    next_cycle = next_stats = time.monotonic()
+    running = True
+    while running:
+        for fd, _ev in poller.poll(POLL_MS):
+            if fd == sock.fileno():
+                _drain_socket(sock, line, buf, view)
+            else:
+                running = _drain_conn(conn, line)
+        if outbox:
+            for msg in outbox:
+                conn.send(msg)
+            outbox.clear()
+        now = time.monotonic()
+        if now >= next_cycle:
+            counts = cycle_counts(line)
+            if counts:
+                conn.send((messages.CYCLE, counts))
+            next_cycle = now + messages.CYCLE_REPORT_S
+        if now >= next_stats:
+            conn.send((messages.STATS, stats.report(line)))
+            next_stats = now + messages.STATS_REPORT_S
+
+
+def _drain_socket(sock: socket.socket, line: Line, buf: bytearray, view: memoryview) -> None:
+    while True:
+        try:
+            n, addr = sock.recvfrom_into(buf)
+        except (BlockingIOError, InterruptedError):
+            return
+        if addr[2] == PACKET_OUTGOING:
+            continue
+        frame = bytearray(view[:n])
+        try:
+            if line.process(frame):
+                sock.send(frame)
+        except FrameError as exc:
+            logger.debug("frame dropped: %s", exc)
+
+
+def _drain_conn(conn: Connection, line: Line) -> bool:
+    try:
+        while conn.poll():
+            if not apply_message(line, conn.recv()):
+                return False
+    except (EOFError, OSError):
+        return False
+    return True
