@@ -172,6 +172,89 @@ class ValueRead(Event):
         return out
 
 
+@dataclass(frozen=True)
+class SlaveEvent(Event):
+    """Base of the EtherCAT master's events about one slave (seed 003 "events"): the slave's
+    position on the line (from 0) and its physical (station) address."""
+
+    position: int = 0
+    address: int = 0
+
+    def fields(self) -> dict[str, Any]:
+        return {"position": self.position, "address": self.address}
+
+
+@dataclass(frozen=True)
+class SlaveStateChange(SlaveEvent):
+    """The master saw a slave's ESM state change (requested or not)."""
+
+    from_state: str = ""
+    to_state: str = ""
+    code: int = 0  # the AL status code the slave showed with the new state
+    kind: ClassVar[str] = "slave_state"
+
+    def fields(self) -> dict[str, Any]:
+        return {**super().fields(), "from": self.from_state, "to": self.to_state,
+                "code": fmt_hex(self.code, 4)}
+
+
+@dataclass(frozen=True)
+class CommError(SlaveEvent):
+    """A communication error the master saw on a slave: ``reason`` is ``lost_frames``,
+    ``link_lost`` (the slave is no longer on the line), ``identity`` (0x1018 is not the
+    description's) or ``init_command`` (an init command's SDO was refused)."""
+
+    reason: str = ""
+    count: int = 0
+    kind: ClassVar[str] = "comm_error"
+
+    def fields(self) -> dict[str, Any]:
+        return {**super().fields(), "reason": self.reason, "count": self.count}
+
+
+@dataclass(frozen=True)
+class CoeEmergency(SlaveEvent):
+    """A CoE emergency the master read from a slave's mailbox."""
+
+    code: int = 0
+    register: int = 0
+    data: bytes = b""
+    kind: ClassVar[str] = "coe_emergency"
+
+    def fields(self) -> dict[str, Any]:
+        return {**super().fields(), "code": fmt_hex(self.code, 4),
+                "register": fmt_hex(self.register, 2), "data": fmt_bytes(self.data)}
+
+
+@dataclass(frozen=True)
+class Resync(Event):
+    """Seed 003 ECAT_Resync: a slave (``position`` >= 0) or the whole network
+    (``position`` -1) reached OP for the first time since start-up or a recovery."""
+
+    position: int = -1
+    address: int = 0
+    slave: str = ""  # the slave's device id; empty for the whole network
+    kind: ClassVar[str] = "resync"
+
+    def fields(self) -> dict[str, Any]:
+        out: dict[str, Any] = {"position": self.position}
+        if self.position >= 0:
+            out.update(address=self.address, slave=self.slave)
+        return out
+
+
+@dataclass(frozen=True)
+class NetworkRecovery(Event):
+    """Seed 003 "network recovery": the master restarts communication with slaves it had
+    lost (a re-plugged cable, a slave powered again); ``positions`` are the recovered ones."""
+
+    positions: tuple[int, ...] = ()
+    kind: ClassVar[str] = "network_recovery"
+
+    def fields(self) -> dict[str, Any]:
+        return {"positions": list(self.positions)}
+
+
 @dataclass
 class EventQueue:
     """The events a model emitted since the runtime last drained them."""

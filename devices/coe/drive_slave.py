@@ -121,6 +121,19 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
     def reachable(self) -> bool:
         return self.on_line and self.link
 
+    def set_link(self, connected: bool, port: str = "in") -> None:
+        """The cable on the IN port; the OUT port is not modelled (last on the line)."""
+        if port == "in":
+            self.link = connected
+
+    def set_power(self, on: bool) -> None:
+        """The drive's own supply: its EtherCAT side follows it."""
+        self.drive.apply("power", {"on": on})
+
+    @property
+    def powered(self) -> bool:
+        return bool(self.drive.powered)
+
     def request_state(self, target: AlState) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
         if not self.reachable():
@@ -271,10 +284,12 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.pd_control = False
 
     def _check_watchdog(self) -> None:
-        if self.esm.state is not AlState.OP or not self.rx_assigned:
+        if self.esm.state is not AlState.OP:
             return
         last = self.last_frame_us
         if last is not None and self.now_us - last <= SM_WATCHDOG_US:
+            return  # checked before the assignment: building rx_assigned costs a list a step
+        if not self.rx_assigned:
             return
         self.drive.log("EtherCAT: SM watchdog expired (no process data): OP -> SAFEOP")
         self.drive.raise_alarm(SYNC_TIMEOUT_ALARM)
@@ -285,10 +300,13 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
     def step(self, now_us: int) -> None:
         super().step(now_us)
         self._follow_power()
+        drive = self.drive
         if self.on_line:
             self._check_watchdog()
-            if self.esm.at_least(AlState.PREOP):
-                for frame in self.emergencies.watch(self.drive):
+            # watch() only when the latched alarms differ from the ones it saw (cheap check)
+            seen = drive.alarms.latched if drive.powered else []
+            if seen != self.emergencies.known and self.esm.at_least(AlState.PREOP):
+                for frame in self.emergencies.watch(drive):
                     self.emit(EmergencySent(now_us, self.drive.device_id,
                                             code=int.from_bytes(frame[:2], "little"),
                                             register=frame[2], data=frame[3:]))
@@ -310,9 +328,15 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         now = self.now_us
         activity = self.last_frame_us is not None and now - self.last_frame_us <= \
             ACTIVITY_WINDOW_US
-        inputs = LedInputs(on_line=self.on_line, link=self.link, activity=activity,
-                           state=self.esm.state, error=self.esm.error,
-                           drive_alarm=self.on_line and bool(self.drive.alarms.latched))
+        on_line, esm = self.on_line, self.esm
+        drive_alarm = on_line and bool(self.drive.alarms.latched)
+        old = self._led_inputs
+        if old is not None and old.activity is activity and old.state is esm.state \
+                and old.on_line is on_line and old.link is self.link \
+                and old.error is esm.error and old.drive_alarm is drive_alarm:
+            return  # the same inputs (field by field: building LedInputs costs more)
+        inputs = LedInputs(on_line=on_line, link=self.link, activity=activity,
+                           state=esm.state, error=esm.error, drive_alarm=drive_alarm)
         if inputs != self._led_inputs:
             self._led_inputs = inputs
             self.leds.update(now, wanted_patterns(inputs), self.emit)

@@ -30,7 +30,7 @@ from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AlState
 from devices.events import AlarmChanged, LogLine, fmt_hex
-from devices.od import ObjectDictionary
+from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 
 SUPPLY_NOMINAL_V = 24.0  # Tab. 29: U_EL/SEN 24 V DC +- 25 %
 SUPPLY_MIN_V = 18.0  # ... below this: undervoltage (FieldRig uses the same band for U_OUT)
@@ -167,6 +167,40 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
             return []
         out, self.diagnosis.mailbox = self.diagnosis.mailbox, []
         return out
+
+    def set_link(self, connected: bool, port: str = "in") -> None:
+        """A cable on port X1 (IN, from the master's side) or X2 (OUT)."""
+        if port == "in":
+            self.link_in = connected
+        else:
+            self.link_out = connected
+
+    def set_power(self, on: bool) -> None:
+        self.cmd_power(on)
+
+    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
+        """A master's CoE SDO download (mailbox from PREOP on; else no answer)."""
+        od = self._mailbox_od(index, sub)
+        od.write(index, sub, decode(od.entry(index, sub).dtype, data))
+
+    def sdo_upload(self, index: int, sub: int) -> bytes:
+        od = self._mailbox_od(index, sub)
+        return encode(od.entry(index, sub).dtype, od.read(index, sub))
+
+    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
+        if not self.reachable() or self.od is None or self.esm.state is AlState.INIT:
+            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
+        return self.od
+
+    def set_dc_fault(self, kind: str | None) -> None:
+        """The master's DC faults as the bus module sees them: jitter or lost SYNC0 are
+        missed sync events (the "sync_error" fault, Tab. 12); drift and None clear it."""
+        entry = Injected("sync_error")
+        if kind in ("jitter", "sync0_lost") and entry not in self.injected:
+            self.injected.append(entry)
+        elif kind not in ("jitter", "sync0_lost") and entry in self.injected:
+            self.injected.remove(entry)
+        self.faults_changed()
 
     # ---- stepping -------------------------------------------------------------------------
     def step(self, now_us: int) -> None:

@@ -15,10 +15,11 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from devices.device import Action, CommandError, Param
+from devices.ethercat import AlState
 from devices.fastcat.catalog import CATALOG, module_type
 from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES
-from devices.od import ObjectDictionary
+from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 
 if TYPE_CHECKING:
     from devices.flash import FlashStore
@@ -152,6 +153,33 @@ class RailMixin:
 
     def cmd_link(self, connected: bool) -> None:
         self.link = connected
+
+    # ---- the line, as the EtherCAT master drives it (devices/master) ------------------------
+    def set_link(self, connected: bool, port: str = "in") -> None:
+        """The cable on the IN port (the coupler's only port): no link raises 0x13."""
+        if port == "in":
+            self._touched = True
+            self.link = connected
+
+    def set_power(self, on: bool) -> None:
+        self._touched = True
+        self.cmd_power(on)  # type: ignore[attr-defined]
+
+    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
+        """A master's CoE SDO download; the mailbox runs from PREOP on (else no answer)."""
+        od = self._mailbox_od(index, sub)
+        self._touched = True
+        od.write(index, sub, decode(od.entry(index, sub).dtype, data))
+
+    def sdo_upload(self, index: int, sub: int) -> bytes:
+        od = self._mailbox_od(index, sub)
+        return encode(od.entry(index, sub).dtype, od.read(index, sub))
+
+    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
+        if not self.reachable() or self.od is None or \
+                self.esm.state is AlState.INIT:  # type: ignore[attr-defined]
+            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
+        return self.od
 
     def cmd_set_rotary(self, value: int) -> None:
         self.rotary_switch = value  # read at the next power-up, like the real switch

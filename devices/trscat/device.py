@@ -18,7 +18,7 @@ from typing import Any, ClassVar
 from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AlState
-from devices.od import AbortCode, ObjectDictionary, SdoAbort
+from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
 from devices.trscat.catalog import (
     BY_IDENT,
@@ -157,6 +157,38 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
         """SDO download (raises SdoAbort with the DS301 code)."""
         self.require_od().write(index, sub, value)
         self._refresh()
+
+    def set_link(self, connected: bool, port: str = "in") -> None:
+        """A cable on port IN (from the master's side) or OUT (to the next slave)."""
+        if port == "in":
+            self.link_in = connected
+        else:
+            self.link_out = connected
+        self._refresh()
+
+    def set_power(self, on: bool) -> None:
+        self.cmd_power(on)
+
+    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
+        """A master's CoE SDO download (mailbox from PRE-OP on; else no answer)."""
+        od = self._mailbox_od(index, sub)
+        self.write_object(index, sub, decode(od.entry(index, sub).dtype, data))
+
+    def sdo_upload(self, index: int, sub: int) -> bytes:
+        od = self._mailbox_od(index, sub)
+        return encode(od.entry(index, sub).dtype, od.read(index, sub))
+
+    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
+        if not self.reachable() or self.od is None or self.esm.state is AlState.INIT:
+            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
+        return self.od
+
+    def set_dc_fault(self, kind: str | None) -> None:
+        """The master's DC faults as this device sees them (§9.1.1, §9.3.7): ``jitter``
+        makes each frame arrive up to a cycle late (SM events missed, sync error),
+        ``sync0_lost`` stops SYNC0 (fatal sync error); ``drift`` and None clear both."""
+        self.sync.jitter_us = self.sync.cycle_us if kind == "jitter" else 0
+        self.sync.sync0_lost = kind == "sync0_lost"
 
     # ---- stepping ---------------------------------------------------------------------------
     def step(self, now_us: int) -> None:

@@ -97,9 +97,11 @@ def test_module_unplugged_in_op_logs_the_seed_lines() -> None:
     assert bench.master is not None
     snap = bench.master.snapshot()
     assert snap["log"][0]["port"] == 65535 and snap["log"][0]["t"] == pytest.approx(5.001)
-    assert snap["slaves"] == [{"name": "Box 1 (FastCAT)", "station_address": 1001,
-                               "present": True, "state": "PREOP", "requested": "SAFEOP",
-                               "al_status": 0x12, "al_status_code": 0x8204}]
+    expected = {"name": "Box 1 (FastCAT)", "station_address": 1001, "present": True,
+                "state": "PREOP", "requested": "SAFEOP", "al_status": 0x12,
+                "al_status_code": 0x8204, "position": 0, "device": "fastcat", "link": True}
+    assert [{k: s[k] for k in expected} for s in snap["slaves"]] == [expected]
+    assert snap["slaves"][0]["counters"]["emergencies"] == 1
 
 
 def test_master_retries_every_interval_and_recovers_after_reset() -> None:
@@ -144,7 +146,12 @@ def test_slave_power_cycle_comes_back_to_op() -> None:
     assert bench.master.snapshot()["slaves"][0]["present"] is False
     bench.apply("power", on=True)
     bench.run_until(lambda: bench.fc.al_state is AlState.OP, limit_s=4.0)
-    assert list(bench.master.log) == []
+    # Seed 003: the loss and the network recovery are logged; no failed transition.
+    assert [e["text"] for e in bench.master.log] == [
+        "'Box 1 (FastCAT)' (1001): no link: slave not found on the line (powered off).",
+        "'Box 1 (FastCAT)' (1001): found on the line again in 'INIT'.",
+        "'Device 1 (EtherCAT)': network recovery: slave(s) at position(s) 0 back on the "
+        "line."]
 
 
 def test_cnf_in_op_is_an_abnormal_state_change() -> None:
@@ -188,7 +195,7 @@ def test_log_history_is_bounded() -> None:
     bench = op_bench()
     assert bench.master is not None
     for _ in range(LOG_LENGTH + 10):
-        bench.master._log(bench.fc, "x")
+        bench.master._log(bench.master.links[0], "lost", cause="x")
     assert len(bench.master.log) == LOG_LENGTH
 
 

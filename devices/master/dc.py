@@ -1,0 +1,122 @@
+"""The master's distributed-clock management (seed 003): states, transitions, faults.
+
+Seed 003 names five phases: IDLE (the master clock is independent of the slaves),
+SYNCHRONIZING (preliminary measurements), WAITING_START_TIME (synchronised, waiting for the
+first instant the slaves do I/O), COMPENSATING (tracking the network clock; slaves normally in
+OP) and NOT_SYNCHRONIZED (the master cannot follow the network clock: every DC slave goes to
+SAFEOP). The transitions are the table :data:`DC_TRANSITIONS`; the triggers are computed by
+:meth:`DcUnit.step` from the line (link, DC slaves in SAFEOP/OP) and the deviation between the
+master clock and the reference clock (the first DC slave). FieldRig's numbers (measurement
+time, deviations) are in docs/ethercat-master.md.
+"""
+
+from __future__ import annotations
+
+import enum
+import random
+from dataclasses import dataclass
+
+SYNC_MEASURE_US = 100_000  # FieldRig: SYNCHRONIZING lasts 100 ms of drift measurements
+START_DELAY_US = 100_000  # FieldRig: START_TIME = 100 ms after the DC slaves reached SAFEOP
+DEFAULT_WINDOW_NS = 1_000  # the mapping file's <DcSyncWindow> default (ns)
+NOISE_NS = 40  # FieldRig: healthy deviation, +- 40 ns around 0
+DRIFT_NS_PER_MS = 25  # FieldRig: a drifting clock leaves the window in 40 ms (1 us window)
+JITTER_FACTOR = 5  # FieldRig: jitter fault: +- 5 windows
+RESYNC_AFTER_US = 500_000  # FieldRig: NOT_SYNCHRONIZED, fault gone -> measure again after
+
+
+class DcState(enum.Enum):
+    IDLE = "IDLE"
+    SYNCHRONIZING = "SYNCHRONIZING"
+    WAITING_START_TIME = "WAITING_START_TIME"
+    COMPENSATING = "COMPENSATING"
+    NOT_SYNCHRONIZED = "NOT_SYNCHRONIZED"
+
+
+class DcTrigger(enum.Enum):
+    LINK_UP = "link_up"  # link seen and the line has DC slaves
+    LINK_DOWN = "link_down"  # no link, or no DC slave on the line any more
+    MEASURED = "measured"  # the preliminary measurements are done
+    START_TIME = "start_time"  # START_TIME passed with the DC slaves in SAFEOP / OP
+    OUT_OF_WINDOW = "out_of_window"  # deviation over the sync window, or SYNC0 lost
+    FAULT_GONE = "fault_gone"  # NOT_SYNCHRONIZED long enough with the cause gone
+
+
+DC_TRANSITIONS: dict[tuple[DcState, DcTrigger], DcState] = {
+    (DcState.IDLE, DcTrigger.LINK_UP): DcState.SYNCHRONIZING,
+    (DcState.SYNCHRONIZING, DcTrigger.MEASURED): DcState.WAITING_START_TIME,
+    (DcState.WAITING_START_TIME, DcTrigger.START_TIME): DcState.COMPENSATING,
+    (DcState.WAITING_START_TIME, DcTrigger.OUT_OF_WINDOW): DcState.NOT_SYNCHRONIZED,
+    (DcState.COMPENSATING, DcTrigger.OUT_OF_WINDOW): DcState.NOT_SYNCHRONIZED,
+    (DcState.NOT_SYNCHRONIZED, DcTrigger.FAULT_GONE): DcState.SYNCHRONIZING,
+    (DcState.SYNCHRONIZING, DcTrigger.LINK_DOWN): DcState.IDLE,
+    (DcState.WAITING_START_TIME, DcTrigger.LINK_DOWN): DcState.IDLE,
+    (DcState.COMPENSATING, DcTrigger.LINK_DOWN): DcState.IDLE,
+    (DcState.NOT_SYNCHRONIZED, DcTrigger.LINK_DOWN): DcState.IDLE,
+}
+
+DC_FAULTS = ("drift", "jitter", "sync0_lost")
+
+
+@dataclass
+class DcUnit:
+    window_ns: int = DEFAULT_WINDOW_NS
+    state: DcState = DcState.IDLE
+    fault: str | None = None
+    deviation_ns: int = 0
+    since_us: int = 0  # when the present state was entered
+    start_time_us: int | None = None  # START_TIME once the DC slaves are in SAFEOP
+
+    def out_of_window(self) -> bool:
+        return self.fault == "sync0_lost" or abs(self.deviation_ns) > self.window_ns
+
+    def measure(self, dt_us: int, rng: random.Random) -> None:
+        """The deviation of the master clock from the reference clock after ``dt_us``."""
+        if self.state is DcState.IDLE:
+            self.deviation_ns = 0
+            return
+        if self.fault == "drift":
+            self.deviation_ns += DRIFT_NS_PER_MS * max(1, dt_us // 1000)
+        elif self.fault == "jitter":
+            spread = JITTER_FACTOR * self.window_ns
+            self.deviation_ns = rng.randint(-spread, spread)
+        else:
+            self.deviation_ns = rng.randint(-NOISE_NS, NOISE_NS)
+
+    def trigger(self, now_us: int, link: bool, dc_slaves: int,
+                dc_slaves_ready: bool) -> DcTrigger | None:
+        """The trigger that applies now, or None (checked against the table by the caller)."""
+        state, waited = self.state, now_us - self.since_us
+        if not link or dc_slaves == 0:
+            return DcTrigger.LINK_DOWN if state is not DcState.IDLE else None
+        if state is DcState.IDLE:
+            return DcTrigger.LINK_UP
+        if state is DcState.NOT_SYNCHRONIZED:
+            gone = self.fault is None and waited >= RESYNC_AFTER_US
+            return DcTrigger.FAULT_GONE if gone else None
+        if state is not DcState.SYNCHRONIZING and self.out_of_window():
+            return DcTrigger.OUT_OF_WINDOW
+        if state is DcState.SYNCHRONIZING:
+            return DcTrigger.MEASURED if waited >= SYNC_MEASURE_US else None
+        if state is DcState.WAITING_START_TIME:
+            if not dc_slaves_ready:
+                self.start_time_us = None
+                return None
+            if self.start_time_us is None:
+                self.start_time_us = now_us + START_DELAY_US
+            return DcTrigger.START_TIME if now_us >= self.start_time_us else None
+        return None
+
+    def move(self, trigger: DcTrigger, now_us: int) -> tuple[DcState, DcState] | None:
+        """Apply ``trigger``: (from, to) when the table has the transition, else None."""
+        target = DC_TRANSITIONS.get((self.state, trigger))
+        if target is None:
+            return None
+        before, self.state, self.since_us = self.state, target, now_us
+        if target in (DcState.SYNCHRONIZING, DcState.IDLE):
+            self.deviation_ns, self.start_time_us = 0, None
+        return before, target
+
+    def snapshot(self) -> dict[str, object]:
+        return {"state": self.state.value, "fault": self.fault,
+                "deviation_ns": self.deviation_ns, "window_ns": self.window_ns}

@@ -1,0 +1,142 @@
+"""The master logger's lines in the styles of the seeds: tables of templates, one per style.
+
+- ``twincat``: seed 000 §7.1 / §7.7 ("'Box 1 (FastCAT)' (1001): CoE - Emergency (Hex: ff00,
+  81, 02 00 00 04 00')."), the only style of the first master; lines the seed does not show
+  (link lost, identity, DC, recovery) are FieldRig's, written the same way.
+- ``sirio``: the Sirio emergency display of §7.2 (three rows, data byte 0 first);
+- ``pegaso``: the Pegaso display of §7.3 (data high byte first);
+- ``aitraceprint``: the telnet trace of §7.4 (``<ms> - <mask> - <text>``; state changes as the
+  EcatManagerSlaveStateCallback + SlaveStateChange pair, states and AL status code numeric).
+Sirio and Pegaso are emergency displays: their other lines are the TwinCAT text. Choices on
+the seed's layout (which byte each header names) are in docs/ethercat-master.md.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from devices.ethercat import AL_STATUS_CODES, AlState
+
+STYLES = ("twincat", "sirio", "pegaso", "aitraceprint")
+MASTER_NAME = "Device 1 (EtherCAT)"  # TwinCAT's name for the master's own lines
+
+# TwinCAT message templates (seed 000 §7.1 / §7.7; the FieldRig lines in the same manner).
+TWINCAT: dict[str, str] = {
+    "emergency": "CoE - Emergency (Hex: {code:04x}, {register:02x}, {data_lower}').",
+    "abnormal": "abnormal state change (from '{from_state}' to '{to_state}') with code "
+                "0x{code:04X}. Try to go back to '{target}'...",
+    "failed": "'{from_state} to {to_state}' failed! Error: 'check device state for "
+              "{to_state}'. AL Status '0x{al_status:04X}' read and '0x{expected:04X}' "
+              "expected. AL Status Code '0x{code:04X}'",
+    "aborted": "state change aborted (requested '{target}', back to '{state}').",
+    "lost": "no link: slave not found on the line ({cause}).",
+    "found": "found on the line again in '{state}'.",
+    "identity": "identity check failed: vendor 0x{vendor:08X}, product 0x{product:08X}, "
+                "revision 0x{revision:08X} read and vendor 0x{want_vendor:08X}, product "
+                "0x{want_product:08X}, revision 0x{want_revision:08X} expected.",
+    "init_command": "init command '{comment}' ({transition}) failed: SDO download "
+                    "0x{index:04X}:{sub:02X} aborted with 0x{abort:08X}.",
+    "lost_frames": "{count} frame(s) lost.",
+    "dc": "distributed clocks: {from_state} -> {to_state} (deviation {deviation} ns, sync "
+          "window {window} ns).",
+    "recovery": "network recovery: slave(s) at position(s) {positions} back on the line.",
+}
+
+# §7.4: the mask column of the trace (00000001 for ECAT events, 00000100 for PLC alarms).
+TRACE_MASK = "00000001"
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One logged message, kept as data so that the log can be rendered in any style."""
+
+    t_us: int
+    message: str  # a key of TWINCAT
+    params: Mapping[str, Any] = field(default_factory=dict)
+    slave: str = ""  # box name; empty for the master's own lines
+    address: int = 0
+    position: int = -1
+
+
+def twincat(entry: Entry) -> str:
+    params = dict(entry.params)
+    if "data" in params:
+        params["data_lower"] = " ".join(f"{b:02x}" for b in params["data"])
+    text = TWINCAT[entry.message].format(**params)
+    if entry.slave:
+        return f"'{entry.slave}' ({entry.address}): {text}"
+    return f"'{MASTER_NAME}': {text}"
+
+
+def _significant(data: bytes) -> int:
+    """The data byte a display's header names: byte 3 (coupler error, seed 000 §7.5) or
+    byte 2 (module error, §7.6) for the FastCAT layout, else the last non-zero byte."""
+    for i in (3, 2):
+        if len(data) > i and data[i]:
+            return i
+    nonzero = [i for i, b in enumerate(data) if b]
+    return nonzero[-1] if nonzero else 0
+
+
+def sirio(entry: Entry) -> str:
+    """§7.2: "Emergency Reset Byte 0 basso Byte 3 alto" / "Byte 0 Byte 2" headers."""
+    if entry.message != "emergency":
+        return twincat(entry)
+    data: bytes = entry.params["data"]
+    top = _significant(data)
+    header = "Byte 0 basso\tByte 3 alto" if top == 3 else f"Byte 0\tByte {top}"
+    return "\n".join((
+        f"Emergency\tReset\t{header}",
+        f"Err. Code\t{entry.params['code']:04X}\tAdditional Code\t",
+        f"Err. Reg.\t{entry.params['register']:04X}\t0x low "
+        f"{' '.join(f'{b:02X}' for b in data)} high\t"))
+
+
+def pegaso(entry: Entry) -> str:
+    """§7.3: the data high byte first; the header names the significant byte and byte 0."""
+    if entry.message != "emergency":
+        return twincat(entry)
+    data: bytes = entry.params["data"]
+    top = _significant(data)
+    high = "alto " if top == 3 else ""
+    return "\n".join((
+        f"ERR CODE\t[0x{entry.params['code']:04X}]",
+        f"ERR REG\tByte {top} [0x{entry.params['register']:02X}] Byte 0",
+        f"ERR DATA\t{high}[0x{' '.join(f'{b:02X}' for b in reversed(data))}] basso"))
+
+
+def _state_number(label: str) -> int:
+    return int(AlState[label])
+
+
+def _code_text(code: int) -> str:
+    """§7.4 prints 33540:Unknown for the manufacturer code 0x8304."""
+    return AL_STATUS_CODES.get(code, "Unknown")
+
+
+def aitraceprint(entry: Entry) -> str:
+    prefix = f"{entry.t_us // 1000} - {TRACE_MASK} - "
+    p, slave = entry.params, entry.position
+    if entry.message == "emergency":
+        data = "".join(f"{b:02X}" for b in p["data"])
+        lines = [f"ECAT_EVENT Emergency slave = {slave} emcyCode = 0x{p['code']:04X} "
+                 f"emcyReg = 0x{p['register']:02X} data=0x{data}"]
+    elif entry.message == "abnormal":
+        to = _state_number(p["to_state"])
+        lines = [f"** ECAT: EcatManagerSlaveStateCallback: {slave} {to} {p['code']}:"
+                 f"{_code_text(p['code'])}",
+                 f"ECAT_EVENT SlaveStateChange slave = {slave} from "
+                 f"{_state_number(p['from_state'])} to {to}"]
+    else:
+        lines = [f"ECAT: {twincat(entry)}"]
+    return "\n".join(prefix + line for line in lines)
+
+
+RENDERERS: dict[str, Callable[[Entry], str]] = {
+    "twincat": twincat, "sirio": sirio, "pegaso": pegaso, "aitraceprint": aitraceprint}
+
+
+def render(style: str, entry: Entry) -> str:
+    return RENDERERS[style](entry)

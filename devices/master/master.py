@@ -1,0 +1,438 @@
+"""The built-in EtherCAT master (seed 003) and its TwinCAT-style logger (seed 000 §7.1, §7.7).
+
+It reads a network description (devices/master/network.py; derived from the rig's line when
+no file is given), waits for link on its port (cable 0 plugged, the first slave powered),
+exchanges one frame per cycle, brings every slave INIT -> PREOP -> SAFEOP -> OP with the init
+commands and checks of each transition (devices/master/startup.py), manages distributed clocks
+(devices/master/dc.py), keeps each slave's diagnostic structure (by position and by physical
+address) and raises the seed's events with the ECAT_Notify / ECAT_Resync hooks. Line faults:
+cables pulled between slaves, slaves powered off, frames lost.
+
+Timing: a requested transition is checked ``check_delay_us`` after the request. The default,
+141 ms, is the gap the §7.7 log shows between "abnormal state change" (280 ms) and "'PREOP to
+SAFEOP' failed!" (421 ms). INIT -> PREOP waits for the slave's internal-bus scan (seconds) up
+to ``state_timeout_us``. Station addresses 1001, 1002, ... as TwinCAT assigns them, unless the
+description says otherwise. See docs/ethercat-master.md.
+"""
+
+from __future__ import annotations
+
+import collections
+import datetime as dt
+import random
+from collections.abc import Mapping, Sequence
+from typing import Any, ClassVar
+
+from devices.device import Action, CommandError, DeviceModel, Param
+from devices.ethercat import AlState
+from devices.events import (
+    CommError,
+    Event,
+    LogLine,
+    NetworkRecovery,
+    Resync,
+    SlaveStateChange,
+    StateChanged,
+)
+from devices.master.dc import DC_FAULTS, DcState, DcUnit
+from devices.master.hooks import Callback, Hooks
+from devices.master.links import TARGETS, Slave, SlaveLink, next_state
+from devices.master.log_styles import STYLES, Entry, render
+from devices.master.network import Mapping as NetworkMapping
+from devices.master.network import MasterParameters, SlaveDescription
+from devices.master.startup import StartupMixin
+
+TWINCAT_PORT = 65535  # seed 000 §7.1 / §7.7: "Server (porta) (65535)"
+FIRST_STATION_ADDRESS = 1001  # §7.1 / §7.7: "'Box 1 (FastCAT)' (1001)"
+STATE_CHECK_DELAY_US = 141_000  # §7.7 log: 14.51.30 280 ms -> 421 ms
+STATE_TIMEOUT_US = 10_000_000  # covers a 16-module scan (§3: "qualche secondo")
+LOG_LENGTH = 500
+DEFAULT_EPOCH = dt.datetime(2019, 11, 12, 14, 51, 30)  # the §7.7 log's date
+DC_MACHINE = "dc"  # StateChanged.machine of the master's DC management
+
+__all__ = ["DEFAULT_EPOCH", "FIRST_STATION_ADDRESS", "LOG_LENGTH", "STATE_CHECK_DELAY_US",
+           "STATE_TIMEOUT_US", "TWINCAT_PORT", "EtherCatMaster", "Slave", "next_state",
+           "twincat_timestamp"]
+
+
+def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
+    """``12/11/2019 14.51.30 421 ms``: the TwinCAT logger's format (seed 000 §7.1, §7.7)."""
+    at = epoch + dt.timedelta(microseconds=t_us)
+    return f"{at:%d/%m/%Y %H.%M.%S} {at.microsecond // 1000:03d} ms"
+
+
+class EtherCatMaster(StartupMixin, DeviceModel):
+    KIND = "master"
+    ACTIONS: ClassVar[Mapping[str, Action]] = {a.name: a for a in (
+        Action("resync", "Take every slave through INIT and back to the target state (a "
+                         "resync resets the FastCAT alarms whose cause is gone, seed 000 §7)"),
+        Action("set_target", "The state the master brings its slaves to",
+               (Param("state", str, choices=TARGETS),)),
+        Action("pull_cable", "Pull the cable that feeds line position N (0 = master -> first "
+                             "slave): every slave from N on is cut off",
+               (Param("cable", int, low=0),)),
+        Action("plug_cable", "Plug the cable that feeds line position N again",
+               (Param("cable", int, low=0),)),
+        Action("power_slave", "Switch the slave at line position N on or off",
+               (Param("position", int, low=0), Param("on", bool))),
+        Action("lose_frames", "The next N cycles' frames are lost (communication error)",
+               (Param("count", int, low=1, high=1_000_000),)),
+        Action("dc_fault", "Distributed clocks fault: drift, jitter over the sync window, "
+                           "SYNC0 lost (seed 003 NOT_SYNCHRONIZED)",
+               (Param("kind", str, choices=DC_FAULTS),)),
+        Action("clear_dc_fault", "Remove the DC fault: the master synchronises again"),
+        Action("set_log_style", "Render the log as TwinCAT, Sirio, Pegaso or AITracePrint "
+                                "show it (seed 000 §7.1-§7.4)",
+               (Param("style", str, choices=STYLES),)),
+    )}
+
+    def __init__(self, device_id: str = "master", rng: random.Random | None = None,
+                 slaves: Sequence[Slave] = (), retry_interval_us: int = 2_000_000,
+                 port: int = TWINCAT_PORT, epoch: dt.datetime = DEFAULT_EPOCH,
+                 check_delay_us: int = STATE_CHECK_DELAY_US,
+                 state_timeout_us: int = STATE_TIMEOUT_US,
+                 descriptions: Sequence[SlaveDescription] | None = None,
+                 mapping: NetworkMapping | None = None,
+                 dc_slaves: Sequence[bool] | None = None) -> None:
+        super().__init__(device_id=device_id, rng=rng or random.Random(0))
+        if descriptions is not None and len(descriptions) != len(slaves):
+            raise ValueError(f"the network description has {len(descriptions)} slaves, the "
+                             f"line {len(slaves)}")
+        self.links = [SlaveLink(s, position=i) for i, s in enumerate(slaves)]
+        for i, link in enumerate(self.links):
+            desc = descriptions[i] if descriptions is not None else None
+            link.description = desc
+            link.dc_derived = bool(dc_slaves[i]) if dc_slaves is not None else False
+            link.slave.station_address = desc.station_address if desc is not None \
+                else FIRST_STATION_ADDRESS + i
+            if desc is not None and desc.name:
+                link.slave.box_name = desc.name
+        self.mapping = mapping
+        params = mapping.parameters if mapping is not None else MasterParameters()
+        self.cycle_us = params.cycle_us
+        self.retry_interval_us = retry_interval_us
+        self.port = port
+        self.epoch = epoch
+        self.check_delay_us = check_delay_us
+        self.state_timeout_us = state_timeout_us
+        self.target = AlState.OP
+        self.log: collections.deque[dict[str, Any]] = collections.deque(maxlen=LOG_LENGTH)
+        self.entries: collections.deque[Entry] = collections.deque(maxlen=LOG_LENGTH)
+        self.log_style = "twincat"
+        self.cables = [True] * len(self.links)
+        self.phys_in = [True] * len(self.links)  # the IN / OUT links last given to the slaves
+        self.phys_out = [True] * len(self.links)
+        self.dc = DcUnit(window_ns=params.dc_window_ns)
+        self.dc_hold = False
+        self.hooks = Hooks()
+        self.external = False
+        self.frames = 0
+        self.lost_frames = 0
+        self.to_lose = 0
+        self.next_cycle_us = 0
+        self.network_op = False
+        self.link_up = False
+        self._bursting = False
+
+    # ---- hooks (seed 003: ECAT_Notify, ECAT_Resync) -------------------------------------------
+    def on_notify(self, callback: Callback) -> None:
+        """Called with each master event after the diagnostic structures are updated."""
+        self.hooks.notify.append(callback)
+
+    def on_resync(self, callback: Callback) -> None:
+        """Called with each Resync: a node or the whole network reached OP the first time."""
+        self.hooks.resync.append(callback)
+
+    # ---- diagnostic structures (seed 003: by position from 0, or by physical address) -------
+    def slave_at(self, position: int) -> dict[str, Any]:
+        if not 0 <= position < len(self.links):
+            raise CommandError(f"no slave at position {position} (0..{len(self.links) - 1})")
+        return self._diagnostic(self.links[position])
+
+    def slave_by_address(self, address: int) -> dict[str, Any]:
+        for link in self.links:
+            if link.slave.station_address == address:
+                return self._diagnostic(link)
+        known = ", ".join(str(link.slave.station_address) for link in self.links)
+        raise CommandError(f"no slave with physical address {address} (addresses: {known})")
+
+    def _diagnostic(self, link: SlaveLink) -> dict[str, Any]:
+        p = link.position
+        return link.diagnostic(bool(getattr(link.slave, "powered", True)), self._connected(p))
+
+    # ---- commands ---------------------------------------------------------------------------
+    def cmd_resync(self) -> None:
+        for link in self.links:
+            if link.present:
+                self._request(link, AlState.INIT)
+
+    def cmd_set_target(self, state: str) -> None:
+        self.target = AlState[state]
+        for link in self.links:
+            link.next_try_us = self.now_us
+
+    def _position(self, value: int, what: str) -> int:
+        if not 0 <= value < len(self.links):
+            raise CommandError(f"{what} {value}: the line has positions 0..{len(self.links) - 1}")
+        return value
+
+    def cmd_pull_cable(self, cable: int) -> None:
+        self.cables[self._position(cable, "cable")] = False
+        self._apply_physical_links()
+
+    def cmd_plug_cable(self, cable: int) -> None:
+        self.cables[self._position(cable, "cable")] = True
+        self._apply_physical_links()
+
+    def cmd_power_slave(self, position: int, on: bool) -> None:
+        self.links[self._position(position, "position")].slave.set_power(on)
+        self._apply_physical_links()
+
+    def cmd_lose_frames(self, count: int) -> None:
+        self.to_lose += count
+
+    def cmd_dc_fault(self, kind: str) -> None:
+        self.dc.fault = kind
+        self._slave_dc_fault(kind)
+
+    def cmd_clear_dc_fault(self) -> None:
+        self.dc.fault = None
+        self._slave_dc_fault(None)
+
+    def _slave_dc_fault(self, kind: str | None) -> None:
+        """The slaves' own view of the fault (their sync-error paths), DC slaves only."""
+        for link in self.links:
+            setter = getattr(link.slave, "set_dc_fault", None)
+            if link.dc and setter is not None:
+                setter(kind)
+
+    def cmd_set_log_style(self, style: str) -> None:
+        self.log_style = style
+        self.log = collections.deque((self._row(e) for e in self.entries), maxlen=LOG_LENGTH)
+
+    # ---- external mode (a wire master drives the line, issue 8) -------------------------------
+    def set_external(self, on: bool) -> None:
+        self.external = on
+
+    def external_request(self, position: int, state: AlState) -> None:
+        link = self.links[self._position(position, "position")]
+        link.requested = state
+        link.slave.request_state(state)
+
+    def external_frame(self, position: int) -> None:
+        link = self.links[self._position(position, "position")]
+        if self._connected(position):
+            link.slave.exchange_frame(self.now_us)
+        self.frames += 1
+
+    def external_stats(self, frames: int, lost_frames: int, cycle_us: int,
+                       wkc_errors: int) -> None:
+        self.frames, self.lost_frames, self.cycle_us = frames, lost_frames, cycle_us
+        for link in self.links:
+            link.counters.wkc_errors = wkc_errors
+
+    # ---- the line ---------------------------------------------------------------------------
+    def _powered(self, position: int) -> bool:
+        return bool(getattr(self.links[position].slave, "powered", True))
+
+    def _connected(self, position: int) -> bool:
+        """The master's frames reach this position: every cable up to it plugged, every
+        slave before it powered (an unpowered slave does not pass frames on)."""
+        return all(self.cables[: position + 1]) and all(
+            self._powered(p) for p in range(position))
+
+    def _apply_physical_links(self) -> None:
+        """Each port's link as the cables and the neighbours' power make it (LINK LEDs)."""
+        n = len(self.links)
+        for p, link in enumerate(self.links):
+            want_in = self.cables[p] and (p == 0 or self._powered(p - 1))
+            if want_in != self.phys_in[p]:
+                self.phys_in[p] = want_in
+                link.slave.set_link(want_in, "in")
+            if p + 1 < n:
+                want_out = self.cables[p + 1] and self._powered(p + 1)
+                if want_out != self.phys_out[p]:
+                    self.phys_out[p] = want_out
+                    link.slave.set_link(want_out, "out")
+
+    def _cause(self, position: int) -> str:
+        for p in range(position + 1):
+            if not self.cables[p]:
+                return f"cable {p} pulled"
+            if p < position and not self._powered(p):
+                return f"the slave at position {p} is off"
+        if not self._powered(position):
+            return "powered off"
+        return "no link on its IN port"
+
+    # ---- stepping ---------------------------------------------------------------------------
+    def step(self, now_us: int) -> None:
+        dt_us = now_us - self.now_us
+        super().step(now_us)
+        self._apply_physical_links()
+        self.link_up = bool(self.links) and self._connected(0) and self.links[0].slave.reachable()
+        cycle = now_us >= self.next_cycle_us
+        if cycle:
+            self.next_cycle_us = now_us + self.cycle_us
+        lost = cycle and not self.external and self.to_lose > 0 and self.link_up
+        if lost:
+            self._lose_frame()
+        recovered = []
+        for link in self.links:
+            if not (self._connected(link.position) and link.slave.reachable()):
+                self._lose(link)
+                continue
+            if not link.present and self._find(link):
+                recovered.append(link.position)
+            if self.external or lost or not cycle:
+                continue
+            link.slave.exchange_frame(now_us)
+            self._serve(link)
+        if cycle and not lost and not self.external and self.link_up:
+            self.frames += 1
+        if recovered:
+            self._event(NetworkRecovery(now_us, self.device_id, positions=tuple(recovered)))
+            self._log(None, "recovery", positions=", ".join(map(str, recovered)))
+        self._watch_states()
+        self._step_dc(dt_us)
+        self.hooks.run()
+
+    def _lose_frame(self) -> None:
+        """One cycle's frame lost: counted per slave; one event per slave per burst."""
+        first = not self._bursting
+        burst = self.to_lose
+        self.to_lose -= 1
+        self.lost_frames += 1
+        self._bursting = self.to_lose > 0
+        for link in self.links:
+            if link.present:
+                link.counters.lost_frames += 1
+                if first:
+                    self._event(CommError(self.now_us, self.device_id,
+                                          position=link.position,
+                                          address=link.slave.station_address,
+                                          reason="lost_frames", count=burst))
+        if first:
+            self._log(None, "lost_frames", count=burst)
+
+    def _find(self, link: SlaveLink) -> bool:
+        """The slave answers (again); True when it is a recovery after a loss."""
+        slave = link.slave
+        link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
+        link.pending, link.identity_ok, link.reached_op = None, None, False
+        if link.diagnosis.startswith("no link"):
+            link.diagnosis = ""
+        if link.lost_once:
+            self._log(link, "found", state=slave.al_state.label)
+        return link.lost_once
+
+    def _lose(self, link: SlaveLink) -> None:
+        if not link.present:
+            return
+        cause = self._cause(link.position)
+        link.present, link.believed, link.pending = False, None, None
+        link.lost_once, link.reached_op, link.seen = True, False, None
+        link.diagnosis = f"no link: {cause}"
+        self.network_op = False
+        self._event(CommError(self.now_us, self.device_id, position=link.position,
+                              address=link.slave.station_address, reason="link_lost",
+                              count=1))
+        self._log(link, "lost", cause=cause)
+
+    def _watch_states(self) -> None:
+        """Slave state changes, and the first OP of each slave / of the network (resync)."""
+        now = self.now_us
+        for link in self.links:
+            if not link.present:
+                continue
+            slave = link.slave
+            state = slave.al_state
+            if state is not link.seen:
+                before = link.seen.label if link.seen is not None else ""
+                link.seen = state
+                link.counters.state_changes += bool(before)
+                self._event(SlaveStateChange(now, self.device_id, position=link.position,
+                                             address=slave.station_address,
+                                             from_state=before, to_state=state.label,
+                                             code=slave.al_status_code))
+            if state is AlState.OP and not link.reached_op:
+                link.reached_op = True
+                self._event(Resync(now, self.device_id, position=link.position,
+                                   address=slave.station_address, slave=slave.device_id))
+        everyone = bool(self.links) and all(
+            link.present and link.slave.al_state is AlState.OP for link in self.links)
+        if everyone and not self.network_op:
+            self.network_op = True
+            self._event(Resync(now, self.device_id, position=-1))
+
+    def _step_dc(self, dt_us: int) -> None:
+        dc = self.dc
+        dc.measure(dt_us, self.rng)
+        dc_links = [link for link in self.links if link.present and link.dc]
+        ready = bool(dc_links) and all(
+            link.slave.al_state in (AlState.SAFEOP, AlState.OP) for link in dc_links)
+        trigger = dc.trigger(self.now_us, self.link_up, len(dc_links), ready)
+        moved = dc.move(trigger, self.now_us) if trigger is not None else None
+        if moved is None:
+            return
+        before, after = moved
+        self._event(StateChanged(self.now_us, self.device_id, from_state=before.value,
+                                 to_state=after.value, machine=DC_MACHINE))
+        self._log(None, "dc", from_state=before.value, to_state=after.value,
+                  deviation=dc.deviation_ns, window=dc.window_ns)
+        if after is DcState.NOT_SYNCHRONIZED:
+            self.dc_hold = True
+            for link in dc_links:  # seed 003: the slaves involved go to SAFE_OP
+                if link.slave.al_state is AlState.OP and not self.external:
+                    self._request(link, AlState.SAFEOP)
+        elif after in (DcState.COMPENSATING, DcState.IDLE):
+            self.dc_hold = False
+            for link in self.links:
+                link.next_try_us = min(link.next_try_us, self.now_us)
+
+    # ---- events and the log -------------------------------------------------------------------
+    def _event(self, event: Event) -> None:
+        self.emit(event)
+        self.hooks.queued.append(event)
+
+    def _log(self, link: SlaveLink | None, message: str, **params: object) -> None:
+        slave = link.slave if link is not None else None
+        entry = Entry(self.now_us, message, params,
+                      slave=slave.box_name if slave is not None else "",
+                      address=slave.station_address if slave is not None else 0,
+                      position=link.position if link is not None else -1)
+        self.entries.append(entry)
+        row = self._row(entry)
+        self.log.append(row)
+        self.emit(LogLine(self.now_us, self.device_id, text=row["text"], port=self.port))
+
+    def _row(self, entry: Entry) -> dict[str, Any]:
+        return {"t": entry.t_us / 1_000_000, "port": self.port,
+                "timestamp": twincat_timestamp(self.epoch, entry.t_us),
+                "text": render(self.log_style, entry)}
+
+    # ---- view -------------------------------------------------------------------------------
+    @property
+    def phase(self) -> str:
+        if not self.link_up:
+            return "waiting_link"
+        present = [link for link in self.links if link.present]
+        if any(link.slave.al_state in (AlState.INIT, AlState.BOOT) for link in present):
+            return "init_commands"
+        if all(link.slave.al_state is self._target_of(link) for link in present):
+            return "running"
+        return "starting"
+
+    def snapshot(self) -> dict[str, Any]:
+        names = [link.slave.device_id for link in self.links]
+        return {"kind": self.KIND, "id": self.device_id, "target": self.target.label,
+                "external": self.external, "link": self.link_up, "phase": self.phase,
+                "log_style": self.log_style, "log_styles": list(STYLES),
+                "dc": self.dc.snapshot(),
+                "cables": [{"index": i, "from": "master" if i == 0 else names[i - 1],
+                            "to": names[i], "plugged": self.cables[i]}
+                           for i in range(len(self.links))],
+                "slaves": [self._diagnostic(link) for link in self.links],
+                "stats": {"frames": self.frames, "lost_frames": self.lost_frames,
+                          "cycle_us": self.cycle_us},
+                "log": list(self.log)}

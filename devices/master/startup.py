@@ -1,0 +1,154 @@
+"""Start-up and supervision of each slave's ESM by the master (seed 003; seed 000 §7.7).
+
+Per slave: found on the line -> its state is read; each step the master requests the next
+state toward its target (INIT -> PREOP -> SAFEOP -> OP), first sending the CoE init commands of
+that transition from the network description (and, before PREOP -> SAFEOP, checking the
+identity 0x1018 against it); the answer is checked ``check_delay_us`` later. A refused
+transition leaves the slave where it is with its own AL status code (the model decides), logged
+as TwinCAT does (§7.7), and is retried every ``retry_interval_us``. A slave that leaves its
+state on its own is an "abnormal state change" and is brought back.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import TYPE_CHECKING
+
+from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState, parse_emergency_frame
+from devices.events import CoeEmergency, CommError
+from devices.master.links import RANK, TRANSITION_NAME, SlaveLink, next_state
+from devices.od import SdoAbort
+
+if TYPE_CHECKING:
+    from devices.events import Event
+
+IDENTITY_SUBS = (1, 2, 3)  # 0x1018: vendor, product code, revision
+
+
+class StartupMixin:
+    """ESM handling of :class:`~devices.master.master.EtherCatMaster`."""
+
+    now_us: int
+    target: AlState
+    check_delay_us: int
+    state_timeout_us: int
+    retry_interval_us: int
+    dc_hold: bool
+
+    if TYPE_CHECKING:
+        def _log(self, link: SlaveLink | None, message: str, **params: object) -> None: ...
+        def _event(self, event: Event) -> None: ...
+
+    def _target_of(self, link: SlaveLink) -> AlState:
+        """The master's target, capped at SAFEOP for DC slaves while DC is not synchronised
+        (seed 003 NOT_SYNCHRONIZED: "all the slaves involved go to the SAFE_OP state")."""
+        if self.dc_hold and link.dc and RANK[self.target] > RANK[AlState.SAFEOP]:
+            return AlState.SAFEOP
+        return self.target
+
+    def _serve(self, link: SlaveLink) -> None:
+        slave, now = link.slave, self.now_us
+        for frame in slave.take_emergencies():
+            code, register, data = parse_emergency_frame(frame)
+            link.counters.emergencies += 1
+            self._event(CoeEmergency(now, "master", position=link.position,
+                                     address=slave.station_address, code=code,
+                                     register=register, data=data))
+            self._log(link, "emergency", code=code, register=register, data=data)
+        if link.pending is not None:
+            self._check(link)
+            return
+        state, target = slave.al_state, self._target_of(link)
+        if state is not link.believed:
+            assert link.believed is not None
+            if RANK.get(link.believed, 0) >= RANK[AlState.SAFEOP]:
+                link.counters.wkc_errors += 1  # its process data stopped answering
+            self._log(link, "abnormal", from_state=link.believed.label, to_state=state.label,
+                      code=slave.al_status_code, target=self.target.label)
+            link.believed, link.next_try_us = state, now
+        if state is not target and now >= link.next_try_us:
+            step = next_state(state, target)
+            if self._before_transition(link, state, step):
+                self._request(link, step)
+            else:
+                link.next_try_us = now + self.retry_interval_us
+
+    def _before_transition(self, link: SlaveLink, current: AlState, target: AlState) -> bool:
+        """Identity check and init commands of ``current -> target``; False stops it."""
+        desc = link.description
+        if desc is None or RANK.get(current, 0) < RANK[AlState.PREOP]:
+            return True  # INIT: no mailbox yet (IP commands go once PREOP is reached)
+        if target is AlState.SAFEOP and current is AlState.PREOP:
+            if not self._identity_ok(link):
+                return False
+            return self._send_init(link, "IP") and self._send_init(link, "PS")
+        name = TRANSITION_NAME.get((current, target))
+        return name is None or self._send_init(link, name)
+
+    def _identity_ok(self, link: SlaveLink) -> bool:
+        desc = link.description
+        assert desc is not None
+        if link.identity_ok is not None:
+            return link.identity_ok
+        if desc.vendor is None:
+            return True  # derived from the rig: nothing to compare with
+        try:
+            got = [struct.unpack("<I", link.slave.sdo_upload(0x1018, sub))[0]
+                   for sub in IDENTITY_SUBS]
+        except (SdoAbort, ValueError, struct.error):
+            return False  # no mailbox answer yet: try again later
+        want = [desc.vendor, desc.product, desc.revision]
+        link.identity_ok = got == want
+        if not link.identity_ok:
+            link.diagnosis = (f"identity mismatch: 0x1018 reads vendor 0x{got[0]:08X} product "
+                              f"0x{got[1]:08X} revision 0x{got[2]:08X}, the network "
+                              f"description expects 0x{want[0]:08X} 0x{want[1]:08X} "
+                              f"0x{want[2]:08X}: the slave stays in PREOP")
+            self._event(CommError(self.now_us, "master", position=link.position,
+                                  address=link.slave.station_address, reason="identity",
+                                  count=1))
+            self._log(link, "identity", vendor=got[0], product=got[1], revision=got[2],
+                      want_vendor=want[0], want_product=want[1], want_revision=want[2])
+        return link.identity_ok
+
+    def _send_init(self, link: SlaveLink, transition: str) -> bool:
+        desc = link.description
+        assert desc is not None
+        for cmd in desc.commands(transition):
+            try:
+                link.slave.sdo_download(cmd.index, cmd.sub, cmd.data)
+            except SdoAbort as exc:
+                link.diagnosis = (f"init command '{cmd.comment}' ({transition}) refused: "
+                                  f"{exc}")
+                self._event(CommError(self.now_us, "master", position=link.position,
+                                      address=link.slave.station_address,
+                                      reason="init_command", count=1))
+                self._log(link, "init_command", comment=cmd.comment, transition=transition,
+                          index=cmd.index, sub=cmd.sub, abort=int(exc.code))
+                return False
+        if link.diagnosis.startswith("init command"):
+            link.diagnosis = ""
+        return True
+
+    def _request(self, link: SlaveLink, target: AlState) -> None:
+        link.pending, link.pending_from = target, link.slave.al_state
+        link.requested, link.requested_at_us = target, self.now_us
+        link.slave.request_state(target)
+
+    def _check(self, link: SlaveLink) -> None:
+        slave, now = link.slave, self.now_us
+        waited = now - link.requested_at_us
+        if waited < self.check_delay_us:
+            return
+        state, target = slave.al_state, link.pending
+        assert target is not None
+        if state is target:
+            link.believed, link.pending, link.next_try_us = state, None, now
+            return
+        if not slave.al_status & AL_STATUS_ERROR_FLAG and waited < self.state_timeout_us:
+            return  # still busy (INIT -> PREOP waits for the internal-bus scan)
+        self._log(link, "failed", from_state=link.pending_from.label, to_state=target.label,
+                  al_status=slave.al_status, expected=int(target), code=slave.al_status_code)
+        self._log(link, "aborted", target=self.target.label, state=state.label)
+        link.believed, link.pending = state, None
+        link.next_try_us = now + self.retry_interval_us
