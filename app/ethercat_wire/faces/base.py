@@ -1,0 +1,183 @@
+"""What every face does the same way: identity, sync managers, AL control, images from mapping.
+
+A face translates between a slave model and the wire; it never decides. The model decides
+whether a requested state is allowed and with which AL status code (``request_state``), what
+its objects hold (its ``od``) and what its outputs do. Faces run in the simulation thread only.
+
+Sync manager layout (the same for every slave, SII category 41): SM0 mailbox out 0x1000 and
+SM1 mailbox in 0x1080, 128 bytes each; SM2 outputs at 0x1100, SM3 inputs at 0x1400 (room for
+768 output bytes, more than any slave of the rig maps). Control bytes are the usual ones: 0x26
+(mailbox, write, PDI IRQ), 0x22 (mailbox, read), 0x64 (3-buffer, write, watchdog), 0x20
+(3-buffer, read). An SM with no process data is disabled (length 0, enable 0).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, ClassVar
+
+from app.ethercat_wire.description import Pdo, SlaveDescription, SyncManager
+from app.ethercat_wire.faces import image
+from devices.ethercat import AlState
+from devices.od import AbortCode, ObjectDictionary, OdEntry, SdoAbort, decode, encode
+
+logger = logging.getLogger(__name__)
+
+MAILBOX_OUT, MAILBOX_IN, MAILBOX_SIZE = 0x1000, 0x1080, 128
+OUTPUTS_START, INPUTS_START = 0x1100, 0x1400
+SM_CONTROL = (0x26, 0x22, 0x64, 0x20)
+RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
+COE_SDO, COE_SDO_INFO, COE_PDO_ASSIGN, COE_PDO_CONFIG = 0x01, 0x02, 0x04, 0x08  # SII GENERAL
+
+
+def sync_managers(out_bytes: int, in_bytes: int) -> tuple[SyncManager, ...]:
+    return (SyncManager(MAILBOX_OUT, MAILBOX_SIZE, SM_CONTROL[0], 1),
+            SyncManager(MAILBOX_IN, MAILBOX_SIZE, SM_CONTROL[1], 1),
+            SyncManager(OUTPUTS_START, out_bytes, SM_CONTROL[2], 1 if out_bytes else 0),
+            SyncManager(INPUTS_START, in_bytes, SM_CONTROL[3], 1 if in_bytes else 0))
+
+
+class NoAnswer(Exception):
+    """The model's mailbox does not answer (off the line, no application, no dictionary yet):
+    no reply goes back, and the master times out as it would on a real device."""
+
+
+class Face:
+    """The wire's view of one kind of slave model. Subclasses name the kind and the ESI data."""
+
+    kind: ClassVar[str]
+    name: ClassVar[str]  # SII string 1 / ESI device name
+    group: ClassVar[str]
+    order_code: ClassVar[str]
+    dc_supported: ClassVar[bool] = False
+    coe_details: ClassVar[int] = COE_SDO | COE_SDO_INFO
+    identity_defaults: ClassVar[tuple[int, int, int]]  # vendor, product, revision (no OD yet)
+
+    def __init__(self) -> None:
+        self._last_outputs: dict[int, bytes] = {}  # id(model) -> last image applied
+
+    # ---- object dictionary -----------------------------------------------------------------
+    def od(self, model: Any) -> ObjectDictionary | None:
+        """The dictionary a CoE master reads; None while the model has none (off, scanning)."""
+        return model.od
+
+    def upload(self, model: Any, index: int, sub: int) -> Any:
+        """SDO upload value (access enforced; raises SdoAbort)."""
+        return self._require_od(model).read(index, sub)
+
+    def download(self, model: Any, index: int, sub: int, value: Any) -> None:
+        """SDO download of a decoded value (access and range enforced; raises SdoAbort)."""
+        self._require_od(model).write(index, sub, value)
+
+    def entry(self, model: Any, index: int, sub: int) -> OdEntry:
+        return self._require_od(model).entry(index, sub)
+
+    def _require_od(self, model: Any) -> Any:
+        od = self.od(model)
+        if od is None or not model.reachable():
+            raise NoAnswer(f"{model.device_id}: no object dictionary on the line now")
+        return od
+
+    def upload_raw(self, model: Any, index: int, sub: int) -> bytes:
+        """The bytes of an SDO upload, little endian as the object's type packs them."""
+        value = self.upload(model, index, sub)
+        return encode(self.entry(model, index, sub).dtype, value)
+
+    def download_raw(self, model: Any, index: int, sub: int, data: bytes) -> None:
+        """An SDO download's bytes: their length must be the object's (DS301 0x0607001x)."""
+        entry = self.entry(model, index, sub)
+        if not entry.access.writable:
+            raise SdoAbort(AbortCode.READ_ONLY, index, sub)
+        try:
+            value = decode(entry.dtype, bytes(data))
+        except SdoAbort as exc:
+            raise SdoAbort(exc.code, index, sub) from None
+        self.download(model, index, sub, value)
+
+    # ---- identity and description ---------------------------------------------------------
+    def identity(self, model: Any) -> tuple[int, int, int, int]:
+        """Vendor, product code, revision, serial: the model's 0x1018."""
+        od = self.od(model)
+        if od is not None and (0x1018, 4) in od:
+            return tuple(int(od.peek(0x1018, s)) for s in (1, 2, 3, 4))  # type: ignore[return-value]
+        vendor, product, revision = self.identity_defaults
+        return vendor, product, revision, int(model.serial)
+
+    def rx_pdos(self, model: Any) -> tuple[Pdo, ...]:
+        return self._assigned_pdos(model, RX_ASSIGN)
+
+    def tx_pdos(self, model: Any) -> tuple[Pdo, ...]:
+        return self._assigned_pdos(model, TX_ASSIGN)
+
+    def _assigned_pdos(self, model: Any, assign_index: int) -> tuple[Pdo, ...]:
+        od = self.od(model)
+        if od is None or (assign_index, 0) not in od:
+            return ()
+        return image.read_pdos(od.peek, od.entry, image.assigned(od.peek, assign_index))
+
+    def describe(self, model: Any) -> SlaveDescription:
+        vendor, product, revision, serial = self.identity(model)
+        rx, tx = self.rx_pdos(model), self.tx_pdos(model)
+        return SlaveDescription(
+            device_id=model.device_id, name=self.name, vendor_id=vendor, product_code=product,
+            revision=revision, serial=serial, group=self.group, order_code=self.order_code,
+            mailbox=(MAILBOX_OUT, MAILBOX_SIZE, MAILBOX_IN, MAILBOX_SIZE),
+            coe_details=self.coe_details,
+            sync_managers=sync_managers(image.byte_size(rx), image.byte_size(tx)),
+            rx_pdos=rx, tx_pdos=tx, dc_supported=self.dc_supported)
+
+    def ready(self, model: Any) -> bool:
+        """Whether the model has its dictionary (a description now is the one a master gets)."""
+        return not model.reachable() or self.od(model) is not None
+
+    # ---- process data ----------------------------------------------------------------------
+    def inputs(self, model: Any) -> bytes:
+        """The SM3 image; empty while the model has no dictionary."""
+        od = self.od(model)
+        if od is None:
+            return b""
+        return image.pack(self.tx_pdos(model), od.peek)
+
+    def apply_outputs(self, model: Any, data: bytes) -> None:
+        """The SM2 image the master wrote: each changed object written as an SDO would."""
+        od = self.od(model)
+        if od is None:
+            return
+        pdos = self.rx_pdos(model)
+        if image.byte_size(pdos) != len(data):
+            logger.info("%s: outputs image of %d bytes, the mapping has %d: ignored",
+                        model.device_id, len(data), image.byte_size(pdos))
+            return
+        key = id(model)
+        wanted = image.changed(pdos, self._last_outputs.get(key), data)
+        self._last_outputs[key] = bytes(data)
+        for index, sub, value in image.unpack(pdos, data, od.entry):
+            if (index, sub) in wanted:
+                self.write_output(model, index, sub, value)
+
+    def write_output(self, model: Any, index: int, sub: int, value: int) -> None:
+        try:
+            self.download(model, index, sub, value)
+        except SdoAbort as exc:
+            logger.info("%s: output not applied: %s", model.device_id, exc)
+
+    # ---- ESM and mailbox ------------------------------------------------------------------
+    def request_state(self, model: Any, state: AlState) -> None:
+        """AL control: the model accepts or refuses (with its own AL status code)."""
+        model.request_state(state)
+
+    def refuse_unknown_state(self, model: Any, code: int) -> None:
+        """An AL control value that is no ESM state: ETG.1000.6 code 0x0012 on the model's
+        ESM (the model never sees a non-state request, so the ESM holder answers it)."""
+        if model.reachable():
+            model.esm.refuse(code, model.now_us)
+
+    def al_status(self, model: Any) -> tuple[int, int]:
+        return int(model.al_status), int(model.al_status_code)
+
+    def take_emergencies(self, model: Any) -> list[bytes]:
+        return list(model.take_emergencies())
+
+    def reachable(self, model: Any) -> bool:
+        return bool(model.reachable())
+

@@ -1,0 +1,61 @@
+"""The servo drive's CoE slave on the wire (seed 004 ch. 5): the drive model's own mailbox.
+
+SDOs go through the slave's ``sdo_upload`` / ``sdo_download`` (its panel logs them, the
+drive's length rule of ch. 4 applies; INIT or off the line: no mailbox, the master times out).
+The images are the slave's: ``read_inputs`` packs the TxPDOs assigned in 0x1C13 (None below
+SAFEOP), ``write_outputs`` takes the RxPDOs of 0x1C12, applied at the next frame in OP.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, ClassVar
+
+from app.ethercat_wire.faces.base import (
+    COE_PDO_ASSIGN,
+    COE_PDO_CONFIG,
+    COE_SDO,
+    COE_SDO_INFO,
+    Face,
+    NoAnswer,
+)
+from devices.coe import objects
+from devices.coe.mailbox import MailboxClosed
+from devices.device import CommandError
+
+logger = logging.getLogger(__name__)
+
+
+class DriveFace(Face):
+    kind = "servo_ecat"
+    name = "SelemaDriveECAT"  # ch. 5: TwinCAT shows 'Drive 5 (SelemaDriveECAT)'
+    group = "Selema Device"  # ch. 5 TwinCAT device tree: Selema > Selema Device
+    order_code = "SelemaDriveECAT"
+    dc_supported = True  # ch. 5 "Distributed Clock"
+    coe_details = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN | COE_PDO_CONFIG  # ch. 5 dynamic PDOs
+    identity_defaults: ClassVar[tuple[int, int, int]] = (
+        objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
+
+    def od(self, model: Any) -> Any:
+        return model.dictionary
+
+    def upload_raw(self, model: Any, index: int, sub: int) -> bytes:
+        try:
+            return model.sdo_upload(index, sub)
+        except MailboxClosed as exc:
+            raise NoAnswer(str(exc)) from None
+
+    def download_raw(self, model: Any, index: int, sub: int, data: bytes) -> None:
+        try:
+            model.sdo_download(index, sub, data)
+        except MailboxClosed as exc:
+            raise NoAnswer(str(exc)) from None
+
+    def inputs(self, model: Any) -> bytes:
+        return model.read_inputs() or b""
+
+    def apply_outputs(self, model: Any, data: bytes) -> None:
+        try:
+            model.write_outputs(data)
+        except CommandError as exc:
+            logger.info("%s: %s", model.device_id, exc)

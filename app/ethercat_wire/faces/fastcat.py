@@ -1,0 +1,26 @@
+"""The FastCAT coupler on the wire (seed 000): identity, PDOs and images from its own objects.
+
+The coupler generates its mapping from the modules of the last scan (§5): 0x16FF / 0x1AFF
+(Reset fault / Fault active) always, then 0x1600 + (n - 1) / 0x1A00 + (n - 1) for module n,
+listed in 0x1C12 / 0x1C13 in that order. The images are those mappings bit for bit
+(:mod:`app.ethercat_wire.faces.image`): 0x16FF's single bit is bit 0 of SM2, module 1's
+outputs follow from bit 1. Until a scan has built the dictionary (power-up, every return to
+INIT, §3) there is no mapping and no image.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+from app.ethercat_wire.faces.base import Face
+from devices.fastcat import objects
+
+
+class FastCatFace(Face):
+    kind = "fastcat"
+    name = objects.DEVICE_NAME  # §6.2 "FastCAT"; TwinCAT shows 'Box 1 (FastCAT)' (§7.1)
+    group = "FastCAT"
+    order_code = "FastCAT"
+    dc_supported = False  # seed 000 names no distributed clock
+    identity_defaults: ClassVar[tuple[int, int, int]] = (
+        objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
