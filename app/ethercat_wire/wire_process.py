@@ -110,6 +110,41 @@ def run(iface: str, descriptions: list[SlaveDescription], conn: Connection) -> N
         sock.close()
 
 
+class Mailman:
+    """Messages to A, sent only while the pipe has room: B never blocks on A (A may be sending
+    to B at the same moment; two blocking writers on a full pipe pair would deadlock and the
+    wire would stop answering). Outputs, cycle counts and stats are state, not history: an
+    unsent one is replaced by a newer one."""
+
+    def __init__(self, conn: Connection) -> None:
+        self.conn = conn
+        self.pending: list[tuple] = []
+        self._writable = select.poll()
+        self._writable.register(conn.fileno(), select.POLLOUT)
+
+    def post(self, msg: tuple) -> None:
+        tag = msg[0]
+        if tag in _REPLACEABLE:
+            key = msg[1] if tag == messages.OUTPUTS else None
+            for i, old in enumerate(self.pending):
+                if old[0] == tag and (key is None or old[1] == key):
+                    if tag == messages.CYCLE:  # counts add up
+                        merged = dict(old[1])
+                        for pos, n in msg[1].items():
+                            merged[pos] = merged.get(pos, 0) + n
+                        msg = (tag, merged)
+                    self.pending[i] = msg
+                    return
+        self.pending.append(msg)
+
+    def flush(self) -> None:
+        while self.pending and self._writable.poll(0):
+            self.conn.send(self.pending.pop(0))
+
+
+_REPLACEABLE = frozenset({messages.OUTPUTS, messages.CYCLE, messages.STATS})
+
+
 def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]) -> None:
     poller = select.poll()
     poller.register(sock.fileno(), select.POLLIN)
@@ -117,6 +152,7 @@ def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]
     buf = bytearray(FRAME_BUFFER)
     view = memoryview(buf)
     stats = Stats()
+    mail = Mailman(conn)
     next_cycle = next_stats = time.monotonic()
     running = True
     while running:
@@ -127,17 +163,18 @@ def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]
                 running = _drain_conn(conn, line)
         if outbox:
             for msg in outbox:
-                conn.send(msg)
+                mail.post(msg)
             outbox.clear()
         now = time.monotonic()
         if now >= next_cycle:
             counts = cycle_counts(line)
             if counts:
-                conn.send((messages.CYCLE, counts))
+                mail.post((messages.CYCLE, counts))
             next_cycle = now + messages.CYCLE_REPORT_S
         if now >= next_stats:
-            conn.send((messages.STATS, stats.report(line)))
+            mail.post((messages.STATS, stats.report(line)))
             next_stats = now + messages.STATS_REPORT_S
+        mail.flush()
 
 
 def _drain_socket(sock: socket.socket, line: Line, buf: bytearray, view: memoryview) -> None:
