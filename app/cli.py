@@ -1,6 +1,9 @@
 """Command line: ``python -m app`` serves the dashboard; ``python -m app scenario run FILE``.
 
 Stable flags (issue 2): ``--host`` (default 127.0.0.1), ``--port`` (default 8080), ``--rig``.
+Classroom (issue 6, docs/classroom.md): ``--rig`` again or ``--rigs N`` serves several rigs, one
+port each from ``--port`` up; a non-loopback ``--host`` asks for an instructor token (printed,
+or ``--instructor-token``); every served session is recorded unless ``--no-record``.
 Bad input (a broken rig or scenario file, a bad flag) prints one line and exits 2, with no
 traceback.
 """
@@ -8,10 +11,12 @@ traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import logging
 import sys
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -35,7 +40,15 @@ def _serve_parser() -> argparse.ArgumentParser:
     p.add_argument("--run-for", type=float, default=None, metavar="SECONDS",
                    help="stop after this many wall seconds (for smoke tests)")
     p.add_argument("--record", default=None, metavar="PATH",
-                   help="record the session to a rerun file (.rrd)")
+                   help="record the session to this rerun file (.rrd); default: a file in "
+                        "STATE_DIR/recordings (one per rig)")
+    p.add_argument("--no-record", action="store_true",
+                   help="do not record the session (no Download recording)")
+    p.add_argument("--rigs", type=int, default=None, metavar="N",
+                   help="serve N copies of the rig (one per trainee), on ports PORT..PORT+N-1")
+    p.add_argument("--instructor-token", default=None, metavar="TOKEN",
+                   help="the instructor's token (default with a non-loopback --host: a new "
+                        "one, printed at start)")
     p.add_argument("--modbus-port", type=int, default=5020,
                    help="TCP port of the drives' Modbus line, bound to --host (default 5020)")
     p.add_argument("--can-interface", choices=("virtual", "udp_multicast", "socketcan"),
@@ -71,8 +84,9 @@ def _scenario_parser() -> argparse.ArgumentParser:
 
 def _rig_flags(p: argparse.ArgumentParser, serving: bool = True) -> None:
     if serving:
-        p.add_argument("--rig", default=str(DEFAULT_RIG),
-                       help="rig file (TOML); default: the embedded default rig")
+        p.add_argument("--rig", action="append", default=None,
+                       help="rig file (TOML); default: the embedded default rig; give it "
+                            "several times to serve several rigs")
         p.add_argument("--state-dir", default="var",
                        help="where device flash files live (default ./var)")
     else:
@@ -129,50 +143,75 @@ def _scenario(args: argparse.Namespace) -> int:
 
 
 def _serve(args: argparse.Namespace) -> int:
-    import viser
+    from app.classroom.roles import Access
+    from app.ui.panels.classroom_rig import serve_rig
 
-    from app.runtime import Runtime
-    from app.ui.dashboard import Dashboard
-
+    rig_files = list(args.rig or [str(DEFAULT_RIG)])
+    if args.rigs is not None:
+        if args.rigs < 1 or len(rig_files) != 1:
+            raise RigConfigError("--rigs", "", "give N >= 1 and one --rig (or none)")
+        rig_files = rig_files * args.rigs
+    count = len(rig_files)
     for flag, port in (("--port", args.port), ("--modbus-port", args.modbus_port)):
-        if not 0 < port < 65536:
-            raise RigConfigError(flag, "", f"{port} is not a TCP port")
-    rig = build_rig(load_rig_spec(args.rig), state_dir=args.state_dir)
-    runtime = Runtime(rig, speed=args.speed)
-    recorder = None
-    if args.record:
-        from app.recording import RigRecorder, attach_to_runtime
-
-        recorder = RigRecorder(args.record)
-        attach_to_runtime(runtime, recorder)
-    server = viser.ViserServer(host=args.host, port=args.port, verbose=False)
-    dashboard = Dashboard(server, runtime)
-    runtime.start()
-    dashboard.start()
-    _power_on(runtime)
-    modbus = _start_modbus(runtime, args)
-    canbus = _start_canopen(runtime, args)
-    print(f"FieldRig: rig '{rig.name}' at http://{args.host}:{args.port} "
-          f"(Ctrl-C to stop)", flush=True)
-    stop = threading.Event()
+        if not 0 < port < 65536 - (count - 1):
+            raise RigConfigError(flag, "", f"{port} is not a TCP port (for {count} rig(s))")
+    if count > 1 and args.can_interface != "virtual":
+        raise RigConfigError("--can-interface", "", "several rigs in one process need the "
+                             "'virtual' CAN interface (one bus per rig)")
+    if args.instructor_token is not None and not args.instructor_token.strip():
+        raise RigConfigError("--instructor-token", "", "an empty token")
+    access_token = Access.for_host(args.host, args.instructor_token).token
+    served, extras = [], []
+    stamp = time.strftime("%Y%m%d-%H%M%S")
     try:
-        stop.wait(args.run_for)
-    except KeyboardInterrupt:
-        pass
+        for i, rig_file in enumerate(rig_files):
+            state_dir = Path(args.state_dir) / (f"rig{i + 1}" if count > 1 else "")
+            rig = build_rig(load_rig_spec(rig_file), state_dir=state_dir)
+            record = _record_path(args, state_dir, rig.name, stamp, i, count)
+            one = serve_rig(rig, Access(access_token), host=args.host, port=args.port + i,
+                            speed=args.speed, record=record)
+            served.append(one)
+            _power_on(one.runtime)
+            extras.append(_start_modbus(one.runtime, args, args.modbus_port + i))
+            extras.append(_start_canopen(one.runtime, args,
+                                         _can_channel(args, i) if count > 1 else None))
+            print(f"FieldRig: rig {i + 1} '{rig.name}' at {one.url}"
+                  + (f" (recording {record})" if record else ""), flush=True)
+        if access_token is not None:
+            print(f"FieldRig: instructor token {access_token}: open a rig's URL with "
+                  f"?token={access_token} (e.g. {served[0].instructor_url}); any other "
+                  "browser is a trainee", flush=True)
+        print("FieldRig: serving (Ctrl-C to stop)", flush=True)
+        stop = threading.Event()
+        with contextlib.suppress(KeyboardInterrupt):
+            stop.wait(args.run_for)
     finally:
-        if modbus is not None:
-            modbus.stop_in_thread()
-        if canbus is not None:
-            canbus.stop()
-        dashboard.stop()
-        runtime.stop()
-        server.stop()
-        if recorder is not None:
-            recorder.close()
+        for extra in extras:
+            if extra is not None:
+                extra.stop_in_thread() if hasattr(extra, "stop_in_thread") else extra.stop()
+        for one in served:
+            one.stop()
     return 0
 
 
-def _start_modbus(runtime: Any, args: argparse.Namespace) -> Any:
+def _record_path(args: argparse.Namespace, state_dir: Path, name: str, stamp: str, i: int,
+                 count: int) -> str | None:
+    """``--record`` (numbered per rig when several), else a file per session in the state dir
+    (every served session is recorded: the Download recording button sends it)."""
+    if args.no_record:
+        return None
+    if args.record:
+        path = Path(args.record)
+        return str(path if count == 1 else path.with_stem(f"{path.stem}-{i + 1}"))
+    safe = "".join(c if c.isalnum() or c in "-_" else "-" for c in name) or "rig"
+    return str(state_dir / "recordings" / f"{safe}-{stamp}.rrd")
+
+
+def _can_channel(args: argparse.Namespace, i: int) -> str:
+    return f"{args.can_channel or 'fieldrig'}-rig{i + 1}"
+
+
+def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     """The drives' Modbus line (pymodbus), when the rig has drives; None otherwise."""
     from app.modbus.server import DriveModbusServer
     from devices.servo.drive import ServoDrive
@@ -180,15 +219,15 @@ def _start_modbus(runtime: Any, args: argparse.Namespace) -> Any:
     drives = [d for d in runtime.rig.devices.values() if isinstance(d, ServoDrive)]
     if not drives:
         return None
-    server = DriveModbusServer(drives, runtime.submit, host=args.host, port=args.modbus_port,
+    server = DriveModbusServer(drives, runtime.submit, host=args.host, port=port,
                                framer=args.modbus_framer)
     server.start_in_thread()
-    print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{args.modbus_port}",
+    print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{port}",
           flush=True)
     return server
 
 
-def _start_canopen(runtime: Any, args: argparse.Namespace) -> Any:
+def _start_canopen(runtime: Any, args: argparse.Namespace, channel: str | None) -> Any:
     """The drives' CAN bus (python-can), when the rig has CANopen nodes; None otherwise."""
     from app.canopen_bus import CanBusError, CanOpenBus
     from devices.canopen.node import CanOpenNode
@@ -196,7 +235,7 @@ def _start_canopen(runtime: Any, args: argparse.Namespace) -> Any:
     nodes = [d for d in runtime.rig.devices.values() if isinstance(d, CanOpenNode)]
     if not nodes:
         return None
-    bus = CanOpenBus(nodes, runtime.submit, args.can_interface, args.can_channel)
+    bus = CanOpenBus(nodes, runtime.submit, args.can_interface, channel or args.can_channel)
     bus.attach(runtime)
     try:
         bus.start()

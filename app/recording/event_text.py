@@ -74,6 +74,9 @@ def text(event: Event, record: dict[str, Any]) -> str:
     return fmt(record)
 
 
+RIG_LOG = device_path("session", "events")  # the recorder's own lines (a rig restart)
+
+
 def log_path(event: Event) -> str:
     return device_path(event.device, "events")
 

@@ -111,6 +111,9 @@ class RigRecorder:
         self._send_blueprint = blueprint
         self._named = False
         self._closed = False
+        self._offset_us = 0  # added to rig times: a restarted rig continues the timeline
+        self._last_t_us = 0  # the latest rig time observed
+        self.runs = 1  # how many times the rig clock started from the beginning, plus one
 
     # ---- what the simulation side calls ----------------------------------------------------
     def sample_due(self, t_us: int) -> bool:
@@ -124,6 +127,9 @@ class RigRecorder:
         with self._lock:
             if self._closed:
                 return
+            if t_us < self._last_t_us:
+                self._restart(t_us)
+            self._last_t_us = t_us
             for event in events:
                 self._event(event)
             if snapshot is not None:
@@ -165,16 +171,36 @@ class RigRecorder:
         self.close()
 
     # ---- buffering ---------------------------------------------------------------------------
+    def _restart(self, t_us: int) -> None:
+        """The rig clock went back (a scenario loaded: the rig restarted factory-fresh). The
+        new run goes on the same timeline after the last one, one sample period apart, and
+        starts with a full sample, as the first run did (docs/recording.md)."""
+        self._send_buffers(hold=True)
+        self._offset_us += self._last_t_us - t_us + self.sample_period_us
+        self.runs += 1
+        self._lane_now.clear()
+        for column in self._scalars.values():
+            column.last, column.held_us = None, None
+        self._next_sample_us = None
+        self._last_flush_us = t_us
+        at = t_us + self._offset_us
+        column = self._texts.setdefault(event_text.RIG_LOG, _Column())
+        column.times.append(at)
+        column.values.append(f"run {self.runs}: the rig restarted (rig time 0 s is "
+                             f"{at / 1e6:g} s of this recording)")
+        column.levels.append("INFO")
+        self._buffered += 1
+
     def _event(self, event: Event) -> None:
         record = event.to_record()
         column = self._texts.setdefault(event_text.log_path(event), _Column())
-        column.times.append(event.t_us)
+        column.times.append(event.t_us + self._offset_us)
         column.values.append(event_text.text(event, record))
         column.levels.append(event_text.level(event, record))
         self._buffered += 1
         lane = event_text.lane_change(event, record)
         if lane is not None:
-            self._lane(lane[0], event.t_us, lane[1], exact=True)
+            self._lane(lane[0], event.t_us + self._offset_us, lane[1], exact=True)
 
     def _lane(self, path: str, t_us: int, value: str, exact: bool = False) -> None:
         """A lane keeps changes only. Events (``exact``) carry the time of the change; samples
@@ -199,11 +225,12 @@ class RigRecorder:
     def _sample(self, t_us: int, snapshot: Mapping[str, Any]) -> None:
         if not self._named:
             self._start(snapshot, t_us)
+        at = t_us + self._offset_us
         for device_id, snap in (snapshot.get("devices") or {}).items():
             for path, value in state_values(device_id, snap):
-                self._lane(path, t_us, value)
+                self._lane(path, at, value)
         for _device, signal in rig_signals(snapshot, t_us):
-            self._scalar(t_us, signal)
+            self._scalar(at, signal)
         period = self.sample_period_us
         self._next_sample_us = (t_us // period + 1) * period  # stay on a regular grid
 

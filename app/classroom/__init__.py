@@ -1,0 +1,2 @@
+"""Classroom logic without a UI: roles and access, hidden faults, exercises, scoring
+(docs/classroom.md)."""

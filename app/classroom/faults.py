@@ -1,0 +1,161 @@
+"""Hidden faults an exercise can inject, and the candidate causes a trainee picks from.
+
+Both come from the devices' own code tables, so a code added to a table is a new cause and a
+new fault without touching this file: the FastCAT coupler and module codes (seed 000 §7.5,
+§7.6, ``devices.fastcat.alarms.CODE_TABLES``) and the servo drive's alarms (its manual's alarm
+table, ``devices.servo.alarms.alarm_table``). A few faults are physical rather than injected
+codes (a pulled cable, a low Tbus supply, a jammed load): their cause is the code the device
+reports for them, and their repair is the opposite action.
+
+A cause is named by an id: ``<device>:coupler:0x13``, ``<device>:module:0x0B`` (FastCAT),
+``<device>:alarm:16`` (servo drive).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+
+@dataclass(frozen=True)
+class Command:
+    target: str
+    action: str
+    args: Mapping[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Cause:
+    id: str
+    label: str
+    device: str
+
+
+@dataclass(frozen=True)
+class HiddenFault:
+    """``inject`` makes the fault, ``repair`` removes its cause (an alarm may stay latched
+    until the trainee resets it). ``gone``: snapshot values of ``device`` that say the fault
+    is gone, besides the device showing no alarm."""
+
+    id: str
+    label: str
+    device: str
+    cause: str
+    inject: tuple[Command, ...]
+    repair: tuple[Command, ...]
+    gone: Mapping[str, Any] = field(default_factory=dict)
+    module: bool = False  # the instructor picks a module (target device/N)
+
+    def at(self, module: int | None) -> HiddenFault:
+        """This fault on module ``module`` (module codes); itself otherwise."""
+        if not self.module or module is None:
+            return self
+        target = f"{self.device}/{module}"
+
+        def moved(commands: tuple[Command, ...]) -> tuple[Command, ...]:
+            return tuple(Command(target, c.action, c.args) for c in commands)
+
+        return HiddenFault(f"{self.id}@{module}", f"{self.label} (module {module})", self.device,
+                           self.cause, moved(self.inject), moved(self.repair), self.gone, True)
+
+
+# Faults that are not a code injection: (device kind, id suffix, label, cause code key,
+# inject (action, args), repair (action, args), snapshot values once repaired).
+PHYSICAL: tuple[tuple[str, str, str, str, tuple[str, dict[str, Any]],
+                      tuple[str, dict[str, Any]], dict[str, Any]], ...] = (
+    ("fastcat", "cable", "EtherCAT cable pulled", "coupler:0x13",
+     ("link", {"connected": False}), ("link", {"connected": True}), {"link": True}),
+    ("fastcat", "tbus_low", "Tbus supply low", "module:0x0C",
+     ("tbus_voltage", {"low": True}), ("tbus_voltage", {"low": False}), {"tbus_low": False}),
+    ("servo", "jam", "Load jammed (shows when the axis moves)", "alarm:16",
+     ("jam_load", {"active": True}), ("jam_load", {"active": False}), {"jammed": False}),
+)
+
+
+def _fastcat(device: str) -> Iterator[tuple[Cause, HiddenFault | None]]:
+    from devices.fastcat.alarms import CODE_TABLES, MODULE
+
+    for table in CODE_TABLES.values():
+        for row in table.values():
+            key = row.label  # coupler:0x04
+            where = "§7.5" if row.table != MODULE else "§7.6"
+            cause = Cause(f"{device}:{key}", f"{device} {row.table} 0x{row.code:02X} "
+                          f"{row.symbol} — {row.description} ({where})", device)
+            fault = HiddenFault(f"{device}:inject:{key}", f"{device}: inject {row.table} "
+                                f"0x{row.code:02X} {row.symbol}", device, cause.id,
+                                (Command(device, "inject_fault", {"fault": key}),),
+                                (Command(device, "clear_fault", {"fault": key}),),
+                                module=row.table == MODULE)
+            yield cause, fault
+
+
+def _servo(device: str, snapshot: Mapping[str, Any]) -> Iterator[tuple[Cause, HiddenFault | None]]:
+    from devices.servo.alarms import alarm_table
+
+    for spec in alarm_table(str(snapshot.get("fieldbus") or "modbus")).values():
+        key = f"alarm:{spec.code}"
+        cause = Cause(f"{device}:{key}", f"{device} alarm {spec.code} {spec.name} — "
+                      f"{spec.description}", device)
+        fault = HiddenFault(f"{device}:inject:{key}", f"{device}: inject alarm {spec.code} "
+                            f"{spec.name}", device, cause.id,
+                            (Command(device, "inject_alarm", {"code": str(spec.code)}),),
+                            (Command(device, "clear_alarm", {"code": str(spec.code)}),))
+        yield cause, fault
+
+
+SOURCES = {"fastcat": lambda d, s: _fastcat(d), "servo": _servo}
+
+
+@dataclass(frozen=True)
+class Catalog:
+    causes: tuple[Cause, ...]
+    faults: tuple[HiddenFault, ...]
+
+    def cause(self, cause_id: str) -> Cause | None:
+        return next((c for c in self.causes if c.id == cause_id), None)
+
+    def fault(self, fault_id: str) -> HiddenFault:
+        base, _, module = fault_id.partition("@")
+        found = next((f for f in self.faults if f.id == base), None)
+        if found is None:
+            raise KeyError(f"no hidden fault {fault_id!r}")
+        return found.at(int(module)) if module else found
+
+
+def catalog(described: Mapping[str, Mapping[str, Any]],
+            snapshot: Mapping[str, Any]) -> Catalog:
+    """Causes and faults of a rig: ``described`` is :meth:`app.rig.Rig.describe`,
+    ``snapshot`` :meth:`app.rig.Rig.snapshot` (a drive's alarms depend on its fieldbus)."""
+    devices = snapshot.get("devices") or {}
+    causes: list[Cause] = []
+    faults: list[HiddenFault] = []
+    for device, info in described.items():
+        source = SOURCES.get(str(info["kind"]))
+        if source is None:
+            continue
+        for cause, fault in source(device, devices.get(device) or {}):
+            causes.append(cause)
+            if fault is not None:
+                faults.append(fault)
+        for kind, suffix, label, code, (i_act, i_args), (r_act, r_args), gone in PHYSICAL:
+            if kind == info["kind"]:
+                faults.append(HiddenFault(f"{device}:{suffix}", f"{device}: {label}", device,
+                                          f"{device}:{code}", (Command(device, i_act, i_args),),
+                                          (Command(device, r_act, r_args),), gone))
+    return Catalog(tuple(causes), tuple(faults))
+
+
+ALARM_KEYS = ("alarm", "alarms")  # snapshot keys that hold a device's active alarm(s)
+
+
+def fault_gone(fault: HiddenFault, snapshot: Mapping[str, Any]) -> bool:
+    """Whether the rig no longer shows ``fault``: its device has no alarm and is back to the
+    repaired values (``snapshot``: the rig's)."""
+    snap = (snapshot.get("devices") or {}).get(fault.device) or {}
+    if any(snap.get(key) for key in ALARM_KEYS):
+        return False
+    injected = snap.get("injected") or []
+    if any(command.action == "inject_fault" for command in fault.inject) and injected:
+        return False
+    return all(snap.get(key) == value for key, value in fault.gone.items())

@@ -1,0 +1,303 @@
+"""The Classroom folder: roles, exercises, scores and the recording download, per browser.
+
+The folder itself is server-level; what is inside is built per connection (viser's client
+GUI inside a server container), so each browser sees its role's part only:
+
+- everyone: "You are the instructor / a trainee", the exercise question (name a cause, done);
+- a trainee of a rig served with a token: the instructor login form;
+- the instructor: the hidden-fault picker, Start / End, the hidden fault, the trainees'
+  answer, actions and score, the refused commands, the scores so far, Download recording.
+
+Hiding is for the eyes only; the server enforces the roles in
+:class:`app.ui.commands.CommandSender` whatever a browser sends. The exercise logic is
+:mod:`app.classroom.exercise` (docs/classroom.md).
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import viser
+
+from app.classroom.exercise import Exercise, Phase
+from app.classroom.faults import Catalog, catalog
+from app.classroom.roles import Operation, Role
+from app.recording import RigRecorder
+from app.runtime import Runtime
+from app.ui.commands import CommandSender, Sent, notify
+from app.ui.panels.classroom_access import TokenForm, read_browser_token
+from app.ui.panels.classroom_html import history_html, instructor_html, trainee_html
+from devices.device import CommandError
+from devices.events import LogLine
+
+logger = logging.getLogger(__name__)
+
+UPDATE_S = 0.5
+WAIT_S = 10.0
+NO_FAULT = "(pick a hidden fault)"
+NO_CAUSE = "(pick the cause)"
+START, END = "Start exercise", "End and score"
+
+
+@dataclass
+class _View:
+    """The handles one connection got; removed and rebuilt when its role changes."""
+
+    role: Role
+    handles: list[Any] = field(default_factory=list)
+    trainee: Any = None
+    instructor: Any = None
+    history: Any = None
+    shown: dict[str, str] = field(default_factory=dict)
+    form: TokenForm | None = None
+
+
+class ClassroomPanel:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
+                 recorder: RigRecorder | None = None, download_name: str = "fieldrig.rrd",
+                 ) -> None:
+        self._server, self._runtime, self._sender = server, runtime, sender
+        self.access = sender.gate.access
+        self._recorder = recorder
+        self._download_name = download_name
+        self.catalog: Catalog = catalog(runtime.rig.describe(), runtime.frame.snapshot)
+        self._faults = {f.label: f for f in self.catalog.faults}
+        self._causes = {c.label: c for c in self.catalog.causes}
+        self._lock = threading.RLock()
+        self.exercise: Exercise | None = None
+        self.history: list[dict[str, Any]] = []
+        self.refusals: collections.deque[str] = collections.deque(maxlen=20)
+        self._views: dict[int, _View] = {}
+        self._folder = server.gui.add_folder("Classroom", expand_by_default=True)
+        self._stop = threading.Event()
+        sender.gate.observe(self._on_sent)
+        server.on_client_connect(self._connect)
+        server.on_client_disconnect(self._disconnect)
+        self._thread = threading.Thread(target=self._run, name="fieldrig-classroom",
+                                        daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5)
+
+    # ---- the exercise (also called by tests and exercise files) ---------------------------
+    def start_exercise(self, fault_id: str, module: int | None = None,
+                       client: viser.ClientHandle | None = None) -> Exercise | None:
+        if not self._sender.allow(client, Operation.EXERCISE, "start an exercise"):
+            return None
+        with self._lock:
+            if self.exercise is not None and self.exercise.phase is not Phase.FINISHED:
+                raise ValueError("an exercise is running: end it first")
+            fault = self.catalog.fault(fault_id).at(module)
+            for command in fault.inject:
+                self._apply(command.target, command.action, dict(command.args))
+            self.exercise = Exercise(fault, time.monotonic())
+        self._log(f"exercise started by connection {self._id(client)} (the fault is hidden)")
+        return self.exercise
+
+    def name_cause(self, cause_id: str, client: viser.ClientHandle | None = None) -> bool:
+        """A trainee's answer; the right cause gets its repair (True)."""
+        with self._lock:
+            exercise = self.exercise
+            if exercise is None or exercise.phase is Phase.FINISHED:
+                raise ValueError("no exercise is running")
+            right = exercise.name_cause(time.monotonic(), cause_id, self._id(client))
+            if right:
+                for command in exercise.fault.repair:
+                    self._apply(command.target, command.action, dict(command.args))
+        self._log(f"connection {self._id(client)} named a cause")
+        return right
+
+    def finish(self, client: viser.ClientHandle | None = None,
+               as_instructor: bool = False) -> dict[str, Any]:
+        """Check the rig, score, and repair the fault's cause if it is still there."""
+        if as_instructor and not self._sender.allow(client, Operation.EXERCISE, "end"):
+            raise PermissionError("ending an exercise is for the instructor")
+        with self._lock:
+            exercise = self.exercise
+            if exercise is None or exercise.phase is Phase.FINISHED:
+                raise ValueError("no exercise is running")
+            if not as_instructor and exercise.phase is not Phase.ANSWERED:
+                raise ValueError("name a cause first")
+            snapshot = self._runtime.submit(self._runtime.rig.snapshot).result(timeout=WAIT_S)
+            exercise.finish(time.monotonic(), snapshot)
+            if not exercise.cause_right:
+                for command in exercise.fault.repair:
+                    try:
+                        self._apply(command.target, command.action, dict(command.args))
+                    except CommandError:
+                        logger.debug("repair after the exercise", exc_info=True)
+            report = exercise.report(self.catalog)
+            self.history.append(report)
+        self._log(f"exercise finished: score {report['score']['total']}")
+        return report
+
+    # ---- connections ------------------------------------------------------------------------
+    def _connect(self, client: viser.ClientHandle) -> None:
+        self._build(client)
+        if not self.access.open:
+            read_browser_token(client, self.access, self._promoted)
+
+    def _disconnect(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            self._views.pop(client.client_id, None)
+        self.access.forget(client.client_id)
+
+    def _promoted(self, client: viser.ClientHandle) -> None:
+        logger.info("connection %s is the instructor", client.client_id)
+        notify(client, "Instructor", "You are the instructor of this rig.")
+        self._build(client)
+
+    def _build(self, client: viser.ClientHandle) -> None:
+        role = self.access.role(client.client_id)
+        with self._lock:
+            old = self._views.pop(client.client_id, None)
+        if old is not None:
+            for handle in reversed(old.handles):
+                handle.remove()
+        view = _View(role)
+        gui = client.gui
+        with self._folder:
+            view.handles.append(gui.add_markdown(
+                f"You are **{'the instructor' if role is Role.INSTRUCTOR else 'a trainee'}**"))
+            if role is Role.TRAINEE:
+                view.form = TokenForm(client, self.access, self._promoted)
+                view.handles.append(view.form)
+            self._answer_controls(client, view)
+            if role is Role.INSTRUCTOR:
+                self._instructor_controls(client, view)
+        with self._lock:
+            self._views[client.client_id] = view
+        self._refresh(view)
+
+    def _answer_controls(self, client: viser.ClientHandle, view: _View) -> None:
+        gui = client.gui
+        folder = gui.add_folder("Exercise")
+        view.handles.append(folder)
+        with folder:
+            view.trainee = gui.add_html(trainee_html(None, 0.0))
+            cause = gui.add_dropdown("Cause", (NO_CAUSE, *self._causes))
+            name = gui.add_button("Name the cause", icon=viser.Icon.CHECK)
+            done = gui.add_button("Done", hint="the rig runs again: check and score")
+
+        def on_name(_event: viser.GuiEvent) -> None:
+            picked = self._causes.get(str(cause.value))
+            if picked is None:
+                notify(client, "Exercise", "pick a cause first", error=True)
+                return
+            self._guarded(client, lambda: self.name_cause(picked.id, client),
+                          "Answer recorded: reset what stays latched, then press Done.")
+
+        name.on_click(on_name)
+        done.on_click(lambda _e: self._guarded(client, lambda: self.finish(client),
+                                               "Exercise finished: thank you."))
+
+    def _instructor_controls(self, client: viser.ClientHandle, view: _View) -> None:
+        gui = client.gui
+        folder = gui.add_folder("Instructor")
+        view.handles.append(folder)
+        with folder:
+            fault = gui.add_dropdown("Hidden fault", (NO_FAULT, *self._faults))
+            module = gui.add_number("Module", 1, min=1, max=64, step=1,
+                                    hint="for module codes (§7.6): the module number")
+            buttons = gui.add_button_group("Exercise control", (START, END))
+            view.instructor = gui.add_html(instructor_html(None, 0.0))
+            gui.add_markdown("**Scores**")
+            view.history = gui.add_html(history_html([]))
+            download = gui.add_button("Download recording", icon=viser.Icon.DOWNLOAD,
+                                      disabled=self._recorder is None)
+
+        def on_button(_event: viser.GuiEvent) -> None:
+            if buttons.value == START:
+                picked = self._faults.get(str(fault.value))
+                if picked is None:
+                    notify(client, "Exercise", "pick a hidden fault first", error=True)
+                    return
+                self._guarded(client, lambda: self.start_exercise(
+                    picked.id, int(module.value) if picked.module else None, client),
+                    "Exercise started.")
+            else:
+                self._guarded(client, lambda: self.finish(client, as_instructor=True),
+                              "Exercise scored.")
+
+        buttons.on_click(on_button)
+        download.on_click(lambda _e: self.download(client))
+
+    def download(self, client: viser.ClientHandle | None) -> bytes | None:
+        """Flush the session's recording and send it to ``client``'s browser."""
+        if not self._sender.allow(client, Operation.RECORDING, "download the recording"):
+            return None
+        if self._recorder is None:
+            notify(client, "Recording", "this session is not recorded", error=True)
+            return None
+        data = self._recorder.recording_bytes()
+        if client is not None:
+            client.send_file_download(self._download_name, data, save_immediately=True)
+        return data
+
+    # ---- helpers --------------------------------------------------------------------------
+    def _guarded(self, client: viser.ClientHandle, fn: Callable[[], Any], ok: str) -> None:
+        try:
+            fn()
+        except (ValueError, KeyError, CommandError, PermissionError) as exc:
+            notify(client, "Exercise", str(exc), error=True)
+            return
+        notify(client, "Exercise", ok)
+
+    def _apply(self, target: str, action: str, args: dict[str, Any]) -> Any:
+        return self._runtime.command(target, action, args).result(timeout=WAIT_S)
+
+    def _log(self, text: str) -> None:
+        logger.info("%s", text)
+        self._runtime.journal([LogLine(t_us=self._runtime.frame.t_us, device="classroom",
+                                       text=text)])
+
+    @staticmethod
+    def _id(client: viser.ClientHandle | None) -> int | None:
+        return None if client is None else client.client_id
+
+    def _on_sent(self, sent: Sent) -> None:
+        if sent.refused:
+            self.refusals.append(f"#{sent.client_id} {sent.target}: {sent.refused}")
+        exercise = self.exercise
+        if exercise is not None and sent.client_id is not None:
+            args = " ".join(f"{k}={v}" for k, v in sent.args.items())
+            exercise.record(time.monotonic(), sent.client_id, sent.role.value,
+                            f"{sent.target}: {sent.action} {args}".strip(), sent.refused)
+
+    # ---- the update thread ----------------------------------------------------------------
+    def _run(self) -> None:
+        while not self._stop.wait(UPDATE_S):
+            with self._lock:
+                views = list(self._views.values())
+            for view in views:
+                try:
+                    self._refresh(view)
+                except Exception:  # the browser may be gone: the next disconnect cleans up
+                    logger.debug("classroom refresh failed", exc_info=True)
+
+    def _refresh(self, view: _View) -> None:
+        exercise = self.exercise
+        report = exercise.report(self.catalog) if exercise is not None else None
+        elapsed = 0.0
+        if exercise is not None:
+            end = exercise.finished_s
+            elapsed = end if end is not None else time.monotonic() - exercise.started_s
+        self._show(view, "trainee", view.trainee, trainee_html(report, elapsed))
+        if view.instructor is not None:
+            self._show(view, "instructor", view.instructor,
+                       instructor_html(report, elapsed, list(self.refusals)))
+            self._show(view, "history", view.history, history_html(self.history))
+
+    @staticmethod
+    def _show(view: _View, key: str, handle: Any, content: str) -> None:
+        if handle is not None and view.shown.get(key) != content:
+            handle.content = content
+            view.shown[key] = content

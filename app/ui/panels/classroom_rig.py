@@ -1,0 +1,79 @@
+"""One served rig: its runtime, viser server, dashboard, access, recording and classroom.
+
+``python -m app`` serves one or several of these in one process (``--rig a --rig b``,
+``--rigs N``), each on its own port with its own runtime, clock and flash directory; tests
+start them the same way. Protocol servers (Modbus, CAN) are the CLI's business.
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+
+import viser
+
+from app.classroom.roles import Access
+from app.recording import RigRecorder, attach_to_runtime
+from app.rig import Rig
+from app.runtime import Runtime
+from app.ui.commands import CommandSender, install_gate
+from app.ui.dashboard import Dashboard
+from app.ui.panels.classroom import ClassroomPanel
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass
+class ServedRig:
+    rig: Rig
+    runtime: Runtime
+    server: viser.ViserServer
+    dashboard: Dashboard
+    classroom: ClassroomPanel
+    recorder: RigRecorder | None
+    host: str
+    port: int
+
+    @property
+    def url(self) -> str:
+        return f"http://{self.host}:{self.port}/"
+
+    @property
+    def instructor_url(self) -> str:
+        token = self.classroom.access.token
+        return self.url if token is None else f"{self.url}?token={token}"
+
+    def stop(self) -> None:
+        self.classroom.stop()
+        self.dashboard.stop()
+        self.runtime.stop()
+        self.server.stop()
+        if self.recorder is not None:
+            self.recorder.close()
+
+
+def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 8080,
+              speed: float = 1.0, record: str | Path | None = None,
+              paused: bool = False) -> ServedRig:
+    """Start serving ``rig``: runtime, recorder (when ``record`` names a file), access gate,
+    viser server, dashboard and classroom folder. ``paused``: the clock waits (tests)."""
+    runtime = Runtime(rig, speed=speed)
+    runtime.set_paused(paused)
+    recorder = None
+    if record is not None:
+        recorder = RigRecorder(record)
+        attach_to_runtime(runtime, recorder)
+    install_gate(runtime, access)
+    server = viser.ViserServer(host=host, port=port, verbose=False)
+    dashboard = Dashboard(server, runtime)
+    classroom = ClassroomPanel(server, runtime, CommandSender(runtime), recorder,
+                               download_name=f"{_slug(rig.name)}.rrd")
+    runtime.start()
+    dashboard.start()
+    return ServedRig(rig, runtime, server, dashboard, classroom, recorder, host,
+                     server.get_port())
+
+
+def _slug(name: str) -> str:
+    return "".join(c if c.isalnum() or c in "-_" else "-" for c in name).strip("-") or "rig"
