@@ -20,12 +20,13 @@ from typing import Any
 
 import viser
 
+from app.classroom.roles import Operation
 from app.player import Player, PlayerView, Status, describe_step
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigConfigError
 from app.runtime import Frame, Runtime
 from app.scenario import Scenario, ScenarioError, load_scenario
-from app.ui.commands import notify
+from app.ui.commands import CommandSender, notify
 from app.ui.panels.widgets import from_user
 from app.ui.style import esc
 
@@ -110,7 +111,7 @@ class ScenarioPlayerPanel:
 
     # ---- callbacks (viser's threads) -------------------------------------------------------
     def _on_button(self, event: viser.GuiEvent) -> None:
-        if not from_user(event):
+        if not from_user(event) or not self._may_control(event):
             return
         choice = str(event.target.value)
         with self._busy:
@@ -130,8 +131,14 @@ class ScenarioPlayerPanel:
         except (ScenarioError, RigConfigError, ValueError) as exc:
             notify(client, f"Scenario: {choice} refused", str(exc), error=True)
 
+    def _may_control(self, event: viser.GuiEvent) -> bool:
+        """Scenario control is the instructor's (app/classroom/roles.py): checked, logged and
+        notified by the runtime's CommandSender."""
+        return CommandSender(self._runtime).allow(event.client, Operation.SCENARIO,
+                                                  "scenario player")
+
     def _on_speed(self, event: viser.GuiEvent) -> None:
-        if not from_user(event):
+        if not from_user(event) or not self._may_control(event):
             return
         try:
             self.player.set_speed(float(str(self._speed.value).rstrip("x")))
