@@ -1,0 +1,125 @@
+"""Exercises and their scoring (issue 6 "exercise mode"; docs/classroom.md "Scoring"): the
+rules are data, the causes and faults come from the devices' code tables (seed 000 §7.5, §7.6,
+the drive manual's alarm table)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+
+from app.classroom.exercise import Exercise, Phase
+from app.classroom.faults import catalog, fault_gone
+from app.classroom.scoring import RULES, ScoringRules, score, time_points
+from app.rig import Rig
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from devices.fastcat.alarms import CODE_TABLES
+
+
+@pytest.mark.parametrize(("seconds", "points"), [
+    (0.0, 20), (RULES.par_s, 20), ((RULES.par_s + RULES.limit_s) / 2, 10),
+    (RULES.limit_s, 0), (10 * RULES.limit_s, 0)])
+def test_time_points(seconds: float, points: int) -> None:
+    assert time_points(RULES, seconds) == points
+
+
+@pytest.mark.parametrize(("right", "fixed", "seconds", "actions", "refused", "total"), [
+    (True, True, 30.0, 2, 0, 100),
+    (True, True, 30.0, 8, 0, 95),  # 5 commands beyond the 3 free ones
+    (True, True, 30.0, 40, 0, 90),  # the action penalty is capped at 10
+    (True, True, 30.0, 5, 2, 96),  # 2 refused: -4, 3 allowed are free
+    (True, False, 30.0, 2, 0, 50),  # time counts for a working fix only
+    (False, True, 30.0, 2, 0, 30),
+    (False, False, 30.0, 2, 9, 0),  # never below 0
+    (True, True, 360.0, 0, 0, 90),
+])
+def test_score(right: bool, fixed: bool, seconds: float, actions: int, refused: int,
+               total: int) -> None:
+    result = score(cause_right=right, fixed=fixed, seconds=seconds, actions=actions,
+                   refused=refused)
+    assert result.total == total
+    assert result.maximum == 100
+    assert sum(p.points for p in result.parts) == total or total == 0
+
+
+def test_rules_are_checked() -> None:
+    with pytest.raises(ValueError):
+        ScoringRules(par_s=100.0, limit_s=50.0)
+    custom = ScoringRules(cause_points=10, fixed_points=10, time_points=0)
+    assert score(cause_right=True, fixed=True, seconds=1.0, actions=0, refused=0,
+                 rules=custom).total == 20
+
+
+@pytest.fixture(scope="module")
+def rig_catalog() -> Any:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    return catalog(rig.describe(), rig.snapshot())
+
+
+def test_causes_come_from_the_code_tables(rig_catalog: Any) -> None:
+    ids = {c.id for c in rig_catalog.causes}
+    for table in CODE_TABLES.values():  # §7.5 and §7.6
+        for row in table.values():
+            assert f"fastcat:{row.label}" in ids
+    assert "drive:alarm:16" in ids  # FOLLOWING_ERROR of the drive's alarm table
+    for fault in rig_catalog.faults:
+        assert rig_catalog.cause(fault.cause) is not None, fault.id
+
+
+def _powered_rig() -> Rig:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.apply("fastcat", "power", {"on": True})
+    rig.apply("master", "set_target", {"state": "OP"})
+    rig.run_until(3_000_000)
+    return rig
+
+
+def _run(rig: Rig, commands: Any) -> None:
+    for c in commands:
+        rig.apply(c.target, c.action, dict(c.args))
+
+
+@pytest.mark.parametrize(("fault_id", "module"), [
+    ("fastcat:inject:coupler:0x04", None), ("fastcat:inject:module:0x0B", 5),
+    ("fastcat:cable", None)])
+def test_exercise_right_cause_fixed(rig_catalog: Any, fault_id: str, module: int | None) -> None:
+    rig = _powered_rig()
+    fault = rig_catalog.fault(fault_id).at(module)
+    assert fault_gone(fault, rig.snapshot())
+    _run(rig, fault.inject)
+    rig.run_until(rig.clock.now_us + 500_000)
+    assert not fault_gone(fault, rig.snapshot())
+    exercise = Exercise(fault, started_s=100.0)
+    exercise.record(101.0, 4, "trainee", "fastcat: inject_fault", refused="instructor only")
+    exercise.record(102.0, 4, "trainee", "fastcat: set_reset_fault on=True")
+    assert exercise.name_cause(130.0, fault.cause, client_id=4) is True
+    assert exercise.phase is Phase.ANSWERED
+    with pytest.raises(ValueError):
+        exercise.name_cause(131.0, fault.cause)
+    _run(rig, fault.repair)
+    # The alarm stays latched until the trainee resets it (§7): 0x5200:1 rising edge, or a
+    # resync for the link loss.
+    rig.run_until(rig.clock.now_us + 500_000)
+    rig.apply("fastcat", "set_reset_fault", {"on": True})
+    rig.apply("master", "resync", {})
+    rig.run_until(rig.clock.now_us + 3_000_000)
+    result = exercise.finish(160.0, rig.snapshot())
+    assert exercise.fixed, rig.snapshot()["devices"]["fastcat"]["alarm"]
+    assert result.total == 100 - 2  # one refused command
+    exercise.record(170.0, 4, "trainee", "late")
+    assert len(exercise.actions) == 2
+    report = exercise.report(rig_catalog)
+    assert report["right"] and report["score"]["total"] == result.total
+    assert report["actions"][0]["refused"]
+
+
+def test_exercise_wrong_cause(rig_catalog: Any) -> None:
+    rig = _powered_rig()
+    fault = rig_catalog.fault("fastcat:inject:coupler:0x04")
+    _run(rig, fault.inject)
+    rig.run_until(rig.clock.now_us + 500_000)
+    exercise = Exercise(fault, started_s=0.0)
+    assert exercise.name_cause(10.0, "fastcat:coupler:0x13") is False
+    result = exercise.finish(20.0, rig.snapshot())
+    assert not exercise.fixed and result.total == 0
+    assert [p.rule for p in result.parts][:3] == ["cause", "fixed", "time"]
