@@ -77,6 +77,8 @@ class RigSpec:
     servos: tuple[ServoSpec, ...] = ()
     slaves: tuple[SlaveSpec, ...] = ()
     line: tuple[str, ...] = ()  # EtherCAT line order (device ids); default: file order by kind
+    eni: str | None = None  # network description file (relative to the rig file)
+    mapping: str | None = None  # mapping file (PLC variables, cycle time, DC sync window)
 
 
 class _Table:
@@ -160,6 +162,8 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
     master = _Table(source, "master", top.get("master", dict, {}))
     retry_s = master.get("retry_interval_s", float, 2.0, _in_range(0.01, 3600))
     line = master.get("line", list, None)
+    eni = master.get("eni", str, None)
+    mapping = master.get("mapping", str, None)
     master.finish()
     fastcats = tuple(_fastcat(source, i, t)
                      for i, t in enumerate(top.get("fastcat", list, [])))
@@ -200,7 +204,7 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
                                  f"must name every EtherCAT slave once ({', '.join(missing)})")
     return RigSpec(source=source, name=name, seed=seed, step_us=round(step_ms * 1000),
                    epoch=epoch, retry_interval_us=round(retry_s * 1e6), fastcats=fastcats,
-                   servos=servos, slaves=slaves, line=tuple(line))
+                   servos=servos, slaves=slaves, line=tuple(line), eni=eni, mapping=mapping)
 
 
 def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
@@ -393,9 +397,21 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = None) -> Rig:
                 ecat_id, drive, random.Random(f"{spec.seed}/{ecat_id}"),
                 box_name=f"Drive {position} (SelemaDriveECAT)", station_address=1000 + position)
     if slaves:
+        from app.network.files import load_description, load_mapping, uses_dc
+
+        descriptions = load_description(spec.source, spec.eni, spec.line) if spec.eni \
+            else None
+        mapping = load_mapping(spec.source, spec.mapping, descriptions, len(spec.line)) \
+            if spec.mapping else None
+        if mapping is not None and mapping.parameters.cycle_us % spec.step_us:
+            raise RigConfigError(spec.source, "master.mapping", f"cycle time "
+                                 f"{mapping.parameters.cycle_us} us is not a multiple of the "
+                                 f"rig step ({spec.step_us} us)")
         devices["master"] = EtherCatMaster(
             "master", random.Random(rng.getrandbits(64)),
             slaves=[slaves[device_id] for device_id in spec.line],
-            retry_interval_us=spec.retry_interval_us, epoch=spec.epoch)
+            retry_interval_us=spec.retry_interval_us, epoch=spec.epoch,
+            descriptions=descriptions, mapping=mapping,
+            dc_slaves=[uses_dc(slaves[device_id]) for device_id in spec.line])
     return Rig(name=spec.name, devices=devices, clock=SimClock(step_us=spec.step_us),
                seed=spec.seed)
