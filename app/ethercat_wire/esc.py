@@ -301,7 +301,11 @@ class Line:
         self._relink()
 
     def set_link(self, position: int, up: bool) -> None:
-        self.link_ok[position] = up
+        """Down: the slaves from `position` on vanish. Up: every cut from `position` on heals."""
+        if up:
+            self.link_ok[position:] = [True] * (len(self.escs) - position)
+        else:
+            self.link_ok[position] = False
         self._relink()
 
     def _relink(self) -> None:
