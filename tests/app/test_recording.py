@@ -439,3 +439,36 @@ def test_live_recording_samples_a_quiet_rig(tmp_path: Path) -> None:
     link = rows(load(path), "rig/fastcat/led/LINK", "Scalars:scalars")
     quiet = [v for t, v in link if 3.3 * S <= t <= 3.9 * S]
     assert quiet.count(0.0) >= 5 and quiet.count(1.0) >= 5
+
+
+def test_a_restarted_rig_continues_the_timeline(tmp_path: Path) -> None:
+    """A scenario loaded on the dashboard restarts the rig clock at 0: the recording goes on
+    after the last run (one sample period apart) with a full sample, never back in time."""
+    from app.player import reset_in_place
+
+    path = tmp_path / "restart.rrd"
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    recorder = RigRecorder(path, flush_period_us=FLUSH_US)
+    hook = scenario_observer(recorder)
+    rig.apply("fastcat", "power", {"on": True})
+    hook(rig, rig.take_events())
+    while rig.clock.now_us < 2 * S:
+        hook(rig, rig.step())
+    first_end = rig.clock.now_us
+    reset_in_place(rig, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+    assert rig.clock.now_us == 0
+    while rig.clock.now_us < S:
+        hook(rig, rig.step())
+    recorder.close()
+    assert recorder.runs == 2
+    assert rerun_cli("rrd", "verify", str(path)).returncode == 0
+    chunks = load(path)
+    restart = rows(chunks, event_text.RIG_LOG, "TextLog:text")
+    assert len(restart) == 1 and "run 2" in restart[0][1]
+    second_start = restart[0][0]
+    assert second_start >= first_end + recorder.sample_period_us - 1_000
+    esm = rows(chunks, "rig/fastcat/state", "StateChange:state")
+    # The fresh rig's state is recorded again at the start of run 2 (INIT, unpowered).
+    assert value_at(esm, first_end) != esm[0][1]
+    assert value_at(esm, second_start) == esm[0][1]
+    assert max(t for t, _ in esm) <= second_start + S
