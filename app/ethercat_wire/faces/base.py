@@ -19,7 +19,16 @@ from typing import Any, ClassVar
 from app.ethercat_wire.description import Pdo, SlaveDescription, SyncManager
 from app.ethercat_wire.faces import image
 from devices.ethercat import AlState
-from devices.od import AbortCode, ObjectDictionary, OdEntry, SdoAbort, decode, encode
+from devices.od import (
+    AbortCode,
+    Access,
+    DataType,
+    ObjectDictionary,
+    OdEntry,
+    SdoAbort,
+    decode,
+    encode,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -27,7 +36,25 @@ MAILBOX_OUT, MAILBOX_IN, MAILBOX_SIZE = 0x1000, 0x1080, 128
 OUTPUTS_START, INPUTS_START = 0x1100, 0x1400
 SM_CONTROL = (0x26, 0x22, 0x64, 0x20)
 RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
+SM_COMM_TYPE = 0x1C00
+SM_TYPES = (1, 2, 3, 4)  # ETG.1000.6 0x1C00: mailbox out, mailbox in, outputs, inputs
 COE_SDO, COE_SDO_INFO, COE_PDO_ASSIGN, COE_PDO_CONFIG = 0x01, 0x02, 0x04, 0x08  # SII GENERAL
+
+
+def _sm_type_objects() -> ObjectDictionary:
+    od = ObjectDictionary()
+    od.add(OdEntry(SM_COMM_TYPE, 0, "Sync manager type", DataType.UNSIGNED8, Access.RO,
+                   len(SM_TYPES)))
+    for sm, kind in enumerate(SM_TYPES):
+        od.add(OdEntry(SM_COMM_TYPE, sm + 1, f"SM{sm} type", DataType.UNSIGNED8, Access.RO,
+                       kind))
+    return od
+
+
+# 0x1C00 describes the sync managers, which the wire lays out (the table above), so the wire
+# answers it for a slave whose dictionary has the PDO assignment but not 0x1C00: a master reads
+# it before 0x1C12 / 0x1C13 (SOEM ecx_readPDOmap) and falls back to the SII PDOs without it.
+SM_TYPE_OBJECTS = _sm_type_objects()
 
 
 def sync_managers(out_bytes: int, in_bytes: int) -> tuple[SyncManager, ...]:
@@ -61,6 +88,17 @@ class Face:
         """The dictionary a CoE master reads; None while the model has none (off, scanning)."""
         return model.od
 
+    def wire_objects(self, model: Any) -> ObjectDictionary | None:
+        """Objects the wire adds to the model's (0x1C00), or None."""
+        od = self.od(model)
+        if od is None or (SM_COMM_TYPE, 0) in od or (RX_ASSIGN, 0) not in od:
+            return None
+        return SM_TYPE_OBJECTS
+
+    def _wire(self, model: Any, index: int) -> ObjectDictionary | None:
+        extra = self.wire_objects(model)
+        return extra if extra is not None and extra.has_index(index) else None
+
     def upload(self, model: Any, index: int, sub: int) -> Any:
         """SDO upload value (access enforced; raises SdoAbort)."""
         return self._require_od(model).read(index, sub)
@@ -70,7 +108,15 @@ class Face:
         self._require_od(model).write(index, sub, value)
 
     def entry(self, model: Any, index: int, sub: int) -> OdEntry:
-        return self._require_od(model).entry(index, sub)
+        extra = self._wire(model, index)
+        return extra.entry(index, sub) if extra is not None else \
+            self._require_od(model).entry(index, sub)
+
+    def objects(self, model: Any) -> list[OdEntry]:
+        """Every entry a master may list (SDO information), the wire's own included."""
+        entries = list(self._require_od(model))
+        extra = self.wire_objects(model)
+        return sorted([*entries, *(extra or ())], key=lambda e: (e.index, e.sub))
 
     def _require_od(self, model: Any) -> Any:
         od = self.od(model)
@@ -80,7 +126,8 @@ class Face:
 
     def upload_raw(self, model: Any, index: int, sub: int) -> bytes:
         """The bytes of an SDO upload, little endian as the object's type packs them."""
-        value = self.upload(model, index, sub)
+        extra = self._wire(model, index)
+        value = extra.read(index, sub) if extra is not None else self.upload(model, index, sub)
         return encode(self.entry(model, index, sub).dtype, value)
 
     def download_raw(self, model: Any, index: int, sub: int, data: bytes) -> None:
