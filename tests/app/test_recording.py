@@ -467,8 +467,8 @@ def test_a_restarted_rig_continues_the_timeline(tmp_path: Path) -> None:
     assert len(restart) == 1 and "run 2" in restart[0][1]
     second_start = restart[0][0]
     assert second_start >= first_end + recorder.sample_period_us - 1_000
-    esm = rows(chunks, "rig/fastcat/state", "StateChange:state")
-    # The fresh rig's state is recorded again at the start of run 2 (INIT, unpowered).
-    assert value_at(esm, first_end) != esm[0][1]
-    assert value_at(esm, second_start) == esm[0][1]
-    assert max(t for t, _ in esm) <= second_start + S
+    run_led = rows(chunks, "rig/fastcat/led/RUN", "StateChange:state")
+    # The fresh, unpowered rig's state is recorded again at the start of run 2.
+    assert value_at(run_led, first_end) != run_led[0][1]
+    assert value_at(run_led, second_start) == run_led[0][1]
+    assert max(t for t, _ in run_led) <= second_start + S
