@@ -23,6 +23,7 @@ NOISE_NS = 40  # FieldRig: healthy deviation, +- 40 ns around 0
 DRIFT_NS_PER_MS = 25  # FieldRig: a drifting clock leaves the window in 40 ms (1 us window)
 JITTER_FACTOR = 5  # FieldRig: jitter fault: +- 5 windows
 RESYNC_AFTER_US = 500_000  # FieldRig: NOT_SYNCHRONIZED, fault gone -> measure again after
+OUT_OF_WINDOW_CYCLES = 5  # FieldRig: consecutive cycles outside the window before giving up
 
 
 class DcState(enum.Enum):
@@ -66,6 +67,7 @@ class DcUnit:
     deviation_ns: int = 0
     since_us: int = 0  # when the present state was entered
     start_time_us: int | None = None  # START_TIME once the DC slaves are in SAFEOP
+    outside: int = 0  # consecutive steps outside the sync window
 
     def out_of_window(self) -> bool:
         return self.fault == "sync0_lost" or abs(self.deviation_ns) > self.window_ns
@@ -94,7 +96,8 @@ class DcUnit:
         if state is DcState.NOT_SYNCHRONIZED:
             gone = self.fault is None and waited >= RESYNC_AFTER_US
             return DcTrigger.FAULT_GONE if gone else None
-        if state is not DcState.SYNCHRONIZING and self.out_of_window():
+        self.outside = self.outside + 1 if self.out_of_window() else 0
+        if state is not DcState.SYNCHRONIZING and self.outside >= OUT_OF_WINDOW_CYCLES:
             return DcTrigger.OUT_OF_WINDOW
         if state is DcState.SYNCHRONIZING:
             return DcTrigger.MEASURED if waited >= SYNC_MEASURE_US else None
@@ -114,7 +117,7 @@ class DcUnit:
             return None
         before, self.state, self.since_us = self.state, target, now_us
         if target in (DcState.SYNCHRONIZING, DcState.IDLE):
-            self.deviation_ns, self.start_time_us = 0, None
+            self.deviation_ns, self.start_time_us, self.outside = 0, None, 0
         return before, target
 
     def snapshot(self) -> dict[str, object]:

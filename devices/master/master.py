@@ -282,8 +282,10 @@ class EtherCatMaster(StartupMixin, DeviceModel):
             if not (self._connected(link.position) and link.slave.reachable()):
                 self._lose(link)
                 continue
-            if not link.present and self._find(link):
-                recovered.append(link.position)
+            if not link.present:
+                if self._find(link):
+                    recovered.append(link.position)
+                self._watch(link)  # the state it is found in
             if self.external or lost or not cycle:
                 continue
             link.slave.exchange_frame(now_us)
@@ -293,7 +295,8 @@ class EtherCatMaster(StartupMixin, DeviceModel):
         if recovered:
             self._event(NetworkRecovery(now_us, self.device_id, positions=tuple(recovered)))
             self._log(None, "recovery", positions=", ".join(map(str, recovered)))
-        self._watch_states()
+        if self.external or (cycle and not lost):  # states are read with the frames
+            self._watch_states()
         self._step_dc(dt_us)
         self.hooks.run()
 
@@ -341,29 +344,29 @@ class EtherCatMaster(StartupMixin, DeviceModel):
 
     def _watch_states(self) -> None:
         """Slave state changes, and the first OP of each slave / of the network (resync)."""
-        now = self.now_us
         for link in self.links:
-            if not link.present:
-                continue
-            slave = link.slave
-            state = slave.al_state
-            if state is not link.seen:
-                before = link.seen.label if link.seen is not None else ""
-                link.seen = state
-                link.counters.state_changes += bool(before)
-                self._event(SlaveStateChange(now, self.device_id, position=link.position,
-                                             address=slave.station_address,
-                                             from_state=before, to_state=state.label,
-                                             code=slave.al_status_code))
-            if state is AlState.OP and not link.reached_op:
-                link.reached_op = True
-                self._event(Resync(now, self.device_id, position=link.position,
-                                   address=slave.station_address, slave=slave.device_id))
+            if link.present:
+                self._watch(link)
         everyone = bool(self.links) and all(
             link.present and link.slave.al_state is AlState.OP for link in self.links)
         if everyone and not self.network_op:
             self.network_op = True
-            self._event(Resync(now, self.device_id, position=-1))
+            self._event(Resync(self.now_us, self.device_id, position=-1))
+
+    def _watch(self, link: SlaveLink) -> None:
+        slave, now = link.slave, self.now_us
+        state = slave.al_state
+        if state is not link.seen:
+            before = link.seen.label if link.seen is not None else ""
+            link.seen = state
+            link.counters.state_changes += bool(before)
+            self._event(SlaveStateChange(now, self.device_id, position=link.position,
+                                         address=slave.station_address, from_state=before,
+                                         to_state=state.label, code=slave.al_status_code))
+        if state is AlState.OP and not link.reached_op:
+            link.reached_op = True
+            self._event(Resync(now, self.device_id, position=link.position,
+                               address=slave.station_address, slave=slave.device_id))
 
     def _step_dc(self, dt_us: int) -> None:
         dc = self.dc
