@@ -1,0 +1,349 @@
+"""Process A's side of the EtherCAT wire: the rig's line behind process B's emulated ESCs.
+
+:class:`WireBridge` describes the slaves of the rig's ``[master] line`` (their faces), starts
+process B (``wire_process.run``) with those descriptions, switches the built-in master to
+external mode and then carries messages both ways (tags in :mod:`app.ethercat_wire.messages`):
+
+- a pump thread only moves messages between the pipe and two queues;
+- everything that touches a model runs in the simulation thread, in a step listener: AL
+  control writes go to the master's ``external_request`` (the slave model decides), mailbox
+  messages to the slave's :class:`~app.ethercat_wire.coe.CoeServer`, SM2 images to its face,
+  frame counts to ``external_frame`` (spread over the reporting interval, so a model sees the
+  master's cycle period, not bursts), statistics to ``external_stats``;
+- back to B go the AL status / code when they change, the SM3 image when it changes (at most
+  every ``INPUTS_PERIOD_US``), emergencies as CoE mailbox messages, and ``link`` when a slave
+  drops off the line (cable pulled, powered off: from that position on nothing answers).
+
+Positions are 0-based line positions; the line is re-read every step, so a rig reset in place
+(scenario player) gets fresh faces and is switched to external mode again.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import multiprocessing
+import socket
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from app.ethercat_wire import messages as msg
+from app.ethercat_wire.coe import CoeServer
+from app.ethercat_wire.description import SlaveDescription
+from app.ethercat_wire.faces import Face, face_for
+from app.rig_config import RigConfigError
+from devices.ethercat import AlState
+
+logger = logging.getLogger(__name__)
+
+ETHERTYPE_ECAT = 0x88A4
+READY_TIMEOUT_S = 30.0  # models ready (FastCAT scan) and process B up, each
+INPUTS_PERIOD_US = 2_000  # SM3 image refreshed at most this often (simulated time)
+UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
+AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
+MAX_PENDING_FRAMES = 256  # frames reported but not yet handed to the models, per slave
+PUMP_POLL_S = 0.001
+OPTION = "--ethercat-if"
+
+Spawn = Callable[[str, Sequence[SlaveDescription], Any], Any]
+
+
+def check_interface(iface: str) -> None:
+    """The interface exists and this process may open a raw EtherCAT socket on it."""
+    try:
+        socket.if_nametoindex(iface)
+    except OSError:
+        names = ", ".join(name for _i, name in socket.if_nameindex()) or "none"
+        raise RigConfigError(OPTION, "", f"no network interface '{iface}' (interfaces: "
+                                         f"{names})") from None
+    try:
+        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE_ECAT))
+    except PermissionError:
+        raise RigConfigError(OPTION, "", "a raw EtherCAT socket needs CAP_NET_RAW: run as "
+                                         "root, or give Python the capability (sudo setcap "
+                                         "cap_net_raw+ep <the python binary>)") from None
+    sock.close()
+
+
+def spawn_wire_process(iface: str, descriptions: Sequence[SlaveDescription], conn: Any) -> Any:
+    """Process B in a fresh interpreter (the ``spawn`` start method of the wire contract)."""
+    from app.ethercat_wire import wire_process
+
+    ctx = multiprocessing.get_context("spawn")
+    proc = ctx.Process(target=wire_process.run, args=(iface, list(descriptions), conn),
+                       name="fieldrig-ethercat-wire", daemon=True)
+    proc.start()
+    return proc
+
+
+@dataclass
+class _Slave:
+    position: int
+    model: Any
+    face: Face
+    coe: CoeServer
+    status: tuple[int, int] | None = None  # last AL status / code sent
+    inputs: bytes | None = None  # last SM3 image sent
+    inputs_due_us: int = 0
+    frames: collections.deque[int] = field(default_factory=collections.deque)  # due times
+
+
+class WireBridge:
+    def __init__(self, runtime: Any, iface: str, spawn: Spawn = spawn_wire_process) -> None:
+        self.runtime = runtime
+        self.iface = iface
+        self._spawn = spawn
+        self._conn: Any = None
+        self.process: Any = None
+        self._inbox: collections.deque[tuple[Any, ...]] = collections.deque()
+        self._outbox: collections.deque[tuple[Any, ...]] = collections.deque()
+        self._stop = threading.Event()
+        self._pump_thread: threading.Thread | None = None
+        self._slaves: list[_Slave] = []
+        self._master: Any = None
+        self._link_down: int | None = None
+        self._last_cycle_us: int | None = None
+        self.descriptions: list[SlaveDescription] = []
+        self.ready_iface: str | None = None
+        self.errors: collections.deque[str] = collections.deque(maxlen=50)
+        self.dc: dict[int, dict[str, int]] = {}
+        self.stats: dict[str, Any] = {}
+
+    # ---- life cycle (caller's thread) -------------------------------------------------------
+    def start(self, timeout_s: float = READY_TIMEOUT_S) -> None:
+        """Describe the line, start process B, wait for it, then pump."""
+        self._call(self._attach)
+        deadline = time.monotonic() + timeout_s
+        while not self._call(self._all_ready) and time.monotonic() < deadline:
+            time.sleep(0.05)  # a FastCAT scans its modules for seconds after power-up
+        self.descriptions = self._call(self._describe)
+        parent, child = multiprocessing.get_context("spawn").Pipe()
+        self._conn = parent
+        self.process = self._spawn(self.iface, self.descriptions, child)
+        self._await_ready(deadline=time.monotonic() + timeout_s)
+        self._call(lambda: self.runtime.add_step_listener(self._on_step))
+        self._pump_thread = threading.Thread(target=self._pump, name="fieldrig-ethercat-pump",
+                                             daemon=True)
+        self._pump_thread.start()
+        logger.info("EtherCAT wire on %s: %d slaves", self.ready_iface,
+                    len(self.descriptions))
+
+    def _await_ready(self, deadline: float) -> None:
+        while time.monotonic() < deadline:
+            if not self._conn.poll(0.05):
+                continue
+            message = self._conn.recv()
+            if message[0] == msg.READY:
+                self.ready_iface = message[1]
+                return
+            if message[0] == msg.ERROR:
+                self._terminate()
+                raise RigConfigError(OPTION, "", f"the EtherCAT wire process failed: "
+                                                 f"{message[1]}")
+            self._inbox.append(message)
+        self._terminate()
+        raise RigConfigError(OPTION, "", "the EtherCAT wire process did not start in time")
+
+    def stop(self) -> None:
+        if self._stop.is_set():
+            return
+        self._stop.set()
+        if self._pump_thread is not None:
+            self._pump_thread.join(timeout=2)
+        try:
+            if self._conn is not None:
+                self._conn.send((msg.STOP,))
+        except (OSError, EOFError, ValueError):
+            pass
+        if self.process is not None and hasattr(self.process, "join"):
+            self.process.join(timeout=2)
+        self._terminate()
+        master = self._master
+        if master is not None and hasattr(master, "set_external"):
+            self.runtime.submit(lambda: master.set_external(False))
+
+    def _terminate(self) -> None:
+        proc = self.process
+        if proc is not None and hasattr(proc, "is_alive") and proc.is_alive():
+            proc.terminate()
+            proc.join(timeout=2)
+
+    def _call(self, fn: Callable[[], Any]) -> Any:
+        return self.runtime.submit(fn).result(timeout=10)
+
+    # ---- the pump (only moves messages) -----------------------------------------------------
+    def _pump(self) -> None:
+        conn = self._conn
+        try:
+            while not self._stop.is_set():
+                while conn.poll(PUMP_POLL_S):
+                    self._inbox.append(conn.recv())
+                while self._outbox:
+                    conn.send(self._outbox.popleft())
+        except (EOFError, OSError) as exc:
+            if not self._stop.is_set():
+                logger.error("EtherCAT wire process gone: %s", exc)
+                self.errors.append(f"wire process gone: {exc}")
+
+    def _send(self, *message: Any) -> None:
+        self._outbox.append(message)
+
+    # ---- simulation thread ------------------------------------------------------------------
+    def _attach(self) -> None:
+        master = self.runtime.rig.devices.get("master")
+        if master is None:
+            raise RigConfigError(OPTION, "", "the rig has no EtherCAT line ([master] line)")
+        self._master = master
+        if hasattr(master, "set_external"):
+            master.set_external(True)
+        else:
+            logger.warning("the built-in master has no external mode: it keeps driving the "
+                           "line next to the wire master")
+        line = [link.slave for link in master.links]
+        old = {id(s.model): s for s in self._slaves}
+        self._slaves = [old.get(id(model)) or self._new_slave(pos, model)
+                        for pos, model in enumerate(line)]
+        for pos, s in enumerate(self._slaves):
+            s.position = pos
+
+    @staticmethod
+    def _new_slave(position: int, model: Any) -> _Slave:
+        face = face_for(model)
+        return _Slave(position, model, face, CoeServer(face, model))
+
+    def _all_ready(self) -> bool:
+        return all(s.face.ready(s.model) for s in self._slaves)
+
+    def _describe(self) -> list[SlaveDescription]:
+        return [s.face.describe(s.model) for s in self._slaves]
+
+    def _on_step(self, now_us: int) -> None:
+        if self._stop.is_set():
+            return
+        if self.runtime.rig.devices.get("master") is not self._master:
+            self._attach()  # the rig was rebuilt in place
+        while self._inbox:
+            self._handle(self._inbox.popleft(), now_us)
+        for s in self._slaves:
+            self._serve(s, now_us)
+        down = next((s.position for s in self._slaves if not s.face.reachable(s.model)), None)
+        if down != self._link_down:
+            self._send(msg.LINK, 0, True)
+            if down is not None:
+                self._send(msg.LINK, down, False)
+            self._link_down = down
+
+    def _serve(self, s: _Slave, now_us: int) -> None:
+        while s.frames and s.frames[0] <= now_us:
+            s.frames.popleft()
+            self._frame(s, now_us)
+        for frame in s.face.take_emergencies(s.model):
+            self._send(msg.MAILBOX_REPLY, s.position, s.coe.emergency(frame))
+            note = getattr(self._master, "external_emergency", None)
+            if note is not None:
+                note(s.position, frame)
+        status = s.face.al_status(s.model)
+        if status != s.status:
+            s.status = status
+            self._send(msg.AL_STATUS, s.position, *status)
+        if now_us >= s.inputs_due_us:
+            s.inputs_due_us = now_us + INPUTS_PERIOD_US
+            data = s.face.inputs(s.model)
+            if data and data != s.inputs:
+                s.inputs = data
+                self._send(msg.INPUTS, s.position, data)
+
+    def _frame(self, s: _Slave, now_us: int) -> None:
+        external = getattr(self._master, "external_frame", None)
+        if external is not None:
+            external(s.position)
+        else:
+            s.model.exchange_frame(now_us)
+
+    def _slave(self, position: int) -> _Slave | None:
+        if 0 <= position < len(self._slaves):
+            return self._slaves[position]
+        logger.info("EtherCAT wire: no slave at line position %s", position)
+        return None
+
+    def _handle(self, message: tuple[Any, ...], now_us: int) -> None:
+        tag = message[0]
+        if tag == msg.READY:
+            self.ready_iface = message[1]
+        elif tag == msg.ERROR:
+            logger.error("EtherCAT wire: %s", message[1])
+            self.errors.append(str(message[1]))
+        elif tag == msg.CYCLE:
+            self._schedule_frames(message[1], now_us)
+        elif tag == msg.STATS:
+            self._stats(message[1])
+        elif tag in (msg.AL_CONTROL, msg.MAILBOX, msg.OUTPUTS, msg.DC):
+            s = self._slave(message[1])
+            if s is not None:
+                self._for_slave(s, tag, message[2])
+        else:
+            logger.info("EtherCAT wire: unknown message %r", tag)
+
+    def _for_slave(self, s: _Slave, tag: str, payload: Any) -> None:
+        if tag == msg.AL_CONTROL:
+            self._al_control(s, int(payload))
+        elif tag == msg.MAILBOX:
+            for reply in s.coe.handle(bytes(payload)):
+                self._send(msg.MAILBOX_REPLY, s.position, reply)
+        elif tag == msg.OUTPUTS:
+            s.face.apply_outputs(s.model, bytes(payload))
+        else:
+            self.dc[s.position] = dict(payload)
+            note = getattr(self._master, "external_dc", None)
+            if note is not None:
+                note(s.position, dict(payload))
+
+    def _al_control(self, s: _Slave, value: int) -> None:
+        try:
+            state = AlState(value & AL_STATE_MASK)
+        except ValueError:
+            s.face.refuse_unknown_state(s.model, UNKNOWN_STATE)
+            return
+        external = getattr(self._master, "external_request", None)
+        if external is not None:
+            external(s.position, state)  # the master notes it and asks the slave model
+        else:
+            s.face.request_state(s.model, state)
+
+    def _schedule_frames(self, counts: dict[int, int], now_us: int) -> None:
+        """Frames seen since B's last report, spread over as long a span from now on."""
+        last, self._last_cycle_us = self._last_cycle_us, now_us
+        span = now_us - last if last is not None and now_us > last else \
+            round(msg.CYCLE_REPORT_S * 1e6)
+        for position, n in counts.items():
+            s = self._slave(int(position))
+            if s is None or n <= 0:
+                continue
+            period = max(1, span // n)
+            s.frames.extend(now_us + k * period for k in range(n))
+            while len(s.frames) > MAX_PENDING_FRAMES:
+                s.frames.popleft()
+
+    def _stats(self, stats: dict[str, Any]) -> None:
+        self.stats = dict(stats)
+        external = getattr(self._master, "external_stats", None)
+        if external is not None:
+            external(frames=int(stats.get("frames", 0)),
+                     lost_frames=int(stats.get("lost_frames", 0)),
+                     cycle_us=round(float(stats.get("cycle_us", 0))),
+                     wkc_errors=int(stats.get("wkc_errors", 0)))
+
+
+def start_wire(runtime: Any, iface: str, rigs: int = 1) -> WireBridge:
+    """``--ethercat-if IFACE``: check the interface, then run the wire (RigConfigError if not)."""
+    if rigs != 1:
+        raise RigConfigError(OPTION, "", "one rig per interface: serve a single rig")
+    check_interface(iface)
+    bridge = WireBridge(runtime, iface)
+    bridge.start()
+    print(f"FieldRig: EtherCAT wire on {bridge.ready_iface} ({len(bridge.descriptions)} "
+          f"slaves)", flush=True)
+    return bridge

@@ -1,0 +1,184 @@
+"""The bridge in process A with a fake process B: the test holds B's end of the pipe.
+
+Messages are the wire contract's (app/ethercat_wire/messages.py); the rig runs in a live
+runtime, so every model access goes through the simulation thread as in the app. Checked:
+descriptions handed to B, the built-in master switched to external mode, AL control answered
+with the model's AL status, SDO over the mailbox, outputs reaching the model, frames and
+statistics reaching the master panel, a pulled cable as ``link``, the FastCAT emergency of
+seed 000 §7.1 as a CoE mailbox message, and ``stop``.
+"""
+
+from __future__ import annotations
+
+import struct
+import time
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+from test_faces import LINE, line_rig
+
+from app.ethercat_wire import messages as msg
+from app.ethercat_wire.bridge import WireBridge, check_interface
+from app.rig_config import RigConfigError
+from app.runtime import Runtime
+
+WAIT_S = 10.0
+
+
+class FakeB:
+    """Process B reduced to its end of the pipe."""
+
+    def __init__(self) -> None:
+        self.conn: Any = None
+        self.descriptions: list[Any] = []
+        self.seen: list[tuple[Any, ...]] = []
+
+    def spawn(self, iface: str, descriptions: Any, conn: Any) -> FakeB:
+        self.conn, self.descriptions = conn, list(descriptions)
+        conn.send((msg.READY, iface))
+        return self
+
+    def is_alive(self) -> bool:
+        return False
+
+    def join(self, timeout: float | None = None) -> None:
+        return None
+
+    def send(self, *message: Any) -> None:
+        self.conn.send(message)
+
+    def expect(self, wanted: Callable[[tuple[Any, ...]], bool]) -> tuple[Any, ...]:
+        """The first message (new or already seen) that ``wanted`` accepts."""
+        for message in self.seen:
+            if wanted(message):
+                self.seen.remove(message)
+                return message
+        deadline = time.monotonic() + WAIT_S
+        while time.monotonic() < deadline:
+            if self.conn.poll(0.01):
+                message = self.conn.recv()
+                if wanted(message):
+                    return message
+                self.seen.append(message)
+        raise AssertionError(f"no such message; seen: {self.seen[-10:]}")
+
+
+def sdo_upload(index: int, sub: int, counter: int = 1) -> bytes:
+    body = struct.pack("<HBHB", 2 << 12, 0x40, index, sub) + bytes(4)
+    return struct.pack("<HHBB", len(body), 0, 0, 3 | counter << 4) + body
+
+
+@pytest.fixture
+def wire():
+    runtime = Runtime(line_rig("OP"))
+    runtime.start()
+    b = FakeB()
+    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
+    bridge.start(timeout_s=WAIT_S)
+    yield runtime, bridge, b
+    bridge.stop()
+    runtime.stop()
+
+
+def sim(runtime: Runtime, fn: Callable[[], Any]) -> Any:
+    return runtime.submit(fn).result(timeout=WAIT_S)
+
+
+def master_view(runtime: Runtime) -> Any:
+    return runtime.rig.devices["master"]
+
+
+def test_start_describes_the_line_and_takes_over_from_the_built_in_master(wire):
+    runtime, bridge, b = wire
+    assert [d.device_id for d in b.descriptions] == list(LINE)
+    assert [d.name for d in b.descriptions] == ["FastCAT", "TRS-CAT", "CPX-E-EC",
+                                                "SelemaDriveECAT"]
+    assert bridge.ready_iface == "veth-test"
+    assert sim(runtime, lambda: master_view(runtime).external) is True
+    for pos in range(len(LINE)):
+        b.expect(lambda m, pos=pos: m[:2] == (msg.AL_STATUS, pos))
+        b.expect(lambda m, pos=pos: m[:2] == (msg.INPUTS, pos))
+
+
+def test_al_control_is_answered_with_the_models_al_status(wire):
+    runtime, _bridge, b = wire
+    b.expect(lambda m: m == (msg.AL_STATUS, 0, 8, 0))
+    b.send(msg.AL_CONTROL, 0, 0x02)
+    b.expect(lambda m: m == (msg.AL_STATUS, 0, 2, 0))
+    assert sim(runtime, lambda: master_view(runtime).links[0].requested.name) == "PREOP"
+    b.send(msg.AL_CONTROL, 2, 0x05)  # no such state: 0x0012 on the model's ESM
+    b.expect(lambda m: m[:2] == (msg.AL_STATUS, 2) and m[3] == 0x0012)
+
+
+def test_sdo_read_of_0x1018_on_every_slave(wire):
+    runtime, _bridge, b = wire
+    for pos, device in enumerate(LINE):
+        b.send(msg.MAILBOX, pos, sdo_upload(0x1018, 2))
+        reply = b.expect(lambda m, pos=pos: m[:2] == (msg.MAILBOX_REPLY, pos))[2]
+        model = runtime.rig.devices[device]
+        expected = sim(runtime, lambda model=model: model.od.peek(0x1018, 2))
+        assert reply[8] == 0x43 and int.from_bytes(reply[12:16], "little") == expected
+
+
+def test_outputs_reach_the_model(wire):
+    """Seed 000 §6.28: DO16 (module 2) channel 1 = SM2 bit 1 (after 0x16FF's bit 0)."""
+    runtime, _bridge, b = wire
+    b.send(msg.OUTPUTS, 0, (1 << 1).to_bytes(3, "little"))
+    wait_for(lambda: runtime.frame.snapshot["devices"]["fastcat"]["rail"][1]["do"][0])
+
+
+def wait_for(check: Callable[[], bool]) -> None:
+    deadline = time.monotonic() + WAIT_S
+    while not check():
+        if time.monotonic() > deadline:
+            raise AssertionError("condition not met in time")
+        time.sleep(0.02)
+
+
+def test_frames_and_stats_reach_the_master(wire):
+    """Frames reported by B reach each slave model through the master (external_frame)."""
+    runtime, _bridge, b = wire
+    drive = runtime.rig.devices["drive_ecat-ecat"]
+    before = sim(runtime, lambda: (master_view(runtime).frames, drive.frames))
+    b.send(msg.CYCLE, {pos: 3 for pos in range(len(LINE))})
+    wait_for(lambda: sim(runtime, lambda: drive.frames) >= before[1] + 3)
+    assert sim(runtime, lambda: master_view(runtime).frames) >= before[0] + 3 * len(LINE)
+    b.send(msg.STATS, {"frames": 1234, "lrw": 1200, "cycle_us": 4000.0, "wkc_errors": 2})
+    wait_for(lambda: runtime.frame.snapshot["devices"]["master"]["stats"]["cycle_us"] == 4000)
+    snap = runtime.frame.snapshot["devices"]["master"]
+    assert snap["external"] is True
+    assert snap["slaves"][0]["counters"]["wkc_errors"] == 2
+
+
+def test_a_pulled_cable_takes_the_slaves_behind_it_off_the_wire(wire):
+    runtime, _bridge, b = wire
+    runtime.command("master", "pull_cable", {"cable": 2}).result(timeout=WAIT_S)
+    b.expect(lambda m: m == (msg.LINK, 2, False))
+    runtime.command("master", "plug_cable", {"cable": 2}).result(timeout=WAIT_S)
+    b.expect(lambda m: m == (msg.LINK, 0, True))
+
+
+def test_fastcat_emergency_reaches_the_mailbox(wire):
+    """Seed 000 §7.1: module 2 stops answering -> FF00 / 81 / 02 00 00 04 00."""
+    runtime, _bridge, b = wire
+    runtime.command("fastcat/2", "module_failure", {"active": True}).result(timeout=WAIT_S)
+    reply = b.expect(lambda m: m[:2] == (msg.MAILBOX_REPLY, 0) and m[2][6:8] == b"\x00\x10")
+    assert reply[2][8:].hex(" ") == "00 ff 81 02 00 00 04 00"
+
+
+def test_stop_tells_b_and_hands_the_line_back():
+    runtime = Runtime(line_rig("OP"))
+    runtime.start()
+    b = FakeB()
+    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
+    bridge.start(timeout_s=WAIT_S)
+    bridge.stop()
+    b.expect(lambda m: m == (msg.STOP,))
+    wait_for(lambda: sim(runtime, lambda: master_view(runtime).external) is False)
+    runtime.stop()
+
+
+def test_a_missing_interface_is_a_clear_error():
+    with pytest.raises(RigConfigError, match="no network interface 'fieldrig-nope0'"):
+        check_interface("fieldrig-nope0")
