@@ -61,6 +61,10 @@ def _serve_parser() -> argparse.ArgumentParser:
     p.add_argument("--modbus-framer", choices=("socket", "rtu"), default="socket",
                    help="Modbus TCP ('socket') or RTU frames over TCP ('rtu', as the real "
                         "drive speaks RTU)")
+    # EtherCAT wire (issue 8, app/ethercat_wire/bridge.py)
+    p.add_argument("--ethercat-if", default=None, metavar="IFACE",
+                   help="put the rig's EtherCAT line on this network interface (raw frames, "
+                        "needs CAP_NET_RAW) for a real master; off by default")
     return p
 
 
@@ -175,6 +179,10 @@ def _serve(args: argparse.Namespace) -> int:
             extras.append(_start_modbus(one.runtime, args, args.modbus_port + i))
             extras.append(_start_canopen(one.runtime, args,
                                          _can_channel(args, i) if count > 1 else None))
+            if args.ethercat_if:  # EtherCAT wire (issue 8, app/ethercat_wire/bridge.py)
+                from app.ethercat_wire.bridge import start_wire
+
+                extras.append(start_wire(one.runtime, args.ethercat_if, rigs=count))
             print(f"FieldRig: rig {i + 1} '{rig.name}' at {one.url}"
                   + (f" (recording {record})" if record else ""), flush=True)
         if access_token is not None:
