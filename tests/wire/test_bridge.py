@@ -115,7 +115,8 @@ def test_sdo_read_of_0x1018_on_every_slave(wire):
     runtime, _bridge, b = wire
     for pos, device in enumerate(LINE):
         b.send(msg.MAILBOX, pos, sdo_upload(0x1018, 2))
-        reply = b.expect(lambda m, pos=pos: m[:2] == (msg.MAILBOX_REPLY, pos))[2]
+        reply = b.expect(lambda m, pos=pos: m[:2] == (msg.MAILBOX_REPLY, pos)
+                         and m[2][6:8] == b"\x00\x30")[2]  # an SDO response, not an EMCY
         model = runtime.rig.devices[device]
         expected = sim(runtime, lambda model=model: model.od.peek(0x1018, 2))
         assert reply[8] == 0x43 and int.from_bytes(reply[12:16], "little") == expected
