@@ -7,6 +7,12 @@ A step is one of
   module); the device must be in the rig;
 - ``target = "fastcat/2"`` + ``action = "unplug"`` + the action's arguments as further keys.
 
+``[[on]]`` tables react to the EtherCAT master's events (its ECAT_Notify hook, seed 003):
+``event = "resync"`` (or ``slave_state``, ``comm_error``, ``coe_emergency``,
+``network_recovery``), optional ``slave = "trscat"`` (only events about that slave), optional
+``once = true``, and a command (``target``, ``action``, arguments) applied at the end of the
+master's step in which the event happened.
+
 Each step has ``at = <seconds>`` (absolute simulated time) or ``after = <seconds>`` (relative to
 the previous step); ``expect_error = true`` marks a command that must be refused (e.g. writing a
 read-only object, for training). See docs/scenarios.md.
@@ -47,6 +53,23 @@ class Step:
     expect_error: bool = False
 
 
+REACTION_EVENTS = ("slave_state", "comm_error", "coe_emergency", "resync",
+                   "network_recovery")
+
+
+@dataclass(frozen=True)
+class Reaction:
+    """``[[on]]``: a command run when the master raises an event (seed 003 ECAT_Notify)."""
+
+    number: int  # 1-based, in file order
+    event: str
+    slave: str  # device id of the slave the event must be about; "" = any
+    target: str
+    action: str
+    args: dict[str, Any] = field(default_factory=dict)
+    once: bool = False
+
+
 @dataclass(frozen=True)
 class Scenario:
     source: str
@@ -55,6 +78,7 @@ class Scenario:
     rig: str | None  # rig file path, resolved; None = the default rig
     steps: tuple[Step, ...]
     end_us: int
+    reactions: tuple[Reaction, ...] = ()
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -75,9 +99,10 @@ def parse_scenario(text: str, source: str = "<scenario>",
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise fail("", f"not valid TOML: {exc}") from None
-    unknown = sorted(set(data) - {"scenario", "step"})
+    unknown = sorted(set(data) - {"scenario", "step", "on"})
     if unknown:
-        raise fail(unknown[0], "unknown key (a scenario has [scenario] and [[step]] tables)")
+        raise fail(unknown[0], "unknown key (a scenario has [scenario], [[step]] and [[on]] "
+                               "tables)")
     head = data.get("scenario", {})
     if not isinstance(head, Mapping):
         raise fail("scenario", "must be a table")
@@ -101,7 +126,11 @@ def parse_scenario(text: str, source: str = "<scenario>",
         raise fail("scenario.duration_s", f"ends at {end / US} s, before the last step at "
                                           f"{last / US} s")
     ordered = tuple(sorted(steps, key=lambda s: (s.t_us, s.number)))
-    return Scenario(source, name, description, rig, ordered, end)
+    raw_on = data.get("on", [])
+    if not isinstance(raw_on, list):
+        raise fail("on", "must be an array of tables: write [[on]]")
+    reactions = tuple(_reaction(i, raw, fail) for i, raw in enumerate(raw_on))
+    return Scenario(source, name, description, rig, ordered, end, reactions)
 
 
 MAX_SECONDS = 10 * 24 * 3600.0  # ten simulated days: far beyond any scenario
@@ -169,6 +198,24 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
                    expect_error=expect_error)
 
 
+def _reaction(i: int, raw: Any, fail: Callable[[str, str], ScenarioError]) -> Reaction:
+    key = f"on[{i}]"
+    if not isinstance(raw, Mapping):
+        raise fail(key, "must be a table")
+    event = _typed(raw, "event", str, "", fail, f"{key}.event")
+    if event not in REACTION_EVENTS:
+        raise fail(f"{key}.event", f"{event!r} is not a master event "
+                                   f"({', '.join(REACTION_EVENTS)})")
+    target = _typed(raw, "target", str, None, fail, f"{key}.target")
+    action = _typed(raw, "action", str, None, fail, f"{key}.action")
+    if target is None or action is None:
+        raise fail(key, "needs target = \"device\" and action = \"...\"")
+    args = {k: v for k, v in raw.items()
+            if k not in {"event", "slave", "target", "action", "once"}}
+    return Reaction(i + 1, event, _typed(raw, "slave", str, "", fail, f"{key}.slave"), target,
+                    action, args, _typed(raw, "once", bool, False, fail, f"{key}.once"))
+
+
 def _focus_target(text: str, fail: Callable[[str, str], ScenarioError], path: str) -> str:
     """``device`` or ``device:N`` (``device/N`` is accepted, as command targets write it)."""
     try:
@@ -191,6 +238,49 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: step {step.number} (at "
                                 f"{step.t_us / US:g} s): {exc}") from None
+    if scenario.reactions and "master" not in rig.devices:
+        raise ScenarioError(f"{scenario.source}: [[on]] needs an EtherCAT master in the rig")
+    for reaction in scenario.reactions:
+        try:
+            rig.check(reaction.target, reaction.action, reaction.args)
+            if reaction.slave:
+                rig.device(reaction.slave)
+        except CommandError as exc:
+            raise ScenarioError(f"{scenario.source}: on[{reaction.number - 1}]: {exc}") \
+                from None
+
+
+def install_reactions(scenario: Scenario, rig: Rig, failures: list[str]) -> None:
+    """Register the scenario's ``[[on]]`` tables on the master's ECAT_Notify hook."""
+    if not scenario.reactions:
+        return
+    master: Any = rig.devices["master"]
+    fired: set[int] = set()
+
+    def about(event: Event) -> str:
+        position = getattr(event, "position", -1)
+        if position is None or not 0 <= position < len(master.links):
+            return ""
+        return str(master.links[position].slave.device_id)
+
+    def react(event: Event) -> None:
+        for r in scenario.reactions:
+            if r.event != event.kind or (r.once and r.number in fired):
+                continue
+            if r.slave and about(event) != r.slave:
+                continue
+            fired.add(r.number)
+            now = rig.clock.now_us
+            rig.pending.append(LogLine(now, "scenario", text=f"on[{r.number - 1}] "
+                                       f"{event.kind}: {r.target} {r.action}"))
+            try:
+                rig.apply(r.target, r.action, r.args)
+            except (CommandError, SdoAbort) as exc:
+                failures.append(f"on[{r.number - 1}] (at {now / US:g} s): {exc}")
+                rig.pending.append(LogLine(now, "scenario", text=f"on[{r.number - 1}] "
+                                           f"failed: {exc}"))
+
+    master.on_notify(react)
 
 
 @dataclass
@@ -213,6 +303,7 @@ def run_scenario(scenario: Scenario, rig: Rig,
     check_against(scenario, rig)
     events: list[Event] = []
     failures: list[str] = []
+    install_reactions(scenario, rig, failures)
     for step in scenario.steps:
         events.extend(_run_until(rig, step.t_us, on_tick))
         applied = apply_step(step, rig, failures)
