@@ -142,8 +142,9 @@ class ClassroomPanel:
     # ---- connections ------------------------------------------------------------------------
     def _connect(self, client: viser.ClientHandle) -> None:
         self._build(client)
-        if not self.access.open:
-            read_browser_token(client, self.access, self._promoted)
+        if not self.access.open:  # its own thread: it waits for the page to render
+            threading.Thread(target=read_browser_token, name="fieldrig-token", daemon=True,
+                             args=(client, self.access, self._promoted)).start()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:
