@@ -46,6 +46,8 @@ class Esc:
         self.downstream = 0  # visible slaves after this one
         self.sms = R.SmRoles()
         self.fmmus: tuple[R.FmmuMap, ...] = ()
+        self._plan: list[tuple[int, int, int, bool, bool, bool]] = []
+        self._bit_fmmus: tuple[R.FmmuMap, ...] = ()
         self.exchanges = 0  # process-data datagrams that hit this slave's FMMUs
         self._mbx_queue: deque[bytes] = deque()
         self._mbx_full: bytes | None = None  # the message now in SM1
@@ -53,6 +55,7 @@ class Esc:
         self._rx_counter = 0  # last mailbox counter taken from SM0 (1..7; 0 = none yet)
         self._outputs = b""
         self._inputs = b""
+        self.master_time: tuple[int, int] | None = None  # (time written to 0x0910, local ns)
 
     # ---- what process A tells the ESC ----
     def set_al_status(self, status: int, code: int) -> None:
@@ -73,8 +76,8 @@ class Esc:
     # ---- what the master does ----
     def read(self, ado: int, length: int) -> bytes:
         end = ado + length
-        if ado < R.DC_RECEIVE_TIME_PU and end > R.DC_SYSTEM_TIME:
-            dc.refresh_system_time(self.mem, self.clock.local_ns())
+        if ado < R.DC_SPEED_COUNTER and end > R.DC_SYSTEM_TIME:
+            self._dc_read(ado, end)
         data = bytes(self.mem[ado:end])
         mbx = self.sms.mbx_in
         if mbx is not None and self._mbx_full is not None and ado <= mbx.last < end:
@@ -108,10 +111,18 @@ class Esc:
             self._eeprom_command()
         if ado < R.FMMU0 + R.FMMU_SIZE * R.FMMU_MAX and end > R.FMMU0:
             self.fmmus = R.decode_fmmus(self.mem, self.desc.fmmu_count)
+            self._replan()
         if ado < R.SM0 + R.SM_SIZE * R.SM_MAX and end > R.SM0:
             self._sm_config_written(ado, end)
         if ado >= R.DC_RECEIVE_TIME_PORT0 and end <= R.DC_CYCLE0 + 8:
             self._dc_write(ado, end, data)
+
+    def _dc_read(self, ado: int, end: int) -> None:
+        if ado < R.DC_RECEIVE_TIME_PU and end > R.DC_SYSTEM_TIME:
+            dc.refresh_system_time(self.mem, self.clock.local_ns())
+        if end > R.DC_SYSTEM_DIFF and self.master_time is not None:
+            dc.take_master_time(self.mem, *self.master_time)
+            self.master_time = None
 
     def _dc_write(self, ado: int, end: int, data: bytes) -> None:
         if not self.desc.dc_supported:
@@ -120,6 +131,7 @@ class Esc:
             dc.latch(self.mem, self.clock.local_ns(), self.index, self.downstream)
         if ado <= R.DC_SYSTEM_TIME and end >= R.DC_SYSTEM_TIME + 4:
             raw = bytes(data[R.DC_SYSTEM_TIME - ado:R.DC_SYSTEM_TIME - ado + 8]).ljust(8, b"\0")
+            self.master_time = None
             dc.take_master_time(self.mem, _U64.unpack(raw)[0], self.clock.local_ns())
         if dc.touches_sync(ado, end):
             self.outbox.append((messages.DC, self.position, dc.sync_settings(self.mem)))
@@ -155,6 +167,7 @@ class Esc:
     def _sm_config_written(self, ado: int, end: int) -> None:
         before = self.sms
         self.sms = R.decode_sms(self.mem, max(4, len(self.desc.sync_managers)))
+        self._replan()
         if before.mbx_in != self.sms.mbx_in:
             # a disabled or moved SM1 loses what it held (a new master starts clean)
             self._mbx_full = None
@@ -228,33 +241,55 @@ class Esc:
             self.mem[sm.start:sm.start + n] = self._inputs[:n]
 
     # ---- logical addressing through the FMMUs ----
+    def _replan(self) -> None:
+        """Byte-wise FMMUs as plain tuples for the cyclic path: (log start, log end, phys
+        start, readable, writable, plain). `plain` False: the physical range holds a mailbox
+        end or the outputs SM, so the access goes through the side effects."""
+        watched = [sm for sm in (self.sms.mbx_in, self.sms.mbx_out, self.sms.outputs)
+                   if sm is not None]
+        plan = []
+        for fm in self.fmmus:
+            if fm.bits is not None:
+                continue
+            p_end = fm.phys_start + fm.log_end - fm.log_start
+            plain = not any(sm.start < p_end and sm.end > fm.phys_start for sm in watched)
+            plan.append((fm.log_start, fm.log_end, fm.phys_start,
+                         bool(fm.kind & R.FMMU_READ), bool(fm.kind & R.FMMU_WRITE), plain))
+        self._plan = plan
+        self._bit_fmmus = tuple(fm for fm in self.fmmus if fm.bits is not None)
+
     def logical(self, cmd: int, address: int, frame: bytearray, offset: int, length: int) -> int:
         """Apply LRD/LWR/LRW [address, address+length) to this slave; the WKC increment."""
         read = wrote = False
         end = address + length
-        for fm in self.fmmus:
-            lo = max(address, fm.log_start)
-            hi = min(end, fm.log_end)
+        mem = self.mem
+        can_write = cmd != Cmd.LRD
+        can_read = cmd != Cmd.LWR
+        for log_start, log_end, phys, readable, writable, plain in self._plan:
+            lo = address if address > log_start else log_start
+            hi = end if end < log_end else log_end
             if lo >= hi:
                 continue
-            if fm.bits is not None:
-                r, w = _bit_map(self.mem, fm, cmd, frame, offset - address, lo, hi)
-                read |= r
-                wrote |= w
-                if w:
-                    span = fm.log_end - fm.log_start + 1
-                    self._after_ram_write(fm.phys_start, fm.phys_start + span)
-                continue
             f0 = offset + lo - address
-            p0 = fm.phys_start + lo - fm.log_start
+            p0 = phys + lo - log_start
             n = hi - lo
-            if fm.kind & R.FMMU_WRITE and cmd != Cmd.LRD:
-                self.mem[p0:p0 + n] = frame[f0:f0 + n]
-                self._after_ram_write(p0, p0 + n)
+            if writable and can_write:
+                mem[p0:p0 + n] = frame[f0:f0 + n]
+                if not plain:
+                    self._after_ram_write(p0, p0 + n)
                 wrote = True
-            if fm.kind & R.FMMU_READ and cmd != Cmd.LWR:
-                frame[f0:f0 + n] = self.read(p0, n)
+            if readable and can_read:
+                frame[f0:f0 + n] = mem[p0:p0 + n] if plain else self.read(p0, n)
                 read = True
+        for fm in self._bit_fmmus:
+            if fm.log_start >= end or fm.log_end <= address:
+                continue
+            lo, hi = max(address, fm.log_start), min(end, fm.log_end)
+            r, w = _bit_map(mem, fm, cmd, frame, offset - address, lo, hi)
+            read |= r
+            wrote |= w
+            if w:
+                self._after_ram_write(fm.phys_start, fm.phys_start + fm.log_end - fm.log_start + 1)
         if read or wrote:
             self.exchanges += 1
         if cmd == Cmd.LRW:
@@ -402,10 +437,24 @@ class Line:
     def _read_multiple_write(self, frame: bytearray, dg: Datagram, is_reader) -> int:
         """ARMW / FRMW: the addressed slave reads into the frame, every other one writes what
         the frame then carries (how a master spreads the reference clock's time)."""
+        if dg.ado == R.DC_SYSTEM_TIME and dg.length in (4, 8):
+            return self._spread_time(frame, dg, is_reader)
         wkc = 0
         for i, esc in enumerate(self.visible):
             wkc += self._access(esc, dg.cmd, frame, dg, 1 if is_reader(i, esc) else 2)
         return wkc
+
+    def _spread_time(self, frame: bytearray, dg: Datagram, is_reader) -> int:
+        """The every-cycle drift datagram, kept cheap: the others only note the time they got
+        (their 0x092C difference is worked out if a master ever reads it)."""
+        off, n = dg.offset, dg.length
+        local = self.visible[0].clock.local_ns()
+        for i, esc in enumerate(self.visible):
+            if is_reader(i, esc):
+                frame[off:off + n] = esc.read(dg.ado, n)
+            elif esc.desc.dc_supported:
+                esc.master_time = (int.from_bytes(frame[off:off + n], "little"), local)
+        return len(self.visible)
 
     def _broadcast(self, frame: bytearray, dg: Datagram) -> None:
         off, n = dg.offset, dg.length

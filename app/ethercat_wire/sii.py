@@ -44,6 +44,8 @@ def crc8(data: bytes) -> int:
 
 
 def sm_type(sm: SyncManager) -> int:
+    if sm.length == 0 and sm.start == 0:
+        return 0  # unused
     mailbox = (sm.control & 0x03) == R.SM_MODE_MAILBOX
     writes = (sm.control & 0x0C) == R.SM_DIR_WRITE
     if mailbox:
