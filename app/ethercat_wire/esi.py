@@ -1,0 +1,173 @@
+"""ESI files (EtherCAT Slave Information, ETG.2000 XML) for the slaves of a rig's line.
+
+Built from the same SlaveDescription as the SII image, so a configurator that imports them
+(TwinCAT, CODESYS, IgH `ethercat` tool users, ...) expects exactly what the wire shows:
+vendor, Type ProductCode / RevisionNo, Name, Fmmu, Sm, RxPdo / TxPdo, Mailbox / CoE, Dc,
+Eeprom. One file per slave of the line.
+
+    python -m app ethercat export-esi [--rig RIG] [--out static/esi/]
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+from app.ethercat_wire import sii
+from app.ethercat_wire.description import Pdo, SlaveDescription
+
+DEFAULT_OUT = Path("static/esi")
+BOOT_LIMIT_US = 20_000_000  # a FastCAT scans its modules for seconds after power-up
+# ETG data type names by bit length (entries of the PDOs; the description has no sign)
+DATA_TYPES = {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}
+SM_NAMES = {sii.SM_TYPE_MBX_OUT: "MBoxOut", sii.SM_TYPE_MBX_IN: "MBoxIn",
+            sii.SM_TYPE_OUTPUTS: "Outputs", sii.SM_TYPE_INPUTS: "Inputs"}
+FMMU_NAMES = {sii.FMMU_OUTPUTS: "Outputs", sii.FMMU_INPUTS: "Inputs",
+              sii.FMMU_MBX_STATE: "MBoxState"}
+COE_FLAGS = (("SdoInfo", 0x02), ("PdoAssign", 0x04), ("PdoConfig", 0x08),
+             ("PdoUpload", 0x10), ("CompleteAccess", 0x20))
+
+
+def hexid(value: int, digits: int = 8) -> str:
+    return f"#x{value:0{digits}X}"
+
+
+def _text(parent: ET.Element, tag: str, text: str, **attrs: str) -> ET.Element:
+    el = ET.SubElement(parent, tag, attrs)
+    el.text = text
+    return el
+
+
+def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int) -> None:
+    el = ET.SubElement(parent, tag, {"Fixed": "1", "Sm": str(sm)})
+    _text(el, "Index", hexid(pdo.index, 4))
+    _text(el, "Name", pdo.name)
+    for e in pdo.entries:
+        entry = ET.SubElement(el, "Entry")
+        _text(entry, "Index", hexid(e.index, 4))
+        if e.index:
+            _text(entry, "SubIndex", str(e.sub))
+        _text(entry, "BitLen", str(e.bits))
+        if e.index:
+            _text(entry, "Name", e.name)
+            _text(entry, "DataType", DATA_TYPES.get(e.bits, f"BIT{e.bits}"))
+
+
+def _sm_number(desc: SlaveDescription, kind: int, default: int) -> int:
+    return next((n for n, sm in enumerate(desc.sync_managers) if sii.sm_type(sm) == kind),
+                default)
+
+
+def device_element(desc: SlaveDescription) -> ET.Element:
+    dev = ET.Element("Device", {"Physics": "YY"})
+    _text(dev, "Type", desc.order_code or desc.name, ProductCode=hexid(desc.product_code),
+          RevisionNo=hexid(desc.revision))
+    _text(dev, "Name", desc.name, LcId="1033")
+    _text(dev, "GroupType", desc.group)
+    fmmus = [sii.FMMU_OUTPUTS, sii.FMMU_INPUTS] + ([sii.FMMU_MBX_STATE] if desc.mailbox else [])
+    for f in fmmus[:desc.fmmu_count]:
+        _text(dev, "Fmmu", FMMU_NAMES[f])
+    for sm in desc.sync_managers:
+        kind = sii.sm_type(sm)
+        attrs = {"StartAddress": hexid(sm.start, 4), "ControlByte": hexid(sm.control, 2),
+                 "Enable": str(sm.enable & 1)}
+        if sm.length:
+            attrs["DefaultSize"] = str(sm.length)
+        _text(dev, "Sm", SM_NAMES.get(kind, ""), **attrs)
+    rx_sm = _sm_number(desc, sii.SM_TYPE_OUTPUTS, 2)
+    tx_sm = _sm_number(desc, sii.SM_TYPE_INPUTS, 3)
+    for pdo in desc.rx_pdos:
+        _pdo(dev, "RxPdo", pdo, rx_sm)
+    for pdo in desc.tx_pdos:
+        _pdo(dev, "TxPdo", pdo, tx_sm)
+    if desc.mailbox is not None:
+        mbx = ET.SubElement(dev, "Mailbox", {"DataLinkLayer": "true"})
+        ET.SubElement(mbx, "CoE", {name: "true" if desc.coe_details & bit else "false"
+                                   for name, bit in COE_FLAGS})
+    if desc.dc_supported:
+        dc = ET.SubElement(dev, "Dc")
+        for name, desc_text, assign in (("FreeRun", "FreeRun/SM-Synchron", 0),
+                                        ("DC", "DC-Synchron", 0x0300)):
+            mode = ET.SubElement(dc, "OpMode")
+            _text(mode, "Name", name)
+            _text(mode, "Desc", desc_text)
+            _text(mode, "AssignActivate", hexid(assign, 4))
+            if assign:
+                _text(mode, "CycleTimeSync0", "0", Factor="1")
+                _text(mode, "ShiftTimeSync0", "0")
+    image = sii.build(desc)
+    eeprom = ET.SubElement(dev, "Eeprom")
+    _text(eeprom, "ByteSize", str(len(image)))
+    _text(eeprom, "ConfigData", image[:14].hex().upper())
+    return dev
+
+
+def document(desc: SlaveDescription, vendor_name: str | None = None) -> ET.ElementTree:
+    root = ET.Element("EtherCATInfo", {
+        "xmlns:xsi": "http://www.w3.org/2001/XMLSchema-instance",
+        "xsi:noNamespaceSchemaLocation": "EtherCATInfo.xsd", "Version": "1.6"})
+    vendor = ET.SubElement(root, "Vendor")
+    _text(vendor, "Id", hexid(desc.vendor_id))
+    _text(vendor, "Name", vendor_name or f"{desc.name} (FieldRig virtual slave)")
+    descriptions = ET.SubElement(root, "Descriptions")
+    group = ET.SubElement(ET.SubElement(descriptions, "Groups"), "Group")
+    _text(group, "Type", desc.group)
+    _text(group, "Name", desc.group, LcId="1033")
+    ET.SubElement(descriptions, "Devices").append(device_element(desc))
+    tree = ET.ElementTree(root)
+    ET.indent(tree)
+    return tree
+
+
+def file_name(desc: SlaveDescription) -> str:
+    return "FieldRig_" + re.sub(r"[^A-Za-z0-9_-]+", "_", desc.name).strip("_") + ".xml"
+
+
+def write(descriptions: list[SlaveDescription], out: Path) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    paths = []
+    for desc in descriptions:
+        path = out / file_name(desc)
+        document(desc).write(path, encoding="ISO-8859-1", xml_declaration=True)
+        paths.append(path)
+    return paths
+
+
+def rig_descriptions(rig: Any) -> list[SlaveDescription]:
+    """The line of a rig as the wire shows it: power on, let the slaves boot, describe."""
+    from app.ethercat_wire.faces import face_for
+
+    for device in rig.devices.values():
+        if "power" in device.ACTIONS:
+            device.apply("power", {"on": True}, None)
+    master = rig.devices.get("master")
+    if master is None:
+        raise ValueError("the rig has no EtherCAT line ([master] line)")
+    line = [(link.slave, face_for(link.slave)) for link in master.links]
+    while not all(face.ready(m) for m, face in line) and rig.clock.now_us < BOOT_LIMIT_US:
+        rig.run_until(rig.clock.now_us + 100_000)
+    return [face.describe(m) for m, face in line]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m app ethercat",
+                                     description="EtherCAT wire tools (issue 8).")
+    sub = parser.add_subparsers(dest="verb", required=True)
+    export = sub.add_parser("export-esi", help="write ESI XML files for the rig's line")
+    export.add_argument("--rig", default=None, help="rig file (default: the default rig)")
+    export.add_argument("--out", default=str(DEFAULT_OUT), help="output folder")
+    args = parser.parse_args(argv)
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+
+    rig = build_rig(load_rig_spec(args.rig or DEFAULT_RIG))
+    for path in write(rig_descriptions(rig), Path(args.out)):
+        print(path)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

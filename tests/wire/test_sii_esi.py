@@ -1,0 +1,74 @@
+"""ESI XML export (ETG.2000 layout) from the same SlaveDescription as the SII image.
+
+A configurator matches a slave by Vendor Id + Type ProductCode / RevisionNo and builds its
+process image from Sm / RxPdo / TxPdo: those must say what the wire shows.
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import replace
+
+from test_esc import description
+
+from app.ethercat_wire import esi, sii
+
+
+def parsed(desc) -> ET.Element:
+    return ET.fromstring(ET.tostring(esi.document(desc).getroot()))
+
+
+def test_identity_and_name():
+    root = parsed(description(3))
+    assert root.findtext("Vendor/Id") == "#x00000ABC"
+    dev = root.find("Descriptions/Devices/Device")
+    typ = dev.find("Type")
+    assert (typ.get("ProductCode"), typ.get("RevisionNo"), typ.text) == (
+        "#x00000103", "#x00020001", "T-3")
+    assert dev.findtext("Name") == "Slave 3"
+    assert dev.findtext("GroupType") == root.findtext("Descriptions/Groups/Group/Type") == "Test"
+
+
+def test_sync_managers_and_fmmus():
+    dev = parsed(description(0)).find("Descriptions/Devices/Device")
+    sms = [(s.text, s.get("StartAddress"), s.get("ControlByte"), s.get("DefaultSize"))
+           for s in dev.findall("Sm")]
+    assert sms == [("MBoxOut", "#x1000", "#x26", "128"), ("MBoxIn", "#x1080", "#x22", "128"),
+                   ("Outputs", "#x1100", "#x64", "2"), ("Inputs", "#x1180", "#x20", "4")]
+    assert [f.text for f in dev.findall("Fmmu")] == ["Outputs", "Inputs", "MBoxState"]
+
+
+def test_pdos_with_entries_and_data_types():
+    dev = parsed(description(0)).find("Descriptions/Devices/Device")
+    rx, tx = dev.find("RxPdo"), dev.find("TxPdo")
+    assert (rx.get("Sm"), rx.findtext("Index"), tx.get("Sm"), tx.findtext("Index")) == (
+        "2", "#x1600", "3", "#x1A00")
+    entry = tx.find("Entry")
+    assert [entry.findtext(t) for t in ("Index", "SubIndex", "BitLen", "DataType")] == [
+        "#x6000", "1", "32", "UDINT"]
+
+
+def test_mailbox_coe_flags_dc_and_eeprom():
+    desc = replace(description(0), coe_details=0x0B)  # SDO, SDO info, PDO config
+    dev = parsed(desc).find("Descriptions/Devices/Device")
+    coe = dev.find("Mailbox/CoE")
+    assert (coe.get("SdoInfo"), coe.get("PdoAssign"), coe.get("PdoConfig")) == (
+        "true", "false", "true")
+    assert [m.findtext("AssignActivate") for m in dev.findall("Dc/OpMode")] == [
+        "#x0000", "#x0300"]
+    image = sii.build(desc)
+    assert dev.findtext("Eeprom/ByteSize") == str(len(image))
+    assert bytes.fromhex(dev.findtext("Eeprom/ConfigData")) == image[:14]
+
+
+def test_no_mailbox_no_dc():
+    dev = parsed(replace(description(0), mailbox=None, dc_supported=False)).find(
+        "Descriptions/Devices/Device")
+    assert dev.find("Mailbox") is None and dev.find("Dc") is None
+    assert [f.text for f in dev.findall("Fmmu")] == ["Outputs", "Inputs"]
+
+
+def test_files_one_per_slave(tmp_path):
+    paths = esi.write([description(0), replace(description(1), name="A/B c")], tmp_path)
+    assert [p.name for p in paths] == ["FieldRig_Slave_0.xml", "FieldRig_A_B_c.xml"]
+    assert ET.parse(paths[1]).getroot().findtext("Descriptions/Devices/Device/Name") == "A/B c"
