@@ -107,6 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if argv[:1] == ["scenario"]:
             return _scenario(_scenario_parser().parse_args(argv[1:]))
+        if argv[:1] == ["ethercat"]:  # issue 8: export-esi (app/ethercat_wire/esi.py)
+            from app.ethercat_wire.esi import main as ethercat_main
+
+            return ethercat_main(argv[1:])
         return _serve(_serve_parser().parse_args(argv))
     except (RigConfigError, ScenarioError) as exc:
         print(f"fieldrig: error: {exc}", file=sys.stderr)
