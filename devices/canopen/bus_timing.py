@@ -147,6 +147,11 @@ class CanLine:
         return True
 
     @property
+    def idle(self) -> bool:
+        """Nothing queued and nothing on the wire."""
+        return not self._waiting and not self._incoming and self._on_wire is None
+
+    @property
     def waiting(self) -> int:
         return len(self._waiting) + len(self._incoming) + (self._on_wire is not None)
 

@@ -75,6 +75,13 @@ class NodeGuard:
         was, self.expired = self.expired, False
         return was
 
+    def expires_by(self, now_us: int) -> bool:
+        """Would :meth:`check` report an expiry at ``now_us``? (It changes nothing.)"""
+        if self.expired or not self.active or not self.life_time_factor \
+                or self.last_request_us is None:
+            return False
+        return now_us > self.last_request_us + self.life_time_us
+
     def check(self, now_us: int) -> int | None:
         """The instant the life time ran out, once per expiry; None otherwise."""
         if self.expired or not self.active or not self.life_time_factor \

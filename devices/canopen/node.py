@@ -61,6 +61,7 @@ NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
 
 class CanOpenNode(ProcessData, DeviceModel):
     KIND = "canopen"
+    SKIP_QUIET = True  # False: every step in full (tests/hardening/test_still_steps.py)
     ACTIONS: ClassVar[dict] = {
         "frame": Action("frame", "A frame from a CANopen master on the bus (NMT, SYNC, SDO, "
                         "RPDO, ...): COB-ID and data bytes in hex, byte 0 first",
@@ -171,20 +172,49 @@ class CanOpenNode(ProcessData, DeviceModel):
     def step(self, now_us: int) -> None:
         super().step(now_us)
         self._t = now_us
-        self._follow_power(now_us)
-        if not self.active:
+        if not (self.SKIP_QUIET and self._quiet(now_us)):
+            self._follow_power(now_us)
+            if not self.active:
+                return
+            if self._boot_at is not None and now_us >= self._boot_at:
+                self._boot(self._boot_at)
+            self._wire(now_us)
+            if self.state is not NmtState.INITIALISATION:
+                self._timers(now_us)
+            self._wire(now_us)
+        elif not self.active:
             return
-        if self._boot_at is not None and now_us >= self._boot_at:
-            self._boot(self._boot_at)
-        self._wire(now_us)
-        if self.state is not NmtState.INITIALISATION:
-            self._timers(now_us)
-        self._wire(now_us)
         second = now_us // 1_000_000
         if second != self._load_mark[0]:
             busy = self.line.busy_us_total
             self.bus_load = (busy - self._load_mark[1]) / 1e6
             self._load_mark = (second, busy)
+
+    def _quiet(self, now_us: int) -> bool:
+        """True when every part of a full step would find nothing to do at ``now_us``: the
+        same power, no boot due, nothing on or for the line, no heartbeat, life-guard expiry,
+        alarm change, emergency or asynchronous TPDO due. Skipping such a step is exact (the
+        idle node of a drive on another bus costs a call; docs/performance.md)."""
+        drive = self.drive
+        if (drive.latched_at_power_up if drive.powered else None) is not self._power_seen:
+            return False
+        if not self.active:
+            return True
+        if self._boot_at is not None or not self.line.idle:
+            return False
+        if self.state is NmtState.INITIALISATION:
+            return True
+        beat = self.heartbeat.next_us
+        if beat is not None and beat <= now_us:
+            return False
+        if self.guard.expires_by(now_us) or drive.alarms.latched != self._known_alarms:
+            return False
+        emcy = self.emcy
+        if emcy.pending or (emcy.last_sent_us is not None
+                            and not allows(self.state, Service.EMCY)):
+            return False
+        return self.state is not NmtState.OPERATIONAL or not any(
+            pdo.valid and pdo.trans_type in ASYNC_TYPES for pdo in self.tpdos)
 
     def _follow_power(self, now_us: int) -> None:
         seen = self.drive.latched_at_power_up if self.drive.powered else None

@@ -101,10 +101,18 @@ del R, N
 DRIVE_ALARMS: dict[int, AlarmSpec] = {a.code: a for a in _DRIVE_ALARMS}
 
 
+_TABLES: dict[str, dict[int, AlarmSpec]] = {}
+
+
 def alarm_table(fieldbus: str) -> dict[int, AlarmSpec]:
-    """Every alarm the drive can raise with the given fieldbus (c9 latched at power-up)."""
-    bus = _PROFINET_ALARMS if fieldbus == "profinet" else _FIELDBUS_ALARMS
-    return {**DRIVE_ALARMS, **{a.code: a for a in bus}}
+    """Every alarm the drive can raise with the given fieldbus (c9 latched at power-up).
+
+    Built once per fieldbus and shared (read every step by the bus adapters): do not modify."""
+    table = _TABLES.get(fieldbus)
+    if table is None:
+        bus = _PROFINET_ALARMS if fieldbus == "profinet" else _FIELDBUS_ALARMS
+        table = _TABLES[fieldbus] = {**DRIVE_ALARMS, **{a.code: a for a in bus}}
+    return table
 
 
 def lookup(fieldbus: str, key: int | str) -> AlarmSpec:
@@ -135,6 +143,7 @@ class AlarmBank:
 
     latched: list[int]
     causes: set[int]
+    changes: int = 0  # counts every change: a drive skipping still steps sees one (stillness.py)
 
     @classmethod
     def empty(cls) -> AlarmBank:
@@ -147,6 +156,7 @@ class AlarmBank:
 
     def latch(self, code: int, lasting_cause: bool) -> bool:
         """Latch an alarm; True when it was not latched before."""
+        self.changes += 1
         if lasting_cause:
             self.causes.add(code)
         if code in self.latched:
@@ -155,10 +165,12 @@ class AlarmBank:
         return True
 
     def remove_cause(self, code: int) -> None:
+        self.changes += 1
         self.causes.discard(code)
 
     def reset(self, table: dict[int, AlarmSpec]) -> list[int]:
         """Alarm reset: drop the resettable alarms whose cause is gone; return them."""
+        self.changes += 1
         cleared = [c for c in self.latched if c not in self.causes and table[c].resettable]
         self.latched = [c for c in self.latched if c not in cleared]
         return cleared

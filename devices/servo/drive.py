@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import logging
 import random
+from collections.abc import Mapping
 from typing import Any
 
 from devices.device import CommandError, DeviceModel
@@ -43,6 +44,7 @@ from devices.servo.registers import (
 )
 from devices.servo.saving import DriveFlash
 from devices.servo.statemachine import DriveStateMachine
+from devices.servo.stillness import StillSteps, may_settle, state_key
 
 __all__ = ["DriveConfig", "ServoDrive"]
 
@@ -55,6 +57,7 @@ SWITCHES = ("neg_limit", "pos_limit", "home")
 
 class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, DeviceModel):
     KIND = "servo"
+    SKIP_STILL = True  # False: every step in full (tests/hardening/test_still_steps.py)
 
     def __init__(self, device_id: str, rng: random.Random, config: DriveConfig,
                  flash: FlashStore) -> None:
@@ -74,6 +77,10 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         self.master_rpm = 0.0
         self.analog_volts = 0.0
         self._t_us = 0
+        # Still steps (devices/servo/stillness.py): the length of the last step if it changed
+        # nothing, and what it found; _touched = something from outside may have changed.
+        self._touched = True
+        self._still = StillSteps()
         self._reset_runtime()
         self.indirect = IndirectAccess(self)
         self.od = build_object_dictionary(self)
@@ -171,6 +178,7 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         return live if live is not None else self.regs[n]
 
     def write_register(self, n: int, value: int) -> None:
+        self._touched = True
         spec = register_spec(n)
         if not spec.writable:
             raise AccessError("readonly", f"R{n:02d} {spec.name} is read-only")
@@ -193,6 +201,7 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         return live if live is not None else self.params[address]
 
     def write_parameter(self, address: int, value: int) -> None:
+        self._touched = True
         if address == SAVE_COMMAND_ADDRESS:
             self.write_save_command(value)
             return
@@ -248,11 +257,13 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
 
     def set_ip_set_point(self, value: int) -> None:
         """0x60C1:1, user units: taken at the next interpolation period (or Sync)."""
+        self._touched = True
         self._require_power()
         self.ip_set_point = value
 
     def set_ip_set_point_16(self, value: int) -> None:
         """0x2002: the low 16 bits; the set-point moves to the nearest value with those bits."""
+        self._touched = True
         self._require_power()
         delta = (value - self.ip_set_point) & 0xFFFF
         self.ip_set_point += delta - 0x10000 if delta >= 0x8000 else delta
@@ -267,6 +278,7 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         return int(max(-0x8000_0000, min(0x7FFF_FFFF, round(value))))
 
     def set_mode(self, mode: int) -> None:
+        self._touched = True
         if mode not in MODE_NAMES:
             raise AccessError("value", f"mode {mode} is not one of "
                                        f"{', '.join(str(m) for m in MODE_NAMES)}")
@@ -281,15 +293,40 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         self.log(f"mode {mode} ({MODE_NAMES[mode]})")
 
     # ---- time -------------------------------------------------------------------------------
+    def touch(self) -> None:
+        """Something from outside changed the drive: the next step runs in full."""
+        self._touched = True
+
+    def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        self._touched = True
+        return super().apply(action, args, module)
+
     def step(self, now_us: int) -> None:
         if now_us < self._t_us:
             raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self._t_us})")
+        span, alarms, still = now_us - self._t_us, self.alarms, self._still
+        if span == still.dt and not self._touched and alarms is still.alarms \
+                and alarms.changes == still.changes and self.SKIP_STILL:
+            self._t_us = self.now_us = now_us  # a repeat of a step that changed nothing
+            return
+        if self._touched:
+            self._touched = False
+            still.restart()
+        before = state_key(self) if span and may_settle(self) and still.due() else None
+        queued = len(self.events.items)
         while self._t_us < now_us:
             dt_us = min(TICK_US, now_us - self._t_us)
             self._t_us += dt_us
             self.now_us = self._t_us
             self._tick(dt_us / 1e6)
         self.now_us = now_us
+        settled = False
+        if before is not None:
+            settled = (not self._touched and len(self.events.items) == queued
+                       and may_settle(self) and state_key(self) == before)
+            still.checked(settled)
+        still.dt = span if settled else None
+        still.alarms, still.changes = self.alarms, self.alarms.changes
 
     def _tick(self, dt: float) -> None:
         lag = self.position_lag_s

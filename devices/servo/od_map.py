@@ -151,6 +151,7 @@ def build_object_dictionary(drive: ServoDrive) -> ObjectDictionary:
         setter = None
         if put is not None:
             def setter(value: Any, put: Callable[[Any], None] = put) -> None:
+                drive.touch()  # the drive's next step runs in full (stillness.py)
                 _guard(index, sub, lambda: put(value))
         od.add(OdEntry(index, sub, name, dtype, access, default, pdo_mappable=mappable,
                        getter=get, setter=setter))

@@ -108,6 +108,7 @@ class DriveReadings:
 
     def set_home(self: ServoDrive, home: float) -> None:
         """The home point reads -home_offset (ch. 4: offset -1000 -> position 1000)."""
+        self._touched = True  # the next step runs in full (stillness.py)
         self.theta_zero = home + self.regs[R.HOME_OFFSET] / self.feed
 
     def live_register(self: ServoDrive, n: int) -> int | None:

@@ -25,6 +25,7 @@ class DriveFlash:
 
     # ---- flash ------------------------------------------------------------------------------
     def request_save(self: ServoDrive, trigger: str) -> None:
+        self._touched = True  # the next step runs in full (stillness.py)
         if self.saving:
             return
         self.save_done = False
@@ -60,6 +61,7 @@ class DriveFlash:
 
         With nothing ever saved the flash holds the first power-up values.
         """
+        self._touched = True  # the next step runs in full (stillness.py)
         blob = self.flash.load()
         if blob is None:
             blob = flashsave.encode(*self._first_power_up_values())

@@ -41,6 +41,7 @@ class DriveStateMachine:
 
     def write_controlword(self: ServoDrive, value: int) -> None:
         """0x6040 from a CiA 402 master (CANopen, CoE, a scenario)."""
+        self._touched = True  # the next step runs in full (stillness.py)
         self._require_power()
         self.ien_cmd = True
         self.cw_source = "cia402"
@@ -59,6 +60,7 @@ class DriveStateMachine:
 
     def set_point_taken(self: ServoDrive) -> bool:
         """Pos_str returns to 0 by itself (ch. 2); True when it did (register view only)."""
+        self._touched = True  # the next step runs in full (stillness.py)
         if self.cw_source != "register" or self.mode not in control.POSITIONER:
             return False
         self.regs[R.CONTROL_WORD] &= ~control.BIT5
@@ -115,6 +117,7 @@ class DriveStateMachine:
 
     # ---- alarms ------------------------------------------------------------------------------
     def raise_alarm(self: ServoDrive, code: int, lasting: bool = False) -> None:
+        self._touched = True  # also raised from outside (the CoE slave's checks)
         spec = self.alarm_table[code]
         if self.alarms.latch(code, lasting):
             self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code), name=spec.name,

@@ -1,0 +1,103 @@
+"""When a drive step may be skipped: the step that repeats a still one (docs/performance.md).
+
+A drive standing still (switched off, or holding in torque with its filters settled) does the
+same nothing every millisecond. The drive runs a full step, and when that step left every part
+of its state exactly as it found it, emitted nothing and read no clock (no boot, save, indirect
+access or latch timing under way), the next step of the same length from the same state does
+the same: it is skipped until something from outside touches the drive (a command, a register,
+parameter or object write, an alarm) or the step length changes.
+
+"Exactly" is checked, not assumed: :func:`state_key` is a value copy of everything a step can
+change, compared before and after. It is taken only when the cheap signs of standing still hold
+(:func:`may_settle`), so a moving drive pays a few attribute reads for it; and a drive that
+looks still but is not (a current filter still decaying, a speed-window timer counting) is
+checked less and less often (:class:`StillSteps`: after 1, 2, 4 .. 128 steps), so the check
+costs it about 1 % of a step. Checking less often only delays the skipping; it cannot make a
+skipped step differ.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import TYPE_CHECKING, Any
+
+from devices.servo.ds402 import State
+
+if TYPE_CHECKING:
+    from devices.servo.drive import ServoDrive
+
+# Attributes no step writes (identity, wiring of the model, the dictionary whose writes touch
+# the drive) or that are the skipping's own bookkeeping; everything else is in the key.
+NOT_STATE = frozenset({
+    "device_id", "rng", "now_us", "events", "config", "flash", "geometry", "od", "indirect",
+    "_t_us", "_touched", "_still", "SKIP_STILL",
+    "regs", "params", "wired", "_levels", "latched_at_power_up",  # in the key, as flat dicts
+})
+FLAT = ("regs", "params", "wired", "_levels", "latched_at_power_up")  # str/int -> int/bool
+MAX_WAIT = 128
+_ATOMS = (int, float, str, bytes, bool, type(None), enum.Enum, tuple, frozenset)
+
+
+_ATOM_TYPES = frozenset({int, float, str, bytes, bool, type(None)})
+
+
+def _value(v: Any) -> Any:
+    """A comparable copy: containers and plain objects one value at a time, all the way down."""
+    if type(v) in _ATOM_TYPES or isinstance(v, _ATOMS):
+        return v
+    if isinstance(v, dict):
+        return tuple((k, _value(x)) for k, x in v.items())
+    if isinstance(v, list):
+        return tuple(_value(x) for x in v)
+    if isinstance(v, set):
+        return frozenset(v)
+    state = getattr(v, "__dict__", None)
+    if state is None:  # frozen values with slots (none today): compare the object itself
+        return v
+    return (type(v), tuple((k, _value(x)) for k, x in state.items()))
+
+
+def state_key(drive: ServoDrive) -> tuple[Any, ...]:
+    """Everything a drive step can change, by value (the indirect access by its values)."""
+    own = tuple((k, _value(v)) for k, v in vars(drive).items() if k not in NOT_STATE)
+    flat = tuple(tuple(getattr(drive, name).items()) for name in FLAT)
+    indirect = drive.indirect
+    return own, flat, tuple(indirect.values.items()), len(indirect._jobs)
+
+
+class StillSteps:
+    """The drive's bookkeeping: the last step's length if it changed nothing (else None), the
+    alarm bank it saw and its change count, and when to check again after a failed check."""
+
+    __slots__ = ("alarms", "changes", "dt", "wait", "wait_left")
+
+    def __init__(self) -> None:
+        self.dt: int | None = None
+        self.alarms: object = None
+        self.changes = 0
+        self.wait = 1
+        self.wait_left = 0
+
+    def due(self) -> bool:
+        """A check now? (Counts down the wait after a failed one.)"""
+        if self.wait_left:
+            self.wait_left -= 1
+            return False
+        return True
+
+    def checked(self, still: bool) -> None:
+        self.wait = 1 if still else min(self.wait * 2, MAX_WAIT)
+        self.wait_left = 0 if still else self.wait
+
+    def restart(self) -> None:
+        """Touched from outside: check at the next chance."""
+        self.wait, self.wait_left = 1, 0
+
+
+def may_settle(drive: ServoDrive) -> bool:
+    """The cheap signs of a step that reads no clock and moves nothing."""
+    plant, trajectory = drive.plant, drive.trajectory
+    return (plant.omega == 0.0 and trajectory.velocity == 0.0 and trajectory.idle
+            and drive.saving_until is None and drive.save_pending is None
+            and drive.latch.rose_at_us is None and not drive.indirect._jobs
+            and not (drive.powered and drive.state is State.NOT_READY_TO_SWITCH_ON))
