@@ -325,8 +325,10 @@ class EtherCatMaster(StartupMixin, DeviceModel):
         link.pending, link.identity_ok, link.reached_op = None, None, False
         if link.diagnosis.startswith("no link"):
             link.diagnosis = ""
-        if link.lost_once:
+        if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
             self._log(link, "found", state=slave.al_state.label)
+            if slave.al_state is not AlState.INIT and not self.external:
+                self._request(link, AlState.INIT)
         return link.lost_once
 
     def _lose(self, link: SlaveLink) -> None:

@@ -1,0 +1,77 @@
+"""Distributed clocks (seed 003): the state table, the faults and their recovery."""
+
+from __future__ import annotations
+
+import random
+
+import pytest
+from line_bench import IN_OP_US, US, line_in_op, master_view, records
+
+from devices.master.dc import DC_TRANSITIONS, DcState, DcTrigger, DcUnit
+
+
+@pytest.mark.parametrize(("state", "trigger"), sorted(DC_TRANSITIONS, key=str))
+def test_every_table_transition(state: DcState, trigger: DcTrigger) -> None:
+    dc = DcUnit(state=state)
+    assert dc.move(trigger, 5) == (state, DC_TRANSITIONS[state, trigger])
+    assert dc.since_us == 5
+
+
+@pytest.mark.parametrize("state", list(DcState))
+def test_triggers_outside_the_table_change_nothing(state: DcState) -> None:
+    for trigger in DcTrigger:
+        if (state, trigger) not in DC_TRANSITIONS:
+            dc = DcUnit(state=state)
+            assert dc.move(trigger, 1) is None and dc.state is state
+
+
+def test_start_sequence_and_drift() -> None:
+    """IDLE -> SYNCHRONIZING at link -> WAITING_START_TIME after the measurements ->
+    COMPENSATING after START_TIME with the DC slaves in SAFEOP; a drift leaves the window."""
+    dc, rng, t = DcUnit(window_ns=1000), random.Random(1), 0
+    seen = [dc.state]
+    while t < 400_000:
+        t += 1000
+        dc.measure(1000, rng)
+        trig = dc.trigger(t, link=True, dc_slaves=2, dc_slaves_ready=t > 150_000)
+        if trig is not None and dc.move(trig, t):
+            seen.append(dc.state)
+    assert seen == [DcState.IDLE, DcState.SYNCHRONIZING, DcState.WAITING_START_TIME,
+                    DcState.COMPENSATING]
+    dc.fault = "drift"
+    while dc.state is DcState.COMPENSATING:
+        t += 1000
+        dc.measure(1000, rng)
+        trig = dc.trigger(t, True, 2, True)
+        if trig is not None:
+            dc.move(trig, t)
+    assert dc.state is DcState.NOT_SYNCHRONIZED and abs(dc.deviation_ns) > 1000
+
+
+@pytest.mark.parametrize(("kind", "codes"), [
+    ("drift", {1: 0x0000, 2: 0x0000}),  # the master asks SAFEOP: no error on the slaves
+    ("jitter", None),
+    ("sync0_lost", {1: 0x002C, 2: 0x001A}),  # their own sync errors (seed 001 §9.3.7)
+])
+def test_dc_fault_sends_the_dc_slaves_to_safeop_and_recovers(
+        kind: str, codes: dict[int, int] | None) -> None:
+    rig = line_in_op()
+    assert master_view(rig)["dc"]["state"] == "COMPENSATING"
+    rig.apply("master", "dc_fault", {"kind": kind})
+    events = rig.run_until(IN_OP_US + US // 2)
+    view = master_view(rig)
+    assert view["dc"]["state"] == "NOT_SYNCHRONIZED" and view["dc"]["fault"] == kind
+    states = [s["state"] for s in view["slaves"]]
+    assert states == ["OP", "SAFEOP", "SAFEOP", "OP"]  # DC: the TRS-CAT and the CPX-E-EC
+    if codes is not None:
+        assert {p: view["slaves"][p]["al_status_code"] for p in codes} == codes
+    dc_moves = [(r["from"], r["to"]) for r in records(events, "state", "master")
+                if r.get("machine") == "dc"]
+    assert dc_moves == [("COMPENSATING", "NOT_SYNCHRONIZED")]
+    rig.run_until(IN_OP_US + US)  # held in SAFEOP while the fault lasts
+    assert [s["state"] for s in master_view(rig)["slaves"]][1:3] == ["SAFEOP", "SAFEOP"]
+    rig.apply("master", "clear_dc_fault", {})
+    events = rig.run_until(IN_OP_US + 2 * US)
+    dc_moves = [r["to"] for r in records(events, "state", "master") if r.get("machine") == "dc"]
+    assert dc_moves == ["SYNCHRONIZING", "WAITING_START_TIME", "COMPENSATING"]
+    assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
