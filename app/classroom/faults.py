@@ -7,8 +7,11 @@ table, ``devices.servo.alarms.alarm_table``). A few faults are physical rather t
 codes (a pulled cable, a low Tbus supply, a jammed load): their cause is the code the device
 reports for them, and their repair is the opposite action.
 
+The TRS-CAT's application errors (seed 001 §9.3.7) and the CPX-E-EC's named faults
+(``devices.cpx.faults``) are causes too.
+
 A cause is named by an id: ``<device>:coupler:0x13``, ``<device>:module:0x0B`` (FastCAT),
-``<device>:alarm:16`` (servo drive).
+``<device>:alarm:16`` (servo drive), ``<device>:fault:FIELD_SUPPLY`` (TRS-CAT, CPX-E-EC).
 """
 
 from __future__ import annotations
@@ -104,7 +107,46 @@ def _servo(device: str, snapshot: Mapping[str, Any]) -> Iterator[tuple[Cause, Hi
         yield cause, fault
 
 
-SOURCES = {"fastcat": lambda d, s: _fastcat(d), "servo": _servo}
+def _trscat(device: str) -> Iterator[tuple[Cause, HiddenFault | None]]:
+    """Seed 001 §9.3.7 application errors. Causes that shut the TRS bus down until a power
+    cycle are causes but no exercise: switching the supply off is the instructor's."""
+    from devices.trscat.diagnostics import FAULTS, Target
+
+    for spec in FAULTS.values():
+        key = f"fault:{spec.name}"
+        cause = Cause(f"{device}:{key}", f"{device} 0x{spec.code:04X} {spec.name} — "
+                      f"{spec.text} (§9.3.7)", device)
+        fault = None
+        if not (spec.bus_shutdown or spec.deadlock):
+            fault = HiddenFault(f"{device}:inject:{key}", f"{device}: inject {spec.name}",
+                                device, cause.id,
+                                (Command(device, "inject_fault", {"fault": spec.name}),),
+                                (Command(device, "clear_fault", {"fault": spec.name}),),
+                                module=spec.target is Target.ANALOG)
+        yield cause, fault
+
+
+def _cpx(device: str) -> Iterator[tuple[Cause, HiddenFault | None]]:
+    """The CPX-E-EC's named faults (devices/cpx/faults.py, with their seed sections); those
+    that need a channel or a sync manager are causes only."""
+    from devices.cpx.faults import FAULTS, Target
+
+    for spec in FAULTS.values():
+        key = f"fault:{spec.name}"
+        cause = Cause(f"{device}:{key}", f"{device} {spec.name} — {spec.doc} ({spec.seed})",
+                      device)
+        fault = None
+        if spec.target in (Target.DEVICE, Target.MODULE):
+            fault = HiddenFault(f"{device}:inject:{key}", f"{device}: inject {spec.name}",
+                                device, cause.id,
+                                (Command(device, "inject_fault", {"fault": spec.name}),),
+                                (Command(device, "clear_fault", {"fault": spec.name}),),
+                                module=spec.target is Target.MODULE)
+        yield cause, fault
+
+
+SOURCES = {"fastcat": lambda d, s: _fastcat(d), "servo": _servo,
+           "trscat": lambda d, s: _trscat(d), "cpx_e_ec": lambda d, s: _cpx(d)}
 
 
 @dataclass(frozen=True)

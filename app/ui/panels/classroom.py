@@ -43,6 +43,8 @@ WAIT_S = 10.0
 NO_FAULT = "(pick a hidden fault)"
 NO_CAUSE = "(pick the cause)"
 START, END = "Start exercise", "End and score"
+INSTRUCTOR_CLASS = "fr-instructor"  # HTML the dashboard shows to the instructor only
+TRAINEE_CSS = f"<style>.{INSTRUCTOR_CLASS} {{ display: none !important; }}</style>"
 
 
 @dataclass
@@ -169,6 +171,9 @@ class ClassroomPanel:
             view.handles.append(gui.add_markdown(
                 f"You are **{'the instructor' if role is Role.INSTRUCTOR else 'a trainee'}**"))
             if role is Role.TRAINEE:
+                # Elements the dashboard marks as the instructor's (the injected causes) are
+                # not shown on a trainee's page.
+                view.handles.append(gui.add_html(TRAINEE_CSS))
                 view.form = TokenForm(client, self.access, self._promoted)
                 view.handles.append(view.form)
             self._answer_controls(client, view)
