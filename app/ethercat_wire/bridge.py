@@ -44,7 +44,11 @@ READY_TIMEOUT_S = 30.0  # models ready (FastCAT scan) and process B up, each
 INPUTS_PERIOD_US = 2_000  # SM3 image refreshed at most this often (simulated time)
 UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
 AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
-MAX_PENDING_FRAMES = 256  # frames reported but not yet handed to the models, per slave
+# Frames handed to the models (docs in _FrameClock): a steady cycle at the reported rate.
+PERIOD_SMOOTHING = 0.3  # weight of the newest report in the cycle estimate
+ALIVE_REPORTS = 3  # the master counts as cycling this many report intervals after a report
+MAX_OWED_REPORTS = 2  # frames owed beyond this many reports' worth are forgotten
+MAX_FRAMES_PER_STEP = 16
 PUMP_POLL_S = 0.001
 OPTION = "--ethercat-if"
 
@@ -80,6 +84,51 @@ def spawn_wire_process(iface: str, descriptions: Sequence[SlaveDescription], con
 
 
 @dataclass
+class _FrameClock:
+    """When to hand one slave's model a process-data frame.
+
+    B reports how many frames a slave saw since its last report (every 10 ms of wall time).
+    Handing them over in bursts would make a model see a period that is not the master's: the
+    TRS-CAT starts its DC-SYNC on the frame period it measures and counts SYNC0 cycles without
+    a frame as sync errors (seed 001 §9.1.1, §9.3.7). So the frames go out one master cycle
+    apart: the cycle is the reported rate in wall time (smoothed; a simulated microsecond is
+    a wall microsecond at speed 1, and a clock that falls behind under load must not make the
+    master look faster), for as long as reports keep saying that the master cycles. The count
+    owed keeps the total close to what B saw; frames the simulation cannot keep up with are
+    forgotten rather than handed over in a burst.
+    """
+
+    period_us: float = 0.0
+    next_us: float = 0.0
+    owed: int = 0
+    alive_until: float = 0.0  # monotonic wall time
+
+    def report(self, n: int, span_s: float, now_us: int, wall: float) -> None:
+        if n <= 0:
+            return
+        sample = span_s * 1e6 / n
+        self.period_us = sample if not self.period_us else \
+            (1 - PERIOD_SMOOTHING) * self.period_us + PERIOD_SMOOTHING * sample
+        self.owed = min(self.owed + n, MAX_OWED_REPORTS * n)
+        self.alive_until = wall + ALIVE_REPORTS * msg.CYCLE_REPORT_S
+        if self.next_us < now_us - self.period_us:
+            self.next_us = now_us  # the master (re)starts: no catching up on the pause
+
+    def due(self, now_us: int, wall: float) -> int:
+        """Frames to hand over at ``now_us``."""
+        if not self.period_us or (self.owed <= 0 and wall > self.alive_until):
+            return 0
+        count = 0
+        while self.next_us <= now_us and count < MAX_FRAMES_PER_STEP:
+            count += 1
+            self.next_us += self.period_us
+            self.owed = max(0, self.owed - 1)
+        if self.next_us <= now_us:
+            self.next_us = now_us + self.period_us
+        return count
+
+
+@dataclass
 class _Slave:
     position: int
     model: Any
@@ -88,7 +137,7 @@ class _Slave:
     status: tuple[int, int] | None = None  # last AL status / code sent
     inputs: bytes | None = None  # last SM3 image sent
     inputs_due_us: int = 0
-    frames: collections.deque[int] = field(default_factory=collections.deque)  # due times
+    clock: _FrameClock = field(default_factory=lambda: _FrameClock())
 
 
 class WireBridge:
@@ -105,7 +154,7 @@ class WireBridge:
         self._slaves: list[_Slave] = []
         self._master: Any = None
         self._link_down: int | None = None
-        self._last_cycle_us: int | None = None
+        self._last_report_wall: float | None = None  # when B's last frame report came
         self.descriptions: list[SlaveDescription] = []
         self.ready_iface: str | None = None
         self.errors: collections.deque[str] = collections.deque(maxlen=50)
@@ -237,8 +286,7 @@ class WireBridge:
             self._link_down = down
 
     def _serve(self, s: _Slave, now_us: int) -> None:
-        while s.frames and s.frames[0] <= now_us:
-            s.frames.popleft()
+        for _ in range(s.clock.due(now_us, time.monotonic())):
             self._frame(s, now_us)
         for frame in s.face.take_emergencies(s.model):
             self._send(msg.MAILBOX_REPLY, s.position, s.coe.emergency(frame))
@@ -297,6 +345,7 @@ class WireBridge:
             s.face.apply_outputs(s.model, bytes(payload))
         else:
             self.dc[s.position] = dict(payload)
+            s.face.configure_dc(s.model, dict(payload))
             note = getattr(self._master, "external_dc", None)
             if note is not None:
                 note(s.position, dict(payload))
@@ -314,18 +363,16 @@ class WireBridge:
             s.face.request_state(s.model, state)
 
     def _schedule_frames(self, counts: dict[int, int], now_us: int) -> None:
-        """Frames seen since B's last report, spread over as long a span from now on."""
-        last, self._last_cycle_us = self._last_cycle_us, now_us
-        span = now_us - last if last is not None and now_us > last else \
-            round(msg.CYCLE_REPORT_S * 1e6)
+        """B's frame counts since its last report, over the wall time since then (a report
+        after a pause covers at most two report periods: B reports while frames come)."""
+        wall = time.monotonic()
+        last, self._last_report_wall = self._last_report_wall, wall
+        span = min(wall - last, 2 * msg.CYCLE_REPORT_S) if last is not None else \
+            msg.CYCLE_REPORT_S
         for position, n in counts.items():
             s = self._slave(int(position))
-            if s is None or n <= 0:
-                continue
-            period = max(1, span // n)
-            s.frames.extend(now_us + k * period for k in range(n))
-            while len(s.frames) > MAX_PENDING_FRAMES:
-                s.frames.popleft()
+            if s is not None:
+                s.clock.report(int(n), span, now_us, wall)
 
     def _stats(self, stats: dict[str, Any]) -> None:
         self.stats = dict(stats)

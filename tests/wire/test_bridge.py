@@ -19,7 +19,7 @@ import pytest
 from test_faces import LINE, line_rig
 
 from app.ethercat_wire import messages as msg
-from app.ethercat_wire.bridge import WireBridge, check_interface
+from app.ethercat_wire.bridge import WireBridge, _FrameClock, check_interface
 from app.rig_config import RigConfigError
 from app.runtime import Runtime
 
@@ -183,3 +183,21 @@ def test_stop_tells_b_and_hands_the_line_back():
 def test_a_missing_interface_is_a_clear_error():
     with pytest.raises(RigConfigError, match="no network interface 'fieldrig-nope0'"):
         check_interface("fieldrig-nope0")
+
+
+def test_frames_go_to_the_models_one_master_cycle_apart():
+    """3 frames reported over 12 ms of wall time: one every 4 ms of simulated time, not a
+    burst (the TRS-CAT measures the frame period for its DC-SYNC, seed 001 §9.1.1), going on
+    while the reports say the master cycles, none once they stop and the owed are out."""
+    clock = _FrameClock()
+    clock.report(3, 0.012, now_us=100_000, wall=0.0)
+    handed = [t for t in range(100_000, 120_000, 1_000) for _ in range(clock.due(t, 0.001))]
+    assert handed == [100_000, 104_000, 108_000, 112_000, 116_000]
+    assert clock.due(130_000, wall=1.0) == 0  # no report for a second: the master stopped
+
+
+def test_dc_settings_are_kept_and_offered_to_the_model(wire):
+    _runtime, bridge, b = wire
+    settings = {"activation": 3, "sync0_cycle_ns": 4_000_000, "start_time_ns": 123}
+    b.send(msg.DC, 1, settings)
+    wait_for(lambda: bridge.dc.get(1) == settings)

@@ -14,6 +14,7 @@ SM1 mailbox in 0x1080, 128 bytes each; SM2 outputs at 0x1100, SM3 inputs at 0x14
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 from app.ethercat_wire.description import Pdo, SlaveDescription, SyncManager
@@ -41,13 +42,24 @@ SM_TYPES = (1, 2, 3, 4)  # ETG.1000.6 0x1C00: mailbox out, mailbox in, outputs, 
 COE_SDO, COE_SDO_INFO, COE_PDO_ASSIGN, COE_PDO_CONFIG = 0x01, 0x02, 0x04, 0x08  # SII GENERAL
 
 
-def _sm_type_objects() -> ObjectDictionary:
-    od = ObjectDictionary()
+def _sm_type_objects(od: ObjectDictionary | None = None) -> ObjectDictionary:
+    od = od if od is not None else ObjectDictionary()
     od.add(OdEntry(SM_COMM_TYPE, 0, "Sync manager type", DataType.UNSIGNED8, Access.RO,
                    len(SM_TYPES)))
     for sm, kind in enumerate(SM_TYPES):
         od.add(OdEntry(SM_COMM_TYPE, sm + 1, f"SM{sm} type", DataType.UNSIGNED8, Access.RO,
                        kind))
+    return od
+
+
+def assignment_objects(rx: Sequence[int], tx: Sequence[int]) -> ObjectDictionary:
+    """0x1C00 with read-only 0x1C12 / 0x1C13 listing ``rx`` / ``tx`` (for a slave whose
+    dictionary has the PDOs but no assignment objects)."""
+    od = _sm_type_objects()
+    for index, name, pdos in ((RX_ASSIGN, "RxPDO assign", rx), (TX_ASSIGN, "TxPDO assign", tx)):
+        od.add(OdEntry(index, 0, name, DataType.UNSIGNED8, Access.RO, len(pdos)))
+        for sub, pdo in enumerate(pdos, start=1):
+            od.add(OdEntry(index, sub, f"{name} {sub}", DataType.UNSIGNED16, Access.RO, pdo))
     return od
 
 
@@ -218,6 +230,15 @@ class Face:
         ESM (the model never sees a non-state request, so the ESM holder answers it)."""
         if model.reachable():
             model.esm.refuse(code, model.now_us)
+
+    def configure_dc(self, model: Any, settings: dict[str, int]) -> bool:
+        """The master's DC registers (0x0981 activation, 0x09A0 SYNC0 cycle, 0x0990 start
+        time) for a model that runs on SYNC0; False when the model takes no DC settings."""
+        configure = getattr(model, "configure_dc", None)
+        if configure is None:
+            return False
+        configure(**settings)
+        return True
 
     def al_status(self, model: Any) -> tuple[int, int]:
         return int(model.al_status), int(model.al_status_code)
