@@ -59,7 +59,7 @@ BREAK = "takes hardware away"
 
 # Read from every model's ACTIONS table (devices/*/actions.py, devices/fastcat/rail.py and
 # modules.py, devices/trscat/commands.py, devices/cpx/actions.py, devices/coe/actions.py,
-# devices/master.py, devices/canopen/node.py). Everything not listed is operation: inputs,
+# devices/master/, devices/canopen/node.py). Everything not listed is operation: inputs,
 # CNF, object and register access, Reset fault, alarm reset, moves, NMT, resync.
 INSTRUCTOR_ONLY: tuple[Rule, ...] = (
     # Any device kind: injecting or removing a hidden cause is the instructor's.
@@ -75,6 +75,10 @@ INSTRUCTOR_ONLY: tuple[Rule, ...] = (
             ("module_failure", {"active": True}, FAULT), ("set_encoder_ppr", {}, BREAK),
             ("wire_thermocouple", {}, BREAK)),
     *_rules("servo", ("power", {"on": False}, FAULT), ("jam_load", {"active": True}, FAULT)),
+    # The line (seed 003): cables, slave supplies, lost frames and DC faults are the
+    # instructor's; plugging back, powering on and clearing are repairs.
+    *_rules("master", ("pull_cable", {}, FAULT), ("power_slave", {"on": False}, FAULT),
+            ("lose_frames", {}, FAULT), ("dc_fault", {}, FAULT)),
     *_rules("servo_ecat", ("link", {"connected": False}, FAULT)),
     *_rules("trscat",
             ("power", {"on": False}, FAULT), ("field_supply", {}, FAULT),

@@ -56,6 +56,9 @@ def test_every_instructor_only_row_is_refused_to_a_trainee(rule: Any) -> None:
     ("servo", "alarm_reset", {}),
     ("servo", "jam_load", {"active": False}),
     ("master", "resync", {}),
+    ("master", "plug_cable", {"cable": 1}),
+    ("master", "power_slave", {"position": 1, "on": True}),
+    ("master", "clear_dc_fault", {}),
     ("canopen", "frame", {"cob_id": 0, "data": "81 01"}),
 ])
 def test_operation_and_repairs_are_the_trainees(kind: str, action: str,
@@ -68,11 +71,12 @@ def test_every_rule_names_a_real_action() -> None:
     from devices.coe.actions import ACTIONS as COE
     from devices.cpx.actions import ACTIONS as CPX
     from devices.fastcat.coupler import FastCat
+    from devices.master import EtherCatMaster
     from devices.servo.actions import ACTIONS as SERVO
     from devices.trscat.commands import ACTIONS as TRS
 
     tables = {"fastcat": FastCat.ACTIONS, "servo": SERVO, "servo_ecat": COE, "trscat": TRS,
-              "cpx_e_ec": CPX}
+              "cpx_e_ec": CPX, "master": EtherCatMaster.ACTIONS}
     everything = set().union(*tables.values())
     for rule in INSTRUCTOR_ONLY:
         names = everything if rule.kind == "*" else tables[rule.kind]
