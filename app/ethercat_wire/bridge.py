@@ -8,11 +8,12 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
 - everything that touches a model runs in the simulation thread, in a step listener: AL
   control writes go to the master's ``external_request`` (the slave model decides), mailbox
   messages to the slave's :class:`~app.ethercat_wire.coe.CoeServer`, SM2 images to its face,
-  frame counts to ``external_frame`` (spread over the reporting interval, so a model sees the
-  master's cycle period, not bursts), statistics to ``external_stats``;
-- back to B go the AL status / code when they change, the SM3 image when it changes (at most
-  every ``INPUTS_PERIOD_US``), emergencies as CoE mailbox messages, and ``link`` when a slave
-  drops off the line (cable pulled, powered off: from that position on nothing answers).
+  frame counts to ``external_frame`` (one master cycle apart, :class:`_FrameClock`, so a
+  model sees the master's cycle, not the report bursts), statistics to ``external_stats``;
+- back to B go the AL status / code when they change, the SM3 image when it changes (packed
+  when a frame is handed to the model, at most every ``INPUTS_PERIOD_US``), emergencies as
+  CoE mailbox messages, and ``link`` when a slave drops off the line (cable pulled, powered
+  off: from that position on nothing answers).
 
 Positions are 0-based line positions; the line is re-read every step, so a rig reset in place
 (scenario player) gets fresh faces and is switched to external mode again.
@@ -41,7 +42,7 @@ logger = logging.getLogger(__name__)
 
 ETHERTYPE_ECAT = 0x88A4
 READY_TIMEOUT_S = 30.0  # models ready (FastCAT scan) and process B up, each
-INPUTS_PERIOD_US = 2_000  # SM3 image refreshed at most this often (simulated time)
+INPUTS_PERIOD_US = 2_000  # SM3 image refreshed with a frame, at most this often (sim. time)
 UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
 AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
 # Frames handed to the models (docs in _FrameClock): a steady cycle at the reported rate.
@@ -286,7 +287,8 @@ class WireBridge:
             self._link_down = down
 
     def _serve(self, s: _Slave, now_us: int) -> None:
-        for _ in range(s.clock.due(now_us, time.monotonic())):
+        handed = s.clock.due(now_us, time.monotonic())
+        for _ in range(handed):
             self._frame(s, now_us)
         for frame in s.face.take_emergencies(s.model):
             self._send(msg.MAILBOX_REPLY, s.position, s.coe.emergency(frame))
@@ -297,7 +299,7 @@ class WireBridge:
         if status != s.status:
             s.status = status
             self._send(msg.AL_STATUS, s.position, *status)
-        if now_us >= s.inputs_due_us:
+        if handed and now_us >= s.inputs_due_us:  # the inputs a frame would carry
             s.inputs_due_us = now_us + INPUTS_PERIOD_US
             data = s.face.inputs(s.model)
             if data and data != s.inputs:

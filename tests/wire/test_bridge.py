@@ -98,6 +98,8 @@ def test_start_describes_the_line_and_takes_over_from_the_built_in_master(wire):
     assert sim(runtime, lambda: master_view(runtime).external) is True
     for pos in range(len(LINE)):
         b.expect(lambda m, pos=pos: m[:2] == (msg.AL_STATUS, pos))
+    b.send(msg.CYCLE, {pos: 3 for pos in range(len(LINE))})  # inputs go with the frames
+    for pos in range(len(LINE)):
         b.expect(lambda m, pos=pos: m[:2] == (msg.INPUTS, pos))
 
 

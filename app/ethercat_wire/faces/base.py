@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from app.ethercat_wire.description import Pdo, SlaveDescription, SyncManager
@@ -76,6 +77,19 @@ def sync_managers(out_bytes: int, in_bytes: int) -> tuple[SyncManager, ...]:
             SyncManager(INPUTS_START, in_bytes, SM_CONTROL[3], 1 if in_bytes else 0))
 
 
+@dataclass(frozen=True)
+class Layout:
+    """One direction's process image: the PDOs, where each mapped object sits, the bytes."""
+
+    pdos: tuple[Pdo, ...]
+    fields: tuple[image.Field, ...]
+    size: int
+
+    @classmethod
+    def of(cls, pdos: tuple[Pdo, ...]) -> Layout:
+        return cls(pdos, tuple(image.fields(pdos)), image.byte_size(pdos))
+
+
 class NoAnswer(Exception):
     """The model's mailbox does not answer (off the line, no application, no dictionary yet):
     no reply goes back, and the master times out as it would on a real device."""
@@ -92,8 +106,13 @@ class Face:
     coe_details: ClassVar[int] = COE_SDO | COE_SDO_INFO
     identity_defaults: ClassVar[tuple[int, int, int]]  # vendor, product, revision (no OD yet)
 
+    # The mapping objects change only with a new dictionary (the FastCAT's scan, the TRS-CAT's
+    # 0xF030, the CPX-E-EC's restart): layouts are kept per dictionary object.
+    mapping_fixed: ClassVar[bool] = True
+
     def __init__(self) -> None:
         self._last_outputs: dict[int, bytes] = {}  # id(model) -> last image applied
+        self._layouts: dict[tuple[int, bool], tuple[Any, Layout]] = {}
 
     # ---- object dictionary -----------------------------------------------------------------
     def od(self, model: Any) -> ObjectDictionary | None:
@@ -162,13 +181,25 @@ class Face:
         vendor, product, revision = self.identity_defaults
         return vendor, product, revision, int(model.serial)
 
+    def layout(self, model: Any, receive: bool) -> Layout:
+        """SM2 (``receive``: the RxPDOs) or SM3 layout as the mapping objects say now."""
+        od = self.od(model)
+        key = (id(model), receive)
+        cached = self._layouts.get(key)
+        if self.mapping_fixed and cached is not None and cached[0] is od:
+            return cached[1]
+        found = Layout.of(self.read_pdos(model, RX_ASSIGN if receive else TX_ASSIGN))
+        self._layouts[key] = (od, found)
+        return found
+
     def rx_pdos(self, model: Any) -> tuple[Pdo, ...]:
-        return self._assigned_pdos(model, RX_ASSIGN)
+        return self.layout(model, True).pdos
 
     def tx_pdos(self, model: Any) -> tuple[Pdo, ...]:
-        return self._assigned_pdos(model, TX_ASSIGN)
+        return self.layout(model, False).pdos
 
-    def _assigned_pdos(self, model: Any, assign_index: int) -> tuple[Pdo, ...]:
+    def read_pdos(self, model: Any, assign_index: int) -> tuple[Pdo, ...]:
+        """The PDOs an assignment object lists, read from the model's dictionary."""
         od = self.od(model)
         if od is None or (assign_index, 0) not in od:
             return ()
@@ -195,22 +226,23 @@ class Face:
         od = self.od(model)
         if od is None:
             return b""
-        return image.pack(self.tx_pdos(model), od.peek)
+        found = self.layout(model, False)
+        return image.pack_fields(found.fields, found.size, od.peek)
 
     def apply_outputs(self, model: Any, data: bytes) -> None:
         """The SM2 image the master wrote: each changed object written as an SDO would."""
         od = self.od(model)
         if od is None:
             return
-        pdos = self.rx_pdos(model)
-        if image.byte_size(pdos) != len(data):
+        found = self.layout(model, True)
+        if found.size != len(data):
             logger.info("%s: outputs image of %d bytes, the mapping has %d: ignored",
-                        model.device_id, len(data), image.byte_size(pdos))
+                        model.device_id, len(data), found.size)
             return
         key = id(model)
-        wanted = image.changed(pdos, self._last_outputs.get(key), data)
+        wanted = image.changed(found.pdos, self._last_outputs.get(key), data)
         self._last_outputs[key] = bytes(data)
-        for index, sub, value in image.unpack(pdos, data, od.entry):
+        for index, sub, value in image.unpack_fields(found.fields, data, od.entry):
             if (index, sub) in wanted:
                 self.write_output(model, index, sub, value)
 

@@ -64,11 +64,11 @@ class CpxFace(Face):
             self._assignment = (key, assignment_objects(key[1], key[2]))
         return self._assignment[1]
 
-    def rx_pdos(self, model: Any) -> tuple[Pdo, ...]:
-        return self._address_order(model, RXPDO_BASE)
-
-    def tx_pdos(self, model: Any) -> tuple[Pdo, ...]:
-        return self._address_order(model, TXPDO_BASE)
+    def read_pdos(self, model: Any, assign_index: int) -> tuple[Pdo, ...]:
+        if (assign_index, 0) in (self.od(model) or ()):
+            return super().read_pdos(model, assign_index)
+        return self._address_order(model, RXPDO_BASE if assign_index == RX_ASSIGN
+                                   else TXPDO_BASE)
 
     def _address_order(self, model: Any, base: int) -> tuple[Pdo, ...]:
         od = self.od(model)

@@ -33,6 +33,7 @@ class DriveFace(Face):
     order_code = "SelemaDriveECAT"
     dc_supported = True  # ch. 5 "Distributed Clock"
     coe_details = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN | COE_PDO_CONFIG  # ch. 5 dynamic PDOs
+    mapping_fixed = False  # 0x1C12 / 0x1C13 and 0x160x / 0x1A0x are written in PREOP (ch. 5)
     identity_defaults: ClassVar[tuple[int, int, int]] = (
         objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
 

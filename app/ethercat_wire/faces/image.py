@@ -77,18 +77,26 @@ def fields(pdos: Sequence[Pdo]) -> list[Field]:
 
 def pack(pdos: Sequence[Pdo], peek: Peek) -> bytes:
     """The image of the current object values (an integer masked to its width)."""
+    return pack_fields(fields(pdos), byte_size(pdos), peek)
+
+
+def pack_fields(mapped: Sequence[Field], size: int, peek: Peek) -> bytes:
     word = 0
-    for f in fields(pdos):
-        value = peek(f.index, f.sub)
-        word |= (int(value) & ((1 << f.bits) - 1)) << f.offset
-    return word.to_bytes(byte_size(pdos), "little")
+    for f in mapped:
+        word |= (int(peek(f.index, f.sub)) & ((1 << f.bits) - 1)) << f.offset
+    return word.to_bytes(size, "little")
 
 
 def unpack(pdos: Sequence[Pdo], data: bytes, lookup: Lookup) -> list[tuple[int, int, int]]:
     """(index, sub, value) of every mapped object in ``data``; signed types sign-extended."""
+    return unpack_fields(fields(pdos), data, lookup)
+
+
+def unpack_fields(mapped: Sequence[Field], data: bytes, lookup: Lookup
+                  ) -> list[tuple[int, int, int]]:
     word = int.from_bytes(data, "little")
     out = []
-    for f in fields(pdos):
+    for f in mapped:
         raw = word >> f.offset & ((1 << f.bits) - 1)
         if lookup(f.index, f.sub).dtype in _SIGNED and raw >> (f.bits - 1):
             raw -= 1 << f.bits
