@@ -295,3 +295,25 @@ def test_trscat_and_cpx_emergencies_travel_as_coe_service_1(rig, device, fault, 
     assert register & 0x01  # 0x1001 generic bit
     if code is not None:
         assert got_code == code
+
+
+def test_cpx_pdo_assignment_is_answered_in_address_order(rig):
+    """Tab. 27 has no 0x1C12 / 0x1C13: the wire answers them (and 0x1C00) with the PDOs in
+    the §2.3.1 order the images use, so a master's CoE mapping matches the SII's."""
+    model = rig.devices["cpx"]
+    face = face_for(model)
+    srv = CoeServer(face, model)
+
+    def upload(index: int, sub: int) -> int:
+        (reply,) = srv.handle(mbx(f"00 20 40 {index & 0xFF:02x} {index >> 8:02x} {sub:02x} "
+                                  "00 00 00 00"))
+        assert reply[8] & 0x43 == 0x43, reply.hex(" ")  # expedited
+        size = 4 - (reply[8] >> 2 & 3)
+        return int.from_bytes(reply[12:12 + size], "little")
+
+    assert [upload(0x1C00, s) for s in range(5)] == [4, 1, 2, 3, 4]
+    for assign, pdos in ((0x1C12, face.rx_pdos(model)), (0x1C13, face.tx_pdos(model))):
+        count = upload(assign, 0)
+        assert [upload(assign, s) for s in range(1, count + 1)] == [p.index for p in pdos]
+    (abort,) = srv.handle(mbx("00 20 2f 12 1c 00 00 00 00 00"))  # the assignment is fixed
+    assert abort[8:].hex(" ") == "80 12 1c 00 02 00 01 06"
