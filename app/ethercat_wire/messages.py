@@ -13,7 +13,9 @@ MAILBOX = "mailbox"  # ("mailbox", pos, data): complete SM0 message, header incl
 OUTPUTS = "outputs"  # ("outputs", pos, data): SM2 image after a master write changed it
 CYCLE = "cycle"  # ("cycle", {pos: n_frames}): exchanges per slave, at most every 10 ms
 DC = "dc"  # ("dc", pos, {"activation", "sync0_cycle_ns", "start_time_ns"})
-STATS = "stats"  # ("stats", {"frames", "lrw", "cycle_us", "wkc_errors"}), every 100 ms
+# ("stats", {"frames", "lrw", "cycle_us", "wkc_errors"}), every 100 ms: counts since B started,
+# cycle_us the mean process-data period of the last 100 ms (wire_process.Stats)
+STATS = "stats"
 ERROR = "error"  # ("error", text)
 
 # A -> B

@@ -63,8 +63,9 @@ def open_socket(iface: str) -> socket.socket:
 
 
 class Stats:
-    """Counters reported to A: cumulative frames, process-data frames, WKC errors, and the
-    mean interval between process-data frames over the last report period (the cycle)."""
+    """Counters reported to A: frames, process-data frames and WKC errors since B started
+    (cumulative), and the mean interval between process-data frames over the last report
+    period (the cycle; 0.0 when none came). B cannot see frames the master lost on its side."""
 
     def __init__(self) -> None:
         self.last_pd = 0
@@ -173,9 +174,9 @@ def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]
     while running:
         for fd, _ev in poller.poll(POLL_MS):
             if fd == sock.fileno():
-                _drain_socket(sock, line, buf, view)
+                _drain_socket(sock, line, buf, view, mail)
             else:
-                running = _drain_conn(conn, line)
+                running = _drain_conn(conn, line, mail)
         if outbox:
             for msg in outbox:
                 mail.post(msg)
@@ -192,7 +193,8 @@ def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]
         mail.flush()
 
 
-def _drain_socket(sock: socket.socket, line: Line, buf: bytearray, view: memoryview) -> None:
+def _drain_socket(sock: socket.socket, line: Line, buf: bytearray, view: memoryview,
+                  mail: Mailman) -> None:
     while True:
         try:
             n, addr = sock.recvfrom_into(buf)
@@ -206,13 +208,20 @@ def _drain_socket(sock: socket.socket, line: Line, buf: bytearray, view: memoryv
                 sock.send(frame)
         except FrameError as exc:
             logger.debug("frame dropped: %s", exc)
+        except Exception as exc:  # a bug must not take the whole wire down: drop the frame
+            logger.exception("frame dropped")
+            mail.post((messages.ERROR, f"frame dropped: {exc!r}"))
 
 
-def _drain_conn(conn: Connection, line: Line) -> bool:
+def _drain_conn(conn: Connection, line: Line, mail: Mailman) -> bool:
     try:
         while conn.poll():
-            if not apply_message(line, conn.recv()):
-                return False
+            msg = conn.recv()
+            try:
+                if not apply_message(line, msg):
+                    return False
+            except (IndexError, TypeError, ValueError) as exc:
+                mail.post((messages.ERROR, f"bad message {msg!r:.80}: {exc}"))
     except (EOFError, OSError):
         return False
     return True

@@ -1,0 +1,169 @@
+"""Process B's loop: messages from A applied to the ESCs, mail to A that never blocks, and the
+raw socket answering frames on a veth pair (root only; skipped with the reason otherwise).
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+import select
+import socket
+import subprocess
+import time
+
+import pytest
+from test_esc import description, make_line, one
+
+from app.ethercat_wire import datagrams as D
+from app.ethercat_wire import messages, wire_process
+from app.ethercat_wire import registers as R
+from app.ethercat_wire.datagrams import Cmd, Request
+from app.ethercat_wire.wire_process import Mailman, apply_message, cycle_counts
+
+
+@pytest.fixture
+def pipe():
+    a, b = multiprocessing.Pipe()
+    yield a, b
+    a.close()
+    b.close()
+
+
+def drain(conn) -> list[tuple]:
+    got = []
+    while conn.poll(0.05):
+        got.append(conn.recv())
+    return got
+
+
+def test_outputs_stats_and_cycle_counts_waiting_in_the_mail_are_replaced(pipe):
+    a, b = pipe
+    mail = Mailman(a)
+    mail.post((messages.OUTPUTS, 0, b"\x01"))
+    mail.post((messages.AL_CONTROL, 0, 2))
+    mail.post((messages.OUTPUTS, 0, b"\x02"))
+    mail.post((messages.OUTPUTS, 1, b"\x03"))
+    mail.post((messages.CYCLE, {0: 2}))
+    mail.post((messages.CYCLE, {0: 3, 1: 1}))
+    mail.post((messages.STATS, {"frames": 1}))
+    mail.post((messages.STATS, {"frames": 2}))
+    mail.flush()
+    assert drain(b) == [(messages.OUTPUTS, 0, b"\x02"), (messages.AL_CONTROL, 0, 2),
+                        (messages.OUTPUTS, 1, b"\x03"), (messages.CYCLE, {0: 5, 1: 1}),
+                        (messages.STATS, {"frames": 2})]
+
+
+def test_the_mail_never_blocks_on_a_full_pipe(pipe):
+    a, b = pipe
+    mail = Mailman(a)
+    for i in range(100):  # ~400 KB: far more than a pipe holds
+        mail.post((messages.MAILBOX, 0, bytes([i]) * 4000))
+    start = time.monotonic()
+    mail.flush()
+    assert time.monotonic() - start < 1.0 and mail.pending  # returned, the rest kept
+    received = []
+    while mail.pending:
+        received += drain(b)
+        mail.flush()
+    received += drain(b)
+    assert [m[2][0] for m in received] == list(range(100))  # in order, none lost
+
+
+def test_messages_from_a_reach_the_escs():
+    line, _, _ = make_line(3)
+    assert apply_message(line, (messages.AL_STATUS, 1, 0x14, 0x001A))
+    assert line.escs[1].mem[R.AL_STATUS] == 0x14 and line.escs[1].mem[R.AL_STATUS_CODE] == 0x1A
+    apply_message(line, (messages.LINK, 2, False))
+    assert len(line.visible) == 2
+    apply_message(line, (messages.LINK, 0, True))
+    assert len(line.visible) == 3
+    assert not apply_message(line, (messages.STOP,))
+    with pytest.raises(IndexError):
+        apply_message(line, (messages.AL_STATUS, 7, 1, 0))
+
+
+def test_cycle_counts_are_taken_once():
+    line, _, _ = make_line(2)
+    line.escs[1].exchanges = 4
+    assert cycle_counts(line) == {1: 4}
+    assert cycle_counts(line) == {}
+
+
+def test_descriptions_pickle_for_the_spawned_process():
+    import pickle
+
+    assert pickle.loads(pickle.dumps(description(1))) == description(1)
+
+
+def test_line_built_from_descriptions_answers_with_its_sii():
+    outbox: list[tuple] = []
+    line = wire_process.build_line([description(0), description(1)], outbox)
+    one(line, Cmd.APWR, -1, R.STATION_ADDRESS, b"\x02\x10")
+    one(line, Cmd.FPWR, 0x1002, R.EEPROM_CONTROL, bytes.fromhex("0001 0a00 0000"))
+    assert one(line, Cmd.FPRD, 0x1002, R.EEPROM_DATA, bytes(4)).data == (0x101).to_bytes(4,
+                                                                                      "little")
+
+
+# ---- the socket loop on a veth pair -----------------------------------------------------
+@pytest.fixture
+def veth():
+    if os.geteuid() != 0:
+        pytest.skip("a veth pair and a raw socket need root")
+    a, b = f"fwm{os.getpid() % 10000}", f"fws{os.getpid() % 10000}"
+    made = subprocess.run(["ip", "link", "add", a, "type", "veth", "peer", "name", b],
+                          capture_output=True, text=True)
+    if made.returncode:
+        pytest.skip(f"`ip link add ... type veth` refused here: {made.stderr.strip()}")
+    for name in (a, b):
+        subprocess.run(["ip", "link", "set", name, "up"], check=True)
+    yield a, b
+    subprocess.run(["ip", "link", "del", a], capture_output=True)
+
+
+def answer(sock: socket.socket, timeout_s: float) -> bytes:
+    """The next frame that came in (a packet socket also sees its own frames going out)."""
+    end = time.monotonic() + timeout_s
+    while select.select([sock], [], [], max(0.0, end - time.monotonic()))[0]:
+        data, addr = sock.recvfrom(2048)
+        if addr[2] != wire_process.PACKET_OUTGOING:
+            return data
+    raise AssertionError("no answer from the wire process")
+
+
+def test_the_wire_process_answers_frames_and_reports(veth):
+    master_if, slave_if = veth
+    ctx = multiprocessing.get_context("spawn")
+    a_end, b_end = ctx.Pipe()
+    proc = ctx.Process(target=wire_process.run,
+                       args=(slave_if, [description(i) for i in range(3)], b_end), daemon=True)
+    proc.start()
+    try:
+        assert a_end.poll(30) and a_end.recv() == (messages.READY, slave_if)
+        sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(D.ETHERTYPE))
+        sock.bind((master_if, D.ETHERTYPE))
+        frame = D.build([Request(Cmd.BRD, 0, R.TYPE, b"\0\0", idx=0x5A),
+                         Request(Cmd.BWR, 0, R.AL_CONTROL, b"\x02\x00", idx=0x5A)])
+        sock.send(frame)
+        reply = D.replies(answer(sock, 5))
+        assert [(r.cmd, r.idx, r.wkc, r.adp) for r in reply] == [
+            (Cmd.BRD, 0x5A, 3, 3), (Cmd.BWR, 0x5A, 3, 3)]
+        got = []
+        end = time.monotonic() + 5
+        while time.monotonic() < end and not any(m[0] == messages.STATS and m[1]["frames"]
+                                                 for m in got):
+            if a_end.poll(0.1):
+                got.append(a_end.recv())
+        assert [m for m in got if m[0] == messages.AL_CONTROL] == [
+            (messages.AL_CONTROL, pos, 2) for pos in range(3)]
+        a_end.send((messages.LINK, 0, False))  # the master's cable: nothing answers
+        time.sleep(0.1)
+        sock.send(frame)
+        with pytest.raises(AssertionError):
+            answer(sock, 0.3)
+        sock.close()
+        a_end.send((messages.STOP,))
+        proc.join(timeout=5)
+        assert proc.exitcode == 0
+    finally:
+        if proc.is_alive():
+            proc.terminate()
