@@ -11,16 +11,26 @@ module only moves frames:
   when its simulated time has come; several nodes on one adapter also hear each other.
 
 Interfaces (``--can-interface``): ``virtual`` (python-can's in-process bus, the default),
-``udp_multicast`` (other processes on this machine: ``--can-channel GROUP[:PORT]``, default
-239.74.163.2:43113), ``socketcan`` (a real or vcan interface where the host has one, e.g.
-``can0``). udp_multicast delivers a sender's own datagrams back to it; the adapter drops those
-echoes. docs/canopen.md has the details.
+``udp_multicast`` (other processes on this machine: ``--can-channel GROUP[:PORT][@ADDRESS]``,
+default 239.74.163.2:43113), ``socketcan`` (a real or vcan interface where the host has one,
+e.g. ``can0``). udp_multicast delivers a sender's own datagrams back to it; the adapter drops
+those echoes. docs/canopen.md has the details.
+
+udp_multicast stays on this machine unless asked otherwise (issue 7, security defaults): the
+socket is bound to the group address (not 0.0.0.0) and joins the group, and sends, on the
+loopback interface 127.0.0.1 with a TTL of 1, so no other host can inject or hear a frame.
+``@ADDRESS`` picks the interface by one of its IPv4 addresses (``@192.168.1.20``: the LAN);
+``@any`` is python-can's own socket (bound to 0.0.0.0, the group joined on the default
+interface). A master in another process must use the same interface: ``open_bus`` gives it
+the bus (docs/hardening.md, README).
 """
 
 from __future__ import annotations
 
 import logging
 import re
+import socket
+import struct
 import threading
 import time
 from collections import deque
@@ -29,6 +39,11 @@ from concurrent.futures import Future
 from typing import Any, Protocol
 
 import can
+from can.interfaces.udp_multicast.bus import (
+    SO_TIMESTAMPNS,
+    GeneralPurposeUdpMulticastBus,
+    UdpMulticastBus,
+)
 
 from devices.canopen.bus_timing import CanFrame
 from devices.canopen.node import CanOpenNode
@@ -39,8 +54,11 @@ INTERFACES = ("virtual", "udp_multicast", "socketcan")
 DEFAULT_CHANNEL = {"virtual": "fieldrig-can", "udp_multicast": "239.74.163.2",
                    "socketcan": "can0"}
 UDP_DEFAULT_PORT = 43113  # python-can's default
+UDP_DEFAULT_INTERFACE = "127.0.0.1"  # loopback: nothing leaves or enters this machine
+ANY_INTERFACE = "any"  # python-can's own socket: 0.0.0.0, the group on the default interface
 ECHO_TTL_S = 2.0  # an own datagram not seen back by then is forgotten
-_GROUP_PORT = re.compile(r"^(?P<group>\d+\.\d+\.\d+\.\d+):(?P<port>\d+)$")
+_IPV4 = r"\d+\.\d+\.\d+\.\d+"
+_CHANNEL = re.compile(rf"^(?P<group>{_IPV4})(?::(?P<port>\d+))?(?:@(?P<iface>{_IPV4}|any))?$")
 
 
 class CanBusError(RuntimeError):
@@ -52,22 +70,82 @@ class StepSource(Protocol):
 
 
 def open_bus(interface: str, channel: str | None = None) -> can.BusABC:
-    """A python-can bus for ``--can-interface`` / ``--can-channel``."""
+    """A python-can bus for ``--can-interface`` / ``--can-channel``.
+
+    A CANopen master in another process opens its side the same way, so both meet on the
+    same interface: ``canopen.Network(open_bus("udp_multicast", CHANNEL)).connect()``.
+    """
     if interface not in INTERFACES:
         raise CanBusError(f"CAN interface {interface!r} is not one of {', '.join(INTERFACES)}")
     channel = channel or DEFAULT_CHANNEL[interface]
-    kwargs: dict[str, Any] = {}
-    if interface == "udp_multicast":
-        match = _GROUP_PORT.match(channel)
-        if match:
-            channel, kwargs["port"] = match["group"], int(match["port"])
-        kwargs.setdefault("port", UDP_DEFAULT_PORT)
-        kwargs["fd"] = False
     try:
-        return can.Bus(interface=interface, channel=channel, **kwargs)
+        if interface == "udp_multicast":
+            return _open_udp(channel)
+        return can.Bus(interface=interface, channel=channel)
     except (can.CanError, OSError, ImportError, ValueError) as exc:
         raise CanBusError(f"cannot open CAN interface {interface} channel {channel}: {exc}") \
             from exc
+
+
+def _open_udp(channel: str) -> can.BusABC:
+    match = _CHANNEL.match(channel)
+    if match is None:
+        raise ValueError("the channel is GROUP[:PORT][@ADDRESS], e.g. 239.74.163.2:43113 "
+                         "(an IPv4 multicast group; @ADDRESS: an IPv4 address of this host's "
+                         "interface to use, or @any; default 127.0.0.1)")
+    group, port = match["group"], int(match["port"] or UDP_DEFAULT_PORT)
+    iface = match["iface"] or UDP_DEFAULT_INTERFACE
+    if iface == ANY_INTERFACE:
+        return can.Bus(interface="udp_multicast", channel=group, port=port, fd=False)
+    return InterfaceUdpMulticastBus(group, port, iface)
+
+
+class _InterfaceMulticast(GeneralPurposeUdpMulticastBus):
+    """python-can's multicast socket, on one interface: bound to the group address, joined
+    and sending on the interface of ``address``, TTL 1 (the wire format is python-can's)."""
+
+    def __init__(self, group: str, port: int, address: str) -> None:
+        self.address = address
+        super().__init__(group, port, hop_limit=1)
+
+    def _create_socket(self, address_family: socket.AddressFamily) -> socket.socket:
+        if address_family != socket.AF_INET:
+            raise can.CanInitializationError("an IPv4 multicast group is needed")
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            here = socket.inet_aton(self.address)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_TTL,
+                            struct.pack("@I", self.hop_limit))
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_IF, here)
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_MULTICAST_LOOP, 1)
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            if hasattr(socket, "SO_REUSEPORT"):
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
+            try:
+                sock.setsockopt(socket.SOL_SOCKET, SO_TIMESTAMPNS, 1)
+                self.timestamp_nanosecond = True
+            except OSError:
+                self.timestamp_nanosecond = False
+            # The group address, not 0.0.0.0: only datagrams sent to the group arrive.
+            sock.bind((self.group, self.port))
+            sock.setsockopt(socket.IPPROTO_IP, socket.IP_ADD_MEMBERSHIP,
+                            socket.inet_aton(self.group) + here)
+            return sock
+        except OSError as exc:
+            sock.close()
+            raise can.CanInitializationError(
+                f"cannot join {self.group}:{self.port} on {self.address}: {exc}") from exc
+
+
+class InterfaceUdpMulticastBus(UdpMulticastBus):
+    """python-can's ``udp_multicast`` bus on one interface (loopback unless told otherwise)."""
+
+    def __init__(self, channel: str, port: int = UDP_DEFAULT_PORT,
+                 address: str = UDP_DEFAULT_INTERFACE, **kwargs: Any) -> None:
+        can.BusABC.__init__(self, channel, **kwargs)  # UdpMulticastBus's own would open 0.0.0.0
+        self._multicast = _InterfaceMulticast(channel, port, address)
+        self._can_protocol = can.CanProtocol.CAN_20
+        self.channel_info = f"udp_multicast {channel}:{port} on {address}"
 
 
 class CanOpenBus:

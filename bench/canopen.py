@@ -81,12 +81,13 @@ def _serve_drive(channel: str) -> None:
 def _serve_floor(channel: str) -> None:
     import canopen
 
-    group, port = channel.split(":")
-    network = canopen.Network()
+    from app.canopen_bus import open_bus
+
+    network = canopen.Network(open_bus("udp_multicast", channel))  # loopback, as the drive's
     node = canopen.LocalNode(NODE, str(EDS))
     network.add_node(node)
     node.sdo[INDEX].raw = 0  # a value to serve (the EDS gives 0x6064 no default)
-    network.connect(interface="udp_multicast", channel=group, port=int(port), fd=False)
+    network.connect()
     print("ready", flush=True)
     sys.stdin.read()
     network.disconnect()
@@ -127,12 +128,13 @@ def _channels() -> dict[str, str]:
 def _uploads_per_s(channel: str, seconds: float) -> float:
     import canopen
 
-    group, port = channel.split(":")
-    network = canopen.Network()
+    from app.canopen_bus import open_bus
+
+    network = canopen.Network(open_bus("udp_multicast", channel))
     node = canopen.RemoteNode(NODE, str(EDS))
     node.sdo.RESPONSE_TIMEOUT = 2.0
     network.add_node(node)
-    network.connect(interface="udp_multicast", channel=group, port=int(port), fd=False)
+    network.connect()
     try:
         end = time.monotonic() + 0.2  # warm-up
         while time.monotonic() < end:

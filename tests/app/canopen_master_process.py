@@ -25,6 +25,8 @@ import canopen
 from canopen.sdo import SdoVariable
 from canopen.sdo.exceptions import SdoAbortedError
 
+from app.canopen_bus import open_bus
+
 ROOT = Path(__file__).resolve().parents[2]
 EDS = ROOT / "static" / "eds" / "servo_drive.eds"
 NODE = 1
@@ -35,12 +37,13 @@ class Master:
     def __init__(self, channel: str, port: int) -> None:
         self.frames: list[tuple[float, int, bytes, bool]] = []
         self.lock = threading.Lock()
-        self.network = canopen.Network()
+        # The drive's side opens the bus on loopback (app/canopen_bus.py): so does the master.
+        self.network = canopen.Network(open_bus("udp_multicast", f"{channel}:{port}"))
         self.network.listeners.append(_recorder(self))
         self.node = canopen.BaseNode402(NODE, str(EDS))
         self.node.sdo.RESPONSE_TIMEOUT = 2.0
         self.network.add_node(self.node)
-        self.network.connect(interface="udp_multicast", channel=channel, port=port, fd=False)
+        self.network.connect()
 
     # ---- talking to the test -------------------------------------------------------------
     @staticmethod

@@ -22,6 +22,7 @@ from pathlib import Path
 
 import pytest
 
+from app.canopen_bus import CanBusError, open_bus
 from app.modbus.server import DriveModbusServer
 from app.rig_config import RigConfigError, build_rig, parse_rig_spec
 from app.scenario import ScenarioError, check_against, parse_scenario
@@ -159,19 +160,39 @@ def test_tcp_listeners_stay_on_loopback_with_can_over_udp(udp_listeners: Listene
     assert all(_loopback(a) for a, _p in udp_listeners.tcp), udp_listeners.tcp
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "python-can's udp_multicast binds 0.0.0.0:PORT and joins the group on the default "
-    "interface (eth0): any host on the LAN can inject CAN frames. app/canopen_bus.py must bind "
-    "the group address and join on 127.0.0.1 (reported; docs/hardening.md)"))
 def test_can_over_udp_stays_on_this_machine(udp_listeners: Listeners) -> None:
     """The UDP socket takes nothing addressed to this host from outside: it is bound to the
-    loopback or the multicast group (not 0.0.0.0), and the group is joined on ``lo`` only."""
+    loopback or the multicast group (not 0.0.0.0), and the group is joined on ``lo`` only
+    (app/canopen_bus.py: loopback unless ``--can-channel GROUP:PORT@ADDRESS`` asks otherwise)."""
     assert udp_listeners.udp
     for address, _port in udp_listeners.udp:
         ip = ipaddress.ip_address(address)
         assert ip.is_loopback or ip.is_multicast, udp_listeners.udp
     assert udp_listeners.igmp_devices and set(udp_listeners.igmp_devices) == {"lo"}, \
         udp_listeners.igmp_devices
+
+
+@pytest.mark.parametrize(("suffix", "bound"), [("", "239.74.251.7"), ("@127.0.0.1", "239.74.251.7"),
+                                               ("@any", "0.0.0.0")])
+def test_can_over_udp_binds_where_the_channel_says(suffix: str, bound: str) -> None:
+    """Loopback and the group address by default; ``@any`` is python-can's own socket (what a
+    user asks for explicitly to reach another host)."""
+    port = 46000 + random.randrange(3000)
+    try:
+        bus = open_bus("udp_multicast", f"239.74.251.7:{port}{suffix}")
+    except CanBusError as exc:
+        pytest.skip(f"udp_multicast cannot bind here: {exc}")
+    try:
+        address, got_port = socket.socket(fileno=os.dup(bus.fileno())).getsockname()
+        assert (address, got_port) == (bound, port)
+    finally:
+        bus.shutdown()
+
+
+@pytest.mark.parametrize("channel", ["239.74.1.1:x", "ff02::1", "239.74.1.1@eth0", "nowhere"])
+def test_a_bad_can_channel_is_one_clear_error(channel: str) -> None:
+    with pytest.raises(CanBusError, match="GROUP\\[:PORT\\]\\[@ADDRESS\\]"):
+        open_bus("udp_multicast", channel)
 
 
 def test_modbus_server_defaults_to_loopback() -> None:
