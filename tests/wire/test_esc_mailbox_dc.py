@@ -152,3 +152,17 @@ def test_a_slave_without_dc_ignores_the_dc_registers():
     outbox.clear()
     one(line, Cmd.FPWR, 0x1001, R.DC_ACTIVATION, b"\x03")
     assert outbox == []
+
+
+def test_armw_spreads_the_reference_time_and_0x092c_shows_the_difference():
+    """ARMW on 0x0910: slave 0 reads, the others take the time; a slave whose own system time
+    is 500 ns behind shows 0x092C = 500 with bit 31 set (received time ahead of the local)."""
+    line, _, _t = make_line(3)
+    addressed(line)
+    one(line, Cmd.FPWR, 0x1002, R.DC_SYSTEM_OFFSET, struct.pack("<q", -500))
+    reply = run(line, Request(Cmd.ARMW, 0, R.DC_SYSTEM_TIME, bytes(8)))[0]
+    assert reply.wkc == 3 and reply.adp == 3
+    diff = struct.unpack("<I", one(line, Cmd.FPRD, 0x1002, R.DC_SYSTEM_DIFF, bytes(4)).data)[0]
+    assert diff == 0x80000000 | 500
+    same = struct.unpack("<I", one(line, Cmd.FPRD, 0x1003, R.DC_SYSTEM_DIFF, bytes(4)).data)[0]
+    assert same == 0
