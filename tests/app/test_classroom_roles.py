@@ -188,3 +188,18 @@ def test_open_rig_everyone_instructor(runtime: Runtime) -> None:
     client = FakeClient(9)
     assert sender.role(client) is Role.INSTRUCTOR
     assert sender.allow(client, Operation.SCENARIO)
+
+
+def test_docs_list_every_instructor_only_action() -> None:
+    """docs/classroom.md's table names every row of INSTRUCTOR_ONLY under its device kind."""
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[2] / "docs" / "classroom.md").read_text()
+    rows = {line.split("|")[1].strip().strip("`"): line.split("|")[2]
+            for line in doc.splitlines() if line.startswith("| `") or line.startswith("| any")}
+    for rule in INSTRUCTOR_ONLY:
+        kind = "any" if rule.kind == "*" else rule.kind
+        cell = rows[kind]
+        written = f"`{rule.action}`" + "".join(f" {k}={str(v).lower()}"
+                                             for k, v in rule.when.items())
+        assert written in cell, (kind, written)
