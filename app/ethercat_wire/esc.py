@@ -285,7 +285,8 @@ class Esc:
             if fm.log_start >= end or fm.log_end <= address:
                 continue
             lo, hi = max(address, fm.log_start), min(end, fm.log_end)
-            r, w = _bit_map(mem, fm, cmd, frame, offset - address, lo, hi)
+            r, w = R.copy_bits(mem, fm, cmd != Cmd.LRD, cmd != Cmd.LWR, frame,
+                                 offset - address, lo, hi)
             read |= r
             wrote |= w
             if w:
@@ -295,26 +296,6 @@ class Esc:
         if cmd == Cmd.LRW:
             return (1 if read else 0) + (2 if wrote else 0)
         return 1 if (read if cmd == Cmd.LRD else wrote) else 0
-
-
-def _bit_map(mem: bytearray, fm: R.FmmuMap, cmd: int, frame: bytearray, base: int,
-             lo: int, hi: int) -> tuple[bool, bool]:
-    """A bit-granular FMMU (SOEM maps slaves with fewer than 8 bits this way)."""
-    sbit, ebit, pbit = fm.bits  # type: ignore[misc]
-    first = fm.log_start * 8 + sbit
-    last = (fm.log_end - 1) * 8 + ebit
-    read = wrote = False
-    for lbit in range(max(first, lo * 8), min(last + 1, hi * 8)):
-        phys = fm.phys_start * 8 + pbit + (lbit - first)
-        fbyte, fmask = base + (lbit >> 3), 1 << (lbit & 7)
-        pbyte, pmask = phys >> 3, 1 << (phys & 7)
-        if fm.kind & R.FMMU_WRITE and cmd != Cmd.LRD:
-            mem[pbyte] = (mem[pbyte] | pmask) if frame[fbyte] & fmask else (mem[pbyte] & ~pmask)
-            wrote = True
-        if fm.kind & R.FMMU_READ and cmd != Cmd.LWR:
-            frame[fbyte] = (frame[fbyte] | fmask) if mem[pbyte] & pmask else (frame[fbyte] & ~fmask)
-            read = True
-    return read, wrote
 
 
 class Line:

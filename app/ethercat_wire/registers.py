@@ -212,3 +212,25 @@ def decode_fmmus(mem: bytearray, count: int) -> tuple[FmmuMap, ...]:
         maps.append(FmmuMap(log_start, log_start + length, phys, kind & 0x03,
                             None if whole else (sbit & 7, ebit & 7, pbit & 7)))
     return tuple(maps)
+
+
+def copy_bits(mem: bytearray, fm: FmmuMap, may_write: bool, may_read: bool, frame: bytearray,
+              base: int, lo: int, hi: int) -> tuple[bool, bool]:
+    """Logical bytes [lo, hi) of a datagram whose byte 0 sits at frame[base] through a
+    bit-granular FMMU (SOEM maps slaves with fewer than 8 bits this way): (read, wrote)."""
+    sbit, ebit, pbit = fm.bits  # type: ignore[misc]
+    first = fm.log_start * 8 + sbit
+    last = (fm.log_end - 1) * 8 + ebit
+    write = may_write and bool(fm.kind & FMMU_WRITE)
+    read = may_read and bool(fm.kind & FMMU_READ)
+    touched = False
+    for lbit in range(max(first, lo * 8), min(last + 1, hi * 8)):
+        touched = True
+        phys = fm.phys_start * 8 + pbit + (lbit - first)
+        fbyte, fmask = base + (lbit >> 3), 1 << (lbit & 7)
+        pbyte, pmask = phys >> 3, 1 << (phys & 7)
+        if write:
+            mem[pbyte] = (mem[pbyte] | pmask) if frame[fbyte] & fmask else (mem[pbyte] & ~pmask)
+        if read:
+            frame[fbyte] = (frame[fbyte] | fmask) if mem[pbyte] & pmask else (frame[fbyte] & ~fmask)
+    return read and touched, write and touched
