@@ -24,9 +24,9 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from devices.device import Action, CommandError, DeviceModel, Param
-from devices.ethercat import AlState
+from devices.ethercat import AlState, parse_emergency_frame
 from devices.events import (
-    CommError,
+    CoeEmergency,
     Event,
     LogLine,
     NetworkRecovery,
@@ -36,6 +36,7 @@ from devices.events import (
 )
 from devices.master.dc import DC_FAULTS, DcState, DcUnit
 from devices.master.hooks import Callback, Hooks
+from devices.master.line import LineMixin
 from devices.master.links import TARGETS, Slave, SlaveLink, next_state
 from devices.master.log_styles import STYLES, Entry, render
 from devices.master.network import Mapping as NetworkMapping
@@ -61,7 +62,7 @@ def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
     return f"{at:%d/%m/%Y %H.%M.%S} {at.microsecond // 1000:03d} ms"
 
 
-class EtherCatMaster(StartupMixin, DeviceModel):
+class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     KIND = "master"
     ACTIONS: ClassVar[Mapping[str, Action]] = {a.name: a for a in (
         Action("resync", "Take every slave through INIT and back to the target state (a "
@@ -176,21 +177,6 @@ class EtherCatMaster(StartupMixin, DeviceModel):
             raise CommandError(f"{what} {value}: the line has positions 0..{len(self.links) - 1}")
         return value
 
-    def cmd_pull_cable(self, cable: int) -> None:
-        self.cables[self._position(cable, "cable")] = False
-        self._apply_physical_links()
-
-    def cmd_plug_cable(self, cable: int) -> None:
-        self.cables[self._position(cable, "cable")] = True
-        self._apply_physical_links()
-
-    def cmd_power_slave(self, position: int, on: bool) -> None:
-        self.links[self._position(position, "position")].slave.set_power(on)
-        self._apply_physical_links()
-
-    def cmd_lose_frames(self, count: int) -> None:
-        self.to_lose += count
-
     def cmd_dc_fault(self, kind: str) -> None:
         self.dc.fault = kind
         self._slave_dc_fault(kind)
@@ -225,45 +211,21 @@ class EtherCatMaster(StartupMixin, DeviceModel):
             link.slave.exchange_frame(self.now_us)
         self.frames += 1
 
+    def external_emergency(self, position: int, frame: bytes) -> None:
+        """An emergency the wire master read from a slave's mailbox: counted, logged, event."""
+        link = self.links[self._position(position, "position")]
+        code, register, data = parse_emergency_frame(frame)
+        link.counters.emergencies += 1
+        self._event(CoeEmergency(self.now_us, self.device_id, position=position,
+                                 address=link.slave.station_address, code=code,
+                                 register=register, data=data))
+        self._log(link, "emergency", code=code, register=register, data=data)
+
     def external_stats(self, frames: int, lost_frames: int, cycle_us: int,
                        wkc_errors: int) -> None:
         self.frames, self.lost_frames, self.cycle_us = frames, lost_frames, cycle_us
         for link in self.links:
             link.counters.wkc_errors = wkc_errors
-
-    # ---- the line ---------------------------------------------------------------------------
-    def _powered(self, position: int) -> bool:
-        return bool(getattr(self.links[position].slave, "powered", True))
-
-    def _connected(self, position: int) -> bool:
-        """The master's frames reach this position: every cable up to it plugged, every
-        slave before it powered (an unpowered slave does not pass frames on)."""
-        return all(self.cables[: position + 1]) and all(
-            self._powered(p) for p in range(position))
-
-    def _apply_physical_links(self) -> None:
-        """Each port's link as the cables and the neighbours' power make it (LINK LEDs)."""
-        n = len(self.links)
-        for p, link in enumerate(self.links):
-            want_in = self.cables[p] and (p == 0 or self._powered(p - 1))
-            if want_in != self.phys_in[p]:
-                self.phys_in[p] = want_in
-                link.slave.set_link(want_in, "in")
-            if p + 1 < n:
-                want_out = self.cables[p + 1] and self._powered(p + 1)
-                if want_out != self.phys_out[p]:
-                    self.phys_out[p] = want_out
-                    link.slave.set_link(want_out, "out")
-
-    def _cause(self, position: int) -> str:
-        for p in range(position + 1):
-            if not self.cables[p]:
-                return f"cable {p} pulled"
-            if p < position and not self._powered(p):
-                return f"the slave at position {p} is off"
-        if not self._powered(position):
-            return "powered off"
-        return "no link on its IN port"
 
     # ---- stepping ---------------------------------------------------------------------------
     def step(self, now_us: int) -> None:
@@ -299,50 +261,6 @@ class EtherCatMaster(StartupMixin, DeviceModel):
             self._watch_states()
         self._step_dc(dt_us)
         self.hooks.run()
-
-    def _lose_frame(self) -> None:
-        """One cycle's frame lost: counted per slave; one event per slave per burst."""
-        first = not self._bursting
-        burst = self.to_lose
-        self.to_lose -= 1
-        self.lost_frames += 1
-        self._bursting = self.to_lose > 0
-        for link in self.links:
-            if link.present:
-                link.counters.lost_frames += 1
-                if first:
-                    self._event(CommError(self.now_us, self.device_id,
-                                          position=link.position,
-                                          address=link.slave.station_address,
-                                          reason="lost_frames", count=burst))
-        if first:
-            self._log(None, "lost_frames", count=burst)
-
-    def _find(self, link: SlaveLink) -> bool:
-        """The slave answers (again); True when it is a recovery after a loss."""
-        slave = link.slave
-        link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
-        link.pending, link.identity_ok, link.reached_op = None, None, False
-        if link.diagnosis.startswith("no link"):
-            link.diagnosis = ""
-        if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
-            self._log(link, "found", state=slave.al_state.label)
-            if slave.al_state is not AlState.INIT and not self.external:
-                self._request(link, AlState.INIT)
-        return link.lost_once
-
-    def _lose(self, link: SlaveLink) -> None:
-        if not link.present:
-            return
-        cause = self._cause(link.position)
-        link.present, link.believed, link.pending = False, None, None
-        link.lost_once, link.reached_op, link.seen = True, False, None
-        link.diagnosis = f"no link: {cause}"
-        self.network_op = False
-        self._event(CommError(self.now_us, self.device_id, position=link.position,
-                              address=link.slave.station_address, reason="link_lost",
-                              count=1))
-        self._log(link, "lost", cause=cause)
 
     def _watch_states(self) -> None:
         """Slave state changes, and the first OP of each slave / of the network (resync)."""

@@ -62,3 +62,18 @@ def test_external_mode_leaves_the_line_to_the_wire_master() -> None:
     master.external_stats(frames=10, lost_frames=2, cycle_us=2000, wkc_errors=1)
     view = master_view(rig)
     assert view["stats"] == {"frames": 10, "lost_frames": 2, "cycle_us": 2000}
+
+
+def test_external_emergency_is_logged_and_counted() -> None:
+    from devices.ethercat import emergency_frame
+
+    rig = line_in_op()
+    master = rig.devices["master"]
+    master.set_external(True)
+    master.external_emergency(2, emergency_frame(0x2320, 0x03, bytes.fromhex("2202020003")))
+    events = rig.take_events()
+    assert [e.to_record()["data"] for e in events if e.kind == "coe_emergency"] == [
+        "22 02 02 00 03"]
+    assert master_view(rig)["slaves"][2]["counters"]["emergencies"] == 1
+    assert master.log[-1]["text"] == \
+        "'Box 3 (CPX-E-EC)' (1003): CoE - Emergency (Hex: 2320, 03, 22 02 02 00 03')."

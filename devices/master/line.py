@@ -1,0 +1,133 @@
+"""The line as the master sees it: cables, the slaves' power, lost frames, slaves lost and found.
+
+Cable N feeds line position N (from the master for N = 0, else from slave N-1's OUT port). The
+master's frames reach a position when every cable up to it is plugged and every slave before
+it is powered (an unpowered slave passes nothing on). The ports' physical links follow the
+cables and the neighbours' power (the slaves' LINK LEDs, the FastCAT's 0x13). See
+docs/ethercat-master.md "Line faults".
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from devices.ethercat import AlState
+from devices.events import CommError
+from devices.master.links import SlaveLink
+
+if TYPE_CHECKING:
+    from devices.events import Event
+
+
+class LineMixin:
+    """Line handling of :class:`~devices.master.master.EtherCatMaster`."""
+
+    links: list[SlaveLink]
+    cables: list[bool]
+    phys_in: list[bool]
+    phys_out: list[bool]
+    to_lose: int
+    lost_frames: int
+    network_op: bool
+    external: bool
+    now_us: int
+    device_id: str
+    _bursting: bool
+
+    if TYPE_CHECKING:
+        def _log(self, link: SlaveLink | None, message: str, **params: object) -> None: ...
+        def _event(self, event: Event) -> None: ...
+        def _request(self, link: SlaveLink, target: AlState) -> None: ...
+        def _position(self, value: int, what: str) -> int: ...
+
+    def cmd_pull_cable(self, cable: int) -> None:
+        self.cables[self._position(cable, "cable")] = False
+        self._apply_physical_links()
+
+    def cmd_plug_cable(self, cable: int) -> None:
+        self.cables[self._position(cable, "cable")] = True
+        self._apply_physical_links()
+
+    def cmd_power_slave(self, position: int, on: bool) -> None:
+        self.links[self._position(position, "position")].slave.set_power(on)
+        self._apply_physical_links()
+
+    def cmd_lose_frames(self, count: int) -> None:
+        self.to_lose += count
+
+    def _powered(self, position: int) -> bool:
+        return bool(getattr(self.links[position].slave, "powered", True))
+
+    def _connected(self, position: int) -> bool:
+        """The master's frames reach this position: every cable up to it plugged, every
+        slave before it powered (an unpowered slave does not pass frames on)."""
+        return all(self.cables[: position + 1]) and all(
+            self._powered(p) for p in range(position))
+
+    def _apply_physical_links(self) -> None:
+        """Each port's link as the cables and the neighbours' power make it (LINK LEDs)."""
+        n = len(self.links)
+        for p, link in enumerate(self.links):
+            want_in = self.cables[p] and (p == 0 or self._powered(p - 1))
+            if want_in != self.phys_in[p]:
+                self.phys_in[p] = want_in
+                link.slave.set_link(want_in, "in")
+            if p + 1 < n:
+                want_out = self.cables[p + 1] and self._powered(p + 1)
+                if want_out != self.phys_out[p]:
+                    self.phys_out[p] = want_out
+                    link.slave.set_link(want_out, "out")
+
+    def _cause(self, position: int) -> str:
+        for p in range(position + 1):
+            if not self.cables[p]:
+                return f"cable {p} pulled"
+            if p < position and not self._powered(p):
+                return f"the slave at position {p} is off"
+        if not self._powered(position):
+            return "powered off"
+        return "no link on its IN port"
+
+    def _lose_frame(self) -> None:
+        """One cycle's frame lost: counted per slave; one event per slave per burst."""
+        first = not self._bursting
+        burst = self.to_lose
+        self.to_lose -= 1
+        self.lost_frames += 1
+        self._bursting = self.to_lose > 0
+        for link in self.links:
+            if link.present:
+                link.counters.lost_frames += 1
+                if first:
+                    self._event(CommError(self.now_us, self.device_id,
+                                          position=link.position,
+                                          address=link.slave.station_address,
+                                          reason="lost_frames", count=burst))
+        if first:
+            self._log(None, "lost_frames", count=burst)
+
+    def _find(self, link: SlaveLink) -> bool:
+        """The slave answers (again); True when it is a recovery after a loss."""
+        slave = link.slave
+        link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
+        link.pending, link.identity_ok, link.reached_op = None, None, False
+        if link.diagnosis.startswith("no link"):
+            link.diagnosis = ""
+        if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
+            self._log(link, "found", state=slave.al_state.label)
+            if slave.al_state is not AlState.INIT and not self.external:
+                self._request(link, AlState.INIT)
+        return link.lost_once
+
+    def _lose(self, link: SlaveLink) -> None:
+        if not link.present:
+            return
+        cause = self._cause(link.position)
+        link.present, link.believed, link.pending = False, None, None
+        link.lost_once, link.reached_op, link.seen = True, False, None
+        link.diagnosis = f"no link: {cause}"
+        self.network_op = False
+        self._event(CommError(self.now_us, self.device_id, position=link.position,
+                              address=link.slave.station_address, reason="link_lost",
+                              count=1))
+        self._log(link, "lost", cause=cause)
