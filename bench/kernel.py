@@ -8,13 +8,16 @@ wall time would. A figure of 20x means 20 simulated seconds per CPU second.
 Figures, each with its target (issue 7 sets two: the default rig >= 20x on one core, and 100
 default rigs in real time on one core, i.e. >= 1x for the hundred together):
 
-- the default rig (``static/rigs/default.toml``): the first 5 s from power-on (internal-bus scan,
-  master walking to OP), idle in OP, cyclic (the Reset-fault bit of the coupler's RxPDO written
-  through the object dictionary every cycle, as a master writes its process image) and in
-  motion (AX2 shafts turning, an analog input moving every 10 ms, analog outputs ramping to a
-  new target every 250 ms, all through rig commands); then CPU per step by device;
-- the FastCAT line: the default rig without its servo drives, i.e. the coupler with its seven
-  modules and the built-in master, the default rig issue 7 was written against;
+- each rig file (``static/rigs/default.toml`` as shipped and ``ethercat_line.toml``, the full
+  line master -> FastCAT -> TRS-CAT -> CPX-E-EC -> drive; ``--rig FILE`` for others): the first
+  5 s from power-on (internal-bus scan, master walking to OP), idle in OP, cyclic (the
+  Reset-fault bit of the coupler's RxPDO written through the object dictionary every cycle, as
+  a master writes its process image) and in motion (AX2 shafts turning, an analog input moving
+  every 10 ms, analog outputs ramping to a new target every 250 ms, every servo drive enabled
+  and jogging one way then the other each second, all through rig commands); then CPU per
+  step by device;
+- the FastCAT line: the first rig with its couplers and master only (the default rig issue 7
+  was written against);
 - 1, 10 and 100 rigs of each stepped together in one loop, idle in OP, after all of them booted
   (a count that would take more than 25 s of CPU is projected from the one before, and says so);
 - 1, 4, 8 and 16 modules on one coupler (a mix of digital, analog and encoder modules with at
@@ -22,12 +25,13 @@ default rigs in real time on one core, i.e. >= 1x for the hundred together):
 
 Method and latest figures: docs/performance.md.
 
-    python -m bench kernel [--quick]
+    python -m bench kernel [--quick] [--rig FILE ...]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import os
 import platform
@@ -36,11 +40,14 @@ import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigSpec, build_rig, load_rig_spec, parse_rig_spec
+from devices.device import CommandError
 from devices.ethercat import AlState
 from devices.fastcat.coupler import FastCat
+from devices.servo.drive import ServoDrive
 
 TARGET_ONE = 20.0  # x real time: one default rig on one core
 TARGET_MANY = 1.0  # x real time for 100 default rigs stepped together on one core
@@ -48,6 +55,8 @@ MANY = 100
 BOOT_LIMIT_S = 12.0  # power-on to OP takes about 3.5 s with seven modules
 MIX = ("DB16", "DI16", "DO16", "AI8D", "AO4", "AI8TC", "AX2", "AI8C")  # 4 analog per 8
 MODULE_COUNTS = (1, 4, 8, 16)
+# The rig files measured: the default rig as shipped and the full EtherCAT line of issue 5.
+RIG_FILES = (DEFAULT_RIG, DEFAULT_RIG.parent / "ethercat_line.toml")
 
 
 @dataclass(frozen=True)
@@ -91,7 +100,12 @@ def couplers(rig: Rig) -> list[FastCat]:
 
 
 def in_op(rig: Rig) -> bool:
-    return all(fc.al_state is AlState.OP and fc.scan is None for fc in couplers(rig))
+    """Every coupler in OP with its scan done, every slave on the master's line in OP."""
+    if not all(fc.al_state is AlState.OP and fc.scan is None for fc in couplers(rig)):
+        return False
+    master = rig.devices.get("master")
+    links = getattr(master, "links", [])
+    return all(link.slave.al_state is AlState.OP for link in links)
 
 
 def boot(rigs: Sequence[Rig]) -> None:
@@ -133,8 +147,16 @@ def cyclic(rig: Rig) -> Callable[[int], None]:
     return each
 
 
+def drives(rig: Rig) -> list[ServoDrive]:
+    return [d for d in rig.devices.values() if isinstance(d, ServoDrive)]
+
+
 def motion(rig: Rig) -> Callable[[int], None]:
-    """Shafts turning, analog inputs moving, analog outputs ramping (rig commands)."""
+    """Shafts turning, analog inputs moving, analog outputs ramping, every servo drive jogging
+    one way then the other each second (rig commands)."""
+    axes = [d.device_id for d in drives(rig)]
+    for axis in axes:
+        rig.apply(axis, "enable", {"on": True})
     inputs: list[str] = []
     outputs: list[tuple[str, int]] = []
     for fc in couplers(rig):
@@ -154,6 +176,10 @@ def motion(rig: Rig) -> Callable[[int], None]:
                 outputs.append((fc.device_id, index))
 
     def each(i: int) -> None:
+        if i % 1000 == 0:
+            for axis in axes:
+                with contextlib.suppress(CommandError):  # a drive powered off: it stays still
+                    rig.apply(axis, "jog", {"direction": 1 if (i // 1000) % 2 == 0 else -1})
         if i % 10 == 0:
             for target in inputs:  # 0..5 and back over 2 s: in range of every input kind
                 value = 2.5 + 2.5 * math.sin(i / 2000 * 2 * math.pi)
@@ -266,20 +292,20 @@ def modules(d: Durations) -> list[str]:
     return out
 
 
-def report(d: Durations, counts: Sequence[int] = (1, 10, MANY)) -> Iterator[str]:
+def report(d: Durations, counts: Sequence[int] = (1, 10, MANY),
+           files: Sequence[Path] = RIG_FILES) -> Iterator[str]:
     """The figures, section by section as each is measured."""
-    spec = default_spec()
-    devices = ", ".join(build_rig(spec, state_dir=None).devices)
-    line_spec = fastcat_line_spec(spec)
-    line_devices = ", ".join(build_rig(line_spec, state_dir=None).devices)
+    specs = [(path.name, load_rig_spec(path)) for path in files]
+    line_spec = fastcat_line_spec(specs[0][1])
+    specs.append(("FastCAT line (the first rig's FastCAT and master only)", line_spec))
     yield ("Simulation kernel: simulated seconds per CPU second (time.process_time), "
-           f"{spec.step_us / 1000:g} ms cycle")
+           f"{line_spec.step_us / 1000:g} ms cycle")
     yield f"  machine: {machine()}"
-    yield from one_rig(f"default rig ({DEFAULT_RIG.name}: {devices})", spec, d)
-    yield from one_rig(f"FastCAT line (the default rig without servo drives: {line_devices})",
-                       line_spec, d)
-    yield from many_rigs("default rig", spec, d, counts)
-    yield from many_rigs("FastCAT line", line_spec, d, counts)
+    for name, spec in specs:
+        devices = ", ".join(build_rig(spec, state_dir=None).devices)
+        yield from one_rig(f"{name} ({devices})", spec, d)
+    for name, spec in specs:
+        yield from many_rigs(name.split(" (")[0], spec, d, counts)
     yield from modules(d)
 
 
@@ -288,9 +314,12 @@ def main(argv: list[str] | None = None) -> int:
                                 description=(__doc__ or "").split("\n")[0])
     p.add_argument("--quick", action="store_true",
                    help="short runs, 10 rigs at most (a smoke test, not a figure)")
+    p.add_argument("--rig", action="append", type=Path, default=None, metavar="TOML",
+                   help="a rig file to measure (repeatable; default: "
+                        f"{', '.join(str(f.name) for f in RIG_FILES)})")
     args = p.parse_args(argv)
     durations, counts = (QUICK, (1, 10)) if args.quick else (Durations(), (1, 10, MANY))
-    for text in report(durations, counts):
+    for text in report(durations, counts, args.rig or RIG_FILES):
         print(text, flush=True)
     return 0
 
