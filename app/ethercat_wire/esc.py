@@ -79,6 +79,8 @@ class Esc:
         if ado < R.DC_SPEED_COUNTER and end > R.DC_SYSTEM_TIME:
             self._dc_read(ado, end)
         data = bytes(self.mem[ado:end])
+        if end > R.MEMORY_SIZE:  # past the 64 KiB: nothing there, the datagram keeps its size
+            data = data.ljust(length, b"\0")
         mbx = self.sms.mbx_in
         if mbx is not None and self._mbx_full is not None and ado <= mbx.last < end:
             self._mailbox_read()
@@ -86,6 +88,8 @@ class Esc:
 
     def write(self, ado: int, data: bytes) -> None:
         end = ado + len(data)
+        if end > R.MEMORY_SIZE:
+            data, end = data[:R.MEMORY_SIZE - ado], R.MEMORY_SIZE
         if ado >= R.PROCESS_RAM:
             self.mem[ado:end] = data
             self._after_ram_write(ado, end)
@@ -252,6 +256,8 @@ class Esc:
             if fm.bits is not None:
                 continue
             p_end = fm.phys_start + fm.log_end - fm.log_start
+            if p_end > R.MEMORY_SIZE:
+                continue  # a map past the 64 KiB does not exist on a real ESC either
             plain = not any(sm.start < p_end and sm.end > fm.phys_start for sm in watched)
             plan.append((fm.log_start, fm.log_end, fm.phys_start,
                          bool(fm.kind & R.FMMU_READ), bool(fm.kind & R.FMMU_WRITE), plain))

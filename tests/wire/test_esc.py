@@ -233,3 +233,14 @@ def test_vanished_slaves_leave_the_frame_untouched_and_count_as_wkc_error():
     assert one(line, Cmd.BRD, 0, R.TYPE, b"\0\0").wkc == 3
     line.set_link(0, False)
     assert not line.process(D.build([Request(Cmd.BRD, 0, 0, b"\0\0")]))  # master link down
+
+
+def test_access_past_the_64_kib_keeps_the_frame_size():
+    line, _, _ = make_line(1)
+    addressed(line)
+    frame = D.build([Request(Cmd.FPWR, 0x1001, 0xFFFE, b"\x01\x02\x03\x04"),
+                     Request(Cmd.FPRD, 0x1001, 0xFFFE, bytes(4))])
+    size = len(frame)
+    assert line.process(frame) and len(frame) == size
+    assert D.replies(frame)[1].data == b"\x01\x02\x00\x00"
+    assert len(line.escs[0].mem) == R.MEMORY_SIZE
