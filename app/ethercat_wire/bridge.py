@@ -150,7 +150,8 @@ class WireBridge:
         self.process: Any = None
         self._inbox: collections.deque[tuple[Any, ...]] = collections.deque()
         self._outbox: collections.deque[tuple[Any, ...]] = collections.deque()
-        self._stop = threading.Event()
+        self._stop = threading.Event()  # the pump and the step listener end
+        self._stopped = False  # stop() done
         self._pump_thread: threading.Thread | None = None
         self._slaves: list[_Slave] = []
         self._master: Any = None
@@ -198,8 +199,9 @@ class WireBridge:
         raise RigConfigError(OPTION, "", "the EtherCAT wire process did not start in time")
 
     def stop(self) -> None:
-        if self._stop.is_set():
+        if self._stopped:
             return
+        self._stopped = True
         self._stop.set()
         if self._pump_thread is not None:
             self._pump_thread.join(timeout=2)
@@ -235,8 +237,13 @@ class WireBridge:
                     conn.send(self._outbox.popleft())
         except (EOFError, OSError) as exc:
             if not self._stop.is_set():
-                logger.error("EtherCAT wire process gone: %s", exc)
+                logger.error("EtherCAT wire process gone: %s; the built-in master takes the "
+                             "line back", exc)
                 self.errors.append(f"wire process gone: {exc}")
+                self._stop.set()
+                master = self._master
+                if master is not None and hasattr(master, "set_external"):
+                    self.runtime.submit(lambda: master.set_external(False))
 
     def _send(self, *message: Any) -> None:
         self._outbox.append(message)

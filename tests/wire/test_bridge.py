@@ -203,3 +203,10 @@ def test_dc_settings_are_kept_and_offered_to_the_model(wire):
     settings = {"activation": 3, "sync0_cycle_ns": 4_000_000, "start_time_ns": 123}
     b.send(msg.DC, 1, settings)
     wait_for(lambda: bridge.dc.get(1) == settings)
+
+
+def test_a_dead_wire_process_hands_the_line_back(wire):
+    runtime, bridge, b = wire
+    b.conn.close()  # process B gone: the pipe breaks
+    wait_for(lambda: sim(runtime, lambda: master_view(runtime).external) is False)
+    assert any("gone" in e for e in bridge.errors)
