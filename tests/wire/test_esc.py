@@ -7,6 +7,7 @@ read FMMU, +2 for a write FMMU).
 
 from __future__ import annotations
 
+import contextlib
 import struct
 
 import pytest
@@ -244,3 +245,26 @@ def test_access_past_the_64_kib_keeps_the_frame_size():
     assert line.process(frame) and len(frame) == size
     assert D.replies(frame)[1].data == b"\x01\x02\x00\x00"
     assert len(line.escs[0].mem) == R.MEMORY_SIZE
+
+
+def test_random_datagrams_never_break_the_line():
+    """Whatever a master (or noise) sends: the answer has the frame's size, or the frame is
+    rejected as malformed; the ESC memory stays 64 KiB."""
+    import random
+
+    rng = random.Random(8)
+    line, _, _ = make_line(3)
+    configure(line)
+    for _ in range(1000):
+        requests = [Request(rng.randrange(16), rng.randrange(0x10000), rng.choice(
+            [rng.randrange(0x10000), rng.randrange(0x1000), 0x0120, 0x0502, 0x0800, 0x0910]),
+            rng.randbytes(rng.randrange(0, 40))) for _ in range(rng.randrange(1, 4))]
+        frame = D.build(requests)
+        size = len(frame)
+        line.process(frame)
+        assert len(frame) == size
+    for _ in range(500):
+        noise = bytearray(D.build([Request(Cmd.BRD, 0, 0, b"\0\0")])[:16]) + rng.randbytes(40)
+        with contextlib.suppress(D.FrameError):
+            line.process(noise)
+    assert all(len(esc.mem) == R.MEMORY_SIZE for esc in line.escs)
