@@ -168,6 +168,9 @@ def test_fastcat_emergency_reaches_the_mailbox(wire):
     runtime.command("fastcat/2", "module_failure", {"active": True}).result(timeout=WAIT_S)
     reply = b.expect(lambda m: m[:2] == (msg.MAILBOX_REPLY, 0) and m[2][6:8] == b"\x00\x10")
     assert reply[2][8:].hex(" ") == "00 ff 81 02 00 00 04 00"
+    # the master panel counts and logs what the wire master received (external_emergency)
+    wait_for(lambda: runtime.frame.snapshot["devices"]["master"]["slaves"][0]["counters"]
+             ["emergencies"] >= 1)
 
 
 def test_stop_tells_b_and_hands_the_line_back():
