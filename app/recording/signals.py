@@ -17,6 +17,8 @@ from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
+import rerun as rr
+
 from devices.leds import LedPattern, is_lit
 
 ROOT = "rig"
@@ -59,7 +61,9 @@ class Signal(NamedTuple):
 
 @functools.lru_cache(maxsize=4096)
 def device_path(device_id: str, *parts: object) -> str:
-    return "/".join([ROOT, device_id, *(str(p) for p in parts)])
+    """``rig/<device>/<part>/...``; each part escaped, so a name with a space or a slash
+    (the TRS-CAT's "LINK-ACT IN", "I/O 1") stays one path part."""
+    return "/".join([ROOT, *(rr.escape_entity_path_part(str(p)) for p in (device_id, *parts))])
 
 
 def state_lane(device_id: str, machine: str) -> str:

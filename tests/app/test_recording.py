@@ -473,3 +473,11 @@ def test_a_restarted_rig_continues_the_timeline(tmp_path: Path) -> None:
     assert [t for t, _ in run_led if second_start <= t < second_start + 20_000]
     assert value_at(run_led, second_start) == run_led[0][1]
     assert max(t for t, _ in run_led) <= second_start + S
+
+
+def test_led_names_with_spaces_and_slashes_stay_one_part(tmp_path: Path) -> None:
+    """The TRS-CAT's "LINK-ACT IN" and "I/O 1" LEDs: one entity each, no nesting, no warning."""
+    from app.recording.signals import device_path
+
+    assert device_path("trscat", "led", "I/O 1") == "rig/trscat/led/I\\/O\\ 1"
+    assert device_path("fastcat", "led", "2.yellow") == "rig/fastcat/led/2.yellow"
