@@ -392,3 +392,21 @@ def wait_for_line(proc: subprocess.Popen, text: str, timeout_s: float) -> None:
         if text in line:
             return
     raise AssertionError(f"the app did not print {text!r}: {''.join(seen)[-2000:]}")
+
+
+def test_a_pulled_cable_makes_slaves_vanish_from_the_wire(session):
+    """The dashboard pulls cable 2 (into the CPX-E-EC): the CPX-E-EC and the drive vanish, the
+    master's working counter falls short and the master panel counts the WKC errors; plugged
+    back, the frames are whole again. Runs last: it leaves the two slaves to be re-started."""
+    runtime, _, master, _ = session
+    model_call(runtime, lambda: runtime.rig.apply("master", "pull_cable", {"cable": 2}))
+    time.sleep(0.3)
+    bad, _, _ = master("cycles", 50, PERIOD_S, {})
+    assert bad == 50
+    time.sleep(0.3)  # B reports its counters every 100 ms
+    panel = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
+    assert panel["slaves"][0]["counters"]["wkc_errors"] >= 50  # B's count, on the panel
+    model_call(runtime, lambda: runtime.rig.apply("master", "plug_cable", {"cable": 2}))
+    time.sleep(0.3)
+    n, _ = master("init")  # a master re-scans after a topology change
+    assert n == 4
