@@ -22,6 +22,7 @@ import argparse
 import contextlib
 import multiprocessing
 import os
+import shutil
 import statistics
 import subprocess
 import threading
@@ -139,6 +140,8 @@ def over_the_wire(n: int, seconds: float, periods_us: tuple[int, ...]) -> dict |
         import pysoem  # noqa: F401
     except ImportError:
         return "needs pysoem"
+    if shutil.which("ip") is None:
+        return "needs the `ip` command (iproute2)"
     a, b = f"bwm{os.getpid() % 10000}", f"bws{os.getpid() % 10000}"
     made = subprocess.run(["ip", "link", "add", a, "type", "veth", "peer", "name", b],
                           capture_output=True, text=True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import multiprocessing
 import os
 import select
+import shutil
 import socket
 import subprocess
 import time
@@ -109,6 +110,8 @@ def test_line_built_from_descriptions_answers_with_its_sii():
 def veth():
     if os.geteuid() != 0:
         pytest.skip("a veth pair and a raw socket need root")
+    if shutil.which("ip") is None:
+        pytest.skip("no `ip` command (iproute2)")
     a, b = f"fwm{os.getpid() % 10000}", f"fws{os.getpid() % 10000}"
     made = subprocess.run(["ip", "link", "add", a, "type", "veth", "peer", "name", b],
                           capture_output=True, text=True)
