@@ -72,3 +72,18 @@ def test_files_one_per_slave(tmp_path):
     paths = esi.write([description(0), replace(description(1), name="A/B c")], tmp_path)
     assert [p.name for p in paths] == ["FieldRig_Slave_0.xml", "FieldRig_A_B_c.xml"]
     assert ET.parse(paths[1]).getroot().findtext("Descriptions/Devices/Device/Name") == "A/B c"
+
+
+def test_static_esi_files_are_those_of_the_default_rig(tmp_path):
+    """static/esi/ is what `python -m app ethercat export-esi` writes for the default rig; after
+    a change of the default rig's line, run that command again."""
+    from pathlib import Path
+
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+
+    shipped = Path(__file__).resolve().parents[2] / "static" / "esi"
+    fresh = esi.write(esi.rig_descriptions(build_rig(load_rig_spec(DEFAULT_RIG))), tmp_path)
+    assert sorted(p.name for p in shipped.glob("*.xml")) == sorted(p.name for p in fresh)
+    for path in fresh:
+        assert (shipped / path.name).read_bytes() == path.read_bytes(), (
+            f"static/esi/{path.name} is stale: python -m app ethercat export-esi")
