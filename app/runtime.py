@@ -57,6 +57,8 @@ class Runtime:
         self._thread: threading.Thread | None = None
         self._listeners: list[Callable[[list[Event]], None]] = []
         self._step_listeners: list[Callable[[int], None]] = []
+        self._frame_listeners: list[Callable[[Frame], None]] = []
+        self._publish_soon = False  # a command ran: publish at once, not at the next 1/30 s
 
     # ---- control -------------------------------------------------------------------------
     def start(self) -> None:
@@ -95,12 +97,23 @@ class Runtime:
         return fut
 
     def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Future[Any]:
-        """Apply a device action; the future holds its result or its CommandError/SdoAbort."""
-        return self.submit(lambda: self.rig.apply(target, action, dict(args or {})))
+        """Apply a device action; the future holds its result or its CommandError/SdoAbort.
+
+        The frame after a command is published as soon as it ran (a click shows without
+        waiting for the next 1/30 s publication; benchmark 2, docs/performance.md)."""
+        def run() -> Any:
+            self._publish_soon = True
+            return self.rig.apply(target, action, dict(args or {}))
+        return self.submit(run)
 
     def add_listener(self, fn: Callable[[list[Event]], None]) -> None:
         """``fn(events)`` runs in the simulation thread after each batch; keep it quick."""
         self._listeners.append(fn)
+
+    def add_frame_listener(self, fn: Callable[[Frame], None]) -> None:
+        """``fn(frame)`` runs in the simulation thread after each publication (a view can wake
+        up on it instead of polling); keep it very quick."""
+        self._frame_listeners.append(fn)
 
     def add_step_listener(self, fn: Callable[[int], None]) -> None:
         """``fn(now_us)`` runs in the simulation thread after every step; keep it very quick."""
@@ -166,9 +179,11 @@ class Runtime:
                     for fn in self._step_listeners:
                         fn(self.rig.clock.now_us)
                     self._journal_events(self._drain_work())
-            if now >= next_publish:
+            if now >= next_publish or self._publish_soon:
                 self._publish()
-                next_publish = now + self._publish_period
+                self._publish_soon = False
+                if now >= next_publish:
+                    next_publish = now + self._publish_period
             self._wake.wait(0.001)
             self._wake.clear()
 
@@ -203,4 +218,9 @@ class Runtime:
     def _publish(self) -> None:
         snap = self.rig.snapshot()
         with self._lock:
-            self._frame = Frame(self._frame.seq + 1, self.rig.clock.now_us, snap)
+            self._frame = frame = Frame(self._frame.seq + 1, self.rig.clock.now_us, snap)
+        for fn in self._frame_listeners:
+            try:
+                fn(frame)
+            except Exception:
+                logger.exception("frame listener failed")
