@@ -46,6 +46,9 @@ def _serve_parser() -> argparse.ArgumentParser:
                    help="do not record the session (no Download recording)")
     p.add_argument("--rigs", type=int, default=None, metavar="N",
                    help="serve N copies of the rig (one per trainee), on ports PORT..PORT+N-1")
+    p.add_argument("--exercises", default=None, metavar="DIR",
+                   help="exercise files (*.toml with an [exercise] table) the instructor may "
+                        "play from the Classroom folder (docs/classroom.md)")
     p.add_argument("--instructor-token", default=None, metavar="TOKEN",
                    help="the instructor's token (default with a non-loopback --host: a new "
                         "one, printed at start)")
@@ -169,6 +172,7 @@ def _serve(args: argparse.Namespace) -> int:
     if args.instructor_token is not None and not args.instructor_token.strip():
         raise RigConfigError("--instructor-token", "", "an empty token")
     access_token = Access.for_host(args.host, args.instructor_token).token
+    exercises = _exercise_files(args.exercises)
     served, extras = [], []
     stamp = time.strftime("%Y%m%d-%H%M%S")
     try:
@@ -177,7 +181,7 @@ def _serve(args: argparse.Namespace) -> int:
             rig = build_rig(load_rig_spec(rig_file), state_dir=state_dir)
             record = _record_path(args, state_dir, rig.name, stamp, i, count)
             one = serve_rig(rig, Access(access_token), host=args.host, port=args.port + i,
-                            speed=args.speed, record=record)
+                            speed=args.speed, record=record, exercise_files=exercises)
             served.append(one)
             _power_on(one.runtime)
             extras.append(_start_modbus(one.runtime, args, args.modbus_port + i))
@@ -217,6 +221,20 @@ def _record_path(args: argparse.Namespace, state_dir: Path, name: str, stamp: st
         return str(path if count == 1 else path.with_stem(f"{path.stem}-{i + 1}"))
     safe = "".join(c if c.isalnum() or c in "-_" else "-" for c in name) or "rig"
     return str(state_dir / "recordings" / f"{safe}-{stamp}.rrd")
+
+
+def _exercise_files(directory: str | None) -> list[Path]:
+    """The exercise files of ``--exercises DIR``, each checked now (a broken one: exit 2)."""
+    if directory is None:
+        return []
+    from app.classroom.exercise_file import load_exercise
+
+    files = sorted(Path(directory).glob("*.toml"))
+    if not files:
+        raise RigConfigError("--exercises", "", f"no *.toml in {directory}")
+    for path in files:
+        load_exercise(path)
+    return files
 
 
 def _can_channel(args: argparse.Namespace, i: int) -> str:

@@ -19,16 +19,19 @@ import collections
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import viser
 
 from app.classroom.exercise import Exercise, Phase
+from app.classroom.exercise_file import load_exercise, start_us
 from app.classroom.faults import Catalog, catalog
 from app.classroom.roles import Operation, Role
 from app.recording import RigRecorder
+from app.rig_config import RigConfigError
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, Sent, notify
 from app.ui.panels.classroom_access import TokenForm, read_browser_token
@@ -42,6 +45,7 @@ UPDATE_S = 0.5
 WAIT_S = 10.0
 NO_FAULT = "(pick a hidden fault)"
 NO_CAUSE = "(pick the cause)"
+NO_FILE = "(pick an exercise file)"
 START, END = "Start exercise", "End and score"
 INSTRUCTOR_CLASS = "fr-instructor"  # HTML the dashboard shows to the instructor only
 TRAINEE_CSS = f"<style>.{INSTRUCTOR_CLASS} {{ display: none !important; }}</style>"
@@ -63,11 +67,15 @@ class _View:
 class ClassroomPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  recorder: RigRecorder | None = None, download_name: str = "fieldrig.rrd",
-                 ) -> None:
+                 player: Any = None, exercise_files: Sequence[Path] = ()) -> None:
+        """``player``: the dashboard's ScenarioPlayerPanel, which plays an exercise file's
+        scenario; ``exercise_files``: what the instructor may pick from."""
         self._server, self._runtime, self._sender = server, runtime, sender
         self.access = sender.gate.access
         self._recorder = recorder
         self._download_name = download_name
+        self._player = player
+        self._files = {p.stem: p for p in exercise_files}
         self.catalog: Catalog = catalog(runtime.rig.describe(), runtime.frame.snapshot)
         self._faults = {f.label: f for f in self.catalog.faults}
         self._causes = {c.label: c for c in self.catalog.causes}
@@ -103,6 +111,38 @@ class ClassroomPanel:
             self.exercise = Exercise(fault, time.monotonic())
         self._log(f"exercise started by connection {self._id(client)} (the fault is hidden)")
         return self.exercise
+
+    def start_from_file(self, path: Path, client: viser.ClientHandle | None = None) -> int:
+        """Play an exercise file's scenario from a factory-fresh rig and inject its hidden
+        fault at its time (a watcher thread); returns that time in simulated us."""
+        if not self._sender.allow(client, Operation.EXERCISE, "start an exercise"):
+            raise PermissionError("exercises are for the instructor")
+        if self._player is None:
+            raise ValueError("this dashboard has no scenario player")
+        scenario, spec = load_exercise(path)
+        self.catalog.fault(spec.fault)  # KeyError before anything changes
+        with self._lock:
+            if self.exercise is not None and self.exercise.phase is not Phase.FINISHED:
+                raise ValueError("an exercise is running: end it first")
+        self._player.load(scenario, path)
+        generation = self._player.player.view().generation
+        at = start_us(scenario, spec)
+        self._player.player.play()
+
+        def inject_when_due() -> None:
+            while not self._stop.wait(0.05):
+                if self._player.player.view().generation != generation:
+                    return  # another scenario was loaded meanwhile
+                if self._runtime.frame.t_us >= at:
+                    try:
+                        self.start_exercise(spec.fault, spec.module)
+                    except (ValueError, KeyError, CommandError) as exc:
+                        logger.warning("exercise file %s: %s", path, exc)
+                    return
+
+        threading.Thread(target=inject_when_due, name="fieldrig-exercise", daemon=True).start()
+        self._log(f"exercise file {path.name} started by connection {self._id(client)}")
+        return at
 
     def name_cause(self, cause_id: str, client: viser.ClientHandle | None = None) -> bool:
         """A trainee's answer; the right cause gets its repair (True)."""
@@ -214,6 +254,20 @@ class ClassroomPanel:
             module = gui.add_number("Module", 1, min=1, max=64, step=1,
                                     hint="for module codes (§7.6): the module number")
             buttons = gui.add_button_group("Exercise control", (START, END))
+            if self._files and self._player is not None:
+                picked_file = gui.add_dropdown("Exercise file", (NO_FILE, *self._files))
+                from_file = gui.add_button("Play file and start", icon=viser.Icon.PLAYER_PLAY,
+                                           hint="the file's scenario, then its hidden fault")
+
+                def on_file(_event: viser.GuiEvent) -> None:
+                    path = self._files.get(str(picked_file.value))
+                    if path is None:
+                        notify(client, "Exercise", "pick an exercise file first", error=True)
+                        return
+                    self._guarded(client, lambda: self.start_from_file(path, client),
+                                  "Scenario playing; the hidden fault follows.")
+
+                from_file.on_click(on_file)
             view.instructor = gui.add_html(instructor_html(None, 0.0))
             gui.add_markdown("**Scores**")
             view.history = gui.add_html(history_html([]))
@@ -252,7 +306,7 @@ class ClassroomPanel:
     def _guarded(self, client: viser.ClientHandle, fn: Callable[[], Any], ok: str) -> None:
         try:
             fn()
-        except (ValueError, KeyError, CommandError, PermissionError) as exc:
+        except (ValueError, KeyError, CommandError, PermissionError, RigConfigError) as exc:
             notify(client, "Exercise", str(exc), error=True)
             return
         notify(client, "Exercise", ok)

@@ -8,6 +8,7 @@ start them the same way. Protocol servers (Modbus, CAN) are the CLI's business.
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -55,9 +56,11 @@ class ServedRig:
 
 def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 8080,
               speed: float = 1.0, record: str | Path | None = None,
-              paused: bool = False) -> ServedRig:
+              paused: bool = False, exercise_files: Sequence[Path] = ()) -> ServedRig:
     """Start serving ``rig``: runtime, recorder (when ``record`` names a file), access gate,
-    viser server, dashboard and classroom folder. ``paused``: the clock waits (tests)."""
+    viser server, dashboard and classroom folder. ``paused``: the clock waits (tests);
+    ``exercise_files``: the exercise files the instructor may play (app/classroom/
+    exercise_file.py)."""
     runtime = Runtime(rig, speed=speed)
     runtime.set_paused(paused)
     recorder = None
@@ -68,7 +71,9 @@ def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 
     server = viser.ViserServer(host=host, port=port, verbose=False)
     dashboard = Dashboard(server, runtime)
     classroom = ClassroomPanel(server, runtime, CommandSender(runtime), recorder,
-                               download_name=f"{_slug(rig.name)}.rrd")
+                               download_name=f"{_slug(rig.name)}.rrd",
+                               player=getattr(dashboard, "scenario_player", None),
+                               exercise_files=exercise_files)
     runtime.start()
     dashboard.start()
     return ServedRig(rig, runtime, server, dashboard, classroom, recorder, host,

@@ -1,0 +1,112 @@
+"""Exercise files: a scenario that sets the stage, plus an ``[exercise]`` table.
+
+::
+
+    [scenario]
+    name = "Lost node on a running line"
+    [[step]]
+    at = 0.0
+    target = "fastcat"
+    action = "power"
+    on = true
+
+    [exercise]
+    fault = "fastcat:inject:coupler:0x04"   # a hidden fault id (app/classroom/faults.py)
+    module = 3                              # for module codes (§7.6): the module number
+    at_s = 5.0                              # inject at this simulated time (default: the end)
+
+The ``[exercise]`` table is cut out and the rest is read as a scenario
+(:func:`app.scenario.parse_scenario`, which knows only ``[scenario]`` and ``[[step]]``). The
+cut works on the text: from the ``[exercise]`` header line to the next table header.
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from app.scenario import Scenario, ScenarioError, parse_scenario
+
+_HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
+_ANY_HEADER = re.compile(r"^\s*\[")
+_KEYS = {"fault", "module", "at_s"}
+
+
+@dataclass(frozen=True)
+class ExerciseSpec:
+    fault: str
+    module: int | None = None
+    at_s: float | None = None  # None: when the scenario ends
+
+
+def split_exercise(text: str, source: str = "<exercise>") -> tuple[str, Mapping[str, Any] | None]:
+    """(the text without its ``[exercise]`` table, that table or None)."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{source}: not valid TOML: {exc}") from None
+    table = data.get("exercise")
+    if table is None:
+        return text, None
+    if not isinstance(table, Mapping):
+        raise ScenarioError(f"{source}: exercise: must be a table ([exercise])")
+    kept: list[str] = []
+    inside = False
+    for line in text.splitlines(keepends=True):
+        if _HEADER.match(line):
+            inside = True
+            continue
+        if inside and _ANY_HEADER.match(line):
+            inside = False
+        if not inside:
+            kept.append(line)
+    rest = "".join(kept)
+    left = tomllib.loads(rest)
+    if "exercise" in left or left != {k: v for k, v in data.items() if k != "exercise"}:
+        raise ScenarioError(f"{source}: exercise: write it as one [exercise] table")
+    return rest, table
+
+
+def parse_spec(table: Mapping[str, Any], source: str = "<exercise>") -> ExerciseSpec:
+    def fail(key: str, why: str) -> ScenarioError:
+        return ScenarioError(f"{source}: exercise.{key}: {why}")
+
+    unknown = sorted(set(table) - _KEYS)
+    if unknown:
+        raise fail(unknown[0], f"unknown key (known: {', '.join(sorted(_KEYS))})")
+    fault = table.get("fault")
+    if not isinstance(fault, str) or not fault:
+        raise fail("fault", "a hidden fault id, e.g. \"fastcat:inject:coupler:0x04\"")
+    module = table.get("module")
+    if module is not None and (isinstance(module, bool) or not isinstance(module, int)
+                               or module < 1):
+        raise fail("module", "a module number from 1")
+    at_s = table.get("at_s")
+    if at_s is not None and (isinstance(at_s, bool) or not isinstance(at_s, (int, float))
+                             or at_s < 0):
+        raise fail("at_s", "simulated seconds, 0 or more")
+    return ExerciseSpec(fault, module, None if at_s is None else float(at_s))
+
+
+def load_exercise(path: str | Path) -> tuple[Scenario, ExerciseSpec]:
+    """The scenario and the exercise of an exercise file; ScenarioError when it has none."""
+    source = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"{source}: cannot read: {exc.strerror or exc}") from None
+    rest, table = split_exercise(text, source)
+    if table is None:
+        raise ScenarioError(f"{source}: no [exercise] table")
+    spec = parse_spec(table, source)
+    scenario = parse_scenario(rest, source, base_dir=Path(path).resolve().parent)
+    return scenario, spec
+
+
+def start_us(scenario: Scenario, spec: ExerciseSpec) -> int:
+    """When the hidden fault goes in, in simulated microseconds."""
+    return scenario.end_us if spec.at_s is None else round(spec.at_s * 1_000_000)

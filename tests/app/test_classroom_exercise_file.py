@@ -1,0 +1,91 @@
+"""Exercise files (docs/classroom.md "Exercise files"): a scenario sets the stage, its
+``[exercise]`` table names the hidden fault injected at a simulated time."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from app.classroom.exercise_file import ExerciseSpec, load_exercise, parse_spec, split_exercise
+from app.classroom.roles import Access
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.scenario import ScenarioError, parse_scenario
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+
+FILE = """\
+[scenario]
+name = "Lost node on a running line"
+duration_s = 4
+
+[[step]]
+at = 0.0
+target = "fastcat"
+action = "power"
+on = true
+
+[exercise]  # the hidden fault
+fault = "fastcat:inject:coupler:0x04"
+at_s = 3.0
+
+[[step]]
+at = 1.0
+caption = "The line runs."
+"""
+
+
+def test_split_keeps_the_scenario() -> None:
+    rest, table = split_exercise(FILE)
+    assert table == {"fault": "fastcat:inject:coupler:0x04", "at_s": 3.0}
+    scenario = parse_scenario(rest)
+    assert scenario.name == "Lost node on a running line" and len(scenario.steps) == 2
+    assert split_exercise("[scenario]\nname = 'x'\n") == ("[scenario]\nname = 'x'\n", None)
+
+
+@pytest.mark.parametrize(("table", "spec"), [
+    ({"fault": "f"}, ExerciseSpec("f")),
+    ({"fault": "f", "module": 3, "at_s": 2}, ExerciseSpec("f", 3, 2.0)),
+])
+def test_spec(table: dict[str, object], spec: ExerciseSpec) -> None:
+    assert parse_spec(table) == spec
+
+
+@pytest.mark.parametrize("table", [
+    {}, {"fault": ""}, {"fault": "f", "module": 0}, {"fault": "f", "module": True},
+    {"fault": "f", "at_s": -1}, {"fault": "f", "when": 1}])
+def test_bad_spec(table: dict[str, object]) -> None:
+    with pytest.raises(ScenarioError, match="exercise"):
+        parse_spec(table)
+
+
+def test_inline_table_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "x.toml"
+    path.write_text('exercise = { fault = "f" }\n[scenario]\nname = "x"\n')
+    with pytest.raises(ScenarioError, match="one \\[exercise\\] table"):
+        load_exercise(path)
+
+
+@pytest.fixture
+def served(tmp_path: Path) -> Iterator[ServedRig]:
+    path = tmp_path / "lost_node.toml"
+    path.write_text(FILE)
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    one = serve_rig(rig, Access(None), port=0, paused=True, exercise_files=[path])
+    yield one
+    one.stop()
+
+
+def test_file_plays_then_injects(served: ServedRig, tmp_path: Path) -> None:
+    classroom = served.classroom
+    at = classroom.start_from_file(tmp_path / "lost_node.toml")
+    assert at == 3_000_000 and classroom.exercise is None
+    served.runtime.advance(3_500_000).result(timeout=60)
+    deadline = time.monotonic() + 10
+    while classroom.exercise is None:
+        assert time.monotonic() < deadline, "the exercise did not start"
+        time.sleep(0.05)
+    assert classroom.exercise.fault.id == "fastcat:inject:coupler:0x04"
+    snap = served.runtime.submit(served.runtime.rig.snapshot).result(timeout=10)
+    assert snap["devices"]["fastcat"]["injected"]
