@@ -188,15 +188,12 @@ def _without_network(text: str) -> str:
 
 
 def regenerate_all() -> list[Path]:
-    """static/networks/: the line rig's files, and the default line's (master -> FastCAT ->
-    TRS-CAT -> CPX-E-EC -> the drive on EtherCAT, the drive's id being drive_ec there)."""
-    line = (ROOT / "static" / "rigs" / "ethercat_line.toml").read_text(encoding="utf-8")
-    line = _without_network(line)
-    out = write(line, "static/rigs/ethercat_line.toml", NETWORKS / "ethercat_line")
-    default = line.replace("drive_ecat", "drive_ec").replace('name = "EtherCAT line"',
-                                                            'name = "FieldRig default rig"')
-    out += write(default, "static/rigs/default.toml (the full default line)",
-                 NETWORKS / "default")
+    """static/networks/: the line rig's files, and the default rig's (the full line: master ->
+    FastCAT -> TRS-CAT -> CPX-E-EC -> the drive on EtherCAT)."""
+    out = []
+    for rig, prefix in (("ethercat_line.toml", "ethercat_line"), ("default.toml", "default")):
+        text = _without_network((ROOT / "static" / "rigs" / rig).read_text(encoding="utf-8"))
+        out += write(text, f"static/rigs/{rig}", NETWORKS / prefix)
     return out
 
 
