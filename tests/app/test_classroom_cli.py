@@ -75,3 +75,13 @@ def test_bad_multi_rig_flags(capsys: object, tmp_path: Path) -> None:
                  str(tmp_path), "--run-for", "0"]) == 2
     assert main(["--instructor-token", " ", "--state-dir", str(tmp_path), "--run-for", "0"]) \
         == 2
+
+
+def test_broken_exercise_file_exits_2(tmp_path: Path, capsys: object) -> None:
+    (tmp_path / "bad.toml").write_text('[exercise]\nfault = ""\n')
+    assert main(["--exercises", str(tmp_path), "--state-dir", str(tmp_path / "s"),
+                 "--run-for", "0"]) == 2
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert main(["--exercises", str(empty), "--state-dir", str(tmp_path / "s"),
+                 "--run-for", "0"]) == 2
