@@ -163,8 +163,11 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
 
     # ---- commands ---------------------------------------------------------------------------
     def cmd_resync(self) -> None:
+        """Every slave through INIT; ECAT_Resync fires again as they reach OP."""
+        self.network_op = False
         for link in self.links:
             if link.present:
+                link.reached_op = False
                 self._request(link, AlState.INIT)
 
     def cmd_set_target(self, state: str) -> None:
