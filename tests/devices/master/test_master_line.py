@@ -141,21 +141,27 @@ def test_lost_frames_are_counted_and_the_slaves_watchdogs_react() -> None:
     assert trs["counters"]["wkc_errors"] == 1
 
 
-def test_identity_mismatch_leaves_the_slave_in_preop(tmp_path: Path) -> None:
-    """A description whose product code differs from the slave's 0x1018: the master logs it
-    and does not request SAFEOP (the slave stays in PREOP)."""
+def _rig_with_eni(tmp_path: Path, old: str, new: str) -> Path:
     from line_bench import ROOT
 
-    eni = (ROOT / "static/networks/ethercat_line.eni.xml").read_text().replace(
-        "<ProductCode>#x54525343</ProductCode>", "<ProductCode>#x54525344</ProductCode>")
-    (tmp_path / "bad.eni.xml").write_text(eni)
+    eni = (ROOT / "static/networks/ethercat_line.eni.xml").read_text()
+    assert old in eni
+    (tmp_path / "bad.eni.xml").write_text(eni.replace(old, new, 1))
     text = LINE_RIG.read_text().replace("../networks/ethercat_line.eni.xml",
                                         str(tmp_path / "bad.eni.xml"))
     text = text.replace("../networks/ethercat_line.mapping.xml",
                         str(LINE_RIG.parent.parent / "networks/ethercat_line.mapping.xml"))
     text = "\n".join(line for line in text.splitlines() if not line.startswith("flash ="))
     (tmp_path / "rig.toml").write_text(text)
-    rig = build_rig(load_rig_spec(tmp_path / "rig.toml"))
+    return tmp_path / "rig.toml"
+
+
+def test_identity_mismatch_leaves_the_slave_in_preop(tmp_path: Path) -> None:
+    """A description whose product code differs from the slave's 0x1018: the master logs it
+    and does not request SAFEOP (the slave stays in PREOP)."""
+    rig = build_rig(load_rig_spec(_rig_with_eni(
+        tmp_path, "<ProductCode>#x54525343</ProductCode>",
+        "<ProductCode>#x54525344</ProductCode>")))
     events = rig.run_until(5 * US)
     trs = master_view(rig)["slaves"][1]
     assert trs["state"] == "PREOP"
@@ -186,3 +192,20 @@ def test_snapshot_has_the_contract_keys() -> None:
                                       "counters"}
     assert set(view["stats"]) == {"frames", "lost_frames", "cycle_us"}
     assert view["log_styles"] == ["twincat", "sirio", "pegaso", "aitraceprint"]
+
+
+def test_a_refused_init_command_stops_the_transition(tmp_path: Path) -> None:
+    """An init command the slave aborts (here a write of the read-only 0x1018:1): logged with
+    the SDO abort code, comm_error, the slave stays in PREOP."""
+    rig = build_rig(load_rig_spec(_rig_with_eni(
+        tmp_path, "<Index>#xF030</Index>\n              <SubIndex>0</SubIndex>\n"
+                  "              <Data>0500</Data>",
+        "<Index>#x1018</Index>\n              <SubIndex>1</SubIndex>\n"
+        "              <Data>01000000</Data>")))
+    events = rig.run_until(2 * US)
+    cpx = master_view(rig)["slaves"][2]
+    assert cpx["state"] == "PREOP"
+    assert cpx["diagnosis"].startswith("init command 'CPX-E-EC: configured module list, count'")
+    assert [r["reason"] for r in records(events, "comm_error")] == ["init_command"]
+    assert any("SDO download 0x1018:01 aborted with 0x06010002" in r["text"]
+               for r in records(events, "log", "master"))
