@@ -42,15 +42,15 @@ class LineMixin:
 
     def cmd_pull_cable(self, cable: int) -> None:
         self.cables[self._position(cable, "cable")] = False
-        self._apply_physical_links()
+        self._apply_physical_links(self._powered_all())
 
     def cmd_plug_cable(self, cable: int) -> None:
         self.cables[self._position(cable, "cable")] = True
-        self._apply_physical_links()
+        self._apply_physical_links(self._powered_all())
 
     def cmd_power_slave(self, position: int, on: bool) -> None:
         self.links[self._position(position, "position")].slave.set_power(on)
-        self._apply_physical_links()
+        self._apply_physical_links(self._powered_all())
 
     def cmd_lose_frames(self, count: int) -> None:
         self.to_lose += count
@@ -64,19 +64,30 @@ class LineMixin:
         return all(self.cables[: position + 1]) and all(
             self._powered(p) for p in range(position))
 
-    def _apply_physical_links(self) -> None:
+    def _reach(self, powered: list[bool]) -> list[bool]:
+        """:meth:`_connected` for every position at once (one pass, each step)."""
+        out, ok = [], True
+        for p in range(len(self.links)):
+            ok = ok and self.cables[p] and (p == 0 or powered[p - 1])
+            out.append(ok)
+        return out
+
+    def _apply_physical_links(self, powered: list[bool]) -> None:
         """Each port's link as the cables and the neighbours' power make it (LINK LEDs)."""
         n = len(self.links)
         for p, link in enumerate(self.links):
-            want_in = self.cables[p] and (p == 0 or self._powered(p - 1))
+            want_in = self.cables[p] and (p == 0 or powered[p - 1])
             if want_in != self.phys_in[p]:
                 self.phys_in[p] = want_in
                 link.slave.set_link(want_in, "in")
             if p + 1 < n:
-                want_out = self.cables[p + 1] and self._powered(p + 1)
+                want_out = self.cables[p + 1] and powered[p + 1]
                 if want_out != self.phys_out[p]:
                     self.phys_out[p] = want_out
                     link.slave.set_link(want_out, "out")
+
+    def _powered_all(self) -> list[bool]:
+        return [self._powered(p) for p in range(len(self.links))]
 
     def _cause(self, position: int) -> str:
         for p in range(position + 1):

@@ -234,8 +234,10 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     def step(self, now_us: int) -> None:
         dt_us = now_us - self.now_us
         super().step(now_us)
-        self._apply_physical_links()
-        self.link_up = bool(self.links) and self._connected(0) and self.links[0].slave.reachable()
+        powered = self._powered_all()
+        self._apply_physical_links(powered)
+        reach = self._reach(powered)
+        self.link_up = bool(self.links) and reach[0] and self.links[0].slave.reachable()
         cycle = now_us >= self.next_cycle_us
         if cycle:
             self.next_cycle_us = now_us + self.cycle_us
@@ -244,7 +246,7 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
             self._lose_frame()
         recovered = []
         for link in self.links:
-            if not (self._connected(link.position) and link.slave.reachable()):
+            if not (reach[link.position] and link.slave.reachable()):
                 self._lose(link)
                 continue
             if not link.present:
