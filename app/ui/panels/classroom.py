@@ -80,6 +80,7 @@ class ClassroomPanel:
         self._faults = {f.label: f for f in self.catalog.faults}
         self._causes = {c.label: c for c in self.catalog.causes}
         self._lock = threading.RLock()
+        self._build_lock = threading.Lock()
         self.exercise: Exercise | None = None
         self.history: list[dict[str, Any]] = []
         self.refusals: collections.deque[str] = collections.deque(maxlen=20)
@@ -199,6 +200,10 @@ class ClassroomPanel:
         self._build(client)
 
     def _build(self, client: viser.ClientHandle) -> None:
+        with self._build_lock:  # a connect and a login of one browser never interleave
+            self._build_locked(client)
+
+    def _build_locked(self, client: viser.ClientHandle) -> None:
         role = self.access.role(client.client_id)
         with self._lock:
             old = self._views.pop(client.client_id, None)
@@ -327,6 +332,8 @@ class ClassroomPanel:
         if sent.refused:
             self.refusals.append(f"#{sent.client_id} {sent.target}: {sent.refused}")
         exercise = self.exercise
+        if sent.role is Role.INSTRUCTOR and not self.access.open:
+            return  # the instructor's own commands are not the trainees' actions
         if exercise is not None and sent.client_id is not None:
             args = " ".join(f"{k}={v}" for k, v in sent.args.items())
             exercise.record(time.monotonic(), sent.client_id, sent.role.value,
