@@ -1,0 +1,221 @@
+"""Benchmark 3 (issue 7): what the dashboard streams, and how late it arrives with many viewers.
+
+The server is the default rig live at real-time speed behind the dashboard as shipped, in a
+process of its own. The clients are Python websocket clients speaking viser's protocol (the
+``viser-v<version>`` subprotocol; each binary frame is one window of messages: two 8-byte
+lengths, zstd-compressed msgpack, raw buffers). They stand in for browsers: they receive what
+a browser receives, byte for byte, but render nothing, so 10 and 50 of them cost the machine
+far less than 10 or 50 Chromium pages would.
+
+- **bytes/s and messages/s to one client** for an idle rig (LEDs blinking: RUN of the FastCAT
+  in OP, L/A flickering) and for a rig in motion (AX2 shafts turning, an analog input moving,
+  every servo drive jogging), 10 s each, after a 2 s warm-up;
+- **update latency** with 1, 10 and 50 clients: the server writes, after each dashboard
+  update, the publication instant of the frame it showed into one extra markdown ("probe");
+  the clients take the receive instant minus that (both are CLOCK_MONOTONIC of one machine):
+  from the frame's publication by the runtime to its arrival at each client; p50 and p95.
+
+No target is set for these in issue 7 beyond "send only what changed" (docs/performance.md).
+
+    python -m bench streaming [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import re
+import socket
+import statistics
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+PROBE = re.compile(rb"probe (\d+) (\d+\.\d+)")
+CLIENT_COUNTS = (1, 10, 50)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+# ---- the server (a child process) ------------------------------------------------------------
+def _serve(port: int, motion: bool, probe: bool) -> None:
+    import viser
+
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.runtime import Frame, Runtime
+    from app.ui import dashboard as ui
+    from bench.kernel import in_op
+    from bench.kernel import motion as motion_workload
+
+    published: dict[int, float] = {}
+
+    class ProbedDashboard(ui.Dashboard):
+        """The dashboard as shipped, plus one markdown: when the frame it shows was published."""
+
+        def tick(self) -> None:
+            super().tick()
+            stamp = published.get(self.rendered_seq)
+            if stamp is not None and self._probe_seq != self.rendered_seq:
+                self._probe_seq = self.rendered_seq
+                self._probe.content = f"probe {self.rendered_seq} {stamp:.6f}"
+
+    def on_frame(frame: Frame) -> None:
+        published[frame.seq] = time.monotonic()
+        published.pop(frame.seq - 1000, None)
+
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    runtime = Runtime(rig)
+    runtime.add_frame_listener(on_frame)
+    server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
+    dashboard = (ProbedDashboard if probe else ui.Dashboard)(server, runtime)
+    if probe:
+        dashboard._probe_seq = -1  # type: ignore[attr-defined]
+        dashboard._probe = server.gui.add_markdown("probe")  # type: ignore[attr-defined]
+    runtime.start()
+    dashboard.start()
+    for device_id, info in rig.describe().items():  # powered, as `python -m app` starts it
+        if "power" in info["actions"]:
+            runtime.command(device_id, "power", {"on": True}).result(10)
+    deadline = time.monotonic() + 30  # as a viewer would find it: booted, in OP
+    while not runtime.submit(lambda: in_op(rig)).result(10) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    if motion:  # the kernel benchmark's workload, applied in the simulation thread
+        each = runtime.submit(lambda: motion_workload(rig)).result(10)
+        runtime.add_step_listener(lambda now_us: each(now_us // rig.clock.step_us))
+    print("ready", flush=True)
+    sys.stdin.read()
+    dashboard.stop()
+    runtime.stop()
+    server.stop()
+
+
+class Server:
+    def __init__(self, motion: bool, probe: bool) -> None:
+        self.port = _free_port()
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "bench.streaming", "serve", str(self.port),
+             "motion" if motion else "idle", "probe" if probe else "plain"],
+            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:  # viser prints its banner first
+            if line.strip() == "ready":
+                break
+        else:
+            self.close()
+            raise RuntimeError("the streaming server did not start")
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        try:
+            self.proc.wait(15)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+
+
+# ---- the clients -----------------------------------------------------------------------------
+@dataclass
+class Tally:
+    frames: int = 0
+    messages: int = 0
+    bytes: int = 0
+    latencies_ms: list[float] = field(default_factory=list)
+
+
+async def _client(port: int, warmup_s: float, seconds: float, tally: Tally) -> None:
+    """Count from ``warmup_s`` after the first window (the backlog of a new connection: the
+    whole GUI and scene) for ``seconds``."""
+    import msgspec
+    import viser
+    import websockets
+    import zstandard
+
+    unzip = zstandard.ZstdDecompressor()
+    async with websockets.connect(f"ws://127.0.0.1:{port}",
+                                  subprotocols=[f"viser-v{viser.__version__}"],
+                                  max_size=None, compression=None) as ws:
+        await ws.recv()
+        start_at = time.monotonic() + warmup_s
+        end_at = start_at + seconds
+        while (now := time.monotonic()) < end_at:
+            try:
+                raw = await asyncio.wait_for(ws.recv(), timeout=end_at - now)
+            except TimeoutError:
+                break
+            received = time.monotonic()
+            if received < start_at or not isinstance(raw, bytes):
+                continue
+            size, packed = int.from_bytes(raw[:8], "little"), int.from_bytes(raw[8:16], "little")
+            inner = unzip.decompress(raw[16:16 + packed], max_output_size=size)
+            tally.frames += 1
+            tally.bytes += len(raw)
+            tally.messages += len(msgspec.msgpack.decode(inner)["messages"])
+            tally.latencies_ms += [(received - float(m[2])) * 1000 for m in PROBE.finditer(inner)]
+
+
+def listen(port: int, clients: int, warmup_s: float, seconds: float) -> list[Tally]:
+    tallies = [Tally() for _ in range(clients)]
+
+    async def main() -> None:
+        await asyncio.gather(*(_client(port, warmup_s, seconds, t) for t in tallies))
+    asyncio.run(main())
+    return tallies
+
+
+def percentile(values: list[float], q: float) -> float:
+    ordered = sorted(values)
+    return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))] if ordered else 0.0
+
+
+def report(quick: bool) -> list[str]:
+    warmup, seconds = (1.0, 3.0) if quick else (2.0, 10.0)
+    out = ["Streaming: the dashboard as shipped, default rig at real time, Python websocket "
+           "clients speaking viser's protocol (stand-ins for browsers)"]
+    for motion in (False, True):
+        server = Server(motion, probe=False)
+        try:
+            tally = listen(server.port, 1, warmup, seconds)[0]
+        finally:
+            server.close()
+        out.append(f"  one client, {'in motion' if motion else 'idle (LEDs blinking)':<22} "
+                   f"{tally.bytes / seconds / 1000:8.1f} kB/s  {tally.messages / seconds:7.1f} "
+                   f"messages/s  {tally.frames / seconds:5.1f} windows/s")
+    server = Server(motion=False, probe=True)
+    try:
+        for count in CLIENT_COUNTS[:2] if quick else CLIENT_COUNTS:
+            tallies = listen(server.port, count, warmup, seconds)
+            lat = [x for t in tallies for x in t.latencies_ms]
+            received = sum(t.bytes for t in tallies) / seconds / 1000
+            out.append(f"  update latency, {count:>2} client{'s' if count > 1 else ' '}  "
+                       f"p50 {statistics.median(lat) if lat else 0:7.1f} ms  "
+                       f"p95 {percentile(lat, 0.95):7.1f} ms  ({len(lat)} updates, "
+                       f"{received:.0f} kB/s to all)")
+    finally:
+        server.close()
+    out.append("  no target in issue 7: send only what changed (docs/performance.md)")
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["serve"]:
+        _serve(int(argv[1]), argv[2] == "motion", argv[3] == "probe")
+        return 0
+    p = argparse.ArgumentParser(prog="python -m bench streaming",
+                                description=(__doc__ or "").split("\n")[0])
+    p.add_argument("--quick", action="store_true", help="short runs, up to 10 clients")
+    args = p.parse_args(argv)
+    print("\n".join(report(args.quick)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
