@@ -25,6 +25,8 @@ import viser.theme
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.drive.view import DriveView, axes_height
+from app.ui.line.scene import Box
+from app.ui.line.view import LineView, camera_for
 from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
@@ -48,6 +50,7 @@ CAMERA_RISE = 0.12  # camera height over the rail centre, per unit of distance
 RAIL_SPACING = BODY_H + 2.0  # vertical distance between the rails of several couplers
 AXIS_GAP = 1.1  # from the lowest rail's bottom to the servo axes (its LED legend in between)
 CAMERA_FOV_DEG = 50.0
+CAPTION_ROOM = 0.6  # above the line, for a scenario caption
 
 TITLE_SVG = (
     "<svg xmlns='http://www.w3.org/2000/svg' width='132' height='32'>"
@@ -99,6 +102,10 @@ class Dashboard:
         self.fastcat_ids = _kind_ids(described, "fastcat")
         self.master_id = next(iter(_kind_ids(described, "master")), None)
         self.drive_ids = _kind_ids(described, "servo")
+        # The EtherCAT line (app/ui/line) when the master has slaves besides one FastCAT.
+        master_snap = self._device_snap(runtime.frame.snapshot, self.master_id)
+        self._line_wanted = len(master_snap.get("slaves") or []) > 1
+        self._line: LineView | None = None
         self._side: Any = None  # the left panel, once built
         self._control_tabs: Any = None  # FastCAT | Servo drive in the control panel
         # The panels drive the first coupler; every coupler gets its rail in the 3D view.
@@ -119,18 +126,25 @@ class Dashboard:
                            "nothing", runtime.rig.name)
             self.server.gui.add_markdown(f"Rig **{runtime.rig.name}** has no FastCAT coupler "
                                          "and no servo drive: this dashboard shows those only.")
-        self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING)
-                        for i, d in enumerate(self.fastcat_ids)]
+        # In the line only the first coupler has a rail (row 1); the others are line bodies.
+        railed = self.fastcat_ids[:1] if self._line_wanted else self.fastcat_ids
+        self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING) for i, d in enumerate(railed)]
         for scene in self._scenes:
             scene.build_coupler()
         frame_slots = [len(self._device_snap(runtime.frame.snapshot, d).get("rail") or [])
-                       for d in self.fastcat_ids]
+                       for d in railed]
+        if self._line_wanted and self.master_id is not None:
+            self._line = self._build_line(described, dict(zip(railed, frame_slots,
+                                                              strict=True)))
         # ---- servo drives (app/ui/drive): tabs, controls, one axis each under the rails ---
         self._drives: DriveView | None = None
         below = 0.0
         if self.drive_ids:
             rails, height = len(self._scenes), axes_height(len(self.drive_ids))
-            if rails:  # under the lowest rail
+            if self._line is not None:  # under the line
+                top = self._line.bounds().z_min - 0.3
+                below = 0.0
+            elif rails:  # under the lowest rail
                 top = -(rails - 1) * RAIL_SPACING - BODY_H / 2 - AXIS_GAP
                 below = AXIS_GAP + height
             else:  # where the rail would be
@@ -138,11 +152,16 @@ class Dashboard:
             self._drives = self._build_drives(described, top, max(frame_slots, default=0))
         # A rig with drives only frames their axes (as wide as an 8-slot rail).
         slots = max(frame_slots, default=MIN_FRAMED_SLOTS if self.drive_ids else 0)
-        self._frame_camera(slots, max(len(self._scenes), 1), below)
+        if self._line is not None:
+            self._frame_line(top - axes_height(len(self._axis_ids())) if self._drives else None)
+        else:
+            self._frame_camera(slots, max(len(self._scenes), 1), below)
         center = self._camera_center
         # Scenario narration (Caption events), above the rail: what a screenshot should say.
+        caption_z = (BODY_H / 2 + 1.3 if self._line is None
+                     else self._line.bounds().z_max + 0.1)
         self._caption = server.scene.add_label(
-            "/caption", "", position=(center[0], -BODY_D, BODY_H / 2 + 1.3),
+            "/caption", "", position=(center[0], -BODY_D, caption_z),
             anchor="bottom-center", font_screen_scale=1.1, visible=False)
         # ---- scenario player, code decoder (app/ui/panels/scenario_player.py, decoder.py) ----
         from app.ui.panels.decoder import DecoderPanel
@@ -192,14 +211,26 @@ class Dashboard:
             gui.add_markdown("**Event log**")
             log = EventLogPanel(self.server, self.fastcat_ids, self._timestamp_fn())
         with side.add_tab("Objects", viser.Icon.LIST_DETAILS):
-            objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender, device_id)
+            objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender, device_id,
+                                            self._od_ids(described, device_id))
         side.dock_left()
         side.set_width(LEFT_WIDTH)
         return _Panels(control, modules, state, log, objects)
 
+    def _od_ids(self, described: Mapping[str, Mapping[str, Any]], first: str) -> list[str]:
+        """Devices the Objects tab offers: ``first``, then the line's slaves with an object
+        dictionary (TRS-CAT, CPX-E-EC, the drive's CoE side)."""
+        if not self._line_wanted:
+            return [first]
+        devices = self.runtime.rig.devices
+        others = [d for d, info in described.items()
+                  if d != first and {"read_object", "write_object"} <= set(info["actions"])
+                  and hasattr(devices.get(d), "od")]
+        return [first, *others]
+
     def _control_tab(self, label: str, icon: Any) -> AbstractContextManager[Any]:
         """A tab of the control panel when the rig has drives too, else the panel itself."""
-        if not (self.drive_ids and self.fastcat_ids):
+        if not (self.drive_ids and self.fastcat_ids) and not self._line_wanted:
             return nullcontext()
         if self._control_tabs is None:
             self._control_tabs = self.server.gui.add_tab_group()
@@ -214,11 +245,55 @@ class Dashboard:
             side = self._side = self.server.gui.add_panel()
         with self._control_tab("Servo drive", viser.Icon.ENGINE):
             view = DriveView(self.server, self.runtime, self._sender, described, self.drive_ids,
-                             side, top, rail_length(max(slots, MIN_FRAMED_SLOTS)))
+                             side, top, rail_length(max(slots, MIN_FRAMED_SLOTS)),
+                             self._axis_ids())
         if self._panels is None:
             side.dock_left()
             side.set_width(LEFT_WIDTH)
         return view
+
+    def _build_line(self, described: Mapping[str, Mapping[str, Any]],
+                    slots: Mapping[str, int]) -> LineView:
+        """The EtherCAT line: 3D, Line and Slave tabs, Line controls (app/ui/line)."""
+        assert self.master_id is not None
+        side = self._side
+        if side is None:  # no FastCAT: the line gets the left panel
+            self.server.gui.add_html(CSS)
+            side = self._side = self.server.gui.add_panel()
+            side.dock_left()
+            side.set_width(LEFT_WIDTH)
+        actions = {d: info["actions"] for d, info in described.items()}
+        line = LineView(self.server, self._sender, self.runtime.frame, self.master_id,
+                        {d: rail_length(n) for d, n in slots.items()}, actions, side,
+                        self._control_tab, VIEW_ASPECT)
+        if self._panels is not None:
+            line.on_select = self._panels.objects.select
+        return line
+
+    def _axis_ids(self) -> list[str]:
+        """Drives that get a 3D axis: not those the line draws (their EtherCAT side)."""
+        if self._line is None:
+            return list(self.drive_ids)
+        snapshot = self.runtime.frame.snapshot.get("devices") or {}
+        on_line = {str((snapshot.get(d) or {}).get("drive")) for d in self._line.scene.order}
+        return [d for d in self.drive_ids if d not in on_line]
+
+    def _frame_line(self, axes_bottom: float | None) -> None:
+        """Frame the whole line (and the axes under it) between the docked panels."""
+        assert self._line is not None
+        box = self._line.bounds()
+        if axes_bottom is not None and self._axis_ids():
+            box = Box(box.x_min, max(box.x_max, rail_length(MIN_FRAMED_SLOTS)), axes_bottom,
+                      box.z_max)
+        box = Box(box.x_min, box.x_max, box.z_min, box.z_max + CAPTION_ROOM)
+        self._line.home = box
+        position, look_at = camera_for(box, VIEW_ASPECT, CAMERA_MARGIN)
+        cam = self.server.initial_camera
+        cam.fov = math.radians(CAMERA_FOV_DEG)
+        cam.look_at = look_at
+        cam.position = position
+        cam.up = (0.0, 0.0, 1.0)
+        self._camera_center = look_at
 
     def _timestamp_fn(self) -> Callable[[int], str]:
         """The master logger's clock for device rows, so that all rows read alike."""
@@ -284,6 +359,8 @@ class Dashboard:
                 panels.log.add_events(events)
             if self._drives is not None:
                 self._drives.add_events(events)
+            if self._line is not None:
+                self._line.add_events(events)
             captions = [e.text for e in events if isinstance(e, Caption)]
             fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events
             self._frame_seq, self._t_us = frame.seq, frame.t_us
@@ -304,6 +381,8 @@ class Dashboard:
                         panels.log.update(master)
                     if self._drives is not None:
                         self._drives.update(frame)
+                    if self._line is not None:
+                        self._line.update(frame)
                 if panels is not None:
                     panels.objects.tick()
                 if self._drives is not None:
@@ -315,6 +394,11 @@ class Dashboard:
     def caption(self) -> str:
         """The scenario caption shown above the rail ("" before the first one)."""
         return self._caption.text if self._caption.visible else ""
+
+    @property
+    def line(self) -> LineView | None:
+        """The EtherCAT line's part of the dashboard (tests)."""
+        return self._line
 
     @property
     def drives(self) -> DriveView | None:

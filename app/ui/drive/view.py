@@ -50,9 +50,12 @@ def companion(snapshot: Mapping[str, Any], drive_id: str, kind: str | None = Non
 class DriveView:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  described: Mapping[str, Mapping[str, Any]], drive_ids: list[str],
-                 side: Any, top_z: float, length: float) -> None:
+                 side: Any, top_z: float, length: float,
+                 axis_ids: list[str] | None = None) -> None:
         """``side`` is the left panel (tabs are added to it); the controls go into the
-        current GUI container; the axes hang from ``top_z`` downwards, ``length`` wide."""
+        current GUI container; the axes hang from ``top_z`` downwards, ``length`` wide, one
+        per drive of ``axis_ids`` (default: every drive; a drive drawn in the EtherCAT line
+        has none)."""
         self._server = server
         self._runtime = runtime
         self.drive_ids = list(drive_ids)
@@ -83,7 +86,7 @@ class DriveView:
                 gui.add_html(DRIVE_CSS)
                 self.canopen = CanOpenMonitor(server)
         self.scenes = {d: AxisScene(server, d, top_z - AXIS_TOP - i * AXIS_SPACING, length)
-                       for i, d in enumerate(self.drive_ids)}
+                       for i, d in enumerate(self.drive_ids if axis_ids is None else axis_ids)}
 
         if self._picker is not None:
             picker = self._picker

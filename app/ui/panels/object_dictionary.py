@@ -1,4 +1,8 @@
-"""The object-dictionary view: the FastCAT's objects (seed 000 §6) with live values.
+"""The object-dictionary view: any device's objects with live values (FastCAT seed 000 §6,
+TRS-CAT seed 001 §9.3, CPX-E-EC seed 002 Tab. 27, the drive's CoE side seed 004 ch. 5).
+
+With several devices a "Device" dropdown picks one (a click on a slave in the 3D view picks it
+too, ``select``); every device with an ``od`` attribute and read / write actions qualifies.
 
 The table is read in the simulation thread (``runtime.submit``) from the model's ``od`` — on
 "Refresh" and every few seconds — and rendered here, filtered by a text box. Writes go through
@@ -30,6 +34,7 @@ REFRESH_S = 2.0
 MAX_SHOWN = 200
 NO_OD = ("no object dictionary now: the FastCAT generates it at the end of the internal-bus "
          "scan (seed 000 §5); power it on and wait for the scan")
+NO_OD_OTHER = "no object dictionary now: is the device powered?"
 
 
 @dataclass(frozen=True)
@@ -88,7 +93,7 @@ def matches(row: OdRow, needle: str) -> bool:
     return n in f"{row.index:04x}:{row.sub}" or n in row.name.lower()
 
 
-def render(rows: Sequence[OdRow], needle: str) -> str:
+def render(rows: Sequence[OdRow], needle: str, empty: str = NO_OD) -> str:
     shown = [r for r in rows if matches(r, needle.strip())]
     body = "".join(
         f"<tr><td>{esc(r.address)}</td><td>{esc(r.name)}</td><td>{esc(r.dtype)}</td>"
@@ -99,7 +104,7 @@ def render(rows: Sequence[OdRow], needle: str) -> str:
         more = (f'<p class="fr-muted">{len(shown) - MAX_SHOWN} more objects: '
                 "narrow the filter.</p>")
     if not shown:
-        why = "no object matches" if rows else NO_OD
+        why = "no object matches" if rows else empty
         body = f'<tr><td colspan="5" class="fr-muted">{esc(why)}</td></tr>'
     return ('<div class="fr-od-wrap"><table class="fr-od" id="fr-od"><thead><tr>'
             "<th>Index:Sub</th><th>Name</th><th>Type</th><th>Access</th><th>Value</th>"
@@ -129,7 +134,7 @@ def parse_value(text: str) -> int | str:
 
 class ObjectDictionaryPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
-                 device_id: str) -> None:
+                 device_id: str, device_ids: Sequence[str] = ()) -> None:
         self._runtime = runtime
         self._sender = sender
         self._device_id = device_id
@@ -140,6 +145,16 @@ class ObjectDictionaryPanel:
         self._next_refresh = 0.0
         self._last = ""
         gui = server.gui
+        self._home = device_id  # the FastCAT: its dictionary waits for the first scan
+        self._empty = NO_OD
+        self._picker = None
+        if len(device_ids) > 1:
+            self._picker = gui.add_dropdown("Device", tuple(device_ids), initial_value=device_id)
+
+            @self._picker.on_update
+            def _(event: viser.GuiEvent) -> None:
+                self.select(str(self._picker.value) if self._picker else device_id)
+
         self._filter = gui.add_text("Filter", "", hint="index (5400, 0x2104) or name")
         refresh = gui.add_button("Refresh", icon=viser.Icon.REFRESH)
         self._address = gui.add_text("Object", "0x5200:1", hint="INDEX:SUB, index in hex")
@@ -159,6 +174,27 @@ class ObjectDictionaryPanel:
         @buttons.on_click
         def _(event: viser.GuiEvent) -> None:
             self._access(event.client, buttons.value)
+
+    @property
+    def device_id(self) -> str:
+        return self._device_id
+
+    def select(self, device_id: str) -> None:
+        """Show ``device_id``'s dictionary (a click on it in the 3D view, or the picker)."""
+        if self._picker is not None and device_id in self._picker.options:
+            if self._picker.value != device_id:
+                self._picker.value = device_id
+        elif self._picker is not None:
+            return
+        with self._lock:
+            if device_id == self._device_id:
+                return
+            self._device_id = device_id
+            self._rows, self._dirty = None, True
+            self._empty = NO_OD if device_id == self._home else NO_OD_OTHER
+        self._table.content = render([], "", "reading the dictionary ...")
+        self._last = ""
+        self.request(None)
 
     def _access(self, client: viser.ClientHandle | None, verb: str) -> None:
         try:
@@ -187,14 +223,17 @@ class ObjectDictionaryPanel:
             self._pending = True
         device_id = self._device_id
         future = self._runtime.submit(lambda: read_rows(self._runtime.rig.device(device_id)))
-        future.add_done_callback(lambda f: self._received(client, f))
+        future.add_done_callback(lambda f: self._received(client, f, device_id))
 
-    def _received(self, client: viser.ClientHandle | None, future: Future[list[OdRow]]) -> None:
+    def _received(self, client: viser.ClientHandle | None, future: Future[list[OdRow]],
+                  device_id: str) -> None:
         exc = future.exception()
         with self._lock:
             self._pending = False
-            if exc is None:
+            if exc is None and device_id == self._device_id:
                 self._rows, self._dirty = future.result(), True
+            elif exc is None:  # the picker moved meanwhile: read the new device
+                self._next_refresh = 0.0
         if exc is not None:
             logger.warning("reading the object dictionary of %s failed: %s", self._device_id, exc)
             notify(client, "Object dictionary", f"could not read it: {exc}", error=True)
@@ -210,7 +249,7 @@ class ObjectDictionaryPanel:
             if not self._dirty or self._rows is None:
                 return
             rows, self._dirty = self._rows, False
-        content = render(rows, self._filter.value)
+        content = render(rows, self._filter.value, self._empty)
         if content != self._last:
             self._table.content = content
             self._last = content

@@ -1,0 +1,213 @@
+"""The 3D bodies of the line besides the FastCAT rail: the master PC, a generic EtherCAT slave
+(the drive's CoE side), and the base every body shares (header, state bar, LED legend).
+
+Same conventions as the rail (``app.ui.rail_scene``): z up, the fronts face -y, sizes in
+module widths. A body spans ``x0 .. x0 + width`` and ``z0 - BODY_H / 2 .. z0 + BODY_H / 2``.
+Above it: a bar coloured by the slave's state as the master sees it (green OP, amber on the
+way, red with an error flag, grey when not seen) and a header "position · address · state";
+below it: the LEDs whose pattern a still picture cannot show, in words.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import viser
+
+from app.ui.line.painter import FRONT_Y, Painter
+from app.ui.rail_scene import BODY_D, BODY_H, PATTERN_WORDS, RGB
+
+BODY: RGB = (214, 219, 228)
+BODY_OFF: RGB = (150, 152, 158)
+SCREEN: RGB = (30, 40, 60)
+STATE_BAR: dict[str, RGB] = {"ok": (20, 170, 60), "busy": (230, 160, 0),
+                             "bad": (220, 30, 30), "gone": (130, 130, 136)}
+STILL_PATTERNS = ("off", "on")
+
+
+def led_colour(name: str) -> str:
+    """The colour of a slave LED from its name (ETG.1300: RUN green, ERR red)."""
+    return "red" if "err" in name.lower() else "green"
+
+
+def blink_words(leds: Iterable[tuple[str, str]]) -> str:
+    """``[("LINK-ACT IN", "flickering"), ("LINK-ACT OUT", "flickering")]`` ->
+    ``"LINK-ACT IN, LINK-ACT OUT flickering"``: only what a still picture cannot show."""
+    by_pattern: dict[str, list[str]] = {}
+    for name, pattern in leds:
+        if pattern not in STILL_PATTERNS:
+            by_pattern.setdefault(pattern, []).append(name)
+    return "\n".join(f"{', '.join(names)} {PATTERN_WORDS.get(p, p)}"
+                     for p, names in by_pattern.items())
+
+
+def state_tone(entry: Mapping[str, Any], target: str | None = None) -> str:
+    """ok / busy / bad / gone for a slave entry of the master snapshot; ok only in the
+    master's target state (a slave the master parked in SAFEOP is not ok)."""
+    if not entry or entry.get("present") is False or entry.get("state") is None:
+        return "gone"
+    if int(entry.get("al_status", 0)) & 0x10 or entry.get("al_status_code"):
+        return "bad"
+    wanted = target or entry.get("requested") or entry.get("state")
+    return "ok" if entry.get("state") == wanted else "busy"
+
+
+def header_text(entry: Mapping[str, Any], position: int) -> str:
+    """``1 · 1002 · OP``, with the AL status code when there is one."""
+    address = entry.get("station_address", "?")
+    state = entry.get("state") or "not seen"
+    text = f"{entry.get('position', position)} · {address} · {state}"
+    code = int(entry.get("al_status_code") or 0)
+    if code:
+        text += f" · AL 0x{code:04X}"
+    if entry.get("powered") is False:
+        text += " · power off"
+    elif entry.get("link") is False:
+        text += " · no link"
+    return text
+
+
+class Body:
+    """One device of the line: its nodes, header, state bar and legend."""
+
+    width = 1.8
+    title = ""
+
+    def __init__(self, server: viser.ViserServer, device_id: str, x0: float, z0: float) -> None:
+        self.device_id = device_id
+        self.x0, self.z0 = x0, z0
+        self.paint = Painter(server, f"/line/{device_id}")
+        self.clickables: list[Any] = []
+        self._bar: viser.BoxHandle | None = None
+        self._tone = ""
+
+    @property
+    def cx(self) -> float:
+        return self.x0 + self.width / 2
+
+    def at(self, dx: float, dz: float, y: float = FRONT_Y) -> tuple[float, float, float]:
+        return (self.x0 + dx, y, self.z0 + dz)
+
+    def build(self) -> None:
+        """The body and its frame (bar, header, legend); subclasses add their front."""
+        body = self.paint.box("body", (self.width * 0.96, BODY_D, BODY_H),
+                              (self.cx, 0.0, self.z0), BODY)
+        self.clickables.append(body)
+        self.build_frame()
+        if self.title:
+            self.paint.label("title", self.title, self.at(self.width / 2, 1.72),
+                             anchor="center-center", scale=0.85)
+
+    def build_frame(self, legend: bool = True) -> None:
+        top = self.z0 + BODY_H / 2
+        self._bar = self.paint.box("state_bar", (self.width * 0.96, BODY_D * 0.9, 0.16),
+                                   (self.cx, 0.0, top + 0.1), STATE_BAR["gone"])
+        self.paint.label("header", "", (self.cx, FRONT_Y, top + 0.26), anchor="bottom-center",
+                         scale=0.72)
+        if legend:
+            self.paint.label("legend", "", (self.cx, FRONT_Y, self.z0 - BODY_H / 2 - 0.15),
+                             anchor="top-center", scale=0.62)
+
+    def update_frame(self, entry: Mapping[str, Any], position: int, legend: str,
+                     target: str | None = None) -> None:
+        tone = state_tone(entry, target)
+        if tone != self._tone and self._bar is not None:
+            self._bar.color = STATE_BAR[tone]
+            self._tone = tone
+        self.paint.set_text("header", header_text(entry, position))
+        self.paint.set_text("legend", legend)
+
+    def update(self, snap: Mapping[str, Any], t_us: int) -> str:
+        """Bring the front to ``snap``; returns the LED legend."""
+        return ""
+
+    def port(self, side: str) -> tuple[float, float]:
+        """(x, z) where a cable enters (``in``, left) or leaves (``out``, right)."""
+        return (self.x0 - 0.05 if side == "in" else self.x0 + self.width + 0.05,
+                self.z0 - BODY_H / 2 + 0.5)
+
+
+class SlaveBody(Body):
+    """Any EtherCAT slave with ``leds`` in its snapshot: the drive's CoE side, or a kind the
+    dashboard does not draw in detail. LEDs in snapshot order, red for the error LED."""
+
+    def __init__(self, server: viser.ViserServer, device_id: str, x0: float, z0: float,
+                 snap: Mapping[str, Any]) -> None:
+        super().__init__(server, device_id, x0, z0)
+        self.title = str(snap.get("drive") or device_id)
+        self._led_names = [str(n) for n in (snap.get("leds") or {})]
+
+    def build(self) -> None:
+        super().build()
+        self.paint.label("bus", "EtherCAT", self.at(self.width / 2, 1.3),
+                         anchor="center-center", scale=0.62)
+        for i, name in enumerate(self._led_names):
+            z = 0.75 - i * 0.42
+            self.paint.led(name, self.at(0.3, z))
+            self.paint.label(f"name_{i}", name, self.at(0.52, z), scale=0.65)
+        self.paint.label("esm", "", self.at(self.width / 2, -1.5), anchor="center-center",
+                         scale=0.7)
+
+    def update(self, snap: Mapping[str, Any], t_us: int) -> str:
+        leds = snap.get("leds") or {}
+        for name in self._led_names:
+            self.paint.set_led(name, led_colour(name), str(leds.get(name, "off")), t_us)
+        self.paint.set_text("esm", f"ESM {snap.get('esm', '-')}")
+        return blink_words((n, str(leds.get(n, "off"))) for n in self._led_names)
+
+
+class MasterBody(Body):
+    """The master: a PC with a screen showing its start-up phase and the DC state."""
+
+    title = "Master"
+
+    def __init__(self, server: viser.ViserServer, x0: float, z0: float) -> None:
+        super().__init__(server, "master", x0, z0)
+
+    def build(self) -> None:
+        super().build()
+        screen = self.paint.box("screen", (self.width * 0.8, 0.1, 1.5),
+                                (self.cx, FRONT_Y + 0.02, self.z0 + 0.45), SCREEN)
+        self.clickables.append(screen)
+        self.paint.label("phase", "", self.at(self.width / 2, 0.75), anchor="center-center",
+                         scale=0.62)
+        self.paint.label("dc", "", self.at(self.width / 2, 0.2), anchor="center-center",
+                         scale=0.62)
+        self.paint.led("link", self.at(0.3, -0.9))
+        self.paint.label("link_name", "link", self.at(0.52, -0.9), scale=0.65)
+
+    def update(self, snap: Mapping[str, Any], t_us: int) -> str:
+        phase = str(snap.get("phase", "running" if snap.get("slaves") else "-"))
+        self.paint.set_text("phase", phase.replace("_", " "))
+        dc = snap.get("dc") or {}
+        self.paint.set_text("dc", f"DC {dc.get('state', '-')}")
+        link = snap.get("link", True)
+        self.paint.set_led("link", "green", "on" if link else "off", t_us)
+        return "external master" if snap.get("external") else ""
+
+    def update_master_frame(self, snap: Mapping[str, Any]) -> None:
+        """The master's own bar: red on a DC fault or a lost link, amber while starting."""
+        dc = snap.get("dc") or {}
+        phase = snap.get("phase", "running")
+        bad = dc.get("fault") or dc.get("state") == "NOT_SYNCHRONIZED" or not snap.get("link",
+                                                                                        True)
+        entry = {"state": "running" if phase == "running" else phase,
+                 "requested": "running", "al_status_code": 1 if bad else 0}
+        self.update_frame(entry, 0, "")
+        self.paint.set_text("header", f"target {snap.get('target', '-')}")
+
+
+class RailFrame(Body):
+    """The FastCAT rail's frame in the line (bar and header); the rail itself, its LED words
+    and its legend are ``app.ui.rail_scene``'s."""
+
+    def __init__(self, server: viser.ViserServer, device_id: str, x0: float, z0: float,
+                 width: float) -> None:
+        super().__init__(server, device_id, x0, z0)
+        self.width = width
+
+    def build(self) -> None:
+        self.build_frame(legend=False)
+        if self._bar is not None:
+            self.clickables.append(self._bar)

@@ -1,0 +1,94 @@
+"""The cables of the line: one polyline of thin boxes per cable, clickable to pull / re-plug.
+
+Cable ``i`` feeds line position ``i`` (master snapshot ``cables``). Plugged: a dark green
+cable from the upstream port (right side, low) to the downstream port (left side, low),
+wrapping under the row when the next device starts a new row. Pulled: red, and its end hangs
+loose in front of the port it came out of, with "pulled" next to it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import viser
+
+from app.ui.line.painter import FRONT_Y
+
+Point = tuple[float, float]  # (x, z) on the front plane
+
+PLUGGED = (25, 120, 80)
+PULLED = (220, 30, 30)
+THICK = 0.14
+CABLE_Y = FRONT_Y - 0.15
+# Called with (client, cable index, plugged now) on a click.
+OnCable = Callable[[viser.ClientHandle | None, int, bool], None]
+
+
+def route(start: Point, end: Point, gap_z: float) -> list[Point]:
+    """From an out port to an in port: straight on one row, else down to ``gap_z``, across,
+    and up or down into the port."""
+    (x0, z0), (x1, z1) = start, end
+    if abs(z0 - z1) < 1e-6 and x0 < x1:
+        return [start, end]
+    return [start, (x0 + 0.35, z0), (x0 + 0.35, gap_z), (x1 - 0.35, gap_z), (x1 - 0.35, z1),
+            end]
+
+
+def pulled_route(points: Sequence[Point]) -> list[Point]:
+    """The cable with its plug out: the last stretch stops short and the end hangs down."""
+    *head, (xa, za), (xb, zb) = points
+    cut = (xa + 0.45 * (xb - xa), za + 0.45 * (zb - za))
+    return [*head, (xa, za), cut, (cut[0] + 0.2, cut[1] - 0.7)]
+
+
+def label_point(points: Sequence[Point]) -> Point:
+    """Middle of the longest stretch, where the cable's name goes."""
+    a, b = max(itertools.pairwise(points),
+               key=lambda ab: math.dist(ab[0], ab[1]))
+    return ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+
+
+class Cable:
+    def __init__(self, server: viser.ViserServer, index: int, points: list[Point],
+                 on_click: OnCable) -> None:
+        self._scene = server.scene
+        self.index = index
+        self.points = points
+        self._on_click = on_click
+        self._nodes: list[Any] = []
+        self.plugged: bool | None = None
+        self.label_text = ""
+
+    def show(self, plugged: bool) -> None:
+        """Redraw when the plug state changes (a handful of boxes)."""
+        if plugged == self.plugged:
+            return
+        self.plugged = plugged
+        for node in self._nodes:
+            node.remove()
+        self._nodes = []
+        points = self.points if plugged else pulled_route(self.points)
+        colour = PLUGGED if plugged else PULLED
+        root = f"/line/cable{self.index}"
+        for n, (a, b) in enumerate(itertools.pairwise(points)):
+            length = math.dist(a, b)
+            if length < 1e-6:
+                continue
+            angle = math.atan2(-(b[1] - a[1]), b[0] - a[0])  # about +y: x turns toward -z
+            box = self._scene.add_box(
+                f"{root}/seg{n}", color=colour, dimensions=(length + THICK, THICK, THICK),
+                position=((a[0] + b[0]) / 2, CABLE_Y, (a[1] + b[1]) / 2),
+                wxyz=(math.cos(angle / 2), 0.0, math.sin(angle / 2), 0.0))
+            box.on_click(self._clicked)
+            self._nodes.append(box)
+        x, z = label_point(self.points)
+        self.label_text = f"cable {self.index}" + ("" if plugged else " pulled")
+        self._nodes.append(self._scene.add_label(
+            f"{root}/label", self.label_text, position=(x, CABLE_Y, z + 0.12),
+            anchor="bottom-center", font_screen_scale=0.58))
+
+    def _clicked(self, event: Any) -> None:
+        self._on_click(event.client, self.index, bool(self.plugged))

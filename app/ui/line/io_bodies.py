@@ -1,0 +1,198 @@
+"""The TRS-CAT with its expansions and the CPX-E-EC with its modules, as 3D fronts.
+
+TRS-CAT (seed 001): RUN, ERROR, LINK-ACT IN / OUT (ETG.1300), green BUS, green +24 V and the
+16 yellow I/O LEDs of the integrated channels, then one plate per expansion with its type and
+what the node found there (0xF050) when that differs from what the master configured (0xF030).
+CPX-E-EC (seed 002 tables 11-13): Run, Error, LA IN, LA OUT, PS, PL, SF, M in the colour the
+model reports (Run / Error also orange), then one plate per module with a red error LED and a
+yellow LED per channel. The seed names no per-channel LED in the snapshot, so the plates show
+the channel signal (inputs for input modules, driven outputs for output modules) and light the
+module's error LED on a short circuit, a wire break, a module failure or a sensor-supply short,
+as the modules' own LEDs do.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.ui.line.bodies import BODY, Body, blink_words
+from app.ui.rail_scene import BODY_D, BODY_H
+
+MODULE_W = 1.0
+TRS_W = 2.6
+CPX_W = 1.8
+TRS_LEDS = (("RUN", "green"), ("ERROR", "red"), ("LINK-ACT IN", "green"),
+            ("LINK-ACT OUT", "green"), ("BUS", "green"), ("+24V", "green"))
+CPX_LEDS = ("Run", "Error", "LA IN", "LA OUT", "PS", "PL", "SF", "M")
+CPX_COLOURS = {"Run": "green", "Error": "red", "LA IN": "green", "LA OUT": "green",
+               "PS": "green", "PL": "green", "SF": "red", "M": "yellow"}
+CHANNEL_LED = (0.24, 0.1, 0.15)
+
+
+def ident_text(value: int | str) -> str:
+    """A §9.3.2 ASCII ident (0x494F2D45 -> "IO-E"); 0 is an empty position."""
+    number = int(value, 16) if isinstance(value, str) else int(value)
+    if number == 0:
+        return "-"
+    raw = number.to_bytes(4, "big")
+    if all(32 <= b < 127 for b in raw):
+        return raw.decode("ascii")
+    return f"0x{number:08X}"
+
+
+def expansion_note(snap: Mapping[str, Any], position: int) -> str:
+    """What a still must say about expansion ``position`` (1-based): another type in 0xF050
+    (found) than in 0xF030 (configured by the master), not found, or the application errors
+    raised for its slot."""
+    slots = snap.get("slots") or []
+    entry = slots[position] if position < len(slots) else {}
+    f030, f050 = snap.get("f030") or [], snap.get("f050") or []
+    configured = f030[position] if position < len(f030) else 0
+    found = f050[position] if position < len(f050) else 0
+    if configured and found and configured != found:
+        return f"cfg {ident_text(configured)}"
+    if not entry.get("serviced", True):
+        return "not seen"
+    # §9.3.7 application errors name the slot they concern (0xA000 configuration error).
+    codes = [str(a.get("code", "")) for a in snap.get("alarms") or []
+             if isinstance(a, Mapping) and a.get("slot") == position]
+    return "\n".join(codes)
+
+
+def short_type(name: str) -> str:
+    return name.removeprefix("TRS-").removeprefix("CPX-E-")
+
+
+def module_error(module: Mapping[str, Any]) -> str:
+    """The reason the module's red LED is on, "" when it is off."""
+    if module.get("failed"):
+        return "failed"
+    if module.get("sensor_supply_short"):
+        return "sensor short"
+    if module.get("shorted"):
+        return "short " + ",".join(str(c) for c in module["shorted"])
+    if module.get("wire_broken"):
+        return "wire " + ",".join(str(c) for c in module["wire_broken"])
+    return ""
+
+
+def channel_levels(module: Mapping[str, Any]) -> list[bool]:
+    """The signal behind each channel LED (digital modules only; analog ones have none)."""
+    kind = str(module.get("short", ""))
+    if "DI" in kind and "AI" not in kind:
+        return [bool(v) for v in module.get("inputs") or []]
+    if "DO" in kind and "AO" not in kind:
+        return [bool(v) for v in module.get("driven") or module.get("outputs") or []]
+    return []
+
+
+class TrsCatBody(Body):
+    title = "TRS-CAT"
+
+    def __init__(self, server: viser.ViserServer, device_id: str, x0: float, z0: float,
+                 snap: Mapping[str, Any]) -> None:
+        super().__init__(server, device_id, x0, z0)
+        self.expansions = [str(s.get("type")) for s in (snap.get("slots") or [])[1:]]
+        self.width = TRS_W + MODULE_W * len(self.expansions)
+
+    def build(self) -> None:
+        # The frame spans node + expansions; the node's own body is narrower.
+        p = self.paint
+        self.clickables.append(p.box("body", (TRS_W * 0.96, BODY_D, BODY_H),
+                                     (self.x0 + TRS_W / 2, 0.0, self.z0), BODY))
+        self.build_frame()
+        p.label("title", self.title, self.at(TRS_W / 2, 1.72), anchor="center-center",
+                scale=0.85)
+        for i, (name, _colour) in enumerate(TRS_LEDS):
+            z = 1.2 - i * 0.36
+            p.led(name, self.at(0.3, z))
+            p.label(f"name_{i}", name, self.at(0.52, z), scale=0.66)
+        p.label("io", "I/O 1-8, 9-16", self.at(0.18, -1.0), scale=0.64)
+        for ch in range(16):
+            row, col = divmod(ch, 8)
+            p.led(f"I/O {ch + 1}", self.at(0.3 + col * 0.29, -1.38 - row * 0.3),
+                  CHANNEL_LED)
+        for n, kind in enumerate(self.expansions, start=1):
+            x = TRS_W + (n - 0.5) * MODULE_W
+            self.clickables.append(p.box(f"exp{n}", (MODULE_W * 0.92, BODY_D, BODY_H),
+                                         (self.x0 + x, 0.0, self.z0), BODY))
+            p.label(f"exp{n}_n", str(n), self.at(x, 1.72), anchor="center-center", scale=0.8)
+            p.label(f"exp{n}_t", short_type(kind), self.at(x, 1.2), anchor="center-center",
+                    scale=0.68)
+            p.label(f"exp{n}_note", "", self.at(x, -0.6), anchor="center-center", scale=0.66)
+
+    def update(self, snap: Mapping[str, Any], t_us: int) -> str:
+        leds = snap.get("leds") or {}
+        for name, colour in TRS_LEDS:
+            self.paint.set_led(name, colour, str(leds.get(name, "off")), t_us)
+        for ch in range(1, 17):
+            self.paint.set_led(f"I/O {ch}", "yellow", str(leds.get(f"I/O {ch}", "off")), t_us)
+        for n in range(1, len(self.expansions) + 1):
+            self.paint.set_text(f"exp{n}_note", expansion_note(snap, n))
+        names = [n for n, _c in TRS_LEDS] + [f"I/O {c}" for c in range(1, 17)]
+        return blink_words((n, str(leds.get(n, "off"))) for n in names)
+
+
+class CpxBody(Body):
+    title = "CPX-E-EC"
+
+    def __init__(self, server: viser.ViserServer, device_id: str, x0: float, z0: float,
+                 snap: Mapping[str, Any]) -> None:
+        super().__init__(server, device_id, x0, z0)
+        modules: Sequence[Mapping[str, Any]] = snap.get("modules") or []
+        self.modules = [(int(m.get("module", i + 1)), str(m.get("short") or m.get("type")),
+                         len(channel_levels(m))) for i, m in enumerate(modules)]
+        self.width = CPX_W + MODULE_W * len(self.modules)
+
+    def build(self) -> None:
+        p = self.paint
+        self.clickables.append(p.box("body", (CPX_W * 0.96, BODY_D, BODY_H),
+                                     (self.x0 + CPX_W / 2, 0.0, self.z0), BODY))
+        self.build_frame()
+        p.label("title", self.title, self.at(CPX_W / 2, 1.72), anchor="center-center",
+                scale=0.8)
+        for i, name in enumerate(CPX_LEDS):
+            z = 1.25 - i * 0.36
+            p.led(name, self.at(0.3, z))
+            p.label(f"name_{i}", name, self.at(0.52, z), scale=0.66)
+        for i, (number, short, channels) in enumerate(self.modules):
+            x = CPX_W + (i + 0.5) * MODULE_W
+            self.clickables.append(p.box(f"m{number}", (MODULE_W * 0.92, BODY_D, BODY_H),
+                                         (self.x0 + x, 0.0, self.z0), BODY))
+            p.label(f"m{number}_n", str(number), self.at(x, 1.72), anchor="center-center",
+                    scale=0.8)
+            p.label(f"m{number}_t", short, self.at(x, 1.25), anchor="center-center",
+                    scale=0.66)
+            p.led(f"m{number}.error", self.at(x, 0.85), (0.3, 0.12, 0.18))
+            for ch in range(channels):
+                row, col = ch % 8, ch // 8
+                p.led(f"m{number}.{ch}", self.at(x - 0.17 + col * 0.34, 0.45 - row * 0.27),
+                      CHANNEL_LED)
+            p.label(f"m{number}_note", "", self.at(x, -1.75), anchor="center-center",
+                    scale=0.64)
+
+    def update(self, snap: Mapping[str, Any], t_us: int) -> str:
+        states = snap.get("led_states") or {}
+        leds = snap.get("leds") or {}
+        shown: list[tuple[str, str]] = []
+        for name in CPX_LEDS:
+            state = states.get(name) or {}
+            pattern = str(state.get("pattern", leds.get(name, "off")))
+            colour = str(state.get("colour", CPX_COLOURS[name]))
+            self.paint.set_led(name, colour, pattern, t_us)
+            shown.append((name if colour == CPX_COLOURS[name] else f"{name} ({colour})",
+                          pattern))
+        by_number = {int(m.get("module", 0)): m for m in snap.get("modules") or []}
+        for number, _short, channels in self.modules:
+            module = by_number.get(number, {})
+            error = module_error(module)
+            self.paint.set_led(f"m{number}.error", "red", "on" if error else "off", t_us)
+            self.paint.set_text(f"m{number}_note", error)
+            levels = channel_levels(module)
+            for ch in range(channels):
+                lit = ch < len(levels) and levels[ch]
+                self.paint.set_led(f"m{number}.{ch}", "yellow", "on" if lit else "off", t_us)
+        return blink_words(shown)

@@ -1,0 +1,162 @@
+"""The master panel (left panel, tab "Line"): phase, DC, frame statistics, one row per slave
+(position, station address, name, state, AL status with code and text, DC, link, counters)
+and the master's log in the style picked in the "Log style" dropdown (seed 003 and the FastCAT
+seed §7.2-§7.4 styles; the master renders the lines, ``set_log_style``).
+
+Read with ``.get()`` defaults: a master without DC or counters still gets its table.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.ui.commands import CommandSender
+from app.ui.panels.state import al_status_text
+from app.ui.panels.widgets import Mirror, from_user
+from app.ui.style import badge, esc, kv_table
+from devices.ethercat import describe_al_status_code
+from devices.events import US_PER_S
+
+LOG_ROWS = 40
+LOG_STYLES = ("twincat", "sirio", "pegaso", "aitraceprint")
+DC_TONE = {"COMPENSATING": "ok", "NOT_SYNCHRONIZED": "bad", "IDLE": "muted"}
+
+
+def state_badge(slave: Mapping[str, Any], target: str | None = None) -> str:
+    state = slave.get("state")
+    if state is None or slave.get("present") is False:
+        return badge("not seen", "bad")
+    requested = slave.get("requested")
+    error = int(slave.get("al_status", 0)) & 0x10 or slave.get("al_status_code")
+    tone = "bad" if error else ("ok" if state == (target or requested or state) else "warn")
+    text = state if requested in (None, state) else f"{state} -> {requested}"
+    return badge(text, tone)
+
+
+def al_cell(slave: Mapping[str, Any]) -> str:
+    if slave.get("state") is None:  # not on the line: nothing was read
+        return '<span class="fr-muted">-</span>'
+    status = int(slave.get("al_status", 0))
+    code = int(slave.get("al_status_code", 0))
+    text = slave.get("al_status_text") or describe_al_status_code(code)
+    code_html = esc(f"0x{code:04X} {text}")
+    if code:
+        code_html = f'<span class="fr-line-bad">{code_html}</span>'
+    return f"0x{status:04X} {esc(al_status_text(status))}<br>{code_html}"
+
+
+def link_cell(slave: Mapping[str, Any]) -> str:
+    if slave.get("powered") is False:
+        return badge("power off", "bad")
+    link = slave.get("link")
+    if link is None:
+        return '<span class="fr-muted">-</span>'
+    return badge("up", "ok") if link else badge("down", "bad")
+
+
+def counters_cell(slave: Mapping[str, Any]) -> str:
+    c = slave.get("counters") or {}
+    return esc(f"{c.get('lost_frames', 0)}/{c.get('wkc_errors', 0)}/"
+               f"{c.get('emergencies', 0)}/{c.get('state_changes', 0)}")
+
+
+def slaves_table(slaves: Sequence[Mapping[str, Any]], target: str | None = None) -> str:
+    rows = []
+    for i, s in enumerate(slaves):
+        dc = s.get("dc")
+        rows.append(
+            f"<tr><td>{esc(s.get('position', i))}<br>{esc(s.get('station_address', '?'))}</td>"
+            f"<td>{esc(s.get('name', s.get('device', '?')))}<br>{state_badge(s, target)}</td>"
+            f"<td>{al_cell(s)}</td>"
+            f"<td>{'-' if dc is None else ('yes' if dc else 'no')}</td>"
+            f"<td>{link_cell(s)}</td><td>{counters_cell(s)}</td></tr>")
+    body = "".join(rows) or '<tr><td colspan="6" class="fr-muted">no slaves</td></tr>'
+    return ('<table class="fr-log fr-line" id="fr-line-slaves"><colgroup><col style="width:10%">'
+            '<col style="width:27%"><col style="width:29%"><col style="width:7%">'
+            '<col style="width:12%"><col style="width:15%"></colgroup><thead><tr>'
+            "<th>Pos<br>Addr</th><th>Name<br>State</th><th>AL status<br>code</th><th>DC</th>"
+            f'<th>Link</th><th title="lost frames / WKC errors / emergencies / state '
+            f'changes">Cnt</th></tr></thead><tbody>{body}</tbody></table>')
+
+
+def dc_text(dc: Mapping[str, Any]) -> str:
+    if not dc:
+        return '<span class="fr-muted">not reported</span>'
+    state = str(dc.get("state", "-"))
+    out = badge(state, DC_TONE.get(state, "warn"))
+    if dc.get("fault"):
+        out += " " + badge(f"fault: {dc['fault']}", "bad")
+    if "deviation_ns" in dc:
+        out += esc(f" deviation {dc['deviation_ns']} ns / window {dc.get('window_ns', '?')} ns")
+    return out
+
+
+def summary(master: Mapping[str, Any], t_us: int) -> str:
+    stats = master.get("stats") or {}
+    phase = str(master.get("phase", "-")).replace("_", " ")
+    mode = " (external master)" if master.get("external") else ""
+    rows = [("Phase", badge(phase, "ok" if phase == "running" else "warn") + esc(mode)),
+            ("Target", esc(master.get("target", "-"))),
+            ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad")),
+            ("DC", dc_text(master.get("dc") or {})),
+            ("Frames", esc(f"{stats.get('frames', '-')} sent, {stats.get('lost_frames', 0)} "
+                           f"lost, cycle {stats.get('cycle_us', '-')} us"))]
+    title = (f'<p class="fr-title"><b>EtherCAT master</b> · {esc(master.get("id", "master"))}'
+             f' · <span class="fr-muted">t = {t_us / US_PER_S:.1f} s</span></p>')
+    return title + kv_table(rows, "fr-line-master")
+
+
+def _stamp(line: Mapping[str, Any]) -> str:
+    return str(line.get("timestamp") or f"{float(line.get('t', 0)):.3f} s")
+
+
+def log_table(lines: Sequence[Mapping[str, Any]]) -> str:
+    """The master's lines as it printed them, newest first."""
+    rows = "".join(
+        f'<tr><td class="fr-ts">{esc(_stamp(line))}</td><td>{esc(line.get("text", ""))}</td>'
+        "</tr>" for line in list(lines)[-LOG_ROWS:][::-1])
+    body = rows or '<tr><td colspan="2" class="fr-muted">no lines yet</td></tr>'
+    return ('<div class="fr-log-wrap"><table class="fr-log" id="fr-line-log"><colgroup>'
+            '<col style="width:30%"><col></colgroup><thead><tr><th>Timestamp</th>'
+            f"<th>Message</th></tr></thead><tbody>{body}</tbody></table></div>")
+
+
+class MasterPanel:
+    def __init__(self, server: viser.ViserServer, sender: CommandSender,
+                 master_id: str) -> None:
+        gui = server.gui
+        self._cache: dict[str, str] = {}
+        self._summary = gui.add_html(summary({}, 0))
+        self._slaves = gui.add_html(slaves_table([]))
+        self._style = gui.add_dropdown("Log style", LOG_STYLES, initial_value=LOG_STYLES[0],
+                                       hint="how the master prints its log (set_log_style)")
+        self._style_mirror = Mirror(self._style)
+        self._log = gui.add_html(log_table([]))
+
+        @self._style.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if from_user(event):
+                sender.send(event.client, master_id, "set_log_style",
+                            {"style": self._style.value})
+
+    def _set(self, key: str, handle: Any, content: str) -> None:
+        if self._cache.get(key) != content:
+            handle.content = content
+            self._cache[key] = content
+
+    def update(self, master: Mapping[str, Any], t_us: int) -> None:
+        styles = tuple(master.get("log_styles") or LOG_STYLES)
+        if tuple(self._style.options) != styles:
+            self._style.options = styles
+        if master.get("log_style") in styles:
+            self._style_mirror.follow(master["log_style"])
+        self._set("summary", self._summary, summary(master, t_us))
+        self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
+                                                            master.get("target")))
+        self._set("log", self._log, log_table(master.get("log") or []))
+
+    def text(self, key: str) -> str:
+        return self._cache.get(key, "")

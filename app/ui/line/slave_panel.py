@@ -1,0 +1,186 @@
+"""The slave panel (left panel, tab "Slave"): the picked slave's state, its LEDs in words
+(name, colour, pattern) and its I/O, for the TRS-CAT, the CPX-E-EC and the drive's EtherCAT
+side; the FastCAT has its own State tab. A click on a slave in the 3D view picks it here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.ui.line.bodies import led_colour
+from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_error
+from app.ui.panels.state import al_status_text
+from app.ui.panels.widgets import Mirror
+from app.ui.rail_scene import PATTERN_WORDS
+from app.ui.style import badge, esc, kv_table
+from devices.ethercat import describe_al_status_code
+
+MESSAGES = 6  # newest 0x10F3 messages shown
+
+
+def bits(values: Sequence[Any]) -> str:
+    """``[1, 0, 1]`` -> ``"101"`` (channel 1 first); analog values as numbers."""
+    if all(isinstance(v, bool) or v in (0, 1) for v in values):
+        return "".join("1" if v else "0" for v in values) or "-"
+    return " ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
+
+
+def esm_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
+    code = int(snap.get("al_status_code", 0))
+    esm, requested = snap.get("esm", "-"), snap.get("requested")
+    tone = "bad" if code else ("ok" if esm == "OP" else "warn")
+    state = badge(str(esm), tone) + (f" (requested {esc(requested)})"
+                                     if requested and requested != esm else "")
+    status = int(snap.get("al_status", 0))
+    text = snap.get("al_status_text") or describe_al_status_code(code)
+    return [("ESM state", state),
+            ("AL status", esc(f"0x{status:04X} {al_status_text(status)}")),
+            ("AL status code", esc(f"0x{code:04X} {text}")),
+            ("Station address", esc(snap.get("station_address", "-")))]
+
+
+def led_table(leds: Sequence[tuple[str, str, str]]) -> str:
+    rows = "".join(f"<tr><td>{esc(n)}</td><td>{esc(c)}</td>"
+                   f"<td>{esc(PATTERN_WORDS.get(p, p))}</td></tr>" for n, c, p in leds)
+    return ('<table class="fr-log" id="fr-slave-leds"><thead><tr><th>LED</th><th>Colour</th>'
+            f"<th>Pattern</th></tr></thead><tbody>{rows}</tbody></table>")
+
+
+def messages_table(messages: Sequence[Mapping[str, Any]]) -> str:
+    if not messages:
+        return '<p class="fr-muted">0x10F3: no messages</p>'
+    rows = "".join(f"<tr><td>{esc(m.get('sub', ''))}</td><td>{esc(m.get('type', ''))}</td>"
+                   f"<td>{esc(m.get('text_id', m.get('code', '')))}</td>"
+                   f"<td>{esc(m.get('text', ''))}</td></tr>"
+                   for m in list(messages)[-MESSAGES:][::-1])
+    return ('<table class="fr-log" id="fr-slave-diag"><colgroup><col style="width:10%">'
+            '<col style="width:15%"><col style="width:17%"><col></colgroup><thead><tr>'
+            "<th>Sub</th><th>Type</th><th>Text-ID</th><th>Message (0x10F3, newest first)</th>"
+            f"</tr></thead><tbody>{rows}</tbody></table>")
+
+
+def alarm_text(alarm: Any) -> str:
+    """``{"code": "0xA000", "name": "CONFIG_ERROR", "slot": 2}`` -> "0xA000 CONFIG_ERROR
+    (slot 2)"."""
+    if not isinstance(alarm, Mapping):
+        return str(alarm)
+    slot = alarm.get("slot")
+    return (f"{alarm.get('code', '')} {alarm.get('name', '')}"
+            + (f" (slot {slot})" if slot is not None else "")).strip()
+
+
+def trscat_html(snap: Mapping[str, Any]) -> str:
+    leds = snap.get("leds") or {}
+    sync = snap.get("sync") or {}
+    bus = snap.get("trs_bus") or {}
+    rows = [
+        *esm_rows(snap),
+        ("Field supply", esc(f"{snap.get('field_supply_v', '-')} V") + " " +
+         (badge("ok", "ok") if snap.get("field_ok", True) else badge("alarm", "bad"))),
+        ("TRS bus", esc(bus.get("state", "-"))),
+        ("Sync", esc(f"{sync.get('mode', '-')} · {sync.get('state', '-')} · SM event missed "
+                     f"{sync.get('sm_event_missed', 0)}" +
+                     (" · sync error" if sync.get("sync_error") else ""))),
+        ("Outputs", esc(snap.get("outputs_mode", "-")) +
+         (" " + badge("PREOP deadlock", "bad") if snap.get("deadlocked") else "")),
+        ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):04X}")),
+        ("Alarms", esc(", ".join(alarm_text(a) for a in snap.get("alarms") or []) or "none")),
+        ("Injected", esc(", ".join(str(a) for a in snap.get("injected") or []) or "none"))]
+    slots = "".join(
+        f"<tr><td>{esc(s.get('slot'))}</td><td>{esc(s.get('type'))}</td>"
+        f"<td>{esc(ident_text(s.get('ident', 0)))}</td>"
+        f"<td>{esc(bits(s.get('inputs') or []))}</td>"
+        f"<td>{esc(bits(s.get('outputs') or []))}</td></tr>" for s in snap.get("slots") or [])
+    io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>Slot</th><th>Type</th>'
+          "<th>Ident</th><th>Inputs</th><th>Outputs</th></tr></thead>"
+          f"<tbody>{slots}</tbody></table>")
+    names = [(n, c, str(leds.get(n, "off"))) for n, c in TRS_LEDS]
+    lit = [c for c in range(1, 17) if leds.get(f"I/O {c}", "off") != "off"]
+    names.append(("I/O 1-16", "yellow", f"on: {lit}" if lit else "off"))
+    diag = (snap.get("diagnosis") or {}).get("messages") or []
+    return (kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(diag))
+
+
+def cpx_html(snap: Mapping[str, Any]) -> str:
+    states = snap.get("led_states") or {}
+    switches = snap.get("switches") or {}
+    supply = snap.get("supply") or {}
+    diagnosis = snap.get("diagnosis") or {}
+    rows = [
+        *esm_rows(snap),
+        ("Switches", esc(f"rotary {switches.get('rotary_hex', '-')}, "
+                         f"{switches.get('mode', '-')}") +
+         (" " + badge("restart to apply", "warn") if switches.get("pending") else "")),
+        ("Supply", esc(f"U_EL/SEN {supply.get('el_sen_v', '-')} V, "
+                       f"U_OUT {supply.get('out_v', '-')} V")),
+        ("Error register", esc(f"0x{int(diagnosis.get('error_register', 0)):02X}")),
+        ("Injected", esc(", ".join(str(a) for a in snap.get("injected") or []) or "none"))]
+    names = [(n, str((states.get(n) or {}).get("colour", c)),
+              str((states.get(n) or {}).get("pattern", "off"))) for n, c in CPX_COLOURS.items()]
+    modules = "".join(
+        f"<tr><td>{esc(m.get('module'))}</td><td>{esc(m.get('short', m.get('type')))}</td>"
+        f"<td>{esc(bits(m.get('inputs') or []))}</td>"
+        f"<td>{esc(bits(m.get('outputs') or []))}</td>"
+        f"<td class=\"fr-line-bad\">{esc(module_error(m))}</td></tr>"
+        for m in snap.get("modules") or [])
+    io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>#</th><th>Module</th>'
+          "<th>Inputs</th><th>Outputs</th><th>Fault</th></tr></thead>"
+          f"<tbody>{modules}</tbody></table>")
+    history = (snap.get("history") or {}).get("messages") or []
+    return kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(history)
+
+
+def ecat_html(snap: Mapping[str, Any]) -> str:
+    leds = snap.get("leds") or {}
+    rows = [
+        *esm_rows(snap),
+        ("Drive", esc(snap.get("drive", "-"))),
+        ("Slot", esc(snap.get("slot", "-"))),
+        ("PDO assignment", esc(f"Rx {snap.get('rx_assign')} · Tx {snap.get('tx_assign')}")),
+        ("Outputs", esc(snap.get("outputs") or "-")),
+        ("Inputs", esc(snap.get("inputs") or "-")),
+        ("Last emergency", esc(snap.get("last_emergency") or "none"))]
+    return kv_table(rows, "fr-slave-state") + led_table(
+        [(n, led_colour(n), str(p)) for n, p in leds.items()])
+
+
+def slave_html(device: str, snap: Mapping[str, Any]) -> str:
+    title = (f'<p class="fr-title"><b>{esc(snap.get("box_name") or device)}</b> · '
+             f'{esc(device)}</p>')
+    kind = snap.get("kind")
+    if kind == "trscat":
+        return title + trscat_html(snap)
+    if kind == "cpx_e_ec":
+        return title + cpx_html(snap)
+    if kind == "fastcat":
+        return title + '<p class="fr-muted">The FastCAT has its own tabs: State, Objects.</p>'
+    return title + ecat_html(snap)
+
+
+class SlavePanel:
+    def __init__(self, server: viser.ViserServer, order: Sequence[str]) -> None:
+        self.picker = server.gui.add_dropdown("Slave", tuple(order) or ("-",))
+        self._mirror = Mirror(self.picker)
+        self._html = server.gui.add_html("")
+        self._last = ""
+
+    @property
+    def selected(self) -> str:
+        return str(self.picker.value)
+
+    def select(self, device: str) -> None:
+        if device in self.picker.options and self.picker.value != device:
+            self.picker.value = device
+
+    def update(self, devices: Mapping[str, Any]) -> None:
+        content = slave_html(self.selected, devices.get(self.selected) or {})
+        if content != self._last:
+            self._html.content = content
+            self._last = content
+
+    @property
+    def content(self) -> str:
+        return self._last

@@ -1,0 +1,10 @@
+"""CSS of the line's tables (added next to ``app.ui.style.CSS``)."""
+
+LINE_CSS = """
+<style>
+#fr-line-slaves td { font-size: 0.95em; }
+#fr-line-log td { white-space: pre-wrap; }
+.fr-line-bad { color: #a11616; font-weight: 600; }
+#fr-slave-leds, #fr-slave-io, #fr-slave-diag { margin-top: 6px; }
+</style>
+"""

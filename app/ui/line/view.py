@@ -1,0 +1,158 @@
+"""Everything the dashboard shows of the EtherCAT line, assembled: the 3D line, the Line and
+Slave tabs, the Line controls, and focus (a click on a device, or a scenario ``Focus`` event:
+its panels pick it and the camera moves toward it).
+
+viser cannot switch a browser's tab from the server, so focus picks the device in the Slave
+tab, the Slave faults form and the Objects tab, and tells the clicking browser where to look.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+import viser
+
+from app.runtime import Frame
+from app.ui.commands import CommandSender, notify
+from app.ui.line.controls import LineControls
+from app.ui.line.master_panel import MasterPanel
+from app.ui.line.scene import Box, LineScene
+from app.ui.line.slave_panel import SlavePanel
+from app.ui.line.style import LINE_CSS
+from devices.events import Event
+
+logger = logging.getLogger(__name__)
+
+CAMERA_FOV_DEG = 50.0
+CAMERA_RISE = 0.12  # camera height over the centre, per unit of distance
+CAMERA_MARGIN = 0.4
+FOCUS_MIN_W = 9.0  # a focused device fills at most this much scene width
+# A click's pointer-up makes the browser send its own camera back; a move sent at once loses
+# that race (seen: the camera stays), so a move after a click waits this long.
+CLICK_SETTLE_S = 0.3
+
+
+def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN,
+               ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """(position, look_at) that fit ``box`` (front plane) into a view of ``aspect``."""
+    half_tan = math.tan(math.radians(CAMERA_FOV_DEG) / 2)
+    width, height = box.x_max - box.x_min, box.z_max - box.z_min
+    distance = 1.0 + max((width / 2 + margin) / (half_tan * aspect),
+                         (height / 2 + margin) / half_tan)
+    centre = ((box.x_min + box.x_max) / 2, 0.0, (box.z_min + box.z_max) / 2)
+    return (centre[0], -distance, centre[2] + distance * CAMERA_RISE), centre
+
+
+def focus_target(target: str) -> str:
+    """``trscat`` or ``cpx:2`` (device:module) -> the device id."""
+    return target.split(":", 1)[0].split("/", 1)[0]
+
+
+class LineView:
+    def __init__(self, server: viser.ViserServer, sender: CommandSender, frame: Frame,
+                 master_id: str, rail_lengths: Mapping[str, float],
+                 actions: Mapping[str, Mapping[str, Any]], side: Any,
+                 control_tab: Callable[[str, Any], Any], aspect: float) -> None:
+        self._server = server
+        self._sender = sender
+        self.master_id = master_id
+        self._aspect = aspect
+        self.on_select: Callable[[str], None] | None = None  # the Objects tab follows
+        self.scene = LineScene(server, frame.snapshot, master_id, rail_lengths, self.focus,
+                               self._cable_clicked)
+        order = self.scene.order
+        gui = server.gui
+        with side.add_tab("Line", viser.Icon.TOPOLOGY_STAR_3):
+            gui.add_html(LINE_CSS)
+            whole = gui.add_button("Show the whole line", icon=viser.Icon.ZOOM_OUT)
+            self.master = MasterPanel(server, sender, master_id)
+        with side.add_tab("Slave", viser.Icon.CPU_2):
+            gui.add_html(LINE_CSS)
+            self.slave = SlavePanel(server, [d for d in order if d not in rail_lengths] +
+                                    [d for d in order if d in rail_lengths])
+        with control_tab("Line", viser.Icon.TOPOLOGY_STAR_3):
+            self.controls = LineControls(server, sender, master_id, order, actions,
+                                         frame.snapshot.get("devices") or {},
+                                         list(rail_lengths))
+        self.focused: str | None = None
+        self.home: Box = self.scene.bounds()  # what "Show the whole line" frames (dashboard)
+
+        @whole.on_click
+        def _(event: viser.GuiEvent) -> None:
+            self.show_all()
+
+        @self.slave.picker.on_update
+        def _(event: viser.GuiEvent) -> None:
+            if event.client is not None:
+                self.focus(event.client, self.slave.selected, move=False)
+
+    # ---- focus ----------------------------------------------------------------------------
+    def bounds(self) -> Box:
+        return self.scene.bounds()
+
+    def focus(self, client: viser.ClientHandle | None, device: str, move: bool = True) -> None:
+        """Pick ``device`` in the panels and move every browser's camera toward it."""
+        if device not in self.scene.bodies:
+            logger.info("focus on %r: not a device of the line", device)
+            return
+        self.focused = device
+        if device != self.master_id:
+            self.slave.select(device)
+            self.controls.select(device)
+            if self.on_select is not None:
+                self.on_select(device)
+            where = "tabs Slave and Objects (left), Line (right)"
+        else:
+            where = "tab Line (left and right)"
+        box = self.scene.focus_box(device)
+        if move and box is not None:
+            width = max(box.x_max - box.x_min, FOCUS_MIN_W)
+            centre = (box.x_min + box.x_max) / 2
+            target = Box(centre - width / 2, centre + width / 2, box.z_min, box.z_max)
+            if client is None:
+                self.move_camera(target)
+            else:
+                timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target,))
+                timer.daemon = True
+                timer.start()
+        notify(client, f"{device} selected", f"its panels: {where}")
+
+    def show_all(self) -> None:
+        self.move_camera(self.home)
+
+    def move_camera(self, box: Box) -> None:
+        position, look_at = camera_for(box, self._aspect)
+        for client in self._server.get_clients().values():
+            try:
+                with client.atomic():  # position first: it drags look_at along (viser)
+                    client.camera.position = position
+                    client.camera.look_at = look_at
+            except Exception:  # a browser that just left
+                logger.debug("camera move for client %s failed", client.client_id,
+                             exc_info=True)
+
+    def add_events(self, events: Iterable[Event]) -> None:
+        """Scenario ``Focus`` events (record kind "focus", key ``target``)."""
+        for event in events:
+            if event.kind == "focus":
+                target = str(getattr(event, "target", "") or "")
+                if target:
+                    self.focus(None, focus_target(target))
+
+    def _cable_clicked(self, client: viser.ClientHandle | None, index: int,
+                       plugged: bool) -> None:
+        verb = "pull_cable" if plugged else "plug_cable"
+        self._sender.send(client, self.master_id, verb, {"cable": index})
+
+    # ---- per frame (dashboard thread) -----------------------------------------------------
+    def update(self, frame: Frame) -> None:
+        devices = frame.snapshot.get("devices") or {}
+        master = devices.get(self.master_id) or {}
+        self.scene.update(frame.snapshot, frame.t_us)
+        self.master.update(master, frame.t_us)
+        self.slave.update(devices)
+        self.controls.update(master)

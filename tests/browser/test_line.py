@@ -1,0 +1,168 @@
+"""The EtherCAT line in headless Chromium (issue 5): the whole line healthy, then each alarm
+state of the five line scenarios, driven by commands on the models as the scenarios do.
+
+Seed 003 (master: line positions, AL status codes, the log), seed 001 §9.3.2 / §9.3.7 (TRS-CAT
+expansion ident check at PREOP -> SAFEOP, 0xA000; outputs on a communication error in OP),
+seed 002 §2.5 (CPX-E-EC short circuit: 0x10F3 message and EMCY, SF / M LEDs). The simulation is
+paused and advanced by the test, so LED phases and texts are the same on every run.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from helpers import LiveDashboard, choose, compare_screenshot, open_dashboard, wait_until
+
+from app.rig_config import DEFAULT_RIG
+from app.ui.line.painter import COLOURS
+from devices.events import Focus
+
+pytestmark = pytest.mark.browser
+
+LINE_RIG = DEFAULT_RIG
+BOOT_S = 8.0  # FastCAT scan and every slave INIT -> OP (the master steps them in line order)
+
+
+@pytest.fixture
+def line(dashboard_for: Any) -> LiveDashboard:
+    live = dashboard_for(LINE_RIG)
+    live.advance(BOOT_S)
+    return live
+
+
+def open_tabs(page: Any, name: str) -> None:
+    """Click every tab called ``name`` (the left panel's and the control panel's)."""
+    for tab in page.get_by_role("tab", name=name).all():
+        tab.click()
+
+
+def slaves(live: LiveDashboard) -> list[dict[str, Any]]:
+    return list(live.snapshot("master")["slaves"])
+
+
+def slave(live: LiveDashboard, device: str) -> dict[str, Any]:
+    return next(s for s in slaves(live) if s["device"] == device)
+
+
+def test_line_healthy(line: LiveDashboard, page: Any) -> None:
+    view = line.dashboard.line
+    assert view is not None
+    assert view.scene.order == ["fastcat", "trscat", "cpx", "drive_ec-ecat"]
+    assert [s["state"] for s in slaves(line)] == ["OP"] * 4
+    assert view.scene.led_colours("trscat")["RUN"] == COLOURS["green"]
+    assert view.scene.led_colours("cpx")["PS"] == COLOURS["green"]
+    assert view.scene.text("trscat", "header") == "1 · 1002 · OP"
+    assert all(c.plugged for c in view.scene.cables)
+    open_dashboard(page, line)
+    open_tabs(page, "Line")
+    table = page.locator("#fr-line-slaves")
+    table.wait_for()
+    for name in ("Box 1 (FastCAT)", "Box 2 (TRS-CAT)", "Box 3 (CPX-E-EC)"):
+        assert name in table.inner_text()
+    compare_screenshot(page, "line_healthy")
+
+
+def test_line_cable_pulled_and_replugged(line: LiveDashboard, page: Any) -> None:
+    open_dashboard(page, line)
+    open_tabs(page, "Line")
+    choose(page, "Cable", "2 trscat -> cpx")
+    page.get_by_role("button", name="Pull").click()
+    wait_until(lambda: not line.snapshot("master")["cables"][2]["plugged"], what="cable 2 out")
+    line.advance(1.0)
+    view = line.dashboard.line
+    assert view is not None and view.scene.cables[2].plugged is False
+    assert slave(line, "cpx")["link"] is False and slave(line, "cpx")["state"] is None
+    assert "not seen" in view.scene.text("cpx", "header")
+    assert view.scene.led_colours("trscat")["RUN"] == COLOURS["green"]  # in front: still OP
+    wait_until(lambda: "not seen" in page.locator("#fr-line-slaves").inner_text(),
+               what="the master panel to show the lost slaves")
+    compare_screenshot(page, "line_cable_pulled")
+    page.get_by_role("button", name="Plug").click()
+    wait_until(lambda: line.snapshot("master")["cables"][2]["plugged"], what="cable 2 in")
+    line.advance(6.0)
+    assert [s["state"] for s in slaves(line)] == ["OP"] * 4
+
+
+def test_line_trscat_expansion_mismatch(line: LiveDashboard, page: Any) -> None:
+    """§9.3.2: expansion 2 swapped for another type with the node off; at power-up the
+    master's 0xF030 no longer matches what the node finds, PREOP -> SAFEOP is refused."""
+    line.command("trscat", "power", {"on": False})
+    line.command("trscat/2", "unplug")
+    line.command("trscat/2", "plug", {"type": "TRS-IO-E"})
+    line.command("trscat", "power", {"on": True})
+    line.advance(6.0)
+    entry = slave(line, "trscat")
+    assert entry["state"] == "PREOP" and entry["al_status_code"] != 0
+    open_dashboard(page, line)
+    view = line.dashboard.line
+    assert view is not None
+    view.slave.select("cpx")  # so that the click below has something to change
+    page.mouse.click(505, 400)  # the TRS-CAT's body in the 3D view
+    wait_until(lambda: view.focused == "trscat" and view.slave.selected == "trscat",
+               what="the click to pick the TRS-CAT")
+    toast = page.locator(".mantine-Notification-root", has_text="trscat selected")
+    toast.first.wait_for()  # the clicking browser is told where its panels are
+    toast.first.locator("button").click()
+    toast.first.wait_for(state="detached")
+    open_tabs(page, "Slave")
+    page.locator("#fr-slave-state").wait_for()
+    assert "0xA000" in view.scene.text("trscat", "exp2_note")
+    compare_screenshot(page, "line_trscat_mismatch")
+
+
+def test_line_trscat_outputs_fallback(line: LiveDashboard, page: Any) -> None:
+    """A communication error in OP (lost frames): SAFEOP-ERROR and the outputs' fallback."""
+    line.command("trscat", "set_output", {"channel": 1, "value": 1})
+    line.advance(0.2)
+    line.command("trscat", "drop_frames", {"count": 200})
+    line.advance(0.5)
+    snap = line.snapshot("trscat")
+    assert snap["esm"] == "SAFEOP" and snap["al_status_code"] == 0x001A
+    assert snap["outputs_mode"] != "normal"
+    line.dashboard.line.focus(None, "trscat")
+    open_dashboard(page, line)
+    open_tabs(page, "Slave")
+    page.locator("#fr-slave-state").wait_for()
+    compare_screenshot(page, "line_trscat_outputs")
+
+
+def test_line_cpx_short_circuit(line: LiveDashboard, page: Any) -> None:
+    """§2.5: the PLC switches on output 3 of the 8DO (module 2, 0x7002:4), then it is shorted:
+    0x10F3 message, EMCY 0x2320 in the master's log, SF LED, the module's red LED."""
+    line.command("cpx", "write_object", {"index": 0x7002, "sub": 4, "value": 1})
+    line.advance(0.5)
+    view = line.dashboard.line
+    assert view is not None
+    assert view.scene.led_colours("cpx")["m2.3"] == COLOURS["yellow"]  # output 3 driven
+    line.command("cpx/2", "short_circuit", {"on": True, "channel": 3})
+    line.advance(1.0)
+    snap = line.snapshot("cpx")
+    assert snap["leds"]["SF"] != "off"
+    assert "Short circuit" in snap["history"]["messages"][-1]["text"]
+    assert any("2320" in entry["text"] for entry in line.snapshot("master")["log"])
+    assert view.scene.led_colours("cpx")["m2.error"] == COLOURS["red"]
+    assert view.scene.text("cpx", "m2_note") == "short 3"
+    open_dashboard(page, line)
+    view.add_events([Focus(line.runtime.frame.t_us, "scenario", target="cpx:2")])
+    assert view.slave.selected == "cpx" and view.controls.picker.value == "cpx"
+    open_tabs(page, "Slave")
+    page.locator("#fr-slave-diag").wait_for()
+    assert "Short circuit" in page.locator("#fr-slave-diag").inner_text()
+    compare_screenshot(page, "line_cpx_short")
+
+
+def test_line_dc_sync_lost(line: LiveDashboard, page: Any) -> None:
+    """Seed 003: a drifting reference clock leaves the sync window: NOT_SYNCHRONIZED, and the
+    DC slaves go to SAFEOP."""
+    line.command("master", "dc_fault", {"kind": "drift"})
+    line.advance(3.0)
+    master = line.snapshot("master")
+    assert master["dc"]["state"] == "NOT_SYNCHRONIZED"
+    dc_slaves = [s for s in master["slaves"] if s["dc"]]
+    assert dc_slaves and all(s["state"] == "SAFEOP" for s in dc_slaves)
+    open_dashboard(page, line)
+    open_tabs(page, "Line")
+    page.locator("#fr-line-master").wait_for()
+    assert "NOT_SYNCHRONIZED" in page.locator("#fr-line-master").inner_text()
+    compare_screenshot(page, "line_dc_lost")

@@ -1,0 +1,173 @@
+"""The line view's texts, colours and geometry without a browser: headers, LED words, the
+expansion and module notes, cable routes, the master panel's table and the focus targets.
+
+Seeds: 003 (master: positions from 0, station addresses, AL status codes), 001 §9.3.2 (TRS-CAT
+ASCII idents, 0xF030 / 0xF050), 002 tables 11-13 (CPX-E-EC LED colours), ETG.1300 (pattern
+names). The snapshots are built by hand in the master snapshot contract's shape.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Any
+
+import pytest
+
+from app.ui.line.bodies import blink_words, header_text, state_tone
+from app.ui.line.cables import label_point, pulled_route, route
+from app.ui.line.controls import cable_options, slave_options, targets
+from app.ui.line.io_bodies import channel_levels, expansion_note, ident_text, module_error
+from app.ui.line.master_panel import dc_text, log_table, slaves_table
+from app.ui.line.scene import Box, line_order, slave_entries
+from app.ui.line.slave_panel import alarm_text, bits, slave_html
+from app.ui.line.view import camera_for, focus_target
+
+SLAVE: dict[str, Any] = {
+    "position": 1, "device": "trscat", "name": "Box 2 (TRS-CAT)", "station_address": 1002,
+    "present": True, "powered": True, "link": True, "state": "OP", "requested": "OP",
+    "al_status": 8, "al_status_code": 0, "al_status_text": "No error", "dc": True,
+    "counters": {"lost_frames": 1, "wkc_errors": 2, "emergencies": 3, "state_changes": 4}}
+
+
+@pytest.mark.parametrize(("change", "tone"), [
+    ({}, "ok"),
+    ({"state": "SAFEOP", "requested": "SAFEOP"}, "busy"),  # parked below the target OP
+    ({"state": "PREOP", "al_status": 0x12, "al_status_code": 0x70}, "bad"),
+    ({"state": None, "present": False}, "gone"),
+])
+def test_state_tone_against_the_master_target(change: dict[str, Any], tone: str) -> None:
+    assert state_tone({**SLAVE, **change}, "OP") == tone
+
+
+@pytest.mark.parametrize(("change", "text"), [
+    ({}, "1 · 1002 · OP"),
+    ({"state": "PREOP", "al_status_code": 0x70}, "1 · 1002 · PREOP · AL 0x0070"),
+    ({"state": None, "link": False}, "1 · 1002 · not seen · no link"),
+    ({"state": None, "powered": False}, "1 · 1002 · not seen · power off"),
+])
+def test_header_text(change: dict[str, Any], text: str) -> None:
+    assert header_text({**SLAVE, **change}, 1) == text
+
+
+def test_blink_words_leave_out_what_a_still_shows() -> None:
+    leds = [("RUN", "on"), ("ERROR", "double_flash"), ("LINK-ACT IN", "flickering"),
+            ("LINK-ACT OUT", "flickering"), ("BUS", "off")]
+    assert blink_words(leds) == "ERROR double flash\nLINK-ACT IN, LINK-ACT OUT flickering"
+    assert blink_words([("RUN", "on")]) == ""
+
+
+@pytest.mark.parametrize(("ident", "text"), [
+    (0x494F2D45, "IO-E"), ("0x414E2D45", "AN-E"), (0, "-"), (0x01020304, "0x01020304")])
+def test_ident_text_reads_the_ascii_idents(ident: int | str, text: str) -> None:
+    """Seed 001 §9.3.2: expansion idents are four ASCII characters."""
+    assert ident_text(ident) == text
+
+
+def test_expansion_note() -> None:
+    io_e, an_e = 0x494F2D45, 0x414E2D45
+    snap: dict[str, Any] = {"slots": [{}, {"serviced": True}, {"serviced": True}],
+                            "f030": [2, io_e, an_e], "f050": [2, io_e, io_e], "alarms": []}
+    assert expansion_note(snap, 1) == ""
+    assert expansion_note(snap, 2) == "cfg AN-E"  # 0xF030 wants AN-E, 0xF050 found IO-E
+    snap["f050"] = snap["f030"]
+    snap["alarms"] = [{"code": "0xA000", "name": "CONFIG_ERROR", "slot": 2}]
+    assert expansion_note(snap, 2) == "0xA000"
+    snap["slots"][1]["serviced"] = False
+    assert expansion_note(snap, 1) == "not seen"
+
+
+@pytest.mark.parametrize(("module", "error", "levels"), [
+    ({"short": "16DI", "inputs": [1, 0, 1]}, "", [True, False, True]),
+    ({"short": "8DO", "driven": [0, 0, 0, 1], "shorted": [3]}, "short 3",
+     [False, False, False, True]),
+    ({"short": "4AI-U-I", "inputs": [5, 0], "wire_broken": [0, 1]}, "wire 0,1", []),
+    ({"short": "16DI", "inputs": [], "failed": True}, "failed", []),
+    ({"short": "16DI", "sensor_supply_short": True}, "sensor short", []),
+])
+def test_cpx_module_led_and_channels(module: dict[str, Any], error: str,
+                                     levels: list[bool]) -> None:
+    assert module_error(module) == error
+    assert channel_levels(module) == levels
+
+
+def test_cable_routes() -> None:
+    assert route((1.0, -1.6), (3.0, -1.6), -3.5) == [(1.0, -1.6), (3.0, -1.6)]
+    wrap = route((9.6, -1.6), (-3.0, -8.2), -3.5)  # end of row 1 to the start of row 2
+    assert wrap[0] == (9.6, -1.6) and wrap[-1] == (-3.0, -8.2)
+    assert all(a[0] == b[0] or a[1] == b[1] for a, b in itertools.pairwise(wrap))
+    assert min(z for _x, z in wrap) == -8.2 and (9.95, -3.5) in wrap
+    pulled = pulled_route([(0.0, 0.0), (2.0, 0.0)])
+    assert pulled[-2] == (0.9, 0.0) and pulled[-1][1] < 0  # stops short, the end hangs
+    assert label_point(wrap) == ((9.95 - 3.35) / 2, -3.5)
+
+
+MASTER: dict[str, Any] = {
+    "target": "OP", "slaves": [
+        {**SLAVE, "position": 0, "device": "fastcat", "station_address": 1001},
+        {**SLAVE}, {**SLAVE, "position": 2, "device": "cpx", "station_address": 1003,
+                    "state": None, "link": False}],
+    "cables": [{"index": 0, "from": "master", "to": "fastcat", "plugged": True},
+               {"index": 1, "from": "fastcat", "to": "trscat", "plugged": True},
+               {"index": 2, "from": "trscat", "to": "cpx", "plugged": False}]}
+
+
+def test_line_order_by_device_or_by_station_address() -> None:
+    assert line_order(MASTER, {}) == ["fastcat", "trscat", "cpx"]
+    old = {"slaves": [{"station_address": 1002}, {"station_address": 1001}]}
+    devices = {"a": {"kind": "fastcat", "station_address": 1001},
+               "b": {"kind": "trscat", "station_address": 1002}}
+    assert line_order(old, devices) == ["b", "a"]
+    assert slave_entries(MASTER, ["fastcat", "trscat", "cpx"])["cpx"]["position"] == 2
+
+
+def test_master_panel_table_and_controls() -> None:
+    html = slaves_table(MASTER["slaves"], "OP")
+    assert html.count("<tr>") == 4  # header + 3 slaves
+    assert "Box 2 (TRS-CAT)" in html and "1/2/3/4" in html and "not seen" in html
+    assert cable_options(MASTER, []) == ["0 master -> fastcat", "1 fastcat -> trscat",
+                                         "2 trscat -> cpx (pulled)"]
+    assert cable_options({}, ["fastcat", "trscat"]) == ["0 master -> fastcat",
+                                                       "1 fastcat -> trscat"]
+    off = {"slaves": [{**SLAVE, "powered": False}]}
+    assert slave_options(off, ["trscat"]) == ["0 trscat (off)"]
+    assert "NOT_SYNCHRONIZED" in dc_text({"state": "NOT_SYNCHRONIZED", "fault": "drift"})
+    assert "fault: drift" in dc_text({"state": "NOT_SYNCHRONIZED", "fault": "drift"})
+    log = log_table([{"timestamp": "12/11/2019 14.51.30 421 ms", "text": "first"},
+                     {"t": 1.5, "text": "second <b>"}])
+    assert log.index("second &lt;b&gt;") < log.index("first")  # newest first, escaped
+    assert "1.500 s" in log
+
+
+def test_targets_and_focus_names() -> None:
+    trscat = {"slots": [{"slot": 0}, {"slot": 1}, {"slot": 2}]}
+    assert targets("trscat", trscat) == ["trscat", "trscat/1", "trscat/2"]
+    assert targets("cpx", {"modules": [{"module": 1}, {"module": 2}]}) == [
+        "cpx", "cpx/1", "cpx/2"]
+    assert [focus_target(t) for t in ("trscat", "cpx:2", "fastcat/3")] == [
+        "trscat", "cpx", "fastcat"]
+
+
+def test_camera_frames_the_box_and_looks_from_above() -> None:
+    position, look_at = camera_for(Box(-3.0, 11.0, -10.0, 3.0), 0.84)
+    assert look_at == (4.0, 0.0, -3.5)
+    assert position[0] == 4.0 and position[1] < -10 and position[2] > look_at[2]
+    near, _ = camera_for(Box(0.0, 9.0, -2.0, 2.0), 0.84)
+    assert near[1] > position[1]  # a smaller box: the camera comes closer
+
+
+def test_slave_panel_texts() -> None:
+    assert bits([1, 0, 1, 1]) == "1011" and bits([0.5, 2.0]) == "0.5 2"
+    assert alarm_text({"code": "0xA000", "name": "CONFIG_ERROR", "slot": 2}) == (
+        "0xA000 CONFIG_ERROR (slot 2)")
+    html = slave_html("trscat", {"kind": "trscat", "esm": "PREOP", "requested": "SAFEOP",
+                                 "al_status": 0x12, "al_status_code": 0x70,
+                                 "leds": {"ERROR": "blinking"}, "slots": [
+                                     {"slot": 0, "type": "TRS-CAT integrated",
+                                      "ident": "0x494F2D42", "inputs": [1, 0]}]})
+    assert "0x0012 PREOP + error" in html and "0x0070" in html and "IO-B" in html
+    assert "blinking" in html
+    cpx = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP", "modules": [
+        {"module": 2, "short": "8DO", "outputs": [0, 0, 0, 1], "shorted": [3]}],
+        "history": {"messages": [{"sub": 7, "type": "error", "text_id": "0x3702",
+                                  "text": "Short circuit/overload"}]}})
+    assert "short 3" in cpx and "Short circuit/overload" in cpx and "0x3702" in cpx
