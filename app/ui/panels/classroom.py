@@ -186,8 +186,13 @@ class ClassroomPanel:
     def _connect(self, client: viser.ClientHandle) -> None:
         self._build(client)
         if not self.access.open:  # its own thread: it waits for the page to render
+            def alive() -> bool:
+                return (not self._stop.is_set()
+                        and client.client_id in self._server.get_clients())
+
             threading.Thread(target=read_browser_token, name="fieldrig-token", daemon=True,
-                             args=(client, self.access, self._promoted)).start()
+                             args=(client, self.access, self._promoted),
+                             kwargs={"alive": alive}).start()
 
     def _disconnect(self, client: viser.ClientHandle) -> None:
         with self._lock:

@@ -62,13 +62,15 @@ class TokenForm:
 
 
 def read_browser_token(client: viser.ClientHandle, access: Access, promoted: Promoted,
-                       wait_s: float = URL_WAIT_S) -> bool:
+                       wait_s: float = URL_WAIT_S,
+                       alive: Callable[[], bool] = lambda: True) -> bool:
     """Blocking (run it in a worker thread): put the URL snippet on the page, then look for
-    a token in the browser's storage for up to ``wait_s``; promote on the right one."""
+    a token in the browser's storage for up to ``wait_s``; promote on the right one.
+    ``alive``: False once the browser or the server is gone (stop asking)."""
     snippet = client.gui.add_html(URL_SNIPPET)
     deadline = time.monotonic() + wait_s
     try:
-        while time.monotonic() < deadline:
+        while time.monotonic() < deadline and alive():
             try:
                 token = client.local_storage.get_item(TOKEN_KEY, timeout=wait_s)
             except (RuntimeError, TimeoutError):
