@@ -40,6 +40,7 @@ CI_CYCLES = 1_000  # 4 s; the long form (--full) runs the issue's 10,000 (40 s)
 FULL_CYCLES = 10_000
 PERIOD_S = 0.004
 SDO_TIMEOUT_US = 3_000_000
+A_NICE = -10
 LINE_RIG = """
 [rig]
 name = "wire line"
@@ -246,8 +247,28 @@ def powered_runtime(rig) -> Runtime:
     return runtime
 
 
+@contextlib.contextmanager
+def favoured(pid: int = 0):
+    """Process A ahead of batch work (nice -10; threads started meanwhile inherit it): on a
+    machine running a dozen other jobs the simulation must keep real time, or the models see
+    the master's frames late (SM watchdog, DC sync errors) for reasons that are not the wire's."""
+    old = os.getpriority(os.PRIO_PROCESS, pid)
+    with contextlib.suppress(OSError):
+        os.setpriority(os.PRIO_PROCESS, pid, A_NICE)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(OSError, ProcessLookupError):
+            os.setpriority(os.PRIO_PROCESS, pid, old)
+
+
 @pytest.fixture(scope="module")
 def session(veth):
+    with favoured():
+        yield from _session(veth)
+
+
+def _session(veth):
     master_if, slave_if = veth
     runtime = powered_runtime(build_rig(parse_rig_spec(LINE_RIG)))
     bridge = start_wire(runtime, slave_if)
@@ -353,6 +374,8 @@ def test_the_app_serves_the_default_rig_on_the_wire(tmp_path):
              "--port", str(free_port()), "--modbus-port", str(free_port()), "--no-record",
              "--state-dir", str(tmp_path), "--run-for", "120"],
             cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        with contextlib.suppress(OSError):  # see favoured(): before the app starts threads
+            os.setpriority(os.PRIO_PROCESS, app.pid, A_NICE)
         master = None
         try:
             wait_for_line(app, "EtherCAT wire on", 60)
