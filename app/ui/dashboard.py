@@ -25,8 +25,7 @@ import viser.theme
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.drive.view import DriveView, axes_height
-from app.ui.line.scene import Box
-from app.ui.line.view import LineView, camera_for
+from app.ui.line.view import LineView
 from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
@@ -50,7 +49,6 @@ CAMERA_RISE = 0.12  # camera height over the rail centre, per unit of distance
 RAIL_SPACING = BODY_H + 2.0  # vertical distance between the rails of several couplers
 AXIS_GAP = 1.1  # from the lowest rail's bottom to the servo axes (its LED legend in between)
 CAMERA_FOV_DEG = 50.0
-CAPTION_ROOM = 0.6  # above the line, for a scenario caption
 
 TITLE_SVG = (
     "<svg xmlns='http://www.w3.org/2000/svg' width='132' height='32'>"
@@ -274,26 +272,14 @@ class Dashboard:
         """Drives that get a 3D axis: not those the line draws (their EtherCAT side)."""
         if self._line is None:
             return list(self.drive_ids)
-        snapshot = self.runtime.frame.snapshot.get("devices") or {}
-        on_line = {str((snapshot.get(d) or {}).get("drive")) for d in self._line.scene.order}
-        return [d for d in self.drive_ids if d not in on_line]
+        return self._line.drives_off_line(self.drive_ids, self.runtime.frame.snapshot)
 
     def _frame_line(self, axes_bottom: float | None) -> None:
         """Frame the whole line (and the axes under it) between the docked panels."""
         assert self._line is not None
-        box = self._line.bounds()
-        if axes_bottom is not None and self._axis_ids():
-            box = Box(box.x_min, max(box.x_max, rail_length(MIN_FRAMED_SLOTS)), axes_bottom,
-                      box.z_max)
-        box = Box(box.x_min, box.x_max, box.z_min, box.z_max + CAPTION_ROOM)
-        self._line.home = box
-        position, look_at = camera_for(box, VIEW_ASPECT, CAMERA_MARGIN)
-        cam = self.server.initial_camera
-        cam.fov = math.radians(CAMERA_FOV_DEG)
-        cam.look_at = look_at
-        cam.position = position
-        cam.up = (0.0, 0.0, 1.0)
-        self._camera_center = look_at
+        bottom = axes_bottom if axes_bottom is not None and self._axis_ids() else None
+        self._camera_center = self._line.frame_initial_camera(
+            bottom, rail_length(MIN_FRAMED_SLOTS), math.radians(CAMERA_FOV_DEG))
 
     def _timestamp_fn(self) -> Callable[[int], str]:
         """The master logger's clock for device rows, so that all rows read alike."""
@@ -394,6 +380,11 @@ class Dashboard:
     def caption(self) -> str:
         """The scenario caption shown above the rail ("" before the first one)."""
         return self._caption.text if self._caption.visible else ""
+
+    @property
+    def objects(self) -> ObjectDictionaryPanel | None:
+        """The Objects tab (tests)."""
+        return self._panels.objects if self._panels is not None else None
 
     @property
     def line(self) -> LineView | None:

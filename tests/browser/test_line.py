@@ -166,3 +166,20 @@ def test_line_dc_sync_lost(line: LiveDashboard, page: Any) -> None:
     page.locator("#fr-line-master").wait_for()
     assert "NOT_SYNCHRONIZED" in page.locator("#fr-line-master").inner_text()
     compare_screenshot(page, "line_dc_lost")
+
+
+@pytest.mark.parametrize(("device", "index"), [
+    ("trscat", 0xF030),  # seed 001 §9.3.2: configured module ident list
+    ("cpx", 0x10F3),  # seed 002 §2.5.2: diagnosis history
+    ("drive_ec-ecat", 0x6041),  # seed 004 ch. 5: statusword
+])
+def test_objects_tab_shows_every_slave(line: LiveDashboard, device: str, index: int) -> None:
+    """Focus on a slave picks its dictionary in the Objects tab, read from its own ``od``."""
+    view = line.dashboard.line
+    assert view is not None
+    view.focus(None, device)
+    objects = line.dashboard.objects
+    assert objects is not None and objects.device_id == device
+    wait_until(lambda: (objects.tick(), objects.row_count())[1] > 0,
+               what=f"the dictionary of {device}")
+    assert any(row.index == index for row in objects.rows())

@@ -34,6 +34,7 @@ FOCUS_MIN_W = 9.0  # a focused device fills at most this much scene width
 # A click's pointer-up makes the browser send its own camera back; a move sent at once loses
 # that race (seen: the camera stays), so a move after a click waits this long.
 CLICK_SETTLE_S = 0.3
+CAPTION_ROOM = 0.6  # above the line, for a scenario caption
 
 
 def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN,
@@ -90,10 +91,34 @@ class LineView:
             if event.client is not None:
                 self.focus(event.client, self.slave.selected, move=False)
 
-    # ---- focus ----------------------------------------------------------------------------
+    # ---- geometry ---------------------------------------------------------------------------
     def bounds(self) -> Box:
         return self.scene.bounds()
 
+    def drives_off_line(self, drive_ids: Iterable[str], snapshot: Mapping[str, Any],
+                        ) -> list[str]:
+        """The drives the line does not draw (the line draws a drive's EtherCAT side)."""
+        devices = snapshot.get("devices") or {}
+        on_line = {str((devices.get(d) or {}).get("drive")) for d in self.scene.order}
+        return [d for d in drive_ids if d not in on_line]
+
+    def frame_initial_camera(self, axes_bottom: float | None, min_width: float,
+                             fov: float) -> tuple[float, float, float]:
+        """Frame the line, the axes down to ``axes_bottom`` (at least ``min_width`` wide)
+        and room for a caption; that is also what "Show the whole line" comes back to."""
+        box = self.bounds()
+        if axes_bottom is not None:
+            box = Box(box.x_min, max(box.x_max, min_width), axes_bottom, box.z_max)
+        self.home = Box(box.x_min, box.x_max, box.z_min, box.z_max + CAPTION_ROOM)
+        position, look_at = camera_for(self.home, self._aspect)
+        cam = self._server.initial_camera
+        cam.fov = fov
+        cam.look_at = look_at
+        cam.position = position
+        cam.up = (0.0, 0.0, 1.0)
+        return look_at
+
+    # ---- focus ----------------------------------------------------------------------------
     def focus(self, client: viser.ClientHandle | None, device: str, move: bool = True) -> None:
         """Pick ``device`` in the panels and move every browser's camera toward it."""
         if device not in self.scene.bodies:

@@ -254,6 +254,11 @@ class ObjectDictionaryPanel:
             self._table.content = content
             self._last = content
 
+    def rows(self) -> list[OdRow]:
+        """The rows last read (tests)."""
+        with self._lock:
+            return list(self._rows or [])
+
     def row_count(self) -> int:
         with self._lock:
             return len(self._rows or [])
