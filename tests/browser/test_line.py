@@ -9,6 +9,7 @@ paused and advanced by the test, so LED phases and texts are the same on every r
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -21,6 +22,7 @@ from devices.events import Focus
 pytestmark = pytest.mark.browser
 
 LINE_RIG = DEFAULT_RIG
+ROOT = Path(__file__).resolve().parents[2]
 BOOT_S = 8.0  # FastCAT scan and every slave INIT -> OP (the master steps them in line order)
 
 
@@ -183,3 +185,26 @@ def test_objects_tab_shows_every_slave(line: LiveDashboard, device: str, index: 
     wait_until(lambda: (objects.tick(), objects.row_count())[1] > 0,
                what=f"the dictionary of {device}")
     assert any(row.index == index for row in objects.rows())
+
+
+def test_scenario_focus_steps_pick_the_device(dashboard_for: Any) -> None:
+    """A line scenario played in the dashboard (static/scenarios/cpx_short_circuit.toml): its
+    ``focus = "cpx:2"`` steps pick the CPX-E-EC in the Slave tab, the Slave faults form and
+    the Objects tab, as a click would; its ``focus = "master"`` only moves the camera."""
+    from app.player import Status
+    from app.scenario import load_scenario
+
+    scenario = load_scenario(ROOT / "static" / "scenarios" / "cpx_short_circuit.toml")
+    live = dashboard_for(ROOT / "static" / "rigs" / "ethercat_line.toml")
+    view, objects = live.dashboard.line, live.dashboard.objects
+    assert view is not None and objects is not None
+    view.slave.select("trscat")
+    player = live.dashboard.scenario_player.player
+    live.dashboard.scenario_player.load(scenario)
+    while player.view().status is not Status.FINISHED:
+        player.step()
+    live.settle()
+    assert player.view().failures == ()
+    wait_until(lambda: view.focused == "cpx", what="the last focus step (cpx:2)")
+    assert view.slave.selected == "cpx" and view.controls.picker.value == "cpx"
+    assert objects.device_id == "cpx"
