@@ -24,6 +24,7 @@ from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.ui.panels.classroom_rig import ServedRig, serve_rig
 
 pytestmark = pytest.mark.browser
+LOADED_S = 60.0  # a page on a machine loaded by other test runs can take long to come up
 TOKEN = "class-token-42"
 RERUN = [sys.executable, "-m", "rerun"]
 
@@ -43,7 +44,7 @@ def _page(browser: Any, url: str) -> Any:
                                   accept_downloads=True)
     page = context.new_page()
     page.goto(url)
-    close_webgl_toast(page)
+    close_webgl_toast(page, timeout=LOADED_S)
     return page
 
 
@@ -58,8 +59,8 @@ def test_trainee_injection_refused_instructor_allowed_download(
     instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
     trainee = _page(browser, f"{served.url}?fixedDpr=1")
     try:
-        wait_for_text(instructor, "You are the instructor")
-        wait_for_text(trainee, "You are a trainee")
+        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
+        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
         # The trainee's page has no instructor controls.
         assert trainee.get_by_role("button", name="Download recording").count() == 0
         assert trainee.get_by_label("Hidden fault", exact=True).count() == 0
@@ -97,8 +98,8 @@ def test_exercise_answered_by_the_trainee(served: ServedRig, browser: Any) -> No
     instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
     trainee = _page(browser, f"{served.url}?fixedDpr=1")
     try:
-        wait_for_text(instructor, "You are the instructor")
-        wait_for_text(trainee, "You are a trainee")
+        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
+        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
         choose(instructor, "Hidden fault", "fastcat: inject coupler 0x04")
         instructor.get_by_role("button", name="Start exercise").click()
         wait_until(lambda: served.classroom.exercise is not None, what="the exercise")

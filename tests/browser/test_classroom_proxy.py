@@ -19,6 +19,7 @@ from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.ui.panels.classroom_rig import ServedRig, serve_rig
 
 pytestmark = pytest.mark.browser
+LOADED_S = 60.0  # a page on a machine loaded by other test runs can take long to come up
 NGINX = shutil.which("nginx") or "/usr/sbin/nginx"
 
 # docs/scaling.md "nginx": the map lists rig number -> host:port (generated from the
@@ -77,7 +78,7 @@ def proxy(tmp_path: Path, rigs: list[ServedRig]) -> Iterator[str]:
 def _open(browser: Any, url: str) -> Any:
     page = browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
     page.goto(url)
-    close_webgl_toast(page)
+    close_webgl_toast(page, timeout=LOADED_S)
     return page
 
 
@@ -85,8 +86,8 @@ def test_rig_urls_through_nginx(proxy: str, rigs: list[ServedRig], browser: Any)
     instructor = _open(browser, f"{proxy}/rig/2/?token=tok&fixedDpr=1")
     trainee = _open(browser, f"{proxy}/rig/1/?fixedDpr=1")
     try:
-        wait_for_text(instructor, "You are the instructor")
-        wait_for_text(trainee, "You are a trainee")
+        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
+        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
         wait_until(lambda: len(rigs[1].server.get_clients()) == 1
                    and len(rigs[0].server.get_clients()) == 1, what="one browser per rig")
         assert rigs[1].classroom.access.role(

@@ -22,7 +22,7 @@ logger = logging.getLogger(__name__)
 
 TOKEN_KEY = "fieldrig-token"  # viser prefixes its localStorage keys ("viser-user:")
 URL_POLL_S = 0.25
-URL_WAIT_S = 15.0  # a loaded machine may take seconds to render the page
+URL_WAIT_S = 30.0  # a loaded machine may take many seconds to render the page
 # Runs when the (broken, invisible) image fails to load: copies ?token=... into localStorage.
 URL_SNIPPET = (
     '<img src="data:," alt="" style="display:none" onerror="try{var t=new URLSearchParams('
