@@ -12,7 +12,10 @@ alternating rounds in one run:
   change the "CNF" row of the state panel (pressed, then released again by the next click);
 - **dashboard, woken**: the same with the update thread woken by each frame the runtime
   publishes (``Runtime.add_frame_listener``) and ``server.flush()`` after each update, the
-  change proposed for app/ui/dashboard.py (docs/performance.md); measured here by a subclass.
+  change proposed for app/ui/dashboard.py (docs/performance.md); measured here by a subclass;
+- **dashboard, woken and lean**: also without the simulated time in the state panels' titles
+  (patched in the bench process), so their HTML is resent only when a value changes: the
+  page's share of the latency (proposal 3 of docs/performance.md).
 
 Target: the dashboard's p95 within 1.1x the floor's p95.
 
@@ -38,7 +41,7 @@ LAUNCH_ARGS = [
     "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
 ]
 TARGET = 1.1  # dashboard p95 / floor p95
-KINDS = ("floor", "dashboard", "woken")
+KINDS = ("floor", "dashboard", "woken", "lean")
 PAUSE_MS = 150  # between clicks: the page settles, the CNF hold stays far below 3 s
 TIMEOUT_S = 60.0
 
@@ -114,8 +117,16 @@ def _serve_floor(port: int) -> None:
     server.stop()
 
 
-def _serve_dashboard(port: int, woken: bool) -> None:
+def _serve_dashboard(port: int, woken: bool, lean: bool = False) -> None:
     import viser
+
+    if lean:  # the titles without "t = ... s": patched where the panels look them up
+        from app.ui.drive import drive_state
+        from app.ui.panels import state
+
+        panel_title, drive_title = state.title, drive_state.title
+        state.title = lambda snap, master, _t: panel_title(snap, master, 0)  # type: ignore
+        drive_state.title = lambda i, snap, _t: drive_title(i, snap, 0)  # type: ignore
 
     from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
     from app.runtime import Runtime
@@ -232,7 +243,8 @@ def report(times: dict[str, list[float]]) -> list[str]:
            f"{len(times['floor'])} clicks each, headless Chromium"]
     labels = {"floor": "floor: bare viser, button -> markdown",
               "dashboard": "dashboard as shipped: Hold CNF -> state panel",
-              "woken": "dashboard, update woken + flush (proposal)"}
+              "woken": "dashboard, update woken + flush (proposal)",
+              "lean": "dashboard, woken + no time in panel HTML"}
     for kind, values in times.items():
         line = (f"  {labels[kind]:<48} p50 {statistics.median(values):6.1f} ms  "
                 f"p95 {p95[kind]:6.1f} ms")
@@ -251,7 +263,7 @@ def main(argv: list[str] | None = None) -> int:
         if kind == "floor":
             _serve_floor(port)
         else:
-            _serve_dashboard(port, woken=kind == "woken")
+            _serve_dashboard(port, woken=kind in ("woken", "lean"), lean=kind == "lean")
         return 0
     p = argparse.ArgumentParser(prog="python -m bench click",
                                 description=(__doc__ or "").split("\n")[0])
