@@ -26,7 +26,14 @@ from pathlib import Path
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
-from app.scenario import Scenario, ScenarioError, Step, apply_step, check_against
+from app.scenario import (
+    Scenario,
+    ScenarioError,
+    Step,
+    apply_step,
+    check_against,
+    install_reactions,
+)
 from devices.events import Event
 
 logger = logging.getLogger(__name__)
@@ -136,6 +143,8 @@ class Player:
                 self._failures = []
                 self._finished = self._started = False
                 self._generation += 1
+            # The [[on]] tables ride on the fresh master's ECAT_Notify hook, as in `scenario run`.
+            install_reactions(scenario, rig, self._failures)
             self._apply_due(rig.clock.now_us)  # steps at 0 s come before the first step
             self.runtime.set_speed(self.runtime.speed)  # rebase the wall clock on time 0
 

@@ -304,3 +304,48 @@ def test_example_scenario_on_the_default_rig(tmp_path: Path) -> None:
     finally:
         runtime.stop()
     assert lines(events) == reference
+
+
+# Seed 003: ECAT_Notify reactions. The coupler's emergency for module 2 (seed 000 §7.1)
+# triggers a re-plug from the scenario's [[on]] table, live as in `scenario run`.
+REACTING = """
+[scenario]
+name = "small: module 2 lost, re-plugged by a reaction"
+rig = "small.toml"
+duration_s = 9
+
+[[step]]
+at = 0.0
+target = "fastcat"
+action = "power"
+on = true
+
+[[step]]
+at = 4.5
+target = "fastcat/2"
+action = "unplug"
+
+[[on]]
+event = "coe_emergency"
+once = true
+target = "fastcat/2"
+action = "plug"
+type = "DI16"
+"""
+
+
+def test_play_runs_the_on_reactions_as_scenario_run_does(live: Live, tmp_path: Path) -> None:
+    reacting = parse_scenario(REACTING, "reacting.toml", base_dir=tmp_path)
+    assert reacting.rig is not None
+    run = run_scenario(reacting, build_rig(load_rig_spec(reacting.rig)))
+    assert not run.failures
+    expected = lines(run.events)
+    assert any('"on[0] coe_emergency: fastcat/2 plug"' in line for line in expected)
+    live.quiet()
+    live.player.load(reacting)
+    live.player.set_speed(MAX_SPEED)
+    live.player.play()
+    live.wait(lambda: live.player.view().status is Status.FINISHED, "the end")
+    played = [e for e in live.events if e.t_us <= reacting.end_us]
+    assert lines(played) == expected
+    assert not live.player.view().failures
