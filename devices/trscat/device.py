@@ -183,6 +183,15 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
             raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
         return self.od
 
+    def configure_dc(self, activation: int, sync0_cycle_ns: int, start_time_ns: int) -> None:
+        """The master wrote the ESC's DC registers: 0x0981 activation, 0x09A0 SYNC0 cycle (ns),
+        0x0990 SYNC0 start time (ns of the DC system time). In DC-SYNC, SYNC0 runs on them
+        (§9.1.1; checked at PREOP -> SAFEOP, 0x1C32:2 then shows the cycle, §9.3.1)."""
+        if not self.powered:
+            return  # the ESC is off: nothing to write into
+        self.sync.configure(activation, sync0_cycle_ns, start_time_ns, self.now_us)
+        self._refresh()
+
     def set_dc_fault(self, kind: str | None) -> None:
         """The master's DC faults as this device sees them (§9.1.1, §9.3.7): ``jitter``
         makes each frame arrive up to a cycle late (SM events missed, sync error),
@@ -310,7 +319,9 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
             "sync": {"mode": sync.mode.label, "sync_control": sync.mode.sync_control,
                      "state": sync.state.value, "cycle_ns": sync.cycle_ns,
                      "sm_event_missed": sync.sm_missed, "sync_error": sync.sync_error,
-                     "sync0_lost": sync.sync0_lost, "jitter_us": sync.jitter_us},
+                     "sync0_lost": sync.sync0_lost, "jitter_us": sync.jitter_us,
+                     "dc_activation": sync.dc_activation, "sync0_cycle_ns": sync.dc_cycle_ns,
+                     "sync0_start_ns": sync.dc_start_ns},
             "outputs_mode": self.out_mode.value, "deadlocked": self.deadlocked,
             "f030": list(self.f030), "f050": list(self.f050),
             "diag_status": self.od_diag_status() if self.detected else 0,

@@ -4,9 +4,11 @@ Seed 001 §9.1.1 (DC-SYNC on SYNC0, 1:1 with the master cycle, ESC 0x980 = 0x030
 fixed 500 us local cycle, 0x980 = 0x0000; the SM2 frame must not invade the calc+copy time),
 §9.3.1 (0x1C32 / 0x1C33 values) and §9.3.7 (0x10F1:2, limit 3 consecutive sync errors).
 
-Model (docs/trscat.md): a master frame is one SM2 event. In DC-SYNC the SYNC0 pulses run on
-the slave's own clock once the master has started them (PREOP -> SAFEOP), one per cycle; the
-cycle is the master's frame period at that moment. At every SYNC0 the frames that arrived at
+Model (docs/trscat.md): a master frame is one SM2 event. In DC-SYNC the SYNC0 pulses come
+from the ESC's DC registers the master writes (0x0981 activation, 0x09A0 SYNC0 cycle, 0x0990
+start time; §9.1.1 "registri 0x980 e 0x981", §9.2 IP "il master inizializza il DC clock
+sync"): they run from PREOP -> SAFEOP on, one per configured cycle, however irregularly the
+frames come. At every SYNC0 the frames that arrived at
 least the calc+copy time (100 us) earlier are taken; none is an "SM event missed" and the
 counter 0x1C32:11 counts them consecutively (a good event resets it). At the limit of 0x10F1:2
 the sync error 0x1C32:32 is TRUE. Frames that arrive while SYNC0 is lost count the other way
@@ -26,6 +28,9 @@ DELAY_NS = 150_000  # §9.3.1 0x1C32:9 / 0x1C33:9
 SYNC_MODES_SUPPORTED = 0x0005  # §9.3.1 0x1C32:4: FREE-RUN and DC-SYNC only
 SYNC_ERROR_LIMIT = 3  # §9.3.7 0x10F1:2
 NS_PER_US = 1_000
+# ESC register 0x0981 (DC activation, ETG.1000.4): bit 0 cyclic operation, bit 1 SYNC0.
+DC_CYCLIC, DC_SYNC0 = 0x01, 0x02
+SYNC0_ACTIVE = DC_CYCLIC | DC_SYNC0
 
 
 class SyncMode(enum.IntEnum):
@@ -62,8 +67,11 @@ class SyncState(enum.Enum):
 @dataclass
 class SyncUnit:
     mode: SyncMode = SyncMode.DC_SYNC
-    running: bool = False  # SYNC0 pulses started by the master (SAFEOP, OP in DC-SYNC)
-    cycle_us: int = 0  # SYNC0 cycle while running
+    running: bool = False  # DC-SYNC started at PREOP -> SAFEOP (SAFEOP, OP)
+    # The master's DC registers (0 at power-up, as the ESC's): 0x0981, 0x09A0, 0x0990.
+    dc_activation: int = 0
+    dc_cycle_ns: int = 0
+    dc_start_ns: int = 0  # the wire's DC system time: kept and shown, not a simulated time
     next_sync0_us: int = 0
     next_free_us: int = 0  # next FREE-RUN local cycle
     arrivals: list[int] = field(default_factory=list)  # SM2 frames waiting for a SYNC0
@@ -71,13 +79,22 @@ class SyncUnit:
     without_sync0: int = 0  # SM events since the last SYNC0
     sync0_seen: bool = True
     last_frame_us: int | None = None
-    frame_period_us: int | None = None
     # Injected faults.
     drop_frames: int = 0  # the next N frames never reach SM2 (lost / CRC error)
     sync0_lost: bool = False  # the SYNC0 pulses stop
     jitter_us: int = 0  # each frame arrives up to this much late
 
     # ---- state ------------------------------------------------------------------------------
+    @property
+    def sync0_configured(self) -> bool:
+        """0x0981 has cyclic operation and SYNC0 on, with a SYNC0 cycle in 0x09A0."""
+        return self.dc_activation & SYNC0_ACTIVE == SYNC0_ACTIVE and self.dc_cycle_ns > 0
+
+    @property
+    def cycle_us(self) -> int:
+        """The SYNC0 cycle on the simulated microsecond clock (0 without one)."""
+        return max(1, round(self.dc_cycle_ns / NS_PER_US)) if self.sync0_configured else 0
+
     @property
     def sync_error(self) -> bool:
         """0x1C32:32 / 0x1C33:32."""
@@ -100,16 +117,34 @@ class SyncUnit:
         """0x1C32:2 / 0x1C33:2: the local cycle in ns (0 before DC-SYNC is started)."""
         if self.mode is SyncMode.FREE_RUN:
             return FREE_RUN_CYCLE_US * NS_PER_US
-        return self.cycle_us * NS_PER_US if self.running else 0
+        return self.dc_cycle_ns if self.running and self.sync0_configured else 0
 
     # ---- the master's side ------------------------------------------------------------------
+    def configure(self, activation: int, sync0_cycle_ns: int, start_time_ns: int,
+                  now_us: int) -> None:
+        """The master wrote the DC registers. While DC-SYNC runs, SYNC0 follows at once: off
+        without activation (SOEM writes 0x0981 = 0 before it reprograms), else the new cycle."""
+        self.dc_activation = int(activation) & 0xFF
+        self.dc_cycle_ns = int(sync0_cycle_ns) & 0xFFFFFFFF
+        self.dc_start_ns = int(start_time_ns) & 0xFFFFFFFFFFFFFFFF
+        if self.running and self.sync0_configured:
+            self._first_sync0(now_us)
+
+    def _first_sync0(self, now_us: int) -> None:
+        """SYNC0's phase: the wire's start time is on the DC system clock, which the simulated
+        clock does not share, so the pulses keep the frames' phase: one cycle after the last
+        frame (a master sending at the start of its cycle, SYNC0 shift 0; docs/trscat.md)."""
+        period = self.cycle_us
+        anchor = self.last_frame_us if self.last_frame_us is not None else now_us
+        self.next_sync0_us = anchor + period
+        if self.next_sync0_us <= now_us:
+            self.next_sync0_us += (now_us - self.next_sync0_us) // period * period + period
+
     def frame(self, now_us: int, rng: random.Random) -> bool:
         """A frame passed; True when it is an SM2 event now (FREE-RUN / not running).
 
         In DC-SYNC while running the event is taken at the next SYNC0 instead (``arrivals``).
         """
-        if self.last_frame_us is not None and now_us > self.last_frame_us:
-            self.frame_period_us = now_us - self.last_frame_us
         self.last_frame_us = now_us
         if self.drop_frames > 0:
             self.drop_frames -= 1
@@ -126,27 +161,22 @@ class SyncUnit:
         return False
 
     def start_refusal(self) -> str | None:
-        """Why SYNC0 cannot start (``"no_frames"``, ``"cycle_too_small"``), or None."""
+        """Why DC-SYNC cannot start (``"no_sync0"``, ``"cycle_too_small"``), or None."""
         if self.mode is not SyncMode.DC_SYNC:
             return None
-        if self.frame_period_us is None or self.last_frame_us is None:
-            return "no_frames"
-        if self.frame_period_us * NS_PER_US < MIN_CYCLE_NS:
+        if not self.sync0_configured:
+            return "no_sync0"
+        if self.dc_cycle_ns < MIN_CYCLE_NS:
             return "cycle_too_small"
         return None
 
     def start(self, now_us: int) -> None:
-        """PREOP -> SAFEOP accepted: in DC-SYNC, SYNC0 starts on the master's frame period."""
+        """PREOP -> SAFEOP accepted: in DC-SYNC, SYNC0 runs on the configured cycle."""
         if self.mode is not SyncMode.DC_SYNC or self.start_refusal() is not None:
             return
-        period = self.frame_period_us
-        assert period is not None and self.last_frame_us is not None
-        self.running, self.cycle_us = True, period
-        self.next_sync0_us = self.last_frame_us + period
-        while self.next_sync0_us <= now_us:
-            self.next_sync0_us += period
+        self.running = True
+        self._first_sync0(now_us)
         self.arrivals, self.sm_missed, self.without_sync0, self.sync0_seen = [], 0, 0, True
-        return None
 
     def stop(self) -> None:
         self.running = False
@@ -157,13 +187,16 @@ class SyncUnit:
         """Local cycles in (last call, now]: (time, an SM2 event taken at this SYNC0).
 
         FREE-RUN (or DC-SYNC not started): every 500 us, never an event (the SM2 event was
-        handled when the frame came). DC-SYNC: one per SYNC0, none while SYNC0 is lost.
+        handled when the frame came). DC-SYNC: one per SYNC0, none while SYNC0 is lost or the
+        master switched it off (0x0981).
         """
         out: list[tuple[int, bool]] = []
         if not self.running:
             while self.next_free_us <= now_us:
                 out.append((self.next_free_us, False))
                 self.next_free_us += FREE_RUN_CYCLE_US
+            return out
+        if not self.sync0_configured:
             return out
         while self.next_sync0_us <= now_us:
             t = self.next_sync0_us

@@ -42,9 +42,9 @@ if TYPE_CHECKING:
 SM_WATCHDOG_US = 100_000  # ESC default SM watchdog (0x0420 = 1000 x 100 us)
 SYNC = "sync"  # StateChanged.machine of the sync unit
 _RANK = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2, AlState.OP: 3}
-_DC_REFUSAL = {"no_frames": INVALID_DC_SYNC, "cycle_too_small": CYCLE_TOO_SMALL}
+_DC_REFUSAL = {"no_sync0": INVALID_DC_SYNC, "cycle_too_small": CYCLE_TOO_SMALL}
 CHECK_TEXT = {
-    INVALID_DC_SYNC: "DC-SYNC: no SM2 cycle to synchronise to (invalid DC SYNC configuration)",
+    INVALID_DC_SYNC: "DC-SYNC: SYNC0 not activated by the master (0x0981 / 0x09A0)",
     CYCLE_TOO_SMALL: "DC-SYNC: cycle time below the 500 us minimum (0x1C32:5)",
     SYNC_ERROR: "Synchronization error: SM events missed (0x1C32:11 reached 0x10F1:2)",
     FATAL_SYNC_ERROR: "Fatal sync error: SM events without SYNC0 (0x10F1:2 reached)",

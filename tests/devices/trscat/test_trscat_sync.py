@@ -8,7 +8,7 @@ from trscat_bench import Bench
 
 from devices.ethercat import AlState
 from devices.od import AbortCode, SdoAbort
-from devices.trscat.sync import SYNC_ERROR_LIMIT, SyncMode, SyncUnit
+from devices.trscat.sync import SYNC0_ACTIVE, SYNC_ERROR_LIMIT, SyncMode, SyncUnit
 
 
 @pytest.mark.parametrize("index", [0x1C32, 0x1C33])
@@ -54,6 +54,7 @@ def test_cycle_time(mode: str, state: AlState, cycle_ns: int) -> None:
 def test_dc_one_local_cycle_per_master_cycle() -> None:
     """§9.1.1: "ad ogni ciclo del master corrisponde 1 ciclo sincrono di TRS-CAT"."""
     unit = SyncUnit()
+    unit.configure(SYNC0_ACTIVE, 2_000_000, 0, now_us=0)
     unit.frame(0, None)  # type: ignore[arg-type]
     unit.frame(2000, None)  # type: ignore[arg-type]
     unit.start(2000)
@@ -155,7 +156,8 @@ def test_free_run_has_no_sync_error_but_a_watchdog() -> None:
 
 @pytest.mark.parametrize(("step_us", "code"), [(400, 0x002E), (500, None), (2000, None)])
 def test_dc_cycle_below_minimum_refuses_safeop(step_us: int, code: int | None) -> None:
-    """§9.3.1 0x1C32:5: SYNC0 below 500 us is refused at PREOP -> SAFEOP (AL 0x002E)."""
+    """§9.3.1 0x1C32:5: SYNC0 below 500 us is refused at PREOP -> SAFEOP (AL 0x002E); the
+    bench's master writes one SYNC0 per step to 0x09A0."""
     bench = Bench(step_us=step_us)
     bench.settle()
     bench.request(AlState.PREOP)
@@ -170,9 +172,10 @@ def test_dc_cycle_below_minimum_refuses_safeop(step_us: int, code: int | None) -
         assert [m["code"] for m in bench.messages()] == ["0x002E"]
 
 
-def test_dc_without_frames_refuses_safeop() -> None:
-    """No SM2 cycle to synchronise to: AL 0x0030 (invalid DC SYNC configuration)."""
-    bench = Bench(frames=False)
+def test_dc_without_sync0_refuses_safeop() -> None:
+    """§9.2 PS "verifica la correttezza ... del DC": a master that never activated SYNC0
+    (0x0981) leaves DC-SYNC nothing to run on: AL 0x0030 (invalid DC SYNC configuration)."""
+    bench = Bench(dc=False)
     bench.settle()
     bench.request(AlState.PREOP)
     bench.request(AlState.SAFEOP)

@@ -2,7 +2,9 @@
 
 Devices step in rig order (TRS-CAT first, master last, as app/rig.py does). Without a master,
 ``frames`` makes the bench call ``exchange_frame`` every step as a master would, so the ESM can
-be driven by hand with ``request``.
+be driven by hand with ``request``; ``dc`` makes ``request`` write the DC registers before
+INIT -> PREOP and PREOP -> SAFEOP as a DC master does (SYNC0 on, one pulse per step, seed 001
+§9.1.1 / §9.2), so DC-SYNC runs 1:1 with the bench's frames.
 """
 
 from __future__ import annotations
@@ -15,6 +17,7 @@ from devices.ethercat import AlState
 from devices.events import Event
 from devices.master import EtherCatMaster
 from devices.trscat.device import TrsCat
+from devices.trscat.sync import SYNC0_ACTIVE
 
 STEP_US = 1_000
 US = 1_000_000
@@ -29,10 +32,11 @@ def detect_us(slots: int) -> int:
 class Bench:
     def __init__(self, expansions: Sequence[str] = (), master: bool = False,
                  frames: bool = True, step_us: int = STEP_US, seed: int = 3,
-                 **kwargs: Any) -> None:
+                 dc: bool = True, **kwargs: Any) -> None:
         self.trs = TrsCat("trscat", random.Random(seed), list(expansions), **kwargs)
-        self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.trs]) \
-            if master else None
+        self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.trs],
+                                     dc_slaves=[dc]) if master else None
+        self.dc = dc
         self.frames = frames and not master
         self.step_us = step_us
         self.now = 0
@@ -70,7 +74,15 @@ class Bench:
         self.step()
 
     def request(self, target: AlState) -> None:
+        if self.dc and self.master is None and target in (AlState.PREOP, AlState.SAFEOP):
+            self.configure_dc(SYNC0_ACTIVE, self.step_us * 1000)
         self.trs.request_state(target)
+        self._collect()
+
+    def configure_dc(self, activation: int, cycle_ns: int) -> None:
+        """The master's writes of 0x0981 / 0x09A0 / 0x0990 (start: 100 ms on, as SOEM)."""
+        self.trs.configure_dc(activation=activation, sync0_cycle_ns=cycle_ns,
+                              start_time_ns=(self.now + 100_000) * 1000)
         self._collect()
 
     def to_state(self, target: AlState) -> None:

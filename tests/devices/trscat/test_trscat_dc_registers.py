@@ -1,0 +1,200 @@
+"""DC-SYNC on the master's DC registers (seed 001 §9.1.1: SYNC0 from the reference clock, the
+ESC's sync registers 0x980 / 0x981; §9.2 IP "il master inizializza il DC clock sync", PS
+"verifica la correttezza ... del DC"; §9.3.1 0x1C32:2 / :5; §9.3.7 0x10F1:2 = 3).
+
+SYNC0 runs on 0x09A0 as written by the master, not on the gaps between the frames: frames that
+come irregularly (a lagging simulation hands two in consecutive steps, then none) do not change
+the cycle; frames that really miss SYNC0 events still make the sync error."""
+
+from __future__ import annotations
+
+import itertools
+
+import pytest
+from trscat_bench import Bench
+
+from devices.ethercat import AlState
+from devices.trscat.sync import SYNC0_ACTIVE, SYNC_ERROR_LIMIT, SyncState
+
+CYCLE_4MS_NS = 4_000_000
+
+
+class Irregular(Bench):
+    """A master cycling every ``cycle_us`` whose frames reach the device at chosen times."""
+
+    def __init__(self, cycle_us: int, **kwargs: object) -> None:
+        super().__init__(**kwargs)  # type: ignore[arg-type]
+        self.cycle_us = cycle_us
+        self.pattern: list[int] = []  # offsets (us) of the frames in each cycle, or []
+        self.frames = False  # this bench hands the frames itself
+
+    def request(self, target: AlState) -> None:
+        if target in (AlState.PREOP, AlState.SAFEOP):
+            self.configure_dc(SYNC0_ACTIVE, self.cycle_us * 1000)
+        self.trs.request_state(target)
+        self._collect()
+
+    def to_state(self, target: AlState) -> None:
+        """Up to ``target`` with valid outputs for a while before SO, as a PLC does."""
+        self.settle()
+        for state in (AlState.PREOP, AlState.SAFEOP, AlState.OP):
+            self.request(state)
+            self.run(0.05)
+            assert self.trs.al_state is state, f"0x{self.trs.al_status_code:04X}"
+            if state is target:
+                return
+
+    def step(self) -> None:
+        super().step()
+        phase = self.now % self.cycle_us
+        for offset in self.pattern or [0]:
+            if phase == offset:
+                self.trs.exchange_frame(self.now)
+        self._collect()
+
+
+def test_sync0_follows_0x09a0_not_the_frame_gaps() -> None:
+    """The wire's case: the master cycles at 4 ms, but the frames reached the model in two
+    consecutive 1 ms steps before PS. SYNC0 and 0x1C32:2 are 4 ms; OP is reached and kept."""
+    bench = Irregular(4000)
+    bench.settle()
+    bench.request(AlState.PREOP)
+    bench.pattern = [0, 1000]  # two frames 1 ms apart in each cycle ...
+    bench.run(0.02)
+    bench.run_until(lambda: bench.now % 4000 == 1000)
+    bench.request(AlState.SAFEOP)  # ... and PS right after the second
+    bench.pattern = [0]
+    assert bench.trs.al_state is AlState.SAFEOP
+    assert bench.read(0x1C32, 2) == bench.read(0x1C33, 2) == CYCLE_4MS_NS
+    bench.run(0.05)
+    bench.request(AlState.OP)
+    bench.run(0.5)
+    assert bench.trs.al_state is AlState.OP and bench.read(0x1C32, 11) == 0
+    assert [t2 - t1 for t1, t2 in _sync0_times(bench, 0.02)] == [4000] * 4
+
+
+def _sync0_times(bench: Bench, seconds: float) -> list[tuple[int, int]]:
+    times = []
+    unit = bench.trs.sync
+    end = bench.now + round(seconds * 1_000_000)
+    while bench.now < end:
+        before = unit.next_sync0_us
+        bench.step()
+        if unit.next_sync0_us != before:
+            times.append(before)
+    return list(itertools.pairwise(times))
+
+
+@pytest.mark.parametrize(("pattern", "falls"), [
+    ([0], False),  # one frame per cycle
+    ([0, 1000], False),  # two in each cycle (a burst)
+    ([3000], False),  # late in the cycle, still > calc+copy before SYNC0
+])
+def test_irregular_frames_within_each_cycle_keep_op(pattern: list[int], falls: bool) -> None:
+    """§9.1.1: one SM2 event per SYNC0 is all DC-SYNC needs, wherever in the cycle it comes."""
+    bench = Irregular(4000)
+    bench.pattern = pattern
+    bench.to_state(AlState.OP)
+    bench.run(0.5)
+    assert (bench.trs.al_state is AlState.SAFEOP) is falls
+    assert bench.read(0x1C32, 2) == CYCLE_4MS_NS
+
+
+@pytest.mark.parametrize("cycle_us", [1000, 4000])
+@pytest.mark.parametrize("missed", [SYNC_ERROR_LIMIT - 1, SYNC_ERROR_LIMIT])
+def test_frames_that_miss_sync0_still_make_the_sync_error(cycle_us: int, missed: int) -> None:
+    """§9.3.1 0x1C32:11 / §9.3.7 0x10F1:2 = 3: with SYNC0 on the configured cycle, 3 cycles
+    without a frame are 3 missed SM events: OP -> SAFE-OP, AL 0x001A; 2 are not."""
+    bench = Irregular(cycle_us)
+    bench.to_state(AlState.OP)
+    bench.run(0.1)
+    bench.apply("drop_frames", count=missed)
+    bench.run(cycle_us * (missed + 2) / 1e6)
+    if missed < SYNC_ERROR_LIMIT:
+        assert bench.trs.al_state is AlState.OP
+    else:
+        assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.SAFEOP, 0x001A)
+
+
+@pytest.mark.parametrize(("activation", "cycle_ns", "code"), [
+    (0x00, CYCLE_4MS_NS, 0x0030),  # SYNC0 not activated
+    (0x01, CYCLE_4MS_NS, 0x0030),  # cyclic operation without SYNC0
+    (0x02, CYCLE_4MS_NS, 0x0030),  # SYNC0 without cyclic operation
+    (SYNC0_ACTIVE, 0, 0x0030),  # no cycle
+    (SYNC0_ACTIVE, 499_000, 0x002E),  # below 0x1C32:5 = 500000 ns
+    (SYNC0_ACTIVE, 500_000, None),
+    (SYNC0_ACTIVE | 0x04, CYCLE_4MS_NS, None),  # SYNC1 too: SYNC0 is what counts
+])
+def test_ps_checks_the_dc_registers(activation: int, cycle_ns: int, code: int | None) -> None:
+    """§9.2 PS: "TRS-CAT verifica la correttezza ... del DC" (0x0981 bits 0 and 1, 0x09A0)."""
+    bench = Bench(dc=False)
+    bench.settle()
+    bench.request(AlState.PREOP)
+    bench.configure_dc(activation, cycle_ns)
+    bench.request(AlState.SAFEOP)
+    if code is None:
+        assert bench.trs.al_state is AlState.SAFEOP and bench.read(0x1C32, 2) == cycle_ns
+    else:
+        assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.PREOP, code)
+
+
+def test_free_run_needs_no_dc_registers() -> None:
+    """§9.1.1 FREE-RUN: the local 500 us cycle, whatever 0x0981 says."""
+    bench = Bench(dc=False, sync_mode="free_run")
+    bench.to_state(AlState.OP)
+    assert bench.read(0x1C32, 2) == 500_000
+
+
+def test_sync0_switched_off_in_op_is_a_fatal_sync_error() -> None:
+    """0x0981 = 0 while DC-SYNC runs: the SM events come without SYNC0; at 0x10F1:2 -> 0x002C
+    (as lose_sync0)."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.configure_dc(0x00, 1_000_000)
+    bench.run(0.01)
+    assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.SAFEOP, 0x002C)
+    assert bench.trs.sync.state is SyncState.SYNC0_LOST
+
+
+def test_soem_reprogramming_keeps_op() -> None:
+    """SOEM's dcsync0 writes 0x0981 = 0, then 0x0990 / 0x09A0, then 0x0981 = 3: a brief gap
+    (fewer than 3 SM events) and SYNC0 runs on the new cycle."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.configure_dc(0x00, 1_000_000)
+    bench.step()
+    bench.configure_dc(SYNC0_ACTIVE, 2_000_000)
+    bench.run(0.2)
+    assert bench.trs.al_state is AlState.OP and bench.read(0x1C32, 2) == 2_000_000
+
+
+def test_power_cycle_clears_the_registers() -> None:
+    """The ESC's registers are 0 after power-up: the master writes them again on the way up."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.apply("power", on=False)
+    bench.apply("power", on=True)
+    assert (bench.trs.sync.dc_activation, bench.trs.sync.dc_cycle_ns) == (0, 0)
+    assert bench.trs.snapshot()["sync"]["sync0_cycle_ns"] == 0
+
+
+@pytest.mark.parametrize("cycle_us", [1000, 4000])
+def test_the_built_in_master_writes_its_cycle(cycle_us: int) -> None:
+    """The built-in master configures a DC slave's registers from its own cycle (SYNC0 on,
+    0x09A0 = the cycle) and the line reaches OP on it."""
+    bench = Bench(master=True)
+    assert bench.master is not None
+    bench.master.cycle_us = cycle_us
+    bench.run_until(lambda: bench.trs.al_state is AlState.OP)
+    bench.run(0.5)
+    assert bench.trs.al_state is AlState.OP
+    assert (bench.trs.sync.dc_activation, bench.read(0x1C32, 2)) == (SYNC0_ACTIVE,
+                                                                      cycle_us * 1000)
+
+
+def test_a_master_without_dc_for_it_is_refused() -> None:
+    """A master whose description does not use DC for the TRS-CAT (DC-SYNC by default, §9.1.1)
+    never activates SYNC0: SAFE-OP refused with 0x0030."""
+    bench = Bench(master=True, dc=False)
+    bench.run(3.0)
+    assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.PREOP, 0x0030)
