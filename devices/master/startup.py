@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     from devices.events import Event
 
 IDENTITY_SUBS = (1, 2, 3)  # 0x1018: vendor, product code, revision
+DC_SYNC0_ON = 0x03  # ESC 0x0981: cyclic operation + SYNC0, as SOEM's dcsync0 writes it
+DC_START_DELAY_NS = 100_000_000  # first SYNC0 100 ms after the registers are written (SOEM)
 
 
 class StartupMixin:
@@ -33,6 +35,7 @@ class StartupMixin:
     check_delay_us: int
     state_timeout_us: int
     retry_interval_us: int
+    cycle_us: int
     dc_hold: bool
 
     if TYPE_CHECKING:
@@ -131,9 +134,20 @@ class StartupMixin:
         return True
 
     def _request(self, link: SlaveLink, target: AlState) -> None:
+        if link.dc and target in (AlState.PREOP, AlState.SAFEOP) and \
+                RANK.get(link.slave.al_state, 0) < RANK[target]:
+            self._write_dc(link)
         link.pending, link.pending_from = target, link.slave.al_state
         link.requested, link.requested_at_us = target, self.now_us
         link.slave.request_state(target)
+
+    def _write_dc(self, link: SlaveLink) -> None:
+        """The DC registers of a DC slave (seed 001 §9.2 IP "il master inizializza il DC clock
+        sync", written again before PS): SYNC0 on, one pulse per master cycle."""
+        configure = getattr(link.slave, "configure_dc", None)
+        if configure is not None:
+            configure(activation=DC_SYNC0_ON, sync0_cycle_ns=self.cycle_us * 1000,
+                      start_time_ns=self.now_us * 1000 + DC_START_DELAY_NS)
 
     def _check(self, link: SlaveLink) -> None:
         slave, now = link.slave, self.now_us
