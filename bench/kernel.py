@@ -83,8 +83,10 @@ def default_spec() -> RigSpec:
 
 def fastcat_line_spec(spec: RigSpec) -> RigSpec:
     """The same rig with its couplers and the master only."""
+    # No network description: the rig file's ENI / mapping name the slaves left out here.
+    network = {name: None for name in ("eni", "mapping") if hasattr(spec, name)}
     return replace(spec, source=f"{spec.source} (FastCAT line)", servos=(), slaves=(),
-                   line=tuple(fc.id for fc in spec.fastcats))
+                   line=tuple(fc.id for fc in spec.fastcats), **network)
 
 
 def modules_spec(count: int) -> RigSpec:
