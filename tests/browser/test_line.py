@@ -39,6 +39,20 @@ def open_tabs(page: Any, name: str) -> None:
         tab.click()
 
 
+def steady(page: Any) -> None:
+    """Wait until the 3D view paints the same picture twice in a row: right after the page
+    opens, the camera may still be easing into its initial pose (seen: a 1 px shift)."""
+    clip = {"x": 410, "y": 60, "width": 540, "height": 650}
+    shots = [page.screenshot(clip=clip)]
+
+    def same_twice() -> bool:
+        page.wait_for_timeout(250)
+        shots.append(page.screenshot(clip=clip))
+        return shots[-1] == shots[-2]
+
+    wait_until(same_twice, what="a steady 3D view")
+
+
 def slaves(live: LiveDashboard) -> list[dict[str, Any]]:
     return list(live.snapshot("master")["slaves"])
 
@@ -62,6 +76,7 @@ def test_line_healthy(line: LiveDashboard, page: Any) -> None:
     table.wait_for()
     for name in ("Box 1 (FastCAT)", "Box 2 (TRS-CAT)", "Box 3 (CPX-E-EC)"):
         assert name in table.inner_text()
+    steady(page)
     compare_screenshot(page, "line_healthy")
 
 
