@@ -107,6 +107,7 @@ class ControlPanel:
         @self._power.on_update
         def _(event: viser.GuiEvent) -> None:
             if from_user(event):
+                self._power_mirror.forget()  # the next frame shows what the model made of it
                 self._send(event.client, self._id, "power", {"on": self._power.value})
 
         @press.on_click
@@ -120,6 +121,7 @@ class ControlPanel:
         @self._hold.on_update
         def _(event: viser.GuiEvent) -> None:
             if from_user(event):
+                self._hold_mirror.forget()
                 action = "press_cnf" if self._hold.value else "release_cnf"
                 self._send(event.client, self._id, action)
 
@@ -147,17 +149,20 @@ class ControlPanel:
         @self._rotary.on_update
         def _(event: viser.GuiEvent) -> None:
             if from_user(event):
+                self._rotary_mirror.forget()
                 self._send(event.client, self._id, "set_rotary",
                            {"value": int(self._rotary.value)})
 
         @self._link.on_update
         def _(event: viser.GuiEvent) -> None:
             if from_user(event):
+                self._link_mirror.forget()
                 self._send(event.client, self._id, "link", {"connected": self._link.value})
 
         @self._tbus_low.on_update
         def _(event: viser.GuiEvent) -> None:
             if from_user(event):
+                self._tbus_mirror.forget()
                 self._send(event.client, self._id, "tbus_voltage", {"low": self._tbus_low.value})
 
     def _master_controls(self, gui: viser.GuiApi, master_id: str) -> None:

@@ -33,7 +33,9 @@ class Mirror:
                 self.handle.value = value
 
     def forget(self) -> None:
-        """Take the next value even if it equals the last one (after a selection change)."""
+        """Take the next value even if it equals the last one (after a selection change, or
+        after a user's click: a burst of clicks can leave the box on the opposite of a model
+        that ended where it was, and only a change would set it back)."""
         self._seen = object()
 
 
