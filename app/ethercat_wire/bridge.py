@@ -47,6 +47,8 @@ UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
 AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
 # Frames handed to the models (docs in _FrameClock): a steady cycle at the reported rate.
 PERIOD_SMOOTHING = 0.3  # weight of the newest report in the cycle estimate
+CYCLE_TOLERANCE = 0.25  # B's cycle measurements within this of each other agree
+ON_TIME_STEPS = 3  # a step at most this many step times after the previous one is on time
 ALIVE_REPORTS = 3  # the master counts as cycling this many report intervals after a report
 MAX_OWED_REPORTS = 2  # frames owed beyond this many reports' worth are forgotten
 MAX_FRAMES_PER_STEP = 16
@@ -89,31 +91,50 @@ class _FrameClock:
     """When to hand one slave's model a process-data frame.
 
     B reports how many frames a slave saw since its last report (every 10 ms of wall time).
-    Handing them over in bursts would make a model see a period that is not the master's: the
-    TRS-CAT starts its DC-SYNC on the frame period it measures and counts SYNC0 cycles without
-    a frame as sync errors (seed 001 §9.1.1, §9.3.7). So the frames go out one master cycle
-    apart: the cycle is the reported rate in wall time (smoothed; a simulated microsecond is
-    a wall microsecond at speed 1, and a clock that falls behind under load must not make the
-    master look faster), for as long as reports keep saying that the master cycles. The count
-    owed keeps the total close to what B saw; frames the simulation cannot keep up with are
-    forgotten rather than handed over in a burst.
+    Handing them over in bursts would leave cycles without a frame: the TRS-CAT runs SYNC0 on
+    the cycle the master wrote to 0x09A0 (``("dc", ...)`` -> ``configure_dc``) and counts
+    SYNC0 cycles without a frame as sync errors (seed 001 §9.1.1, §9.3.7). So the frames go
+    out one master cycle apart: the cycle is the reported rate in wall time (smoothed; a
+    simulated microsecond is a wall microsecond at speed 1, and a clock that falls behind
+    under load must not make the master look faster), for as long as reports keep saying
+    that the master cycles. The count owed keeps the total close to what B saw; frames the
+    simulation cannot keep up with are forgotten rather than handed over in a burst.
     """
 
     period_us: float = 0.0
     next_us: float = 0.0
     owed: int = 0
     alive_until: float = 0.0  # monotonic wall time
+    measured: bool = False  # period_us is B's own measurement (``master_cycle``)
+    candidate: float = 0.0  # a measurement far from period_us, adopted if the next agrees
 
     def report(self, n: int, span_s: float, now_us: int, wall: float) -> None:
         if n <= 0:
             return
-        sample = span_s * 1e6 / n
-        self.period_us = sample if not self.period_us else \
-            (1 - PERIOD_SMOOTHING) * self.period_us + PERIOD_SMOOTHING * sample
+        if not self.measured:  # a rough estimate until B's first measurement comes
+            sample = span_s * 1e6 / n
+            self.period_us = sample if not self.period_us else \
+                (1 - PERIOD_SMOOTHING) * self.period_us + PERIOD_SMOOTHING * sample
         self.owed = min(self.owed + n, MAX_OWED_REPORTS * n)
         self.alive_until = wall + ALIVE_REPORTS * msg.CYCLE_REPORT_S
         if self.next_us < now_us - self.period_us:
             self.next_us = now_us  # the master (re)starts: no catching up on the pause
+
+    def master_cycle(self, cycle_us: float) -> None:
+        """B's mean process-data period over its last stats interval, on B's own clock. The
+        estimate from the reports is only as good as A's timing of them: a starved pump or a
+        busy simulation thread takes several at once (spans near 0), and B merges the counts
+        of reports A could not take: that made the period look like 1 ms at a 4 ms cycle.
+        A mean over a window in which the master started or paused is too long: a value far
+        from the present one is taken only when the next measurement agrees with it.
+        """
+        if cycle_us <= 0:
+            return
+        if not self.measured or _close(cycle_us, self.period_us) or \
+                _close(cycle_us, self.candidate):
+            self.period_us, self.measured, self.candidate = float(cycle_us), True, 0.0
+        else:
+            self.candidate = float(cycle_us)
 
     def due(self, now_us: int, wall: float) -> int:
         """Frames to hand over at ``now_us``."""
@@ -127,6 +148,10 @@ class _FrameClock:
         if self.next_us <= now_us:
             self.next_us = now_us + self.period_us
         return count
+
+
+def _close(a: float, b: float) -> bool:
+    return b > 0 and abs(a - b) <= CYCLE_TOLERANCE * b
 
 
 @dataclass
@@ -157,6 +182,9 @@ class WireBridge:
         self._master: Any = None
         self._link_down: int | None = None
         self._last_report_wall: float | None = None  # when B's last frame report came
+        self._step_wall: float | None = None  # the wall time the last step stood for
+        self._step_us: int | None = None
+        self._call_wall: float | None = None  # when the last step listener call ran
         self.descriptions: list[SlaveDescription] = []
         self.ready_iface: str | None = None
         self.errors: collections.deque[str] = collections.deque(maxlen=50)
@@ -284,8 +312,9 @@ class WireBridge:
             self._attach()  # the rig was rebuilt in place
         while self._inbox:
             self._handle(self._inbox.popleft(), now_us)
+        step_wall = self._wall_of_step(now_us)
         for s in self._slaves:
-            self._serve(s, now_us)
+            self._serve(s, now_us, step_wall)
         down = next((s.position for s in self._slaves if not s.face.reachable(s.model)), None)
         if down != self._link_down:
             self._send(msg.LINK, 0, True)
@@ -293,8 +322,29 @@ class WireBridge:
                 self._send(msg.LINK, down, False)
             self._link_down = down
 
-    def _serve(self, s: _Slave, now_us: int) -> None:
-        handed = s.clock.due(now_us, time.monotonic())
+    def _wall_of_step(self, now_us: int) -> float:
+        """The wall time this simulated step stands for: the wall clock, except while the
+        simulation catches up after a stall, when its steps stand for the (past) wall times
+        they were late for. Whether the master still cycles is judged at that time, so a
+        stall of the simulation thread does not leave steps without frames (3 of them in a
+        row are a TRS-CAT sync error) while B's reports wait for the pump."""
+        wall = time.monotonic()
+        last_wall, last_us, last_call = self._step_wall, self._step_us, self._call_wall
+        self._call_wall = wall
+        if last_wall is None or last_us is None or last_call is None or now_us <= last_us:
+            step_wall = wall
+        else:
+            speed = float(getattr(self.runtime, "speed", 1.0) or 1.0)
+            step_s = (now_us - last_us) / 1e6 / speed
+            if step_s <= wall - last_call <= ON_TIME_STEPS * step_s:
+                step_wall = wall  # on time: the simulation keeps up
+            else:  # a stall, or the burst of steps after one
+                step_wall = min(wall, last_wall + step_s)
+        self._step_wall, self._step_us = step_wall, now_us
+        return step_wall
+
+    def _serve(self, s: _Slave, now_us: int, step_wall: float) -> None:
+        handed = s.clock.due(now_us, step_wall)
         for _ in range(handed):
             self._frame(s, now_us)
         for frame in s.face.take_emergencies(s.model):
@@ -385,6 +435,8 @@ class WireBridge:
 
     def _stats(self, stats: dict[str, Any]) -> None:
         self.stats = dict(stats)
+        for s in self._slaves:
+            s.clock.master_cycle(float(stats.get("cycle_us", 0)))
         external = getattr(self._master, "external_stats", None)
         if external is not None:
             external(frames=int(stats.get("frames", 0)),

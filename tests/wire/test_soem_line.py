@@ -130,15 +130,21 @@ def master_main(iface: str, conn) -> None:
         emergencies.clear()
         return taken
 
+    def dc(dc_positions):
+        """SYNC0 every cycle, as a DC master configures it (0x0981 / 0x0990 / 0x09A0). Before
+        config_map, which asks each slave for SAFE-OP as it maps it: a DC-SYNC slave checks
+        these registers at PREOP -> SAFEOP (seed 001 §9.2; config_init cleared them)."""
+        master.config_dc()
+        for pos in dc_positions:
+            master.slaves[pos].dc_sync(True, int(PERIOD_S * 1e9))
+
     def map_(dc_positions):
+        dc(dc_positions)
         try:
             master.config_map()
             errors = []
         except ps.ConfigMapError as exc:  # SOEM mapped anyway (SII fallback): report, go on
             errors = [repr(e) for e in exc.error_list]
-        master.config_dc()
-        for pos in dc_positions:  # SYNC0 every cycle, as a DC master configures it
-            master.slaves[pos].dc_sync(True, int(PERIOD_S * 1e9))
         return master.expected_wkc, errors
 
     def exchange():
@@ -202,7 +208,7 @@ def master_main(iface: str, conn) -> None:
             time.sleep(PERIOD_S)
         return None
 
-    handlers = {"init": init, "map": map_, "state": state, "slave_state": slave_state,
+    handlers = {"init": init, "dc": dc, "map": map_, "state": state, "slave_state": slave_state,
                 "cycles": cycles, "sdo_read": sdo_read, "sdo_write": sdo_write,
                 "emergency": emergency, "drain": drain}
     while True:
@@ -301,8 +307,10 @@ def test_sdo_read_0x1018_on_every_slave(session):
 
 
 def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
-    """Seed 001 §9.3.2: 0xF030 (detected) differs from 0xF050 (configured) -> 0x0070."""
+    """Seed 001 §9.3.2: 0xF030 (detected) differs from 0xF050 (configured) -> 0x0070. SYNC0
+    is configured first: PS checks the DC registers before 0xF030 (§9.2; else 0x0030)."""
     _, _, master, _ = session
+    master("dc", [1])
     original = master("sdo_read", 1, 0xF030, 2)
     master("sdo_write", 1, 0xF030, 2, struct.pack("<I", 0x414E2D45))  # "TRS-AN-E" ident
     state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)
