@@ -49,6 +49,7 @@ AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowl
 PERIOD_SMOOTHING = 0.3  # weight of the newest report in the cycle estimate
 CYCLE_TOLERANCE = 0.25  # B's cycle measurements within this of each other agree
 ON_TIME_STEPS = 3  # a step at most this many step times after the previous one is on time
+MAX_AL_DEFER_US = 100_000  # an AL control waits at most this long for the frames before it
 ALIVE_REPORTS = 3  # the master counts as cycling this many report intervals after a report
 MAX_OWED_REPORTS = 2  # frames owed beyond this many reports' worth are forgotten
 MAX_FRAMES_PER_STEP = 16
@@ -185,6 +186,7 @@ class WireBridge:
         self._step_wall: float | None = None  # the wall time the last step stood for
         self._step_us: int | None = None
         self._call_wall: float | None = None  # when the last step listener call ran
+        self._deferred_since: int | None = None  # an AL control held since (sim. time)
         self.descriptions: list[SlaveDescription] = []
         self.ready_iface: str | None = None
         self.errors: collections.deque[str] = collections.deque(maxlen=50)
@@ -310,7 +312,7 @@ class WireBridge:
             return
         if self.runtime.rig.devices.get("master") is not self._master:
             self._attach()  # the rig was rebuilt in place
-        while self._inbox:
+        while self._inbox and not self._defer(self._inbox[0], now_us):
             self._handle(self._inbox.popleft(), now_us)
         step_wall = self._wall_of_step(now_us)
         for s in self._slaves:
@@ -321,6 +323,25 @@ class WireBridge:
             if down is not None:
                 self._send(msg.LINK, down, False)
             self._link_down = down
+
+    def _defer(self, message: tuple[Any, ...], now_us: int) -> bool:
+        """Hold an AL control write (and what came after it) while frames the master sent
+        before it are still owed to the model: a simulation that lags takes B's frame reports
+        and the request in one step, and the model must see those frames first (the TRS-CAT
+        checks at SAFEOP -> OP that its SYNC0 events took frames, seed 001 §9.3.1; the others
+        want valid outputs). At most ``MAX_AL_DEFER_US`` of simulated time."""
+        if message[0] != msg.AL_CONTROL:
+            return False
+        s = self._slave(message[1])
+        if s is None or s.clock.owed <= 0 or not s.clock.period_us:
+            self._deferred_since = None
+            return False
+        if self._deferred_since is None:
+            self._deferred_since = now_us
+        if now_us - self._deferred_since >= MAX_AL_DEFER_US:
+            self._deferred_since = None
+            return False
+        return True
 
     def _wall_of_step(self, now_us: int) -> float:
         """The wall time this simulated step stands for: the wall clock, except while the
