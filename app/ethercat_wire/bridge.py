@@ -127,9 +127,11 @@ class _FrameClock:
         busy simulation thread takes several at once (spans near 0), and B merges the counts
         of reports A could not take: that made the period look like 1 ms at a 4 ms cycle.
         A mean over a window in which the master started or paused is too long: a value far
-        from the present one is taken only when the next measurement agrees with it.
+        from the present one is taken only when the very next measurement agrees with it (two
+        windows cut by a pause, e.g. around config_map, would otherwise agree on 20 ms).
         """
         if cycle_us <= 0:
+            self.candidate = 0.0  # no frames: the next measurement is not "the next" one
             return
         if not self.measured or _close(cycle_us, self.period_us) or \
                 _close(cycle_us, self.candidate):
