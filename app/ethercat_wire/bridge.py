@@ -127,13 +127,14 @@ class _FrameClock:
         busy simulation thread takes several at once (spans near 0), and B merges the counts
         of reports A could not take: that made the period look like 1 ms at a 4 ms cycle.
         A mean over a window in which the master started or paused is too long: a value far
-        from the present one is taken only when the very next measurement agrees with it (two
+        from the present one (and the first one: the window the master started in, 25 ms seen
+        at a 4 ms cycle) is taken only when the very next measurement agrees with it (two
         windows cut by a pause, e.g. around config_map, would otherwise agree on 20 ms).
         """
         if cycle_us <= 0:
             self.candidate = 0.0  # no frames: the next measurement is not "the next" one
             return
-        if not self.measured or _close(cycle_us, self.period_us) or \
+        if (self.measured and _close(cycle_us, self.period_us)) or \
                 _close(cycle_us, self.candidate):
             self.period_us, self.measured, self.candidate = float(cycle_us), True, 0.0
         else:
@@ -316,6 +317,10 @@ class WireBridge:
             self._attach()  # the rig was rebuilt in place
         while self._inbox and not self._defer(self._inbox[0], now_us):
             self._handle(self._inbox.popleft(), now_us)
+        if self._inbox:  # held: B's statistics (the cycle) still count meanwhile
+            for message in [m for m in self._inbox if m[0] == msg.STATS]:
+                self._inbox.remove(message)
+                self._handle(message, now_us)
         step_wall = self._wall_of_step(now_us)
         for s in self._slaves:
             self._serve(s, now_us, step_wall)
