@@ -59,8 +59,9 @@ def _serve_parser() -> argparse.ArgumentParser:
                    help="the drives' CAN bus: 'virtual' (in this process), 'udp_multicast' "
                         "(another process on this machine can be the master), 'socketcan'")
     p.add_argument("--can-channel", default=None,
-                   help="virtual: a name; udp_multicast: GROUP[:PORT] (default "
-                        "239.74.163.2:43113, loopback only); socketcan: e.g. can0")
+                   help="virtual: a name; udp_multicast: GROUP[:PORT][@ADDRESS|@any] "
+                        "(default 239.74.163.2:43113 on loopback; @ADDRESS joins on that "
+                        "interface, @any on the default one); socketcan: e.g. can0")
     p.add_argument("--modbus-framer", choices=("socket", "rtu"), default="socket",
                    help="Modbus TCP ('socket') or RTU frames over TCP ('rtu', as the real "
                         "drive speaks RTU)")
