@@ -103,11 +103,14 @@ def master_main(iface: str, n: int, seconds: float, periods_us: tuple[int, ...],
     result["periods"] = {}
     for period_us in periods_us:
         cycles = max(200, int(seconds * 1e6 / period_us))
-        bad = late = 0
+        bad = lost = late = 0
         t = time.perf_counter()
         for _ in range(cycles):
             m.send_processdata()
-            if m.receive_processdata(2000) != m.expected_wkc:
+            wkc = m.receive_processdata(2000)
+            if wkc < 0:  # EC_NOFRAME: not back within the timeout
+                lost += 1
+            elif wkc != m.expected_wkc:
                 bad += 1
             t += period_us / 1e6
             rest = t - time.perf_counter()
@@ -119,7 +122,7 @@ def master_main(iface: str, n: int, seconds: float, periods_us: tuple[int, ...],
             time.sleep(max(0.0, rest - 0.0002))
             while time.perf_counter() < t:
                 pass
-        result["periods"][period_us] = (cycles, bad, late)
+        result["periods"][period_us] = (cycles, bad, lost, late)
     m.close()
     conn.send(result)
 
@@ -176,13 +179,13 @@ def over_the_wire(n: int, seconds: float, periods_us: tuple[int, ...]) -> dict |
         subprocess.run(["ip", "link", "del", a], capture_output=True)
 
 
-def shortest_clean(periods: dict[int, tuple[int, int, int]]) -> str:
-    """Going down from 4 ms: the last period with no wrong WKC and at most 1 % overruns
-    before the first one that fails either."""
+def shortest_clean(periods: dict[int, tuple[int, int, int, int]]) -> str:
+    """Going down from 4 ms: the last period with no wrong WKC, no lost frame and at most
+    1 % overruns before the first one that fails any."""
     best = None
     for period in sorted(periods, reverse=True):
-        cycles, bad, late = periods[period]
-        if bad or late > cycles // 100:
+        cycles, bad, lost, late = periods[period]
+        if bad or lost or late > cycles // 100:
             break
         best = period
     return f"{best / 1000:g} ms" if best else "none"
@@ -210,7 +213,7 @@ def main(argv: list[str] | None = None) -> int:
               f"{result['frames_per_s']:.0f} frames/s back to back, median round trip "
               f"{result['median_trip_us']:.0f} us; shortest clean cycle "
               f"{shortest_clean(result['periods'])}")
-        for period, (cycles, bad, late) in result["periods"].items():
+        for period, (cycles, bad, lost, late) in result["periods"].items():
             print(f"        {period / 1000:5.2f} ms: {cycles} cycles, {bad} wrong WKC, "
-                  f"{late} overruns")
+                  f"{lost} lost frames, {late} overruns")
     return 0

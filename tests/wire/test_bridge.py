@@ -192,8 +192,9 @@ def test_a_missing_interface_is_a_clear_error():
 
 def test_frames_go_to_the_models_one_master_cycle_apart():
     """3 frames reported over 12 ms of wall time: one every 4 ms of simulated time, not a
-    burst (the TRS-CAT measures the frame period for its DC-SYNC, seed 001 §9.1.1), going on
-    while the reports say the master cycles, none once they stop and the owed are out."""
+    burst (a burst leaves SYNC0 cycles without a frame, which the TRS-CAT counts as missed SM
+    events, seed 001 §9.1.1), going on while the reports say the master cycles, none once they
+    stop and the owed are out."""
     clock = _FrameClock()
     clock.report(3, 0.012, now_us=100_000, wall=0.0)
     handed = [t for t in range(100_000, 120_000, 1_000) for _ in range(clock.due(t, 0.001))]
@@ -213,3 +214,33 @@ def test_a_dead_wire_process_hands_the_line_back(wire):
     b.conn.close()  # process B gone: the pipe breaks
     wait_for(lambda: sim(runtime, lambda: master_view(runtime).external) is False)
     assert any("gone" in e for e in bridge.errors)
+
+
+def test_b_s_cycle_measurement_is_taken_only_when_the_next_agrees():
+    """The window the master started in reads long (25 ms at a 4 ms cycle): B's first
+    measurement, and any far from the present period, counts only once the next agrees."""
+    clock = _FrameClock()
+    clock.report(3, 0.012, now_us=0, wall=0.0)  # the rough estimate from A's reports
+    clock.master_cycle(25_000.0)
+    assert clock.period_us == 4_000 and not clock.measured
+    clock.master_cycle(4_000.0)
+    assert clock.period_us == 4_000 and not clock.measured  # 4 ms disagrees with 25 ms
+    clock.master_cycle(4_010.0)
+    assert (clock.period_us, clock.measured) == (4_010.0, True)
+    clock.master_cycle(20_000.0)  # one window cut by a pause: not adopted
+    assert clock.period_us == 4_010.0
+    clock.master_cycle(4_000.0)
+    assert clock.period_us == 4_000.0
+
+
+def test_a_pause_between_two_long_measurements_keeps_the_period():
+    """Two windows cut by a pause (no frames between them) must not agree on a long cycle."""
+    clock = _FrameClock()
+    clock.master_cycle(4_000.0)
+    clock.master_cycle(4_000.0)
+    clock.master_cycle(20_000.0)
+    clock.master_cycle(0.0)  # a window without frames: the master paused
+    clock.master_cycle(20_000.0)
+    assert clock.period_us == 4_000.0
+    clock.master_cycle(20_000.0)  # two in a row with frames: the master now runs at 20 ms
+    assert clock.period_us == 20_000.0

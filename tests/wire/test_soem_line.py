@@ -25,6 +25,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 import pytest
 
@@ -41,6 +42,11 @@ FULL_CYCLES = 10_000
 PERIOD_S = 0.004
 SDO_TIMEOUT_US = 3_000_000
 A_NICE = -10
+# Lost frames (not back within SOEM's 2 ms receive timeout) tolerated per 1,000 cycles in the
+# CI form only: on a shared, non-real-time host a stall of process B or of the veth softirq
+# beyond 2 ms loses a frame whatever the emulation does (docs/ethercat-wire.md, "Lost frames").
+# Wrong working counters are never tolerated; --full tolerates neither.
+CI_LOST_PER_1000 = 5
 LINE_RIG = """
 [rig]
 name = "wire line"
@@ -96,6 +102,20 @@ def veth_pair(tag: str):
 def veth():
     with veth_pair("l") as pair:
         yield pair
+
+
+class Cycles(NamedTuple):
+    wrong: list[tuple[int, int]]  # (cycle, WKC) of frames back with another working counter
+    lost: int  # frames not back within the receive timeout
+    late: int  # cycles the master itself started late (its own scheduling)
+    inputs: list[bytes]
+
+
+def check_cycles(c: Cycles, n: int, expected: int, full: bool) -> None:
+    assert c.wrong == [], (f"{len(c.wrong)} wrong working counters in {n} cycles (expected "
+                           f"{expected}; first (cycle, wkc): {c.wrong[:10]}; {c.late} late)")
+    budget = 0 if full else n * CI_LOST_PER_1000 // 1000
+    assert c.lost <= budget, f"{c.lost} frames lost in {n} cycles ({c.late} late)"
 
 
 # ---- the master process -----------------------------------------------------------------
@@ -176,19 +196,25 @@ def master_main(iface: str, conn) -> None:
         return slave.state, slave.al_status
 
     def cycles(n, period, outputs):
+        """n exchanges `period` apart. A frame that came back with another working counter
+        is a WKC error; one that did not come back within the receive timeout (SOEM's
+        EC_NOFRAME, -1) is a lost frame, counted apart as TwinCAT and the master panel do."""
         for pos, data in outputs.items():
             master.slaves[pos].output = data
-        bad, late, t = 0, 0, time.perf_counter()
-        for _ in range(n):
-            if exchange() != master.expected_wkc:
-                bad += 1
+        wrong, lost, late, t = [], 0, 0, time.perf_counter()
+        for i in range(n):
+            wkc = exchange()
+            if wkc < 0:
+                lost += 1
+            elif wkc != master.expected_wkc:
+                wrong.append((i, wkc))
             t += period
             rest = t - time.perf_counter()
             if rest > 0:
                 time.sleep(rest)
             else:
                 late += 1
-        return bad, late, [bytes(s.input) for s in master.slaves]
+        return Cycles(wrong, lost, late, [bytes(s.input) for s in master.slaves])
 
     def sdo_read(pos, index, sub):
         return bytes(master.slaves[pos].sdo_read(index, sub))
@@ -339,11 +365,11 @@ def test_cycles_at_4_ms_without_wkc_errors_and_data_both_ways(session, full):
     model_call(runtime, lambda: runtime.rig.apply("fastcat/1", "set_input",
                                                   {"channel": 5, "value": True}))
     do16_ch3 = (1 << (1 + 2)).to_bytes(3, "little")  # after 0x16FF's reset-fault bit
-    bad, late, inputs = master("cycles", n, PERIOD_S, {0: do16_ch3}, timeout=n * 0.02 + 60)
-    assert bad == 0, f"{bad} wrong working counters in {n} cycles ({late} late)"
+    c = master("cycles", n, PERIOD_S, {0: do16_ch3}, timeout=n * 0.02 + 60)
+    check_cycles(c, n, 3 * 4, full)
     do = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["fastcat"]["rail"][1])
     assert do["type"] == "DO16" and do["do"] == [ch == 2 for ch in range(16)]
-    assert int.from_bytes(inputs[0], "little") & 1 << (1 + 4)  # DI16 channel 5 (§6.24)
+    assert int.from_bytes(c.inputs[0], "little") & 1 << (1 + 4)  # DI16 channel 5 (§6.24)
     snap = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
     assert snap["external"] and snap["stats"]["frames"] > 0
 
@@ -398,8 +424,7 @@ def test_the_app_serves_the_default_rig_on_the_wire(tmp_path):
             assert errors == [] and expected == 3 * n
             states = master("state", AlState.OP, 10.0)
             assert [s & 0x1F for s, _ in states] == [AlState.OP] * n, states
-            bad, late, _ = master("cycles", 250, PERIOD_S, {})
-            assert bad == 0, f"{bad} wrong working counters ({late} late)"
+            check_cycles(master("cycles", 250, PERIOD_S, {}), 250, expected, False)
         finally:
             if master is not None:
                 master.close()
@@ -432,8 +457,9 @@ def test_a_pulled_cable_makes_slaves_vanish_from_the_wire(session):
     runtime, _, master, _ = session
     model_call(runtime, lambda: runtime.rig.apply("master", "pull_cable", {"cable": 2}))
     time.sleep(0.3)
-    bad, _, _ = master("cycles", 50, PERIOD_S, {})
-    assert bad == 50
+    c = master("cycles", 50, PERIOD_S, {})
+    assert len(c.wrong) + c.lost == 50 and c.wrong, c  # short WKC: the slaves behind are gone
+    assert all(wkc < 3 * 4 for _, wkc in c.wrong)
     time.sleep(0.3)  # B reports its counters every 100 ms
     panel = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
     assert panel["slaves"][0]["counters"]["wkc_errors"] >= 50  # B's count, on the panel
