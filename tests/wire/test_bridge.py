@@ -16,7 +16,8 @@ from collections.abc import Callable
 from typing import Any
 
 import pytest
-from test_faces import LINE, line_rig
+from test_faces import line_rig
+from wire_line import LINE
 
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire.bridge import WireBridge, _FrameClock, check_interface

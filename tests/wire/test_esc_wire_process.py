@@ -5,15 +5,13 @@ raw socket answering frames on a veth pair (root only; skipped with the reason o
 from __future__ import annotations
 
 import multiprocessing
-import os
 import select
-import shutil
 import socket
-import subprocess
 import time
 
 import pytest
 from test_esc import description, make_line, one
+from wire_line import veth_pair
 
 from app.ethercat_wire import datagrams as D
 from app.ethercat_wire import messages, wire_process
@@ -108,19 +106,8 @@ def test_line_built_from_descriptions_answers_with_its_sii():
 # ---- the socket loop on a veth pair -----------------------------------------------------
 @pytest.fixture
 def veth():
-    if os.geteuid() != 0:
-        pytest.skip("a veth pair and a raw socket need root")
-    if shutil.which("ip") is None:
-        pytest.skip("no `ip` command (iproute2)")
-    a, b = f"fwm{os.getpid() % 10000}", f"fws{os.getpid() % 10000}"
-    made = subprocess.run(["ip", "link", "add", a, "type", "veth", "peer", "name", b],
-                          capture_output=True, text=True)
-    if made.returncode:
-        pytest.skip(f"`ip link add ... type veth` refused here: {made.stderr.strip()}")
-    for name in (a, b):
-        subprocess.run(["ip", "link", "set", name, "up"], check=True)
-    yield a, b
-    subprocess.run(["ip", "link", "del", a], capture_output=True)
+    with veth_pair("w") as pair:
+        yield pair
 
 
 def answer(sock: socket.socket, timeout_s: float) -> bytes:

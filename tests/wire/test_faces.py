@@ -10,6 +10,7 @@ the terminal); state refusals keep the model's own codes (seed 001 §9.3.2: 0x00
 from __future__ import annotations
 
 import pytest
+from wire_line import LINE, line_spec
 
 from app.ethercat_wire import faces
 from app.ethercat_wire.description import Pdo, PdoEntry
@@ -18,36 +19,12 @@ from app.rig_config import build_rig, parse_rig_spec
 from devices.ethercat import AlState
 from devices.od import Access, DataType, OdEntry
 
-LINE = ("fastcat", "trscat", "cpx", "drive_ecat-ecat")
-RIG = """
-[rig]
-name = "wire"
-seed = 3
-step_ms = 1
-[master]
-line = ["fastcat", "trscat", "cpx", "drive_ecat-ecat"]
-[[fastcat]]
-id = "fastcat"
-modules = ["DI16", "DO16", "AI8D"]
-[[trscat]]
-id = "trscat"
-expansions = ["TRS-IO-E"]
-configured = ["TRS-IO-E"]
-[[cpx]]
-id = "cpx"
-dil2 = true
-modules = ["CPX-E-16DI", "CPX-E-8DO", "CPX-E-4AI-U-I", "CPX-E-4AO-U-I"]
-[[servo]]
-id = "drive_ecat"
-fieldbus = "ethercat"
-node_id = 2
-"""
 TIMEOUT_US = 8_000_000
 
 
 def line_rig(state: str = "OP"):
     """The rig of ``RIG`` with every slave brought to ``state`` by the built-in master."""
-    rig = build_rig(parse_rig_spec(RIG))
+    rig = build_rig(parse_rig_spec(line_spec()))
     for device in rig.devices.values():
         if "power" in device.ACTIONS:
             device.apply("power", {"on": True}, None)

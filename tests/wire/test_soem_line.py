@@ -18,7 +18,6 @@ from __future__ import annotations
 import contextlib
 import multiprocessing
 import os
-import shutil
 import socket
 import struct
 import subprocess
@@ -30,6 +29,8 @@ from typing import NamedTuple
 import pytest
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem (the SOEM master) is not installed")
+
+from wire_line import line_spec, veth_pair  # noqa: E402
 
 from app.ethercat_wire.bridge import start_wire  # noqa: E402
 from app.rig_config import build_rig, load_rig_spec, parse_rig_spec  # noqa: E402
@@ -47,57 +48,9 @@ A_NICE = -10
 # beyond 2 ms loses a frame whatever the emulation does (docs/ethercat-wire.md, "Lost frames").
 # Wrong working counters are never tolerated; --full tolerates neither.
 CI_LOST_PER_1000 = 5
-LINE_RIG = """
-[rig]
-name = "wire line"
-seed = 8
-step_ms = 1
-[master]
-line = ["fastcat", "trscat", "cpx", "drive_ecat-ecat"]
-[[fastcat]]
-id = "fastcat"
-modules = ["DI16", "DO16", "AI8D"]
-[[trscat]]
-id = "trscat"
-expansions = ["TRS-IO-E"]
-configured = ["TRS-IO-E"]
-[[cpx]]
-id = "cpx"
-dil2 = true
-modules = ["CPX-E-16DI", "CPX-E-8DO", "CPX-E-4AI-U-I", "CPX-E-4AO-U-I"]
-[[servo]]
-id = "drive_ecat"
-fieldbus = "ethercat"
-node_id = 2
-"""
 
 
 # ---- the veth pair ------------------------------------------------------------------------
-def _veth(tag: str) -> tuple[str, str]:
-    if os.geteuid() != 0:
-        pytest.skip("creating a veth pair needs root")
-    if shutil.which("ip") is None:
-        pytest.skip("no `ip` command (iproute2)")
-    a, b = f"fr{tag}m{os.getpid() % 10000}", f"fr{tag}s{os.getpid() % 10000}"
-    subprocess.run(["ip", "link", "del", a], capture_output=True)
-    made = subprocess.run(["ip", "link", "add", a, "type", "veth", "peer", "name", b],
-                          capture_output=True, text=True)
-    if made.returncode:
-        pytest.skip(f"`ip link add ... type veth` refused here: {made.stderr.strip()}")
-    for name in (a, b):
-        subprocess.run(["ip", "link", "set", name, "up"], check=True)
-    return a, b
-
-
-@contextlib.contextmanager
-def veth_pair(tag: str):
-    a, b = _veth(tag)
-    try:
-        yield a, b
-    finally:
-        subprocess.run(["ip", "link", "del", a], capture_output=True)
-
-
 @pytest.fixture(scope="module")
 def veth():
     with veth_pair("l") as pair:
@@ -302,7 +255,7 @@ def session(veth):
 
 def _session(veth):
     master_if, slave_if = veth
-    runtime = powered_runtime(build_rig(parse_rig_spec(LINE_RIG)))
+    runtime = powered_runtime(build_rig(parse_rig_spec(line_spec("wire line", seed=8))))
     bridge = start_wire(runtime, slave_if)
     master = Master(master_if)
     yield runtime, bridge, master, []  # [3]: what config_map() reported
