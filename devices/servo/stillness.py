@@ -18,10 +18,11 @@ skipped step differ.
 
 from __future__ import annotations
 
-import enum
 from typing import TYPE_CHECKING, Any
 
 from devices.servo.ds402 import State
+from devices.stillness import Backoff
+from devices.stillness import value_key as _value
 
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
@@ -34,27 +35,6 @@ NOT_STATE = frozenset({
     "regs", "params", "wired", "_levels", "latched_at_power_up",  # in the key, as flat dicts
 })
 FLAT = ("regs", "params", "wired", "_levels", "latched_at_power_up")  # str/int -> int/bool
-MAX_WAIT = 128
-_ATOMS = (int, float, str, bytes, bool, type(None), enum.Enum, tuple, frozenset)
-
-
-_ATOM_TYPES = frozenset({int, float, str, bytes, bool, type(None)})
-
-
-def _value(v: Any) -> Any:
-    """A comparable copy: containers and plain objects one value at a time, all the way down."""
-    if type(v) in _ATOM_TYPES or isinstance(v, _ATOMS):
-        return v
-    if isinstance(v, dict):
-        return tuple((k, _value(x)) for k, x in v.items())
-    if isinstance(v, list):
-        return tuple(_value(x) for x in v)
-    if isinstance(v, set):
-        return frozenset(v)
-    state = getattr(v, "__dict__", None)
-    if state is None:  # frozen values with slots (none today): compare the object itself
-        return v
-    return (type(v), tuple((k, _value(x)) for k, x in state.items()))
 
 
 def state_key(drive: ServoDrive) -> tuple[Any, ...]:
@@ -65,33 +45,18 @@ def state_key(drive: ServoDrive) -> tuple[Any, ...]:
     return own, flat, tuple(indirect.values.items()), len(indirect._jobs)
 
 
-class StillSteps:
+class StillSteps(Backoff):
     """The drive's bookkeeping: the last step's length if it changed nothing (else None), the
-    alarm bank it saw and its change count, and when to check again after a failed check."""
+    alarm bank it saw and its change count, and when to check again after a failed check
+    (devices/stillness.py's 1, 2, 4 .. 128 backoff)."""
 
-    __slots__ = ("alarms", "changes", "dt", "wait", "wait_left")
+    __slots__ = ("alarms", "changes", "dt")
 
     def __init__(self) -> None:
+        super().__init__()
         self.dt: int | None = None
         self.alarms: object = None
         self.changes = 0
-        self.wait = 1
-        self.wait_left = 0
-
-    def due(self) -> bool:
-        """A check now? (Counts down the wait after a failed one.)"""
-        if self.wait_left:
-            self.wait_left -= 1
-            return False
-        return True
-
-    def checked(self, still: bool) -> None:
-        self.wait = 1 if still else min(self.wait * 2, MAX_WAIT)
-        self.wait_left = 0 if still else self.wait
-
-    def restart(self) -> None:
-        """Touched from outside: check at the next chance."""
-        self.wait, self.wait_left = 1, 0
 
 
 def may_settle(drive: ServoDrive) -> bool:

@@ -1,0 +1,64 @@
+"""Generic parts of skipping still steps (docs/performance.md): a value copy and a backoff.
+
+A model may skip a step that repeats one which changed nothing, if it can prove "changed
+nothing" exactly. Two pieces serve every model that does so by comparing its state:
+
+- :func:`value_key`: a comparable copy of a value, containers and plain objects one value at
+  a time all the way down, so ``value_key(x) == value_key(y)`` means the two hold the same
+  values (not merely the same objects, which a step mutates in place);
+- :class:`Backoff`: when a check for stillness failed, wait 1, 2, 4 .. :data:`MAX_WAIT` steps
+  before the next one, so a model that looks still but is not (a filter settling, a timer
+  counting) pays about 1 % of a step for the checks. Waiting only delays the skipping; it can
+  never make a skipped step differ.
+"""
+
+from __future__ import annotations
+
+import enum
+from typing import Any
+
+MAX_WAIT = 128
+# Immutable values compared as themselves (tuples / frozensets of these are values too).
+ATOMS = (int, float, str, bytes, bool, type(None), enum.Enum, tuple, frozenset)
+_ATOM_TYPES = frozenset({int, float, str, bytes, bool, type(None)})
+
+
+def value_key(v: Any) -> Any:
+    """A comparable copy: containers and plain objects one value at a time, all the way down."""
+    if type(v) in _ATOM_TYPES or isinstance(v, ATOMS):
+        return v
+    if isinstance(v, dict):
+        return tuple((k, value_key(x)) for k, x in v.items())
+    if isinstance(v, list):
+        return tuple(value_key(x) for x in v)
+    if isinstance(v, set):
+        return frozenset(v)
+    state = getattr(v, "__dict__", None)
+    if state is None:  # frozen values with slots (none today): compare the object itself
+        return v
+    return (type(v), tuple((k, value_key(x)) for k, x in state.items()))
+
+
+class Backoff:
+    """When to check for stillness again after a failed check: after 1, 2, 4 .. MAX_WAIT."""
+
+    __slots__ = ("wait", "wait_left")
+
+    def __init__(self) -> None:
+        self.wait = 1
+        self.wait_left = 0
+
+    def due(self) -> bool:
+        """A check now? (Counts down the wait after a failed one.)"""
+        if self.wait_left:
+            self.wait_left -= 1
+            return False
+        return True
+
+    def checked(self, still: bool) -> None:
+        self.wait = 1 if still else min(self.wait * 2, MAX_WAIT)
+        self.wait_left = 0 if still else self.wait
+
+    def restart(self) -> None:
+        """Touched from outside: check at the next chance."""
+        self.wait, self.wait_left = 1, 0
