@@ -16,27 +16,18 @@ from __future__ import annotations
 
 import os
 import shutil
-import socket
-import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import viser
 from PIL import Image, ImageChops
 
+from app import screenshots
 from app.rig import Rig
-from app.runtime import Runtime
-from app.ui.dashboard import Dashboard
+from app.screenshots import CHROMIUM, VIEWPORT, ServedRig, free_port
 
-CHROMIUM = "/usr/bin/chromium"
-LAUNCH_ARGS = [
-    "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync", "--no-first-run",
-    "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-]
-VIEWPORT = {"width": 1280, "height": 720}
+__all__ = ["CHROMIUM", "VIEWPORT", "free_port"]  # re-exported for the tests
+LAUNCH_ARGS = list(screenshots.LAUNCH_ARGS)
 HERE = Path(__file__).resolve().parent
 BASELINES = HERE / "baselines"
 OUTPUT = HERE / "output"
@@ -49,31 +40,14 @@ MAX_DIFF_FRACTION = 0.01
 WALL_TIMEOUT_S = 20.0
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def wait_until(predicate: Callable[[], Any], timeout: float = WALL_TIMEOUT_S,
                what: str = "condition") -> Any:
     """Poll ``predicate`` (wall time: browser round trips are real time) until truthy."""
-    deadline = time.monotonic() + timeout
-    while True:
-        value = predicate()
-        if value:
-            return value
-        if time.monotonic() > deadline:
-            raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
-        time.sleep(0.02)
+    return screenshots.wait_until(predicate, what, timeout)
 
 
-@dataclass
-class LiveDashboard:
-    runtime: Runtime
-    server: viser.ViserServer
-    dashboard: Dashboard
-    url: str
+class LiveDashboard(ServedRig):
+    """The screenshot CLI's served rig, with what the tests wait for."""
 
     @property
     def rig(self) -> Rig:
@@ -81,9 +55,6 @@ class LiveDashboard:
 
     def snapshot(self, device: str = "fastcat") -> dict[str, Any]:
         return self.runtime.frame.snapshot["devices"][device]
-
-    def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Any:
-        return self.runtime.command(target, action, args).result(timeout=WALL_TIMEOUT_S)
 
     def advance(self, seconds: float) -> None:
         """Step the paused simulation by exactly ``seconds``, in the simulation thread, with
@@ -104,21 +75,9 @@ class LiveDashboard:
         wait_until(lambda: predicate(self.snapshot()), what=what)
         self.settle()
 
-    def stop(self) -> None:
-        self.dashboard.stop()
-        self.runtime.stop()
-        self.server.stop()
-
 
 def start_dashboard(rig: Rig) -> LiveDashboard:
-    runtime = Runtime(rig)
-    runtime.set_paused(True)
-    port = free_port()
-    server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
-    dashboard = Dashboard(server, runtime)
-    runtime.start()
-    dashboard.start()
-    live = LiveDashboard(runtime, server, dashboard, f"http://127.0.0.1:{port}")
+    live = LiveDashboard.start(rig)
     live.settle()
     return live
 
