@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 from devices.ethercat import AlState
 from devices.events import CommError
 from devices.master.links import SlaveLink
+from devices.master.still import StillCounts
 
 if TYPE_CHECKING:
     from devices.events import Event
@@ -33,6 +34,11 @@ class LineMixin:
     now_us: int
     device_id: str
     _bursting: bool
+    skipped: StillCounts
+    _line_cables: list[bool]
+    _line_powered: list[bool]
+    _line_reach: list[bool]
+    _watched: list[AlState | None] | None
 
     if TYPE_CHECKING:
         def _log(self, link: SlaveLink | None, message: str, **params: object) -> None: ...
@@ -72,8 +78,21 @@ class LineMixin:
             out.append(ok)
         return out
 
+    def _line(self, skip: bool) -> list[bool]:
+        """Each position's reach, the physical links brought up to date first. With the cables
+        and the power as they were last applied, applying them again would set no link (every
+        ``phys_in`` / ``phys_out`` already is what they make it) and give the same reach."""
+        powered = self._powered_all()
+        if skip and powered == self._line_powered and self.cables == self._line_cables:
+            self.skipped.line += 1
+            return self._line_reach
+        self._apply_physical_links(powered)
+        return self._line_reach
+
     def _apply_physical_links(self, powered: list[bool]) -> None:
         """Each port's link as the cables and the neighbours' power make it (LINK LEDs)."""
+        self._line_cables, self._line_powered = list(self.cables), list(powered)
+        self._line_reach = self._reach(powered)
         n = len(self.links)
         for p, link in enumerate(self.links):
             want_in = self.cables[p] and (p == 0 or powered[p - 1])
@@ -87,7 +106,7 @@ class LineMixin:
                     link.slave.set_link(want_out, "out")
 
     def _powered_all(self) -> list[bool]:
-        return [self._powered(p) for p in range(len(self.links))]
+        return [bool(getattr(link.slave, "powered", True)) for link in self.links]
 
     def _cause(self, position: int) -> str:
         for p in range(position + 1):
@@ -120,6 +139,7 @@ class LineMixin:
     def _find(self, link: SlaveLink) -> bool:
         """The slave answers (again); True when it is a recovery after a loss."""
         slave = link.slave
+        self._watched = None  # presence and reached_op change: the next watch runs in full
         link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
         link.pending, link.identity_ok, link.reached_op = None, None, False
         if link.diagnosis.startswith("no link"):
@@ -137,7 +157,7 @@ class LineMixin:
         link.present, link.believed, link.pending = False, None, None
         link.lost_once, link.reached_op, link.seen = True, False, None
         link.diagnosis = f"no link: {cause}"
-        self.network_op = False
+        self.network_op, self._watched = False, None
         self._event(CommError(self.now_us, self.device_id, position=link.position,
                               address=link.slave.station_address, reason="link_lost",
                               count=1))

@@ -42,6 +42,7 @@ from devices.master.log_styles import STYLES, Entry, render
 from devices.master.network import Mapping as NetworkMapping
 from devices.master.network import MasterParameters, SlaveDescription
 from devices.master.startup import StartupMixin
+from devices.master.still import StillCounts
 
 TWINCAT_PORT = 65535  # seed 000 §7.1 / §7.7: "Server (porta) (65535)"
 FIRST_STATION_ADDRESS = 1001  # §7.1 / §7.7: "'Box 1 (FastCAT)' (1001)"
@@ -64,6 +65,7 @@ def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
 
 class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     KIND = "master"
+    SKIP_STILL = True  # False: every part of every step in full (test_still_master.py)
     ACTIONS: ClassVar[Mapping[str, Action]] = {a.name: a for a in (
         Action("resync", "Take every slave through INIT and back to the target state (a "
                          "resync resets the FastCAT alarms whose cause is gone, seed 000 §7)"),
@@ -134,6 +136,15 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         self.network_op = False
         self.link_up = False
         self._bursting = False
+        # Still steps (devices/master/still.py): the line as last applied, the states last
+        # watched (None: watch again), the links that use DC (fixed by the description).
+        self.skipped = StillCounts()
+        self._line_cables: list[bool] = []
+        self._line_powered: list[bool] = []
+        self._line_reach: list[bool] = []
+        self._watched: list[AlState | None] | None = None
+        self._dc_links = [link for link in self.links if link.dc]
+        self._uses_dc = [link.dc for link in self.links]
 
     # ---- hooks (seed 003: ECAT_Notify, ECAT_Resync) -------------------------------------------
     def on_notify(self, callback: Callback) -> None:
@@ -164,7 +175,7 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     # ---- commands ---------------------------------------------------------------------------
     def cmd_resync(self) -> None:
         """Every slave through INIT; ECAT_Resync fires again as they reach OP."""
-        self.network_op = False
+        self.network_op, self._watched = False, None
         for link in self.links:
             if link.present:
                 link.reached_op = False
@@ -234,41 +245,61 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     def step(self, now_us: int) -> None:
         dt_us = now_us - self.now_us
         super().step(now_us)
-        powered = self._powered_all()
-        self._apply_physical_links(powered)
-        reach = self._reach(powered)
-        self.link_up = bool(self.links) and reach[0] and self.links[0].slave.reachable()
+        skip = self.SKIP_STILL
+        reach = self._line(skip)
+        links = self.links
+        self.link_up = bool(links) and reach[0] and links[0].slave.reachable()
         cycle = now_us >= self.next_cycle_us
         if cycle:
             self.next_cycle_us = now_us + self.cycle_us
         lost = cycle and not self.external and self.to_lose > 0 and self.link_up
         if lost:
             self._lose_frame()
+        exchange = cycle and not lost and not self.external
+        target = self.target
+        held = self._target_of_dc()  # the target of a DC slave (SAFEOP while DC holds)
+        uses_dc = self._uses_dc
         recovered = []
-        for link in self.links:
-            if not (reach[link.position] and link.slave.reachable()):
+        for link in links:
+            slave = link.slave
+            if not (reach[link.position] and slave.reachable()):
                 self._lose(link)
                 continue
             if not link.present:
                 if self._find(link):
                     recovered.append(link.position)
                 self._watch(link)  # the state it is found in
-            if self.external or lost or not cycle:
+            if not exchange:
                 continue
-            link.slave.exchange_frame(now_us)
-            self._serve(link)
-        if cycle and not lost and not self.external and self.link_up:
+            slave.exchange_frame(now_us)
+            if not skip:
+                self._serve(link)
+                continue
+            frames = slave.take_emergencies()
+            if not frames and link.pending is None:  # _serve would do nothing (still.py)
+                state = slave.al_state
+                wanted = held if uses_dc[link.position] else target
+                if state is link.believed and (state is wanted or now_us < link.next_try_us):
+                    self.skipped.serve += 1
+                    continue
+            self._serve(link, frames)
+        if exchange and self.link_up:
             self.frames += 1
         if recovered:
             self._event(NetworkRecovery(now_us, self.device_id, positions=tuple(recovered)))
             self._log(None, "recovery", positions=", ".join(map(str, recovered)))
         if self.external or (cycle and not lost):  # states are read with the frames
-            self._watch_states()
+            self._watch_states(skip)
         self._step_dc(dt_us)
-        self.hooks.run()
+        if self.hooks.queued:
+            self.hooks.run()
 
-    def _watch_states(self) -> None:
+    def _watch_states(self, skip: bool = False) -> None:
         """Slave state changes, and the first OP of each slave / of the network (resync)."""
+        states = [link.slave.al_state if link.present else None for link in self.links]
+        if skip and states == self._watched:
+            self.skipped.watch += 1  # a watch of the same states already did its work
+            return
         for link in self.links:
             if link.present:
                 self._watch(link)
@@ -277,6 +308,7 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         if everyone and not self.network_op:
             self.network_op = True
             self._event(Resync(self.now_us, self.device_id, position=-1))
+        self._watched = states
 
     def _watch(self, link: SlaveLink) -> None:
         slave, now = link.slave, self.now_us
@@ -296,8 +328,10 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     def _step_dc(self, dt_us: int) -> None:
         dc = self.dc
         dc.measure(dt_us, self.rng)
-        dc_links = [link for link in self.links if link.present and link.dc]
-        ready = bool(dc_links) and all(
+        dc_links = [link for link in self._dc_links if link.present]
+        # Only WAITING_START_TIME asks whether the DC slaves are ready (DcUnit.trigger).
+        asked = dc.state is DcState.WAITING_START_TIME or not self.SKIP_STILL
+        ready = asked and bool(dc_links) and all(
             link.slave.al_state in (AlState.SAFEOP, AlState.OP) for link in dc_links)
         trigger = dc.trigger(self.now_us, self.link_up, len(dc_links), ready)
         moved = dc.move(trigger, self.now_us) if trigger is not None else None

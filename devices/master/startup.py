@@ -45,13 +45,20 @@ class StartupMixin:
     def _target_of(self, link: SlaveLink) -> AlState:
         """The master's target, capped at SAFEOP for DC slaves while DC is not synchronised
         (seed 003 NOT_SYNCHRONIZED: "all the slaves involved go to the SAFE_OP state")."""
-        if self.dc_hold and link.dc and RANK[self.target] > RANK[AlState.SAFEOP]:
+        return self._target_of_dc() if link.dc else self.target
+
+    def _target_of_dc(self) -> AlState:
+        """:meth:`_target_of` a slave that uses DC."""
+        if self.dc_hold and RANK[self.target] > RANK[AlState.SAFEOP]:
             return AlState.SAFEOP
         return self.target
 
-    def _serve(self, link: SlaveLink) -> None:
+    def _serve(self, link: SlaveLink, emergencies: list[bytes] | None = None) -> None:
+        """One cycle's supervision of a slave; ``emergencies``: its mailbox, already taken."""
         slave, now = link.slave, self.now_us
-        for frame in slave.take_emergencies():
+        if emergencies is None:
+            emergencies = slave.take_emergencies()
+        for frame in emergencies:
             code, register, data = parse_emergency_frame(frame)
             link.counters.emergencies += 1
             self._event(CoeEmergency(now, "master", position=link.position,

@@ -1,0 +1,33 @@
+"""What the master may leave out of a step, and the count of what it left out.
+
+The master cannot skip whole steps: every cycle each reachable slave gets its frame
+(``exchange_frame``: the slaves count frames and SM events), each slave's mailbox is emptied
+(``take_emergencies``) and the DC unit draws its deviation from ``rng``. What it leaves out are
+the parts that would change nothing (docs/ethercat-master.md "Still steps"):
+
+- the line: the physical links and the reach of each position are a function of the cables and
+  the slaves' power; with both as the last time they were applied, applying them again sets no
+  link and gives the same reach;
+- serving a slave (``startup._serve``) that has no emergency, no request pending, is in the
+  state the master last confirmed, and is at its target or not due for a retry: ``_serve`` would
+  do nothing (the test is inlined in ``EtherCatMaster.step``, the hot path);
+- watching the slaves' states (``_watch_states``) when every slave is present or absent and in
+  the state it was the last time they were watched, and nothing reset what the watch keeps
+  (``seen``, ``reached_op``, ``network_op``, presence): the watch would emit nothing;
+- asking whether the DC slaves are in SAFEOP / OP outside WAITING_START_TIME, the one DC state
+  whose trigger reads the answer.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass
+class StillCounts:
+    """How often each part was left out (tests check that skipping happened)."""
+
+    line: int = 0
+    serve: int = 0
+    watch: int = 0
+
