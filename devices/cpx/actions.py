@@ -239,10 +239,12 @@ class OperatorMixin:
         return self.od
 
     def cmd_write_object(self: CpxEEc, index: int, sub: int, value: int) -> None:
+        # the wire's face calls this directly: the dictionary's setters touch the model
         self._require_od().write(index, sub, value)
 
     def cmd_read_object(self: CpxEEc, index: int, sub: int) -> Any:
         od = self._require_od()
         if index == HISTORY and sub >= FIRST_SUB:
+            self.touch()  # the wire's face calls this directly, not through apply()
             self.history.read(sub)  # NO_SUBINDEX past sub 0, New Message Available falls
         return od.read(index, sub)

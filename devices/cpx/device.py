@@ -24,6 +24,7 @@ from devices.cpx.indicators import wanted_leds
 from devices.cpx.leds import LedBank
 from devices.cpx.modules import CpxModule, ModuleFault, Monitors
 from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
+from devices.cpx.stillness import StillSteps, clock_key, state_key
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
 from devices.device import Action, DeviceModel
@@ -44,6 +45,7 @@ SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a 
 class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
     KIND = "cpx_e_ec"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+    SKIP_STILL = True  # False: every step in full (tests/hardening/test_still_cpx.py)
 
     def __init__(self, device_id: str, rng: random.Random,
                  modules: Sequence[str | tuple[str, Mapping[str, Any]]] = (),
@@ -51,6 +53,10 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
                  history_flags: int = 0x0000, out_connected: bool = False,
                  box_name: str = "Box 3 (CPX-E-EC)", station_address: int = 1003) -> None:
         super().__init__(device_id=device_id, rng=rng)
+        # Still steps (devices/cpx/stillness.py): _touched = something from outside may have
+        # changed the model since the last step, _touch_streak = the last step was touched too.
+        self._touched, self._touch_streak = True, False
+        self._still = StillSteps()
         self.modules: list[CpxModule] = []
         for number, item in enumerate(modules, start=1):
             name, options = (item, {}) if isinstance(item, str) else item
@@ -113,6 +119,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
             self.space = AddressSpace.of(self.bus.mtype, [m.mtype for m in self.modules])
         self.boot_failed = self.has_fault("booting_error")
         self.od = build_od(self)
+        self._announce_writes(self.od)
         self.esm.reset(self.now_us)
 
     def _stop(self) -> None:
@@ -148,7 +155,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
     def reachable(self) -> bool:
         return self.powered and self.link_in
 
-    def exchange_frame(self, now_us: int) -> None:
+    def exchange_frame(self, now_us: int) -> None:  # no touch: stillness.clock_key
         """One process-data cycle of the master passed through this slave."""
         if not self.reachable():
             return
@@ -166,16 +173,20 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
         if not self.reachable() or self.esm.state is AlState.INIT:
             return []
         out, self.diagnosis.mailbox = self.diagnosis.mailbox, []
+        if out:
+            self.touch()
         return out
 
     def set_link(self, connected: bool, port: str = "in") -> None:
         """A cable on port X1 (IN, from the master's side) or X2 (OUT)."""
+        self.touch()
         if port == "in":
             self.link_in = connected
         else:
             self.link_out = connected
 
     def set_power(self, on: bool) -> None:
+        self.touch()
         self.cmd_power(on)
 
     def sdo_download(self, index: int, sub: int, data: bytes) -> None:
@@ -195,6 +206,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
     def set_dc_fault(self, kind: str | None) -> None:
         """The master's DC faults as the bus module sees them: jitter or lost SYNC0 are
         missed sync events (the "sync_error" fault, Tab. 12); drift and None clear it."""
+        self.touch()
         entry = Injected("sync_error")
         if kind in ("jitter", "sync0_lost") and entry not in self.injected:
             self.injected.append(entry)
@@ -203,9 +215,58 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
         self.faults_changed()
 
     # ---- stepping -------------------------------------------------------------------------
+    def touch(self) -> None:
+        """Something from outside may have changed the model: the next step runs in full."""
+        self._touched = True
+
+    def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        self._touched = True
+        return super().apply(action, args, module)
+
+    def _announce_writes(self, od: ObjectDictionary) -> None:
+        """Every write into the dictionary touches the model; an output object written with
+        the value it has (a master's process image every cycle) changes nothing."""
+        for entry in od:
+            if not entry.access.writable:
+                continue
+            setter, getter = entry.setter, entry.getter
+            output = 0x7000 <= entry.index <= 0x70FF and getter is not None
+
+            def write(value: Any, setter: Any = setter, getter: Any = getter,
+                      output: bool = output) -> None:
+                if not output or getter() != value:
+                    self._touched = True
+                if setter is not None:
+                    setter(value)
+            entry.setter = write
+
     def step(self, now_us: int) -> None:
         dt_us = now_us - self.now_us
         super().step(now_us)
+        still = self._still
+        if self._touched:
+            if not self._touch_streak:  # touched once, not every cycle: check soon
+                still.restart()
+            self._touched, self._touch_streak = False, True
+            still.dt = None
+        else:
+            self._touch_streak = False
+            if still.dt == dt_us and self.SKIP_STILL and still.clock == clock_key(self):
+                still.skipped += 1  # a repeat of a step that changed nothing
+                return
+        check = self.SKIP_STILL and still.due()
+        before = (state_key(self), clock_key(self)) if check else None
+        queued = len(self.events.items)
+        self._full_step(dt_us)
+        if before is not None:
+            settled = (not self._touched and len(self.events.items) == queued
+                       and state_key(self) == before[0])
+            still.checked(settled)
+            still.dt, still.clock = (dt_us, before[1]) if settled else (None, ())
+        else:
+            still.dt = None
+
+    def _full_step(self, dt_us: int) -> None:
         self._follow_supply()
         if not self.powered:
             return
@@ -235,18 +296,28 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
             return
         if self.low_since_us is None:
             self.low_since_us = self.now_us
-        if self.now_us - self.low_since_us >= BRIDGING_US:
+        if self.bridging_over():
             self._set_powered(False)
+
+    def bridging_over(self) -> bool:
+        return self.low_since_us is not None and self.now_us - self.low_since_us >= BRIDGING_US
+
+    def pd_watchdog_expired(self) -> bool:
+        """No process data for the Sync Manager watchdog time."""
+        return self.now_us - self.last_pd_us > WATCHDOG_US
+
+    def sync_error(self) -> bool:
+        return self.sync_counter > SYNC_ERROR_COUNTER_LIMIT
 
     def _supervise(self) -> None:
         """OP -> SAFEOP on the Sync Manager watchdog or a sync error (Tab. 12)."""
         if self.esm.state is not AlState.OP:
             return
-        if self.now_us - self.last_pd_us > WATCHDOG_US:
+        if self.pd_watchdog_expired():
             self.esm.fall(AlState.SAFEOP, ErrorKind.WATCHDOG, SM_WATCHDOG, self.now_us)
             self.emit(LogLine(self.now_us, self.device_id, text="Sync Manager watchdog: no "
                               "process data for 100 ms, OP -> SAFEOP"))
-        elif self.sync_counter > SYNC_ERROR_COUNTER_LIMIT:
+        elif self.sync_error():
             self.esm.fall(AlState.SAFEOP, ErrorKind.SYNC, SYNC_ERROR, self.now_us)
             self.emit(LogLine(self.now_us, self.device_id, text="sync error counter over "
                               "0x10F1:2, OP -> SAFEOP"))

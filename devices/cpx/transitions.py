@@ -47,6 +47,7 @@ class TransitionsMixin:
 
     def request_state(self: CpxEEc, target: AlState) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
+        self.touch()  # the next step runs in full (devices/cpx/stillness.py)
         if not self.reachable() or self.has_fault("ac_failure"):
             return  # the ESC takes the request, but no application answers it (Tab. 12)
         now, esm = self.now_us, self.esm

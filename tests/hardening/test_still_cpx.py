@@ -1,0 +1,347 @@
+"""Skipping still CPX-E-EC steps changes nothing (docs/cpx-e-ec.md "Still steps").
+
+The CPX-E-EC skips a step that repeats a full step which left its state exactly as it found it
+(devices/cpx/stillness.py). Exact or wrong: the same runs with ``SKIP_STILL`` = False on the
+CPX-E-EC (every other device as it is, in both runs) must give the same events, in the same
+order at the same microsecond, and the same snapshots.
+
+- the example scenarios that work the CPX-E-EC (seed 002 §2.5 short circuit, the pulled cable
+  that cuts it off the master) and one that works every part of it (inputs, analog values,
+  outputs, faults, supplies, switches, restart);
+- a seeded random differential on two default rigs: commands to the CPX-E-EC and its modules,
+  named faults (seed 002 Tab. 12, 17, 21), object writes and reads (Tab. 27), master cable /
+  power / DC faults, with idle stretches of up to 900 steps; every step's events compared,
+  and after each stretch every snapshot and the CPX-E-EC's full ``state_key``;
+- the CPX-E-EC alone (no master: traffic, "no master" and the watchdog run out on the clock)
+  at step lengths other than 1 ms, with a counting 1CI module.
+
+Each checks that steps were skipped, so skipping switched off by mistake fails it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import random
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from app.rig import Rig
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.scenario import load_scenario, parse_scenario, run_scenario, scenario_rig_path
+from devices.cpx.device import CpxEEc
+from devices.cpx.faults import FAULTS
+from devices.cpx.stillness import VALUES, state_key
+from devices.device import CommandError
+from devices.od import SdoAbort
+
+ROOT = Path(__file__).resolve().parents[2]
+CPX_SCENARIOS = ("cpx_short_circuit", "cable_pulled")
+
+WORK_THE_CPX = """
+[scenario]
+name = "CPX-E-EC worked: field, outputs, faults, supplies"
+duration_s = 8
+
+[[step]]
+at = 2.0
+target = "cpx/1"
+action = "set_input"
+channel = 3
+on = true
+
+[[step]]
+at = 2.1
+target = "cpx"
+action = "write_object"
+index = 0x7002
+sub = 1
+value = 1
+
+[[step]]
+at = 2.2
+target = "cpx/3"
+action = "set_analog"
+channel = 0
+value = 4.5
+
+[[step]]
+at = 2.3
+target = "cpx"
+action = "write_object"
+index = 0x2003
+sub = 2
+value = 6
+
+[[step]]
+at = 2.5
+checkpoint = "worked"
+
+[[step]]
+at = 2.6
+target = "cpx/1"
+action = "force"
+channel = 2
+value = 1
+
+[[step]]
+at = 3.0
+target = "cpx"
+action = "supply"
+out = 12.0
+
+[[step]]
+at = 3.5
+target = "cpx"
+action = "supply"
+out = 24.0
+
+[[step]]
+at = 3.6
+target = "cpx"
+action = "inject_fault"
+fault = "watchdog"
+
+[[step]]
+at = 4.0
+checkpoint = "watchdog"
+
+[[step]]
+at = 4.2
+target = "cpx"
+action = "clear_fault"
+fault = "watchdog"
+
+[[step]]
+at = 4.5
+target = "cpx"
+action = "power"
+on = false
+
+[[step]]
+at = 4.51
+target = "cpx"
+action = "power"
+on = true
+
+[[step]]
+at = 5.0
+target = "cpx"
+action = "power"
+on = false
+
+[[step]]
+at = 5.5
+target = "cpx"
+action = "power"
+on = true
+
+[[step]]
+at = 6.0
+checkpoint = "back"
+"""
+
+
+def cpx_devices(rig: Rig) -> list[CpxEEc]:
+    return [d for d in rig.devices.values() if isinstance(d, CpxEEc)]
+
+
+def no_skipping(rig: Rig) -> Rig:
+    for device in cpx_devices(rig):
+        device.SKIP_STILL = False
+    return rig
+
+
+def skipped(rig: Rig) -> int:
+    return sum(d._still.skipped for d in cpx_devices(rig))
+
+
+def scenario_run(scenario: Any, skip: bool) -> tuple[list[str], dict[str, Any], int]:
+    rig_path = scenario_rig_path(scenario, None)
+    rig = build_rig(load_rig_spec(Path(rig_path) if rig_path else DEFAULT_RIG), state_dir=None)
+    if not skip:
+        no_skipping(rig)
+    seen: dict[str, Any] = {}
+
+    def on_step(step: Any, rig: Rig) -> None:
+        if step.kind == "checkpoint":
+            seen[step.text] = rig.snapshot()
+
+    run = run_scenario(scenario, rig, on_step=on_step)
+    seen["end"] = rig.snapshot()
+    return [json.dumps(e.to_record(), sort_keys=True) for e in run.events], seen, skipped(rig)
+
+
+def assert_same_runs(scenario: Any) -> list[str]:
+    events, snapshots, count = scenario_run(scenario, True)
+    plain_events, plain_snapshots, plain_count = scenario_run(scenario, False)
+    assert events == plain_events
+    assert snapshots == plain_snapshots
+    assert plain_count == 0 and count > 1000  # the CPX-E-EC did skip, and only with skipping
+    return events
+
+
+@pytest.mark.parametrize("name", CPX_SCENARIOS)
+def test_cpx_scenarios_are_the_same_without_skipping(name: str) -> None:
+    """Seed 002 §2.5 (short circuit, 0x10F3, emergency 0x2320) and the pulled cable."""
+    assert_same_runs(load_scenario(ROOT / "static" / "scenarios" / f"{name}.toml"))
+
+
+def test_worked_cpx_scenario_is_the_same_without_skipping() -> None:
+    """Seed 002 Tab. 11-13 (ESM and LEDs), Tab. 21 (diagnosis), Tab. 29 (bridging)."""
+    events = assert_same_runs(parse_scenario(WORK_THE_CPX, "<worked CPX-E-EC>"))
+    kinds = {json.loads(line)["event"] for line in events if '"cpx"' in line}
+    assert {"state", "alarm", "led", "emergency"} <= kinds  # the run did work the CPX-E-EC
+
+
+# ---- random differential -------------------------------------------------------------------
+Op = tuple[str, str, dict[str, Any]]
+OBJECT_WRITES = (  # (index, sub, values) of the default rig's CPX-E-EC (Tab. 27)
+    (0x7002, 1, (0, 1)), (0x7002, 4, (0, 1)), (0x7004, 1, (0, 8000, 32767)),
+    (0x7000, 1, (0, 0x8000 | 1936, 0x8000 | 2008 + 8)), (0x2003, 1, (1, 2, 5, 6)),
+    (0x2004, 2, (1, 5, 6)), (0x2102, 1, (0, 1)), (0x2400, 2, (0, 1)), (0x2400, 3, (0, 1)),
+    (0x2400, 4, (0, 1)), (0x2400, 7, (0, 1, 2)), (0x2401, 0, (0, 1)), (0x10F3, 5, (0, 1, 3)),
+    (0x10F3, 3, (0, 6, 7)), (0xF030, 0, (0, 5)),
+)
+
+
+def random_op(rng: random.Random) -> Op:
+    module = rng.randint(1, 4)
+    fault = rng.choice(tuple(FAULTS))
+    fault_args: dict[str, Any] = {"fault": fault}
+    target_kind = FAULTS[fault].target.name
+    if target_kind in ("MODULE", "CHANNEL"):
+        fault_args["module"] = rng.choice((2, 3, 4)) if fault != "module_failure" else module
+    if target_kind == "CHANNEL" or (fault == "short_circuit" and rng.random() < 0.7):
+        fault_args["channel"] = rng.randint(0, 3)
+    if target_kind == "SYNC_MANAGER":
+        fault_args["sm"] = rng.randint(0, 3)
+    index, sub, values = rng.choice(OBJECT_WRITES)
+    choices: list[Callable[[], Op]] = [
+        lambda: ("cpx/1", "set_input", {"channel": rng.randint(0, 15), "on": rng.random() < 0.5}),
+        lambda: ("cpx/3", "set_analog", {"channel": rng.randint(0, 3),
+                                         "value": rng.choice((0.0, 1.0, 4.0, 12.5, 25.0))}),
+        lambda: (f"cpx/{module}", "short_circuit", {"on": rng.random() < 0.6,
+                                                    "channel": rng.randint(0, 3)}),
+        lambda: ("cpx/3", "short_circuit", {"on": rng.random() < 0.6}),
+        lambda: (f"cpx/{module}", "wire_break", {"channel": rng.randint(0, 3),
+                                                 "on": rng.random() < 0.6}),
+        lambda: (f"cpx/{module}", "force", {"channel": rng.randint(0, 7),
+                                            **({"value": rng.randint(0, 1)}
+                                               if rng.random() < 0.6 else {})}),
+        lambda: ("cpx", "inject_fault", fault_args),
+        lambda: ("cpx", "clear_fault", fault_args),
+        lambda: ("cpx", "write_object", {"index": index, "sub": sub,
+                                         "value": rng.choice(values)}),
+        lambda: ("cpx", "read_object", {"index": 0x10F3, "sub": rng.choice((2, 4, 6, 7))}),
+        lambda: ("cpx", "power", {"on": rng.random() < 0.7}),
+        lambda: ("cpx", "supply", {"el_sen": rng.choice((24.0, 24.0, 17.0, 5.0)),
+                                   "out": rng.choice((24.0, 24.0, 12.0, 0.0))}),
+        lambda: ("cpx", "cable", {"port": rng.choice(("in", "out")),
+                                  "connected": rng.random() < 0.6}),
+        lambda: ("cpx", "set_dil", {"dil1": rng.random() < 0.3, "dil2": rng.random() < 0.7}),
+        lambda: ("cpx", "restart", {}),
+        lambda: ("master", "pull_cable", {"cable": rng.choice((2, 3))}),
+        lambda: ("master", "plug_cable", {"cable": rng.choice((2, 3))}),
+        lambda: ("master", "power_slave", {"position": 2, "on": rng.random() < 0.7}),
+        lambda: ("master", "dc_fault", {"kind": rng.choice(("jitter", "sync0_lost", "drift"))}),
+        lambda: ("master", "clear_dc_fault", {}),
+        lambda: ("master", "resync", {}),
+    ]
+    return rng.choice(choices)()
+
+
+def outcome(rig: Rig, op: Op) -> str:
+    try:
+        return repr(rig.apply(*op))
+    except (CommandError, SdoAbort) as exc:
+        return f"refused: {exc}"
+
+
+def full_state(rig: Rig) -> tuple[Any, ...]:
+    return rig.snapshot(), tuple(state_key(d) for d in cpx_devices(rig))
+
+
+@pytest.mark.parametrize("seed", [21, pytest.param(22, marks=pytest.mark.full)])
+def test_random_differential_on_the_default_rig(seed: int, full: bool) -> None:
+    rng = random.Random(seed)
+    spec = load_rig_spec(DEFAULT_RIG)
+    skipping, plain = build_rig(spec, state_dir=None), no_skipping(build_rig(spec, state_dir=None))
+    for _ in range(3000):  # power-up, master to OP
+        assert skipping.step() == plain.step()
+    for _ in range(300 if full else 40):
+        op = random_op(rng)
+        assert outcome(skipping, op) == outcome(plain, op), op
+        assert skipping.take_events() == plain.take_events(), op
+        for _ in range(rng.choice((1, 2, 5, 30, 200, 900))):
+            assert skipping.step() == plain.step(), op
+        assert full_state(skipping) == full_state(plain), op
+    assert skipped(plain) == 0
+    assert skipped(skipping) > 2000  # the CPX-E-EC did settle and skip
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_cpx_alone_at_other_step_lengths(seed: int, full: bool) -> None:
+    """No master: LA IN / LA OUT, Error (no master) and the SM watchdog follow the clock."""
+    rng = random.Random(seed)
+    models = [CpxEEc("cpx", random.Random(5),
+                     modules=["CPX-E-16DI", "CPX-E-8DO", "CPX-E-4AI-U-I", "CPX-E-4AO-U-I",
+                              "CPX-E-1CI"]) for _ in range(2)]
+    models[1].SKIP_STILL = False
+    rigs = [Rig("cpx", {"cpx": m}) for m in models]
+    t_us = 0
+    for _ in range(120 if full else 30):
+        if rng.random() < 0.15:
+            op: Op = ("cpx/5", "set_count_rate", {"hz": rng.choice((0.0, 0.0, 150.0, -20.0))})
+        elif rng.random() < 0.2:
+            op = ("cpx", "exchange_frame", {})
+        else:
+            op = random_op(rng)
+            if op[0] == "master":
+                continue
+        if op[1] == "exchange_frame":  # a master's frame, without a master
+            for model in models:
+                model.exchange_frame(t_us)
+        else:
+            assert outcome(rigs[0], op) == outcome(rigs[1], op), op
+        dt = rng.choice((250, 1000, 2000, 3500))
+        for _ in range(rng.choice((1, 10, 60, 300))):
+            t_us += dt
+            for model in models:
+                model.step(t_us)
+            assert models[0].drain_events() == models[1].drain_events(), op
+        assert state_key(models[0]) == state_key(models[1]), op
+        assert models[0].snapshot() == models[1].snapshot(), op
+    assert models[1]._still.skipped == 0 and models[0]._still.skipped > 100
+
+
+def test_values_taken_as_they_are_are_deeply_immutable() -> None:
+    """stillness.VALUES are compared by ==, not copied: frozen dataclasses whose instances
+    hash (so no list, dict or set inside), as every instance in a worked model does."""
+    model = CpxEEc("cpx", random.Random(5), modules=["CPX-E-16DI", "CPX-E-8DO"])
+    model.apply("short_circuit", {"on": True, "channel": 1}, 2)
+    model.apply("supply", {"out": 12.0})  # U_OUT low: an error of module 2 (Tab. 21)
+    for t in range(1, 200):
+        model.step(t * 1000)
+    seen: list[Any] = []
+
+    def walk(v: Any, depth: int = 0) -> None:
+        if isinstance(v, VALUES):
+            seen.append(v)
+        if depth > 6:
+            return
+        items = v.values() if isinstance(v, dict) else v if isinstance(v, (list, tuple)) \
+            else vars(v).values() if hasattr(v, "__dict__") and not callable(v) else ()
+        for x in items:
+            walk(x, depth + 1)
+
+    walk({k: v for k, v in vars(model).items() if k not in ("od", "rng", "events")})
+    assert {type(v) for v in seen} >= {cls for cls in VALUES if cls.__name__ in (
+        "ModuleType", "LedState", "ActiveError", "ModuleFault", "DiagMessage")}
+    for cls in VALUES:
+        assert dataclasses.is_dataclass(cls) and cls.__dataclass_params__.frozen, cls
+    for v in seen:
+        hash(v)  # a list, dict or set inside would raise TypeError
