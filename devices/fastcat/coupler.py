@@ -390,6 +390,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, AlStatusView, DeviceModel):
             "injected": [{"fault": a.info.symbol, "module": a.module or None}
                          for a in self.injected],
             "link": self.link, "tbus_low": self.tbus_low,
+            # §6.17 0x5200:1, the level the master or the dashboard last wrote. Without supply
+            # there is no object: it reads as its default (False) until it is written again.
+            "reset_fault": self.powered and bool(self.reset_bit),
             "cnf": {"pressed": self.cnf.pressed,
                     "held_s": self.cnf.held_us(self.now_us) / 1_000_000,
                     "phase": self.cnf_phase.value},
