@@ -108,3 +108,21 @@ def test_fieldrig_fixture_and_play(fieldrig) -> None:  # noqa: F811 (the importe
     assert failures == [] and rig.t == load_scenario(SCENARIO).end_us / 1e6
     checkpoints = [e.to_record()["name"] for e in rig.events("checkpoint")]
     assert checkpoints == ["op", "in_alarm", "recovered"]
+
+
+def test_the_comparison_forgives_a_one_pixel_shift_but_not_a_changed_led() -> None:
+    """The CI failure of 2026-11-22 in miniature: the same picture one pixel lower passes; a
+    green LED turned red (a few pixels) is still counted."""
+    from PIL import Image, ImageDraw
+
+    base = Image.new("RGB", (200, 100), "white")
+    draw = ImageDraw.Draw(base)
+    draw.rectangle((20, 20, 180, 80), outline="black", width=1)
+    draw.ellipse((90, 40, 100, 50), fill=(0, 200, 0))
+    shifted = Image.new("RGB", base.size, "white")
+    shifted.paste(base, (0, 1))
+    assert diff_fraction(shifted, base)[0] == 0.0
+    red = base.copy()
+    ImageDraw.Draw(red).ellipse((90, 40, 100, 50), fill=(220, 0, 0))
+    fraction, mask = diff_fraction(red, base)
+    assert fraction > 0.003 and mask.getpixel((95, 45)) == 255
