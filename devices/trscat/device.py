@@ -32,19 +32,21 @@ from devices.trscat.catalog import (
 )
 from devices.trscat.commands import ACTIONS, CommandsMixin
 from devices.trscat.diagnostics import AppFault, DiagHistory
-from devices.trscat.esm import SM_WATCHDOG, Esm
-from devices.trscat.indicators import LedBank, LedInputs, wanted_patterns
+from devices.trscat.esm import Esm
+from devices.trscat.indicators import LedBank, LedInputs
 from devices.trscat.io import SlotIo, field_in_range
 from devices.trscat.objects import build_od, refuse_in_state
+from devices.trscat.pdo import outputs_index
+from devices.trscat.stepping import SteppingMixin
 from devices.trscat.sync import MODE_BY_NAME, SyncUnit
 from devices.trscat.transitions import OutputMode, TransitionsMixin
 
 DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
-ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently
 
 
-class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceModel):
+class TrsCat(SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView,
+             DeviceModel):
     KIND = "trscat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -53,6 +55,7 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
                  field_supply_v: float = 24.0, out_link: bool = False,
                  box_name: str = "Box 2 (TRS-CAT)", station_address: int = 1002) -> None:
         super().__init__(device_id=device_id, rng=rng)
+        self._still_state()
         kinds = _expansion_list(expansions, "expansion")
         self.startup_f030 = None if configured is None else \
             [INTEGRATED, *_expansion_list(configured, "configured expansion")]
@@ -107,6 +110,7 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
                 io.reset()
 
     def cmd_power(self, on: bool) -> None:
+        self._touch()
         if on == self.powered:
             return
         self.clear_all_alarms()
@@ -155,11 +159,13 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
 
     def write_object(self, index: int, sub: int, value: Any) -> None:
         """SDO download (raises SdoAbort with the DS301 code)."""
+        self._touch()
         self.require_od().write(index, sub, value)
         self._refresh()
 
     def set_link(self, connected: bool, port: str = "in") -> None:
         """A cable on port IN (from the master's side) or OUT (to the next slave)."""
+        self._touch()
         if port == "in":
             self.link_in = connected
         else:
@@ -189,6 +195,7 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
         (§9.1.1; checked at PREOP -> SAFEOP, 0x1C32:2 then shows the cycle, §9.3.1)."""
         if not self.powered:
             return  # the ESC is off: nothing to write into
+        self._touch()
         self.sync.configure(activation, sync0_cycle_ns, start_time_ns, self.now_us)
         self._refresh()
 
@@ -196,26 +203,11 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
         """The master's DC faults as this device sees them (§9.1.1, §9.3.7): ``jitter``
         makes each frame arrive up to a cycle late (SM events missed, sync error),
         ``sync0_lost`` stops SYNC0 (fatal sync error); ``drift`` and None clear both."""
+        self._touch()
         self.sync.jitter_us = self.sync.cycle_us if kind == "jitter" else 0
         self.sync.sync0_lost = kind == "sync0_lost"
 
-    # ---- stepping ---------------------------------------------------------------------------
-    def step(self, now_us: int) -> None:
-        super().step(now_us)
-        if not self.powered:
-            return
-        if self.bus is TrsBus.DETECTING and now_us >= self.detect_done_us:
-            self._finish_detection()
-        for t, sm_event in self.sync.cycles_until(now_us):
-            if sm_event and self.esm.state in (AlState.SAFEOP, AlState.OP):
-                self._latch_outputs(t)
-            self._local_cycle()
-        self._check_sync()
-        if self.esm.state is AlState.OP and self.check_outputs() is not None:
-            self._fall_on_comm_error(SM_WATCHDOG)
-        self._evaluate_alarms()
-        self._refresh()
-
+    # ---- stepping: devices/trscat/stepping.py ------------------------------------------------
     def _finish_detection(self) -> None:
         self.detected = [INTEGRATED, *self._chain()]
         self.f050 = [len(self.detected), *(k.ident for k in self.detected)]
@@ -225,36 +217,10 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
         if self.esm.state is AlState.INIT and self.esm.requested is AlState.PREOP:
             self._enter(AlState.PREOP)
 
-    def _latch_outputs(self, t_us: int) -> None:
-        for io in self.rail:
-            if io is not None:
-                io.latched = list(io.plc)
-        self.last_sm_event_us = t_us
-
-    def _local_cycle(self) -> None:
-        for slot, io in enumerate(self.rail):
-            if io is None:
-                continue
-            serviced = self.serviced(slot)
-            working = serviced and not self.slot_fault(slot, frozenset({"AN_PLUS_12V",
-                                                                        "AN_MINUS_12V"}))
-            io.cycle(self._slot_outputs(slot, io), self._slot_field_v(slot), working)
-
-    def _slot_outputs(self, slot: int, io: SlotIo) -> list[int]:
-        if self.out_mode is OutputMode.NORMAL:
-            return io.latched
-        if self.out_mode is OutputMode.ERROR:
-            return self.error_out.get(slot, [0] * io.kind.outputs)
-        return [0] * io.kind.outputs
-
-    def _slot_field_v(self, slot: int) -> float:
-        """Expansions take the field supply from the TRS bus (§10.3) unless their own fails."""
-        return 0.0 if ("FIELD_SUPPLY", slot) in self.injected else self.field_v
-
     # ---- object dictionary ------------------------------------------------------------------
     def _rebuild_od(self) -> None:
         configured = [BY_IDENT.get(self.f030[s]) for s in range(1, self.f030[0] + 1)]
-        self.od = build_od(self, configured, self.detected)
+        self.od = build_od(self, configured, self.detected, self._touch)
 
     def _write_f030_list(self, kinds: Sequence[ModuleKind]) -> None:
         self.f030 = [len(kinds), *(k.ident for k in kinds)]
@@ -284,25 +250,15 @@ class TrsCat(TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView, DeviceM
         io = self.rail[slot] if slot < len(self.rail) else None
         return io.plc[channel] if io is not None and io.kind is self.detected[slot] else 0
 
-    # ---- what the outside sees --------------------------------------------------------------
-    def _refresh(self) -> None:
-        if self.powered:
-            self._sync_event()
-        now = self.now_us
-        activity = self.last_frame_us is not None and now - self.last_frame_us <= \
-            ACTIVITY_WINDOW_US
-        base = self.rail[0]
-        assert base is not None and base.lines is not None
-        inputs = LedInputs(
-            powered=self.powered, state=self.esm.state, error=self.esm.error,
-            deadlocked=self.deadlocked, link_in=self.link_in, link_out=self.link_out,
-            activity=activity, bus_running=self.bus is TrsBus.RUNNING,
-            field_ok=field_in_range(self.field_v), io_mask=base.lines.level,
-            io_count=base.lines.count)
-        if inputs != self._led_inputs:  # the patterns are a function of these inputs only
-            self._led_inputs = inputs
-            self.leds.update(now, wanted_patterns(inputs), self.emit)
+    def od_write_output(self, slot: int, channel: int, value: int) -> None:
+        """0x7ss0 written: the objects are the detected module's; with that module gone (or
+        another one in its place) the write has nowhere to go, as a read gives 0."""
+        io = self.rail[slot] if slot < len(self.rail) else None
+        if io is None or io.kind is not self.detected[slot]:
+            raise SdoAbort(AbortCode.CANNOT_STORE, outputs_index(slot), channel + 1)
+        self.od_set_output(slot, channel, value)
 
+    # ---- what the outside sees --------------------------------------------------------------
     def snapshot(self) -> dict[str, Any]:
         sync = self.sync
         return {

@@ -180,33 +180,47 @@ class SlotIo:
         self._zeros_out, self._zeros_in = [0] * outs, [0] * ins
         self._applied_mask = 0
         self._inputs_mask = 0
+        self.still = False  # the last cycle changed nothing (set by cycle)
         if self.lines is not None:
             self.lines.reset()
 
-    def cycle(self, outputs: list[int], field_v: float, working: bool) -> None:
-        """One local cycle: drive ``outputs``, then sample the inputs.
+    def cycle(self, outputs: list[int], field_v: float, working: bool) -> bool:
+        """One local cycle: drive ``outputs``, then sample the inputs; True when it changed
+        anything (``still`` keeps the answer: docs/trscat.md "Still steps").
 
         ``working`` False (TRS bus down, or the module's own supply fault): the outputs are
         off and the TxPDO image reads 0. The terminals still follow the field.
         """
         applied = outputs if working else self._zeros_out
-        if applied != self.applied:
+        changed = applied != self.applied
+        if changed:
             self.applied = list(applied)
             self._applied_mask = to_mask(self.applied)
         lines = self.lines
         if lines is not None:
+            driving, tripped, level = lines.driving, lines.tripped, lines.level
+            history, debounced = lines.history, lines.value
             lines.drive(self._applied_mask, field_in_range(field_v))
             sampled = lines.sample()  # the terminals are sampled (and lit) bus or no bus
+            changed = changed or driving != lines.driving or tripped != lines.tripped \
+                or level != lines.level or debounced != sampled or history != lines.history
             value = sampled if working else 0
             if value != self._inputs_mask:
+                changed = True
                 self._inputs_mask = value
                 self.inputs = bits(value, lines.count)
-        elif not working:
-            self.inputs = self._zeros_in
-        elif self.kind.shape is IoShape.ANALOG:
-            self.inputs = [volts_to_counts(v) for v in self.analog_in_v]
         else:
-            self.inputs = list(self.words_in)
+            if not working:
+                inputs = self._zeros_in
+            elif self.kind.shape is IoShape.ANALOG:
+                inputs = [volts_to_counts(v) for v in self.analog_in_v]
+            else:
+                inputs = list(self.words_in)
+            if inputs != self.inputs:  # by value: the image is only ever read, never mutated
+                changed = True
+                self.inputs = inputs
+        self.still = not changed
+        return changed
 
     def field_current_a(self) -> float:
         return self.lines.current_a if self.lines is not None else 0.0

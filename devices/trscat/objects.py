@@ -9,7 +9,7 @@ FieldRig values (docs/trscat.md). "R-WPS" (0xF030) is read always, written in PR
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
 from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
@@ -63,12 +63,15 @@ class TrsObjects(Protocol):
     def od_bus_ok(self, sub: int) -> bool: ...
     def od_input(self, slot: int, channel: int) -> int: ...
     def od_output(self, slot: int, channel: int) -> int: ...
-    def od_set_output(self, slot: int, channel: int, value: int) -> None: ...
+    def od_write_output(self, slot: int, channel: int, value: int) -> None: ...
 
 
 def build_od(dev: TrsObjects, configured: Sequence[ModuleKind | None],
-             detected: Sequence[ModuleKind]) -> ObjectDictionary:
-    """``configured``: the slots of 0xF030 (PDO assignment); ``detected``: of 0xF050."""
+             detected: Sequence[ModuleKind],
+             on_write: Callable[[], None] | None = None) -> ObjectDictionary:
+    """``configured``: the slots of 0xF030 (PDO assignment); ``detected``: of 0xF050.
+    ``on_write`` is called before every write that reaches the model (an entry's setter), so
+    a write straight into the dictionary wakes the device as a command does."""
     od = ObjectDictionary()
     _identity(od, dev)
     _diagnostics(od, dev)
@@ -76,10 +79,22 @@ def build_od(dev: TrsObjects, configured: Sequence[ModuleKind | None],
         _sync_manager(od, dev, index, io)
     add_pdo_mappings(od, configured)
     for slot, kind in enumerate(detected):
-        add_slot_objects(od, slot, kind, dev.od_input, dev.od_output, dev.od_set_output)
+        add_slot_objects(od, slot, kind, dev.od_input, dev.od_output, dev.od_write_output)
     _modular_device(od, dev)
     _outputs_on_error(od, dev)
+    if on_write is not None:
+        for entry in od:
+            if entry.setter is not None:
+                entry.setter = _announced(entry.setter, on_write)
     return od
+
+
+def _announced(setter: Callable[[Any], None], on_write: Callable[[], None]
+               ) -> Callable[[Any], None]:
+    def write(value: Any) -> None:
+        on_write()
+        setter(value)
+    return write
 
 
 def _ro(od: ObjectDictionary, index: int, sub: int, name: str, dtype: DataType, value: Any,

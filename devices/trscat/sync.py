@@ -106,11 +106,13 @@ class SyncUnit:
 
     @property
     def state(self) -> SyncState:
+        # ``fatal`` and ``sync_error`` written out: this is read twice per step.
         if not self.running:
             return SyncState.FREE_RUN
-        if self.fatal:
+        if self.without_sync0 >= SYNC_ERROR_LIMIT:
             return SyncState.SYNC0_LOST
-        return SyncState.SYNC_ERROR if self.sync_error else SyncState.DC_RUNNING
+        return SyncState.SYNC_ERROR if self.sm_missed >= SYNC_ERROR_LIMIT else \
+            SyncState.DC_RUNNING
 
     @property
     def cycle_ns(self) -> int:
@@ -198,17 +200,23 @@ class SyncUnit:
             return out
         if not self.sync0_configured:
             return out
-        while self.next_sync0_us <= now_us:
-            t = self.next_sync0_us
-            self.next_sync0_us += self.cycle_us
+        t, period = self.next_sync0_us, self.cycle_us
+        while t <= now_us:
+            self.next_sync0_us = t + period
             deadline = t - CALC_COPY_NS // NS_PER_US
-            taken = [a for a in self.arrivals if a <= deadline]
-            self.arrivals = [a for a in self.arrivals if a > deadline]
-            if self.sync0_lost:
-                continue  # no SYNC0: the frames that came are overwritten by the next ones
-            self.sync0_seen = True
-            self.sm_missed = 0 if taken else self.sm_missed + 1
-            out.append((t, bool(taken)))
+            arrivals = self.arrivals
+            if not arrivals:
+                taken = False
+            elif max(arrivals) <= deadline:  # the usual case: every frame in time
+                taken, self.arrivals = True, []
+            else:
+                taken = any(a <= deadline for a in arrivals)
+                self.arrivals = [a for a in arrivals if a > deadline]
+            if not self.sync0_lost:  # no SYNC0: the frames that came are overwritten
+                self.sync0_seen = True
+                self.sm_missed = 0 if taken else self.sm_missed + 1
+                out.append((t, taken))
+            t = self.next_sync0_us
         return out
 
     def restart_free_run(self, now_us: int) -> None:

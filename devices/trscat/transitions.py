@@ -101,11 +101,13 @@ class TransitionsMixin:
         def _evaluate_alarms(self) -> None: ...
         def _refresh(self) -> None: ...
         def _write_f030_list(self, kinds: Sequence[ModuleKind]) -> None: ...
+        def _touch(self) -> None: ...
 
     def request_state(self, target: AlState) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
         if not self.reachable():
             return
+        self._touch()
         now, esm = self.now_us, self.esm
         current = esm.state
         esm.requested = target
@@ -204,12 +206,12 @@ class TransitionsMixin:
         self.esm.fall(AlState.SAFEOP, code, self.now_us)
 
     # ---- sync -------------------------------------------------------------------------------
-    def _sync_event(self) -> None:
-        """StateChanged "sync" on a change; a diagnosis message on entering an error."""
-        sync = self.sync
-        state = sync.state
+    def _sync_event(self) -> SyncState:
+        """StateChanged "sync" on a change; a diagnosis message on entering an error. Returns
+        the state."""
+        state = self.sync.state
         if state is self.sync_state:
-            return
+            return state
         self.emit(StateChanged(self.now_us, self.device_id, from_state=self.sync_state.value,
                                to_state=state.value, machine=SYNC))
         self.sync_state = state
@@ -217,10 +219,15 @@ class TransitionsMixin:
             state)
         if code is not None:
             self.report(check_message(code, CHECK_TEXT[code], self.now_us * 1000))
+        return state
 
     def _check_sync(self) -> None:
-        self._sync_event()
-        if self.esm.state is AlState.OP:
+        state = self._sync_event()
+        # check_sync answers a code exactly in these two states (fatal / sync_error).
+        if self.esm.state is AlState.OP and state in _SYNC_FAULTS:
             code = self.check_sync()
             if code is not None:
                 self._fall_on_comm_error(code)
+
+
+_SYNC_FAULTS = (SyncState.SYNC_ERROR, SyncState.SYNC0_LOST)

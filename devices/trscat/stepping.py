@@ -1,0 +1,208 @@
+"""How a TRS-CAT step runs, and which parts of it are skipped as repeats (docs/trscat.md
+"Still steps").
+
+A step: the power-up detection when due, the local cycles the sync unit releases (seed 001
+§9.1.1: one per SYNC0 in DC-SYNC, every 500 us in FREE-RUN; each latches the outputs of an SM2
+event taken and runs every slot's I/O with the 4-sample debounce of §3), the sync checks
+(§9.1.1 / §9.3.7), the SM watchdog, the alarm causes (§9.3.7) and the LEDs (§8).
+
+Under a master in OP the sync bookkeeping moves every cycle, so a step is never still as a
+whole; what repeats is the rest. A step is *quiet* when the last one changed nothing (no slot
+changed, no event) and nothing came in since (``_touch``: commands, object writes, AL control,
+DC registers and faults, cables, power; the master's frames only feed the sync unit and the
+latched image, which are looked at by value). In a quiet step the slot plan (who works, at
+which field volts), the alarm causes and every LED input but activity are those of the last
+step, so: no slot whose last cycle changed nothing is rerun with the same outputs, no alarm
+cause is evaluated, no LED input is rebuilt. ``SKIP_STILL`` = False runs every part.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any, ClassVar
+
+from devices.ethercat import AlState
+from devices.events import Event
+from devices.trscat.alarms import TrsBus
+from devices.trscat.esm import SM_WATCHDOG
+from devices.trscat.indicators import LedInputs, wanted_patterns
+from devices.trscat.io import SlotIo, field_in_range
+from devices.trscat.transitions import OutputMode
+
+if TYPE_CHECKING:
+    from devices.events import EventQueue
+    from devices.trscat.alarms import FaultKey
+    from devices.trscat.esm import Esm
+    from devices.trscat.indicators import LedBank
+    from devices.trscat.sync import SyncState, SyncUnit
+
+ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently
+AN_SUPPLY_FAULTS = frozenset({"AN_PLUS_12V", "AN_MINUS_12V"})  # §9.3.7: the module stops
+
+
+class SteppingMixin:
+    """The step of :class:`~devices.trscat.device.TrsCat`."""
+
+    # Skip the parts of a step that repeat the last one; the tests switch it off on an
+    # instance to compare.
+    SKIP_STILL: ClassVar[bool] = True
+
+    # Provided by TrsCat (declared for type checkers).
+    now_us: int
+    events: EventQueue
+    powered: bool
+    bus: TrsBus
+    detect_done_us: int
+    rail: list[SlotIo | None]
+    injected: list[FaultKey]
+    field_v: float
+    esm: Esm
+    sync: SyncUnit
+    sync_state: SyncState
+    out_mode: OutputMode
+    error_out: dict[int, list[int]]
+    last_sm_event_us: int | None
+    last_frame_us: int | None
+    deadlocked: bool
+    link_in: bool
+    link_out: bool
+    leds: LedBank
+    _led_inputs: LedInputs | None
+
+    if TYPE_CHECKING:  # defined by DeviceModel / TrsCat and the other mixins
+        def _finish_detection(self) -> None: ...
+        def _check_sync(self) -> None: ...
+        def check_outputs(self) -> int | None: ...
+        def _fall_on_comm_error(self, code: int) -> None: ...
+        def _evaluate_alarms(self) -> None: ...
+        def _sync_event(self) -> SyncState: ...
+        def serviced(self, slot: int) -> bool: ...
+        def slot_fault(self, slot: int, names: frozenset[str]) -> bool: ...
+
+    def _still_state(self) -> None:
+        # _dirty: something came in from outside or an event was emitted since the last step
+        # began; _quiet: the last step ended with nothing changed; _plan: each slot's
+        # (slot, io, working, field volts) of the last local cycle, kept while quiet.
+        self._dirty, self._quiet = True, False
+        self._plan: list[tuple[int, SlotIo, bool, float]] | None = None
+        self.skipped_slot_cycles = 0  # for the tests: local cycles of a slot not rerun
+
+    def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        self._touch()
+        return super().apply(action, args, module)  # type: ignore[misc]
+
+    def emit(self, event: Event) -> None:
+        self._dirty = True  # whatever emits an event changed something a step depends on
+        self.events.put(event)
+
+    def _touch(self) -> None:
+        """Something from outside may change what a step computes (every way in but the
+        master's frames, which only feed the sync unit and the latched outputs)."""
+        self._dirty = True
+
+    def step(self, now_us: int) -> None:
+        super().step(now_us)  # type: ignore[misc]
+        if not self.powered:
+            return
+        if self.bus is TrsBus.DETECTING and now_us >= self.detect_done_us:
+            self._finish_detection()
+        # Quiet: the last step changed nothing and nothing came in since: the slot plan, the
+        # alarm causes and the LED inputs other than activity are as that step left them.
+        quiet = self._quiet and not self._dirty and self.SKIP_STILL
+        self._dirty = False
+        if not quiet:
+            self._plan = None
+        changed = False
+        for t, sm_event in self.sync.cycles_until(now_us):
+            if sm_event and self.esm.state in (AlState.SAFEOP, AlState.OP):
+                self._latch_outputs(t)
+            if self._local_cycle():
+                changed = True
+        self._check_sync()
+        if self.esm.state is AlState.OP and self.check_outputs() is not None:
+            self._fall_on_comm_error(SM_WATCHDOG)
+        quiet = quiet and not changed and not self._dirty
+        if not quiet:
+            self._evaluate_alarms()
+        self._refresh(quiet)
+        self._quiet = not changed and not self._dirty
+
+    def _latch_outputs(self, t_us: int) -> None:
+        for io in self.rail:
+            if io is not None and io.latched != io.plc:
+                io.latched = list(io.plc)
+        self.last_sm_event_us = t_us
+
+    def _local_cycle(self) -> bool:
+        """Every slot's local cycle; True when one of them changed anything.
+
+        A slot whose last cycle changed nothing (``io.still``) is a fixed point: with the same
+        working state, field volts and outputs it would change nothing again, so it is not
+        rerun. Working and volts are the plan's, made by the first cycle after the last
+        change; the outputs are compared by value (the latched image can change without a
+        touch, when a frame written long ago is taken at this SYNC0).
+        """
+        plan = self._plan
+        if plan is None:
+            plan = self._plan = []
+            for slot, io in enumerate(self.rail):
+                if io is None:
+                    continue
+                serviced = self.serviced(slot)
+                working = serviced and not self.slot_fault(slot, AN_SUPPLY_FAULTS)
+                plan.append((slot, io, working, self._slot_field_v(slot)))
+            skip = False
+        else:
+            skip = self.SKIP_STILL
+        changed = False
+        normal = self.out_mode is OutputMode.NORMAL
+        for slot, io, working, field_v in plan:
+            outputs = io.latched if normal else self._slot_outputs(slot, io)
+            if skip and io.still and (not working or outputs == io.applied):
+                self.skipped_slot_cycles += 1
+                continue
+            if io.cycle(outputs, field_v, working):
+                changed = True
+        return changed
+
+    def _slot_outputs(self, slot: int, io: SlotIo) -> list[int]:
+        if self.out_mode is OutputMode.NORMAL:
+            return io.latched
+        if self.out_mode is OutputMode.ERROR:
+            return self.error_out.get(slot, [0] * io.kind.outputs)
+        return [0] * io.kind.outputs
+
+    def _slot_field_v(self, slot: int) -> float:
+        """Expansions take the field supply from the TRS bus (§10.3) unless their own fails."""
+        return 0.0 if ("FIELD_SUPPLY", slot) in self.injected else self.field_v
+
+    def _refresh(self, quiet: bool = False) -> None:
+        """The LEDs from their inputs. ``quiet``: nothing but the time moved since the last
+        refresh (no touch, no event, no slot changed), so only activity can differ."""
+        now = self.now_us
+        activity = self.last_frame_us is not None and now - self.last_frame_us <= \
+            ACTIVITY_WINDOW_US
+        old = self._led_inputs
+        if quiet and old is not None and old.activity is activity:
+            return
+        if self.powered:
+            self._sync_event()
+        base = self.rail[0]
+        assert base is not None and base.lines is not None
+        powered, esm, lines = self.powered, self.esm, base.lines
+        bus_running, field_ok = self.bus is TrsBus.RUNNING, field_in_range(self.field_v)
+        if old is not None and old.activity is activity and old.powered is powered \
+                and old.state is esm.state and old.error is esm.error \
+                and old.deadlocked is self.deadlocked and old.link_in is self.link_in \
+                and old.link_out is self.link_out and old.bus_running is bus_running \
+                and old.field_ok is field_ok and old.io_mask == lines.level \
+                and old.io_count == lines.count:
+            return  # the same inputs (field by field: building LedInputs costs more)
+        inputs = LedInputs(
+            powered=powered, state=esm.state, error=esm.error,
+            deadlocked=self.deadlocked, link_in=self.link_in, link_out=self.link_out,
+            activity=activity, bus_running=bus_running, field_ok=field_ok,
+            io_mask=lines.level, io_count=lines.count)
+        if inputs != old:  # the patterns are a function of these inputs only
+            self._led_inputs = inputs
+            self.leds.update(now, wanted_patterns(inputs), self.emit)
