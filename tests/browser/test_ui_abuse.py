@@ -11,6 +11,12 @@ with the model's snapshot:
 - seed 004 ch. 2: "Enable" is R00 = 3 (torque and motion on), "Disable" R00 = 0 (CiA 402
   Switch on disabled): the last click decides.
 
+viser sends a page's change to the *other* pages only, so a page whose click crosses a message
+from the server can keep showing its click while the model holds the other value; the
+dashboard's Synced widgets (app/ui/panels/widgets.py) send the model's value to every page once
+a click has been through the runtime. ``test_a_click_crossing_another_pages_change`` makes that
+crossing happen every time (it holds one page's incoming bytes).
+
 Commands from the pages reach the runtime in arrival order (app/ui/commands.py); the tests do
 not assume which of two browsers' clicks arrives first, only that the end state is one of the
 states their last clicks allow, and that both pages show it.
@@ -18,14 +24,19 @@ states their last clicks allow, and that both pages show it.
 
 from __future__ import annotations
 
+import contextlib
+import socket
+import threading
 from typing import Any
 
 import pytest
 from helpers import (
     VIEWPORT,
     LiveDashboard,
+    close_webgl_toast,
     open_dashboard,
     state_value,
+    wait_for_text,
     wait_until,
 )
 
@@ -72,6 +83,7 @@ def views_agree(live: LiveDashboard, *pages: Any) -> None:
     snap = live.snapshot()
     pressed = bool(snap["cnf"]["pressed"])
     bit = bool(reset_bit(live))
+    assert snap["reset_fault"] is bit  # the snapshot the box mirrors is 0x5200:1 (§6.17)
     for page in pages:
         wait_until(lambda p=page: snap["esm"] in state_value(p, "ESM state"),
                    what=f"the page to show ESM {snap['esm']}")
@@ -81,22 +93,6 @@ def views_agree(live: LiveDashboard, *pages: Any) -> None:
                    what="the Hold CNF box to mirror the model")
         wait_until(lambda p=page: checked(p, "Reset fault") == bit,
                    what="the Reset fault box to mirror 0x5200:1")
-
-
-MIRROR_BUG = (
-    "after a burst of clicks a checkbox can show the opposite of the model: Mirror.follow "
-    "(app/ui/panels/widgets.py) pushes a model value only when the value changes, and the "
-    "control callbacks (app/ui/panels/control.py) read the handle's current value in viser's "
-    "thread pool rather than the event's; reported to the dashboard's owner")
-
-
-def views_agree_after_burst(live: LiveDashboard, *pages: Any) -> None:
-    """``views_agree``; a disagreement is the known dashboard bug above (xfail, not pass):
-    the test passes by itself once it is fixed. The rig-state checks before it still fail."""
-    try:
-        views_agree(live, *pages)
-    except AssertionError as exc:
-        pytest.xfail(f"{MIRROR_BUG}: {exc}")
 
 
 def test_rapid_clicks_on_cnf_reset_fault_and_a_drive_button(live: LiveDashboard, page) -> None:
@@ -134,7 +130,7 @@ def test_rapid_clicks_on_cnf_reset_fault_and_a_drive_button(live: LiveDashboard,
         assert snap["cnf"]["held_s"] >= 5.0
     else:
         assert snap["cnf"]["phase"] == "idle"
-    views_agree_after_burst(live, page)
+    views_agree(live, page)
 
 
 def test_two_browsers_issuing_conflicting_commands(live: LiveDashboard, browser) -> None:
@@ -163,7 +159,7 @@ def test_two_browsers_issuing_conflicting_commands(live: LiveDashboard, browser)
         else:
             assert snap["cnf"]["phase"] == "idle" and snap["esm"] == "OP"
         assert snap["alarm"] is None
-        views_agree_after_burst(live, a, b)  # whichever won, both pages show the model
+        views_agree(live, a, b)  # whichever won, both pages show the model
     finally:
         for page in pages:
             page.context.close()
@@ -197,3 +193,94 @@ def test_a_browser_closed_in_the_middle_of_a_cnf_hold(live: LiveDashboard, brows
         views_agree(live, second)
     finally:
         second.context.close()
+
+
+class HeldLine:
+    """A loopback TCP proxy in front of the dashboard whose server-to-page bytes can be held
+    back, then delivered in order (viser's page talks to its websocket from a web worker,
+    which Playwright's websocket routing does not see)."""
+
+    def __init__(self, url: str) -> None:
+        self._target = ("127.0.0.1", int(url.rsplit(":", 1)[1]))
+        self._listener = socket.create_server(("127.0.0.1", 0))
+        self.url = f"http://127.0.0.1:{self._listener.getsockname()[1]}"
+        self._lock = threading.Lock()
+        self.holding = False
+        self.held: list[tuple[socket.socket, bytes]] = []
+        self._sockets: list[socket.socket] = []
+        threading.Thread(target=self._accept, name="held-line", daemon=True).start()
+
+    def _accept(self) -> None:
+        while True:
+            try:
+                page, _ = self._listener.accept()
+            except OSError:  # closed
+                return
+            server = socket.create_connection(self._target)
+            self._sockets += [page, server]
+            for src, dst, to_page in ((page, server, False), (server, page, True)):
+                threading.Thread(target=self._pipe, args=(src, dst, to_page), daemon=True,
+                                 name="held-line-pipe").start()
+
+    def _pipe(self, src: socket.socket, dst: socket.socket, to_page: bool) -> None:
+        with contextlib.suppress(OSError):
+            while data := src.recv(65536):
+                with self._lock:
+                    if to_page and self.holding:
+                        self.held.append((dst, data))
+                    else:
+                        dst.sendall(data)
+        with contextlib.suppress(OSError):
+            dst.shutdown(socket.SHUT_WR)
+
+    def release(self) -> None:
+        with self._lock:
+            self.holding = False
+            held, self.held = self.held, []
+            for dst, data in held:
+                with contextlib.suppress(OSError):
+                    dst.sendall(data)
+
+    def close(self) -> None:
+        self.release()
+        self._listener.close()
+        for sock in self._sockets:
+            with contextlib.suppress(OSError):
+                sock.close()
+
+
+def test_a_click_crossing_another_pages_change(live: LiveDashboard, browser) -> None:
+    """§6.17 from two pages. B sets Reset fault while A's copy of that change is held on its
+    way; A clicks twice meanwhile (sets the bit, which the server already holds: nothing
+    happens; clears it: 0x5200:1 = 0). Then A receives B's change, after its own clicks. The
+    model ends at 0 (A's last click), and both pages must show it: viser never sends A its
+    own clear, so only the dashboard's re-send of the model's value can put A's box back."""
+    a_page = browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
+    b_page = browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
+    a = HeldLine(live.url)
+    try:
+        a_page.goto(f"{a.url}/?fixedDpr=1")  # open_dashboard, through the proxy
+        wait_for_text(a_page, "ESM state")
+        close_webgl_toast(a_page)
+        open_dashboard(b_page, live)
+        live.advance(BOOT_S)
+        views_agree(live, a_page, b_page)
+        assert reset_bit(live) == 0
+
+        a.holding = True
+        b_page.get_by_label("Reset fault", exact=True).click()
+        wait_until(lambda: reset_bit(live) == 1, what="B's click to reach 0x5200:1")
+        live.settle()  # viser has sent B's change to A (held)
+        rapid(a_page, "Reset fault", 2)
+        wait_until(lambda: reset_bit(live) == 0, what="A's second click to reach 0x5200:1")
+        commands_applied(live, a_page)
+        live.settle()
+        assert a.held, "nothing was held for page A"
+        a.release()
+        live.settle()
+        assert reset_bit(live) == 0 and live.snapshot()["reset_fault"] is False
+        views_agree(live, a_page, b_page)
+    finally:
+        for page in (a_page, b_page):
+            page.context.close()
+        a.close()

@@ -1,8 +1,11 @@
 """Coupler controls: power, CNF, fault injection, Reset fault, rotary switch, training causes.
 
-Every callback only queues a device action (``CommandSender``); what the device then does
-shows in the state panel and the 3D view of every browser. Widgets are server-level, so a
-click in one browser moves the same widget in the others.
+Every callback only queues a device action (``CommandSender``) with the value of the change
+that called it; what the device then does shows in the state panel and the 3D view of every
+browser. Widgets are server-level, so a click in one browser moves the same widget in the
+others; the widgets that are device values (Power, Hold CNF, Reset fault, rotary switch, cable,
+Tbus) end up showing the model's value in every browser whatever the clicks
+(:class:`app.ui.panels.widgets.Synced`).
 """
 
 from __future__ import annotations
@@ -14,13 +17,12 @@ from typing import Any
 import viser
 
 from app.ui.commands import CommandSender
-from app.ui.panels.widgets import Mirror, from_user, set_options
+from app.ui.panels.widgets import Synced, UserChange, on_user_change, set_options
 
 CNF_HOLD_S = 3.0  # seed 000 §2: "almeno tre secondi"
 CNF_PRESS_S = 3.5  # the button's press: comfortably past the threshold
 CNF_SHORT_S = 1.0  # a press that must do nothing (training)
 COUPLER_TARGET = "coupler (no module)"
-RESET_FAULT = (0x5200, 1)  # seed 000 §6.17
 MASTER_TARGETS = ("INIT", "PREOP", "SAFEOP", "OP")
 
 
@@ -68,6 +70,8 @@ class ControlPanel:
                  faults: Sequence[FaultOption], rotary_range: tuple[int, int],
                  master_id: str | None = None) -> None:
         self._send = sender.send
+        self._sender = sender
+        self._server = server
         self._id = device_id
         self._faults = {t: [f for f in faults if f.table == t] for t in TABLE_LABELS}
         gui = server.gui
@@ -80,8 +84,6 @@ class ControlPanel:
             self._hold = gui.add_checkbox("Hold CNF", False,
                                           hint="CNF pressed while checked; release after 3 s")
             self._cnf_progress = gui.add_progress_bar(0.0, color="blue")
-            self._power_mirror = Mirror(self._power)
-            self._hold_mirror = Mirror(self._hold)
 
         with gui.add_folder("Faults"):
             self._table = gui.add_dropdown("Table", tuple(TABLE_LABELS.values()))
@@ -97,18 +99,26 @@ class ControlPanel:
                                           initial_value=max(low, 1))
             self._link = gui.add_checkbox("EtherCAT cable in", True)
             self._tbus_low = gui.add_checkbox("Tbus supply low", False)
-            self._rotary_mirror = Mirror(self._rotary)
-            self._link_mirror = Mirror(self._link)
-            self._tbus_mirror = Mirror(self._tbus_low)
 
         if master_id is not None:
             self._master_controls(gui, master_id)
 
-        @self._power.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                self._power_mirror.forget()  # the next frame shows what the model made of it
-                self._send(event.client, self._id, "power", {"on": self._power.value})
+        device = self._id
+        self._power_sync = self._synced(
+            self._power, lambda c, on: self._send(c, device, "power", {"on": bool(on)}))
+        self._hold_sync = self._synced(
+            self._hold, lambda c, down: self._send(c, device,
+                                                   "press_cnf" if down else "release_cnf"))
+        # §6.17: the box is the level of 0x5200:1; its rising edge resets the alarm.
+        self._reset_sync = self._synced(
+            self._reset, lambda c, on: self._send(c, device, "set_reset_fault", {"on": bool(on)}))
+        self._rotary_sync = self._synced(
+            self._rotary, lambda c, v: self._send(c, device, "set_rotary", {"value": int(v)}))
+        self._link_sync = self._synced(
+            self._link, lambda c, on: self._send(c, device, "link", {"connected": bool(on)}))
+        self._tbus_sync = self._synced(
+            self._tbus_low, lambda c, low: self._send(c, device, "tbus_voltage",
+                                                      {"low": bool(low)}))
 
         @press.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -118,52 +128,23 @@ class ControlPanel:
         def _(event: viser.GuiEvent) -> None:
             self._send(event.client, self._id, "hold_cnf", {"seconds": CNF_SHORT_S})
 
-        @self._hold.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                self._hold_mirror.forget()
-                action = "press_cnf" if self._hold.value else "release_cnf"
-                self._send(event.client, self._id, action)
-
         @self._table.on_update
         def _(event: viser.GuiEvent) -> None:
             set_options(self._fault, self._fault_labels(self._table_key()))
 
         @actions.on_click
-        def _(event: viser.GuiEvent) -> None:
+        async def _(event: viser.GuiEvent) -> None:
+            # On viser's loop: the group's value is still the button of this click.
+            verb = "inject_fault" if event.target.value == "Inject" else "clear_fault"
             fault = self._selected_fault()
             if fault is None:
                 return
-            verb = "inject_fault" if actions.value == "Inject" else "clear_fault"
             module = option_slot(self._target.value)  # byte 0 of the emergency (§7)
             target = self._id if module is None else f"{self._id}/{module}"
             self._send(event.client, target, verb, {"fault": fault.ref})
 
-        @self._reset.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                index, sub = RESET_FAULT
-                self._send(event.client, self._id, "write_object",
-                           {"index": index, "sub": sub, "value": int(self._reset.value)})
-
-        @self._rotary.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                self._rotary_mirror.forget()
-                self._send(event.client, self._id, "set_rotary",
-                           {"value": int(self._rotary.value)})
-
-        @self._link.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                self._link_mirror.forget()
-                self._send(event.client, self._id, "link", {"connected": self._link.value})
-
-        @self._tbus_low.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                self._tbus_mirror.forget()
-                self._send(event.client, self._id, "tbus_voltage", {"low": self._tbus_low.value})
+    def _synced(self, handle: Any, command: UserChange) -> Synced:
+        return Synced(self._server, handle, self._sender, command)
 
     def _master_controls(self, gui: viser.GuiApi, master_id: str) -> None:
         """The built-in master: a resync (the only reset of codes above 0x7F, §7.5)."""
@@ -176,10 +157,8 @@ class ControlPanel:
         def _(event: viser.GuiEvent) -> None:
             self._send(event.client, master_id, "resync")
 
-        @target.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                self._send(event.client, master_id, "set_target", {"state": target.value})
+        on_user_change(target, lambda client, state: self._send(
+            client, master_id, "set_target", {"state": state}))
 
     def _table_key(self) -> str:
         for key, label in TABLE_LABELS.items():
@@ -197,9 +176,10 @@ class ControlPanel:
         return None
 
     def update(self, snap: Mapping[str, Any]) -> None:
-        self._power_mirror.follow(bool(snap.get("powered")))
+        self._power_sync.follow(bool(snap.get("powered")))
         cnf = snap.get("cnf") or {}
-        self._hold_mirror.follow(bool(cnf.get("pressed")))
+        self._hold_sync.follow(bool(cnf.get("pressed")))
+        self._reset_sync.follow(bool(snap.get("reset_fault", False)))
         held = float(cnf.get("held_s", 0.0)) if cnf.get("pressed") else 0.0
         progress = round(min(100.0, 100.0 * held / CNF_HOLD_S))
         if self._cnf_progress.value != progress:
@@ -207,7 +187,7 @@ class ControlPanel:
             # Green once the hold is long enough: releasing now starts the CNF procedure.
             self._cnf_progress.color = "green" if held >= CNF_HOLD_S else "blue"
         if "rotary_switch" in snap:
-            self._rotary_mirror.follow(int(snap["rotary_switch"]))
-        self._link_mirror.follow(bool(snap.get("link", True)))
-        self._tbus_mirror.follow(bool(snap.get("tbus_low", False)))
+            self._rotary_sync.follow(int(snap["rotary_switch"]))
+        self._link_sync.follow(bool(snap.get("link", True)))
+        self._tbus_sync.follow(bool(snap.get("tbus_low", False)))
         set_options(self._target, [COUPLER_TARGET, *fault_targets(snap.get("rail") or [])])

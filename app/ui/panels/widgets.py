@@ -1,17 +1,45 @@
-"""Small pieces the control panels share: mirroring device state into input widgets.
+"""Small pieces the control panels share: input widgets that show device state.
 
-An input widget that also shows device state (Power, Hold CNF, module power, ...) follows the
-device only when the device's value *changes*: a click then stays visible until the model
-has acted on it, instead of being overwritten by the previous frame. Writing ``.value`` from
-here fires the widget's callbacks with ``event.client is None``; the callbacks ignore those
-(:func:`from_user`), so the view never echoes a command back.
+viser keeps one value per server-level widget for every browser, but that value is what the
+server last *heard*: a page's change goes to the *other* pages only, and assigning the value
+the server already holds sends nothing. So a page whose click crossed a message from the server
+(another page's change, the view's own write) keeps showing its click while the server and
+the model hold the other value, and no later write of that same value puts it back. Two kinds
+of input widget show device state:
+
+- :class:`Synced`, a widget that *is* a device value (Power, Hold CNF, Reset fault, ...). A
+  change made in a page becomes one command carrying the value that change set. Once the
+  command, or its refusal, has been through the runtime, the widget sends the model's value
+  to every page, even when the server's copy already equals it. Whatever the clicks, every
+  page ends up showing the model.
+- :class:`Mirror`, a form field pre-filled from the device and applied by a separate button
+  (the drive's c7): it follows the device only when the device's value changes, so what a
+  user types in it is not overwritten by the next frame.
+
+Writing ``.value`` from the server fires the widget's callbacks with ``event.client is None``;
+the callbacks ignore those (:func:`from_user`), so the view never echoes a command back.
 """
 
 from __future__ import annotations
 
+import logging
+from collections.abc import Callable
 from typing import Any
 
 import viser
+
+from app.ui.commands import CommandSender
+
+logger = logging.getLogger(__name__)
+
+# Called with the browser that made a change and the value that change set.
+UserChange = Callable[[viser.ClientHandle | None, Any], None]
+
+# Model values a Synced widget lets pass after its commands went through the runtime before it
+# sends the model's value: the first can come from a frame published before they ran.
+FRESH_AFTER = 2
+
+_NOTHING = object()
 
 
 def from_user(event: viser.GuiEvent) -> bool:
@@ -19,8 +47,113 @@ def from_user(event: viser.GuiEvent) -> bool:
     return event.client is not None
 
 
+def on_user_change(handle: Any, fn: UserChange) -> None:
+    """Call ``fn(client, value)`` for every change a person makes to ``handle``, in order.
+
+    The callback is a coroutine, so viser runs it on its event loop right after it applied the
+    page's message: the value read there is the one that message set. (A plain callback runs
+    later in viser's thread pool and reads whatever the widget holds by then, and two of them
+    can queue their commands in either order.)"""
+    async def changed(event: viser.GuiEvent) -> None:
+        if from_user(event):
+            fn(event.client, event.target.value)
+
+    handle.on_update(changed)
+
+
+def _aside(value: Any) -> Any:
+    """Another value of the same type (see :meth:`Synced._resend`)."""
+    if isinstance(value, bool):
+        return not value
+    if isinstance(value, int | float):
+        return value + 1
+    if isinstance(value, str):
+        return value + " "
+    raise TypeError(f"cannot re-send a {type(value).__name__} widget value")
+
+
+class Synced:
+    """A widget that commands a device value and shows every page the model's value.
+
+    ``command(client, value)`` queues the device action for a change made in a page (it
+    should not block: it runs on viser's event loop). ``follow(value)`` takes the model's
+    value from each new frame. While a page's change is on its way to the model the widget
+    keeps showing it; afterwards it shows the model's value, including when the command was
+    refused or changed nothing."""
+
+    def __init__(self, server: viser.ViserServer, handle: Any, sender: CommandSender,
+                 command: UserChange) -> None:
+        self.handle = handle
+        self._loop = server.get_event_loop()
+        self._sender = sender
+        self._command = command
+        # Event loop only: the widget's value changes there (viser applies the pages' changes
+        # there, this class writes it there), so nothing writes between a change and its read.
+        self._pending = 0  # changes whose command has not been through the runtime yet
+        self._fresh_wait = 0  # model values still to let pass before the re-send
+        # Written on the event loop, read by follow(): a change or a re-send is under way.
+        self._busy = False
+        self._followed: Any = _NOTHING  # follow()'s thread only
+        on_user_change(handle, self._changed)
+
+    def follow(self, value: Any) -> None:
+        """The model's value, from any thread (the dashboard's frame update)."""
+        if value == self._followed and not self._busy:
+            return
+        self._followed = value
+        self._call(self._show, value)
+
+    # ---- on viser's event loop ---------------------------------------------------------------
+    def _changed(self, client: viser.ClientHandle | None, value: Any) -> None:
+        self._pending += 1
+        self._busy = True
+        try:
+            self._command(client, value)
+        finally:
+            # Runtime work runs in arrival order: this no-op runs after the command (or finds
+            # it refused), and the frames published after it show what the model made of it.
+            self._sender.submit(None, "dashboard view", _nothing,
+                                done=lambda _result: self._call(self._settled))
+
+    def _settled(self) -> None:
+        self._pending -= 1
+        if self._pending == 0:
+            self._fresh_wait = FRESH_AFTER
+
+    def _show(self, value: Any) -> None:
+        if self._pending:
+            return  # the page shows a change the model has not taken yet: leave it
+        if self._fresh_wait:
+            self._fresh_wait -= 1
+            if self._fresh_wait == 0:
+                self._resend(value)
+        elif self.handle.value != value:
+            self.handle.value = value
+        self._busy = self._pending > 0 or self._fresh_wait > 0
+
+    def _resend(self, value: Any) -> None:
+        """Send ``value`` to every page, also when the server's copy already holds it (a page
+        may show its own click instead). viser sends only a change: step aside and back. Both
+        writes happen in this one turn of the event loop, which also runs viser's sending, and
+        the second replaces the first in viser's outgoing buffer (one message per widget and
+        property): the pages receive the model's value only."""
+        if self.handle.value == value:
+            self.handle.value = _aside(value)
+        self.handle.value = value
+
+    def _call(self, fn: Callable[..., None], *args: Any) -> None:
+        try:
+            self._loop.call_soon_threadsafe(fn, *args)
+        except RuntimeError:  # the server stopped: no page left to show anything
+            logger.debug("viser's event loop is closed; %s dropped", fn.__name__)
+
+
+def _nothing() -> None:
+    return None
+
+
 class Mirror:
-    """Follow a device value into a widget on change only."""
+    """Follow a device value into a form field on change only (see the module docstring)."""
 
     def __init__(self, handle: Any) -> None:
         self.handle = handle
@@ -33,9 +166,7 @@ class Mirror:
                 self.handle.value = value
 
     def forget(self) -> None:
-        """Take the next value even if it equals the last one (after a selection change, or
-        after a user's click: a burst of clicks can leave the box on the opposite of a model
-        that ended where it was, and only a change would set it back)."""
+        """Take the next value even if it equals the last one (after a selection change)."""
         self._seen = object()
 
 

@@ -1,0 +1,247 @@
+"""Synced widgets (app/ui/panels/widgets.py): every page ends up showing the model's value.
+
+The fakes below behave as viser 1.1.1 does (docs/stack-notes.md): a page's change sets the
+server's value and runs coroutine callbacks at once on the event loop, plain callbacks later in
+a thread pool; assigning ``.value`` sends a message only when the value differs and calls the
+callbacks with ``client=None``. The fake runtime applies queued work in arrival order, as
+app/runtime.py does. Seed 000 §6.17 (Reset fault: the box is the level of 0x5200:1) is the
+example: a refused write (coupler without supply) must put the box back.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import pytest
+
+from app.ui.panels import widgets
+from app.ui.panels.widgets import FRESH_AFTER, Synced
+
+
+@dataclass
+class Event:
+    client: Any
+    target: Any
+
+
+class Handle:
+    """A server-level viser input: ``sent`` holds the values sent to every page. Messages of
+    one turn of the event loop for one widget coalesce (viser's outgoing buffer keeps the last
+    update per widget and property until its next window)."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, value: Any) -> None:
+        self._loop = loop
+        self._value = value
+        self.callbacks: list[Callable[[Event], Any]] = []
+        self.sent: list[Any] = []
+        self.outbox: list[Any] = []  # this turn's messages; the last one goes out
+        self.pool: list[Callable[[], None]] = []  # plain callbacks not run yet
+
+    def on_update(self, fn: Callable[[Event], Any]) -> None:
+        self.callbacks.append(fn)
+
+    @property
+    def value(self) -> Any:
+        return self._value
+
+    @value.setter
+    def value(self, value: Any) -> None:
+        if value == self._value:
+            return  # viser: an unchanged value sends nothing
+        self.outbox.append(value)
+        self._value = value
+        for fn in self.callbacks:
+            out = fn(Event(None, self))
+            if inspect.iscoroutine(out):
+                self._loop.create_task(out)
+
+    def window(self) -> None:
+        """viser sends its next window."""
+        if self.outbox:
+            self.sent.append(self.outbox[-1])
+            self.outbox.clear()
+
+    def user(self, client: str, value: Any) -> None:
+        """A page's change, as viser's message handler applies it."""
+        if value == self._value:
+            return
+        self._value = value
+        for fn in self.callbacks:
+            if inspect.iscoroutinefunction(fn):
+                self._loop.run_until_complete(fn(Event(client, self)))
+            else:
+                self.pool.append(lambda fn=fn, client=client: fn(Event(client, self)))
+
+
+class Server:
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._loop = loop
+
+    def get_event_loop(self) -> asyncio.AbstractEventLoop:
+        return self._loop
+
+
+class Runtime:
+    """The simulation thread: a model value, commands and the sender's work in order."""
+
+    def __init__(self, value: Any, powered: bool = True) -> None:
+        self.value = value
+        self.powered = powered
+        self.work: list[Callable[[], None]] = []
+        self.commands: list[Any] = []
+        self.refused: list[Any] = []
+
+    def command(self, client: Any, value: Any) -> None:
+        def run() -> None:
+            if not self.powered:  # CommandError: the coupler is not powered
+                self.refused.append(value)
+                return
+            self.commands.append(value)
+            self.value = value
+        self.work.append(run)
+
+    def submit(self, client: Any, label: str, fn: Callable[[], Any], *,
+               done: Callable[[Any], None] | None = None) -> None:
+        def run() -> None:
+            result = fn()
+            if done is not None:
+                done(result)
+        self.work.append(run)
+
+    def drain(self) -> None:
+        work, self.work = self.work, []
+        for fn in work:
+            fn()
+
+
+@pytest.fixture
+def loop() -> Iterator[asyncio.AbstractEventLoop]:
+    loop = asyncio.new_event_loop()
+    yield loop
+    loop.close()
+
+
+def turn(loop: asyncio.AbstractEventLoop, handle: Handle | None = None) -> None:
+    """Run what the other threads handed the event loop, then viser's next window."""
+    loop.run_until_complete(asyncio.sleep(0))
+    if handle is not None:
+        handle.window()
+
+
+def rig(loop: asyncio.AbstractEventLoop, value: Any,
+        powered: bool = True) -> tuple[Handle, Runtime, Synced]:
+    handle = Handle(loop, value)
+    runtime = Runtime(value, powered)
+    synced = Synced(Server(loop), handle, runtime, runtime.command)  # type: ignore[arg-type]
+    synced.follow(runtime.value)
+    turn(loop, handle)
+    handle.sent.clear()
+    return handle, runtime, synced
+
+
+def frames(loop: asyncio.AbstractEventLoop, synced: Synced, runtime: Runtime,
+           n: int = FRESH_AFTER) -> None:
+    """``n`` dashboard frames with the model's value."""
+    for _ in range(n):
+        synced.follow(runtime.value)
+        turn(loop, synced.handle)
+
+
+def test_each_change_commands_the_value_it_set_in_order(loop) -> None:
+    """§6.17: the last click wins: commands carry each change's own value, in order."""
+    handle, runtime, _synced = rig(loop, False)
+    for value in (True, False, True, False, True):
+        handle.user("page A", value)
+    runtime.drain()
+    assert runtime.commands == [True, False, True, False, True]
+    assert runtime.value is True
+
+
+def test_a_plain_callback_would_read_a_later_value(loop) -> None:
+    """Why the callbacks are coroutines: a thread-pool callback reads the widget when it runs."""
+    handle = Handle(loop, False)
+    read: list[bool] = []
+    handle.on_update(lambda event: read.append(event.target.value))
+    handle.user("page A", True)
+    handle.user("page A", False)
+    for fn in handle.pool:
+        fn()
+    assert read == [False, False]  # the True click was never commanded
+
+
+def test_a_refused_change_puts_the_widget_back(loop) -> None:
+    """§6.17 without supply there is no 0x5200:1: the refused click leaves the model False,
+    and the box goes back to False on every page."""
+    handle, runtime, synced = rig(loop, False, powered=False)
+    handle.user("page A", True)
+    runtime.drain()
+    turn(loop)
+    assert runtime.refused == [True] and runtime.value is False
+    frames(loop, synced, runtime)
+    assert handle.value is False and handle.sent[-1] is False
+
+
+def test_the_model_value_is_sent_again_when_the_server_already_holds_it(loop) -> None:
+    """A page whose click crossed a message can show the opposite of a server copy that equals
+    the model; after the command went through, the model's value goes to every page."""
+    handle, runtime, synced = rig(loop, False)
+    handle.user("page A", True)
+    runtime.drain()
+    turn(loop)
+    assert handle.value is True and runtime.value is True
+    before = len(handle.sent)
+    frames(loop, synced, runtime)
+    assert handle.value is True
+    assert len(handle.sent) > before and handle.sent[-1] is True
+
+
+def test_a_change_stays_shown_until_the_model_took_it(loop) -> None:
+    """Frames published before the command ran do not flip the click back."""
+    handle, runtime, synced = rig(loop, False)
+    handle.user("page A", True)
+    frames(loop, synced, runtime, n=3)  # the model is still False: the command is queued
+    assert handle.value is True and handle.sent == []
+    runtime.drain()
+    turn(loop)
+    synced.follow(False)  # a frame published before the command ran, read after it
+    turn(loop, handle)
+    assert handle.sent == []
+    frames(loop, synced, runtime)
+    assert handle.value is True and handle.sent[-1] is True
+    assert False not in handle.sent
+
+
+def test_the_model_changing_by_itself_is_followed(loop) -> None:
+    """No click: a model change (e.g. a power cycle clearing 0x5200:1) reaches the widget."""
+    handle, runtime, synced = rig(loop, True)
+    runtime.value = False
+    frames(loop, synced, runtime, n=1)
+    assert handle.value is False and handle.sent == [False]
+    frames(loop, synced, runtime, n=3)
+    assert handle.sent == [False]  # nothing more while nothing changes
+
+
+def test_a_burst_from_two_pages_ends_on_the_model(loop) -> None:
+    """Two pages at odds, many changes: one re-send after the last has been through."""
+    handle, runtime, synced = rig(loop, False)
+    for k in range(9):
+        handle.user("page A" if k % 2 else "page B", k % 3 == 0)
+        if k % 4 == 0:
+            runtime.drain()
+            turn(loop)
+            frames(loop, synced, runtime, n=1)
+    runtime.drain()
+    turn(loop)
+    frames(loop, synced, runtime)
+    assert handle.value == runtime.value
+    assert handle.sent[-1] == runtime.value
+
+
+@pytest.mark.parametrize(("value", "other"), [(True, False), (False, True), (3, 4), (2.5, 3.5),
+                                              ("OP", "OP ")])
+def test_aside_is_another_value_of_the_same_type(value: Any, other: Any) -> None:
+    assert widgets._aside(value) == other and type(widgets._aside(value)) is type(value)
