@@ -85,6 +85,9 @@ class SteppingMixin:
         # (slot, io, working, field volts) of the last local cycle, kept while quiet.
         self._dirty, self._quiet = True, False
         self._plan: list[tuple[int, SlotIo, bool, float]] | None = None
+        # _all_still: the last run of the slot loop left every slot still; _latched_moved: a
+        # latched image changed since (an SM2 event with new outputs).
+        self._all_still, self._latched_moved = False, True
         self.skipped_slot_cycles = 0  # for the tests: local cycles of a slot not rerun
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
@@ -131,6 +134,7 @@ class SteppingMixin:
         for io in self.rail:
             if io is not None and io.latched != io.plc:
                 io.latched = list(io.plc)
+                self._latched_moved = True
         self.last_sm_event_us = t_us
 
     def _local_cycle(self) -> bool:
@@ -140,7 +144,9 @@ class SteppingMixin:
         working state, field volts and outputs it would change nothing again, so it is not
         rerun. Working and volts are the plan's, made by the first cycle after the last
         change; the outputs are compared by value (the latched image can change without a
-        touch, when a frame written long ago is taken at this SYNC0).
+        touch, when a frame written long ago is taken at this SYNC0). When the last run of
+        this loop left every slot still, and so with its outputs applied, and no latched image
+        moved since, every slot would be skipped: the loop is.
         """
         plan = self._plan
         if plan is None:
@@ -154,6 +160,10 @@ class SteppingMixin:
             skip = False
         else:
             skip = self.SKIP_STILL
+            if skip and self._all_still and not self._latched_moved:
+                self.skipped_slot_cycles += len(plan)
+                return False
+        self._latched_moved = False
         changed = False
         normal = self.out_mode is OutputMode.NORMAL
         for slot, io, working, field_v in plan:
@@ -163,6 +173,7 @@ class SteppingMixin:
                 continue
             if io.cycle(outputs, field_v, working):
                 changed = True
+        self._all_still = not changed  # a slot skipped was still, one run is unless changed
         return changed
 
     def _slot_outputs(self, slot: int, io: SlotIo) -> list[int]:

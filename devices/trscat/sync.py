@@ -28,6 +28,7 @@ DELAY_NS = 150_000  # §9.3.1 0x1C32:9 / 0x1C33:9
 SYNC_MODES_SUPPORTED = 0x0005  # §9.3.1 0x1C32:4: FREE-RUN and DC-SYNC only
 SYNC_ERROR_LIMIT = 3  # §9.3.7 0x10F1:2
 NS_PER_US = 1_000
+CALC_COPY_US = CALC_COPY_NS // NS_PER_US
 # ESC register 0x0981 (DC activation, ETG.1000.4): bit 0 cyclic operation, bit 1 SYNC0.
 DC_CYCLIC, DC_SYNC0 = 0x01, 0x02
 SYNC0_ACTIVE = DC_CYCLIC | DC_SYNC0
@@ -93,7 +94,7 @@ class SyncUnit:
     @property
     def cycle_us(self) -> int:
         """The SYNC0 cycle on the simulated microsecond clock (0 without one)."""
-        return max(1, round(self.dc_cycle_ns / NS_PER_US)) if self.sync0_configured else 0
+        return _cycle_us(self.dc_cycle_ns) if self.sync0_configured else 0
 
     @property
     def sync_error(self) -> bool:
@@ -198,12 +199,13 @@ class SyncUnit:
                 out.append((self.next_free_us, False))
                 self.next_free_us += FREE_RUN_CYCLE_US
             return out
-        if not self.sync0_configured:
+        t = self.next_sync0_us
+        if t > now_us or not self.sync0_configured:
             return out
-        t, period = self.next_sync0_us, self.cycle_us
+        period = _cycle_us(self.dc_cycle_ns)
         while t <= now_us:
             self.next_sync0_us = t + period
-            deadline = t - CALC_COPY_NS // NS_PER_US
+            deadline = t - CALC_COPY_US
             arrivals = self.arrivals
             if not arrivals:
                 taken = False
@@ -221,3 +223,7 @@ class SyncUnit:
 
     def restart_free_run(self, now_us: int) -> None:
         self.next_free_us = now_us + FREE_RUN_CYCLE_US
+
+
+def _cycle_us(cycle_ns: int) -> int:
+    return max(1, round(cycle_ns / NS_PER_US))
