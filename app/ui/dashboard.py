@@ -2,9 +2,11 @@
 
 Threading (docs/dashboard.md): the runtime's simulation thread owns the models. viser runs
 callbacks in its own threads; they only queue commands (``app.ui.commands``). The dashboard
-has one update thread that, about 30 times a second, reads the runtime's latest frame and new
-events and writes what changed into the server-level handles inside ``server.atomic()``, so
-every browser sees the same rig and one frame's changes arrive together.
+has one update thread that, woken by each frame the runtime publishes (about 30 a second, and
+one right after a command ran), reads the latest frame and new events, writes what changed
+into the server-level handles inside ``server.atomic()``, so every browser sees the same rig
+and one frame's changes arrive together, and flushes viser's send window, so a click's answer
+leaves at once (benchmark 2, docs/performance.md).
 """
 
 from __future__ import annotations
@@ -110,6 +112,7 @@ class Dashboard:
         self.device_id = self.fastcat_ids[0] if self.fastcat_ids else None
         self._sender = CommandSender(runtime)
         self._stop = threading.Event()
+        self._wake = threading.Event()  # set by the runtime's frame listener
         self._thread: threading.Thread | None = None
         self._event_seq = 0
         self._frame_seq = -1
@@ -310,26 +313,37 @@ class Dashboard:
 
     # ---- running ------------------------------------------------------------------------
     def start(self) -> None:
+        # Runs in the simulation thread right after each publication: only a flag.
+        self.runtime.add_frame_listener(lambda _frame: self._wake.set())
         self._thread = threading.Thread(target=self._run, name="fieldrig-dashboard",
                                         daemon=True)
         self._thread.start()
 
     def stop(self) -> None:
         self._stop.set()
+        self._wake.set()
         if self._drives is not None:
             self._drives.stop()
         if self._thread is not None:
             self._thread.join(timeout=5)
 
     def _run(self) -> None:
+        # A frame wakes the thread at once (a command's frame is published as soon as it
+        # ran); without one (a stopped simulation thread) it still updates at UPDATE_HZ, for
+        # what runs on wall time (the Objects tab's refresh, the drive plots).
         period = 1.0 / UPDATE_HZ
         while not self._stop.is_set():
-            started = time.monotonic()
+            self._wake.wait(period)
+            self._wake.clear()
+            if self._stop.is_set():
+                break
             try:
                 self.tick()
+                # viser sends a window, then waits 1/60 s before looking for the next one
+                # unless flushed: without this a click's answer could wait those 17 ms.
+                self.server.flush()
             except Exception:  # a view bug must not freeze the dashboard for good
                 logger.exception("dashboard update failed")
-            self._stop.wait(max(0.0, period - (time.monotonic() - started)))
 
     @staticmethod
     def _device_snap(snapshot: Mapping[str, Any], device_id: str | None) -> dict[str, Any]:

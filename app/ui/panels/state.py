@@ -2,8 +2,11 @@
 
 ESM state, Fault active (0x5100:1), emergency data (0x5400), AL status and AL status code with
 their meaning (seed 000 §7.7; manufacturer codes 0x80XX decoded as module number in byte 1 and
-coupler code in byte 0), the latched alarm, CNF phase and scan progress. One server-level HTML
-handle: every browser sees the same text, rewritten only when it changes.
+coupler code in byte 0), the latched alarm, CNF phase and scan progress. Server-level HTML
+handles, so every browser sees the same text: the title line (box, station, simulated time)
+and the table are two handles, each rewritten only when its own text changes. The time moves
+ten times a second; the table only when a value in it does, so a click's answer is not queued
+behind a stream of identical tables (benchmarks 2 and 3, docs/performance.md).
 """
 
 from __future__ import annotations
@@ -124,13 +127,19 @@ def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: 
 class StatePanel:
     def __init__(self, server: viser.ViserServer, code_name: CodeName) -> None:
         self._code_name = code_name
-        self._html = server.gui.add_html(kv_table([("ESM state", "-")], "fr-state"))
-        self._last = ""
+        # Two bare <div>s one after the other lay out as the one <div> they replace: the
+        # title's bottom margin collapses through its div (no padding, no border), so the
+        # screenshots do not move.
+        self._title = server.gui.add_html("")
+        self._table = server.gui.add_html(kv_table([("ESM state", "-")], "fr-state"))
+        self._shown_title = ""
+        self._shown_table = ""
 
     def update(self, snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None = None,
                t_us: int = 0) -> None:
-        content = title(snap, master_snap, t_us) + kv_table(state_rows(snap, self._code_name),
-                                                           "fr-state")
-        if content != self._last:
-            self._html.content = content
-            self._last = content
+        heading = title(snap, master_snap, t_us)
+        if heading != self._shown_title:
+            self._title.content = self._shown_title = heading
+        table = kv_table(state_rows(snap, self._code_name), "fr-state")
+        if table != self._shown_table:
+            self._table.content = self._shown_table = table
