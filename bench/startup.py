@@ -24,22 +24,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-ROOT = Path(__file__).resolve().parent.parent
-CHROMIUM = "/usr/bin/chromium"
-LAUNCH_ARGS = [
-    "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-    "--disable-component-update", "--disable-sync", "--no-first-run",
-    "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-]
+from bench._browser import ROOT, VIEWPORT, chromium, free_port
+
 PLACEHOLDER = "-"
 TIMEOUT_S = 60.0
 STATE_CELL = "#fr-state td"  # the first value cell: the "ESM state" row
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def _listening(port: int) -> bool:
@@ -59,9 +48,9 @@ class Run:
 
 
 def one_run(browser: Any) -> Run:
-    port, modbus_port = _free_port(), _free_port()
+    port, modbus_port = free_port(), free_port()
     with tempfile.TemporaryDirectory(prefix="fieldrig-startup-") as state_dir:
-        context = browser.new_context(viewport={"width": 1280, "height": 720})
+        context = browser.new_context(viewport=VIEWPORT)
         page = context.new_page()
         log = Path(state_dir) / "stderr.txt"
         t0 = time.monotonic()
@@ -99,16 +88,8 @@ def one_run(browser: Any) -> Run:
 
 
 def run(runs: int) -> list[Run]:
-    from playwright.sync_api import sync_playwright
-
-    if not Path(CHROMIUM).exists():
-        raise RuntimeError(f"{CHROMIUM} is missing (apt-get install chromium)")
-    with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=LAUNCH_ARGS)
-        try:
-            return [one_run(browser) for _ in range(runs)]
-        finally:
-            browser.close()
+    with chromium() as browser:
+        return [one_run(browser) for _ in range(runs)]
 
 
 def report(results: list[Run]) -> list[str]:

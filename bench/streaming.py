@@ -25,39 +25,34 @@ from __future__ import annotations
 import argparse
 import asyncio
 import re
-import socket
 import statistics
-import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
+from typing import Any
 
-ROOT = Path(__file__).resolve().parent.parent
+from bench._browser import ServerProcess, serve_dashboard
+
 PROBE = re.compile(rb"probe (\d+) (\d+\.\d+)")
 CLIENT_COUNTS = (1, 10, 50)
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 # ---- the server (a child process) ------------------------------------------------------------
 def _serve(port: int, motion: bool, probe: bool) -> None:
-    import viser
-
-    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-    from app.runtime import Frame, Runtime
-    from app.ui import dashboard as ui
+    from app.runtime import Frame
+    from app.ui.dashboard import Dashboard
     from bench.kernel import in_op
     from bench.kernel import motion as motion_workload
 
     published: dict[int, float] = {}
 
-    class ProbedDashboard(ui.Dashboard):
+    class ProbedDashboard(Dashboard):
         """The dashboard as shipped, plus one markdown: when the frame it shows was published."""
+
+        def __init__(self, *args: Any) -> None:
+            super().__init__(*args)
+            self._probe_seq = -1
+            self._probe = self.server.gui.add_markdown("probe")
 
         def tick(self) -> None:
             super().tick()
@@ -70,55 +65,22 @@ def _serve(port: int, motion: bool, probe: bool) -> None:
         published[frame.seq] = time.monotonic()
         published.pop(frame.seq - 1000, None)
 
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    runtime = Runtime(rig)
-    runtime.add_frame_listener(on_frame)
-    server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
-    dashboard = (ProbedDashboard if probe else ui.Dashboard)(server, runtime)
-    if probe:
-        dashboard._probe_seq = -1  # type: ignore[attr-defined]
-        dashboard._probe = server.gui.add_markdown("probe")  # type: ignore[attr-defined]
-    runtime.start()
-    dashboard.start()
-    for device_id, info in rig.describe().items():  # powered, as `python -m app` starts it
-        if "power" in info["actions"]:
-            runtime.command(device_id, "power", {"on": True}).result(10)
-    deadline = time.monotonic() + 30  # as a viewer would find it: booted, in OP
-    while not runtime.submit(lambda: in_op(rig)).result(10) and time.monotonic() < deadline:
-        time.sleep(0.1)
-    if motion:  # the kernel benchmark's workload, applied in the simulation thread
-        each = runtime.submit(lambda: motion_workload(rig)).result(10)
-        runtime.add_step_listener(lambda now_us: each(now_us // rig.clock.step_us))
-    print("ready", flush=True)
-    sys.stdin.read()
-    dashboard.stop()
-    runtime.stop()
-    server.stop()
+    def setup(rig: Any, runtime: Any, _dashboard: Any) -> None:
+        runtime.add_frame_listener(on_frame)
+        deadline = time.monotonic() + 30  # as a viewer would find it: booted, in OP
+        while (not runtime.submit(lambda: in_op(rig)).result(10)
+               and time.monotonic() < deadline):
+            time.sleep(0.1)
+        if motion:  # the kernel benchmark's workload, applied in the simulation thread
+            each = runtime.submit(lambda: motion_workload(rig)).result(10)
+            runtime.add_step_listener(lambda now_us: each(now_us // rig.clock.step_us))
+
+    serve_dashboard(port, ProbedDashboard if probe else None, setup)
 
 
-class Server:
-    def __init__(self, motion: bool, probe: bool) -> None:
-        self.port = _free_port()
-        self.proc = subprocess.Popen(
-            [sys.executable, "-m", "bench.streaming", "serve", str(self.port),
-             "motion" if motion else "idle", "probe" if probe else "plain"],
-            stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=ROOT)
-        assert self.proc.stdout is not None
-        for line in self.proc.stdout:  # viser prints its banner first
-            if line.strip() == "ready":
-                break
-        else:
-            self.close()
-            raise RuntimeError("the streaming server did not start")
-
-    def close(self) -> None:
-        if self.proc.stdin is not None:
-            self.proc.stdin.close()
-        try:
-            self.proc.wait(15)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+def start_server(motion: bool, probe: bool) -> ServerProcess:
+    return ServerProcess("bench.streaming", "motion" if motion else "idle",
+                         "probe" if probe else "plain", what="streaming server")
 
 
 # ---- the clients -----------------------------------------------------------------------------
@@ -180,7 +142,7 @@ def report(quick: bool) -> list[str]:
     out = ["Streaming: the dashboard as shipped, default rig at real time, Python websocket "
            "clients speaking viser's protocol (stand-ins for browsers)"]
     for motion in (False, True):
-        server = Server(motion, probe=False)
+        server = start_server(motion, probe=False)
         try:
             tally = listen(server.port, 1, warmup, seconds)[0]
         finally:
@@ -188,7 +150,7 @@ def report(quick: bool) -> list[str]:
         out.append(f"  one client, {'in motion' if motion else 'idle (LEDs blinking)':<22} "
                    f"{tally.bytes / seconds / 1000:8.1f} kB/s  {tally.messages / seconds:7.1f} "
                    f"messages/s  {tally.frames / seconds:5.1f} windows/s")
-    server = Server(motion=False, probe=True)
+    server = start_server(motion=False, probe=True)
     try:
         for count in CLIENT_COUNTS[:2] if quick else CLIENT_COUNTS:
             tallies = listen(server.port, count, warmup, seconds)
