@@ -81,9 +81,9 @@ class DcUnit:
             self.deviation_ns += DRIFT_NS_PER_MS * max(1, dt_us // 1000)
         elif self.fault == "jitter":
             spread = JITTER_FACTOR * self.window_ns
-            self.deviation_ns = rng.randint(-spread, spread)
-        else:
-            self.deviation_ns = rng.randint(-NOISE_NS, NOISE_NS)
+            self.deviation_ns = rng.randrange(-spread, spread + 1)
+        else:  # randrange(a, b + 1) is what randint(a, b) calls: the same draw, a call less
+            self.deviation_ns = rng.randrange(-NOISE_NS, NOISE_NS + 1)
 
     def trigger(self, now_us: int, link: bool, dc_slaves: int,
                 dc_slaves_ready: bool) -> DcTrigger | None:
