@@ -284,3 +284,20 @@ def test_a_click_crossing_another_pages_change(live: LiveDashboard, browser) -> 
         for page in (a_page, b_page):
             page.context.close()
         a.close()
+
+
+def test_a_refused_click_goes_back_to_the_model(live: LiveDashboard, page) -> None:
+    """§6.17 without supply: no 0x5200:1 to write. The click is refused (notified in the
+    page), the model keeps False, and the box goes back to unchecked."""
+    open_dashboard(page, live)
+    live.advance(BOOT_S)
+    live.command("fastcat", "power", {"on": False})
+    live.settle()
+    wait_until(lambda: not checked(page, "Power"), what="the Power box to show the supply off")
+    page.get_by_label("Reset fault", exact=True).click()
+    toast = page.locator(".mantine-Notification-root", has_text="set_reset_fault refused")
+    toast.first.wait_for(timeout=20_000)  # the click reached the server and was refused
+    live.runtime.submit(lambda: None).result(timeout=20)  # after the click, in arrival order
+    live.settle()
+    assert live.snapshot()["reset_fault"] is False
+    wait_until(lambda: not checked(page, "Reset fault"), what="the refused click to go back")
