@@ -24,7 +24,7 @@ from devices.cpx.indicators import wanted_leds
 from devices.cpx.leds import LedBank
 from devices.cpx.modules import CpxModule, ModuleFault, Monitors
 from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
-from devices.cpx.stillness import StillSteps, clock_key, state_key
+from devices.cpx.stillness import StillStepping
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
 from devices.device import Action, DeviceModel
@@ -42,10 +42,9 @@ SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per
 SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
 
 
-class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
+class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
     KIND = "cpx_e_ec"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
-    SKIP_STILL = True  # False: every step in full (tests/hardening/test_still_cpx.py)
 
     def __init__(self, device_id: str, rng: random.Random,
                  modules: Sequence[str | tuple[str, Mapping[str, Any]]] = (),
@@ -53,10 +52,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
                  history_flags: int = 0x0000, out_connected: bool = False,
                  box_name: str = "Box 3 (CPX-E-EC)", station_address: int = 1003) -> None:
         super().__init__(device_id=device_id, rng=rng)
-        # Still steps (devices/cpx/stillness.py): _touched = something from outside may have
-        # changed the model since the last step, _touch_streak = the last step was touched too.
-        self._touched, self._touch_streak = True, False
-        self._still = StillSteps()
+        self._init_still()
         self.modules: list[CpxModule] = []
         for number, item in enumerate(modules, start=1):
             name, options = (item, {}) if isinstance(item, str) else item
@@ -214,58 +210,7 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
             self.injected.remove(entry)
         self.faults_changed()
 
-    # ---- stepping -------------------------------------------------------------------------
-    def touch(self) -> None:
-        """Something from outside may have changed the model: the next step runs in full."""
-        self._touched = True
-
-    def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
-        self._touched = True
-        return super().apply(action, args, module)
-
-    def _announce_writes(self, od: ObjectDictionary) -> None:
-        """Every write into the dictionary touches the model; an output object written with
-        the value it has (a master's process image every cycle) changes nothing."""
-        for entry in od:
-            if not entry.access.writable:
-                continue
-            setter, getter = entry.setter, entry.getter
-            output = 0x7000 <= entry.index <= 0x70FF and getter is not None
-
-            def write(value: Any, setter: Any = setter, getter: Any = getter,
-                      output: bool = output) -> None:
-                if not output or getter() != value:
-                    self._touched = True
-                if setter is not None:
-                    setter(value)
-            entry.setter = write
-
-    def step(self, now_us: int) -> None:
-        dt_us = now_us - self.now_us
-        super().step(now_us)
-        still = self._still
-        if self._touched:
-            if not self._touch_streak:  # touched once, not every cycle: check soon
-                still.restart()
-            self._touched, self._touch_streak = False, True
-            still.dt = None
-        else:
-            self._touch_streak = False
-            if still.dt == dt_us and self.SKIP_STILL and still.clock == clock_key(self):
-                still.skipped += 1  # a repeat of a step that changed nothing
-                return
-        check = self.SKIP_STILL and still.due()
-        before = (state_key(self), clock_key(self)) if check else None
-        queued = len(self.events.items)
-        self._full_step(dt_us)
-        if before is not None:
-            settled = (not self._touched and len(self.events.items) == queued
-                       and state_key(self) == before[0])
-            still.checked(settled)
-            still.dt, still.clock = (dt_us, before[1]) if settled else (None, ())
-        else:
-            still.dt = None
-
+    # ---- stepping (skipping still steps: StillStepping, devices/cpx/stillness.py) -------
     def _full_step(self, dt_us: int) -> None:
         self._follow_supply()
         if not self.powered:
@@ -325,10 +270,18 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
     def _process_data(self) -> None:
         state = self.esm.state
         supply_ok = self.u_out_ok
+        memo = self._memo if self.SKIP_STILL else None
         for module in self.modules:
-            module.drive_outputs(self._output_values(module), supply_ok)
+            values = self._output_values(module)
+            if memo is None:
+                module.drive_outputs(values, supply_ok)
+            else:
+                memo.drive(module, values, supply_ok)
             if state in (AlState.SAFEOP, AlState.OP):  # Tab. 11: inputs from SAFEOP on
-                module.sample_inputs()
+                if memo is None:
+                    module.sample_inputs()
+                else:
+                    memo.sample(module)
         if state in (AlState.SAFEOP, AlState.OP):
             self._bus_inputs()
 
@@ -369,8 +322,11 @@ class CpxEEc(TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
         faults: list[tuple[ModuleFault, ModuleType]] = []
         if not self.u_el_sen_ok:
             faults.append((ModuleFault(0, "undervoltage_el_sen"), self.bus.mtype))
+        supply_ok, memo = self.u_out_ok, self._memo
         for module in self.modules:
-            faults.extend((f, module.mtype) for f in module.faults(monitors, self.u_out_ok))
+            found = memo.faults(module, monitors, supply_ok) if self.SKIP_STILL else \
+                module.faults(monitors, supply_ok)
+            faults.extend((f, module.mtype) for f in found)
         self.diagnosis.update(faults, self.now_us, self._t_ns())
 
     def _t_ns(self) -> int:

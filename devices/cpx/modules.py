@@ -157,6 +157,13 @@ class CpxModule:
         if self.is_counter and not self.failed and 0 not in self.wire_broken:
             self.counter += self.count_rate_hz * dt_us / 1_000_000
 
+    def sample_reads(self) -> tuple[Any, ...]:
+        """Everything :meth:`sample_inputs` reads but the module's type (a full step skips a
+        module whose reads and images are as it left them: devices/cpx/stillness.py)."""
+        return (self.failed, self.sensor_supply_short, tuple(self.field_inputs),
+                tuple(self.analog_in), frozenset(self.wire_broken), tuple(self.ranges),
+                tuple(self.forced.items()))
+
     def sample_inputs(self) -> None:
         """Field signals -> 0x60xx (the bus module samples in SAFEOP and OP, Tab. 11)."""
         if self.is_counter:
@@ -189,6 +196,12 @@ class CpxModule:
         counting = self.count_rate_hz != 0 and not self.failed and 0 not in self.wire_broken
         speed = _clamp(self.count_rate_hz if counting else 0, *INT16)
         return [signed, self.latch, speed, int(counting)]
+
+    def output_reads(self, values: Sequence[int], supply_ok: bool) -> tuple[Any, ...]:
+        """Everything :meth:`drive_outputs` reads but the type (not for the 1CI, whose
+        control bits have edges)."""
+        return (tuple(values), supply_ok, self.failed, frozenset(self.shorted),
+                tuple(self.forced.items()), tuple(self.ranges))
 
     def drive_outputs(self, values: Sequence[int], supply_ok: bool) -> None:
         """What the outputs do for the values they are told; a short circuit or a missing
@@ -226,6 +239,12 @@ class CpxModule:
         return r.low + max(0, raw) / FULL_SCALE * (r.high - r.low)
 
     # ---- diagnosis --------------------------------------------------------------------------
+    def fault_reads(self, monitors: Monitors, supply_ok: bool) -> tuple[Any, ...]:
+        """Everything :meth:`faults` reads but the type and the module number."""
+        return (self.failed, self.sensor_supply_short, monitors.scs, monitors.sco,
+                monitors.v_out, supply_ok, frozenset(self.shorted), tuple(self.commanded),
+                tuple(self.ranges), frozenset(self.wire_broken), tuple(self.analog_in))
+
     def faults(self, monitors: Monitors, supply_ok: bool) -> list[ModuleFault]:
         """The causes this module reports now, channel order."""
         n, out = self.number, []

@@ -78,8 +78,22 @@ sub = 2
 value = 6
 
 [[step]]
+at = 2.4
+target = "cpx/3"
+action = "set_analog"
+channel = 1
+value = 1.0
+
+[[step]]
 at = 2.5
 checkpoint = "worked"
+
+[[step]]
+at = 2.55
+target = "cpx/3"
+action = "set_analog"
+channel = 1
+value = 12.0
 
 [[step]]
 at = 2.6
@@ -176,13 +190,13 @@ def scenario_run(scenario: Any, skip: bool) -> tuple[list[str], dict[str, Any], 
     return [json.dumps(e.to_record(), sort_keys=True) for e in run.events], seen, skipped(rig)
 
 
-def assert_same_runs(scenario: Any) -> list[str]:
+def assert_same_runs(scenario: Any) -> tuple[list[str], dict[str, Any]]:
     events, snapshots, count = scenario_run(scenario, True)
     plain_events, plain_snapshots, plain_count = scenario_run(scenario, False)
     assert events == plain_events
     assert snapshots == plain_snapshots
     assert plain_count == 0 and count > 1000  # the CPX-E-EC did skip, and only with skipping
-    return events
+    return events, snapshots
 
 
 @pytest.mark.parametrize("name", CPX_SCENARIOS)
@@ -193,9 +207,12 @@ def test_cpx_scenarios_are_the_same_without_skipping(name: str) -> None:
 
 def test_worked_cpx_scenario_is_the_same_without_skipping() -> None:
     """Seed 002 Tab. 11-13 (ESM and LEDs), Tab. 21 (diagnosis), Tab. 29 (bridging)."""
-    events = assert_same_runs(parse_scenario(WORK_THE_CPX, "<worked CPX-E-EC>"))
+    events, snapshots = assert_same_runs(parse_scenario(WORK_THE_CPX, "<worked CPX-E-EC>"))
     kinds = {json.loads(line)["event"] for line in events if '"cpx"' in line}
     assert {"state", "alarm", "led", "emergency"} <= kinds  # the run did work the CPX-E-EC
+    errors = snapshots["worked"]["devices"]["cpx"]["diagnosis"]["errors"]
+    assert {"cause": "wire_break", "module": 3, "channel": 1} in [
+        {k: e[k] for k in ("cause", "module", "channel")} for e in errors]  # 4-20 mA at 1 mA
 
 
 # ---- random differential -------------------------------------------------------------------
