@@ -20,6 +20,9 @@ as before. The next step is then skipped while
 A step reads the clock nowhere else but in time stamps of what it emits (a diagnosis message,
 an LED or state event), and a still step emits nothing. The LEDs are patterns (ETG.1300 names),
 not lamp phases: a blinking LED is a constant pattern, not a change per step.
+
+A full step that does run leaves out, per module, what would write the same values again
+(:class:`ModuleMemo`).
 """
 
 from __future__ import annotations
