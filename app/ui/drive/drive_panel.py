@@ -19,7 +19,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.drive.drive_state import FIELDBUS_NAMES
 from app.ui.panels.action_form import ActionForm
-from app.ui.panels.widgets import Mirror, from_user, set_options
+from app.ui.panels.widgets import Mirror, Synced, set_options
 from app.ui.style import esc
 from devices.device import Action
 from devices.servo import control
@@ -121,19 +121,21 @@ class DrivePanel:
         with gui.add_folder("Other drive actions", expand_by_default=False):
             self._form = ActionForm(gui, actions, self._apply, label="Drive action")
 
-        self._mirrors = {name: Mirror(handle) for name, handle in (
-            ("powered", self._power), ("ten", self._ten), ("ien", self._ien),
-            ("jammed", self._jam), ("mode", self._mode), ("c9", self._c9),
-            ("c7", self._c7))}
+        # The boxes and the mode are drive values: every page ends up showing the selected
+        # drive's (Synced). c9 and c7 are a form applied by "Write c9 and c7": what a user
+        # types there must survive the next frame (Mirror).
+        self._synced = {name: Synced(server, handle, sender, command) for name, handle, command in (
+            ("powered", self._power, lambda c, on: self._apply(c, "power", {"on": bool(on)})),
+            ("ten", self._ten, lambda c, on: self._apply(c, "set_input",
+                                                         {"name": "ten", "value": bool(on)})),
+            ("ien", self._ien, lambda c, on: self._apply(c, "set_input",
+                                                         {"name": "ien", "value": bool(on)})),
+            ("jammed", self._jam, lambda c, on: self._apply(c, "jam_load",
+                                                            {"active": bool(on)})),
+            ("mode", self._mode, lambda c, option: self._apply(
+                c, "set_mode", {"mode": leading_int(option)})))}
+        self._mirrors = {"c9": Mirror(self._c9), "c7": Mirror(self._c7)}
 
-        def user(handle: Any, send: Callable[[viser.GuiEvent], None]) -> None:
-            handle.on_update(lambda event: send(event) if from_user(event) else None)
-
-        user(self._power, lambda e: self._do(e, "power", on=self._power.value))
-        user(self._ten, lambda e: self._do(e, "set_input", name="ten", value=self._ten.value))
-        user(self._ien, lambda e: self._do(e, "set_input", name="ien", value=self._ien.value))
-        user(self._jam, lambda e: self._do(e, "jam_load", active=self._jam.value))
-        user(self._mode, lambda e: self._do(e, "set_mode", mode=leading_int(self._mode.value)))
         torque.on_click(lambda e: self._do(e, "enable", on=torque.value == "Enable"))
         reset.on_click(lambda e: self._do(e, "alarm_reset"))
         home.on_click(lambda e: self._do(e, "home"))
@@ -242,13 +244,11 @@ class DrivePanel:
         if fieldbus != self._fieldbus:  # Profinet numbers 30..33 differently (ch. 6)
             self._fieldbus = fieldbus
             set_options(self._alarm, list(alarm_options(fieldbus)))
-        self._mirrors["powered"].follow(bool(snap.get("powered")))
-        self._mirrors["ten"].follow(bool(snap.get("ten")))
-        self._mirrors["ien"].follow(bool(snap.get("ien")))
-        self._mirrors["jammed"].follow(bool(snap.get("jammed")))
+        for name in ("powered", "ten", "ien", "jammed"):
+            self._synced[name].follow(bool(snap.get(name)))
         option = mode_option(snap.get("mode"))
         if option is not None:
-            self._mirrors["mode"].follow(option)
+            self._synced["mode"].follow(option)
         bus = next((o for o in FIELDBUS_OPTIONS
                     if FIELDBUS_BY_C9.get(leading_int(o)) == fieldbus), None)
         if bus is not None:  # what the drive latched at power-up
@@ -263,6 +263,8 @@ class DrivePanel:
             self._shown_result = result
 
     def forget(self) -> None:
-        """Another drive was selected: take its values into the widgets."""
+        """Another drive was selected: take its c9 and c7 into the form. (A Synced widget at
+        rest already shows the last value it followed, so it needs nothing: the next frame's
+        value, the new drive's, is shown when it differs.)"""
         for mirror in self._mirrors.values():
             mirror.forget()

@@ -15,7 +15,7 @@ import viser
 
 from app.ui.commands import CommandSender
 from app.ui.panels.state import al_status_text
-from app.ui.panels.widgets import Mirror, from_user
+from app.ui.panels.widgets import Synced
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import describe_al_status_code
 from devices.events import US_PER_S
@@ -133,14 +133,10 @@ class MasterPanel:
         self._slaves = gui.add_html(slaves_table([]))
         self._style = gui.add_dropdown("Log style", LOG_STYLES, initial_value=LOG_STYLES[0],
                                        hint="how the master prints its log (set_log_style)")
-        self._style_mirror = Mirror(self._style)
+        # The style is the master's (its snapshot's "log_style"): every page ends up showing it.
+        self._style_sync = Synced(server, self._style, sender, lambda client, style: sender.send(
+            client, master_id, "set_log_style", {"style": style}))
         self._log = gui.add_html(log_table([]))
-
-        @self._style.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if from_user(event):
-                sender.send(event.client, master_id, "set_log_style",
-                            {"style": self._style.value})
 
     def _set(self, key: str, handle: Any, content: str) -> None:
         if self._cache.get(key) != content:
@@ -152,7 +148,7 @@ class MasterPanel:
         if tuple(self._style.options) != styles:
             self._style.options = styles
         if master.get("log_style") in styles:
-            self._style_mirror.follow(master["log_style"])
+            self._style_sync.follow(master["log_style"])
         self._set("summary", self._summary, summary(master, t_us))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))

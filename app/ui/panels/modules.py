@@ -19,7 +19,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.control import module_options, option_slot
-from app.ui.panels.widgets import Mirror, from_user, set_options
+from app.ui.panels.widgets import Synced, set_options
 from app.ui.style import esc
 from devices.device import Action
 
@@ -72,7 +72,6 @@ class ModulePanel:
             self._plug_type = gui.add_dropdown("Plug type", tuple(catalog))
             self._swap_with = gui.add_dropdown("Swap with", ("1",))
             self._powered = gui.add_checkbox("Module powered", True)
-            self._powered_mirror = Mirror(self._powered)
 
         with gui.add_folder("Encoder (AX2)", visible=False) as self._encoder_folder:
             self._encoder_state = gui.add_html("")
@@ -83,7 +82,6 @@ class ModulePanel:
                                            hint=f"0x7600 bit {12 + k}; the rising edge starts "
                                                 "the zero cycle")
                           for k in range(2)]
-            self._zero_mirrors = [Mirror(box) for box in self._zero]
 
         with gui.add_folder("Module I/O", expand_by_default=False):
             extra = {n: a for n, a in module_actions.items() if n not in DEDICATED}
@@ -91,9 +89,15 @@ class ModulePanel:
         self._available: list[str] | None = None  # the selected module's actions, when read
         self._available_lock = threading.Lock()
 
+        # The boxes are values of the selected module: every page ends up showing the model's
+        # (Synced). A change commands the module selected when it reaches the server.
+        self._powered_sync = Synced(server, self._powered, sender, self._module_power)
+        self._zero_syncs = [Synced(server, box, sender,
+                                   lambda client, on, k=k: self._zero_cycle(client, k, bool(on)))
+                            for k, box in enumerate(self._zero)]
+
         @self._module.on_update
         def _(event: viser.GuiEvent) -> None:
-            self._powered_mirror.forget()
             self._selection_changed()
 
         @rail_ops.on_click
@@ -109,13 +113,6 @@ class ModulePanel:
                 other = option_slot(self._swap_with.value)
                 self._sender.send(event.client, target, "swap", {"other": other})
 
-        @self._powered.on_update
-        def _(event: viser.GuiEvent) -> None:
-            target = self._target()
-            if from_user(event) and target is not None:
-                self._sender.send(event.client, target, "module_power",
-                                  {"on": self._powered.value})
-
         @set_speed.on_click
         def _(event: viser.GuiEvent) -> None:
             target = self._target()
@@ -124,9 +121,6 @@ class ModulePanel:
             which, rpm = self._speed
             self._sender.send(event.client, target, "set_shaft_speed",
                               {which: int(self._encoder.value), rpm: float(self._rpm.value)})
-
-        for k, box in enumerate(self._zero):
-            box.on_update(lambda event, k=k: self._zero_cycle(event, k))
 
     # ---- helpers ------------------------------------------------------------------------
     def _slot(self) -> int | None:
@@ -146,13 +140,17 @@ class ModulePanel:
         if target is not None:
             self._sender.send(client, target, action, args)
 
-    def _zero_cycle(self, event: viser.GuiEvent, k: int) -> None:
+    def _module_power(self, client: viser.ClientHandle | None, on: Any) -> None:
+        target = self._target()
+        if target is not None:
+            self._sender.send(client, target, "module_power", {"on": bool(on)})
+
+    def _zero_cycle(self, client: viser.ClientHandle | None, k: int, on: bool) -> None:
         """Set or clear one zero-cycle bit of 0x7600, keeping the other bits (invert flags)."""
         slot = self._slot()
-        if not from_user(event) or slot is None:
+        if slot is None:
             return
-        index, bit, on = module_index(ENCODER_COMMAND_BASE, slot), ZERO_CYCLE_BITS[k], \
-            bool(self._zero[k].value)
+        index, bit = module_index(ENCODER_COMMAND_BASE, slot), ZERO_CYCLE_BITS[k]
         rig = self._runtime.rig
 
         def read_modify_write() -> int:
@@ -161,15 +159,13 @@ class ModulePanel:
             rig.apply(self._id, "write_object", {"index": index, "sub": 0, "value": word})
             return word
 
-        self._sender.submit(event.client, f"0x{index:04X} zero-cycle command", read_modify_write)
+        self._sender.submit(client, f"0x{index:04X} zero-cycle command", read_modify_write)
 
     def _selection_changed(self) -> None:
         """Show the encoder section only for an AX2; ask the model which module actions the
         selected module takes (its type decides) for the generated form."""
         entry = self._entry()
         self._encoder_folder.visible = bool(entry and entry.get("encoders") is not None)
-        for mirror in self._zero_mirrors:
-            mirror.forget()
         slot = self._slot()
         if slot is None or not (entry and entry.get("type")):
             self._set_available([])
@@ -204,11 +200,13 @@ class ModulePanel:
         entry = self._entry()
         if entry is None:
             return
-        self._powered_mirror.follow(bool(entry.get("powered", True)))
+        # The selected module's values: after a selection change the next frame shows the new
+        # module's (a Synced at rest shows what it last followed, so only a difference is sent).
+        self._powered_sync.follow(bool(entry.get("powered", True)))
         if entry.get("encoders") is not None:
             command = int(entry.get("command", 0))  # 0x7600 as the module holds it
-            for k, mirror in enumerate(self._zero_mirrors):
-                mirror.follow(bool(command & ZERO_CYCLE_BITS[k]))
+            for k, synced in enumerate(self._zero_syncs):
+                synced.follow(bool(command & ZERO_CYCLE_BITS[k]))
             html = encoder_text(entry)
             if self._encoder_state.content != html:
                 self._encoder_state.content = html

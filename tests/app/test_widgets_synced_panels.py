@@ -1,0 +1,353 @@
+"""The drive, module and master panels' device-value widgets are Synced (issue 7, the checkbox
+mirror bug): a change commands the value it set, to the device selected when it reached the
+server; a refused or lost change goes back to the model's value on every page; a selection
+change shows the newly selected device's value.
+
+The fake GUI behaves as viser 1.1.1 does for what Synced relies on (docs/stack-notes.md, and
+tests/app/test_widgets_synced.py for the widget alone): a page's change sets the server's value
+and runs coroutine callbacks on the event loop; assigning ``.value`` sends a message only when
+the value differs, and the last message of one turn of the loop is the one that goes out.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from types import SimpleNamespace
+from typing import Any
+
+import pytest
+
+from app.ui.drive.drive_panel import DrivePanel, mode_option
+from app.ui.line.master_panel import LOG_STYLES, MasterPanel
+from app.ui.panels.modules import ModulePanel
+from app.ui.panels.widgets import FRESH_AFTER
+
+
+@dataclass
+class Event:
+    client: Any
+    target: Any
+
+
+class Handle:
+    """Any server-level viser GUI handle; ``sent`` holds the values sent to every page."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, label: str, value: Any,
+                 options: tuple[str, ...] = ()) -> None:
+        self._loop = loop
+        self.label = label
+        self._value = value
+        self.options = options
+        self.callbacks: list[Callable[[Event], Any]] = []
+        self.sent: list[Any] = []
+        self.outbox: list[Any] = []
+        self.visible = True
+        self.disabled = False
+        self.content = ""
+
+    def __enter__(self) -> Handle:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def on_update(self, fn: Callable[[Event], Any]) -> None:
+        self.callbacks.append(fn)
+
+    on_click = on_update
+
+    @property
+    def value(self) -> Any:
+        return self._value
+
+    @value.setter
+    def value(self, value: Any) -> None:
+        if value == self._value:
+            return  # viser: an unchanged value sends nothing
+        self.outbox.append(value)
+        self._value = value
+        for fn in self.callbacks:
+            out = fn(Event(None, self))
+            if inspect.iscoroutine(out):
+                self._loop.create_task(out)
+
+    def window(self) -> None:
+        if self.outbox:
+            self.sent.append(self.outbox[-1])
+            self.outbox.clear()
+
+    def user(self, client: str, value: Any) -> None:
+        """A page's change, as viser's message handler applies it (plain callbacks at once:
+        the panels' own ones, e.g. a selection change, do not depend on their timing here)."""
+        if value == self._value:
+            return
+        self._value = value
+        for fn in self.callbacks:
+            out = fn(Event(client, self))
+            if inspect.iscoroutine(out):
+                self._loop.run_until_complete(out)
+
+
+class Gui:
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._loop = loop
+        self.handles: dict[str, Handle] = {}
+
+    def _add(self, label: str, value: Any, options: tuple[str, ...] = ()) -> Handle:
+        handle = Handle(self._loop, label, value, options)
+        self.handles.setdefault(label, handle)
+        return handle
+
+    def add_checkbox(self, label: str, initial_value: bool, **_: Any) -> Handle:
+        return self._add(label, initial_value)
+
+    def add_dropdown(self, label: str, options: Any, initial_value: Any = None,
+                     **_: Any) -> Handle:
+        options = tuple(options)
+        return self._add(label, options[0] if initial_value is None else initial_value, options)
+
+    def add_button_group(self, label: str, options: Any, **_: Any) -> Handle:
+        return self._add(label, next(iter(options)), tuple(options))
+
+    def add_number(self, label: str, initial_value: Any, **_: Any) -> Handle:
+        return self._add(label, initial_value)
+
+    def add_text(self, label: str, initial_value: str, **_: Any) -> Handle:
+        return self._add(label, initial_value)
+
+    def add_button(self, label: str, **_: Any) -> Handle:
+        return self._add(label, False)
+
+    def add_folder(self, label: str, **_: Any) -> Handle:
+        return self._add(f"folder {label}", None)
+
+    def add_html(self, content: str, **_: Any) -> Handle:
+        handle = Handle(self._loop, "html", None)
+        handle.content = content
+        return handle
+
+    def add_progress_bar(self, value: float, **_: Any) -> Handle:
+        return self._add("progress", value)
+
+    def windows(self) -> None:
+        for handle in self.handles.values():
+            handle.window()
+
+
+class Server:
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._loop = loop
+        self.gui = Gui(loop)
+
+    def get_event_loop(self) -> asyncio.AbstractEventLoop:
+        return self._loop
+
+
+class Sender:
+    """The runtime's queue: commands and submitted work run in arrival order on drain()."""
+
+    def __init__(self) -> None:
+        self.work: list[Callable[[], None]] = []
+        self.sent: list[tuple[str, str, dict[str, Any]]] = []
+        self.labels: list[str] = []
+
+    def send(self, client: Any, target: str, action: str, args: dict[str, Any] | None = None,
+             *, done: Callable[[Any], None] | None = None) -> None:
+        self.work.append(lambda: self.sent.append((target, action, dict(args or {}))))
+
+    def submit(self, client: Any, label: str, fn: Callable[[], Any], *,
+               done: Callable[[Any], None] | None = None) -> None:
+        def run() -> None:
+            if label != "dashboard view":
+                self.labels.append(label)
+                return  # the panels' own work needs a rig: what it was asked is enough here
+            result = fn()
+            if done is not None:
+                done(result)
+        self.work.append(run)
+
+    def drain(self) -> None:
+        work, self.work = self.work, []
+        for fn in work:
+            fn()
+
+
+@pytest.fixture
+def loop() -> Iterator[asyncio.AbstractEventLoop]:
+    loop = asyncio.new_event_loop()
+    yield loop
+    loop.close()
+
+
+def turn(loop: asyncio.AbstractEventLoop, server: Server) -> None:
+    loop.run_until_complete(asyncio.sleep(0))
+    server.gui.windows()
+
+
+def frames(loop: asyncio.AbstractEventLoop, server: Server, update: Callable[[], None],
+           n: int = FRESH_AFTER + 1) -> None:
+    for _ in range(n):
+        update()
+        turn(loop, server)
+
+
+# ---- the servo drive (seed 004) --------------------------------------------------------------
+DRIVE = {"powered": True, "ten": True, "ien": True, "jammed": False, "mode": 1,
+         "fieldbus": "modbus", "node_id": 1}
+
+# (label, snapshot key, clicked value, command it must send, snapshot value shown back)
+DRIVE_WIDGETS = [
+    ("Drive power", "powered", False, ("power", {"on": False}), False),
+    ("TEN (24 V)", "ten", False, ("set_input", {"name": "ten", "value": False}), False),
+    ("IEN (24 V)", "ien", False, ("set_input", {"name": "ien", "value": False}), False),
+    ("Load jammed", "jammed", True, ("jam_load", {"active": True}), True),
+    ("Mode", "mode", mode_option(3), ("set_mode", {"mode": 3}), 3),
+]
+
+
+def drive_rig(loop: asyncio.AbstractEventLoop) -> tuple[Server, Sender, DrivePanel, list[str]]:
+    server, sender, selected = Server(loop), Sender(), ["drive1"]
+    panel = DrivePanel(server, None, sender, lambda: selected[0], {})  # type: ignore[arg-type]
+    frames(loop, server, lambda: panel.update(DRIVE))
+    return server, sender, panel, selected
+
+
+@pytest.mark.parametrize(("label", "key", "clicked", "command", "model"), DRIVE_WIDGETS)
+def test_a_drive_change_commands_its_value_and_a_refused_one_goes_back(
+        loop, label: str, key: str, clicked: Any, command: tuple[str, dict[str, Any]],
+        model: Any) -> None:
+    """Seed 004 ch. 2 (power, TEN / IEN inputs), the modes of R35: the command carries the
+    change's value to the selected drive; a model that did not take it puts the widget back."""
+    server, sender, panel, _ = drive_rig(loop)
+    handle = server.gui.handles[label]
+    before = handle.value
+    handle.user("page A", clicked)
+    sender.drain()
+    assert sender.sent == [("drive1", *command)]
+    turn(loop, server)
+    frames(loop, server, lambda: panel.update(DRIVE))  # the drive kept its value
+    assert handle.value == before and handle.sent[-1] == before
+    handle.sent.clear()
+    frames(loop, server, lambda: panel.update({**DRIVE, key: model}))  # it changed by itself
+    assert handle.value == clicked and handle.sent == [clicked]
+
+
+def test_a_drive_change_in_the_page_is_resent_when_the_server_holds_the_model(loop) -> None:
+    """The crossing: the server's copy already equals what the drive ends with; the value goes
+    to every page anyway, so a page still showing its own click is put right."""
+    server, sender, panel, _ = drive_rig(loop)
+    handle = server.gui.handles["Drive power"]
+    handle.user("page A", False)
+    sender.drain()
+    turn(loop, server)
+    frames(loop, server, lambda: panel.update({**DRIVE, "powered": False}))
+    assert handle.value is False and handle.sent[-1] is False
+
+
+@pytest.mark.parametrize(("label", "key", "clicked", "command", "model"), DRIVE_WIDGETS)
+def test_another_drive_selected_shows_its_values(
+        loop, label: str, key: str, clicked: Any, command: tuple[str, dict[str, Any]],
+        model: Any) -> None:
+    """A selection change: the widgets show the new drive's values; a click goes to it."""
+    server, sender, panel, selected = drive_rig(loop)
+    handle = server.gui.handles[label]
+    selected[0] = "drive2"
+    panel.forget()
+    frames(loop, server, lambda: panel.update({**DRIVE, key: model}))
+    assert handle.value == clicked
+    handle.user("page A", _other(handle, clicked))
+    sender.drain()
+    assert sender.sent and sender.sent[0][0] == "drive2"
+
+
+def _other(handle: Handle, value: Any) -> Any:
+    if isinstance(value, bool):
+        return not value
+    return next(o for o in handle.options if o != value)
+
+
+def test_c9_and_c7_stay_forms(loop) -> None:
+    """c9 and c7 are applied by their button: a frame does not overwrite what a user typed."""
+    server, _sender, panel, _ = drive_rig(loop)
+    c7 = server.gui.handles["Node (c7)"]
+    c7.user("page A", 42)
+    frames(loop, server, lambda: panel.update(DRIVE))
+    assert c7.value == 42
+
+
+# ---- rail modules (seed 000 §2, §6.30) ----------------------------------------------------
+def rail(powered: tuple[bool, bool], command: tuple[int, int]) -> dict[str, Any]:
+    return {"rail": [{"slot": k + 1, "type": "AX2", "powered": powered[k],
+                      "command": command[k], "encoders": [{}, {}]} for k in range(2)]}
+
+
+def module_rig(loop: asyncio.AbstractEventLoop) -> tuple[Server, Sender, ModulePanel]:
+    server, sender = Server(loop), Sender()
+    runtime = SimpleNamespace(rig=None)  # read only by the work Sender does not run
+    panel = ModulePanel(server, runtime, sender, "fastcat", {}, ["AX2"])  # type: ignore[arg-type]
+    return server, sender, panel
+
+
+def test_module_selection_shows_the_selected_modules_values(loop) -> None:
+    """§2 / §6.30: slot 1 powered with no zero-cycle bit, slot 2 unpowered with bit 13 set;
+    selecting slot 2 shows its values, a click on Module powered goes to slot 2."""
+    server, sender, panel = module_rig(loop)
+    snap = rail((True, False), (0, 0x2000))
+    frames(loop, server, lambda: panel.update(snap))
+    module, powered = server.gui.handles["Module"], server.gui.handles["Module powered"]
+    zero = [server.gui.handles[f"Zero-cycle command enc {k}"] for k in (1, 2)]
+    assert option_slot_value(module) == "1" and powered.value is True
+    assert [z.value for z in zero] == [False, False]
+    module.user("page A", next(o for o in module.options if o.startswith("2")))
+    frames(loop, server, lambda: panel.update(snap))
+    assert powered.value is False and [z.value for z in zero] == [False, True]
+    powered.user("page A", True)
+    sender.drain()
+    assert sender.sent == [("fastcat/2", "module_power", {"on": True})]
+
+
+def option_slot_value(handle: Handle) -> str:
+    return str(handle.value).split(" ", 1)[0]
+
+
+@pytest.mark.parametrize("k", [0, 1])
+def test_a_zero_cycle_click_commands_the_selected_module_and_goes_back_if_refused(
+        loop, k: int) -> None:
+    """§6.30: bit 12 / 13 of 0x7600 + 0x10 * (N - 1), written by the change's own value; a
+    write the module did not take puts the box back on every page."""
+    server, sender, panel = module_rig(loop)
+    snap = rail((True, True), (0, 0))
+    frames(loop, server, lambda: panel.update(snap))
+    module = server.gui.handles["Module"]
+    module.user("page A", next(o for o in module.options if o.startswith("2")))
+    frames(loop, server, lambda: panel.update(snap))  # the selection has been shown
+    box = server.gui.handles[f"Zero-cycle command enc {k + 1}"]
+    box.user("page A", True)
+    sender.drain()
+    assert [w for w in sender.labels if "zero-cycle" in w] == ["0x7610 zero-cycle command"]
+    turn(loop, server)
+    frames(loop, server, lambda: panel.update(snap))
+    assert box.value is False and box.sent[-1] is False
+
+
+# ---- the master's log style (seed 003, seed 000 §7.2-§7.4) --------------------------------
+@pytest.mark.parametrize("style", LOG_STYLES[1:])
+def test_the_log_style_is_the_masters(loop, style: str) -> None:
+    """The dropdown commands set_log_style with the picked style and shows the master's."""
+    server, sender = Server(loop), Sender()
+    panel = MasterPanel(server, sender, "master")  # type: ignore[arg-type]
+    master = {"log_style": LOG_STYLES[0], "log_styles": list(LOG_STYLES)}
+    frames(loop, server, lambda: panel.update(master, 0))
+    dropdown = server.gui.handles["Log style"]
+    dropdown.user("page A", style)
+    sender.drain()
+    assert sender.sent == [("master", "set_log_style", {"style": style})]
+    turn(loop, server)
+    frames(loop, server, lambda: panel.update({**master, "log_style": style}, 0))
+    assert dropdown.value == style and dropdown.sent[-1] == style
+    dropdown.sent.clear()
+    frames(loop, server, lambda: panel.update(master, 0))  # another page's choice won
+    assert dropdown.value == LOG_STYLES[0] and dropdown.sent == [LOG_STYLES[0]]
