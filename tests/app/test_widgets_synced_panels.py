@@ -36,8 +36,10 @@ class Handle:
     """Any server-level viser GUI handle; ``sent`` holds the values sent to every page."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop, label: str, value: Any,
-                 options: tuple[str, ...] = ()) -> None:
+                 options: tuple[str, ...] = (), pool: list[Callable[[], Any]] | None = None
+                 ) -> None:
         self._loop = loop
+        self._pool = pool if pool is not None else []
         self.label = label
         self._value = value
         self.options = options
@@ -79,25 +81,27 @@ class Handle:
             self.sent.append(self.outbox[-1])
             self.outbox.clear()
 
-    def user(self, client: str, value: Any) -> None:
-        """A page's change, as viser's message handler applies it (plain callbacks at once:
-        the panels' own ones, e.g. a selection change, do not depend on their timing here)."""
-        if value == self._value:
+    def user(self, client: str, value: Any, click: bool = False) -> None:
+        """A page's change (or a button group's click, which always counts), as viser's
+        message handler applies it: coroutine callbacks at once, plain ones later in a pool."""
+        if value == self._value and not click:
             return
         self._value = value
         for fn in self.callbacks:
-            out = fn(Event(client, self))
-            if inspect.iscoroutine(out):
-                self._loop.run_until_complete(out)
+            if inspect.iscoroutinefunction(fn):
+                self._loop.run_until_complete(fn(Event(client, self)))
+            else:
+                self._pool.append(lambda fn=fn, client=client: fn(Event(client, self)))
 
 
 class Gui:
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self._loop = loop
         self.handles: dict[str, Handle] = {}
+        self.pool: list[Callable[[], Any]] = []  # viser's thread pool: plain callbacks
 
     def _add(self, label: str, value: Any, options: tuple[str, ...] = ()) -> Handle:
-        handle = Handle(self._loop, label, value, options)
+        handle = Handle(self._loop, label, value, options, self.pool)
         self.handles.setdefault(label, handle)
         return handle
 
@@ -183,6 +187,10 @@ def loop() -> Iterator[asyncio.AbstractEventLoop]:
 
 
 def turn(loop: asyncio.AbstractEventLoop, server: Server) -> None:
+    """The pool's callbacks, what the other threads handed the event loop, viser's window."""
+    pool, server.gui.pool[:] = list(server.gui.pool), []
+    for fn in pool:
+        fn()
     loop.run_until_complete(asyncio.sleep(0))
     server.gui.windows()
 
@@ -278,6 +286,23 @@ def test_c9_and_c7_stay_forms(loop) -> None:
     assert c7.value == 42
 
 
+@pytest.mark.parametrize(("label", "clicks", "commands"), [
+    ("Torque", ("Enable", "Disable", "Enable"),
+     [("enable", {"on": True}), ("enable", {"on": False}), ("enable", {"on": True})]),
+    ("Jog", ("Jog +", "Jog 0", "Jog -"),
+     [("jog", {"direction": 1}), ("jog", {"direction": 0}), ("jog", {"direction": -1})]),
+])
+def test_a_burst_on_a_button_group_commands_each_clicks_button_in_order(
+        loop, label: str, clicks: tuple[str, ...], commands: list[Any]) -> None:
+    """Issue 7: each click commands its own button, in order (not the group's later value)."""
+    server, sender, _panel, _ = drive_rig(loop)
+    for button in clicks:
+        server.gui.handles[label].user("page A", button, click=True)
+    turn(loop, server)
+    sender.drain()
+    assert sender.sent == [("drive1", *command) for command in commands]
+
+
 # ---- rail modules (seed 000 §2, §6.30) ----------------------------------------------------
 def rail(powered: tuple[bool, bool], command: tuple[int, int]) -> dict[str, Any]:
     return {"rail": [{"slot": k + 1, "type": "AX2", "powered": powered[k],
@@ -351,3 +376,15 @@ def test_the_log_style_is_the_masters(loop, style: str) -> None:
     dropdown.sent.clear()
     frames(loop, server, lambda: panel.update(master, 0))  # another page's choice won
     assert dropdown.value == LOG_STYLES[0] and dropdown.sent == [LOG_STYLES[0]]
+
+
+def test_rail_clicks_are_commanded_in_click_order(loop) -> None:
+    """§2 (modules plugged and unplugged by hand): Unplug then Plug is commanded in that order,
+    each click with its own button."""
+    server, sender, panel = module_rig(loop)
+    frames(loop, server, lambda: panel.update(rail((True, True), (0, 0))))
+    for button in ("Unplug", "Plug"):
+        server.gui.handles["Rail"].user("page A", button, click=True)
+    turn(loop, server)
+    sender.drain()
+    assert sender.sent == [("fastcat/1", "unplug", {}), ("fastcat/1", "plug", {"type": "AX2"})]

@@ -62,6 +62,18 @@ def mode_option(mode: Any) -> str | None:
     return next((o for o in MODE_OPTIONS if leading_int(o) == mode), None)
 
 
+def on_button(group: Any, fn: Callable[[viser.GuiEvent, str], None]) -> None:
+    """Call ``fn(event, button)`` for each click on a button group, with the button clicked.
+
+    A coroutine, so it runs on viser's event loop as the click arrives, while the group's value
+    is still this click's button (a plain callback runs later in a thread pool and can read the
+    next click's: Enable, Disable commanded as Disable, Disable). ``fn`` must not block."""
+    async def clicked(event: viser.GuiEvent) -> None:
+        fn(event, str(event.target.value))
+
+    group.on_click(clicked)
+
+
 class DrivePanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  target: Target, actions: Mapping[str, Action]) -> None:
@@ -136,17 +148,17 @@ class DrivePanel:
                 c, "set_mode", {"mode": leading_int(option)})))}
         self._mirrors = {"c9": Mirror(self._c9), "c7": Mirror(self._c7)}
 
-        torque.on_click(lambda e: self._do(e, "enable", on=torque.value == "Enable"))
+        on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
         reset.on_click(lambda e: self._do(e, "alarm_reset"))
         home.on_click(lambda e: self._do(e, "home"))
-        jog.on_click(lambda e: self._do(e, "jog", direction=JOG[jog.value]))
-        moves.on_click(lambda e: self._positioner(e, moves.value))
+        on_button(jog, lambda e, b: self._do(e, "jog", direction=JOG[b]))
+        on_button(moves, self._positioner)
         run.on_click(lambda e: self._run_velocity(e))
-        alarm_ops.on_click(lambda e: self._do(
-            e, "inject_alarm" if alarm_ops.value == "Inject alarm" else "clear_alarm",
+        on_button(alarm_ops, lambda e, b: self._do(
+            e, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
             code=str(leading_int(self._alarm.value))))
-        reg_ops.on_click(lambda e: self._register_access(e, reg_ops.value))
-        par_ops.on_click(lambda e: self._parameter_access(e, par_ops.value))
+        on_button(reg_ops, self._register_access)
+        on_button(par_ops, self._parameter_access)
         write_bus.on_click(lambda e: self._write_fieldbus(e))
         save.on_click(lambda e: self._do(e, "save"))
 

@@ -101,13 +101,15 @@ class ModulePanel:
             self._selection_changed()
 
         @rail_ops.on_click
-        def _(event: viser.GuiEvent) -> None:
+        async def _(event: viser.GuiEvent) -> None:
+            # On viser's loop: the group's value is still the button of this click.
+            button = event.target.value
             target = self._target()
             if target is None:
                 return
-            if rail_ops.value == "Unplug":
+            if button == "Unplug":
                 self._sender.send(event.client, target, "unplug")
-            elif rail_ops.value == "Plug":
+            elif button == "Plug":
                 self._sender.send(event.client, target, "plug", {"type": self._plug_type.value})
             else:
                 other = option_slot(self._swap_with.value)
