@@ -111,11 +111,15 @@ class Body:
 
     def update_frame(self, entry: Mapping[str, Any], position: int, legend: str,
                      target: str | None = None) -> None:
-        tone = state_tone(entry, target)
+        self.show_frame(state_tone(entry, target), header_text(entry, position), legend)
+
+    def show_frame(self, tone: str, header: str, legend: str) -> None:
+        """Bar colour, header and legend, each sent only when it differs from what the browsers
+        have: any scene message makes every browser redraw its 3D canvas (issue 7)."""
         if tone != self._tone and self._bar is not None:
             self._bar.color = STATE_BAR[tone]
             self._tone = tone
-        self.paint.set_text("header", header_text(entry, position))
+        self.paint.set_text("header", header)
         self.paint.set_text("legend", legend)
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
@@ -186,16 +190,18 @@ class MasterBody(Body):
         self.paint.set_led("link", "green", "on" if link else "off", t_us)
         return "external master" if snap.get("external") else ""
 
-    def update_master_frame(self, snap: Mapping[str, Any]) -> None:
-        """The master's own bar: red on a DC fault or a lost link, amber while starting."""
+    def update_master_frame(self, snap: Mapping[str, Any], legend: str = "") -> None:
+        """The master's own frame: the bar red on a DC fault or a lost link, amber while
+        starting; the header names the target state; ``legend`` is :meth:`update`'s."""
         dc = snap.get("dc") or {}
         phase = snap.get("phase", "running")
         bad = dc.get("fault") or dc.get("state") == "NOT_SYNCHRONIZED" or not snap.get("link",
                                                                                         True)
         entry = {"state": "running" if phase == "running" else phase,
                  "requested": "running", "al_status_code": 1 if bad else 0}
-        self.update_frame(entry, 0, "")
-        self.paint.set_text("header", f"target {snap.get('target', '-')}")
+        # One text per label per frame: the slave header and then "target ..." made the
+        # label change twice in every frame, so every browser got it 30 times a second.
+        self.show_frame(state_tone(entry), f"target {snap.get('target', '-')}", legend)
 
 
 class RailFrame(Body):

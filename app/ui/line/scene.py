@@ -129,9 +129,7 @@ class LineScene:
         devices = snapshot.get("devices") or {}
         master = devices.get(self.master_id) or {}
         entries = slave_entries(master, self.order)
-        legend = self.master.update(master, t_us)
-        self.master.update_master_frame(master)
-        self.master.paint.set_text("legend", legend)
+        self.master.update_master_frame(master, self.master.update(master, t_us))
         for position, device in enumerate(self.order):
             body = self.bodies[device]
             words = body.update(devices.get(device) or {}, t_us)
