@@ -253,13 +253,18 @@ class _Html:
 
 
 class DriveStatePanel:
-    """Title and state table (above the plots)."""
+    """Title and state table (above the plots), as two handles: the title carries the
+    simulated time and changes ten times a second, the table only when a value in it does, so
+    the table is not resent with every tenth (issue 7, as ``app.ui.panels.state``). Two bare
+    <div>s lay out as the one they replace (the title's margin collapses through its div)."""
 
     def __init__(self, server: viser.ViserServer) -> None:
-        self._html = _Html(server, kv_table([("CiA 402 state", "-")], "fr-drive"))
+        self._title = _Html(server, "")
+        self._table = _Html(server, kv_table([("CiA 402 state", "-")], "fr-drive"))
 
     def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
-        self._html.show(title(drive_id, snap, t_us) + kv_table(state_rows(snap), "fr-drive"))
+        self._title.show(title(drive_id, snap, t_us))
+        self._table.show(kv_table(state_rows(snap), "fr-drive"))
 
 
 class StatusWordsPanel:
