@@ -63,14 +63,19 @@ def speed_label(speed: float) -> str:
 
 
 def status_html(view: PlayerView, frame: Frame) -> str:
-    scenario, t_us = view.scenario, frame.t_us
-    marker = (f'id="{STATUS_ID}" data-frame="{frame.seq}" data-t-us="{t_us}" '
+    marker = (f'id="{STATUS_ID}" data-frame="{frame.seq}" data-t-us="{frame.t_us}" '
               f'data-applied="{view.applied}" data-generation="{view.generation}" '
               f'data-status="{view.status.name.lower()}"')
+    return f'<div {marker} style="font-size:0.85em">{status_text(view, frame.t_us)}</div>'
+
+
+def status_text(view: PlayerView, t_us: int) -> str:
+    """What the status block says (inside the marker): the scenario, its state and time, the
+    step, the caption, the checkpoint and the failures."""
+    scenario = view.scenario
     if scenario is None:
-        return (f'<div {marker} style="font-size:0.85em"><span class="fr-muted">No scenario '
-                f"loaded. Pick one and press Play: the rig restarts factory-fresh and the "
-                f"scenario drives it.</span></div>")
+        return ('<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
+                "restarts factory-fresh and the scenario drives it.</span>")
     total = len(scenario.steps)
     lines = [f"<b>{esc(scenario.name)}</b> &middot; {esc(view.status.value)} &middot; "
              f"t = {t_us / 1e6:.1f} s of {scenario.end_us / 1e6:g} s",
@@ -82,7 +87,7 @@ def status_html(view: PlayerView, frame: Frame) -> str:
     if view.checkpoint:
         lines.append(f'<span class="fr-muted">checkpoint {esc(view.checkpoint)}</span>')
     lines.extend(f'<span style="color:#a11616">{esc(f)}</span>' for f in view.failures)
-    return f'<div {marker} style="font-size:0.85em">{"<br>".join(lines)}</div>'
+    return "<br>".join(lines)
 
 
 class ScenarioPlayerPanel:
@@ -106,6 +111,7 @@ class ScenarioPlayerPanel:
                                            initial_value=speed_label(initial))
             self._status = gui.add_html(status_html(self.player.view(), runtime.frame))
         self._last = ""
+        self._said: tuple[Any, ...] = ()
         self._buttons.on_click(self._on_button)
         self._speed.on_update(self._on_speed)
 
@@ -183,8 +189,19 @@ class ScenarioPlayerPanel:
 
     # ---- the dashboard's update thread -----------------------------------------------------
     def update(self, frame: Frame) -> None:
-        """``frame``: the one the dashboard is writing (the marker names it)."""
-        content = status_html(self.player.view(), frame)
+        """``frame``: the one the dashboard is writing (the marker names it).
+
+        The marker's ``data-frame`` and ``data-t-us`` move with every frame (30 a second even
+        in an idle rig). A running rig's block is rewritten when what it says changes (text,
+        step, generation, status), with the frame of that change. A paused rig's block names
+        every frame written, as the screenshot tooling needs: it steps a paused rig and waits
+        until ``data-frame`` reaches the runtime's frame (app/screenshots.py ``sync``)."""
+        view = self.player.view()
+        said = (view.applied, view.generation, view.status, status_text(view, frame.t_us))
+        if said == self._said and not self._runtime.paused:
+            return
+        self._said = said
+        content = status_html(view, frame)
         if content != self._last:
             self._status.content = content
             self._last = content
