@@ -18,6 +18,10 @@ What the shim adds, each for a reason the library leaves open:
   after the last segment (the library checks only at the end).
 - The library's abort needs the index of the transfer: for a request it cannot parse it would
   fail before answering, so the index is set from the request first.
+- A segment request outside a segmented transfer of its direction (an upload segment with no
+  upload under way, a download segment with no download) aborts with 0x05040001, "command
+  specifier not valid": the library would run into its empty buffer and answer 0x08000000
+  with a logged traceback. The shim follows the transfer from the answers it sends.
 """
 
 from __future__ import annotations
@@ -35,7 +39,11 @@ from devices.od import AbortCode, DataType, OdEntry, SdoAbort, encode
 SDO_RX_BASE = 0x600  # client -> server (request)
 SDO_TX_BASE = 0x580  # server -> client (response)
 _CCS_DOWNLOAD, _CCS_UPLOAD = 0x20, 0x40
-_EXPEDITED, _SIZE_GIVEN = 0x02, 0x01
+_CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT = 0x00, 0x60
+_SCS_UPLOAD_SEGMENT, _SCS_DOWNLOAD_SEGMENT, _SCS_UPLOAD, _SCS_DOWNLOAD, _SCS_ABORT = (
+    0x00, 0x20, 0x40, 0x60, 0x80)
+_EXPEDITED, _SIZE_GIVEN, _LAST_SEGMENT = 0x02, 0x01, 0x01
+_UP, _DOWN = "upload", "download"
 _SIGNED = frozenset({DataType.INTEGER8, DataType.INTEGER16, DataType.INTEGER32})
 _WIDTH = {DataType.BOOLEAN: 1, DataType.INTEGER8: 1, DataType.UNSIGNED8: 1,
           DataType.INTEGER16: 2, DataType.UNSIGNED16: 2, DataType.INTEGER32: 4,
@@ -78,8 +86,11 @@ class SdoChannel:
         self.object_dictionary = object_dictionary  # SdoServer's Mapping side reads it
         self.rx_cobid, self.tx_cobid = SDO_RX_BASE + node_id, SDO_TX_BASE + node_id
         self.server = SdoServer(self.rx_cobid, self.tx_cobid, self)
-        self.server.network = _Network(send)  # type: ignore[assignment]
+        self.server.network = _Network(self._answered)  # type: ignore[assignment]
+        self._send = send
         self._size_given = True
+        self._transfer: str | None = None  # the segmented transfer under way, if any
+        self._request = b""
 
     def on_request(self, data: bytes) -> None:
         """One request frame (8 bytes; a shorter one is padded, "accetta ogni tipo di SDO")."""
@@ -87,6 +98,13 @@ class SdoChannel:
             return
         request = bytes(data[:8]).ljust(8, b"\0")
         command, ccs = request[0], request[0] & 0xE0
+        self._request = request
+        if (ccs == _CCS_UPLOAD_SEGMENT and self._transfer != _UP) or \
+                (ccs == _CCS_DOWNLOAD_SEGMENT and self._transfer != _DOWN):
+            if self.server._index is None:
+                self.server._index, self.server._subindex = 0, 0
+            self.server.abort(int(AbortCode.INVALID_COMMAND))
+            return
         if ccs in (_CCS_DOWNLOAD, _CCS_UPLOAD):
             self.server._index = int.from_bytes(request[1:3], "little")
             self.server._subindex = request[3]
@@ -108,6 +126,20 @@ class SdoChannel:
             self.server.abort(int(exc.code))
             return False
         return True
+
+    def _answered(self, can_id: int, response: bytes) -> None:
+        """Follow the segmented transfer from the answer, then send it."""
+        scs, request = response[0] & 0xE0, self._request
+        if scs == _SCS_ABORT:
+            self._transfer = None
+        elif scs == _SCS_UPLOAD:
+            self._transfer = None if response[0] & _EXPEDITED else _UP
+        elif scs == _SCS_DOWNLOAD:
+            self._transfer = None if request[0] & _EXPEDITED else _DOWN
+        elif (scs == _SCS_UPLOAD_SEGMENT and response[0] & _LAST_SEGMENT) or \
+                (scs == _SCS_DOWNLOAD_SEGMENT and request[0] & _LAST_SEGMENT):
+            self._transfer = None  # the server's "no more data" / the client's last segment
+        self._send(can_id, response)
 
     # ---- what SdoServer calls ------------------------------------------------------------
     def get_data(self, index: int, subindex: int, check_readable: bool = False) -> bytes:

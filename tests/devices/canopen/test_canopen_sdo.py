@@ -105,6 +105,36 @@ def test_toggle_bit_not_alternated() -> None:
     ])
 
 
+@pytest.mark.parametrize("steps", [
+    # an upload segment with no upload under way, then after an expedited upload
+    [("60 00 00 00 00 00 00 00", "80 00 00 00 01 00 04 05")],
+    [("40 18 10 01 00 00 00 00", "43 18 10 01 {vendor} "),
+     ("60 00 00 00 00 00 00 00", "80 18 10 01 01 00 04 05")],
+    # a download segment with no download under way, then after a finished one
+    [("0B A0 0F 00 00 00 00 00", "80 00 00 00 01 00 04 05")],
+    [("21 17 10 00 02 00 00 00", "60 17 10 00 00 00 00 00"),
+     ("0B A0 0F 00 00 00 00 00", "20 00 00 00 00 00 00 00"),
+     ("1B A0 0F 00 00 00 00 00", "80 17 10 00 01 00 04 05")],
+    # an upload segment in a download, and the segmented upload still works afterwards
+    [("21 17 10 00 02 00 00 00", "60 17 10 00 00 00 00 00"),
+     ("60 00 00 00 00 00 00 00", "80 17 10 00 01 00 04 05"),
+     ("40 08 10 00 00 00 00 00", "41 08 10 00 1A 00 00 00"),
+     ("60 00 00 00 00 00 00 00", "00 41 78 69 73 20 4E 6F")],  # "Axis No"
+])
+def test_a_segment_outside_its_transfer_is_an_invalid_command(steps) -> None:
+    """DS 301: a segment request with no segmented transfer of its direction under way is a
+    command specifier not valid here, 0x05040001 (canopen's SdoServer alone answers 0x08000000
+    after a TypeError), and nothing is written."""
+    bench = make_bench(device_name=SEED_NAME)
+    vendor = VENDOR_ID.to_bytes(4, "little").hex(" ").upper()
+    before = _state(bench)
+    _script(bench, [(req, resp.format(vendor=vendor).strip()) for req, resp in steps])
+    finished = any(req.startswith("0B") for req, _ in steps[1:])  # the 4000 ms download
+    assert bench.node.heartbeat_ms == (4000 if finished else before[3])
+    if not finished:
+        assert _state(bench) == before
+
+
 def test_expedited_download_without_size_is_accepted() -> None:
     """"Lo slave accetta ogni tipo di SDO, anche se il master non indica la lunghezza"."""
     bench = make_bench()
