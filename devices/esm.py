@@ -16,6 +16,7 @@ from typing import ClassVar, Generic, TypeVar
 
 from devices.ethercat import AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
 from devices.events import AlStatusChanged, Event, StateChanged
+from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 
 # §7.7 codes for requests the ESM itself refuses.
 NO_ERROR = 0x0000
@@ -128,3 +129,32 @@ class AlStatusView:
     @property
     def al_status_code(self) -> int:
         return self.esm.code
+
+
+class CoeMailbox:
+    """The CoE SDO service of a slave's mailbox, as a master reaches it (devices.master.Slave):
+    from PREOP on, with the slave reachable and its dictionary built; otherwise the mailbox
+    does not answer and the master's SDO times out (0x05040000). Values travel as the bytes
+    of the entry's type. A slave whose writes must go through its own path overrides
+    :meth:`mailbox_write`."""
+
+    od: ObjectDictionary | None
+    esm: Esm
+
+    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
+        od = self._mailbox_od(index, sub)
+        self.mailbox_write(index, sub, decode(od.entry(index, sub).dtype, data))
+
+    def sdo_upload(self, index: int, sub: int) -> bytes:
+        od = self._mailbox_od(index, sub)
+        return encode(od.entry(index, sub).dtype, od.read(index, sub))
+
+    def mailbox_write(self, index: int, sub: int, value: object) -> None:
+        assert self.od is not None  # _mailbox_od checked it
+        self.od.write(index, sub, value)
+
+    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
+        if not self.reachable() or self.od is None or \
+                self.esm.state is AlState.INIT:  # type: ignore[attr-defined]
+            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
+        return self.od

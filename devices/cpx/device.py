@@ -28,10 +28,10 @@ from devices.cpx.stillness import StillStepping
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
 from devices.device import Action, DeviceModel
-from devices.esm import AlStatusView
+from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
 from devices.events import AlarmChanged, LogLine, fmt_hex
-from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
+from devices.od import ObjectDictionary
 
 SUPPLY_NOMINAL_V = 24.0  # Tab. 29: U_EL/SEN 24 V DC +- 25 %
 SUPPLY_MIN_V = 18.0  # ... below this: undervoltage (FieldRig uses the same band for U_OUT)
@@ -42,7 +42,8 @@ SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per
 SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
 
 
-class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, AlStatusView, DeviceModel):
+class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatusView,
+             DeviceModel):
     KIND = "cpx_e_ec"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -184,20 +185,6 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, AlStatusView, Devic
     def set_power(self, on: bool) -> None:
         self.touch()
         self.cmd_power(on)
-
-    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
-        """A master's CoE SDO download (mailbox from PREOP on; else no answer)."""
-        od = self._mailbox_od(index, sub)
-        od.write(index, sub, decode(od.entry(index, sub).dtype, data))
-
-    def sdo_upload(self, index: int, sub: int) -> bytes:
-        od = self._mailbox_od(index, sub)
-        return encode(od.entry(index, sub).dtype, od.read(index, sub))
-
-    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
-        if not self.reachable() or self.od is None or self.esm.state is AlState.INIT:
-            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
-        return self.od
 
     def set_dc_fault(self, kind: str | None) -> None:
         """The master's DC faults as the bus module sees them: jitter or lost SYNC0 are

@@ -20,7 +20,7 @@ from collections.abc import Mapping
 from typing import Any, ClassVar
 
 from devices.device import Action, DeviceModel
-from devices.esm import AlStatusView
+from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
 from devices.events import StateChanged
 from devices.fastcat.alarms import COUPLER, Alarm
@@ -50,7 +50,7 @@ CNF_PROCEDURE = "cnf"  # StateChanged.machine of the procedure: idle, resetting,
 ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this recently
 
 
-class FastCat(BusMixin, FaultsMixin, RailMixin, AlStatusView, DeviceModel):
+class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, DeviceModel):
     KIND = "fastcat"
     ACTIONS: ClassVar[Mapping[str, Action]] = {**MODULE_ACTIONS, **COUPLER_ACTIONS}
 

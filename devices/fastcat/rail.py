@@ -15,11 +15,10 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from devices.device import Action, CommandError, Param
-from devices.ethercat import AlState
 from devices.fastcat.catalog import CATALOG, module_type
 from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES
-from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
+from devices.od import ObjectDictionary
 
 if TYPE_CHECKING:
     from devices.flash import FlashStore
@@ -165,21 +164,9 @@ class RailMixin:
         self._touched = True
         self.cmd_power(on)  # type: ignore[attr-defined]
 
-    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
-        """A master's CoE SDO download; the mailbox runs from PREOP on (else no answer)."""
-        od = self._mailbox_od(index, sub)
-        self._touched = True
-        od.write(index, sub, decode(od.entry(index, sub).dtype, data))
-
-    def sdo_upload(self, index: int, sub: int) -> bytes:
-        od = self._mailbox_od(index, sub)
-        return encode(od.entry(index, sub).dtype, od.read(index, sub))
-
-    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
-        if not self.reachable() or self.od is None or \
-                self.esm.state is AlState.INIT:  # type: ignore[attr-defined]
-            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
-        return self.od
+    def mailbox_write(self, index: int, sub: int, value: Any) -> None:
+        self._touched = True  # a master's SDO download (CoeMailbox): the next step is full
+        super().mailbox_write(index, sub, value)  # type: ignore[misc]
 
     def cmd_set_rotary(self, value: int) -> None:
         self.rotary_switch = value  # read at the next power-up, like the real switch

@@ -16,9 +16,9 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from devices.device import Action, DeviceModel
-from devices.esm import AlStatusView
+from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
-from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
+from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
 from devices.trscat.catalog import (
     BY_IDENT,
@@ -45,8 +45,8 @@ DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
 
 
-class TrsCat(SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, AlStatusView,
-             DeviceModel):
+class TrsCat(SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, CoeMailbox,
+             AlStatusView, DeviceModel):
     KIND = "trscat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
@@ -175,19 +175,8 @@ class TrsCat(SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, AlStat
     def set_power(self, on: bool) -> None:
         self.cmd_power(on)
 
-    def sdo_download(self, index: int, sub: int, data: bytes) -> None:
-        """A master's CoE SDO download (mailbox from PRE-OP on; else no answer)."""
-        od = self._mailbox_od(index, sub)
-        self.write_object(index, sub, decode(od.entry(index, sub).dtype, data))
-
-    def sdo_upload(self, index: int, sub: int) -> bytes:
-        od = self._mailbox_od(index, sub)
-        return encode(od.entry(index, sub).dtype, od.read(index, sub))
-
-    def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
-        if not self.reachable() or self.od is None or self.esm.state is AlState.INIT:
-            raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
-        return self.od
+    def mailbox_write(self, index: int, sub: int, value: Any) -> None:
+        self.write_object(index, sub, value)  # a master's SDO download: touched and refreshed
 
     def configure_dc(self, activation: int, sync0_cycle_ns: int, start_time_ns: int) -> None:
         """The master wrote the ESC's DC registers: 0x0981 activation, 0x09A0 SYNC0 cycle (ns),
