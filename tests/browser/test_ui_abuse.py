@@ -40,10 +40,13 @@ from helpers import (
     wait_until,
 )
 
+from app.ui.commands import Sent, gate_for
+
 pytestmark = pytest.mark.browser
 
 BOOT_S = 4.0  # power-up scan of 7 modules and INIT -> OP (docs/fastcat-coupler.md)
 CLICKS = 30  # an even number: every checkbox ends where it started
+THROTTLE_MS = 50  # viser's client: one GUI message per 50 ms, the latest of any widget
 
 # Click an element ``n`` times from inside the page, without waiting in between (faster than
 # any user; Playwright's own click waits for each to be actionable).
@@ -69,6 +72,22 @@ def checked(page: Any, label: str) -> bool:
 
 def reset_bit(live: LiveDashboard) -> int:
     return int(live.command("fastcat", "read_object", {"index": 0x5200, "sub": 1}))
+
+
+def delivered(page: Any, sent: list[Sent]) -> None:
+    """Wait until the server has every click a burst of ``page`` left in flight.
+
+    The clicks travel the websocket after rapid() returns, and viser's client sends every GUI
+    change through one sender throttled to 50 ms (client/src/WebsocketUtils.ts): in a burst
+    the first goes out, then only the latest of each window, of ANY widget. So a marker click
+    ("Alarm reset": no effect on a drive without alarm) waits the window out, or it would
+    replace the burst's last click; sent after it, the marker arrives after the burst, and the
+    commands of the burst are queued on the runtime before the marker's."""
+    markers = sum(s.action == "alarm_reset" for s in sent)
+    page.wait_for_timeout(4 * THROTTLE_MS)
+    rapid(page, "Alarm reset", 1)
+    wait_until(lambda: sum(s.action == "alarm_reset" for s in sent) > markers,
+               what="the marker click after the burst at the server")
 
 
 def commands_applied(live: LiveDashboard, page: Any) -> None:
@@ -104,9 +123,14 @@ def test_rapid_clicks_on_cnf_reset_fault_and_a_drive_button(live: LiveDashboard,
 
     page.get_by_role("tab", name="Servo drive").click()
     page.get_by_role("tab", name="Drive", exact=True).click()
+    sent: list[Sent] = []
+    gate_for(live.runtime).observe(sent.append)
     for _ in range(CLICKS // 2):
         rapid(page, "Enable", 1)
         rapid(page, "Disable", 1)
+    delivered(page, sent)
+    torque = [s.args["on"] for s in sent if s.action == "enable"]
+    assert torque and torque[-1] is False, torque  # the last click was Disable
     commands_applied(live, page)
     live.advance(0.5)
     drive = live.snapshot("drive")
@@ -119,6 +143,7 @@ def test_rapid_clicks_on_cnf_reset_fault_and_a_drive_button(live: LiveDashboard,
     stored_before = live.snapshot()["stored_config"]
     rapid(page, "Hold CNF")
     rapid(page, "Reset fault")
+    delivered(page, sent)
     commands_applied(live, page)
     live.advance(5.0)  # any CNF procedure would have run by now (§2: reset, scan, store)
     snap = live.snapshot()
