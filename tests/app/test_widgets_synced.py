@@ -1,9 +1,9 @@
 """Synced widgets (app/ui/panels/widgets.py): every page ends up showing the model's value.
 
-The fakes below behave as viser 1.1.1 does (docs/stack-notes.md): a page's change sets the
-server's value and runs coroutine callbacks at once on the event loop, plain callbacks later in
-a thread pool; assigning ``.value`` sends a message only when the value differs and calls the
-callbacks with ``client=None``. The fake runtime applies queued work in arrival order, as
+The fake viser handle (tests/app/fake_viser.py) behaves as viser 1.1.1 does: a page's change
+sets the server's value and runs coroutine callbacks at once on the event loop, plain callbacks
+later in a thread pool; assigning ``.value`` sends a message only when the value differs and
+calls the callbacks with ``client=None``. The fake runtime applies queued work in arrival order, as
 app/runtime.py does. Seed 000 §6.17 (Reset fault: the box is the level of 0x5200:1) is the
 example: a refused write (coupler without supply) must put the box back.
 """
@@ -11,70 +11,14 @@ example: a refused write (coupler without supply) must put the box back.
 from __future__ import annotations
 
 import asyncio
-import inspect
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from typing import Any
 
 import pytest
+from fake_viser import Handle
 
 from app.ui.panels import widgets
 from app.ui.panels.widgets import FRESH_AFTER, Synced
-
-
-@dataclass
-class Event:
-    client: Any
-    target: Any
-
-
-class Handle:
-    """A server-level viser input: ``sent`` holds the values sent to every page. Messages of
-    one turn of the event loop for one widget coalesce (viser's outgoing buffer keeps the last
-    update per widget and property until its next window)."""
-
-    def __init__(self, loop: asyncio.AbstractEventLoop, value: Any) -> None:
-        self._loop = loop
-        self._value = value
-        self.callbacks: list[Callable[[Event], Any]] = []
-        self.sent: list[Any] = []
-        self.outbox: list[Any] = []  # this turn's messages; the last one goes out
-        self.pool: list[Callable[[], None]] = []  # plain callbacks not run yet
-
-    def on_update(self, fn: Callable[[Event], Any]) -> None:
-        self.callbacks.append(fn)
-
-    @property
-    def value(self) -> Any:
-        return self._value
-
-    @value.setter
-    def value(self, value: Any) -> None:
-        if value == self._value:
-            return  # viser: an unchanged value sends nothing
-        self.outbox.append(value)
-        self._value = value
-        for fn in self.callbacks:
-            out = fn(Event(None, self))
-            if inspect.iscoroutine(out):
-                self._loop.create_task(out)
-
-    def window(self) -> None:
-        """viser sends its next window."""
-        if self.outbox:
-            self.sent.append(self.outbox[-1])
-            self.outbox.clear()
-
-    def user(self, client: str, value: Any) -> None:
-        """A page's change, as viser's message handler applies it."""
-        if value == self._value:
-            return
-        self._value = value
-        for fn in self.callbacks:
-            if inspect.iscoroutinefunction(fn):
-                self._loop.run_until_complete(fn(Event(client, self)))
-            else:
-                self.pool.append(lambda fn=fn, client=client: fn(Event(client, self)))
 
 
 class Server:

@@ -12,86 +12,17 @@ the value differs, and the last message of one turn of the loop is the one that 
 from __future__ import annotations
 
 import asyncio
-import inspect
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from types import SimpleNamespace
 from typing import Any
 
 import pytest
+from fake_viser import Handle
 
 from app.ui.drive.drive_panel import DrivePanel, mode_option
 from app.ui.line.master_panel import LOG_STYLES, MasterPanel
 from app.ui.panels.modules import ModulePanel
 from app.ui.panels.widgets import FRESH_AFTER
-
-
-@dataclass
-class Event:
-    client: Any
-    target: Any
-
-
-class Handle:
-    """Any server-level viser GUI handle; ``sent`` holds the values sent to every page."""
-
-    def __init__(self, loop: asyncio.AbstractEventLoop, label: str, value: Any,
-                 options: tuple[str, ...] = (), pool: list[Callable[[], Any]] | None = None
-                 ) -> None:
-        self._loop = loop
-        self._pool = pool if pool is not None else []
-        self.label = label
-        self._value = value
-        self.options = options
-        self.callbacks: list[Callable[[Event], Any]] = []
-        self.sent: list[Any] = []
-        self.outbox: list[Any] = []
-        self.visible = True
-        self.disabled = False
-        self.content = ""
-
-    def __enter__(self) -> Handle:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def on_update(self, fn: Callable[[Event], Any]) -> None:
-        self.callbacks.append(fn)
-
-    on_click = on_update
-
-    @property
-    def value(self) -> Any:
-        return self._value
-
-    @value.setter
-    def value(self, value: Any) -> None:
-        if value == self._value:
-            return  # viser: an unchanged value sends nothing
-        self.outbox.append(value)
-        self._value = value
-        for fn in self.callbacks:
-            out = fn(Event(None, self))
-            if inspect.iscoroutine(out):
-                self._loop.create_task(out)
-
-    def window(self) -> None:
-        if self.outbox:
-            self.sent.append(self.outbox[-1])
-            self.outbox.clear()
-
-    def user(self, client: str, value: Any, click: bool = False) -> None:
-        """A page's change (or a button group's click, which always counts), as viser's
-        message handler applies it: coroutine callbacks at once, plain ones later in a pool."""
-        if value == self._value and not click:
-            return
-        self._value = value
-        for fn in self.callbacks:
-            if inspect.iscoroutinefunction(fn):
-                self._loop.run_until_complete(fn(Event(client, self)))
-            else:
-                self._pool.append(lambda fn=fn, client=client: fn(Event(client, self)))
 
 
 class Gui:
@@ -101,7 +32,7 @@ class Gui:
         self.pool: list[Callable[[], Any]] = []  # viser's thread pool: plain callbacks
 
     def _add(self, label: str, value: Any, options: tuple[str, ...] = ()) -> Handle:
-        handle = Handle(self._loop, label, value, options, self.pool)
+        handle = Handle(self._loop, value, label, options, self.pool)
         self.handles.setdefault(label, handle)
         return handle
 
@@ -129,7 +60,7 @@ class Gui:
         return self._add(f"folder {label}", None)
 
     def add_html(self, content: str, **_: Any) -> Handle:
-        handle = Handle(self._loop, "html", None)
+        handle = Handle(self._loop, None, "html")
         handle.content = content
         return handle
 

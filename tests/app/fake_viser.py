@@ -1,0 +1,86 @@
+"""A fake of what viser 1.1.1 does for the widgets that mirror a device (docs/stack-notes.md).
+
+A page's change sets the server's value and runs coroutine callbacks at once on the event
+loop, plain callbacks later in a thread pool (``pool``: run them when the test says);
+assigning ``.value`` sends a message only when the value differs and calls the callbacks with
+``client=None``; the messages of one turn of the event loop for one widget coalesce (viser's
+outgoing buffer keeps the last update per widget and property until its next window).
+Shared by tests/app/test_widgets_synced.py and test_widgets_synced_panels.py.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass
+class Event:
+    client: Any
+    target: Any
+
+
+class Handle:
+    """Any server-level viser GUI handle; ``sent`` holds the values sent to every page."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, value: Any, label: str = "",
+                 options: tuple[str, ...] = (), pool: list[Callable[[], Any]] | None = None
+                 ) -> None:
+        self._loop = loop
+        self.pool = pool if pool is not None else []  # plain callbacks not run yet
+        self.label = label
+        self._value = value
+        self.options = options
+        self.callbacks: list[Callable[[Event], Any]] = []
+        self.sent: list[Any] = []
+        self.outbox: list[Any] = []  # this turn's messages; the last one goes out
+        self.visible = True
+        self.disabled = False
+        self.content = ""
+
+    def __enter__(self) -> Handle:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def on_update(self, fn: Callable[[Event], Any]) -> None:
+        self.callbacks.append(fn)
+
+    on_click = on_update
+
+    @property
+    def value(self) -> Any:
+        return self._value
+
+    @value.setter
+    def value(self, value: Any) -> None:
+        if value == self._value:
+            return  # viser: an unchanged value sends nothing
+        self.outbox.append(value)
+        self._value = value
+        for fn in self.callbacks:
+            out = fn(Event(None, self))
+            if inspect.iscoroutine(out):
+                self._loop.create_task(out)
+
+    def window(self) -> None:
+        """viser sends its next window."""
+        if self.outbox:
+            self.sent.append(self.outbox[-1])
+            self.outbox.clear()
+
+    def user(self, client: str, value: Any, click: bool = False) -> None:
+        """A page's change (or a button group's click, which always counts), as viser's
+        message handler applies it: coroutine callbacks at once, plain ones later in a pool."""
+        if value == self._value and not click:
+            return
+        self._value = value
+        for fn in self.callbacks:
+            if inspect.iscoroutinefunction(fn):
+                self._loop.run_until_complete(fn(Event(client, self)))
+            else:
+                self.pool.append(lambda fn=fn, client=client: fn(Event(client, self)))
