@@ -28,10 +28,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from still_runs import checkpoint_run, scenario_rig
 
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.scenario import load_scenario, parse_scenario, run_scenario, scenario_rig_path
+from app.scenario import load_scenario, parse_scenario
 from devices.cpx.device import CpxEEc
 from devices.cpx.faults import FAULTS
 from devices.cpx.stillness import VALUES, state_key
@@ -175,19 +176,10 @@ def skipped(rig: Rig) -> int:
 
 
 def scenario_run(scenario: Any, skip: bool) -> tuple[list[str], dict[str, Any], int]:
-    rig_path = scenario_rig_path(scenario, None)
-    rig = build_rig(load_rig_spec(Path(rig_path) if rig_path else DEFAULT_RIG), state_dir=None)
+    rig = scenario_rig(scenario)
     if not skip:
         no_skipping(rig)
-    seen: dict[str, Any] = {}
-
-    def on_step(step: Any, rig: Rig) -> None:
-        if step.kind == "checkpoint":
-            seen[step.text] = rig.snapshot()
-
-    run = run_scenario(scenario, rig, on_step=on_step)
-    seen["end"] = rig.snapshot()
-    return [json.dumps(e.to_record(), sort_keys=True) for e in run.events], seen, skipped(rig)
+    return (*checkpoint_run(scenario, rig), skipped(rig))
 
 
 def assert_same_runs(scenario: Any) -> tuple[list[str], dict[str, Any]]:

@@ -23,17 +23,17 @@ Reduced (CI): five scenarios, 1 x 100 random operations; ``--full``: every examp
 from __future__ import annotations
 
 import enum
-import json
 import random
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import pytest
+from still_runs import checkpoint_run, scenario_rig
 
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.scenario import load_scenario, run_scenario, scenario_rig_path
+from app.scenario import load_scenario
 from devices.device import CommandError
 from devices.ethercat import AlState
 from devices.master import EtherCatMaster
@@ -77,23 +77,14 @@ def master_state(rig: Rig) -> dict[str, Any]:
 # ---- scenarios ------------------------------------------------------------------------------
 def scenario_run(path: Path, skip: bool) -> tuple[list[str], dict[str, Any]]:
     scenario = load_scenario(path)
-    rig_path = scenario_rig_path(scenario, None)
-    rig_file = (path.parent / rig_path).resolve() if rig_path else DEFAULT_RIG
-    rig = build_rig(load_rig_spec(rig_file), state_dir=None)
+    rig = scenario_rig(scenario)
     if "master" not in rig.devices:
         pytest.skip(f"{path.stem}: its rig has no EtherCAT master")
     if not skip:
         no_skipping(rig)
-    seen: dict[str, Any] = {}
-
-    def on_step(step: Any, rig: Rig) -> None:
-        if step.kind == "checkpoint":
-            seen[step.text] = (rig.snapshot(), master_state(rig))
-
-    run = run_scenario(scenario, rig, on_step=on_step)
-    seen["end"] = (rig.snapshot(), master_state(rig))
+    events, seen = checkpoint_run(scenario, rig, lambda rig: (rig.snapshot(), master_state(rig)))
     seen["skipped"] = vars(master_of(rig).skipped)
-    return [json.dumps(e.to_record(), sort_keys=True) for e in run.events], seen
+    return events, seen
 
 
 @pytest.mark.parametrize("path", [

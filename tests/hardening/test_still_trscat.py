@@ -27,10 +27,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from still_runs import checkpoint_run, scenario_rig
 
 from app.rig import Rig
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec, parse_rig_spec
-from app.scenario import load_scenario, run_scenario, scenario_rig_path
+from app.rig_config import build_rig, parse_rig_spec
+from app.scenario import load_scenario
 from devices.device import CommandError
 from devices.od import SdoAbort
 from devices.trscat.device import TrsCat
@@ -48,30 +49,22 @@ def no_skipping(rig: Rig) -> Rig:
     return rig
 
 
-def scenario_rig(path: Path) -> Rig:
-    rig_path = scenario_rig_path(load_scenario(path), None)
-    return build_rig(load_rig_spec(Path(rig_path) if rig_path else DEFAULT_RIG), state_dir=None)
+def trscat_rig(path: Path) -> Rig:
+    return scenario_rig(load_scenario(path))
 
 
 def scenario_run(path: Path, skip: bool) -> tuple[list[str], dict[str, Any], int]:
     scenario = load_scenario(path)
-    rig = scenario_rig(path)
+    rig = scenario_rig(scenario)
     if not skip:
         no_skipping(rig)
-    seen: dict[str, Any] = {}
-
-    def on_step(step: Any, rig: Rig) -> None:
-        if step.kind == "checkpoint":
-            seen[step.text] = rig.snapshot()
-
-    run = run_scenario(scenario, rig, on_step=on_step)
-    seen["end"] = rig.snapshot()
+    events, seen = checkpoint_run(scenario, rig)
     skipped = sum(d.skipped_slot_cycles for d in rig.devices.values() if isinstance(d, TrsCat))
-    return [json.dumps(e.to_record(), sort_keys=True) for e in run.events], seen, skipped
+    return events, seen, skipped
 
 
 def _with_trscat(path: Path) -> bool:
-    return any(isinstance(d, TrsCat) for d in scenario_rig(path).devices.values())
+    return any(isinstance(d, TrsCat) for d in trscat_rig(path).devices.values())
 
 
 @pytest.mark.parametrize("path", [
