@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 import struct
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -225,6 +225,20 @@ class ObjectDictionary:
 
     def __len__(self) -> int:
         return len(self._entries)
+
+    def announce_writes(self, before: Callable[[OdEntry, Any], None],
+                        entries: Iterable[OdEntry] | None = None) -> None:
+        """Call ``before(entry, value)`` ahead of every value stored into ``entries`` (default:
+        every entry with a setter): how a model that skips still steps learns that a write
+        from outside its step touched it. Call once, after the last entry was added."""
+        chosen = [e for e in self if e.setter is not None] if entries is None else list(entries)
+        for entry in chosen:
+            def write(value: Any, entry: OdEntry = entry,
+                      setter: Callable[[Any], None] | None = entry.setter) -> None:
+                before(entry, value)
+                if setter is not None:
+                    setter(value)
+            entry.setter = write
 
     def has_index(self, index: int) -> bool:
         return any(i == index for i, _ in self._entries)

@@ -41,7 +41,7 @@ from devices.stillness import Backoff, value_key_for
 
 if TYPE_CHECKING:
     from devices.cpx.device import CpxEEc
-    from devices.od import ObjectDictionary
+    from devices.od import ObjectDictionary, OdEntry
 
 # Identity, the dictionary (its stored values change only by writes, which touch the model),
 # the event queue (compared by length) and this bookkeeping; ``units`` is [bus, *modules].
@@ -115,19 +115,11 @@ class StillStepping:
     def _announce_writes(self, od: ObjectDictionary) -> None:
         """Every write into the dictionary touches the model; an output object written with
         the value it has (a master's process image every cycle) changes nothing."""
-        for entry in od:
-            if not entry.access.writable:
-                continue
-            setter, getter = entry.setter, entry.getter
-            output = 0x7000 <= entry.index <= 0x70FF and getter is not None
-
-            def write(value: Any, setter: Any = setter, getter: Any = getter,
-                      output: bool = output) -> None:
-                if not output or getter() != value:
-                    self._touched = True
-                if setter is not None:
-                    setter(value)
-            entry.setter = write
+        def before(entry: OdEntry, value: Any) -> None:
+            output = 0x7000 <= entry.index <= 0x70FF and entry.getter is not None
+            if not output or entry.getter() != value:
+                self._touched = True
+        od.announce_writes(before, [e for e in od if e.access.writable])
 
     def step(self: CpxEEc, now_us: int) -> None:
         dt_us = now_us - self.now_us

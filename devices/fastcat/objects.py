@@ -8,7 +8,6 @@ ambiguous rows are in docs/fastcat-coupler.md.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from functools import partial
 from typing import TYPE_CHECKING, Any, Protocol
 
 from devices.od import Access, DataType, ObjectDictionary, OdEntry
@@ -67,19 +66,9 @@ def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
     for n, module in enumerate(modules, start=1):
         module.add_objects(od, n)
     if on_write is not None:
-        for entry in od:
-            if entry.setter is not None:
-                module_object = (entry.index, entry.sub) not in coupler_keys
-                entry.setter = _announced(entry.setter, partial(on_write, module_object))
+        announce = on_write
+        od.announce_writes(lambda e, _v: announce((e.index, e.sub) not in coupler_keys))
     return od
-
-
-def _announced(setter: Callable[[Any], None], on_write: Callable[[], None]
-               ) -> Callable[[Any], None]:
-    def write(value: Any) -> None:
-        on_write()
-        setter(value)
-    return write
 
 
 def _ro(od: ObjectDictionary, index: int, sub: int, name: str, dtype: DataType, value: Any,

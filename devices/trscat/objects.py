@@ -83,18 +83,9 @@ def build_od(dev: TrsObjects, configured: Sequence[ModuleKind | None],
     _modular_device(od, dev)
     _outputs_on_error(od, dev)
     if on_write is not None:
-        for entry in od:
-            if entry.setter is not None:
-                entry.setter = _announced(entry.setter, on_write)
+        announce = on_write
+        od.announce_writes(lambda _e, _v: announce())
     return od
-
-
-def _announced(setter: Callable[[Any], None], on_write: Callable[[], None]
-               ) -> Callable[[Any], None]:
-    def write(value: Any) -> None:
-        on_write()
-        setter(value)
-    return write
 
 
 def _ro(od: ObjectDictionary, index: int, sub: int, name: str, dtype: DataType, value: Any,
