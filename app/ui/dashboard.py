@@ -1,12 +1,14 @@
 """The viser dashboard of a rig: 3D DIN rail, control panel, state, event log, objects.
 
 Threading (docs/dashboard.md): the runtime's simulation thread owns the models. viser runs
-callbacks in its own threads; they only queue commands (``app.ui.commands``). The dashboard
-has one update thread that, woken by each frame the runtime publishes (about 30 a second, and
-one right after a command ran), reads the latest frame and new events, writes what changed
-into the server-level handles inside ``server.atomic()``, so every browser sees the same rig
-and one frame's changes arrive together, and flushes viser's send window, so a click's answer
-leaves at once (benchmark 2, docs/performance.md).
+callbacks in its thread pool, or on its event loop (the controls that are device values,
+``app.ui.panels.widgets.Synced``: they must not block); they only queue commands
+(``app.ui.commands``). The dashboard has one update thread that, woken by each frame the
+runtime publishes (about 30 a second, and one right after a command ran), reads the latest
+frame and new events, writes what changed into the server-level handles inside
+``server.atomic()``, so every browser sees the same rig and one frame's changes arrive
+together, and flushes viser's send window, so a click's answer leaves at once (benchmark 2,
+docs/performance.md).
 """
 
 from __future__ import annotations
