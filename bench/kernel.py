@@ -19,7 +19,9 @@ default rigs in real time on one core, i.e. >= 1x for the hundred together):
 - the FastCAT line: the first rig with its couplers and master only (the default rig issue 7
   was written against);
 - 1, 10 and 100 rigs of each stepped together in one loop, idle in OP, after all of them booted
-  (a count that would take more than 25 s of CPU is projected from the one before, and says so);
+  (a count that would take more than 25 s of CPU is projected from the one before, and says so),
+  and beside them the floor: the same rig's device ids stepped as models that do nothing
+  (bench/_kernel_floor.py), what the loop and the calls alone cost;
 - 1, 4, 8 and 16 modules on one coupler (a mix of digital, analog and encoder modules with at
   most 8 analog ones), idle and cyclic.
 
@@ -44,6 +46,7 @@ from pathlib import Path
 
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigSpec, build_rig, load_rig_spec, parse_rig_spec
+from bench._kernel_floor import floor_line
 from devices.device import CommandError
 from devices.ethercat import AlState
 from devices.fastcat.coupler import FastCat
@@ -278,6 +281,8 @@ def many_rigs(title: str, spec: RigSpec, d: Durations, counts: Sequence[int]) ->
         idle_cpu = cpu / seconds / count
         together = speed(seconds, cpu)
         out.append(line(f"{label} ({together * count:.0f}x per rig)", together, target))
+    out.append(floor_line(build_rig(spec, state_dir=None), spec.step_us,
+                          steps=round(d.many * 100_000)))
     return out
 
 
