@@ -8,6 +8,13 @@ and the carriage at ``axis.carriage`` between the negative limit switch, the hom
 the positive limit switch at the positions the rig file sets. A switch lights while the
 carriage (or a forced input) actuates it. Nodes are built once; per frame only positions,
 colours and texts that changed are sent.
+
+Labels keep one size on screen whatever the zoom (viser "screen" labels), so the layout keeps
+them apart by placing, not by measuring: the caption (position, velocity, actuated switches)
+sits in the empty band above the travel, beside the drive's name; the switch labels hang
+under the bed, each on the side of its switch away from its nearer neighbour (the default
+rig's home switch is a few pixels from NL); the motor's label under the motor, clear of the
+carriage's at the end stop. tests/app/test_axis_labels.py checks them at the default camera.
 """
 
 from __future__ import annotations
@@ -69,8 +76,29 @@ SEGMENT_PLACES: dict[str, tuple[float, float, bool]] = {
     "e": (-SEG_W / 2, -SEG_H / 4, False), "c": (SEG_W / 2, -SEG_H / 4, False),
 }
 # The drive's network LEDs (ch. 5 "Connessioni e Leds Drive EtherCAT"): name, colour, z.
+# 0.4 apart: their labels (one line each) do not overlap at the default camera.
 NETWORK_LEDS: tuple[tuple[str, str, float], ...] = (
-    ("L/A", "green", 0.35), ("Status", "green", 0.0), ("Error", "red", -0.35))
+    ("L/A", "green", 0.4), ("Status", "green", 0.0), ("Error", "red", -0.4))
+# The axis switches (seed 004 ch. 2, CN2 inputs: pin 8 Negative limit switch, pin 9 Positive
+# limit switch, pin 14 Home switch): key, the axis field with its position, the label.
+SWITCHES: tuple[tuple[str, str, str], ...] = (
+    ("neg", "neg_limit", "NL"), ("home", "home_switch", "home"), ("pos", "pos_limit", "PL"))
+SWITCH_LABEL_Z = -0.82  # top of the switch labels, under the bed
+CARRIAGE_LABEL_Z = 0.5  # bottom of the carriage's position, over the carriage
+MOTOR_LABEL_Z = -0.62  # top of the motor's label, under the motor
+LEGEND_Z = AXIS_TOP - 0.08  # top of the two-line caption, above the travel
+
+
+def switch_label_anchors(xs: Mapping[str, float]) -> dict[str, str]:
+    """The anchor of each switch label, ``xs`` being the switches' scene x: the leftmost label
+    ends at its switch, the rightmost starts at it, the middle one opens toward the wider gap.
+    Two labels then grow away from each other however close their switches are (the home
+    switch on a limit switch included), and the middle one has at least half the span."""
+    order = sorted(xs, key=lambda k: (xs[k], [s[0] for s in SWITCHES].index(k)))
+    first, mid, last = order
+    toward_right = xs[last] - xs[mid] >= xs[mid] - xs[first]
+    return {first: "top-right", mid: "top-left" if toward_right else "top-right",
+            last: "top-left"}
 
 
 def display_segments(text: str) -> list[str]:
@@ -110,17 +138,26 @@ class AxisScene:
                  length: float) -> None:
         self._server = server
         self._root = f"/{drive_id}_axis"
-        self._z = z
-        self._length = length
+        self.z = z
+        self.length = length
         self._travel: Travel | None = None
         self._sent: dict[str, Any] = {}  # last value sent per node property
         self._segments: list[dict[str, viser.BoxHandle]] = []
         self._leds: dict[str, tuple[viser.BoxHandle, viser.LabelHandle, str]] = {}
         self._switches: dict[str, tuple[viser.BoxHandle, viser.LabelHandle]] = {}
+        self._labels: list[viser.LabelHandle] = []
         self._build_static()
 
     def _at(self, x: float, y: float, z: float) -> tuple[float, float, float]:
-        return (x, y, z + self._z)
+        return (x, y, z + self.z)
+
+    def _label(self, name: str, text: str, x: float, y: float, z: float, anchor: Any,
+               scale: float) -> viser.LabelHandle:
+        label = self._server.scene.add_label(f"{self._root}/{name}", text,
+                                             position=self._at(x, y, z), anchor=anchor,
+                                             font_screen_scale=scale)
+        self._labels.append(label)
+        return label
 
     # ---- building ---------------------------------------------------------------------
     def _build_static(self) -> None:
@@ -128,8 +165,7 @@ class AxisScene:
         front = -DRIVE_D / 2 - 0.04
         scene.add_box(f"{root}/drive", color=DRIVE_BODY, dimensions=(DRIVE_W, DRIVE_D, DRIVE_H),
                       position=at(DRIVE_X, 0.0, AXIS_TOP - DRIVE_H / 2))
-        self._name = scene.add_label(f"{root}/drive_name", "", position=at(DRIVE_X, front, 1.62),
-                                     anchor="center-center", font_screen_scale=0.8)
+        self._name = self._label("drive_name", "", DRIVE_X, front, 1.62, "center-center", 0.8)
         scene.add_box(f"{root}/display", color=DISPLAY_BG, dimensions=(1.0, 0.05, 0.66),
                       position=at(DRIVE_X, front, 1.0))
         for digit in range(DIGITS):
@@ -146,17 +182,15 @@ class AxisScene:
             key = name.replace("/", "")
             box = scene.add_box(f"{root}/led_{key}", color=LED_OFF, dimensions=LED_SIZE,
                                 position=at(0.4, front, z))
-            label = scene.add_label(f"{root}/led_{key}_label", f"{name} off",
-                                    position=at(0.7, front, z), anchor="center-left",
-                                    font_screen_scale=0.7)
+            label = self._label(f"led_{key}_label", f"{name} off", 0.7, front, z,
+                                "center-left", 0.7)
             self._leds[name] = (box, label, colour)
         # Motor, coupling, screw and bed.
         mz = 0.0
         scene.add_box(f"{root}/motor", color=MOTOR, dimensions=(MOTOR_W, 1.0, 1.0),
                       position=at(MOTOR_X0 + MOTOR_W / 2, 0.0, mz))
-        scene.add_label(f"{root}/motor_label", "motor", position=at(MOTOR_X0 + MOTOR_W / 2,
-                                                                    FRONT - 0.1, 0.78),
-                        anchor="bottom-center", font_screen_scale=0.7)
+        self._label("motor_label", "motor", MOTOR_X0 + MOTOR_W / 2, FRONT - 0.1,
+                    MOTOR_LABEL_Z, "top-center", 0.7)
         along_x = (math.cos(math.pi / 4), 0.0, math.sin(math.pi / 4), 0.0)
         coupling_x = MOTOR_X0 + MOTOR_W + 0.1
         scene.add_cylinder(f"{root}/coupling", radius=0.22, height=0.2, color=MOTOR,
@@ -164,7 +198,7 @@ class AxisScene:
         self._nib = scene.add_box(f"{root}/nib", color=NIB, dimensions=(0.22, 0.1, 0.1),
                                   position=at(coupling_x, 0.0, mz + 0.17))
         self._nib_x = coupling_x
-        screw_len = self._length - coupling_x
+        screw_len = self.length - coupling_x
         scene.add_cylinder(f"{root}/screw", radius=0.08, height=screw_len, color=SCREW,
                            wxyz=along_x, position=at(coupling_x + screw_len / 2, 0.0, mz))
         scene.add_box(f"{root}/bed", color=BED, dimensions=(screw_len, 1.1, 0.22),
@@ -172,13 +206,9 @@ class AxisScene:
         self._carriage = scene.add_box(f"{root}/carriage", color=CARRIAGE,
                                        dimensions=(0.7, 1.0, 0.8), position=at(TRAVEL_X0, 0.0,
                                                                                mz))
-        self._carriage_label = scene.add_label(f"{root}/carriage_label", "",
-                                               position=at(TRAVEL_X0, FRONT, mz + 0.5),
-                                               anchor="bottom-center", font_screen_scale=0.8)
-        self._legend = scene.add_label(f"{root}/legend", "",
-                                       position=at((TRAVEL_X0 + self._length) / 2, FRONT,
-                                                   AXIS_BOTTOM + 0.05),
-                                       anchor="bottom-center", font_screen_scale=0.75)
+        self._carriage_label = self._label("carriage_label", "", TRAVEL_X0, FRONT,
+                                           mz + CARRIAGE_LABEL_Z, "bottom-center", 0.8)
+        self._legend = self._label("legend", "", TRAVEL_X0, FRONT, LEGEND_Z, "top-left", 0.75)
 
     def _build_switches(self, travel: Travel, axis: Mapping[str, Any]) -> None:
         scene, at = self._server.scene, self._at
@@ -188,14 +218,14 @@ class AxisScene:
         scene.add_box(f"{self._root}/home_cam", color=HOME_CAM,
                       dimensions=(travel.x1 - home, 0.04, 0.1),
                       position=at((home + travel.x1) / 2, FRONT + 0.04, -0.5))
-        for key, field, text in (("neg", "neg_limit", "NL"), ("home", "home_switch", "home"),
-                                 ("pos", "pos_limit", "PL")):
-            x = travel.x(float(axis.get(field, 0.0)))
+        xs = {key: travel.x(float(axis.get(field, 0.0))) for key, field, _ in SWITCHES}
+        anchors = switch_label_anchors(xs)
+        for key, _, text in SWITCHES:
             box = scene.add_box(f"{self._root}/switch_{key}", color=SWITCH_OFF,
-                                dimensions=(0.16, 0.5, 0.3), position=at(x, FRONT + 0.1, -0.62))
-            label = scene.add_label(f"{self._root}/switch_{key}_label", text,
-                                    position=at(x, FRONT, -0.82), anchor="top-center",
-                                    font_screen_scale=0.7)
+                                dimensions=(0.16, 0.5, 0.3),
+                                position=at(xs[key], FRONT + 0.1, -0.62))
+            label = self._label(f"switch_{key}_label", text, xs[key], FRONT, SWITCH_LABEL_Z,
+                                anchors[key], 0.7)
             self._switches[key] = (box, label)
 
     # ---- per frame ----------------------------------------------------------------------
@@ -210,14 +240,14 @@ class AxisScene:
         ``network`` is the snapshot of the drive's EtherCAT side, if the rig has one."""
         axis = snap.get("axis") or {}
         if self._travel is None:
-            self._travel = Travel.of(axis, self._length)
+            self._travel = Travel.of(axis, self.length)
             self._build_switches(self._travel, axis)
         travel = self._travel
         carriage = float(axis.get("carriage", 0.0))
         x = round(travel.x(carriage), 3)
         self._send("carriage", self._carriage, "position", self._at(x, 0.0, 0.0))
         self._send("carriage_label_pos", self._carriage_label, "position",
-                   self._at(x, FRONT, 0.5))
+                   self._at(x, FRONT, CARRIAGE_LABEL_Z))
         self._send("carriage_label", self._carriage_label, "text",
                    f"{snap.get('position_counts', 0)}")
         self._send("carriage_color", self._carriage, "color",
@@ -231,7 +261,7 @@ class AxisScene:
             lit = bool(limits.get(key))
             self._send(f"switch_{key}", box, "color", SWITCH_LIT[key] if lit else SWITCH_OFF)
         self._update_drive(drive_id, snap, network, t_us)
-        self._send("legend", self._legend, "text", legend_text(snap))
+        self._send("legend", self._legend, "text", legend_label(snap))
 
     def _update_drive(self, drive_id: str, snap: Mapping[str, Any],
                       network: Mapping[str, Any] | None, t_us: int) -> None:
@@ -254,20 +284,35 @@ class AxisScene:
         return [{seg: self._sent.get(f"seg{d}{seg}", SEGMENT_OFF) for seg in SEGMENT_PLACES}
                 for d in range(DIGITS)]
 
+    def labels(self) -> list[viser.LabelHandle]:
+        """Every label of the axis (tests: that none covers another)."""
+        return list(self._labels)
+
     def carriage_x(self) -> float:
         """Scene x of the carriage now (tests)."""
         position = self._sent.get("carriage")
         return float(position[0]) if position else TRAVEL_X0
 
 
-def legend_text(snap: Mapping[str, Any]) -> str:
-    """The axis in words under it: what a still picture cannot show by itself."""
+def legend_parts(snap: Mapping[str, Any]) -> list[str]:
+    """The axis in words: what a still picture cannot show by itself."""
     velocity = float(snap.get("velocity", 0.0))
     limits = snap.get("limits") or {}
-    hit = [name for key, name in (("neg", "NL"), ("home", "home"), ("pos", "PL"))
-           if limits.get(key)]
+    hit = [name for key, _, name in SWITCHES if limits.get(key)]
     parts = [f"position {snap.get('position_counts', 0)}", f"velocity {velocity:.0f} u/s",
              f"switches: {', '.join(hit) if hit else 'none'}"]
     if snap.get("jammed"):
         parts.append("load jammed")
-    return " · ".join(parts)
+    return parts
+
+
+def legend_text(snap: Mapping[str, Any]) -> str:
+    """The caption on one line: "position 0 · velocity 0 u/s · switches: home"."""
+    return " · ".join(legend_parts(snap))
+
+
+def legend_label(snap: Mapping[str, Any]) -> str:
+    """The caption as the scene shows it: the motion on the first line, the switches (and a
+    jammed load) on the second, so that it stays within the travel's width."""
+    parts = legend_parts(snap)
+    return " · ".join(parts[:2]) + "\n" + " · ".join(parts[2:])
