@@ -19,7 +19,7 @@ from devices.servo import ds402
 from devices.servo.actions import DriveActions
 from devices.servo.alarms import AlarmBank, AlarmSpec, Effect, alarm_table
 from devices.servo.config import DriveConfig
-from devices.servo.ds402 import Command, State
+from devices.servo.ds402 import State
 from devices.servo.errors import AccessError
 from devices.servo.io import INPUT_NAMES, LatchFilter
 from devices.servo.modes import MODE_CLASSES, Mode
@@ -45,6 +45,7 @@ from devices.servo.registers import (
 from devices.servo.saving import DriveFlash
 from devices.servo.statemachine import DriveStateMachine
 from devices.servo.stillness import StillSteps, may_settle, state_key
+from devices.servo.ticking import SWITCHES, DriveTick
 
 __all__ = ["DriveConfig", "ServoDrive"]
 
@@ -52,10 +53,11 @@ logger = logging.getLogger(__name__)
 
 TICK_US = 1_000
 BOOT_US = 50_000  # Not ready to switch on -> Switch on disabled after the self test
-SWITCHES = ("neg_limit", "pos_limit", "home")
+_FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)  # an enum member's lookup is slow
 
 
-class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, DeviceModel):
+class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveActions,
+                 DeviceModel):
     KIND = "servo"
     SKIP_STILL = True  # False: every step in full (tests/hardening/test_still_steps.py)
 
@@ -105,6 +107,9 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         self._was_allowed = False
         self._fault_effect = Effect.RELEASE
         self._levels: dict[str, bool] = {}
+        # (wiring, switches, levels) of the last tick's levels (ticking.py); a cache
+        self._levels_cache: tuple[dict[str, bool], tuple[bool, ...], dict[str, bool]] | None \
+            = None
         self.mode_logic: Mode = MODE_CLASSES[1]()
 
     def _power_up(self) -> None:
@@ -231,9 +236,13 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         return self.wired.get(name, False)
 
     def input_levels(self) -> dict[str, bool]:
-        levels = {name: self.wired.get(name, False) for name in INPUT_NAMES}
-        for name, actuated in zip(SWITCHES, self.geometry.switches(self.plant.theta),
-                                  strict=True):
+        return self.levels_at(self.geometry.switches(self.plant.theta))
+
+    def levels_at(self, switches: tuple[bool, bool, bool]) -> dict[str, bool]:
+        """The input levels with the switches (neg, pos, home) as the carriage actuates them."""
+        wired = self.wired
+        levels = {name: wired.get(name, False) for name in INPUT_NAMES}
+        for name, actuated in zip(SWITCHES, switches, strict=True):
             levels[name] = levels[name] or actuated
         return levels
 
@@ -249,7 +258,7 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
 
     @property
     def following_error_exceeded(self) -> bool:
-        window = self.regs[R.FOLLOWING_ERROR_WINDOW]
+        window = self.regs[_FOLLOWING_ERROR_WINDOW]
         return window != DISABLED_32 and abs(self.following_error_user) > window
 
     def log(self, text: str) -> None:
@@ -312,7 +321,9 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
         if self._touched:
             self._touched = False
             still.restart()
-        before = state_key(self) if span and may_settle(self) and still.due() else None
+        # plant.omega first: may_settle's first test, without the call for a moving drive
+        before = state_key(self) if span and self.plant.omega == 0.0 and may_settle(self) \
+            and still.due() else None
         queued = len(self.events.items)
         while self._t_us < now_us:
             dt_us = min(TICK_US, now_us - self._t_us)
@@ -327,94 +338,6 @@ class ServoDrive(DriveStateMachine, DriveFlash, DriveReadings, DriveActions, Dev
             still.checked(settled)
         still.dt = span if settled else None
         still.alarms, still.changes = self.alarms, self.alarms.changes
-
-    def _tick(self, dt: float) -> None:
-        lag = self.position_lag_s
-        if not self.powered:
-            self.plant.step(dt, None, lag)
-            self.trajectory.hold(self.plant.theta, self.plant.omega)
-            return
-        if self.state is State.NOT_READY_TO_SWITCH_ON and self._t_us >= self.boot_until:
-            self._transition(Command.SELF_TEST_DONE)
-        self.indirect.step(self._t_us)
-        self._update_saving()
-        self._evaluate()
-        theta_before, velocity_before = self.plant.theta, self.trajectory.velocity
-        self._move(dt, lag)
-        self.meter.update(self, (self.trajectory.velocity - velocity_before) / dt, dt)
-        levels = self.input_levels()
-        changes = self._changes(self._levels, levels, theta_before, self.plant.theta)
-        if levels["start"] and not self._levels.get("start", False):
-            self.mode_logic.on_start_input(self)
-        self._levels = levels
-        confirmed = self.latch.update(levels["latch"], self._t_us, self.position_user)
-        if confirmed is not None:
-            self.regs[R.LATCHED_POSITION] = confirmed
-            self.latched_flag = True
-        self.mode_logic.observe(self, changes)
-        self._check_limits(levels)
-        self._check_following_error(dt)
-        if abs((self.plant.theta - self.theta_zero) * self.feed) > 0x7FFF_FFFF:
-            self.raise_alarm(15)  # the position no longer fits R06 (S32)
-
-    def _move(self, dt: float, lag: float) -> None:
-        if not self.state.in_torque:
-            if self._was_allowed:
-                self.mode_logic.halted(self)
-                self._was_allowed = False
-            self.plant.step(dt, None, lag)
-            self.trajectory.hold(self.plant.theta, self.plant.omega)
-            return
-        if self.state is State.OPERATION_ENABLED:
-            allowed = self.motion_allowed
-            if allowed:
-                self.mode_logic.step(self, dt)
-            elif self._was_allowed:
-                self.mode_logic.halted(self)
-                halting = self.motion_enabled  # halt bit: profile deceleration
-                self.trajectory.stop(self.limits() if halting else self.quick_stop_limits())
-            self._was_allowed = allowed
-        self.trajectory.advance(dt)
-        self.plant.step(dt, self.trajectory.position, lag)
-        standstill = self.trajectory.idle and self.trajectory.velocity == 0.0
-        if standstill and self.state is State.QUICK_STOP_ACTIVE:
-            self._transition(Command.STANDSTILL)
-        elif standstill and self.state is State.FAULT_REACTION_ACTIVE:
-            self._transition(Command.FAULT_REACTION_DONE)
-
-    def _changes(self, before: dict[str, bool], after: dict[str, bool], theta0: float,
-                 theta1: float) -> list[tuple[str, bool, float]]:
-        """Switch edges and markers of this tick, each at the position it happened."""
-        g = self.geometry
-        edges = {"neg_limit": g.neg_limit, "pos_limit": g.pos_limit, "home": g.home_switch}
-        found = []
-        for name in SWITCHES:
-            if before.get(name, after[name]) != after[name]:
-                edge = edges[name]
-                at = edge if min(theta0, theta1) <= edge <= max(theta0, theta1) else theta1
-                found.append((name, after[name], at))
-        found += [("marker", True, m) for m in g.markers_between(theta0, theta1)]
-        return sorted(found, key=lambda change: abs(change[2] - theta0))
-
-    def _check_limits(self, levels: dict[str, bool]) -> None:
-        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
-        if self.state is not State.OPERATION_ENABLED or self.mode_logic.busy:
-            return
-        velocity = self.trajectory.velocity
-        if levels["neg_limit"] and velocity < 0.0:
-            self.raise_alarm(20)
-        elif levels["pos_limit"] and velocity > 0.0:
-            self.raise_alarm(21)
-
-    def _check_following_error(self, dt: float) -> None:
-        """Alarm 16: |following error| > R03 for longer than R04 ms (R03 = 0xFFFFFFFF: off)."""
-        if self.state is State.OPERATION_ENABLED and self.following_error_exceeded:
-            self._fe_ms += dt * 1e3
-            if self._fe_ms > self.regs[R.FOLLOWING_ERROR_TIMEOUT]:
-                self._fe_ms = 0.0
-                self.raise_alarm(16)
-        else:
-            self._fe_ms = 0.0
 
     def snapshot(self) -> dict[str, Any]:
         return self.build_snapshot()

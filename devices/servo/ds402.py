@@ -30,11 +30,12 @@ class State(enum.Enum):
     @property
     def in_torque(self) -> bool:
         """The motor is powered and controlled (the register view's Ten_st)."""
-        return self in IN_TORQUE
+        return self in _IN_TORQUE_ORDERED  # a tuple: compared by identity, no enum hashing
 
 
-IN_TORQUE = frozenset({State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE,
-                       State.FAULT_REACTION_ACTIVE})
+_IN_TORQUE_ORDERED = (State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE,
+                      State.FAULT_REACTION_ACTIVE)
+IN_TORQUE = frozenset(_IN_TORQUE_ORDERED)
 
 
 class Command(enum.Enum):

@@ -16,6 +16,10 @@ from devices.servo.homing import Homing
 from devices.servo.mode_base import Mode
 from devices.servo.registers import DISABLED_16, R
 
+# Register numbers read every tick (a moving drive): an enum member's lookup is slow.
+_AUX_IN_1, _TARGET_VELOCITY = int(R.AUX_IN_1), int(R.TARGET_VELOCITY)
+_VELOCITY_WINDOW, _VELOCITY_THRESHOLD = int(R.VELOCITY_WINDOW), int(R.VELOCITY_THRESHOLD)
+
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
 
@@ -120,11 +124,11 @@ class SpeedMonitor:
         self.below_threshold_ms = 0.0
 
     def update(self, d: ServoDrive, target: float, dt: float) -> None:
-        actual = d.velocity_user
-        self.in_window_ms = self.in_window_ms + dt * 1e3 \
-            if abs(target - actual) <= d.reg(R.VELOCITY_WINDOW) else 0.0
-        self.below_threshold_ms = self.below_threshold_ms + dt * 1e3 \
-            if abs(actual) <= d.reg(R.VELOCITY_THRESHOLD) else 0.0
+        actual, regs, dt_ms = d.velocity_user, d.regs, dt * 1e3
+        self.in_window_ms = self.in_window_ms + dt_ms \
+            if abs(target - actual) <= regs[_VELOCITY_WINDOW] else 0.0
+        self.below_threshold_ms = self.below_threshold_ms + dt_ms \
+            if abs(actual) <= regs[_VELOCITY_THRESHOLD] else 0.0
 
     def reached(self, d: ServoDrive) -> bool:
         if d.reg(R.VELOCITY_WINDOW) == DISABLED_16:
@@ -147,7 +151,7 @@ class Velocity(Mode):
         self.monitor = SpeedMonitor()
 
     def target_user(self, d: ServoDrive) -> float:
-        return d.reg(R.AUX_IN_1) if d.input_level("select") else d.reg(R.TARGET_VELOCITY)
+        return d.regs[_AUX_IN_1] if d.input_level("select") else d.regs[_TARGET_VELOCITY]
 
     def enter(self, d: ServoDrive) -> None:
         super().enter(d)

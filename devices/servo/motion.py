@@ -208,8 +208,9 @@ class Trajectory:
         self._segment_start = self.position
 
     def advance(self, dt: float) -> None:
-        while dt > 0.0 and self._index < len(self._plan):
-            segment = self._plan[self._index]
+        plan = self._plan  # not replaced while advancing; len(plan) is the idle test
+        while dt > 0.0 and self._index < len(plan):
+            segment = plan[self._index]
             left = segment.duration - self._elapsed
             if dt < left:
                 self._elapsed += dt
@@ -222,5 +223,5 @@ class Trajectory:
                 self.position, self.velocity = self._segment_start, segment.v1
                 self._index += 1
                 self._elapsed = 0.0
-        if self.idle and self.target is not None and self.velocity == 0.0:
+        if self._index >= len(plan) and self.target is not None and self.velocity == 0.0:
             self.position = self.target  # land exactly: the plan's sum carries float error

@@ -57,6 +57,7 @@ class Plant:
         self.jammed = False
         self.blocked = False  # against an end stop
         self._last_demand: float | None = None
+        self._end_stops = geometry.end_stops  # the geometry is frozen
 
     def step(self, dt: float, demand: float | None, lag: float) -> None:
         """Advance dt seconds following ``demand`` (None: no torque, the motor coasts)."""
@@ -79,8 +80,9 @@ class Plant:
             if abs(demand - new) < SETTLED_REV:
                 new = demand
         self._last_demand = demand
-        low, high = self.geometry.end_stops
+        low, high = self._end_stops
         self.blocked = not low <= new <= high
-        self.theta = min(max(new, low), high)
+        new = low if low > new else new  # min(max(new, low), high), written out (every tick)
+        self.theta = high if high < new else new
         if demand is not None or self.blocked:
             self.omega = (self.theta - before) / dt if dt > 0.0 else 0.0

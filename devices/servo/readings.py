@@ -20,6 +20,8 @@ S32_MAX = 0x7FFF_FFFF
 S16_MAX = 0x7FFF
 RMS_TIME_CONSTANT_S = 1.0
 JAM_CURRENT = 200.0  # % of nominal the motor draws pushing a jammed load
+_IN_TORQUE = ds402._IN_TORQUE_ORDERED  # State.in_torque without the property call
+_FEED_CONSTANT = int(R.FEED_CONSTANT)  # an enum member's lookup costs more than the dict's
 
 
 def _clamp(value: float, limit: int) -> int:
@@ -34,18 +36,22 @@ class CurrentMeter:
         self._mean_square = 0.0
 
     def update(self, d: ServoDrive, accel: float, dt: float) -> None:
-        if d.state.in_torque:
-            inertia = 1.0 + d.config.load_inertia
-            torque = 5.0 + 50.0 * abs(accel) / d.config.quick_stop_decel * inertia
+        # min(x, cap) written out as "cap if cap < x else x", its exact meaning (every tick)
+        if d.state in _IN_TORQUE:
+            config = d.config
+            inertia = 1.0 + config.load_inertia
+            torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
             if d.plant.jammed or d.plant.blocked:
                 torque += JAM_CURRENT * min(abs(d.following_error_user) / d.feed, 1.0)
-            self.instant = min(torque, 3.0 * d.params[5])  # d5 caps the current
+            cap = 3.0 * d.params[5]  # d5 caps the current
+            self.instant = cap if cap < torque else torque
         else:
             self.instant = 0.0
         k = 1.0 - math.exp(-dt / RMS_TIME_CONSTANT_S)
         self._mean_square += (self.instant ** 2 - self._mean_square) * k
-        self.rms = math.sqrt(self._mean_square)
-        self.overload = min(100.0 * (self.rms / 100.0) ** 2, 999.0)
+        self.rms = rms = math.sqrt(self._mean_square)
+        overload = 100.0 * (rms / 100.0) ** 2
+        self.overload = 999.0 if overload > 999.0 else overload
 
 
 class DriveReadings:
@@ -76,7 +82,8 @@ class DriveReadings:
     # ---- units and limits the modes use -------------------------------------------------------
     @property
     def feed(self: ServoDrive) -> int:
-        return max(self.regs[R.FEED_CONSTANT], 1)  # a feed of 0 counts as 1 unit per turn
+        feed = self.regs[_FEED_CONSTANT]
+        return feed if feed >= 1 else 1  # max(feed, 1): a feed of 0 counts as 1 unit per turn
 
     def user_to_rev(self: ServoDrive, position: float) -> float:
         return self.theta_zero + position / self.feed

@@ -26,6 +26,9 @@ logger = logging.getLogger(__name__)
 class DriveStateMachine:
     """Mixin of :class:`~devices.servo.drive.ServoDrive`."""
 
+    # (state, controlword, source, TEN) of the last evaluation that moved nothing: a cache
+    _quiet_evaluation: tuple[State, int, str, bool] | None = None
+
     # ---- control words --------------------------------------------------------------------------
     def _write_control_register(self: ServoDrive, value: int) -> None:
         rising = value & ~self.regs[R.CONTROL_WORD]
@@ -96,14 +99,29 @@ class DriveStateMachine:
                 self.trajectory.stop(self.quick_stop_limits())
 
     def _evaluate(self: ServoDrive) -> None:
-        """Apply the controlword's level command and the hardware consent TEN."""
+        """Apply the controlword's level command and the hardware consent TEN.
+
+        What it does depends only on (state, controlword, its source, TEN); inputs whose last
+        evaluation moved nothing are remembered and not evaluated again (a moving drive
+        evaluates every tick, docs/servo-drive.md §Step cost)."""
         if not self.powered or self.saving:
             return
-        if not self.input_level("ten"):
-            self._transition(Command.TORQUE_LOST)
-        command = ds402.decode(self.cw)
-        if command is None:
+        ten = self.wired.get("ten", False)  # input_level("ten"): TEN is no switch
+        inputs = (self.state, self.cw, self.cw_source, ten)
+        if inputs == self._quiet_evaluation:
             return
+        moved = False
+        if not ten:
+            moved = self._transition(Command.TORQUE_LOST)
+        command = ds402.decode(self.cw)
+        if command is not None:
+            moved = self._evaluate_command(command) or moved
+        if not moved:
+            self._quiet_evaluation = inputs
+
+    def _evaluate_command(self: ServoDrive, command: Command) -> bool:
+        """Follow the level command up to four transitions; True when the state moved."""
+        moved = False
         for _ in range(4):
             step = command
             if step is Command.ENABLE_OPERATION and self.state is State.SWITCH_ON_DISABLED \
@@ -111,9 +129,11 @@ class DriveStateMachine:
                 step = Command.SHUTDOWN  # Ten_cmd goes all the way into torque (2, 3, 4)
             if step is Command.ENABLE_OPERATION and self.state is State.SWITCHED_ON \
                     and not self.input_level("ten"):
-                return
+                break
             if not self._transition(step):
-                return
+                break
+            moved = True
+        return moved
 
     # ---- alarms ------------------------------------------------------------------------------
     def raise_alarm(self: ServoDrive, code: int, lasting: bool = False) -> None:

@@ -28,10 +28,12 @@ if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
 
 # Attributes no step writes (identity, wiring of the model, the dictionary whose writes touch
-# the drive) or that are the skipping's own bookkeeping; everything else is in the key.
+# the drive), the skipping's own bookkeeping, or caches of pure functions of the state (the
+# step cost work, ticking.py: what they hold never changes what a step does); everything else
+# is in the key.
 NOT_STATE = frozenset({
     "device_id", "rng", "now_us", "events", "config", "flash", "geometry", "od", "indirect",
-    "_t_us", "_touched", "_still", "SKIP_STILL",
+    "_t_us", "_touched", "_still", "SKIP_STILL", "_levels_cache", "_quiet_evaluation",
     "regs", "params", "wired", "_levels", "latched_at_power_up",  # in the key, as flat dicts
 })
 FLAT = ("regs", "params", "wired", "_levels", "latched_at_power_up")  # str/int -> int/bool

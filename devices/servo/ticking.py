@@ -1,0 +1,154 @@
+"""One tick of the drive (at most 1 ms): state machine, motion, current, inputs and checks.
+
+Seed 004 ch. 1-5 through the modules this one calls; docs/servo-drive.md §Step cost. This is
+the hot path of a moving drive (docs/performance.md, benchmark 1 "in motion"), so it is
+written for speed without changing a result: the same work in the same order with the same
+floating-point expressions as the plain code, minus what cannot change anything:
+
+- parts whose inputs say they do nothing are not called (the indirect access with no job, the
+  flash save with none pending or running, the latch filter with its input low and nothing
+  captured, the switch and marker crossings when the mode does not watch them: only homing);
+- the input levels dict is rebuilt only when the wiring or a switch changed (the same dict
+  object otherwise: nobody mutates it);
+- hot constants (enum members, register numbers) are module names, because reading an enum
+  member off its class costs a Python-level lookup; states are compared by identity.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from devices.servo import ds402
+from devices.servo.ds402 import Command, State
+from devices.servo.mode_base import Changes, Mode
+from devices.servo.registers import DISABLED_32, R
+
+if TYPE_CHECKING:
+    from devices.servo.drive import ServoDrive
+
+SWITCHES = ("neg_limit", "pos_limit", "home")
+S32_MAX = 0x7FFF_FFFF
+_NOT_READY = State.NOT_READY_TO_SWITCH_ON
+_ENABLED, _QUICK_STOP = State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE
+_FAULT_REACTION = State.FAULT_REACTION_ACTIVE
+_IN_TORQUE = (_ENABLED, _QUICK_STOP, _FAULT_REACTION)  # State.in_torque, by identity
+_LATCHED_POSITION = int(R.LATCHED_POSITION)
+_FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)
+_FOLLOWING_ERROR_TIMEOUT = int(R.FOLLOWING_ERROR_TIMEOUT)
+_CW_HALT = ds402.CW_HALT
+_NO_OBSERVER = Mode.observe
+
+
+class DriveTick:
+    """Mixin of :class:`~devices.servo.drive.ServoDrive`: ``_tick`` and what it calls."""
+
+    def _tick(self: ServoDrive, dt: float) -> None:
+        lag = self.position_lag_s
+        plant, trajectory = self.plant, self.trajectory
+        if not self.powered:
+            plant.step(dt, None, lag)
+            trajectory.hold(plant.theta, plant.omega)
+            return
+        t_us = self._t_us
+        if self.state is _NOT_READY and t_us >= self.boot_until:
+            self._transition(Command.SELF_TEST_DONE)
+        if self.indirect._jobs:  # without a job its step changes nothing
+            self.indirect.step(t_us)
+        if self.save_pending or self.saving_until is not None:  # else nothing to update
+            self._update_saving()
+        self._evaluate()
+        theta_before, velocity_before = plant.theta, trajectory.velocity
+        self._move(dt, lag)
+        self.meter.update(self, (trajectory.velocity - velocity_before) / dt, dt)
+        theta_after = plant.theta
+        before, levels = self._levels, self._tick_levels(theta_after)
+        if levels["start"] and not before.get("start", False):
+            self.mode_logic.on_start_input(self)
+        self._levels = levels
+        latch, latch_level = self.latch, levels["latch"]
+        if latch_level or latch.level or latch.rose_at_us is not None:  # else a no-op
+            confirmed = latch.update(latch_level, t_us, self.position_user)
+            if confirmed is not None:
+                self.regs[_LATCHED_POSITION] = confirmed
+                self.latched_flag = True
+        mode = self.mode_logic
+        if type(mode).observe is not _NO_OBSERVER:  # the crossings are for homing only
+            mode.observe(self, self._changes(before, levels, theta_before, theta_after))
+        self._check_limits(levels)
+        self._check_following_error(dt)
+        if abs((plant.theta - self.theta_zero) * self.feed) > S32_MAX:
+            self.raise_alarm(15)  # the position no longer fits R06 (S32)
+
+    def _tick_levels(self: ServoDrive, theta: float) -> dict[str, bool]:
+        """:meth:`input_levels` at ``theta``: the last tick's dict when nothing changed."""
+        switches = self.geometry.switches(theta)
+        wired, cached = self.wired, self._levels_cache
+        if cached is not None and cached[1] == switches and cached[0] == wired:
+            return cached[2]
+        levels = self.levels_at(switches)
+        self._levels_cache = (dict(wired), switches, levels)
+        return levels
+
+    def _move(self: ServoDrive, dt: float, lag: float) -> None:
+        state, trajectory = self.state, self.trajectory
+        if state not in _IN_TORQUE:
+            if self._was_allowed:
+                self.mode_logic.halted(self)
+                self._was_allowed = False
+            self.plant.step(dt, None, lag)
+            trajectory.hold(self.plant.theta, self.plant.omega)
+            return
+        if state is _ENABLED:
+            wired = self.wired  # motion_allowed, with the state known to be enabled
+            allowed = self.ien_cmd and wired.get("ien", False) and wired.get("ten", False) \
+                and not self.cw & _CW_HALT
+            if allowed:
+                self.mode_logic.step(self, dt)
+            elif self._was_allowed:
+                self.mode_logic.halted(self)
+                halting = self.motion_enabled  # halt bit: profile deceleration
+                trajectory.stop(self.limits() if halting else self.quick_stop_limits())
+            self._was_allowed = allowed
+        trajectory.advance(dt)
+        self.plant.step(dt, trajectory.position, lag)
+        if trajectory.idle and trajectory.velocity == 0.0:  # standstill
+            if self.state is _QUICK_STOP:
+                self._transition(Command.STANDSTILL)
+            elif self.state is _FAULT_REACTION:
+                self._transition(Command.FAULT_REACTION_DONE)
+
+    def _changes(self: ServoDrive, before: dict[str, bool], after: dict[str, bool],
+                 theta0: float, theta1: float) -> Changes:
+        """Switch edges and markers of this tick, each at the position it happened."""
+        g = self.geometry
+        edges = {"neg_limit": g.neg_limit, "pos_limit": g.pos_limit, "home": g.home_switch}
+        found = []
+        for name in SWITCHES:
+            if before.get(name, after[name]) != after[name]:
+                edge = edges[name]
+                at = edge if min(theta0, theta1) <= edge <= max(theta0, theta1) else theta1
+                found.append((name, after[name], at))
+        found += [("marker", True, m) for m in g.markers_between(theta0, theta1)]
+        return sorted(found, key=lambda change: abs(change[2] - theta0))
+
+    def _check_limits(self: ServoDrive, levels: dict[str, bool]) -> None:
+        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
+        if self.state is not _ENABLED or self.mode_logic.busy:
+            return
+        velocity = self.trajectory.velocity
+        if levels["neg_limit"] and velocity < 0.0:
+            self.raise_alarm(20)
+        elif levels["pos_limit"] and velocity > 0.0:
+            self.raise_alarm(21)
+
+    def _check_following_error(self: ServoDrive, dt: float) -> None:
+        """Alarm 16: |following error| > R03 for longer than R04 ms (R03 = 0xFFFFFFFF: off)."""
+        window = self.regs[_FOLLOWING_ERROR_WINDOW]  # following_error_exceeded, inline
+        if self.state is _ENABLED and window != DISABLED_32 \
+                and abs(self.following_error_user) > window:
+            self._fe_ms += dt * 1e3
+            if self._fe_ms > self.regs[_FOLLOWING_ERROR_TIMEOUT]:
+                self._fe_ms = 0.0
+                self.raise_alarm(16)
+        else:
+            self._fe_ms = 0.0
