@@ -10,6 +10,10 @@ server's own send path, patched to record), frame by frame:
 - idle, the 3D scene only carries LED colours (the flickering LINK / L/A LEDs, ETG.1300);
 - the Drive tab's state table is not resent while only the simulated time moves (its title,
   with the time, is its own handle);
+- the master panel: its status table (phase, target, link) and its slave table are not resent
+  while the time, the frame counter and the DC deviation move (each in its own handle, tested
+  block by block in test_send_only_changes_panels.py); the drive plots' unchanged x range is
+  not resent with their data;
 - the scenario player's ``fr-player`` block (app/screenshots.py waits on its ``data-frame``):
   a running rig's block is rewritten only when what it says changes; a paused rig's names
   every frame written, byte for byte what ``status_html`` gives.
@@ -114,14 +118,14 @@ def test_nothing_written_twice_in_a_frame(idle: tuple[Dashboard, Tape]) -> None:
 
 
 def test_nothing_rewritten_with_the_value_it_has(idle: tuple[Dashboard, Tape]) -> None:
-    """Scene nodes and HTML blocks (the drive plots' uPlot scales, app/ui/drive/plots.py, are
-    not looked at here: they are resent unchanged during the first 20 s window)."""
+    """Scene nodes, HTML blocks and the drive plots' uPlot scales (their x range stands at
+    0..20 s until the window fills: app/ui/drive/plots.py)."""
     _, tape = idle
     last: dict[tuple[str, str], Any] = {}
     for n, messages in enumerate(tape.ticks):
         for message in messages:
             for key, value in writes(message):
-                if not key[0].startswith("/") and key[1] != "content":
+                if not key[0].startswith("/") and key[1] not in ("content", "scales"):
                     continue
                 assert last.get(key, object()) != value, f"frame {n}: {key} resent"
                 last[key] = value
@@ -147,6 +151,24 @@ def test_drive_table_not_resent_for_the_time(idle: tuple[Dashboard, Tape]) -> No
     assert not [c for c in contents if 'id="fr-drive"' in c]
     titles = [c for c in contents if c.startswith('<p class="fr-title"><b>drive</b>')]
     assert IDLE_FRAMES * FRAME_US // 100_000 - 1 <= len(titles) <= IDLE_FRAMES
+
+
+def test_master_summary_not_resent_for_the_time(idle: tuple[Dashboard, Tape]) -> None:
+    """The master's status table and slave table stand; its title moves with the tenths, its
+    DC and Frames rows with every frame (the counter, the deviation drawn each cycle)."""
+    dashboard, tape = idle
+    contents = [str(v) for messages in tape.ticks for m in messages
+                for (_, prop), v in writes(m) if prop == "content"]
+    assert not [c for c in contents if 'id="fr-line-master-status"' in c]
+    assert not [c for c in contents if 'id="fr-line-slaves"' in c]
+    titles = [c for c in contents if "<b>EtherCAT master</b>" in c]
+    tenths = IDLE_FRAMES * FRAME_US // 100_000
+    assert tenths - 1 <= len(titles) <= tenths + 1
+    assert all('id="fr-line-master' not in c for c in titles)
+    live = [c for c in contents if 'id="fr-line-master"' in c]
+    assert live and all("Phase" not in c for c in live)
+    assert dashboard.line is not None
+    assert "running" in dashboard.line.master.text("status")
 
 
 # ---- the scenario player's marker -------------------------------------------------------------

@@ -90,6 +90,9 @@ class DrivePlots:
         self._sampler = sampler
         self._sent_version = -1
         self._sent_at = 0.0
+        # viser sends a property each time it is assigned, equal or not: the x range is set
+        # only when it moves (it stands at 0..WINDOW_S until the window fills, then slides).
+        self._sent_range: tuple[float, float] | None = None
         empty = (np.zeros(1), np.zeros(1))
         last = len(SIGNALS) - 1
         # One time axis for the three, under the last chart: the others are shorter by it.
@@ -117,9 +120,13 @@ class DrivePlots:
             return False
         t_end = max(float(columns[0][-1]), t_us / 1e6)
         x_range = (max(0.0, t_end - WINDOW_S), max(t_end, WINDOW_S))
+        scales = None if x_range == self._sent_range else {
+            "x": {"time": False, "auto": False, "range": x_range}}
         for chart, values in zip(self._charts, columns[1:], strict=True):
-            chart.scales = {"x": {"time": False, "auto": False, "range": x_range}}
+            if scales is not None:
+                chart.scales = scales
             chart.data = (columns[0], values)
+        self._sent_range = x_range
         self._sent_version, self._sent_at = version, now
         return True
 

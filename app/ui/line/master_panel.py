@@ -94,19 +94,32 @@ def dc_text(dc: Mapping[str, Any]) -> str:
     return out
 
 
-def summary(master: Mapping[str, Any], t_us: int) -> str:
-    stats = master.get("stats") or {}
+def title(master: Mapping[str, Any], t_us: int) -> str:
+    """``EtherCAT master · master · t = 12.3 s``: its own handle, as the state panel's."""
+    return (f'<p class="fr-title"><b>EtherCAT master</b> · {esc(master.get("id", "master"))}'
+            f' · <span class="fr-muted">t = {t_us / US_PER_S:.1f} s</span></p>')
+
+
+def status_table(master: Mapping[str, Any]) -> str:
+    """Phase, target and link: what changes only when the line does."""
     phase = str(master.get("phase", "-")).replace("_", " ")
     mode = " (external master)" if master.get("external") else ""
     rows = [("Phase", badge(phase, "ok" if phase == "running" else "warn") + esc(mode)),
             ("Target", esc(master.get("target", "-"))),
-            ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad")),
-            ("DC", dc_text(master.get("dc") or {})),
+            ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad"))]
+    return kv_table(rows, "fr-line-master-status")
+
+
+def live_table(master: Mapping[str, Any]) -> str:
+    """DC and frame counters: new every frame (the deviation is drawn each cycle, a frame goes
+    out each cycle). The DC state shares its cell with the deviation: one line of text that
+    wraps as a whole, so it cannot sit in another handle without moving pixels. The table keeps
+    the summary's id: it holds the DC state the browser tests read (tests/browser/test_line.py)."""
+    stats = master.get("stats") or {}
+    rows = [("DC", dc_text(master.get("dc") or {})),
             ("Frames", esc(f"{stats.get('frames', '-')} sent, {stats.get('lost_frames', 0)} "
                            f"lost, cycle {stats.get('cycle_us', '-')} us"))]
-    title = (f'<p class="fr-title"><b>EtherCAT master</b> · {esc(master.get("id", "master"))}'
-             f' · <span class="fr-muted">t = {t_us / US_PER_S:.1f} s</span></p>')
-    return title + kv_table(rows, "fr-line-master")
+    return kv_table(rows, "fr-line-master")
 
 
 def _stamp(line: Mapping[str, Any]) -> str:
@@ -129,7 +142,13 @@ class MasterPanel:
                  master_id: str) -> None:
         gui = server.gui
         self._cache: dict[str, str] = {}
-        self._summary = gui.add_html(summary({}, 0))
+        # The summary is three handles stacked as the one block they replace (the title's
+        # margin collapses through its bare <div>, the two tables share their column widths):
+        # the time and the counters move every frame, phase, target and link seldom, and each
+        # handle is rewritten only when its own text changes (benchmark 3, docs/performance.md).
+        self._title = gui.add_html(title({}, 0))
+        self._status = gui.add_html(status_table({}))
+        self._live = gui.add_html(live_table({}))
         self._slaves = gui.add_html(slaves_table([]))
         self._style = gui.add_dropdown("Log style", LOG_STYLES, initial_value=LOG_STYLES[0],
                                        hint="how the master prints its log (set_log_style)")
@@ -149,10 +168,13 @@ class MasterPanel:
             self._style.options = styles
         if master.get("log_style") in styles:
             self._style_sync.follow(master["log_style"])
-        self._set("summary", self._summary, summary(master, t_us))
+        self._set("title", self._title, title(master, t_us))
+        self._set("status", self._status, status_table(master))
+        self._set("live", self._live, live_table(master))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))
         self._set("log", self._log, log_table(master.get("log") or []))
 
     def text(self, key: str) -> str:
+        """What a block shows: ``title``, ``status``, ``live``, ``slaves`` or ``log``."""
         return self._cache.get(key, "")
