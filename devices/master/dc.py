@@ -24,6 +24,18 @@ DRIFT_NS_PER_MS = 25  # FieldRig: a drifting clock leaves the window in 40 ms (1
 JITTER_FACTOR = 5  # FieldRig: jitter fault: +- 5 windows
 RESYNC_AFTER_US = 500_000  # FieldRig: NOT_SYNCHRONIZED, fault gone -> measure again after
 OUT_OF_WINDOW_CYCLES = 5  # FieldRig: consecutive cycles outside the window before giving up
+NOISE_SPAN = 2 * NOISE_NS + 1  # the healthy deviation's values, -NOISE_NS .. NOISE_NS
+
+
+def draw(rng: random.Random, low: int, span: int) -> int:
+    """``rng.randrange(low, low + span)`` for ints, span > 0, one call instead of three.
+
+    CPython's randrange (Lib/random.py, 3.11 and 3.12) turns integer arguments with step 1 into
+    ``istart + self._randbelow(width)``; this makes that call directly: the same draw from the
+    same stream, for every Random whatever its ``_randbelow`` (tests/devices/master/
+    test_master_dc.py compares the two streams).
+    """
+    return low + rng._randbelow(span)
 
 
 class DcState(enum.Enum):
@@ -81,9 +93,20 @@ class DcUnit:
             self.deviation_ns += DRIFT_NS_PER_MS * max(1, dt_us // 1000)
         elif self.fault == "jitter":
             spread = JITTER_FACTOR * self.window_ns
-            self.deviation_ns = rng.randrange(-spread, spread + 1)
-        else:  # randrange(a, b + 1) is what randint(a, b) calls: the same draw, a call less
-            self.deviation_ns = rng.randrange(-NOISE_NS, NOISE_NS + 1)
+            self.deviation_ns = draw(rng, -spread, 2 * spread + 1)
+        else:
+            self.deviation_ns = draw(rng, -NOISE_NS, NOISE_SPAN)
+
+    def compensate(self, rng: random.Random) -> bool:
+        """A COMPENSATING cycle without a fault, link up and DC slaves present, made short:
+        :meth:`measure` (the healthy noise) and, when the deviation is in the window, all
+        :meth:`trigger` would do (``outside`` back to 0, no trigger); True then. False: the
+        deviation is out of the window (a window under NOISE_NS), ``trigger`` must count it."""
+        self.deviation_ns = dev = rng._randbelow(NOISE_SPAN) - NOISE_NS  # draw(), inlined
+        if -self.window_ns <= dev <= self.window_ns:
+            self.outside = 0
+            return True
+        return False
 
     def trigger(self, now_us: int, link: bool, dc_slaves: int,
                 dc_slaves_ready: bool) -> DcTrigger | None:

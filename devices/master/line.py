@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 
 from devices.ethercat import AlState
 from devices.events import CommError
-from devices.master.links import SlaveLink
+from devices.master.links import Slave, SlaveLink
 from devices.master.still import StillCounts
 
 if TYPE_CHECKING:
@@ -24,6 +24,7 @@ class LineMixin:
     """Line handling of :class:`~devices.master.master.EtherCatMaster`."""
 
     links: list[SlaveLink]
+    _slaves: tuple[Slave, ...]
     cables: list[bool]
     phys_in: list[bool]
     phys_out: list[bool]
@@ -82,11 +83,13 @@ class LineMixin:
         """Each position's reach, the physical links brought up to date first. With the cables
         and the power as they were last applied, applying them again would set no link (every
         ``phys_in`` / ``phys_out`` already is what they make it) and give the same reach."""
-        powered = self._powered_all()
+        # The values as the slaves give them (bools all, but == would also take 1 for True):
+        # compared only; applied as bools.
+        powered = [getattr(slave, "powered", True) for slave in self._slaves]
         if skip and powered == self._line_powered and self.cables == self._line_cables:
             self.skipped.line += 1
             return self._line_reach
-        self._apply_physical_links(powered)
+        self._apply_physical_links([bool(on) for on in powered])
         return self._line_reach
 
     def _apply_physical_links(self, powered: list[bool]) -> None:

@@ -30,4 +30,5 @@ class StillCounts:
     line: int = 0
     serve: int = 0
     watch: int = 0
+    dc: int = 0
 

@@ -7,7 +7,15 @@ import random
 import pytest
 from line_bench import IN_OP_US, US, line_in_op, master_view, records
 
-from devices.master.dc import DC_TRANSITIONS, DcState, DcTrigger, DcUnit
+from devices.master.dc import (
+    DC_TRANSITIONS,
+    NOISE_NS,
+    NOISE_SPAN,
+    DcState,
+    DcTrigger,
+    DcUnit,
+    draw,
+)
 
 
 @pytest.mark.parametrize(("state", "trigger"), sorted(DC_TRANSITIONS, key=str))
@@ -75,3 +83,51 @@ def test_dc_fault_sends_the_dc_slaves_to_safeop_and_recovers(
     dc_moves = [r["to"] for r in records(events, "state", "master") if r.get("machine") == "dc"]
     assert dc_moves == ["SYNCHRONIZING", "WAITING_START_TIME", "COMPENSATING"]
     assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
+
+
+class _FloatRandom(random.Random):
+    """A Random whose _randbelow is the random()-based one (a subclass overriding random()
+    without getrandbits gets it): draw() must follow whichever one randrange uses."""
+
+    def random(self) -> float:
+        return super().random()
+
+
+# The widths the DC unit draws: the healthy noise, the jitter fault over the default window,
+# over a small window and a window of 1 ns (seed 003 <DcSyncWindow>; docs/ethercat-master.md).
+@pytest.mark.parametrize(("low", "span"), [(-NOISE_NS, NOISE_SPAN),
+                                           (-5 * 1000, 2 * 5 * 1000 + 1),
+                                           (-5 * 7, 2 * 5 * 7 + 1), (-5, 11), (0, 1)])
+@pytest.mark.parametrize("kind", [random.Random, _FloatRandom])
+def test_draw_is_randrange_draw_for_draw(low: int, span: int, kind: type[random.Random]
+                                         ) -> None:
+    """draw() replaces rng.randrange(low, low + span): the same values from the same stream,
+    and the generator left in the same state, over 100,000 draws."""
+    ours, theirs = kind(7), kind(7)
+    got = [draw(ours, low, span) for _ in range(100_000)]
+    want = [theirs.randrange(low, low + span) for _ in range(100_000)]
+    assert got == want
+    assert ours.getstate() == theirs.getstate()
+    assert min(got) == low and max(got) == low + span - 1  # the whole range is drawn
+
+
+@pytest.mark.parametrize("window_ns", [1000, 40, 39, 20, 1])
+def test_compensate_is_measure_and_trigger(window_ns: int) -> None:
+    """DcUnit.compensate (the master's short way in COMPENSATING) against measure() + trigger():
+    the same deviations, ``outside`` counts, triggers and rng state, windows in and under the
+    noise (where a deviation can fall outside and trigger() has to count it)."""
+    short, full = DcUnit(window_ns=window_ns), DcUnit(window_ns=window_ns)
+    for dc in (short, full):
+        dc.state = DcState.COMPENSATING
+    rng_short, rng_full = random.Random(3), random.Random(3)
+    for t in range(1000, 200_000, 1000):
+        full.measure(1000, rng_full)
+        want = full.trigger(t, link=True, dc_slaves=1, dc_slaves_ready=True)
+        got = None if short.compensate(rng_short) else \
+            short.trigger(t, link=True, dc_slaves=1, dc_slaves_ready=True)
+        assert (got, vars(short)) == (want, vars(full))
+        for dc, trigger in ((short, got), (full, want)):
+            if trigger is not None:
+                dc.state = DcState.COMPENSATING  # stay: only the counting is compared
+                dc.outside = 0
+    assert rng_short.getstate() == rng_full.getstate()
