@@ -102,6 +102,7 @@ class CommandsMixin:
     diag: DiagHistory
     esm: Esm
     od: ObjectDictionary | None
+    _plc_written: bool
 
     if TYPE_CHECKING:  # defined by TrsCat
         def cmd_power(self, on: bool) -> None: ...
@@ -185,6 +186,7 @@ class CommandsMixin:
             raise CommandError(f"{io.kind.name} output {channel + 1}: {value} outside "
                                f"{low}..{high}")
         io.plc[channel] = value
+        self._plc_written = True  # the next SM2 event latches it (stepping.py)
 
     def cmd_unplug(self, module: int) -> None:
         self.slot_io(module)

@@ -140,15 +140,17 @@ class TrsCat(SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, CoeMai
 
     def exchange_frame(self, now_us: int) -> None:
         """One process-data frame of the master passed through (an SM2 event)."""
-        if not self.reachable():
+        if not (self.powered and self.link_in):  # reachable(), inlined: called every cycle
             return
         self.last_frame_us = now_us
         if self.sync.frame(now_us, self.rng) and self.esm.state in (AlState.SAFEOP, AlState.OP):
             self._latch_outputs(now_us)
 
     def take_emergencies(self) -> list[bytes]:
-        """8-byte CoE emergencies in the mailbox; it runs from PRE-OP on."""
-        if not self.reachable() or self.esm.state is AlState.INIT:
+        """8-byte CoE emergencies in the mailbox; it runs from PRE-OP on. An empty mailbox
+        answers at once (every cycle; the mailbox is only ever replaced, never appended to)."""
+        if not self.mailbox or not (self.powered and self.link_in) or \
+                self.esm.state is AlState.INIT:
             return []
         out, self.mailbox = self.mailbox, []
         return out

@@ -27,17 +27,19 @@ from devices.trscat.alarms import TrsBus
 from devices.trscat.esm import SM_WATCHDOG
 from devices.trscat.indicators import LedInputs, wanted_patterns
 from devices.trscat.io import SlotIo, field_in_range
-from devices.trscat.transitions import OutputMode
+from devices.trscat.sync import SYNC_ERROR_LIMIT, SyncState
+from devices.trscat.transitions import SM_WATCHDOG_US, OutputMode
 
 if TYPE_CHECKING:
     from devices.events import EventQueue
     from devices.trscat.alarms import FaultKey
     from devices.trscat.esm import Esm
     from devices.trscat.indicators import LedBank
-    from devices.trscat.sync import SyncState, SyncUnit
+    from devices.trscat.sync import SyncUnit
 
 ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently
 AN_SUPPLY_FAULTS = frozenset({"AN_PLUS_12V", "AN_MINUS_12V"})  # §9.3.7: the module stops
+_LATCHING = (AlState.SAFEOP, AlState.OP)  # the states in which an SM2 event latches outputs
 
 
 class SteppingMixin:
@@ -89,6 +91,10 @@ class SteppingMixin:
         # latched image changed since (an SM2 event with new outputs).
         self._all_still, self._latched_moved = False, True
         self.skipped_slot_cycles = 0  # for the tests: local cycles of a slot not rerun
+        # _plc_written: a plc image was written since the last _latch_outputs. Only writes,
+        # a latch and power-up / plugging (both give plc == latched) move either image, so
+        # without one every latched image equals its plc image and a latch copies nothing.
+        self._plc_written = False
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
         self._touch()
@@ -116,13 +122,30 @@ class SteppingMixin:
         if not quiet:
             self._plan = None
         changed = False
+        esm = self.esm
         for t, sm_event in self.sync.cycles_until(now_us):
-            if sm_event and self.esm.state in (AlState.SAFEOP, AlState.OP):
-                self._latch_outputs(t)
-            if self._local_cycle():
+            if sm_event and esm.state in _LATCHING:
+                if self._plc_written or not self.SKIP_STILL:
+                    self._latch_outputs(t)
+                else:  # every latched image is its plc image already (_plc_written)
+                    self.last_sm_event_us = t
+            if self._plan is not None and self._all_still and not self._latched_moved \
+                    and self.SKIP_STILL:  # _local_cycle would skip every slot
+                self.skipped_slot_cycles += len(self._plan)
+            elif self._local_cycle():
                 changed = True
-        self._check_sync()
-        if self.esm.state is AlState.OP and self.check_outputs() is not None:
+        # _check_sync has nothing to do when the sync state (SyncUnit.state, written out) is
+        # the one last seen and not an error: DC_RUNNING or FREE_RUN.
+        sync = self.sync
+        if sync.running:
+            calm = sync.without_sync0 < SYNC_ERROR_LIMIT and sync.sm_missed < SYNC_ERROR_LIMIT \
+                and self.sync_state is SyncState.DC_RUNNING
+        else:
+            calm = self.sync_state is SyncState.FREE_RUN
+        if not (calm and self.SKIP_STILL):
+            self._check_sync()
+        last = self.last_sm_event_us  # check_outputs(), inlined
+        if esm.state is AlState.OP and (last is None or now_us - last > SM_WATCHDOG_US):
             self._fall_on_comm_error(SM_WATCHDOG)
         quiet = quiet and not changed and not self._dirty
         if not quiet:
@@ -131,6 +154,7 @@ class SteppingMixin:
         self._quiet = not changed and not self._dirty
 
     def _latch_outputs(self, t_us: int) -> None:
+        self._plc_written = False
         for io in self.rail:
             if io is not None and io.latched != io.plc:
                 io.latched = list(io.plc)

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import enum
 import random
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 FREE_RUN_CYCLE_US = 500  # §9.1.1 "tempo di ciclo locale fisso pari a 500 us"
@@ -85,6 +86,9 @@ class SyncUnit:
     sync0_lost: bool = False  # the SYNC0 pulses stop
     jitter_us: int = 0  # each frame arrives up to this much late
 
+    def __post_init__(self) -> None:
+        self._period_us = self.cycle_us  # cycle_us, kept: configure() alone changes it
+
     # ---- state ------------------------------------------------------------------------------
     @property
     def sync0_configured(self) -> bool:
@@ -130,6 +134,7 @@ class SyncUnit:
         self.dc_activation = int(activation) & 0xFF
         self.dc_cycle_ns = int(sync0_cycle_ns) & 0xFFFFFFFF
         self.dc_start_ns = int(start_time_ns) & 0xFFFFFFFFFFFFFFFF
+        self._period_us = self.cycle_us
         if self.running and self.sync0_configured:
             self._first_sync0(now_us)
 
@@ -186,23 +191,24 @@ class SyncUnit:
         self.arrivals, self.sm_missed, self.without_sync0, self.sync0_seen = [], 0, 0, True
 
     # ---- the local cycles -------------------------------------------------------------------
-    def cycles_until(self, now_us: int) -> list[tuple[int, bool]]:
+    def cycles_until(self, now_us: int) -> Sequence[tuple[int, bool]]:
         """Local cycles in (last call, now]: (time, an SM2 event taken at this SYNC0).
 
         FREE-RUN (or DC-SYNC not started): every 500 us, never an event (the SM2 event was
         handled when the frame came). DC-SYNC: one per SYNC0, none while SYNC0 is lost or the
         master switched it off (0x0981).
         """
-        out: list[tuple[int, bool]] = []
         if not self.running:
+            out: list[tuple[int, bool]] = []
             while self.next_free_us <= now_us:
                 out.append((self.next_free_us, False))
                 self.next_free_us += FREE_RUN_CYCLE_US
             return out
         t = self.next_sync0_us
-        if t > now_us or not self.sync0_configured:
-            return out
-        period = _cycle_us(self.dc_cycle_ns)
+        period = self._period_us  # 0: SYNC0 not configured (0x0981 / 0x09A0)
+        if t > now_us or not period:
+            return ()
+        out = []
         while t <= now_us:
             self.next_sync0_us = t + period
             deadline = t - CALC_COPY_US

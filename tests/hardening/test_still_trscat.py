@@ -286,3 +286,40 @@ def test_the_state_copy_sees_a_difference() -> None:
         rig.apply("trscat", "set_input", {"channel": 3, "on": True})
     rigs[0].step()
     assert trscat_state(rigs[0]) != trscat_state(rigs[1])
+
+
+def _counting(real: Callable[..., Any], count: dict[str, int], name: str) -> Callable[..., Any]:
+    def counted(*args: Any) -> Any:
+        count[name] += 1
+        return real(*args)
+    return counted
+
+
+@pytest.mark.parametrize("name", list(RIGS))
+def test_idle_steps_take_the_short_ways(name: str) -> None:
+    """Idle in OP the step neither copies latched images (no plc write since the last latch,
+    §9.1.1 SM2 event) nor re-derives an unchanged sync state (§9.3.7): the shortcuts are taken,
+    and with SKIP_STILL off they are not (the differential tests above prove them exact)."""
+    expansions, mode = RIGS[name]
+    spec = parse_rig_spec(RIG.format(seed=5, expansions=json.dumps(expansions), mode=mode))
+    calls: list[dict[str, int]] = []
+    for rig in (build_rig(spec, state_dir=None), no_skipping(build_rig(spec, state_dir=None))):
+        trs = rig.devices["trscat"]
+        assert isinstance(trs, TrsCat)
+        for _ in range(2500):
+            rig.step()
+        count = {"_latch_outputs": 0, "_check_sync": 0}
+        for method in count:
+            setattr(trs, method, _counting(getattr(trs, method), count, method))
+        for _ in range(1000):
+            rig.step()
+        rig.apply("trscat/1", "set_output", {"channel": 1, "value": 1})  # one write: latched
+        for _ in range(10):
+            rig.step()
+        assert trs.rail[1] is not None and trs.rail[1].latched[0] == 1
+        calls.append(count)
+    skipping, plain = calls
+    assert plain["_check_sync"] == 1010
+    assert skipping["_check_sync"] == 0
+    if mode == "dc":  # FREE-RUN latches at each frame (exchange_frame), not in the step
+        assert plain["_latch_outputs"] == 1010 and skipping["_latch_outputs"] == 1
