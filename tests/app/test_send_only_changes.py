@@ -13,7 +13,8 @@ server's own send path, patched to record), frame by frame:
 - the master panel: its status table (phase, target, link) and its slave table are not resent
   while the time, the frame counter and the DC deviation move (each in its own handle, tested
   block by block in test_send_only_changes_panels.py); the drive plots' unchanged x range is
-  not resent with their data;
+  not resent with their data, and a still drive's charts get the ends of their flat lines,
+  not every sample of the window;
 - the scenario player's ``fr-player`` block (app/screenshots.py waits on its ``data-frame``):
   a running rig's block is rewritten only when what it says changes; a paused rig's names
   every frame written, byte for byte what ``status_html`` gives.
@@ -23,6 +24,7 @@ from __future__ import annotations
 
 import collections
 import dataclasses
+import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -36,10 +38,14 @@ from app.runtime import Frame, Runtime
 from app.scenario import load_scenario
 from app.screenshots import free_port
 from app.ui.dashboard import Dashboard
+from app.ui.drive.plots import SEND_PERIOD_S, SIGNALS
 from app.ui.panels.scenario_player import STATUS_ID, ScenarioPlayerPanel, library, status_html
 
 FRAME_US = 33_000  # one dashboard frame of simulated time (the runtime publishes at 30 Hz)
 IDLE_FRAMES = 90  # three seconds
+# The drive plots are written on wall time (SEND_PERIOD_S); frames here come faster than real
+# time, so every PLOT_FRAMES-th frame also writes them, as 30 frames a second would.
+PLOT_FRAMES = round(SEND_PERIOD_S * 1e6 / FRAME_US)
 BOOT_LIMIT_US = 30_000_000
 TIMEOUT_S = 60
 
@@ -99,10 +105,12 @@ def idle() -> Iterator[tuple[Dashboard, Tape]]:
         runtime.advance(1_000_000).result(timeout=TIMEOUT_S)
         dashboard.tick()
         tape.recording = True
-        for _ in range(IDLE_FRAMES):
+        for n in range(IDLE_FRAMES):
             runtime.advance(FRAME_US).result(timeout=TIMEOUT_S)
             tape.ticks.append([])
             dashboard.tick()
+            if dashboard.drives is not None and n % PLOT_FRAMES == PLOT_FRAMES - 1:
+                dashboard.drives.plots.update(time.monotonic(), runtime.frame.t_us, force=True)
         tape.recording = False
         yield dashboard, tape
     finally:
@@ -169,6 +177,16 @@ def test_master_summary_not_resent_for_the_time(idle: tuple[Dashboard, Tape]) ->
     assert live and all("Phase" not in c for c in live)
     assert dashboard.line is not None
     assert "running" in dashboard.line.master.text("status")
+
+
+def test_idle_plots_send_the_ends_of_flat_lines(idle: tuple[Dashboard, Tape]) -> None:
+    """The drive stands still: a chart's data is its flat line's two ends (app/ui/drive/plots.py;
+    every sample of the window before, up to 1000 float64 t and value pairs a chart)."""
+    _, tape = idle
+    data = [v for messages in tape.ticks for m in messages for (_, prop), v in writes(m)
+            if prop == "data"]
+    assert len(data) >= len(SIGNALS) * (IDLE_FRAMES // PLOT_FRAMES)
+    assert all(len(t) == len(values) == 2 for t, values in data), [len(t) for t, _ in data]
 
 
 # ---- the scenario player's marker -------------------------------------------------------------

@@ -8,7 +8,9 @@ patched to record), frame after frame of a rig standing idle.
   its own text changes (it was one block rewritten every frame: ~29 messages/s, 15 kB/s);
 - the drive plots (app/ui/drive/plots.py): viser sends a property each time it is assigned,
   equal or not; the uPlot ``scales`` go out only when the x range moves (it stands at
-  0..WINDOW_S until the window fills, then slides), the data with every new sample.
+  0..WINDOW_S until the window fills, then slides), the data with every new sample, but only
+  the samples that shape the line (a still drive: a few points a chart, not 1000 float64 t and
+  value pairs, 48 kB a write for the three).
 """
 
 from __future__ import annotations
@@ -19,11 +21,19 @@ from dataclasses import dataclass, field
 from types import SimpleNamespace
 from typing import Any
 
+import numpy as np
 import pytest
 import viser
 
 from app.screenshots import free_port
-from app.ui.drive.plots import SAMPLE_US, WINDOW_S, DrivePlots, DriveSampler
+from app.ui.drive.plots import (
+    SAMPLE_US,
+    SIGNALS,
+    WINDOW_S,
+    DrivePlots,
+    DriveSampler,
+    line_points,
+)
 from app.ui.line.master_panel import MasterPanel
 
 FRAME_US = 33_000  # one dashboard frame of simulated time (the runtime publishes at 30 Hz)
@@ -163,10 +173,13 @@ def test_master_block_follows_its_values(server: Any, change: dict[str, Any],
 
 
 # ---- the drive plots ---------------------------------------------------------------------------
-def plots(server: Any) -> tuple[DrivePlots, DriveSampler, Recorder]:
+STILL = {"position_counts": 1.0, "velocity": 0.0, "following_error": 0.0}
+
+
+def plots(server: Any, snapshot: Any = lambda: STILL
+          ) -> tuple[DrivePlots, DriveSampler, Recorder]:
     viser_server, recorder = server
-    sampler = DriveSampler(lambda: {"position_counts": 1.0, "velocity": 0.0,
-                                    "following_error": 0.0})
+    sampler = DriveSampler(snapshot)
     chart_plots = DrivePlots(viser_server, sampler)
     recorder.clear()
     return chart_plots, sampler, recorder
@@ -207,3 +220,51 @@ def test_plot_range_follows_the_sliding_window(server: Any) -> None:
     recorder.clear()
     chart_plots.update(25.0, 24_000_000, force=True)  # nothing new sampled: nothing sent
     assert recorder.sent == {}
+
+
+@pytest.mark.parametrize(("values", "kept"), [
+    ([], []), ([5.0], [0]), ([5.0, 5.0], [0, 1]), ([3.0] * 6, [0, 5]),
+    ([0.0, 0.0, 0.0, 7.0, 7.0, 7.0], [0, 2, 3, 5]),  # a step: both sides of it
+    ([0.0, 1.0, 2.0, 3.0], [0, 1, 2, 3]),  # a ramp: every sample
+    ([1.0, 1.0, float("nan"), 1.0, 1.0], [0, 1, 2, 3, 4]),
+])
+def test_line_points(values: list[float], kept: list[int]) -> None:
+    assert line_points(np.asarray(values, dtype=np.float64)).tolist() == kept
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_line_points_draw_the_same_line(seed: int) -> None:
+    """Through the kept samples, the line passes by every sample left out (runs of equal
+    values with steps and ramps between them, as a drive that moves, stops, moves)."""
+    rng = np.random.default_rng(seed)
+    values = np.repeat(rng.integers(-3, 4, 40).astype(np.float64), rng.integers(1, 30, 40))
+    t = np.arange(len(values)) * SAMPLE_US / 1e6
+    shape = line_points(values)
+    assert len(shape) < len(values)
+    assert np.array_equal(np.interp(t, t[shape], values[shape]), values)
+
+
+def test_still_drive_plots_a_few_points(server: Any) -> None:
+    """A drive standing still for 24 s: two points a chart, the ends of its flat line; the
+    charts still say how many samples their lines go through."""
+    chart_plots, sampler, recorder = plots(server)
+    run(chart_plots, sampler, 0, 24_000_000, 1_000_000)
+    last = [values[-1] for values in per_chart(recorder, "data")]
+    assert [t.tolist() for t, _ in last] == [[24.0 - WINDOW_S, 24.0]] * len(SIGNALS)
+    assert [v.tolist() for _, v in last] == [[STILL[key]] * 2 for key, _, _ in SIGNALS]
+    assert chart_plots.drawn_points() == int(WINDOW_S * 1e6 / SAMPLE_US) + 1
+
+
+def test_moving_drive_plots_every_sample_of_its_ramp(server: Any) -> None:
+    """Position ramping at constant velocity: every sample of the position (no two equal),
+    the two ends of the velocity's plateau."""
+    clock = {"t": 0.0}
+    chart_plots, sampler, recorder = plots(server, lambda: {
+        "position_counts": 1000.0 * clock["t"], "velocity": 1000.0, "following_error": 0.0})
+    for now_us in range(0, 5_000_001, SAMPLE_US):
+        clock["t"] = now_us / 1e6
+        sampler.on_step(now_us)
+    assert chart_plots.update(5.0, 5_000_000, force=True)
+    position, velocity, _ = (values[-1] for values in per_chart(recorder, "data"))
+    assert len(position[0]) == 251 and np.array_equal(position[1], 1000.0 * position[0])
+    assert velocity[0].tolist() == [0.0, 5.0] and velocity[1].tolist() == [1000.0, 1000.0]

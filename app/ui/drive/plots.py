@@ -5,6 +5,12 @@ runtime step listener reading the drive's snapshot), not from the frames the vie
 a paused rig advanced by 20 s in one go still gets a full curve, and a screenshot at a given
 simulated instant always shows the same plot. The dashboard thread sends the last
 :data:`WINDOW_S` seconds to the uPlot charts a few times a second.
+
+viser sends a chart's whole data with each write, as raw float64 (uncompressed): 1000 samples
+of t and value for three charts are 48 kB a write, ~180 kB/s to each browser for a drive that
+stands still (benchmark 3, docs/performance.md). A chart gets only the samples that shape its
+line, :func:`line_points`: a run of equal values is drawn by its first and last sample alone
+(the line between them is the same), so a still drive costs a few points a chart.
 """
 
 from __future__ import annotations
@@ -32,6 +38,17 @@ SIGNALS: tuple[tuple[str, str, str], ...] = (
 )
 
 SnapshotFn = Callable[[], Mapping[str, Any] | None]
+
+
+def line_points(values: np.ndarray) -> np.ndarray:
+    """The indices of the samples that shape a line through ``values``: the first, the last,
+    and each one that differs from a neighbour. Left out: the inside of a run of equal values,
+    which lies on the segment between the run's ends."""
+    keep = np.ones(len(values), dtype=bool)
+    if len(values) > 2:
+        moved = values[1:] != values[:-1]  # NaN != NaN: a NaN is kept
+        keep[1:-1] = moved[:-1] | moved[1:]
+    return np.flatnonzero(keep)
 
 
 class DriveSampler:
@@ -93,13 +110,18 @@ class DrivePlots:
         # viser sends a property each time it is assigned, equal or not: the x range is set
         # only when it moves (it stands at 0..WINDOW_S until the window fills, then slides).
         self._sent_range: tuple[float, float] | None = None
+        self._sent_samples = 0
         empty = (np.zeros(1), np.zeros(1))
         last = len(SIGNALS) - 1
         # One time axis for the three, under the last chart: the others are shorter by it.
         self._charts = [
             server.gui.add_uplot(
                 empty, ({"label": "t (s)"},
-                        {"label": label.split(" (")[0], "stroke": colour, "width": 1.5}),
+                        # No point markers: uPlot shows them where points are sparse, as a run
+                        # reduced to its ends is (samples 20 ms apart on a 20 s axis never are,
+                        # so the page showed none before either).
+                        {"label": label.split(" (")[0], "stroke": colour, "width": 1.5,
+                         "points": {"show": False}}),
                 title=label, height=PLOT_HEIGHT + (TIME_AXIS_HEIGHT if i == last else 0),
                 legend={"show": False}, cursor={"show": False},
                 scales={"x": {"time": False}},
@@ -125,8 +147,9 @@ class DrivePlots:
         for chart, values in zip(self._charts, columns[1:], strict=True):
             if scales is not None:
                 chart.scales = scales
-            chart.data = (columns[0], values)
-        self._sent_range = x_range
+            shape = line_points(values)
+            chart.data = (columns[0][shape], values[shape])
+        self._sent_range, self._sent_samples = x_range, len(columns[0])
         self._sent_version, self._sent_at = version, now
         return True
 
@@ -135,5 +158,5 @@ class DrivePlots:
         return self._sent_version == self._sampler.version
 
     def drawn_points(self) -> int:
-        """Samples in the charts now (tests)."""
-        return len(self._charts[0].data[0]) if self._sent_version >= 0 else 0
+        """Samples the charts' lines go through now (tests)."""
+        return self._sent_samples
