@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import pytest
 import viser
+from label_boxes import TOUCH_PX, VIEW_HEIGHT_PX, Box, label_box, overlaps
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
@@ -37,59 +38,6 @@ from app.ui.drive.axis_scene import (
     legend_text,
     switch_label_anchors,
 )
-
-VIEW_HEIGHT_PX = 670  # the 3D view between the docked panels of 1280 x 720 (app/ui/dashboard.py)
-EM_PX = 12.0  # viser: a screen label's em at font_screen_scale 1
-LINE_EM = 1.117  # Arial / Liberation Sans ascent + descent (0.905 + 0.212 em)
-PADDING = 0.2  # viser: background padding, a share of the line height
-TOUCH_PX = 1.0  # backgrounds may touch; more than this is an overlap
-# Advance widths in em, rounded up from Arial's: narrow glyphs, wide ones, capitals, the rest.
-NARROW = " .,:;·|'!ijlftrI/-()[]"
-WIDE = "mwMW@%"
-
-
-def char_em(ch: str) -> float:
-    if ch in NARROW:
-        return 0.34
-    if ch in WIDE:
-        return 0.95
-    return 0.78 if ch.isupper() else 0.56
-
-
-@dataclass(frozen=True)
-class Box:
-    """A label's background on the axis' front plane, in scene units (x right, z up)."""
-
-    text: str
-    x0: float
-    x1: float
-    z0: float
-    z1: float
-
-    def overlap(self, other: Box, tol: float) -> bool:
-        return (min(self.x1, other.x1) - max(self.x0, other.x0) > tol
-                and min(self.z1, other.z1) - max(self.z0, other.z0) > tol)
-
-
-def label_box(label: viser.LabelHandle, px_per_unit: float) -> Box:
-    """viser's layoutLabel, from the label's text, anchor and scale."""
-    em = EM_PX * float(label.font_screen_scale) / px_per_unit
-    lines = str(label.text).split("\n")
-    line_h = LINE_EM * em
-    pad = PADDING * line_h
-    width = max(sum(char_em(c) for c in line) for line in lines) * em + pad
-    height = len(lines) * line_h + pad
-    vertical, horizontal = str(label.anchor).split("-")
-    x, _, z = (float(v) for v in label.position)
-    x0 = {"left": x, "right": x - width}.get(horizontal, x - width / 2)
-    z1 = {"top": z, "bottom": z + height}.get(vertical, z + height / 2)
-    return Box(str(label.text), x0, x0 + width, z1 - height, z1)
-
-
-def overlaps(boxes: list[Box], tol: float) -> list[tuple[str, str]]:
-    return [(a.text, b.text) for i, a in enumerate(boxes) for b in boxes[i + 1:]
-            if a.overlap(b, tol)]
-
 
 TWO_DRIVES = """
 [rig]

@@ -6,10 +6,16 @@ module widths. A body spans ``x0 .. x0 + width`` and ``z0 - BODY_H / 2 .. z0 + B
 Above it: a bar coloured by the slave's state as the master sees it (green OP, amber on the
 way, red with an error flag, grey when not seen) and a header "position · address · state";
 below it: the LEDs whose pattern a still picture cannot show, in words.
+
+Labels keep one size on screen whatever the zoom (viser "screen" labels), so a text that
+must stay inside its part (the master's screen, a module plate, the drive's front) is broken
+onto lines (:func:`wrap`) rather than shrunk; tests/app/test_line_labels.py checks them at
+the dashboard's default camera, the widest view.
 """
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -24,6 +30,26 @@ SCREEN: RGB = (30, 40, 60)
 STATE_BAR: dict[str, RGB] = {"ok": (20, 170, 60), "busy": (230, 160, 0),
                              "bad": (220, 30, 30), "gone": (130, 130, 136)}
 STILL_PATTERNS = ("off", "on")
+MASTER_W = 2.6  # as wide as the FastCAT coupler: the longest DC state fits its screen
+SCREEN_SHARE = 0.88  # of the master's width
+DC_LINE = 13  # characters per line of the DC state ("SYNCHRONIZING")
+ESM_Z = -0.75  # the drive's ESM state: under its LEDs, above the cable coming in
+
+
+def wrap(text: str, width: int) -> str:
+    """``text`` on lines of at most ``width`` characters where it allows, broken after a
+    space, an underscore or a hyphen; the underscore or hyphen stays at the end of its line,
+    so "DC NOT_" / "SYNCHRONIZED" still spells the seed's NOT_SYNCHRONIZED. A longer piece
+    keeps a line of its own."""
+    lines: list[str] = []
+    line = ""
+    for piece in re.findall(r"[^ _-]+[ _-]*|[ _-]+", text):
+        if line and len((line + piece).rstrip()) > width:
+            lines.append(line.rstrip())
+            line = piece
+        else:
+            line += piece
+    return "\n".join([*lines, line.rstrip()])
 
 
 def led_colour(name: str) -> str:
@@ -150,14 +176,15 @@ class SlaveBody(Body):
             z = 0.75 - i * 0.42
             self.paint.led(name, self.at(0.3, z))
             self.paint.label(f"name_{i}", name, self.at(0.52, z), scale=0.65)
-        self.paint.label("esm", "", self.at(self.width / 2, -1.5), anchor="center-center",
+        # Two lines ("ESM" over the state): "ESM SAFEOP" on one is wider than the body.
+        self.paint.label("esm", "", self.at(self.width / 2, ESM_Z), anchor="center-center",
                          scale=0.7)
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
         leds = snap.get("leds") or {}
         for name in self._led_names:
             self.paint.set_led(name, led_colour(name), str(leds.get(name, "off")), t_us)
-        self.paint.set_text("esm", f"ESM {snap.get('esm', '-')}")
+        self.paint.set_text("esm", f"ESM\n{snap.get('esm', '-')}")
         return blink_words((n, str(leds.get(n, "off"))) for n in self._led_names)
 
 
@@ -165,18 +192,20 @@ class MasterBody(Body):
     """The master: a PC with a screen showing its start-up phase and the DC state."""
 
     title = "Master"
+    width = MASTER_W
 
     def __init__(self, server: viser.ViserServer, x0: float, z0: float) -> None:
         super().__init__(server, "master", x0, z0)
 
     def build(self) -> None:
         super().build()
-        screen = self.paint.box("screen", (self.width * 0.8, 0.1, 1.5),
+        screen = self.paint.box("screen", (self.width * SCREEN_SHARE, 0.1, 1.5),
                                 (self.cx, FRONT_Y + 0.02, self.z0 + 0.45), SCREEN)
         self.clickables.append(screen)
-        self.paint.label("phase", "", self.at(self.width / 2, 0.75), anchor="center-center",
+        self.paint.label("phase", "", self.at(self.width / 2, 0.8), anchor="center-center",
                          scale=0.62)
-        self.paint.label("dc", "", self.at(self.width / 2, 0.2), anchor="center-center",
+        # One or two lines from the top down ("DC NOT_" / "SYNCHRONIZED"), inside the screen.
+        self.paint.label("dc", "", self.at(self.width / 2, 0.5), anchor="top-center",
                          scale=0.62)
         self.paint.led("link", self.at(0.3, -0.9))
         self.paint.label("link_name", "link", self.at(0.52, -0.9), scale=0.65)
@@ -185,7 +214,7 @@ class MasterBody(Body):
         phase = str(snap.get("phase", "running" if snap.get("slaves") else "-"))
         self.paint.set_text("phase", phase.replace("_", " "))
         dc = snap.get("dc") or {}
-        self.paint.set_text("dc", f"DC {dc.get('state', '-')}")
+        self.paint.set_text("dc", wrap(f"DC {dc.get('state', '-')}", DC_LINE))
         link = snap.get("link", True)
         self.paint.set_led("link", "green", "on" if link else "off", t_us)
         return "external master" if snap.get("external") else ""

@@ -4,6 +4,11 @@ Cable ``i`` feeds line position ``i`` (master snapshot ``cables``). Plugged: a d
 cable from the upstream port (right side, low) to the downstream port (left side, low),
 wrapping under the row when the next device starts a new row. Pulled: red, and its end hangs
 loose in front of the port it came out of, with "pulled" next to it.
+
+The label sits over the middle of the cable's longest stretch. Between two bodies of a row
+that stretch is narrower than "cable 2 pulled" at the default camera (labels keep their size
+on screen), so there "pulled" goes on a second line; the long stretch between the rows keeps
+one line, under the rail's legend.
 """
 
 from __future__ import annotations
@@ -23,6 +28,8 @@ PLUGGED = (25, 120, 80)
 PULLED = (220, 30, 30)
 THICK = 0.14
 CABLE_Y = FRONT_Y - 0.15
+ONE_LINE_STRETCH = 2.5  # a stretch at least this long takes "cable i pulled" on one line
+LABEL_LIFT = 0.12  # the label's bottom over the cable
 # Called with (client, cable index, plugged now) on a click.
 OnCable = Callable[[viser.ClientHandle | None, int, bool], None]
 
@@ -44,11 +51,22 @@ def pulled_route(points: Sequence[Point]) -> list[Point]:
     return [*head, (xa, za), cut, (cut[0] + 0.2, cut[1] - 0.7)]
 
 
+def longest_stretch(points: Sequence[Point]) -> tuple[Point, Point]:
+    return max(itertools.pairwise(points), key=lambda ab: math.dist(ab[0], ab[1]))
+
+
 def label_point(points: Sequence[Point]) -> Point:
     """Middle of the longest stretch, where the cable's name goes."""
-    a, b = max(itertools.pairwise(points),
-               key=lambda ab: math.dist(ab[0], ab[1]))
+    a, b = longest_stretch(points)
     return ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+
+
+def cable_label(index: int, plugged: bool, points: Sequence[Point]) -> str:
+    """"cable 2", or "cable 2 pulled" (on two lines where the stretch is short)."""
+    if plugged:
+        return f"cable {index}"
+    sep = " " if math.dist(*longest_stretch(points)) >= ONE_LINE_STRETCH else "\n"
+    return f"cable {index}{sep}pulled"
 
 
 class Cable:
@@ -85,9 +103,9 @@ class Cable:
             box.on_click(self._clicked)
             self._nodes.append(box)
         x, z = label_point(self.points)
-        self.label_text = f"cable {self.index}" + ("" if plugged else " pulled")
+        self.label_text = cable_label(self.index, plugged, self.points)
         self._nodes.append(self._scene.add_label(
-            f"{root}/label", self.label_text, position=(x, CABLE_Y, z + 0.12),
+            f"{root}/label", self.label_text, position=(x, CABLE_Y, z + LABEL_LIFT),
             anchor="bottom-center", font_screen_scale=0.58))
 
     def _clicked(self, event: Any) -> None:

@@ -9,6 +9,11 @@ yellow LED per channel. The seed names no per-channel LED in the snapshot, so th
 the channel signal (inputs for input modules, driven outputs for output modules) and light the
 module's error LED on a short circuit, a wire break, a module failure or a sensor-supply short,
 as the modules' own LEDs do.
+
+A plate is one module wide (1.0) and its labels keep their size on screen: a type longer
+than TYPE_LINE characters ("4AI-U-I") takes two lines ("4AI-" / "U-I") hanging from under
+the plate's number, so that neighbouring types do not run into each other at the default
+camera (tests/app/test_line_labels.py).
 """
 
 from __future__ import annotations
@@ -18,7 +23,7 @@ from typing import Any
 
 import viser
 
-from app.ui.line.bodies import BODY, Body, blink_words
+from app.ui.line.bodies import BODY, Body, blink_words, wrap
 from app.ui.rail_scene import BODY_D, BODY_H
 
 MODULE_W = 1.0
@@ -30,6 +35,10 @@ CPX_LEDS = ("Run", "Error", "LA IN", "LA OUT", "PS", "PL", "SF", "M")
 CPX_COLOURS = {"Run": "green", "Error": "red", "LA IN": "green", "LA OUT": "green",
                "PS": "green", "PL": "green", "SF": "red", "M": "yellow"}
 CHANNEL_LED = (0.24, 0.1, 0.15)
+TYPE_LINE = 5  # characters of a plate's type per line: "16DI" on one, "4AI-U-I" on two
+TYPE_Z = 1.5  # top of a plate's type, under its number
+ERROR_LED_Z = 0.72  # a CPX plate's error LED, under a two-line type
+EXP_NOTE_Z = 0.2  # a TRS-CAT expansion's note, clear of the cables at the plate's foot
 
 
 def ident_text(value: int | str) -> str:
@@ -120,9 +129,10 @@ class TrsCatBody(Body):
             self.clickables.append(p.box(f"exp{n}", (MODULE_W * 0.92, BODY_D, BODY_H),
                                          (self.x0 + x, 0.0, self.z0), BODY))
             p.label(f"exp{n}_n", str(n), self.at(x, 1.72), anchor="center-center", scale=0.8)
-            p.label(f"exp{n}_t", short_type(kind), self.at(x, 1.2), anchor="center-center",
-                    scale=0.68)
-            p.label(f"exp{n}_note", "", self.at(x, -0.6), anchor="center-center", scale=0.66)
+            p.label(f"exp{n}_t", wrap(short_type(kind), TYPE_LINE), self.at(x, TYPE_Z),
+                    anchor="top-center", scale=0.68)
+            p.label(f"exp{n}_note", "", self.at(x, EXP_NOTE_Z), anchor="center-center",
+                    scale=0.66)
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
         leds = snap.get("leds") or {}
@@ -164,9 +174,9 @@ class CpxBody(Body):
                                          (self.x0 + x, 0.0, self.z0), BODY))
             p.label(f"m{number}_n", str(number), self.at(x, 1.72), anchor="center-center",
                     scale=0.8)
-            p.label(f"m{number}_t", short, self.at(x, 1.25), anchor="center-center",
-                    scale=0.66)
-            p.led(f"m{number}.error", self.at(x, 0.85), (0.3, 0.12, 0.18))
+            p.label(f"m{number}_t", wrap(short, TYPE_LINE), self.at(x, TYPE_Z),
+                    anchor="top-center", scale=0.66)
+            p.led(f"m{number}.error", self.at(x, ERROR_LED_Z), (0.3, 0.12, 0.18))
             for ch in range(channels):
                 row, col = ch % 8, ch // 8
                 p.led(f"m{number}.{ch}", self.at(x - 0.17 + col * 0.34, 0.45 - row * 0.27),

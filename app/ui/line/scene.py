@@ -21,7 +21,8 @@ from app.ui.line.cables import Cable, OnCable, route
 from app.ui.line.io_bodies import CpxBody, TrsCatBody
 from app.ui.rail_scene import BODY_H
 
-MASTER_X0 = -3.0
+MASTER_X0 = -3.8  # the master (2.6 wide) ends 1.2 before the rail: room for cable 0
+ROW2_X0 = -3.0
 ROW_GAP = 2.6  # between row 1's bottom and row 2's top: legend, cable, headers
 ROW2_Z = -(BODY_H + ROW_GAP)
 GAP_X = 0.7
@@ -82,7 +83,7 @@ class LineScene:
         self.order = line_order(master, devices)
         self.master = MasterBody(server, MASTER_X0, 0.0)
         self.bodies: dict[str, Body] = {master_id: self.master}
-        x_row2 = MASTER_X0
+        x_row2 = ROW2_X0
         for device in self.order:
             snap = devices.get(device) or {}
             if device in rail_lengths:  # the FastCAT rail is row 1 (at x = 0)

@@ -1,0 +1,81 @@
+"""Where viser draws a scene label, estimated: the tests of the axis and line scenes' labels.
+
+viser draws a "screen" label at a constant size on screen: 12 px per em at font_screen_scale
+1 (client/src/label/LabelRenderer.tsx), a background 0.2 line heights wider and taller than
+the text (labelLayout.ts), in the system font stack, Liberation Sans (Arial metrics) on this
+machine. Whether two labels collide therefore depends on how many pixels one scene unit takes
+at the camera the dashboard starts with; the tests read that camera off a real dashboard and
+estimate each label's box from character widths rounded up from Arial's. The estimate is
+conservative: a label drawn narrower than estimated only widens the gaps.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import viser
+
+VIEW_HEIGHT_PX = 670  # the 3D view between the docked panels of 1280 x 720 (app/ui/dashboard.py)
+EM_PX = 12.0  # viser: a screen label's em at font_screen_scale 1
+LINE_EM = 1.117  # Arial / Liberation Sans ascent + descent (0.905 + 0.212 em)
+PADDING = 0.2  # viser: background padding, a share of the line height
+TOUCH_PX = 1.0  # backgrounds may touch; more than this is an overlap
+# Advance widths in em, rounded up from Arial's: narrow glyphs, wide ones, capitals, the rest.
+NARROW = " .,:;·|'!ijlftrI/-()[]"
+WIDE = "mwMW@%"
+
+
+def char_em(ch: str) -> float:
+    if ch in NARROW:
+        return 0.34
+    if ch in WIDE:
+        return 0.95
+    return 0.78 if ch.isupper() else 0.56
+
+
+@dataclass(frozen=True)
+class Box:
+    """A label's background (or a solid part) on a front plane, in scene units (x right, z up)."""
+
+    text: str
+    x0: float
+    x1: float
+    z0: float
+    z1: float
+
+    def overlap(self, other: Box, tol: float) -> bool:
+        return (min(self.x1, other.x1) - max(self.x0, other.x0) > tol
+                and min(self.z1, other.z1) - max(self.z0, other.z0) > tol)
+
+
+def label_box(label: viser.LabelHandle, px_per_unit: float) -> Box:
+    """viser's layoutLabel, from the label's text, anchor and scale."""
+    em = EM_PX * float(label.font_screen_scale) / px_per_unit
+    lines = str(label.text).split("\n")
+    line_h = LINE_EM * em
+    pad = PADDING * line_h
+    width = max(sum(char_em(c) for c in line) for line in lines) * em + pad
+    height = len(lines) * line_h + pad
+    vertical, horizontal = str(label.anchor).split("-")
+    x, _, z = (float(v) for v in label.position)
+    x0 = {"left": x, "right": x - width}.get(horizontal, x - width / 2)
+    z1 = {"top": z, "bottom": z + height}.get(vertical, z + height / 2)
+    return Box(str(label.text), x0, x0 + width, z1 - height, z1)
+
+
+def overlaps(boxes: list[Box], tol: float) -> list[tuple[str, str]]:
+    return [(a.text, b.text) for i, a in enumerate(boxes) for b in boxes[i + 1:]
+            if a.overlap(b, tol)]
+
+
+def px_per_unit(camera: Any, point: Sequence[float]) -> float:
+    """Screen pixels per scene unit at ``point`` for ``camera`` (position, look_at, fov):
+    the view's height over the frustum's height at the point's depth."""
+    eye, look = np.array(camera.position), np.array(camera.look_at)
+    ahead = (look - eye) / np.linalg.norm(look - eye)
+    depth = float(np.dot(np.array(point) - eye, ahead))
+    return VIEW_HEIGHT_PX / (2 * depth * math.tan(camera.fov / 2))
