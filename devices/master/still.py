@@ -15,7 +15,12 @@ the parts that would change nothing (docs/ethercat-master.md "Still steps"):
   the state it was the last time they were watched, and nothing reset what the watch keeps
   (``seen``, ``reached_op``, ``network_op``, presence): the watch would emit nothing;
 - asking whether the DC slaves are in SAFEOP / OP outside WAITING_START_TIME, the one DC state
-  whose trigger reads the answer.
+  whose trigger reads the answer;
+- in a *quiet* cycle (every slave reachable, present and left unserved, each in the state the
+  last watch kept, read right after its own frame and mailbox): building the watch's state list
+  (it would be the kept one), and the DC unit's general step when it is COMPENSATING without a
+  fault and the deviation falls in the window (``DcUnit.compensate`` does what ``measure`` and
+  ``trigger`` would: one draw, ``outside`` back to 0).
 """
 
 from __future__ import annotations

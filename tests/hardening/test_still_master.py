@@ -2,7 +2,8 @@
 
 The EtherCAT master leaves out of a step the parts that would change nothing (the line
 re-applied with the same cables and power, a slave served with nothing to do, the slaves'
-states watched again unchanged; ``devices/master/still.py``). Exact or wrong: the same runs with
+states watched again unchanged, a quiet COMPENSATING cycle's DC step in the window;
+``devices/master/still.py``). Exact or wrong: the same runs with
 ``SKIP_STILL = False`` on the master must give the same events, in the same order at the same
 microsecond, the same snapshots and the same master state (every link's bookkeeping, the
 physical links, the DC unit, the rng).
@@ -84,7 +85,10 @@ def scenario_run(path: Path, skip: bool) -> tuple[list[str], dict[str, Any]]:
     if not skip:
         no_skipping(rig)
     events, seen = checkpoint_run(scenario, rig, lambda rig: (rig.snapshot(), master_state(rig)))
-    seen["skipped"] = vars(master_of(rig).skipped)
+    counts = dict(vars(master_of(rig).skipped))
+    if not master_of(rig)._dc_links:
+        del counts["dc"]  # a line without DC slaves (the FastCAT line) has no DC cycle to skip
+    seen["skipped"] = counts
     return events, seen
 
 
@@ -97,7 +101,7 @@ def test_example_scenarios_are_the_same_without_skipping(path: Path) -> None:
     skipped, plain_skipped = seen.pop("skipped"), plain_seen.pop("skipped")
     assert events == plain_events
     assert seen == plain_seen
-    assert plain_skipped == NOTHING_SKIPPED
+    assert plain_skipped == {part: 0 for part in skipped}
     assert min(skipped.values()) > 1000, skipped  # the master did leave parts out
 
 
