@@ -115,10 +115,11 @@ def blinking(snap: Snapshot) -> None:
 
 
 def expansion_and_module_faults(snap: Snapshot) -> None:
-    """Seed 001 §9.3.7: an application error on expansion 2; seed 002 §2.5: a short circuit
-    on the 8DO's channel 3 (the line_cpx_short screenshot)."""
+    """Seed 001 §9.3.7: an application error on expansion 2, another type found there; seed
+    002 §2.5: a short circuit on the 8DO's channel 3 (the line_cpx_short screenshot)."""
     trs = devices(snap)["trscat"]
     trs["alarms"] = [{"code": "0xA000", "slot": 2}]
+    trs["f050"][3] = 0x494F2D45  # §9.3.2: IO-E found where AN-E is configured: two lines
     modules = devices(snap)["cpx"]["modules"]
     modules[1]["shorted"] = [3]
 

@@ -124,7 +124,8 @@ def test_line_trscat_expansion_mismatch(line: LiveDashboard, page: Any) -> None:
     toast.first.wait_for(state="detached")
     open_tabs(page, "Slave")
     page.locator("#fr-slave-state").wait_for()
-    assert "0xA000" in view.scene.text("trscat", "exp2_note")
+    # what the master configured there, and the configuration error (§9.3.2, §9.3.7)
+    assert view.scene.text("trscat", "exp2_note").split("\n") == ["cfg AN-E", "0xA000"]
     compare_screenshot(page, "line_trscat_mismatch")
 
 

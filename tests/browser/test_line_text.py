@@ -64,13 +64,17 @@ def test_ident_text_reads_the_ascii_idents(ident: int | str, text: str) -> None:
 
 
 def test_expansion_note() -> None:
-    io_e, an_e = 0x494F2D45, 0x414E2D45
+    """Seed 001 §9.3.2: sub 0 of 0xF030 / 0xF050 is the count, sub 1 the integrated module
+    (IO-B), expansion n is sub n + 1 (the lists the TRS-CAT's snapshot carries)."""
+    io_b, io_e, an_e = 0x494F2D42, 0x494F2D45, 0x414E2D45
     snap: dict[str, Any] = {"slots": [{}, {"serviced": True}, {"serviced": True}],
-                            "f030": [2, io_e, an_e], "f050": [2, io_e, io_e], "alarms": []}
+                            "f030": [3, io_b, io_e, an_e, 0], "f050": [3, io_b, io_e, io_e, 0],
+                            "alarms": []}
     assert expansion_note(snap, 1) == ""
     assert expansion_note(snap, 2) == "cfg AN-E"  # 0xF030 wants AN-E, 0xF050 found IO-E
-    snap["f050"] = snap["f030"]
     snap["alarms"] = [{"code": "0xA000", "name": "CONFIG_ERROR", "slot": 2}]
+    assert expansion_note(snap, 2) == "cfg AN-E\n0xA000"  # what was configured, and the code
+    snap["f050"] = snap["f030"]
     assert expansion_note(snap, 2) == "0xA000"
     snap["slots"][1]["serviced"] = False
     assert expansion_note(snap, 1) == "not seen"

@@ -54,21 +54,24 @@ def ident_text(value: int | str) -> str:
 
 def expansion_note(snap: Mapping[str, Any], position: int) -> str:
     """What a still must say about expansion ``position`` (1-based): another type in 0xF050
-    (found) than in 0xF030 (configured by the master), not found, or the application errors
+    (found) than in 0xF030 (configured by the master), not found, and the application errors
     raised for its slot."""
     slots = snap.get("slots") or []
     entry = slots[position] if position < len(slots) else {}
+    # §9.3.2: sub 0 is the count and sub 1 the integrated module, so expansion n is sub n + 1.
+    sub = position + 1
     f030, f050 = snap.get("f030") or [], snap.get("f050") or []
-    configured = f030[position] if position < len(f030) else 0
-    found = f050[position] if position < len(f050) else 0
+    configured = f030[sub] if sub < len(f030) else 0
+    found = f050[sub] if sub < len(f050) else 0
+    lines = []
     if configured and found and configured != found:
-        return f"cfg {ident_text(configured)}"
-    if not entry.get("serviced", True):
-        return "not seen"
+        lines.append(f"cfg {ident_text(configured)}")
+    elif not entry.get("serviced", True):
+        lines.append("not seen")
     # §9.3.7 application errors name the slot they concern (0xA000 configuration error).
-    codes = [str(a.get("code", "")) for a in snap.get("alarms") or []
-             if isinstance(a, Mapping) and a.get("slot") == position]
-    return "\n".join(codes)
+    lines += [str(a.get("code", "")) for a in snap.get("alarms") or []
+              if isinstance(a, Mapping) and a.get("slot") == position]
+    return "\n".join(lines)
 
 
 def short_type(name: str) -> str:
