@@ -225,7 +225,7 @@ def test_plot_range_follows_the_sliding_window(server: Any) -> None:
 @pytest.mark.parametrize(("values", "kept"), [
     ([], []), ([5.0], [0]), ([5.0, 5.0], [0, 1]), ([3.0] * 6, [0, 5]),
     ([0.0, 0.0, 0.0, 7.0, 7.0, 7.0], [0, 2, 3, 5]),  # a step: both sides of it
-    ([0.0, 1.0, 2.0, 3.0], [0, 1, 2, 3]),  # a ramp: every sample
+    ([0.0, 1.0, 2.0, 3.0], [0, 1, 2, 3]),  # a ramp without times: every sample
     ([1.0, 1.0, float("nan"), 1.0, 1.0], [0, 1, 2, 3, 4]),
 ])
 def test_line_points(values: list[float], kept: list[int]) -> None:
@@ -255,9 +255,9 @@ def test_still_drive_plots_a_few_points(server: Any) -> None:
     assert chart_plots.drawn_points() == int(WINDOW_S * 1e6 / SAMPLE_US) + 1
 
 
-def test_moving_drive_plots_every_sample_of_its_ramp(server: Any) -> None:
-    """Position ramping at constant velocity: every sample of the position (no two equal),
-    the two ends of the velocity's plateau."""
+def test_moving_drive_plots_the_ends_of_its_ramp(server: Any) -> None:
+    """Position ramping at constant velocity: the two ends of the ramp (a straight line), the
+    two ends of the velocity's plateau; the charts still say how many samples they cover."""
     clock = {"t": 0.0}
     chart_plots, sampler, recorder = plots(server, lambda: {
         "position_counts": 1000.0 * clock["t"], "velocity": 1000.0, "following_error": 0.0})
@@ -266,5 +266,23 @@ def test_moving_drive_plots_every_sample_of_its_ramp(server: Any) -> None:
         sampler.on_step(now_us)
     assert chart_plots.update(5.0, 5_000_000, force=True)
     position, velocity, _ = (values[-1] for values in per_chart(recorder, "data"))
-    assert len(position[0]) == 251 and np.array_equal(position[1], 1000.0 * position[0])
+    assert position[0].tolist() == [0.0, 5.0] and position[1].tolist() == [0.0, 5000.0]
     assert velocity[0].tolist() == [0.0, 5.0] and velocity[1].tolist() == [1000.0, 1000.0]
+    assert chart_plots.drawn_points() == 251
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_line_points_with_times_draw_the_same_line(seed: int) -> None:
+    """Ramps, plateaus and bends of a drive that accelerates, cruises, stops (sample times as
+    the sampler takes them, not exact in binary): the kept samples draw every sample left
+    out to within float rounding, and every bend is kept."""
+    rng = np.random.default_rng(seed)
+    slopes = np.repeat(rng.integers(-3, 4, 30) * 1000.0, rng.integers(1, 40, 30))
+    t = np.arange(len(slopes) + 1) * SAMPLE_US / 1e6
+    values = np.concatenate(([0.0], np.cumsum(slopes * SAMPLE_US / 1e6)))
+    shape = line_points(values, t)
+    assert len(shape) < len(values) / 2
+    drawn = np.interp(t, t[shape], values[shape])
+    assert np.allclose(drawn, values, rtol=0, atol=1e-6 * np.ptp(values))
+    bends = np.flatnonzero(slopes[1:] != slopes[:-1]) + 1  # where the slope changes
+    assert set(bends.tolist()) <= set(shape.tolist())

@@ -9,8 +9,9 @@ simulated instant always shows the same plot. The dashboard thread sends the las
 viser sends a chart's whole data with each write, as raw float64 (uncompressed): 1000 samples
 of t and value for three charts are 48 kB a write, ~180 kB/s to each browser for a drive that
 stands still (benchmark 3, docs/performance.md). A chart gets only the samples that shape its
-line, :func:`line_points`: a run of equal values is drawn by its first and last sample alone
-(the line between them is the same), so a still drive costs a few points a chart.
+line, :func:`line_points`: a run of equal values, or a straight run (a position ramping at
+constant velocity), is drawn by its first and last sample alone (the line between them is the
+same), so a still drive costs a few points a chart and a jogging one a few more.
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ SEND_PERIOD_S = 0.25  # wall time between two updates of the charts
 PLOT_HEIGHT = 64  # pixels of one chart without its time axis
 TIME_AXIS_HEIGHT = 28
 VALUE_AXIS_WIDTH = 70  # room for "-600,000"
+STRAIGHT = 1e-9  # a turn this small against the segments' size is float rounding, not a bend
 
 # (snapshot key, title, colour)
 SIGNALS: tuple[tuple[str, str, str], ...] = (
@@ -40,14 +42,25 @@ SIGNALS: tuple[tuple[str, str, str], ...] = (
 SnapshotFn = Callable[[], Mapping[str, Any] | None]
 
 
-def line_points(values: np.ndarray) -> np.ndarray:
+def line_points(values: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
     """The indices of the samples that shape a line through ``values``: the first, the last,
-    and each one that differs from a neighbour. Left out: the inside of a run of equal values,
-    which lies on the segment between the run's ends."""
+    and each one where the line turns. Left out: the inside of a run of equal values and, given
+    the times ``t``, the inside of a straight run (a position ramping at constant velocity),
+    which lie on the segment between the run's ends."""
     keep = np.ones(len(values), dtype=bool)
-    if len(values) > 2:
+    if len(values) <= 2:
+        return np.flatnonzero(keep)
+    if t is None:
         moved = values[1:] != values[:-1]  # NaN != NaN: a NaN is kept
         keep[1:-1] = moved[:-1] | moved[1:]
+        return np.flatnonzero(keep)
+    dv, dt = np.diff(values), np.diff(t)
+    # The turn at a sample: the cross product of the segments either side, against their
+    # size. STRAIGHT leaves out only what float rounding bends (sample times are not exact in
+    # binary); a NaN compares False and is kept.
+    turn = np.abs(dv[:-1] * dt[1:] - dv[1:] * dt[:-1])
+    size = (np.abs(dv[:-1]) + np.abs(dv[1:])) * (dt[:-1] + dt[1:])
+    keep[1:-1] = ~(turn <= STRAIGHT * size)
     return np.flatnonzero(keep)
 
 
@@ -147,7 +160,7 @@ class DrivePlots:
         for chart, values in zip(self._charts, columns[1:], strict=True):
             if scales is not None:
                 chart.scales = scales
-            shape = line_points(values)
+            shape = line_points(values, columns[0])
             chart.data = (columns[0][shape], values[shape])
         self._sent_range, self._sent_samples = x_range, len(columns[0])
         self._sent_version, self._sent_at = version, now
