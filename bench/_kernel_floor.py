@@ -80,6 +80,6 @@ def floor_us(rig: Rig, steps: int = STEPS) -> float:
 def floor_line(rig: Rig, step_us: int, steps: int = STEPS) -> str:
     us = floor_us(rig, steps)
     slaves = sum(len(getattr(d, "links", ())) for d in rig.devices.values())
-    return (f"    floor: {len(rig.devices)} models that do nothing, {slaves} slaves passed a "
-            f"frame per cycle: {us:.1f} us per rig step, at most {step_us / us:.0f} rigs in "
-            "real time")
+    return (f"    floor: {len(rig.devices)} models that do nothing, {slaves} slave"
+            f"{'s' if slaves != 1 else ''} passed a frame per cycle: {us:.1f} us per rig "
+            f"step, at most {step_us / us:.0f} rigs in real time")
