@@ -8,6 +8,10 @@ screenshot at a given simulated time is always the same picture. See docs/leds.m
 from __future__ import annotations
 
 import enum
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+from devices.events import Event, LedChanged
 
 
 class LedPattern(enum.Enum):
@@ -47,3 +51,29 @@ def is_lit(pattern: LedPattern, t_us: int) -> bool:
         phase_ms -= span
         lit = not lit
     return False  # unreachable: the spans sum to the period
+
+
+@dataclass
+class LedBank:
+    """The last pattern of every single-colour LED of a device; emits LedChanged only when a
+    pattern changes, and an LED no longer wanted goes dark (a module unplugged)."""
+
+    device: str
+    patterns: dict[str, LedPattern] = field(default_factory=dict)
+
+    def update(self, t_us: int, wanted: Mapping[str, LedPattern],
+               emit: Callable[[Event], None]) -> None:
+        patterns = self.patterns
+        for name, pattern in wanted.items():
+            if patterns.get(name, LedPattern.OFF) is not pattern:
+                emit(LedChanged(t_us, self.device, led=name, pattern=pattern.value))
+            patterns[name] = pattern
+        # Every wanted name is in ``patterns`` now: more names means some are no longer wanted.
+        if len(patterns) > len(wanted):
+            for name in [n for n in patterns if n not in wanted]:
+                if patterns.pop(name) is not LedPattern.OFF:
+                    emit(LedChanged(t_us, self.device, led=name,
+                                    pattern=LedPattern.OFF.value))
+
+    def snapshot(self) -> dict[str, str]:
+        return {name: pattern.value for name, pattern in self.patterns.items()}

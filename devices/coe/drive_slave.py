@@ -53,9 +53,9 @@ from devices.device import Action, CommandError, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AlState, describe_al_status_code
 from devices.events import EmergencySent
+from devices.leds import LedBank
 from devices.od import OdEntry, SdoAbort
 from devices.servo.drive import ServoDrive
-from devices.trscat.indicators import LedBank
 
 logger = logging.getLogger(__name__)
 

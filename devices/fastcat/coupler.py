@@ -30,7 +30,6 @@ from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
 from devices.fastcat.esm import Esm, request_refusal
 from devices.fastcat.faults import FaultsMixin
 from devices.fastcat.leds_fastcat import (
-    LedBank,
     err_led,
     link_led,
     module_led_patterns,
@@ -41,6 +40,7 @@ from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES, build_od
 from devices.fastcat.rail import COUPLER_ACTIONS, MODULE_ACTIONS, RailMixin
 from devices.flash import FlashError, FlashStore, MemoryFlash
+from devices.leds import LedBank
 from devices.od import ObjectDictionary
 
 logger = logging.getLogger(__name__)

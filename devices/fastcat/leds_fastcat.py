@@ -9,11 +9,8 @@ yellow blinking while the internal bus is active. Table in docs/fastcat-coupler.
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
 
 from devices.ethercat import AlState
-from devices.events import Event, LedChanged
 from devices.fastcat.alarms import COUPLER, Alarm
 from devices.fastcat.cnf import BusScan, ScanPhase
 from devices.fastcat.esm import ErrorKind
@@ -107,24 +104,3 @@ def module_light(alive: bool, slot: int, scan: BusScan | None, now_us: int, addr
 def module_led_patterns(slot: int, light: ModuleLight) -> dict[str, LedPattern]:
     red, yellow = MODULE_LEDS[light]
     return {f"{slot}.red": red, f"{slot}.yellow": yellow}
-
-
-@dataclass
-class LedBank:
-    """The last pattern of every LED; emits LedChanged only when a pattern changes."""
-
-    device: str
-    patterns: dict[str, LedPattern] = field(default_factory=dict)
-
-    def update(self, t_us: int, wanted: Mapping[str, LedPattern],
-               emit: Callable[[Event], None]) -> None:
-        for name, pattern in wanted.items():
-            if self.patterns.get(name, LedPattern.OFF) is not pattern:
-                emit(LedChanged(t_us, self.device, led=name, pattern=pattern.value))
-            self.patterns[name] = pattern
-        for name in [n for n in self.patterns if n not in wanted]:
-            if self.patterns.pop(name) is not LedPattern.OFF:
-                emit(LedChanged(t_us, self.device, led=name, pattern=LedPattern.OFF.value))
-
-    def snapshot(self) -> dict[str, str]:
-        return {name: pattern.value for name, pattern in self.patterns.items()}

@@ -18,6 +18,7 @@ from typing import Any, ClassVar
 from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
+from devices.leds import LedBank
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
 from devices.trscat.catalog import (
@@ -33,7 +34,7 @@ from devices.trscat.catalog import (
 from devices.trscat.commands import ACTIONS, CommandsMixin
 from devices.trscat.diagnostics import AppFault, DiagHistory
 from devices.trscat.esm import Esm
-from devices.trscat.indicators import LedBank, LedInputs
+from devices.trscat.indicators import LedInputs
 from devices.trscat.io import SlotIo, field_in_range
 from devices.trscat.objects import build_od, refuse_in_state
 from devices.trscat.pdo import outputs_index

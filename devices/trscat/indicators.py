@@ -7,11 +7,9 @@ their line (§8.3); +24Vdc green on = field supply present and in range (§8.4).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from devices.ethercat import AlState
-from devices.events import Event, LedChanged
 from devices.leds import LedPattern
 from devices.trscat.esm import ErrorKind
 
@@ -90,21 +88,3 @@ def wanted_patterns(s: LedInputs) -> dict[str, LedPattern]:
     out.update({name: _on(bool(s.io_mask >> i & 1))
                 for i, name in enumerate(_io_names(s.io_count))})
     return out
-
-
-@dataclass
-class LedBank:
-    """The last pattern of every LED; emits LedChanged only when a pattern changes."""
-
-    device: str
-    patterns: dict[str, LedPattern] = field(default_factory=dict)
-
-    def update(self, t_us: int, wanted: Mapping[str, LedPattern],
-               emit: Callable[[Event], None]) -> None:
-        for name, pattern in wanted.items():
-            if self.patterns.get(name, LedPattern.OFF) is not pattern:
-                emit(LedChanged(t_us, self.device, led=name, pattern=pattern.value))
-            self.patterns[name] = pattern
-
-    def snapshot(self) -> dict[str, str]:
-        return {name: pattern.value for name, pattern in self.patterns.items()}

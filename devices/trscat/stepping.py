@@ -32,9 +32,9 @@ from devices.trscat.transitions import SM_WATCHDOG_US, OutputMode
 
 if TYPE_CHECKING:
     from devices.events import EventQueue
+    from devices.leds import LedBank
     from devices.trscat.alarms import FaultKey
     from devices.trscat.esm import Esm
-    from devices.trscat.indicators import LedBank
     from devices.trscat.sync import SyncUnit
 
 ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently

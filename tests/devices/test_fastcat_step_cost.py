@@ -19,8 +19,8 @@ from devices.ethercat import AlState
 from devices.fastcat import coupler as coupler_module
 from devices.fastcat.analog import AnalogInputs
 from devices.fastcat.coupler import FastCat
-from devices.fastcat.leds_fastcat import LedBank
 from devices.fastcat.modules import IoModule
+from devices.leds import LedBank
 
 DEFAULT = ("DB16", "DI16", "DO16", "AI8D", "AO4", "AI8TC", "AX2")  # static/rigs/default.toml
 
