@@ -159,6 +159,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
 
     def take_emergencies(self) -> list[bytes]:
         """8-byte CoE emergencies (code LE16, register, 5 bytes); the mailbox runs from PREOP."""
+        if not self.emergencies.pending:  # the master asks every cycle: nothing to hand over
+            return []
         if not self.reachable() or not self.esm.at_least(AlState.PREOP):
             return []
         return self.emergencies.take()

@@ -167,6 +167,8 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
 
     def take_emergencies(self) -> list[bytes]:
         """8-byte emergencies (§2.5.3) queued in the mailbox; it runs from PREOP on."""
+        if not self.diagnosis.mailbox:  # the master asks every cycle: nothing to hand over
+            return []
         if not self.reachable() or self.esm.state is AlState.INIT:
             return []
         out, self.diagnosis.mailbox = self.diagnosis.mailbox, []
