@@ -124,6 +124,18 @@ def expansion_and_module_faults(snap: Snapshot) -> None:
     modules[1]["shorted"] = [3]
 
 
+def every_module_faulted(snap: Snapshot) -> None:
+    """Seed 002 §2.5: every CPX-E module with its red LED on and its note at its longest (a
+    sensor-supply short, six of the 8DO's outputs shorted, wires broken), side by side, with
+    the blink words under the CPX (SF flashing)."""
+    modules = devices(snap)["cpx"]["modules"]
+    modules[0]["sensor_supply_short"] = True
+    modules[1]["shorted"] = [0, 1, 3, 4, 6, 7]
+    modules[2]["wire_broken"] = [0, 2]
+    modules[3]["wire_broken"] = [0, 1, 2, 3]
+    devices(snap)["cpx"]["led_states"]["SF"] = {"pattern": "triple_flash", "colour": "red"}
+
+
 def dc_state(state: DcState) -> Callable[[Snapshot], None]:
     def apply(snap: Snapshot) -> None:
         devices(snap)["master"]["dc"].update(state=state.value, fault="drift")
@@ -137,6 +149,7 @@ STATES: dict[str, Callable[[Snapshot], None]] = {
     "al_codes_and_power": al_codes_and_power,
     "blinking": blinking,
     "faults": expansion_and_module_faults,
+    "every_module_faulted": every_module_faulted,
     **{f"dc_{s.name}": dc_state(s) for s in DcState},
 }
 

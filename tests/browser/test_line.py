@@ -170,6 +170,27 @@ def test_line_cpx_short_circuit(line: LiveDashboard, page: Any) -> None:
     compare_screenshot(page, "line_cpx_short")
 
 
+def test_line_cpx_every_module_faulted(line: LiveDashboard, page: Any) -> None:
+    """§2.5 on every module at once: a failed 16DI, six of the 8DO's outputs shorted, every
+    wire of the 4AI broken, one of the 4AO's: each red LED on, each note under its own plate
+    and clear of its neighbours' ("short" / "6 ch.", "wire" / "0-3")."""
+    line.command("cpx/1", "inject_fault", {"fault": "module_failure"})
+    for channel in (0, 1, 3, 4, 6, 7):
+        line.command("cpx/2", "short_circuit", {"on": True, "channel": channel})
+    for channel in range(4):
+        line.command("cpx/3", "wire_break", {"on": True, "channel": channel})
+    line.command("cpx/4", "wire_break", {"on": True, "channel": 1})
+    line.advance(1.0)
+    view = line.dashboard.line
+    assert view is not None
+    notes = [view.scene.text("cpx", f"m{n}_note") for n in range(1, 5)]
+    assert notes == ["failed", "short\n6 ch.", "wire\n0-3", "wire 1"]
+    assert all(view.scene.led_colours("cpx")[f"m{n}.error"] == COLOURS["red"]
+               for n in range(1, 5))
+    open_dashboard(page, line)
+    compare_screenshot(page, "line_cpx_every_module_faulted")
+
+
 def test_line_dc_sync_lost(line: LiveDashboard, page: Any) -> None:
     """Seed 003: a drifting reference clock leaves the sync window: NOT_SYNCHRONIZED, and the
     DC slaves go to SAFEOP."""

@@ -16,7 +16,14 @@ import pytest
 from app.ui.line.bodies import blink_words, header_text, state_tone
 from app.ui.line.cables import label_point, pulled_route, route
 from app.ui.line.controls import cable_options, slave_options, targets
-from app.ui.line.io_bodies import channel_levels, expansion_note, ident_text, module_error
+from app.ui.line.io_bodies import (
+    channel_levels,
+    channel_list,
+    expansion_note,
+    ident_text,
+    module_error,
+    module_note,
+)
 from app.ui.line.master_panel import dc_text, log_table, slaves_table
 from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
@@ -92,6 +99,28 @@ def test_cpx_module_led_and_channels(module: dict[str, Any], error: str,
                                      levels: list[bool]) -> None:
     assert module_error(module) == error
     assert channel_levels(module) == levels
+
+
+@pytest.mark.parametrize(("channels", "text"), [
+    ([3], "3"), ([0, 1], "0,1"), ([0, 1, 2, 3], "0-3"), ([5, 0, 1, 2, 3], "0-3,5"),
+    ([0, 1, 3, 4, 6, 7], "0,1,3,4,6,7"), (list(range(8)), "0-7"),
+])
+def test_channel_lists_shorten_runs(channels: list[int], text: str) -> None:
+    assert channel_list(channels) == text
+
+
+@pytest.mark.parametrize(("module", "note"), [
+    ({"shorted": [3]}, "short 3"),  # one line when it fits a plate
+    ({"wire_broken": [0, 1]}, "wire\n0,1"),
+    ({"shorted": list(range(8))}, "short\n0-7"),
+    ({"shorted": [0, 1, 3, 4, 6, 7]}, "short\n6 ch."),  # too long for a line: the count
+    ({"sensor_supply_short": True}, "sensor\nshort"),
+    ({"failed": True, "shorted": [1]}, "failed"),
+    ({}, ""),
+])
+def test_module_note_takes_two_lines_at_most(module: dict[str, Any], note: str) -> None:
+    assert module_note(module) == note
+    assert all(len(line) <= 7 for line in note.split("\n"))
 
 
 def test_cable_routes() -> None:

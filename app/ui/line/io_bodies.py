@@ -13,7 +13,9 @@ as the modules' own LEDs do.
 A plate is one module wide (1.0) and its labels keep their size on screen: a type longer
 than TYPE_LINE characters ("4AI-U-I") takes two lines ("4AI-" / "U-I") hanging from under
 the plate's number, so that neighbouring types do not run into each other at the default
-camera (tests/app/test_line_labels.py).
+camera (tests/app/test_line_labels.py). A module's note under its plate ("short 0-7", "sensor
+short") takes at most two lines of NOTE_LINE characters, so that the notes of neighbouring
+faulted modules stay apart and clear of the blink words under the CPX.
 """
 
 from __future__ import annotations
@@ -39,6 +41,8 @@ TYPE_LINE = 5  # characters of a plate's type per line: "16DI" on one, "4AI-U-I"
 TYPE_Z = 1.5  # top of a plate's type, under its number
 ERROR_LED_Z = 0.72  # a CPX plate's error LED, under a two-line type
 EXP_NOTE_Z = 0.2  # a TRS-CAT expansion's note, clear of the cables at the plate's foot
+NOTE_TOP_Z = -1.6  # a CPX module's note hangs from under the lowest channel LED (row 8)
+NOTE_LINE = 7  # characters of a CPX module's note per line: "short 3" on one, "sensor" / "short"
 
 
 def ident_text(value: int | str) -> str:
@@ -80,15 +84,52 @@ def short_type(name: str) -> str:
 
 def module_error(module: Mapping[str, Any]) -> str:
     """The reason the module's red LED is on, "" when it is off."""
+    reason, channels = _error_parts(module)
+    return f"{reason} {channel_list(channels)}" if channels else reason
+
+
+def module_note(module: Mapping[str, Any]) -> str:
+    """:func:`module_error` under the plate, on at most two lines of NOTE_LINE characters (the
+    blink words of the CPX hang below): the reason, then the channels where they fit on a
+    line, else their count ("short" / "6 ch."; the Slave tab lists every one)."""
+    reason, channels = _error_parts(module)
+    if not channels:
+        return wrap(reason, NOTE_LINE)
+    listed = channel_list(channels)
+    if len(reason) + 1 + len(listed) <= NOTE_LINE:
+        return f"{reason} {listed}"
+    return f"{reason}\n{listed if len(listed) <= NOTE_LINE else f'{len(channels)} ch.'}"
+
+
+def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
+    """Why the red LED is on (a failure first, as the module reports it) and the channels."""
     if module.get("failed"):
-        return "failed"
+        return "failed", []
     if module.get("sensor_supply_short"):
-        return "sensor short"
+        return "sensor short", []
     if module.get("shorted"):
-        return "short " + ",".join(str(c) for c in module["shorted"])
+        return "short", sorted({int(c) for c in module["shorted"]})
     if module.get("wire_broken"):
-        return "wire " + ",".join(str(c) for c in module["wire_broken"])
-    return ""
+        return "wire", sorted({int(c) for c in module["wire_broken"]})
+    return "", []
+
+
+def channel_list(channels: Sequence[int]) -> str:
+    """Channel numbers as a field engineer writes them: a run of three or more by its ends
+    ([0, 1, 2, 3, 5] -> "0-3,5")."""
+    numbers = sorted({int(c) for c in channels})
+    parts: list[str] = []
+    i = 0
+    while i < len(numbers):
+        j = i
+        while j + 1 < len(numbers) and numbers[j + 1] == numbers[j] + 1:
+            j += 1
+        if j - i >= 2:
+            parts.append(f"{numbers[i]}-{numbers[j]}")
+        else:
+            parts.extend(str(n) for n in numbers[i:j + 1])
+        i = j + 1
+    return ",".join(parts)
 
 
 def channel_levels(module: Mapping[str, Any]) -> list[bool]:
@@ -184,7 +225,7 @@ class CpxBody(Body):
                 row, col = ch % 8, ch // 8
                 p.led(f"m{number}.{ch}", self.at(x - 0.17 + col * 0.34, 0.45 - row * 0.27),
                       CHANNEL_LED)
-            p.label(f"m{number}_note", "", self.at(x, -1.75), anchor="center-center",
+            p.label(f"m{number}_note", "", self.at(x, NOTE_TOP_Z), anchor="top-center",
                     scale=0.64)
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
@@ -203,7 +244,7 @@ class CpxBody(Body):
             module = by_number.get(number, {})
             error = module_error(module)
             self.paint.set_led(f"m{number}.error", "red", "on" if error else "off", t_us)
-            self.paint.set_text(f"m{number}_note", error)
+            self.paint.set_text(f"m{number}_note", module_note(module))
             levels = channel_levels(module)
             for ch in range(channels):
                 lit = ch < len(levels) and levels[ch]
