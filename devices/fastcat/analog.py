@@ -12,6 +12,7 @@ by value, not tracked by setters, so that no way of changing them can be missed.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -168,6 +169,7 @@ class AnalogInputs:
         self._filters = [InputFilter() for _ in range(self.count)]
         self._seen: tuple[Any, ...] = ()  # the inputs _law was computed from
         self._law: list[tuple[int, int] | None] = [None] * self.count  # (target, coefficient)
+        self._rows: list[tuple[Any, ...]] = []  # per channel, the inputs of _law (_relaw)
         # The channels a step of _active_dt may still move; the others sit at a fixed point
         # of their law for that step length.
         self._active: list[int] = list(range(self.count))
@@ -222,10 +224,7 @@ class AnalogInputs:
                   self.filters, self.types, self.tc_types, self.wired)
         active = self._active
         if inputs != self._seen:
-            self._seen = tuple(list(v) if isinstance(v, list) else v for v in inputs)
-            law = [(self.target(ch), self.coeff(ch)) for ch in range(self.count)]
-            changed = {ch for ch in range(self.count) if law[ch] != self._law[ch]}
-            self._law = law  # type: ignore[assignment]
+            changed = self._relaw(inputs)
             active = sorted(changed.union(active))
         if dt_us != self._active_dt:
             active, self._active_dt = list(range(self.count)), dt_us
@@ -238,6 +237,30 @@ class AnalogInputs:
             if filt.y != y or filt._rem_us != rem:
                 moving.append(ch)  # a channel that did not move is at a fixed point
         self._active = moving
+
+    def _relaw(self, inputs: tuple[Any, ...]) -> set[int]:
+        """Recompute (target, coefficient) of the channels whose inputs differ from the last
+        ones seen; the channels whose law changed. A channel's law depends on its own field
+        value, filter, type, thermocouple type and wiring, and on the module-wide values
+        (cold junction, pot supply, 0x2104): one field value moving recomputes one channel."""
+        seen = self._seen
+        # Per channel: (field, 0x2106, 0x4500, 0x200B, wired), compared as one tuple.
+        rows = list(zip(self.field, self.filters, self.types, self.tc_types, self.wired,
+                        strict=True))
+        if not seen or inputs[1:4] != seen[1:4]:
+            redo: Iterable[int] = range(self.count)
+        else:
+            redo = [ch for ch, row in enumerate(rows) if row != self._rows[ch]]
+        self._seen = tuple(list(v) if isinstance(v, list) else v for v in inputs)
+        self._rows = rows
+        changed = set()
+        law = self._law
+        for ch in redo:
+            new = (self.target(ch), self.coeff(ch))
+            if new != law[ch]:
+                law[ch] = new
+                changed.add(ch)
+        return changed
 
     def physical_alarms(self) -> set[int]:
         if self.pot_supply_short and any(
@@ -326,8 +349,10 @@ class AnalogOutputs:
         elif self.actual == self._goal:
             return  # on target: a ramp (0x200A is unsigned) has nowhere to go
         self.still = False
+        actual = self.actual
         for ch, target in enumerate(self._goal):
-            self.actual[ch] = ramp_toward(self.actual[ch], target, self.ramps[ch], ms)
+            if actual[ch] != target:  # a channel on its target stays there (ramp_toward)
+                actual[ch] = ramp_toward(actual[ch], target, self.ramps[ch], ms)
 
     def physical_alarms(self) -> set[int]:
         return {CODE_AO_PROTECTION} if self.overload else set()

@@ -38,6 +38,9 @@ class BusMixin:
     _answering: list[bool] | None
     _bus_still: bool
     _exchange_key: tuple[int, bool] | None  # (step length, outputs enabled) of the last cycle
+    # (bus table, answering, answering (number, module) pairs, silent numbers); None = stale
+    _answer_cache: tuple[Any, ...] | None
+    _moving: tuple[Any, list[tuple[int, IoModule]]]  # (bus table, modules left moving)
 
     if TYPE_CHECKING:  # defined by FastCat
         def _build_od(self) -> None: ...
@@ -57,20 +60,43 @@ class BusMixin:
         repeat = not touched and still and self._exchange_key == (dt_us, outputs_enabled)
         self._exchange_key = (dt_us, outputs_enabled)
         # Who answers cannot change until the step ends: the alarm check reuses the list.
-        self._answering = answering = [m is not None and m.responds() for m in bus]
-        for n, module in enumerate(bus, start=1):
-            if module is not None and answering[n - 1]:
-                if repeat and module.still:
-                    continue
-                module.step(dt_us, outputs_enabled)
-                still = still and module.still
-                raised = module.take_raised_alarms()
-                if raised:
-                    self.fresh_raised.extend(Alarm(MODULE, code, n) for code in raised)
-            else:  # §6.18: a failed exchange on the internal bus
-                self.comm_errors[n - 1] = min(UDINT_MAX, self.comm_errors[n - 1] + 1)
-                still = False
-        self._bus_still = still
+        answering, cycle, silent = self._who_answers(bus)
+        self._answering = answering
+        last_bus, last_moving = self._moving
+        if repeat and last_bus is bus:
+            # A module's still flag changes only in its own step (or a reset, which comes
+            # with a command or a scan): in a repeat, the modules the last cycle left moving
+            # are the only ones that are not skipped.
+            cycle = last_moving
+        moving = []
+        for n, module in cycle:
+            if repeat and module.still:
+                continue
+            module.step(dt_us, outputs_enabled)
+            if not module.still:
+                moving.append((n, module))
+            raised = module.take_raised_alarms()
+            if raised:
+                self.fresh_raised.extend(Alarm(MODULE, code, n) for code in raised)
+        for n in silent:  # §6.18: a failed exchange on the internal bus
+            self.comm_errors[n - 1] = min(UDINT_MAX, self.comm_errors[n - 1] + 1)
+        self._moving = (bus, moving)
+        self._bus_still = still and not moving and not silent
+
+    def _who_answers(self, bus: list[IoModule | None]) -> tuple[list[bool],
+                                                                 list[tuple[int, IoModule]],
+                                                                 list[int]]:
+        """Per module number whether it answers; the (number, module) pairs that do; the
+        numbers that do not. Answering changes only by a command (plug, power, failure),
+        which touches the model (FastCat.step drops this then), or with the bus table."""
+        cache = self._answer_cache
+        if cache is None or cache[0] is not bus:
+            answering = [m is not None and m.responds() for m in bus]
+            cycle = [(n, m) for n, m in enumerate(bus, start=1)
+                     if m is not None and answering[n - 1]]
+            silent = [n for n, ok in enumerate(answering, start=1) if not ok]
+            cache = self._answer_cache = (bus, answering, cycle, silent)
+        return cache[1], cache[2], cache[3]
 
     def _answers(self, n: int) -> bool:
         module = self._bus_table()[n - 1]

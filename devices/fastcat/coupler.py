@@ -88,6 +88,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         # Derived tables with what they were computed from (bus.py, faults.py, LEDs).
         self._bus_key, self._bus, self._rebound_for, self._answering = (), [], None, None
         self._exchange_key: tuple[int, bool] | None = None
+        self._answer_cache: tuple[Any, ...] | None = None
+        self._moving: tuple[Any, list[tuple[int, IoModule]]] = (None, [])
         self._scan_causes_key: tuple[Any, ...] | None = None
         self._led_key: tuple[Any, ...] = ()
         self.esm = Esm(self.emit, device_id)
@@ -217,6 +219,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         if not self._touched and self._settled == (dt_us, self._activity(now_us)):
             return  # the same inputs as a step that changed nothing: nothing changes
         touched = self._modules_touched
+        if self._touched:
+            self._answer_cache = None  # a command may have changed who answers (bus.py)
         self._touched, self._modules_touched, self._bus_still = False, False, False
         queued = len(self.events.items)
         if self.cnf.release_due(now_us):

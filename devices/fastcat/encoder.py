@@ -139,7 +139,12 @@ class EncoderInput:
     def step(self, dt_us: int, invert: bool, rng: random.Random) -> None:
         old = self.theta
         adv, self._rem = divmod(self._rate * dt_us + self._rem, US_PER_S)
-        self.theta = old + adv
+        new = self.theta = old + adv
+        if not self.faults and not self.disabled:
+            rev = self.real_ppr * SUB
+            if old // rev == new // rev:  # counting, no noise, no zero mark crossed
+                self._count(new // SUB - old // SUB, invert)  # what the lines below do
+                return
         if not self.counting:
             self.last_mark_dir = 0  # pulses are being missed: no mark-to-mark check on resume
             return

@@ -67,6 +67,7 @@ class FaultsMixin:
     stored: list[str] | None
     _scan_causes_key: tuple[Any, ...] | None  # (detected, stored, causes) of the last call
     _answering: list[bool] | None  # who answered this step's exchange (None outside a step)
+    _bus: list[IoModule | None]  # the bus table (bus.py)
 
     if TYPE_CHECKING:  # defined by DeviceModel / FastCat; stubs here would shadow them
         def emit(self, event: Event) -> None: ...
@@ -89,10 +90,12 @@ class FaultsMixin:
             yield from self._scan_causes()
         if self.address_fault and self.address_check and self._address_mismatch():
             yield Alarm(COUPLER, 0x12)
-        bus = self._bus_table()
         answering = self._answering  # this step's exchange, else as _answers(n):
         if answering is None:
+            bus = self._bus_table()
             answering = [m is not None and m.responds() for m in bus]
+        else:
+            bus = self._bus  # the table this step's exchange used (bus.py)
         if not all(answering):
             for n, (slot, name) in enumerate(self.detected, start=1):
                 if not answering[n - 1]:
