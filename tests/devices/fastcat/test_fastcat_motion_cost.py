@@ -1,0 +1,254 @@
+"""Differential tests of the FastCAT's in-motion shortcuts (docs/fastcat-coupler.md, "Step
+cost"): each shortcut is run beside the plain computation it replaces and must agree with it
+step for step, events, snapshots and object values alike.
+
+- the coupler keeps who answers between steps and, in a repeat, steps only the modules the
+  last cycle left moving (bus.py); the plain twin is touched before every step, so it asks
+  every module and steps every answering one (seed 000 §6.18 comm errors, §7 alarms);
+- an analog input recomputes the law (target, filter coefficient) of the channels whose
+  inputs changed only (§6.8-§6.10, §6.15); the plain twin recomputes every channel;
+- an encoder step within one revolution counts at once (§6.26); the plain twin takes the
+  general path (zero marks, noise and signal checks);
+- analog outputs on their target are not ramped (§6.7).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import random
+from collections.abc import Callable
+from typing import Any
+
+import pytest
+
+from devices.ethercat import AlState
+from devices.fastcat.analog import AnalogInputs, AnalogOutputs, ramp_toward
+from devices.fastcat.catalog import module_type
+from devices.fastcat.coupler import FastCat
+from devices.fastcat.encoder import SUB, EncoderInput
+from devices.flash import MemoryFlash
+from devices.master import EtherCatMaster
+
+DEFAULT = ("DB16", "DI16", "DO16", "AI8D", "AO4", "AI8TC", "AX2")  # static/rigs/default.toml
+STEP_US = 1_000
+
+
+class Twin:
+    """A coupler and its master stepped at 1 ms, with the events they emitted, as JSON."""
+
+    def __init__(self, plain: bool, seed: int = 3) -> None:
+        self.fc = FastCat("fastcat", random.Random(seed), [(m, {}) for m in DEFAULT],
+                          flash=MemoryFlash())
+        self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.fc])
+        self.plain = plain
+        self.now = 0
+        self.events: list[str] = []
+
+    def step(self) -> None:
+        if self.plain:  # a full step: who answers asked again, every answering module stepped
+            self.fc._touched = self.fc._modules_touched = True
+            self.fc._answer_cache = None
+        self.now += STEP_US
+        for device in (self.fc, self.master):
+            device.step(self.now)
+            self.events += [json.dumps(e.to_record(), sort_keys=True)
+                            for e in device.drain_events()]
+
+    def apply(self, action: str, module: int | None = None, **args: Any) -> Any:
+        return self.fc.apply(action, args, module)
+
+    def view(self) -> str:
+        od = self.fc.od
+        values = [] if od is None else [
+            od.read(0x6000, ch) for ch in range(1, 17)] + [  # 0x6000 of module 1
+            od.read(0x6400 + 0x10 * 3, ch) for ch in range(1, 9)] + [  # 0x6400 of module 4
+            od.read(0x6500 + 0x10 * 6, k) for k in (1, 2)] + [  # 0x6500 of module 7
+            self.fc.od_comm_errors(n) for n in range(1, 8)]
+        return json.dumps([self.fc.snapshot(), values], sort_keys=True, default=str)
+
+
+# Motion as bench/kernel.py drives it, and the field changes that touch the shortcuts' caches.
+def _motion(t: Twin, i: int) -> None:
+    if i == 0:
+        t.apply("set_shaft_speed", module=7, encoder=1, rpm=600.0)
+        t.apply("set_shaft_speed", module=7, encoder=2, rpm=-150.0)
+        t.apply("write_object", index=0x200A + 0x40, sub=1, value=2)  # AO4 ramp, 2 codes/ms
+    if i % 10 == 0:
+        value = round(2.5 + 2.5 * math.sin(i / 2000 * 2 * math.pi), 3)
+        t.apply("set_analog", module=4, channel=1, value=value)
+        t.apply("set_analog", module=6, channel=1, value=20.0 + 10 * value)
+    if i % 250 == 0:
+        t.apply("write_object", index=0x7400 + 0x40, sub=1,
+                value=1000 if (i // 250) % 2 else -1000)
+
+
+EPISODES: dict[str, Callable[[Twin, int], None]] = {
+    "module fails and comes back": lambda t, i: (
+        i == 300 and t.apply("module_failure", module=2, active=True),
+        i == 900 and t.apply("module_failure", module=2, active=False)),
+    "module unplugged and put back": lambda t, i: (
+        i == 300 and t.apply("unplug", module=5),
+        i == 700 and t.apply("plug", module=5, type="AO4")),
+    "module supply off and on": lambda t, i: (
+        i == 300 and t.apply("module_power", module=7, on=False),
+        i == 800 and t.apply("module_power", module=7, on=True)),
+    "encoder faults": lambda t, i: (
+        i == 200 and t.apply("encoder_fault", module=7, encoder=1, fault="pulse_noise",
+                             active=True),
+        i == 400 and t.apply("encoder_fault", module=7, encoder=2, fault="no_zero_mark",
+                             active=True),
+        i == 600 and t.apply("encoder_fault", module=7, encoder=1, fault="signal_lost",
+                             active=True)),
+    "thermocouple and cold junction": lambda t, i: (
+        i == 250 and t.apply("wire_thermocouple", module=6, channel=1, type="K"),
+        i == 500 and t.apply("write_object", index=0x200B + 0x50, sub=1, value=1),
+        i == 700 and t.apply("write_object", index=0x2104 + 0x50, sub=0, value=10000)),
+    "output short and reset fault": lambda t, i: (
+        i == 200 and t.apply("write_object", index=0x7000 + 0x20, sub=3, value=1),
+        i == 300 and t.apply("output_short", module=3, channel=3, active=True),
+        i == 600 and t.apply("output_short", module=3, channel=3, active=False),
+        i == 700 and t.apply("set_reset_fault", on=True)),
+}
+
+
+@pytest.mark.parametrize("episode", sorted(EPISODES))
+def test_in_motion_shortcuts_match_the_plain_step(episode: str) -> None:
+    """Seed 000 §6.18, §6.24-§6.30, §7: the same commands on a coupler taking its shortcuts
+    and on one doing every step in full leave the same events, snapshots and objects."""
+    fast, plain = Twin(plain=False), Twin(plain=True)
+    for t in (fast, plain):  # boot and let the master take the line to OP
+        for _ in range(4000):
+            t.step()
+        assert t.fc.al_state is AlState.OP
+    assert fast.view() == plain.view()
+    for i in range(1200):
+        for t in (fast, plain):
+            _motion(t, i)
+            EPISODES[episode](t, i)
+            t.step()
+        if i % 50 == 0:
+            assert fast.view() == plain.view(), f"step {i}"
+    assert fast.events == plain.events
+    assert fast.view() == plain.view()
+
+
+def test_fast_twin_takes_the_shortcut() -> None:
+    """The comparison above is not between two plain steps: in motion and without a command,
+    the coupler steps only the moving modules, in bus order (§6.18)."""
+    fast = Twin(plain=False)
+    for _ in range(4000):
+        fast.step()
+    _motion(fast, 0)
+    for _ in range(5):
+        fast.step()
+    stepped: list[str] = []
+    for module in fast.fc.modules():
+        original = module.step
+
+        def counted(dt_us: int, enabled: bool, m: Any = module, f: Any = original) -> None:
+            stepped.append(m.mtype.name)
+            f(dt_us, enabled)
+        module.step = counted  # type: ignore[method-assign]
+    for _ in range(9):
+        fast.step()
+    assert stepped == ["AI8D", "AO4", "AI8TC", "AX2"] * 9
+
+
+# --- analog inputs: only the channels whose inputs changed are recomputed ----------------------
+@pytest.mark.parametrize("name", ["AI8D", "AI8TC", "AI8M", "AI4P", "AB4M4"])
+def test_analog_law_per_channel_matches_every_channel(name: str) -> None:
+    """§6.8-§6.10, §6.15: random changes to field values, filters, types, thermocouple types,
+    wiring, cold junction and pot supply; the fast module (per-channel law) and the plain one
+    (every channel recomputed each step, ``_seen`` forgotten) read the same codes."""
+    mtype = module_type(name)
+    fast, plain = AnalogInputs(mtype), AnalogInputs(mtype)
+    rng = random.Random(name)
+    for i in range(3000):
+        if rng.random() < 0.2:
+            change = _random_change(rng, fast)
+            for ai in (fast, plain):
+                change(ai)
+        dt = rng.choice((1000, 1000, 1000, 250, 2000))
+        plain._seen = ()  # the plain path: every channel's law recomputed
+        fast.step(dt)
+        plain.step(dt)
+        assert [fast.code(ch) for ch in range(fast.count)] == \
+            [plain.code(ch) for ch in range(plain.count)], f"step {i}"
+        assert fast._law == [(fast.target(ch), fast.coeff(ch)) for ch in range(fast.count)]
+        assert fast.still == plain.still
+
+
+def _random_change(rng: random.Random, ai: AnalogInputs) -> Callable[[AnalogInputs], None]:
+    """One change to an input of the law, to apply to both twins alike."""
+    ch = rng.randrange(ai.count)
+    kind = ai.kind(ch)
+    value = round(rng.uniform(kind.field_low, kind.field_high), 2)
+    coeff = rng.choice((1, 100, 4000, 10000))
+    bit = rng.randrange(2)
+    ai_type = rng.randrange(1, 6)
+    choices: list[Callable[[AnalogInputs], None]] = [
+        lambda a: a.field.__setitem__(ch, value),
+        lambda a: a.field.__setitem__(ch, value),
+        lambda a: setattr(a, "cold_junction_c", value % 40),
+        lambda a: setattr(a, "pot_supply_short", not a.pot_supply_short),
+        lambda a: setattr(a, "filter_all", coeff),
+        lambda a: a.filters.__setitem__(ch, coeff),
+        lambda a: a.tc_types.__setitem__(ch, bit),
+        lambda a: a.wired.__setitem__(ch, "K" if bit else "J"),
+    ]
+    if ai.configurable:
+        choices.append(lambda a: a.set_type(ch, ai_type))
+    return rng.choice(choices)
+
+
+# --- encoders: the one-revolution shortcut against the general path ---------------------------
+class _NeverEmpty(set[str]):
+    """A fault set that reads as non-empty: the encoder takes its general path."""
+
+    def __bool__(self) -> bool:
+        return True
+
+
+@pytest.mark.parametrize("rpm", [600.0, -150.0, 6000.0, -59999.0, 0.5, 3.0])
+@pytest.mark.parametrize("invert", [False, True])
+def test_encoder_one_revolution_shortcut_matches_the_general_path(rpm: float,
+                                                                  invert: bool) -> None:
+    """§6.12, §6.13, §6.26: positions, mark-to-mark counts, zero cycle and raised alarms agree
+    with the general path over many revolutions, with odd step lengths and a zero cycle."""
+    fast, plain = EncoderInput(0, 1000), EncoderInput(0, 1000)
+    plain.faults = _NeverEmpty()
+    rng = random.Random(5)
+    for enc in (fast, plain):
+        enc.set_rpm(rpm)
+        enc.ppr_setting = 999  # a count alarm at every mark
+    for i in range(4000):
+        if i == 100:
+            for enc in (fast, plain):
+                enc.arm_zero_cycle()
+        dt = rng.choice((1000, 1000, 333, 2500))
+        fast.step(dt, invert, random.Random(i))
+        plain.step(dt, invert, random.Random(i))
+        assert (fast.theta, fast.position, fast.since_mark, fast.travel, fast.armed,
+                fast.zero_done, fast.last_mark_dir, fast.raised) == \
+            (plain.theta, plain.position, plain.since_mark, plain.travel, plain.armed,
+             plain.zero_done, plain.last_mark_dir, plain.raised), f"step {i}"
+    assert abs(fast.theta - SUB // 2) > 0
+
+
+# --- analog outputs: a channel on its target is left alone --------------------------------------
+@pytest.mark.parametrize("ramp", [0, 1, 7, 40000])
+def test_ao_channel_on_target_is_where_a_ramp_leaves_it(ramp: int) -> None:
+    """§6.7: ``ramp_toward`` of a channel already on its target returns the target, so not
+    calling it changes nothing; outputs still ramp as before."""
+    for code in (-2047, 0, 5, 2047):
+        assert ramp_toward(code, code, ramp, 3) == code
+    ao = AnalogOutputs(module_type("AO4"))
+    ao.ramps = [ramp, 0, 2, 0]
+    ao.targets = [1500, 0, -300, 0]
+    expected = [0, 0, 0, 0]
+    for _ in range(200):
+        expected = [ramp_toward(a, max(-ao.full, min(ao.full, t)), r, 1)
+                    for a, t, r in zip(expected, ao.targets, ao.ramps, strict=True)]
+        ao.step(1000, True)
+        assert ao.actual == expected
