@@ -251,7 +251,7 @@ def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     if not drives:
         return None
     server = DriveModbusServer(drives, runtime.submit, host=args.host, port=port,
-                               framer=args.modbus_framer)
+                               framer=args.modbus_framer, call=runtime.call)
     server.start_in_thread()
     print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{port}",
           flush=True)

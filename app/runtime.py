@@ -2,9 +2,13 @@
 
 viser callbacks, protocol servers and the CLI never touch a model. They call
 :meth:`Runtime.command` (a named device action) or :meth:`Runtime.submit` (any function that
-needs the models, e.g. a Modbus request) and get a ``concurrent.futures.Future``; the
-simulation thread runs queued work at step boundaries, in arrival order. Views read the latest
-:class:`Frame` and the bounded event journal; both are published by the simulation thread.
+needs the models) and get a ``concurrent.futures.Future``; the simulation thread runs queued
+work at step boundaries, in arrival order. A protocol server that answers each request at once
+(the Modbus line) uses :meth:`Runtime.call` instead: the function runs in the caller's thread
+while the simulation thread is between two steps (it holds the rig lock while it steps), which
+spares the request two thread hand-overs (benchmark 4, docs/hardening.md). Either way the
+models are only ever touched by one thread at a time. Views read the latest :class:`Frame`
+and the bounded event journal; both are published by the simulation thread.
 """
 
 from __future__ import annotations
@@ -47,7 +51,12 @@ class Runtime:
         self._paused = False
         self._publish_period = 1.0 / publish_hz
         self._work: queue.Queue[tuple[Callable[[], Any], Future[Any]]] = queue.Queue()
-        self._lock = threading.Lock()
+        self._lock = threading.Lock()  # the journal and the frame
+        # The rig: held by the simulation thread for each step (and the work and publication
+        # around it) and by call(); re-entrant, as queued work may publish or call.
+        self._rig_lock = threading.RLock()
+        self._sim_waiting = False  # the simulation thread wants the rig lock: call() waits
+        self._caller: int | None = None  # the thread inside call(), if any
         self._journal: collections.deque[tuple[int, Event]] = collections.deque(
             maxlen=JOURNAL_LENGTH)
         self._event_seq = 0
@@ -96,6 +105,27 @@ class Runtime:
         self._wake.set()
         return fut
 
+    def call(self, fn: Callable[[], T]) -> T:
+        """Run ``fn`` now, in the calling thread, between two steps of the simulation thread
+        (waiting for the step in progress, if any), and journal the events it caused. For a
+        protocol server that answers a request as soon as it is framed; it must be quick (the
+        simulation waits for it) and must not wait on the simulation thread itself."""
+        # Python's locks are not fair: a caller in a tight loop could take the lock again and
+        # again while the simulation thread, woken, waits for the GIL. Waiting for its turn
+        # here (sleep(0) hands the GIL over) keeps the clock running under any request rate.
+        # (A call made from inside a call holds the lock already: it must not wait.)
+        me = threading.get_ident()
+        while self._sim_waiting and self._caller != me:
+            time.sleep(0)
+        with self._rig_lock:
+            outer, self._caller = self._caller, me
+            try:
+                result = fn()
+                self._journal_events(self.rig.take_events())
+                return result
+            finally:
+                self._caller = outer
+
     def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Future[Any]:
         """Apply a device action; the future holds its result or its CommandError/SdoAbort.
 
@@ -107,7 +137,8 @@ class Runtime:
         return self.submit(run)
 
     def add_listener(self, fn: Callable[[list[Event]], None]) -> None:
-        """``fn(events)`` runs in the simulation thread after each batch; keep it quick."""
+        """``fn(events)`` runs after each batch, with the rig held (in the simulation thread,
+        or in the thread of a :meth:`call`); keep it quick."""
         self._listeners.append(fn)
 
     def add_frame_listener(self, fn: Callable[[Frame], None]) -> None:
@@ -158,7 +189,10 @@ class Runtime:
         sim0 = self.rig.clock.now_us
         next_publish = 0.0
         while not self._stop.is_set():
-            self._journal_events(self._drain_work())
+            self._sim_waiting = True
+            with self._rig_lock:
+                self._sim_waiting = False
+                self._journal_events(self._drain_work())
             now = time.monotonic()
             if self._rebase:
                 self._rebase = False
@@ -175,12 +209,19 @@ class Runtime:
                 while self.rig.clock.now_us + self.rig.clock.step_us <= target:
                     # Each step's events reach the listeners before the step listeners run,
                     # so an observer never sees a sample ahead of the events that led to it.
-                    self._journal_events(self.rig.step())
-                    for fn in self._step_listeners:
-                        fn(self.rig.clock.now_us)
-                    self._journal_events(self._drain_work())
+                    # The lock is taken per step: a call() waits for one step at most.
+                    self._sim_waiting = True
+                    with self._rig_lock:
+                        self._sim_waiting = False
+                        self._journal_events(self.rig.step())
+                        for fn in self._step_listeners:
+                            fn(self.rig.clock.now_us)
+                        self._journal_events(self._drain_work())
             if now >= next_publish or self._publish_soon:
-                self._publish()
+                self._sim_waiting = True
+                with self._rig_lock:
+                    self._sim_waiting = False
+                    self._publish()
                 self._publish_soon = False
                 if now >= next_publish:
                     next_publish = now + self._publish_period

@@ -1,9 +1,12 @@
 """The drives' Modbus line served with pymodbus on TCP: MBAP framing, or RTU framing over TCP.
 
 pymodbus does the transport, the framing and the CRC; the drive's application layer is
-:func:`app.modbus.pdu.serve_line`, run in the simulation thread through ``submit`` (the server's
-asyncio loop never touches a model). Two small hooks below pymodbus's public API keep the seed's
-"exception 02 only, otherwise no reply" (seed 004 ch.2 "Eccezioni"); docs/modbus.md says why:
+:func:`app.modbus.pdu.serve_line`, run between two simulation steps: with ``call`` (the runtime's
+:meth:`~app.runtime.Runtime.call`) at once in the server's loop while the simulation thread is
+between steps, so a request costs no thread hand-over (benchmark 4, docs/hardening.md); else
+in the simulation thread through ``submit``. Two small hooks below pymodbus's public API keep
+the seed's "exception 02 only, otherwise no reply" (seed 004 ch.2 "Eccezioni"); docs/modbus.md
+says why:
 
 - :class:`_RawDecoder` hands every de-framed PDU over as raw bytes, so pymodbus never decodes,
   validates or answers a request itself (its own decoder answers exception 01 to an unknown
@@ -35,6 +38,7 @@ logger = logging.getLogger(__name__)
 
 T = TypeVar("T")
 Submit = Callable[[Callable[[], T]], "concurrent.futures.Future[T]"]
+Call = Callable[[Callable[[], T]], T]
 
 FRAMERS = {"socket": FramerType.SOCKET, "rtu": FramerType.RTU}
 SAVE_REPLY_POLL_S = 0.02
@@ -105,11 +109,12 @@ class DriveModbusServer:
     """The Modbus line of ``drives`` on ``host:port`` (port 0: any free port, see ``.port``)."""
 
     def __init__(self, drives: Sequence[ModbusDrive], submit: Submit, host: str = "127.0.0.1",
-                 port: int = 5020, framer: str = "socket") -> None:
+                 port: int = 5020, framer: str = "socket", call: Call | None = None) -> None:
         if framer not in FRAMERS:
             raise ValueError(f"framer must be one of {', '.join(FRAMERS)}, got {framer!r}")
         self._drives = list(drives)
         self._submit = submit
+        self._call = call
         self.host = host
         self.port = port
         self.framer = framer
@@ -179,7 +184,24 @@ class DriveModbusServer:
     # ---- one request ---------------------------------------------------------------------
     def _answer(self, handler: _DriveRequestHandler, request: _RawPdu,
                 addr: tuple | None) -> None:
-        task = asyncio.get_running_loop().create_task(self._serve(handler, request, addr))
+        if self._call is None:
+            self._spawn(self._serve(handler, request, addr))
+            return
+        # Answered right here, in frame order; only a reply held back by a save waits (ch.2).
+        try:
+            outcome = self._call(lambda: serve_line(self._drives, request.dev_id,
+                                                    request.frame))
+        except Exception:  # a model fault must not take the line down: the drive stays silent
+            logger.exception("Modbus request %s to unit %d failed", request.frame.hex(" "),
+                             request.dev_id)
+            return
+        if isinstance(outcome, Reply) and outcome.after_save:
+            self._spawn(self._reply_after_save(handler, request, addr, outcome))
+        else:
+            self._reply(handler, request, addr, outcome)
+
+    def _spawn(self, coro: Any) -> None:
+        task = asyncio.get_running_loop().create_task(coro)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
@@ -191,10 +213,23 @@ class DriveModbusServer:
         except Exception:  # a model fault must not take the line down: the drive stays silent
             logger.exception("Modbus request %s to unit %d failed", frame.hex(" "), unit)
             return
+        if isinstance(outcome, Reply) and outcome.after_save:
+            await self._reply_after_save(handler, request, addr, outcome)
+        else:
+            self._reply(handler, request, addr, outcome)
+
+    async def _reply_after_save(self, handler: _DriveRequestHandler, request: _RawPdu,
+                                addr: tuple | None, outcome: Reply) -> None:
+        if await self._saved(request.dev_id):
+            self._reply(handler, request, addr, outcome)
+
+    @staticmethod
+    def _reply(handler: _DriveRequestHandler, request: _RawPdu, addr: tuple | None,
+               outcome: Outcome) -> None:
+        unit = request.dev_id
         if isinstance(outcome, Silence):
-            logger.debug("unit %d %s: no reply (%s)", unit, frame.hex(" "), outcome.reason)
-            return
-        if isinstance(outcome, Reply) and outcome.after_save and not await self._saved(unit):
+            logger.debug("unit %d %s: no reply (%s)", unit, request.frame.hex(" "),
+                         outcome.reason)
             return
         if handler.transport is None:
             return  # the client went away meanwhile
@@ -214,4 +249,6 @@ class DriveModbusServer:
         return False
 
     async def _in_sim(self, fn: Callable[[], Any]) -> Any:
+        if self._call is not None:
+            return self._call(fn)
         return await asyncio.wrap_future(self._submit(fn))

@@ -110,8 +110,12 @@ def _receive(sock: socket.socket, wait: float) -> bytes:
 
 @contextmanager
 def serve(drives: list, framer: str, paused: bool = False) -> Iterator[Line]:
+    """The line on ``framer``; "socket+call" is MBAP framing served through ``call`` (answered
+    in the server's loop between two steps, as ``python -m app`` does) instead of ``submit``."""
+    framer, _, hand_over = framer.partition("+")
     with SimThread(drives, paused=paused) as sim:
-        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer=framer)
+        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer=framer,
+                                   call=sim.call if hand_over == "call" else None)
         server.start_in_thread()
         try:
             yield Line(server, sim, drives, framer)
@@ -119,7 +123,7 @@ def serve(drives: list, framer: str, paused: bool = False) -> Iterator[Line]:
             server.stop_in_thread()
 
 
-@pytest.fixture(params=["socket", "rtu"])
+@pytest.fixture(params=["socket", "rtu", "socket+call"])
 def framer(request: pytest.FixtureRequest) -> str:
     return request.param
 

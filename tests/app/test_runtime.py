@@ -115,3 +115,49 @@ def test_a_speed_beyond_the_cpu_still_runs_flat_out() -> None:
     finally:
         rt.stop()
     assert advanced >= 1_000_000  # a counter steps far faster than 2x real time
+
+
+@dataclass
+class Busy(DeviceModel):
+    """A device whose step lets other threads run in the middle of it (time.sleep(0) gives up
+    the GIL), so a caller that did not wait for the step would see ``inside`` set."""
+
+    inside: bool = False
+
+    def step(self, now_us: int) -> None:
+        super().step(now_us)
+        self.inside = True
+        time.sleep(0)
+        self.inside = False
+
+    def snapshot(self) -> dict[str, Any]:
+        return {}
+
+
+def test_call_runs_between_two_steps_in_the_callers_thread() -> None:
+    """Runtime.call (the Modbus line's way in, benchmark 4): the function runs in the calling
+    thread, never while the simulation thread is inside a step, and its events are journalled
+    in the order they came."""
+    busy, counter = Busy("b"), Counter("c")
+    rt = Runtime(Rig("t", {"b": busy, "c": counter}, SimClock(step_us=1000)), speed=50.0)
+    rt.start()
+    try:
+        seen: list[bool] = []
+        threads: set[str] = set()
+        deadline = time.monotonic() + 10
+        # Calls back to back: the simulation must still get its steps (the lock is not fair;
+        # call() lets a waiting simulation thread go first).
+        while rt.call(lambda: counter.steps) < 200:
+            assert time.monotonic() < deadline, "the simulation starved"
+            seen.append(rt.call(lambda: busy.inside))
+            threads.add(rt.call(lambda: threading.current_thread().name))
+        assert len(seen) > 0 and not any(seen)
+        assert threads == {threading.current_thread().name}
+        seq0, _ = rt.events_since(0)
+        for word in ("x", "y"):
+            assert rt.call(lambda w=word: rt.rig.apply("c", "say", {"text": w})) == word.upper()
+        _, events = rt.events_since(seq0)  # journalled by call itself, no step needed
+        assert [e.text for e in events if isinstance(e, LogLine)] == ["x", "y"]
+        assert rt.call(lambda: rt.call(lambda: 7)) == 7  # a call inside a call goes through
+    finally:
+        rt.stop()
