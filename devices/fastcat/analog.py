@@ -114,14 +114,17 @@ class InputFilter:
         self.y = float(target)
         self._rem_us = 0
 
-    def advance(self, target: int, coeff: int, dt_us: int) -> None:
+    def advance(self, target: int, coeff: int, dt_us: int) -> bool:
+        """One step toward ``target``; False when it changed nothing (a fixed point)."""
+        y, rem = self.y, self._rem_us
         if coeff >= FILTER_MAX:
             self.y = float(target)
-            return
-        ms, self._rem_us = divmod(self._rem_us + dt_us, US_PER_MS)
+            return self.y != y
+        ms, self._rem_us = divmod(rem + dt_us, US_PER_MS)
         if ms:
             keep = (1.0 - coeff / FILTER_MAX) ** ms
-            self.y = target + (self.y - target) * keep
+            self.y = target + (y - target) * keep
+        return self.y != y or self._rem_us != rem
 
     @property
     def code(self) -> int:
@@ -229,14 +232,10 @@ class AnalogInputs:
         if dt_us != self._active_dt:
             active, self._active_dt = list(range(self.count)), dt_us
         self.still = not active
-        moving = []
-        for ch in active:
-            filt = self._filters[ch]
-            y, rem = filt.y, filt._rem_us
-            filt.advance(*self._law[ch], dt_us)  # type: ignore[misc]
-            if filt.y != y or filt._rem_us != rem:
-                moving.append(ch)  # a channel that did not move is at a fixed point
-        self._active = moving
+        filters, law = self._filters, self._law
+        # A channel that did not move is at a fixed point of its law for this step length.
+        self._active = [ch for ch in active
+                        if filters[ch].advance(*law[ch], dt_us)]  # type: ignore[misc]
 
     def _relaw(self, inputs: tuple[Any, ...]) -> set[int]:
         """Recompute (target, coefficient) of the channels whose inputs differ from the last
@@ -251,7 +250,9 @@ class AnalogInputs:
             redo: Iterable[int] = range(self.count)
         else:
             redo = [ch for ch, row in enumerate(rows) if row != self._rows[ch]]
-        self._seen = tuple(list(v) if isinstance(v, list) else v for v in inputs)
+        field, cold, pot_short, filter_all, filters, types, tc_types, wired = inputs
+        self._seen = (list(field), cold, pot_short, filter_all, list(filters), list(types),
+                      list(tc_types), list(wired))
         self._rows = rows
         changed = set()
         law = self._law

@@ -231,6 +231,7 @@ class Ax2:
         self._in_alarm = in_alarm
         self.command = 0  # 0x7600
         self._seen_command = 0
+        self._inverts = (False, False)  # inverted(0), inverted(1) for _seen_command
         self.still = False  # the last step changed nothing and would not in a repeat
 
     def reset(self) -> None:
@@ -238,6 +239,7 @@ class Ax2:
             enc.reset()
         self.command = 0
         self._seen_command = 0
+        self._inverts = (False, False)
 
     def inverted(self, k: int) -> bool:
         return bool(self.command & CMD_INVERT_BOTH) != bool(self.command & CMD_INVERT[k])
@@ -257,14 +259,18 @@ class Ax2:
             self.still = enc2.rest() and still1
             return []
         self.still = False
-        rising = self.command & ~self._seen_command
-        self._seen_command = self.command
+        command = self.command
+        if command != self._seen_command:  # the inversions follow the command word
+            rising = command & ~self._seen_command
+            self._seen_command = command
+            self._inverts = (self.inverted(0), self.inverted(1))
+            for enc in self.inputs:
+                if rising & CMD_ZERO_CYCLE[enc.k]:
+                    enc.arm_zero_cycle()
         raised: list[int] = []
         for enc in self.inputs:
-            if rising & CMD_ZERO_CYCLE[enc.k]:
-                enc.arm_zero_cycle()
             if enc.turning:
-                enc.step(dt_us, self.inverted(enc.k), rng)
+                enc.step(dt_us, self._inverts[enc.k], rng)
             else:
                 enc.rest()  # 0 <= remainder < 1 s: a zero rate moves nothing
             if enc.raised:

@@ -67,7 +67,7 @@ class FaultsMixin:
     stored: list[str] | None
     _scan_causes_key: tuple[Any, ...] | None  # (detected, stored, causes) of the last call
     _answering: list[bool] | None  # who answered this step's exchange (None outside a step)
-    _bus: list[IoModule | None]  # the bus table (bus.py)
+    _answer_cache: tuple[Any, ...] | None  # who answers, kept by bus.py
 
     if TYPE_CHECKING:  # defined by DeviceModel / FastCat; stubs here would shadow them
         def emit(self, event: Event) -> None: ...
@@ -90,12 +90,14 @@ class FaultsMixin:
             yield from self._scan_causes()
         if self.address_fault and self.address_check and self._address_mismatch():
             yield Alarm(COUPLER, 0x12)
-        answering = self._answering  # this step's exchange, else as _answers(n):
-        if answering is None:
+        if self._answering is None:  # outside a step: asked now, as _answers(n)
             bus = self._bus_table()
             answering = [m is not None and m.responds() for m in bus]
-        else:
-            bus = self._bus  # the table this step's exchange used (bus.py)
+            cycle = [(n, m) for n, m in enumerate(bus, start=1) if m is not None
+                     and answering[n - 1]]
+        else:  # in a step: whom this step's exchange found answering (bus.py)
+            assert self._answer_cache is not None
+            _bus, answering, cycle, _silent = self._answer_cache
         if not all(answering):
             for n, (slot, name) in enumerate(self.detected, start=1):
                 if not answering[n - 1]:
@@ -104,10 +106,9 @@ class FaultsMixin:
                     yield Alarm(COUPLER, 0x01 if changed else 0x04, n)
         if self.tbus_low and self.detected:
             yield Alarm(MODULE, 0x0C, 1)  # §7.6 LOW_VOLTAGE, byte 0 = first module
-        for n, module in enumerate(bus, start=1):
-            if answering[n - 1]:
-                for code in module.physical_alarm_codes():  # type: ignore[union-attr]
-                    yield Alarm(MODULE, code, n)
+        for n, module in cycle:
+            for code in module.physical_alarm_codes():
+                yield Alarm(MODULE, code, n)
         yield from self.fresh_raised  # raised this exchange: an event, latch it as such
         for a in self.raised:
             if a.module <= len(self.bound) and answering[a.module - 1] \
