@@ -12,7 +12,6 @@ by value, not tracked by setters, so that no way of changing them can be missed.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,6 +20,8 @@ from devices.fastcat.module_od import add_object, pdo_entries
 from devices.od import ObjectDictionary
 
 US_PER_MS = 1000
+# AnalogInputs.step's inputs tuple: the positions of the per-channel lists (_relaw).
+_PER_CHANNEL = (0, 4, 5, 6, 7)
 
 FILTER_MIN = 1  # §6.9 / §6.10: 1 = strongest filter
 FILTER_MAX = 10000  # §6.9 / §6.10: 10000 = no filter
@@ -172,7 +173,6 @@ class AnalogInputs:
         self._filters = [InputFilter() for _ in range(self.count)]
         self._seen: tuple[Any, ...] = ()  # the inputs _law was computed from
         self._law: list[tuple[int, int] | None] = [None] * self.count  # (target, coefficient)
-        self._rows: list[tuple[Any, ...]] = []  # per channel, the inputs of _law (_relaw)
         # The channels a step of _active_dt may still move; the others sit at a fixed point
         # of their law for that step length.
         self._active: list[int] = list(range(self.count))
@@ -243,20 +243,22 @@ class AnalogInputs:
         value, filter, type, thermocouple type and wiring, and on the module-wide values
         (cold junction, pot supply, 0x2104): one field value moving recomputes one channel."""
         seen = self._seen
-        # Per channel: (field, 0x2106, 0x4500, 0x200B, wired), compared as one tuple.
-        rows = list(zip(self.field, self.filters, self.types, self.tc_types, self.wired,
-                        strict=True))
+        redo: set[int] | range
         if not seen or inputs[1:4] != seen[1:4]:
-            redo: Iterable[int] = range(self.count)
+            redo = range(self.count)
+            self._seen = tuple(list(v) if isinstance(v, list) else v for v in inputs)
         else:
-            redo = [ch for ch, row in enumerate(rows) if row != self._rows[ch]]
-        field, cold, pot_short, filter_all, filters, types, tc_types, wired = inputs
-        self._seen = (list(field), cold, pot_short, filter_all, list(filters), list(types),
-                      list(tc_types), list(wired))
-        self._rows = rows
+            redo = set()
+            copies = list(seen)
+            for i in _PER_CHANNEL:  # field, 0x2106, 0x4500, 0x200B, wired
+                now, before = inputs[i], seen[i]
+                if now != before:  # whole lists compared first: usually only the field differs
+                    redo.update(ch for ch in range(self.count) if now[ch] != before[ch])
+                    copies[i] = list(now)
+            self._seen = tuple(copies)  # the unchanged lists' copies are equal: kept
         changed = set()
         law = self._law
-        for ch in redo:
+        for ch in sorted(redo):
             new = (self.target(ch), self.coeff(ch))
             if new != law[ch]:
                 law[ch] = new
