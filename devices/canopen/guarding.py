@@ -82,6 +82,14 @@ class NodeGuard:
             return False
         return now_us > self.last_request_us + self.life_time_us
 
+    def expiry_at(self) -> int | None:
+        """The first instant at which :meth:`expires_by` says True, as things stand (None:
+        none); instants are whole microseconds."""
+        if self.expired or not self.active or not self.life_time_factor \
+                or self.last_request_us is None:
+            return None
+        return self.last_request_us + self.life_time_us + 1
+
     def check(self, now_us: int) -> int | None:
         """The instant the life time ran out, once per expiry; None otherwise."""
         if self.expired or not self.active or not self.life_time_factor \

@@ -42,7 +42,7 @@ from devices.canopen.nmt import (
     next_state,
     parse_command,
 )
-from devices.canopen.pdo import ASYNC_TYPES, Pdo
+from devices.canopen.pdo import Pdo
 from devices.canopen.process_data import ProcessData
 from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
 from devices.device import Action, CommandError, DeviceModel, Param
@@ -56,6 +56,7 @@ BOOT_US = 50_000  # Initialisation after power-up: the drive's self test, then b
 RESET_COMMUNICATION_US = 5_000  # Initialisation after an NMT reset communication
 FRAMES_IN_SNAPSHOT = 60
 OUTBOX = 4096  # frames kept for an adapter that does not drain them (headless runs)
+CALM_FOREVER = 1 << 62  # _calm_until when neither heartbeat nor life guarding is running
 NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
 
 
@@ -86,6 +87,8 @@ class CanOpenNode(ProcessData, DeviceModel):
         self.syncs = 0
         self.bus_load = 0.0
         self._load_mark = (0, 0)  # (second, busy us then)
+        self._load_next_us = 1_000_000  # the first instant of the second after the mark's
+        self._calm_until = 0  # quiet steps proven before this instant (_quiet); 0: none
         self._boot_at: int | None = None
         self._power_seen: object | None = None
         self._known_alarms: list[int] = []
@@ -151,6 +154,7 @@ class CanOpenNode(ProcessData, DeviceModel):
         if not self.active:
             return
         frame = CanFrame(can_id, bytes(data), rtr, dlc if rtr and dlc is not None else -1)
+        self._calm_until = 0
         self.line.offer(frame, self.now_us)
 
     def cmd_frame(self, cob_id: int, data: str, rtr: bool) -> None:
@@ -170,51 +174,82 @@ class CanOpenNode(ProcessData, DeviceModel):
 
     # ---- time -----------------------------------------------------------------------------
     def step(self, now_us: int) -> None:
-        super().step(now_us)
-        self._t = now_us
-        if not (self.SKIP_QUIET and self._quiet(now_us)):
-            self._follow_power(now_us)
+        # DeviceModel.step, inline: the idle node's step is mostly calls (docs/canopen.md
+        # "Step cost")
+        if now_us < self.now_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self.now_us})")
+        self.now_us = self._t = now_us
+        drive = self.drive
+        full = (drive.latched_at_power_up if drive.powered else None) is not self._power_seen \
+            or not self.SKIP_QUIET
+        if not full:
+            if not self.active:  # the same power, still silent: nothing can happen
+                return
+            # A quiet step proved calm up to _calm_until: since then only quiet steps ran,
+            # nothing was received or sent (both reset it) and time alone changes nothing
+            # before that instant; the drive's alarms are the one input from outside.
+            calm = now_us < self._calm_until and drive.alarms.latched == self._known_alarms
+            full = not (calm or self._quiet(now_us))
+        if full:
+            self._full_step(now_us)
             if not self.active:
                 return
-            if self._boot_at is not None and now_us >= self._boot_at:
-                self._boot(self._boot_at)
-            self._wire(now_us)
-            if self.state is not NmtState.INITIALISATION:
-                self._timers(now_us)
-            self._wire(now_us)
-        elif not self.active:
-            return
-        second = now_us // 1_000_000
-        if second != self._load_mark[0]:
+        elif self.state is NmtState.OPERATIONAL:
+            # The one part of a full step that may still act: the asynchronous TPDOs.
+            sent = self._async_tpdos(now_us)
+            if sent:
+                self._wire(now_us)
+        if now_us >= self._load_next_us:
+            second = now_us // 1_000_000
             busy = self.line.busy_us_total
             self.bus_load = (busy - self._load_mark[1]) / 1e6
             self._load_mark = (second, busy)
+            self._load_next_us = (second + 1) * 1_000_000
+
+    def _full_step(self, now_us: int) -> None:
+        self._calm_until = 0
+        self._follow_power(now_us)
+        if not self.active:
+            return
+        if self._boot_at is not None and now_us >= self._boot_at:
+            self._boot(self._boot_at)
+        self._wire(now_us)
+        if self.state is not NmtState.INITIALISATION:
+            self._timers(now_us)
+        self._wire(now_us)
 
     def _quiet(self, now_us: int) -> bool:
-        """True when every part of a full step would find nothing to do at ``now_us``: the
-        same power, no boot due, nothing on or for the line, no heartbeat, life-guard expiry,
-        alarm change, emergency or asynchronous TPDO due. Skipping such a step is exact (the
-        idle node of a drive on another bus costs a call; docs/performance.md)."""
-        drive = self.drive
-        if (drive.latched_at_power_up if drive.powered else None) is not self._power_seen:
+        """True when every part of a full step but the asynchronous TPDOs would find nothing
+        to do at ``now_us`` for an active node (the caller checked the power): no boot due,
+        nothing on or for the line, no heartbeat, life-guard expiry, alarm change or
+        emergency due. Skipping those parts is exact (the idle node costs a few reads;
+        docs/canopen.md "Step cost"); in Operational the step still runs the asynchronous
+        TPDOs, as a full step would (:meth:`_async_tpdos`)."""
+        if self._boot_at is not None:
             return False
-        if not self.active:
-            return True
-        if self._boot_at is not None or not self.line.idle:
+        line = self.line
+        if line._waiting or line._incoming or line._on_wire is not None:  # not line.idle
             return False
         if self.state is NmtState.INITIALISATION:
             return True
         beat = self.heartbeat.next_us
         if beat is not None and beat <= now_us:
             return False
-        if self.guard.expires_by(now_us) or drive.alarms.latched != self._known_alarms:
+        guard = self.guard
+        if guard.last_request_us is not None and guard.expires_by(now_us):
+            return False
+        if self.drive.alarms.latched != self._known_alarms:
             return False
         emcy = self.emcy
         if emcy.pending or (emcy.last_sent_us is not None
                             and not allows(self.state, Service.EMCY)):
             return False
-        return self.state is not NmtState.OPERATIONAL or not any(
-            pdo.valid and pdo.trans_type in ASYNC_TYPES for pdo in self.tpdos)
+        # Quiet: and so until the heartbeat or the life guarding falls due, unless a frame
+        # comes or goes or a full step runs first (step, receive and _send see to that).
+        expiry = self.guard.expiry_at()
+        self._calm_until = min(CALM_FOREVER if beat is None else beat,
+                               CALM_FOREVER if expiry is None else expiry)
+        return True
 
     def _follow_power(self, now_us: int) -> None:
         seen = self.drive.latched_at_power_up if self.drive.powered else None
@@ -275,9 +310,7 @@ class CanOpenNode(ProcessData, DeviceModel):
             self.emit(EmergencySent(at, self.drive.device_id, code=int.from_bytes(data[:2],
                       "little"), register=data[2], data=data[3:]))
         if self.state is NmtState.OPERATIONAL:
-            for pdo in self.tpdos:
-                if pdo.valid and pdo.trans_type in ASYNC_TYPES:
-                    self._async_tpdo(pdo, now_us)
+            self._async_tpdos(now_us)
 
     # ---- received frames -------------------------------------------------------------------
     def _handle(self, frame: CanFrame) -> None:
@@ -351,6 +384,7 @@ class CanOpenNode(ProcessData, DeviceModel):
         self._known_alarms = latched
 
     def _send(self, can_id: int, data: bytes, t: int) -> None:
+        self._calm_until = 0
         self.line.offer(CanFrame(can_id, data, rx=False), t)
 
     def _send_now(self, can_id: int, data: bytes) -> None:

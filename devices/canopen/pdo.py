@@ -18,8 +18,18 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
-from devices.od import AbortCode, DataType, OdEntry, SdoAbort, decode, encode
+from devices.canopen.dictionary import CanOpenDictionary
+from devices.od import (
+    AbortCode,
+    DataType,
+    ObjectDictionary,
+    OdEntry,
+    SdoAbort,
+    decode,
+    encode,
+)
 
 RPDO_COMM, RPDO_MAP, TPDO_COMM, TPDO_MAP = 0x1400, 0x1600, 0x1800, 0x1A00
 COB_INVALID = 0x8000_0000  # bit 31: PDO not valid ("un MSB settato a 1 significa NON valido")
@@ -84,6 +94,8 @@ class Pdo:
     last_data: bytes | None = None
     syncs: int = 0
     buffered: bytes | None = None  # synchronous RPDO data waiting for the next Sync
+    # (dictionary, count, entries, [(entry, stored values, key)]) for pack_planned; a cache
+    _plan: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def default(cls, number: int, receive: bool, node_id: int) -> Pdo:
@@ -197,6 +209,42 @@ class Pdo:
             index, sub, _bits = split_entry(value)
             out += encode(lookup(index, sub).dtype, read(index, sub))
         return bytes(out)
+
+    def pack_planned(self, dictionary: Any) -> bytes:
+        """:meth:`pack` with ``dictionary.entry`` / ``dictionary.peek``, the lookups made once
+        per dictionary and mapping (a TPDO is packed every step in Operational): the same
+        getters in the same order, the same bytes, the same exceptions."""
+        plan = self._plan
+        if plan is None or plan[0] is not dictionary or plan[1] != self.count \
+                or plan[2] != self.entries:
+            try:
+                lookups = self._lookups(dictionary)
+            except SdoAbort:  # an object that does not exist: the plain path raises it
+                lookups = None
+            if lookups is None:
+                self._plan = None
+                return self.pack(dictionary.entry, dictionary.peek)
+            plan = self._plan = (dictionary, self.count, list(self.entries), lookups)
+        out = b""
+        for entry, values, key in plan[3]:
+            dtype, getter = entry.dtype, entry.getter
+            out += encode(dtype, getter() if getter is not None else values[key])
+        return out
+
+    def _lookups(self, dictionary: Any) -> list[tuple[OdEntry, dict, tuple[int, int]]] | None:
+        """What :meth:`pack` looks up per mapped object: the entry (``dictionary.entry``) and
+        where ``dictionary.peek`` finds a stored value (the owning dictionary's values);
+        None when a dictionary reads its own way (only the plain ones are planned)."""
+        if type(dictionary) is not CanOpenDictionary:
+            return None
+        out = []
+        for value in self.mapped:
+            index, sub, _bits = split_entry(value)
+            owner = dictionary.owner(index, sub)
+            if type(owner) is not ObjectDictionary:
+                return None
+            out.append((owner.entry(index, sub), owner._values, (index, sub)))
+        return out
 
     def unpack(self, data: bytes, lookup: Lookup) -> list[tuple[int, int, object]]:
         """(index, sub, value) of each mapped object in an RPDO's data; dummies skipped."""

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from devices.canopen import emcy as em
 from devices.canopen.nmt import NmtState
-from devices.canopen.pdo import COB_NO_RTR, Pdo
+from devices.canopen.pdo import ASYNC_TYPES, COB_INVALID, COB_NO_RTR, Pdo
 from devices.device import CommandError
 from devices.od import SdoAbort
 
@@ -82,10 +82,18 @@ class ProcessData:
                 if data is not None:
                     self._send_pdo(pdo, data, t)
 
-    def _async_tpdo(self: CanOpenNode, pdo: Pdo, now_us: int) -> None:
+    def _async_tpdos(self: CanOpenNode, now_us: int) -> bool:
+        """The asynchronous TPDOs of a step in Operational; True when one went out."""
+        sent = False
+        for pdo in self.tpdos:
+            if not pdo.cob_id & COB_INVALID and pdo.trans_type in ASYNC_TYPES:
+                sent = self._async_tpdo(pdo, now_us) or sent
+        return sent
+
+    def _async_tpdo(self: CanOpenNode, pdo: Pdo, now_us: int) -> bool:
         data = self._pack(pdo)
         if data is None:
-            return
+            return False
         last = pdo.last_sent_us
         event = data != pdo.last_data
         timer = bool(pdo.event_timer_ms) and last is not None \
@@ -93,10 +101,12 @@ class ProcessData:
         inhibited = last is not None and now_us - last <= pdo.inhibit_100us * 100
         if (event or timer) and not inhibited:
             self._send_pdo(pdo, data, now_us)
+            return True
+        return False
 
     def _pack(self: CanOpenNode, pdo: Pdo) -> bytes | None:
         try:
-            return pdo.pack(self.dictionary.entry, self.dictionary.peek)
+            return pdo.pack_planned(self.dictionary)
         except (SdoAbort, CommandError) as exc:
             logger.debug("%s: %s not packed: %s", self.drive.device_id, pdo.name, exc)
             return None
