@@ -62,6 +62,8 @@ logger = logging.getLogger(__name__)
 ETHERCAT = "ethercat"  # drive.fieldbus for c9 = 11
 BOX_NAME = "Drive 1 (SelemaDriveECAT)"  # TwinCAT's name for it (ch. 5: "Drive 5 (Selema...)")
 SM_WATCHDOG_US = 100_000  # ESC default SM watchdog (0x0420 = 1000 x 100 us)
+# Esm.at_least(SAFEOP) as a set (every state has a rank), for the per-cycle exchange_frame
+SAFEOP_OR_HIGHER = frozenset(s for s, rank in RANK.items() if rank >= RANK[AlState.SAFEOP])
 ACTIVITY_WINDOW_US = 50_000  # L/A flickers while a frame passed this recently
 MAPPING_ALARM = 33  # ch. 5: "Errore mappatura pdo non eseguita correttamente"
 SYNC_TIMEOUT_ALARM = 34  # ch. 5: "Timeout sincronizzazione con il Master ECAT"
@@ -167,13 +169,16 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
 
     def exchange_frame(self, now_us: int) -> None:
         """One cyclic frame of the master passed (the SM2 / SM3 events)."""
-        if not self.reachable():
+        if not (self.on_line and self.link):  # reachable(), inline: called every cycle
             return
         self.last_frame_us = now_us
         self.frames += 1
-        if self.esm.state is AlState.OP and self.outputs is not None:
+        state = self.esm.state
+        if state is AlState.OP and self.outputs is not None:
             self._apply_outputs(self.outputs)
-        self._inputs_due = self.esm.at_least(AlState.SAFEOP)
+            state = self.esm.state
+        self._inputs_due = state in SAFEOP_OR_HIGHER if state in RANK \
+            else self.esm.at_least(AlState.SAFEOP)
 
     # ---- process data ----------------------------------------------------------------------
     @property
@@ -300,11 +305,19 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
 
     # ---- time ---------------------------------------------------------------------------------
     def step(self, now_us: int) -> None:
-        super().step(now_us)
-        self._follow_power()
+        # DeviceModel.step, _follow_power's and _check_watchdog's first tests and _refresh's
+        # same-inputs test inline: an idle slave's step is mostly calls (docs/ethercat-coe.md
+        # "Step cost")
+        if now_us < self.now_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self.now_us})")
+        self.now_us = now_us
         drive = self.drive
+        if (drive.latched_at_power_up if drive.powered else None) is not self._power_seen:
+            self._follow_power()
         if self.on_line:
-            self._check_watchdog()
+            last = self.last_frame_us
+            if self.esm.state is AlState.OP and (last is None or now_us - last > SM_WATCHDOG_US):
+                self._check_watchdog()
             # watch() only when the latched alarms differ from the ones it saw (cheap check)
             seen = drive.alarms.latched if drive.powered else []
             if seen != self.emergencies.known and self.esm.at_least(AlState.PREOP):
@@ -312,7 +325,14 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
                     self.emit(EmergencySent(now_us, self.drive.device_id,
                                             code=int.from_bytes(frame[:2], "little"),
                                             register=frame[2], data=frame[3:]))
-        self._refresh()
+        # _refresh() when its inputs may differ from the last ones (its own first test)
+        last, esm, old, on_line = self.last_frame_us, self.esm, self._led_inputs, self.on_line
+        if old is None or old.activity is not (last is not None
+                                               and now_us - last <= ACTIVITY_WINDOW_US) \
+                or old.state is not esm.state or old.on_line is not on_line \
+                or old.link is not self.link or old.error is not esm.error \
+                or old.drive_alarm is not (on_line and bool(drive.alarms.latched)):
+            self._refresh()
 
     def _follow_power(self) -> None:
         """On the line while the drive is powered with c9 = 11 latched at its power-up."""
