@@ -40,6 +40,7 @@ BRIDGING_US = 20_000  # Tab. 29: mains buffering time 20 ms
 ACTIVITY_WINDOW_US = 50_000  # LA IN / LA OUT flicker while frames passed this recently
 SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per good one
 SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
+PD_STATES = frozenset({AlState.SAFEOP, AlState.OP})  # the sync error counter counts
 
 
 class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatusView,
@@ -154,16 +155,25 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
 
     def exchange_frame(self, now_us: int) -> None:  # no touch: stillness.clock_key
         """One process-data cycle of the master passed through this slave."""
-        if not self.reachable():
+        # reachable(), has_fault() and application_runs inline: the master calls this every
+        # cycle (docs/cpx-e-ec.md "Step cost")
+        if not (self.powered and self.link_in):
             return
         self.last_frame_us = now_us
-        if self.has_fault("watchdog") or not self.application_runs:
+        faults = self.fault_names
+        if "watchdog" in faults or not (
+                self.powered and not self.boot_failed and "ac_failure" not in faults
+                and self.switches.active_mode is not DiagMode.BOOTLOADER):
             return  # the frame passes the ESC, but no process data reach the application
         self.last_pd_us = now_us
-        if self.esm.state in (AlState.SAFEOP, AlState.OP):
-            missed = self.has_fault("sync_error")
-            self.sync_counter = min(SYNC_COUNTER_CAP, self.sync_counter + SYNC_MISSED_STEP) \
-                if missed else max(0, self.sync_counter - 1)
+        if self.esm.state in PD_STATES:
+            counter = self.sync_counter
+            if "sync_error" in faults:
+                self.sync_counter = min(SYNC_COUNTER_CAP, counter + SYNC_MISSED_STEP)
+            elif counter > 0:
+                self.sync_counter = counter - 1
+            else:
+                self.sync_counter = 0  # max(0, counter - 1)
 
     def take_emergencies(self) -> list[bytes]:
         """8-byte emergencies (§2.5.3) queued in the mailbox; it runs from PREOP on."""
@@ -334,6 +344,17 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
     # ---- LEDs -----------------------------------------------------------------------------
     def _refresh_leds(self) -> None:
         self.leds.update(self.now_us, wanted_leds(self), self.emit)
+
+    def clock_key_now(self) -> tuple[Any, ...]:
+        """:func:`~devices.cpx.stillness.clock_key`, the methods it asks inline (the still
+        step's test, every step; tests/devices/cpx/test_cpx_step_cost.py compares the two)."""
+        esm, now, last, low = self.esm, self.now_us, self.last_frame_us, self.low_since_us
+        return (esm.state, esm.error, esm.code, esm.requested,
+                now - self.last_pd_us > WATCHDOG_US,
+                self.sync_counter > SYNC_ERROR_COUNTER_LIMIT,
+                last is not None and now - last <= ACTIVITY_WINDOW_US,
+                now - (last if last is not None else self.power_on_us) > WATCHDOG_US,
+                low is not None and now - low >= BRIDGING_US)
 
     def traffic(self) -> bool:
         return self.last_frame_us is not None and \
