@@ -50,7 +50,11 @@ class BusMixin:
         came since the last step; without one, a module whose last step changed nothing and
         saw the same step length and output enable would do the same again: it is skipped."""
         outputs_enabled = self.esm.state is AlState.OP and self.alarm is None
-        bus = self._bus_table()
+        # The rail, the scan result and the binding change only by a command (which drops
+        # the answer cache), a scan (which drops it too) or a rebind (after which it is
+        # built): while the cache is there, its table is the table.
+        cache = self._answer_cache
+        bus = cache[0] if cache is not None else self._bus_table()
         still = True
         if self._rebound_for is not self._bus_key:  # the rail, scan result or binding changed
             self._rebind()

@@ -227,6 +227,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             self._on_cnf_release()
         if self.scan is not None:
             self._exchange_key = None  # no cycle: the next one starts afresh
+            self._answer_cache = None  # the scan may bind other modules (bus.py)
             self._advance_scan(self.scan)
         elif self.booted:
             self._exchange(dt_us, touched)

@@ -254,12 +254,13 @@ class Ax2:
 
     def step(self, dt_us: int, rng: random.Random) -> list[int]:
         enc1, enc2 = self.inputs
-        if self.command == self._seen_command and not enc1.turning and not enc2.turning:
+        command = self.command
+        # ``_rate`` is what ``turning`` reads (read here directly: this runs every step)
+        if command == self._seen_command and not enc1._rate and not enc2._rate:
             still1 = enc1.rest()  # the usual case: shafts still, no new command bit
             self.still = enc2.rest() and still1
             return []
         self.still = False
-        command = self.command
         if command != self._seen_command:  # the inversions follow the command word
             rising = command & ~self._seen_command
             self._seen_command = command
@@ -269,7 +270,7 @@ class Ax2:
                     enc.arm_zero_cycle()
         raised: list[int] = []
         for enc in self.inputs:
-            if enc.turning:
+            if enc._rate:
                 enc.step(dt_us, self._inverts[enc.k], rng)
             else:
                 enc.rest()  # 0 <= remainder < 1 s: a zero rate moves nothing

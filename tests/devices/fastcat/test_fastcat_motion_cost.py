@@ -29,6 +29,7 @@ from devices.fastcat.coupler import FastCat
 from devices.fastcat.encoder import SUB, EncoderInput
 from devices.flash import MemoryFlash
 from devices.master import EtherCatMaster
+from devices.od import SdoAbort
 
 DEFAULT = ("DB16", "DI16", "DO16", "AI8D", "AO4", "AI8TC", "AX2")  # static/rigs/default.toml
 STEP_US = 1_000
@@ -37,10 +38,13 @@ STEP_US = 1_000
 class Twin:
     """A coupler and its master stepped at 1 ms, with the events they emitted, as JSON."""
 
-    def __init__(self, plain: bool, seed: int = 3) -> None:
+    def __init__(self, plain: bool, seed: int = 3, master: bool = True) -> None:
         self.fc = FastCat("fastcat", random.Random(seed), [(m, {}) for m in DEFAULT],
                           flash=MemoryFlash())
-        self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.fc])
+        self.devices: list[Any] = [self.fc]
+        if master:
+            self.devices.append(EtherCatMaster("master", random.Random(seed + 1),
+                                               slaves=[self.fc]))
         self.plain = plain
         self.now = 0
         self.events: list[str] = []
@@ -50,7 +54,7 @@ class Twin:
             self.fc._touched = self.fc._modules_touched = True
             self.fc._answer_cache = None
         self.now += STEP_US
-        for device in (self.fc, self.master):
+        for device in self.devices:
             device.step(self.now)
             self.events += [json.dumps(e.to_record(), sort_keys=True)
                             for e in device.drain_events()]
@@ -60,10 +64,18 @@ class Twin:
 
     def view(self) -> str:
         od = self.fc.od
+
+        def read(index: int, sub: int) -> Any:
+            assert od is not None
+            try:
+                return od.read(index, sub)
+            except SdoAbort as abort:  # module numbers move with a rescan
+                return str(abort)
+
         values = [] if od is None else [
-            od.read(0x6000, ch) for ch in range(1, 17)] + [  # 0x6000 of module 1
-            od.read(0x6400 + 0x10 * 3, ch) for ch in range(1, 9)] + [  # 0x6400 of module 4
-            od.read(0x6500 + 0x10 * 6, k) for k in (1, 2)] + [  # 0x6500 of module 7
+            read(0x6000, ch) for ch in range(1, 17)] + [  # 0x6000 of module 1
+            read(0x6400 + 0x10 * 3, ch) for ch in range(1, 9)] + [  # 0x6400 of module 4
+            read(0x6500 + 0x10 * 6, k) for k in (1, 2)] + [  # 0x6500 of module 7
             self.fc.od_comm_errors(n) for n in range(1, 8)]
         return json.dumps([self.fc.snapshot(), values], sort_keys=True, default=str)
 
@@ -83,7 +95,7 @@ def _motion(t: Twin, i: int) -> None:
                 value=1000 if (i // 250) % 2 else -1000)
 
 
-EPISODES: dict[str, Callable[[Twin, int], None]] = {
+EPISODES: dict[str, Callable[[Twin, int], Any]] = {
     "module fails and comes back": lambda t, i: (
         i == 300 and t.apply("module_failure", module=2, active=True),
         i == 900 and t.apply("module_failure", module=2, active=False)),
@@ -109,7 +121,17 @@ EPISODES: dict[str, Callable[[Twin, int], None]] = {
         i == 300 and t.apply("output_short", module=3, channel=3, active=True),
         i == 600 and t.apply("output_short", module=3, channel=3, active=False),
         i == 700 and t.apply("set_reset_fault", on=True)),
+    "modules swapped and swapped back": lambda t, i: (
+        i == 200 and t.apply("swap", module=1, other=2),
+        i == 500 and t.apply("swap", module=1, other=2),
+        i == 800 and t.apply("set_reset_fault", on=False),
+        i == 801 and t.apply("set_reset_fault", on=True)),
+    "CNF rescan with a module changed": lambda t, i: (
+        i == 100 and t.apply("unplug", module=2),
+        i == 101 and t.apply("plug", module=2, type="DI16"),  # a new one of the same type
+        i == 200 and t.apply("hold_cnf", seconds=3.0)),
 }
+STEPS = {"CNF rescan with a module changed": 9000}  # CNF 3 s, scan 3 s, master back to OP
 
 
 @pytest.mark.parametrize("episode", sorted(EPISODES))
@@ -122,15 +144,49 @@ def test_in_motion_shortcuts_match_the_plain_step(episode: str) -> None:
             t.step()
         assert t.fc.al_state is AlState.OP
     assert fast.view() == plain.view()
-    for i in range(1200):
+    for i in range(STEPS.get(episode, 1200)):
         for t in (fast, plain):
             _motion(t, i)
             EPISODES[episode](t, i)
             t.step()
         if i % 50 == 0:
             assert fast.view() == plain.view(), f"step {i}"
+    if episode in STEPS:
+        assert fast.fc.al_state is AlState.OP and fast.fc.scan is None
     assert fast.events == plain.events
     assert fast.view() == plain.view()
+
+
+def test_rescan_without_a_master_matches_the_plain_step() -> None:
+    """§2, §3, §6.18, §7.5: with no master to touch the coupler, a CNF scan binds a module
+    plugged at the end of the rail (the bus table and who answers change with the scan
+    alone); the flash write fails, so the first cause found is SAVE_FLASH (0x11) and the
+    alarm search stops before it looks at the bus."""
+    fast, plain = Twin(plain=False, master=False), Twin(plain=True, master=False)
+    for t in (fast, plain):
+        for _ in range(4000):  # past the power-up scan
+            t.step()
+    for i in range(9000):
+        for t in (fast, plain):
+            if i == 0:
+                t.apply("set_shaft_speed", module=7, encoder=1, rpm=600.0)
+            if i % 10 == 0 and not 1000 <= i < 8000:  # nothing touches the coupler from
+                # the CNF press to well after the scan
+                t.apply("set_analog", module=4, channel=1, value=round(math.sin(i / 300), 3))
+            if i == 500:
+                t.apply("plug", module=8, type="AX2")
+                t.apply("set_shaft_speed", module=8, encoder=2, rpm=-300.0)
+            if i == 600:
+                t.fc.flash.fail = True  # type: ignore[attr-defined]
+            if i == 1000:
+                t.apply("hold_cnf", seconds=3.0)
+            t.step()
+        if i % 250 == 0:
+            assert fast.view() == plain.view(), f"step {i}"
+    assert [name for _slot, name in fast.fc.detected] == [*DEFAULT, "AX2"]
+    assert fast.fc.alarm is not None and fast.fc.alarm.code == 0x11
+    assert fast.fc.rail[7].ax2.inputs[1].position != 0  # type: ignore[union-attr]
+    assert fast.events == plain.events
 
 
 def test_fast_twin_takes_the_shortcut() -> None:
