@@ -25,6 +25,8 @@ class LineMixin:
 
     links: list[SlaveLink]
     _slaves: tuple[Slave, ...]
+    _power_names: tuple[str, ...]  # ("powered",) per slave: getattr's arguments in _line
+    _power_defaults: tuple[bool, ...]  # (True,) per slave
     cables: list[bool]
     phys_in: list[bool]
     phys_out: list[bool]
@@ -84,8 +86,10 @@ class LineMixin:
         and the power as they were last applied, applying them again would set no link (every
         ``phys_in`` / ``phys_out`` already is what they make it) and give the same reach."""
         # The values as the slaves give them (bools all, but == would also take 1 for True):
-        # compared only; applied as bools.
-        powered = [getattr(slave, "powered", True) for slave in self._slaves]
+        # compared only; applied as bools. map() with the getattr builtin makes the same
+        # getattr(slave, "powered", True) calls as a list comprehension, without its frame
+        # (~0.3 us a step on the default line).
+        powered = list(map(getattr, self._slaves, self._power_names, self._power_defaults))
         if skip and powered == self._line_powered and self.cables == self._line_cables:
             self.skipped.line += 1
             return self._line_reach

@@ -144,8 +144,15 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         self._line_reach: list[bool] = []
         self._watched: list[AlState | None] | None = None
         self._slaves = tuple(link.slave for link in self.links)  # the line is fixed
+        self._power_names = ("powered",) * len(self._slaves)
+        self._power_defaults = (True,) * len(self._slaves)
         self._dc_links = [link for link in self.links if link.dc]
         self._uses_dc = [link.dc for link in self.links]
+        # The step's loop, one row per position (the line is fixed): each slave's bound calls
+        # made once here, so a cycle does not look up and bind three methods per slave again.
+        self._rows = tuple((link, link.position, link.slave, link.slave.reachable,
+                            link.slave.exchange_frame, link.slave.take_emergencies, link.dc)
+                           for link in self.links)
 
     # ---- hooks (seed 003: ECAT_Notify, ECAT_Resync) -------------------------------------------
     def on_notify(self, callback: Callback) -> None:
@@ -248,32 +255,30 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         super().step(now_us)
         skip = self.SKIP_STILL
         reach = self._line(skip)
-        links = self.links
+        rows = self._rows
         # A slave's reachable() has no side effect: position 0's answer serves twice.
-        first = bool(links) and reach[0] and links[0].slave.reachable()
+        first = bool(rows) and reach[0] and rows[0][3]()
         self.link_up = first
         cycle = now_us >= self.next_cycle_us
         if cycle:
             self.next_cycle_us = now_us + self.cycle_us
-        lost = cycle and not self.external and self.to_lose > 0 and first
+        external = self.external
+        lost = cycle and not external and self.to_lose > 0 and first
         if lost:
             self._lose_frame()
-        exchange = cycle and not lost and not self.external
+        exchange = cycle and not lost and not external
         target = self.target
         # The target of a DC slave (SAFEOP while DC holds): _target_of_dc, inlined.
         held = AlState.SAFEOP if self.dc_hold and RANK[target] > RANK[AlState.SAFEOP] \
             else target
-        uses_dc = self._uses_dc
         # quiet: every slave present, reachable and left unserved, each in the state the last
         # watch saw (still.py): the watch and the DC unit's trigger may take their short way.
         watched = self._watched
         quiet = exchange and skip and watched is not None
         served = 0
         recovered = []
-        for link in links:
-            slave = link.slave
-            p = link.position
-            if not (first if p == 0 else reach[p] and slave.reachable()):
+        for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc in rows:
+            if not (first if p == 0 else reach[p] and reachable()):
                 self._lose(link)
                 quiet = False
                 continue
@@ -284,23 +289,24 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
                 quiet = False
             if not exchange:
                 continue
-            slave.exchange_frame(now_us)
+            exchange_frame(now_us)
             if not skip:
                 self._serve(link)
                 continue
-            frames = slave.take_emergencies()
+            frames = take_emergencies()
             if not frames and link.pending is None:  # _serve would do nothing (still.py)
                 state = slave.al_state
                 if state is link.believed and (
-                        state is (held if uses_dc[p] else target) or now_us < link.next_try_us):
+                        state is (held if uses_dc else target) or now_us < link.next_try_us):
                     served += 1
                     if quiet and state is not watched[p]:  # type: ignore[index]
                         quiet = False
                     continue
             quiet = False
             self._serve(link, frames)
+        skipped = self.skipped
         if served:
-            self.skipped.serve += served
+            skipped.serve += served
         if exchange and first:
             self.frames += 1
         if recovered:
@@ -309,15 +315,15 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         if quiet:
             # Each state read after its own frame and mailbox (no slave's frame moves
             # another slave), none served: the list _watch_states would make is ``watched``.
-            self.skipped.watch += 1
-        elif self.external or (cycle and not lost):  # states are read with the frames
+            skipped.watch += 1
+        elif external or (cycle and not lost):  # states are read with the frames
             self._watch_states(skip)
         dc = self.dc
         if quiet and dc.state is DcState.COMPENSATING and dc.fault is None and self._dc_links \
                 and dc.compensate(self.rng):
             # Every DC slave present (quiet), link up, no fault, the deviation in the window:
             # compensate() did all measure() and trigger() would (dc.py).
-            self.skipped.dc += 1
+            skipped.dc += 1
         else:
             self._step_dc(dt_us, quiet)
         if self.hooks.queued:
