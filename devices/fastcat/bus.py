@@ -41,6 +41,7 @@ class BusMixin:
     # (bus table, answering, answering (number, module) pairs, silent numbers); None = stale
     _answer_cache: tuple[Any, ...] | None
     _moving: tuple[Any, list[tuple[int, IoModule]]]  # (bus table, modules left moving)
+    _stepped: list[tuple[int, IoModule]] | None  # the modules this step's exchange stepped
 
     if TYPE_CHECKING:  # defined by FastCat
         def _build_od(self) -> None: ...
@@ -67,11 +68,17 @@ class BusMixin:
         answering, cycle, silent = self._who_answers(bus)
         self._answering = answering
         last_bus, last_moving = self._moving
-        if repeat and last_bus is bus:
-            # A module's still flag changes only in its own step (or a reset, which comes
-            # with a command or a scan): in a repeat, the modules the last cycle left moving
-            # are the only ones that are not skipped.
-            cycle = last_moving
+        # The (number, module) pairs this cycle steps, for the alarm search (faults.py).
+        stepped: list[tuple[int, IoModule]] | None = cycle  # not a repeat: every one answering
+        if repeat:
+            if last_bus is bus:
+                # A module's still flag changes only in its own step (or a reset, which comes
+                # with a command or a scan): in a repeat, the modules the last cycle left
+                # moving are the only ones that are not skipped.
+                stepped = cycle = last_moving
+            else:
+                stepped = None  # skipped one by one below: not listed
+        self._stepped = stepped
         moving = []
         for n, module in cycle:
             if repeat and module.still:

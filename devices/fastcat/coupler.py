@@ -90,6 +90,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self._exchange_key: tuple[int, bool] | None = None
         self._answer_cache: tuple[Any, ...] | None = None
         self._moving: tuple[Any, list[tuple[int, IoModule]]] = (None, [])
+        self._stepped: list[tuple[int, IoModule]] | None = None
+        self._quiet = False  # faults.py: the last alarm search in a step found no cause
         self._scan_causes_key: tuple[Any, ...] | None = None
         self._led_key: tuple[Any, ...] = ()
         self.esm = Esm(self.emit, device_id)
@@ -221,6 +223,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         touched = self._modules_touched
         if self._touched:
             self._answer_cache = None  # a command may have changed who answers (bus.py)
+            self._quiet = False  # ... or brought an alarm cause (faults.py)
         self._touched, self._modules_touched, self._bus_still = False, False, False
         queued = len(self.events.items)
         if self.cnf.release_due(now_us):
@@ -228,6 +231,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         if self.scan is not None:
             self._exchange_key = None  # no cycle: the next one starts afresh
             self._answer_cache = None  # the scan may bind other modules (bus.py)
+            self._quiet = False  # and find other causes (faults.py)
             self._advance_scan(self.scan)
         elif self.booted:
             self._exchange(dt_us, touched)

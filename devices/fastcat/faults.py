@@ -68,6 +68,8 @@ class FaultsMixin:
     _scan_causes_key: tuple[Any, ...] | None  # (detected, stored, causes) of the last call
     _answering: list[bool] | None  # who answered this step's exchange (None outside a step)
     _answer_cache: tuple[Any, ...] | None  # who answers, kept by bus.py
+    _stepped: list[tuple[int, IoModule]] | None  # the modules this step's exchange stepped
+    _quiet: bool  # the last search, in a step, found no cause (_still_quiet)
 
     if TYPE_CHECKING:  # defined by DeviceModel / FastCat; stubs here would shadow them
         def emit(self, event: Event) -> None: ...
@@ -147,7 +149,12 @@ class FaultsMixin:
         if not self.powered or self.scan is not None or not self.booted:
             return
         if self.alarm is None:  # while one is latched, later causes report nothing (§7)
-            first = next(self._causes(), None)
+            if self._quiet and self._still_quiet():
+                first = None
+            else:
+                first = next(self._causes(), None)
+                # Found nothing in a step: kept while the next steps bring nothing new.
+                self._quiet = first is None and self._answering is not None
             if first is not None:
                 self._latch(first)
         # A module alarm raised while another is latched stays pending while its cause lasts.
@@ -156,6 +163,18 @@ class FaultsMixin:
             self.fresh_raised = []
             self.raised = [a for a in dict.fromkeys([*self.raised, *fresh])
                            if a == self.alarm or self._module_cause(a)]
+
+    def _still_quiet(self) -> bool:
+        """After a step's search found no cause: does this step's search find none either?
+        Every cause but the modules' own is coupler state that only a command (a touch) or
+        a scan changes, and FastCat.step clears ``_quiet`` on both; a module's level alarms
+        change only with its own state, so only the modules this exchange stepped can have
+        one now (a still module that was not stepped is as it was). Any doubt, or anything
+        found: False, and the full search (in report order) decides."""
+        stepped = self._stepped
+        if self._answering is None or stepped is None or self.fresh_raised or self.raised:
+            return False
+        return all(not module.physical_alarm_codes() for _n, module in stepped)
 
     def _module_cause(self, alarm: Alarm) -> bool:
         n = alarm.module
@@ -196,6 +215,7 @@ class FaultsMixin:
 
     def _clear_alarm(self) -> None:
         alarm, self.alarm = self.alarm, None
+        self._quiet = False  # search in full from here
         for module in self.modules():
             module.in_alarm = False
         if alarm is not None:

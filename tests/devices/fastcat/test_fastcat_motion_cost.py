@@ -3,8 +3,10 @@ cost"): each shortcut is run beside the plain computation it replaces and must a
 step for step, events, snapshots and object values alike.
 
 - the coupler keeps who answers between steps and, in a repeat, steps only the modules the
-  last cycle left moving (bus.py); the plain twin is touched before every step, so it asks
-  every module and steps every answering one (seed 000 §6.18 comm errors, §7 alarms);
+  last cycle left moving (bus.py); after a search that found no alarm cause it looks only at
+  the modules it stepped (faults.py); the plain twin is touched before every step and its
+  caches dropped, so it asks every module, steps every answering one and searches every
+  cause (seed 000 §6.18 comm errors, §7 alarms);
 - an analog input recomputes the law (target, filter coefficient) of the channels whose
   inputs changed only (§6.8-§6.10, §6.15); the plain twin recomputes every channel;
 - an encoder step within one revolution counts at once (§6.26); the plain twin takes the
@@ -50,9 +52,11 @@ class Twin:
         self.events: list[str] = []
 
     def step(self) -> None:
-        if self.plain:  # a full step: who answers asked again, every answering module stepped
+        if self.plain:  # a full step: who answers asked again, every answering module
+            # stepped, every alarm cause searched for
             self.fc._touched = self.fc._modules_touched = True
             self.fc._answer_cache = None
+            self.fc._quiet = False
         self.now += STEP_US
         for device in self.devices:
             device.step(self.now)
@@ -187,6 +191,32 @@ def test_rescan_without_a_master_matches_the_plain_step() -> None:
     assert fast.fc.alarm is not None and fast.fc.alarm.code == 0x11
     assert fast.fc.rail[7].ax2.inputs[1].position != 0  # type: ignore[union-attr]
     assert fast.events == plain.events
+
+
+def test_level_alarm_from_a_module_step_is_found() -> None:
+    """§7, §7.6: a level alarm that appears in a module's own step, with no command, is latched
+    in that step as by the full search. No module type does that today (their level alarms
+    follow commands), so the AX2 is given one: encoder 1's signal alarm (0x12) once its
+    counter passes 15000 pulses."""
+    twins = Twin(plain=False), Twin(plain=True)
+    for t in twins:
+        for _ in range(4000):
+            t.step()
+        ax2 = t.fc.rail[6]
+        assert ax2 is not None and ax2.ax2 is not None
+        encoder = ax2.ax2.inputs[0]
+
+        def codes(e: Any = encoder) -> tuple[int, ...]:
+            return (0x12,) if e.position > 15_000 else ()
+        ax2.physical_alarm_codes = codes  # type: ignore[method-assign]
+    fast, plain = twins
+    for i in range(1500):
+        for t in twins:
+            _motion(t, i)
+            t.step()
+    assert fast.fc.alarm is not None and fast.fc.alarm.code == 0x12
+    assert fast.events == plain.events
+    assert fast.view() == plain.view()
 
 
 def test_fast_twin_takes_the_shortcut() -> None:
