@@ -24,6 +24,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from devices.device import Action, CommandError, DeviceModel, Param
+from devices.esm import AlStatusView
 from devices.ethercat import AlState, parse_emergency_frame
 from devices.events import (
     CoeEmergency,
@@ -149,9 +150,12 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         self._dc_links = [link for link in self.links if link.dc]
         self._uses_dc = [link.dc for link in self.links]
         # The step's loop, one row per position (the line is fixed): each slave's bound calls
-        # made once here, so a cycle does not look up and bind three methods per slave again.
+        # made once here, so a cycle does not look up and bind three methods per slave again;
+        # and whether its al_state is AlStatusView's property (``esm.state`` read fresh each
+        # time), which the loop then reads without the property's call.
         self._rows = tuple((link, link.position, link.slave, link.slave.reachable,
-                            link.slave.exchange_frame, link.slave.take_emergencies, link.dc)
+                            link.slave.exchange_frame, link.slave.take_emergencies, link.dc,
+                            getattr(type(link.slave), "al_state", None) is AlStatusView.al_state)
                            for link in self.links)
 
     # ---- hooks (seed 003: ECAT_Notify, ECAT_Resync) -------------------------------------------
@@ -277,7 +281,8 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         quiet = exchange and skip and watched is not None
         served = 0
         recovered = []
-        for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc in rows:
+        for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc, esm_view \
+                in rows:
             if not (first if p == 0 else reach[p] and reachable()):
                 self._lose(link)
                 quiet = False
@@ -295,7 +300,7 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
                 continue
             frames = take_emergencies()
             if not frames and link.pending is None:  # _serve would do nothing (still.py)
-                state = slave.al_state
+                state = slave.esm.state if esm_view else slave.al_state  # type: ignore
                 if state is link.believed and (
                         state is (held if uses_dc else target) or now_us < link.next_try_us):
                     served += 1

@@ -1,12 +1,14 @@
 """The master's cheaper step is the same step (docs/ethercat-master.md "Step cost", issue 7).
 
-Two shortcuts: the step's loop uses rows made once (each slave's bound ``reachable``,
+Three shortcuts: the step's loop uses rows made once (each slave's bound ``reachable``,
 ``exchange_frame``, ``take_emergencies``, its position and DC use) instead of looking them up
-on every link each cycle, and ``_line`` reads the slaves' power with ``map(getattr, ...)``
-instead of a list comprehension. Differential: a master that rebuilds the rows from its links
-before every step and reads the power with the comprehension (the plain path) against the
-normal one, on two default rigs driven by the same seeded random commands; every step's
-events, the snapshots, the master's counters and its rng compared.
+on every link each cycle, it reads ``slave.esm.state`` for a slave whose ``al_state`` is
+AlStatusView's property (what the property returns, without its call), and ``_line`` reads
+the slaves' power with ``map(getattr, ...)`` instead of a list comprehension. Differential: a
+master that rebuilds the rows from its links before every step (al_state read through the
+property) and reads the power with the comprehension (the plain path) against the normal one,
+on two default rigs driven by the same seeded random commands; every step's events, the
+snapshots, the master's counters and its rng compared.
 """
 
 from __future__ import annotations
@@ -29,7 +31,8 @@ class PlainMaster(EtherCatMaster):
 
     def step(self, now_us: int) -> None:
         self._rows = tuple((link, link.position, link.slave, link.slave.reachable,
-                            link.slave.exchange_frame, link.slave.take_emergencies, link.dc)
+                            link.slave.exchange_frame, link.slave.take_emergencies, link.dc,
+                            False)  # al_state through the slave's property
                            for link in self.links)
         super().step(now_us)
 
@@ -111,3 +114,16 @@ def test_mapped_getattr_equals_the_comprehension(slaves: tuple[object, ...]) -> 
     mapped = list(map(getattr, slaves, names, defaults))
     assert mapped == [getattr(s, "powered", True) for s in slaves]
     assert [type(v) for v in mapped] == [type(getattr(s, "powered", True)) for s in slaves]
+
+
+def test_every_default_slave_reads_its_state_without_the_property() -> None:
+    """The ESM read applies to the four slaves of the default line (the shortcut is taken),
+    and gives what the property gives."""
+    r = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    m = r.devices["master"]
+    assert isinstance(m, EtherCatMaster)
+    assert [row[7] for row in m._rows] == [True] * 4
+    for _ in range(BOOT_STEPS):
+        r.step()
+        assert [link.slave.esm.state for link in m.links] == [  # type: ignore[attr-defined]
+            link.slave.al_state for link in m.links]
