@@ -120,11 +120,10 @@ class Runtime:
         with self._rig_lock:
             outer, self._caller = self._caller, me
             try:
-                result = fn()
-                self._journal_events(self.rig.take_events())
-                return result
-            finally:
+                return fn()
+            finally:  # what it emitted before failing is journalled too, as submit does
                 self._caller = outer
+                self._journal_events(self.rig.take_events())
 
     def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Future[Any]:
         """Apply a device action; the future holds its result or its CommandError/SdoAbort.

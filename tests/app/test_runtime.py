@@ -161,3 +161,18 @@ def test_call_runs_between_two_steps_in_the_callers_thread() -> None:
         assert rt.call(lambda: rt.call(lambda: 7)) == 7  # a call inside a call goes through
     finally:
         rt.stop()
+
+
+def test_call_journals_what_a_failing_function_emitted(runtime: Runtime) -> None:
+    runtime.set_paused(True)  # no step will collect the event: call must journal it itself
+    runtime.submit(lambda: None).result(timeout=5)
+    seq0, _ = runtime.events_since(0)
+
+    def say_then_fail() -> None:
+        runtime.rig.apply("c", "say", {"text": "before"})
+        raise RuntimeError("after")
+
+    with pytest.raises(RuntimeError, match="after"):
+        runtime.call(say_then_fail)
+    _, events = runtime.events_since(seq0)  # at once, not at the next step
+    assert [e.text for e in events if isinstance(e, LogLine)] == ["before"]
