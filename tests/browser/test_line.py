@@ -33,9 +33,18 @@ def line(dashboard_for: Any) -> LiveDashboard:
     return live
 
 
+PANELS_WITH_TAB = {"Line": 2}  # the left panel's and the control panel's; others: one
+
+
 def open_tabs(page: Any, name: str) -> None:
-    """Click every tab called ``name`` (the left panel's and the control panel's)."""
-    for tab in page.get_by_role("tab", name=name).all():
+    """Click every tab called ``name`` (the left panel's and the control panel's). Waits for
+    all of them first: on a loaded machine one panel's tabs can appear after the other's, and
+    a tab left unclicked keeps its panel hidden (seen once in CI: the master panel's table
+    read as empty for 20 s)."""
+    tabs = page.get_by_role("tab", name=name)
+    want = PANELS_WITH_TAB.get(name, 1)
+    wait_until(lambda: tabs.count() >= want, what=f"{want} tab(s) named {name!r}")
+    for tab in tabs.all():
         tab.click()
 
 
