@@ -147,6 +147,10 @@ class OdEntry:
     pdo_mappable: bool = False
     getter: Getter | None = None  # live value from the model; None = stored value
     setter: Setter | None = None  # called after checks with the new value
+    # The setter only stores what the getter reads back, with no edge or side effect: writing
+    # the value the entry holds changes nothing (a model that skips still steps need not be
+    # told of it; devices/fastcat/objects.py).
+    plain_store: bool = False
 
     def check_value(self, value: Any) -> Any:
         if self.dtype is DataType.OCTET_STRING:

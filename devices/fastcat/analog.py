@@ -368,7 +368,8 @@ class AnalogOutputs:
             self.targets[ch] = int(v)
 
         add_object(od, 0x200A, n, self.count, lambda ch: self.ramps[ch], put_ramp)
-        add_object(od, 0x7400, n, self.count, lambda ch: self.targets[ch], put_target)
+        add_object(od, 0x7400, n, self.count, lambda ch: self.targets[ch], put_target,
+                   plain_store=True)
 
     def rx_entries(self, n: int) -> list[tuple[int, int, int]]:
         return pdo_entries(0x7400, n, self.count)

@@ -52,6 +52,7 @@ ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this 
 
 class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, DeviceModel):
     KIND = "fastcat"
+    SKIP_SAME_WRITES = True  # objects.py: a write of the value an output holds is no touch
     ACTIONS: ClassVar[Mapping[str, Action]] = {**MODULE_ACTIONS, **COUPLER_ACTIONS}
 
     def __init__(self, device_id: str, rng: random.Random,

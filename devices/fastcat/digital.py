@@ -99,7 +99,7 @@ class DigitalIo:
             add_object(od, 0x6000, n, self.inputs_n, lambda ch: int(self.input_value(ch)))
         if self.outputs_n:
             add_object(od, 0x7000, n, self.outputs_n, lambda ch: int(self.command[ch]),
-                       put_output)
+                       put_output, plain_store=True)
 
     def tx_entries(self, n: int) -> list[tuple[int, int, int]]:
         return pdo_entries(0x6000, n, self.inputs_n) if self.inputs_n else []

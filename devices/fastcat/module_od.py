@@ -81,10 +81,12 @@ ChannelSetter = Callable[[int, Any], None]  # channel (0-based), checked new val
 
 
 def add_object(od: ObjectDictionary, base: int, n: int, count: int, get: ChannelGetter,
-               put: ChannelSetter | None = None, default: int | None = None) -> int:
+               put: ChannelSetter | None = None, default: int | None = None,
+               plain_store: bool = False) -> int:
     """Add object ``base`` of module ``n`` with ``count`` channels (ignored for single objects).
 
-    Values are live: reads call ``get(channel)``, accepted writes call ``put(channel, value)``.
+    Values are live: reads call ``get(channel)``, accepted writes call ``put(channel, value)``;
+    ``plain_store``: ``put`` only stores what ``get`` reads back (``OdEntry.plain_store``).
     Returns the object index.
     """
     spec = OBJECTS[base]
@@ -94,7 +96,8 @@ def add_object(od: ObjectDictionary, base: int, n: int, count: int, get: Channel
     def entry(sub: int, name: str, channel: int) -> OdEntry:
         return OdEntry(index, sub, name, spec.dtype, spec.access, value_default, spec.low,
                        spec.high, spec.pdo, getter=partial(get, channel),
-                       setter=None if put is None else partial(put, channel))
+                       setter=None if put is None else partial(put, channel),
+                       plain_store=plain_store)
 
     if spec.single:
         od.add(entry(0, spec.entry_name, 0))

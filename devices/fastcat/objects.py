@@ -45,6 +45,7 @@ class CouplerObjects(Protocol):
     def od_set_address_check(self, value: int) -> None: ...
     def od_rotary(self) -> int: ...
     def od_emergency_word(self) -> int: ...
+    SKIP_SAME_WRITES: bool  # False: every write touches the coupler (the plain path, tests)
 
 
 def pdo_entry(index: int, sub: int, bit_length: int) -> int:
@@ -56,7 +57,8 @@ def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
              on_write: Callable[[bool], None] | None = None) -> ObjectDictionary:
     """``modules``: the detected modules in bus order (module n = ``modules[n - 1]``).
     ``on_write(module)`` is called before every write that reaches the model (an entry's
-    setter); ``module`` says whether the entry is a module's object or the coupler's own."""
+    setter) and may change it (not for a ``plain_store`` entry written with the value it
+    holds); ``module`` says whether the entry is a module's object or the coupler's own."""
     od = ObjectDictionary()
     _identity(od, serial)
     _pdos(od, modules)
@@ -67,7 +69,16 @@ def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
         module.add_objects(od, n)
     if on_write is not None:
         announce = on_write
-        od.announce_writes(lambda e, _v: announce((e.index, e.sub) not in coupler_keys))
+
+        def before(entry: OdEntry, value: Any) -> None:
+            # A master writes its whole process image every cycle, nearly all of it the values
+            # the entries hold: such a write changes nothing, and the coupler's next step may
+            # stay a still one (docs/fastcat-coupler.md "Step cost").
+            if entry.plain_store and coupler.SKIP_SAME_WRITES and entry.getter is not None \
+                    and entry.getter() == value:
+                return
+            announce((entry.index, entry.sub) not in coupler_keys)
+        od.announce_writes(before)
     return od
 
 
@@ -128,7 +139,8 @@ def _coupler_objects(od: ObjectDictionary, c: CouplerObjects, count: int) -> Non
     # §6.17 coupler control, mapped in 0x16FF.
     _ro(od, 0x5200, 0, "N° of entries", DataType.UNSIGNED8, 8)
     od.add(OdEntry(0x5200, 1, "Reset fault", DataType.BOOLEAN, Access.RW, False,
-                   pdo_mappable=True, getter=c.od_reset_fault, setter=c.od_set_reset_fault))
+                   pdo_mappable=True, getter=c.od_reset_fault, setter=c.od_set_reset_fault,
+                   plain_store=True))  # a rising edge is a change of the value
     for sub in range(2, 9):
         _ro(od, 0x5200, sub, "Reserved", DataType.BOOLEAN, False)
     # §6.18: one counter per detected module.
