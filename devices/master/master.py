@@ -25,7 +25,7 @@ from typing import Any, ClassVar
 
 from devices.device import Action, CommandError, DeviceModel, Param
 from devices.esm import AlStatusView
-from devices.ethercat import AlState, parse_emergency_frame
+from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState, parse_emergency_frame
 from devices.events import (
     CoeEmergency,
     Event,
@@ -299,10 +299,18 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
                 self._serve(link)
                 continue
             frames = take_emergencies()
-            if not frames and link.pending is None:  # _serve would do nothing (still.py)
+            if not frames:  # _serve would do nothing (still.py)?
                 state = slave.esm.state if esm_view else slave.al_state  # type: ignore
-                if state is link.believed and (
-                        state is (held if uses_dc else target) or now_us < link.next_try_us):
+                pending = link.pending
+                if pending is None:
+                    idle = state is link.believed and (
+                        state is (held if uses_dc else target) or now_us < link.next_try_us)
+                else:  # _check would find the transition still under way
+                    waited = now_us - link.requested_at_us
+                    idle = waited < self.check_delay_us or (
+                        state is not pending and waited < self.state_timeout_us
+                        and not slave.al_status & AL_STATUS_ERROR_FLAG)
+                if idle:
                     served += 1
                     if quiet and state is not watched[p]:  # type: ignore[index]
                         quiet = False

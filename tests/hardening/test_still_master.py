@@ -192,3 +192,27 @@ def test_random_differential_on_the_default_rig(seed: int, full: bool) -> None:
     assert min(skipped.values()) > 1000, skipped  # the master did leave parts out
     # the run worked the paths the skipping must not hide: faults, losses, recoveries
     assert {"SlaveStateChange", "CommError", "LogLine", "StateChanged"} <= kinds, kinds
+
+
+@pytest.mark.parametrize("timeout_us", [1_000_000, 2_000_000])
+def test_transitions_under_way_timed_out_and_retried(timeout_us: int) -> None:
+    """A slave's transition still under way is left unserved (``_check`` would do nothing):
+    with a state timeout shorter than the FastCAT's internal-bus scan the master's INIT ->
+    PREOP times out, is logged and retried, and a CNF press starts it over; the same steps
+    with and without skipping."""
+    spec = load_rig_spec(DEFAULT_RIG)
+    skipping, plain = build_rig(spec, state_dir=None), no_skipping(build_rig(spec, state_dir=None))
+    for rig in (skipping, plain):
+        master_of(rig).state_timeout_us = timeout_us
+    for i in range(14_000):
+        if i == 9_000:
+            for rig in (skipping, plain):
+                rig.apply("fastcat", "hold_cnf", {"seconds": 3.0})
+        assert skipping.step() == plain.step(), i
+        if i % 500 == 0:
+            assert master_state(skipping) == master_state(plain), i
+    assert skipping.snapshot() == plain.snapshot()
+    assert master_state(skipping) == master_state(plain)
+    texts = [row["text"] for row in master_of(skipping).log]
+    assert any("'INIT to PREOP' failed" in t for t in texts), texts  # the timeout was hit
+    assert vars(master_of(skipping).skipped)["serve"] > 10_000
