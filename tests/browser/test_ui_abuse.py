@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import socket
 import threading
+import time
 from typing import Any
 
 import pytest
@@ -82,9 +83,17 @@ def delivered(page: Any, sent: list[Sent]) -> None:
     the first goes out, then only the latest of each window, of ANY widget. So a marker click
     ("Alarm reset": no effect on a drive without alarm) waits the window out, or it would
     replace the burst's last click; sent after it, the marker arrives after the burst, and the
-    commands of the burst are queued on the runtime before the marker's."""
+    commands of the burst are queued on the runtime before the marker's. Waiting the window
+    out means waiting until nothing more arrives for several windows: on a loaded machine the
+    page's timers run late, and a fixed wait once let the marker replace the burst's last
+    click (a CI run saw the drive's last Enable/Disable burst end on Enable)."""
     markers = sum(s.action == "alarm_reset" for s in sent)
-    page.wait_for_timeout(4 * THROTTLE_MS)
+    deadline = time.monotonic() + 10.0
+    while True:
+        count = len(sent)
+        page.wait_for_timeout(10 * THROTTLE_MS)
+        if len(sent) == count or time.monotonic() > deadline:
+            break
     rapid(page, "Alarm reset", 1)
     wait_until(lambda: sum(s.action == "alarm_reset" for s in sent) > markers,
                what="the marker click after the burst at the server")
