@@ -87,7 +87,7 @@ class SyncUnit:
     jitter_us: int = 0  # each frame arrives up to this much late
 
     def __post_init__(self) -> None:
-        self._period_us = self.cycle_us  # cycle_us, kept: configure() alone changes it
+        self.period_us = self.cycle_us  # cycle_us, kept: configure() alone changes it
 
     # ---- state ------------------------------------------------------------------------------
     @property
@@ -134,7 +134,7 @@ class SyncUnit:
         self.dc_activation = int(activation) & 0xFF
         self.dc_cycle_ns = int(sync0_cycle_ns) & 0xFFFFFFFF
         self.dc_start_ns = int(start_time_ns) & 0xFFFFFFFFFFFFFFFF
-        self._period_us = self.cycle_us
+        self.period_us = self.cycle_us
         if self.running and self.sync0_configured:
             self._first_sync0(now_us)
 
@@ -205,7 +205,7 @@ class SyncUnit:
                 self.next_free_us += FREE_RUN_CYCLE_US
             return out
         t = self.next_sync0_us
-        period = self._period_us  # 0: SYNC0 not configured (0x0981 / 0x09A0)
+        period = self.period_us  # 0: SYNC0 not configured (0x0981 / 0x09A0)
         if t > now_us or not period:
             return ()
         out = []
@@ -226,6 +226,22 @@ class SyncUnit:
                 out.append((t, taken))
             t = self.next_sync0_us
         return out
+
+    def take_one_sync0(self, now_us: int) -> int | None:
+        """The steady case of :meth:`cycles_until`, without building its list: exactly one
+        SYNC0 in (last call, now], SYNC0 not lost and the one frame waiting for it in time.
+        Then the same as ``cycles_until`` (that SYNC0 takes the frame) and its time; else
+        None and nothing changed (``cycles_until`` is for the rest)."""
+        t = self.next_sync0_us
+        arrivals = self.arrivals
+        if not (t <= now_us < t + self.period_us and self.running and len(arrivals) == 1
+                and arrivals[0] <= t - CALC_COPY_US) or self.sync0_lost:
+            return None
+        self.next_sync0_us = t + self.period_us
+        self.arrivals = []
+        self.sync0_seen = True
+        self.sm_missed = 0
+        return t
 
     def restart_free_run(self, now_us: int) -> None:
         self.next_free_us = now_us + FREE_RUN_CYCLE_US

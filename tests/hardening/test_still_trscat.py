@@ -14,7 +14,9 @@ samples, §9.1.1 SM-event-missed counter, §9.3.5 / §9.3.6 outputs on error, §
   expansion): every TRS-CAT action, object writes, the master's DC faults, lost frames, cables,
   slave power and target states, with idle stretches of up to 900 steps; every step's events,
   and after each stretch every snapshot and the TRS-CAT's whole state compared; the run must
-  have skipped slot cycles (else it proved nothing).
+  have skipped slot cycles (else it proved nothing);
+- the steady step (docs/trscat.md "Step cost") against the full one, in a DC-SYNC rig whose
+  frames are lost, dropped, late and whose SYNC0 is lost, so the step enters and leaves it often.
 """
 
 from __future__ import annotations
@@ -200,7 +202,7 @@ def outcome(rig: Rig, op: Op) -> str:
 
 
 _BOOKKEEPING = frozenset({"SKIP_STILL", "_dirty", "_quiet", "_plan", "skipped_slot_cycles", "still",
-                          "events", "od"})
+                          "events", "od", "_step_in_full"})  # the last: a test's counter
 
 
 def value_of(obj: Any) -> Any:
@@ -298,7 +300,8 @@ def _counting(real: Callable[..., Any], count: dict[str, int], name: str) -> Cal
 @pytest.mark.parametrize("name", list(RIGS))
 def test_idle_steps_take_the_short_ways(name: str) -> None:
     """Idle in OP the step neither copies latched images (no plc write since the last latch,
-    §9.1.1 SM2 event) nor re-derives an unchanged sync state (§9.3.7): the shortcuts are taken,
+    §9.1.1 SM2 event) nor re-derives an unchanged sync state (§9.3.7), and in DC-SYNC it is the
+    steady step (one SYNC0, one frame in time) without the full one: the shortcuts are taken,
     and with SKIP_STILL off they are not (the differential tests above prove them exact)."""
     expansions, mode = RIGS[name]
     spec = parse_rig_spec(RIG.format(seed=5, expansions=json.dumps(expansions), mode=mode))
@@ -308,7 +311,7 @@ def test_idle_steps_take_the_short_ways(name: str) -> None:
         assert isinstance(trs, TrsCat)
         for _ in range(2500):
             rig.step()
-        count = {"_latch_outputs": 0, "_check_sync": 0}
+        count = {"_latch_outputs": 0, "_check_sync": 0, "_step_in_full": 0}
         for method in count:
             setattr(trs, method, _counting(getattr(trs, method), count, method))
         for _ in range(1000):
@@ -323,3 +326,54 @@ def test_idle_steps_take_the_short_ways(name: str) -> None:
     assert skipping["_check_sync"] == 0
     if mode == "dc":  # FREE-RUN latches at each frame (exchange_frame), not in the step
         assert plain["_latch_outputs"] == 1010 and skipping["_latch_outputs"] == 1
+        # the steady step ("Step cost"): all but the write's step and the ones after it
+        assert plain["_step_in_full"] == 1010 and skipping["_step_in_full"] <= 6
+
+
+# ---- the steady step (docs/trscat.md "Step cost") ------------------------------------------
+STEADY_OPS: tuple[Op, ...] = (  # what moves the sync unit, mostly without touching the TRS-CAT
+    ("master", "lose_frames", {"count": 1}), ("master", "lose_frames", {"count": 2}),
+    ("master", "lose_frames", {"count": 3}), ("master", "lose_frames", {"count": 150}),
+    ("trscat", "drop_frames", {"count": 1}), ("trscat", "drop_frames", {"count": 2}),
+    ("trscat", "frame_jitter", {"us": 400}), ("trscat", "frame_jitter", {"us": 1000}),
+    ("trscat", "lose_sync0", {"lost": True}),
+    ("trscat/1", "set_output", {"channel": 2, "value": 1}),
+    ("trscat/1", "set_output", {"channel": 2, "value": 0}),
+    ("trscat", "set_input", {"channel": 5, "on": True}),
+    ("trscat", "set_input", {"channel": 5, "on": False}),
+    ("master", "set_target", {"state": "SAFEOP"}),
+)
+HEAL: tuple[Op, ...] = (  # back to the steady case: one of them after most stretches
+    ("trscat", "frame_jitter", {"us": 0}), ("trscat", "lose_sync0", {"lost": False}),
+    ("master", "set_target", {"state": "OP"}),
+)
+
+
+@pytest.mark.parametrize("seed", [21, pytest.param(22, marks=pytest.mark.full)])
+def test_steady_steps_differential(seed: int) -> None:
+    """The steady step (one SYNC0 taking the one frame in time, quiet, OP, §9.1.1) against
+    the full one: lost and late frames, SYNC0 lost, outputs, inputs and state changes in
+    short stretches, so the unit enters and leaves the steady case often; every step's
+    events, every stretch's snapshots and whole state compared."""
+    spec = parse_rig_spec(RIG.format(seed=seed, expansions=json.dumps(RIGS["dc"][0]),
+                                     mode="dc"))
+    skipping, plain = build_rig(spec, state_dir=None), no_skipping(build_rig(spec, state_dir=None))
+    trs = skipping.devices["trscat"]
+    assert isinstance(trs, TrsCat)
+    count = {"_step_in_full": 0}
+    trs._step_in_full = _counting(trs._step_in_full, count, "_step_in_full")  # type: ignore
+    rng = random.Random(seed)
+    steps = 0
+    for _ in range(2500):
+        assert skipping.step() == plain.step()
+    for _ in range(150):
+        op = rng.choice(HEAL if rng.random() < 0.4 else STEADY_OPS)
+        assert outcome(skipping, op) == outcome(plain, op), op
+        assert skipping.take_events() == plain.take_events(), op
+        for _ in range(rng.choice((1, 2, 3, 5, 10, 40, 300, 900))):  # long: back to OP
+            assert skipping.step() == plain.step(), op
+            steps += 1
+        assert skipping.snapshot() == plain.snapshot(), op
+        assert trscat_state(skipping) == trscat_state(plain), op
+    steady = 2500 + steps - count["_step_in_full"]
+    assert steady > steps // 4  # the steady step was taken, and left, many times
