@@ -31,7 +31,23 @@ logger = logging.getLogger(__name__)
 T = TypeVar("T")
 
 MAX_CATCH_UP_US = 200_000  # beyond this lag the clock slips instead of racing to catch up
+# The simulation thread naps 1 ms between wake-ups while something talks to the rig (queued
+# work within ACTIVE_S, or a real-time step listener: the EtherCAT wire), so an answer due at
+# the next step goes out within about a millisecond. Otherwise it naps IDLE_NAP_S and steps the
+# elapsed milliseconds in one go: the simulated time is the same, but a wake-up costs about
+# 50 us of CPU on these machines, more than an idle default-rig step (docs/performance.md,
+# "Served rigs"). Queued work wakes the thread at once either way.
+ACTIVE_NAP_S = 0.001
+IDLE_NAP_S = 0.010
+ACTIVE_S = 0.5
 JOURNAL_LENGTH = 20_000
+
+
+def nap_s(now: float, last_work: float, next_publish: float, realtime: bool) -> float:
+    """How long the simulation thread sleeps before it looks again (monotonic seconds)."""
+    if realtime or now - last_work <= ACTIVE_S:
+        return ACTIVE_NAP_S
+    return min(IDLE_NAP_S, max(ACTIVE_NAP_S, next_publish - now))
 
 
 @dataclass(frozen=True)
@@ -68,6 +84,8 @@ class Runtime:
         self._step_listeners: list[Callable[[int], None]] = []
         self._frame_listeners: list[Callable[[Frame], None]] = []
         self._publish_soon = False  # a command ran: publish at once, not at the next 1/30 s
+        self._realtime_listeners = 0  # step listeners that need each step within ~1 ms
+        self._worked = False  # _drain_work ran something since the loop last looked
 
     # ---- control -------------------------------------------------------------------------
     def start(self) -> None:
@@ -145,9 +163,12 @@ class Runtime:
         up on it instead of polling); keep it very quick."""
         self._frame_listeners.append(fn)
 
-    def add_step_listener(self, fn: Callable[[int], None]) -> None:
-        """``fn(now_us)`` runs in the simulation thread after every step; keep it very quick."""
+    def add_step_listener(self, fn: Callable[[int], None], realtime: bool = False) -> None:
+        """``fn(now_us)`` runs in the simulation thread after every step; keep it very quick.
+        ``realtime``: the listener needs each step close to its wall time (it relates steps
+        to wall-clock arrivals), so the thread never steps in idle batches while it is there."""
         self._step_listeners.append(fn)
+        self._realtime_listeners += realtime
 
     # ---- what views read ------------------------------------------------------------------
     @property
@@ -187,6 +208,7 @@ class Runtime:
         wall0 = time.monotonic()
         sim0 = self.rig.clock.now_us
         next_publish = 0.0
+        last_work = wall0
         while not self._stop.is_set():
             self._sim_waiting = True
             with self._rig_lock:
@@ -224,7 +246,9 @@ class Runtime:
                 self._publish_soon = False
                 if now >= next_publish:
                     next_publish = now + self._publish_period
-            self._wake.wait(0.001)
+            if self._worked:
+                self._worked, last_work = False, now
+            self._wake.wait(nap_s(now, last_work, next_publish, bool(self._realtime_listeners)))
             self._wake.clear()
 
     def _drain_work(self) -> list[Event]:
@@ -236,6 +260,7 @@ class Runtime:
                 return events
             if not fut.set_running_or_notify_cancel():
                 continue
+            self._worked = True
             try:
                 fut.set_result(fn())
             except Exception as exc:  # delivered to the caller, never kills the simulation

@@ -208,7 +208,7 @@ class WireBridge:
         self._conn = parent
         self.process = self._spawn(self.iface, self.descriptions, child)
         self._await_ready(deadline=time.monotonic() + timeout_s)
-        self._call(lambda: self.runtime.add_step_listener(self._on_step))
+        self._call(lambda: self.runtime.add_step_listener(self._on_step, realtime=True))
         self._pump_thread = threading.Thread(target=self._pump, name="fieldrig-ethercat-pump",
                                              daemon=True)
         self._pump_thread.start()

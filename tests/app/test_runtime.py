@@ -11,7 +11,7 @@ import pytest
 
 from app.clock import SimClock
 from app.rig import Rig
-from app.runtime import Runtime
+from app.runtime import ACTIVE_NAP_S, ACTIVE_S, IDLE_NAP_S, Runtime, nap_s
 from devices.device import Action, CommandError, DeviceModel, Param
 from devices.events import LogLine
 
@@ -176,3 +176,34 @@ def test_call_journals_what_a_failing_function_emitted(runtime: Runtime) -> None
         runtime.call(say_then_fail)
     _, events = runtime.events_since(seq0)  # at once, not at the next step
     assert [e.text for e in events if isinstance(e, LogLine)] == ["before"]
+
+
+def test_nap_is_short_while_something_talks_to_the_rig() -> None:
+    now = 100.0
+    # work within ACTIVE_S, or a real-time step listener: a step within about a millisecond
+    assert nap_s(now, now - ACTIVE_S / 2, now + 1.0, realtime=False) == ACTIVE_NAP_S
+    assert nap_s(now, now - 60.0, now + 1.0, realtime=True) == ACTIVE_NAP_S
+    # idle: steps in batches, but no later than the next publication
+    assert nap_s(now, now - 60.0, now + 1.0, realtime=False) == IDLE_NAP_S
+    assert nap_s(now, now - 60.0, now + 0.004, realtime=False) == pytest.approx(0.004)
+    assert nap_s(now, now - 60.0, now - 0.5, realtime=False) == ACTIVE_NAP_S
+
+
+def test_idle_runtime_keeps_real_time_and_answers_at_once() -> None:
+    """Stepping in idle batches changes neither the simulated time's pace nor how soon queued
+    work runs."""
+    rig = Rig("t", {"c": Counter("c")}, SimClock(step_us=1000))
+    runtime = Runtime(rig)
+    runtime.start()
+    try:
+        time.sleep(1.2)  # well past ACTIVE_S: idle naps
+        wall0, sim0 = time.monotonic(), rig.clock.now_us
+        time.sleep(0.5)
+        started = time.monotonic()
+        t_us = runtime.submit(lambda: rig.clock.now_us).result(timeout=5)
+        answered = time.monotonic() - started
+        ran = (t_us - sim0) / 1e6
+        assert ran == pytest.approx(time.monotonic() - wall0, abs=0.15)
+        assert answered < 0.25  # queued work wakes the thread (not after an idle nap)
+    finally:
+        runtime.stop()
