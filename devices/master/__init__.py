@@ -1,6 +1,9 @@
 """The built-in EtherCAT master (seed 003), split by what each part holds:
 
-- ``master``: :class:`EtherCatMaster` (commands, stepping, the line, events, snapshot);
+- ``master``: :class:`EtherCatMaster` (commands, stepping, events and the log);
+- ``actions``: its commands, as data;
+- ``line``: cables, the slaves' power, lost frames, slaves lost and found;
+- ``view``: its snapshot and the per-slave diagnostic structures;
 - ``startup``: each slave's ESM start-up and supervision, init commands, identity;
 - ``links``: the ``Slave`` protocol and the master's per-slave view and counters;
 - ``dc``: the distributed-clock state machine (enum + transition table);

@@ -23,7 +23,7 @@ import random
 from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
-from devices.device import Action, CommandError, DeviceModel, Param
+from devices.device import Action, CommandError, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState, parse_emergency_frame
 from devices.events import (
@@ -35,15 +35,17 @@ from devices.events import (
     SlaveStateChange,
     StateChanged,
 )
-from devices.master.dc import DC_FAULTS, DcState, DcUnit
+from devices.master.actions import MASTER_ACTIONS
+from devices.master.dc import DcState, DcUnit
 from devices.master.hooks import Callback, Hooks
 from devices.master.line import LineMixin
-from devices.master.links import RANK, TARGETS, Slave, SlaveLink, next_state
-from devices.master.log_styles import STYLES, Entry, render
+from devices.master.links import RANK, Slave, SlaveLink, next_state
+from devices.master.log_styles import Entry, render
 from devices.master.network import Mapping as NetworkMapping
 from devices.master.network import MasterParameters, SlaveDescription
 from devices.master.startup import StartupMixin
 from devices.master.still import StillCounts
+from devices.master.view import ViewMixin
 
 TWINCAT_PORT = 65535  # seed 000 §7.1 / §7.7: "Server (porta) (65535)"
 FIRST_STATION_ADDRESS = 1001  # §7.1 / §7.7: "'Box 1 (FastCAT)' (1001)"
@@ -64,31 +66,10 @@ def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
     return f"{at:%d/%m/%Y %H.%M.%S} {at.microsecond // 1000:03d} ms"
 
 
-class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
+class EtherCatMaster(LineMixin, StartupMixin, ViewMixin, DeviceModel):
     KIND = "master"
     SKIP_STILL = True  # False: every part of every step in full (test_still_master.py)
-    ACTIONS: ClassVar[Mapping[str, Action]] = {a.name: a for a in (
-        Action("resync", "Take every slave through INIT and back to the target state (a "
-                         "resync resets the FastCAT alarms whose cause is gone, seed 000 §7)"),
-        Action("set_target", "The state the master brings its slaves to",
-               (Param("state", str, choices=TARGETS),)),
-        Action("pull_cable", "Pull the cable that feeds line position N (0 = master -> first "
-                             "slave): every slave from N on is cut off",
-               (Param("cable", int, low=0),)),
-        Action("plug_cable", "Plug the cable that feeds line position N again",
-               (Param("cable", int, low=0),)),
-        Action("power_slave", "Switch the slave at line position N on or off",
-               (Param("position", int, low=0), Param("on", bool))),
-        Action("lose_frames", "The next N cycles' frames are lost (communication error)",
-               (Param("count", int, low=1, high=1_000_000),)),
-        Action("dc_fault", "Distributed clocks fault: drift, jitter over the sync window, "
-                           "SYNC0 lost (seed 003 NOT_SYNCHRONIZED)",
-               (Param("kind", str, choices=DC_FAULTS),)),
-        Action("clear_dc_fault", "Remove the DC fault: the master synchronises again"),
-        Action("set_log_style", "Render the log as TwinCAT, Sirio, Pegaso or AITracePrint "
-                                "show it (seed 000 §7.1-§7.4)",
-               (Param("style", str, choices=STYLES),)),
-    )}
+    ACTIONS: ClassVar[Mapping[str, Action]] = MASTER_ACTIONS
 
     def __init__(self, device_id: str = "master", rng: random.Random | None = None,
                  slaves: Sequence[Slave] = (), retry_interval_us: int = 2_000_000,
@@ -166,23 +147,6 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
     def on_resync(self, callback: Callback) -> None:
         """Called with each Resync: a node or the whole network reached OP the first time."""
         self.hooks.resync.append(callback)
-
-    # ---- diagnostic structures (seed 003: by position from 0, or by physical address) -------
-    def slave_at(self, position: int) -> dict[str, Any]:
-        if not 0 <= position < len(self.links):
-            raise CommandError(f"no slave at position {position} (0..{len(self.links) - 1})")
-        return self._diagnostic(self.links[position])
-
-    def slave_by_address(self, address: int) -> dict[str, Any]:
-        for link in self.links:
-            if link.slave.station_address == address:
-                return self._diagnostic(link)
-        known = ", ".join(str(link.slave.station_address) for link in self.links)
-        raise CommandError(f"no slave with physical address {address} (addresses: {known})")
-
-    def _diagnostic(self, link: SlaveLink) -> dict[str, Any]:
-        p = link.position
-        return link.diagnostic(bool(getattr(link.slave, "powered", True)), self._connected(p))
 
     # ---- commands ---------------------------------------------------------------------------
     def cmd_resync(self) -> None:
@@ -425,29 +389,3 @@ class EtherCatMaster(LineMixin, StartupMixin, DeviceModel):
         return {"t": entry.t_us / 1_000_000, "port": self.port,
                 "timestamp": twincat_timestamp(self.epoch, entry.t_us),
                 "text": render(self.log_style, entry)}
-
-    # ---- view -------------------------------------------------------------------------------
-    @property
-    def phase(self) -> str:
-        if not self.link_up:
-            return "waiting_link"
-        present = [link for link in self.links if link.present]
-        if any(link.slave.al_state in (AlState.INIT, AlState.BOOT) for link in present):
-            return "init_commands"
-        if all(link.slave.al_state is self._target_of(link) for link in present):
-            return "running"
-        return "starting"
-
-    def snapshot(self) -> dict[str, Any]:
-        names = [link.slave.device_id for link in self.links]
-        return {"kind": self.KIND, "id": self.device_id, "target": self.target.label,
-                "external": self.external, "link": self.link_up, "phase": self.phase,
-                "log_style": self.log_style, "log_styles": list(STYLES),
-                "dc": self.dc.snapshot(),
-                "cables": [{"index": i, "from": "master" if i == 0 else names[i - 1],
-                            "to": names[i], "plugged": self.cables[i]}
-                           for i in range(len(self.links))],
-                "slaves": [self._diagnostic(link) for link in self.links],
-                "stats": {"frames": self.frames, "lost_frames": self.lost_frames,
-                          "cycle_us": self.cycle_us},
-                "log": list(self.log)}

@@ -1,0 +1,78 @@
+"""What the master shows: its snapshot and seed 003's diagnostic structures per slave."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from devices.device import CommandError
+from devices.ethercat import AlState
+from devices.master.links import SlaveLink
+from devices.master.log_styles import STYLES
+
+if TYPE_CHECKING:
+    from devices.master.dc import DcUnit
+
+
+class ViewMixin:
+    """The view part of :class:`~devices.master.master.EtherCatMaster`."""
+
+    KIND: str
+    device_id: str
+    links: list[SlaveLink]
+    link_up: bool
+    external: bool
+    target: AlState
+    log_style: str
+    dc: DcUnit
+    cables: list[bool]
+    frames: int
+    lost_frames: int
+    cycle_us: int
+    log: Any
+
+    if TYPE_CHECKING:
+        def _connected(self, position: int) -> bool: ...
+        def _target_of(self, link: SlaveLink) -> AlState: ...
+
+    # ---- diagnostic structures (seed 003: by position from 0, or by physical address) -------
+    def slave_at(self, position: int) -> dict[str, Any]:
+        if not 0 <= position < len(self.links):
+            raise CommandError(f"no slave at position {position} (0..{len(self.links) - 1})")
+        return self._diagnostic(self.links[position])
+
+    def slave_by_address(self, address: int) -> dict[str, Any]:
+        for link in self.links:
+            if link.slave.station_address == address:
+                return self._diagnostic(link)
+        known = ", ".join(str(link.slave.station_address) for link in self.links)
+        raise CommandError(f"no slave with physical address {address} (addresses: {known})")
+
+    def _diagnostic(self, link: SlaveLink) -> dict[str, Any]:
+        p = link.position
+        return link.diagnostic(bool(getattr(link.slave, "powered", True)), self._connected(p))
+
+    # ---- view -------------------------------------------------------------------------------
+    @property
+    def phase(self) -> str:
+        if not self.link_up:
+            return "waiting_link"
+        present = [link for link in self.links if link.present]
+        if any(link.slave.al_state in (AlState.INIT, AlState.BOOT) for link in present):
+            return "init_commands"
+        if all(link.slave.al_state is self._target_of(link) for link in present):
+            return "running"
+        return "starting"
+
+    def snapshot(self) -> dict[str, Any]:
+        names = [link.slave.device_id for link in self.links]
+        return {"kind": self.KIND, "id": self.device_id, "target": self.target.label,
+                "external": self.external, "link": self.link_up, "phase": self.phase,
+                "log_style": self.log_style, "log_styles": list(STYLES),
+                "dc": self.dc.snapshot(),
+                "cables": [{"index": i, "from": "master" if i == 0 else names[i - 1],
+                            "to": names[i], "plugged": self.cables[i]}
+                           for i in range(len(self.links))],
+                "slaves": [self._diagnostic(link) for link in self.links],
+                "stats": {"frames": self.frames, "lost_frames": self.lost_frames,
+                          "cycle_us": self.cycle_us},
+                "log": list(self.log)}
