@@ -311,9 +311,10 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         return super().apply(action, args, module)
 
     def step(self, now_us: int) -> None:
-        if now_us < self._t_us:
-            raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self._t_us})")
-        span, alarms, still = now_us - self._t_us, self.alarms, self._still
+        t_us = self._t_us  # only this method writes _t_us
+        if now_us < t_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {t_us})")
+        span, alarms, still = now_us - t_us, self.alarms, self._still
         if span == still.dt and not self._touched and alarms is still.alarms \
                 and alarms.changes == still.changes and self.SKIP_STILL:
             self._t_us = self.now_us = now_us  # a repeat of a step that changed nothing
@@ -324,11 +325,13 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         # plant.omega first: may_settle's first test, without the call for a moving drive
         before = state_key(self) if span and self.plant.omega == 0.0 and may_settle(self) \
             and still.due() else None
-        queued = len(self.events.items)
-        while self._t_us < now_us:
-            dt_us = min(TICK_US, now_us - self._t_us)
-            self._t_us += dt_us
-            self.now_us = self._t_us
+        queued = len(self.events.items) if before is not None else 0
+        while t_us < now_us:
+            dt_us = now_us - t_us
+            if dt_us > TICK_US:  # min(TICK_US, now_us - t_us)
+                dt_us = TICK_US
+            t_us += dt_us
+            self._t_us = self.now_us = t_us
             self._tick(dt_us / 1e6)
         self.now_us = now_us
         settled = False

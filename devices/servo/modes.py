@@ -19,6 +19,7 @@ from devices.servo.registers import DISABLED_16, R
 # Register numbers read every tick (a moving drive): an enum member's lookup is slow.
 _AUX_IN_1, _TARGET_VELOCITY = int(R.AUX_IN_1), int(R.TARGET_VELOCITY)
 _VELOCITY_WINDOW, _VELOCITY_THRESHOLD = int(R.VELOCITY_WINDOW), int(R.VELOCITY_THRESHOLD)
+_FEED_CONSTANT = int(R.FEED_CONSTANT)
 
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
@@ -123,13 +124,6 @@ class SpeedMonitor:
         self.in_window_ms = 0.0
         self.below_threshold_ms = 0.0
 
-    def update(self, d: ServoDrive, target: float, dt: float) -> None:
-        actual, regs, dt_ms = d.velocity_user, d.regs, dt * 1e3
-        self.in_window_ms = self.in_window_ms + dt_ms \
-            if abs(target - actual) <= regs[_VELOCITY_WINDOW] else 0.0
-        self.below_threshold_ms = self.below_threshold_ms + dt_ms \
-            if abs(actual) <= regs[_VELOCITY_THRESHOLD] else 0.0
-
     def reached(self, d: ServoDrive) -> bool:
         if d.reg(R.VELOCITY_WINDOW) == DISABLED_16:
             return d.trajectory.cruising
@@ -151,7 +145,8 @@ class Velocity(Mode):
         self.monitor = SpeedMonitor()
 
     def target_user(self, d: ServoDrive) -> float:
-        return d.regs[_AUX_IN_1] if d.input_level("select") else d.regs[_TARGET_VELOCITY]
+        # d.input_level("select"): the wiring alone, select is no switch
+        return d.regs[_AUX_IN_1] if d.wired.get("select", False) else d.regs[_TARGET_VELOCITY]
 
     def enter(self, d: ServoDrive) -> None:
         super().enter(d)
@@ -164,7 +159,14 @@ class Velocity(Mode):
             vmax = d.motor_vmax_rev
             velocity = max(-vmax, min(vmax, d.speed_to_rev(target)))
             d.trajectory.run_at(velocity, d.limits(vmax=vmax))
-        self.monitor.update(d, target, dt)
+        # the speed monitor's timers, here (every tick of a jog: no call)
+        monitor, regs, dt_ms = self.monitor, d.regs, dt * 1e3
+        feed = regs[_FEED_CONSTANT]
+        actual = d.plant.omega * (feed if feed >= 1 else 1)  # d.velocity_user
+        monitor.in_window_ms = monitor.in_window_ms + dt_ms \
+            if abs(target - actual) <= regs[_VELOCITY_WINDOW] else 0.0
+        monitor.below_threshold_ms = monitor.below_threshold_ms + dt_ms \
+            if abs(actual) <= regs[_VELOCITY_THRESHOLD] else 0.0
 
     def halted(self, d: ServoDrive) -> None:
         self.commanded = None

@@ -208,20 +208,29 @@ class Trajectory:
         self._segment_start = self.position
 
     def advance(self, dt: float) -> None:
-        plan = self._plan  # not replaced while advancing; len(plan) is the idle test
-        while dt > 0.0 and self._index < len(plan):
-            segment = plan[self._index]
-            left = segment.duration - self._elapsed
+        # the plan is not replaced while advancing; the index and the time into the segment
+        # live in locals until the end (every tick of a moving drive)
+        plan, index, elapsed = self._plan, self._index, self._elapsed
+        count = len(plan)  # index >= count: idle
+        while dt > 0.0 and index < count:
+            segment = plan[index]
+            left = segment.duration - elapsed
             if dt < left:
-                self._elapsed += dt
+                elapsed += dt
                 dt = 0.0
-                covered, self.velocity = segment.at(self._elapsed)
-                self.position = self._segment_start + covered
+                v0 = segment.v0
+                if v0 == segment.v1:  # a cruise: Ramp.at's first case, inline
+                    self.velocity = v0
+                    self.position = self._segment_start + v0 * elapsed
+                else:
+                    covered, self.velocity = segment.at(elapsed)
+                    self.position = self._segment_start + covered
             else:
                 dt -= left
                 self._segment_start += segment.distance
                 self.position, self.velocity = self._segment_start, segment.v1
-                self._index += 1
-                self._elapsed = 0.0
-        if self._index >= len(plan) and self.target is not None and self.velocity == 0.0:
+                index += 1
+                elapsed = 0.0
+        self._index, self._elapsed = index, elapsed
+        if index >= count and self.target is not None and self.velocity == 0.0:
             self.position = self.target  # land exactly: the plan's sum carries float error

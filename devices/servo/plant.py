@@ -16,6 +16,7 @@ from dataclasses import dataclass
 COAST_TIME_CONSTANT_S = 0.2  # a released motor's speed decays with this time constant
 STOPPED_REV_S = 1e-4  # a coasting motor slower than this has stopped
 SETTLED_REV = 1e-7  # closer than this the position loop has settled (well below 1 user unit)
+_exp = math.exp  # every tick of a drive in torque: no module attribute lookup
 
 
 @dataclass(frozen=True)
@@ -73,16 +74,18 @@ class Plant:
             new = self.theta + self.omega * dt
         else:
             # exact response of a first-order lag to a demand ramping linearly over the step
-            previous = self._last_demand if self._last_demand is not None else demand
+            previous = self._last_demand
+            if previous is None:
+                previous = demand
             rate = (demand - previous) / dt if dt > 0.0 else 0.0
-            decay = math.exp(-dt / lag) if lag > 0.0 else 0.0
-            new = demand - rate * lag + (self.theta - previous + rate * lag) * decay
+            decay = _exp(-dt / lag) if lag > 0.0 else 0.0
+            new = demand - rate * lag + (before - previous + rate * lag) * decay
             if abs(demand - new) < SETTLED_REV:
                 new = demand
         self._last_demand = demand
         low, high = self._end_stops
-        self.blocked = not low <= new <= high
+        self.blocked = blocked = not low <= new <= high
         new = low if low > new else new  # min(max(new, low), high), written out (every tick)
-        self.theta = high if high < new else new
-        if demand is not None or self.blocked:
-            self.omega = (self.theta - before) / dt if dt > 0.0 else 0.0
+        self.theta = theta = high if high < new else new
+        if demand is not None or blocked:
+            self.omega = (theta - before) / dt if dt > 0.0 else 0.0

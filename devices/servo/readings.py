@@ -20,6 +20,8 @@ S32_MAX = 0x7FFF_FFFF
 S16_MAX = 0x7FFF
 RMS_TIME_CONSTANT_S = 1.0
 JAM_CURRENT = 200.0  # % of nominal the motor draws pushing a jammed load
+_K_1MS = 1.0 - math.exp(-0.001 / RMS_TIME_CONSTANT_S)  # CurrentMeter.update's k at 1 ms
+_sqrt = math.sqrt
 _IN_TORQUE = ds402._IN_TORQUE_ORDERED  # State.in_torque without the property call
 _FEED_CONSTANT = int(R.FEED_CONSTANT)  # an enum member's lookup costs more than the dict's
 
@@ -38,18 +40,20 @@ class CurrentMeter:
     def update(self, d: ServoDrive, accel: float, dt: float) -> None:
         # min(x, cap) written out as "cap if cap < x else x", its exact meaning (every tick)
         if d.state in _IN_TORQUE:
-            config = d.config
+            config, plant = d.config, d.plant
             inertia = 1.0 + config.load_inertia
             torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
-            if d.plant.jammed or d.plant.blocked:
+            if plant.jammed or plant.blocked:
                 torque += JAM_CURRENT * min(abs(d.following_error_user) / d.feed, 1.0)
             cap = 3.0 * d.params[5]  # d5 caps the current
-            self.instant = cap if cap < torque else torque
+            self.instant = instant = cap if cap < torque else torque
         else:
-            self.instant = 0.0
-        k = 1.0 - math.exp(-dt / RMS_TIME_CONSTANT_S)
-        self._mean_square += (self.instant ** 2 - self._mean_square) * k
-        self.rms = rms = math.sqrt(self._mean_square)
+            self.instant = instant = 0.0
+        # the filter constant of a 1 ms tick is a constant (dt == 0.001: the same bits)
+        k = _K_1MS if dt == 0.001 else 1.0 - math.exp(-dt / RMS_TIME_CONSTANT_S)
+        mean_square = self._mean_square
+        self._mean_square = mean_square = mean_square + (instant ** 2 - mean_square) * k
+        self.rms = rms = _sqrt(mean_square)
         overload = 100.0 * (rms / 100.0) ** 2
         self.overload = 999.0 if overload > 999.0 else overload
 

@@ -11,7 +11,14 @@ floating-point expressions as the plain code, minus what cannot change anything:
 - the input levels dict is rebuilt only when the wiring or a switch changed (the same dict
   object otherwise: nobody mutates it);
 - hot constants (enum members, register numbers) are module names, because reading an enum
-  member off its class costs a Python-level lookup; states are compared by identity.
+  member off its class costs a Python-level lookup; states are compared by identity;
+- the helpers a tick called every time (the motion, the limit and following-error checks,
+  ``feed``, ``following_error_user``, ``trajectory.idle``, ``geometry.switches``,
+  ``motion_allowed``, ``_evaluate``'s "nothing new" test) are written out here, each the same
+  expression as the helper's: a Python call costs more than most of these bodies
+  (docs/servo-drive.md §Step cost in motion);
+- the position loop's lag is kept with the i1 it was computed for (``_lag_cache``): the config
+  is frozen, so the lag changes only with i1, however i1 is written (parameter, flash load).
 """
 
 from __future__ import annotations
@@ -35,15 +42,26 @@ _IN_TORQUE = (_ENABLED, _QUICK_STOP, _FAULT_REACTION)  # State.in_torque, by ide
 _LATCHED_POSITION = int(R.LATCHED_POSITION)
 _FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)
 _FOLLOWING_ERROR_TIMEOUT = int(R.FOLLOWING_ERROR_TIMEOUT)
+_FEED_CONSTANT = int(R.FEED_CONSTANT)
+_I1 = 35  # parameter i1, the position loop gain (position_lag_s)
 _CW_HALT = ds402.CW_HALT
 _NO_OBSERVER = Mode.observe
+_NEVER_BUSY = Mode.busy  # the property of every mode but homing: always False
 
 
 class DriveTick:
     """Mixin of :class:`~devices.servo.drive.ServoDrive`: ``_tick`` and what it calls."""
 
+    # (i1, position_lag_s at that i1): the lag is a function of i1 alone (the config is frozen)
+    _lag_cache: tuple[int, float] | None = None
+
     def _tick(self: ServoDrive, dt: float) -> None:
-        lag = self.position_lag_s
+        i1, cached_lag = self.params[_I1], self._lag_cache
+        if cached_lag is not None and cached_lag[0] == i1:
+            lag = cached_lag[1]
+        else:
+            lag = self.position_lag_s
+            self._lag_cache = (i1, lag)
         plant, trajectory = self.plant, self.trajectory
         if not self.powered:
             plant.step(dt, None, lag)
@@ -56,12 +74,50 @@ class DriveTick:
             self.indirect.step(t_us)
         if self.save_pending or self.saving_until is not None:  # else nothing to update
             self._update_saving()
-        self._evaluate()
+        wired = self.wired
+        if (self.state, self.cw, self.cw_source, wired.get("ten", False)) \
+                != self._quiet_evaluation:  # else _evaluate returns at once
+            self._evaluate()
         theta_before, velocity_before = plant.theta, trajectory.velocity
-        self._move(dt, lag)
+        # ---- the motion (the demand from the mode, the trajectory, the motor) ----
+        state = self.state
+        if state not in _IN_TORQUE:
+            if self._was_allowed:
+                self.mode_logic.halted(self)
+                self._was_allowed = False
+            plant.step(dt, None, lag)
+            trajectory.hold(plant.theta, plant.omega)
+        else:
+            if state is _ENABLED:
+                # motion_allowed, with the state known to be enabled
+                allowed = self.ien_cmd and wired.get("ien", False) \
+                    and wired.get("ten", False) and not self.cw & _CW_HALT
+                if allowed:
+                    self.mode_logic.step(self, dt)
+                elif self._was_allowed:
+                    self.mode_logic.halted(self)
+                    halting = self.motion_enabled  # halt bit: profile deceleration
+                    trajectory.stop(self.limits() if halting else self.quick_stop_limits())
+                self._was_allowed = allowed
+            trajectory.advance(dt)
+            plant.step(dt, trajectory.position, lag)
+            if trajectory._index >= len(trajectory._plan) and trajectory.velocity == 0.0:
+                if self.state is _QUICK_STOP:  # standstill (trajectory.idle, inline)
+                    self._transition(Command.STANDSTILL)
+                elif self.state is _FAULT_REACTION:
+                    self._transition(Command.FAULT_REACTION_DONE)
+        # ---- what the motion changed: current, inputs, alarms ----
         self.meter.update(self, (trajectory.velocity - velocity_before) / dt, dt)
         theta_after = plant.theta
-        before, levels = self._levels, self._tick_levels(theta_after)
+        g = self.geometry  # geometry.switches(theta_after), inline
+        switches = (theta_after <= g.neg_limit, theta_after >= g.pos_limit,
+                    theta_after >= g.home_switch)
+        before, cached = self._levels, self._levels_cache
+        if cached is not None and cached[1] == switches and cached[0] == wired:
+            levels = cached[2]  # input_levels(): the last tick's dict, nothing changed
+        else:
+            levels = self.levels_at(switches)
+            self._levels_cache = (dict(wired), switches, levels)
         if levels["start"] and not before.get("start", False):
             self.mode_logic.on_start_input(self)
         self._levels = levels
@@ -74,48 +130,29 @@ class DriveTick:
         mode = self.mode_logic
         if type(mode).observe is not _NO_OBSERVER:  # the crossings are for homing only
             mode.observe(self, self._changes(before, levels, theta_before, theta_after))
-        self._check_limits(levels)
-        self._check_following_error(dt)
-        if abs((plant.theta - self.theta_zero) * self.feed) > S32_MAX:
+        neg_limit, pos_limit = levels["neg_limit"], levels["pos_limit"]
+        if (neg_limit or pos_limit) and self.state is _ENABLED:  # _check_limits, inline:
+            mode = self.mode_logic  # with no limit switch active it has nothing to check
+            if type(mode).busy is _NEVER_BUSY or not mode.busy:
+                velocity = trajectory.velocity
+                if neg_limit and velocity < 0.0:
+                    self.raise_alarm(20)
+                elif pos_limit and velocity > 0.0:
+                    self.raise_alarm(21)
+        # _check_following_error, inline: alarm 16 when |error| > R03 for longer than R04 ms
+        regs = self.regs
+        window, feed = regs[_FOLLOWING_ERROR_WINDOW], regs[_FEED_CONSTANT]
+        if self.state is _ENABLED and window != DISABLED_32 and abs(  # following_error_user
+                (trajectory.position - plant.theta) * (feed if feed >= 1 else 1)) > window:
+            self._fe_ms += dt * 1e3
+            if self._fe_ms > regs[_FOLLOWING_ERROR_TIMEOUT]:
+                self._fe_ms = 0.0
+                self.raise_alarm(16)
+        else:
+            self._fe_ms = 0.0
+        feed = self.regs[_FEED_CONSTANT]  # again: alarm 16 may have changed what it reads
+        if abs((plant.theta - self.theta_zero) * (feed if feed >= 1 else 1)) > S32_MAX:
             self.raise_alarm(15)  # the position no longer fits R06 (S32)
-
-    def _tick_levels(self: ServoDrive, theta: float) -> dict[str, bool]:
-        """:meth:`input_levels` at ``theta``: the last tick's dict when nothing changed."""
-        switches = self.geometry.switches(theta)
-        wired, cached = self.wired, self._levels_cache
-        if cached is not None and cached[1] == switches and cached[0] == wired:
-            return cached[2]
-        levels = self.levels_at(switches)
-        self._levels_cache = (dict(wired), switches, levels)
-        return levels
-
-    def _move(self: ServoDrive, dt: float, lag: float) -> None:
-        state, trajectory = self.state, self.trajectory
-        if state not in _IN_TORQUE:
-            if self._was_allowed:
-                self.mode_logic.halted(self)
-                self._was_allowed = False
-            self.plant.step(dt, None, lag)
-            trajectory.hold(self.plant.theta, self.plant.omega)
-            return
-        if state is _ENABLED:
-            wired = self.wired  # motion_allowed, with the state known to be enabled
-            allowed = self.ien_cmd and wired.get("ien", False) and wired.get("ten", False) \
-                and not self.cw & _CW_HALT
-            if allowed:
-                self.mode_logic.step(self, dt)
-            elif self._was_allowed:
-                self.mode_logic.halted(self)
-                halting = self.motion_enabled  # halt bit: profile deceleration
-                trajectory.stop(self.limits() if halting else self.quick_stop_limits())
-            self._was_allowed = allowed
-        trajectory.advance(dt)
-        self.plant.step(dt, trajectory.position, lag)
-        if trajectory.idle and trajectory.velocity == 0.0:  # standstill
-            if self.state is _QUICK_STOP:
-                self._transition(Command.STANDSTILL)
-            elif self.state is _FAULT_REACTION:
-                self._transition(Command.FAULT_REACTION_DONE)
 
     def _changes(self: ServoDrive, before: dict[str, bool], after: dict[str, bool],
                  theta0: float, theta1: float) -> Changes:
@@ -132,7 +169,10 @@ class DriveTick:
         return sorted(found, key=lambda change: abs(change[2] - theta0))
 
     def _check_limits(self: ServoDrive, levels: dict[str, bool]) -> None:
-        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
+        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing.
+
+        The plain form of the check ``_tick`` writes out (the plain tick of
+        tests/devices/servo/test_servo_step_cost.py calls it)."""
         if self.state is not _ENABLED or self.mode_logic.busy:
             return
         velocity = self.trajectory.velocity
@@ -140,15 +180,3 @@ class DriveTick:
             self.raise_alarm(20)
         elif levels["pos_limit"] and velocity > 0.0:
             self.raise_alarm(21)
-
-    def _check_following_error(self: ServoDrive, dt: float) -> None:
-        """Alarm 16: |following error| > R03 for longer than R04 ms (R03 = 0xFFFFFFFF: off)."""
-        window = self.regs[_FOLLOWING_ERROR_WINDOW]  # following_error_exceeded, inline
-        if self.state is _ENABLED and window != DISABLED_32 \
-                and abs(self.following_error_user) > window:
-            self._fe_ms += dt * 1e3
-            if self._fe_ms > self.regs[_FOLLOWING_ERROR_TIMEOUT]:
-                self._fe_ms = 0.0
-                self.raise_alarm(16)
-        else:
-            self._fe_ms = 0.0
