@@ -131,8 +131,10 @@ class DriveTick:
         if type(mode).observe is not _NO_OBSERVER:  # the crossings are for homing only
             mode.observe(self, self._changes(before, levels, theta_before, theta_after))
         neg_limit, pos_limit = levels["neg_limit"], levels["pos_limit"]
-        if (neg_limit or pos_limit) and self.state is _ENABLED:  # _check_limits, inline:
-            mode = self.mode_logic  # with no limit switch active it has nothing to check
+        # Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing
+        # (with no limit switch active there is nothing to check).
+        if (neg_limit or pos_limit) and self.state is _ENABLED:
+            mode = self.mode_logic
             if type(mode).busy is _NEVER_BUSY or not mode.busy:
                 velocity = trajectory.velocity
                 if neg_limit and velocity < 0.0:
@@ -167,16 +169,3 @@ class DriveTick:
                 found.append((name, after[name], at))
         found += [("marker", True, m) for m in g.markers_between(theta0, theta1)]
         return sorted(found, key=lambda change: abs(change[2] - theta0))
-
-    def _check_limits(self: ServoDrive, levels: dict[str, bool]) -> None:
-        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing.
-
-        The plain form of the check ``_tick`` writes out (the plain tick of
-        tests/devices/servo/test_servo_step_cost.py calls it)."""
-        if self.state is not _ENABLED or self.mode_logic.busy:
-            return
-        velocity = self.trajectory.velocity
-        if levels["neg_limit"] and velocity < 0.0:
-            self.raise_alarm(20)
-        elif levels["pos_limit"] and velocity > 0.0:
-            self.raise_alarm(21)

@@ -69,6 +69,16 @@ class PlainDrive(ServoDrive):
         if abs((self.plant.theta - self.theta_zero) * self.feed) > 0x7FFF_FFFF:
             self.raise_alarm(15)
 
+    def _check_limits(self, levels: dict[str, bool]) -> None:
+        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
+        if self.state is not State.OPERATION_ENABLED or self.mode_logic.busy:
+            return
+        velocity = self.trajectory.velocity
+        if levels["neg_limit"] and velocity < 0.0:
+            self.raise_alarm(20)
+        elif levels["pos_limit"] and velocity > 0.0:
+            self.raise_alarm(21)
+
     def _move(self, dt: float, lag: float) -> None:
         if not self.state.in_torque:
             if self._was_allowed:
