@@ -135,6 +135,19 @@ class Live:
             assert time.monotonic() < deadline, f"timed out waiting for {what}"
             self.barrier()
 
+    def untouched(self) -> tuple[object, int, int]:
+        """What a refused load must leave as it was. The rig keeps running meanwhile (a
+        refusal must not pause it), so its clock only moves on, never back."""
+        return self.runtime.rig, self.t_us, len(self.events)
+
+    def assert_untouched(self, before: tuple[object, int, int]) -> None:
+        rig, t_us, n_events = before
+        self.barrier()
+        assert self.runtime.rig is rig and not self.runtime.paused
+        assert self.t_us >= t_us, "the clock went back: the rig was reset"
+        assert all(e.t_us >= t_us for e in self.events[n_events:])
+        assert self.player.view().status is Status.EMPTY
+
     @property
     def t_us(self) -> int:
         return self.runtime.rig.clock.now_us
@@ -264,19 +277,19 @@ def test_speed_out_of_range_is_refused(live: Live, speed: float) -> None:
 
 def test_a_scenario_for_another_rig_is_refused_before_anything_changes(live: Live) -> None:
     other = load_scenario(Path(DEFAULT_RIG).parent.parent / "scenarios" / "cnf_scan.toml")
-    t_us = live.t_us
+    before = live.untouched()
     with pytest.raises(ScenarioError, match="cannot play on this dashboard"):
         live.player.load(other)  # the default rig has a master and drives; this one not
-    assert live.t_us == t_us and live.player.view().status is Status.EMPTY
+    live.assert_untouched(before)
 
 
 def test_a_broken_step_is_refused_before_anything_changes(live: Live, tmp_path: Path) -> None:
     bad = parse_scenario(SCENARIO.replace('action = "unplug"', 'action = "unplugg"'),
                          "bad.toml", base_dir=tmp_path)
-    t_us = live.t_us
+    before = live.untouched()
     with pytest.raises(ScenarioError, match="step 5"):
         live.player.load(bad)
-    assert live.t_us == t_us
+    live.assert_untouched(before)
 
 
 def test_controls_need_a_scenario(live: Live) -> None:
