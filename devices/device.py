@@ -101,6 +101,26 @@ class DeviceModel:
             raise ValueError(f"{self.device_id}: time went backwards ({now_us} < {self.now_us})")
         self.now_us = now_us
 
+    # ---- quiet spans (docs/performance.md "Quiet spans") --------------------------------------
+    def quiet_until(self, step_us: int) -> int:
+        """How far this model's coming steps are *quiet*: the latest time T (``now_us`` plus a
+        whole number of steps; ``now_us`` itself for none) such that stepping it at each of
+        ``now_us + step_us`` .. T, with no command in between, would emit no event and
+        change nothing (its rng's state included) that :meth:`skip_to` does not set exactly
+        as those steps would. No side effect.
+
+        For an EtherCAT slave the promise holds whether or not the master's frames arrive in
+        the span (the master reports its own frames: :meth:`frames_quiet`). The default: no
+        quiet step, the rig steps this model one step at a time.
+        """
+        return self.now_us
+
+    def skip_to(self, t_us: int) -> None:
+        """Leave the model as its quiet steps up to ``t_us`` would (``t_us`` no later than
+        :meth:`quiet_until` gave, asked just before with no command since)."""
+        if t_us != self.now_us:
+            raise NotImplementedError(f"{self.device_id}: no quiet steps to skip")
+
     def snapshot(self) -> dict[str, Any]:
         raise NotImplementedError  # abstract: every model reports its own state
 
