@@ -90,7 +90,7 @@ class Rig:
                 if span >= MIN_SPAN:
                     until = now + span * step_us
                     for device in devices:
-                        device.skip_to(until)
+                        device.skip_to(until, step_us)
                     clock.now_us = until
                     self.skipped_steps += span
                     steps -= span

@@ -115,9 +115,9 @@ class DeviceModel:
         """
         return self.now_us
 
-    def skip_to(self, t_us: int) -> None:
-        """Leave the model as its quiet steps up to ``t_us`` would (``t_us`` no later than
-        :meth:`quiet_until` gave, asked just before with no command since)."""
+    def skip_to(self, t_us: int, step_us: int) -> None:
+        """Leave the model as its quiet steps up to ``t_us``, ``step_us`` apart, would (``t_us``
+        no later than :meth:`quiet_until` gave, asked just before with no command since)."""
         if t_us != self.now_us:
             raise NotImplementedError(f"{self.device_id}: no quiet steps to skip")
 
