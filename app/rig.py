@@ -7,7 +7,7 @@ master last, so a master sees its slaves' state of the same cycle.
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -75,29 +75,47 @@ class Rig:
         (:meth:`DeviceModel.quiet_until`) is skipped in one go (docs/performance.md "Quiet
         spans"). Between the calls nothing may touch the devices, as between steps."""
         events: list[Event] = []
-        clock, step_us = self.clock, self.clock.step_us
-        devices = list(self.devices.values())  # the master last, as in step()
         while steps > 0:
-            if steps >= MIN_SPAN and self.SKIP_SPANS and self._quiet.due():
-                now = clock.now_us
-                until = now + steps * step_us
-                for device in devices:
-                    until = min(until, device.quiet_until(step_us))
-                    if until - now < MIN_SPAN * step_us:
-                        break
-                span = (until - now) // step_us
-                self._quiet.checked(span >= MIN_SPAN)
-                if span >= MIN_SPAN:
-                    until = now + span * step_us
-                    for device in devices:
-                        device.skip_to(until, step_us)
-                    clock.now_us = until
-                    self.skipped_steps += span
-                    steps -= span
-                    continue
-            events.extend(self.step())
-            steps -= 1
+            span = self.quiet_steps(steps)
+            if span:
+                self.skip(span)
+                steps -= span
+            else:
+                events.extend(self.step())
+                steps -= 1
         return events
+
+    def quiet_steps(self, steps: int, also: Iterable[Callable[[int], int]] = ()) -> int:
+        """How many of the next ``steps`` steps may be skipped in one go (:meth:`skip`): 0, or
+        at least MIN_SPAN steps in which every device is quiet, and every ``also`` (an
+        observer's own ``quiet_until(step_us)``: it has nothing to do before then) agrees. No
+        side effect on the devices; after a "0" the next asks back off (1, 2, 4 .. calls)."""
+        if steps < MIN_SPAN or not self.SKIP_SPANS or not self._quiet.due():
+            return 0
+        now, step_us = self.clock.now_us, self.clock.step_us
+        until, least = now + steps * step_us, now + MIN_SPAN * step_us
+        for device in self.devices.values():
+            until = min(until, device.quiet_until(step_us))
+            if until < least:
+                break
+        else:
+            for quiet_until in also:
+                until = min(until, quiet_until(step_us))
+                if until < least:
+                    break
+        span = max(0, (until - now) // step_us)
+        quiet = span >= MIN_SPAN
+        self._quiet.checked(quiet)
+        return span if quiet else 0
+
+    def skip(self, steps: int) -> None:
+        """Skip ``steps`` quiet steps, as :meth:`quiet_steps` just gave (or fewer)."""
+        step_us = self.clock.step_us
+        until = self.clock.now_us + steps * step_us
+        for device in self.devices.values():  # the master last: its slaves' frames
+            device.skip_to(until, step_us)
+        self.clock.now_us = until
+        self.skipped_steps += steps
 
     def take_events(self) -> list[Event]:
         """Events emitted outside a step (by commands), in order."""
