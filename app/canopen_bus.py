@@ -45,6 +45,7 @@ from can.interfaces.udp_multicast.bus import (
     UdpMulticastBus,
 )
 
+from app.rig import FAR_US, ObserverSpan
 from devices.canopen.bus_timing import CanFrame
 from devices.canopen.node import CanOpenNode
 
@@ -66,7 +67,8 @@ class CanBusError(RuntimeError):
 
 
 class StepSource(Protocol):
-    def add_step_listener(self, fn: Callable[[int], None]) -> None: ...
+    def add_step_listener(self, fn: Callable[[int], None], realtime: bool = False,
+                          quiet_until: ObserverSpan | None = None) -> None: ...
 
 
 def open_bus(interface: str, channel: str | None = None) -> can.BusABC:
@@ -167,7 +169,7 @@ class CanOpenBus:
 
     # ---- life cycle ----------------------------------------------------------------------
     def attach(self, runtime: StepSource) -> None:
-        runtime.add_step_listener(self.on_step)
+        runtime.add_step_listener(self.on_step, quiet_until=self.quiet_until)
 
     def start(self) -> None:
         self.bus = open_bus(self.interface, self.channel)
@@ -182,6 +184,10 @@ class CanOpenBus:
             self.bus = None
 
     # ---- simulation thread ---------------------------------------------------------------
+    def quiet_until(self, now_us: int, step_us: int) -> int:
+        """Nothing to send while no node has a finished frame (a quiet node sends none)."""
+        return now_us if any(node.outbox for node in self.nodes) else FAR_US
+
     def on_step(self, now_us: int) -> None:
         """Send what the nodes finished transmitting by ``now_us`` (simulation thread)."""
         for node in self.nodes:

@@ -23,7 +23,7 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
-from app.rig import Rig
+from app.rig import FAR_US, Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
 from app.scenario import (
@@ -107,7 +107,7 @@ class Player:
         self._finished = False
         self._generation = 0
         self._started = False  # a simulation step has run since the load
-        runtime.add_step_listener(self._on_step)
+        runtime.add_step_listener(self._on_step, quiet_until=self._quiet_until)
 
     # ---- commands (any thread but the simulation thread) ---------------------------------
     def rig_path(self, scenario: Scenario) -> Path:
@@ -222,6 +222,11 @@ class Player:
             return self._scenario
 
     # ---- the simulation thread -----------------------------------------------------------
+    def _quiet_until(self, now_us: int, step_us: int) -> int:
+        """Nothing to do while no scenario is loaded or after its end; a loaded one is played
+        step by step (its steps' times and the end are checked after every step)."""
+        return FAR_US if self._scenario is None or self._finished else now_us
+
     def _on_step(self, now_us: int) -> None:
         if self._scenario is None or self._finished:
             return

@@ -19,6 +19,9 @@ from devices.stillness import Backoff
 
 # Fewer quiet steps than this are stepped one by one: asking every device costs about a step.
 MIN_SPAN = 2
+# An observer's quiet_until(now_us, step_us): it has nothing to do after the steps up to then.
+ObserverSpan = Callable[[int, int], int]
+FAR_US = 1 << 62  # an observer with nothing due: the devices decide
 
 
 @dataclass
@@ -85,11 +88,12 @@ class Rig:
                 steps -= 1
         return events
 
-    def quiet_steps(self, steps: int, also: Iterable[Callable[[int], int]] = ()) -> int:
+    def quiet_steps(self, steps: int, also: Iterable[ObserverSpan] = ()) -> int:
         """How many of the next ``steps`` steps may be skipped in one go (:meth:`skip`): 0, or
         at least MIN_SPAN steps in which every device is quiet, and every ``also`` (an
-        observer's own ``quiet_until(step_us)``: it has nothing to do before then) agrees. No
-        side effect on the devices; after a "0" the next asks back off (1, 2, 4 .. calls)."""
+        observer's own ``quiet_until(now_us, step_us)``: the last time up to which it would do
+        nothing after a step of a quiet rig) agrees. No side effect on the devices; after a
+        "0" the next asks back off (1, 2, 4 .. calls)."""
         if steps < MIN_SPAN or not self.SKIP_SPANS or not self._quiet.due():
             return 0
         now, step_us = self.clock.now_us, self.clock.step_us
@@ -100,7 +104,7 @@ class Rig:
                 break
         else:
             for quiet_until in also:
-                until = min(until, quiet_until(step_us))
+                until = min(until, quiet_until(now, step_us))
                 if until < least:
                     break
         span = max(0, (until - now) // step_us)

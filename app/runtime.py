@@ -23,7 +23,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from app.rig import Rig
+from app.rig import ObserverSpan, Rig
 from devices.events import Event
 
 logger = logging.getLogger(__name__)
@@ -85,6 +85,8 @@ class Runtime:
         self._frame_listeners: list[Callable[[Frame], None]] = []
         self._publish_soon = False  # a command ran: publish at once, not at the next 1/30 s
         self._realtime_listeners = 0  # step listeners that need each step within ~1 ms
+        self._unspanned_listeners = 0  # step listeners that need every step (no quiet spans)
+        self._listener_spans: list[ObserverSpan] = []
         self._worked = False  # _drain_work ran something since the loop last looked
 
     # ---- control -------------------------------------------------------------------------
@@ -163,12 +165,21 @@ class Runtime:
         up on it instead of polling); keep it very quick."""
         self._frame_listeners.append(fn)
 
-    def add_step_listener(self, fn: Callable[[int], None], realtime: bool = False) -> None:
+    def add_step_listener(self, fn: Callable[[int], None], realtime: bool = False,
+                          quiet_until: ObserverSpan | None = None) -> None:
         """``fn(now_us)`` runs in the simulation thread after every step; keep it very quick.
         ``realtime``: the listener needs each step close to its wall time (it relates steps
-        to wall-clock arrivals), so the thread never steps in idle batches while it is there."""
+        to wall-clock arrivals), so the thread never steps in idle batches while it is there.
+        ``quiet_until(now_us, step_us)``: the time up to which ``fn`` would do nothing after
+        the steps of a quiet rig; with it the rig may skip quiet spans (Rig.quiet_steps) and
+        ``fn`` is not called for their steps. A listener without it keeps the rig stepping one
+        step at a time."""
         self._step_listeners.append(fn)
         self._realtime_listeners += realtime
+        if quiet_until is None:
+            self._unspanned_listeners += 1
+        else:
+            self._listener_spans.append(quiet_until)
 
     # ---- what views read ------------------------------------------------------------------
     @property
@@ -197,9 +208,7 @@ class Runtime:
         def run() -> None:
             end = self.rig.clock.now_us + duration_us
             while self.rig.clock.now_us + self.rig.clock.step_us <= end:
-                self._journal_events(self.rig.step())
-                for fn in self._step_listeners:
-                    fn(self.rig.clock.now_us)
+                self._step_or_skip(end)
             self._publish()
         return self.submit(run)
 
@@ -234,9 +243,7 @@ class Runtime:
                     self._sim_waiting = True
                     with self._rig_lock:
                         self._sim_waiting = False
-                        self._journal_events(self.rig.step())
-                        for fn in self._step_listeners:
-                            fn(self.rig.clock.now_us)
+                        self._step_or_skip(target)
                         self._journal_events(self._drain_work())
             if now >= next_publish or self._publish_soon:
                 self._sim_waiting = True
@@ -250,6 +257,20 @@ class Runtime:
                 self._worked, last_work = False, now
             self._wake.wait(nap_s(now, last_work, next_publish, bool(self._realtime_listeners)))
             self._wake.clear()
+
+    def _step_or_skip(self, end_us: int) -> None:
+        """One step, or a quiet span up to ``end_us`` at most (docs/performance.md "Quiet
+        spans"): skipped steps emit nothing and need no listener."""
+        rig = self.rig
+        if not self._unspanned_listeners:
+            span = rig.quiet_steps((end_us - rig.clock.now_us) // rig.clock.step_us,
+                                   self._listener_spans)
+            if span:
+                rig.skip(span)
+                return
+        self._journal_events(rig.step())
+        for fn in self._step_listeners:
+            fn(rig.clock.now_us)
 
     def _drain_work(self) -> list[Event]:
         events: list[Event] = []

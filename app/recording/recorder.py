@@ -116,6 +116,11 @@ class RigRecorder:
         self.runs = 1  # how many times the rig clock started from the beginning, plus one
 
     # ---- what the simulation side calls ----------------------------------------------------
+    def quiet_until(self, now_us: int, step_us: int) -> int:
+        """Up to when no sample is due (a quiet rig's steps before then need no snapshot)."""
+        due = self._next_sample_us
+        return now_us if due is None else max(now_us, due - 1)
+
     def sample_due(self, t_us: int) -> bool:
         """Whether a snapshot taken at ``t_us`` would be recorded (take one only then)."""
         return self._next_sample_us is None or t_us >= self._next_sample_us
@@ -307,7 +312,7 @@ def attach_to_runtime(runtime: Runtime, recorder: RigRecorder) -> None:
     add_step_listener = getattr(runtime, "add_step_listener", None)
     per_step = add_step_listener is not None
     if add_step_listener is not None:
-        add_step_listener(on_step)
+        add_step_listener(on_step, quiet_until=recorder.quiet_until)
     runtime.add_listener(on_batch)
     # The state before the first batch (and the blueprint) even if nothing happens for a while.
     runtime.submit(lambda: recorder.observe(rig.clock.now_us, rig.snapshot(), []))

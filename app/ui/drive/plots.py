@@ -24,6 +24,8 @@ from typing import Any
 import numpy as np
 import viser
 
+from app.rig import FAR_US
+
 SAMPLE_US = 20_000  # 50 samples per simulated second
 WINDOW_S = 20.0  # the plots show the last 20 simulated seconds
 SEND_PERIOD_S = 0.25  # wall time between two updates of the charts
@@ -96,6 +98,16 @@ class DriveSampler:
         with self._lock:
             self._rows.append(row)
             self.version += 1
+
+    def quiet_until(self, now_us: int, step_us: int) -> int:
+        """Up to when :meth:`on_step` would take no sample (Runtime.add_step_listener): the
+        step before the next sample time; none while the timeline is not set."""
+        if not self.active:
+            return FAR_US
+        due = self._next_us
+        if due is None or now_us < due - SAMPLE_US:
+            return now_us  # the next step sets the timeline (or starts a fresh one)
+        return due - 1
 
     def reset(self) -> None:
         """Forget the samples (another drive was selected); called from the view."""

@@ -74,7 +74,8 @@ class DriveView:
             self.master = CanOpenMaster(server, runtime, sender,
                                         lambda: self._nodes.get(self.selected))
         self.sampler = DriveSampler(self._selected_snapshot)
-        runtime.add_step_listener(self.sampler.on_step)
+        runtime.add_step_listener(self.sampler.on_step,
+                                  quiet_until=self.sampler.quiet_until)
         with side.add_tab("Drive", viser.Icon.ENGINE):
             gui.add_html(DRIVE_CSS)
             self.state = DriveStatePanel(server)
