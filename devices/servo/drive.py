@@ -44,7 +44,7 @@ from devices.servo.registers import (
 )
 from devices.servo.saving import DriveFlash
 from devices.servo.statemachine import DriveStateMachine
-from devices.servo.stillness import StillSteps, may_settle, state_key
+from devices.servo.stillness import StillSteps, filter_only, may_settle, state_key
 from devices.servo.ticking import SWITCHES, DriveTick
 
 __all__ = ["DriveConfig", "ServoDrive"]
@@ -54,6 +54,10 @@ logger = logging.getLogger(__name__)
 TICK_US = 1_000
 BOOT_US = 50_000  # Not ready to switch on -> Switch on disabled after the self test
 _FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)  # an enum member's lookup is slow
+# A quiet drive stays quiet until something from outside touches it: its quiet span has no end
+# of its own. quiet_until says this many steps (about 50 days of 1 ms steps); the rig takes the
+# least of every device's answer and of the steps it was asked for.
+QUIET_FOREVER_STEPS = 1 << 32
 
 
 class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveActions,
@@ -322,6 +326,10 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         if self._touched:
             self._touched = False
             still.restart()
+            still.filter_dt = None
+        elif span != still.filter_dt or alarms is not still.alarms \
+                or alarms.changes != still.changes:
+            still.filter_dt = None  # another step length, or the alarm bank changed from outside
         # plant.omega first: may_settle's first test, without the call for a moving drive
         before = state_key(self) if span and self.plant.omega == 0.0 and may_settle(self) \
             and still.due() else None
@@ -336,11 +344,52 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         self.now_us = now_us
         settled = False
         if before is not None:
-            settled = (not self._touched and len(self.events.items) == queued
-                       and may_settle(self) and state_key(self) == before)
+            quiet = not self._touched and len(self.events.items) == queued and may_settle(self)
+            after = state_key(self) if quiet else None
+            settled = after == before
             still.checked(settled)
+            # changed nothing but the current meter's filter: quiet spans (quiet_until)
+            still.filter_dt = span if after is not None and filter_only(before, after) \
+                else None
         still.dt = span if settled else None
         still.alarms, still.changes = self.alarms, self.alarms.changes
+
+    # ---- quiet spans (docs/servo-drive.md "Quiet spans") --------------------------------------
+    def quiet_until(self, step_us: int) -> int:
+        """Unbounded (:data:`QUIET_FOREVER_STEPS`) while the drive's steps of ``step_us`` are
+        proven to change nothing but the current meter's filter; else ``now_us``.
+
+        The proof is the still step's (stillness.py): the last checked step, of this length,
+        emitted nothing, left every part of the state but the meter as it found it and read no
+        clock (:func:`may_settle`: no boot, save, indirect access or latch timing under way);
+        nothing in a step reads the meter but the meter itself, so every later step of that
+        length does the same until something from outside touches the drive (a command, a
+        write, an alarm: ``_touched``, the alarm bank's change count). Nothing else in a
+        standing drive's step depends on time: no rng draw, no blinking (the display is a
+        function of the state), no timer counting (a counting timer, e.g. mode 3's speed
+        window, changes the state: no proof). Relies on the rig's promise that no other model
+        touches the drive in the span (its CANopen node and CoE slave are quiet too, so they
+        write nothing to it and raise no alarm on it).
+        """
+        still, alarms = self._still, self.alarms
+        if self._touched or step_us != still.filter_dt or alarms is not still.alarms \
+                or alarms.changes != still.changes or not self.SKIP_STILL:
+            return self.now_us
+        return self.now_us + QUIET_FOREVER_STEPS * step_us
+
+    def skip_to(self, t_us: int) -> None:
+        """As the quiet steps up to ``t_us``: only the clock and the current meter's filter
+        move (:meth:`CurrentMeter.repeat`, the same arithmetic tick by tick)."""
+        now_us = self.now_us
+        if t_us == now_us:
+            return
+        span = self._still.filter_dt
+        if span is None or (t_us - now_us) % span or t_us < now_us or now_us != self._t_us:
+            raise ValueError(f"{self.device_id}: no quiet span to {t_us} us")
+        if self._still.dt is None:  # the filter still settles (else it rests: nothing to do)
+            ticks = [TICK_US] * (span // TICK_US) + ([span % TICK_US] if span % TICK_US else [])
+            self.meter.repeat(tuple(dt_us / 1e6 for dt_us in ticks), (t_us - now_us) // span)
+        self._t_us = self.now_us = t_us
 
     def snapshot(self) -> dict[str, Any]:
         return self.build_snapshot()

@@ -57,6 +57,29 @@ class CurrentMeter:
         overload = 100.0 * (rms / 100.0) ** 2
         self.overload = 999.0 if overload > 999.0 else overload
 
+    def repeat(self, dts: tuple[float, ...], steps: int) -> None:
+        """As ``steps`` steps of ticks ``dts`` (seconds each) would move the meter with the
+        instant current as it is (a standing drive whose steps change nothing else: quiet
+        spans, drive.py). The filter's own arithmetic, value for value: the same expressions
+        in the same order, so the same bits. Stops early once a whole step leaves the mean
+        square as it was (a fixed point: every further step does the same)."""
+        if steps <= 0:
+            return
+        ks = tuple(_K_1MS if dt == 0.001 else 1.0 - math.exp(-dt / RMS_TIME_CONSTANT_S)
+                   for dt in dts)
+        square = self.instant ** 2
+        mean_square = self._mean_square
+        for _ in range(steps):
+            start = mean_square
+            for k in ks:
+                mean_square = mean_square + (square - mean_square) * k
+            if mean_square == start:
+                break
+        self._mean_square = mean_square
+        self.rms = rms = _sqrt(mean_square)
+        overload = 100.0 * (rms / 100.0) ** 2
+        self.overload = 999.0 if overload > 999.0 else overload
+
 
 class DriveReadings:
     """Mixin of :class:`~devices.servo.drive.ServoDrive`: measured values and the snapshot."""

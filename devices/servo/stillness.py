@@ -34,30 +34,46 @@ if TYPE_CHECKING:
 NOT_STATE = frozenset({
     "device_id", "rng", "now_us", "events", "config", "flash", "geometry", "od", "indirect",
     "_t_us", "_touched", "_still", "SKIP_STILL", "_levels_cache", "_quiet_evaluation",
-    "_lag_cache",
+    "_lag_cache", "meter",
     "regs", "params", "wired", "_levels", "latched_at_power_up",  # in the key, as flat dicts
 })
 FLAT = ("regs", "params", "wired", "_levels", "latched_at_power_up")  # str/int -> int/bool
 
 
 def state_key(drive: ServoDrive) -> tuple[Any, ...]:
-    """Everything a drive step can change, by value (the indirect access by its values)."""
+    """Everything a drive step can change, by value (the indirect access by its values). The
+    current meter comes last: ``key[:-1]`` is everything but the meter (quiet spans,
+    :func:`filter_only`)."""
     own = tuple((k, _value(v)) for k, v in vars(drive).items() if k not in NOT_STATE)
     flat = tuple(tuple(getattr(drive, name).items()) for name in FLAT)
     indirect = drive.indirect
-    return own, flat, tuple(indirect.values.items()), len(indirect._jobs)
+    return own, flat, tuple(indirect.values.items()), len(indirect._jobs), \
+        tuple(vars(drive.meter).values())
+
+
+def filter_only(before: tuple[Any, ...], after: tuple[Any, ...]) -> bool:
+    """Two :func:`state_key` values that differ at most in the current meter (its RMS filter
+    settling: nothing in a step reads the meter but the meter itself)."""
+    return before[:-1] == after[:-1]
 
 
 class StillSteps(Backoff):
     """The drive's bookkeeping: the last step's length if it changed nothing (else None), the
     alarm bank it saw and its change count, and when to check again after a failed check
-    (devices/stillness.py's 1, 2, 4 .. 128 backoff)."""
+    (devices/stillness.py's 1, 2, 4 .. 128 backoff).
 
-    __slots__ = ("alarms", "changes", "dt")
+    ``filter_dt``: the step length at which the last checked step changed nothing but the
+    current meter's filter (None if it changed more, or the drive was touched, or the alarm
+    bank or the step length changed since): every step of that length from then on does the
+    same, so the drive is quiet and a quiet span moves only the filter (drive.py,
+    :meth:`~devices.servo.drive.ServoDrive.quiet_until`)."""
+
+    __slots__ = ("alarms", "changes", "dt", "filter_dt")
 
     def __init__(self) -> None:
         super().__init__()
         self.dt: int | None = None
+        self.filter_dt: int | None = None
         self.alarms: object = None
         self.changes = 0
 
