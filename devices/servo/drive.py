@@ -377,14 +377,15 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
             return self.now_us
         return self.now_us + QUIET_FOREVER_STEPS * step_us
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         """As the quiet steps up to ``t_us``: only the clock and the current meter's filter
         move (:meth:`CurrentMeter.repeat`, the same arithmetic tick by tick)."""
         now_us = self.now_us
         if t_us == now_us:
             return
         span = self._still.filter_dt
-        if span is None or (t_us - now_us) % span or t_us < now_us or now_us != self._t_us:
+        if span is None or span != step_us or (t_us - now_us) % span or t_us < now_us \
+                or now_us != self._t_us:
             raise ValueError(f"{self.device_id}: no quiet span to {t_us} us")
         if self._still.dt is None:  # the filter still settles (else it rests: nothing to do)
             ticks = [TICK_US] * (span // TICK_US) + ([span % TICK_US] if span % TICK_US else [])

@@ -131,7 +131,7 @@ def test_skip_to_moves_the_filter_as_steps_do(step_us: int) -> None:
         for _ in range(n):
             t_us += step_us
             stepped.step(t_us)
-        skipped.skip_to(t_us)
+        skipped.skip_to(t_us, step_us)
         assert deep_state(skipped) == deep_state(stepped), n
         assert stepped.drain_events() == skipped.drain_events() == []
     # and the two go on alike: a command, then steps
