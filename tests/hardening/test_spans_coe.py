@@ -23,6 +23,7 @@ from collections.abc import Callable
 from typing import Any
 
 import pytest
+from span_runs import deep_state, lines, outcome, plain, rig_state
 
 from app.clock import SimClock
 from app.rig import Rig
@@ -32,7 +33,6 @@ from devices.device import DeviceModel
 from devices.ethercat import AlState
 from devices.flash import MemoryFlash
 from devices.servo.drive import DriveConfig, ServoDrive
-from tests.hardening.span_runs import deep_state, lines, outcome, plain, rig_state
 
 MS = 1_000
 INIT, PREOP, SAFEOP, OP = AlState.INIT, AlState.PREOP, AlState.SAFEOP, AlState.OP
