@@ -69,6 +69,8 @@ MAPPING_ALARM = 33  # ch. 5: "Errore mappatura pdo non eseguita correttamente"
 SYNC_TIMEOUT_ALARM = 34  # ch. 5: "Timeout sincronizzazione con il Master ECAT"
 QUICK_STOP = 0x0002  # ch. 4 "rilascio asse": the drive stops and leaves torque
 SDO_LOG = 20
+# quiet_until's answer when nothing in the slave itself ends the span (whole steps past it)
+QUIET_FOREVER_STEPS = 1 << 40
 OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
 
 
@@ -333,6 +335,84 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
                 or old.link is not self.link or old.error is not esm.error \
                 or old.drive_alarm is not (on_line and bool(drive.alarms.latched)):
             self._refresh()
+
+    # ---- quiet spans (docs/ethercat-coe.md "Quiet spans") -------------------------------------
+    # This relies on the contract's rule that the other models of the rig are quiet over the
+    # same span: the drive's ``powered``, ``latched_at_power_up``, ``alarms.latched`` and
+    # ``responding`` stay as they are (a drive's quiet step moves none of them).
+    def quiet_until(self, step_us: int) -> int:
+        """The steps up to the returned time would each take step()'s short way: the drive's
+        power as last followed, no watchdog check that can fire, no emergency to send, the LED
+        inputs as last refreshed. What ends a span without frames: the L/A activity window
+        (last frame + 50 ms, then the LED would stop flickering) and, in OP with RxPDOs
+        assigned, the SM watchdog (last frame + 100 ms). With frames (frames_quiet) neither
+        moves. The early-outs come first, the cheap ones first."""
+        now = self.now_us
+        old = self._led_inputs
+        if old is None:
+            return now
+        drive, esm, on_line = self.drive, self.esm, self.on_line
+        if (drive.latched_at_power_up if drive.powered else None) is not self._power_seen:
+            return now  # the next step follows the power
+        state, last = esm.state, self.last_frame_us
+        # the next step's _refresh(): every input as last refreshed, activity as at that step
+        activity = last is not None and now + step_us - last <= ACTIVITY_WINDOW_US
+        if old.activity is not activity or old.state is not state \
+                or old.on_line is not on_line or old.link is not self.link \
+                or old.error is not esm.error \
+                or old.drive_alarm is not (on_line and bool(drive.alarms.latched)):
+            return now
+        # Without frames the activity input flips at the first step past last + 50 ms: the
+        # span ends at the last step on or before it (frames would keep it, as they would
+        # keep everything else here). Not active: without frames it stays so.
+        end = last + ACTIVITY_WINDOW_US if last is not None and activity else None
+        if on_line:
+            if state is AlState.OP and not activity:  # active: the window ends it sooner
+                if last is None or now + step_us - last > SM_WATCHDOG_US:
+                    if self.rx_assigned:
+                        return now  # the next step's watchdog check fires
+                elif self.rx_assigned:
+                    end = last + SM_WATCHDOG_US  # the watchdog fires at the step after it
+            seen = drive.alarms.latched if drive.powered else []
+            if seen != self.emergencies.known and esm.at_least(AlState.PREOP):
+                return now  # the next step watches the alarms (emergencies)
+        if end is None:
+            return now + QUIET_FOREVER_STEPS * step_us
+        return now + max(0, (end - now) // step_us) * step_us
+
+    def skip_to(self, t_us: int) -> None:
+        """A quiet step moves nothing but the clock (its short way through step())."""
+        if t_us < self.now_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({t_us} < {self.now_us})")
+        self.now_us = t_us
+
+    def frames_quiet(self) -> bool:
+        """Whether a frame now, and more of them while the slave's steps stay quiet, would
+        change nothing but what skip_frames sets. Not: in OP with an outputs image, every frame
+        writes it to the drive (0x6040 through the drive's controlword path, which touches
+        the drive, sets Ien_cmd and its source, evaluates the CiA 402 state machine and the
+        mode's controlword hook; 0x60C1:1 / 0x607A / 0x60FF / 0x6060; a Sync restarting the
+        interpolation period in mode 7), so no frame of it is a no-op; and while the L/A
+        activity input is off, a frame turns it on at the next step (the LED flickers)."""
+        if not (self.on_line and self.link):
+            return True  # exchange_frame returns at once
+        if self.outputs is not None and self.esm.state is AlState.OP:
+            return False
+        old = self._led_inputs
+        return old is not None and old.activity
+
+    def skip_frames(self, n: int, last_us: int) -> None:
+        """As ``n`` frames, the last at ``last_us`` (frames_quiet() held): the count, the time
+        of the last one, the inputs due again from SAFEOP on. A frame draws nothing."""
+        if n <= 0 or not (self.on_line and self.link):
+            return
+        state = self.esm.state
+        if state is AlState.OP and self.outputs is not None:
+            raise RuntimeError(f"{self.device_id}: frames in OP with outputs are not quiet")
+        self.last_frame_us = last_us
+        self.frames += n
+        self._inputs_due = state in SAFEOP_OR_HIGHER if state in RANK \
+            else self.esm.at_least(AlState.SAFEOP)
 
     def _follow_power(self) -> None:
         """On the line while the drive is powered with c9 = 11 latched at its power-up."""
