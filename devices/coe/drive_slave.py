@@ -380,7 +380,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
             return now + QUIET_FOREVER_STEPS * step_us
         return now + max(0, (end - now) // step_us) * step_us
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         """A quiet step moves nothing but the clock (its short way through step())."""
         if t_us < self.now_us:
             raise ValueError(f"{self.device_id}: time went backwards ({t_us} < {self.now_us})")
@@ -396,8 +396,9 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         activity input is off, a frame turns it on at the next step (the LED flickers)."""
         if not (self.on_line and self.link):
             return True  # exchange_frame returns at once
-        if self.outputs is not None and self.esm.state is AlState.OP:
-            return False
+        if self.emergencies.pending or (
+                self.outputs is not None and self.esm.state is AlState.OP):
+            return False  # the master's mailbox read would take something
         old = self._led_inputs
         return old is not None and old.activity
 

@@ -10,10 +10,7 @@ Two kinds of test:
   (:class:`FrameSource`: a frame per step while cycling, the mailbox read, skipping with
   ``frames_quiet`` / ``skip_frames`` as the contract has the master do), one skipping spans
   with ``Rig.advance``, one stepping, under random ops (ESM requests, frames on / off, link,
-  power, outputs, objects, slots, alarms). While the ServoDrive has no ``quiet_until`` of its
-  own, the rig here gives it one for the test (:func:`_still_drive`): quiet exactly when its
-  next step is its own still-step shortcut (a repeat of a step that changed nothing, which the
-  drive takes until something touches it); a drive with its own is used as it is.
+  power, outputs, objects, slots, alarms); the drive with its own quiet spans.
 """
 
 from __future__ import annotations
@@ -37,30 +34,6 @@ from devices.servo.drive import DriveConfig, ServoDrive
 MS = 1_000
 INIT, PREOP, SAFEOP, OP = AlState.INIT, AlState.PREOP, AlState.SAFEOP, AlState.OP
 FAR = 1 << 50
-
-
-# ---- a drive quiet while its still step repeats (for the test, until it has its own) ----------
-def _still_quiet_until(drive: ServoDrive, step_us: int) -> int:
-    still, alarms = drive._still, drive.alarms
-    now = drive.now_us
-    if drive._t_us == now and still.dt == step_us and not drive._touched \
-            and alarms is still.alarms and alarms.changes == still.changes and drive.SKIP_STILL:
-        return now + FAR * step_us  # every coming step repeats the still one: only the clock
-    return now
-
-
-def _still_skip_to(drive: ServoDrive, t_us: int) -> None:
-    drive._t_us = drive.now_us = t_us  # what each repeated still step does
-
-
-DRIVE_HAS_SPANS = ServoDrive.quiet_until is not DeviceModel.quiet_until
-
-
-@pytest.fixture()
-def spans_drive(monkeypatch: pytest.MonkeyPatch) -> None:
-    if not DRIVE_HAS_SPANS:
-        monkeypatch.setattr(ServoDrive, "quiet_until", _still_quiet_until, raising=False)
-        monkeypatch.setattr(ServoDrive, "skip_to", _still_skip_to, raising=False)
 
 
 # ---- a stand-in master: a frame per step while cycling -----------------------------------------
@@ -96,8 +69,8 @@ class FrameSource(DeviceModel):
             return self.now_us
         return self.now_us + FAR * step_us
 
-    def skip_to(self, t_us: int) -> None:
-        n = (t_us - self.now_us) // MS  # one frame per step of the 1 ms rig
+    def skip_to(self, t_us: int, step_us: int) -> None:
+        n = (t_us - self.now_us) // step_us  # one frame per step
         self.now_us = t_us
         if self.cycling and n > 0:
             self.frames += n
@@ -218,7 +191,7 @@ def differential(seed: int, rounds: int,
 
 
 @pytest.mark.parametrize("seed", [1, 2])
-def test_skipping_rig_matches_stepping(spans_drive: None, full: bool, seed: int) -> None:
+def test_skipping_rig_matches_stepping(full: bool, seed: int) -> None:
     rounds = 400 if full else 25
     skipped = differential(seed, rounds)
     assert skipped > rounds * 50, skipped
@@ -226,7 +199,7 @@ def test_skipping_rig_matches_stepping(spans_drive: None, full: bool, seed: int)
 
 @pytest.mark.full
 @pytest.mark.parametrize("seed", range(10, 20))
-def test_skipping_rig_matches_stepping_more_seeds(spans_drive: None, seed: int) -> None:
+def test_skipping_rig_matches_stepping_more_seeds(seed: int) -> None:
     assert differential(seed, 300) > 0
 
 
@@ -265,7 +238,7 @@ def _skipped(drive: ServoDrive, slave: DriveEcatSlave, until: int, frames: bool)
     while t < until:  # the drive as it is stepped (a drive with no quiet span of its own)
         t += MS
         drive.step(t)
-    slave.skip_to(until)
+    slave.skip_to(until, MS)
     if frames:
         slave.skip_frames((until - start) // MS, until)
     return lines(drive.drain_events() + slave.drain_events())
@@ -362,7 +335,7 @@ def test_unreachable_frames_change_nothing() -> None:
     assert slave.quiet_until(MS) >= slave.now_us + 1000 * MS
 
 
-def test_idle_op_rig_skips_most_steps(spans_drive: None) -> None:
+def test_idle_op_rig_skips_most_steps() -> None:
     """The idle state aimed at: OP, a frame every ms, no outputs image, the drive standing."""
     skipping, stepping = build(), plain(build())
     for rig in (skipping, stepping):
