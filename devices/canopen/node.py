@@ -42,7 +42,7 @@ from devices.canopen.nmt import (
     next_state,
     parse_command,
 )
-from devices.canopen.pdo import Pdo
+from devices.canopen.pdo import ASYNC_TYPES, COB_INVALID, Pdo
 from devices.canopen.process_data import ProcessData
 from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
 from devices.device import Action, CommandError, DeviceModel, Param
@@ -58,6 +58,7 @@ FRAMES_IN_SNAPSHOT = 60
 OUTBOX = 4096  # frames kept for an adapter that does not drain them (headless runs)
 CALM_FOREVER = 1 << 62  # _calm_until when neither heartbeat nor life guarding is running
 NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
+SECOND_US = 1_000_000  # the bus-load mark moves at each new second
 
 
 class CanOpenNode(ProcessData, DeviceModel):
@@ -205,6 +206,115 @@ class CanOpenNode(ProcessData, DeviceModel):
             self.bus_load = (busy - self._load_mark[1]) / 1e6
             self._load_mark = (second, busy)
             self._load_next_us = (second + 1) * 1_000_000
+
+    # ---- quiet spans (docs/canopen.md "Quiet spans") --------------------------------------
+    def quiet_until(self, step_us: int) -> int:
+        """The last step instant before which every step would be a quiet one that sends
+        nothing (see :meth:`DeviceModel.quiet_until`): a silent node for ever; an active
+        one until its next heartbeat, the first instant its life time runs out, or the
+        event timer of an asynchronous TPDO in Operational, whichever comes first. Cheap
+        "no" first: the power, the line, the alarms, the emergencies; the TPDOs are packed
+        last (their getters are the drive's), without touching the packing plan.
+
+        Relies on the rig's rule that the drive is quiet over the same span (the rig skips
+        only when every device says so): the drive's power (``latched_at_power_up``), its
+        latched alarms and every object a TPDO maps (statusword, positions, registers) are
+        what they are now at every step of the span."""
+        now = self.now_us
+        drive = self.drive
+        if (drive.latched_at_power_up if drive.powered else None) is not self._power_seen \
+                or not self.SKIP_QUIET:
+            return now  # the next step runs in full (or every step does)
+        end = CALM_FOREVER
+        if self.active:
+            if self._boot_at is not None:
+                return now
+            line = self.line
+            if line._waiting or line._incoming or line._on_wire is not None:
+                return now
+            state = self.state
+            if state is not NmtState.INITIALISATION:  # (Initialisation: _quiet says True)
+                if drive.alarms.latched != self._known_alarms:
+                    return now
+                emcy = self.emcy
+                if emcy.pending or (emcy.last_sent_us is not None
+                                    and not allows(state, Service.EMCY)):
+                    return now
+                beat = self.heartbeat.next_us
+                if beat is not None:
+                    end = beat  # the step at or after it sends the heartbeat
+                expiry = self.guard.expiry_at()
+                if expiry is not None and expiry < end:
+                    end = expiry  # the step at or after it sends EMCY 0x8130
+                if state is NmtState.OPERATIONAL and end - now > step_us:  # else no span
+                    for pdo in self.tpdos:
+                        if pdo.cob_id & COB_INVALID or pdo.trans_type not in ASYNC_TYPES:
+                            continue
+                        data = self._peek_pack(pdo)
+                        if data is None:  # not packed: never sent (the drive stays as it is)
+                            continue
+                        if data != pdo.last_data:  # an event: sent at the next step
+                            return now
+                        last = pdo.last_sent_us  # set with last_data (_send_pdo)
+                        if pdo.event_timer_ms and last is not None:
+                            due = last + pdo.event_timer_ms * 1000  # the timer sends it
+                            if due < end:
+                                end = due
+            # The bus-load mark: skip_to moves it exactly only when no step can jump a
+            # whole second (and when it was moved at the last step, as every active step does).
+            if self._load_next_us <= now:
+                return now
+            if step_us > SECOND_US and self._load_next_us < end:
+                end = self._load_next_us
+        steps = (end - 1 - now) // step_us  # the last step instant before ``end``
+        return now + steps * step_us if steps > 0 else now
+
+    def _peek_pack(self, pdo: Pdo) -> bytes | None:
+        """:meth:`_pack` without a side effect: through the plan when it stands (it is then
+        left as it is), else the plain :meth:`Pdo.pack` (same getters, bytes, exceptions)."""
+        plan = pdo._plan
+        if plan is not None and plan[0] is self.dictionary and plan[1] == pdo.count \
+                and plan[2] == pdo.entries:
+            return self._pack(pdo)
+        try:
+            return pdo.pack(self.dictionary.entry, self.dictionary.peek)
+        except (SdoAbort, CommandError):
+            return None
+
+    def skip_to(self, t_us: int) -> None:
+        """As the quiet steps up to ``t_us`` would leave the node (a silent node: the clock
+        only). Exact piece by piece: the calm proof a quiet step makes (``_calm_until``); the
+        packing plans the asynchronous TPDOs' packs make in Operational (the data itself is
+        unchanged and nothing is sent); the bus-load mark at each new second (the line is
+        idle, so its busy time stays: the first new second reads the busy time since the
+        mark, any later one reads 0)."""
+        if self.active and t_us > self.now_us:
+            state = self.state
+            if state is not NmtState.INITIALISATION:
+                # A step at or after _calm_until finds it past and runs _quiet, which proves
+                # calm up to the heartbeat / life-guard expiry (both after t_us): as _quiet sets.
+                if self._calm_until <= t_us:
+                    beat, expiry = self.heartbeat.next_us, self.guard.expiry_at()
+                    self._calm_until = min(CALM_FOREVER if beat is None else beat,
+                                           CALM_FOREVER if expiry is None else expiry)
+                if state is NmtState.OPERATIONAL:
+                    dictionary = self.dictionary
+                    for pdo in self.tpdos:
+                        if pdo.cob_id & COB_INVALID or pdo.trans_type not in ASYNC_TYPES:
+                            continue
+                        plan = pdo._plan
+                        if plan is None or plan[0] is not dictionary \
+                                or plan[1] != pdo.count or plan[2] != pdo.entries:
+                            self._pack(pdo)  # the plan the first quiet step would make
+            if t_us >= self._load_next_us:
+                second = t_us // SECOND_US
+                busy = self.line.busy_us_total
+                crossed_one = second * SECOND_US == self._load_next_us
+                self.bus_load = (busy - self._load_mark[1]) / 1e6 if crossed_one \
+                    else (busy - busy) / 1e6
+                self._load_mark = (second, busy)
+                self._load_next_us = (second + 1) * SECOND_US
+        self.now_us = self._t = t_us
 
     def _full_step(self, now_us: int) -> None:
         self._calm_until = 0
