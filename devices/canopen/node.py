@@ -281,7 +281,7 @@ class CanOpenNode(ProcessData, DeviceModel):
         except (SdoAbort, CommandError):
             return None
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         """As the quiet steps up to ``t_us`` would leave the node (a silent node: the clock
         only). Exact piece by piece: the calm proof a quiet step makes (``_calm_until``); the
         packing plans the asynchronous TPDOs' packs make in Operational (the data itself is

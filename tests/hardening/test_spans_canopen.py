@@ -36,7 +36,6 @@ from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec, parse_rig_spec
 from devices.canopen.nmt import NmtState
 from devices.canopen.node import CanOpenNode
-from devices.servo.drive import ServoDrive
 
 ONE_DRIVE = """
 [rig]
@@ -51,23 +50,6 @@ node_id = 2
 ten_wired = true
 ien_wired = true
 """
-
-
-class QuietDrive(ServoDrive):
-    """The drive with the quiet span of its still step (tests only: the drive's own is
-    another family's work): quiet while the next step of this length would be a still
-    repeat, which moves the clock only."""
-
-    def quiet_until(self, step_us: int) -> int:
-        still, alarms = self._still, self.alarms
-        if step_us == still.dt and not self._touched and alarms is still.alarms \
-                and alarms.changes == still.changes and self.SKIP_STILL \
-                and self._t_us == self.now_us:
-            return self.now_us + 1_000_000 * step_us
-        return self.now_us
-
-    def skip_to(self, t_us: int) -> None:
-        self._t_us = self.now_us = t_us
 
 
 def sdo(index: int, sub: int, value: int, size: int) -> tuple[int, str, bool]:
@@ -100,8 +82,6 @@ ALL_FRAMES = tuple(f for f in FRAMES if f[1] not in ENABLING) + MORE_FRAMES
 def one_drive_rig(fieldbus: str, seed: int) -> Rig:
     rig = build_rig(parse_rig_spec(ONE_DRIVE.format(seed=seed, fieldbus=fieldbus),
                                    "<one drive>"), state_dir=None)
-    drive = rig.devices["drive_co"]
-    drive.__class__ = QuietDrive  # type: ignore[assignment]
     rig.advance(300)  # powered and booted: the node pre-operational (or silent)
     return rig
 
@@ -209,7 +189,7 @@ def span_by_skip_to(build: Any, setup: list[Op], node_id: str, warm: int, cap: i
     steps = min((until - now) // step_us, cap)
     for _ in range(steps):
         step_all_but(skipping, node_id)
-    node.skip_to(now + steps * step_us)
+    node.skip_to(now + steps * step_us, step_us)
     events = stepped.advance(steps)
     assert lines(events) == lines(skipping.take_events())
     assert stepped.snapshot() == skipping.snapshot()
