@@ -48,6 +48,7 @@ logger = logging.getLogger(__name__)
 CNF_BUTTON = "cnf_button"  # StateChanged.machine of the button: released / pressed
 CNF_PROCEDURE = "cnf"  # StateChanged.machine of the procedure: idle, resetting, scanning, ...
 ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this recently
+QUIET_FOREVER_STEPS = 1 << 40  # a quiet span with no end of its own (the rig caps it)
 
 
 class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, DeviceModel):
@@ -213,7 +214,53 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             esm.accept(target, now)
         self._refresh()
 
+    def frames_quiet(self) -> bool:
+        """Quiet spans (links.py): a frame now, and any number of them while the coupler's
+        own steps stay quiet, changes nothing but ``last_frame_us`` (:meth:`skip_frames`).
+        Unreachable, a frame does nothing. Reachable, a frame keeps LINK activity on for the
+        next :data:`ACTIVITY_WINDOW_US`: that changes no step only if the settled step saw
+        activity (``_settled[1]``); the master's mailbox read must also find nothing."""
+        if not (self.powered and self.link):
+            return True
+        if self.mailbox and self.esm.state is not AlState.INIT:
+            return False  # take_emergencies would empty the mailbox
+        settled = self._settled
+        return settled is not None and settled[1] and not self._touched
+
+    def skip_frames(self, n: int, last_us: int) -> None:
+        """As ``n`` frames, one per master cycle, the last at ``last_us``."""
+        if n > 0 and self.powered and self.link:
+            self.last_frame_us = last_us
+
     # ---- stepping ---------------------------------------------------------------------------
+    def quiet_until(self, step_us: int) -> int:
+        """The quiet span (devices/device.py): every step up to T takes the still branch of
+        :meth:`step`. Unpowered, a step only moves the clock: no end. Powered, the settled
+        step's (step length, LINK activity) must repeat; with no command, the only input of
+        that test that moves with time is the activity (no frame for more than
+        :data:`ACTIVITY_WINDOW_US`), which without frames turns off once, at
+        ``last_frame_us + ACTIVITY_WINDOW_US``, and with frames stays on (frames_quiet)."""
+        now = self.now_us
+        if not self.powered:
+            return now + QUIET_FOREVER_STEPS * step_us
+        settled = self._settled
+        if self._touched or settled is None or settled[0] != step_us:
+            return now
+        last = self.last_frame_us
+        if settled[1]:  # activity must stay on: it does up to last + window without frames
+            if last is None:
+                return now
+            return now + max(0, (last + ACTIVITY_WINDOW_US - now) // step_us) * step_us
+        if last is not None and now + step_us - last <= ACTIVITY_WINDOW_US:
+            return now  # a frame since the settled step: the next step sees activity
+        return now + QUIET_FOREVER_STEPS * step_us  # off, and stays off without frames
+
+    def skip_to(self, t_us: int) -> None:
+        """The still steps up to ``t_us`` move only the clock (:meth:`step`)."""
+        if t_us < self.now_us:
+            raise ValueError(f"{self.device_id}: time went backwards ({t_us} < {self.now_us})")
+        self.now_us = t_us
+
     def step(self, now_us: int) -> None:
         dt_us = now_us - self.now_us
         super().step(now_us)
