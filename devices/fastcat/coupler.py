@@ -255,7 +255,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             return now  # a frame since the settled step: the next step sees activity
         return now + QUIET_FOREVER_STEPS * step_us  # off, and stays off without frames
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         """The still steps up to ``t_us`` move only the clock (:meth:`step`)."""
         if t_us < self.now_us:
             raise ValueError(f"{self.device_id}: time went backwards ({t_us} < {self.now_us})")

@@ -81,7 +81,7 @@ class Feeder(DeviceModel):
             return self.now_us
         return self.now_us + FOREVER * step_us
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         n = t_us // self.cycle_us - self.now_us // self.cycle_us if self.sending else 0
         self.now_us = t_us
         if n:  # after the slave's own skip_to, as the master will
@@ -296,7 +296,7 @@ def test_skip_frames_is_n_frames(frames: int) -> None:
         stepped.step(start + i * STEP_US)
         if i <= frames:
             stepped.exchange_frame(start + i * STEP_US)
-    skipped.skip_to(until)
+    skipped.skip_to(until, STEP_US)
     skipped.skip_frames(frames, start + frames * STEP_US)
     assert not stepped.drain_events() and not skipped.drain_events()
     assert deep_state(stepped) == deep_state(skipped)
