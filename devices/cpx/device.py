@@ -41,6 +41,7 @@ ACTIVITY_WINDOW_US = 50_000  # LA IN / LA OUT flicker while frames passed this r
 SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per good one
 SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
 PD_STATES = frozenset({AlState.SAFEOP, AlState.OP})  # the sync error counter counts
+QUIET_HORIZON_STEPS = 1 << 40  # a quiet span with no clock comparison left to flip: "forever"
 
 
 class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatusView,
@@ -174,6 +175,58 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
                 self.sync_counter = counter - 1
             else:
                 self.sync_counter = 0  # max(0, counter - 1)
+
+    def frames_quiet(self) -> bool:
+        """Would the master's frames, one now and one per cycle while this slave's own steps
+        stay quiet (:meth:`quiet_until`), change nothing but what :meth:`skip_frames` sets?
+        (docs/cpx-e-ec.md "Quiet spans"). Ask it with :meth:`quiet_until`, before the span.
+
+        A frame sets ``last_frame_us`` / ``last_pd_us`` and steps ``sync_counter``; the steps
+        read them only through the clock key's comparisons (traffic, "no master", the SM
+        watchdog, the sync error). Frames make the first two fresher, so those comparisons
+        keep their frameless value when that is already "traffic, a master, process data":
+        quiet_until ends the span before the frameless value could flip. The counter goes
+        down to 0 (or up to its cap with a sync fault) without crossing the limit when it is
+        on the side it goes to. The master's take_emergencies, every cycle, hands nothing
+        over while the mailbox is empty (quiet steps queue nothing)."""
+        if not (self.powered and self.link_in):
+            return True  # exchange_frame returns at once
+        if self.diagnosis.mailbox and self.esm.state is not AlState.INIT:
+            return False  # the cycle's take_emergencies would hand them over (and touch)
+        step = self._still.dt
+        if not step:
+            return False  # no still step proved: quiet_until gives no span either
+        first, last = self.now_us + step, self.last_frame_us  # the span's first step
+        if last is None or first - last > ACTIVITY_WINDOW_US:
+            return False  # a frame would light LA IN / LA OUT and end "no master"
+        faults = self.fault_names
+        if "watchdog" in faults or not (
+                not self.boot_failed and "ac_failure" not in faults
+                and self.switches.active_mode is not DiagMode.BOOTLOADER):
+            return True  # process data do not reach the application: only last_frame_us
+        if first - self.last_pd_us > WATCHDOG_US:
+            return False  # process data again would end the SM watchdog's expiry
+        if self.esm.state in PD_STATES:
+            return (self.sync_counter > SYNC_ERROR_COUNTER_LIMIT) == ("sync_error" in faults)
+        return True
+
+    def skip_frames(self, n: int, last_us: int) -> None:
+        """As ``n`` calls of :meth:`exchange_frame`, one per master cycle, the last at
+        ``last_us``, while :meth:`frames_quiet` holds (nothing they read changes between)."""
+        if n <= 0 or not (self.powered and self.link_in):
+            return
+        self.last_frame_us = last_us
+        faults = self.fault_names
+        if "watchdog" in faults or not (
+                not self.boot_failed and "ac_failure" not in faults
+                and self.switches.active_mode is not DiagMode.BOOTLOADER):
+            return
+        self.last_pd_us = last_us
+        if self.esm.state in PD_STATES:
+            if "sync_error" in faults:
+                self.sync_counter = min(SYNC_COUNTER_CAP, self.sync_counter + SYNC_MISSED_STEP * n)
+            else:
+                self.sync_counter = max(0, self.sync_counter - n)
 
     def take_emergencies(self) -> list[bytes]:
         """8-byte emergencies (§2.5.3) queued in the mailbox; it runs from PREOP on."""
@@ -355,6 +408,54 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
                 last is not None and now - last <= ACTIVITY_WINDOW_US,
                 now - (last if last is not None else self.power_on_us) > WATCHDOG_US,
                 low is not None and now - low >= BRIDGING_US)
+
+    # ---- quiet spans (docs/cpx-e-ec.md "Quiet spans") --------------------------------------
+    def quiet_until(self, step_us: int) -> int:
+        """The last step up to which every step would be a still step (stillness.py): nothing
+        touched the model since a full step of this length changed nothing, and each clock
+        comparison of :meth:`clock_key_now` keeps, at every step of the span, the value the
+        still step was proved with. Without frames each comparison flips at most once, at a
+        time known now (the last frame / process data / power-up / supply dip plus its
+        window): the span ends before the first flip still ahead. With the master's frames
+        (:meth:`frames_quiet` true) the comparisons hold the same values (see there)."""
+        now = self.now_us
+        still = self._still
+        if self._touched or still.dt != step_us or not self.SKIP_STILL:
+            return now  # the next step runs in full (the cheap "no", asked often in motion)
+        esm, last, pd, low = self.esm, self.last_frame_us, self.last_pd_us, self.low_since_us
+        first = now + step_us
+        base = last if last is not None else self.power_on_us
+        pd_over = first - pd > WATCHDOG_US
+        traffic = last is not None and first - last <= ACTIVITY_WINDOW_US
+        silent = first - base > WATCHDOG_US
+        bridged = low is not None and first - low >= BRIDGING_US
+        if still.clock != (esm.state, esm.error, esm.code, esm.requested, pd_over,
+                           self.sync_counter > SYNC_ERROR_COUNTER_LIMIT, traffic, silent,
+                           bridged):
+            return now  # the next step is not the still one
+        # The last time each comparison still has its value at ``first`` (none: no end).
+        end = now + QUIET_HORIZON_STEPS * step_us
+        if not pd_over:
+            end = pd + WATCHDOG_US
+        if traffic:  # base is last: traffic's window ends before "no master" (50 < 100 ms)
+            if base + ACTIVITY_WINDOW_US < end:
+                end = base + ACTIVITY_WINDOW_US
+        elif not silent and base + WATCHDOG_US < end:
+            end = base + WATCHDOG_US
+        if low is not None and not bridged and low + BRIDGING_US - 1 < end:
+            end = low + BRIDGING_US - 1
+        return now + (end - now) // step_us * step_us
+
+    def skip_to(self, t_us: int) -> None:
+        """As the still steps up to ``t_us`` (:meth:`quiet_until`): the clock moves, the
+        still-step count grows; nothing else does."""
+        now, still = self.now_us, self._still
+        if t_us == now:
+            return
+        if t_us < now or self._touched or not still.dt:
+            raise ValueError(f"{self.device_id}: no quiet steps to {t_us} us (now {now} us)")
+        still.skipped += (t_us - now) // still.dt
+        self.now_us = t_us
 
     def traffic(self) -> bool:
         return self.last_frame_us is not None and \
