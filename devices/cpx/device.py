@@ -446,7 +446,7 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
             end = low + BRIDGING_US - 1
         return now + (end - now) // step_us * step_us
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         """As the still steps up to ``t_us`` (:meth:`quiet_until`): the clock moves, the
         still-step count grows; nothing else does."""
         now, still = self.now_us, self._still

@@ -86,7 +86,7 @@ class FrameSource(DeviceModel):
             return self.now_us
         return self.now_us + 10**9 * step_us
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         if self.sending:
             first = max(self.next_us, self.now_us + self.step_us)
             if first <= t_us:
@@ -261,7 +261,7 @@ def frames_against_skip(make: Callable[[], tuple[Rig, CpxEEc]], spans: int) -> i
             a.step(now + k * STEP_US)
             a.exchange_frame(now + k * STEP_US)
             assert not a.take_emergencies()
-        b.skip_to(until)
+        b.skip_to(until, STEP_US)
         b.skip_frames(n, until)
         assert not a.drain_events() and not b.drain_events()
         assert deep_state(a) == deep_state(b)
