@@ -133,8 +133,9 @@ class SpansMixin:
         if framed:
             # A frame at every step: activity stays lit (checked at the first step above,
             # and lit it must be, or the first frame would light it), and in OP each frame is
-            # an SM event (no output written: _plc_written is False while quiet in OP).
-            if not old.activity or step_us > ACTIVITY_WINDOW_US or \
+            # an SM event (no output written: _plc_written is False while quiet in OP; none
+            # dropped: a dropped frame is no SM event).
+            if not old.activity or step_us > ACTIVITY_WINDOW_US or sync.drop_frames or \
                     (self.esm.state in _LATCHING and self._plc_written):
                 return now
             return until
