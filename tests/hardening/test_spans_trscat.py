@@ -11,7 +11,8 @@
 - frames_quiet / skip_frames directly: two identical devices in a quiet state, one stepped
   with a frame after every step, the other skip_to + skip_frames; the deep state compared.
 
-Reduced (CI, about 10 s in all): 1 x 40 rounds each; ``--full``: 6 x 250.
+Reduced (CI): 1 x 40 rounds each, the file 15-35 s with a load average of ~8 on 2 cores;
+``--full``: 6 x 250 (2.5 min so loaded).
 """
 
 from __future__ import annotations
