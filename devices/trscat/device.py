@@ -38,6 +38,7 @@ from devices.trscat.indicators import LedInputs
 from devices.trscat.io import SlotIo, field_in_range
 from devices.trscat.objects import build_od, refuse_in_state
 from devices.trscat.pdo import outputs_index
+from devices.trscat.spans import SpansMixin
 from devices.trscat.stepping import SteppingMixin
 from devices.trscat.sync import MODE_BY_NAME, SyncUnit
 from devices.trscat.transitions import OutputMode, TransitionsMixin
@@ -46,7 +47,7 @@ DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
 
 
-class TrsCat(SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, CoeMailbox,
+class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, CoeMailbox,
              AlStatusView, DeviceModel):
     KIND = "trscat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
