@@ -43,6 +43,7 @@ from devices.master.links import RANK, Slave, SlaveLink, next_state
 from devices.master.log_styles import Entry, render
 from devices.master.network import Mapping as NetworkMapping
 from devices.master.network import MasterParameters, SlaveDescription
+from devices.master.spans import SpanMixin
 from devices.master.startup import StartupMixin
 from devices.master.still import StillCounts
 from devices.master.view import ViewMixin
@@ -66,7 +67,7 @@ def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
     return f"{at:%d/%m/%Y %H.%M.%S} {at.microsecond // 1000:03d} ms"
 
 
-class EtherCatMaster(LineMixin, StartupMixin, ViewMixin, DeviceModel):
+class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel):
     KIND = "master"
     SKIP_STILL = True  # False: every part of every step in full (test_still_master.py)
     ACTIONS: ClassVar[Mapping[str, Action]] = MASTER_ACTIONS
@@ -134,6 +135,9 @@ class EtherCatMaster(LineMixin, StartupMixin, ViewMixin, DeviceModel):
         # made once here, so a cycle does not look up and bind three methods per slave again;
         # and whether its al_state is AlStatusView's property (``esm.state`` read fresh each
         # time), which the loop then reads without the property's call.
+        for slave in self._slaves:  # a DC slave's span needs to know its frames will come
+            if hasattr(slave, "frames_promised"):
+                slave.frames_promised = self.frames_promised  # type: ignore[attr-defined]
         self._rows = tuple((link, link.position, link.slave, link.slave.reachable,
                             link.slave.exchange_frame, link.slave.take_emergencies, link.dc,
                             getattr(type(link.slave), "al_state", None) is AlStatusView.al_state)

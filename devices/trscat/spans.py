@@ -149,7 +149,7 @@ class SpansMixin:
             until = min(until, now + (sm + SM_WATCHDOG_US - now) // step_us * step_us)
         return until
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         """As the quiet steps up to ``t_us`` (the kind read off the state, as quiet_until did;
         the frames of a sync0 span are :meth:`skip_frames`')."""
         if t_us == self.now_us:

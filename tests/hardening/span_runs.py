@@ -21,7 +21,7 @@ from devices.device import CommandError
 from devices.stillness import Backoff
 
 # Attributes that count or pace the skipping itself, never read by a model's behaviour.
-BOOKKEEPING = frozenset({"skipped", "skipped_steps", "_quiet"})
+BOOKKEEPING = frozenset({"skipped", "skipped_steps"})
 
 Op = tuple[str, str, dict[str, Any]]
 CALLS = (types.FunctionType, types.MethodType, types.BuiltinFunctionType,
@@ -88,16 +88,18 @@ def lines(events: Iterable[Any]) -> list[str]:
 
 
 def differential(build: Callable[[], Rig], ops: Callable[[random.Random], Op], seed: int,
-                 rounds: int, lengths: tuple[int, ...] = (1, 3, 20, 200, 900, 3000)) -> int:
+                 rounds: int, lengths: tuple[int, ...] = (1, 3, 20, 200, 900, 3000),
+                 finale: tuple[Op, ...] = (), finale_steps: int = 0) -> int:
     """``rounds`` of (a random op, a random stretch) on a skipping rig and a plain one,
-    compared after each; the steps the skipping rig skipped."""
+    compared after each, then the ``finale`` ops (e.g. every fault cleared) each followed by
+    ``finale_steps``; the steps the skipping rig skipped."""
     rng = random.Random(seed)
     skipping, stepping = build(), plain(build())
-    for _ in range(rounds):
-        op = ops(rng)
+    plan = [(ops(rng), rng.choice(lengths)) for _ in range(rounds)]
+    plan += [(op, finale_steps) for op in finale]
+    for op, steps in plan:
         assert outcome(skipping, op) == outcome(stepping, op), op
         assert lines(skipping.take_events()) == lines(stepping.take_events()), op
-        steps = rng.choice(lengths)
         assert lines(skipping.advance(steps)) == lines(stepping.advance(steps)), (op, steps)
         assert rig_state(skipping) == rig_state(stepping), (op, steps)
     return skipping.skipped_steps

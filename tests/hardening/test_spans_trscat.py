@@ -72,7 +72,7 @@ class Wire(DeviceModel):
             return self.now_us
         return self.now_us + (1 << 40) * step_us
 
-    def skip_to(self, t_us: int) -> None:
+    def skip_to(self, t_us: int, step_us: int) -> None:
         if self.sending:
             self.slave.skip_frames((t_us - self.now_us) // self.step_us, t_us)
         self.now_us = t_us
@@ -214,7 +214,7 @@ def test_frames_direct(sync_mode: str, state: str, n: int) -> None:
         a.step(now + k * STEP_US)
         a.exchange_frame(now + k * STEP_US)
     end = now + n * STEP_US
-    b.skip_to(end)
+    b.skip_to(end, STEP_US)
     b.skip_frames(n, end)
     assert deep_state(a) == deep_state(b)
     assert a.drain_events() == b.drain_events() == []
