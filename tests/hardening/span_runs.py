@@ -100,6 +100,22 @@ def differential(build: Callable[[], Rig], ops: Callable[[random.Random], Op], s
     for op, steps in plan:
         assert outcome(skipping, op) == outcome(stepping, op), op
         assert lines(skipping.take_events()) == lines(stepping.take_events()), op
-        assert lines(skipping.advance(steps)) == lines(stepping.advance(steps)), (op, steps)
+        advance_alike(skipping, stepping, steps, op)
         assert rig_state(skipping) == rig_state(stepping), (op, steps)
     return skipping.skipped_steps
+
+
+def advance_alike(skipping: Rig, stepping: Rig, steps: int, why: object) -> None:
+    """``Rig.advance(steps)`` on both, span by span: after each skipped span the stepping rig
+    is stepped as far and the two snapshots compared, so a span one step too long shows where
+    it happened, even in a model that would catch up by the end of the stretch."""
+    while steps > 0:
+        span = skipping.quiet_steps(steps)
+        if span:
+            skipping.skip(span)
+            assert lines(stepping.advance(span)) == [], (why, "events in a quiet span")
+            assert skipping.snapshot() == stepping.snapshot(), (why, "after a span", span)
+            steps -= span
+        else:
+            assert lines(skipping.step()) == lines(stepping.step()), why
+            steps -= 1
