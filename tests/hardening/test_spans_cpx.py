@@ -27,11 +27,11 @@ from typing import Any
 
 import pytest
 from span_runs import deep_state, differential
+from test_still_cpx import random_fault
 
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec, parse_rig_spec
 from devices.cpx.device import ACTIVITY_WINDOW_US, CpxEEc
-from devices.cpx.faults import FAULTS
 from devices.cpx.transitions import WATCHDOG_US
 from devices.device import DeviceModel
 from devices.ethercat import AlState
@@ -167,16 +167,7 @@ STATES = ("INIT", "PREOP", "SAFEOP", "OP", "OP")
 
 def random_op(rng: random.Random, frames: bool) -> Op:
     module = rng.randint(1, 4)
-    fault = rng.choice(tuple(FAULTS))
-    fault_args: dict[str, Any] = {"fault": fault}
-    target_kind = FAULTS[fault].target.name
-    fault_target = "cpx"
-    if target_kind in ("MODULE", "CHANNEL"):
-        fault_target = f"cpx/{rng.choice((2, 3, 4)) if fault != 'module_failure' else module}"
-    if target_kind == "CHANNEL" or (fault == "short_circuit" and rng.random() < 0.7):
-        fault_args["channel"] = rng.randint(0, 3)
-    if target_kind == "SYNC_MANAGER":
-        fault_args["sm"] = rng.randint(0, 3)
+    fault_target, fault_args = random_fault(rng, module)
     index, sub, values = rng.choice(OBJECT_WRITES)
     choices: list[Callable[[], Op]] = [
         lambda: ("cpx", "bring_up", {}),

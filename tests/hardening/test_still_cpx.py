@@ -218,8 +218,8 @@ OBJECT_WRITES = (  # (index, sub, values) of the default rig's CPX-E-EC (Tab. 27
 )
 
 
-def random_op(rng: random.Random) -> Op:
-    module = rng.randint(1, 4)
+def random_fault(rng: random.Random, module: int) -> tuple[str, dict[str, Any]]:
+    """A fault of the catalogue with the target and arguments it takes (inject / clear)."""
     fault = rng.choice(tuple(FAULTS))
     fault_args: dict[str, Any] = {"fault": fault}
     target_kind = FAULTS[fault].target.name
@@ -230,6 +230,12 @@ def random_op(rng: random.Random) -> Op:
         fault_args["channel"] = rng.randint(0, 3)
     if target_kind == "SYNC_MANAGER":
         fault_args["sm"] = rng.randint(0, 3)
+    return fault_target, fault_args
+
+
+def random_op(rng: random.Random) -> Op:
+    module = rng.randint(1, 4)
+    fault_target, fault_args = random_fault(rng, module)
     index, sub, values = rng.choice(OBJECT_WRITES)
     choices: list[Callable[[], Op]] = [
         lambda: ("cpx/1", "set_input", {"channel": rng.randint(0, 15), "on": rng.random() < 0.5}),
