@@ -117,9 +117,13 @@ class RigRecorder:
 
     # ---- what the simulation side calls ----------------------------------------------------
     def quiet_until(self, now_us: int, step_us: int) -> int:
-        """Up to when no sample is due (a quiet rig's steps before then need no snapshot)."""
+        """Up to when no sample is due (a quiet rig's steps before then need no snapshot).
+        None while the clock is behind the last observation: the next step's observation
+        starts the new run (``_restart``) and its sample grid."""
         due = self._next_sample_us
-        return now_us if due is None else max(now_us, due - 1)
+        if due is None or now_us < self._last_t_us:
+            return now_us
+        return max(now_us, due - 1)
 
     def sample_due(self, t_us: int) -> bool:
         """Whether a snapshot taken at ``t_us`` would be recorded (take one only then)."""
