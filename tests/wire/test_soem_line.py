@@ -87,7 +87,13 @@ def master_main(iface: str, conn) -> None:
     emergencies: list[tuple[int, int, int, int, int, int]] = []
 
     def init():
-        n = master.config_init()
+        # SOEM names a slave whose SII it could not read in time "? M:..". On a loaded shared
+        # host process B can miss SOEM's EEPROM timeout on the first reads (CI, 2026-11-26:
+        # slave 0 only); a master scans again, as a field engineer would press "scan" again.
+        for _ in range(3):
+            n = master.config_init()
+            if not any(s.name.startswith("? M:") for s in master.slaves):
+                break
         for pos, slave in enumerate(master.slaves):
             slave.add_emergency_callback(lambda e, pos=pos: emergencies.append(
                 (pos, e.error_code, e.error_reg, e.b1, e.w1, e.w2)))
