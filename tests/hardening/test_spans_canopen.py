@@ -73,8 +73,8 @@ MORE_FRAMES = (  # node 2 again
     (0x081, "", False), (0x182, "", True), (0x202, "06 00 00 00 00 00", False),
     (0x202, "00 00 10 27 00 00", False),
 )
-# Frames that enable the drive (controlword 0x0F): an enabled drive, and one that was, is not
-# still for minutes (its RMS current filter decays), so its rig has no span at all; rare.
+# Frames that enable the drive (controlword 0x0F), kept rare: an enabled drive standing in
+# mode 3 counts its speed-window timers every step and gives no span (docs/servo-drive.md).
 ENABLING = frozenset({"2B 40 60 00 0F 00 00 00", "0F 00"})
 ALL_FRAMES = tuple(f for f in FRAMES if f[1] not in ENABLING) + MORE_FRAMES
 
