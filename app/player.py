@@ -90,6 +90,7 @@ def reset_in_place(running: Rig, fresh: Rig) -> None:
     running.clock.step_us = fresh.clock.step_us
     running.clock.now_us = fresh.clock.now_us
     running.pending = []
+    running.touch()
 
 
 class Player:

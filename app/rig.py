@@ -37,6 +37,12 @@ class Rig:
     def __post_init__(self) -> None:
         self.pending: list[Event] = []
         self._quiet = Backoff()
+        # Bumped by whatever may change what a snapshot shows: a command, an outside write
+        # (touch), a step the devices did not promise quiet. Equal revisions: the devices are
+        # as they were, up to the counters quiet steps move (docs/performance.md "Quiet
+        # samples").
+        self.revision = 0
+        self._promised_us = -1  # every device's steps up to here are quiet (quiet_steps)
         self.skipped_steps = 0  # steps advance() skipped in quiet spans (tests look)
 
     def device(self, device_id: str) -> DeviceModel:
@@ -53,9 +59,18 @@ class Rig:
 
     def apply(self, target: str, action: str, args: dict[str, Any]) -> Any:
         device_id, module = parse_target(target)
-        result = self.device(device_id).apply(action, args, module)
-        self._collect()
-        return result
+        self.touch()
+        try:
+            return self.device(device_id).apply(action, args, module)
+        finally:
+            self._collect()
+
+    def touch(self) -> None:
+        """Something changed the devices from outside a step (a command, a protocol adapter's
+        write): a new revision, and no promise of quiet steps until the devices are asked
+        again."""
+        self.revision += 1
+        self._promised_us = -1
 
     def step(self) -> list[Event]:
         """Advance every device by one clock step; return the events of this step in order."""
@@ -64,6 +79,8 @@ class Rig:
             device.step(now)
         self._collect()
         out, self.pending = self.pending, []
+        if out or now > self._promised_us:
+            self.revision += 1
         return out
 
     def run_until(self, t_us: int) -> list[Event]:
@@ -97,12 +114,14 @@ class Rig:
         if steps < MIN_SPAN or not self.SKIP_SPANS or not self._quiet.due():
             return 0
         now, step_us = self.clock.now_us, self.clock.step_us
-        until, least = now + steps * step_us, now + MIN_SPAN * step_us
+        promised, least = FAR_US, now + MIN_SPAN * step_us
         for device in self.devices.values():
-            until = min(until, device.quiet_until(step_us))
-            if until < least:
+            promised = min(promised, device.quiet_until(step_us))
+            if promised < least:
                 break
-        else:
+        until = min(promised, now + steps * step_us)
+        if until >= least:
+            self._promised_us = promised
             for quiet_until in also:
                 until = min(until, quiet_until(now, step_us))
                 if until < least:

@@ -139,6 +139,7 @@ class Runtime:
             time.sleep(0)
         with self._rig_lock:
             outer, self._caller = self._caller, me
+            self.rig.touch()  # a protocol server's request may write to a device
             try:
                 return fn()
             finally:  # what it emitted before failing is journalled too, as submit does
@@ -271,6 +272,8 @@ class Runtime:
         self._journal_events(rig.step())
         for fn in self._step_listeners:
             fn(rig.clock.now_us)
+        if self._unspanned_listeners:
+            rig.touch()  # such a listener (the wire bridge) may write to the models each step
 
     def _drain_work(self) -> list[Event]:
         events: list[Event] = []
@@ -282,6 +285,7 @@ class Runtime:
             if not fut.set_running_or_notify_cancel():
                 continue
             self._worked = True
+            self.rig.touch()  # work may write to a device directly (an adapter's request)
             try:
                 fut.set_result(fn())
             except Exception as exc:  # delivered to the caller, never kills the simulation

@@ -12,7 +12,10 @@ benchmark 3, docs/scaling.md):
   no-op queued on each every 100 ms, as a browser or a protocol client does, which keeps the
   simulation thread on 1 ms wake-ups): how far each rig's clock kept up with the wall clock, and
   the process's CPU per simulated millisecond per rig, i.e. the share of a core one served rig
-  takes.
+  takes;
+- one rig served idle and recorded as ``python -m app`` records it (a Rerun file, samples every
+  10 ms), with the recorder repeating its last sample while the rig's revision stands, and in
+  the same run with a snapshot at every sample (docs/recording.md "Repeated samples").
 
 CPU is ``time.process_time()`` (every thread of this process). Method and figures:
 docs/performance.md "Served rigs".
@@ -24,10 +27,12 @@ from __future__ import annotations
 
 import argparse
 import sys
+import tempfile
 import threading
 import time
 from pathlib import Path
 
+from app.recording.recorder import RigRecorder, attach_to_runtime
 from app.rig_config import DEFAULT_RIG, RigSpec, build_rig, load_rig_spec
 from app.runtime import Runtime
 from bench.kernel import boot, run
@@ -52,11 +57,27 @@ def snapshot_us(spec: RigSpec, count: int = 200) -> float:
     return (time.process_time() - start) / count * 1e6
 
 
-def served(spec: RigSpec, count: int, wall_s: float, busy: bool) -> tuple[float, float]:
-    """(the slowest rig's simulated seconds per wall second, CPU µs per simulated ms per rig)."""
+def served(spec: RigSpec, count: int, wall_s: float, busy: bool,
+           record: bool | None = None) -> tuple[float, float]:
+    """(the slowest rig's simulated seconds per wall second, CPU µs per simulated ms per rig).
+    ``record``: recorded to a file, repeating samples (True) or not (False)."""
     rigs = [build_rig(spec, state_dir=None) for _ in range(count)]
     boot(rigs)
     runtimes = [Runtime(rig, publish_hz=PUBLISH_HZ) for rig in rigs]
+    with tempfile.TemporaryDirectory() as tmp:
+        recorders = [RigRecorder(Path(tmp) / f"rig{i}.rrd") for i in range(count)] \
+            if record is not None else []
+        for runtime, recorder in zip(runtimes, recorders, strict=False):
+            attach_to_runtime(runtime, recorder, repeat=bool(record))
+        try:
+            return _serve(rigs, runtimes, wall_s, busy)
+        finally:
+            for recorder in recorders:
+                recorder.close()
+
+
+def _serve(rigs: list, runtimes: list[Runtime], wall_s: float,
+           busy: bool) -> tuple[float, float]:
     starts = [rig.clock.now_us for rig in rigs]
     stop = threading.Event()
 
@@ -94,6 +115,10 @@ def report(spec: RigSpec, name: str, wall_s: float, counts: tuple[int, ...]) -> 
             label = f"{count} rig{'s' if count > 1 else ' '} served, {mode}"
             out.append(f"  {label:<52} {per_ms:7.1f} us  (the slowest clock at "
                        f"{pace:.2f}x wall time)")
+    for record, how in ((True, "repeating samples"), (False, "a snapshot per sample")):
+        pace, per_ms = served(spec, 1, wall_s, False, record)
+        label = f"1 rig  served, idle, recorded ({how})"
+        out.append(f"  {label:<52} {per_ms:7.1f} us  (the slowest clock at {pace:.2f}x wall time)")
     out.append("  no target in issue 7: the gap to the kernel is the runtime's wake-ups and "
                "snapshots (docs/performance.md)")
     return out

@@ -25,8 +25,9 @@ import rerun as rr
 
 from app.recording import event_text
 from app.recording.blueprint import TIMELINE, lane_style, rig_blueprint, series_style
-from app.recording.signals import SeriesInfo, Signal, rig_signals, state_values
+from app.recording.signals import SeriesInfo, Signal, led_patterns, rig_signals, state_values
 from devices.events import Event
+from devices.leds import LedPattern, is_lit
 
 if TYPE_CHECKING:
     from app.rig import Rig
@@ -113,6 +114,9 @@ class RigRecorder:
         self._closed = False
         self._offset_us = 0  # added to rig times: a restarted rig continues the timeline
         self._last_t_us = 0  # the latest rig time observed
+        # What the last sample gave each scalar column: its row, or the LED pattern its
+        # lit / dark row is computed from at each time (resample); None: no sample to repeat.
+        self._repeat: list[tuple[_Column, tuple[float, ...], LedPattern | None]] | None = None
         self.runs = 1  # how many times the rig clock started from the beginning, plus one
 
     # ---- what the simulation side calls ----------------------------------------------------
@@ -143,10 +147,36 @@ class RigRecorder:
                 self._event(event)
             if snapshot is not None:
                 self._sample(t_us, snapshot)
-            if (t_us - self._last_flush_us >= self.flush_period_us
-                    or self._buffered >= self.max_buffered_rows):
-                self._send_buffers()
-                self._last_flush_us = t_us
+            self._flush_due(t_us)
+
+    def resample(self, t_us: int) -> bool:
+        """Record at ``t_us`` the sample :meth:`observe` would record for a snapshot equal to
+        the last one sampled (a rig whose revision has not moved: app.rig.Rig.revision), without
+        taking one: every signal as it was, each LED lit or dark by its pattern at ``t_us``.
+        False (nothing recorded) when there is no sample to repeat or the clock went back."""
+        with self._lock:
+            if self._closed:
+                return True
+            if self._repeat is None or t_us < self._last_t_us:
+                return False
+            self._last_t_us = t_us
+            at = t_us + self._offset_us
+            for column, row, pattern in self._repeat:
+                if pattern is not None:
+                    row = (1.0 if is_lit(pattern, t_us) else 0.0,)
+                if column.add_sample(at, row):
+                    self._buffered += 1
+            # The state lanes need nothing: the last sample set them, and an event since
+            # would have moved the revision.
+            self._next_sample_us = (t_us // self.sample_period_us + 1) * self.sample_period_us
+            self._flush_due(t_us)
+            return True
+
+    def _flush_due(self, t_us: int) -> None:
+        if (t_us - self._last_flush_us >= self.flush_period_us
+                or self._buffered >= self.max_buffered_rows):
+            self._send_buffers()
+            self._last_flush_us = t_us
 
     # ---- what owners call ------------------------------------------------------------------
     def flush(self, timeout_s: float = 10.0) -> None:
@@ -191,6 +221,7 @@ class RigRecorder:
         for column in self._scalars.values():
             column.last, column.held_us = None, None
         self._next_sample_us = None
+        self._repeat = None  # the columns' last rows are gone
         self._last_flush_us = t_us
         at = t_us + self._offset_us
         column = self._texts.setdefault(event_text.RIG_LOG, _Column())
@@ -238,8 +269,12 @@ class RigRecorder:
         for device_id, snap in (snapshot.get("devices") or {}).items():
             for path, value in state_values(device_id, snap):
                 self._lane(path, at, value)
+        leds = led_patterns(snapshot)
+        repeat = []
         for _device, signal in rig_signals(snapshot, t_us):
-            self._scalar(at, signal)
+            column = self._scalar(at, signal)
+            repeat.append((column, signal.values, leds.get(signal.path)))
+        self._repeat = repeat
         period = self.sample_period_us
         self._next_sample_us = (t_us // period + 1) * period  # stay on a regular grid
 
@@ -250,7 +285,7 @@ class RigRecorder:
         if self._send_blueprint:
             self._rec.send_blueprint(rig_blueprint(snapshot, t_us))
 
-    def _scalar(self, t_us: int, signal: Signal) -> None:
+    def _scalar(self, t_us: int, signal: Signal) -> _Column:
         column = self._scalars.get(signal.path)
         if column is None:
             column = self._scalars[signal.path] = _Column(width=len(signal.values))
@@ -265,6 +300,7 @@ class RigRecorder:
             self._styled[signal.path] = signal.info
         if column.add_sample(t_us, signal.values):
             self._buffered += 1
+        return column
 
     # ---- sending -----------------------------------------------------------------------------
     def _send_scalars(self, path: str, column: _Column, hold: bool = False) -> None:
@@ -296,12 +332,13 @@ class RigRecorder:
         self._buffered = 0
 
 
-def attach_to_runtime(runtime: Runtime, recorder: RigRecorder) -> None:
+def attach_to_runtime(runtime: Runtime, recorder: RigRecorder, repeat: bool = True) -> None:
     """Record a live runtime. Everything runs in the simulation thread, where the rig may be
     read: events after each batch (each at its own time), and a snapshot whenever a sample is
     due. Samples need a hook that runs after every simulation step (``add_step_listener``,
     see docs/recording.md "Live sessions"); without one they are taken after batches with
-    events only."""
+    events only. ``repeat``: a sample due while the rig's revision has not moved repeats the
+    last one instead of taking a snapshot (the same rows; "Repeated samples")."""
     rig = runtime.rig
 
     def on_batch(events: list[Event]) -> None:
@@ -309,8 +346,15 @@ def attach_to_runtime(runtime: Runtime, recorder: RigRecorder) -> None:
         due = not per_step and recorder.sample_due(t_us)
         recorder.observe(t_us, rig.snapshot() if due else None, events)
 
+    sampled = [-1]  # the rig revision of the last snapshot sampled
+
     def on_step(t_us: int) -> None:
         if recorder.sample_due(t_us):
+            # The same revision: the devices are as that snapshot showed them, bar counters
+            # the recording does not carry (docs/recording.md "Repeated samples").
+            if repeat and rig.revision == sampled[0] and recorder.resample(t_us):
+                return
+            sampled[0] = rig.revision
             recorder.observe(t_us, rig.snapshot(), [])
 
     add_step_listener = getattr(runtime, "add_step_listener", None)

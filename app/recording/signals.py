@@ -127,6 +127,18 @@ def led_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[
                      _led_info(device_id, led))
 
 
+def led_patterns(snapshot: Mapping[str, Any]) -> dict[str, LedPattern]:
+    """Entity path -> pattern of every LED :func:`led_signals` samples in a rig snapshot (a
+    repeated sample recomputes lit / dark from these alone)."""
+    out: dict[str, LedPattern] = {}
+    for device_id, snap in (snapshot.get("devices") or {}).items():
+        for led, name in (snap.get("leds") or {}).items():
+            pattern = _PATTERNS.get(name)
+            if pattern is not None:
+                out[device_path(device_id, "led", led)] = pattern
+    return out
+
+
 def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str, str]]:
     """(lane path, value) of every state machine and LED pattern the snapshot shows."""
     for key, machine in STATE_KEYS.items():
