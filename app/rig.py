@@ -7,7 +7,7 @@ master last, so a master sees its slaves' state of the same cycle.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -146,9 +146,16 @@ class Rig:
         out, self.pending = self.pending, []
         return out
 
-    def snapshot(self) -> dict[str, Any]:
-        return {"t": self.clock.now_s, "rig": self.name,
-                "devices": {i: d.snapshot() for i, d in self.devices.items()}}
+    def snapshot(self, since: Mapping[str, Any] | None = None) -> dict[str, Any]:
+        """Every device's snapshot. ``since``: a snapshot of this rig taken at the current
+        :attr:`revision`; the devices whose snapshots quiet steps leave alone
+        (``QUIET_SNAPSHOT``) are taken from it as they are (the same objects)."""
+        kept = (since or {}).get("devices") or {}
+        devices = {}
+        for i, d in self.devices.items():
+            old = kept.get(i) if d.QUIET_SNAPSHOT else None
+            devices[i] = old if old is not None else d.snapshot()
+        return {"t": self.clock.now_s, "rig": self.name, "devices": devices}
 
     def _collect(self) -> None:
         for device in self.devices.values():

@@ -77,6 +77,7 @@ class Runtime:
             maxlen=JOURNAL_LENGTH)
         self._event_seq = 0
         self._frame = Frame(0, rig.clock.now_us, rig.snapshot())
+        self._frame_revision = rig.revision  # the rig's revision when the frame was taken
         self._stop = threading.Event()
         self._wake = threading.Event()  # set by submit(): queued work runs without a nap
         self._thread: threading.Thread | None = None
@@ -211,6 +212,7 @@ class Runtime:
             while self.rig.clock.now_us + self.rig.clock.step_us <= end:
                 self._step_or_skip(end)
             self._publish()
+        run.steps_only = True  # type: ignore[attr-defined]  # steps, writes nothing: no touch
         return self.submit(run)
 
     # ---- the simulation thread ------------------------------------------------------------
@@ -285,7 +287,8 @@ class Runtime:
             if not fut.set_running_or_notify_cancel():
                 continue
             self._worked = True
-            self.rig.touch()  # work may write to a device directly (an adapter's request)
+            if not getattr(fn, "steps_only", False):
+                self.rig.touch()  # work may write to a device directly (an adapter's request)
             try:
                 fut.set_result(fn())
             except Exception as exc:  # delivered to the caller, never kills the simulation
@@ -306,7 +309,12 @@ class Runtime:
                 logger.exception("event listener failed")
 
     def _publish(self) -> None:
-        snap = self.rig.snapshot()
+        rig = self.rig
+        # Nothing moved since the last frame but counters: the models that show none keep
+        # their snapshot objects (a view may compare them by identity).
+        kept = self._frame.snapshot if self._frame_revision == rig.revision else None
+        snap = rig.snapshot(kept)
+        self._frame_revision = rig.revision
         with self._lock:
             self._frame = frame = Frame(self._frame.seq + 1, self.rig.clock.now_us, snap)
         for fn in self._frame_listeners:

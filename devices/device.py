@@ -94,6 +94,9 @@ class DeviceModel:
 
     ACTIONS: ClassVar[Mapping[str, Action]] = {}
     KIND: ClassVar[str] = "device"
+    # True: quiet steps leave this model's snapshot as it was (it shows no counter they move),
+    # so a snapshot taken before them still stands (app.rig.Rig.snapshot's ``since``).
+    QUIET_SNAPSHOT: ClassVar[bool] = False
 
     def step(self, now_us: int) -> None:
         """Advance to simulated time ``now_us`` (never backwards)."""

@@ -50,6 +50,7 @@ DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
 class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, CoeMailbox,
              AlStatusView, DeviceModel):
     KIND = "trscat"
+    QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
     def __init__(self, device_id: str, rng: random.Random, expansions: Sequence[str] = (),

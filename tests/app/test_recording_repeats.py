@@ -115,3 +115,26 @@ def test_calls_and_work_move_the_revision(runtime: Runtime) -> None:
     before = rig.revision
     runtime.submit(lambda: None).result(timeout=WAIT_S)
     assert rig.revision > before
+
+
+def test_frames_keep_the_snapshots_of_models_nothing_moved(runtime: Runtime) -> None:
+    """The publication takes a fresh snapshot only of the models whose snapshot may have
+    moved: in an idle stretch the quiet ones are the same objects frame after frame, the
+    master's (its frame counter) is new; a command makes every one new."""
+    runtime.command("fastcat", "power", {"on": True}).result(timeout=WAIT_S)
+    advance(runtime, 8.0)
+    rig = runtime.rig
+    quiet = [i for i, d in rig.devices.items() if d.QUIET_SNAPSHOT]
+    assert {"fastcat", "trscat", "cpx", "drive"} <= set(quiet)
+    advance(runtime, 0.1)
+    one = runtime.frame.snapshot["devices"]
+    advance(runtime, 0.1)
+    two = runtime.frame.snapshot["devices"]
+    assert all(one[i] is two[i] for i in quiet)
+    assert two["master"] is not one["master"]
+    assert two["master"]["stats"]["frames"] > one["master"]["stats"]["frames"]
+    runtime.command("cpx/1", "set_input", {"channel": 1, "on": True}).result(WAIT_S)
+    advance(runtime, 0.1)
+    three = runtime.frame.snapshot["devices"]
+    assert not any(three[i] is two[i] for i in quiet)
+    assert three == {i: d.snapshot() for i, d in rig.devices.items()}

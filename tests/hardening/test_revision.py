@@ -1,11 +1,14 @@
-"""The rig's revision: equal revisions mean a recording would sample the same thing.
+"""The rig's revision: equal revisions mean a recording would sample the same thing, and
+models marked ``QUIET_SNAPSHOT`` show the same snapshot.
 
 ``Rig.revision`` moves with every command, every outside write the runtime hands the rig
 (``touch``) and every step the devices did not promise quiet (``quiet_steps``). A live
 recorder repeats its last sample while it stands (docs/recording.md "Repeated samples"), so
 the claim tested here is the one it relies on: two snapshots taken at the same revision give
 the same state lanes and the same signals, each LED by its pattern (its lit / dark row is a
-function of the pattern and the time alone). Counters the recording does not carry may move.
+function of the pattern and the time alone). Counters the recording does not carry may move,
+but not in a ``QUIET_SNAPSHOT`` model's snapshot: a snapshot that keeps those models from the
+last one (``Rig.snapshot(since)``, the runtime's publication) must equal a fresh one.
 
 - a seeded random differential on the default rig (the span tests' commands, faults healed at
   the end), driven as the runtime drives it: quiet spans skipped up to each 10 ms sample,
@@ -55,11 +58,14 @@ def run_sampled(rig: Rig, steps: int, seen: dict[str, Any]) -> None:
         rig.step()
         if rig.clock.now_us % SAMPLE_US:
             continue
-        content = recorded(rig.snapshot())
+        snapshot = rig.snapshot()
+        content = recorded(snapshot)
         if rig.revision == seen.get("revision"):
             assert content == seen["content"], (rig.clock.now_us, "the same revision")
+            kept = rig.snapshot(seen["snapshot"])  # QUIET_SNAPSHOT models from the last one
+            assert kept == snapshot, (rig.clock.now_us, "a kept model snapshot moved")
             seen["repeats"] += 1
-        seen["revision"], seen["content"] = rig.revision, content
+        seen["revision"], seen["content"], seen["snapshot"] = rig.revision, content, snapshot
         seen["samples"] += 1
 
 
