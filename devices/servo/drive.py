@@ -63,7 +63,6 @@ QUIET_FOREVER_STEPS = 1 << 32
 class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveActions,
                  DeviceModel):
     KIND = "servo"
-    QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     SKIP_STILL = True  # False: every step in full (tests/hardening/test_still_steps.py)
 
     def __init__(self, device_id: str, rng: random.Random, config: DriveConfig,

@@ -135,3 +135,18 @@ def test_a_busy_rig_moves_it_every_step() -> None:
         rig.step()
         revisions.append(rig.revision)
     assert revisions == sorted(set(revisions))
+
+
+def test_a_drive_left_standing_after_a_jog() -> None:
+    """A drive disabled after a move stands still, but its RMS current (o2) decays through
+    the quiet spans: its snapshot is not kept (QUIET_SNAPSHOT stays off for the drives)."""
+    rig = idle_rig()
+    rig.apply("drive", "enable", {"on": True})
+    rig.apply("drive", "jog", {"direction": 1})
+    rig.advance(500)
+    rig.apply("drive", "stop", {})
+    rig.advance(300)
+    rig.apply("drive", "enable", {"on": False})
+    seen: dict[str, Any] = {"repeats": 0, "samples": 0}
+    run_sampled(rig, 5_000, seen)
+    assert seen["repeats"] > 100
