@@ -135,6 +135,7 @@ def parse_value(text: str) -> int | str:
 class ObjectDictionaryPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  device_id: str, device_ids: Sequence[str] = ()) -> None:
+        self._server = server
         self._runtime = runtime
         self._sender = sender
         self._device_id = device_id
@@ -242,7 +243,9 @@ class ObjectDictionaryPanel:
         """From the dashboard thread: periodic refresh, and re-render when rows or filter
         changed (rendering stays out of the simulation thread)."""
         now = time.monotonic() if now is None else now
-        if now >= self._next_refresh:
+        # Nobody to show it to: no read (work for the simulation thread, which then keeps 1 ms
+        # naps for a while). The first browser to connect gets a read at the next tick.
+        if now >= self._next_refresh and self._server.get_clients():
             self._next_refresh = now + REFRESH_S
             self.request(None)
         with self._lock:
