@@ -58,13 +58,20 @@ def rail_length(slots: int) -> float:
     return COUPLER_W + max(slots, 1) * MODULE_W
 
 
-def led_color(colour: str, pattern: str, t_us: int) -> RGB:
-    try:
-        lit = is_lit(LedPattern(pattern), t_us)
-    except ValueError:  # an unknown pattern is a model bug; show it dark rather than crash
+_PATTERNS = {p.value: p for p in LedPattern}  # a dict lookup: LedPattern(name) is slow
+
+
+def led_lit(pattern: str, t_us: int) -> bool:
+    """Whether an LED showing the pattern named ``pattern`` is lit at ``t_us``."""
+    found = _PATTERNS.get(pattern)
+    if found is None:  # an unknown pattern is a model bug; show it dark rather than crash
         logger.warning("unknown LED pattern %r", pattern)
-        lit = False
-    return LIT[colour] if lit else LED_OFF
+        return False
+    return is_lit(found, t_us)
+
+
+def led_color(colour: str, pattern: str, t_us: int) -> RGB:
+    return LIT[colour] if led_lit(pattern, t_us) else LED_OFF
 
 
 PATTERN_WORDS = {"off": "off", "on": "on", "flickering": "flickering", "blinking": "blinking",

@@ -7,6 +7,7 @@ collide with viser's own (Mantine) classes.
 
 from __future__ import annotations
 
+import functools
 import html
 
 CSS = """
@@ -45,7 +46,14 @@ CSS = """
 
 
 def esc(value: object) -> str:
-    return html.escape(str(value), quote=True)
+    return _escaped(str(value))
+
+
+# The views rebuild their HTML 30 times a second from mostly the same texts (labels, states,
+# codes): each text is escaped once, not ~300 times per update (docs/performance.md).
+@functools.lru_cache(maxsize=8192)
+def _escaped(text: str) -> str:
+    return html.escape(text, quote=True)
 
 
 def badge(text: str, tone: str) -> str:

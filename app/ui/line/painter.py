@@ -6,15 +6,11 @@ every LED at the frame's simulated time, but only flips reach the browsers.
 
 from __future__ import annotations
 
-import logging
 from typing import Any
 
 import viser
 
-from app.ui.rail_scene import LED_OFF, LIT, RGB
-from devices.leds import LedPattern, is_lit
-
-logger = logging.getLogger(__name__)
+from app.ui.rail_scene import LED_OFF, LIT, RGB, led_lit
 
 # The CPX-E-EC's Run / Error also light orange (seed 002 tables 11-13).
 COLOURS: dict[str, RGB] = {**LIT, "orange": (255, 128, 0)}
@@ -22,12 +18,7 @@ FRONT_Y = -1.06  # the front plane of the line's bodies (their depth is 2.0, lik
 
 
 def lit_colour(colour: str, pattern: str, t_us: int) -> RGB:
-    try:
-        lit = is_lit(LedPattern(pattern), t_us)
-    except ValueError:  # an unknown pattern is a model bug; show it dark rather than crash
-        logger.warning("unknown LED pattern %r", pattern)
-        lit = False
-    return COLOURS.get(colour, COLOURS["green"]) if lit else LED_OFF
+    return COLOURS.get(colour, COLOURS["green"]) if led_lit(pattern, t_us) else LED_OFF
 
 
 class Painter:
