@@ -39,7 +39,7 @@ class Rig:
         self._quiet = Backoff()
         # Bumped by whatever may change what a snapshot shows: a command, an outside write
         # (touch), a step the devices did not promise quiet. Equal revisions: the devices are
-        # as they were, up to the counters quiet steps move (docs/performance.md "Quiet
+        # as they were, up to the counters quiet steps move (docs/recording.md "Repeated
         # samples").
         self.revision = 0
         self._promised_us = -1  # every device's steps up to here are quiet (quiet_steps)
@@ -119,9 +119,11 @@ class Rig:
             promised = min(promised, device.quiet_until(step_us))
             if promised < least:
                 break
+        # What the devices say now replaces what they said before (a device may have been
+        # written to since without a touch); a "no" that left some unasked promises nothing.
+        self._promised_us = promised if promised >= least else now
         until = min(promised, now + steps * step_us)
         if until >= least:
-            self._promised_us = promised
             for quiet_until in also:
                 until = min(until, quiet_until(now, step_us))
                 if until < least:

@@ -150,3 +150,18 @@ def test_a_drive_left_standing_after_a_jog() -> None:
     seen: dict[str, Any] = {"repeats": 0, "samples": 0}
     run_sampled(rig, 5_000, seen)
     assert seen["repeats"] > 100
+
+
+def test_a_new_ask_replaces_the_promise() -> None:
+    """A model written to without a touch (a caller that broke the rule) says no at the next
+    ask: the promise goes, and the next step moves the revision."""
+    rig = idle_rig()
+    assert rig.quiet_steps(100) >= 2
+    rig.devices["drive"].apply("enable", {"on": True})  # the model's own API: no touch
+    rig.devices["drive"].apply("jog", {"direction": 1})
+    rig.take_events()  # the drive's events of the commands: not the step's
+    assert rig.quiet_steps(100) == 0
+    before = rig.revision
+    for _ in range(10):  # a jog in progress: no event in these steps, and no promise
+        assert rig.step() == []
+    assert rig.revision == before + 10
