@@ -96,6 +96,9 @@ class Pdo:
     buffered: bytes | None = None  # synchronous RPDO data waiting for the next Sync
     # (dictionary, count, entries, [(entry, stored values, key)]) for pack_planned; a cache
     _plan: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
+    # (the configuration it was made for, describe()'s dict); a cache
+    _described: tuple[Any, dict[str, object]] | None = field(default=None, repr=False,
+                                                              compare=False)
 
     @classmethod
     def default(cls, number: int, receive: bool, node_id: int) -> Pdo:
@@ -261,7 +264,18 @@ class Pdo:
         return out
 
     def describe(self) -> dict[str, object]:
-        """Snapshot form for views."""
+        """Snapshot form for views (one dict per configuration: every snapshot asks, and the
+        configuration changes only by an SDO write)."""
+        key = (self.cob_id, self.trans_type, self.inhibit_100us, self.event_timer_ms,
+               tuple(self.mapped))
+        cached = self._described
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        described = self._describe()
+        self._described = (key, described)
+        return described
+
+    def _describe(self) -> dict[str, object]:
         return {
             "pdo": self.name, "cob_id": f"0x{self.cob_id:08X}", "can_id": f"0x{self.can_id:03X}",
             "valid": self.valid, "type": self.trans_type,

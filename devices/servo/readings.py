@@ -173,8 +173,11 @@ class DriveReadings:
         return self.alarm_table[code].error_code_or_generic if code else 0
 
     # ---- status words, outputs, snapshot ------------------------------------------------------
-    def status_flags(self: ServoDrive) -> control.StatusFlags:
-        levels = self.input_levels()
+    def status_flags(self: ServoDrive,
+                     levels: dict[str, bool] | None = None) -> control.StatusFlags:
+        """``levels``: :meth:`input_levels` of now, if the caller has them already."""
+        if levels is None:
+            levels = self.input_levels()
         mode_flags = self.mode_logic.flags(self) if self.powered else {}
         stopping = self.state in (State.QUICK_STOP_ACTIVE, State.FAULT_REACTION_ACTIVE) or (
             self.state is State.OPERATION_ENABLED and not self.motion_allowed
@@ -212,8 +215,9 @@ class DriveReadings:
         return input_word(self.input_levels())
 
     def build_snapshot(self: ServoDrive) -> dict[str, Any]:
-        r05, sw = self.status_register, self.statusword
         levels = self.input_levels()
+        flags = self.status_flags(levels)  # once for both words (status_register, statusword)
+        r05, sw = control.register_status(flags), control.cia402_status(flags)
         code = self.alarms.active
         alarm = self.alarm_table[code].as_dict() if code else None
         f = self.config.feed_constant
