@@ -25,7 +25,7 @@ import rerun as rr
 
 from app.recording import event_text
 from app.recording.blueprint import TIMELINE, lane_style, rig_blueprint, series_style
-from app.recording.signals import SeriesInfo, Signal, led_patterns, rig_signals, state_values
+from app.recording.signals import SeriesInfo, Signal, rig_signals, state_values
 from devices.events import Event
 from devices.leds import LedPattern, is_lit
 
@@ -269,11 +269,10 @@ class RigRecorder:
         for device_id, snap in (snapshot.get("devices") or {}).items():
             for path, value in state_values(device_id, snap):
                 self._lane(path, at, value)
-        leds = led_patterns(snapshot)
         repeat = []
         for _device, signal in rig_signals(snapshot, t_us):
             column = self._scalar(at, signal)
-            repeat.append((column, signal.values, leds.get(signal.path)))
+            repeat.append((column, signal.values, signal.pattern))
         self._repeat = repeat
         period = self.sample_period_us
         self._next_sample_us = (t_us // period + 1) * period  # stay on a regular grid

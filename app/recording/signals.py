@@ -53,6 +53,8 @@ class Signal(NamedTuple):
     path: str
     values: tuple[float, ...]
     info: SeriesInfo
+    # An LED's lit / dark row: the pattern it follows (the row at any time is is_lit's)
+    pattern: LedPattern | None = None
 
     @property
     def view(self) -> str:
@@ -124,19 +126,7 @@ def led_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[
         if pattern is None:
             continue  # not an ETG.1300 pattern name: nothing sensible to plot
         yield Signal(device_path(device_id, "led", led), (1.0 if is_lit(pattern, t_us) else 0.0,),
-                     _led_info(device_id, led))
-
-
-def led_patterns(snapshot: Mapping[str, Any]) -> dict[str, LedPattern]:
-    """Entity path -> pattern of every LED :func:`led_signals` samples in a rig snapshot (a
-    repeated sample recomputes lit / dark from these alone)."""
-    out: dict[str, LedPattern] = {}
-    for device_id, snap in (snapshot.get("devices") or {}).items():
-        for led, name in (snap.get("leds") or {}).items():
-            pattern = _PATTERNS.get(name)
-            if pattern is not None:
-                out[device_path(device_id, "led", led)] = pattern
-    return out
+                     _led_info(device_id, led), pattern)
 
 
 def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str, str]]:

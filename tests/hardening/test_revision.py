@@ -28,7 +28,7 @@ import pytest
 from span_runs import outcome
 from test_spans_rig import HEAL, booted, rig_op
 
-from app.recording.signals import led_patterns, rig_signals, state_values
+from app.recording.signals import rig_signals, state_values
 from app.rig import Rig
 
 SAMPLE_US = 10_000  # the recorder's default sample period
@@ -36,9 +36,8 @@ SAMPLE_US = 10_000  # the recorder's default sample period
 
 def recorded(snapshot: Mapping[str, Any]) -> tuple[Any, ...]:
     """What a recorder's sample takes from a snapshot, LEDs as patterns (not lit / dark)."""
-    leds = led_patterns(snapshot)
     lanes = [v for d, s in snapshot["devices"].items() for v in state_values(d, s)]
-    signals = [(s.path, leds.get(s.path) or s.values) for _d, s in rig_signals(snapshot, 0)]
+    signals = [(s.path, s.pattern or s.values) for _d, s in rig_signals(snapshot, 0)]
     return tuple(lanes), tuple(signals)
 
 
