@@ -66,7 +66,8 @@ class Runtime:
         self._rebase = False
         self._paused = False
         self._publish_period = 1.0 / publish_hz
-        self._work: queue.Queue[tuple[Callable[[], Any], Future[Any]]] = queue.Queue()
+        # (work, its future, whether it may write to the models: Rig.touch before it runs)
+        self._work: queue.Queue[tuple[Callable[[], Any], Future[Any], bool]] = queue.Queue()
         self._lock = threading.Lock()  # the journal and the frame
         # The rig: held by the simulation thread for each step (and the work and publication
         # around it) and by call(); re-entrant, as queued work may publish or call.
@@ -121,8 +122,11 @@ class Runtime:
     # ---- messages to the simulation thread -----------------------------------------------
     def submit(self, fn: Callable[[], T]) -> Future[T]:
         """Run ``fn`` in the simulation thread at the next step boundary."""
+        return self._queue(fn, writes=True)
+
+    def _queue(self, fn: Callable[[], T], writes: bool) -> Future[T]:
         fut: Future[T] = Future()
-        self._work.put((fn, fut))
+        self._work.put((fn, fut, writes))
         self._wake.set()
         return fut
 
@@ -212,8 +216,7 @@ class Runtime:
             while self.rig.clock.now_us + self.rig.clock.step_us <= end:
                 self._step_or_skip(end)
             self._publish()
-        run.steps_only = True  # type: ignore[attr-defined]  # steps, writes nothing: no touch
-        return self.submit(run)
+        return self._queue(run, writes=False)  # it only steps: no touch
 
     # ---- the simulation thread ------------------------------------------------------------
     def _run(self) -> None:
@@ -281,13 +284,13 @@ class Runtime:
         events: list[Event] = []
         while True:
             try:
-                fn, fut = self._work.get_nowait()
+                fn, fut, writes = self._work.get_nowait()
             except queue.Empty:
                 return events
             if not fut.set_running_or_notify_cancel():
                 continue
             self._worked = True
-            if not getattr(fn, "steps_only", False):
+            if writes:
                 self.rig.touch()  # work may write to a device directly (an adapter's request)
             try:
                 fut.set_result(fn())
