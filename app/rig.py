@@ -111,8 +111,19 @@ class Rig:
         observer's own ``quiet_until(now_us, step_us)``: the last time up to which it would do
         nothing after a step of a quiet rig) agrees. No side effect on the devices; after a
         "0" the next asks back off (1, 2, 4 .. calls)."""
+        span, observed = self.quiet_span(steps, also)
+        if observed:  # up to the step before the observer's, which is then stepped
+            span -= 1
+        return span if span >= MIN_SPAN else 0
+
+    def quiet_span(self, steps: int, also: Iterable[ObserverSpan] = ()) -> tuple[int, bool]:
+        """:meth:`quiet_steps`, and the span's end at the step an observer acts on: ``(span,
+        True)`` when an observer (``also``) is due at the span's last step, through which
+        every device is still quiet. That step may be skipped with the others: a skipped
+        quiet step leaves the devices as a real one would and emits nothing, so the caller
+        runs its observers after the skip as it would after that step (app/runtime.py)."""
         if steps < MIN_SPAN or not self.SKIP_SPANS or not self._quiet.due():
-            return 0
+            return 0, False
         now, step_us = self.clock.now_us, self.clock.step_us
         promised, least = FAR_US, now + MIN_SPAN * step_us
         for device in self.devices.values():
@@ -122,18 +133,18 @@ class Rig:
         # What the devices say now replaces what they said before (a device may have been
         # written to since without a touch); a "no" that left some unasked promises nothing.
         self._promised_us = promised if promised >= least else now
-        until = min(promised, now + steps * step_us)
-        if until >= least:
-            for quiet_until in also:
-                until = min(until, quiet_until(now, step_us))
-                if until < least:
-                    break
-        span = max(0, (until - now) // step_us)
-        quiet = span >= MIN_SPAN
         # Back off only when a device said no (asking them costs about a step); an observer's
         # due time (a recorder's sample) says nothing about the steps after it.
-        self._quiet.checked(quiet or promised >= least)
-        return span if quiet else 0
+        self._quiet.checked(promised >= least)
+        if promised < least:
+            return 0, False
+        quiet, observed = (min(promised, now + steps * step_us) - now) // step_us, False
+        for quiet_until in also:
+            # The first step after the observer's quiet time is the one it acts on.
+            due = max(1, (quiet_until(now, step_us) - now) // step_us + 1)
+            if due <= quiet:
+                quiet, observed = due, True
+        return quiet, observed
 
     def skip(self, steps: int) -> None:
         """Skip ``steps`` quiet steps, as :meth:`quiet_steps` just gave (or fewer)."""

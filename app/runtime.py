@@ -266,13 +266,17 @@ class Runtime:
 
     def _step_or_skip(self, end_us: int) -> None:
         """One step, or a quiet span up to ``end_us`` at most (docs/performance.md "Quiet
-        spans"): skipped steps emit nothing and need no listener."""
+        spans"): skipped steps emit nothing and need no listener, but for the last one of a
+        span that ends where a listener is due (Rig.quiet_span), after which they all run."""
         rig = self.rig
         if not self._unspanned_listeners:
-            span = rig.quiet_steps((end_us - rig.clock.now_us) // rig.clock.step_us,
-                                   self._listener_spans)
+            span, observed = rig.quiet_span((end_us - rig.clock.now_us) // rig.clock.step_us,
+                                            self._listener_spans)
             if span:
                 rig.skip(span)
+                if observed:  # a listener is due at the span's last step: as after a step
+                    for fn in self._step_listeners:
+                        fn(rig.clock.now_us)
                 return
         self._journal_events(rig.step())
         for fn in self._step_listeners:

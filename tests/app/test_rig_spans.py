@@ -56,6 +56,20 @@ class Blinker(DeviceModel):
 
 
 @dataclass
+class Still(DeviceModel):
+    """Nothing ever changes: every step is quiet."""
+
+    def quiet_until(self, step_us: int) -> int:
+        return self.now_us + 1_000_000 * step_us
+
+    def skip_to(self, t_us: int, step_us: int) -> None:
+        self.now_us = t_us
+
+    def snapshot(self) -> dict[str, Any]:
+        return {"now_us": self.now_us}
+
+
+@dataclass
 class Busy(DeviceModel):
     """No quiet steps (the default)."""
 

@@ -11,7 +11,7 @@ import random
 from collections.abc import Iterator
 
 import pytest
-from test_rig_spans import Blinker, rig
+from test_rig_spans import Blinker, Still, rig
 
 from app.rig import Rig
 from app.runtime import Runtime
@@ -73,3 +73,21 @@ def test_a_listener_without_a_span_keeps_every_step(runtimes) -> None:
     spans, _ = runtimes
     run(spans, False)
     assert spans.rig.skipped_steps == 0
+
+
+def test_a_listener_due_at_a_quiet_step_runs_after_the_skip() -> None:
+    """The step a listener is due at is skipped with the span before it when every device is
+    quiet through it; the listener then runs as it would after that step (Rig.quiet_span)."""
+    runtime = Runtime(rig(Still("a"), Still("b")))
+    runtime.set_paused(True)
+    runtime.start()
+    try:
+        stepped: list[int] = []
+        step = runtime.rig.step
+        runtime.rig.step = lambda: (stepped.append(runtime.rig.clock.now_us), step())[1]
+        samples, events = run(runtime, True)
+    finally:
+        runtime.stop()
+    assert [t for t, _ in samples] == list(range(PERIOD_US, 1_000_001, PERIOD_US))
+    assert stepped == [] and events == []
+    assert runtime.rig.skipped_steps == 1000
