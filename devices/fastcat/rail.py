@@ -115,7 +115,13 @@ class RailMixin:
         self.shelf[module] = taken
         self.rail[module - 1] = None
 
+    def _on_rail(self, module: int) -> None:
+        if not 1 <= module <= MAX_MODULES:
+            raise CommandError(f"{self.device_id}: no rail position {module}: a FastCAT takes "
+                               f"at most {MAX_MODULES} modules (§2)")
+
     def cmd_plug(self, module: int, type: str) -> None:
+        self._on_rail(module)
         if module <= len(self.rail) and self.rail[module - 1] is not None:
             raise CommandError(f"{self.device_id}: rail position {module} is taken by a "
                                f"{self.rail[module - 1].mtype.name}: unplug it first")
@@ -132,6 +138,7 @@ class RailMixin:
         self.rail[module - 1] = new
 
     def cmd_swap(self, module: int, other: int) -> None:
+        self._on_rail(module)
         if module == other:
             raise CommandError(f"swap: rail position {module} with itself")
         top = max(module, other)

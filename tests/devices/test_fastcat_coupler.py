@@ -348,6 +348,23 @@ def test_resync_keeps_an_alarm_whose_cause_is_present() -> None:
 
 
 # ---- physical causes ----------------------------------------------------------------------------
+def test_the_rail_takes_sixteen_modules() -> None:
+    """§2 "fino ad un massimo di 16 moduli": no 17th position to plug into or swap with (the
+    scan, the object dictionary and the PDOs number modules 1..16); the rail is unchanged and
+    a rescan still works."""
+    bench = Bench(["DI16"] * 16)
+    bench.settle()
+    for action, args in (("plug", {"module": 17, "type": "DI16"}),
+                         ("swap", {"module": 17, "other": 1})):
+        with pytest.raises(CommandError, match="at most 16 modules"):
+            bench.apply(action, **args)
+    assert len(bench.fc.rail) == 16
+    bench.fc.request_state(AlState.PREOP)
+    bench.fc.request_state(AlState.INIT)
+    bench.run_until(lambda: bench.fc.scan is None)
+    assert bench.read(0x5300, 0) == 16
+
+
 def test_unplug_in_op_is_missing_node_answer() -> None:
     """§7.1 / §7.7: a module unplugged in OP -> 0x04 for module 2, 0x8204, OP -> PREOP;
     §6.18 counts the failed exchanges; plugged back, a Reset fault clears it."""
