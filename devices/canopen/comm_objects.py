@@ -111,7 +111,8 @@ def _pdo_objects(od: ObjectDictionary, node: CanOpenNode, pdo: Pdo) -> None:
     # RxPDOs"); TPDO records have 1-5 as printed (sub 4: compatibility entry).
     add(comm, 0, "Highest sub-index supported", D.UNSIGNED8, RO,
         lambda: 2 if pdo.receive else 5)
-    add(comm, 1, "COB-ID", D.UNSIGNED32, RW, lambda: pdo.cob_id, pdo.set_cob_id)
+    add(comm, 1, "COB-ID", D.UNSIGNED32, RW, lambda: pdo.cob_id,
+        lambda v: node.set_pdo_cob_id(pdo, v))
     add(comm, 2, "Transmission type", D.UNSIGNED8, RW, lambda: pdo.trans_type, pdo.set_type)
     if not pdo.receive:
         add(comm, 3, "Inhibit time", D.UNSIGNED16, RW, lambda: pdo.inhibit_100us,

@@ -114,7 +114,25 @@ class CanOpenNode(ProcessData, DeviceModel):
         if self._canopen_od is None:
             self._canopen_od = build_canopen_od(self.dictionary, self.node_id)
         self.sdo = SdoChannel(self.node_id, self.dictionary, self._canopen_od, self._send_now)
-        self._by_rx_id = {p.can_id: p for p in self.rpdos}
+        self._route_rpdos()
+
+    def _route_rpdos(self) -> None:
+        """The frames the node takes as RPDOs: the COB-IDs of its valid RPDOs as they are now
+        ("la validazione del corrispondente COB-ID nel OD"; bit 31 set: not taken). Made
+        again at every write of a 0x140x:1, so a received frame costs one dict look-up."""
+        routes: dict[int, tuple[Pdo, ...]] = {}
+        for pdo in self.rpdos:
+            if pdo.valid:
+                # Two RPDOs on one COB-ID both take the frame, as two receivers would.
+                routes[pdo.can_id] = (*routes.get(pdo.can_id, ()), pdo)
+        self._by_rx_id = routes
+
+    def set_pdo_cob_id(self, pdo: Pdo, value: int) -> None:
+        """0x1400-0x1403:1 / 0x1800-0x1803:1. A TPDO is sent with its COB-ID as it is at
+        each send; an RPDO's new COB-ID takes effect for the next frame."""
+        pdo.set_cob_id(value)
+        if pdo.receive:
+            self._route_rpdos()
 
     # ---- what the comm objects call -------------------------------------------------------
     @property
@@ -440,7 +458,8 @@ class CanOpenNode(ProcessData, DeviceModel):
         elif can_id == self.sync_cob_id & 0x7FF and allows(self.state, Service.SYNC):
             self._sync(t)
         elif can_id in self._by_rx_id and allows(self.state, Service.PDO):
-            self._rpdo(self._by_rx_id[can_id], data, t)
+            for pdo in self._by_rx_id[can_id]:
+                self._rpdo(pdo, data, t)
 
     def _nmt(self, command: NmtCommand, t: int) -> None:
         new = next_state(self.state, command)

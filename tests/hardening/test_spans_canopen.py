@@ -7,12 +7,12 @@
   ``random_op``), master frames (its ``FRAMES`` and more: NMT start / stop / resets,
   heartbeat times, guard time and life time factor with guarding requests, SYNC and its
   COB-ID, TPDO types 0 / 1 / 254 / 255 with event timers and inhibit times, TPDO3/4 switched
-  on, RPDOs, EMCY inhibit) — with stretches of 1 .. 3000 steps, compared after each. The
-  ServoDrive has no quiet_until of its own yet, so the drive here is a test subclass that
-  says "quiet" exactly while its still step would be taken (``_still``, a repeat of a step
-  that changed nothing: the step then moves only ``now_us`` / ``_t_us``, which is all its
-  ``skip_to`` does). A drive on CANopen (the node's every NMT state) and one on Modbus (the
-  silent node);
+  on, RPDOs, RPDO COB-IDs moved and switched on / off, EMCY inhibit) — with stretches of
+  1 .. 3000 steps, compared after each. The ServoDrive has no quiet_until of its own yet, so
+  the drive here is a test subclass that says "quiet" exactly while its still step would be
+  taken (``_still``, a repeat of a step that changed nothing: the step then moves only
+  ``now_us`` / ``_t_us``, which is all its ``skip_to`` does). A drive on CANopen (the node's
+  every NMT state) and one on Modbus (the silent node);
 - directly on the default rig (master, three drives, their nodes; the drives plain): the
   nodes' spans in the idle states (pre-operational with heartbeat, silent nodes,
   operational with asynchronous TPDOs on an event timer, life guarding) — one rig stepped,
@@ -72,6 +72,10 @@ MORE_FRAMES = (  # node 2 again
     sdo(0x1803, 1, 0x8000_0482, 4), sdo(0x1A00, 0, 0, 1), sdo(0x1A00, 0, 1, 1),
     (0x081, "", False), (0x182, "", True), (0x202, "06 00 00 00 00 00", False),
     (0x202, "00 00 10 27 00 00", False),
+    # RPDOs moved and switched on / off: the node takes frames on their current COB-IDs
+    sdo(0x1400, 1, 0x201, 4), sdo(0x1400, 1, 0x202, 4), sdo(0x1401, 1, 0x302, 4),
+    sdo(0x1401, 1, 0x8000_0302, 4), (0x201, "06 00 00 00 00 00", False),
+    (0x302, "06 00 01", False),
 )
 # Frames that enable the drive (controlword 0x0F), kept rare: an enabled drive standing in
 # mode 3 counts its speed-window timers every step and gives no span (docs/servo-drive.md).

@@ -145,6 +145,79 @@ def test_asynchronous_rpdo_applies_at_once_synchronous_at_the_next_sync() -> Non
     assert bench.drive.cw == 0x0007
 
 
+def test_rpdo_is_taken_on_its_current_cob_id() -> None:
+    """"Un nodo di rete che vuole accettare un certo PDO deve solo attivare il corrispondente
+    messaggio CAN ... con la validazione del corrispondente COB-ID nel OD" and "PDO linking:
+    Si": after 0x1400:1 = 513 node 2 takes RPDO1 on 0x201 (the interpolator note) and no
+    longer on its default 0x202."""
+    bench = _started(node_id=2)
+    bench.nmt(NmtCommand.ENTER_PRE_OPERATIONAL)
+    bench.ok(0x1400, 1, 513, 4)
+    bench.nmt(NmtCommand.START)
+    bench.send(0x202, struct.pack("<Hi", 0x0006, 0))  # the old COB-ID: not this PDO's now
+    bench.run(3)
+    assert bench.drive.cw == 0
+    bench.send(0x201, struct.pack("<Hi", 0x0006, 0))
+    bench.run(3)
+    assert bench.drive.cw == 0x0006
+    bench.ok(0x1400, 1, 0x202, 4)  # and back again
+    bench.send(0x201, struct.pack("<Hi", 0x0007, 0))
+    bench.run(3)
+    assert bench.drive.cw == 0x0006
+    bench.send(0x202, struct.pack("<Hi", 0x0007, 0))
+    bench.run(3)
+    assert bench.drive.cw == 0x0007
+
+
+def test_rpdo_with_bit_31_set_is_ignored() -> None:
+    """"Un MSB settato a 1 significa NON valido": RPDO2 (0x80000301 at power-on) takes
+    nothing, not even a length error, until bit 31 is cleared; a synchronous RPDO switched
+    off is not applied at the Sync either."""
+    bench = _started()
+    assert bench.read(0x1401, 1) == 0x8000_0301
+    bench.send(0x301, struct.pack("<Hb", 0x0006, 3))
+    bench.send(0x301, bytes((0x06,)))  # too short for its mapping: no EMCY 0x8210 either
+    bench.run(3)
+    assert (bench.drive.cw, bench.drive.mode) == (0, 1)
+    assert [f for f in bench.take() if f.can_id == 0x081] == []
+    bench.ok(0x1401, 1, 0x301, 4)
+    bench.send(0x301, struct.pack("<Hb", 0x0006, 3))
+    bench.run(3)
+    assert (bench.drive.cw, bench.drive.mode) == (0x0006, 3)
+    bench.ok(0x1400, 2, 1, 1)  # RPDO1 synchronous, then switched off
+    bench.ok(0x1400, 1, 0x8000_0201, 4)
+    bench.send(0x201, struct.pack("<Hi", 0x0007, 0))
+    bench.send(0x080)
+    bench.run(3)
+    assert bench.drive.cw == 0x0006
+
+
+def test_tpdo_goes_out_on_its_current_cob_id_and_not_when_switched_off() -> None:
+    """0x1800:1 moves TPDO1 (timer, SYNC and remote request alike); bit 31 stops it."""
+    bench = make_bench()
+    bench.ok(0x1800, 5, 20, 2)
+    bench.ok(0x1800, 1, 0x1A1, 4)
+    bench.nmt(NmtCommand.START)
+    bench.run(100)
+    bench.send(0x1A1, rtr=True, dlc=2)
+    bench.send(0x181, rtr=True, dlc=2)
+    bench.run(2)
+    frames = bench.take()
+    assert len(_tpdos_in(frames, 0x1A1)) >= 5
+    assert _tpdos_in(frames, 0x181) == []
+    bench.ok(0x1800, 1, 0x8000_01A1, 4)
+    bench.ok(0x1800, 2, 1, 1)
+    bench.run(100)
+    bench.send(0x080)
+    bench.send(0x1A1, rtr=True, dlc=2)
+    bench.run(5)
+    assert [f for f in bench.take() if f.can_id in (0x181, 0x1A1) and not f.rx] == []
+
+
+def _tpdos_in(frames: list, can_id: int) -> list:
+    return [f for f in frames if f.can_id == can_id]
+
+
 def test_rpdo_shorter_than_its_mapping_is_not_processed() -> None:
     """DS 301: EMCY 0x8210, "PDO not processed due to length error"."""
     bench = _started()
@@ -155,11 +228,15 @@ def test_rpdo_shorter_than_its_mapping_is_not_processed() -> None:
         ["10 82 11 00 00 00 00 00"]
 
 
-def test_seed_interpolator_example_sync_and_rpdo_loop() -> None:
+@pytest.mark.parametrize("node_id", [1, 2])
+def test_seed_interpolator_example_sync_and_rpdo_loop(node_id: int) -> None:
     """Ch. 4 "Modo interpolatore": 60C2.1 = 1 ms, mode 7, RPDO1 = set-point + controlword
     synchronous, TPDO1 = position + statusword on every Sync, NMT start, enable, 0x001F,
-    then every cycle a Sync and PDO 1 (set-point, controlword)."""
-    bench = make_bench()
+    then every cycle a Sync and PDO 1 (set-point, controlword). Node 2 follows the "Nota":
+    "1400, sub 1 = 513" first, so it takes node 1's RPDO1 (0x201)."""
+    bench = make_bench(node_id=node_id)
+    if node_id != 1:
+        bench.ok(0x1400, 1, 513, 4)
     for index, sub, value, size in (
             (0x6092, 1, 6000, 4), (0x60C2, 1, 1, 1), (0x6060, 0, 7, 1),
             (0x1400, 2, 1, 1), (0x1600, 0, 0, 1), (0x1600, 1, 0x60C10120, 4),
@@ -181,7 +258,8 @@ def test_seed_interpolator_example_sync_and_rpdo_loop() -> None:
         bench.send(0x201, struct.pack("<iH", set_point, 0x001F))
         bench.run(1)
     bench.run(20)
-    feedback = [struct.unpack("<iH", f.data) for f in bench.take() if f.can_id == 0x181]
+    feedback = [struct.unpack("<iH", f.data) for f in bench.take()
+                if f.can_id == 0x180 + node_id]
     assert len(feedback) >= 595  # one TPDO per Sync
     positions = [p for p, _ in feedback]
     assert positions == sorted(positions)
