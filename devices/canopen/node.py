@@ -289,7 +289,10 @@ class CanOpenNode(ProcessData, DeviceModel):
 
     def _peek_pack(self, pdo: Pdo) -> bytes | None:
         """:meth:`_pack` without a side effect: through the plan when it stands (it is then
-        left as it is), else the plain :meth:`Pdo.pack` (same getters, bytes, exceptions)."""
+        left as it is), else the plain :meth:`Pdo.pack` (same getters, bytes, exceptions);
+        None, as from :meth:`_pack`, for a TPDO with nothing mapped."""
+        if not pdo.count:
+            return None
         plan = pdo._plan
         if plan is not None and plan[0] is self.dictionary and plan[1] == pdo.count \
                 and plan[2] == pdo.entries:

@@ -5,7 +5,8 @@ the synchronous RPDOs received since the previous SYNC take effect ("attuati al 
 immediatamente successivo"), the drive takes the Sync (the interpolator takes its set-point),
 then the synchronous TPDOs go out with the values of that instant: type 0 when they changed,
 type n every n SYNCs. Asynchronous RPDOs take effect when they arrive; asynchronous TPDOs go on
-a change or on their event timer, never within the inhibit time of the previous one.
+a change or on their event timer, never within the inhibit time of the previous one. A TPDO
+with no object mapped (0x1A0x:0 = 0) is never sent: a PDO carries one to eight bytes.
 """
 
 from __future__ import annotations
@@ -73,7 +74,8 @@ class ProcessData:
                 logger.info("%s: %s: %s", self.drive.device_id, pdo.name, exc)
 
     def _pdo_request(self: CanOpenNode, can_id: int, t: int) -> None:
-        """A remote request for a TPDO (COB-ID bit 30 clear): the current data at once."""
+        """A remote request for a TPDO (COB-ID bit 30 clear): the current data at once; a
+        TPDO with nothing mapped leaves it unanswered, as a switched-off one does."""
         if self.state is not NmtState.OPERATIONAL:
             return
         for pdo in self.tpdos:
@@ -105,6 +107,11 @@ class ProcessData:
         return False
 
     def _pack(self: CanOpenNode, pdo: Pdo) -> bytes | None:
+        """The TPDO's data, or None when it is not sent: nothing mapped ("Il campo dati di un
+        PDO può essere compreso tra uno e otto byte"; so no frame at the timer, a SYNC or a
+        remote request) or an object it maps cannot be read."""
+        if not pdo.count:
+            return None
         try:
             return pdo.pack_planned(self.dictionary)
         except (SdoAbort, CommandError) as exc:

@@ -214,6 +214,36 @@ def test_tpdo_goes_out_on_its_current_cob_id_and_not_when_switched_off() -> None
     assert [f for f in bench.take() if f.can_id in (0x181, 0x1A1) and not f.rx] == []
 
 
+def test_tpdo_with_no_mapped_object_is_not_sent() -> None:
+    """"Il campo dati di un PDO può essere compreso tra uno e otto byte": with NumOfEntries
+    = 0 ("Per eliminare una mappatura bisogna agire con il NumOfEntries") there is no PDO to
+    send — not on the event timer, not at a SYNC (types 0 and 1), not to a remote request —
+    and a quiet span is not cut by its timer. Mapped again, it goes out as on entering
+    Operational."""
+    bench = make_bench()
+    bench.ok(0x1800, 5, 20, 2)
+    bench.nmt(NmtCommand.START)
+    bench.run(50)
+    bench.ok(0x1A00, 0, 0, 1)
+    bench.take()
+    bench.run(100)
+    assert _tpdos(bench) == []
+    node = bench.node
+    assert node.quiet_until(1_000) > node.now_us + 1_000_000  # no timer left to keep
+    for trans_type in (1, 0):
+        bench.ok(0x1800, 2, trans_type, 1)
+        for _ in range(3):
+            bench.send(0x080)
+            bench.run(2)
+    bench.send(0x181, rtr=True, dlc=0)
+    bench.run(2)
+    assert _tpdos(bench) == []
+    bench.ok(0x1800, 2, 255, 1)
+    bench.ok(0x1A00, 0, 1, 1)
+    bench.run(50)
+    assert [hexs(f.data) for f in _tpdos(bench)][:2] == ["40 86", "40 86"]
+
+
 def _tpdos_in(frames: list, can_id: int) -> list:
     return [f for f in frames if f.can_id == can_id]
 
