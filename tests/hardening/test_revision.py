@@ -42,19 +42,23 @@ def recorded(snapshot: Mapping[str, Any]) -> tuple[Any, ...]:
 
 
 def run_sampled(rig: Rig, steps: int, seen: dict[str, Any]) -> None:
-    """``steps`` steps as the runtime takes them with a recorder attached: quiet spans skipped
-    up to the step before each sample time, which is stepped; at each sample, with the
-    revision as at the last one, the recorded content must be the last one's."""
+    """``steps`` steps as the runtime takes them with a recorder attached: quiet spans skipped,
+    through a sample time when the devices are quiet through it (Rig.quiet_span), else up to
+    the step before it, which is stepped; at each sample, with the revision as at the last
+    one, the recorded content must be the last one's."""
     step_us = rig.clock.step_us
     end = rig.clock.now_us + steps * step_us
     while rig.clock.now_us < end:
         now = rig.clock.now_us
         due = now - now % SAMPLE_US + SAMPLE_US
-        span = rig.quiet_steps((end - now) // step_us, [lambda n, s, due=due: max(n, due - s)])
+        span, observed = rig.quiet_span((end - now) // step_us,
+                                        [lambda n, s, due=due: max(n, due - s)])
         if span:
             rig.skip(span)
-            continue
-        rig.step()
+            if not observed:
+                continue
+        else:
+            rig.step()
         if rig.clock.now_us % SAMPLE_US:
             continue
         snapshot = rig.snapshot()
