@@ -166,7 +166,10 @@ class ValueRead(Event):
     kind: ClassVar[str] = "read"
 
     def fields(self) -> dict[str, Any]:
-        out: dict[str, Any] = {"address": self.address, "value": self.value}
+        value = self.value
+        if isinstance(value, bytes | bytearray):  # an OCTET_STRING object: JSON-able hex
+            value = fmt_bytes(value)
+        out: dict[str, Any] = {"address": self.address, "value": value}
         if isinstance(self.value, int) and not isinstance(self.value, bool):
             out["hex"] = f"0x{self.value & 0xFFFFFFFF:08X}"
         return out

@@ -474,9 +474,11 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
     def od_status_register(self) -> int:
         return self.diagnosis.status_bits
 
-    def od_history_message(self, sub: int) -> str:
+    def od_history_message(self, sub: int) -> bytes:
+        # an empty slot lies above sub 0: a master's read aborts before it (history.read),
+        # only the dashboard's peek sees it, as no bytes
         message = self.history.message(sub)
-        return "" if message is None else message.encode().hex(" ").upper()
+        return b"" if message is None else message.encode()
 
     def od_f030_written(self, _value: Any) -> None:
         self.f030_written = True

@@ -14,6 +14,7 @@ from typing import Any, Protocol
 
 from devices.cpx.catalog import ModuleType
 from devices.cpx.history import FIRST_SUB, INDEX, MAX_MESSAGES, DiagHistory
+from devices.cpx.messages import MESSAGE_BYTES
 from devices.cpx.modules import ANALOG_RANGES, CpxModule
 from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
 
@@ -43,7 +44,7 @@ class CpxObjects(Protocol):
 
     def od_error_register(self) -> int: ...
     def od_status_register(self) -> int: ...
-    def od_history_message(self, sub: int) -> str: ...
+    def od_history_message(self, sub: int) -> bytes: ...
     def od_f030_written(self, value: Any) -> None: ...
     def od_unique_id(self) -> str: ...
 
@@ -106,9 +107,10 @@ def _history(od: ObjectDictionary, dev: CpxObjects) -> None:
     od.add(OdEntry(INDEX, 5, "Flags", DataType.UNSIGNED16, Access.RW, 0x0000,
                    getter=lambda: h.flags, setter=h.write_flags))
     for sub in range(FIRST_SUB, FIRST_SUB + MAX_MESSAGES):
-        # BYTE[23]: od.py has no octet-string type; the value is the bytes as hex text.
-        _ro(od, INDEX, sub, f"Subindex {sub:03d}", DataType.VISIBLE_STRING, "",
-            getter=lambda sub=sub: dev.od_history_message(sub))
+        # BYTE[23] (Tab. 14 / 27): the default gives the entry its 23-byte size (the SDO
+        # information service reports it); the value is the stored message's bytes.
+        _ro(od, INDEX, sub, f"Subindex {sub:03d}", DataType.OCTET_STRING,
+            bytes(MESSAGE_BYTES), getter=lambda sub=sub: dev.od_history_message(sub))
 
 
 def _fixed(od: ObjectDictionary, index: int, sub: int, name: str, value: int) -> None:

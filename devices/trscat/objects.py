@@ -120,11 +120,11 @@ def _diagnostics(od: ObjectDictionary, dev: TrsObjects) -> None:
         getter=lambda: diag.new_available)
     od.add(OdEntry(0x10F3, 5, "Flags", U16, RW, 0, getter=lambda: diag.flags,
                    setter=diag.set_flags))
-    # ETG.1020 messages are OCTET_STRINGs; devices/od.py has no such type, so they are
-    # VISIBLE_STRINGs whose latin-1 encoding is exactly the message bytes.
+    # ETG.1020 messages are OCTET_STRINGs (§9.3.7 prints no type for them); a place never
+    # written holds no bytes.
     for sub in range(FIRST_MESSAGE_SUB, LAST_MESSAGE_SUB + 1):
         _ro(od, 0x10F3, sub, f"Diagnosis message {sub - FIRST_MESSAGE_SUB + 1:02d}",
-            DataType.VISIBLE_STRING, "", getter=lambda s=sub: diag.raw(s).decode("latin-1"))
+            DataType.OCTET_STRING, b"", getter=lambda s=sub: diag.raw(s))
 
 
 def _sync_manager(od: ObjectDictionary, dev: TrsObjects, index: int, io: str) -> None:

@@ -27,6 +27,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.style import esc
 from devices.device import CommandError
+from devices.events import fmt_bytes
 
 logger = logging.getLogger(__name__)
 
@@ -76,7 +77,14 @@ def format_value(value: Any, dtype: str) -> str:
         return str(value)
     if isinstance(value, str):
         return f'"{value}"'
+    if isinstance(value, bytes | bytearray):  # OCTET_STRING: the bytes in hex, byte 0 first
+        return fmt_bytes(value)
     return str(value)
+
+
+def read_text(value: Any) -> str:
+    """A Read button's answer: an OCTET_STRING in hex as the table shows it, else repr."""
+    return fmt_bytes(value) if isinstance(value, bytes | bytearray) else repr(value)
 
 
 def matches(row: OdRow, needle: str) -> bool:
@@ -207,7 +215,8 @@ class ObjectDictionaryPanel:
         if verb == "Read":
             self._sender.send(client, self._device_id, "read_object",
                               {"index": index, "sub": sub},
-                              done=lambda v: notify(client, f"{address} read", f"value = {v!r}"))
+                              done=lambda v: notify(client, f"{address} read",
+                                                    f"value = {read_text(v)}"))
             return
         value = parse_value(self._value.value)
         self._sender.send(client, self._device_id, "write_object",

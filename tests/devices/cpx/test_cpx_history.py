@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import json
+
 import pytest
 from cpx_bench import Bench, tab9
 
+from app.ethercat_wire.faces.cpx import CpxFace
+from app.ui.panels.object_dictionary import read_rows, render
 from devices.cpx.codes import (
     CPX_TEXT_ID_BASE,
     DIAG_CODE_CPX,
@@ -22,6 +26,7 @@ from devices.cpx.history import (
     DiagHistory,
 )
 from devices.cpx.messages import MESSAGE_BYTES, DiagMessage, channel_param
+from devices.events import ValueRead
 from devices.od import AbortCode, DataType, SdoAbort
 
 # Tab. 15, as printed.
@@ -174,12 +179,58 @@ def test_short_circuit_message_on_the_device_matches_tab15() -> None:
     shorted_at = bench.now
     bench.run(0.01)
     newest = bench.apply("read_object", index=0x10F3, sub=2)
-    raw = bytes.fromhex(bench.apply("read_object", index=0x10F3, sub=newest))
+    raw = bench.apply("read_object", index=0x10F3, sub=newest)
     assert raw[:8] == TAB15[:8]  # diag code, flags, Text-ID
     assert raw[16:] == TAB15[16:] + b"\x00"  # parameters: module 2, channel 0x80
     # seen at the next 1 ms cycle; ns since the bus module started (Tab. 16 [4])
     assert DiagMessage.decode(raw).timestamp_ns == (shorted_at + 1000) * 1000
     assert bench.apply("read_object", index=0x10F3, sub=4) is False  # read: newest seen
+
+
+def shorted_tab9() -> tuple[Bench, int, bytes]:
+    """The Tab. 15 case (short circuit at output 0 of module 2): bench, newest sub, bytes."""
+    bench = tab9().to_op()
+    bench.apply("write_object", index=0x7002, sub=1, value=1)
+    bench.apply("short_circuit", module=2, channel=0, on=True)
+    bench.run(0.01)
+    newest = bench.cpx.history.newest
+    message = bench.cpx.history.message(newest)
+    assert message is not None and message.text_id == 0x3702
+    return bench, newest, message.encode()
+
+
+def test_message_subs_are_byte23_on_every_read_path() -> None:
+    """Tab. 14 / Tab. 27: subs 6 ... are BYTE[23], and Tab. 15 prints a message as its raw
+    bytes: the operator's read, the master's CoE upload and the wire's SDO upload all hand
+    over the 23 bytes, not their hex text."""
+    bench, newest, raw = shorted_tab9()
+    entry = bench.cpx.od.entry(0x10F3, newest)
+    assert entry.dtype is DataType.OCTET_STRING
+    assert entry.bit_length == 8 * MESSAGE_BYTES  # what the SDO information service reports
+    assert len(raw) == MESSAGE_BYTES and raw[:8] == TAB15[:8]
+    assert bench.apply("read_object", index=0x10F3, sub=newest) == raw
+    assert bench.cpx.sdo_upload(0x10F3, newest) == raw
+    assert CpxFace().upload_raw(bench.cpx, 0x10F3, newest) == raw
+
+
+def test_message_shown_in_hex_in_the_objects_tab_and_the_read_event() -> None:
+    """A trainee reading 0x10F3:6 in the Objects tab, or a scenario's ``read`` step, sees the
+    Tab. 15 bytes in hex; the event record stays JSON."""
+    bench, newest, raw = shorted_tab9()
+    shown = raw.hex(" ").upper()
+    assert shown.startswith("02 00 00 E1 02 02 02 37")
+    html = render(read_rows(bench.cpx), f"0x10F3:{newest}")
+    assert f"<td>{shown}</td>" in html
+    record = ValueRead(0, "cpx", address=f"0x10F3:{newest}", value=raw).to_record()
+    assert record["value"] == shown and json.loads(json.dumps(record)) == record
+
+
+def test_an_empty_message_slot_shows_no_bytes() -> None:
+    """Above sub 0 (ETG.1020: the highest subindex in use) a master's read aborts
+    (test_reading_past_sub0_is_refused); the Objects tab shows the slot without bytes."""
+    bench = Bench(master=False)
+    sub = bench.cpx.history.sub0 + 1
+    assert bench.cpx.od.peek(0x10F3, sub) == b""
 
 
 def test_error_going_is_an_info_message_unless_filtered() -> None:

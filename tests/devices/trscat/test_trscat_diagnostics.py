@@ -8,9 +8,10 @@ import struct
 import pytest
 from trscat_bench import Bench
 
+from app.ui.panels.object_dictionary import read_rows, render
 from devices.device import CommandError
 from devices.ethercat import AlState
-from devices.od import SdoAbort
+from devices.od import DataType, SdoAbort
 from devices.trscat.diagnostics import (
     FAULTS,
     MAX_MESSAGES,
@@ -265,13 +266,28 @@ def test_history_through_the_object_dictionary() -> None:
     bench.apply("inject_fault", module=1, fault="AN_MINUS_12V")
     bench.run(0.002)
     assert bench.read(0x10F3, 2) == 7 and bench.read(0x10F3, 4) is True
-    raw = bench.read(0x10F3, 6).encode("latin-1")
+    raw = bench.read(0x10F3, 6)
     assert struct.unpack_from("<IHH", raw) == (0xE8005114, 0x0112, 0x5114)
     assert raw[-3:] == bytes((5, 0, 1))
     bench.apply("acknowledge_messages")
     assert bench.read(0x10F3, 3) == 7 and bench.read(0x10F3, 4) is False
     with pytest.raises(SdoAbort):
         bench.write(0x10F3, 3, 20)  # no message there
+
+
+def test_messages_are_octet_strings() -> None:
+    """ETG.1020, which §9.3.7's 0x10F3 follows (the seed prints no type for the message subs):
+    a message is an OCTET_STRING, read as its bytes by the operator and the master's CoE
+    upload alike; the Objects tab shows them in hex; a place never written holds no bytes."""
+    bench = Bench(["AN-E"], configured=["AN-E"])
+    bench.to_state(AlState.OP)
+    bench.apply("inject_fault", module=1, fault="AN_PLUS_12V")
+    bench.run(0.002)
+    raw = bench.trs.diag.messages[6].encode()
+    assert bench.trs.od.entry(0x10F3, 6).dtype is DataType.OCTET_STRING
+    assert bench.read(0x10F3, 6) == raw == bench.trs.sdo_upload(0x10F3, 6)
+    assert bench.read(0x10F3, 7) == b""
+    assert f"<td>{raw.hex(' ').upper()}</td>" in render(read_rows(bench.trs), "10f3:6")
 
 
 def test_emergency_only_with_flag_bit0() -> None:
