@@ -135,8 +135,8 @@ class CoeMailbox:
     """The CoE SDO service of a slave's mailbox, as a master reaches it (devices.master.Slave):
     from PREOP on, with the slave reachable and its dictionary built; otherwise the mailbox
     does not answer and the master's SDO times out (0x05040000). Values travel as the bytes
-    of the entry's type. A slave whose writes must go through its own path overrides
-    :meth:`mailbox_write`."""
+    of the entry's type. A slave whose writes or reads must go through its own path (side
+    effects of a read, say) overrides :meth:`mailbox_write` / :meth:`mailbox_read`."""
 
     od: ObjectDictionary | None
     esm: Esm
@@ -147,7 +147,11 @@ class CoeMailbox:
 
     def sdo_upload(self, index: int, sub: int) -> bytes:
         od = self._mailbox_od(index, sub)
-        return encode(od.entry(index, sub).dtype, od.read(index, sub))
+        return encode(od.entry(index, sub).dtype, self.mailbox_read(index, sub))
+
+    def mailbox_read(self, index: int, sub: int) -> object:
+        assert self.od is not None  # _mailbox_od checked it
+        return self.od.read(index, sub)
 
     def mailbox_write(self, index: int, sub: int, value: object) -> None:
         assert self.od is not None  # _mailbox_od checked it

@@ -243,8 +243,16 @@ class OperatorMixin:
         self._require_od().write(index, sub, value)
 
     def cmd_read_object(self: CpxEEc, index: int, sub: int) -> Any:
-        od = self._require_od()
+        return self._read_object(self._require_od(), index, sub)
+
+    def mailbox_read(self: CpxEEc, index: int, sub: int) -> Any:
+        # the built-in master's SDO upload (CoeMailbox.sdo_upload): a read of the newest
+        # message lowers New Message Available there too (docs/cpx-e-ec.md choice 21)
+        assert self.od is not None  # the mailbox checked it
+        return self._read_object(self.od, index, sub)
+
+    def _read_object(self: CpxEEc, od: ObjectDictionary, index: int, sub: int) -> Any:
         if index == HISTORY and sub >= FIRST_SUB:
-            self.touch()  # the wire's face calls this directly, not through apply()
+            self.touch()  # the wire's face and the master call this, not through apply()
             self.history.read(sub)  # NO_SUBINDEX past sub 0, New Message Available falls
         return od.read(index, sub)

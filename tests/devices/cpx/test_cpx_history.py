@@ -225,6 +225,50 @@ def test_message_shown_in_hex_in_the_objects_tab_and_the_read_event() -> None:
     assert record["value"] == shown and json.loads(json.dumps(record)) == record
 
 
+READ_PATHS = {
+    "operator": lambda b, sub: b.apply("read_object", index=0x10F3, sub=sub),
+    "coe_upload": lambda b, sub: b.cpx.sdo_upload(0x10F3, sub),  # the built-in master's SDO
+    "wire": lambda b, sub: CpxFace().upload_raw(b.cpx, 0x10F3, sub),
+}
+
+
+@pytest.mark.parametrize("path", READ_PATHS)
+def test_new_message_available_falls_on_every_read_path(path: str) -> None:
+    """ETG.1020 (choice 21): in Overwrite mode New Message Available falls when the newest
+    message is read, whoever reads it; an older message leaves it up."""
+    read = READ_PATHS[path]
+    bench, newest, _raw = shorted_tab9()
+    assert bench.cpx.od.peek(0x10F3, 4) is True
+    older = bench.cpx.history.ordered()[-2][0]
+    read(bench, older)
+    assert bench.cpx.od.peek(0x10F3, 4) is True
+    read(bench, newest)
+    assert bench.cpx.od.peek(0x10F3, 4) is False
+
+
+@pytest.mark.parametrize("path", READ_PATHS)
+def test_acknowledge_mode_reads_leave_new_message_available(path: str) -> None:
+    """Tab. 18 bit 4 = 1 (Acknowledge): only writing sub 3 lowers it, on any read path."""
+    bench = tab9().to_op()
+    bench.apply("write_object", index=0x10F3, sub=5, value=FLAG_ACKNOWLEDGE)
+    bench.apply("short_circuit", module=1, on=True)
+    bench.run(0.01)
+    newest = bench.cpx.history.newest
+    READ_PATHS[path](bench, newest)
+    assert bench.cpx.od.peek(0x10F3, 4) is True
+    bench.apply("write_object", index=0x10F3, sub=3, value=newest)
+    assert bench.cpx.od.peek(0x10F3, 4) is False
+
+
+@pytest.mark.parametrize("path", READ_PATHS)
+def test_reading_past_sub0_is_refused_on_every_path(path: str) -> None:
+    """Sub 0 is the highest subindex in use (ETG.1020): above it every read aborts."""
+    bench = tab9().to_op()
+    with pytest.raises(SdoAbort) as info:
+        READ_PATHS[path](bench, bench.cpx.history.sub0 + 1)
+    assert info.value.code is AbortCode.NO_SUBINDEX
+
+
 def test_an_empty_message_slot_shows_no_bytes() -> None:
     """Above sub 0 (ETG.1020: the highest subindex in use) a master's read aborts
     (test_reading_past_sub0_is_refused); the Objects tab shows the slot without bytes."""

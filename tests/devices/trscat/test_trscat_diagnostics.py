@@ -8,6 +8,7 @@ import struct
 import pytest
 from trscat_bench import Bench
 
+from app.ethercat_wire.faces.trscat import TrsCatFace
 from app.ui.panels.object_dictionary import read_rows, render
 from devices.device import CommandError
 from devices.ethercat import AlState
@@ -288,6 +289,24 @@ def test_messages_are_octet_strings() -> None:
     assert bench.read(0x10F3, 6) == raw == bench.trs.sdo_upload(0x10F3, 6)
     assert bench.read(0x10F3, 7) == b""
     assert f"<td>{raw.hex(' ').upper()}</td>" in render(read_rows(bench.trs), "10f3:6")
+
+
+@pytest.mark.parametrize("path", ["operator", "coe_upload", "wire"])
+def test_reading_the_newest_message_leaves_new_message_available(path: str) -> None:
+    """§9.3.7 acknowledge mode (ETG.1020): :4 stays TRUE whoever reads the newest message;
+    only acknowledging it (:3) lowers it."""
+    read = {"operator": lambda: bench.read(0x10F3, 6),
+            "coe_upload": lambda: bench.trs.sdo_upload(0x10F3, 6),
+            "wire": lambda: TrsCatFace().upload_raw(bench.trs, 0x10F3, 6)}[path]
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.apply("inject_fault", fault="FIELD_SUPPLY")
+    bench.run(0.002)
+    assert bench.read(0x10F3, 2) == 6 and bench.read(0x10F3, 4) is True
+    read()
+    assert bench.read(0x10F3, 4) is True
+    bench.write(0x10F3, 3, 6)
+    assert bench.read(0x10F3, 4) is False
 
 
 def test_emergency_only_with_flag_bit0() -> None:
