@@ -225,7 +225,10 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsM
         """§9.3.2: written by the master in PRE-OP only; the PDO assignment follows."""
         if self.esm.state is not AlState.PREOP:
             raise refuse_in_state(0xF030, sub)
-        if sub > 0 and value != 0 and not ident_allowed_at(sub, value):
+        # 0 = an unused expansion position; sub 1 (the integrated module) admits only its
+        # own ident, "ammesso solo 0x494F2D42".
+        unused = sub >= 2 and value == 0
+        if sub > 0 and not unused and not ident_allowed_at(sub, value):
             raise SdoAbort(AbortCode.VALUE_RANGE, 0xF030, sub)
         self.f030[sub] = value
         self._rebuild_od()

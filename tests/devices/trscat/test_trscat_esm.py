@@ -99,20 +99,28 @@ def test_configured_list_written_in_preop_only(state: AlState, ok: bool) -> None
         assert info.value.code is AbortCode.CANNOT_STORE_STATE
 
 
-@pytest.mark.parametrize(("sub", "value", "ok"), [
-    (0, 0, False), (0, 1, True), (0, 8, True), (0, 9, False),  # "valori da 1 a 8"
-    (1, IO_B, True), (1, IO_E, False),  # "ammesso solo 0x494F2D42"
-    (2, KK_E, True), (8, KK_E, False), (8, AN_E, True), (3, 0, True), (4, 0x1234, False)])
-def test_configured_list_values(sub: int, value: int, ok: bool) -> None:
-    """§9.3.2 0xF030 table: the allowed values of each sub."""
+_TOO_LOW, _TOO_HIGH, _RANGE = AbortCode.VALUE_TOO_LOW, AbortCode.VALUE_TOO_HIGH, \
+    AbortCode.VALUE_RANGE
+
+
+@pytest.mark.parametrize(("sub", "value", "error"), [
+    (0, 0, _TOO_LOW), (0, 1, None), (0, 8, None), (0, 9, _TOO_HIGH),  # "valori da 1 a 8"
+    (1, IO_B, None), (1, IO_E, _RANGE), (1, 0, _RANGE),  # "ammesso solo 0x494F2D42"
+    (2, KK_E, None), (8, KK_E, _RANGE), (8, AN_E, None), (3, 0, None), (4, 0x1234, _RANGE)])
+def test_configured_list_values(sub: int, value: int, error: AbortCode | None) -> None:
+    """§9.3.2 0xF030 table: the allowed values of each sub (0 only for an unused expansion
+    sub: sub 1, the integrated module, admits 0x494F2D42 alone)."""
     bench = Bench()
     bench.to_state(AlState.PREOP)
-    if ok:
+    if error is None:
         bench.write(0xF030, sub, value)
         assert bench.read(0xF030, sub) == value
     else:
-        with pytest.raises(SdoAbort):
+        before = bench.read(0xF030, sub)
+        with pytest.raises(SdoAbort) as info:
             bench.write(0xF030, sub, value)
+        assert info.value.code is error
+        assert bench.read(0xF030, sub) == before
 
 
 def _write_f030(bench: Bench, idents: list[int]) -> None:
