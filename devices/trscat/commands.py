@@ -268,12 +268,14 @@ class CommandsMixin:
                                f"power-up detection of the TRS bus is over (§9.2 INIT)")
         return self.od
 
-    def od_set_sync_mode(self, value: int) -> None:
+    def od_set_sync_mode(self, index: int, value: int) -> None:
+        """0x1C32:1 or 0x1C33:1 (``index``) written: one mode for both; an abort names the
+        object the master wrote."""
         if self.esm.state is not AlState.PREOP:
-            raise refuse_in_state(0x1C32, 1)
+            raise refuse_in_state(index, 1)
         try:
             mode = SyncMode(value)
         except ValueError:
-            raise SdoAbort(AbortCode.VALUE_RANGE, 0x1C32, 1) from None
+            raise SdoAbort(AbortCode.VALUE_RANGE, index, 1) from None
         self.sync.mode = mode
 

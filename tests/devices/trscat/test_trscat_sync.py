@@ -182,24 +182,26 @@ def test_dc_without_sync0_refuses_safeop() -> None:
     assert bench.trs.al_status_code == 0x0030
 
 
+@pytest.mark.parametrize("index", [0x1C32, 0x1C33])
 @pytest.mark.parametrize(("state", "value", "error"), [
     (AlState.PREOP, 0x0000, None),
     (AlState.PREOP, 0x0002, None),
     (AlState.PREOP, 0x0001, AbortCode.VALUE_RANGE),  # SM-synchronous: not supported
     (AlState.SAFEOP, 0x0000, AbortCode.CANNOT_STORE_STATE),
 ])
-def test_sync_mode_written_in_preop(state: AlState, value: int,
+def test_sync_mode_written_in_preop(index: int, state: AlState, value: int,
                                     error: AbortCode | None) -> None:
-    """§9.1.1 / §9.3.1: the mode is chosen by the master before SAFE-OP (0x1C32:1 RW)."""
+    """§9.1.1 / §9.3.1: the mode is chosen by the master before SAFE-OP (0x1C32:1 / 0x1C33:1
+    RW); a refusal names the object written, as an SDO abort does."""
     bench = Bench()
     bench.to_state(state)
     if error is None:
-        bench.write(0x1C32, 1, value)
-        assert bench.read(0x1C33, 1) == value
+        bench.write(index, 1, value)
+        assert bench.read(0x1C32, 1) == bench.read(0x1C33, 1) == value
     else:
         with pytest.raises(SdoAbort) as info:
-            bench.write(0x1C32, 1, value)
-        assert info.value.code is error
+            bench.write(index, 1, value)
+        assert (info.value.code, info.value.index, info.value.sub) == (error, index, 1)
 
 
 def test_switch_to_free_run_then_op() -> None:
