@@ -27,12 +27,14 @@ MAX_BYTES = 4_000_000  # a network file larger than this is not a description
 
 
 def uses_dc(device: Any) -> bool:
-    """DC use of a slave model when no description says it: the TRS-CAT in DC-SYNC (seed 001
-    §9.1.1), the CPX-E-EC with a module that runs synchronously (seed 002 §2.1.4)."""
+    """DC use of a slave model when no description says it: the TRS-CAT set up for DC-SYNC
+    (its rig ``sync_mode``, the master's option of seed 001 §9.3; SYNC0 activated makes it
+    DC-SYNC at PS, §9.1.1), the CPX-E-EC with a module that runs synchronously (seed 002
+    §2.1.4)."""
     if device.KIND == "trscat":
         from devices.trscat.sync import SyncMode
 
-        return device.sync_mode_default is SyncMode.DC_SYNC
+        return device.master_sync_mode is SyncMode.DC_SYNC
     if device.KIND == "cpx_e_ec":
         return any(m.mtype.name.startswith(CPX_DC_MODULES) for m in device.modules)
     return False

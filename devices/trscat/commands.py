@@ -73,7 +73,9 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("frame_jitter", "Frames arrive up to this many us late; one that invades the "
                            "calc+copy time misses its SYNC0 (§9.1.1)",
            (Param("us", int, low=0, high=100_000),)),
-    Action("set_sync_mode", "Write 0x1C32:1 / 0x1C33:1 in PRE-OP: dc or free_run (§9.1.1)",
+    Action("set_sync_mode", "Write 0x1C32:1 / 0x1C33:1 in PRE-OP: dc or free_run, the mode "
+                            "the master asks for; PS refuses it (0x0030) unless the Sync "
+                            "Control register says the same (§9.1.1)",
            (Param("mode", str, choices=tuple(MODE_BY_NAME)),)),
     Action("acknowledge_messages", "Write 0x10F3:3 = 0x10F3:2, as a master acknowledging "
                                    "every diagnosis message (§9.3.7)"),
@@ -269,13 +271,14 @@ class CommandsMixin:
         return self.od
 
     def od_set_sync_mode(self, index: int, value: int) -> None:
-        """0x1C32:1 or 0x1C33:1 (``index``) written: one mode for both; an abort names the
-        object the master wrote."""
+        """0x1C32:1 or 0x1C33:1 (``index``) written: one mode for both, shown at once and
+        checked at PS against the Sync Control register (§9.1.1); kept until INIT. An abort
+        names the object the master wrote."""
         if self.esm.state is not AlState.PREOP:
             raise refuse_in_state(index, 1)
         try:
             mode = SyncMode(value)
         except ValueError:
             raise SdoAbort(AbortCode.VALUE_RANGE, index, 1) from None
-        self.sync.mode = mode
+        self.sync.mode = self.sync.requested = mode
 

@@ -68,7 +68,10 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsM
         if not 0.0 <= float(field_supply_v) <= 40.0:
             raise ValueError(f"field_supply_v {field_supply_v}: give 0..40 V (24 V nominal, "
                              f"seed 001 §3)")
-        self.sync_mode_default = MODE_BY_NAME[str(sync_mode).lower()]
+        # The mode the line's master is set up for (§9.3 "opzioni da settare nel master"): the
+        # built-in master activates SYNC0 for it or not (app/network/files.py uses_dc). The
+        # device itself takes its mode from the Sync Control register at PS (§9.1.1).
+        self.master_sync_mode = MODE_BY_NAME[str(sync_mode).lower()]
         self.rail: list[SlotIo | None] = [SlotIo.new(INTEGRATED),
                                           *(SlotIo.new(k) for k in kinds)]
         self.box_name = box_name
@@ -95,7 +98,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsM
         self.error_values = [0] * MAX_SLOTS  # §9.3.5: 0 at reset
         self.error_modes = [0] * MAX_SLOTS
         self.sysok_mask = 0  # §9.3.6: 0 at reset
-        self.sync = SyncUnit(mode=self.sync_mode_default, next_free_us=self.now_us)
+        self.sync = SyncUnit(next_free_us=self.now_us)  # DC-SYNC, the §9.1.1 default
         self.sync_state = self.sync.state
         self.diag = DiagHistory()
         self.active: dict[FaultKey, AppFault] = {}
@@ -184,9 +187,10 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsM
         self.write_object(index, sub, value)  # a master's SDO download: touched and refreshed
 
     def configure_dc(self, activation: int, sync0_cycle_ns: int, start_time_ns: int) -> None:
-        """The master wrote the ESC's DC registers: 0x0981 activation, 0x09A0 SYNC0 cycle (ns),
-        0x0990 SYNC0 start time (ns of the DC system time). In DC-SYNC, SYNC0 runs on them
-        (§9.1.1; checked at PREOP -> SAFEOP, 0x1C32:2 then shows the cycle, §9.3.1)."""
+        """The master wrote the ESC's DC registers: 0x0981 activation (the Sync Control
+        register's high byte), 0x09A0 SYNC0 cycle (ns), 0x0990 SYNC0 start time (ns of the DC
+        system time). PREOP -> SAFEOP takes the mode from them and, in DC-SYNC, SYNC0 runs on
+        them (§9.1.1; 0x1C32:1 / :2 then show the mode and the cycle, §9.3.1)."""
         if not self.powered:
             return  # the ESC is off: nothing to write into
         self._touch()
@@ -269,7 +273,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsM
             "trs_bus": {"state": self.bus.value, "current_a": round(self.bus_current_a(), 3),
                         "communication_ok": self.od_bus_ok(2), "voltage_ok": self.od_bus_ok(3),
                         "current_ok": self.od_bus_ok(4)},
-            "sync": {"mode": sync.mode.label, "sync_control": sync.mode.sync_control,
+            "sync": {"mode": sync.mode.label, "sync_control": sync.sync_control,
                      "state": sync.state.value, "cycle_ns": sync.cycle_ns,
                      "sm_event_missed": sync.sm_missed, "sync_error": sync.sync_error,
                      "sync0_lost": sync.sync0_lost, "jitter_us": sync.jitter_us,

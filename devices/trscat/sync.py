@@ -4,15 +4,19 @@ Seed 001 §9.1.1 (DC-SYNC on SYNC0, 1:1 with the master cycle, ESC 0x980 = 0x030
 fixed 500 us local cycle, 0x980 = 0x0000; the SM2 frame must not invade the calc+copy time),
 §9.3.1 (0x1C32 / 0x1C33 values) and §9.3.7 (0x10F1:2, limit 3 consecutive sync errors).
 
-Model (docs/trscat.md): a master frame is one SM2 event. In DC-SYNC the SYNC0 pulses come
+Model (docs/trscat.md): the mode is the ESC's Sync Control register as the master wrote it
+(§9.1.1 "Il modo di sincronizzazione può essere cambiato mediante il Sync Control Register del
+ESC (registri 0x980 e 0x981)"): at PREOP -> SAFEOP the word 0x0980 = 0x0300 (0x0981 = 0x03,
+cyclic operation + SYNC0) is DC-SYNC, 0x0000 FREE-RUN, anything else refused; 0x1C32:1 /
+0x1C33:1 then report it. A master frame is one SM2 event. In DC-SYNC the SYNC0 pulses come
 from the ESC's DC registers the master writes (0x0981 activation, 0x09A0 SYNC0 cycle, 0x0990
-start time; §9.1.1 "registri 0x980 e 0x981", §9.2 IP "il master inizializza il DC clock
-sync"): they run from PREOP -> SAFEOP on, one per configured cycle, however irregularly the
-frames come. At every SYNC0 the frames that arrived at
-least the calc+copy time (100 us) earlier are taken; none is an "SM event missed" and the
-counter 0x1C32:11 counts them consecutively (a good event resets it). At the limit of 0x10F1:2
-the sync error 0x1C32:32 is TRUE. Frames that arrive while SYNC0 is lost count the other way
-round (SM events without SYNC0); at the same limit that is a fatal sync error.
+start time; §9.2 IP "il master inizializza il DC clock sync"): they run from PREOP -> SAFEOP
+on, one per configured cycle, however irregularly the frames come. At every SYNC0 the frames
+that arrived at least the calc+copy time (100 us) earlier are taken; none is an "SM event
+missed" and the counter 0x1C32:11 counts them consecutively (a good event resets it). At the
+limit of 0x10F1:2 the sync error 0x1C32:32 is TRUE. Frames that arrive while SYNC0 is lost
+count the other way round (SM events without SYNC0); at the same limit that is a fatal sync
+error.
 """
 
 from __future__ import annotations
@@ -30,7 +34,9 @@ SYNC_MODES_SUPPORTED = 0x0005  # §9.3.1 0x1C32:4: FREE-RUN and DC-SYNC only
 SYNC_ERROR_LIMIT = 3  # §9.3.7 0x10F1:2
 NS_PER_US = 1_000
 CALC_COPY_US = CALC_COPY_NS // NS_PER_US
-# ESC register 0x0981 (DC activation, ETG.1000.4): bit 0 cyclic operation, bit 1 SYNC0.
+# ESC register 0x0981 (DC activation, ETG.1000.4): bit 0 cyclic operation, bit 1 SYNC0, bit 2
+# SYNC1. It is the high byte of the 16-bit Sync Control word 0x0980 the seed names (§9.1.1);
+# the low byte, 0x0980 (cyclic unit control), is not modelled: 0, as SOEM and TwinCAT write it.
 DC_CYCLIC, DC_SYNC0 = 0x01, 0x02
 SYNC0_ACTIVE = DC_CYCLIC | DC_SYNC0
 
@@ -42,19 +48,25 @@ class SyncMode(enum.IntEnum):
     DC_SYNC = 0x0002
 
     @property
-    def sync_control(self) -> int:
-        """ESC register 0x980 (Sync Control) that goes with the mode (§9.1.1)."""
-        return SYNC_CONTROL[self]
-
-    @property
     def label(self) -> str:
         return "DC-SYNC" if self is SyncMode.DC_SYNC else "FREE-RUN"
 
 
+# §9.1.1: "Il registro 0x980 deve assumere valore 0x0300" (DC-SYNC) / "0x0000" (FREE-RUN).
 SYNC_CONTROL: dict[SyncMode, int] = {SyncMode.FREE_RUN: 0x0000, SyncMode.DC_SYNC: 0x0300}
+MODE_BY_SYNC_CONTROL: dict[int, SyncMode] = {word: mode for mode, word in SYNC_CONTROL.items()}
 MODE_BY_NAME: dict[str, SyncMode] = {"dc": SyncMode.DC_SYNC, "dc-sync": SyncMode.DC_SYNC,
                                      "free_run": SyncMode.FREE_RUN,
                                      "free-run": SyncMode.FREE_RUN}
+
+
+class DcRefusal(enum.Enum):
+    """Why PREOP -> SAFEOP refuses the sync configuration (transitions.py gives the codes)."""
+
+    SYNC_CONTROL = "sync_control"  # 0x0980 neither 0x0300 nor 0x0000
+    MODE_MISMATCH = "mode_mismatch"  # 0x1C32:1 written by the master, 0x0980 says otherwise
+    NO_CYCLE = "no_cycle"  # SYNC0 activated, 0x09A0 = 0
+    CYCLE_TOO_SMALL = "cycle_too_small"  # 0x09A0 below 0x1C32:5
 
 
 class SyncState(enum.Enum):
@@ -68,7 +80,8 @@ class SyncState(enum.Enum):
 
 @dataclass
 class SyncUnit:
-    mode: SyncMode = SyncMode.DC_SYNC
+    mode: SyncMode = SyncMode.DC_SYNC  # 0x1C32:1: DC-SYNC "quella di default" until a PS
+    requested: SyncMode | None = None  # 0x1C32:1 / 0x1C33:1 as written by the master
     running: bool = False  # DC-SYNC started at PREOP -> SAFEOP (SAFEOP, OP)
     # The master's DC registers (0 at power-up, as the ESC's): 0x0981, 0x09A0, 0x0990.
     dc_activation: int = 0
@@ -94,6 +107,16 @@ class SyncUnit:
     def sync0_configured(self) -> bool:
         """0x0981 has cyclic operation and SYNC0 on, with a SYNC0 cycle in 0x09A0."""
         return self.dc_activation & SYNC0_ACTIVE == SYNC0_ACTIVE and self.dc_cycle_ns > 0
+
+    @property
+    def sync_control(self) -> int:
+        """The 16-bit Sync Control word 0x0980 (§9.1.1): 0x0981 as the master wrote it, high."""
+        return self.dc_activation << 8
+
+    @property
+    def register_mode(self) -> SyncMode | None:
+        """The mode 0x0980 selects, None for a word that is neither (§9.1.1)."""
+        return MODE_BY_SYNC_CONTROL.get(self.sync_control)
 
     @property
     def cycle_us(self) -> int:
@@ -168,19 +191,30 @@ class SyncUnit:
         self.arrivals.append(now_us + late)
         return False
 
-    def start_refusal(self) -> str | None:
-        """Why DC-SYNC cannot start (``"no_sync0"``, ``"cycle_too_small"``), or None."""
-        if self.mode is not SyncMode.DC_SYNC:
-            return None
-        if not self.sync0_configured:
-            return "no_sync0"
-        if self.dc_cycle_ns < MIN_CYCLE_NS:
-            return "cycle_too_small"
+    def start_refusal(self) -> DcRefusal | None:
+        """Why PREOP -> SAFEOP cannot take the mode of the Sync Control register, or None. A
+        mode the master wrote to 0x1C32:1 must be the register's (ETG.1020: the ETG slave stack
+        answers a disagreement with 0x0030 too)."""
+        mode = self.register_mode
+        if mode is None:
+            return DcRefusal.SYNC_CONTROL
+        if self.requested is not None and self.requested is not mode:
+            return DcRefusal.MODE_MISMATCH
+        if mode is SyncMode.DC_SYNC:
+            if self.dc_cycle_ns == 0:
+                return DcRefusal.NO_CYCLE
+            if self.dc_cycle_ns < MIN_CYCLE_NS:
+                return DcRefusal.CYCLE_TOO_SMALL
         return None
 
     def start(self, now_us: int) -> None:
-        """PREOP -> SAFEOP accepted: in DC-SYNC, SYNC0 runs on the configured cycle."""
-        if self.mode is not SyncMode.DC_SYNC or self.start_refusal() is not None:
+        """PREOP -> SAFEOP accepted: the register's mode; in DC-SYNC, SYNC0 runs on the
+        configured cycle."""
+        mode = self.register_mode
+        if mode is None or self.start_refusal() is not None:
+            return
+        self.mode = mode
+        if mode is not SyncMode.DC_SYNC:
             return
         self.running = True
         self._first_sync0(now_us)

@@ -1,7 +1,8 @@
 """How the TRS-CAT moves through the EtherCAT states (seed 001 §9.2) and leaves OP on an error.
 
 The checks of each transition are listed in devices/trscat/esm.py (``TRANSITION_CHECKS``) and
-defined here: SM / DC configuration (DC-SYNC needs a SYNC0 cycle of at least 500 us, §9.3.1),
+defined here: SM / DC configuration (the mode is the Sync Control register's, §9.1.1; DC-SYNC
+needs a SYNC0 cycle of at least 500 us, §9.3.1),
 0xF030 = 0xF050 at PREOP -> SAFEOP (§9.2, §9.3.2), no sync error and valid outputs for OP.
 A communication error in OP (ETG.1020: sync error, SM watchdog) sends the device to SAFE-OP
 with the error flag; the outputs then follow 0xF700 / 0xF701 / 0xF710 (§9.3.5, §9.3.6).
@@ -31,7 +32,7 @@ from devices.trscat.esm import (
     request_refusal,
 )
 from devices.trscat.outputs import outputs_on_error
-from devices.trscat.sync import SyncState, SyncUnit
+from devices.trscat.sync import SYNC_CONTROL, DcRefusal, SyncMode, SyncState, SyncUnit
 
 if TYPE_CHECKING:
     from devices.events import Event
@@ -42,10 +43,19 @@ if TYPE_CHECKING:
 SM_WATCHDOG_US = 100_000  # ESC default SM watchdog (0x0420 = 1000 x 100 us)
 SYNC = "sync"  # StateChanged.machine of the sync unit
 _RANK = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2, AlState.OP: 3}
-_DC_REFUSAL = {"no_sync0": INVALID_DC_SYNC, "cycle_too_small": CYCLE_TOO_SMALL}
+# PREOP -> SAFEOP refusals of the sync configuration: AL code and diagnosis text (formatted
+# with the register word and the mode the master wrote to 0x1C32:1).
+_DC_REFUSAL: dict[DcRefusal, tuple[int, str]] = {
+    DcRefusal.SYNC_CONTROL: (INVALID_DC_SYNC, "Sync Control 0x0980 = 0x{word:04X}: neither "
+                             "DC-SYNC (0x0300) nor FREE-RUN (0x0000)"),
+    DcRefusal.MODE_MISMATCH: (INVALID_DC_SYNC, "0x1C32:1 = {requested} but Sync Control "
+                              "0x0980 = 0x{word:04X}"),
+    DcRefusal.NO_CYCLE: (INVALID_DC_SYNC, "DC-SYNC: SYNC0 activated without a cycle "
+                         "(0x09A0 = 0)"),
+    DcRefusal.CYCLE_TOO_SMALL: (CYCLE_TOO_SMALL, "DC-SYNC: cycle time below the 500 us "
+                                "minimum (0x1C32:5)"),
+}
 CHECK_TEXT = {
-    INVALID_DC_SYNC: "DC-SYNC: SYNC0 not activated by the master (0x0981 / 0x09A0)",
-    CYCLE_TOO_SMALL: "DC-SYNC: cycle time below the 500 us minimum (0x1C32:5)",
     SYNC_ERROR: "Synchronization error: SM events missed (0x1C32:11 reached 0x10F1:2)",
     FATAL_SYNC_ERROR: "Fatal sync error: SM events without SYNC0 (0x10F1:2 reached)",
     SM_WATCHDOG: "Sync manager watchdog: no process data from the master",
@@ -144,12 +154,20 @@ class TransitionsMixin:
         return UNSPECIFIED_ERROR if self.deadlocked else None
 
     def check_dc(self) -> int | None:
-        reason = self.sync.start_refusal()
+        """§9.2 PS "verifica la correttezza ... del DC": the Sync Control register (§9.1.1)
+        gives the mode; DC-SYNC needs a SYNC0 cycle of at least 0x1C32:5."""
+        sync = self.sync
+        reason = sync.start_refusal()
         if reason is None:
             return None
-        code = _DC_REFUSAL[reason]
+        code, text = _DC_REFUSAL[reason]
         if self.esm.code != code:  # one message per episode, not per retry of the master
-            self.report(check_message(code, CHECK_TEXT[code], self.now_us * 1000))
+            # SyncMode is an IntEnum: FREE_RUN (0) is falsy, hence "is None".
+            requested = SyncMode.DC_SYNC if sync.requested is None else sync.requested
+            text = text.format(word=sync.sync_control,
+                               requested=f"0x{int(requested):04X} ({requested.label}, "
+                                         f"0x0980 = 0x{SYNC_CONTROL[requested]:04X})")
+            self.report(check_message(code, text, self.now_us * 1000))
         return code
 
     def check_idents(self) -> int | None:
@@ -192,6 +210,8 @@ class TransitionsMixin:
         if target in (AlState.PREOP, AlState.INIT):
             self.sync.stop()
             self.sync.restart_free_run(self.now_us)
+        if target is AlState.INIT:  # the master's PRE-OP settings go; it writes them again
+            self.sync.requested = None
 
     def _fall_on_comm_error(self, code: int) -> None:
         """ETG.1020: a communication error in OP -> SAFE-OP + error; outputs per §9.3.5."""

@@ -29,7 +29,7 @@ from app.rig import Rig
 from devices.device import Action, DeviceModel, Param
 from devices.ethercat import AlState
 from devices.trscat.device import TrsCat
-from devices.trscat.sync import SYNC0_ACTIVE
+from devices.trscat.sync import SYNC0_ACTIVE, SyncMode
 
 STEP_US = 1_000
 UP = {AlState.INIT: AlState.PREOP, AlState.PREOP: AlState.SAFEOP,
@@ -83,7 +83,11 @@ class Wire(DeviceModel):
     def cmd_request(self, state: str) -> None:
         target = STATES[state]
         slave = self.slave
-        if target in (AlState.PREOP, AlState.SAFEOP) and slave.sync.mode.label == "DC-SYNC":
+        # A master set up for the rig's mode, or for the one it wrote to 0x1C32:1: it
+        # activates SYNC0 for DC-SYNC (the device takes its mode from that at PS).
+        mode = slave.sync.requested if slave.sync.requested is not None else \
+            slave.master_sync_mode
+        if target in (AlState.PREOP, AlState.SAFEOP) and mode is SyncMode.DC_SYNC:
             slave.configure_dc(SYNC0_ACTIVE, self.step_us * 1000, (self.now_us + 100) * 1000)
         slave.request_state(target)
 

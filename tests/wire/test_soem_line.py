@@ -111,8 +111,9 @@ def master_main(iface: str, conn) -> None:
 
     def dc(dc_positions):
         """SYNC0 every cycle, as a DC master configures it (0x0981 / 0x0990 / 0x09A0). Before
-        config_map, which asks each slave for SAFE-OP as it maps it: a DC-SYNC slave checks
-        these registers at PREOP -> SAFEOP (seed 001 §9.2; config_init cleared them)."""
+        config_map, which asks each slave for SAFE-OP as it maps it: the TRS-CAT takes its mode
+        from these registers at PREOP -> SAFEOP (seed 001 §9.1.1, §9.2; config_init cleared
+        them: left so, it would run FREE-RUN)."""
         master.config_dc()
         for pos in dc_positions:
             master.slaves[pos].dc_sync(True, int(PERIOD_S * 1e9))
@@ -293,7 +294,8 @@ def test_sdo_read_0x1018_on_every_slave(session):
 
 def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
     """Seed 001 §9.3.2: 0xF030 (detected) differs from 0xF050 (configured) -> 0x0070. SYNC0
-    is configured first: PS checks the DC registers before 0xF030 (§9.2; else 0x0030)."""
+    is configured first, as for the line: PS takes the mode from the DC registers and checks
+    them before 0xF030 (§9.1.1, §9.2)."""
     _, _, master, _ = session
     master("dc", [1])
     original = master("sdo_read", 1, 0xF030, 2)

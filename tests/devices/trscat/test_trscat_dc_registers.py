@@ -116,33 +116,127 @@ def test_frames_that_miss_sync0_still_make_the_sync_error(cycle_us: int, missed:
         assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.SAFEOP, 0x001A)
 
 
-@pytest.mark.parametrize(("activation", "cycle_ns", "code"), [
-    (0x00, CYCLE_4MS_NS, 0x0030),  # SYNC0 not activated
-    (0x01, CYCLE_4MS_NS, 0x0030),  # cyclic operation without SYNC0
-    (0x02, CYCLE_4MS_NS, 0x0030),  # SYNC0 without cyclic operation
-    (SYNC0_ACTIVE, 0, 0x0030),  # no cycle
-    (SYNC0_ACTIVE, 499_000, 0x002E),  # below 0x1C32:5 = 500000 ns
-    (SYNC0_ACTIVE, 500_000, None),
-    (SYNC0_ACTIVE | 0x04, CYCLE_4MS_NS, None),  # SYNC1 too: SYNC0 is what counts
-])
-def test_ps_checks_the_dc_registers(activation: int, cycle_ns: int, code: int | None) -> None:
-    """§9.2 PS: "TRS-CAT verifica la correttezza ... del DC" (0x0981 bits 0 and 1, 0x09A0)."""
-    bench = Bench(dc=False)
+def _ps_with(bench: Bench, activation: int, cycle_ns: int) -> None:
+    """A master that writes the Sync Control register (0x0981, high byte of the 0x0980 word)
+    and the SYNC0 cycle in PRE-OP, then asks for SAFE-OP."""
     bench.settle()
     bench.request(AlState.PREOP)
     bench.configure_dc(activation, cycle_ns)
     bench.request(AlState.SAFEOP)
+
+
+@pytest.mark.parametrize(("activation", "cycle_ns", "code"), [
+    (0x00, CYCLE_4MS_NS, None),  # 0x0980 = 0x0000: FREE-RUN (the cycle is not used)
+    (0x01, CYCLE_4MS_NS, 0x0030),  # cyclic operation without SYNC0
+    (0x02, CYCLE_4MS_NS, 0x0030),  # SYNC0 without cyclic operation
+    (SYNC0_ACTIVE, 0, 0x0030),  # SYNC0 activated without a cycle
+    (SYNC0_ACTIVE, 499_000, 0x002E),  # below 0x1C32:5 = 500000 ns
+    (SYNC0_ACTIVE, 500_000, None),
+    (SYNC0_ACTIVE | 0x04, CYCLE_4MS_NS, 0x0030),  # 0x0700: SYNC1 too, not in 0x1C32:4
+])
+@pytest.mark.parametrize("rig_mode", ["dc", "free_run"])
+def test_ps_checks_the_dc_registers(rig_mode: str, activation: int, cycle_ns: int,
+                                    code: int | None) -> None:
+    """§9.2 PS: "TRS-CAT verifica la correttezza ... del DC"; §9.1.1: 0x980 = 0x0300 is
+    DC-SYNC, 0x0000 FREE-RUN, whatever the rig's master option (``sync_mode``) says."""
+    bench = Bench(dc=False, sync_mode=rig_mode)
+    _ps_with(bench, activation, cycle_ns)
     if code is None:
-        assert bench.trs.al_state is AlState.SAFEOP and bench.read(0x1C32, 2) == cycle_ns
+        assert bench.trs.al_state is AlState.SAFEOP
+        assert bench.read(0x1C32, 2) == (cycle_ns if activation else 500_000)
     else:
         assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.PREOP, code)
+        assert bench.messages()[-1]["code"] == f"0x{code:04X}"
 
 
-def test_free_run_needs_no_dc_registers() -> None:
-    """§9.1.1 FREE-RUN: the local 500 us cycle, whatever 0x0981 says."""
-    bench = Bench(dc=False, sync_mode="free_run")
-    bench.to_state(AlState.OP)
-    assert bench.read(0x1C32, 2) == 500_000
+@pytest.mark.parametrize("rig_mode", ["dc", "free_run"])
+@pytest.mark.parametrize(("activation", "mode", "sync_control", "label", "cycle_ns"), [
+    (SYNC0_ACTIVE, 0x0002, 0x0300, "DC-SYNC", CYCLE_4MS_NS),
+    (0x00, 0x0000, 0x0000, "FREE-RUN", 500_000),
+])
+def test_the_sync_control_register_sets_the_mode(rig_mode: str, activation: int, mode: int,
+                                                 sync_control: int, label: str,
+                                                 cycle_ns: int) -> None:
+    """§9.1.1: "Il modo di sincronizzazione può essere cambiato mediante il Sync Control
+    Register del ESC (registri 0x980 e 0x981). Tale modalità è riportata negli oggetti 0x1C32 e
+    0x1C33": the mode taken at PS is the register's, shown in 0x1C32:1 / 0x1C33:1 and in the
+    snapshot next to the register (0x0981 is the high byte of the 0x0980 word)."""
+    bench = Bench(dc=False, sync_mode=rig_mode)
+    _ps_with(bench, activation, CYCLE_4MS_NS)
+    assert bench.trs.al_state is AlState.SAFEOP
+    assert bench.read(0x1C32, 1) == bench.read(0x1C33, 1) == mode
+    assert bench.read(0x1C32, 2) == bench.read(0x1C33, 2) == cycle_ns
+    sync = bench.trs.snapshot()["sync"]
+    assert (sync["mode"], sync["sync_control"], sync["dc_activation"]) == \
+        (label, sync_control, activation)
+    assert bench.trs.sync.running is (mode == 0x0002)
+
+
+def test_the_mode_is_taken_again_at_every_ps() -> None:
+    """A master that changes its configuration between two start-ups: SAFE-OP -> PRE-OP, the
+    register rewritten, PS again: the new mode."""
+    bench = Bench(dc=False)
+    _ps_with(bench, SYNC0_ACTIVE, CYCLE_4MS_NS)
+    assert bench.read(0x1C32, 1) == 0x0002
+    bench.request(AlState.PREOP)
+    bench.configure_dc(0x00, 0)
+    bench.request(AlState.SAFEOP)
+    assert bench.trs.al_state is AlState.SAFEOP
+    assert (bench.read(0x1C32, 1), bench.read(0x1C32, 2)) == (0x0000, 500_000)
+    bench.run(0.05)
+    bench.request(AlState.OP)
+    bench.run(0.2)
+    assert bench.trs.al_state is AlState.OP and bench.trs.sync.state is SyncState.FREE_RUN
+
+
+def test_power_up_mode_is_dc_sync_whatever_the_rig() -> None:
+    """§9.1.1 "La modalità DC-SYNC ... è quella di default": before the first PS 0x1C32:1 reads
+    0x0002 (the register, 0 at power-up, is taken at PS)."""
+    for rig_mode in ("dc", "free_run"):
+        bench = Bench(sync_mode=rig_mode)
+        bench.settle()
+        assert bench.read(0x1C32, 1) == bench.read(0x1C33, 1) == 0x0002
+
+
+@pytest.mark.parametrize(("written", "activation", "code"), [
+    (0x0002, SYNC0_ACTIVE, None), (0x0000, 0x00, None),
+    (0x0000, SYNC0_ACTIVE, 0x0030),  # FREE-RUN asked in 0x1C32:1, SYNC0 activated
+    (0x0002, 0x00, 0x0030),  # DC-SYNC asked, 0x0980 left at 0x0000
+])
+@pytest.mark.parametrize("index", [0x1C32, 0x1C33])
+def test_a_written_sync_mode_must_agree_with_the_register(index: int, written: int,
+                                                          activation: int,
+                                                          code: int | None) -> None:
+    """0x1C32:1 / 0x1C33:1 are RW (§9.3.1): a master may write the mode it configured in
+    PRE-OP; PS then checks it against the Sync Control register (ETG.1020, as the ETG slave
+    stack does), 0x0030 when they disagree."""
+    bench = Bench(dc=False)
+    bench.settle()
+    bench.request(AlState.PREOP)
+    bench.write(index, 1, written)
+    bench.configure_dc(activation, CYCLE_4MS_NS)
+    bench.request(AlState.SAFEOP)
+    if code is None:
+        assert bench.trs.al_state is AlState.SAFEOP and bench.read(0x1C32, 1) == written
+    else:
+        assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.PREOP, code)
+        assert bench.read(0x1C32, 1) == written  # what the master wrote stays readable
+        text = bench.messages()[-1]["text"]
+        assert f"0x1C32:1 = 0x{written:04X}" in text
+        assert f"0x0980 = 0x{activation << 8:04X}" in text
+
+
+def test_a_written_sync_mode_is_forgotten_in_init() -> None:
+    """Back in INIT the master's PRE-OP settings are gone: the register alone decides again."""
+    bench = Bench(dc=False)
+    bench.settle()
+    bench.request(AlState.PREOP)
+    bench.write(0x1C32, 1, 0x0000)
+    bench.request(AlState.INIT)
+    bench.request(AlState.PREOP)
+    bench.run(0.01)
+    _ps_with(bench, SYNC0_ACTIVE, CYCLE_4MS_NS)
+    assert bench.trs.al_state is AlState.SAFEOP and bench.read(0x1C32, 1) == 0x0002
 
 
 def test_sync0_switched_off_in_op_is_a_fatal_sync_error() -> None:
@@ -192,9 +286,15 @@ def test_the_built_in_master_writes_its_cycle(cycle_us: int) -> None:
                                                                       cycle_us * 1000)
 
 
-def test_a_master_without_dc_for_it_is_refused() -> None:
-    """A master whose description does not use DC for the TRS-CAT (DC-SYNC by default, §9.1.1)
-    never activates SYNC0: SAFE-OP refused with 0x0030."""
-    bench = Bench(master=True, dc=False)
+@pytest.mark.parametrize(("rig_mode", "master_dc", "mode"), [
+    ("dc", False, 0x0000), ("free_run", True, 0x0002)])
+def test_the_masters_dc_option_decides(rig_mode: str, master_dc: bool, mode: int) -> None:
+    """§9.3 "Altre opzioni da settare nel master: ... la modalità in cui TRS-CAT deve
+    funzionare": a master whose description does not use DC leaves 0x0981 = 0 and the line
+    reaches OP in FREE-RUN; one that activates SYNC0 gets DC-SYNC (the rig's ``sync_mode`` is
+    only what the built-in master does when no description says otherwise)."""
+    bench = Bench(master=True, dc=master_dc, sync_mode=rig_mode)
     bench.run(3.0)
-    assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.PREOP, 0x0030)
+    assert bench.trs.al_state is AlState.OP
+    assert bench.read(0x1C32, 1) == bench.read(0x1C33, 1) == mode
+    assert bench.trs.snapshot()["sync"]["sync_control"] == (0x0300 if master_dc else 0)

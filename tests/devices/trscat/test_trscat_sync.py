@@ -28,9 +28,10 @@ def test_constant_subs(index: int, sub: int, value: int) -> None:
 @pytest.mark.parametrize(("mode", "sync_mode", "sync_control"), [
     ("dc", 0x0002, 0x0300), ("free_run", 0x0000, 0x0000)])
 def test_modes(mode: str, sync_mode: int, sync_control: int) -> None:
-    """§9.1.1: DC-SYNC (default) 0x0002 with ESC 0x980 = 0x0300, FREE-RUN 0x0000 / 0x0000."""
+    """§9.1.1: DC-SYNC (default) 0x0002 with ESC 0x980 = 0x0300, FREE-RUN 0x0000 / 0x0000: a
+    master set up for the mode writes the register, PS takes the mode from it."""
     bench = Bench(sync_mode=mode)
-    bench.settle()
+    bench.to_state(AlState.SAFEOP)
     assert bench.read(0x1C32, 1) == bench.read(0x1C33, 1) == sync_mode
     assert bench.trs.snapshot()["sync"]["sync_control"] == sync_control
 
@@ -41,11 +42,13 @@ def test_dc_is_the_default() -> None:
 
 
 @pytest.mark.parametrize(("mode", "state", "cycle_ns"), [
-    ("free_run", AlState.PREOP, 500_000), ("free_run", AlState.OP, 500_000),
+    ("free_run", AlState.PREOP, 0), ("free_run", AlState.SAFEOP, 500_000),
+    ("free_run", AlState.OP, 500_000),
     ("dc", AlState.PREOP, 0), ("dc", AlState.SAFEOP, 1_000_000), ("dc", AlState.OP, 1_000_000)])
 def test_cycle_time(mode: str, state: AlState, cycle_ns: int) -> None:
     """§9.3.1 0x1C32:2: FREE-RUN fixed 500 us (§9.1.1); DC-SYNC 1:1 with the master cycle
-    (1 ms here), known once SYNC0 runs."""
+    (1 ms here), known once SYNC0 runs. Before the first PS the device is in its default
+    DC-SYNC, not yet running: 0."""
     bench = Bench(sync_mode=mode)
     bench.to_state(state)
     assert bench.read(0x1C32, 2) == bench.read(0x1C33, 2) == cycle_ns
@@ -172,14 +175,16 @@ def test_dc_cycle_below_minimum_refuses_safeop(step_us: int, code: int | None) -
         assert [m["code"] for m in bench.messages()] == ["0x002E"]
 
 
-def test_dc_without_sync0_refuses_safeop() -> None:
-    """§9.2 PS "verifica la correttezza ... del DC": a master that never activated SYNC0
-    (0x0981) leaves DC-SYNC nothing to run on: AL 0x0030 (invalid DC SYNC configuration)."""
+def test_a_master_without_sync0_gets_free_run() -> None:
+    """§9.1.1: 0x0980 = 0x0000 is FREE-RUN. A master that never activated SYNC0 (0x0981 = 0)
+    takes the default device (DC-SYNC at power-up) to SAFE-OP in FREE-RUN."""
     bench = Bench(dc=False)
     bench.settle()
+    assert bench.read(0x1C32, 1) == 0x0002
     bench.request(AlState.PREOP)
     bench.request(AlState.SAFEOP)
-    assert bench.trs.al_status_code == 0x0030
+    assert bench.trs.al_state is AlState.SAFEOP and bench.trs.al_status_code == 0
+    assert bench.read(0x1C32, 1) == bench.read(0x1C33, 1) == 0x0000
 
 
 @pytest.mark.parametrize("index", [0x1C32, 0x1C33])
@@ -205,7 +210,8 @@ def test_sync_mode_written_in_preop(index: int, state: AlState, value: int,
 
 
 def test_switch_to_free_run_then_op() -> None:
-    bench = Bench()
+    """A FREE-RUN master (0x0981 left at 0) that also writes 0x1C32:1 = FREE-RUN in PRE-OP."""
+    bench = Bench(dc=False)
     bench.settle()
     bench.request(AlState.PREOP)
     bench.apply("set_sync_mode", mode="free_run")

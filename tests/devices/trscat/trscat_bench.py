@@ -4,7 +4,9 @@ Devices step in rig order (TRS-CAT first, master last, as app/rig.py does). With
 ``frames`` makes the bench call ``exchange_frame`` every step as a master would, so the ESM can
 be driven by hand with ``request``; ``dc`` makes ``request`` write the DC registers before
 INIT -> PREOP and PREOP -> SAFEOP as a DC master does (SYNC0 on, one pulse per step, seed 001
-§9.1.1 / §9.2), so DC-SYNC runs 1:1 with the bench's frames.
+§9.1.1 / §9.2), so the TRS-CAT takes DC-SYNC at PS and runs 1:1 with the bench's frames.
+Left out, ``dc`` follows the rig's ``sync_mode`` as the built-in master does (uses_dc in
+app/network/files.py): a "free_run" bench leaves 0x0981 at 0, and the device runs FREE-RUN.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ from devices.ethercat import AlState
 from devices.events import Event
 from devices.master import EtherCatMaster
 from devices.trscat.device import TrsCat
-from devices.trscat.sync import SYNC0_ACTIVE
+from devices.trscat.sync import MODE_BY_NAME, SYNC0_ACTIVE, SyncMode
 
 STEP_US = 1_000
 US = 1_000_000
@@ -32,8 +34,10 @@ def detect_us(slots: int) -> int:
 class Bench:
     def __init__(self, expansions: Sequence[str] = (), master: bool = False,
                  frames: bool = True, step_us: int = STEP_US, seed: int = 3,
-                 dc: bool = True, **kwargs: Any) -> None:
+                 dc: bool | None = None, **kwargs: Any) -> None:
         self.trs = TrsCat("trscat", random.Random(seed), list(expansions), **kwargs)
+        if dc is None:
+            dc = MODE_BY_NAME[str(kwargs.get("sync_mode", "dc")).lower()] is SyncMode.DC_SYNC
         self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.trs],
                                      dc_slaves=[dc]) if master else None
         self.dc = dc
