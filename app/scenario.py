@@ -9,7 +9,8 @@ A step is one of
 
 ``[[on]]`` tables react to the EtherCAT master's events (its ECAT_Notify hook, seed 003):
 ``event = "resync"`` (or ``slave_state``, ``comm_error``, ``coe_emergency``,
-``network_recovery``), optional ``slave = "trscat"`` (only events about that slave), optional
+``network_recovery``), optional ``slave = "trscat"`` (only events about that slave; a
+``network_recovery`` is about each of its ``positions``), optional
 ``once = true``, and a command (``target``, ``action``, arguments) applied at the end of the
 master's step in which the event happened.
 
@@ -257,17 +258,20 @@ def install_reactions(scenario: Scenario, rig: Rig, failures: list[str]) -> None
     master: Any = rig.devices["master"]
     fired: set[int] = set()
 
-    def about(event: Event) -> str:
-        position = getattr(event, "position", -1)
-        if position is None or not 0 <= position < len(master.links):
-            return ""
-        return str(master.links[position].slave.device_id)
+    def about(event: Event) -> tuple[str, ...]:
+        """The device ids of the slaves ``event`` is about: its ``position``, or every one
+        of a network_recovery's ``positions``."""
+        positions = getattr(event, "positions", None)
+        if positions is None:
+            positions = (getattr(event, "position", -1),)
+        return tuple(str(master.links[p].slave.device_id) for p in positions
+                     if p is not None and 0 <= p < len(master.links))
 
     def react(event: Event) -> None:
         for r in scenario.reactions:
             if r.event != event.kind or (r.once and r.number in fired):
                 continue
-            if r.slave and about(event) != r.slave:
+            if r.slave and r.slave not in about(event):
                 continue
             fired.add(r.number)
             now = rig.clock.now_us

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.scenario import ScenarioError, check_against, parse_scenario
+from app.scenario import ScenarioError, check_against, parse_scenario, run_scenario
+
+LINE_RIG = Path(__file__).resolve().parents[2] / "static" / "rigs" / "ethercat_line.toml"
 
 GOOD = """
 [[on]]
@@ -49,3 +53,45 @@ def test_reactions_are_checked_against_the_rig(change: tuple[str, str], message:
     scenario = parse_scenario(GOOD.replace(*change), "r.toml")
     with pytest.raises(ScenarioError, match=message):
         check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG)))
+
+
+RECOVERY = """
+[scenario]
+rig = "{rig}"
+duration_s = 5
+[[step]]
+at = 4.0
+target = "master"
+action = "pull_cable"
+cable = 2
+[[step]]
+at = 4.5
+target = "master"
+action = "plug_cable"
+cable = 2
+[[on]]
+event = "network_recovery"
+slave = "{slave}"
+target = "master"
+action = "set_log_style"
+style = "sirio"
+"""
+
+
+@pytest.mark.parametrize(("slave", "fires"), [("cpx", True), ("drive_ecat-ecat", True),
+                                              ("trscat", False)])
+def test_network_recovery_reaction_filters_on_the_recovered_slaves(slave: str,
+                                                                   fires: bool) -> None:
+    """``slave`` on a network_recovery: the slave is one of the event's ``positions``
+    (docs/scenarios.md: "only events about this slave"). Cable 2 re-plugged recovers
+    positions 2 and 3 (cpx, the drive); the TRS-CAT at 1 was never lost."""
+    scenario = parse_scenario(RECOVERY.format(rig=LINE_RIG, slave=slave), "r.toml")
+    rig = build_rig(load_rig_spec(LINE_RIG))
+    run = run_scenario(scenario, rig)
+    assert run.failures == []
+    recoveries = [e for e in run.events if e.kind == "network_recovery"]
+    assert [e.positions for e in recoveries] == [(2, 3)]  # type: ignore[attr-defined]
+    lines = [e.text for e in run.events  # type: ignore[attr-defined]
+             if e.device == "scenario" and e.kind == "log"]
+    assert lines == (["on[0] network_recovery: master set_log_style"] if fires else [])
+    assert rig.devices["master"].log_style == ("sirio" if fires else "twincat")
