@@ -41,6 +41,7 @@ class StartupMixin:
     if TYPE_CHECKING:
         def _log(self, link: SlaveLink | None, message: str, **params: object) -> None: ...
         def _event(self, event: Event) -> None: ...
+        def _watch(self, link: SlaveLink) -> None: ...
 
     def _target_of(self, link: SlaveLink) -> AlState:
         """The master's target, capped at SAFEOP for DC slaves while DC is not synchronised
@@ -76,6 +77,10 @@ class StartupMixin:
             self._log(link, "abnormal", from_state=link.believed.label, to_state=state.label,
                       code=slave.al_status_code, target=self.target.label)
             link.believed, link.next_try_us = state, now
+            # The change is an event now (seed 003: "the status change of slaves"): the
+            # request below may bring the slave back within this step, before the step's
+            # watch reads its state again.
+            self._watch(link)
         if state is not target and now >= link.next_try_us:
             step = next_state(state, target)
             if self._before_transition(link, state, step):

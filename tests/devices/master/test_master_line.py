@@ -141,6 +141,36 @@ def test_lost_frames_are_counted_and_the_slaves_watchdogs_react() -> None:
     assert trs["counters"]["wkc_errors"] == 1
 
 
+def test_a_slave_brought_back_at_once_still_raises_its_state_changes() -> None:
+    """Seed 003: "the status change of slaves" is an event (diagnostic structures, callbacks,
+    ECAT_Notify). 150 lost frames: the CPX-E-EC and the drive fall OP -> SAFEOP on their SM
+    watchdog (0x001B); the master reads SAFEOP, logs the abnormal state change and requests OP,
+    which they take in the same cycle. Both changes are events, in the structure's counter
+    and on the hook, each after its slave's log line."""
+    rig = line_in_op()
+    master = rig.devices["master"]
+    before = [s["counters"]["state_changes"] for s in master_view(rig)["slaves"]]
+    notified: list[tuple[int, str, str]] = []
+    master.on_notify(lambda e: notified.append((e.position, e.from_state, e.to_state))
+                     if e.kind == "slave_state" else None)
+    rig.apply("master", "lose_frames", {"count": 150})
+    events = rig.run_until(IN_OP_US + US)
+    for name in ("cpx", "drive_ecat-ecat"):
+        p = POSITIONS[name]
+        mine = [r for r in (e.to_record() for e in events) if r["device"] == "master"
+                and (r.get("position") == p or (r["event"] == "log"
+                     and f"(100{p + 1}): abnormal" in r["text"]))
+                and r["event"] in ("log", "slave_state")]
+        assert [(r["event"], r.get("from"), r.get("to"), r.get("code")) for r in mine] == [
+            ("log", None, None, None),
+            ("slave_state", "OP", "SAFEOP", "0x001B"),
+            ("slave_state", "SAFEOP", "OP", "0x0000")], name
+        assert mine[0]["t"] == mine[1]["t"] == mine[2]["t"]
+        assert [n for n in notified if n[0] == p] == [(p, "OP", "SAFEOP"), (p, "SAFEOP", "OP")]
+        after = master_view(rig)["slaves"][p]
+        assert (after["state"], after["counters"]["state_changes"]) == ("OP", before[p] + 2)
+
+
 def _rig_with_eni(tmp_path: Path, old: str, new: str) -> Path:
     from line_bench import ROOT
 
