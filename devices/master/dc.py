@@ -24,6 +24,7 @@ DRIFT_NS_PER_MS = 25  # FieldRig: a drifting clock leaves the window in 40 ms (1
 JITTER_FACTOR = 5  # FieldRig: jitter fault: +- 5 windows
 RESYNC_AFTER_US = 500_000  # FieldRig: NOT_SYNCHRONIZED, fault gone -> measure again after
 OUT_OF_WINDOW_CYCLES = 5  # FieldRig: consecutive cycles outside the window before giving up
+LOCK_CYCLES = 5  # FieldRig: consecutive cycles inside the window to count as synced
 NOISE_SPAN = 2 * NOISE_NS + 1  # the healthy deviation's values, -NOISE_NS .. NOISE_NS
 
 
@@ -49,7 +50,7 @@ class DcState(enum.Enum):
 class DcTrigger(enum.Enum):
     LINK_UP = "link_up"  # link seen and the line has DC slaves
     LINK_DOWN = "link_down"  # no link, or no DC slave on the line any more
-    MEASURED = "measured"  # the preliminary measurements are done
+    MEASURED = "measured"  # the preliminary measurements are done, inside the window
     START_TIME = "start_time"  # START_TIME passed with the DC slaves in SAFEOP / OP
     OUT_OF_WINDOW = "out_of_window"  # deviation over the sync window, or SYNC0 lost
     FAULT_GONE = "fault_gone"  # NOT_SYNCHRONIZED long enough with the cause gone
@@ -58,6 +59,9 @@ class DcTrigger(enum.Enum):
 DC_TRANSITIONS: dict[tuple[DcState, DcTrigger], DcState] = {
     (DcState.IDLE, DcTrigger.LINK_UP): DcState.SYNCHRONIZING,
     (DcState.SYNCHRONIZING, DcTrigger.MEASURED): DcState.WAITING_START_TIME,
+    # Seed 003 NOT_SYNCHRONIZED: "if for any reason the master fails to follow the network
+    # clock" - also when it cannot get into the window while measuring (docs/ethercat-master.md).
+    (DcState.SYNCHRONIZING, DcTrigger.OUT_OF_WINDOW): DcState.NOT_SYNCHRONIZED,
     (DcState.WAITING_START_TIME, DcTrigger.START_TIME): DcState.COMPENSATING,
     (DcState.WAITING_START_TIME, DcTrigger.OUT_OF_WINDOW): DcState.NOT_SYNCHRONIZED,
     (DcState.COMPENSATING, DcTrigger.OUT_OF_WINDOW): DcState.NOT_SYNCHRONIZED,
@@ -80,6 +84,7 @@ class DcUnit:
     since_us: int = 0  # when the present state was entered
     start_time_us: int | None = None  # START_TIME once the DC slaves are in SAFEOP
     outside: int = 0  # consecutive steps outside the sync window
+    inside: int = 0  # SYNCHRONIZING: consecutive steps inside the sync window
 
     def out_of_window(self) -> bool:
         return self.fault == "sync0_lost" or abs(self.deviation_ns) > self.window_ns
@@ -119,11 +124,20 @@ class DcUnit:
         if state is DcState.NOT_SYNCHRONIZED:
             gone = self.fault is None and waited >= RESYNC_AFTER_US
             return DcTrigger.FAULT_GONE if gone else None
-        self.outside = self.outside + 1 if self.out_of_window() else 0
-        if state is not DcState.SYNCHRONIZING and self.outside >= OUT_OF_WINDOW_CYCLES:
-            return DcTrigger.OUT_OF_WINDOW
+        out = self.out_of_window()
+        self.outside = self.outside + 1 if out else 0
         if state is DcState.SYNCHRONIZING:
-            return DcTrigger.MEASURED if waited >= SYNC_MEASURE_US else None
+            # Seed 003: WAITING_START_TIME comes "after the master has synced with the slaves":
+            # the measurements end synced (steadily inside the window) or failed (steadily
+            # outside it); anything between measures on.
+            self.inside = 0 if out else self.inside + 1
+            if waited < SYNC_MEASURE_US:
+                return None
+            if self.inside >= LOCK_CYCLES:
+                return DcTrigger.MEASURED
+            return DcTrigger.OUT_OF_WINDOW if self.outside >= OUT_OF_WINDOW_CYCLES else None
+        if self.outside >= OUT_OF_WINDOW_CYCLES:
+            return DcTrigger.OUT_OF_WINDOW
         if state is DcState.WAITING_START_TIME:
             if not dc_slaves_ready:
                 self.start_time_us = None
@@ -140,7 +154,7 @@ class DcUnit:
             return None
         before, self.state, self.since_us = self.state, target, now_us
         if target in (DcState.SYNCHRONIZING, DcState.IDLE):
-            self.deviation_ns, self.start_time_us, self.outside = 0, None, 0
+            self.deviation_ns, self.start_time_us, self.outside, self.inside = 0, None, 0, 0
         return before, target
 
     def snapshot(self) -> dict[str, object]:

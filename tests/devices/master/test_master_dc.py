@@ -5,12 +5,14 @@ from __future__ import annotations
 import random
 
 import pytest
-from line_bench import IN_OP_US, US, line_in_op, master_view, records
+from line_bench import IN_OP_US, LINE_RIG, US, line_in_op, master_view, records
 
+from app.rig_config import build_rig, load_rig_spec
 from devices.master.dc import (
     DC_TRANSITIONS,
     NOISE_NS,
     NOISE_SPAN,
+    SYNC_MEASURE_US,
     DcState,
     DcTrigger,
     DcUnit,
@@ -54,6 +56,39 @@ def test_start_sequence_and_drift() -> None:
         if trig is not None:
             dc.move(trig, t)
     assert dc.state is DcState.NOT_SYNCHRONIZED and abs(dc.deviation_ns) > 1000
+
+
+@pytest.mark.parametrize("fault", ["drift", "jitter", "sync0_lost"])
+def test_synchronizing_is_left_only_inside_the_window(fault: str) -> None:
+    """Seed 003: WAITING_START_TIME comes "after the master has synced with the slaves";
+    NOT_SYNCHRONIZED "if for any reason the master fails to follow the network clock". A
+    master that cannot get inside the sync window while measuring never reports synced: it
+    ends the measurements in NOT_SYNCHRONIZED."""
+    dc, rng, t = DcUnit(window_ns=1000), random.Random(3), 0
+    dc.fault = fault
+    seen = [dc.state]
+    while t < 400_000:
+        t += 1000
+        dc.measure(1000, rng)
+        trig = dc.trigger(t, link=True, dc_slaves=2, dc_slaves_ready=True)
+        if trig is not None and dc.move(trig, t):
+            seen.append(dc.state)
+            if dc.state is DcState.NOT_SYNCHRONIZED:
+                assert t >= SYNC_MEASURE_US  # the measurements are made first
+    assert seen == [DcState.IDLE, DcState.SYNCHRONIZING, DcState.NOT_SYNCHRONIZED]
+
+
+@pytest.mark.parametrize("fault", ["drift", "jitter", "sync0_lost"])
+def test_a_dc_fault_at_power_on_holds_the_dc_slaves_in_safeop(fault: str) -> None:
+    rig = build_rig(load_rig_spec(LINE_RIG))
+    rig.apply("master", "dc_fault", {"kind": fault})
+    events = rig.run_until(2 * US)
+    moves = [(r["to"], r["t"]) for r in records(events, "state", "master")
+             if r.get("machine") == "dc"]
+    assert [to for to, _ in moves] == ["SYNCHRONIZING", "NOT_SYNCHRONIZED"]
+    view = master_view(rig)
+    assert view["dc"]["state"] == "NOT_SYNCHRONIZED"
+    assert [s["state"] for s in view["slaves"]][1:3] == ["SAFEOP", "SAFEOP"]  # the DC ones
 
 
 @pytest.mark.parametrize(("kind", "codes"), [
