@@ -9,10 +9,11 @@ A step is one of
 
 ``[[on]]`` tables react to the EtherCAT master's events (its ECAT_Notify hook, seed 003):
 ``event = "resync"`` (or ``slave_state``, ``comm_error``, ``coe_emergency``,
-``network_recovery``), optional ``slave = "trscat"`` (only events about that slave; a
-``network_recovery`` is about each of its ``positions``), optional
-``once = true``, and a command (``target``, ``action``, arguments) applied at the end of the
-master's step in which the event happened.
+``network_recovery``, ``dc_state`` - the DC unit's state changes, optional ``to =
+"NOT_SYNCHRONIZED"``), optional ``slave = "trscat"`` (only events about that slave; a
+``network_recovery`` is about each of its ``positions``), optional ``once = true``, and a
+command (``target``, ``action``, arguments) applied at the end of the master's step in which
+the event happened.
 
 Each step has ``at = <seconds>`` (absolute simulated time) or ``after = <seconds>`` (relative to
 the previous step); ``expect_error = true`` marks a command that must be refused (e.g. writing a
@@ -32,6 +33,8 @@ from app.rig_config import RigConfigError
 from app.targets import parse_target
 from devices.device import CommandError
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
+from devices.master.dc import DcState
+from devices.master.master import DC_MACHINE
 from devices.od import SdoAbort
 
 US = 1_000_000
@@ -55,7 +58,17 @@ class Step:
 
 
 REACTION_EVENTS = ("slave_state", "comm_error", "coe_emergency", "resync",
-                   "network_recovery")
+                   "network_recovery", "dc_state")
+DC_STATE_NAMES = tuple(s.value for s in DcState)
+_REACTION_KEYS = {"event", "slave", "target", "action", "once", "to"}
+
+
+def reaction_event(event: Event) -> str:
+    """The ``[[on]] event`` name of a master event: its kind, ``dc_state`` for the DC
+    unit's state changes (a ``state`` event with ``machine: "dc"``)."""
+    if event.kind == "state" and getattr(event, "machine", "") == DC_MACHINE:
+        return "dc_state"
+    return event.kind
 
 
 @dataclass(frozen=True)
@@ -69,6 +82,7 @@ class Reaction:
     action: str
     args: dict[str, Any] = field(default_factory=dict)
     once: bool = False
+    to: str = ""  # dc_state: the DC state entered; "" = any
 
 
 @dataclass(frozen=True)
@@ -211,10 +225,19 @@ def _reaction(i: int, raw: Any, fail: Callable[[str, str], ScenarioError]) -> Re
     action = _typed(raw, "action", str, None, fail, f"{key}.action")
     if target is None or action is None:
         raise fail(key, "needs target = \"device\" and action = \"...\"")
-    args = {k: v for k, v in raw.items()
-            if k not in {"event", "slave", "target", "action", "once"}}
-    return Reaction(i + 1, event, _typed(raw, "slave", str, "", fail, f"{key}.slave"), target,
-                    action, args, _typed(raw, "once", bool, False, fail, f"{key}.once"))
+    args = {k: v for k, v in raw.items() if k not in _REACTION_KEYS}
+    slave = _typed(raw, "slave", str, "", fail, f"{key}.slave")
+    to = _typed(raw, "to", str, "", fail, f"{key}.to")
+    if event == "dc_state":
+        if slave:
+            raise fail(f"{key}.slave", "a dc_state event is about the master's distributed "
+                                       "clock, not a slave")
+        if to and to not in DC_STATE_NAMES:
+            raise fail(f"{key}.to", f"{to!r} is not a DC state ({', '.join(DC_STATE_NAMES)})")
+    elif "to" in raw:
+        raise fail(f"{key}.to", "only for event = \"dc_state\" (the DC state entered)")
+    return Reaction(i + 1, event, slave, target, action, args,
+                    _typed(raw, "once", bool, False, fail, f"{key}.once"), to)
 
 
 def _focus_target(text: str, fail: Callable[[str, str], ScenarioError], path: str) -> str:
@@ -268,15 +291,18 @@ def install_reactions(scenario: Scenario, rig: Rig, failures: list[str]) -> None
                      if p is not None and 0 <= p < len(master.links))
 
     def react(event: Event) -> None:
+        name = reaction_event(event)
         for r in scenario.reactions:
-            if r.event != event.kind or (r.once and r.number in fired):
+            if r.event != name or (r.once and r.number in fired):
                 continue
             if r.slave and r.slave not in about(event):
+                continue
+            if r.to and getattr(event, "to_state", "") != r.to:
                 continue
             fired.add(r.number)
             now = rig.clock.now_us
             rig.pending.append(LogLine(now, "scenario", text=f"on[{r.number - 1}] "
-                                       f"{event.kind}: {r.target} {r.action}"))
+                                       f"{name}: {r.target} {r.action}"))
             try:
                 rig.apply(r.target, r.action, r.args)
             except (CommandError, SdoAbort) as exc:

@@ -95,3 +95,59 @@ def test_network_recovery_reaction_filters_on_the_recovered_slaves(slave: str,
              if e.device == "scenario" and e.kind == "log"]
     assert lines == (["on[0] network_recovery: master set_log_style"] if fires else [])
     assert rig.devices["master"].log_style == ("sirio" if fires else "twincat")
+
+
+DC_STATE = """
+[scenario]
+rig = "{rig}"
+duration_s = 4.5
+[[step]]
+at = 4.0
+target = "master"
+action = "dc_fault"
+kind = "sync0_lost"
+[[on]]
+event = "dc_state"
+to = "NOT_SYNCHRONIZED"
+target = "master"
+action = "set_log_style"
+style = "sirio"
+[[on]]
+event = "dc_state"
+target = "master"
+action = "set_log_style"
+style = "pegaso"
+"""
+
+
+def test_dc_state_reactions_follow_the_distributed_clock() -> None:
+    """Seed 003 names "distributed clock status variation" among the ECAT_Notify events: a
+    scenario reacts to the DC unit's moves, optionally to one state (``to``)."""
+    scenario = parse_scenario(DC_STATE.format(rig=LINE_RIG), "r.toml")
+    assert [(r.event, r.to) for r in scenario.reactions] == [
+        ("dc_state", "NOT_SYNCHRONIZED"), ("dc_state", "")]
+    run = run_scenario(scenario, build_rig(load_rig_spec(LINE_RIG)))
+    assert run.failures == []
+    moves = [e.to_state for e in run.events  # type: ignore[attr-defined]
+             if e.kind == "state" and getattr(e, "machine", "") == "dc"]
+    assert moves == ["SYNCHRONIZING", "WAITING_START_TIME", "COMPENSATING", "NOT_SYNCHRONIZED"]
+    lines = [e.text for e in run.events  # type: ignore[attr-defined]
+             if e.device == "scenario" and e.kind == "log"]
+    assert lines == ["on[1] dc_state: master set_log_style"] * 3 + [
+        "on[0] dc_state: master set_log_style", "on[1] dc_state: master set_log_style"]
+
+
+@pytest.mark.parametrize(("extra", "message"), [
+    ('to = "SYNCED"', "on\\[0\\].to: 'SYNCED' is not a DC state"),
+    ('slave = "trscat"', "on\\[0\\].slave: a dc_state event is about the master"),
+])
+def test_bad_dc_state_reactions(extra: str, message: str) -> None:
+    text = f'[[on]]\nevent = "dc_state"\n{extra}\ntarget = "master"\naction = "resync"\n'
+    with pytest.raises(ScenarioError, match=message):
+        parse_scenario(text, "bad.toml")
+
+
+def test_to_is_only_for_dc_state() -> None:
+    text = '[[on]]\nevent = "resync"\nto = "OP"\ntarget = "master"\naction = "resync"\n'
+    with pytest.raises(ScenarioError, match=r'on\[0\]\.to: only for event = "dc_state"'):
+        parse_scenario(text, "bad.toml")
