@@ -149,6 +149,7 @@ class LineMixin:
         self._watched = None  # presence and reached_op change: the next watch runs in full
         link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
         link.pending, link.identity_ok, link.reached_op = None, None, False
+        link.stalled = False
         if link.diagnosis.startswith("no link"):
             link.diagnosis = ""
         if link.lost_once:  # seed 003 network recovery: communication restarts from INIT

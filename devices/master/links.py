@@ -93,6 +93,9 @@ class SlaveLink:
     lost_once: bool = False  # absent after having been present: its return is a recovery
     diagnosis: str = ""  # the master's own finding (identity mismatch, init command failed)
     identity_ok: bool | None = None  # None: not checked yet
+    # Its last transition was refused or stopped by the master (retried): DC START_TIME does
+    # not wait for it (docs/ethercat-master.md, distributed clocks).
+    stalled: bool = False
     dc_derived: bool = False  # DC use when no network description is given
     counters: Counters = field(default_factory=Counters)
 

@@ -109,7 +109,9 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.phys_in = [True] * len(self.links)  # the IN / OUT links last given to the slaves
         self.phys_out = [True] * len(self.links)
         self.dc = DcUnit(window_ns=params.dc_window_ns)
-        self.dc_hold = False
+        # DC slaves wait in SAFEOP until COMPENSATING (seed 003: START_TIME is "the first time
+        # the slaves implement I/O"); the unit starts IDLE.
+        self.dc_hold = True
         self.hooks = Hooks()
         self.external = False
         self.frames = 0
@@ -350,10 +352,14 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         else:
             dc.measure(dt_us, self.rng)
             dc_links = [link for link in self._dc_links if link.present]
-        # Only WAITING_START_TIME asks whether the DC slaves are ready (DcUnit.trigger).
+        # Only WAITING_START_TIME asks whether the DC slaves are ready (DcUnit.trigger): every
+        # one in SAFEOP / OP but those whose start-up the master found refused (it retries
+        # them; START_TIME does not wait for a broken slave, the others go on to OP).
         asked = dc.state is DcState.WAITING_START_TIME or not self.SKIP_STILL
-        ready = asked and bool(dc_links) and all(
-            link.slave.al_state in (AlState.SAFEOP, AlState.OP) for link in dc_links)
+        synced = [link for link in dc_links
+                  if link.slave.al_state in (AlState.SAFEOP, AlState.OP)]
+        ready = asked and bool(synced) and all(
+            link in synced or link.stalled for link in dc_links)
         trigger = dc.trigger(self.now_us, self.link_up, len(dc_links), ready)
         moved = dc.move(trigger, self.now_us) if trigger is not None else None
         if moved is None:
@@ -363,15 +369,19 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                                  to_state=after.value, machine=DC_MACHINE))
         self._log(None, "dc", from_state=before.value, to_state=after.value,
                   deviation=dc.deviation_ns, window=dc.window_ns)
+        # Seed 003: the slaves do I/O from START_TIME on (COMPENSATING: "typically all slaves
+        # are in OP state"); before it and out of sync the DC slaves stay in SAFEOP.
+        self.dc_hold = after is not DcState.COMPENSATING
         if after is DcState.NOT_SYNCHRONIZED:
-            self.dc_hold = True
             for link in dc_links:  # seed 003: the slaves involved go to SAFE_OP
                 if link.slave.al_state is AlState.OP and not self.external:
                     self._request(link, AlState.SAFEOP)
-        elif after in (DcState.COMPENSATING, DcState.IDLE):
-            self.dc_hold = False
+        elif after is DcState.COMPENSATING:
+            # The held ones go on now (a sync error's refusal too); one refused below SAFEOP
+            # (its configuration, not the clock: START_TIME did not wait for it) keeps its retry.
             for link in self.links:
-                link.next_try_us = min(link.next_try_us, self.now_us)
+                if not link.stalled or link.slave.al_state in (AlState.SAFEOP, AlState.OP):
+                    link.next_try_us = min(link.next_try_us, self.now_us)
 
     # ---- events and the log -------------------------------------------------------------------
     def _event(self, event: Event) -> None:

@@ -44,8 +44,9 @@ class StartupMixin:
         def _watch(self, link: SlaveLink) -> None: ...
 
     def _target_of(self, link: SlaveLink) -> AlState:
-        """The master's target, capped at SAFEOP for DC slaves while DC is not synchronised
-        (seed 003 NOT_SYNCHRONIZED: "all the slaves involved go to the SAFE_OP state")."""
+        """The master's target, capped at SAFEOP for DC slaves until DC is COMPENSATING (seed
+        003: START_TIME is "the first time the slaves implement I/O"; NOT_SYNCHRONIZED: "all
+        the slaves involved go to the SAFE_OP state")."""
         return self._target_of_dc() if link.dc else self.target
 
     def _target_of_dc(self) -> AlState:
@@ -86,7 +87,7 @@ class StartupMixin:
             if self._before_transition(link, state, step):
                 self._request(link, step)
             else:
-                link.next_try_us = now + self.retry_interval_us
+                link.stalled, link.next_try_us = True, now + self.retry_interval_us
 
     def _before_transition(self, link: SlaveLink, current: AlState, target: AlState) -> bool:
         """Identity check and init commands of ``current -> target``; False stops it."""
@@ -170,11 +171,12 @@ class StartupMixin:
         assert target is not None
         if state is target:
             link.believed, link.pending, link.next_try_us = state, None, now
+            link.stalled = False
             return
         if not slave.al_status & AL_STATUS_ERROR_FLAG and waited < self.state_timeout_us:
             return  # still busy (INIT -> PREOP waits for the internal-bus scan)
         self._log(link, "failed", from_state=link.pending_from.label, to_state=target.label,
                   al_status=slave.al_status, expected=int(target), code=slave.al_status_code)
         self._log(link, "aborted", target=self.target.label, state=state.label)
-        link.believed, link.pending = state, None
+        link.believed, link.pending, link.stalled = state, None, True
         link.next_try_us = now + self.retry_interval_us

@@ -8,6 +8,7 @@ import pytest
 from line_bench import IN_OP_US, LINE_RIG, US, line_in_op, master_view, records
 
 from app.rig_config import build_rig, load_rig_spec
+from devices.ethercat import AlState
 from devices.master.dc import (
     DC_TRANSITIONS,
     NOISE_NS,
@@ -89,6 +90,27 @@ def test_a_dc_fault_at_power_on_holds_the_dc_slaves_in_safeop(fault: str) -> Non
     view = master_view(rig)
     assert view["dc"]["state"] == "NOT_SYNCHRONIZED"
     assert [s["state"] for s in view["slaves"]][1:3] == ["SAFEOP", "SAFEOP"]  # the DC ones
+
+
+def test_dc_slaves_go_to_op_only_after_start_time() -> None:
+    """Seed 003: WAITING_START_TIME waits "for the START_TIME, which is the first time the
+    slaves implement I/O"; in COMPENSATING, "after START_TIME has passed", "typically all
+    slaves are in OP state". At start-up the DC slaves (TRS-CAT, CPX-E-EC) wait in SAFEOP
+    until COMPENSATING; the others do not wait for the clock."""
+    rig = build_rig(load_rig_spec(LINE_RIG))
+    master = rig.devices["master"]
+    first_op: dict[str, tuple[int, DcState]] = {}
+    while rig.clock.now_us < IN_OP_US:
+        rig.step()
+        for link in master.links:
+            name = link.slave.device_id
+            if link.slave.al_state is AlState.OP and name not in first_op:
+                first_op[name] = (rig.clock.now_us, master.dc.state)
+    assert set(first_op) == {"fastcat", "trscat", "cpx", "drive_ecat-ecat"}
+    assert first_op["trscat"][1] is first_op["cpx"][1] is DcState.COMPENSATING
+    # the drive (no DC) reaches OP while the master is still waiting for START_TIME
+    assert first_op["drive_ecat-ecat"][1] is not DcState.COMPENSATING
+    assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
 
 
 @pytest.mark.parametrize(("kind", "codes"), [

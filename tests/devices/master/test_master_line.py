@@ -199,6 +199,8 @@ def test_identity_mismatch_leaves_the_slave_in_preop(tmp_path: Path) -> None:
     assert [r["reason"] for r in records(events, "comm_error")] == ["identity"]
     assert any("identity check failed" in r["text"] for r in records(events, "log", "master"))
     assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP", "PREOP", "OP", "OP"]
+    # START_TIME did not wait for the refused DC slave: the CPX-E-EC (DC) went on to OP
+    assert master_view(rig)["dc"]["state"] == "COMPENSATING"
 
 
 def test_unknown_positions_are_refused() -> None:
