@@ -12,7 +12,8 @@ what comes back. The rules, with their seed sections, are in docs/modbus.md; in 
   quantity 1 or 2 only (2 = the whole register, high word first).
 - Only exception 02 (illegal data address) is ever answered; every other error (bad length,
   quantity or byte count, a value out of range, a read-only target) gets no reply at all.
-- Unit id 0 is a broadcast write (FC 06 / 16) to every drive on the line, never answered.
+- Unit id 0 is a broadcast write (FC 06 / 16) to every drive on the line, never answered;
+  unit ids 91..255 are reserved and never answered.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from typing import Protocol
 
 from devices.device import CommandError
 from devices.servo.errors import AccessError
+from devices.servo.parameters import MODBUS_NODE_HIGH  # 91..255 reserved (ch.2)
 from devices.servo.parameters import SAVE_COMMAND_ADDRESS as SAVE_ADDRESS
 from devices.servo.registers import REGISTER_BASE  # R00 at 0x8000 ... R133 at 0x8085
 
@@ -121,6 +123,9 @@ def serve_line(drives: Sequence[ModbusDrive], unit_id: int, pdu: bytes) -> Outco
     """Serve one request addressed to ``unit_id`` on a line holding ``drives``."""
     if unit_id == BROADCAST_UNIT:
         return _broadcast(drives, pdu)
+    if unit_id > MODBUS_NODE_HIGH:
+        # Reserved even if a drive's c7 got there (a CANopen node number kept across c9 = 3).
+        return Silence(f"unit id {unit_id} is reserved (slaves are 1..{MODBUS_NODE_HIGH})")
     listening = [d for d in _on_line(drives) if d.node_id == unit_id]
     if not listening:
         return Silence(f"no drive answers unit id {unit_id}")

@@ -6,7 +6,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from devices.servo.errors import AccessError
-from devices.servo.parameters import C9_BY_FIELDBUS, PARAMETER_BY_NAME
+from devices.servo.parameters import C9_BY_FIELDBUS, PARAMETER_BY_NAME, check_node_number
 from devices.servo.plant import AxisGeometry
 from devices.servo.registers import register_spec
 
@@ -15,7 +15,7 @@ from devices.servo.registers import register_spec
 class DriveConfig:
     """One drive in a rig. Positions are user units at ``feed_constant`` units per motor turn."""
 
-    #: c7 at first power-up (1..99; a Modbus line addresses 1..90, seed 004 ch. 2)
+    #: c7 at first power-up: 1..90 on Modbus (seed 004 ch. 2), 1..99 otherwise (ch. 4)
     node_id: int = 1
     #: c9 at first power-up: "modbus" (3), "canopen" (5), "ethercat" (11), "profinet" (13)
     fieldbus: str = "modbus"
@@ -61,6 +61,14 @@ class DriveConfig:
                 spec.check(value)
             except AccessError as exc:
                 raise ValueError(f"parameters: {exc}") from None
+        # c7 / c9 in ``parameters`` override node_id / fieldbus at first power-up
+        # (saving.py); a Modbus drive at 91..99 would sit on reserved addresses (ch. 2).
+        given = {str(k).lower(): v for k, v in self.parameters.items()}
+        try:
+            check_node_number(given.get("c7", self.node_id),
+                              given.get("c9", C9_BY_FIELDBUS[self.fieldbus]))
+        except AccessError as exc:
+            raise ValueError(f"node_id: {exc}") from None
         for number, value in self.registers.items():
             try:
                 spec = register_spec(number)

@@ -31,6 +31,8 @@ from devices.servo.parameters import (
     PARAMETERS,
     SAVE_COMMAND_ADDRESS,
     SAVE_COMMAND_VALUE,
+    ParameterSpec,
+    check_node_number,
     parameter_spec,
 )
 from devices.servo.plant import Plant
@@ -217,9 +219,16 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         spec = parameter_spec(address)
         if not spec.writable:
             raise AccessError("readonly", f"parameter {spec.name} is read-only")
-        value = spec.check(value)
+        value = self.check_parameter(spec, value)
         self._require_power()
         self.params[address] = value
+
+    def check_parameter(self, spec: ParameterSpec, value: int) -> int:
+        """``value`` if ``spec`` may take it now; c7's range depends on the c9 stored now."""
+        value = spec.check(value)
+        if spec.name == "c7":
+            check_node_number(value, self.params[PARAMETER_BY_NAME["c9"].address])
+        return value
 
     def write_save_command(self, value: int) -> None:
         """0x3802 = 0x0011 (FC 06, or FC 16 as the 32-bit 0x00000011): save to flash."""

@@ -98,7 +98,7 @@ class IndirectAccess:
         spec = parameter_spec(address)
         if not spec.writable:
             raise AccessError("readonly", f"parameter {spec.name} is read-only")
-        spec.check(value)
+        self.drive.check_parameter(spec, value)
         self._schedule(PARAMETER_APPLY_US, "param_write_address", address,
                        lambda: self.drive.write_parameter(address, value))
 
@@ -134,7 +134,7 @@ class IndirectAccess:
             pspec = parameter_spec(n)
             if not pspec.writable:
                 raise AccessError("readonly", f"parameter {pspec.name} is read-only")
-            pspec.check(value)
+            self.drive.check_parameter(pspec, value)
             self._schedule(PARAMETER_APPLY_US, "var_write_address", address,
                            lambda: self.drive.write_parameter(n, value))
 

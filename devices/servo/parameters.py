@@ -23,6 +23,12 @@ SAVE_COMMAND_VALUE = 0x0011
 FIELDBUS_BY_C9: dict[int, str] = {3: "modbus", 5: "canopen", 11: "ethercat", 13: "profinet"}
 C9_BY_FIELDBUS: dict[str, int] = {name: code for code, name in FIELDBUS_BY_C9.items()}
 
+# The highest node number c7 may take, by c9: a Modbus line assigns 1..90 to the slaves and
+# reserves 91..255 (ch. 2 "Configurazione della rete", "Composizione del frame"); any other
+# fieldbus takes the whole 1..99 of c7 (ch. 4 CANopen; EtherCAT ignores c7, ch. 5).
+MODBUS_NODE_HIGH = 90
+NODE_HIGH_BY_C9: dict[int, int] = {3: MODBUS_NODE_HIGH}
+
 # n1 -> CAN bit rate in kBaud (ch. 4 "Configurazione della rete").
 CAN_KBAUD_BY_N1: dict[int, int] = {1: 10, 2: 20, 3: 50, 4: 125, 5: 250, 6: 500, 7: 800, 8: 1000}
 
@@ -148,6 +154,14 @@ def parameter_by_name_or_address(key: str | int) -> ParameterSpec:
             raise AccessError("address", f"there is no parameter {key!r} (names: "
                                          f"{', '.join(sorted(PARAMETER_BY_NAME))})") from None
     return parameter_spec(key)
+
+
+def check_node_number(c7: int, c9: int) -> None:
+    """c7 against the fieldbus c9 selects (the per-parameter range is the widest, 1..99)."""
+    high = NODE_HIGH_BY_C9.get(c9)
+    if high is not None and c7 > high:
+        raise AccessError("value", f"parameter c7 = {c7} is outside 1..{high} with c9 = {c9} "
+                                   f"({FIELDBUS_BY_C9[c9]})")
 
 
 def default_parameters(overrides: dict[str, int] | None = None) -> dict[int, int]:

@@ -312,6 +312,17 @@ def test_unit_id_picks_the_drive_with_that_node_number(line: list[FakeDrive], un
         assert outcome == Reply(h("03 02 00") + bytes((line[answers].read_parameter(1),)))
 
 
+@pytest.mark.parametrize("unit", [91, 95, 99, 247, 255])
+def test_reserved_unit_ids_are_never_answered(line: list[FakeDrive], unit: int) -> None:
+    """ch.2 "Composizione del frame": "Gli indirizzi da 91 a 255 sono riservati". A drive whose
+    node number ended up there (c7 is 1..99 for CANopen, ch.4) stays silent on a Modbus line."""
+    line[1].node_id = unit
+    assert isinstance(serve_line(line, unit, h("03 0001 0001")), Silence)
+    before = line[1].state()
+    assert isinstance(serve_line(line, unit, h("06 0003 000A")), Silence)
+    assert line[1].state() == before
+
+
 def test_a_drive_that_is_saving_does_not_answer(line: list[FakeDrive]) -> None:
     """ch.2 "Salvataggio su flash": "il drive non risponde" during the save."""
     line[1].responding = False
@@ -420,6 +431,9 @@ def test_real_drive_register_writes(servo, request_: str, register: int, stored:
     "06 3802 0012",
     "10 3802 0002 04 0001 0011",
     "10 8009 0003 06 0000 0000 0000",
+    "06 0014 005B",  # c7 = 91: a Modbus node number is 1..90 (ch.2 "Configurazione della rete")
+    "06 0014 0063",  # c7 = 99
+    "10 0014 0001 02 005F",  # c7 = 95 by FC 16
 ])
 def test_real_drive_refusals_are_silent_and_change_nothing(servo, request_: str) -> None:
     d, _ = servo

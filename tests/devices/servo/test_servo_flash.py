@@ -10,6 +10,7 @@ from devices.flash import MemoryFlash
 from devices.servo import flashsave
 from devices.servo.drive import DriveConfig
 from devices.servo.ds402 import State
+from devices.servo.errors import AccessError
 
 
 @pytest.mark.parametrize("trigger", ["mode-50", "0x3802", "0x1010", "0x2007", "action"])
@@ -135,6 +136,34 @@ def test_node_number_and_fieldbus_are_read_at_power_up_only() -> None:
     assert (sim.drive.node_id, sim.drive.fieldbus) == (7, "canopen")
 
 
+def test_modbus_node_number_is_1_to_90() -> None:
+    """Ch. 2 "Configurazione della rete": with c9 = 3 c7 "può assumere ogni valore tra 1 e 90";
+    ch. 4: with c9 = 5 "qualsiasi valore compreso tra 1 e 99". c7 is checked against the c9
+    stored now, so a technician moving a drive to CANopen writes c9 first, then c7."""
+    sim = make_sim(DriveConfig(node_id=1), flash=MemoryFlash())
+    sim.drive.write_parameter(20, 90)
+    for node in (91, 95, 99):
+        with pytest.raises(AccessError) as exc:
+            sim.drive.write_parameter(20, node)
+        assert exc.value.kind == "value"
+    assert sim.drive.read_parameter(20) == 90
+    sim.drive.write_parameter(22, 5)  # c9 = CANopen
+    sim.drive.write_parameter(20, 99)
+    assert sim.drive.read_parameter(20) == 99
+    sim.drive.write_parameter(22, 3)  # back to Modbus: c7 = 99 stays, the line ignores it
+    with pytest.raises(AccessError):
+        sim.drive.write_parameter(20, 95)
+    assert sim.drive.read_parameter(20) == 99
+
+
+def test_rig_node_number_range_follows_the_fieldbus() -> None:
+    """A Modbus drive at node 91..99 is a config error (ch. 2: 1..90); CANopen takes 1..99."""
+    for fieldbus in ("canopen", "ethercat", "profinet"):
+        assert make_sim(DriveConfig(node_id=99, fieldbus=fieldbus)).drive.node_id == 99
+    assert make_sim(DriveConfig(node_id=1, parameters={"c9": 5, "c7": 95})).drive.node_id == 95
+    assert make_sim(DriveConfig(node_id=90)).drive.node_id == 90
+
+
 def test_powered_off_drive_does_not_respond() -> None:
     sim = make_sim()
     sim.drive.apply("power", {"on": False})
@@ -152,6 +181,8 @@ def test_rig_values_for_first_power_up() -> None:
     for bad in ({"parameters": {"zz": 1}}, {"parameters": {"d1": 0}},
                 {"registers": {200: 1}}, {"registers": {5: 1}},
                 {"registers": {27: 3}}, {"node_id": 0}, {"fieldbus": "profibus"},
-                {"start_position": 1e9}):
+                {"start_position": 1e9}, {"node_id": 91}, {"node_id": 99},
+                {"parameters": {"c7": 95}}, {"parameters": {"C7": 91}},
+                {"node_id": 95, "fieldbus": "canopen", "parameters": {"c9": 3}}):
         with pytest.raises(ValueError):
             DriveConfig(**bad)
