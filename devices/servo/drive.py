@@ -376,15 +376,23 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         write, an alarm: ``_touched``, the alarm bank's change count). Nothing else in a
         standing drive's step depends on time: no rng draw, no blinking (the display is a
         function of the state), no timer counting (a counting timer, e.g. mode 3's speed
-        window, changes the state: no proof). Relies on the rig's promise that no other model
-        touches the drive in the span (its CANopen node and CoE slave are quiet too, so they
-        write nothing to it and raise no alarm on it).
+        window, changes the state: no proof) — but for zero speed in the velocity modes, kept
+        as a start time and read off the clock: the span ends before it comes on. Relies on
+        the rig's promise that no other model touches the drive in the span (its CANopen node
+        and CoE slave are quiet too, so they write nothing to it and raise no alarm on it).
         """
-        still, alarms = self._still, self.alarms
+        still, alarms, now = self._still, self.alarms, self.now_us
         if self._touched or step_us != still.filter_dt or alarms is not still.alarms \
                 or alarms.changes != still.changes or not self.SKIP_STILL:
-            return self.now_us
-        return self.now_us + QUIET_FOREVER_STEPS * step_us
+            return now
+        monitor = self.mode_logic.monitor
+        if monitor is not None and self.powered:
+            # Zero speed comes on by the clock (modes.SpeedMonitor): the status word changes
+            # with no step changing anything, and the node / slave read it every step.
+            at = monitor.zero_speed_at(self)
+            if at is not None and at > now:
+                return now + (at - 1 - now) // step_us * step_us
+        return now + QUIET_FOREVER_STEPS * step_us
 
     def skip_to(self, t_us: int, step_us: int) -> None:
         """As the quiet steps up to ``t_us``: only the clock and the current meter's filter

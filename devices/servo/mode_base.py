@@ -6,12 +6,15 @@ from typing import TYPE_CHECKING, ClassVar
 
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
+    from devices.servo.modes import SpeedMonitor
 
 Changes = list[tuple[str, bool, float]]
 
 
 class Mode:
     number: ClassVar[int] = 0
+    #: the velocity modes' speed monitor: the drive feeds it the speed every tick (zero speed)
+    monitor: SpeedMonitor | None = None
 
     @property
     def busy(self) -> bool:

@@ -18,7 +18,7 @@ from devices.servo.registers import DISABLED_16, R
 
 # Register numbers read every tick (a moving drive): an enum member's lookup is slow.
 _AUX_IN_1, _TARGET_VELOCITY = int(R.AUX_IN_1), int(R.TARGET_VELOCITY)
-_VELOCITY_WINDOW, _VELOCITY_THRESHOLD = int(R.VELOCITY_WINDOW), int(R.VELOCITY_THRESHOLD)
+_VELOCITY_WINDOW = int(R.VELOCITY_WINDOW)
 _FEED_CONSTANT = int(R.FEED_CONSTANT)
 
 if TYPE_CHECKING:
@@ -118,11 +118,36 @@ class PulsePositioner(Positioner):
 
 
 class SpeedMonitor:
-    """Velocity window (R14/R15, 0x606D/E) and threshold (R16/R17, 0x606F/0x6070) timers."""
+    """Velocity window (R14/R15, 0x606D/E) and threshold (R16/R17, 0x606F/0x6070) timers.
+
+    The window timer counts while the mode runs (its target is the command's). The threshold
+    timer is zero speed, ch. 1 R05 bit 7 "velocità nulla: 1: asse fermo": it follows the axis
+    every tick of a velocity mode, whatever stopped it or keeps it still (stop, Ien, torque
+    off). It is kept as the time the speed went within the threshold, not as a count, so a
+    standing axis changes nothing tick after tick (still steps and quiet spans,
+    docs/servo-drive.md) and the flag is read off the clock.
+    """
 
     def __init__(self) -> None:
         self.in_window_ms = 0.0
-        self.below_threshold_ms = 0.0
+        #: start of the first tick of the current run within R16, us; None outside it
+        self.below_threshold_since_us: int | None = None
+
+    def follow_speed(self, d: ServoDrive, tick_start_us: int) -> None:
+        """Every tick, at its start (ticking.py has this written out)."""
+        if abs(d.velocity_user) <= d.reg(R.VELOCITY_THRESHOLD):
+            if self.below_threshold_since_us is None:
+                self.below_threshold_since_us = tick_start_us
+        else:
+            self.below_threshold_since_us = None
+
+    def zero_speed_at(self, d: ServoDrive) -> int | None:
+        """When zero speed comes on if the speed stays within the threshold; None if it
+        cannot (above the threshold, or the check disabled)."""
+        since = self.below_threshold_since_us
+        if since is None or d.reg(R.VELOCITY_THRESHOLD) == DISABLED_16:
+            return None
+        return since + 1000 * d.reg(R.VELOCITY_THRESHOLD_TIME)
 
     def reached(self, d: ServoDrive) -> bool:
         if d.reg(R.VELOCITY_WINDOW) == DISABLED_16:
@@ -130,9 +155,8 @@ class SpeedMonitor:
         return self.in_window_ms >= d.reg(R.VELOCITY_WINDOW_TIME)
 
     def zero_speed(self, d: ServoDrive) -> bool:
-        if d.reg(R.VELOCITY_THRESHOLD) == DISABLED_16:
-            return False
-        return self.below_threshold_ms >= d.reg(R.VELOCITY_THRESHOLD_TIME)
+        at = self.zero_speed_at(d)
+        return at is not None and d.now_us >= at
 
 
 class Velocity(Mode):
@@ -159,14 +183,13 @@ class Velocity(Mode):
             vmax = d.motor_vmax_rev
             velocity = max(-vmax, min(vmax, d.speed_to_rev(target)))
             d.trajectory.run_at(velocity, d.limits(vmax=vmax))
-        # the speed monitor's timers, here (every tick of a jog: no call)
-        monitor, regs, dt_ms = self.monitor, d.regs, dt * 1e3
+        # the speed window timer, here (every tick of a jog: no call); the threshold timer
+        # follows the axis in any state (ticking.py)
+        monitor, regs = self.monitor, d.regs
         feed = regs[_FEED_CONSTANT]
         actual = d.plant.omega * (feed if feed >= 1 else 1)  # d.velocity_user
-        monitor.in_window_ms = monitor.in_window_ms + dt_ms \
+        monitor.in_window_ms = monitor.in_window_ms + dt * 1e3 \
             if abs(target - actual) <= regs[_VELOCITY_WINDOW] else 0.0
-        monitor.below_threshold_ms = monitor.below_threshold_ms + dt_ms \
-            if abs(actual) <= regs[_VELOCITY_THRESHOLD] else 0.0
 
     def halted(self, d: ServoDrive) -> None:
         self.commanded = None

@@ -43,6 +43,7 @@ _LATCHED_POSITION = int(R.LATCHED_POSITION)
 _FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)
 _FOLLOWING_ERROR_TIMEOUT = int(R.FOLLOWING_ERROR_TIMEOUT)
 _FEED_CONSTANT = int(R.FEED_CONSTANT)
+_VELOCITY_THRESHOLD = int(R.VELOCITY_THRESHOLD)
 _I1 = 35  # parameter i1, the position loop gain (position_lag_s)
 _CW_HALT = ds402.CW_HALT
 _NO_OBSERVER = Mode.observe
@@ -78,6 +79,18 @@ class DriveTick:
         if (self.state, self.cw, self.cw_source, wired.get("ten", False)) \
                 != self._quiet_evaluation:  # else _evaluate returns at once
             self._evaluate()
+        monitor = self.mode_logic.monitor
+        if monitor is not None:
+            # velocity modes: zero speed follows the axis in every state, not only while the
+            # mode runs (R05 bit 7 "asse fermo"); SpeedMonitor.follow_speed, inline, at the
+            # tick's start as the mode's step reads the speed
+            regs = self.regs
+            feed = regs[_FEED_CONSTANT]
+            if abs(plant.omega * (feed if feed >= 1 else 1)) <= regs[_VELOCITY_THRESHOLD]:
+                if monitor.below_threshold_since_us is None:
+                    monitor.below_threshold_since_us = t_us - round(dt * 1e6)
+            else:
+                monitor.below_threshold_since_us = None
         theta_before, velocity_before = plant.theta, trajectory.velocity
         # ---- the motion (the demand from the mode, the trajectory, the motor) ----
         state = self.state

@@ -27,6 +27,7 @@ from test_still_steps import random_op
 from app.rig import Rig
 from app.rig_config import build_rig, parse_rig_spec
 from devices.flash import MemoryFlash
+from devices.servo import ds402
 from devices.servo.drive import DriveConfig, ServoDrive
 
 RIG = """
@@ -137,3 +138,35 @@ def test_skip_to_moves_the_filter_as_steps_do(step_us: int) -> None:
             d.step(t_us)
     assert stepped.drain_events() == skipped.drain_events()
     assert deep_state(skipped) == deep_state(stepped)
+
+
+@pytest.mark.parametrize("step_us", [1_000, 3_500, 250])
+def test_a_span_ends_before_zero_speed_comes_on(step_us: int) -> None:
+    """A standing drive in mode 3 says "asse fermo" (R05 bit 7, 0x6041 bit 12) R17 = 10 ms
+    after its speed went within R16, by the clock and with nothing else changing. The CANopen
+    node's TPDOs and the CoE slave's inputs read the status word at every step of a span, so
+    the drive's span ends before the bit comes on (docs/servo-drive.md "Quiet spans")."""
+    d = ServoDrive("servo", random.Random(7), DriveConfig(), MemoryFlash())
+    t_us = 0
+    while t_us < 100_000:
+        t_us += step_us
+        d.step(t_us)
+    d.apply("write_register", {"register": 1, "value": 3})  # standing, switched on disabled
+    word, spans = d.statusword, 0
+    assert not word & ds402.SW_MODE_12
+    while d.statusword == word:
+        until = d.quiet_until(step_us)
+        assert until - d.now_us <= 10_000, "a span across the zero-speed instant"
+        spans += until > d.now_us
+        while d.now_us < until:
+            t_us += step_us
+            d.step(t_us)
+            assert d.statusword == word
+        t_us += step_us
+        d.step(t_us)
+    assert d.statusword == word | ds402.SW_MODE_12
+    # quiet before the bit came on, up to it (at 3.5 ms the still proof comes too late)
+    assert spans or step_us > 1_000
+    t_us += step_us
+    d.step(t_us)
+    assert d.quiet_until(step_us) - d.now_us > 10**6  # and without end once it is on

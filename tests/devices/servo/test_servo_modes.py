@@ -165,6 +165,56 @@ def test_velocity_select_and_zero_speed() -> None:
     assert sim.drive.statusword & ds402.SW_MODE_12
 
 
+ZERO_SPEED = 0x80  # R05 bit 7 in mode 3
+
+
+def _zero_speed(sim: Sim) -> bool:
+    """R05 bit 7 (mode 3 only, control.py) and 0x6041 bit 12 (3 and -127) must agree."""
+    twin = bool(sim.drive.statusword & ds402.SW_MODE_12)
+    if sim.drive.mode == 3:
+        assert bool(sim.r05 & ZERO_SPEED) is twin
+    return twin
+
+
+@pytest.mark.parametrize("stop_cw", [0x07, 0x01, 0x00], ids=["Stp_cmd", "Ien_cmd off",
+                                                             "torque off"])
+@pytest.mark.parametrize("mode", [3, -127])
+def test_zero_speed_reports_the_axis_standing_whatever_stopped_it(stop_cw: int,
+                                                                  mode: int) -> None:
+    """Ch. 1 R05 bit 7, "Controllo Velocità: velocità nulla: 1: asse fermo": the axis, not the
+    command. An axis stopped from speed by Stp_cmd, Ien_cmd off or torque off (coasting) reports
+    it once its speed has stayed within R16 for R17 = 10 ms, and so does 0x6041 bit 12."""
+    sim = make_sim()
+    sim.w(1, mode)
+    sim.w(13, 1000)
+    sim.drive.apply("analog_input", {"volts": 2.0})
+    sim.w(0, 0x03)
+    sim.run(500)
+    assert abs(sim.drive.read_register(8)) > 100
+    assert not _zero_speed(sim)
+    sim.w(0, stop_cw)
+    threshold = sim.drive.read_register(16)  # R16 velocity_threshold (default 100)
+    sim.run_until(lambda: abs(sim.drive.velocity_user) <= threshold, 5_000)
+    sim.run(9)
+    assert not _zero_speed(sim)  # within the threshold for less than R17 so far
+    sim.run(2)
+    assert _zero_speed(sim)
+    sim.w(0, 0x00)  # torque off at a standstill: still standing
+    sim.run(50)
+    assert _zero_speed(sim)
+
+
+def test_zero_speed_without_torque_in_mode_3() -> None:
+    """Mode 3 selected, never in torque: the axis stands, so "asse fermo"."""
+    sim = make_sim()
+    sim.w(1, 3)
+    sim.run(20)
+    assert _zero_speed(sim)
+    sim.w(0, 0x01)  # torque, no Ien_cmd
+    sim.run(20)
+    assert _zero_speed(sim)
+
+
 def _homing_sim(start: float = 0.0, method: int = 34, offset: int = 0) -> Sim:
     cfg = DriveConfig(neg_limit=-18000, pos_limit=18000, home_switch=2400, marker_offset=1500,
                       start_position=start)

@@ -134,8 +134,7 @@ def plain_monitor_update(self: SpeedMonitor, d: ServoDrive, target: float, dt: f
     actual = d.velocity_user
     in_window = abs(target - actual) <= d.reg(R.VELOCITY_WINDOW)
     self.in_window_ms = self.in_window_ms + dt * 1e3 if in_window else 0.0
-    below = abs(actual) <= d.reg(R.VELOCITY_THRESHOLD)
-    self.below_threshold_ms = self.below_threshold_ms + dt * 1e3 if below else 0.0
+    # zero speed (the threshold timer) is the drive tick's, every tick: PlainDrive
 
 
 def plain_target_user(self: Velocity, d: ServoDrive) -> float:

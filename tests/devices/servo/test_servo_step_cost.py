@@ -45,6 +45,9 @@ class PlainDrive(ServoDrive):
         self.indirect.step(self._t_us)
         self._update_saving()
         self._evaluate()
+        monitor = self.mode_logic.monitor
+        if monitor is not None:  # zero speed follows the axis in any state (velocity modes)
+            monitor.follow_speed(self, self._t_us - round(dt * 1e6))
         theta_before, velocity_before = self.plant.theta, self.trajectory.velocity
         self._move(dt, lag)
         self.meter.update(self, (self.trajectory.velocity - velocity_before) / dt, dt)
