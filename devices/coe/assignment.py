@@ -23,7 +23,6 @@ from devices.canopen.pdo import (
     DEFAULT_TPDO_MAPS,
     MAX_ENTRIES,
     Pdo,
-    split_entry,
 )
 from devices.od import AbortCode, SdoAbort
 
@@ -119,26 +118,18 @@ def assigned_pdos(assignment: Assignment, pdos: Sequence[Pdo]) -> list[Pdo]:
     return [pdos[i - assignment.first] for i in assignment.assigned]
 
 
-def mapping_problem(assignment: Assignment, pdos: Sequence[Pdo], receive: bool) -> str | None:
+def mapping_problem(assignment: Assignment, pdos: Sequence[Pdo]) -> str | None:
     """Why an assignment cannot be used for process data, or None (checked at PREOP -> SAFEOP).
 
-    An assigned PDO must map something; and an output object may appear only once among the
-    assigned RxPDOs: the default RxPDOs all carry the controlword, so two of them together
-    would write 0x6040 twice per cycle (docs/ethercat-coe.md §PDO assignment).
+    An assigned PDO must map something. An object may repeat: ch. 5 allows "una qualunque
+    configurazione possibile fra i pdo di default", and every default RxPDO carries the
+    controlword, so 0x1601 "ulteriormente" mapped next to a slot's RxPDO repeats 0x6040; the
+    outputs image then writes each object once, with its last value in image order
+    (process_image.last_writes, docs/ethercat-coe.md §PDO assignment).
     """
-    seen: set[tuple[int, int]] = set()
     for pdo in assigned_pdos(assignment, pdos):
         if pdo.count == 0:
             return f"0x{pdo.map_index:04X} is assigned but maps nothing"
-        if not receive:
-            continue
-        for entry in pdo.mapped:
-            index, sub, _bits = split_entry(entry)
-            if index < 0x1000:  # DS 301 dummy entries may repeat
-                continue
-            if (index, sub) in seen:
-                return f"0x{index:04X}:{sub} is mapped twice in the assigned RxPDOs"
-            seen.add((index, sub))
     return None
 
 

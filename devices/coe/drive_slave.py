@@ -221,7 +221,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
 
     def _apply_outputs(self, data: bytes) -> None:
         lookup = self.dictionary.entry
-        for index, sub, value in process_image.unpack(self.rx_assigned, data, lookup):
+        writes = process_image.last_writes(process_image.unpack(self.rx_assigned, data, lookup))
+        for index, sub, value in writes:
             try:
                 self.dictionary.write(index, sub, value)
             except SdoAbort as exc:
@@ -253,14 +254,13 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         return None
 
     def check_output_mapping(self) -> int | None:
-        return self._check_mapping(self.rx_assign, self.rx_pdos, True, INVALID_OUTPUT_MAPPING)
+        return self._check_mapping(self.rx_assign, self.rx_pdos, INVALID_OUTPUT_MAPPING)
 
     def check_input_mapping(self) -> int | None:
-        return self._check_mapping(self.tx_assign, self.tx_pdos, False, INVALID_INPUT_MAPPING)
+        return self._check_mapping(self.tx_assign, self.tx_pdos, INVALID_INPUT_MAPPING)
 
-    def _check_mapping(self, assignment: Assignment, pdos: list, receive: bool,
-                       code: int) -> int | None:
-        problem = mapping_problem(assignment, pdos, receive)
+    def _check_mapping(self, assignment: Assignment, pdos: list, code: int) -> int | None:
+        problem = mapping_problem(assignment, pdos)
         if problem is None:
             return None
         if self.esm.code != code:  # one message per refusal episode, not per retry

@@ -56,3 +56,20 @@ def unpack(pdos: Sequence[Pdo], data: bytes, lookup: Lookup) -> list[tuple[int, 
         out += pdo.unpack(data[offset:offset + pdo.length], lookup)
         offset += pdo.length
     return out
+
+
+def last_writes(writes: list[tuple[int, int, Any]]) -> list[tuple[int, int, Any]]:
+    """``writes`` with each object once: its last value, at its last place in image order.
+
+    An object repeats when RxPDOs that share it are assigned together (every default RxPDO
+    carries the controlword; ch. 5 "ulteriormente mappare gli oggetti 0x1601"). The drive
+    takes the frame's data into its objects and then acts on them once, so it sees the last
+    value only, never the earlier ones: a controlword of 0 in 0x1600 and 0x000F in 0x1601
+    enables the drive instead of disabling and enabling it in every frame.
+    """
+    if len(writes) < 2:
+        return writes
+    last = {(index, sub): n for n, (index, sub, _value) in enumerate(writes)}
+    if len(last) == len(writes):  # no object repeats: the usual image
+        return writes
+    return [w for n, w in enumerate(writes) if last[w[0], w[1]] == n]

@@ -114,7 +114,12 @@ def test_remapping_first_the_pdo_then_the_assignment() -> None:
 
 
 @pytest.mark.parametrize(("assign", "code"), [
-    ((0x1C12, [0x1600, 0x1602]), 0x0025),  # the controlword twice
+    # "una qualunque configurazione possibile fra i pdo di default" (ch. 5): the controlword
+    # that every default RxPDO carries may come twice; the last one in the image wins
+    ((0x1C12, [0x1600, 0x1602]), None),
+    ((0x1C12, [0x1600, 0x1601]), None),  # "ulteriormente mappare gli oggetti 0x1601"
+    ((0x1C12, [0x1603, 0x1601]), None),
+    ((0x1C12, [0x1600, 0x1601, 0x1602, 0x1603]), None),
     ((0x1C12, [0x1601]), None),
     ((0x1C12, []), None),  # no outputs at all is a valid configuration
     ((0x1C13, [0x1A00, 0x1A02, 0x1A03]), None),  # inputs may repeat the statusword
@@ -222,19 +227,57 @@ def test_csp_ends_when_another_mode_is_written() -> None:
     assert bench.read(0x6061, signed=True) == 1 and not bench.slave.csp.active
 
 
+def _assign(bench, index: int, pdos: list[int]) -> None:
+    bench.write(index, 0, 0, 1)
+    for sub, pdo in enumerate(pdos, start=1):
+        bench.write(index, sub, pdo, 2)
+    bench.write(index, 0, len(pdos), 1)
+
+
 def test_modes_of_operation_through_process_data() -> None:
     """Ch. 5: "si possono ulteriormente mappare gli oggetti 0x1601 e 0x1A01 per controllare le
-    modalità operative via pdo"."""
+    modalità operative via pdo": 0x1601 / 0x1A01 alone ..."""
     bench = make_bench()
     bench.go(PREOP)
-    for index, pdo in ((0x1C12, 0x1601), (0x1C13, 0x1A01)):
-        bench.write(index, 0, 0, 1)
-        bench.write(index, 1, pdo, 2)
-        bench.write(index, 0, 1, 1)
+    _assign(bench, 0x1C12, [0x1601])
+    _assign(bench, 0x1C13, [0x1A01])
     bench.up_to(OP)
     for mode in (3, 8, 6, 7):
         bench.outputs("<Hb", 0, mode, ms=2)
         assert bench.inputs("<Hb")[1] == mode
+
+
+@pytest.mark.parametrize("slot", ["interpolated", "position", "velocity"])
+def test_modes_of_operation_through_process_data_next_to_a_slot(slot: str) -> None:
+    """... and "ulteriormente" (in addition) to a slot's PDOs, as the TwinCAT screen of ch. 5
+    "Settaggi SM / DC" shows (Status Word twice, then Mode of Operation display): 0x1601 after
+    the slot's RxPDO, 0x1A01 after its TxPDO. The controlword is in both RxPDOs; the image is
+    applied in order and each object is written once per frame with its last value, so the
+    drive sees the controlword of 0x1601 only (docs/ethercat-coe.md §PDO assignment)."""
+    rx, tx = SLOTS[slot].rx, SLOTS[slot].tx
+    bench = make_bench()
+    bench.go(PREOP)
+    _assign(bench, 0x1C12, [rx, 0x1601])
+    _assign(bench, 0x1C13, [tx, 0x1A01])
+    bench.go(SAFEOP)
+    assert bench.slave.al_state is SAFEOP and bench.drive.alarms.latched == []
+    assert process_image.size(bench.slave.rx_assigned) == 2 + 4 + 2 + 1
+    bench.up_to(OP)
+    mode = SLOTS[slot].mode
+    for cw in CIA402_ENABLE:  # the first controlword stays 0: only the last one counts
+        bench.outputs("<HiHb", 0x0000, 0, cw, mode, ms=2)
+    assert bench.inputs("<HiHb")[3] == mode
+    word = bench.inputs("<HiHb")[0]
+    assert word == bench.inputs("<HiHb")[2] == bench.drive.statusword
+    assert word & 0x6F == 0x27  # operation enabled, and it stays so frame after frame
+    bench.run(20)
+    assert bench.drive.statusword & 0x6F == 0x27
+
+
+def test_a_repeated_output_object_is_written_once_with_its_last_value() -> None:
+    writes = [(0x6040, 0, 0x0000), (0x60C1, 1, 5), (0x6040, 0, 0x000F), (0x6060, 0, 7)]
+    assert process_image.last_writes(writes) == writes[1:]
+    assert process_image.last_writes(writes[:2]) == writes[:2]
 
 
 def test_image_layout_as_twincat_shows_it() -> None:
