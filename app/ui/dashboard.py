@@ -38,7 +38,7 @@ from app.ui.panels.state import StatePanel
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
 from app.ui.style import CSS
 from devices.device import Action
-from devices.events import US_PER_S, Caption
+from devices.events import US_PER_S, Caption, Event
 
 logger = logging.getLogger(__name__)
 
@@ -119,6 +119,7 @@ class Dashboard:
         self._event_seq = 0
         self._frame_seq = -1
         self._t_us = -1
+        self._events_untold = False  # events taken while no browser was there (take_events)
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
         self._configure_look()
         self._panels: _Panels | None = None
@@ -317,6 +318,8 @@ class Dashboard:
     def start(self) -> None:
         # Runs in the simulation thread right after each publication: only a flag.
         self.runtime.add_frame_listener(lambda _frame: self._wake.set())
+        # A browser that connects is shown the views at once, not at the next frame.
+        self.server.on_client_connect(lambda _client: self._wake.set())
         self._thread = threading.Thread(target=self._run, name="fieldrig-dashboard",
                                         daemon=True)
         self._thread.start()
@@ -340,6 +343,12 @@ class Dashboard:
             if self._stop.is_set():
                 break
             try:
+                if not self.server.get_clients():
+                    # Nobody to show the views to: computing them was most of an idle served
+                    # rig's dashboard cost. The logs still take every event (the journal is
+                    # bounded), and the first tick with a browser draws the current frame.
+                    self.take_events()
+                    continue
                 self.tick()
                 # viser sends a window, then waits 1/60 s before looking for the next one
                 # unless flushed: without this a click's answer could wait those 17 ms.
@@ -354,22 +363,12 @@ class Dashboard:
     def tick(self) -> None:
         """One view update: new events into the log, changed values into the handles."""
         with self._lock:
-            frame = self.runtime.frame
-            self._event_seq, events = self.runtime.events_since(self._event_seq)
-            panels = self._panels
-            if panels is not None:
-                panels.log.add_events(events)
-            if self._drives is not None:
-                self._drives.add_events(events)
-            if self._line is not None:
-                self._line.add_events(events)
-            captions = [e.text for e in events if isinstance(e, Caption)]
-            fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events
-            self._frame_seq, self._t_us = frame.seq, frame.t_us
+            frame, panels = self.runtime.frame, self._panels
             with self.server.atomic():
-                if captions:
-                    self._caption.text = captions[-1]
-                    self._caption.visible = True
+                events = self._take_events()
+                fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events \
+                    or self._events_untold
+                self._frame_seq, self._t_us, self._events_untold = frame.seq, frame.t_us, False
                 if fresh:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
                     for scene, snap in zip(self._scenes, snaps, strict=True):
@@ -391,6 +390,28 @@ class Dashboard:
                     self._drives.tick(time.monotonic(), frame.t_us)
                 self.scenario_player.update(frame)  # scenario player, code decoder
                 self.decoder.update()
+
+    def take_events(self) -> None:
+        """The new events into the logs and the caption, without updating the views (no
+        browser connected); the next :meth:`tick` updates them."""
+        with self._lock:
+            if self._take_events():
+                self._events_untold = True
+
+    def _take_events(self) -> list[Event]:
+        self._event_seq, events = self.runtime.events_since(self._event_seq)
+        panels = self._panels
+        if panels is not None:
+            panels.log.add_events(events)
+        if self._drives is not None:
+            self._drives.add_events(events)
+        if self._line is not None:
+            self._line.add_events(events)
+        captions = [e.text for e in events if isinstance(e, Caption)]
+        if captions:
+            self._caption.text = captions[-1]
+            self._caption.visible = True
+        return events
 
     @property
     def caption(self) -> str:
