@@ -157,8 +157,13 @@ class CoeMailbox:
         assert self.od is not None  # _mailbox_od checked it
         self.od.write(index, sub, value)
 
+    def mailbox_runs(self) -> bool:
+        """Whether the controller behind the ESC serves the mailbox; a slave whose CoE runs on
+        a controller that can fail while the ESC still passes frames overrides this."""
+        return True
+
     def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
-        if not self.reachable() or self.od is None or \
+        if not self.reachable() or not self.mailbox_runs() or self.od is None or \
                 self.esm.state is AlState.INIT:  # type: ignore[attr-defined]
             raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
         return self.od

@@ -155,6 +155,11 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
     def reachable(self) -> bool:
         return self.powered and self.link_in
 
+    def mailbox_runs(self) -> bool:
+        # Tab. 12 red on: the application controller, which runs CoE, does not answer; the
+        # ESC still passes frames (docs/cpx-e-ec.md choice 25)
+        return not self.has_fault("ac_failure")
+
     def exchange_frame(self, now_us: int) -> None:  # no touch: stillness.clock_key
         """One process-data cycle of the master passed through this slave."""
         # reachable(), has_fault() and application_runs inline: the master calls this every
@@ -233,7 +238,7 @@ class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatu
         """8-byte emergencies (§2.5.3) queued in the mailbox; it runs from PREOP on."""
         if not self.diagnosis.mailbox:  # the master asks every cycle: nothing to hand over
             return []
-        if not self.reachable() or self.esm.state is AlState.INIT:
+        if not self.reachable() or not self.mailbox_runs() or self.esm.state is AlState.INIT:
             return []
         out, self.diagnosis.mailbox = self.diagnosis.mailbox, []
         if out:

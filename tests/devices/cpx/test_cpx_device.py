@@ -13,7 +13,7 @@ from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_SM_ADDRESS, TEXT_SM_SETTINGS,
 from devices.cpx.device import CpxEEc
 from devices.device import CommandError
 from devices.ethercat import AlState
-from devices.od import DataType
+from devices.od import AbortCode, DataType, SdoAbort
 
 
 def test_master_brings_it_to_op() -> None:
@@ -113,6 +113,29 @@ def test_application_controller_failure_ignores_the_master() -> None:
     bench.apply("clear_fault", fault="ac_failure")
     bench.cpx.request_state(AlState.PREOP)
     assert bench.cpx.al_state is AlState.PREOP
+
+
+def test_application_controller_failure_stops_the_masters_coe() -> None:
+    """Tab. 12 red on: "critical communication error, the application controller does not
+    answer" - the ESC keeps the AL state, but the CoE mailbox runs on the controller: the
+    built-in master's SDO upload / download and its emergency fetch get no answer (choice 25).
+    The operator's read_object already failed (test above); the master's path did not."""
+    bench = Bench(["8DO"], master=False, history_flags=0x0001)
+    bench.cpx.request_state(AlState.PREOP)
+    assert bench.cpx.sdo_upload(0x1000, 0)  # the mailbox answers in PREOP
+    bench.apply("supply", out=12.0)  # U_OUT undervoltage: an emergency waits in the mailbox
+    bench.run(0.01)
+    bench.apply("inject_fault", fault="ac_failure")
+    assert bench.cpx.al_state is AlState.PREOP  # the AL status does not move
+    with pytest.raises(SdoAbort) as upload:
+        bench.cpx.sdo_upload(0x1000, 0)
+    assert upload.value.code is AbortCode.SDO_TIMEOUT
+    before = bench.cpx.od.peek(0x2400, 7)
+    with pytest.raises(SdoAbort) as download:
+        bench.cpx.sdo_download(0x2400, 7, bytes((2,)))
+    assert download.value.code is AbortCode.SDO_TIMEOUT
+    assert bench.cpx.od.peek(0x2400, 7) == before
+    assert bench.cpx.take_emergencies() == []
 
 
 # (fault, sm, refused transition, AL status code, Text-ID)
