@@ -412,6 +412,7 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = None) -> Rig:
             slaves=[slaves[device_id] for device_id in spec.line],
             retry_interval_us=spec.retry_interval_us, epoch=spec.epoch,
             descriptions=descriptions, mapping=mapping,
-            dc_slaves=[uses_dc(slaves[device_id]) for device_id in spec.line])
+            dc_slaves=[uses_dc(slaves[device_id]) for device_id in spec.line],
+            step_us=spec.step_us)
     return Rig(name=spec.name, devices=devices, clock=SimClock(step_us=spec.step_us),
                seed=spec.seed)

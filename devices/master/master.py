@@ -79,7 +79,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                  state_timeout_us: int = STATE_TIMEOUT_US,
                  descriptions: Sequence[SlaveDescription] | None = None,
                  mapping: NetworkMapping | None = None,
-                 dc_slaves: Sequence[bool] | None = None) -> None:
+                 dc_slaves: Sequence[bool] | None = None,
+                 step_us: int | None = None) -> None:
         super().__init__(device_id=device_id, rng=rng or random.Random(0))
         if descriptions is not None and len(descriptions) != len(slaves):
             raise ValueError(f"the network description has {len(descriptions)} slaves, the "
@@ -94,7 +95,11 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             if desc is not None and desc.name:
                 link.slave.box_name = desc.name
         self.mapping = mapping
-        params = mapping.parameters if mapping is not None else MasterParameters()
+        # Without a mapping the master cycles once a rig step (the rig passes ``step_us``;
+        # docs/ethercat-master.md start-up 3): a fixed 1 ms would skip steps at a finer step
+        # and claim a cycle (SYNC0, stats) it cannot keep at a coarser one.
+        params = mapping.parameters if mapping is not None else \
+            MasterParameters() if step_us is None else MasterParameters(cycle_us=step_us)
         self.cycle_us = params.cycle_us
         self.retry_interval_us = retry_interval_us
         self.port = port

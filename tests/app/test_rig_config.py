@@ -97,3 +97,19 @@ def test_bad_slave_configuration_is_one_clear_error() -> None:
     with pytest.raises(RigConfigError) as info:
         build_rig(spec, state_dir=None)
     assert info.value.key == "cpx" and "CPX-E-99XX" in info.value.reason
+
+
+@pytest.mark.parametrize("step_ms", [0.5, 2])
+def test_master_without_mapping_cycles_every_rig_step(step_ms: float) -> None:
+    """No [master] mapping: the master's cycle is the rig step (docs/ethercat-master.md
+    start-up 3, docs/rig-file.md `step_ms`), one frame a step - not a fixed 1 ms, which
+    sent frames every other step at 0.5 ms and claimed a 1 ms cycle (DC SYNC0, stats) at 2."""
+    from app.rig_config import build_rig
+
+    spec = parse_rig_spec(f'[rig]\nstep_ms = {step_ms}\n[[cpx]]\nid = "cpx"\n', "step.toml")
+    rig = build_rig(spec, state_dir=None)
+    master = rig.devices["master"]
+    assert master.cycle_us == spec.step_us
+    assert master.snapshot()["stats"]["cycle_us"] == spec.step_us
+    rig.advance(40)
+    assert master.frames == 40
