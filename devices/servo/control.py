@@ -43,7 +43,7 @@ _MODE_CW: tuple[tuple[frozenset[int], dict[int, str]], ...] = (
 )
 _MODE_SW: tuple[tuple[frozenset[int], dict[int, str]], ...] = (
     (POSITIONER, {5: "sp_rdy", 6: "EOJ", 7: "Following_error"}),
-    (frozenset({3}), {7: "Zero_velocity"}),
+    (VELOCITY, {7: "Zero_velocity"}),  # -127: speed control too (docs/servo-drive.md)
     (HOMING, {6: "Homing_ok", 7: "Homing_error"}),
     (INTERPOLATOR, {5: "Ip_st"}),
     (ELECTRONIC_AXIS, {6: "Axis_started"}),
@@ -152,7 +152,7 @@ def register_status(f: StatusFlags) -> int:
     if f.mode in POSITIONER:
         sw |= _bit(f.set_point_ready, BIT5) | _bit(f.end_of_job, BIT6)
         sw |= _bit(f.following_error, BIT7)
-    elif f.mode == 3:
+    elif f.mode in VELOCITY:
         sw |= _bit(f.zero_speed, BIT7)
     elif f.mode in HOMING:
         sw |= _bit(f.homing_attained, BIT6) | _bit(f.homing_error, BIT7)

@@ -165,14 +165,17 @@ def test_velocity_select_and_zero_speed() -> None:
     assert sim.drive.statusword & ds402.SW_MODE_12
 
 
-ZERO_SPEED = 0x80  # R05 bit 7 in mode 3
+ZERO_SPEED = 0x80  # R05 bit 7 in the velocity modes 3 and -127
 
 
 def _zero_speed(sim: Sim) -> bool:
-    """R05 bit 7 (mode 3 only, control.py) and 0x6041 bit 12 (3 and -127) must agree."""
+    """R05 bit 7 and 0x6041 bit 12 must agree in both velocity modes: -127 is "modo
+    riferimento analogico velocità" (seed 004 ch. 4), speed control from the analog input, so
+    R05 bit 7 "Controllo Velocità: velocità nulla" applies to it (docs/servo-drive.md)."""
+    assert sim.drive.mode in (3, -127)
     twin = bool(sim.drive.statusword & ds402.SW_MODE_12)
-    if sim.drive.mode == 3:
-        assert bool(sim.r05 & ZERO_SPEED) is twin
+    assert bool(sim.r05 & ZERO_SPEED) is twin
+    assert sim.drive.snapshot()["status_bits"]["Zero_velocity"] is twin
     return twin
 
 
