@@ -122,7 +122,7 @@ def _pdo_objects(od: ObjectDictionary, node: CanOpenNode, pdo: Pdo) -> None:
         add(comm, 5, "Event timer", D.UNSIGNED16, RW, lambda: pdo.event_timer_ms,
             lambda v: setattr(pdo, "event_timer_ms", v))
     add(mapping, 0, "Number of mapped objects", D.UNSIGNED8, RW, lambda: pdo.count,
-        lambda v: pdo.set_count(v, node.dictionary.entry))
+        lambda v: node.set_pdo_count(pdo, v))
     for sub in range(1, MAX_ENTRIES + 1):
         add(mapping, sub, f"{kind} PDO {pdo.number} mapping entry {sub}", D.UNSIGNED32, RW,
             lambda s=sub: pdo.entries[s - 1],

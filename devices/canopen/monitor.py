@@ -43,9 +43,10 @@ class BusMonitor:
 
 
 def pdo_text(pdos: Iterable[Pdo], can_id: int, data: bytes) -> str | None:
-    """"TPDO1 0x6041:00=0x637" for a frame of one of the node's valid PDOs, else None."""
+    """"TPDO1 0x6041:00=0x637" for a frame of one of the node's PDOs in use (valid, something
+    mapped), else None."""
     for pdo in pdos:
-        if pdo.valid and pdo.can_id == can_id:
+        if pdo.valid and pdo.count and pdo.can_id == can_id:
             parts, offset = [], 0
             for index, sub, bits in map(split_entry, pdo.mapped):
                 chunk = data[offset:offset + bits // 8]

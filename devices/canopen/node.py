@@ -118,11 +118,13 @@ class CanOpenNode(ProcessData, DeviceModel):
 
     def _route_rpdos(self) -> None:
         """The frames the node takes as RPDOs: the COB-IDs of its valid RPDOs as they are now
-        ("la validazione del corrispondente COB-ID nel OD"; bit 31 set: not taken). Made
-        again at every write of a 0x140x:1, so a received frame costs one dict look-up."""
+        ("la validazione del corrispondente COB-ID nel OD"; bit 31 set: not taken) that map
+        something: a PDO carries one to eight bytes, so with 0x160x:0 = 0 the RPDO is not in
+        use, as its TPDO twin is not sent (docs/canopen.md). Made again at every write of a
+        0x140x:1 or 0x160x:0, so a received frame costs one dict look-up."""
         routes: dict[int, tuple[Pdo, ...]] = {}
         for pdo in self.rpdos:
-            if pdo.valid:
+            if pdo.valid and pdo.count:
                 # Two RPDOs on one COB-ID both take the frame, as two receivers would.
                 routes[pdo.can_id] = (*routes.get(pdo.can_id, ()), pdo)
         self._by_rx_id = routes
@@ -131,6 +133,13 @@ class CanOpenNode(ProcessData, DeviceModel):
         """0x1400-0x1403:1 / 0x1800-0x1803:1. A TPDO is sent with its COB-ID as it is at
         each send; an RPDO's new COB-ID takes effect for the next frame."""
         pdo.set_cob_id(value)
+        if pdo.receive:
+            self._route_rpdos()
+
+    def set_pdo_count(self, pdo: Pdo, value: int) -> None:
+        """0x1600-0x1603:0 / 0x1A00-0x1A03:0: an RPDO mapped or emptied starts or stops
+        taking frames."""
+        pdo.set_count(value, self.dictionary.entry)
         if pdo.receive:
             self._route_rpdos()
 

@@ -258,6 +258,37 @@ def test_rpdo_shorter_than_its_mapping_is_not_processed() -> None:
         ["10 82 11 00 00 00 00 00"]
 
 
+def test_rpdo_with_no_mapped_object_takes_nothing() -> None:
+    """"Il campo dati di un PDO può essere compreso tra uno e otto byte"; "Per eliminare una
+    mappatura bisogna agire con il NumOfEntries": an RPDO with 0x1600:0 = 0 is not in use, as
+    its TPDO twin is not sent. A frame on its COB-ID, of any length, is not the node's: no
+    write, no EMCY 0x8210 (nothing to be short of), not kept for the Sync, and the bus
+    monitor does not name it RPDO1. Mapped again, the RPDO takes its frames as before."""
+    bench = _started()
+    bench.nmt(NmtCommand.ENTER_PRE_OPERATIONAL)
+    bench.ok(0x1400, 2, 1, 1)  # synchronous: nothing may wait for the Sync either
+    bench.ok(0x1600, 0, 0, 1)
+    bench.nmt(NmtCommand.START)
+    bench.run(3)
+    bench.take()
+    for data in (struct.pack("<Hi", 0x0006, 0), b"", bytes((0x06,))):
+        bench.send(0x201, data)
+        bench.run(2)
+    recent = bench.node.monitor.recent(8)
+    taken = [f["text"] for f in recent if f["id"] == "0x201"]
+    assert len(taken) == 3 and not any(t.startswith("RPDO1") for t in taken), taken
+    bench.ok(0x1600, 0, 2, 1)
+    bench.send(0x080)
+    bench.run(3)
+    assert bench.drive.cw == 0
+    assert [f for f in bench.take() if f.can_id == 0x081] == []
+    bench.send(0x201, struct.pack("<Hi", 0x0006, 0))
+    bench.send(0x080)
+    bench.run(3)
+    assert bench.drive.cw == 0x0006
+    assert any(f["text"].startswith("RPDO1 0x6040") for f in bench.node.monitor.recent(8))
+
+
 @pytest.mark.parametrize("node_id", [1, 2])
 def test_seed_interpolator_example_sync_and_rpdo_loop(node_id: int) -> None:
     """Ch. 4 "Modo interpolatore": 60C2.1 = 1 ms, mode 7, RPDO1 = set-point + controlword
