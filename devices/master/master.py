@@ -360,11 +360,11 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         # Only WAITING_START_TIME asks whether the DC slaves are ready (DcUnit.trigger): every
         # one in SAFEOP / OP but those whose start-up the master found refused (it retries
         # them; START_TIME does not wait for a broken slave, the others go on to OP).
-        asked = dc.state is DcState.WAITING_START_TIME or not self.SKIP_STILL
-        synced = [link for link in dc_links
-                  if link.slave.al_state in (AlState.SAFEOP, AlState.OP)]
-        ready = asked and bool(synced) and all(
-            link in synced or link.stalled for link in dc_links)
+        ready = False
+        if dc.state is DcState.WAITING_START_TIME or not self.SKIP_STILL:
+            synced = [link.slave.al_state in (AlState.SAFEOP, AlState.OP) for link in dc_links]
+            ready = any(synced) and all(
+                in_sync or link.stalled for in_sync, link in zip(synced, dc_links, strict=True))
         trigger = dc.trigger(self.now_us, self.link_up, len(dc_links), ready)
         moved = dc.move(trigger, self.now_us) if trigger is not None else None
         if moved is None:

@@ -80,8 +80,10 @@ class StartupMixin:
             link.believed, link.next_try_us = state, now
             # The change is an event now (seed 003: "the status change of slaves"): the
             # request below may bring the slave back within this step, before the step's
-            # watch reads its state again.
+            # watch reads its state again. The kept states no longer describe what was seen:
+            # the step's watch runs in full (the slave back in OP is a change again).
             self._watch(link)
+            self._watched = None
         if state is not target and now >= link.next_try_us:
             step = next_state(state, target)
             if self._before_transition(link, state, step):

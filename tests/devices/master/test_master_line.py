@@ -171,6 +171,21 @@ def test_a_slave_brought_back_at_once_still_raises_its_state_changes() -> None:
         assert (after["state"], after["counters"]["state_changes"]) == ("OP", before[p] + 2)
 
 
+@pytest.mark.parametrize("skip_still", [True, False])
+def test_one_slave_back_at_once_gives_both_changes_on_the_still_path(skip_still: bool) -> None:
+    """The same with every other slave unchanged: the master's kept states (its still watch)
+    must not hide the change back to OP (it did, with the event raised 0.5 s later)."""
+    rig = line_in_op()
+    rig.devices["master"].SKIP_STILL = skip_still
+    rig.devices["cpx"].request_state(AlState.SAFEOP)
+    events = rig.run_until(IN_OP_US + US // 2)
+    changes = [(r["t"], r["position"], r["from"], r["to"]) for r in (e.to_record() for e in events)
+               if r["device"] == "master" and r["event"] == "slave_state"]
+    t = changes[0][0] if changes else None
+    p = POSITIONS["cpx"]
+    assert changes == [(t, p, "OP", "SAFEOP"), (t, p, "SAFEOP", "OP")]
+
+
 def _rig_with_eni(tmp_path: Path, old: str, new: str) -> Path:
     from line_bench import ROOT
 
