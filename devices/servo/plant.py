@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 
 COAST_TIME_CONSTANT_S = 0.2  # a released motor's speed decays with this time constant
-STOPPED_REV_S = 1e-4  # a coasting motor slower than this has stopped
+STOPPED_REV_S = 1e-4  # a motor slower than this has stopped (coasting, or ending a stop)
 SETTLED_REV = 1e-7  # closer than this the position loop has settled (well below 1 user unit)
 _exp = math.exp  # every tick of a drive in torque: no module attribute lookup
 
@@ -59,6 +59,12 @@ class Plant:
         self.blocked = False  # against an end stop
         self._last_demand: float | None = None
         self._end_stops = geometry.end_stops  # the geometry is frozen
+
+    @property
+    def standstill(self) -> bool:
+        """The motor has stopped: what a quick stop or a fault reaction waits for before the
+        torque goes off (DSP 402; the demand at rest is not enough, the motor lags it)."""
+        return -STOPPED_REV_S < self.omega < STOPPED_REV_S
 
     def step(self, dt: float, demand: float | None, lag: float) -> None:
         """Advance dt seconds following ``demand`` (None: no torque, the motor coasts)."""

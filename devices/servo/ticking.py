@@ -28,6 +28,7 @@ from typing import TYPE_CHECKING
 from devices.servo import ds402
 from devices.servo.ds402 import Command, State
 from devices.servo.mode_base import Changes, Mode
+from devices.servo.plant import STOPPED_REV_S as _STOPPED_REV_S
 from devices.servo.registers import DISABLED_32, R
 
 if TYPE_CHECKING:
@@ -114,8 +115,13 @@ class DriveTick:
                 self._was_allowed = allowed
             trajectory.advance(dt)
             plant.step(dt, trajectory.position, lag)
-            if trajectory._index >= len(trajectory._plan) and trajectory.velocity == 0.0:
-                if self.state is _QUICK_STOP:  # standstill (trajectory.idle, inline)
+            # A quick stop or fault reaction ends at standstill (DSP 402 v1.1, seed 004 ch. 4;
+            # F3 "Rampa di emergenza"): the demand at rest (trajectory.idle, inline) and the
+            # motor, which lags it, stopped too (plant.standstill, inline) - else the torque
+            # went off with the motor still turning and the axis coasted.
+            if trajectory._index >= len(trajectory._plan) and trajectory.velocity == 0.0 \
+                    and -_STOPPED_REV_S < plant.omega < _STOPPED_REV_S:
+                if self.state is _QUICK_STOP:
                     self._transition(Command.STANDSTILL)
                 elif self.state is _FAULT_REACTION:
                     self._transition(Command.FAULT_REACTION_DONE)

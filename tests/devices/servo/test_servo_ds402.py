@@ -14,6 +14,7 @@ from servo_helpers import CANOPEN_ENABLE, Sim, make_sim
 
 from devices.servo import ds402
 from devices.servo.ds402 import TRANSITIONS, Command, State
+from devices.servo.plant import STOPPED_REV_S
 
 C = Command
 
@@ -67,8 +68,9 @@ def _trigger(sim: Sim, command: Command) -> None:
     elif command is C.FAULT:
         d.apply("inject_alarm", {"code": 1})
     elif command in (C.STANDSTILL, C.FAULT_REACTION_DONE):
-        sim.run_until(lambda: d.trajectory.idle and d.trajectory.velocity == 0.0,
-                      timeout_ms=2_000)
+        # standstill: the demand at rest and the motor, which lags it, stopped too
+        sim.run_until(lambda: d.trajectory.idle and d.trajectory.velocity == 0.0
+                      and d.plant.standstill, timeout_ms=2_000)
     elif command is C.TORQUE_LOST:
         d.apply("set_input", {"name": "ten", "value": False})
 
@@ -156,3 +158,32 @@ def test_fault_reset_needs_a_rising_edge_and_no_cause() -> None:
     assert sim.drive.state is State.FAULT  # bit 7 held: no new edge
     sim.cw(0x0000, 0x0080)
     assert sim.drive.state is State.SWITCH_ON_DISABLED
+
+
+@pytest.mark.parametrize("stop", ["quick stop", "alarm 2"])
+def test_quick_stop_and_fault_reaction_end_with_the_motor_at_standstill(stop: str) -> None:
+    """DSP 402 v1.1 (seed 004 ch. 4 "Device Profile: DSP 402 v1.1"): the quick stop and the
+    fault reaction bring the axis to a standstill on the emergency ramp (F3 "Rampa di
+    emergenza") before the torque goes off. The motor lags the demand (the position loop):
+    ending when only the demand is at rest released a motor still turning at ~30 rpm, which
+    then coasted ~600 user units with no control."""
+    sim = make_sim()
+    sim.cw(*CANOPEN_ENABLE)
+    d = sim.drive
+    d.od.write(0x6060, 0, 3)
+    d.od.write(0x60FF, 0, 60000)  # 600 rpm at the default feed
+    sim.run(1000)
+    assert d.read_register(73) == 600
+    ramp = State.QUICK_STOP_ACTIVE if stop == "quick stop" else State.FAULT_REACTION_ACTIVE
+    if stop == "quick stop":
+        d.write_controlword(0x000B)
+    else:
+        d.apply("inject_alarm", {"code": "2"})
+    sim.run(1)
+    assert d.state is ramp
+    sim.run_until(lambda: d.state is not ramp, 2_000)
+    assert d.state is (State.SWITCH_ON_DISABLED if stop == "quick stop" else State.FAULT)
+    assert abs(d.plant.omega) < STOPPED_REV_S  # torque off only with the motor stopped
+    released_at = d.position_user
+    sim.run(2_000)
+    assert abs(d.position_user - released_at) <= 1  # no coasting after the release

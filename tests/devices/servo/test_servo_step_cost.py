@@ -101,7 +101,8 @@ class PlainDrive(ServoDrive):
             self._was_allowed = allowed
         self.trajectory.advance(dt)
         self.plant.step(dt, self.trajectory.position, lag)
-        standstill = self.trajectory.idle and self.trajectory.velocity == 0.0
+        standstill = self.trajectory.idle and self.trajectory.velocity == 0.0 \
+            and self.plant.standstill
         if standstill and self.state is State.QUICK_STOP_ACTIVE:
             self._transition(Command.STANDSTILL)
         elif standstill and self.state is State.FAULT_REACTION_ACTIVE:
