@@ -187,8 +187,10 @@ class Homing(Mode):
         self.next_phase(d)
 
     def limits(self, d: ServoDrive, speed_user: float) -> Limits:
+        """R20 / R21 with R22, clamped to Vmax: d3 "Velocità massima del motore" (ch. 1)
+        limits every speed, as in the other modes."""
         acc = d.accel_to_rev(d.reg(R.HOMING_ACCELERATION))
-        return Limits(abs(d.speed_to_rev(speed_user)), acc, acc)
+        return Limits(min(abs(d.speed_to_rev(speed_user)), d.motor_vmax_rev), acc, acc)
 
     def next_phase(self, d: ServoDrive) -> None:
         assert self.run is not None

@@ -317,6 +317,34 @@ def test_homing_hitting_an_unexpected_limit_switch_fails() -> None:
     assert sim.drive.read_register(46) == 14
 
 
+@pytest.mark.parametrize(("method", "fast", "slow"), [
+    (18, 1_000_000, 3000), (17, 1_000_000, 3000), (1, 12000, 1_000_000)],
+    ids=["18 fast", "17 fast", "1 slow"])
+def test_homing_speeds_are_limited_by_d3(method: int, fast: int, slow: int) -> None:
+    """Ch. 1 "d3 Velocità massima del motore, Vmax %": d3 limits every speed, homing's too
+    (R20 fast, R21 slow). 1e6 user units/s at feed 6000 is 10000 rpm; d3 = 50 % of 3000 rpm
+    is 1500 rpm. Unclamped, the search ran at 6000 rpm and tripped alarm 16."""
+    sim = _homing_sim(method=method)
+    sim.w(20, fast)
+    sim.w(21, slow)
+    sim.w(22, 20_000)  # 0.1 turn to Vmax: short searches reach it too
+    d = sim.drive
+    vmax_rpm = d.motor_vmax_rev * 60
+    assert vmax_rpm == pytest.approx(1500)
+    sim.w(1, 6)
+    sim.w(0, 0x03)
+    sim.w(0, 0x43)
+    peak = 0.0
+    while not sim.r05 & 0xC0:
+        assert sim.t_us < 30_000_000, "homing did not end"
+        sim.run(1)
+        peak = max(peak, abs(d.trajectory.velocity) * 60, abs(d.plant.omega) * 60)
+    assert peak == pytest.approx(vmax_rpm)  # at Vmax, not beyond
+    assert sim.r05 & 0xC0 == 0x40, "Homing ok, no homing error"
+    assert d.read_register(46) == 0
+    assert d.plant.theta * 6000 == pytest.approx(HOME_POINTS[method][0], abs=0.5)
+
+
 def test_interpolator_follows_a_set_point_per_period() -> None:
     """Mode 7: 0x60C2:1 = 2 ms; each period the drive takes 0x60C1:1 and moves linearly."""
     sim = make_sim()
