@@ -91,7 +91,9 @@ class ServedRig:
         port = free_port()
         with contextlib.redirect_stdout(sys.stderr):  # viser's banner: stdout is for events
             server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
-        dashboard = Dashboard(server, runtime)
+        # Every frame drawn, browser or not: advance() waits on rendered_seq before a page
+        # is open, and tests read the views.
+        dashboard = Dashboard(server, runtime, draw_unwatched=True)
         runtime.start()
         dashboard.start()
         return cls(runtime, server, dashboard, f"http://127.0.0.1:{port}")

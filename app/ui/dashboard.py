@@ -97,9 +97,14 @@ def _kind_ids(described: Mapping[str, Mapping[str, Any]], kind: str) -> list[str
 
 
 class Dashboard:
-    def __init__(self, server: viser.ViserServer, runtime: Runtime) -> None:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime,
+                 draw_unwatched: bool = False) -> None:
         self.server = server
         self.runtime = runtime
+        # False: no view is computed while no browser is connected (the thread only takes
+        # events). True for a driver that waits on rendered_seq before any page is open (the
+        # screenshot tool steps a paused rig and waits for each frame to be drawn).
+        self.draw_unwatched = draw_unwatched
         described = runtime.rig.describe()
         self.fastcat_ids = _kind_ids(described, "fastcat")
         self.master_id = next(iter(_kind_ids(described, "master")), None)
@@ -343,7 +348,7 @@ class Dashboard:
             if self._stop.is_set():
                 break
             try:
-                if not self.server.get_clients():
+                if not self.draw_unwatched and not self.server.get_clients():
                     # Nobody to show the views to: computing them was most of an idle served
                     # rig's dashboard cost. The logs still take every event (the journal is
                     # bounded), and the first tick with a browser draws the current frame.
