@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from app.rig import FAR_US, Rig
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.runtime import Runtime
 from app.scenario import (
     Scenario,
@@ -77,6 +77,31 @@ def compatible(running: Rig, fresh: Rig) -> str | None:
             f"running rig '{running.name}' has {', '.join(f'{i} ({k})' for i, k in have)}")
 
 
+def shown_path(path: Path) -> Path:
+    """``path`` as a command typed in the working directory takes it (relative when inside)."""
+    try:
+        return path.resolve().relative_to(Path.cwd().resolve())
+    except ValueError:
+        return path
+
+
+class RigMismatch(ScenarioError):
+    """A scenario written for a rig with other devices than the running one.
+
+    ``fix`` is what a trainee reads in the dashboard's notice: the command that serves the
+    scenario's rig, first, in a few words; ``str()`` adds the two device lists (the log, the
+    CLI), which were the whole notice before and pushed its title and the fix out of view."""
+
+    def __init__(self, scenario: Scenario, rig_file: Path, rig_name: str, running: str,
+                 why: str) -> None:
+        self.rig_file = rig_file
+        self.fix = (f"Serve its rig: python -m app --rig {shown_path(rig_file)} (it is "
+                    f"written for the rig '{rig_name}'; this dashboard serves '{running}', "
+                    f"with other devices: both lists are in the server log).")
+        super().__init__(f"{scenario.source}: cannot play on this dashboard: {why}; serve its "
+                         f"rig instead (python -m app --rig {shown_path(rig_file)})")
+
+
 def reset_in_place(running: Rig, fresh: Rig) -> None:
     """Give ``running`` the state of the factory-fresh ``fresh``; simulation thread only.
 
@@ -108,11 +133,33 @@ class Player:
         self._finished = False
         self._generation = 0
         self._started = False  # a simulation step has run since the load
+        # rig file -> (its rig's name, why it cannot replace the running rig) or None
+        self._fits: dict[Path, tuple[str, str] | None] = {}
         runtime.add_step_listener(self._on_step, quiet_until=self._quiet_until)
 
     # ---- commands (any thread but the simulation thread) ---------------------------------
     def rig_path(self, scenario: Scenario) -> Path:
         return Path(scenario.rig) if scenario.rig is not None else self.default_rig
+
+    def mismatch(self, scenario: Scenario) -> RigMismatch | None:
+        """Why ``scenario`` cannot play on the running rig (None when it can, or when its
+        rig file does not load: Play then says why). The devices of a running rig never
+        change (a load resets them in place), so each rig file is built once."""
+        path = self.rig_path(scenario).resolve()
+        if path not in self._fits:
+            try:
+                fresh = build_rig(load_rig_spec(path), state_dir=None)
+            except (RigConfigError, ValueError) as exc:
+                logger.warning("rig %s of scenario '%s' does not load: %s", path,
+                               scenario.name, exc)
+                return None
+            why = compatible(self.runtime.rig, fresh)
+            self._fits[path] = None if why is None else (fresh.name, why)
+        found = self._fits[path]
+        if found is None:
+            return None
+        rig_name, why = found
+        return RigMismatch(scenario, path, rig_name, self.runtime.rig.name, why)
 
     def load(self, scenario: Scenario, fresh: Rig | None = None) -> None:
         """Make the rig factory-fresh and stand before the scenario's first step, paused.
@@ -129,8 +176,8 @@ class Player:
         if fresh is not self.runtime.rig:
             why = compatible(self.runtime.rig, fresh)
             if why is not None:
-                raise ScenarioError(f"{scenario.source}: cannot play on this dashboard: {why}; "
-                                    f"serve its rig instead (python -m app --rig FILE)")
+                raise RigMismatch(scenario, self.rig_path(scenario).resolve(), fresh.name,
+                                  self.runtime.rig.name, why)
         self.runtime.set_paused(True)
 
         def install() -> None:

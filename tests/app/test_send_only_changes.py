@@ -240,7 +240,7 @@ def test_paused_marker_names_every_frame(player: Any) -> None:
     for frame in shown:
         panel.update(frame)
     view = panel.player.view()
-    assert sent == [status_html(view, f) for f in shown]
+    assert sent == [status_html(view, f, panel.hint) for f in shown]
 
 
 def _view(**changes: Any) -> PlayerView:

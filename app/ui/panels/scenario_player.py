@@ -21,7 +21,7 @@ from typing import Any
 import viser
 
 from app.classroom.roles import Operation
-from app.player import Player, PlayerView, Status, describe_step
+from app.player import Player, PlayerView, RigMismatch, Status, describe_step, shown_path
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigConfigError
 from app.runtime import Frame, Runtime
@@ -58,24 +58,54 @@ def library(directory: Path = SCENARIO_DIR) -> list[Entry]:
     return [Entry(n if names.count(n) == 1 else f"{n} ({p.stem})", p) for n, p in found]
 
 
+def marked(entries: list[Entry], player: Player) -> tuple[list[Entry], list[Path]]:
+    """The picker's entries: those that play on the running rig first, as they are; then those
+    written for another rig file, labelled ``[rig STEM] name`` (the mark first: a long name is
+    cut at the right in the dropdown) so that a trainee sees which rig to serve before Play.
+    Also the other rig files, in order."""
+    here: list[Entry] = []
+    other: list[Entry] = []
+    rigs: list[Path] = []
+    for entry in entries:
+        why = player.mismatch(load_scenario(entry.path))
+        if why is None:
+            here.append(entry)
+            continue
+        other.append(Entry(f"[rig {why.rig_file.stem}] {entry.label}", entry.path))
+        if why.rig_file not in rigs:
+            rigs.append(why.rig_file)
+    return here + other, rigs
+
+
+def other_rig_hint(rigs: list[Path]) -> str:
+    """How to play the scenarios marked for another rig: the command for each rig file."""
+    if not rigs:
+        return ""
+    return ("Scenarios marked [rig NAME] are written for another rig; serve it to play them: "
+            + "; ".join(f"python -m app --rig {shown_path(r)}" for r in rigs) + ".")
+
+
 def speed_label(speed: float) -> str:
     return f"{speed:g}x"
 
 
-def status_html(view: PlayerView, frame: Frame) -> str:
+def status_html(view: PlayerView, frame: Frame, hint: str = "") -> str:
     marker = (f'id="{STATUS_ID}" data-frame="{frame.seq}" data-t-us="{frame.t_us}" '
               f'data-applied="{view.applied}" data-generation="{view.generation}" '
               f'data-status="{view.status.name.lower()}"')
-    return f'<div {marker} style="font-size:0.85em">{status_text(view, frame.t_us)}</div>'
+    return (f'<div {marker} style="font-size:0.85em">{status_text(view, frame.t_us, hint)}'
+            "</div>")
 
 
-def status_text(view: PlayerView, t_us: int) -> str:
+def status_text(view: PlayerView, t_us: int, hint: str = "") -> str:
     """What the status block says (inside the marker): the scenario, its state and time, the
-    step, the caption, the checkpoint and the failures."""
+    step, the caption, the checkpoint and the failures; ``hint`` follows the "no scenario"
+    text (how to play the scenarios marked for another rig)."""
     scenario = view.scenario
     if scenario is None:
         return ('<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
-                "restarts factory-fresh and the scenario drives it.</span>")
+                "restarts factory-fresh and the scenario drives it."
+                + (f" {esc(hint)}" if hint else "") + "</span>")
     total = len(scenario.steps)
     lines = [f"<b>{esc(scenario.name)}</b> &middot; {esc(view.status.value)} &middot; "
              f"t = {t_us / 1e6:.1f} s of {scenario.end_us / 1e6:g} s",
@@ -98,7 +128,9 @@ class ScenarioPlayerPanel:
         self.player = Player(runtime, default_rig)
         self._runtime = runtime
         self._caption = caption  # the dashboard's caption label: hidden on a (re)load
-        self._entries = {e.label: e for e in library(directory)}
+        entries, rigs = marked(library(directory), self.player)
+        self._entries = {e.label: e for e in entries}
+        self.hint = other_rig_hint(rigs)
         self._loaded: Path | None = None
         self._busy = threading.Lock()  # one playback command at a time, in click order
         gui = server.gui
@@ -109,7 +141,8 @@ class ScenarioPlayerPanel:
             initial = min(SPEEDS, key=lambda s: abs(s - runtime.speed))
             self._speed = gui.add_dropdown("Speed", tuple(speed_label(s) for s in SPEEDS),
                                            initial_value=speed_label(initial))
-            self._status = gui.add_html(status_html(self.player.view(), runtime.frame))
+            self._status = gui.add_html(status_html(self.player.view(), runtime.frame,
+                                                    self.hint))
         self._last = ""
         self._said: tuple[Any, ...] = ()
         self._buttons.on_click(self._on_button)
@@ -134,6 +167,9 @@ class ScenarioPlayerPanel:
                 self.player.step()
             elif choice == RESTART:
                 self._ensure_loaded(force=True)
+        except RigMismatch as exc:  # the fix first and short; the device lists to the log
+            logger.warning("%s", exc)
+            notify(client, f"Scenario: {choice} refused", exc.fix, error=True)
         except (ScenarioError, RigConfigError, ValueError) as exc:
             notify(client, f"Scenario: {choice} refused", str(exc), error=True)
 
@@ -197,11 +233,12 @@ class ScenarioPlayerPanel:
         every frame written, as the screenshot tooling needs: it steps a paused rig and waits
         until ``data-frame`` reaches the runtime's frame (app/screenshots.py ``sync``)."""
         view = self.player.view()
-        said = (view.applied, view.generation, view.status, status_text(view, frame.t_us))
+        said = (view.applied, view.generation, view.status,
+                status_text(view, frame.t_us, self.hint))
         if said == self._said and not self._runtime.paused:
             return
         self._said = said
-        content = status_html(view, frame)
+        content = status_html(view, frame, self.hint)
         if content != self._last:
             self._status.content = content
             self._last = content

@@ -1,0 +1,90 @@
+"""The Scenario tab on the default dashboard (``python -m app``): the library lists every
+scenario of ``static/scenarios/``, also those written for another rig file (the EtherCAT line,
+nine analog modules). Those are marked in the picker with the rig they need, listed after the
+ones that play here, and Play on one is refused with a short notice that gives the command to
+serve its rig first; the two device lists go to the server log, not into the notice (a notice
+of ~1,200 characters was clipped, title and fix cut off)."""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+import viser
+
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.runtime import Runtime
+from app.scenario import load_scenario
+from app.screenshots import free_port
+from app.ui.panels.scenario_player import CHOOSE, PLAY, ScenarioPlayerPanel, library
+
+LINE_RIG = Path("static/rigs/ethercat_line.toml")
+
+
+class _Client:
+    client_id = 1
+
+    def __init__(self) -> None:
+        self.notes: list[tuple[str, str, str]] = []
+
+    def add_notification(self, title: str, body: str, color: str = "",
+                         auto_close_seconds: Any = None) -> None:
+        self.notes.append((title, body, color))
+
+
+@pytest.fixture
+def panel() -> Iterator[ScenarioPlayerPanel]:
+    """The panel on the default rig's runtime, never started (a refused load touches nothing)."""
+    runtime = Runtime(build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        yield ScenarioPlayerPanel(server, runtime)
+    finally:
+        server.stop()
+
+
+def _rig_of(path: Path) -> Path:
+    rig = load_scenario(path).rig
+    return Path(rig).resolve() if rig is not None else DEFAULT_RIG.resolve()
+
+
+def test_scenarios_for_another_rig_are_marked_and_listed_last(
+        panel: ScenarioPlayerPanel) -> None:
+    options = list(panel._pick.options)
+    assert options[0] == CHOOSE
+    entries = library()
+    assert len(options) == 1 + len(entries)  # nothing left out
+    here = [e for e in entries if _rig_of(e.path) == DEFAULT_RIG.resolve()]
+    other = [e for e in entries if e not in here]
+    assert here and other  # the library has both kinds
+    # The ones that play here keep their plain name, first.
+    assert options[1:1 + len(here)] == [e.label for e in here]
+    for label, entry in zip(options[1 + len(here):], other, strict=True):
+        stem = _rig_of(entry.path).stem
+        assert label == f"[rig {stem}] {entry.label}"
+    assert "[rig ethercat_line] Distributed clocks: SYNC0 lost" in options
+    assert "[rig nine_analog] Too many analog modules" in options
+    # The empty status tells how to play the marked ones.
+    status = str(panel._status.content)
+    assert "[rig NAME]" in status
+    for rig in ("ethercat_line", "nine_analog"):
+        assert f"python -m app --rig static/rigs/{rig}.toml" in status
+
+
+def test_play_on_another_rig_is_refused_short_fix_first(
+        panel: ScenarioPlayerPanel, caplog: pytest.LogCaptureFixture) -> None:
+    client = _Client()
+    panel._pick.value = next(o for o in panel._pick.options if "SYNC0 lost" in o)
+    with caplog.at_level(logging.WARNING):
+        panel._run(client, PLAY)  # type: ignore[arg-type]
+    [(title, body, color)] = client.notes
+    assert (title, color) == ("Scenario: Play refused", "red")
+    assert len(body) <= 250, body  # fits the notice without clipping
+    assert body.startswith(f"Serve its rig: python -m app --rig {LINE_RIG}"), body
+    assert "drive_ecat" not in body and "drive_ec (" not in body  # no device lists
+    # The device lists are in the log, for whoever wants the detail.
+    assert any("drive_ecat (servo)" in r.getMessage() for r in caplog.records)
+    assert panel.player.view().scenario is None  # nothing loaded
