@@ -82,9 +82,29 @@ def format_value(value: Any, dtype: str) -> str:
     return str(value)
 
 
-def read_text(value: Any) -> str:
-    """A Read button's answer: an OCTET_STRING in hex as the table shows it, else repr."""
-    return fmt_bytes(value) if isinstance(value, bytes | bytearray) else repr(value)
+HEX_DIGITS = {"UINT": 4, "UDINT": 8}  # the types the table also shows in hex
+
+
+def read_box(value: Any, dtype: str) -> str:
+    """A Read's value as the Value box takes it back for a Write: unsigned 16/32-bit in hex
+    (0x04000003, as the State panel shows 0x5400), other numbers in decimal, a string as it
+    is, an OCTET_STRING in hex bytes as the table shows it."""
+    if isinstance(value, bool):
+        return str(int(value))
+    if isinstance(value, int):
+        digits = HEX_DIGITS.get(dtype)
+        return f"0x{value:0{digits}X}" if digits is not None and value >= 0 else str(value)
+    if isinstance(value, bytes | bytearray):
+        return fmt_bytes(value)
+    return str(value)
+
+
+def read_text(value: Any, dtype: str) -> str:
+    """A Read button's answer: unsigned 16/32-bit in hex then decimal ("0x04000003
+    (67108867)"), the rest as the table shows it."""
+    if isinstance(value, int) and not isinstance(value, bool) and dtype in HEX_DIGITS:
+        return f"{read_box(value, dtype)} ({value})"
+    return format_value(value, dtype)
 
 
 def matches(row: OdRow, needle: str) -> bool:
@@ -213,10 +233,9 @@ class ObjectDictionaryPanel:
             return
         address = f"0x{index:04X}:{sub}"
         if verb == "Read":
-            self._sender.send(client, self._device_id, "read_object",
-                              {"index": index, "sub": sub},
-                              done=lambda v: notify(client, f"{address} read",
-                                                    f"value = {read_text(v)}"))
+            device_id = self._device_id
+            self._sender.send(client, device_id, "read_object", {"index": index, "sub": sub},
+                              done=lambda v: self._read(client, device_id, index, sub, v))
             return
         value = parse_value(self._value.value)
         self._sender.send(client, self._device_id, "write_object",
@@ -224,6 +243,26 @@ class ObjectDictionaryPanel:
                           done=lambda _r: (notify(client, f"{address} written",
                                                   f"value = {value!r}"),
                                            self.request(None)))
+
+    def _read(self, client: viser.ClientHandle | None, device_id: str, index: int, sub: int,
+              value: Any) -> None:
+        """A Read's answer: into the Value box (a Write starts from it) and the notice."""
+        dtype = self._dtype(device_id, index, sub)
+        self._value.value = read_box(value, dtype)
+        notify(client, f"0x{index:04X}:{sub} read", f"value = {read_text(value, dtype)}")
+
+    def _dtype(self, device_id: str, index: int, sub: int) -> str:
+        """The object's type, from the rows read (or from the model when they are not there
+        yet: the entry's type never changes); "" when unknown."""
+        with self._lock:
+            rows = self._rows if device_id == self._device_id else None
+        for row in rows or ():
+            if (row.index, row.sub) == (index, sub):
+                return row.dtype
+        try:
+            return str(self._runtime.rig.device(device_id).od.entry(index, sub).dtype.short)
+        except Exception:  # no such device or object any more: shown untyped
+            return ""
 
     def request(self, client: viser.ClientHandle | None) -> None:
         """Read the dictionary in the simulation thread; the table updates on the next tick."""

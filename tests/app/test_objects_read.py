@@ -1,0 +1,94 @@
+"""The Objects tab's Read: the value read goes into the Value box (so Write starts from it)
+and the notice shows it as the table and the State panel do, unsigned integers in hex with
+the width of their type (0x5400 UDINT = 0x04000003, seed 000 §6.19), then in decimal;
+byte strings (0x10F3 messages) in hex, byte 0 first."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from concurrent.futures import Future
+from typing import Any
+
+import pytest
+
+from app.ui.panels import object_dictionary
+from app.ui.panels.object_dictionary import ObjectDictionaryPanel, OdRow
+
+
+class _Handle:
+    def __init__(self, value: Any = "") -> None:
+        self.value = value
+        self.content = ""
+        self.options: tuple[str, ...] = ()
+
+    def on_update(self, fn: Callable[..., Any]) -> Callable[..., Any]:
+        return fn
+
+    on_click = on_update
+
+
+class _Gui:
+    def __getattr__(self, name: str) -> Callable[..., _Handle]:
+        return lambda *args, **kw: _Handle(args[1] if len(args) > 1 else "")
+
+
+class _Server:
+    gui = _Gui()
+
+    def get_clients(self) -> dict[int, object]:
+        return {}
+
+
+class _Runtime:
+    def __init__(self, rows: list[OdRow]) -> None:
+        self.rows = rows
+
+    def submit(self, fn: Callable[[], Any]) -> Future[Any]:
+        done: Future[Any] = Future()
+        done.set_result(self.rows)
+        return done
+
+
+class _Sender:
+    """Answers read_object at once with ``value``."""
+
+    def __init__(self, value: Any) -> None:
+        self.value = value
+        self.sent: list[tuple[str, str, dict[str, Any]]] = []
+
+    def send(self, client: Any, target: str, action: str, args: dict[str, Any], *,
+             done: Callable[[Any], Any] | None = None) -> None:
+        self.sent.append((target, action, args))
+        if done is not None:
+            done(self.value)
+
+
+ROWS = [OdRow(0x5400, 0, "Alarm status", "UDINT", "RO", 0x04000003),
+        OdRow(0x2104, 0, "Module 1 settings", "UINT", "RW", 0x0007),
+        OdRow(0x5000, 1, "Box name", "STRING", "RW", "Box 1"),
+        OdRow(0x10F3, 6, "Diagnosis message 1", "ARRAY OF BYTE", "RO", bytes([0x00, 0xE8, 0x01]))]
+
+
+@pytest.mark.parametrize(("address", "value", "box", "shown"), [
+    ("0x5400", 0x04000003, "0x04000003", "0x04000003 (67108867)"),
+    ("0x2104:0", 7, "0x0007", "0x0007 (7)"),
+    ("0x5000:1", "Box 1", "Box 1", '"Box 1"'),
+    ("0x10F3:6", bytes([0x00, 0xE8, 0x01]), "00 E8 01", "00 E8 01"),
+])
+def test_read_fills_the_value_box_and_shows_hex(
+        monkeypatch: pytest.MonkeyPatch, address: str, value: Any, box: str,
+        shown: str) -> None:
+    notes: list[tuple[str, str]] = []
+    monkeypatch.setattr(object_dictionary, "notify",
+                        lambda client, title, body, error=False: notes.append((title, body)))
+    sender = _Sender(value)
+    panel = ObjectDictionaryPanel(_Server(), _Runtime(ROWS), sender,  # type: ignore[arg-type]
+                                  "fastcat")
+    panel.request(None)  # the table's rows: the types come from them
+    panel._address.value = address
+    panel._value.value = "1"  # what was typed before
+    panel._access(object(), "Read")  # type: ignore[arg-type]
+    assert sender.sent[0][1] == "read_object"
+    assert panel._value.value == box
+    [(title, body)] = notes
+    assert title.endswith("read") and body == f"value = {shown}"
