@@ -6,47 +6,13 @@ byte strings (0x10F3 messages) in hex, byte 0 first."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from concurrent.futures import Future
 from typing import Any
 
 import pytest
+from objects_tab_fakes import FakeRuntime, FakeServer
 
 from app.ui.panels import object_dictionary
 from app.ui.panels.object_dictionary import ObjectDictionaryPanel, OdRow
-
-
-class _Handle:
-    def __init__(self, value: Any = "") -> None:
-        self.value = value
-        self.content = ""
-        self.options: tuple[str, ...] = ()
-
-    def on_update(self, fn: Callable[..., Any]) -> Callable[..., Any]:
-        return fn
-
-    on_click = on_update
-
-
-class _Gui:
-    def __getattr__(self, name: str) -> Callable[..., _Handle]:
-        return lambda *args, **kw: _Handle(args[1] if len(args) > 1 else "")
-
-
-class _Server:
-    gui = _Gui()
-
-    def get_clients(self) -> dict[int, object]:
-        return {}
-
-
-class _Runtime:
-    def __init__(self, rows: list[OdRow]) -> None:
-        self.rows = rows
-
-    def submit(self, fn: Callable[[], Any]) -> Future[Any]:
-        done: Future[Any] = Future()
-        done.set_result(self.rows)
-        return done
 
 
 class _Sender:
@@ -82,7 +48,7 @@ def test_read_fills_the_value_box_and_shows_hex(
     monkeypatch.setattr(object_dictionary, "notify",
                         lambda client, title, body, error=False: notes.append((title, body)))
     sender = _Sender(value)
-    panel = ObjectDictionaryPanel(_Server(), _Runtime(ROWS), sender,  # type: ignore[arg-type]
+    panel = ObjectDictionaryPanel(FakeServer(), FakeRuntime(ROWS), sender,  # type: ignore[arg-type]
                                   "fastcat")
     panel.request(None)  # the table's rows: the types come from them
     panel._address.value = address
