@@ -28,6 +28,7 @@ from app.ui.commands import CommandSender, notify
 from app.ui.style import esc
 from devices.device import CommandError
 from devices.events import fmt_bytes
+from devices.od import SdoAbort
 
 logger = logging.getLogger(__name__)
 
@@ -261,7 +262,7 @@ class ObjectDictionaryPanel:
                 return row.dtype
         try:
             return str(self._runtime.rig.device(device_id).od.entry(index, sub).dtype.short)
-        except Exception:  # no such device or object any more: shown untyped
+        except (CommandError, SdoAbort, AttributeError):  # no such device / object / od
             return ""
 
     def request(self, client: viser.ClientHandle | None) -> None:

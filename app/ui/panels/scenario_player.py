@@ -43,19 +43,21 @@ STATUS_ID = "fr-player"
 class Entry:
     label: str  # what the picker shows: the scenario's name
     path: Path
+    scenario: Scenario  # as the picker read it (Play reads the file again)
 
 
 def library(directory: Path = SCENARIO_DIR) -> list[Entry]:
     """The scenarios of ``directory`` by name (file stem added when two share a name); a file
     that does not load is left out with a warning, not shown broken."""
-    found: list[tuple[str, Path]] = []
+    found: list[tuple[Scenario, Path]] = []
     for path in sorted(directory.glob("*.toml")):
         try:
-            found.append((load_scenario(path).name, path))
+            found.append((load_scenario(path), path))
         except ScenarioError as exc:
             logger.warning("scenario left out of the picker: %s", exc)
-    names = [n for n, _ in found]
-    return [Entry(n if names.count(n) == 1 else f"{n} ({p.stem})", p) for n, p in found]
+    names = [s.name for s, _ in found]
+    return [Entry(s.name if names.count(s.name) == 1 else f"{s.name} ({p.stem})", p, s)
+            for s, p in found]
 
 
 def marked(entries: list[Entry], player: Player) -> tuple[list[Entry], list[Path]]:
@@ -67,11 +69,12 @@ def marked(entries: list[Entry], player: Player) -> tuple[list[Entry], list[Path
     other: list[Entry] = []
     rigs: list[Path] = []
     for entry in entries:
-        why = player.mismatch(load_scenario(entry.path))
+        why = player.mismatch(entry.scenario)
         if why is None:
             here.append(entry)
             continue
-        other.append(Entry(f"[rig {why.rig_file.stem}] {entry.label}", entry.path))
+        other.append(Entry(f"[rig {why.rig_file.stem}] {entry.label}", entry.path,
+                           entry.scenario))
         if why.rig_file not in rigs:
             rigs.append(why.rig_file)
     return here + other, rigs
@@ -218,7 +221,7 @@ class ScenarioPlayerPanel:
                       if e.path.resolve() == path.resolve()), None)
         if label is None:
             label = scenario.name if scenario.name not in self._entries else f"{path}"
-            self._entries[label] = Entry(label, path)
+            self._entries[label] = Entry(label, path, scenario)
             self._pick.options = (CHOOSE, *self._entries)
         if self._pick.value != label:
             self._pick.value = label
