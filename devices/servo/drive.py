@@ -217,14 +217,15 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
             self.write_save_command(value)
             return
         spec = parameter_spec(address)
-        if not spec.writable:
-            raise AccessError("readonly", f"parameter {spec.name} is read-only")
         value = self.check_parameter(spec, value)
         self._require_power()
         self.params[address] = value
 
     def check_parameter(self, spec: ParameterSpec, value: int) -> int:
-        """``value`` if ``spec`` may take it now; c7's range depends on the c9 stored now."""
+        """``value`` if the parameter ``spec`` may be written with it now (every write path:
+        Modbus, the indirect 0x2000 / 0x2006 access); c7's range depends on the c9 stored now."""
+        if not spec.writable:
+            raise AccessError("readonly", f"parameter {spec.name} is read-only")
         value = spec.check(value)
         if spec.name == "c7":
             check_node_number(value, self.params[PARAMETER_BY_NAME["c9"].address])

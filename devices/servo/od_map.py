@@ -96,8 +96,6 @@ class IndirectAccess:
             return
         value = self.values["param_write_value"]
         spec = parameter_spec(address)
-        if not spec.writable:
-            raise AccessError("readonly", f"parameter {spec.name} is read-only")
         self.drive.check_parameter(spec, value)
         self._schedule(PARAMETER_APPLY_US, "param_write_address", address,
                        lambda: self.drive.write_parameter(address, value))
@@ -132,8 +130,6 @@ class IndirectAccess:
                            lambda: self.drive.write_register(n, value))
         else:
             pspec = parameter_spec(n)
-            if not pspec.writable:
-                raise AccessError("readonly", f"parameter {pspec.name} is read-only")
             self.drive.check_parameter(pspec, value)
             self._schedule(PARAMETER_APPLY_US, "var_write_address", address,
                            lambda: self.drive.write_parameter(n, value))
