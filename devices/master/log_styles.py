@@ -6,14 +6,15 @@
 - ``sirio``: the Sirio emergency display of §7.2 (three rows, data byte 0 first);
 - ``pegaso``: the Pegaso display of §7.3 (data high byte first);
 - ``aitraceprint``: the telnet trace of §7.4 (``<ms> - <mask> - <text>``; state changes as the
-  EcatManagerSlaveStateCallback + SlaveStateChange pair, states and AL status code numeric).
+  EcatManagerSlaveStateCallback + SlaveStateChange pair, states and AL status code numeric;
+  a slave's emergency after its other lines of the same instant, :data:`LATE`).
 Sirio and Pegaso are emergency displays: their other lines are the TwinCAT text. Choices on
 the seed's layout (which byte each header names) are in docs/ethercat-master.md.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -43,6 +44,12 @@ TWINCAT: dict[str, str] = {
           "window {window} ns).",
     "recovery": "network recovery: slave(s) at position(s) {positions} back on the line.",
 }
+
+# Messages a style prints after a slave's other lines of the same instant. The §7.4 trace
+# (seed 000 lines 592-599, oldest first) has slave 11's state-change pair at 380808 and its
+# emergency at 380856, after it; TwinCAT (§7.7, newest first) logs the emergency first, as the
+# master reads it (the mailbox before the state), so the other styles keep that order.
+LATE: dict[str, frozenset[str]] = {"aitraceprint": frozenset({"emergency"})}
 
 # §7.4: the mask column of the trace (00000001 for ECAT events, 00000100 for PLC alarms).
 TRACE_MASK = "00000001"
@@ -140,3 +147,30 @@ RENDERERS: dict[str, Callable[[Entry], str]] = {
 
 def render(style: str, entry: Entry) -> str:
     return RENDERERS[style](entry)
+
+
+def is_late(style: str, entry: Entry) -> bool:
+    """A line ``style`` prints after the other lines of its slave and instant (:data:`LATE`)."""
+    return entry.position >= 0 and entry.message in LATE.get(style, ())
+
+
+def same_group(a: Entry, b: Entry) -> bool:
+    """One slave's lines of one instant: the run within which :data:`LATE` reorders."""
+    return a.t_us == b.t_us and a.position == b.position
+
+
+def arrange(style: str, entries: Iterable[Entry]) -> list[Entry]:
+    """``entries`` (in the order logged) in the order ``style`` prints them: in each run of
+    one slave's entries of one instant, the style's late ones last, each part in its order.
+    The master's live log holds late lines back the same way (EtherCatMaster._log)."""
+    out: list[Entry] = []
+    held: list[Entry] = []
+    for entry in entries:
+        if held and not same_group(held[0], entry):
+            out += held
+            held = []
+        if is_late(style, entry):
+            held.append(entry)
+        else:
+            out.append(entry)
+    return out + held

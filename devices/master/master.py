@@ -40,7 +40,7 @@ from devices.master.dc import DcState, DcUnit
 from devices.master.hooks import Callback, Hooks
 from devices.master.line import LineMixin
 from devices.master.links import RANK, Slave, SlaveLink, next_state
-from devices.master.log_styles import Entry, render
+from devices.master.log_styles import Entry, arrange, is_late, render, same_group
 from devices.master.network import Mapping as NetworkMapping
 from devices.master.network import MasterParameters, SlaveDescription
 from devices.master.spans import SpanMixin
@@ -110,6 +110,9 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.log: collections.deque[dict[str, Any]] = collections.deque(maxlen=LOG_LENGTH)
         self.entries: collections.deque[Entry] = collections.deque(maxlen=LOG_LENGTH)
         self.log_style = "twincat"
+        # Lines the style prints after the slave's other lines of the same step (log_styles.LATE),
+        # held until that slave's run of lines ends; empty between steps.
+        self._held: list[Entry] = []
         self.cables = [True] * len(self.links)
         self.phys_in = [True] * len(self.links)  # the IN / OUT links last given to the slaves
         self.phys_out = [True] * len(self.links)
@@ -194,8 +197,10 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                 setter(kind)
 
     def cmd_set_log_style(self, style: str) -> None:
+        self._flush_log()
         self.log_style = style
-        self.log = collections.deque((self._row(e) for e in self.entries), maxlen=LOG_LENGTH)
+        self.log = collections.deque((self._row(e) for e in arrange(style, self.entries)),
+                                     maxlen=LOG_LENGTH)
 
     # ---- external mode (a wire master drives the line, issue 8) -------------------------------
     def set_external(self, on: bool) -> None:
@@ -221,6 +226,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                                  address=link.slave.station_address, code=code,
                                  register=register, data=data))
         self._log(link, "emergency", code=code, register=register, data=data)
+        self._flush_log()  # outside a step: nothing else of this slave's instant follows
 
     def external_stats(self, frames: int, lost_frames: int, cycle_us: int,
                        wkc_errors: int) -> None:
@@ -314,6 +320,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             skipped.dc += 1
         else:
             self._step_dc(dt_us, quiet)
+        if self._held:
+            self._flush_log()
         if self.hooks.queued:
             self.hooks.run()
 
@@ -400,9 +408,23 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                       address=slave.station_address if slave is not None else 0,
                       position=link.position if link is not None else -1)
         self.entries.append(entry)
+        held = self._held
+        if held and not same_group(held[0], entry):
+            self._flush_log()
+        if is_late(self.log_style, entry):
+            held.append(entry)  # log_styles.arrange's order, line by line
+        else:
+            self._emit_row(entry)
+
+    def _flush_log(self) -> None:
+        held, self._held = self._held, []
+        for entry in held:
+            self._emit_row(entry)
+
+    def _emit_row(self, entry: Entry) -> None:
         row = self._row(entry)
         self.log.append(row)
-        self.emit(LogLine(self.now_us, self.device_id, text=row["text"], port=self.port))
+        self.emit(LogLine(entry.t_us, self.device_id, text=row["text"], port=self.port))
 
     def _row(self, entry: Entry) -> dict[str, Any]:
         return {"t": entry.t_us / 1_000_000, "port": self.port,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import datetime as dt
 import random
+from pathlib import Path
 
 import pytest
 from fastcat_bench import US, Bench
@@ -102,6 +103,39 @@ def test_module_unplugged_in_op_logs_the_seed_lines() -> None:
                 "al_status_code": 0x8204, "position": 0, "device": "fastcat", "link": True}
     assert [{k: s[k] for k in expected} for s in snap["slaves"]] == [expected]
     assert snap["slaves"][0]["counters"]["emergencies"] == 1
+
+
+def test_aitraceprint_prints_the_state_change_pair_before_the_emergency() -> None:
+    """§7.4 (seed 000 lines 592-599, chronological): the trace prints slave 11's
+    EcatManagerSlaveStateCallback / SlaveStateChange pair and only then its emergency; the
+    TwinCAT log (§7.7, newest first) has the emergency before the abnormal state change. The
+    same step's lines in each style's order, live and when the log is re-rendered."""
+    seed = Path("/work/shared/seeds/000_2ef4aa04068c5f92.txt")
+    if not seed.exists():
+        pytest.skip("seed 000 not available on this machine")
+    kinds = ("EcatManagerSlaveStateCallback", "SlaveStateChange", "ECAT_EVENT Emergency")
+    seed_order = [k for line in seed.read_text(encoding="utf-8").splitlines()
+                  for k in kinds if k in line]
+    assert seed_order == list(kinds)
+    bench = op_bench()
+    assert bench.master is not None
+    bench.master.apply("set_log_style", {"style": "aitraceprint"})
+    bench.run_to(UNPLUG_AT_US)
+    bench.apply("unplug", module=2)
+    bench.run(0.5)
+    live = [e["text"] for e in bench.master.log]
+    lines = "\n".join(live).split("\n")
+    assert [k for line in lines[:3] for k in kinds if k in line] == list(kinds)
+    assert lines[:3] == [
+        "5001 - 00000001 - ** ECAT: EcatManagerSlaveStateCallback: 0 2 33284:Unknown",
+        "5001 - 00000001 - ECAT_EVENT SlaveStateChange slave = 0 from 8 to 2",
+        "5001 - 00000001 - ECAT_EVENT Emergency slave = 0 emcyCode = 0xFF00 emcyReg = 0x81 "
+        "data=0x0200000400"]
+    assert [r["text"] for r in bench.records("log")] == live
+    bench.master.apply("set_log_style", {"style": "twincat"})
+    assert log(bench) == SEED_7_7[::-1]
+    bench.master.apply("set_log_style", {"style": "aitraceprint"})
+    assert [e["text"] for e in bench.master.log] == live
 
 
 def test_master_retries_every_interval_and_recovers_after_reset() -> None:
