@@ -96,6 +96,9 @@ class SlaveLink:
     # Its last transition was refused or stopped by the master (retried): DC START_TIME does
     # not wait for it (docs/ethercat-master.md, distributed clocks).
     stalled: bool = False
+    # A DC slave's own START_TIME (seed 003: "the first time the slaves implement I/O"), set
+    # when it reaches SAFEOP from below; it is not asked for OP before it (startup._serve).
+    start_time_us: int | None = None
     dc_derived: bool = False  # DC use when no network description is given
     counters: Counters = field(default_factory=Counters)
 

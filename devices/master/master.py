@@ -36,7 +36,7 @@ from devices.events import (
     StateChanged,
 )
 from devices.master.actions import MASTER_ACTIONS
-from devices.master.dc import DcState, DcUnit
+from devices.master.dc import START_DELAY_US, DcState, DcUnit
 from devices.master.hooks import Callback, Hooks
 from devices.master.line import LineMixin
 from devices.master.links import RANK, Slave, SlaveLink, next_state
@@ -345,12 +345,20 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         slave, now = link.slave, self.now_us
         state = slave.al_state
         if state is not link.seen:
-            before = link.seen.label if link.seen is not None else ""
+            previous = link.seen
+            before = previous.label if previous is not None else ""
             link.seen = state
             link.counters.state_changes += bool(before)
             self._event(SlaveStateChange(now, self.device_id, position=link.position,
                                          address=slave.station_address, from_state=before,
                                          to_state=state.label, code=slave.al_status_code))
+            if state is AlState.SAFEOP and link.dc and (
+                    previous is None or RANK.get(previous, 0) < RANK[AlState.SAFEOP]):
+                # Up from INIT / PREOP (start-up, found again, resync): as the DC unit's
+                # START_TIME, 100 ms after the DC slave is in SAFEOP. At start-up the unit's
+                # own START_TIME comes no sooner; a slave that re-joins while DC stays
+                # COMPENSATING has only this one (seed 003 WAITING_START_TIME).
+                link.start_time_us = now + START_DELAY_US
         if state is AlState.OP and not link.reached_op:
             link.reached_op = True
             self._event(Resync(now, self.device_id, position=link.position,

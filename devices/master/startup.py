@@ -86,6 +86,11 @@ class StartupMixin:
             self._watched = None
         if state is not target and now >= link.next_try_us:
             step = next_state(state, target)
+            if step is AlState.OP and link.start_time_us is not None:
+                if now < link.start_time_us:  # seed 003: no I/O before its START_TIME
+                    link.next_try_us = link.start_time_us
+                    return
+                link.start_time_us = None
             if self._before_transition(link, state, step):
                 self._request(link, step)
             else:

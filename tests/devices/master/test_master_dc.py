@@ -13,6 +13,7 @@ from devices.master.dc import (
     DC_TRANSITIONS,
     NOISE_NS,
     NOISE_SPAN,
+    START_DELAY_US,
     SYNC_MEASURE_US,
     DcState,
     DcTrigger,
@@ -111,6 +112,38 @@ def test_dc_slaves_go_to_op_only_after_start_time() -> None:
     # the drive (no DC) reaches OP while the master is still waiting for START_TIME
     assert first_op["drive_ecat-ecat"][1] is not DcState.COMPENSATING
     assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
+
+
+@pytest.mark.parametrize(("off", "on"), [
+    (("pull_cable", {"cable": 2}), ("plug_cable", {"cable": 2})),
+    (("power_slave", {"position": 2, "on": False}), ("power_slave", {"position": 2, "on": True})),
+])
+def test_a_dc_slave_found_again_waits_in_safeop_for_its_start_time(
+        off: tuple[str, dict[str, object]], on: tuple[str, dict[str, object]]) -> None:
+    """Seed 003: START_TIME is "the first time the slaves implement I/O", and the network
+    recovery is "a reboot of EtherCAT communication". The CPX-E-EC (DC) found again behind
+    the TRS-CAT (DC, the reference clock, still there: DC stays COMPENSATING) restarts from
+    INIT and, as at start-up, waits in SAFEOP until a START_TIME 100 ms after it reached
+    SAFEOP; the drive (no DC) does not wait. A check delay under 100 ms shows it (at the
+    default 141 ms the check itself comes later than START_TIME)."""
+    rig = line_in_op()
+    master = rig.devices["master"]
+    master.check_delay_us = 10_000
+    rig.apply("master", *off)
+    rig.run_until(IN_OP_US + US // 2)
+    rig.apply("master", *on)
+    seen: dict[tuple[int, AlState], int] = {}
+    dc_states = set()
+    while rig.clock.now_us < IN_OP_US + 3 * US:
+        rig.step()
+        dc_states.add(master.dc.state)
+        for pos in (2, 3):
+            seen.setdefault((pos, master.links[pos].slave.al_state), rig.clock.now_us)
+    assert dc_states == {DcState.COMPENSATING}
+    assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
+    cpx_wait = seen[2, AlState.OP] - seen[2, AlState.SAFEOP]
+    assert START_DELAY_US <= cpx_wait < START_DELAY_US + 5_000
+    assert seen[3, AlState.OP] - seen[3, AlState.SAFEOP] < START_DELAY_US  # no DC: no wait
 
 
 @pytest.mark.parametrize(("kind", "codes"), [
