@@ -205,7 +205,7 @@ class SlaveStateChange(SlaveEvent):
 class CommError(SlaveEvent):
     """A communication error the master saw on a slave: ``reason`` is ``lost_frames``,
     ``link_lost`` (the slave is no longer on the line), ``identity`` (0x1018 is not the
-    description's) or ``init_command`` (an init command's SDO was refused)."""
+    description's, or could not be read) or ``init_command`` (an init command's SDO was refused)."""
 
     reason: str = ""
     count: int = 0

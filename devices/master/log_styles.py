@@ -37,6 +37,8 @@ TWINCAT: dict[str, str] = {
     "identity": "identity check failed: vendor 0x{vendor:08X}, product 0x{product:08X}, "
                 "revision 0x{revision:08X} read and vendor 0x{want_vendor:08X}, product "
                 "0x{want_product:08X}, revision 0x{want_revision:08X} expected.",
+    "identity_read": "identity check failed: SDO upload 0x{index:04X}:{sub:02X} aborted with "
+                     "0x{abort:08X}.",
     "init_command": "init command '{comment}' ({transition}) failed: SDO download "
                     "0x{index:04X}:{sub:02X} aborted with 0x{abort:08X}.",
     "lost_frames": "{count} frame(s) lost.",

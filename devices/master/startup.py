@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState, parse_emergency_frame
 from devices.events import CoeEmergency, CommError
 from devices.master.links import RANK, TRANSITION_NAME, SlaveLink, next_state
-from devices.od import SdoAbort
+from devices.od import ABORT_TEXT, AbortCode, SdoAbort
 
 if TYPE_CHECKING:
     from devices.events import Event
@@ -115,11 +115,28 @@ class StartupMixin:
             return link.identity_ok
         if desc.vendor is None:
             return True  # derived from the rig: nothing to compare with
+        sub = IDENTITY_SUBS[0]
         try:
-            got = [struct.unpack("<I", link.slave.sdo_upload(0x1018, sub))[0]
-                   for sub in IDENTITY_SUBS]
-        except (SdoAbort, ValueError, struct.error):
-            return False  # no mailbox answer yet: try again later
+            got = []
+            for sub in IDENTITY_SUBS:
+                got.append(struct.unpack("<I", link.slave.sdo_upload(0x1018, sub))[0])
+        except (SdoAbort, ValueError, struct.error) as exc:
+            # No usable answer (the SDO timed out or was aborted; no mailbox at all, or an
+            # answer that is no UDINT, counts as the timeout): as a refused init command, a
+            # communication error the master reports (seed 003 events: the diagnostic
+            # structure, ECAT_Notify); the transition stops and is retried, and START_TIME
+            # does not wait for the slave (stalled), as for any start-up the master found failed.
+            abort = exc.code if isinstance(exc, SdoAbort) else AbortCode.SDO_TIMEOUT
+            link.diagnosis = (f"identity not read: SDO upload 0x1018:{sub:02X} aborted with "
+                              f"0x{int(abort):08X} ({ABORT_TEXT.get(abort, abort.name)}): "
+                              f"the slave stays in PREOP")
+            self._event(CommError(self.now_us, "master", position=link.position,
+                                  address=link.slave.station_address, reason="identity",
+                                  count=1))
+            self._log(link, "identity_read", index=0x1018, sub=sub, abort=int(abort))
+            return False
+        if link.diagnosis.startswith("identity not read"):
+            link.diagnosis = ""
         want = [desc.vendor, desc.product, desc.revision]
         link.identity_ok = got == want
         if not link.identity_ok:

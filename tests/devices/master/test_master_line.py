@@ -218,6 +218,35 @@ def test_identity_mismatch_leaves_the_slave_in_preop(tmp_path: Path) -> None:
     assert master_view(rig)["dc"]["state"] == "COMPENSATING"
 
 
+def test_an_identity_read_without_answer_is_a_reported_communication_error() -> None:
+    """The CPX-E-EC's application controller (its CoE) fails in PREOP: the master's 0x1018
+    upload before PREOP -> SAFEOP gets no answer (SDO timeout 0x05040000), as an init command
+    would. Seed 003: a communication error is an event that updates the slave's diagnostic
+    structure; the master logs it, raises comm_error, stops the transition and retries it every
+    retry interval. START_TIME does not wait for a slave whose start-up failed (the TRS-CAT, DC,
+    goes on to OP); once the controller answers the CPX-E-EC goes up and the diagnosis clears."""
+    rig = build_rig(load_rig_spec(LINE_RIG))
+    rig.run_until(50_000)  # the CPX-E-EC is in PREOP, its PREOP -> SAFEOP not yet requested
+    rig.apply("cpx", "inject_fault", {"fault": "ac_failure"})
+    events = rig.run_until(3 * US)
+    cpx = master_view(rig)["slaves"][2]
+    assert cpx["state"] == "PREOP"
+    assert cpx["diagnosis"] == ("identity not read: SDO upload 0x1018:01 aborted with "
+                                "0x05040000 (SDO protocol timed out): the slave stays in PREOP")
+    errors = [(r["position"], r["reason"]) for r in records(events, "comm_error")]
+    assert errors == [(2, "identity")] * 2  # at 0.142 s and at the retry 2 s later
+    assert [r["text"] for r in records(events, "log", "master") if "1018" in r["text"]] == [
+        "'Box 3 (CPX-E-EC)' (1003): identity check failed: SDO upload 0x1018:01 aborted with "
+        "0x05040000."] * 2
+    assert master_view(rig)["dc"]["state"] == "COMPENSATING"
+    assert master_view(rig)["slaves"][1]["state"] == "OP"
+    rig.apply("cpx", "clear_fault", {"fault": "ac_failure"})
+    rig.run_until(10 * US)
+    view = master_view(rig)
+    assert [s["state"] for s in view["slaves"]] == ["OP"] * 4
+    assert view["slaves"][2]["diagnosis"] == ""
+
+
 def test_unknown_positions_are_refused() -> None:
     rig = line_in_op()
     with pytest.raises(CommandError, match="cable 4"):
