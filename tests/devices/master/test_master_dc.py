@@ -175,6 +175,26 @@ def test_dc_fault_sends_the_dc_slaves_to_safeop_and_recovers(
     assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
 
 
+def test_the_dc_slaves_drop_on_not_synchronized_is_notified_not_logged_per_slave() -> None:
+    """Seed 003: "the status change of slaves" is an event (diagnostic structure, ECAT_Notify);
+    the TwinCAT log (seed 000 §7.7) has lines for abnormal changes and failures only, none for
+    a transition the master requests (start-up, resync, set_target). The drop to SAFEOP the
+    master requests on NOT_SYNCHRONIZED is one of those: each DC slave's slave_state reaches
+    ECAT_Notify, and the log's DC line says why (docs/ethercat-master.md, choices)."""
+    rig = line_in_op()
+    master = rig.devices["master"]
+    notified: list[tuple[int, str, str]] = []
+    master.on_notify(lambda e: notified.append((e.position, e.from_state, e.to_state))
+                     if e.kind == "slave_state" else None)
+    mark = len(master.log)
+    rig.apply("master", "dc_fault", {"kind": "drift"})
+    rig.run_until(IN_OP_US + US // 2)
+    assert notified == [(1, "OP", "SAFEOP"), (2, "OP", "SAFEOP")]
+    texts = [e["text"] for e in list(master.log)[mark:]]
+    assert len(texts) == 1 and texts[0].startswith(
+        "'Device 1 (EtherCAT)': distributed clocks: COMPENSATING -> NOT_SYNCHRONIZED")
+
+
 class _FloatRandom(random.Random):
     """A Random whose _randbelow is the random()-based one (a subclass overriding random()
     without getrandbits gets it): draw() must follow whichever one randrange uses."""
