@@ -80,6 +80,26 @@ def test_synchronizing_is_left_only_inside_the_window(fault: str) -> None:
     assert seen == [DcState.IDLE, DcState.SYNCHRONIZING, DcState.NOT_SYNCHRONIZED]
 
 
+@pytest.mark.parametrize("window_ns", [0, 10, 20, 30, NOISE_NS - 1])
+def test_a_sync_window_under_the_noise_does_not_keep_synchronizing(window_ns: int) -> None:
+    """A sync window narrower than the healthy +-40 ns noise: seed 003 gives no timeout, but
+    NOT_SYNCHRONIZED is "if for any reason the master fails to follow the network clock".
+    SYNCHRONIZING always ends - locked (5 cycles inside) or failed (5 outside) - within a
+    quarter second of link; a failed one measures again 500 ms later, the DC slaves held in
+    SAFEOP meanwhile."""
+    for seed in range(30):
+        dc, rng, t = DcUnit(window_ns=window_ns), random.Random(seed), 0
+        dc.move(DcTrigger.LINK_UP, 0)
+        while dc.state is DcState.SYNCHRONIZING:
+            assert t < 250_000, f"window {window_ns} ns, seed {seed}: still SYNCHRONIZING"
+            t += 1000
+            dc.measure(1000, rng)
+            trig = dc.trigger(t, link=True, dc_slaves=2, dc_slaves_ready=True)
+            if trig is not None:
+                dc.move(trig, t)
+        assert dc.state in (DcState.WAITING_START_TIME, DcState.NOT_SYNCHRONIZED)
+
+
 @pytest.mark.parametrize("fault", ["drift", "jitter", "sync0_lost"])
 def test_a_dc_fault_at_power_on_holds_the_dc_slaves_in_safeop(fault: str) -> None:
     rig = build_rig(load_rig_spec(LINE_RIG))
