@@ -54,6 +54,7 @@ __all__ = ["DriveConfig", "ServoDrive"]
 logger = logging.getLogger(__name__)
 
 TICK_US = 1_000
+_TICK_S = TICK_US / 1e6  # dt_us / 1e6 of a whole tick, as the step loop computes it
 BOOT_US = 50_000  # Not ready to switch on -> Switch on disabled after the self test
 _FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)  # an enum member's lookup is slow
 # A quiet drive stays quiet until something from outside touches it: its quiet span has no end
@@ -343,6 +344,14 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         # plant.omega first: may_settle's first test, without the call for a moving drive
         before = state_key(self) if span and self.plant.omega == 0.0 and may_settle(self) \
             and still.due() else None
+        if before is None and span == TICK_US:
+            # one tick and no still check (a moving drive's step): the loop and the
+            # bookkeeping below, written out for that case
+            self._t_us = self.now_us = now_us
+            self._tick(_TICK_S)
+            still.dt = None
+            still.alarms, still.changes = self.alarms, self.alarms.changes
+            return
         queued = len(self.events.items) if before is not None else 0
         while t_us < now_us:
             dt_us = now_us - t_us

@@ -28,7 +28,11 @@ from typing import TYPE_CHECKING
 from devices.servo import ds402
 from devices.servo.ds402 import Command, State
 from devices.servo.mode_base import Changes, Mode
+from devices.servo.modes import Velocity as _VELOCITY
+from devices.servo.plant import SETTLED_REV as _SETTLED_REV
 from devices.servo.plant import STOPPED_REV_S as _STOPPED_REV_S
+from devices.servo.plant import _exp
+from devices.servo.readings import _K_1MS, _sqrt
 from devices.servo.registers import DISABLED_32, R
 
 if TYPE_CHECKING:
@@ -45,6 +49,10 @@ _FOLLOWING_ERROR_WINDOW = int(R.FOLLOWING_ERROR_WINDOW)
 _FOLLOWING_ERROR_TIMEOUT = int(R.FOLLOWING_ERROR_TIMEOUT)
 _FEED_CONSTANT = int(R.FEED_CONSTANT)
 _VELOCITY_THRESHOLD = int(R.VELOCITY_THRESHOLD)
+_VELOCITY_WINDOW = int(R.VELOCITY_WINDOW)
+_TARGET_VELOCITY = int(R.TARGET_VELOCITY)
+_AUX_IN_1 = int(R.AUX_IN_1)
+_IN_TORQUE_ORDERED = ds402._IN_TORQUE_ORDERED  # CurrentMeter.update's test
 _I1 = 35  # parameter i1, the position loop gain (position_lag_s)
 _CW_HALT = ds402.CW_HALT
 _NO_OBSERVER = Mode.observe
@@ -107,14 +115,57 @@ class DriveTick:
                 allowed = self.ien_cmd and wired.get("ien", False) \
                     and wired.get("ten", False) and not self.cw & _CW_HALT
                 if allowed:
-                    self.mode_logic.step(self, dt)
+                    mode = self.mode_logic
+                    if type(mode) is _VELOCITY:
+                        # Velocity.step and target_user, inline (mode 3: every tick of a
+                        # jog); a new target plans a new run: the method does that
+                        regs = self.regs
+                        target = regs[_AUX_IN_1] if wired.get("select", False) \
+                            else regs[_TARGET_VELOCITY]
+                        if target != mode.commanded:
+                            mode.step(self, dt)
+                        else:  # the speed window timer, as Velocity.step runs it
+                            monitor = mode.monitor
+                            feed = regs[_FEED_CONSTANT]
+                            actual = plant.omega * (feed if feed >= 1 else 1)
+                            monitor.in_window_ms = monitor.in_window_ms + dt * 1e3 \
+                                if abs(target - actual) <= regs[_VELOCITY_WINDOW] else 0.0
+                    else:
+                        mode.step(self, dt)
                 elif self._was_allowed:
                     self.mode_logic.halted(self)
                     halting = self.motion_enabled  # halt bit: profile deceleration
                     trajectory.stop(self.limits() if halting else self.quick_stop_limits())
                 self._was_allowed = allowed
-            trajectory.advance(dt)
-            plant.step(dt, trajectory.position, lag)
+            # Trajectory.advance inline for the step inside a cruise (a jog's usual tick):
+            # the same expressions as its first case; anything else takes the method
+            plan, index = trajectory._plan, trajectory._index
+            segment = plan[index] if index < len(plan) else None
+            if segment is not None and dt > 0.0 and segment.v0 == segment.v1 \
+                    and dt < segment.duration - trajectory._elapsed:
+                trajectory._elapsed = elapsed = trajectory._elapsed + dt
+                trajectory.velocity = v0 = segment.v0
+                trajectory.position = trajectory._segment_start + v0 * elapsed
+            else:
+                trajectory.advance(dt)
+            demand = trajectory.position
+            if plant.jammed:
+                plant.step(dt, demand, lag)
+            else:  # Plant.step following a demand, inline: the same expressions in order
+                before_theta, previous = plant.theta, plant._last_demand
+                if previous is None:
+                    previous = demand
+                rate = (demand - previous) / dt if dt > 0.0 else 0.0
+                decay = _exp(-dt / lag) if lag > 0.0 else 0.0
+                new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
+                if abs(demand - new) < _SETTLED_REV:
+                    new = demand
+                plant._last_demand = demand
+                low, high = plant._end_stops
+                plant.blocked = not low <= new <= high
+                new = low if low > new else new
+                plant.theta = theta = high if high < new else new
+                plant.omega = (theta - before_theta) / dt if dt > 0.0 else 0.0
             # A quick stop or fault reaction ends at standstill (DSP 402 v1.1, seed 004 ch. 4;
             # F3 "Rampa di emergenza"): the demand at rest (trajectory.idle, inline) and the
             # motor, which lags it, stopped too (plant.standstill, inline) - else the torque
@@ -126,7 +177,24 @@ class DriveTick:
                 elif self.state is _FAULT_REACTION:
                     self._transition(Command.FAULT_REACTION_DONE)
         # ---- what the motion changed: current, inputs, alarms ----
-        self.meter.update(self, (trajectory.velocity - velocity_before) / dt, dt)
+        accel = (trajectory.velocity - velocity_before) / dt
+        if dt == 0.001 and self.state in _IN_TORQUE_ORDERED \
+                and not (plant.jammed or plant.blocked):
+            # CurrentMeter.update inline for a 1 ms tick in torque, the motor free: the same
+            # expressions in the same order (readings.py)
+            meter, config = self.meter, self.config
+            inertia = 1.0 + config.load_inertia
+            torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
+            cap = 3.0 * self.params[5]  # d5 caps the current
+            meter.instant = instant = cap if cap < torque else torque
+            mean_square = meter._mean_square
+            meter._mean_square = mean_square = mean_square + (instant ** 2 - mean_square) \
+                * _K_1MS
+            meter.rms = rms = _sqrt(mean_square)
+            overload = 100.0 * (rms / 100.0) ** 2
+            meter.overload = 999.0 if overload > 999.0 else overload
+        else:
+            self.meter.update(self, accel, dt)
         theta_after = plant.theta
         g = self.geometry  # geometry.switches(theta_after), inline
         switches = (theta_after <= g.neg_limit, theta_after >= g.pos_limit,

@@ -274,3 +274,36 @@ def test_the_lag_follows_a_write_of_i1_at_the_next_tick() -> None:
 def test_the_meter_constant_at_1_ms_is_the_computed_one() -> None:
     k = 1.0 - math.exp(-(1000 / 1e6) / RMS_TIME_CONSTANT_S)  # dt as the drive's step makes it
     assert k == readings._K_1MS
+
+
+def test_a_cruising_tick_calls_none_of_the_parts() -> None:
+    """The tick's inline copies (session 10: Velocity.step, Trajectory.advance in a cruise,
+    Plant.step following a demand, CurrentMeter.update at 1 ms) are what a jog runs: the
+    differential tests above then compare them, not the methods, with the plain code."""
+    drive = ServoDrive("drive", random.Random(7), DriveConfig(), MemoryFlash())
+    rig = Rig("rig", {"drive": drive})
+    t_us = 0
+    for _ in range(100):
+        t_us += 1000
+        drive.step(t_us)
+    rig.apply("drive", "enable", {"on": True})
+    rig.apply("drive", "jog", {"direction": 1})
+    for _ in range(1500):  # up to speed, cruising
+        t_us += 1000
+        drive.step(t_us)
+    calls: list[str] = []
+    with pytest.MonkeyPatch.context() as mp:
+        def spied(name: str, method: Callable[..., Any]) -> Callable[..., Any]:
+            def spy(*args: Any) -> Any:
+                calls.append(name)
+                return method(*args)
+            return spy
+
+        for cls, name in ((Plant, "step"), (Trajectory, "advance"), (CurrentMeter, "update"),
+                          (Velocity, "step"), (Velocity, "target_user")):
+            mp.setattr(cls, name, spied(name, getattr(cls, name)))
+        for _ in range(100):
+            t_us += 1000
+            drive.step(t_us)
+    assert drive.plant.omega > 0.0 and drive.trajectory.velocity > 0.0
+    assert calls == []
