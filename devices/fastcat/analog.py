@@ -234,8 +234,25 @@ class AnalogInputs:
         self.still = not active
         filters, law = self._filters, self._law
         # A channel that did not move is at a fixed point of its law for this step length.
-        self._active = [ch for ch in active
-                        if filters[ch].advance(*law[ch], dt_us)]  # type: ignore[misc]
+        # InputFilter.advance, inline (the same expressions in order): a moving input's
+        # channel runs it every millisecond
+        moved = []
+        for ch in active:
+            flt = filters[ch]
+            target, coeff = law[ch]  # type: ignore[misc]
+            y, rem = flt.y, flt._rem_us
+            if coeff >= FILTER_MAX:
+                flt.y = float(target)
+                if flt.y != y:
+                    moved.append(ch)
+                continue
+            ms, flt._rem_us = divmod(rem + dt_us, US_PER_MS)
+            if ms:
+                keep = (1.0 - coeff / FILTER_MAX) ** ms
+                flt.y = target + (y - target) * keep
+            if flt.y != y or flt._rem_us != rem:
+                moved.append(ch)
+        self._active = moved
 
     def _relaw(self, inputs: tuple[Any, ...]) -> set[int]:
         """Recompute (target, coefficient) of the channels whose inputs differ from the last

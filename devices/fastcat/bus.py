@@ -86,9 +86,9 @@ class BusMixin:
             module.step(dt_us, outputs_enabled)
             if not module.still:
                 moving.append((n, module))
-            raised = module.take_raised_alarms()
-            if raised:
-                self.fresh_raised.extend(Alarm(MODULE, code, n) for code in raised)
+            if module._raised:  # take_raised_alarms() returns [] without any: no call
+                self.fresh_raised.extend(Alarm(MODULE, code, n)
+                                         for code in module.take_raised_alarms())
         for n in silent:  # §6.18: a failed exchange on the internal bus
             self.comm_errors[n - 1] = min(UDINT_MAX, self.comm_errors[n - 1] + 1)
         self._moving = (bus, moving)

@@ -267,7 +267,10 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         super().step(now_us)
         if not self.powered:
             return
-        if not self._touched and self._settled == (dt_us, self._activity(now_us)):
+        # LINK activity: only the master's frame (exchange_frame, outside this step) moves
+        # last_frame_us, so it is the same at the start and the end of the step
+        activity = self._activity(now_us)
+        if not self._touched and self._settled == (dt_us, activity):
             return  # the same inputs as a step that changed nothing: nothing changes
         touched = self._modules_touched
         if self._touched:
@@ -285,12 +288,12 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         elif self.booted:
             self._exchange(dt_us, touched)
         self._evaluate_alarms()
-        self._refresh()
+        self._refresh(activity)
         self._answering = None  # valid only inside this step
         settled = (self._bus_still and self.scan is None and not self.cnf.pressed
                    and not self.raised and not self.fresh_raised
                    and len(self.events.items) == queued)
-        self._settled = (dt_us, self._activity(now_us)) if settled else None
+        self._settled = (dt_us, activity) if settled else None
 
     def _touch(self, module: bool) -> None:
         """An object write: by the master, an SDO client or a command."""
@@ -390,8 +393,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         return self.rotary_read
 
     # ---- what the outside sees --------------------------------------------------------------
-    def _refresh(self) -> None:
-        """After any change: modules' alarm flag (§7), CNF phase, LED patterns."""
+    def _refresh(self, activity: bool | None = None) -> None:
+        """After any change: modules' alarm flag (§7), CNF phase, LED patterns. ``activity``:
+        the LINK activity now, when the caller (a step) has it already."""
         in_alarm = self.powered and self.alarm is not None
         for module in self.rail:
             if module is not None:
@@ -402,11 +406,12 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             self.emit(StateChanged(self.now_us, self.device_id, from_state=self.cnf_phase.value,
                                    to_state=phase.value, machine=CNF_PROCEDURE))
             self.cnf_phase = phase
-        self._refresh_leds()
+        self._refresh_leds(activity)
 
-    def _refresh_leds(self) -> None:
+    def _refresh_leds(self, activity: bool | None = None) -> None:
         now, rail, powered, scan = self.now_us, self.rail, self.powered, self.scan
-        activity = self._activity(now)
+        if activity is None:
+            activity = self._activity(now)
         if self._answering is not None and rail == self._bus:
             alive = self._answering  # in a step, with every module on the bus: the same list
         else:

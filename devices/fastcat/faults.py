@@ -174,7 +174,10 @@ class FaultsMixin:
         stepped = self._stepped
         if self._answering is None or stepped is None or self.fresh_raised or self.raised:
             return False
-        return all(not module.physical_alarm_codes() for _n, module in stepped)
+        for _n, module in stepped:  # noqa: SIM110 - all() of a generator costs more here
+            if module.physical_alarm_codes():
+                return False
+        return True
 
     def _module_cause(self, alarm: Alarm) -> bool:
         n = alarm.module

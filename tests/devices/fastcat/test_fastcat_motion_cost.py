@@ -37,16 +37,31 @@ DEFAULT = ("DB16", "DI16", "DO16", "AI8D", "AO4", "AI8TC", "AX2")  # static/rigs
 STEP_US = 1_000
 
 
+class FreshActivityFastCat(FastCat):
+    """The coupler reading the LINK activity afresh where the step used to (the LEDs, the
+    settled key) instead of the step's one reading at its start (session 10)."""
+
+    def _refresh(self, activity: bool | None = None) -> None:
+        super()._refresh(None)
+
+    def step(self, now_us: int) -> None:
+        super().step(now_us)
+        if self._settled is not None:
+            self._settled = (self._settled[0], self._activity(now_us))
+
+
 class Twin:
     """A coupler and its master stepped at 1 ms, with the events they emitted, as JSON."""
 
     def __init__(self, plain: bool, seed: int = 3, master: bool = True) -> None:
-        self.fc = FastCat("fastcat", random.Random(seed), [(m, {}) for m in DEFAULT],
+        coupler = FreshActivityFastCat if plain else FastCat
+        self.fc = coupler("fastcat", random.Random(seed), [(m, {}) for m in DEFAULT],
                           flash=MemoryFlash())
         self.devices: list[Any] = [self.fc]
+        self.master: Any = None
         if master:
-            self.devices.append(EtherCatMaster("master", random.Random(seed + 1),
-                                               slaves=[self.fc]))
+            self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.fc])
+            self.devices.append(self.master)
         self.plain = plain
         self.now = 0
         self.events: list[str] = []
@@ -106,6 +121,12 @@ EPISODES: dict[str, Callable[[Twin, int], Any]] = {
     "module unplugged and put back": lambda t, i: (
         i == 300 and t.apply("unplug", module=5),
         i == 700 and t.apply("plug", module=5, type="AO4")),
+    "EtherCAT cable out and back": lambda t, i: (
+        i == 300 and t.apply("link", connected=False),
+        i == 700 and t.apply("link", connected=True)),
+    "master stops sending frames and starts again": lambda t, i: (  # LINK activity off, on
+        i == 300 and t.devices.pop(),
+        i == 700 and t.devices.append(t.master)),
     "module supply off and on": lambda t, i: (
         i == 300 and t.apply("module_power", module=7, on=False),
         i == 800 and t.apply("module_power", module=7, on=True)),
@@ -263,6 +284,46 @@ def test_analog_law_per_channel_matches_every_channel(name: str) -> None:
             [plain.code(ch) for ch in range(plain.count)], f"step {i}"
         assert fast._law == [(fast.target(ch), fast.coeff(ch)) for ch in range(fast.count)]
         assert fast.still == plain.still
+
+
+class MethodFilterInputs(AnalogInputs):
+    """The analog inputs advancing each channel through ``InputFilter.advance``, as before
+    the step wrote it out (session 10)."""
+
+    def step(self, dt_us: int) -> None:
+        inputs = (self.field, self.cold_junction_c, self.pot_supply_short, self.filter_all,
+                  self.filters, self.types, self.tc_types, self.wired)
+        active = self._active
+        if inputs != self._seen:
+            changed = self._relaw(inputs)
+            active = sorted(changed.union(active))
+        if dt_us != self._active_dt:
+            active, self._active_dt = list(range(self.count)), dt_us
+        self.still = not active
+        filters, law = self._filters, self._law
+        self._active = [ch for ch in active
+                        if filters[ch].advance(*law[ch], dt_us)]  # type: ignore[misc]
+
+
+@pytest.mark.parametrize("name", ["AI8D", "AI8TC", "AI8M", "AI4P", "AB4M4"])
+def test_inline_filter_advance_matches_the_method(name: str) -> None:
+    """§6.9-§6.10: the step's inline filter arithmetic against InputFilter.advance, under
+    random field, filter and type changes at several step lengths: every filter's state (y
+    and the sub-millisecond remainder) bit for bit, the channels left moving, ``still``."""
+    mtype = module_type(name)
+    fast, plain = AnalogInputs(mtype), MethodFilterInputs(mtype)
+    rng = random.Random(f"inline {name}")
+    for i in range(4000):
+        if rng.random() < 0.1:
+            change = _random_change(rng, fast)
+            for ai in (fast, plain):
+                change(ai)
+        dt = rng.choice((1000, 1000, 1000, 250, 700, 2000, 5000))
+        fast.step(dt)
+        plain.step(dt)
+        assert [(f.y.hex(), f._rem_us) for f in fast._filters] == \
+            [(f.y.hex(), f._rem_us) for f in plain._filters], f"step {i}"
+        assert fast._active == plain._active and fast.still == plain.still
 
 
 def _random_change(rng: random.Random, ai: AnalogInputs) -> Callable[[AnalogInputs], None]:
