@@ -143,7 +143,13 @@ class EncoderInput:
         if not self.faults and not self.disabled:
             rev = self.real_ppr * SUB
             if old // rev == new // rev:  # counting, no noise, no zero mark crossed
-                self._count(new // SUB - old // SUB, invert)  # what the lines below do
+                delta = new // SUB - old // SUB  # what the lines below count
+                if delta and not self.armed:  # _count, inline (a turning shaft, every ms)
+                    self.position = (self.position + (-delta if invert else delta)
+                                     + 0x8000_0000) % 0x1_0000_0000 - 0x8000_0000  # wrap32
+                    self.since_mark += delta
+                else:
+                    self._count(delta, invert)
                 return
         if not self.counting:
             self.last_mark_dir = 0  # pulses are being missed: no mark-to-mark check on resume

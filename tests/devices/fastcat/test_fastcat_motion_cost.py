@@ -383,6 +383,22 @@ def test_encoder_one_revolution_shortcut_matches_the_general_path(rpm: float,
     assert abs(fast.theta - SUB // 2) > 0
 
 
+@pytest.mark.parametrize("rpm", [6000.0, -6000.0])
+def test_encoder_shortcut_rolls_over_as_the_general_path(rpm: float) -> None:
+    """§6.26: 0x6500 is a DINT; the one-revolution step (its count written out inline,
+    session 10) rolls over at ±2^31 exactly as the general path's wrap32."""
+    fast, plain = EncoderInput(0, 1000), EncoderInput(0, 1000)
+    plain.faults = _NeverEmpty()
+    for enc in (fast, plain):
+        enc.set_rpm(rpm)
+        enc.position = 0x7FFF_FF00 if rpm > 0 else -0x8000_0000 + 0x100
+    for i in range(100):
+        fast.step(1000, False, random.Random(i))
+        plain.step(1000, False, random.Random(i))
+        assert (fast.position, fast.since_mark) == (plain.position, plain.since_mark)
+    assert (fast.position < 0) == (rpm > 0)  # it did roll over
+
+
 # --- analog outputs: a channel on its target is left alone --------------------------------------
 @pytest.mark.parametrize("ramp", [0, 1, 7, 40000])
 def test_ao_channel_on_target_is_where_a_ramp_leaves_it(ramp: int) -> None:
