@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import logging
 import math
+import textwrap
 import threading
 import time
 import urllib.parse
@@ -53,6 +54,22 @@ CAMERA_RISE = 0.12  # camera height over the rail centre, per unit of distance
 RAIL_SPACING = BODY_H + 2.0  # vertical distance between the rails of several couplers
 AXIS_GAP = 1.1  # from the lowest rail's bottom to the servo axes (its LED legend in between)
 CAMERA_FOV_DEG = 50.0
+
+# A screen label keeps its size on screen: one line of the longest scenario caption (236
+# characters) was twice as wide as the 3D view between the panels, so both ends were under
+# them. Lines of at most CAPTION_LINE characters at CAPTION_SCALE (about 7 px a character,
+# tests/app/label_boxes.py) stay inside the ~560 px view with room to spare.
+CAPTION_LINE = 76
+CAPTION_SCALE = 1.0
+
+
+def caption_lines(text: str) -> str:
+    """A scenario caption broken at spaces into lines of at most CAPTION_LINE characters (a
+    longer word keeps a line of its own; hyphens and underscores stay: "0xF700 / 0xF701",
+    "NOT_SYNCHRONIZED" are what the trainee looks up)."""
+    return textwrap.fill(" ".join(text.split()), CAPTION_LINE, break_long_words=False,
+                         break_on_hyphens=False)
+
 
 TITLE_SVG = (
     "<svg xmlns='http://www.w3.org/2000/svg' width='132' height='32'>"
@@ -171,7 +188,7 @@ class Dashboard:
                      else self._line.bounds().z_max + 0.1)
         self._caption = server.scene.add_label(
             "/caption", "", position=(center[0], -BODY_D, caption_z),
-            anchor="bottom-center", font_screen_scale=1.1, visible=False)
+            anchor="bottom-center", font_screen_scale=CAPTION_SCALE, visible=False)
         # ---- scenario player, code decoder (app/ui/panels/scenario_player.py, decoder.py) ----
         from app.ui.panels.decoder import DecoderPanel
         from app.ui.panels.scenario_player import ScenarioPlayerPanel
@@ -414,14 +431,15 @@ class Dashboard:
             self._line.add_events(events)
         captions = [e.text for e in events if isinstance(e, Caption)]
         if captions:
-            self._caption.text = captions[-1]
+            self._caption.text = caption_lines(captions[-1])
             self._caption.visible = True
         return events
 
     @property
     def caption(self) -> str:
-        """The scenario caption shown above the rail ("" before the first one)."""
-        return self._caption.text if self._caption.visible else ""
+        """The scenario caption shown above the rail ("" before the first one), on one line
+        as the scenario wrote it."""
+        return " ".join(str(self._caption.text).split("\n")) if self._caption.visible else ""
 
     @property
     def objects(self) -> ObjectDictionaryPanel | None:

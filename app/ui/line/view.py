@@ -35,16 +35,23 @@ FOCUS_MIN_W = 9.0  # a focused device fills at most this much scene width
 # that race (seen: the camera stays), so a move after a click waits this long.
 CLICK_SETTLE_S = 0.3
 CAPTION_ROOM = 0.6  # above the line, for a scenario caption
+# The camera looks from above, so the framed box leaves ~45 px free under the axes at 1280 x
+# 720 and only a few above the line: a caption of three lines (app/ui/dashboard.py) did not fit
+# there. Looking this much higher moves the picture down into that free room; a larger
+# CAPTION_ROOM would instead zoom out, and the labels of the line would run into each other
+# (tests/app/test_line_labels.py). tests/app/test_caption.py checks both ends.
+CAPTION_LIFT = 1.4
 
 
-def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN,
+def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN, lift: float = 0.0,
                ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """(position, look_at) that fit ``box`` (front plane) into a view of ``aspect``."""
+    """(position, look_at) that fit ``box`` (front plane) into a view of ``aspect``, looking
+    ``lift`` scene units above its centre."""
     half_tan = math.tan(math.radians(CAMERA_FOV_DEG) / 2)
     width, height = box.x_max - box.x_min, box.z_max - box.z_min
     distance = 1.0 + max((width / 2 + margin) / (half_tan * aspect),
                          (height / 2 + margin) / half_tan)
-    centre = ((box.x_min + box.x_max) / 2, 0.0, (box.z_min + box.z_max) / 2)
+    centre = ((box.x_min + box.x_max) / 2, 0.0, (box.z_min + box.z_max) / 2 + lift)
     return (centre[0], -distance, centre[2] + distance * CAMERA_RISE), centre
 
 
@@ -110,7 +117,7 @@ class LineView:
         if axes_bottom is not None:
             box = Box(box.x_min, max(box.x_max, min_width), axes_bottom, box.z_max)
         self.home = Box(box.x_min, box.x_max, box.z_min, box.z_max + CAPTION_ROOM)
-        position, look_at = camera_for(self.home, self._aspect)
+        position, look_at = camera_for(self.home, self._aspect, lift=CAPTION_LIFT)
         cam = self._server.initial_camera
         cam.fov = fov
         cam.look_at = look_at
@@ -147,10 +154,10 @@ class LineView:
         notify(client, f"{device} selected", f"its panels: {where}")
 
     def show_all(self) -> None:
-        self.move_camera(self.home)
+        self.move_camera(self.home, CAPTION_LIFT)
 
-    def move_camera(self, box: Box) -> None:
-        position, look_at = camera_for(box, self._aspect)
+    def move_camera(self, box: Box, lift: float = 0.0) -> None:
+        position, look_at = camera_for(box, self._aspect, lift=lift)
         for client in self._server.get_clients().values():
             try:
                 with client.atomic():  # position first: it drags look_at along (viser)
