@@ -77,7 +77,8 @@ def frames_html(frames: Sequence[Mapping[str, Any]], rows: int = FRAME_ROWS) -> 
     """The bus monitor, newest first: time | dir | COB-ID | type | data | meaning."""
     body = "".join(
         f'<tr class="{"fr-rx" if f.get("dir") == "rx" else ""} '
-        f'{KIND_CLASS.get(str(f.get("kind")), "")}"><td>{float(f.get("t", 0.0)):.3f}</td>'
+        f'{KIND_CLASS.get(str(f.get("kind")), "")}">'
+        f'<td class="fr-t">{float(f.get("t", 0.0)):.3f}</td>'
         f'<td>{esc(f.get("dir", ""))}</td><td>{esc(f.get("id", ""))}</td>'
         f'<td>{esc(f.get("kind", ""))}</td><td>{esc(f.get("data", ""))}</td>'
         f'<td>{esc(f.get("text", ""))}</td></tr>'
@@ -85,7 +86,7 @@ def frames_html(frames: Sequence[Mapping[str, Any]], rows: int = FRAME_ROWS) -> 
     if not body:
         body = '<tr><td colspan="6" class="fr-muted">no frames yet</td></tr>'
     return ('<div class="fr-frames-wrap"><table class="fr-frames" id="fr-frames"><colgroup>'
-            '<col style="width:4.1em"><col style="width:2em"><col style="width:3.9em">'
+            '<col style="width:5.4em"><col style="width:2em"><col style="width:3.9em">'
             '<col style="width:4.5em"><col style="width:8.2em"><col></colgroup><thead><tr>'
             '<th>time</th><th title="rx: to the drive, tx: from the drive">dir</th>'
             '<th>COB-ID</th><th>type</th><th>data</th><th>meaning</th></tr></thead>'

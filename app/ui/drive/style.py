@@ -25,6 +25,9 @@ DRIVE_CSS = """
                 top: 0; font-family: system-ui, sans-serif; }
 .fr-frames td { padding: 1px 3px; border-bottom: 1px solid #eceef1; vertical-align: top;
                 word-break: break-word; }
+/* The time column holds "1234.567" on one line (5.4em): a number broken after five
+   characters ("10.25" / "0") read as two values. */
+.fr-frames td.fr-t { white-space: nowrap; }
 .fr-frames tr.fr-rx td { color: #1f4f8f; }
 .fr-frames tr.fr-emcy td { color: #a11616; }
 .fr-frames-wrap { max-height: 300px; overflow-y: auto; border: 1px solid #e3e5e8; }

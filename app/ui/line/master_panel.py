@@ -58,9 +58,12 @@ def link_cell(slave: Mapping[str, Any]) -> str:
 
 
 def counters_cell(slave: Mapping[str, Any]) -> str:
+    """"10/2/1/13"; when the column is too narrow it may wrap after a slash (<wbr>), never
+    inside a number (the audit saw "10/2/1/1" over "3")."""
     c = slave.get("counters") or {}
-    return esc(f"{c.get('lost_frames', 0)}/{c.get('wkc_errors', 0)}/"
-               f"{c.get('emergencies', 0)}/{c.get('state_changes', 0)}")
+    numbers = (c.get("lost_frames", 0), c.get("wkc_errors", 0), c.get("emergencies", 0),
+               c.get("state_changes", 0))
+    return "/<wbr>".join(esc(n) for n in numbers)
 
 
 def slaves_table(slaves: Sequence[Mapping[str, Any]], target: str | None = None) -> str:
@@ -74,9 +77,12 @@ def slaves_table(slaves: Sequence[Mapping[str, Any]], target: str | None = None)
             f"<td>{'-' if dc is None else ('yes' if dc else 'no')}</td>"
             f"<td>{link_cell(s)}</td><td>{counters_cell(s)}</td></tr>")
     body = "".join(rows) or '<tr><td colspan="6" class="fr-muted">no slaves</td></tr>'
-    return ('<table class="fr-log fr-line" id="fr-line-slaves"><colgroup><col style="width:10%">'
-            '<col style="width:27%"><col style="width:29%"><col style="width:7%">'
-            '<col style="width:12%"><col style="width:15%"></colgroup><thead><tr>'
+    # Widths so that the longest word of each column fits at the 400 px left panel (words
+    # wrap whole, tests/browser/test_table_wrapping.py): "(SelemaDriveECAT)" in Name, the
+    # "power" of the "power off" badge in Link, "10/2/1/13" in Cnt.
+    return ('<table class="fr-log fr-line" id="fr-line-slaves"><colgroup><col style="width:9%">'
+            '<col style="width:31%"><col style="width:21%"><col style="width:7%">'
+            '<col style="width:15%"><col style="width:17%"></colgroup><thead><tr>'
             "<th>Pos<br>Addr</th><th>Name<br>State</th><th>AL status<br>code</th><th>DC</th>"
             f'<th>Link</th><th title="lost frames / WKC errors / emergencies / state '
             f'changes">Cnt</th></tr></thead><tbody>{body}</tbody></table>')
