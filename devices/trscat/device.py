@@ -293,7 +293,12 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsM
 
     def _slot_snapshot(self, slot: int, io: SlotIo | None) -> dict[str, Any]:
         if io is None:
-            return {"slot": slot, "type": None}
+            # An empty position: what the master configures there (0xF030 of the built-in
+            # master, None without one), so a view can name the module that is missing.
+            configured = self.startup_f030
+            return {"slot": slot, "type": None,
+                    "configured": configured[slot].name
+                    if configured is not None and slot < len(configured) else None}
         detected = self.detected[slot].name if slot < len(self.detected) else None
         return {"slot": slot, "type": io.kind.name, "ident": f"0x{io.kind.ident:08X}",
                 "detected_as": detected, "serviced": self.serviced(slot),

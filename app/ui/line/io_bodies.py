@@ -67,10 +67,16 @@ def expansion_note(snap: Mapping[str, Any], position: int) -> str:
     f030, f050 = snap.get("f030") or [], snap.get("f050") or []
     configured = f030[sub] if sub < len(f030) else 0
     found = f050[sub] if sub < len(f050) else 0
+    # Every module is unserviced while the TRS bus is off (node powered off, still
+    # detecting): that is the node's state, in the header; a plate says "not seen" only for
+    # its own module: an empty position, or a fitted module the running bus does not reach.
+    bus_running = (snap.get("trs_bus") or {}).get("state", "running") == "running"
     lines = []
-    if configured and found and configured != found:
+    if "type" in entry and entry["type"] is None:
+        lines.append("not seen")
+    elif configured and found and configured != found:
         lines.append(f"cfg {ident_text(configured)}")
-    elif not entry.get("serviced", True):
+    elif bus_running and not entry.get("serviced", True):
         lines.append("not seen")
     # §9.3.7 application errors name the slot they concern (0xA000 configuration error).
     lines += [str(a.get("code", "")) for a in snap.get("alarms") or []
@@ -148,7 +154,9 @@ class TrsCatBody(Body):
     def __init__(self, server: viser.ViserServer, device_id: str, x0: float, z0: float,
                  snap: Mapping[str, Any]) -> None:
         super().__init__(server, device_id, x0, z0)
-        self.expansions = [str(s.get("type")) for s in (snap.get("slots") or [])[1:]]
+        # An empty position (type None) gets the plate of the module configured there.
+        self.expansions = [str(s.get("type") or s.get("configured") or "-")
+                           for s in (snap.get("slots") or [])[1:]]
         self.width = TRS_W + MODULE_W * len(self.expansions)
 
     def build(self) -> None:

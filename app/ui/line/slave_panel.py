@@ -72,25 +72,62 @@ def alarm_text(alarm: Any) -> str:
             + (f" (slot {slot})" if slot is not None else "")).strip()
 
 
+# The sync unit's state (devices/trscat/sync.py SyncState) in words: FREE_RUN is also DC-SYNC
+# before the master started SYNC0, so it names the local cycle, not the mode.
+SYNC_STATES = {"free_run": "free-running local cycle (no SYNC0)",
+               "dc_running": "on SYNC0 (DC running)",
+               "sync_error": "sync error (SM events missed)",
+               "sync0_lost": "SYNC0 lost (SM events without SYNC0)"}
+
+
+def field_supply(snap: Mapping[str, Any]) -> str:
+    """The field supply as the +24V LED judges it: the LED needs the logic supply too
+    (docs/trscat.md), so a powered-off node says so instead of "ok"."""
+    volts = esc(f"{snap.get('field_supply_v', '-')} V")
+    if snap.get("powered") is False:
+        return f"{volts} {badge('node off', 'warn')} not monitored, +24V LED off"
+    return f"{volts} " + (badge("ok", "ok") if snap.get("field_ok", True)
+                          else badge("alarm", "bad"))
+
+
+def sync_rows(sync: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """The mode (0x1C32:1, which PREOP -> SAFEOP takes from Sync Control 0x0980) and the
+    sync unit's state, each labelled: "DC-SYNC · free_run" read as one thing."""
+    state = str(sync.get("state", "-"))
+    return [("Sync mode", esc(f"{sync.get('mode', '-')} (0x1C32:1) · Sync Control 0x0980 = "
+                              f"0x{int(sync.get('sync_control', 0)):04X}")),
+            ("Sync state", esc(f"{SYNC_STATES.get(state, state)} · SM events missed "
+                               f"{sync.get('sm_event_missed', 0)}" +
+                               (" · sync error" if sync.get("sync_error") else "")))]
+
+
+def slot_type(slot: Mapping[str, Any]) -> str:
+    """An empty position: "- not seen", with the module the master configures there."""
+    if slot.get("type") is not None:
+        return esc(slot.get("type"))
+    configured = slot.get("configured")
+    return ("- " + badge("not seen", "bad") +
+            (esc(f" (configured {configured})") if configured else ""))
+
+
 def trscat_html(snap: Mapping[str, Any]) -> str:
     leds = snap.get("leds") or {}
     sync = snap.get("sync") or {}
     bus = snap.get("trs_bus") or {}
     rows = [
         *esm_rows(snap),
-        ("Field supply", esc(f"{snap.get('field_supply_v', '-')} V") + " " +
-         (badge("ok", "ok") if snap.get("field_ok", True) else badge("alarm", "bad"))),
+        ("Logic supply", badge("on", "ok") if snap.get("powered", True)
+         else badge("off", "bad") + esc(" (Vdd)")),
+        ("Field supply", field_supply(snap)),
         ("TRS bus", esc(bus.get("state", "-"))),
-        ("Sync", esc(f"{sync.get('mode', '-')} · {sync.get('state', '-')} · SM event missed "
-                     f"{sync.get('sm_event_missed', 0)}" +
-                     (" · sync error" if sync.get("sync_error") else ""))),
+        *sync_rows(sync),
         ("Outputs", esc(snap.get("outputs_mode", "-")) +
          (" " + badge("PREOP deadlock", "bad") if snap.get("deadlocked") else "")),
         ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):04X}")),
         ("Alarms", esc(", ".join(alarm_text(a) for a in snap.get("alarms") or []) or "none")),
         ("Injected", esc(", ".join(str(a) for a in snap.get("injected") or []) or "none"))]
     slots = "".join(
-        f"<tr><td>{esc(s.get('slot'))}</td><td>{esc(s.get('type'))}</td>"
+        f"<tr><td>{esc(s.get('slot'))}</td><td>{slot_type(s)}</td>"
         f"<td>{esc(ident_text(s.get('ident', 0)))}</td>"
         f"<td>{esc(bits(s.get('inputs') or []))}</td>"
         f"<td>{esc(bits(s.get('outputs') or []))}</td></tr>" for s in snap.get("slots") or [])

@@ -1,0 +1,98 @@
+"""The TRS-CAT's slave panel and plates agree with the node's power and what is fitted.
+
+The UI audit, TRS-CAT powered off by the master and expansion 2 (AN-E) unplugged (the way a
+technician swaps it, seed 001 §7: never under power): "not seen" stood under plate 1, whose
+IO-E is still fitted, and not under plate 2, which is empty; the I/O table's slot 2 read
+"None"; the panel said "Field supply 24.0 V ok" while the +24V LED was off; "Sync DC-SYNC ·
+free_run" did not say which part is the mode (0x1C32:1, from Sync Control 0x0980 at PREOP ->
+SAFEOP, docs/trscat.md) and which the sync unit's state.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import pytest
+
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.ui.line.io_bodies import expansion_note
+from app.ui.line.slave_panel import slave_html
+
+BOOT_STEPS = 8000  # 8 s of 1 ms steps: every slave in OP
+
+
+def rows(html: str) -> dict[str, str]:
+    """The state table's rows as text: {"Field supply": "24.0 V ok", ...}."""
+    table = html.split('id="fr-slave-state">', 1)[1].split("</table>", 1)[0]
+    return {re.sub("<[^>]+>", "", k): " ".join(re.sub("<[^>]+>", " ", v).split())
+            for k, v in re.findall(r"<tr><th>(.*?)</th><td>(.*?)</td></tr>", table)}
+
+
+def io_rows(html: str) -> list[str]:
+    table = html.split('id="fr-slave-io">', 1)[1].split("</table>", 1)[0]
+    body = table.split("<tbody>", 1)[1]
+    return [" ".join(re.sub("<[^>]+>", " ", r).split()) for r in body.split("</tr>") if r]
+
+
+@pytest.fixture(scope="module")
+def booted() -> Any:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    for _ in range(BOOT_STEPS):
+        rig.step()
+    return rig
+
+
+@pytest.fixture(scope="module")
+def off(booted: Any) -> dict[str, Any]:
+    """Powered off from the master, then expansion 2 unplugged."""
+    booted.apply("master", "power_slave", {"position": 1, "on": False})
+    for _ in range(200):
+        booted.step()
+    booted.apply("trscat/2", "unplug", {})
+    booted.step()
+    snap = booted.devices["trscat"].snapshot()
+    assert not snap["powered"] and snap["leds"]["+24V"] == "off"
+    assert snap["slots"][2]["type"] is None
+    return snap
+
+
+def test_not_seen_sits_under_the_empty_plate(off: dict[str, Any]) -> None:
+    assert expansion_note(off, 1) == ""  # the IO-E is fitted; the node is off (header says)
+    assert expansion_note(off, 2) == "not seen"
+
+
+def test_empty_slot_reads_as_such(off: dict[str, Any]) -> None:
+    html = slave_html("trscat", off)
+    assert "None" not in html
+    slot2 = io_rows(html)[2]
+    assert slot2.startswith("2 ") and "not seen" in slot2 and "TRS-AN-E" in slot2, slot2
+
+
+def test_field_supply_agrees_with_the_powered_off_node(off: dict[str, Any]) -> None:
+    state = rows(slave_html("trscat", off))
+    assert "ok" not in state["Field supply"].split(), state["Field supply"]
+    assert "node off" in state["Field supply"], state["Field supply"]
+    assert state["Logic supply"].startswith("off"), state["Logic supply"]
+
+
+def test_sync_mode_and_state_are_labelled(booted: Any, off: dict[str, Any]) -> None:
+    state = rows(slave_html("trscat", off))
+    assert "Sync" not in state
+    assert state["Sync mode"].startswith("DC-SYNC (0x1C32:1)"), state["Sync mode"]
+    assert "0x0980" in state["Sync mode"]
+    assert state["Sync state"].startswith("free-running local cycle"), state["Sync state"]
+    assert "SM events missed 0" in state["Sync state"]
+
+
+def test_a_powered_node_in_op_reads_as_before() -> None:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    for _ in range(BOOT_STEPS):
+        rig.step()
+    snap = rig.devices["trscat"].snapshot()
+    state = rows(slave_html("trscat", snap))
+    assert state["Logic supply"] == "on"
+    assert state["Field supply"] == "24.0 V ok"
+    assert state["Sync state"].startswith("on SYNC0 (DC running)"), state["Sync state"]
+    assert expansion_note(snap, 1) == expansion_note(snap, 2) == ""
+    assert all("not seen" not in r for r in io_rows(slave_html("trscat", snap)))
