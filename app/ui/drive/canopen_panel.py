@@ -22,6 +22,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.drive_state import FIELDBUS_NAMES
+from app.ui.panels.widgets import Mirror
 from app.ui.style import badge, esc, kv_table
 from devices.device import CommandError
 from devices.od import SdoAbort
@@ -127,7 +128,12 @@ class CanOpenMaster:
             names = list(cm.CONTROLWORD_COMMANDS)
             cw_a = gui.add_button_group("0x6040 (SDO)", tuple(names[:3]))
             cw_b = gui.add_button_group("0x6040 more", tuple(names[3:]))
-            self._heartbeat = gui.add_number("Heartbeat (ms)", 1000, min=0, max=65535, step=1)
+            # Pre-filled from the node's 0x1017 (update()): the initial 1000 used to sit there
+            # while the object was 0, as if the heartbeat had been set already.
+            self._heartbeat = gui.add_number("Heartbeat (ms)", 0, min=0, max=65535, step=1,
+                                             hint="the node's 0x1017 (producer heartbeat "
+                                                  "time); type a new period, then Set")
+            self._heartbeat_mirror = Mirror(self._heartbeat)
             set_hb = gui.add_button("Set heartbeat", hint="SDO download 0x1017:0")
             self._object = gui.add_text("SDO object", "0x6041:0")
             self._value = gui.add_text("SDO value", "0")
@@ -170,6 +176,21 @@ class CanOpenMaster:
                 self._send(event.client, "SDO download",
                            lambda node: cm.sdo_download(node, index, sub, value,
                                                         self._object_size(index, sub)))
+
+    @property
+    def heartbeat_box(self) -> Any:
+        return self._heartbeat
+
+    def update(self, node: Mapping[str, Any]) -> None:
+        """The selected node's snapshot (dashboard thread): the box follows 0x1017 when it
+        changes (this master's SDO, another master's, a reset), and keeps what a user typed
+        until then."""
+        if "heartbeat_ms" in node:
+            self._heartbeat_mirror.follow(int(node["heartbeat_ms"]))
+
+    def forget(self) -> None:
+        """Another drive picked: take its 0x1017 at the next frame."""
+        self._heartbeat_mirror.forget()
 
     # ---- sending (simulation thread) --------------------------------------------------------
     def _device(self) -> Any:

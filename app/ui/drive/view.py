@@ -102,6 +102,8 @@ class DriveView:
         self.selected = drive_id
         self.sampler.reset()
         self.controls.forget()
+        if self.master is not None:
+            self.master.forget()
 
     def _selected_snapshot(self) -> Mapping[str, Any] | None:
         """Simulation thread (the sampler): the selected drive's snapshot, taken now."""
@@ -128,6 +130,8 @@ class DriveView:
         if self.canopen is not None:
             node_id = self._nodes.get(self.selected) or ""
             self.canopen.update(node_id, devices.get(node_id) or {}, snap)
+        if self.master is not None:
+            self.master.update(devices.get(self._nodes.get(self.selected) or "") or {})
 
     def tick(self, now: float, t_us: int) -> None:
         self.plots.update(now, t_us)
