@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 from devices.canopen.emcy import EMCY_BASE
 from devices.canopen.nmt import HEARTBEAT_BASE, NMT_COB_ID, STATE_CODE, NmtCommand
@@ -87,6 +88,46 @@ def sdo_response(data: bytes) -> str:
     if scs == 4:
         return _abort(data)
     return f"command 0x{cmd:02X}"
+
+
+def sdo_parts(can_id: int, data: bytes) -> dict[str, Any] | None:
+    """The pieces of an SDO frame a sentence needs, as plain data (a view joins a request
+    and its answer: "Download (write) 0x6040:00 = 0F 00 to node 1: done"); None for
+    another frame. ``service``: download, upload, download segment, upload segment, abort;
+    ``value``: the expedited bytes ("0F 00"), ``size``: the bytes announced for a
+    segmented transfer, ``last``: a segment with the "no more segments" bit."""
+    if SDO_RX_BASE < can_id <= SDO_RX_BASE + 127 and len(data) >= 4:
+        node, request = can_id - SDO_RX_BASE, True
+    elif SDO_TX_BASE < can_id <= SDO_TX_BASE + 127 and len(data) >= 4:
+        node, request = can_id - SDO_TX_BASE, False
+    else:
+        return None
+    cmd = data[0]
+    specifier = cmd >> 5
+    parts: dict[str, Any] = {"node": node, "request": request, "object": _mux(data),
+                             "service": f"command 0x{cmd:02X}", "value": "", "size": None,
+                             "abort": "", "last": False}
+    if specifier == 4:
+        parts["service"], parts["abort"] = "abort", _abort(data).split(" ", 2)[2]
+        return parts
+    # DS 301: a client's download initiate is ccs 1, upload 2; a server's answers scs 3, 2.
+    initiate = {1: "download", 2: "upload"} if request else {3: "download", 2: "upload"}
+    segment = {0: "download segment", 3: "upload segment"} if request \
+        else {1: "download segment", 0: "upload segment"}
+    if specifier in initiate:
+        parts["service"] = initiate[specifier]
+        expedited = bool(cmd & 2)
+        if expedited and (request or specifier == 2):
+            parts["value"] = _expedited_data(data)
+        elif not expedited and (cmd & 1) and specifier in (1, 2):
+            parts["size"] = int.from_bytes(data[4:8], "little")
+    elif specifier in segment:
+        parts["service"] = segment[specifier]
+        parts["object"] = ""
+        # Only a segment carrying data (the client's download, the server's upload
+        # segment: specifier 0) has the "no more segments" bit.
+        parts["last"] = specifier == 0 and bool(cmd & 1)
+    return parts
 
 
 def describe(can_id: int, data: bytes, rtr: bool, ctx: Context) -> tuple[str, str]:

@@ -12,7 +12,7 @@ from collections.abc import Iterable
 from typing import Any
 
 from devices.canopen.bus_timing import CanFrame
-from devices.canopen.decode import Context, describe
+from devices.canopen.decode import Context, describe, sdo_parts
 from devices.canopen.pdo import Pdo, split_entry
 from devices.events import fmt_bytes
 
@@ -23,6 +23,10 @@ class BusMonitor:
     def __init__(self) -> None:
         self.frames: deque[dict[str, Any]] = deque(maxlen=FRAME_LOG)
         self.last_sdo = self.last_pdo = ""
+        # The last SDO exchange as plain data (decode.sdo_parts): the master's initiating
+        # request and the node's latest answer to it, for a view to put in one sentence.
+        self.sdo_request: dict[str, Any] | None = None
+        self.sdo_response: dict[str, Any] | None = None
         self.counts = {"rx": 0, "tx": 0}
 
     def record(self, frame: CanFrame, ctx: Context) -> None:
@@ -35,6 +39,13 @@ class BusMonitor:
                             "kind": kind, "text": text})
         if kind == "SDO":
             self.last_sdo = text
+            parts = sdo_parts(frame.can_id, frame.data)
+            if parts is not None:
+                if not parts["request"]:
+                    self.sdo_response = parts
+                elif parts["service"] in ("download", "upload", "abort") or \
+                        self.sdo_request is None:
+                    self.sdo_request, self.sdo_response = parts, None
         elif kind == "PDO":
             self.last_pdo = text
 

@@ -553,6 +553,8 @@ class CanOpenNode(ProcessData, DeviceModel):
             "rpdo": [p.describe() for p in self.rpdos],
             "tpdo": [p.describe() for p in self.tpdos],
             "last_sdo": self.monitor.last_sdo, "last_pdo": self.monitor.last_pdo,
+            "last_sdo_exchange": {"request": self.monitor.sdo_request,
+                                  "response": self.monitor.sdo_response},
             "frames": self.monitor.recent(FRAMES_IN_SNAPSHOT),
             "bus": {**self.monitor.counts, "syncs": self.syncs,
                     "load": round(self.bus_load, 4), "dropped": self.line.dropped},

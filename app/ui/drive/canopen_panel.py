@@ -38,6 +38,52 @@ def nmt_badge(state: str) -> str:
     return badge(state, tone)
 
 
+SDO_SERVICES = {"download": "Download (write)", "upload": "Upload (read)"}
+
+
+def _sdo_result(request: Mapping[str, Any], response: Mapping[str, Any] | None) -> str:
+    if response is None:
+        return "no answer yet"
+    service = response.get("service")
+    if service == "abort":
+        return f"aborted by the node, {response.get('abort', '')}"
+    if service == "download":  # a segmented download's first answer only opens it
+        return "done" if request.get("size") is None else "accepted, segments follow"
+    if service == "upload":
+        if response.get("value"):
+            return f"value {response['value']}"
+        return f"{response.get('size', '?')} bytes follow in segments"
+    if service == "upload segment":
+        return "last segment received" if response.get("last") else "segments under way"
+    if service == "download segment":  # the answer carries no "last" bit
+        return "segment acknowledged"
+    return str(service)
+
+
+def sdo_sentence(exchange: Mapping[str, Any] | None, fallback: str = "") -> str:
+    """The last SDO exchange in words (node snapshot ``last_sdo_exchange``): service and
+    direction, object, value written, result. "Download (write) 0x6040:00 = 0F 00 to node 1:
+    done." (the frame log's "node 1 ->: download 0x6040:00 done" read as a puzzle)."""
+    request = (exchange or {}).get("request")
+    response = (exchange or {}).get("response")
+    if request is None:
+        return fallback or "-"
+    node = request.get("node")
+    where = request.get("object", "")
+    if request.get("service") == "abort":
+        return f"The master aborted the transfer of {where} with node {node}: " \
+               f"{request.get('abort', '')}."
+    if request.get("service") == "download":
+        value = f" = {request['value']}" if request.get("value") else (
+            f", {request['size']} bytes" if request.get("size") is not None else "")
+        what = f"{SDO_SERVICES['download']} {where}{value} to node {node}"
+    elif request.get("service") == "upload":
+        what = f"{SDO_SERVICES['upload']} {where} from node {node}"
+    else:
+        what = f"SDO {request.get('service')} with node {node}"
+    return f"{what}: {_sdo_result(request, response)}."
+
+
 def status_rows(node: Mapping[str, Any], drive: Mapping[str, Any]) -> list[tuple[str, str]]:
     heartbeat = int(node.get("heartbeat_ms", 0))
     guard, factor = int(node.get("guard_time_ms", 0)), int(node.get("life_time_factor", 0))
@@ -55,7 +101,8 @@ def status_rows(node: Mapping[str, Any], drive: Mapping[str, Any]) -> list[tuple
                                f"{history}")),
         ("Bus", esc(f"rx {bus.get('rx', 0)} · tx {bus.get('tx', 0)} · SYNC "
                     f"{bus.get('syncs', 0)} · load {100 * float(bus.get('load', 0.0)):.1f}%")),
-        ("Last SDO", esc(node.get("last_sdo") or "-")),
+        ("Last SDO", esc(sdo_sentence(node.get("last_sdo_exchange"),
+                                      node.get("last_sdo") or ""))),
         ("Last PDO", esc(node.get("last_pdo") or "-")),
     ]
 
