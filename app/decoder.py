@@ -15,7 +15,9 @@ Accepted input (case and ``0x`` prefixes do not matter):
   SDO abort code (``0x06020000``), a FastCAT 0x5400 word (``0x04000002``), an ETG.1020 Diag
   Code (``0xE8007500``), a CPX-E Text-ID (``0x3702``), a FastCAT alarm code (``0x04``);
 - a name: ``MISSING_NODE_ANSWER``, ``CO_E_TARATURA``, ``coupler:0x04``, ``FOLLOWING_ERROR``,
-  or a drive alarm number ``alarm 16`` (the drive's display shows it in decimal).
+  or a drive alarm number ``alarm 16`` (the drive's display shows it in decimal). A bare
+  number of 1-3 decimal digits (``16``) reads as hex in the code tables and as the drive
+  alarm of that decimal number: both are listed.
 """
 
 from __future__ import annotations
@@ -102,7 +104,12 @@ def decode(text: str) -> list[Meaning]:
     values = [n for n in numbers if n is not None]
     widths = [len(_digits(t)) for t in tokens]
     if len(values) == 1:
-        return _number(values[0], widths[0])
+        found = _number(values[0], widths[0])
+        # The drive's display shows its alarm in decimal (seed 004 ch. 5): a bare 1-3 digit
+        # number ("16") may be that too; it is listed after the hex readings, not instead.
+        if re.fullmatch(r"\d{1,3}", raw):
+            found += [_drive_alarm(spec) for spec in _drive_specs() if spec.code == int(raw)]
+        return found
     return _frame(values, widths)
 
 

@@ -243,3 +243,24 @@ def test_trscat_check_message_diag_code(code: int) -> None:
     diag = check_message(code, "check", 0).diag_code
     m = one(decode(f"0x{diag:08X}"), TRSCAT)
     assert m.text.rstrip(".") == AL_STATUS_CODES[code].rstrip(".")
+
+
+def test_a_bare_decimal_number_also_reads_as_the_drive_alarm() -> None:
+    """The UI audit: "16" decoded as AL status 0x0016 only, while the drive's display shows
+    its alarms in decimal (seed 004 ch. 5) and alarm 16 is what many users mean. Every table
+    the number reads in is listed, each under its family."""
+    found = decode("16")
+    families = [m.family for m in found]
+    assert ETHERCAT in families and SERVO in families, found
+    drive = next(m for m in found if m.family == SERVO)
+    assert drive.title.startswith("Drive alarm 16 ") and "FOLLOWING_ERROR" in drive.title
+    assert [m.family for m in decode("0x16")] == [ETHERCAT]  # hex written as hex: no decimal
+    assert SERVO not in [m.family for m in decode("1A")]
+
+
+def test_the_codes_tab_names_each_table_a_number_reads_in() -> None:
+    from app.ui.panels.decoder import result_html
+
+    html = result_html("16", decode("16"))
+    assert "2 readings" in html and ETHERCAT in html and SERVO in html
+    assert html.index(ETHERCAT) < html.index("AL status code 0x0016")

@@ -48,10 +48,18 @@ def result_html(query: str, meanings: Iterable[Meaning] | None, error: str = "")
                 "status code (0x8204), an EMCY or 0x603F code (8130), an SDO abort code "
                 "(0x06020000) or an alarm name, or pick a code the rig reported.</span>")
     else:
+        # Each reading under the table it comes from: one number can mean several things
+        # ("16": AL status 0x0016 and drive alarm 16), and the table says which device
+        # would report it.
+        meanings = list(meanings)
         body = "".join(
-            f'<div style="margin:0 0 6px 0"><b>{esc(m.title)}</b> '
-            f'<span class="fr-muted">{esc(m.family)} &middot; {esc(m.source)}</span><br>'
+            f'<div style="margin:0 0 6px 0"><span class="fr-badge fr-muted">{esc(m.family)}'
+            f"</span> <b>{esc(m.title)}</b> "
+            f'<span class="fr-muted">{esc(m.source)}</span><br>'
             f"{esc(m.text)}</div>" for m in meanings)
+        if len(meanings) > 1:
+            tables = list(dict.fromkeys(m.family for m in meanings))
+            query = f"{query} · {len(meanings)} readings, in {', '.join(tables)}"
     head = f'<div class="fr-muted">{esc(query)}</div>' if query else ""
     return f'<div id="{RESULT_ID}" style="font-size:0.82em">{head}{body}</div>'
 
