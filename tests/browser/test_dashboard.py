@@ -84,6 +84,9 @@ def test_cnf_fault_and_reset(live: LiveDashboard, page) -> None:
     wait_until(lambda: _reset_bit(live) == 1, what="0x5200:1 = 1")
     live.advance(0.1)
     assert live.snapshot()["fault_active"]
+    # The box mirrors the bit and stays ticked: the note under it says why (the UI audit).
+    note = page.locator("#fr-reset-note")
+    wait_until(lambda: "rising edge (0 → 1)" in note.inner_text(), what="the Reset fault note")
     reset.uncheck()
     wait_until(lambda: _reset_bit(live) == 0, what="0x5200:1 = 0")
     live.advance(0.1)

@@ -23,6 +23,18 @@ CNF_HOLD_S = 3.0  # seed 000 §2: "almeno tre secondi"
 CNF_PRESS_S = 3.5  # the button's press: comfortably past the threshold
 CNF_SHORT_S = 1.0  # a press that must do nothing (training)
 COUPLER_TARGET = "coupler (no module)"
+# Seed 000 §6.17 / §7: writing 0x5200:1 commands the reset, "alzando il bit" (raising it); the
+# coupler keeps the bit at 1 until it is written 0. The box mirrors the bit, so it stays ticked
+# after a reset, which trainees read as a stuck reset: the hint and, while the bit is 1, a
+# note under the box say what it is.
+RESET_HINT = ("This box is the bit 0x5200:1 (Reset fault) as the coupler holds it. The reset "
+              "acts on its rising edge: ticking it (0 → 1) resets a resettable alarm whose "
+              "cause is gone (codes above 0x7F need a resync). The bit stays 1 afterwards: "
+              "untick it (1 → 0) before the next reset.")
+RESET_NOTE = ('<p class="fr-muted" id="fr-reset-note" style="font-size:0.8em;margin:0 0 4px 0">'
+              "Reset fault bit 0x5200:1 = 1. A reset happens only on the rising edge "
+              "(0 → 1), for a resettable alarm whose cause is gone. The box shows the bit: "
+              "untick it before the next try.</p>")
 MASTER_TARGETS = ("INIT", "PREOP", "SAFEOP", "OP")
 
 
@@ -90,8 +102,9 @@ class ControlPanel:
             self._fault = gui.add_dropdown("Fault", self._fault_labels("coupler"))
             self._target = gui.add_dropdown("Target", (COUPLER_TARGET,))
             actions = gui.add_button_group("Injection", ("Inject", "Clear"))
-            self._reset = gui.add_checkbox("Reset fault", False,
-                                           hint="0x5200:1; the rising edge resets the alarm")
+            self._reset = gui.add_checkbox("Reset fault", False, hint=RESET_HINT)
+            self._reset_note = gui.add_html("", visible=False)
+            self._reset_note_bit: bool | None = None
 
         with gui.add_folder("Address and causes", expand_by_default=False):
             low, high = rotary_range
@@ -175,11 +188,24 @@ class ControlPanel:
                 return fault
         return None
 
+    @property
+    def reset_box(self) -> Any:
+        return self._reset
+
+    @property
+    def reset_note(self) -> Any:
+        return self._reset_note
+
     def update(self, snap: Mapping[str, Any]) -> None:
         self._power_sync.follow(bool(snap.get("powered")))
         cnf = snap.get("cnf") or {}
         self._hold_sync.follow(bool(cnf.get("pressed")))
-        self._reset_sync.follow(bool(snap.get("reset_fault", False)))
+        bit = bool(snap.get("reset_fault", False))
+        if bit != self._reset_note_bit:  # before the box, which viser's loop sets later
+            self._reset_note_bit = bit
+            self._reset_note.content = RESET_NOTE if bit else ""
+            self._reset_note.visible = bit
+        self._reset_sync.follow(bit)
         held = float(cnf.get("held_s", 0.0)) if cnf.get("pressed") else 0.0
         progress = round(min(100.0, 100.0 * held / CNF_HOLD_S))
         if self._cnf_progress.value != progress:
