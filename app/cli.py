@@ -14,9 +14,11 @@ import argparse
 import contextlib
 import json
 import logging
+import signal
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -200,7 +202,7 @@ def _serve(args: argparse.Namespace) -> int:
                   "browser is a trainee", flush=True)
         print("FieldRig: serving (Ctrl-C to stop)", flush=True)
         stop = threading.Event()
-        with contextlib.suppress(KeyboardInterrupt):
+        with contextlib.suppress(KeyboardInterrupt), _sigterm_as_interrupt():
             stop.wait(args.run_for)
     finally:
         for extra in extras:
@@ -209,6 +211,26 @@ def _serve(args: argparse.Namespace) -> int:
         for one in served:
             one.stop()
     return 0
+
+
+@contextlib.contextmanager
+def _sigterm_as_interrupt() -> Iterator[None]:
+    """SIGTERM stops serving as Ctrl-C does. A service manager (systemd, docker, a CI job's
+    timeout) stops a process with SIGTERM, whose default action ends it at once: the
+    recordings were left without the footer a closed Rerun file gets, and the servers were not
+    shut down. Only the main thread may set a handler; the previous one is put back."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def interrupt(_signum: int, _frame: object) -> None:
+        raise KeyboardInterrupt
+
+    previous = signal.signal(signal.SIGTERM, interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _record_path(args: argparse.Namespace, state_dir: Path, name: str, stamp: str, i: int,
