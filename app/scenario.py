@@ -102,7 +102,18 @@ def load_scenario(path: str | Path) -> Scenario:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError(f"{source}: cannot read scenario: {exc.strerror or exc}") from None
-    return parse_scenario(text, source, base_dir=Path(path).resolve().parent)
+    scenario = parse_scenario(text, source, base_dir=Path(path).resolve().parent)
+    # A file is a whole scenario: without its [scenario] table (an empty file, a step list
+    # saved without its head) or without a step it is a wrong file, which CI must see as
+    # exit 2, not as a run that passed. parse_scenario itself also reads fragments (an
+    # exercise file once its [exercise] table is cut out, tests).
+    if "scenario" not in tomllib.loads(text):
+        raise ScenarioError(f"{source}: no [scenario] table (a scenario file starts with "
+                            f"[scenario] and name = \"...\")")
+    if not scenario.steps:
+        raise ScenarioError(f"{source}: no steps (add [[step]] tables: at = ..., then "
+                            f"caption, checkpoint, focus or target + action)")
+    return scenario
 
 
 def parse_scenario(text: str, source: str = "<scenario>",

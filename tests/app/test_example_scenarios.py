@@ -131,7 +131,7 @@ def test_too_many_analog_modules(capsys, tmp_path) -> None:
 
 def test_bad_scenario_exits_2_with_one_line(tmp_path: Path) -> None:
     bad = tmp_path / "bad.toml"
-    bad.write_text('[[step]]\nat = 1\ntarget = "fastcat"\naction = "fly"\n')
+    bad.write_text('[scenario]\n[[step]]\nat = 1\ntarget = "fastcat"\naction = "fly"\n')
     proc = subprocess.run([sys.executable, "-m", "app", "scenario", "run", str(bad)],
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2

@@ -51,3 +51,23 @@ seconds = 3.5
 def test_bad_scenarios(text: str, message: str) -> None:
     with pytest.raises(ScenarioError, match=message):
         parse_scenario(text, "bad.toml")
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("", "no \\[scenario\\] table"),
+    ("# only a comment\n", "no \\[scenario\\] table"),
+    ("[scenario]\nname = \"x\"\n", "no steps"),
+    ("[[step]]\nat = 0.0\ntarget = \"fastcat\"\naction = \"power\"\non = true\n",
+     "no \\[scenario\\] table"),
+])
+def test_a_scenario_file_needs_its_table_and_steps(tmp_path, text: str, message: str) -> None:
+    """A file without [scenario] or without a step is a wrong file (exit 2), not a run that
+    passes (it exited 0, the last one even ran)."""
+    from app.cli import main
+    from app.scenario import load_scenario
+
+    path = tmp_path / "s.toml"
+    path.write_text(text, encoding="utf-8")
+    with pytest.raises(ScenarioError, match=message):
+        load_scenario(path)
+    assert main(["scenario", "run", str(path), "--quiet"]) == 2
