@@ -39,10 +39,31 @@ from devices.od import SdoAbort
 
 US = 1_000_000
 _STEP_KEYS = {"at", "after", "target", "action", "caption", "checkpoint", "expect_error"}
+# The keys a step may have, in the order a message lists them (a command step's other keys are
+# its action's arguments, checked against the rig's device by check_against).
+_STEP_KEYS_SHOWN = ("at", "after", "caption", "checkpoint", "focus", "target", "action",
+                    "expect_error")
+_REACTION_KEYS_SHOWN = ("event", "slave", "to", "once", "target", "action")
 
 
 class ScenarioError(ValueError):
     pass
+
+
+def step_label(number: int) -> str:
+    """``step[0]`` for the file's first [[step]]: messages count from 0, as the rig files'
+    (``fastcat[0]``) and ``on[0]`` do, so one number finds the table in every message."""
+    return f"step[{number - 1}]"
+
+
+def _unknown_key(raw: Mapping[str, Any], known: tuple[str, ...], key: str,
+                 fail: Callable[[str, str], ScenarioError]) -> ScenarioError | None:
+    """A table that says what it is by none of its keys: name the first key that is not
+    a known one (``acton`` for ``action``), as the rig files do."""
+    unknown = sorted(set(raw) - set(known))
+    if not unknown:
+        return None
+    return fail(f"{key}.{unknown[0]}", f"unknown key (known here: {', '.join(known)})")
 
 
 @dataclass(frozen=True)
@@ -196,6 +217,10 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
             t_us += round(after * US)
         expect_error = _typed(raw, "expect_error", bool, False, fail, f"{key}.expect_error")
         kinds = [k for k in ("caption", "checkpoint", "focus", "action") if k in raw]
+        if not kinds:
+            typo = _unknown_key(raw, _STEP_KEYS_SHOWN, key, fail)
+            if typo is not None:
+                raise typo
         if len(kinds) != 1:
             raise fail(key, "needs exactly one of caption, checkpoint, action (or focus)")
         if kinds[0] == "focus":
@@ -235,6 +260,9 @@ def _reaction(i: int, raw: Any, fail: Callable[[str, str], ScenarioError]) -> Re
     target = _typed(raw, "target", str, None, fail, f"{key}.target")
     action = _typed(raw, "action", str, None, fail, f"{key}.action")
     if target is None or action is None:
+        typo = _unknown_key(raw, _REACTION_KEYS_SHOWN, key, fail)
+        if typo is not None:
+            raise typo
         raise fail(key, "needs target = \"device\" and action = \"...\"")
     args = {k: v for k, v in raw.items() if k not in _REACTION_KEYS}
     slave = _typed(raw, "slave", str, "", fail, f"{key}.slave")
@@ -271,7 +299,7 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
                 continue
             rig.check(step.target, step.action, step.args)
         except CommandError as exc:
-            raise ScenarioError(f"{scenario.source}: step {step.number} (at "
+            raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
                                 f"{step.t_us / US:g} s): {exc}") from None
     if scenario.reactions and "master" not in rig.devices:
         raise ScenarioError(f"{scenario.source}: [[on]] needs an EtherCAT master in the rig")
@@ -382,15 +410,16 @@ def apply_step(step: Step, rig: Rig, failures: list[str]) -> list[Event]:
     except (CommandError, SdoAbort) as exc:
         out.extend(rig.take_events())
         if step.expect_error:
-            out.append(LogLine(now, "scenario", text=f"step {step.number}: refused as "
+            out.append(LogLine(now, "scenario", text=f"{step_label(step.number)}: refused as "
                                                       f"expected: {exc}"))
         else:
-            failures.append(f"step {step.number} (at {now / US:g} s): {exc}")
-            out.append(LogLine(now, "scenario", text=f"step {step.number} failed: {exc}"))
+            failures.append(f"{step_label(step.number)} (at {now / US:g} s): {exc}")
+            out.append(LogLine(now, "scenario", text=f"{step_label(step.number)} failed: "
+                                                      f"{exc}"))
         return out
     out.extend(rig.take_events())
     if step.expect_error:
-        failures.append(f"step {step.number} (at {now / US:g} s): expected an error, "
+        failures.append(f"{step_label(step.number)} (at {now / US:g} s): expected an error, "
                         f"the command was accepted")
     if step.action.startswith("read"):
         out.append(ValueRead(now, step.target, address=_address(step.args), value=result))

@@ -136,7 +136,7 @@ def test_bad_scenario_exits_2_with_one_line(tmp_path: Path) -> None:
                           capture_output=True, text=True, cwd=ROOT)
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
-    assert "step 1" in proc.stderr and "no action 'fly'" in proc.stderr
+    assert "step[0]" in proc.stderr and "no action 'fly'" in proc.stderr
 
 
 def test_bad_rig_exits_2_with_one_line(tmp_path: Path) -> None:

@@ -37,7 +37,7 @@ def test_focus_steps_emit_focus_records() -> None:
 
 def test_focus_on_a_device_not_in_the_rig_is_refused_before_the_run() -> None:
     scenario = parse_scenario("[[step]]\nat = 1\nfocus = \"nosuch\"\n", "f.toml")
-    with pytest.raises(ScenarioError, match=r"step 1.*no device 'nosuch'"):
+    with pytest.raises(ScenarioError, match=r"step\[0\].*no device 'nosuch'"):
         check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG)))
 
 

@@ -287,7 +287,7 @@ def test_a_broken_step_is_refused_before_anything_changes(live: Live, tmp_path: 
     bad = parse_scenario(SCENARIO.replace('action = "unplug"', 'action = "unplugg"'),
                          "bad.toml", base_dir=tmp_path)
     before = live.untouched()
-    with pytest.raises(ScenarioError, match="step 5"):
+    with pytest.raises(ScenarioError, match=r"step\[4\]"):
         live.player.load(bad)
     live.assert_untouched(before)
 

@@ -71,3 +71,37 @@ def test_a_scenario_file_needs_its_table_and_steps(tmp_path, text: str, message:
     with pytest.raises(ScenarioError, match=message):
         load_scenario(path)
     assert main(["scenario", "run", str(path), "--quiet"]) == 2
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("[[step]]\nat = 0.0\ntarget = \"fastcat\"\nacton = \"power\"\non = true\n",
+     r"step\[0\]\.acton: unknown key \(known here: at, after, caption, checkpoint, focus, "
+     r"target, action, expect_error\)"),
+    ("[[step]]\nat = 0.0\ncaptoin = \"x\"\n", r"step\[0\]\.captoin: unknown key"),
+    ("[[on]]\nevent = \"resync\"\ntarget = \"fastcat\"\nactoin = \"power\"\n",
+     r"on\[0\]\.actoin: unknown key \(known here: event, slave, to, once, target, action\)"),
+])
+def test_a_typo_in_a_step_key_is_named(text: str, message: str) -> None:
+    """``acton = "power"`` gave 'needs exactly one of caption, checkpoint, action' without
+    naming the typo; rig files name it (``fastcat[0].box_nmae: unknown key``)."""
+    with pytest.raises(ScenarioError, match=message):
+        parse_scenario(text, "bad.toml")
+
+
+def test_steps_are_numbered_from_0_in_every_message() -> None:
+    """One convention, the rig files' and [[on]]'s: ``step[N]`` from 0, parse and check
+    alike (the check said ``step 1 (at 0 s)`` for the file's first step)."""
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import apply_step, check_against
+
+    scenario = parse_scenario("[[step]]\nat = 0.5\ntarget = \"fastcat\"\naction = \"fly\"\n",
+                              "bad.toml")
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    with pytest.raises(ScenarioError, match=r"bad.toml: step\[0\] \(at 0.5 s\): .*'fly'"):
+        check_against(scenario, rig)
+    refused = parse_scenario("[[step]]\nat = 0\ncaption = \"x\"\n[[step]]\nat = 0\n"
+                             "target = \"fastcat\"\naction = \"power\"\non = true\n"
+                             "expect_error = true\n", "bad.toml")
+    failures: list[str] = []
+    apply_step(refused.steps[1], rig, failures)
+    assert failures == ["step[1] (at 0 s): expected an error, the command was accepted"]
