@@ -289,7 +289,15 @@ def _focus_target(text: str, fail: Callable[[str, str], ScenarioError], path: st
 
 
 def check_against(scenario: Scenario, rig: Rig) -> None:
-    """Refuse a scenario whose commands the rig would not take, before anything runs."""
+    """Refuse a scenario whose commands the rig would not take, before anything runs.
+
+    Arguments are checked against the devices' declared actions (types, ranges, choices and
+    the models' own tables, Param.parse); a module target against the rig as built plus the
+    positions earlier steps may fill (DeviceModel.check_module / fills, in time order). What
+    depends on the state the run reaches (an object's access rights in the current state, a
+    drive alarm code of the selected fieldbus, a plug on a taken position) stays with the step.
+    """
+    filled: dict[str, set[int]] = {}  # device id -> module positions earlier steps may fill
     for step in scenario.steps:
         if step.kind not in ("command", "focus"):
             continue
@@ -298,6 +306,11 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
                 rig.device(step.target.split(":", 1)[0])
                 continue
             rig.check(step.target, step.action, step.args)
+            device_id, module = parse_target(step.target)
+            device = rig.device(device_id)
+            seen = filled.setdefault(device_id, set())
+            device.check_module(step.action, module, seen)
+            seen.update(device.fills(step.action, step.args, module))
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
                                 f"{step.t_us / US:g} s): {exc}") from None

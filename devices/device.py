@@ -13,7 +13,7 @@ knowing device logic. ``apply("press_cnf", {...})`` calls the model's ``cmd_pres
 from __future__ import annotations
 
 import random
-from collections.abc import Mapping
+from collections.abc import Callable, Collection, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -34,6 +34,11 @@ class Param:
     high: float | None = None
     choices: tuple[Any, ...] | None = None
     doc: str = ""
+    # The model's own reading of a value that no choices list covers (a fault symbol or
+    # ``coupler:0x04``, a parameter name or address): called with the typed value, raises
+    # CommandError for a value the model refuses whatever its state, so a scenario file is
+    # refused before it runs and not at the step (app.scenario.check_against).
+    parse: Callable[[Any], object] | None = None
 
     def check(self, value: Any) -> Any:
         if self.type is float and isinstance(value, int) and not isinstance(value, bool):
@@ -49,6 +54,8 @@ class Param:
         if self.choices is not None and value not in self.choices:
             allowed = ", ".join(repr(c) for c in self.choices)
             raise CommandError(f"'{self.name}' = {value!r} is not one of {allowed}")
+        if self.parse is not None:
+            self.parse(value)
         return value
 
 
@@ -146,6 +153,16 @@ class DeviceModel:
             raise CommandError(f"action '{action}' needs a module: write "
                                f"'{self.device_id}/N'")
         return spec.check_args(args)
+
+    # ---- what a scenario check may know of module targets (app.scenario.check_against) ----
+    def check_module(self, action: str, module: int | None, filled: Collection[int]) -> None:
+        """Refuse ``action`` on ``device/module`` when no module can be there: none in the
+        model now and none put there by an earlier command (``filled``, from
+        :meth:`fills`). Default: every module number is left to the command itself."""
+
+    def fills(self, action: str, args: Mapping[str, Any], module: int | None) -> tuple[int, ...]:
+        """The module positions this command may put a module on (a plug, a swap)."""
+        return ()
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
         """Run a named action now; raises CommandError for anything the device refuses."""

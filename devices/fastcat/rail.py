@@ -10,11 +10,12 @@ at rail position N. Mapping of causes to alarm codes: docs/fastcat-coupler.md.
 from __future__ import annotations
 
 import random
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from devices.device import Action, CommandError, Param
+from devices.fastcat.alarms import parse_fault
 from devices.fastcat.catalog import CATALOG, module_type
 from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES
@@ -24,6 +25,11 @@ if TYPE_CHECKING:
     from devices.flash import FlashStore
 
 _SLOT = Param("other", int, low=1, high=MAX_MODULES, doc="the other rail position")
+_FAULT = Param("fault", str, parse=parse_fault, doc="a §7.5 / §7.6 symbol or coupler:0xNN / "
+                                                    "module:0xNN")
+# Commands that act on the module at the rail position (the others put one there or name
+# the position only, e.g. a module alarm).
+_NEED_MODULE = ("unplug", "module_power")
 
 COUPLER_ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("power", "Switch the coupler supply on or off", (Param("on", bool),)),
@@ -35,9 +41,9 @@ COUPLER_ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("inject_fault", "Make an alarm cause present: a §7.5 / §7.6 symbol (e.g. "
                            "MISSING_NODE_ANSWER, TARATURA) or coupler:0xNN / module:0xNN; "
                            "the target module is byte 0 of the emergency",
-           (Param("fault", str),), module="optional"),
+           (_FAULT,), module="optional"),
     Action("clear_fault", "Remove an injected cause (the alarm stays latched until reset)",
-           (Param("fault", str),), module="optional"),
+           (_FAULT,), module="optional"),
     Action("set_reset_fault", "Write the Reset fault bit 0x5200:1; a rising edge resets a "
                               "resettable alarm whose cause is gone (§6.17, §7)",
            (Param("on", bool),)),
@@ -95,6 +101,26 @@ class RailMixin:
             self.check_command(action, args, module)
             return self.rail_module(module).apply(action, args)
         return super().apply(action, args, module)  # type: ignore[misc]
+
+    def check_module(self, action: str, module: int | None, filled: Collection[int]) -> None:
+        if module is None:
+            return
+        self._on_rail(module)
+        if action not in MODULE_ACTIONS and action not in _NEED_MODULE:
+            return
+        if module in filled or (module <= len(self.rail) and self.rail[module - 1] is not None):
+            return  # a module is there, or an earlier command may have put one there
+        raise CommandError(f"{self.device_id}: no module at rail position {module} (rail: "
+                           f"{self._rail_text()}) and no earlier step plugs one there")
+
+    def fills(self, action: str, args: Mapping[str, Any], module: int | None) -> tuple[int, ...]:
+        if module is None:
+            return ()
+        if action == "plug":
+            return (module,)
+        if action == "swap":
+            return (module, int(args.get("other", module)))
+        return ()
 
     def rail_module(self, slot: int | None) -> IoModule:
         if slot is None or not 1 <= slot <= len(self.rail) or self.rail[slot - 1] is None:

@@ -22,7 +22,8 @@ if TYPE_CHECKING:
 
 U16 = 0xFFFF
 _REG = Param("register", int, low=0, high=LAST_REGISTER, doc="register number n (R00..R133)")
-_PARAM = Param("parameter", str, doc="parameter name (d3) or Modbus address (3, 0x0003)")
+_PARAM = Param("parameter", str, parse=parameter_by_name_or_address,
+               doc="parameter name (d3) or Modbus address (3, 0x0003)")
 _VALUE32 = Param("value", int, low=-0x8000_0000, high=0xFFFF_FFFF)
 _ALARM = Param("code", str, doc="alarm code (16) or name (FOLLOWING_ERROR)")
 

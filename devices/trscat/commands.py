@@ -33,7 +33,8 @@ if TYPE_CHECKING:
     from devices.trscat.esm import Esm
 
 _CHANNEL = Param("channel", int, low=1, high=16, doc="channel, from 1")
-_FAULT = Param("fault", str, doc="a seed 001 §9.3.7 code (0x3220) or name (FIELD_SUPPLY)")
+_FAULT = Param("fault", str, parse=parse_fault,
+               doc="a seed 001 §9.3.7 code (0x3220) or name (FIELD_SUPPLY)")
 SENSOR_ON_V = 24.0  # set_input(on=True): a PNP sensor puts the field voltage on the terminal
 
 ACTIONS: dict[str, Action] = {a.name: a for a in (

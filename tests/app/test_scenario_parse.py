@@ -105,3 +105,49 @@ def test_steps_are_numbered_from_0_in_every_message() -> None:
     failures: list[str] = []
     apply_step(refused.steps[1], rig, failures)
     assert failures == ["step[1] (at 0 s): expected an error, the command was accepted"]
+
+
+@pytest.mark.parametrize(("step", "message"), [
+    ('target = "fastcat"\naction = "inject_fault"\nfault = "NOT_A_FAULT"\n',
+     r"step\[0\] \(at 1 s\): unknown fault 'NOT_A_FAULT'"),
+    ('target = "drive"\naction = "write_parameter"\nparameter = "zz9"\nvalue = 3\n',
+     r"step\[0\] \(at 1 s\): there is no parameter 'zz9'"),
+    ('target = "trscat"\naction = "inject_fault"\nfault = "NO_SUCH"\n', r"step\[0\].*NO_SUCH"),
+    ('target = "fastcat/12"\naction = "unplug"\n',
+     r"step\[0\] \(at 1 s\): fastcat: no module at rail position 12"),
+    ('target = "fastcat/17"\naction = "plug"\ntype = "DI16"\n', r"no rail position 17"),
+])
+def test_wrong_arguments_are_refused_before_the_run(tmp_path, capsys, step: str,
+                                                    message: str) -> None:
+    """Arguments the device's own tables refuse (a fault symbol, a parameter name, a rail
+    position with no module) exited 1 at run time with a partial events.jsonl; docs promise
+    they are checked before the run starts: exit 2, nothing written."""
+    from app.cli import main
+    from app.scenario import load_scenario
+
+    path = tmp_path / "s.toml"
+    path.write_text(f"[scenario]\nname = \"x\"\n[[step]]\nat = 1.0\n{step}", encoding="utf-8")
+    assert main(["scenario", "run", str(path), "--quiet", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("fieldrig: error: "), err
+    assert not (tmp_path / "o" / "events.jsonl").exists()
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import check_against
+
+    with pytest.raises(ScenarioError, match=message):
+        check_against(load_scenario(path), build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+
+
+def test_a_module_plugged_by_an_earlier_step_may_be_commanded() -> None:
+    """Whether a rail position holds a module is the rail's state: a step that plugs one
+    there (or swaps one there) comes first, then the position is a fine target."""
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import check_against
+
+    scenario = parse_scenario(
+        "[[step]]\nat = 0\ntarget = \"fastcat/9\"\naction = \"plug\"\ntype = \"DI16\"\n"
+        "[[step]]\nat = 0\ntarget = \"fastcat/2\"\naction = \"swap\"\nother = 10\n"
+        "[[step]]\nat = 1\ntarget = \"fastcat/9\"\naction = \"unplug\"\n"
+        "[[step]]\nat = 1\ntarget = \"fastcat/10\"\naction = \"module_power\"\non = false\n",
+        "ok.toml")
+    check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
