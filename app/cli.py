@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
-from app.scenario import ScenarioError, load_scenario, run_scenario
+from app.scenario import ScenarioError, check_against, load_scenario, run_scenario
 
 EXIT_BAD_INPUT = 2
 EXIT_SCENARIO_FAILED = 1
@@ -82,7 +82,8 @@ def _scenario_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run a scenario file")
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, help="directory for events.jsonl")
-    run.add_argument("--quiet", action="store_true", help="do not print events on stdout")
+    run.add_argument("--quiet", action="store_true", help="do not print events on stdout (with --screenshots: nor viser's "
+                          "banner on stderr)")
     run.add_argument("--record", default=None, metavar="PATH",
                      help="also record the run to a rerun file (.rrd)")
     run.add_argument("--screenshots", action="store_true",
@@ -127,12 +128,16 @@ def _scenario(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.file)
     rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
     rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
+    # The whole file is checked against the rig before anything starts (a server, a browser,
+    # a recording): a wrong file is one error line and exit 2 in every mode.
+    check_against(scenario, rig)
     if args.screenshots:
         if not args.out:
             raise ScenarioError("--screenshots needs --out DIR")
         from app.screenshots import run_with_screenshots
 
-        result = run_with_screenshots(scenario, rig, args.out, record=args.record)
+        result = run_with_screenshots(scenario, rig, args.out, record=args.record,
+                                      quiet=args.quiet)
     elif args.record:
         from app.recording import RigRecorder, scenario_observer
 

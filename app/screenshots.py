@@ -17,6 +17,7 @@ instant (the player panel's ``data-frame`` marker) and has painted it.
 from __future__ import annotations
 
 import contextlib
+import io
 import json
 import logging
 import re
@@ -33,7 +34,7 @@ import viser
 from app.player import Status
 from app.rig import Rig
 from app.runtime import Runtime
-from app.scenario import Scenario, ScenarioError, Step
+from app.scenario import Scenario, ScenarioError, Step, check_against
 from app.ui.dashboard import Dashboard
 from app.ui.panels.scenario_player import STATUS_ID
 from devices.events import Event
@@ -83,20 +84,22 @@ class ServedRig:
     server: viser.ViserServer
     dashboard: Dashboard
     url: str
+    quiet: bool = False
 
     @classmethod
-    def start(cls, rig: Rig) -> ServedRig:
+    def start(cls, rig: Rig, quiet: bool = False) -> ServedRig:
+        """``quiet``: nothing of viser's on the output (``scenario run --quiet``)."""
         runtime = Runtime(rig)
         runtime.set_paused(True)
         port = free_port()
-        with contextlib.redirect_stdout(sys.stderr):  # viser's banner: stdout is for events
+        with _viser_output(quiet):
             server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
         # Every frame drawn, browser or not: advance() waits on rendered_seq before a page
         # is open, and tests read the views.
         dashboard = Dashboard(server, runtime, draw_unwatched=True)
         runtime.start()
         dashboard.start()
-        return cls(runtime, server, dashboard, f"http://127.0.0.1:{port}")
+        return cls(runtime, server, dashboard, f"http://127.0.0.1:{port}", quiet)
 
     def advance(self, seconds: float) -> None:
         """Step the paused rig by exactly ``seconds`` of simulated time."""
@@ -108,8 +111,16 @@ class ServedRig:
     def stop(self) -> None:
         self.dashboard.stop()
         self.runtime.stop()
-        with contextlib.redirect_stdout(sys.stderr):
+        with _viser_output(self.quiet):  # "(viser) Server stopped"
             self.server.stop()
+
+
+def _viser_output(quiet: bool) -> contextlib.AbstractContextManager[Any]:
+    """Where viser's prints go: its banner (a boxed URL table) and "Server stopped" are
+    rich.print calls that ``verbose=False`` does not silence (viser 1.1: verbose only covers
+    the connection messages) and rich.print writes to ``sys.stdout`` of the moment. stdout is
+    for the event lines, so stderr; with ``quiet``, nowhere."""
+    return contextlib.redirect_stdout(io.StringIO() if quiet else sys.stderr)
 
 
 class Chromium:
@@ -230,13 +241,20 @@ def event_lines(events: list[Event]) -> str:
 
 
 def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
-                         record: str | None = None,
-                         chromium: str = CHROMIUM) -> ScreenshotRun:
+                         record: str | None = None, chromium: str = CHROMIUM,
+                         quiet: bool = False) -> ScreenshotRun:
     """Play ``scenario`` on the untouched ``rig`` in a served dashboard; one PNG per checkpoint
-    and ``events.jsonl`` into ``out_dir``."""
+    and ``events.jsonl`` into ``out_dir``. ``quiet``: viser prints nothing.
+
+    The scenario is checked against the rig and the browser looked for first, so a wrong file
+    or a missing Chromium is one error line and no server starts."""
+    check_against(scenario, rig)
+    if not Path(chromium).exists():
+        raise ScreenshotError(f"{chromium} is missing: install Debian's chromium "
+                              "(apt-get install -y chromium)")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    served = ServedRig.start(rig)
+    served = ServedRig.start(rig, quiet=quiet)
     events: list[Event] = []
     served.runtime.add_listener(events.extend)  # every journalled batch, in order
     recorder = None

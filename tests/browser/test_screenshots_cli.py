@@ -75,6 +75,7 @@ def test_the_command_line(tmp_path: Path) -> None:
                            "--out", str(out), "--screenshots", "--quiet"],
                           cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
+    assert "viser" not in done.stdout + done.stderr  # --quiet: no banner, no "Server stopped"
     assert sorted(p.name for p in out.iterdir()) == [*NAMES, "events.jsonl"]
     assert (out / "events.jsonl").read_text(encoding="utf-8") == reference_lines()
 
