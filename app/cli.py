@@ -82,7 +82,8 @@ def _scenario_parser() -> argparse.ArgumentParser:
     run = sub.add_parser("run", help="run a scenario file")
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, help="directory for events.jsonl")
-    run.add_argument("--quiet", action="store_true", help="do not print events on stdout (with --screenshots: nor viser's "
+    run.add_argument("--quiet", action="store_true",
+                     help="do not print events on stdout (with --screenshots: nor viser's "
                           "banner on stderr)")
     run.add_argument("--record", default=None, metavar="PATH",
                      help="also record the run to a rerun file (.rrd)")
