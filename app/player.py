@@ -309,11 +309,24 @@ class Player:
             logger.info("scenario '%s' finished at %.3f s", scenario.name, now_us / 1e6)
 
 
+# Parameters that name an object or a frame: the seeds, the scenario files and every panel
+# write them in hex (0x5400, COB-ID 0x601), so the "next" line does too; width in hex digits.
+HEX_ARGS = {"index": 4, "cob_id": 3}
+
+
+def _arg(name: str, value: object) -> str:
+    width = HEX_ARGS.get(name)
+    if width is not None and isinstance(value, int) and not isinstance(value, bool):
+        return f"{name}=0x{value:0{width}X}"
+    return f"{name}={value!r}"
+
+
 def describe_step(step: Step) -> str:
-    """One line for a view: ``6 s: fastcat/2 unplug``."""
+    """One line for a view: ``6 s: fastcat/2 unplug``, ``7.5 s: fastcat read_object
+    index=0x5400 sub=0``."""
     at = f"{step.t_us / 1e6:g} s"
     if step.kind == "command":
-        args = " ".join(f"{k}={v!r}" for k, v in step.args.items())
+        args = " ".join(_arg(k, v) for k, v in step.args.items())
         return f"{at}: {step.target} {step.action}" + (f" {args}" if args else "")
     return f"{at}: {step.kind} \u00ab{step.text}\u00bb"
 

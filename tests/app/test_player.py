@@ -362,3 +362,19 @@ def test_play_runs_the_on_reactions_as_scenario_run_does(live: Live, tmp_path: P
     played = [e for e in live.events if e.t_us <= reacting.end_us]
     assert lines(played) == expected
     assert not live.player.view().failures
+
+
+def test_next_step_shows_object_indexes_in_hex() -> None:
+    """The "next" line wrote ``index=21504`` where the scenario file, the Objects tab and the
+    State panel say 0x5400 (static/scenarios/module_lost_in_op.toml)."""
+    from app.player import describe_step
+    from app.scenario import Step
+
+    read = Step(1, 7_500_000, "command", "fastcat", "read_object", {"index": 0x5400, "sub": 0})
+    assert describe_step(read) == "7.5 s: fastcat read_object index=0x5400 sub=0"
+    frame = Step(2, 1_000_000, "command", "drive_co", "send_frame",
+                 {"cob_id": 0x601, "data": "40 41 60 00"})
+    assert describe_step(frame) == "1 s: drive_co send_frame cob_id=0x601 data='40 41 60 00'"
+    write = Step(3, 2_000_000, "command", "drive", "write_register", {"register": 12,
+                                                                      "value": 6000})
+    assert describe_step(write) == "2 s: drive write_register register=12 value=6000"
