@@ -235,7 +235,10 @@ class Dashboard:
         with side.add_tab("State", viser.Icon.GAUGE):
             state = StatePanel(self.server, code_name)
             gui.add_markdown("**Event log**")
-            log = EventLogPanel(self.server, self.fastcat_ids, self._timestamp_fn())
+            # Every device's own events (the drives' alarms too), the master's via its log.
+            log = EventLogPanel(self.server, {d: str(info["kind"]) for d, info in
+                                              described.items() if d != self.master_id},
+                                self._timestamp_fn())
         with side.add_tab("Objects", viser.Icon.LIST_DETAILS):
             objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender, device_id,
                                             self._od_ids(described, device_id))

@@ -42,14 +42,23 @@ class LogRow:
     error: bool
 
 
-def event_message(event: Event) -> tuple[str, bool] | None:
-    """The log text of a device event, and whether it reads as an error; None to skip it."""
+# The name of a device kind's main state machine (StateChanged.machine == ""), when it is not
+# the EtherCAT ESM: a servo drive's is CiA 402 (its EtherCAT side reports machine "esm").
+_MAIN_MACHINE = {"servo": "CiA 402"}
+
+
+def event_message(event: Event, device_kind: str = "") -> tuple[str, bool] | None:
+    """The log text of a device event, and whether it reads as an error; None to skip it.
+    ``device_kind`` (the rig's ``describe()`` kind) names the device's main state machine."""
     record = event.to_record()
     if isinstance(event, StateChanged):
         if event.machine == "cnf_button":
             return f"CNF button {event.to_state}", False
-        if event.machine:
-            what = "CNF procedure" if event.machine == "cnf" else event.machine
+        if event.machine == "esm":
+            return f"ESM state change '{event.from_state}' -> '{event.to_state}'", False
+        main = _MAIN_MACHINE.get(device_kind, "")
+        if event.machine or main:
+            what = ("CNF procedure" if event.machine == "cnf" else event.machine or main)
             return f"{what}: {event.from_state} -> {event.to_state}", False
         return f"ESM state change '{event.from_state}' -> '{event.to_state}'", False
     if isinstance(event, EmergencySent):
@@ -80,9 +89,11 @@ def render_rows(rows: Iterable[LogRow]) -> str:
 
 
 class EventLogPanel:
-    def __init__(self, server: viser.ViserServer, device_ids: Iterable[str],
+    def __init__(self, server: viser.ViserServer, device_kinds: Mapping[str, str],
                  timestamp: Timestamp) -> None:
-        self._devices = set(device_ids)
+        """``device_kinds``: id -> kind of every device whose own events are logged (all of
+        the rig's but the master, whose lines come from its snapshot's ``log``)."""
+        self._kinds = dict(device_kinds)
         self._timestamp = timestamp
         self._device_rows: collections.deque[LogRow] = collections.deque(maxlen=MAX_ROWS)
         self._order = 0
@@ -91,9 +102,11 @@ class EventLogPanel:
 
     def add_events(self, events: Iterable[Event]) -> None:
         for event in events:
-            if event.device not in self._devices and not isinstance(event, Caption):
+            if event.device not in self._kinds and not isinstance(event, Caption):
                 continue
-            found = event_message(event)
+            # LEDs, log lines, reads, ... give None: a moving drive emits none of the kinds
+            # kept, so the log is not flooded (and the deque keeps it bounded anyway).
+            found = event_message(event, self._kinds.get(event.device, ""))
             if found is None:
                 continue
             text, error = found
