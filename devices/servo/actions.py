@@ -204,11 +204,15 @@ class DriveActions:
         self.write_register(R.CONTROL_WORD, r00 | control.BIT5
                             | (control.BIT7 if relative else 0))
 
-    def cmd_jog(self: ServoDrive, direction: int) -> None:
+    def cmd_jog(self: ServoDrive, direction: int) -> str | None:
+        """Mode 3 and R13 = direction * R12, taken in any state as a master's writes are;
+        the answer says why the axis will not move (not enabled, ...), None when it will or
+        for a stop."""
         self._powered()
         if self.mode != 3:
             self.set_mode(3)
         self.write_register(R.TARGET_VELOCITY, direction * self.regs[R.PROFILE_VELOCITY])
+        return self.motion_blocked() if direction else None
 
     def cmd_home(self: ServoDrive) -> None:
         self._powered()

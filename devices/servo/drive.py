@@ -267,6 +267,22 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         return self.state is State.OPERATION_ENABLED and self.ien_cmd \
             and self.input_level("ien") and self.input_level("ten")
 
+    def motion_blocked(self) -> str | None:
+        """Why a motion command would not move the axis now, in the operator's words; None
+        when it would. The command is still taken (a master's writes are), this only says
+        why nothing happens, for the panel's notice."""
+        label = self.state.label
+        if self.state in (State.FAULT, State.FAULT_REACTION_ACTIVE):
+            return (f"not enabled ({label}, alarm {self.alarms.active}) - reset the alarm, "
+                    "then enable torque")
+        if self.state is not State.OPERATION_ENABLED:
+            return f"not enabled ({label}) - enable torque first"
+        if not (self.ien_cmd and self.input_level("ien")):
+            return "motion not enabled (IEN input or Ien_cmd off) - switch IEN on"
+        if self.cw & ds402.CW_HALT:
+            return "halted (0x6040 bit 8) - clear the halt bit"
+        return None
+
     @property
     def motion_allowed(self) -> bool:
         return self.motion_enabled and not self.cw & ds402.CW_HALT

@@ -234,6 +234,48 @@ def test_a_burst_on_a_button_group_commands_each_clicks_button_in_order(
     assert sender.sent == [("drive1", *command) for command in commands]
 
 
+class _Client:
+    def __init__(self) -> None:
+        self.notices: list[tuple[str, str]] = []
+
+    def add_notification(self, title: str, body: str, **_: Any) -> None:
+        self.notices.append((title, body))
+
+
+class _AnsweringSender(Sender):
+    """Answers every command with ``answer``, as the model's action returned it."""
+
+    def __init__(self, answer: Any) -> None:
+        super().__init__()
+        self.answer = answer
+
+    def send(self, client: Any, target: str, action: str, args: dict[str, Any] | None = None,
+             *, done: Callable[[Any], None] | None = None) -> None:
+        super().send(client, target, action, args, done=done)
+        if done is not None:
+            self.work.append(lambda: done(self.answer))
+
+
+@pytest.mark.parametrize(("answer", "notices"), [
+    ("not enabled (Switch on disabled) - enable torque first",
+     [("drive1: jog", "drive1: not enabled (Switch on disabled) - enable torque first")]),
+    (None, []),
+])
+def test_jog_tells_the_clicking_page_why_the_drive_does_not_move(
+        loop, answer: str | None, notices: list[tuple[str, str]]) -> None:
+    """Jog on a drive without torque only switched Mode to 3: no motion, no word. The model's
+    answer (devices/servo/actions.py cmd_jog) now reaches the page that clicked."""
+    server, sender = Server(loop), _AnsweringSender(answer)
+    panel = DrivePanel(server, None, sender, lambda: "drive1", {})  # type: ignore[arg-type]
+    frames(loop, server, lambda: panel.update(DRIVE))
+    client = _Client()
+    server.gui.handles["Jog"].user(client, "Jog +", click=True)  # type: ignore[arg-type]
+    turn(loop, server)
+    sender.drain()
+    assert sender.sent == [("drive1", "jog", {"direction": 1})]
+    assert client.notices == notices
+
+
 # ---- rail modules (seed 000 §2, §6.30) ----------------------------------------------------
 def rail(powered: tuple[bool, bool], command: tuple[int, int]) -> dict[str, Any]:
     return {"rail": [{"slot": k + 1, "type": "AX2", "powered": powered[k],

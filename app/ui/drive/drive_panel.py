@@ -16,7 +16,7 @@ from typing import Any
 import viser
 
 from app.runtime import Runtime
-from app.ui.commands import CommandSender
+from app.ui.commands import CommandSender, notify
 from app.ui.drive.drive_state import FIELDBUS_NAMES
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.widgets import Mirror, Synced, set_options
@@ -151,7 +151,7 @@ class DrivePanel:
         on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
         reset.on_click(lambda e: self._do(e, "alarm_reset"))
         home.on_click(lambda e: self._do(e, "home"))
-        on_button(jog, lambda e, b: self._do(e, "jog", direction=JOG[b]))
+        on_button(jog, lambda e, b: self._jog(e, JOG[b]))
         on_button(moves, self._positioner)
         run.on_click(lambda e: self._run_velocity(e))
         on_button(alarm_ops, lambda e, b: self._do(
@@ -165,6 +165,17 @@ class DrivePanel:
     # ---- commands -----------------------------------------------------------------------
     def _do(self, event: viser.GuiEvent, action: str, **args: Any) -> None:
         self._sender.send(event.client, self._target(), action, args)
+
+    def _jog(self, event: viser.GuiEvent, direction: int) -> None:
+        """Jog; when the model answers why the axis will not move (a drive without torque
+        only switches to mode 3), the clicking page is told, naming the drive."""
+        target, client = self._target(), event.client
+
+        def answered(why: Any) -> None:
+            if why:
+                notify(client, f"{target}: jog", f"{target}: {why}")
+
+        self._sender.send(client, target, "jog", {"direction": direction}, done=answered)
 
     def _apply(self, client: viser.ClientHandle | None, action: str,
                args: dict[str, Any]) -> None:

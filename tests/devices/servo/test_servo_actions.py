@@ -95,6 +95,26 @@ def test_jog_and_home() -> None:
     assert d.homed
 
 
+def test_jog_on_a_disabled_drive_says_why_it_does_not_move() -> None:
+    """Jog sets mode 3 and R13 as a master's writes would, also without torque (the writes are
+    accepted, ch. 2), and the axis stays: the action's answer says why, for the panel."""
+    sim = make_sim()
+    d = sim.drive
+    assert d.state is State.SWITCH_ON_DISABLED
+    assert d.apply("jog", {"direction": 1}) == \
+        "not enabled (Switch on disabled) - enable torque first"
+    assert d.mode == 3 and d.read_register(13) == d.read_register(12)
+    sim.run(200)
+    assert d.read_register(8) == 0  # no motion
+    assert d.apply("jog", {"direction": 0}) is None  # a stop needs no notice
+    d.apply("enable", {"on": True})
+    assert d.apply("jog", {"direction": 1}) is None
+    d.apply("inject_alarm", {"code": "MOTOR_CURRENT"})
+    assert d.state is State.FAULT
+    assert d.apply("jog", {"direction": -1}) == \
+        "not enabled (Fault, alarm 3) - reset the alarm, then enable torque"
+
+
 def test_events_follow_the_schema() -> None:
     sim = make_sim()
     sim.drive.apply("enable", {"on": True})
