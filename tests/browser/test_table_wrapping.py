@@ -78,3 +78,34 @@ def test_canopen_time_column_keeps_its_numbers_whole(live: LiveDashboard, page: 
     frames = page.locator("#fr-frames")
     wait_until(lambda: "10." in frames.inner_text(), what="frames after 10 s")
     assert split_words(page, "#fr-frames td") == []
+
+
+# The Server cells whose text the column clips (overflow hidden: wider content than cell).
+CLIPPED_JS = """
+sel => [...document.querySelectorAll(sel)]
+  .filter(cell => cell.scrollWidth > cell.clientWidth).map(cell => cell.innerText)
+"""
+
+
+def test_event_log_server_column_shows_every_name_whole(live: LiveDashboard, page: Any) -> None:
+    """The Server column (4.8em) showed "scenari" for a caption's "scenario"; every device id
+    that reaches the log, the master's "(65535)" and "scenario" must fit."""
+    from devices.events import Caption, StateChanged
+
+    open_dashboard(page, live)
+    live.advance(1.0)
+    t_us = live.runtime.frame.t_us
+    # The devices that emit under their own id (a drive's -can / -ecat companions emit under
+    # the drive's), and the longest id of static/rigs/, ethercat_line's "drive_ecat", as a
+    # caption's device (the log keeps captions from any device).
+    names = ["fastcat", "trscat", "cpx", "drive", "drive_co", "drive_ec"]
+    live.runtime.journal([StateChanged(t_us, d, "A", "B", machine="test") for d in names]
+                         + [Caption(t_us, "drive_ecat", text="longest id"),
+                            Caption(t_us, "scenario", text="a caption")])
+    live.advance(0.1)
+    log = page.locator("#fr-log")
+    wait_until(lambda: "a caption" in log.inner_text(), what="the caption in the event log")
+    shown = {str(s) for s in page.evaluate(
+        "() => [...document.querySelectorAll('#fr-log td.fr-srv')].map(c => c.innerText)")}
+    assert {"scenario", "drive_ecat", "(65535)", *names} <= shown
+    assert page.evaluate(CLIPPED_JS, "#fr-log td.fr-srv") == []

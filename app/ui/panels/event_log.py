@@ -82,8 +82,10 @@ def render_rows(rows: Iterable[LogRow]) -> str:
     if not body:
         body = '<tr><td colspan="3" class="fr-muted">no messages yet</td></tr>'
     # Timestamp column: the date and the time of day on two lines, as narrow as they get.
+    # Server column: 7em holds the longest id of static/rigs/ ("drive_ecat", 64 px at the
+    # log's 10.7 px font, + 8 px padding); 4.8em clipped "scenario" to "scenari".
     return ('<div class="fr-log-wrap"><table class="fr-log" id="fr-log"><colgroup>'
-            '<col style="width:4.8em"><col style="width:10.4em"><col></colgroup><thead><tr>'
+            '<col style="width:7em"><col style="width:10.4em"><col></colgroup><thead><tr>'
             '<th>Server</th><th>Timestamp</th>'
             f'<th>Message</th></tr></thead><tbody>{body}</tbody></table></div>')
 
