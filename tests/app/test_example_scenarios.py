@@ -106,6 +106,24 @@ def test_config_mismatch_at_power_up(capsys, tmp_path) -> None:
     assert relearnt[-1]["to"] == "OP"
 
 
+def test_config_mismatch_explains_the_drive_alarm_it_causes(capsys, tmp_path) -> None:
+    """Powering the FastCAT off cuts the EtherCAT line behind it: drive_ec loses the master's
+    process data and raises alarm 34 SYNC_TIMEOUT (Fault, Error LED lit) and keeps it at the
+    mismatch checkpoint. No caption said so, and a customer asks; one must, while the caption
+    on screen at the checkpoint still tells the scenario's point."""
+    records = run("config_mismatch", capsys, tmp_path)
+    at = next(r["t"] for r in records if r["event"] == "checkpoint" and r["name"] == "mismatch")
+    alarms = {(r["device"], r["code"]): r for r in records
+              if r["event"] == "alarm" and r["device"] != "fastcat" and r["t"] <= at}
+    standing = [key for key, r in alarms.items() if r["active"]]
+    assert standing == [("drive_ec", "34")]
+    raised_t = alarms[("drive_ec", "34")]["t"]
+    captions = [r for r in records if r["event"] == "caption" and raised_t <= r["t"] <= at]
+    assert any("drive_ec" in c["text"] and "34 SYNC_TIMEOUT" in c["text"] for c in captions)
+    shown = captions[-1]["text"]  # the caption above the line at the checkpoint
+    assert "stored configuration" in shown and "drive_ec" in shown
+
+
 def test_ax2_homing_sets_home_offset_and_done_bit(capsys, tmp_path) -> None:
     records = run("ax2_homing", capsys, tmp_path)
     status, position = [r for r in records if r["event"] == "read"]
