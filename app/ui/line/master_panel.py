@@ -124,7 +124,7 @@ def live_table(master: Mapping[str, Any]) -> str:
     stats = master.get("stats") or {}
     rows = [("DC", dc_text(master.get("dc") or {})),
             ("Frames", esc(f"{stats.get('frames', '-')} sent, {stats.get('lost_frames', 0)} "
-                           f"lost, cycle {stats.get('cycle_us', '-')} us"))]
+                           f"lost, cycle {stats.get('cycle_us', '-')} µs"))]
     return kv_table(rows, "fr-line-master")
 
 
