@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
+from served_dashboard import drawn, served_default_rig
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.screenshots import ServedRig
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.canopen_panel import CanOpenMaster
@@ -22,23 +22,8 @@ DRIVE, NODE = "drive_co", "drive_co-can"  # the default rig's drive on CANopen
 
 @pytest.fixture
 def served() -> Iterator[ServedRig]:
-    live = ServedRig.start(build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
-    try:
-        live.advance(1.0)  # the node's boot-up
+    with served_default_rig(1.0) as live:  # the node's boot-up
         yield live
-    finally:
-        live.stop()
-
-
-def settle(live: ServedRig) -> None:
-    """One more frame, drawn by the dashboard thread."""
-    live.advance(0.05)
-    seq = live.runtime.frame.seq
-    for _ in range(200):
-        if live.dashboard.rendered_seq >= seq:
-            return
-        live.runtime.advance(0).result(10)
-    raise AssertionError("the dashboard did not draw the frame")
 
 
 def master_of(live: ServedRig) -> CanOpenMaster:
@@ -50,7 +35,7 @@ def master_of(live: ServedRig) -> CanOpenMaster:
 
 def test_heartbeat_box_shows_0x1017(served: ServedRig) -> None:
     master = master_of(served)
-    settle(served)
+    drawn(served)
     node = served.runtime.rig.devices[NODE]
     assert node.snapshot()["heartbeat_ms"] == 0
     assert int(master.heartbeat_box.value) == 0
@@ -58,13 +43,13 @@ def test_heartbeat_box_shows_0x1017(served: ServedRig) -> None:
 
 def test_heartbeat_box_follows_an_sdo_download(served: ServedRig) -> None:
     master = master_of(served)
-    settle(served)
+    drawn(served)
     node = served.runtime.rig.devices[NODE]
     frame = cm.sdo_download(int(node.node_id), *cm.HEARTBEAT, 250, 2)
     served.runtime.submit(lambda: node.receive(frame.can_id, frame.data)).result(10)
-    settle(served)
+    drawn(served)
     assert node.snapshot()["heartbeat_ms"] == 250
     assert int(master.heartbeat_box.value) == 250
     master.heartbeat_box.value = 700  # typed, not sent yet: the next frames leave it
-    settle(served)
+    drawn(served)
     assert int(master.heartbeat_box.value) == 700

@@ -5,55 +5,21 @@ recording, and prints the URLs and the instructor token."""
 from __future__ import annotations
 
 import re
-import socket
-import subprocess
-import sys
-import time
 import urllib.request
 from pathlib import Path
 
+from served_process import free_ports, start_serving
+
 from app.cli import main
-
-PY = sys.executable
-
-
-def _free_ports(n: int, start: int) -> int:
-    """A base port with ``n`` free ports from it (best effort: bound and released)."""
-    for base in range(start, 60000, 97):
-        socks: list[socket.socket] = []
-        try:
-            for i in range(n):
-                sock = socket.socket()
-                socks.append(sock)
-                sock.bind(("127.0.0.1", base + i))
-            return base
-        except OSError:
-            continue
-        finally:
-            for sock in socks:
-                sock.close()
-    raise RuntimeError("no free ports")
 
 
 def test_two_rigs_two_urls(tmp_path: Path) -> None:
-    port, modbus = _free_ports(2, 23000), _free_ports(2, 33000)
-    proc = subprocess.Popen(
-        [PY, "-m", "app", "--rigs", "2", "--port", str(port), "--modbus-port", str(modbus),
-         "--state-dir", str(tmp_path / "state"), "--instructor-token", "tok-1",
-         "--run-for", "60"],
-        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    lines: list[str] = []
+    port, modbus = free_ports(2, 23000), free_ports(2, 33000)
+    proc, text = start_serving(
+        "--rigs", "2", "--port", str(port), "--modbus-port", str(modbus),
+        "--state-dir", str(tmp_path / "state"), "--instructor-token", "tok-1",
+        "--run-for", "60")
     try:
-        assert proc.stdout is not None
-        deadline = time.monotonic() + 90
-        while time.monotonic() < deadline:
-            line = proc.stdout.readline()
-            if not line:
-                break
-            lines.append(line)
-            if "serving" in line:
-                break
-        text = "".join(lines)
         urls = re.findall(r"rig (\d) '[^']+' at (http://\S+)", text)
         assert [u for _, u in urls] == [f"http://127.0.0.1:{port}/",
                                         f"http://127.0.0.1:{port + 1}/"], text

@@ -15,29 +15,15 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from served_dashboard import drawn, served_default_rig
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.screenshots import ServedRig
 
 
 @pytest.fixture
 def served() -> Iterator[ServedRig]:
-    live = ServedRig.start(build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
-    try:
-        live.advance(8.0)  # the first internal-bus scan builds 0x5200 (§5)
+    with served_default_rig(8.0) as live:  # the first internal-bus scan builds 0x5200 (§5)
         yield live
-    finally:
-        live.stop()
-
-
-def drawn(live: ServedRig) -> None:
-    live.advance(0.05)
-    seq = live.runtime.frame.seq
-    for _ in range(200):
-        if live.dashboard.rendered_seq >= seq:
-            return
-        live.runtime.advance(0).result(10)
-    raise AssertionError("the dashboard did not draw the frame")
 
 
 def box_shows(box: Any, value: bool) -> None:
