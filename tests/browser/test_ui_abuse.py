@@ -177,12 +177,23 @@ def test_two_browsers_issuing_conflicting_commands(live: LiveDashboard, browser)
             open_dashboard(page, live)
         live.advance(BOOT_S)
         a, b = pages
+        sent: list[Sent] = []
+        gate_for(live.runtime).observe(sent.append)
         # A presses CNF while B releases it, both many times; then the same on Reset fault.
         for _ in range(5):
             rapid(a, "Hold CNF", 7)
             rapid(b, "Hold CNF", 7)
             rapid(a, "Reset fault", 3)
             rapid(b, "Reset fault", 5)
+        # Every click of both bursts at the server before the model is read: one that came
+        # after the read (viser's client sends on its own 50 ms clock) changed the model while
+        # the paused rig published no frame for the boxes to follow (a CI run timed out
+        # waiting for the Reset fault box).
+        for page in pages:  # the marker button is on the drive's tab
+            page.get_by_role("tab", name="Servo drive").click()
+            page.get_by_role("tab", name="Drive", exact=True).click()
+            delivered(page, sent)
+            page.get_by_role("tab", name="FastCAT").click()
         commands_applied(live, a)
         snap = live.snapshot()
         assert snap["esm"] == "OP" and snap["alarm"] is None
