@@ -110,13 +110,12 @@ def test_aitraceprint_prints_the_state_change_pair_before_the_emergency() -> Non
     EcatManagerSlaveStateCallback / SlaveStateChange pair and only then its emergency; the
     TwinCAT log (§7.7, newest first) has the emergency before the abnormal state change. The
     same step's lines in each style's order, live and when the log is re-rendered."""
-    seed = Path("/work/shared/seeds/000_2ef4aa04068c5f92.txt")
-    if not seed.exists():
-        pytest.skip("seed 000 not available on this machine")
     kinds = ("EcatManagerSlaveStateCallback", "SlaveStateChange", "ECAT_EVENT Emergency")
-    seed_order = [k for line in seed.read_text(encoding="utf-8").splitlines()
-                  for k in kinds if k in line]
-    assert seed_order == list(kinds)
+    seed = Path("/work/shared/seeds/000_2ef4aa04068c5f92.txt")
+    if seed.exists():  # the order below is the seed's; the lines are checked without it too
+        seed_order = [k for line in seed.read_text(encoding="utf-8").splitlines()
+                      for k in kinds if k in line]
+        assert seed_order == list(kinds)
     bench = op_bench()
     assert bench.master is not None
     bench.master.apply("set_log_style", {"style": "aitraceprint"})
