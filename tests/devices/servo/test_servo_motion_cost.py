@@ -246,8 +246,8 @@ def test_every_mode_steps_as_the_plain_code(seed: int) -> None:
     assert same_runs(seed, 100, random_ops) > 1_000
 
 
-def test_the_lag_follows_a_write_of_i1_at_the_next_tick() -> None:
-    """The cached lag is the one of the i1 in force: written mid-jog, the next tick uses it."""
+def jogging_drive() -> tuple[ServoDrive, Rig, int]:
+    """A drive booted for 100 ms, then enabled and jogging forwards; and the time it is at."""
     drive = ServoDrive("drive", random.Random(7), DriveConfig(), MemoryFlash())
     rig = Rig("rig", {"drive": drive})
     t_us = 0
@@ -256,6 +256,12 @@ def test_the_lag_follows_a_write_of_i1_at_the_next_tick() -> None:
         drive.step(t_us)
     rig.apply("drive", "enable", {"on": True})
     rig.apply("drive", "jog", {"direction": 1})
+    return drive, rig, t_us
+
+
+def test_the_lag_follows_a_write_of_i1_at_the_next_tick() -> None:
+    """The cached lag is the one of the i1 in force: written mid-jog, the next tick uses it."""
+    drive, rig, t_us = jogging_drive()
     for i1 in (50, 10, 99, 50):
         rig.apply("drive", "write_parameter", {"parameter": "i1", "value": i1})
         for _ in range(30):
@@ -280,14 +286,7 @@ def test_a_cruising_tick_calls_none_of_the_parts() -> None:
     """The tick's inline copies (session 10: Velocity.step, Trajectory.advance in a cruise,
     Plant.step following a demand, CurrentMeter.update at 1 ms) are what a jog runs: the
     differential tests above then compare them, not the methods, with the plain code."""
-    drive = ServoDrive("drive", random.Random(7), DriveConfig(), MemoryFlash())
-    rig = Rig("rig", {"drive": drive})
-    t_us = 0
-    for _ in range(100):
-        t_us += 1000
-        drive.step(t_us)
-    rig.apply("drive", "enable", {"on": True})
-    rig.apply("drive", "jog", {"direction": 1})
+    drive, _rig, t_us = jogging_drive()
     for _ in range(1500):  # up to speed, cruising
         t_us += 1000
         drive.step(t_us)
