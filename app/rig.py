@@ -52,10 +52,11 @@ class Rig:
             raise CommandError(f"no device '{device_id}' in rig '{self.name}' (devices: {known})")
         return found
 
-    def check(self, target: str, action: str, args: dict[str, Any]) -> None:
-        """Validate a command without running it (scenario files are checked before a run)."""
+    def check(self, target: str, action: str, args: dict[str, Any]) -> dict[str, Any]:
+        """Validate a command without running it (scenario files are checked before a run);
+        the arguments as the device reads them."""
         device_id, module = parse_target(target)
-        self.device(device_id).check_command(action, args, module)
+        return self.device(device_id).check_command(action, args, module)
 
     def apply(self, target: str, action: str, args: dict[str, Any]) -> Any:
         device_id, module = parse_target(target)

@@ -31,7 +31,7 @@ from typing import Any
 from app.rig import Rig
 from app.rig_config import RigConfigError
 from app.targets import parse_target
-from devices.device import CommandError
+from devices.device import UNKNOWN_MODULE, CommandError
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
 from devices.master.dc import DcState
 from devices.master.master import DC_MACHINE
@@ -292,12 +292,13 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
     """Refuse a scenario whose commands the rig would not take, before anything runs.
 
     Arguments are checked against the devices' declared actions (types, ranges, choices and
-    the models' own tables, Param.parse); a module target against the rig as built plus the
-    positions earlier steps may fill (DeviceModel.check_module / fills, in time order). What
-    depends on the state the run reaches (an object's access rights in the current state, a
-    drive alarm code of the selected fieldbus, a plug on a taken position) stays with the step.
+    the models' own tables, Param.parse); a module target against the modules its device holds
+    at that step: the rig as built, changed by the earlier steps in time order
+    (DeviceModel.module_layout / check_module). A position an ``[[on]]`` command may change
+    is left to the run, and so is what depends on the state the run reaches (an object's
+    access rights in the current state, a drive's power).
     """
-    filled: dict[str, set[int]] = {}  # device id -> module positions earlier steps may fill
+    layouts = _module_layouts(scenario, rig)
     for step in scenario.steps:
         if step.kind not in ("command", "focus"):
             continue
@@ -305,12 +306,17 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
             if step.kind == "focus":
                 rig.device(step.target.split(":", 1)[0])
                 continue
-            rig.check(step.target, step.action, step.args)
+            args = rig.check(step.target, step.action, step.args)
             device_id, module = parse_target(step.target)
             device = rig.device(device_id)
-            seen = filled.setdefault(device_id, set())
-            device.check_module(step.action, module, seen)
-            seen.update(device.fills(step.action, step.args, module))
+            layout = layouts.setdefault(device_id, device.module_layout())
+            if step.expect_error:
+                # refused as the author expects, or not: the run tells; what it may change
+                # on the rail is unknown from here on
+                for position in device.changes_modules(step.action, args, module):
+                    layout[position] = UNKNOWN_MODULE
+            else:
+                device.check_module(step.action, args, module, layout)
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
                                 f"{step.t_us / US:g} s): {exc}") from None
@@ -324,6 +330,23 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: on[{reaction.number - 1}]: {exc}") \
                 from None
+
+
+def _module_layouts(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
+    """Each device's modules as built, with the positions an ``[[on]]`` command may change
+    marked unknown: it runs whenever its event comes, before or after any step."""
+    layouts: dict[str, dict[int, Any]] = {}
+    for reaction in scenario.reactions:
+        try:
+            args = rig.check(reaction.target, reaction.action, reaction.args)
+            device_id, module = parse_target(reaction.target)
+        except CommandError:
+            continue  # check_against names it
+        device = rig.device(device_id)
+        layout = layouts.setdefault(device_id, device.module_layout())
+        for position in device.changes_modules(reaction.action, args, module):
+            layout[position] = UNKNOWN_MODULE
+    return layouts
 
 
 def install_reactions(scenario: Scenario, rig: Rig, failures: list[str]) -> None:

@@ -13,7 +13,7 @@ knowing device logic. ``apply("press_cnf", {...})`` calls the model's ``cmd_pres
 from __future__ import annotations
 
 import random
-from collections.abc import Callable, Collection, Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -22,6 +22,11 @@ from devices.events import Event, EventQueue
 
 class CommandError(ValueError):
     """A command the device cannot take: unknown action, bad argument, value out of range."""
+
+
+# A module position of a scenario check's layout whose module no check before the run can
+# know (an [[on]] command may plug or unplug there at any instant): anything may be there.
+UNKNOWN_MODULE: Any = object()
 
 
 @dataclass(frozen=True)
@@ -155,13 +160,24 @@ class DeviceModel:
         return spec.check_args(args)
 
     # ---- what a scenario check may know of module targets (app.scenario.check_against) ----
-    def check_module(self, action: str, module: int | None, filled: Collection[int]) -> None:
-        """Refuse ``action`` on ``device/module`` when no module can be there: none in the
-        model now and none put there by an earlier command (``filled``, from
-        :meth:`fills`). Default: every module number is left to the command itself."""
+    def module_layout(self) -> dict[int, Any]:
+        """The modules as built, by the N of ``device/N``: each one's kind, as this model's
+        :meth:`check_module` reads it. Empty for a device without module targets."""
+        return {}
 
-    def fills(self, action: str, args: Mapping[str, Any], module: int | None) -> tuple[int, ...]:
-        """The module positions this command may put a module on (a plug, a swap)."""
+    def check_module(self, action: str, args: Mapping[str, Any], module: int | None,
+                     layout: dict[int, Any]) -> None:
+        """Refuse ``action`` (``args`` as :meth:`check_command` returned them) on
+        ``device/module`` when the modules ``layout`` holds at that step (the rig as built,
+        changed by earlier commands) cannot take it; then change ``layout`` as the command
+        would (a plug, an unplug, a swap). A position set to :data:`UNKNOWN_MODULE` may hold
+        anything: nothing is refused there. Default: no module is checked."""
+
+    def changes_modules(self, action: str, args: Mapping[str, Any],
+                        module: int | None) -> tuple[int, ...]:
+        """The positions this command may put a module on, take one off or change the kind
+        of (a plug, an unplug, a swap): an ``[[on]]`` command does so at an instant no check
+        before the run knows."""
         return ()
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:

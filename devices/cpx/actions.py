@@ -15,6 +15,7 @@ from devices.cpx.catalog import IO_MODULES, module_type
 from devices.cpx.faults import FAULTS, Injected, Target, check_target, fault_spec
 from devices.cpx.history import FIRST_SUB
 from devices.cpx.history import INDEX as HISTORY
+from devices.cpx.module_checks import module_listing, modules_layout
 from devices.cpx.modules import CpxModule
 from devices.cpx.switches import ROTARY_MAX
 from devices.device import Action, CommandError, Param
@@ -119,9 +120,8 @@ class OperatorMixin:
     # ---- field --------------------------------------------------------------------------
     def unit(self: CpxEEc, module: int | None) -> CpxModule:
         if module is None or not 1 <= module <= len(self.modules):
-            listing = ", ".join(f"{m.number}={m.mtype.short}" for m in self.modules)
-            raise CommandError(f"{self.device_id}: no module {module} (modules: "
-                               f"{listing or 'none'})")
+            raise CommandError(module_listing(self.device_id, module,
+                                              modules_layout(self.modules)))
         return self.modules[module - 1]
 
     def _channel(self: CpxEEc, target: CpxModule, channel: int) -> int:

@@ -22,6 +22,7 @@ from devices.cpx.faults import Injected
 from devices.cpx.history import DiagHistory
 from devices.cpx.indicators import wanted_leds
 from devices.cpx.leds import LedBank
+from devices.cpx.module_checks import ModuleChecks
 from devices.cpx.modules import CpxModule, ModuleFault, Monitors
 from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
 from devices.cpx.stillness import StillStepping
@@ -44,8 +45,8 @@ PD_STATES = frozenset({AlState.SAFEOP, AlState.OP})  # the sync error counter co
 QUIET_HORIZON_STEPS = 1 << 40  # a quiet span with no clock comparison left to flip: "forever"
 
 
-class CpxEEc(StillStepping, TransitionsMixin, OperatorMixin, CoeMailbox, AlStatusView,
-             DeviceModel):
+class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMailbox,
+             AlStatusView, DeviceModel):
     KIND = "cpx_e_ec"
     QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS

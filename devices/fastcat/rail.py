@@ -10,11 +10,11 @@ at rail position N. Mapping of causes to alarm codes: docs/fastcat-coupler.md.
 from __future__ import annotations
 
 import random
-from collections.abc import Collection, Mapping
+from collections.abc import Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from devices.device import Action, CommandError, Param
+from devices.device import UNKNOWN_MODULE, Action, CommandError, Param
 from devices.fastcat.alarms import parse_fault
 from devices.fastcat.catalog import CATALOG, module_type
 from devices.fastcat.modules import IoModule
@@ -102,21 +102,36 @@ class RailMixin:
             return self.rail_module(module).apply(action, args)
         return super().apply(action, args, module)  # type: ignore[misc]
 
-    def check_module(self, action: str, module: int | None, filled: Collection[int]) -> None:
+    def module_layout(self) -> dict[int, Any]:
+        return {n: m.mtype for n, m in enumerate(self.rail, start=1) if m is not None}
+
+    def check_module(self, action: str, args: Mapping[str, Any], module: int | None,
+                     layout: dict[int, Any]) -> None:
         if module is None:
             return
         self._on_rail(module)
-        if action not in MODULE_ACTIONS and action not in _NEED_MODULE:
-            return
-        if module in filled or (module <= len(self.rail) and self.rail[module - 1] is not None):
-            return  # a module is there, or an earlier command may have put one there
-        raise CommandError(f"{self.device_id}: no module at rail position {module} (rail: "
-                           f"{self._rail_text()}) and no earlier step plugs one there")
+        if action == "plug":
+            layout[module] = module_type(args["type"])
+        elif action == "swap":
+            other = args["other"]
+            here, there = layout.pop(module, None), layout.pop(other, None)
+            if here is not None:
+                layout[other] = here
+            if there is not None:
+                layout[module] = there
+        elif action in MODULE_ACTIONS or action in _NEED_MODULE:
+            if module not in layout:
+                raise CommandError(f"{self.device_id}: no module at rail position {module} "
+                                   f"(rail: {_layout_text(layout)}) and no earlier step plugs "
+                                   f"one there")
+            if action == "unplug":
+                del layout[module]
 
-    def fills(self, action: str, args: Mapping[str, Any], module: int | None) -> tuple[int, ...]:
+    def changes_modules(self, action: str, args: Mapping[str, Any],
+                        module: int | None) -> tuple[int, ...]:
         if module is None:
             return ()
-        if action == "plug":
+        if action in ("plug", "unplug"):
             return (module,)
         if action == "swap":
             return (module, int(args.get("other", module)))
@@ -220,3 +235,13 @@ class RailMixin:
             raise CommandError(f"{self.device_id}: the object dictionary is generated at the "
                                f"end of the first internal-bus scan (§5); wait for it")
         return self.od
+
+
+def _layout_text(layout: Mapping[int, Any]) -> str:
+    """``1=DB16, 2=-, 3=?``: a scenario check's rail (``?`` = an [[on]] command may change it)."""
+    last = max(layout, default=0)
+    return ", ".join(f"{n}={_kind_name(layout.get(n))}" for n in range(1, last + 1)) or "empty"
+
+
+def _kind_name(kind: Any) -> str:
+    return "-" if kind is None else "?" if kind is UNKNOWN_MODULE else str(kind.name)

@@ -17,13 +17,13 @@ from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.trscat.alarms import FaultKey, TrsBus
 from devices.trscat.catalog import (
     EXPANSIONS,
-    MAX_EXPANSIONS,
     IoShape,
     expansion_kind,
     limit_violation,
 )
 from devices.trscat.diagnostics import FAULTS, Target, parse_fault
 from devices.trscat.io import SlotIo
+from devices.trscat.module_checks import device_fault, no_expansion, plug_position
 from devices.trscat.objects import refuse_in_state
 from devices.trscat.sync import MODE_BY_NAME, SyncMode, SyncUnit
 
@@ -124,13 +124,9 @@ class CommandsMixin:
         slot = module or 0
         io = self.rail[slot] if slot < len(self.rail) else None
         if io is None:
-            raise CommandError(f"{self.device_id}: no expansion at position {slot} "
-                               f"(rail: {self._rail_text()})")
+            layout = {s: io.kind for s, io in enumerate(self.rail) if io is not None}
+            raise CommandError(no_expansion(self.device_id, slot, layout, len(self.rail) - 1))
         return io
-
-    def _rail_text(self) -> str:
-        return ", ".join(f"{s}={io.kind.short if io else '-'}"
-                         for s, io in enumerate(self.rail))
 
     def _channel(self, io: SlotIo, channel: int, shapes: tuple[IoShape, ...],
                  outputs: bool = False) -> int:
@@ -198,8 +194,7 @@ class CommandsMixin:
             self._log(f"expansion {module} unplugged with power on (not allowed, §7)")
 
     def cmd_plug(self, module: int, type: str) -> None:
-        if module > MAX_EXPANSIONS:
-            raise CommandError(f"a TRS-CAT has expansion positions 1..{MAX_EXPANSIONS} (§5)")
+        plug_position(module)
         if module < len(self.rail) and self.rail[module] is not None:
             raise CommandError(f"{self.device_id}: position {module} holds a "
                                f"{self.rail[module].kind.name}: unplug it first")
@@ -217,10 +212,7 @@ class CommandsMixin:
     # ---- faults -------------------------------------------------------------------------------
     def _fault_key(self, text: str, module: int | None) -> FaultKey:
         fault = parse_fault(text)
-        if fault.target is Target.DEVICE:
-            if module is not None:
-                raise CommandError(f"{fault.name} is a fault of the TRS-CAT itself: target "
-                                   f"'{self.device_id}'")
+        if device_fault(self.device_id, text, module):
             return fault.name, None
         io = self.slot_io(module)
         if fault.target is Target.ANALOG and io.kind is not EXPANSIONS["TRS-AN-E"]:

@@ -36,6 +36,7 @@ from devices.trscat.diagnostics import AppFault, DiagHistory
 from devices.trscat.esm import Esm
 from devices.trscat.indicators import LedInputs
 from devices.trscat.io import SlotIo, field_in_range
+from devices.trscat.module_checks import ModuleChecks
 from devices.trscat.objects import build_od, refuse_in_state
 from devices.trscat.pdo import outputs_index
 from devices.trscat.spans import SpansMixin
@@ -47,8 +48,8 @@ DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
 
 
-class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, CommandsMixin, CoeMailbox,
-             AlStatusView, DeviceModel):
+class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChecks, CommandsMixin,
+             CoeMailbox, AlStatusView, DeviceModel):
     KIND = "trscat"
     QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS

@@ -1,0 +1,85 @@
+"""Module targets of every device are checked before the run, against the modules each
+position holds at that step (the rig as built, changed by earlier plug / unplug / swap /
+replace steps): a scenario that cannot work exits 2 with one line, before any event."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from app.cli import main
+
+
+def run_steps(tmp_path: Path, steps: str, *flags: str) -> int:
+    path = tmp_path / "s.toml"
+    path.write_text(f"[scenario]\nname = \"t\"\nduration_s = 2\n{steps}", encoding="utf-8")
+    return main(["scenario", "run", str(path), "--quiet", "--out", str(tmp_path / "o"), *flags])
+
+
+def refused(tmp_path: Path, capsys: pytest.CaptureFixture[str], steps: str,
+            *flags: str) -> str:
+    """The one stderr line of a scenario refused before the run (exit 2, no events.jsonl)."""
+    rc = run_steps(tmp_path, steps, *flags)
+    err = capsys.readouterr().err.splitlines()
+    assert rc == 2, err
+    assert len(err) == 1 and err[0].startswith("fieldrig: error: "), err
+    assert not (tmp_path / "o" / "events.jsonl").exists()
+    return err[0]
+
+
+def step(target: str, action: str, at: float = 0.5, **args: object) -> str:
+    lines = [f"[[step]]\nat = {at}\ntarget = \"{target}\"\naction = \"{action}\""]
+    lines += [f"{k} = {v!r}".replace("'", '"').replace("True", "true").replace("False", "false")
+              for k, v in args.items()]
+    return "\n".join(lines) + "\n"
+
+
+def test_a_cpx_module_that_is_not_there_is_refused_before_the_run(tmp_path, capsys) -> None:
+    """cpx/7 on a four-module CPX-E-EC exited 1 at the step, events.jsonl half written."""
+    line = refused(tmp_path, capsys, step("cpx/7", "inject_fault", fault="short_circuit"))
+    assert line.endswith("s.toml: step[0] (at 0.5 s): cpx: no module 7 (modules: 1=16DI, "
+                         "2=8DO, 3=4AI-U-I, 4=4AO-U-I)"), line
+
+
+@pytest.mark.parametrize(("target", "action", "args"), [
+    ("cpx/5", "set_input", {"channel": 0, "on": True}),
+    ("cpx/9", "replace_module", {"type": "16DI"}),
+])
+def test_every_cpx_module_action_needs_a_module(tmp_path, capsys, target, action, args) -> None:
+    line = refused(tmp_path, capsys, step(target, action, **args))
+    assert f"cpx: no module {target[4:]} (modules: 1=16DI" in line, line
+
+
+@pytest.mark.parametrize(("target", "action", "args", "message"), [
+    ("trscat/3", "set_input", {"channel": 1, "on": True},
+     "trscat: no expansion at position 3 (rail: 0=IO-B, 1=IO-E, 2=AN-E)"),
+    ("trscat/5", "inject_fault", {"fault": "FIELD_SUPPLY"},
+     "trscat: no expansion at position 5 (rail: 0=IO-B, 1=IO-E, 2=AN-E)"),
+    ("trscat/8", "plug", {"type": "TRS-IO-E"}, "a TRS-CAT has expansion positions 1..7 (§5)"),
+])
+def test_a_trscat_expansion_that_is_not_there_is_refused(tmp_path, capsys, target, action,
+                                                         args, message) -> None:
+    line = refused(tmp_path, capsys, step(target, action, **args))
+    assert line.endswith(f"step[0] (at 0.5 s): {message}"), line
+
+
+def test_an_expansion_plugged_by_an_earlier_step_may_be_commanded(tmp_path, capsys) -> None:
+    steps = (step("trscat", "power", at=0.0, on=False)
+             + step("trscat/3", "plug", at=0.1, type="TRS-IO-E")
+             + step("trscat/3", "set_input", at=0.2, channel=2, on=True))
+    rc = run_steps(tmp_path, steps)
+    assert rc == 0, capsys.readouterr().err
+
+
+def test_a_position_an_on_command_may_fill_is_left_to_the_run() -> None:
+    """An [[on]] command runs whenever its event comes: what it plugs may be there for any
+    step, so the check does not refuse a step on that position."""
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import check_against, parse_scenario
+
+    scenario = parse_scenario(
+        step("trscat/4", "set_input", channel=1, on=True)
+        + '[[on]]\nevent = "resync"\ntarget = "trscat/4"\naction = "plug"\n'
+          'type = "TRS-IO-E"\n', "ok.toml")
+    check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
