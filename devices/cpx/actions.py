@@ -15,7 +15,7 @@ from devices.cpx.catalog import IO_MODULES, module_type
 from devices.cpx.faults import FAULTS, Injected, Target, check_target, fault_spec
 from devices.cpx.history import FIRST_SUB
 from devices.cpx.history import INDEX as HISTORY
-from devices.cpx.module_checks import module_listing, modules_layout
+from devices.cpx.module_checks import check_kind, module_listing, modules_layout
 from devices.cpx.modules import CpxModule
 from devices.cpx.switches import ROTARY_MAX
 from devices.device import Action, CommandError, Param
@@ -124,60 +124,41 @@ class OperatorMixin:
                                               modules_layout(self.modules)))
         return self.modules[module - 1]
 
-    def _channel(self: CpxEEc, target: CpxModule, channel: int) -> int:
-        if not 0 <= channel < target.mtype.channels:
-            raise CommandError(f"{target.mtype.name} has channels 0 ... "
-                               f"{target.mtype.channels - 1}, not {channel}")
-        return channel
-
     def cmd_set_input(self: CpxEEc, module: int, channel: int, on: bool) -> None:
         target = self.unit(module)
-        if not target.is_digital_input:
-            raise CommandError(f"module {module} ({target.mtype.name}) has no digital inputs")
-        target.field_inputs[self._channel(target, channel)] = on
+        check_kind(target.mtype, module, "set_input", {"channel": channel})
+        target.field_inputs[channel] = on
 
     def cmd_set_analog(self: CpxEEc, module: int, channel: int, value: float) -> None:
         target = self.unit(module)
-        if not target.analog_in:
-            raise CommandError(f"module {module} ({target.mtype.name}) has no analog inputs")
-        target.analog_in[self._channel(target, channel)] = value
+        check_kind(target.mtype, module, "set_analog", {"channel": channel})
+        target.analog_in[channel] = value
 
     def cmd_set_count_rate(self: CpxEEc, module: int, hz: float) -> None:
         target = self.unit(module)
-        if not target.is_counter:
-            raise CommandError(f"module {module} ({target.mtype.name}) is not a counter")
+        check_kind(target.mtype, module, "set_count_rate", {})
         target.count_rate_hz = hz
 
     def cmd_short_circuit(self: CpxEEc, module: int, on: bool, channel: int | None) -> None:
         target = self.unit(module)
+        check_kind(target.mtype, module, "short_circuit", {"channel": channel})
         if channel is None:
-            if not target.mtype.inputs or target.is_counter:
-                raise CommandError(f"{target.mtype.name} has no sensor supply to short: "
-                                   f"give the output channel")
             target.sensor_supply_short = on
             return
-        if not target.mtype.outputs or target.is_counter:
-            raise CommandError(f"{target.mtype.name} has no outputs to short; without "
-                               f"channel the sensor supply is shorted")
-        (target.shorted.add if on else target.shorted.discard)(self._channel(target, channel))
+        (target.shorted.add if on else target.shorted.discard)(channel)
 
     def cmd_wire_break(self: CpxEEc, module: int, channel: int, on: bool) -> None:
         target = self.unit(module)
-        if not (target.mtype.analog_ranges or target.is_counter):
-            raise CommandError(f"{target.mtype.name}: wire break is diagnosed on analog "
-                               f"channels and the counter input")
-        ch = self._channel(target, channel)
-        (target.wire_broken.add if on else target.wire_broken.discard)(ch)
+        check_kind(target.mtype, module, "wire_break", {"channel": channel})
+        (target.wire_broken.add if on else target.wire_broken.discard)(channel)
 
     def cmd_force(self: CpxEEc, module: int, channel: int, value: int | None) -> None:
         target = self.unit(module)
-        if target.mtype.analog_ranges or target.is_counter:
-            raise CommandError(f"{target.mtype.name}: only digital channels can be forced")
-        ch = self._channel(target, channel)
+        check_kind(target.mtype, module, "force", {"channel": channel})
         if value is None:
-            target.forced.pop(ch, None)
+            target.forced.pop(channel, None)
         else:
-            target.forced[ch] = value
+            target.forced[channel] = value
 
     def cmd_replace_module(self: CpxEEc, module: int, type: str) -> None:
         self.unit(module)

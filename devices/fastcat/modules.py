@@ -103,6 +103,30 @@ _ACTION_TABLE: tuple[tuple[Action, Fits, str], ...] = (
             (_ACTIVE,), module="required"), _any, ""),
 )
 
+
+
+def _digital_channels(t: ModuleType) -> int:
+    return t.di + t.do + t.dio  # DigitalIo numbers inputs, outputs and both in one row
+
+
+def _analog_channels(t: ModuleType) -> int:
+    return t.ai
+
+
+# The actions that name a channel: how many the type has, what they are (for the message).
+_CHANNELS: dict[str, tuple[Callable[[ModuleType], int], str]] = {
+    "set_input": (_digital_channels, "digital"),
+    "output_short": (_digital_channels, "digital"),
+    "set_analog": (_analog_channels, "analog input"),
+    "wire_thermocouple": (_analog_channels, "thermocouple"),
+}
+
+
+def _check_channel(mtype: ModuleType, channel: int, count: int, what: str) -> None:
+    if not 1 <= channel <= count:
+        raise CommandError(f"{mtype.name} has {what} channels 1..{count}, not {channel}")
+
+
 # Rig-file options per module: name -> (which types take it, what the type needs).
 _OPTIONS: dict[str, tuple[Fits, str]] = {
     "calibrated": (_analog, "analog channels"),
@@ -274,11 +298,23 @@ class IoModule:
         if spec is None:
             raise CommandError(f"a {self.mtype.name} module has no action '{action}' (it has: "
                                f"{', '.join(self.available_actions())})")
-        fits, needs = self._FITS[action]
-        if not fits(self.mtype):
+        kwargs = spec.check_args(args)
+        self.check_kind(self.mtype, action, kwargs)
+        return getattr(self, f"cmd_{action}")(**kwargs)
+
+    @classmethod
+    def check_kind(cls, mtype: ModuleType, action: str, args: Mapping[str, Any]) -> None:
+        """Refuse what a module of this type cannot take whatever its state: an action it
+        has nothing for, a channel it does not have (also a scenario check before the run:
+        the type a rail position holds at that step)."""
+        fits, needs = cls._FITS[action]
+        if not fits(mtype):
             raise CommandError(f"action '{action}' needs a module with {needs}; "
-                               f"{self.mtype.name} is '{self.mtype.description}'")
-        return getattr(self, f"cmd_{action}")(**spec.check_args(args))
+                               f"{mtype.name} is '{mtype.description}'")
+        counted = _CHANNELS.get(action)
+        if counted is not None:
+            count, what = counted
+            _check_channel(mtype, args["channel"], count(mtype), what)
 
     def cmd_set_input(self, channel: int, value: bool) -> None:
         dig = self._dig()
@@ -326,9 +362,7 @@ class IoModule:
         self.failed = active
 
     def _channel(self, channel: int, count: int, what: str) -> int:
-        if not 1 <= channel <= count:
-            raise CommandError(f"{self.mtype.name} has {what} channels 1..{count}, "
-                               f"not {channel}")
+        _check_channel(self.mtype, channel, count, what)
         return channel - 1
 
     def _dig(self) -> DigitalIo:

@@ -126,6 +126,8 @@ class RailMixin:
                                    f"one there")
             if action == "unplug":
                 del layout[module]
+            elif action in MODULE_ACTIONS and layout[module] is not UNKNOWN_MODULE:
+                IoModule.check_kind(layout[module], action, args)
 
     def changes_modules(self, action: str, args: Mapping[str, Any],
                         module: int | None) -> tuple[int, ...]:

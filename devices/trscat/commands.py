@@ -17,13 +17,19 @@ from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.trscat.alarms import FaultKey, TrsBus
 from devices.trscat.catalog import (
     EXPANSIONS,
-    IoShape,
     expansion_kind,
     limit_violation,
 )
-from devices.trscat.diagnostics import FAULTS, Target, parse_fault
+from devices.trscat.diagnostics import FAULTS, parse_fault
 from devices.trscat.io import SlotIo
-from devices.trscat.module_checks import device_fault, no_expansion, plug_position
+from devices.trscat.module_checks import (
+    channel_index,
+    check_output,
+    check_slot_fault,
+    device_fault,
+    no_expansion,
+    plug_position,
+)
 from devices.trscat.objects import refuse_in_state
 from devices.trscat.sync import MODE_BY_NAME, SyncMode, SyncUnit
 
@@ -128,16 +134,6 @@ class CommandsMixin:
             raise CommandError(no_expansion(self.device_id, slot, layout, len(self.rail) - 1))
         return io
 
-    def _channel(self, io: SlotIo, channel: int, shapes: tuple[IoShape, ...],
-                 outputs: bool = False) -> int:
-        if io.kind.shape not in shapes:
-            raise CommandError(f"{io.kind.name} has no {' / '.join(s.value for s in shapes)} "
-                               f"channels")
-        count = io.kind.outputs if outputs else io.kind.inputs
-        if not 1 <= channel <= count:
-            raise CommandError(f"{io.kind.name}: channel {channel} outside 1..{count}")
-        return channel - 1
-
     # ---- field side ---------------------------------------------------------------------------
     def cmd_field_supply(self, volts: float) -> None:
         self.field_v = volts
@@ -153,37 +149,33 @@ class CommandsMixin:
 
     def cmd_set_input_voltage(self, channel: int, volts: float, module: int | None) -> None:
         io = self.slot_io(module)
-        ch = self._channel(io, channel, (IoShape.DIGITAL,))
+        ch = channel_index(io.kind, "set_input_voltage", channel)
         assert io.lines is not None
         io.lines.set_external(ch, volts)
 
     def cmd_set_load(self, channel: int, amps: float, module: int | None) -> None:
         io = self.slot_io(module)
-        ch = self._channel(io, channel, (IoShape.DIGITAL,))
+        ch = channel_index(io.kind, "set_load", channel)
         assert io.lines is not None
         io.lines.set_load(ch, amps)
 
     def cmd_set_analog_input(self, channel: int, volts: float, module: int) -> None:
         io = self.slot_io(module)
-        io.analog_in_v[self._channel(io, channel, (IoShape.ANALOG,))] = volts
+        io.analog_in_v[channel_index(io.kind, "set_analog_input", channel)] = volts
 
     def cmd_set_input_word(self, channel: int, value: int, module: int) -> None:
         io = self.slot_io(module)
-        io.words_in[self._channel(io, channel, (IoShape.WORDS,))] = value
+        io.words_in[channel_index(io.kind, "set_input_word", channel)] = value
 
     def cmd_set_output(self, channel: int, value: int, module: int | None) -> None:
         io = self.slot_io(module)
-        ch = self._channel(io, channel, tuple(IoShape), outputs=True)
+        ch = channel_index(io.kind, "set_output", channel)
         self.od_set_output(module or 0, ch, value)
 
     def od_set_output(self, slot: int, channel: int, value: int) -> None:
         io = self.rail[slot]
         assert io is not None
-        low, high = {IoShape.DIGITAL: (0, 1), IoShape.ANALOG: (-0x8000, 0x7FFF),
-                     IoShape.WORDS: (0, 0xFFFF)}[io.kind.shape]
-        if not low <= value <= high:
-            raise CommandError(f"{io.kind.name} output {channel + 1}: {value} outside "
-                               f"{low}..{high}")
+        check_output(io.kind, channel, value)
         io.plc[channel] = value
         self._plc_written = True  # the next SM2 event latches it (stepping.py)
 
@@ -214,10 +206,7 @@ class CommandsMixin:
         fault = parse_fault(text)
         if device_fault(self.device_id, text, module):
             return fault.name, None
-        io = self.slot_io(module)
-        if fault.target is Target.ANALOG and io.kind is not EXPANSIONS["TRS-AN-E"]:
-            raise CommandError(f"{fault.name} (0x{fault.code:04X}) is a TRS-AN-E fault; "
-                               f"position {module or 0} is a {io.kind.name}")
+        check_slot_fault(text, self.slot_io(module).kind, module or 0)
         return fault.name, module or 0
 
     def cmd_inject_fault(self, fault: str, module: int | None) -> None:

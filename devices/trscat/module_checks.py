@@ -1,6 +1,8 @@
 """What a scenario check before the run knows of ``trscat/N`` targets
 (app.scenario.check_against): the expansions each position holds at that step, from the rig
-as built and the earlier plug / unplug steps, refused as the handlers would refuse them."""
+as built and the earlier plug / unplug steps, refused as the handlers would refuse them: a
+position with no expansion, a channel its kind does not have (:func:`check_kind`, which the
+handlers call too), a TRS-AN-E fault elsewhere."""
 
 from __future__ import annotations
 
@@ -8,13 +10,65 @@ from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
 from devices.device import UNKNOWN_MODULE, CommandError
-from devices.trscat.catalog import MAX_EXPANSIONS, expansion_kind
+from devices.trscat.catalog import (
+    EXPANSIONS,
+    INTEGRATED,
+    MAX_EXPANSIONS,
+    IoShape,
+    ModuleKind,
+    expansion_kind,
+)
 from devices.trscat.diagnostics import Target, parse_fault
 
 if TYPE_CHECKING:
     from devices.trscat.io import SlotIo
 
 _FAULT_ACTIONS = ("inject_fault", "clear_fault")
+_DIGITAL = ((IoShape.DIGITAL,), False)
+# The channels each action names: of which shapes, and whether outputs are counted.
+_CHANNELS: dict[str, tuple[tuple[IoShape, ...], bool]] = {
+    "set_input": _DIGITAL, "set_input_voltage": _DIGITAL, "set_load": _DIGITAL,
+    "set_analog_input": ((IoShape.ANALOG,), False), "set_input_word": ((IoShape.WORDS,), False),
+    "set_output": (tuple(IoShape), True),
+}
+# What the PLC may write to an output of each shape (the RxPDO entry's type).
+OUTPUT_RANGE = {IoShape.DIGITAL: (0, 1), IoShape.ANALOG: (-0x8000, 0x7FFF),
+                IoShape.WORDS: (0, 0xFFFF)}
+
+
+def channel_index(kind: ModuleKind, action: str, channel: int) -> int:
+    """The 0-based index of ``channel`` (from 1) of an action on a slot of this kind."""
+    shapes, outputs = _CHANNELS[action]
+    if kind.shape not in shapes:
+        raise CommandError(f"{kind.name} has no {' / '.join(s.value for s in shapes)} "
+                           f"channels")
+    count = kind.outputs if outputs else kind.inputs
+    if not 1 <= channel <= count:
+        raise CommandError(f"{kind.name}: channel {channel} outside 1..{count}")
+    return channel - 1
+
+
+def check_output(kind: ModuleKind, index: int, value: int) -> None:
+    low, high = OUTPUT_RANGE[kind.shape]
+    if not low <= value <= high:
+        raise CommandError(f"{kind.name} output {index + 1}: {value} outside {low}..{high}")
+
+
+def check_slot_fault(fault: str, kind: ModuleKind, slot: int) -> None:
+    found = parse_fault(fault)
+    if found.target is Target.ANALOG and kind is not EXPANSIONS["TRS-AN-E"]:
+        raise CommandError(f"{found.name} (0x{found.code:04X}) is a TRS-AN-E fault; "
+                           f"position {slot} is a {kind.name}")
+
+
+def check_kind(kind: ModuleKind, slot: int, action: str, args: Mapping[str, Any]) -> None:
+    """Refuse what slot ``slot`` holding ``kind`` cannot take whatever its state."""
+    if action in _FAULT_ACTIONS:
+        check_slot_fault(args["fault"], kind, slot)
+    elif action in _CHANNELS:
+        index = channel_index(kind, action, args["channel"])
+        if action == "set_output":
+            check_output(kind, index, args["value"])
 
 
 def rail_text(layout: Mapping[int, Any], last: int) -> str:
@@ -59,17 +113,19 @@ class ModuleChecks:
                      layout: dict[int, Any]) -> None:
         if action in _FAULT_ACTIONS and device_fault(self.device_id, args["fault"], module):
             return
-        if module is None:
-            return
-        if action == "plug":
+        if action == "plug" and module is not None:
             plug_position(module)
             layout[module] = expansion_kind(args["type"])
             return
-        if module not in layout:
-            raise CommandError(no_expansion(self.device_id, module, layout,
+        slot = module or 0
+        kind = layout.get(slot, INTEGRATED if slot == 0 else None)
+        if kind is None:
+            raise CommandError(no_expansion(self.device_id, slot, layout,
                                             max(layout, default=0)))
+        if kind is not UNKNOWN_MODULE:
+            check_kind(kind, slot, action, args)
         if action == "unplug":
-            del layout[module]
+            del layout[slot]
 
     def changes_modules(self, action: str, args: Mapping[str, Any],
                         module: int | None) -> tuple[int, ...]:
