@@ -111,6 +111,9 @@ class RailMixin:
             return
         self._on_rail(module)
         if action == "plug":
+            here = layout.get(module)
+            if here is not None and here is not UNKNOWN_MODULE:
+                raise CommandError(_taken(self.device_id, module, here.name))
             layout[module] = module_type(args["type"])
         elif action == "swap":
             other = args["other"]
@@ -165,9 +168,9 @@ class RailMixin:
 
     def cmd_plug(self, module: int, type: str) -> None:
         self._on_rail(module)
-        if module <= len(self.rail) and self.rail[module - 1] is not None:
-            raise CommandError(f"{self.device_id}: rail position {module} is taken by a "
-                               f"{self.rail[module - 1].mtype.name}: unplug it first")
+        taken = self.rail[module - 1] if module <= len(self.rail) else None
+        if taken is not None:
+            raise CommandError(_taken(self.device_id, module, taken.mtype.name))
         mtype = module_type(type)
         back = self.shelf.get(module)
         if back is not None and back.mtype is mtype:  # the same module put back
@@ -247,3 +250,7 @@ def _layout_text(layout: Mapping[int, Any]) -> str:
 
 def _kind_name(kind: Any) -> str:
     return "-" if kind is None else "?" if kind is UNKNOWN_MODULE else str(kind.name)
+
+
+def _taken(device_id: str, module: int, name: str) -> str:
+    return f"{device_id}: rail position {module} is taken by a {name}: unplug it first"

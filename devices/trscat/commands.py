@@ -18,17 +18,16 @@ from devices.trscat.alarms import FaultKey, TrsBus
 from devices.trscat.catalog import (
     EXPANSIONS,
     expansion_kind,
-    limit_violation,
 )
 from devices.trscat.diagnostics import FAULTS, parse_fault
 from devices.trscat.io import SlotIo
 from devices.trscat.module_checks import (
     channel_index,
     check_output,
+    check_plug,
     check_slot_fault,
     device_fault,
     no_expansion,
-    plug_position,
 )
 from devices.trscat.objects import refuse_in_state
 from devices.trscat.sync import MODE_BY_NAME, SyncMode, SyncUnit
@@ -118,6 +117,7 @@ class CommandsMixin:
         def write_object(self, index: int, sub: int, value: Any) -> None: ...
         def read_object(self, index: int, sub: int) -> Any: ...
         def _log(self, text: str) -> None: ...
+        def module_layout(self) -> dict[int, Any]: ...
 
     def check_command(self, action: str, args: Mapping[str, Any],
                       module: int | None = None) -> dict[str, Any]:
@@ -186,15 +186,8 @@ class CommandsMixin:
             self._log(f"expansion {module} unplugged with power on (not allowed, §7)")
 
     def cmd_plug(self, module: int, type: str) -> None:
-        plug_position(module)
-        if module < len(self.rail) and self.rail[module] is not None:
-            raise CommandError(f"{self.device_id}: position {module} holds a "
-                               f"{self.rail[module].kind.name}: unplug it first")
         kind = expansion_kind(type)
-        kinds = [io.kind for io in self.rail[1:] if io is not None] + [kind]
-        violation = limit_violation(kinds)
-        if violation is not None:
-            raise CommandError(violation)
+        check_plug(self.device_id, module, kind, self.module_layout())
         self.rail.extend([None] * (module + 1 - len(self.rail)))
         self.rail[module] = SlotIo.new(kind)
         if self.powered:

@@ -17,6 +17,7 @@ from devices.trscat.catalog import (
     IoShape,
     ModuleKind,
     expansion_kind,
+    limit_violation,
 )
 from devices.trscat.diagnostics import Target, parse_fault
 
@@ -89,6 +90,25 @@ def plug_position(module: int) -> None:
         raise CommandError(f"a TRS-CAT has expansion positions 1..{MAX_EXPANSIONS} (§5)")
 
 
+def check_plug(device_id: str, module: int, kind: ModuleKind,
+               held: Mapping[int, Any]) -> None:
+    """A plug of ``kind`` at ``module`` on a rail holding ``held`` (slot -> kind): a position
+    1..7 that is free, and expansions that still fit §5 with it."""
+    plug_position(module)
+    here = held.get(module)
+    if here is UNKNOWN_MODULE:
+        return
+    if here is not None:
+        raise CommandError(f"{device_id}: position {module} holds a {here.name}: unplug it "
+                           f"first")
+    kinds = [k for s, k in held.items() if s > 0] + [kind]
+    if UNKNOWN_MODULE in kinds:
+        return
+    violation = limit_violation(kinds)
+    if violation is not None:
+        raise CommandError(violation)
+
+
 def device_fault(device_id: str, fault: str, module: int | None) -> bool:
     """Whether ``fault`` is the TRS-CAT's own; refused on an expansion target."""
     found = parse_fault(fault)
@@ -114,8 +134,9 @@ class ModuleChecks:
         if action in _FAULT_ACTIONS and device_fault(self.device_id, args["fault"], module):
             return
         if action == "plug" and module is not None:
-            plug_position(module)
-            layout[module] = expansion_kind(args["type"])
+            kind = expansion_kind(args["type"])
+            check_plug(self.device_id, module, kind, layout)
+            layout[module] = kind
             return
         slot = module or 0
         kind = layout.get(slot, INTEGRATED if slot == 0 else None)

@@ -83,3 +83,40 @@ def test_a_position_an_on_command_may_fill_is_left_to_the_run() -> None:
         + '[[on]]\nevent = "resync"\ntarget = "trscat/4"\naction = "plug"\n'
           'type = "TRS-IO-E"\n', "ok.toml")
     check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+
+
+@pytest.mark.parametrize(("steps", "message"), [
+    (step("fastcat/2", "plug", type="DI16"),
+     "step[0] (at 0.5 s): fastcat: rail position 2 is taken by a DI16: unplug it first"),
+    (step("fastcat/9", "plug", type="DI16") + step("fastcat/9", "plug", at=0.6, type="DO16"),
+     "step[1] (at 0.6 s): fastcat: rail position 9 is taken by a DI16: unplug it first"),
+    (step("fastcat/2", "swap", other=9) + step("fastcat/9", "plug", at=0.6, type="DO16"),
+     "step[1] (at 0.6 s): fastcat: rail position 9 is taken by a DI16: unplug it first"),
+    (step("trscat/1", "plug", type="TRS-IO-E"),
+     "step[0] (at 0.5 s): trscat: position 1 holds a TRS-IO-E: unplug it first"),
+])
+def test_a_plug_on_a_taken_position_is_refused_before_the_run(tmp_path, capsys, steps,
+                                                              message) -> None:
+    """A plug on a position that holds a module by then (as built, or put there by an
+    earlier plug or swap) passed the check and failed at the step (exit 1)."""
+    line = refused(tmp_path, capsys, steps)
+    assert line.endswith(message), line
+
+
+def test_a_plug_after_an_unplug_of_the_same_position_is_fine(tmp_path, capsys) -> None:
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import check_against, parse_scenario
+
+    scenario = parse_scenario(
+        step("fastcat/2", "unplug") + step("fastcat/2", "plug", at=0.6, type="DO16")
+        + step("trscat/2", "unplug", at=0.7) + step("trscat/2", "plug", at=0.8,
+                                                     type="TRS-IO-E"), "ok.toml")
+    check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+
+
+def test_a_plug_the_trscat_cannot_fit_is_refused_before_the_run(tmp_path, capsys) -> None:
+    """Seed 001 §5: with the TRS-IO-E and the TRS-AN-E, a third smart expansion does not fit;
+    the earlier plugs count."""
+    steps = "".join(step(f"trscat/{n}", "plug", at=0.1 * n, type="TRS-AC-E") for n in (3, 4, 5))
+    line = refused(tmp_path, capsys, steps)
+    assert "step[2] (at 0.5 s): 2 standard + 3 smart expansions do not fit a TRS-CAT" in line
