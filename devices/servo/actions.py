@@ -72,6 +72,7 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
 )}
 
 _TOLERANT = {"parameter", "code"}  # accept 3 as well as "3"
+_ALARM_ACTIONS = ("inject_alarm", "clear_alarm")
 
 
 class DriveActions:
@@ -83,7 +84,12 @@ class DriveActions:
                       module: int | None = None) -> dict[str, Any]:
         args = {k: str(v) if k in _TOLERANT and isinstance(v, int) and not isinstance(v, bool)
                 else v for k, v in args.items()}
-        return super().check_command(action, args, module)  # type: ignore[misc]
+        kwargs = super().check_command(action, args, module)  # type: ignore[misc]
+        if action in _ALARM_ACTIONS:
+            # The alarm table of the fieldbus c9 selected at the last power-up (ch. 5 / ch. 6):
+            # a scenario check before the run reads the drive's configuration as built.
+            self._alarm(kwargs["code"])  # type: ignore[attr-defined]
+        return kwargs
 
     def _powered(self: ServoDrive) -> None:
         if not self.powered:
