@@ -48,9 +48,16 @@ class Rig:
     def device(self, device_id: str) -> DeviceModel:
         found = self.devices.get(device_id)
         if found is None:
-            known = ", ".join(self.devices) or "none"
-            raise CommandError(f"no device '{device_id}' in rig '{self.name}' (devices: {known})")
+            raise CommandError(f"no device '{device_id}' in rig '{self.name}' (devices: "
+                               f"{self.targets_text()})")
         return found
+
+    def targets_text(self) -> str:
+        """The ids a command may target (a device with actions), each side of a device
+        named as such: ``drive-can (the CANopen node of drive)``."""
+        shown = [f"{i} ({d.part_of()})" if d.part_of() else i
+                 for i, d in self.devices.items() if d.ACTIONS]
+        return ", ".join(shown) or "none"
 
     def check(self, target: str, action: str, args: dict[str, Any]) -> dict[str, Any]:
         """Validate a command without running it (scenario files are checked before a run);

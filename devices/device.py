@@ -159,6 +159,11 @@ class DeviceModel:
                                f"'{self.device_id}/N'")
         return spec.check_args(args)
 
+    def part_of(self) -> str:
+        """What this model is a side of, for a list of targets (``the CANopen node of
+        drive``); empty for a device of its own."""
+        return ""
+
     # ---- what a scenario check may know of module targets (app.scenario.check_against) ----
     def module_layout(self) -> dict[int, Any]:
         """The modules as built, by the N of ``device/N``: each one's kind, as this model's

@@ -97,6 +97,9 @@ class CanOpenNode(ProcessData, DeviceModel):
         self._canopen_od: Any = None
         self._reset_communication()
 
+    def part_of(self) -> str:
+        return f"the CANopen node of {self.drive.device_id}"
+
     # ---- communication parameters (DS 301 Reset-Communication) ---------------------------
     def _reset_communication(self) -> None:
         self.sync_cob_id = SYNC_COB_ID

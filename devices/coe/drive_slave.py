@@ -98,6 +98,9 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self._follow_power()
         self._refresh()
 
+    def part_of(self) -> str:
+        return f"the EtherCAT CoE slave of {self.drive.device_id}"
+
     def _reset(self) -> None:
         """Power-on values of the EtherCAT side."""
         self.rx_pdos, self.tx_pdos = default_pdos(True), default_pdos(False)

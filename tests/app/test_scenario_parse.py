@@ -151,3 +151,22 @@ def test_a_module_plugged_by_an_earlier_step_may_be_commanded() -> None:
         "[[step]]\nat = 1\ntarget = \"fastcat/10\"\naction = \"module_power\"\non = false\n",
         "ok.toml")
     check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+
+
+def test_an_unknown_device_names_what_each_targetable_id_is() -> None:
+    """The list gave every internal id bare (``drive-can``, ``drive_ec-ecat``, ...): a
+    scenario may target them, but nothing said they are a drive's CANopen node or CoE
+    slave."""
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import check_against
+
+    scenario = parse_scenario('[[step]]\nat = 0\ntarget = "drives"\naction = "power"\n'
+                              'on = true\n', "bad.toml")
+    with pytest.raises(ScenarioError) as caught:
+        check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+    assert str(caught.value) == (
+        "bad.toml: step[0] (at 0 s): no device 'drives' in rig 'FieldRig default rig' "
+        "(devices: fastcat, trscat, cpx, drive, drive-can (the CANopen node of drive), "
+        "drive_co, drive_co-can (the CANopen node of drive_co), drive_ec, drive_ec-can (the "
+        "CANopen node of drive_ec), drive_ec-ecat (the EtherCAT CoE slave of drive_ec), "
+        "master)")
