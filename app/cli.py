@@ -1,4 +1,5 @@
-"""Command line: ``python -m app`` serves the dashboard; ``python -m app scenario run FILE``.
+"""Command line: ``python -m app`` serves the dashboard; ``python -m app scenario run FILE``;
+``python -m app scenario list`` lists the example scenarios with their rig files.
 
 Stable flags (issue 2): ``--host`` (default 127.0.0.1), ``--port`` (default 8080), ``--rig``.
 Classroom (issue 6, docs/classroom.md): ``--rig`` again or ``--rigs N`` serves several rigs, one
@@ -23,7 +24,13 @@ from pathlib import Path
 from typing import Any
 
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
-from app.scenario import ScenarioError, check_against, load_scenario, run_scenario
+from app.scenario import (
+    EXAMPLES_DIR,
+    ScenarioError,
+    check_against,
+    load_scenario,
+    run_scenario,
+)
 
 EXIT_BAD_INPUT = 2
 EXIT_SCENARIO_FAILED = 1
@@ -32,7 +39,8 @@ EXIT_SCENARIO_FAILED = 1
 def _serve_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m app",
                                 description="FieldRig: serve the dashboard of a virtual rig. "
-                                            "Subcommand: 'scenario run FILE'.")
+                                            "Subcommands: 'scenario run FILE', 'scenario "
+                                            "list'.")
     _rig_flags(p)
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only)")
@@ -77,8 +85,11 @@ def _serve_parser() -> argparse.ArgumentParser:
 def _scenario_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="python -m app scenario",
                                 description="Run a scenario headless, as fast as possible, and "
-                                            "print its events as JSON lines.")
+                                            "print its events as JSON lines ('run FILE'), or "
+                                            "list the example scenarios ('list').")
     sub = p.add_subparsers(dest="verb", required=True)
+    sub.add_parser("list", help="the example scenarios, one per line: file, name and rig file "
+                                "(tab-separated)")
     run = sub.add_parser("run", help="run a scenario file")
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, help="directory for events.jsonl")
@@ -126,6 +137,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _scenario(args: argparse.Namespace) -> int:
+    if args.verb == "list":
+        return _scenario_list()
     scenario = load_scenario(args.file)
     rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
     rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
@@ -160,6 +173,26 @@ def _scenario(args: argparse.Namespace) -> int:
     for failure in result.failures:
         print(f"fieldrig: scenario step failed: {failure}", file=sys.stderr)
     return EXIT_SCENARIO_FAILED if result.failures else 0
+
+
+def _scenario_list() -> int:
+    """Each example of static/scenarios, sorted by file: ``FILE<TAB>NAME<TAB>RIG``, the paths
+    as a command typed here takes them (``scenario run FILE --rig RIG``). A file that does not
+    load is one error line on stderr, and the exit code 2."""
+    from app.player import shown_path
+
+    broken = False
+    for path in sorted(EXAMPLES_DIR.glob("*.toml")):
+        try:
+            scenario = load_scenario(path)
+        except ScenarioError as exc:
+            print(f"fieldrig: error: {exc}", file=sys.stderr)
+            broken = True
+            continue
+        rig = Path(scenario.rig) if scenario.rig else DEFAULT_RIG
+        name = " ".join(scenario.name.split())  # one line, one column, whatever the file says
+        print(f"{shown_path(path)}\t{name}\t{shown_path(rig)}")
+    return EXIT_BAD_INPUT if broken else 0
 
 
 def _serve(args: argparse.Namespace) -> int:

@@ -38,6 +38,8 @@ from devices.master.master import DC_MACHINE
 from devices.od import SdoAbort
 
 US = 1_000_000
+# The example library: ``scenario list`` and the dashboard's scenario picker show it.
+EXAMPLES_DIR = Path(__file__).resolve().parent.parent / "static" / "scenarios"
 _STEP_KEYS = {"at", "after", "target", "action", "caption", "checkpoint", "expect_error"}
 # The keys a step may have, in the order a message lists them (a command step's other keys are
 # its action's arguments, checked against the rig's device by check_against).

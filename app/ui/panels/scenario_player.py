@@ -25,14 +25,14 @@ from app.player import Player, PlayerView, RigMismatch, Status, describe_step, s
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigConfigError
 from app.runtime import Frame, Runtime
-from app.scenario import Scenario, ScenarioError, load_scenario
+from app.scenario import EXAMPLES_DIR, Scenario, ScenarioError, load_scenario
 from app.ui.commands import CommandSender, notify
 from app.ui.panels.widgets import from_user
 from app.ui.style import esc
 
 logger = logging.getLogger(__name__)
 
-SCENARIO_DIR = DEFAULT_RIG.parent.parent / "scenarios"
+SCENARIO_DIR = EXAMPLES_DIR
 CHOOSE = "(choose a scenario)"
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
 PLAY, PAUSE, STEP, RESTART = "Play", "Pause", "Step", "Restart"
