@@ -104,5 +104,6 @@ def check_target(spec: FaultSpec, module: int | None, channel: int | None,
                                f"outputs, SM3 inputs)")
     elif sm is not None:
         raise CommandError(f"{spec.name} takes no sync manager")
-    if spec.name == "module_failure" and module is None:
-        raise CommandError("module_failure needs a module: target 'cpx/N'")
+    if spec.name in ("module_failure", "short_circuit") and module is None:
+        # module_ident_mismatch alone has a meaning without a module (the bus module)
+        raise CommandError(f"{spec.name} needs a module: target 'cpx/N'")

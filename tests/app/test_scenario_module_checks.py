@@ -42,6 +42,14 @@ def test_a_cpx_module_that_is_not_there_is_refused_before_the_run(tmp_path, caps
                          "2=8DO, 3=4AI-U-I, 4=4AO-U-I)"), line
 
 
+def test_a_cpx_short_circuit_without_a_module_is_refused_before_the_run(tmp_path,
+                                                                         capsys) -> None:
+    """target = "cpx" passed the check and the step failed with "no module None"."""
+    line = refused(tmp_path, capsys, step("cpx", "inject_fault", fault="short_circuit"))
+    assert line.endswith("step[0] (at 0.5 s): short_circuit needs a module: target 'cpx/N'"), \
+        line
+
+
 @pytest.mark.parametrize(("target", "action", "args"), [
     ("cpx/5", "set_input", {"channel": 0, "on": True}),
     ("cpx/9", "replace_module", {"type": "16DI"}),
