@@ -189,6 +189,8 @@ class Dashboard:
         self._caption = server.scene.add_label(
             "/caption", "", position=(center[0], -BODY_D, caption_z),
             anchor="bottom-center", font_screen_scale=CAPTION_SCALE, visible=False)
+        if self._line is not None:  # a focused view takes the caption above its device
+            self._line.on_caption_moved = self._place_caption
         # ---- scenario player, code decoder (app/ui/panels/scenario_player.py, decoder.py) ----
         from app.ui.panels.decoder import DecoderPanel
         from app.ui.panels.scenario_player import ScenarioPlayerPanel
@@ -437,6 +439,9 @@ class Dashboard:
             self._caption.text = caption_lines(captions[-1])
             self._caption.visible = True
         return events
+
+    def _place_caption(self, where: tuple[float, float]) -> None:
+        self._caption.position = (where[0], -BODY_D, where[1])
 
     @property
     def caption(self) -> str:

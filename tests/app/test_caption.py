@@ -12,6 +12,7 @@ import math
 import tomllib
 from collections.abc import Iterator
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -93,3 +94,37 @@ def test_the_caption_room_keeps_the_axes_in_view(dashboard: Dashboard) -> None:
     home = line.home
     _, bottom = project(dashboard.server.initial_camera, (home.x_min, 0.0, home.z_min))
     assert bottom <= VIEW_HEIGHT_PX - EDGE_PX, bottom
+
+
+@pytest.mark.parametrize("device", ["master", "fastcat", "trscat", "cpx", "drive_ec-ecat"])
+def test_a_focused_view_shows_the_caption_and_the_whole_device(dashboard: Dashboard,
+                                                                device: str) -> None:
+    """A scenario ``focus`` step moves the camera to one device: the caption (placed above
+    the whole line before) was out of that view, and a demo viewer reads the caption there
+    too. The caption moves above the focused device; both stay inside the view between the
+    panels, the caption above the device, not over it."""
+    line = dashboard.line
+    assert line is not None
+    dashboard.runtime._journal_events([Caption(0, "scenario", text=longest_caption())])
+    dashboard.tick()
+    line.focus(None, device)
+    position, look_at = line.focus_camera(device, VIEW_WIDTH_PX / VIEW_HEIGHT_PX)
+    camera = SimpleNamespace(position=position, look_at=look_at, up=(0.0, 0.0, 1.0),
+                             fov=dashboard.server.initial_camera.fov)
+    label = dashboard._caption
+    box = label_box(label, px_per_unit(camera, label.position))
+    y = float(label.position[1])
+    left, top = project(camera, (box.x0, y, box.z1))
+    right, bottom = project(camera, (box.x1, y, box.z0))
+    assert left >= EDGE_PX and right <= VIEW_WIDTH_PX - EDGE_PX, (device, left, right)
+    assert top >= EDGE_PX, (device, top)
+    body = line.scene.focus_box(device)
+    assert body is not None
+    assert box.z0 >= body.z_max, (device, box.z0, body.z_max)  # above the device, not over it
+    b_left, b_top = project(camera, (body.x_min, 0.0, body.z_max))
+    b_right, b_bottom = project(camera, (body.x_max, 0.0, body.z_min))
+    assert b_left >= EDGE_PX and b_right <= VIEW_WIDTH_PX - EDGE_PX, (device, b_left, b_right)
+    assert bottom <= b_top and b_bottom <= VIEW_HEIGHT_PX - EDGE_PX, (device, b_top, b_bottom)
+    line.show_all()  # "Show the whole line": the caption goes back above the whole line
+    assert float(label.position[2]) >= line.bounds().z_max
+    assert abs(float(label.position[0]) - line.home_caption[0]) < 1e-9

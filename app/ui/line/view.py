@@ -41,6 +41,10 @@ CAPTION_ROOM = 0.6  # above the line, for a scenario caption
 # CAPTION_ROOM would instead zoom out, and the labels of the line would run into each other
 # (tests/app/test_line_labels.py). tests/app/test_caption.py checks both ends.
 CAPTION_LIFT = 1.4
+CAPTION_GAP = 0.1  # from the top of what the caption stands above to its bottom
+# Above a focused device, for three caption lines at the focus zoom (~50 px a unit at 1280 x
+# 720): a focused view is fitted to the width, so this only moves the picture down a little.
+FOCUS_CAPTION_ROOM = 1.2
 
 
 def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN, lift: float = 0.0,
@@ -53,6 +57,17 @@ def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN, lift: flo
                          (height / 2 + margin) / half_tan)
     centre = ((box.x_min + box.x_max) / 2, 0.0, (box.z_min + box.z_max) / 2 + lift)
     return (centre[0], -distance, centre[2] + distance * CAMERA_RISE), centre
+
+
+def focus_frame(box: Box) -> tuple[Box, tuple[float, float]]:
+    """What a focus on a device of ``box`` frames, and where the caption goes: centred above
+    the device, with room for it in the framed box. Placed above the whole line, the caption
+    was out of every focused view, so a demo viewer lost the narration at each focus step."""
+    width = max(box.x_max - box.x_min, FOCUS_MIN_W)
+    centre = (box.x_min + box.x_max) / 2
+    framed = Box(centre - width / 2, centre + width / 2, box.z_min,
+                 box.z_max + FOCUS_CAPTION_ROOM)
+    return framed, (centre, box.z_max + CAPTION_GAP)
 
 
 def focus_target(target: str) -> str:
@@ -70,6 +85,8 @@ class LineView:
         self.master_id = master_id
         self._aspect = aspect
         self.on_select: Callable[[str], None] | None = None  # the Objects tab follows
+        # The dashboard's caption label follows the camera: (x, z) of its bottom centre.
+        self.on_caption_moved: Callable[[tuple[float, float]], None] | None = None
         self.scene = LineScene(server, frame.snapshot, master_id, rail_lengths, self.focus,
                                self._cable_clicked)
         order = self.scene.order
@@ -142,30 +159,54 @@ class LineView:
             where = "tab Line (left and right)"
         box = self.scene.focus_box(device)
         if move and box is not None:
-            width = max(box.x_max - box.x_min, FOCUS_MIN_W)
-            centre = (box.x_min + box.x_max) / 2
-            target = Box(centre - width / 2, centre + width / 2, box.z_min, box.z_max)
+            target, caption = focus_frame(box)
             if client is None:
-                self.move_camera(target)
+                self.move_camera(target, caption=caption)
             else:
-                timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target,))
+                timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target, 0.0, caption))
                 timer.daemon = True
                 timer.start()
         notify(client, f"{device} selected", f"its panels: {where}")
 
-    def show_all(self) -> None:
-        self.move_camera(self.home, CAPTION_LIFT)
+    def focus_camera(self, device: str, aspect: float,
+                     ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+        """(position, look_at) a focus on ``device`` gives a view of ``aspect`` (tests)."""
+        box = self.scene.focus_box(device)
+        assert box is not None, device
+        return camera_for(focus_frame(box)[0], aspect)
 
-    def move_camera(self, box: Box, lift: float = 0.0) -> None:
-        position, look_at = camera_for(box, self._aspect, lift=lift)
+    @property
+    def home_caption(self) -> tuple[float, float]:
+        """(x, z) of the caption's bottom centre in the whole line's view: above the line."""
+        return (self.home.x_min + self.home.x_max) / 2, self.bounds().z_max + CAPTION_GAP
+
+    def show_all(self) -> None:
+        self.move_camera(self.home, CAPTION_LIFT, self.home_caption)
+
+    def move_camera(self, box: Box, lift: float = 0.0,
+                    caption: tuple[float, float] | None = None) -> None:
+        """Every browser's camera onto ``box``, each fitted to its own 3D view (the canvas
+        between the panels, whatever the window's size); ``caption``: where the scenario
+        caption goes for that view."""
+        if caption is not None and self.on_caption_moved is not None:
+            self.on_caption_moved(caption)
         for client in self._server.get_clients().values():
             try:
+                position, look_at = camera_for(box, self._client_aspect(client), lift=lift)
                 with client.atomic():  # position first: it drags look_at along (viser)
                     client.camera.position = position
                     client.camera.look_at = look_at
             except Exception:  # a browser that just left
                 logger.debug("camera move for client %s failed", client.client_id,
                              exc_info=True)
+
+    def _client_aspect(self, client: viser.ClientHandle) -> float:
+        """The browser's own 3D view (its canvas between the panels); before its first camera
+        message, the 1280 x 720 layout's."""
+        camera = client.camera
+        if camera.update_timestamp == 0.0 or camera.image_height <= 0:
+            return self._aspect
+        return camera.aspect
 
     def add_events(self, events: Iterable[Event]) -> None:
         """Scenario ``Focus`` events (record kind "focus", key ``target``)."""
