@@ -40,6 +40,7 @@ class Handle:
         self.visible = True
         self.disabled = False
         self.content = ""
+        self.hint: str | None = None
 
     def __enter__(self) -> Handle:
         return self

@@ -43,7 +43,9 @@ def test_fault_dropdown_lists_every_code_of_both_tables() -> None:
 
 def test_fault_option_text_and_reference() -> None:
     option = FaultOption("coupler", 0x04, "MISSING_NODE_ANSWER", "No answer from the node")
-    assert option.label == "0x04 MISSING_NODE_ANSWER — No answer from the node"
+    # The label is what the box can show; the description is the box's hint.
+    assert option.label == "0x04 MISSING_NODE_ANSWER"
+    assert option.detail == "0x04 MISSING_NODE_ANSWER: No answer from the node (seed 000 §7.5)"
     assert option.ref == "coupler:0x04"  # unambiguous: 0x04 is ALARM_IO_FAULT in §7.6
 
 

@@ -9,6 +9,7 @@ word of every cell of those tables as Chromium lays them out.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -17,6 +18,8 @@ from helpers import LiveDashboard, choose, open_dashboard, wait_until
 from app.ui.drive import canopen_master as cm
 
 pytestmark = pytest.mark.browser
+
+ROOT = Path(__file__).resolve().parents[2]
 
 BOOT_S = 8.0
 
@@ -109,3 +112,126 @@ def test_event_log_server_column_shows_every_name_whole(live: LiveDashboard, pag
         "() => [...document.querySelectorAll('#fr-log td.fr-srv')].map(c => c.innerText)")}
     assert {"scenario", "drive_ecat", "(65535)", *names} <= shown
     assert page.evaluate(CLIPPED_JS, "#fr-log td.fr-srv") == []
+
+
+# The widths (px) of ``texts`` in the font of the dropdown ``label`` (viser's Select, with its
+# letter spacing), and the room its box leaves for the value (the chevron taken off).
+FIT_JS = """
+([label, texts]) => {
+  const input = [...document.querySelectorAll('input[role=combobox]')]
+    .find(i => i.offsetParent !== null && i.labels.length
+               && i.labels[0].innerText.trim() === label);
+  if (!input) return null;
+  const cs = getComputedStyle(input);
+  const ctx = document.createElement('canvas').getContext('2d');
+  ctx.font = cs.font;
+  ctx.letterSpacing = cs.letterSpacing;
+  const chevron = input.parentElement.querySelector('[data-position=right]');
+  const room = input.clientWidth - parseFloat(cs.paddingLeft) - parseFloat(cs.paddingRight)
+    - (chevron ? chevron.getBoundingClientRect().width : 0);
+  return {room, widths: texts.map(t => ctx.measureText(t).width)};
+}
+"""
+
+
+def cut_options(page: Any, label: str, options: list[str], slack: float = 1.0) -> list[str]:
+    """The options of the dropdown ``label`` wider than ``slack`` times its box's room."""
+    fit = page.evaluate(FIT_JS, [label, options])
+    assert fit is not None, f"no visible dropdown {label!r}"
+    return [f"{o} ({w:.0f} px > {fit['room']:.0f})"
+            for o, w in zip(options, fit["widths"], strict=True) if w > slack * fit["room"]]
+
+
+# The longest manual names ("0x0B UNKNOWN_SDO_WR_ANSWER", "24 ABS_ENCODER_COMMUNICATION",
+# 184 / 187 px) are wider than the control panel's 152 px box by themselves: the box may lose
+# their last characters, which the hint (hover) and the open list show whole.
+NAME_SLACK = 1.25
+
+
+def test_fault_and_alarm_choices_show_whole_in_their_boxes(live: LiveDashboard,
+                                                           page: Any) -> None:
+    """The Fault box read "0x01 MODULE_CHANGED — A mod" (the description glued to the
+    label, 547 px in a 152 px box): the labels are the code and the manual's name, and the
+    description goes to the box's hint. The drive's Alarm list is built the same way."""
+    from app.ui.dashboard import fault_options
+    from app.ui.drive.drive_panel import alarm_options
+    from app.ui.panels.control import FaultOption
+
+    open_dashboard(page, live)
+    faults = [FaultOption(o.table, o.code, o.name, o.description).label
+              for o in fault_options()]
+    assert cut_options(page, "Fault", faults, NAME_SLACK) == []
+    choose(page, "Fault", "0x12 ADDRESS_MASTER_NOT_OK")
+    panels = live.dashboard._panels
+    assert panels is not None
+    fault = panels.control._fault
+    wait_until(lambda: fault.value == "0x12 ADDRESS_MASTER_NOT_OK", what="the pick")
+    assert fault.hint is not None and fault.hint.startswith(
+        "0x12 ADDRESS_MASTER_NOT_OK: The address set with the rotary switch does not match")
+    page.get_by_role("tab", name="Servo drive").click()
+    alarms = sorted({o for bus in ("modbus", "canopen", "ethercat", "profinet")
+                     for o in alarm_options(bus)})
+    assert cut_options(page, "Alarm", alarms, NAME_SLACK) == []
+
+
+def test_player_time_stays_on_one_line(live: LiveDashboard, page: Any) -> None:
+    """The player's "t = 7.0 s of 16 s" broke after "7.0 s" in the panel's width."""
+    from app.scenario import load_scenario
+    from app.ui.panels.scenario_player import STATUS_ID
+
+    scenario = load_scenario(ROOT / "static" / "scenarios" / "module_lost_in_op.toml")
+    open_dashboard(page, live)
+    page.get_by_role("tab", name="Scenario", exact=True).click()
+    panel = live.dashboard.scenario_player
+    panel.load(scenario)
+    while live.runtime.frame.t_us < 7_000_000:
+        panel.player.step()
+    live.settle()
+    status = page.locator(f"#{STATUS_ID}")
+    wait_until(lambda: "t = 7.0 s of 16 s" in status.inner_text(), what="t = 7.0 s shown")
+    assert phrase_lines(page, f"#{STATUS_ID}", "t = 7.0 s of 16 s") == 1
+
+
+# How many lines the layout spreads ``phrase`` over (0: not found) inside ``sel``.
+PHRASE_LINES_JS = """
+([sel, phrase]) => {
+  const root = document.querySelector(sel);
+  const walker = document.createTreeWalker(root, NodeFilter.SHOW_TEXT);
+  for (let node = walker.nextNode(); node; node = walker.nextNode()) {
+    const at = node.data.indexOf(phrase);
+    if (at < 0) continue;
+    const range = document.createRange();
+    range.setStart(node, at);
+    range.setEnd(node, at + phrase.length);
+    return new Set([...range.getClientRects()].filter(r => r.width > 0)
+                                              .map(r => Math.round(r.top))).size;
+  }
+  return 0;
+}
+"""
+
+
+def phrase_lines(page: Any, selector: str, phrase: str) -> int:
+    return int(page.evaluate(PHRASE_LINES_JS, [selector, phrase]))
+
+
+def test_reported_codes_list_starts_on_the_newest_code(live: LiveDashboard,
+                                                       page: Any) -> None:
+    """The Codes tab's Reported list opened on its placeholder row "(pick a reported
+    code)"; it now starts on the newest code, decoded, and every entry fits the box."""
+    open_dashboard(page, live)
+    live.advance(4.0)
+    live.command("fastcat/2", "unplug")  # seed 000 §7.7: emergency, AL status code, alarm
+    live.advance(1.0)
+    page.get_by_role("tab", name="Codes", exact=True).click()
+    box = page.get_by_role("combobox", name="Reported")
+    wait_until(lambda: "MISSING_NODE_ANSWER" in box.input_value()
+               or "8204" in box.input_value() or "FF00" in box.input_value(),
+               what="the newest reported code in the box")
+    box.click()
+    rows = [str(t) for t in page.get_by_role("option").all_inner_texts()]
+    assert rows and not rows[0].startswith("("), rows
+    assert cut_options(page, "Reported", rows) == []
+    result = page.locator("#fr-decoded")
+    wait_until(lambda: "MISSING_NODE_ANSWER" in result.inner_text(),
+               what="the newest code decoded")

@@ -19,7 +19,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive.drive_state import FIELDBUS_NAMES
 from app.ui.panels.action_form import ActionForm
-from app.ui.panels.widgets import Mirror, Synced, set_options
+from app.ui.panels.widgets import DetailHint, Mirror, Synced, set_options
 from app.ui.style import esc
 from devices.device import Action
 from devices.servo import control
@@ -38,11 +38,16 @@ START_BITS = control.BIT5 | control.BIT6 | control.BIT7  # R00 bits 5..7: mode s
 JOG = {"Jog -": -1, "Jog 0": 0, "Jog +": 1}
 
 
+def alarm_details(fieldbus: str) -> dict[str, str]:
+    """``"16 FOLLOWING_ERROR"`` -> ``"16 FOLLOWING_ERROR: maximum position ..."`` for every
+    alarm of the drive with this fieldbus (ch. 3, ch. 5; ch. 6 for Profinet), in code order:
+    the list shows the labels, the box's hint the description (:class:`DetailHint`)."""
+    alarms = sorted(alarm_table(fieldbus).values(), key=lambda a: a.code)
+    return {f"{a.code} {a.name}": f"{a.code} {a.name}: {a.description}" for a in alarms}
+
+
 def alarm_options(fieldbus: str) -> tuple[str, ...]:
-    """``"16 FOLLOWING_ERROR — maximum position ..."`` for every alarm of the drive with this
-    fieldbus (ch. 3, ch. 5; ch. 6 for Profinet)."""
-    return tuple(f"{a.code} {a.name} — {a.description}"
-                 for a in sorted(alarm_table(fieldbus).values(), key=lambda a: a.code))
+    return tuple(alarm_details(fieldbus))
 
 
 def leading_int(option: str) -> int:
@@ -107,6 +112,7 @@ class DrivePanel:
             jog = gui.add_button_group("Jog", tuple(JOG))
         with gui.add_folder("Alarms and load"):
             self._alarm = gui.add_dropdown("Alarm", alarm_options(self._fieldbus))
+            self._alarm_hint = DetailHint(self._alarm, lambda: alarm_details(self._fieldbus))
             alarm_ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
             self._jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
                                          "following error, alarm 16")
@@ -267,6 +273,7 @@ class DrivePanel:
         if fieldbus != self._fieldbus:  # Profinet numbers 30..33 differently (ch. 6)
             self._fieldbus = fieldbus
             set_options(self._alarm, list(alarm_options(fieldbus)))
+            self._alarm_hint.refresh()
         for name in ("powered", "ten", "ien", "jammed"):
             self._synced[name].follow(bool(snap.get(name)))
         option = mode_option(snap.get("mode"))

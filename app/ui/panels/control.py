@@ -17,7 +17,13 @@ from typing import Any
 import viser
 
 from app.ui.commands import CommandSender
-from app.ui.panels.widgets import Synced, UserChange, on_user_change, set_options
+from app.ui.panels.widgets import (
+    DetailHint,
+    Synced,
+    UserChange,
+    on_user_change,
+    set_options,
+)
 
 CNF_HOLD_S = 3.0  # seed 000 §2: "almeno tre secondi"
 CNF_PRESS_S = 3.5  # the button's press: comfortably past the threshold
@@ -47,7 +53,14 @@ class FaultOption:
 
     @property
     def label(self) -> str:
-        return f"0x{self.code:02X} {self.name} — {self.description}"
+        """The code and the manual's name: what the box can show whole (the description is
+        the box's hint, :class:`DetailHint`)."""
+        return f"0x{self.code:02X} {self.name}"
+
+    @property
+    def detail(self) -> str:
+        section = "§7.5" if self.table == "coupler" else "§7.6"
+        return f"{self.label}: {self.description} (seed 000 {section})"
 
     @property
     def ref(self) -> str:
@@ -141,9 +154,13 @@ class ControlPanel:
         def _(event: viser.GuiEvent) -> None:
             self._send(event.client, self._id, "hold_cnf", {"seconds": CNF_SHORT_S})
 
+        self._fault_hint = DetailHint(self._fault, lambda: {
+            f.label: f.detail for f in self._faults[self._table_key()]})
+
         @self._table.on_update
         def _(event: viser.GuiEvent) -> None:
-            set_options(self._fault, self._fault_labels(self._table_key()))
+            set_options(self._fault, list(self._fault_labels(self._table_key())))
+            self._fault_hint.refresh()
 
         @actions.on_click
         async def _(event: viser.GuiEvent) -> None:

@@ -2,8 +2,11 @@
 
 The meaning comes from :func:`app.decoder.decode` (the devices' own tables). The "Reported"
 dropdown lists the latest emergencies, AL status codes and alarms of the runtime's journal,
-newest first: picking one decodes it, so a code seen in the log is one click away. The answer
-is server-level, like the rest of the dashboard: every browser sees the last decoded code.
+newest first: picking one decodes it, so a code seen in the log is one click away. A newly
+reported code is picked and decoded at once, unless the Code box holds a query the user typed
+(the list then opens on it, where it used to open on a "(pick a reported code)" row). The
+answer is server-level, like the rest of the dashboard: every browser sees the last decoded
+code.
 """
 
 from __future__ import annotations
@@ -21,14 +24,15 @@ from app.ui.style import esc
 from devices.events import AlarmChanged, AlStatusChanged, EmergencySent, Event, fmt_bytes
 
 NONE = "(nothing reported yet)"
-PICK = "(pick a reported code)"
 MAX_REPORTED = 20
 RESULT_ID = "fr-decoded"
 
 
 def reported_code(event: Event) -> tuple[str, str] | None:
-    """(picker label, text to decode) for an event that carries a code; None otherwise."""
-    at = f"{event.t_us / 1e6:.3f} s {event.device}"
+    """(picker label, text to decode) for an event that carries a code; None otherwise. The
+    time in tenths, as the rest of the dashboard: with milliseconds a FastCAT emergency's
+    label was wider than the box (the result's head line repeats the whole label)."""
+    at = f"{event.t_us / 1e6:.1f} s {event.device}"
     if isinstance(event, EmergencySent):
         text = f"{event.code:04X} {event.register:02X} {fmt_bytes(event.data)}".strip()
         return f"{at} emergency {text}", text
@@ -84,9 +88,11 @@ class DecoderPanel:
         self._input.on_update(self._on_input)
         self._button.on_click(lambda event: self.show(str(self._input.value)))
         self._picker.on_update(self._on_pick)
+        self._typed = False  # the Code box holds the user's own query: new codes leave it
 
-    def show(self, text: str) -> list[Meaning]:
-        """Decode ``text`` into the result block (what a click does); returns the readings."""
+    def show(self, text: str, head: str = "") -> list[Meaning]:
+        """Decode ``text`` into the result block (what a click does); returns the readings.
+        ``head``: the line above them (a reported code's whole label), else the query."""
         query = text.strip()
         if not query:
             self._result.content = result_html("", None)
@@ -96,20 +102,24 @@ class DecoderPanel:
         except DecodeError as exc:
             self._result.content = result_html(query, None, str(exc))
             return []
-        self._result.content = result_html(query, meanings)
+        self._result.content = result_html(head or query, meanings)
         return meanings
 
     def _on_input(self, event: viser.GuiEvent) -> None:
         if from_user(event):
+            self._typed = True
             self.show(str(self._input.value))
 
     def _on_pick(self, event: viser.GuiEvent) -> None:
-        if not from_user(event):
-            return
-        text = dict(self._reported).get(str(self._picker.value))
+        if from_user(event):
+            self._show_reported(str(self._picker.value))
+
+    def _show_reported(self, label: str) -> None:
+        text = dict(self._reported).get(label)
         if text is not None:
+            self._typed = False
             self._input.value = text
-            self.show(text)
+            self.show(text, label)
 
     # ---- the dashboard's update thread -----------------------------------------------------
     def update(self) -> None:
@@ -119,7 +129,11 @@ class DecoderPanel:
         if not fresh:
             return
         self._reported.extend(fresh)
-        labels = [PICK, *(label for label, _ in reversed(self._reported))]
+        labels = [label for label, _ in reversed(self._reported)]
         current = str(self._picker.value)
         self._picker.options = tuple(labels)
-        self._picker.value = current if current in labels else PICK
+        if self._typed:  # the user's query stays on display
+            self._picker.value = current if current in labels else labels[0]
+        else:
+            self._picker.value = labels[0]
+            self._show_reported(labels[0])

@@ -110,8 +110,10 @@ def status_text(view: PlayerView, t_us: int, hint: str = "") -> str:
                 "restarts factory-fresh and the scenario drives it."
                 + (f" {esc(hint)}" if hint else "") + "</span>")
     total = len(scenario.steps)
+    # The time is one unit: the panel's width broke "t = 7.0 s of 16 s" after "7.0 s".
     lines = [f"<b>{esc(scenario.name)}</b> &middot; {esc(view.status.value)} &middot; "
-             f"t = {t_us / 1e6:.1f} s of {scenario.end_us / 1e6:g} s",
+             f'<span style="white-space:nowrap">t = {t_us / 1e6:.1f} s of '
+             f"{scenario.end_us / 1e6:g} s</span>",
              f"step {view.applied} of {total}"
              + (f" &middot; next {esc(describe_step(view.next_step))}"
                 if view.next_step is not None else "")]

@@ -183,3 +183,22 @@ def set_options(dropdown: Any, options: list[str], keep_prefix: str | None = Non
             return
     if options:
         dropdown.value = options[0]
+
+
+class DetailHint:
+    """A dropdown whose options are short labels ("0x04 MISSING_NODE_ANSWER"), with the long
+    text of the picked one ("No answer from the node") as the box's hint. A description glued
+    to the label made the box cut it ("0x01 MODULE_CHANGED — A mod"): the box holds about 25
+    characters. ``details`` maps a label to its hint; call :meth:`refresh` after replacing
+    the options."""
+
+    def __init__(self, dropdown: Any, details: Callable[[], dict[str, str]]) -> None:
+        self._dropdown = dropdown
+        self._details = details
+        dropdown.on_update(lambda _event: self.refresh())
+        self.refresh()
+
+    def refresh(self) -> None:
+        hint = self._details().get(str(self._dropdown.value))
+        if self._dropdown.hint != hint:
+            self._dropdown.hint = hint
