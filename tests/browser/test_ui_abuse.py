@@ -186,8 +186,9 @@ def test_two_browsers_issuing_conflicting_commands(live: LiveDashboard, browser)
             rapid(a, "Reset fault", 3)
             rapid(b, "Reset fault", 5)
         # Every click of both bursts at the server before the model is read: one that came
-        # after the read (viser's client sends on its own 50 ms clock) changed the model while
-        # the paused rig published no frame for the boxes to follow (a CI run timed out
+        # after the read (viser's client sends on its own 50 ms clock) changed the model the
+        # test had already read, so the boxes (which follow the frames a paused runtime still
+        # publishes at 30 Hz) settled on a value the test did not expect (a CI run timed out
         # waiting for the Reset fault box).
         for page in pages:  # the marker button is on the drive's tab
             page.get_by_role("tab", name="Servo drive").click()
