@@ -46,6 +46,32 @@ def alarm_details(fieldbus: str) -> dict[str, str]:
     return {f"{a.code} {a.name}": f"{a.code} {a.name}: {a.description}" for a in alarms}
 
 
+def register_details() -> dict[str, str]:
+    """``"R24 master_encoder_increments"`` -> its range, access and Modbus address (ch. 1
+    "Registri"): the box holds about 25 characters, so the hint carries the label whole."""
+    out = {}
+    for n, spec in sorted(REGISTERS.items()):
+        access = ("read only" if not spec.writable
+                  else "kept by Save to flash" if spec.saveable else "not saved")
+        out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {spec.low}..{spec.high}, "
+                                        f"{access}; Modbus 0x{spec.address:04X}")
+    return out
+
+
+def parameter_details() -> dict[str, str]:
+    """``"c9 operating mode / fieldbus"`` -> its range, default and Modbus address (ch. 1
+    "Parametri"), and whether it acts only at the next power-up."""
+    out = {}
+    for spec in PARAMETERS.values():
+        unit = " %" if spec.unit == "%" else ""
+        when = "; read at power-up" if spec.power_up else ""
+        access = "" if spec.writable else ", read only"
+        out[f"{spec.name} {spec.meaning}"] = (
+            f"{spec.name} {spec.meaning}: {spec.low}..{spec.high}{unit}, default "
+            f"{spec.default}{access}{when}; Modbus 0x{spec.address:04X}")
+    return out
+
+
 def alarm_options(fieldbus: str) -> tuple[str, ...]:
     return tuple(alarm_details(fieldbus))
 
@@ -123,7 +149,9 @@ class DrivePanel:
                                                   min=-0x8000_0000, max=0xFFFF_FFFF)
             reg_ops = gui.add_button_group("Register access", ("Read register",
                                                                "Write register"))
+            self._register_hint = DetailHint(self._register, register_details)
             self._parameter = gui.add_dropdown("Parameter", PARAMETER_OPTIONS)
+            self._parameter_hint = DetailHint(self._parameter, parameter_details)
             self._parameter_value = gui.add_number("Parameter value", 0, step=1, min=0,
                                                    max=0xFFFF)
             par_ops = gui.add_button_group("Parameter access", ("Read param.", "Write param."))
