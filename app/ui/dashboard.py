@@ -449,6 +449,19 @@ class Dashboard:
         as the scenario wrote it."""
         return " ".join(str(self._caption.text).split("\n")) if self._caption.visible else ""
 
+    def instructor_widgets(self) -> list[Any]:
+        """The controls that make a fault or show one outright: a trainee's page does not
+        show them (the classroom's trainee CSS, docs/classroom.md)."""
+        found: list[Any] = []
+        if self._panels is not None:
+            found += self._panels.control.instructor_only
+            found += self._panels.modules.instructor_only
+        if self._drives is not None:
+            found += self._drives.controls.instructor_only
+        if self._line is not None:
+            found += self._line.controls.instructor_only
+        return found
+
     @property
     def objects(self) -> ObjectDictionaryPanel | None:
         """The Objects tab (tests)."""

@@ -61,7 +61,17 @@ def badge(text: str, tone: str) -> str:
     return f'<span class="fr-badge fr-{tone}">{esc(text)}</span>'
 
 
+# Rows and elements with this class are not shown on a trainee's page (the classroom's
+# trainee CSS, app/ui/panels/classroom.py): what names an injected cause outright.
+INSTRUCTOR_CLASS = "fr-instructor"
+# Rows that name the simulator's injected causes, not anything the device shows.
+CAUSE_ROWS = frozenset({"Causes", "Injected"})
+
+
 def kv_table(rows: list[tuple[str, str]], table_id: str) -> str:
-    """A two-column table; values are HTML already (escape them with :func:`esc`)."""
-    body = "".join(f"<tr><th>{esc(k)}</th><td>{v}</td></tr>" for k, v in rows)
+    """A two-column table; values are HTML already (escape them with :func:`esc`). A row
+    of :data:`CAUSE_ROWS` is the instructor's (:data:`INSTRUCTOR_CLASS`)."""
+    body = "".join(
+        f'<tr class="{INSTRUCTOR_CLASS}"><th>{esc(k)}</th><td>{v}</td></tr>' if k in CAUSE_ROWS
+        else f"<tr><th>{esc(k)}</th><td>{v}</td></tr>" for k, v in rows)
     return f'<table class="fr-kv" id="{esc(table_id)}">{body}</table>'

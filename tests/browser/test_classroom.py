@@ -10,6 +10,7 @@ footer a closed recording gets).
 from __future__ import annotations
 
 import logging
+import re
 import subprocess
 import sys
 from collections.abc import Iterator
@@ -48,6 +49,20 @@ def _page(browser: Any, url: str) -> Any:
     return page
 
 
+def _row_display(page: Any, label: str) -> str:
+    """The CSS display of a labelled widget's row (label, <p>, label box, row, row wrapper:
+    viser 1.1.1's components/common.tsx)."""
+    found = page.locator("label").filter(has_text=re.compile(f"^{re.escape(label)}$")).first
+    return str(found.evaluate(
+        "e => getComputedStyle(e.parentElement.parentElement.parentElement.parentElement)"
+        ".display"))
+
+
+def _button_display(page: Any, name: str) -> str:
+    found = page.get_by_role("button", name=name, exact=True, include_hidden=True).first
+    return str(found.evaluate("e => getComputedStyle(e.parentElement).display"))
+
+
 def _injected(served: ServedRig) -> list[Any]:
     snap = served.runtime.submit(served.runtime.rig.snapshot).result(timeout=10)
     return list(snap["devices"]["fastcat"]["injected"])
@@ -67,15 +82,53 @@ def test_trainee_injection_refused_instructor_allowed_download(
         assert instructor.get_by_label("Hidden fault", exact=True).count() == 1
         assert instructor.get_by_role("button", name="Download recording").count() == 1
 
+        # The fault pickers and the boxes that would show a hidden physical fault are not on
+        # the trainee's page; what a trainee operates is (Reset fault, Power, CNF, Resync).
+        # (Rows in closed folders and other tabs are not visible on either page: the test
+        # reads the display of the row's own wrapper, which the trainee CSS sets.)
+        pages = (instructor, trainee)
+        tabs = {"FastCAT": (("Fault", "Injection", "Tbus supply low", "EtherCAT cable in",
+                             "Rail", "Module powered"),
+                            ("Reset fault", "Power", "Hold CNF", "Module")),
+                "Servo drive": (("Alarm", "Alarm cause", "Load jammed"),
+                                ("Drive power", "Jog")),
+                "Line": (("Cable plug", "Frames to lose", "DC fault"), ("Target state",))}
+        for tab, (hidden, shown) in tabs.items():
+            for page in pages:  # a tab's widgets are in the page once it was opened
+                for each in page.get_by_role("tab", name=tab, exact=True).all():
+                    each.click()
+            for label in hidden:
+                assert _row_display(instructor, label) != "none", label
+                assert _row_display(trainee, label) == "none", label
+            for label in shown:
+                assert _row_display(trainee, label) != "none", label
+        assert _button_display(instructor, "Lose frames") != "none"
+        assert _button_display(trainee, "Lose frames") == "none"
+        assert _button_display(trainee, "Resync") != "none"
+        for page in pages:  # back to the FastCAT tab and the left panel's State tab
+            page.get_by_role("tab", name="FastCAT", exact=True).click()
+            page.get_by_role("tab", name="State", exact=True).click()
+
         with caplog.at_level(logging.WARNING, logger="app.ui.commands"):
-            trainee.get_by_role("button", name="Inject", exact=True).click()
+            trainee.get_by_label("Power", exact=True).first.click()  # off: a fault, refused
             wait_for_text(trainee, "instructor only")
         assert any("refused from trainee" in r.message for r in caplog.records)
-        assert _injected(served) == []
+        assert served.runtime.frame.snapshot["devices"]["fastcat"]["powered"]
         wait_until(lambda: served.classroom.refusals, what="the refusal in the classroom")
 
         instructor.get_by_role("button", name="Inject", exact=True).click()
         wait_until(lambda: _injected(served), what="the instructor's injection")
+
+        # A hidden physical fault is not named on the trainee's page: the state table's
+        # Causes row is the instructor's.
+        served.runtime.command("fastcat", "tbus_voltage", {"low": True}).result(timeout=10)
+        causes = "#fr-state tr.fr-instructor"
+        wait_until(lambda: "Tbus supply low" in instructor.locator(causes).inner_text(),
+                   what="the Causes row on the instructor's page")
+        wait_until(lambda: "Tbus supply low" in trainee.locator(causes).inner_text(),
+                   what="the Causes row in the trainee's page")
+        assert instructor.locator(causes).is_visible()
+        assert not trainee.locator(causes).is_visible()
 
         with instructor.expect_download(timeout=30_000) as download:
             instructor.get_by_role("button", name="Download recording").click()

@@ -142,6 +142,9 @@ class DrivePanel:
             alarm_ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
             self._jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
                                          "following error, alarm 16")
+        # What makes a fault, or shows one outright (the box follows the drive): not on a
+        # trainee's page (the classroom's trainee CSS; docs/classroom.md).
+        self.instructor_only = (self._alarm, alarm_ops, self._jam)
         with gui.add_folder("Registers and parameters", expand_by_default=False):
             self._register = gui.add_dropdown("Register", REGISTER_OPTIONS,
                                               initial_value=register_option(R.PROFILE_VELOCITY))

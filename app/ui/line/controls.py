@@ -86,6 +86,10 @@ class LineControls:
         with gui.add_folder("Master", expand_by_default=False):
             gui.add_button("Resync").on_click(master("resync"))
             self.target = gui.add_dropdown("Target state", TARGETS, initial_value="OP")
+        # What makes a fault, and says which one was made: not on a trainee's page (the
+        # classroom's trainee CSS; docs/classroom.md). Resync and the target state stay.
+        self.instructor_only = [self.cable, cable_buttons, self.slave_power, power_buttons,
+                                self.frames, lose, self.dc_fault, dc_buttons]
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         faulty = [d for d in order if d not in own_tabs]
         with gui.add_folder("Slave faults"):

@@ -36,6 +36,8 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, Sent, notify
 from app.ui.panels.classroom_access import TokenForm, read_browser_token
 from app.ui.panels.classroom_html import history_html, instructor_html, trainee_html
+from app.ui.panels.widgets import widget_uuid
+from app.ui.style import INSTRUCTOR_CLASS
 from devices.device import CommandError
 from devices.events import LogLine
 
@@ -47,8 +49,20 @@ NO_FAULT = "(pick a hidden fault)"
 NO_CAUSE = "(pick the cause)"
 NO_FILE = "(pick an exercise file)"
 START, END = "Start exercise", "End and score"
-INSTRUCTOR_CLASS = "fr-instructor"  # HTML the dashboard shows to the instructor only
-TRAINEE_CSS = f"<style>.{INSTRUCTOR_CLASS} {{ display: none !important; }}</style>"
+
+
+def trainee_css(widgets: Sequence[Any] = ()) -> str:
+    """The style a trainee's page gets: no element of :data:`INSTRUCTOR_CLASS` (the injected
+    causes in the state tables) and no row of these server-level widgets (fault pickers, the
+    boxes that follow an injected physical fault). viser 1.1.1 has no per-client visibility
+    for a server-level widget; its client renders a widget's uuid as the input's ``id`` and
+    its label's ``for``, inside the row's two wrappers (components/common.tsx): the rule
+    hides that outer wrapper, padding and all (tests/browser/test_classroom.py)."""
+    rules = [f".{INSTRUCTOR_CLASS}"]
+    for uuid in map(widget_uuid, widgets):
+        rules.append(f'div:has(> div > div > p > label[for="{uuid}"])')  # a labelled input
+        rules.append(f'div:has(> button[id="{uuid}"])')  # a button
+    return f"<style>{', '.join(rules)} {{ display: none !important; }}</style>"
 
 
 @dataclass
@@ -67,9 +81,13 @@ class _View:
 class ClassroomPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  recorder: RigRecorder | None = None, download_name: str = "fieldrig.rrd",
-                 player: Any = None, exercise_files: Sequence[Path] = ()) -> None:
+                 player: Any = None, exercise_files: Sequence[Path] = (),
+                 instructor_widgets: Sequence[Any] = ()) -> None:
         """``player``: the dashboard's ScenarioPlayerPanel, which plays an exercise file's
-        scenario; ``exercise_files``: what the instructor may pick from."""
+        scenario; ``exercise_files``: what the instructor may pick from;
+        ``instructor_widgets``: the dashboard's widgets a trainee's page does not show
+        (:func:`trainee_css`)."""
+        self._trainee_css = trainee_css(instructor_widgets)
         self._server, self._runtime, self._sender = server, runtime, sender
         self.access = sender.gate.access
         self._recorder = recorder
@@ -221,9 +239,9 @@ class ClassroomPanel:
             view.handles.append(gui.add_markdown(
                 f"You are **{'the instructor' if role is Role.INSTRUCTOR else 'a trainee'}**"))
             if role is Role.TRAINEE:
-                # Elements the dashboard marks as the instructor's (the injected causes) are
-                # not shown on a trainee's page.
-                view.handles.append(gui.add_html(TRAINEE_CSS))
+                # What the dashboard marks as the instructor's (the injected causes, the
+                # fault pickers) is not shown on a trainee's page.
+                view.handles.append(gui.add_html(self._trainee_css))
                 view.form = TokenForm(client, self.access, self._promoted)
                 view.handles.append(view.form)
             self._answer_controls(client, view)

@@ -125,6 +125,10 @@ class ControlPanel:
                                           initial_value=max(low, 1))
             self._link = gui.add_checkbox("EtherCAT cable in", True)
             self._tbus_low = gui.add_checkbox("Tbus supply low", False)
+        # What makes a fault, or shows one outright (the two boxes follow the coupler): not
+        # on a trainee's page (the classroom's trainee CSS; docs/classroom.md).
+        self.instructor_only = (self._table, self._fault, self._target, actions, self._link,
+                                self._tbus_low)
 
         if master_id is not None:
             self._master_controls(gui, master_id)

@@ -72,6 +72,9 @@ class ModulePanel:
             self._plug_type = gui.add_dropdown("Plug type", tuple(catalog))
             self._swap_with = gui.add_dropdown("Swap with", ("1",))
             self._powered = gui.add_checkbox("Module powered", True)
+        # Plugging, swapping and a module's supply are the instructor's (the box follows the
+        # module): not on a trainee's page (the classroom's trainee CSS; docs/classroom.md).
+        self.instructor_only = (rail_ops, self._plug_type, self._swap_with, self._powered)
 
         with gui.add_folder("Encoder (AX2)", visible=False) as self._encoder_folder:
             self._encoder_state = gui.add_html("")

@@ -42,6 +42,13 @@ FRESH_AFTER = 2
 _NOTHING = object()
 
 
+def widget_uuid(handle: Any) -> str:
+    """The id viser's client gives a server-level widget in the page. viser 1.1.1 (pinned in
+    pyproject.toml) keeps it on the handle's private ``_impl``; the classroom's trainee CSS
+    needs it to hide a widget on some pages only."""
+    return str(handle._impl.uuid)
+
+
 def from_user(event: viser.GuiEvent) -> bool:
     """True for a change a person made in a browser, False for the view's own writes."""
     return event.client is not None
