@@ -99,13 +99,18 @@ def gate_for(runtime: Runtime) -> Gate:
         return gate
 
 
+# A refusal stays longer than a confirmation, but closes: toasts that stayed until clicked
+# piled up over the 3D view's LEDs a trainee has to read (classroom review, session 11).
+NOTE_S, ERROR_S = 4.0, 12.0
+
+
 def notify(client: viser.ClientHandle | None, title: str, body: str, *,
            error: bool = False) -> None:
     if client is None:
         return
     try:
         client.add_notification(title, body, color="red" if error else "blue",
-                                auto_close_seconds=None if error else 4.0)
+                                auto_close_seconds=ERROR_S if error else NOTE_S)
     except Exception:  # the browser may have gone away meanwhile
         logger.debug("could not notify client %s", getattr(client, "client_id", "?"),
                      exc_info=True)

@@ -23,7 +23,7 @@ from app.classroom.roles import (
 )
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
-from app.ui.commands import REFUSALS_DEVICE, CommandSender, Gate, Sent
+from app.ui.commands import ERROR_S, NOTE_S, REFUSALS_DEVICE, CommandSender, Gate, Sent, notify
 from devices.events import LogLine
 
 
@@ -203,3 +203,21 @@ def test_docs_list_every_instructor_only_action() -> None:
         written = f"`{rule.action}`" + "".join(f" {k}={str(v).lower()}"
                                              for k, v in rule.when.items())
         assert written in cell, (kind, written)
+
+
+def test_every_notification_closes_by_itself() -> None:
+    """Refusals stayed until clicked and piled up over the LEDs a trainee reads; they now
+    close after ERROR_S (longer than a confirmation)."""
+    shown: list[tuple[str, Any]] = []
+
+    class Page:
+        client_id = 7
+
+        def add_notification(self, title: str, body: str, color: str = "",
+                             auto_close_seconds: Any = None) -> None:
+            shown.append((color, auto_close_seconds))
+
+    notify(Page(), "fastcat: power refused", "instructor only", error=True)  # type: ignore[arg-type]
+    notify(Page(), "Instructor", "You are the instructor")  # type: ignore[arg-type]
+    assert shown == [("red", ERROR_S), ("blue", NOTE_S)]
+    assert NOTE_S < ERROR_S < 60
