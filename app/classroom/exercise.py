@@ -86,7 +86,8 @@ class Exercise:
             refused = sum(1 for a in self.actions if a.refused)
             self.result = score(cause_right=self.cause_right, fixed=self.fixed,
                                 seconds=self.finished_s, actions=len(self.actions),
-                                refused=refused, rules=self.rules)
+                                refused=refused, rules=self.rules,
+                                named=self.answer is not None)
             self.phase = Phase.FINISHED
             return self.result
 

@@ -59,12 +59,14 @@ def time_points(rules: ScoringRules, seconds: float) -> int:
 
 
 def score(*, cause_right: bool, fixed: bool, seconds: float, actions: int, refused: int,
-          rules: ScoringRules = RULES) -> Score:
+          rules: ScoringRules = RULES, named: bool = True) -> Score:
     """``actions``: commands the trainee's connections sent (refused ones included),
-    ``refused``: how many of them the server refused."""
+    ``refused``: how many of them the server refused; ``named``: a cause was named at all
+    (an exercise the instructor ended before any answer)."""
     parts = [
         Part("cause", rules.cause_points if cause_right else 0,
-             "named the injected cause" if cause_right else "named another cause"),
+             "named the injected cause" if cause_right
+             else "named another cause" if named else "no cause named"),
         Part("fixed", rules.fixed_points if fixed else 0,
              "the fault is gone" if fixed else "the rig still shows the fault"),
         Part("time", time_points(rules, seconds) if cause_right and fixed else 0,

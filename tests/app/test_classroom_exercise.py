@@ -13,6 +13,7 @@ from app.classroom.faults import catalog, fault_gone
 from app.classroom.scoring import RULES, ScoringRules, score, time_points
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.ui.panels.classroom_html import history_html
 from devices.device import CommandError
 from devices.fastcat.alarms import CODE_TABLES
 
@@ -123,6 +124,17 @@ def test_exercise_wrong_cause(rig_catalog: Any) -> None:
     result = exercise.finish(20.0, rig.snapshot())
     assert not exercise.fixed and result.total == 0
     assert [p.rule for p in result.parts][:3] == ["cause", "fixed", "time"]
+    assert result.parts[0].why == "named another cause"
+    assert history_html([exercise.report(rig_catalog)]).count("<td>wrong</td>") == 1
+
+
+def test_exercise_ended_with_no_answer_says_so(rig_catalog: Any) -> None:
+    """End and score before any answer read "named another cause" and "wrong"."""
+    rig = _powered_rig()
+    exercise = Exercise(rig_catalog.fault("fastcat:inject:coupler:0x04"), started_s=0.0)
+    result = exercise.finish(20.0, rig.snapshot())
+    assert result.parts[0].points == 0 and result.parts[0].why == "no cause named"
+    assert "<td>none named</td>" in history_html([exercise.report(rig_catalog)])
 
 
 def _every_fault() -> list[str]:

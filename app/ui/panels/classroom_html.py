@@ -81,9 +81,14 @@ def instructor_html(report: Mapping[str, Any] | None, elapsed_s: float,
             f'{"<br>".join(lines)}</div>')
 
 
+def _verdict(report: Mapping[str, Any]) -> str:
+    return "right" if report["right"] else "wrong" if report["answer"] is not None \
+        else "none named"
+
+
 def history_html(results: Iterable[Mapping[str, Any]]) -> str:
     rows = "".join(
-        f"<tr><td>{esc(r['fault'])}</td><td>{'right' if r['right'] else 'wrong'}</td>"
+        f"<tr><td>{esc(r['fault'])}</td><td>{_verdict(r)}</td>"
         f"<td>{'yes' if r['fixed'] else 'no'}</td><td>{r['finished_s']:.0f} s</td>"
         f"<td><b>{r['score']['total']}</b></td></tr>" for r in results)
     if not rows:
