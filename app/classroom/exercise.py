@@ -99,6 +99,7 @@ class Exercise:
             "fault": self.fault.label, "cause": cause.label if cause else self.fault.cause,
             "phase": self.phase.value,
             "answer": named.label if named else self.answer, "right": self.cause_right,
+            "answered_by": self.answered_by,
             "answered_s": self.answered_s, "finished_s": self.finished_s, "fixed": self.fixed,
             "actions": [{"t": a.at_s, "client": a.client_id, "role": a.role, "text": a.text,
                          "refused": a.refused} for a in self.actions],

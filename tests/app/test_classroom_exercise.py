@@ -13,7 +13,7 @@ from app.classroom.faults import catalog, fault_gone
 from app.classroom.scoring import RULES, ScoringRules, score, time_points
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.ui.panels.classroom_html import history_html
+from app.ui.panels.classroom_html import history_html, trainee_html
 from devices.device import CommandError
 from devices.fastcat.alarms import CODE_TABLES
 
@@ -171,3 +171,14 @@ def test_every_hidden_fault_injects_and_repairs(rig_catalog: Any, all_powered: R
     rig.run_until(rig.clock.now_us + 10_000)
     _run(rig, fault.repair)
     assert rig_catalog.cause(fault.cause) is not None
+
+
+def test_only_the_page_that_answered_reads_answer_recorded(rig_catalog: Any) -> None:
+    """A second trainee, whose answer was refused, read "Answer recorded" too."""
+    exercise = Exercise(rig_catalog.fault("fastcat:inject:coupler:0x04"), started_s=0.0)
+    exercise.name_cause(5.0, "fastcat:coupler:0x13", client_id=4)
+    report = exercise.report(rig_catalog)
+    assert report["answered_by"] == 4
+    assert "Answer recorded" in trainee_html(report, 6.0, mine=True)
+    other = trainee_html(report, 6.0, mine=False)
+    assert "Answer recorded" not in other and "Another trainee named a cause" in other

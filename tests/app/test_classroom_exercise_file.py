@@ -89,3 +89,11 @@ def test_file_plays_then_injects(served: ServedRig, tmp_path: Path) -> None:
     assert classroom.exercise.fault.id == "fastcat:inject:coupler:0x04"
     snap = served.runtime.submit(served.runtime.rig.snapshot).result(timeout=10)
     assert snap["devices"]["fastcat"]["injected"]
+
+
+def test_refused_commands_start_afresh_with_each_exercise(served: ServedRig) -> None:
+    """The instructor's list mixed refusals from before the exercise and from earlier ones."""
+    classroom = served.classroom
+    classroom.refusals.append("#3 fastcat: power makes a fault (instructor only)")
+    classroom.start_exercise("fastcat:inject:coupler:0x04")
+    assert list(classroom.refusals) == []

@@ -70,6 +70,7 @@ class _View:
     """The handles one connection got; removed and rebuilt when its role changes."""
 
     role: Role
+    client_id: int | None = None
     handles: list[Any] = field(default_factory=list)
     trainee: Any = None
     instructor: Any = None
@@ -128,6 +129,9 @@ class ClassroomPanel:
             for command in fault.inject:
                 self._apply(command.target, command.action, dict(command.args))
             self.exercise = Exercise(fault, time.monotonic())
+            # The instructor's list shows this exercise's refusals (and the ones after it)
+            # only: older ones mixed in could not be told apart.
+            self.refusals.clear()
         self._log(f"exercise started by connection {self._id(client)} (the fault is hidden)")
         return self.exercise
 
@@ -233,7 +237,7 @@ class ClassroomPanel:
         if old is not None:
             for handle in reversed(old.handles):
                 handle.remove()
-        view = _View(role)
+        view = _View(role, client.client_id)
         gui = client.gui
         with self._folder:
             view.handles.append(gui.add_markdown(
@@ -380,7 +384,8 @@ class ClassroomPanel:
         if exercise is not None:
             end = exercise.finished_s
             elapsed = end if end is not None else time.monotonic() - exercise.started_s
-        self._show(view, "trainee", view.trainee, trainee_html(report, elapsed))
+        mine = report is not None and report["answered_by"] == view.client_id
+        self._show(view, "trainee", view.trainee, trainee_html(report, elapsed, mine))
         if view.instructor is not None:
             self._show(view, "instructor", view.instructor,
                        instructor_html(report, elapsed, list(self.refusals)))

@@ -16,9 +16,11 @@ HISTORY_ID = "fr-exercise-history"
 MAX_ACTIONS_SHOWN = 12
 
 
-def trainee_html(report: Mapping[str, Any] | None, elapsed_s: float) -> str:
+def trainee_html(report: Mapping[str, Any] | None, elapsed_s: float,
+                 mine: bool = True) -> str:
     """No hidden fault, no answer, no score: what the trainee is asked and whether the
-    answer is in."""
+    answer is in; ``mine``: this page named it (the first answer counts, another
+    trainee's was refused)."""
     phase = report["phase"] if report else "none"
     if report is None:
         body = ('<span class="fr-muted">No exercise is running. When the instructor starts '
@@ -27,9 +29,13 @@ def trainee_html(report: Mapping[str, Any] | None, elapsed_s: float) -> str:
     elif phase == "running":
         body = (f"<b>Exercise running</b> ({elapsed_s:.0f} s): the rig has a fault. Find its "
                 "cause, pick it and press <i>Name the cause</i>.")
-    elif phase == "answered":
+    elif phase == "answered" and mine:
         body = ("<b>Answer recorded.</b> If the rig still shows an alarm, reset it (Reset "
                 "fault, resync, alarm reset), then press <i>Done</i>.")
+    elif phase == "answered":
+        body = ("<b>Another trainee named a cause</b> (the first answer counts). If the rig "
+                "still shows an alarm, reset it (Reset fault, resync, alarm reset), then press "
+                "<i>Done</i>.")
     else:
         body = "<b>Exercise finished.</b> The instructor has your result."
     return f'<div id="{TRAINEE_ID}" data-phase="{phase}" style="font-size:0.85em">{body}</div>'
