@@ -233,7 +233,8 @@ def _serve(args: argparse.Namespace) -> int:
                 from app.ethercat_wire.bridge import start_wire
 
                 extras.append(start_wire(one.runtime, args.ethercat_if, rigs=count))
-            print(f"FieldRig: rig {i + 1} '{rig.name}' at {one.url}"
+            print(f"FieldRig: rig {i + 1} '{rig.name}' at {one.shown_url}"
+                  + (f" (listening on {args.host})" if one.shown_url != one.url else "")
                   + (f" (recording {record})" if record else ""), flush=True)
         if access_token is not None:
             print(f"FieldRig: instructor token {access_token}: open a rig's URL with "

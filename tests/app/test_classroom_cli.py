@@ -5,12 +5,15 @@ recording, and prints the URLs and the instructor token."""
 from __future__ import annotations
 
 import re
+import socket
 import urllib.request
 from pathlib import Path
+from types import SimpleNamespace
 
 from served_process import free_ports, start_serving
 
 from app.cli import main
+from app.ui.panels.classroom_rig import ServedRig
 
 
 def test_two_rigs_two_urls(tmp_path: Path) -> None:
@@ -51,3 +54,16 @@ def test_broken_exercise_file_exits_2(tmp_path: Path, capsys: object) -> None:
     empty.mkdir()
     assert main(["--exercises", str(empty), "--state-dir", str(tmp_path / "s"),
                  "--run-for", "0"]) == 2
+
+
+def test_a_wildcard_host_is_shown_by_the_machine_name() -> None:
+    """Served on 0.0.0.0 the server printed http://0.0.0.0:8190/, which no trainee's browser
+    can open; the machine's name stands in (README: http://THIS-MACHINE:8081/)."""
+    token = SimpleNamespace(access=SimpleNamespace(token="tok"))
+    one = ServedRig(None, None, None, None, token, None, "0.0.0.0", 8081)  # type: ignore[arg-type]
+    name = socket.gethostname()
+    assert one.url == "http://0.0.0.0:8081/"
+    assert one.shown_url == f"http://{name}:8081/"
+    assert one.instructor_url == f"http://{name}:8081/?token=tok"
+    loopback = ServedRig(None, None, None, None, token, None, "127.0.0.1", 8080)  # type: ignore[arg-type]
+    assert loopback.shown_url == loopback.url == "http://127.0.0.1:8080/"

@@ -8,6 +8,7 @@ start them the same way. Protocol servers (Modbus, CAN) are the CLI's business.
 from __future__ import annotations
 
 import logging
+import socket
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +24,7 @@ from app.ui.dashboard import Dashboard
 from app.ui.panels.classroom import ClassroomPanel
 
 logger = logging.getLogger(__name__)
+WILDCARD_HOSTS = frozenset({"0.0.0.0", "::", ""})
 
 
 @dataclass
@@ -41,9 +43,17 @@ class ServedRig:
         return f"http://{self.host}:{self.port}/"
 
     @property
+    def shown_url(self) -> str:
+        """The URL to hand to trainees: a wildcard bind address (0.0.0.0, ::) is no address
+        a browser on another machine can open, so the machine's name stands in for it."""
+        if self.host in WILDCARD_HOSTS:
+            return f"http://{socket.gethostname()}:{self.port}/"
+        return self.url
+
+    @property
     def instructor_url(self) -> str:
         token = self.classroom.access.token
-        return self.url if token is None else f"{self.url}?token={token}"
+        return self.shown_url if token is None else f"{self.shown_url}?token={token}"
 
     def stop(self) -> None:
         self.classroom.stop()
