@@ -95,7 +95,8 @@ def _verdict(report: Mapping[str, Any]) -> str:
 def history_html(results: Iterable[Mapping[str, Any]]) -> str:
     rows = "".join(
         f"<tr><td>{esc(r['fault'])}</td><td>{_verdict(r)}</td>"
-        f"<td>{'yes' if r['fixed'] else 'no'}</td><td>{r['finished_s']:.0f} s</td>"
+        f"<td>{'yes' if r['fixed'] else 'no'}</td>"
+        f"<td style=\"white-space:nowrap\">{r['finished_s']:.0f} s</td>"
         f"<td><b>{r['score']['total']}</b></td></tr>" for r in results)
     if not rows:
         return (f'<div id="{HISTORY_ID}" class="fr-muted" style="font-size:0.82em">'
