@@ -88,3 +88,13 @@ def test_play_on_another_rig_is_refused_short_fix_first(
     # The device lists are in the log, for whoever wants the detail.
     assert any("drive_ecat (servo)" in r.getMessage() for r in caplog.records)
     assert panel.player.view().scenario is None  # nothing loaded
+
+
+def test_the_picked_scenario_is_whole_in_the_hint(panel: ScenarioPlayerPanel) -> None:
+    """The box cuts a long name; its hint gives the name, the file and the first sentence."""
+    assert panel._pick.hint is None  # nothing picked yet
+    entry = next(e for e in library() if e.path.name == "cpx_short_circuit.toml")
+    label = next(o for o in panel._pick.options if o.endswith(entry.scenario.name))
+    panel._pick.value = label
+    assert panel._pick.hint == (f"{label} (cpx_short_circuit.toml): Seed 002 §2.5: an output "
+                                "of the CPX-E-8DO (module 2) is shorted while it is on.")

@@ -27,7 +27,7 @@ from app.rig_config import DEFAULT_RIG, RigConfigError
 from app.runtime import Frame, Runtime
 from app.scenario import EXAMPLES_DIR, Scenario, ScenarioError, load_scenario
 from app.ui.commands import CommandSender, notify
-from app.ui.panels.widgets import from_user
+from app.ui.panels.widgets import DetailHint, from_user
 from app.ui.style import esc
 
 logger = logging.getLogger(__name__)
@@ -44,6 +44,13 @@ class Entry:
     label: str  # what the picker shows: the scenario's name
     path: Path
     scenario: Scenario  # as the picker read it (Play reads the file again)
+
+
+def entry_detail(entry: Entry) -> str:
+    """``name (file.toml): the description's first sentence`` for the picker's hint."""
+    text = " ".join(entry.scenario.description.split())
+    first = text.split(". ", 1)[0].rstrip(".")
+    return f"{entry.label} ({entry.path.name})" + (f": {first}." if first else "")
 
 
 def library(directory: Path = SCENARIO_DIR) -> list[Entry]:
@@ -142,6 +149,9 @@ class ScenarioPlayerPanel:
         with gui.add_folder("Scenario player"):
             self._pick = gui.add_dropdown("Scenario", (CHOOSE, *self._entries),
                                           initial_value=CHOOSE)
+            # The box cuts a long name ("CPX-E-EC: short circuit at a digital outp"): the
+            # picked one's whole name, file and first sentence are its hint.
+            self._pick_hint = DetailHint(self._pick, self._details)
             self._buttons = gui.add_button_group("Playback", (PLAY, PAUSE, STEP, RESTART))
             initial = min(SPEEDS, key=lambda s: abs(s - runtime.speed))
             self._speed = gui.add_dropdown("Speed", tuple(speed_label(s) for s in SPEEDS),
@@ -216,6 +226,9 @@ class ScenarioPlayerPanel:
         self.player.load(scenario, fresh)
         self._loaded = path if path is not None else Path(scenario.source)
         self._show_picked(scenario, self._loaded)
+
+    def _details(self) -> dict[str, str]:
+        return {label: entry_detail(entry) for label, entry in self._entries.items()}
 
     def _show_picked(self, scenario: Scenario, path: Path) -> None:
         """The picker names the loaded scenario, also one loaded from elsewhere (the CLI)."""
