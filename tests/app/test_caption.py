@@ -13,6 +13,7 @@ import tomllib
 from collections.abc import Iterator
 from pathlib import Path
 from types import SimpleNamespace
+from typing import Any
 
 import numpy as np
 import pytest
@@ -64,6 +65,14 @@ def dashboard() -> Iterator[Dashboard]:
         server.stop()
 
 
+def on_screen(camera: Any, label: Any) -> tuple[Any, tuple[float, float, float, float]]:
+    """The caption's box in scene units and its (left, top, right, bottom) in view pixels."""
+    box = label_box(label, px_per_unit(camera, label.position))
+    y = float(label.position[1])
+    left, top = project(camera, (box.x0, y, box.z1))
+    right, bottom = project(camera, (box.x1, y, box.z0))
+    return box, (left, top, right, bottom)
+
 def test_the_longest_caption_fits_the_view(dashboard: Dashboard) -> None:
     text = longest_caption()
     assert len(text) > 200  # trscat_outputs_fallback.toml: what the audit saw cut
@@ -74,10 +83,7 @@ def test_the_longest_caption_fits_the_view(dashboard: Dashboard) -> None:
     shown = str(label.text)
     assert shown.split() == text.split()  # every word, broken at spaces only
     camera = dashboard.server.initial_camera
-    box = label_box(label, px_per_unit(camera, label.position))
-    y = float(label.position[1])
-    left, top = project(camera, (box.x0, y, box.z1))
-    right, _ = project(camera, (box.x1, y, box.z0))
+    box, (left, top, right, _) = on_screen(camera, label)
     assert left >= EDGE_PX and right <= VIEW_WIDTH_PX - EDGE_PX, (left, right, shown)
     assert top >= EDGE_PX, (top, shown)
     # ... and above the line, not over it.
@@ -112,10 +118,7 @@ def test_a_focused_view_shows_the_caption_and_the_whole_device(dashboard: Dashbo
     camera = SimpleNamespace(position=position, look_at=look_at, up=(0.0, 0.0, 1.0),
                              fov=dashboard.server.initial_camera.fov)
     label = dashboard._caption
-    box = label_box(label, px_per_unit(camera, label.position))
-    y = float(label.position[1])
-    left, top = project(camera, (box.x0, y, box.z1))
-    right, bottom = project(camera, (box.x1, y, box.z0))
+    box, (left, top, right, bottom) = on_screen(camera, label)
     assert left >= EDGE_PX and right <= VIEW_WIDTH_PX - EDGE_PX, (device, left, right)
     assert top >= EDGE_PX, (device, top)
     body = line.scene.focus_box(device)
