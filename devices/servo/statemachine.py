@@ -23,6 +23,9 @@ if TYPE_CHECKING:
 logger = logging.getLogger(__name__)
 
 
+# Commands that leave torque for a state of statusword bit 0 (Ready to switch on, Switched on)
+_SAVE_HOLDS = frozenset({Command.SHUTDOWN, Command.SWITCH_ON})
+
 class DriveStateMachine:
     """Mixin of :class:`~devices.servo.drive.ServoDrive`."""
 
@@ -130,6 +133,13 @@ class DriveStateMachine:
             if step is Command.ENABLE_OPERATION and self.state is State.SWITCHED_ON \
                     and not self.input_level("ten"):
                 break
+            if self.save_pending and self.state is State.OPERATION_ENABLED \
+                    and step in _SAVE_HOLDS:
+                # Ch. 4: a save asked in torque runs when torque goes off, and "è completo
+                # quando il bit 0 di StatusWord vale 1": torque goes off to Switch on disabled
+                # (9), where the manual's own sequence saves (0x0002); the command goes on
+                # from there once the save is over (_evaluate waits while saving).
+                return self._transition(Command.DISABLE_VOLTAGE) or moved
             if not self._transition(step):
                 break
             moved = True

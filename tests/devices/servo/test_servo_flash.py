@@ -71,6 +71,34 @@ def test_canopen_save_sequence_ends_in_ready_to_switch_on() -> None:
     assert sim.drive.state is State.READY_TO_SWITCH_ON
 
 
+@pytest.mark.parametrize("off", [0x0006, 0x0007])
+def test_a_save_asked_in_torque_keeps_bit_0_low_until_it_is_done(off: int) -> None:
+    """Ch. 4: a save asked with the motor enabled completes when it is disabled, and "il
+    salvataggio è completo quando il bit 0 di StatusWord vale 1". 0x1010:1 written in
+    Operation enabled, then 0x0006 (or 0x0007): bit 0 read 1 at once, 3 s before the save
+    ended (review, session 11). The torque-off now leaves the drive where the manual's own
+    sequence saves (Switch on disabled, 0x0002); the command completes after the save."""
+    sim = make_sim()
+    sim.cw(*CANOPEN_ENABLE)
+    assert sim.drive.state is State.OPERATION_ENABLED
+    sim.drive.od.write(0x1010, 1, 0x65766173)
+    sim.run(100)
+    assert sim.flash.writes == 0 and not sim.drive.saving  # in torque: pending
+    sim.cw(off)
+    assert not sim.drive.state.in_torque
+    assert sim.drive.statusword & 0x0001 == 0
+    if off == 0x0007:  # Switched on is no step from Switch on disabled: 0x0006 first
+        sim.run_until(lambda: not sim.drive.saving, 5_000)
+        assert sim.drive.state is State.SWITCH_ON_DISABLED and sim.flash.writes == 1
+        assert sim.drive.statusword & 0x0001 == 0
+        sim.cw(0x0006)
+        assert sim.drive.state is State.READY_TO_SWITCH_ON
+        return
+    took = sim.run_until(lambda: sim.drive.statusword & 0x0001, 5_000)
+    assert took >= flashsave.SAVE_DURATION_US / 1000 - 2
+    assert sim.flash.writes == 1 and sim.drive.state is State.READY_TO_SWITCH_ON
+
+
 def test_power_cut_during_a_save_keeps_the_old_content() -> None:
     flash = MemoryFlash()
     sim = make_sim(flash=flash)
