@@ -104,7 +104,6 @@ _ACTION_TABLE: tuple[tuple[Action, Fits, str], ...] = (
 )
 
 
-
 def _digital_channels(t: ModuleType) -> int:
     return t.di + t.do + t.dio  # DigitalIo numbers inputs, outputs and both in one row
 
