@@ -21,10 +21,9 @@ if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
 
 logger = logging.getLogger(__name__)
-
-
 # Commands that leave torque for a state of statusword bit 0 (Ready to switch on, Switched on)
 _SAVE_HOLDS = frozenset({Command.SHUTDOWN, Command.SWITCH_ON})
+
 
 class DriveStateMachine:
     """Mixin of :class:`~devices.servo.drive.ServoDrive`."""

@@ -73,6 +73,7 @@ def on_screen(camera: Any, label: Any) -> tuple[Any, tuple[float, float, float, 
     right, bottom = project(camera, (box.x1, y, box.z0))
     return box, (left, top, right, bottom)
 
+
 def test_the_longest_caption_fits_the_view(dashboard: Dashboard) -> None:
     text = longest_caption()
     assert len(text) > 200  # trscat_outputs_fallback.toml: what the audit saw cut
