@@ -315,8 +315,7 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
             if step.expect_error:
                 # refused as the author expects, or not: the run tells; what it may change
                 # on the rail is unknown from here on
-                for position in device.changes_modules(step.action, args, module):
-                    layout[position] = UNKNOWN_MODULE
+                _unknown_after(layout, device, step.action, args, module)
             else:
                 device.check_module(step.action, args, module, layout)
         except CommandError as exc:
@@ -346,9 +345,15 @@ def _module_layouts(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
             continue  # check_against names it
         device = rig.device(device_id)
         layout = layouts.setdefault(device_id, device.module_layout())
-        for position in device.changes_modules(reaction.action, args, module):
-            layout[position] = UNKNOWN_MODULE
+        _unknown_after(layout, device, reaction.action, args, module)
     return layouts
+
+
+def _unknown_after(layout: dict[int, Any], device: Any, action: str, args: dict[str, Any],
+                   module: int | None) -> None:
+    """Mark the positions this command may change as holding anything (UNKNOWN_MODULE)."""
+    for position in device.changes_modules(action, args, module):
+        layout[position] = UNKNOWN_MODULE
 
 
 def install_reactions(scenario: Scenario, rig: Rig, failures: list[str]) -> None:

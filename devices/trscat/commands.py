@@ -130,8 +130,8 @@ class CommandsMixin:
         slot = module or 0
         io = self.rail[slot] if slot < len(self.rail) else None
         if io is None:
-            layout = {s: io.kind for s, io in enumerate(self.rail) if io is not None}
-            raise CommandError(no_expansion(self.device_id, slot, layout, len(self.rail) - 1))
+            raise CommandError(no_expansion(self.device_id, slot, self.module_layout(),
+                                            len(self.rail) - 1))
         return io
 
     # ---- field side ---------------------------------------------------------------------------
