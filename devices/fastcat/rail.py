@@ -151,8 +151,7 @@ class RailMixin:
         return module
 
     def _rail_text(self) -> str:
-        return ", ".join(f"{i}={m.mtype.name if m else '-'}" for i, m in
-                         enumerate(self.rail, start=1)) or "empty"
+        return _layout_text(self.module_layout(), last=len(self.rail))
 
     def cmd_unplug(self, module: int) -> None:
         taken = self.rail_module(module)
@@ -242,9 +241,10 @@ class RailMixin:
         return self.od
 
 
-def _layout_text(layout: Mapping[int, Any]) -> str:
-    """``1=DB16, 2=-, 3=?``: a scenario check's rail (``?`` = an [[on]] command may change it)."""
-    last = max(layout, default=0)
+def _layout_text(layout: Mapping[int, Any], last: int | None = None) -> str:
+    """``1=DB16, 2=-, 3=?``: positions 1 .. ``last`` (default: the last one held) of a rail
+    or a scenario check's layout (``?`` = an [[on]] command may change it)."""
+    last = max(layout, default=0) if last is None else last
     return ", ".join(f"{n}={_kind_name(layout.get(n))}" for n in range(1, last + 1)) or "empty"
 
 
