@@ -191,19 +191,12 @@ class SlotIo:
         ``working`` False (TRS bus down, or the module's own supply fault): the outputs are
         off and the TxPDO image reads 0. The terminals still follow the field.
         """
-        applied = outputs if working else self._zeros_out
-        changed = applied != self.applied
-        if changed:
-            self.applied = list(applied)
-            self._applied_mask = to_mask(self.applied)
+        changed = self._drive(outputs, field_v, working)
         lines = self.lines
         if lines is not None:
-            driving, tripped, level = lines.driving, lines.tripped, lines.level
             history, debounced = lines.history, lines.value
-            lines.drive(self._applied_mask, field_in_range(field_v))
             sampled = lines.sample()  # the terminals are sampled (and lit) bus or no bus
-            changed = changed or driving != lines.driving or tripped != lines.tripped \
-                or level != lines.level or debounced != sampled or history != lines.history
+            changed = changed or debounced != sampled or history != lines.history
             value = sampled if working else 0
             if value != self._inputs_mask:
                 changed = True
@@ -220,6 +213,31 @@ class SlotIo:
                 changed = True
                 self.inputs = inputs
         self.still = not changed
+        return changed
+
+    def apply_outputs(self, outputs: list[int], field_v: float, working: bool) -> bool:
+        """Drive ``outputs`` now, outside a local cycle: what a state change does to the
+        terminals (seed 001 §9.2: the safe state is the state's, not the next SYNC0's). No
+        sample is taken: the inputs wait for the next local cycle, and the §3 debounce keeps
+        its count. True when the terminals or the image changed; the slot is then not still.
+        """
+        changed = self._drive(outputs, field_v, working)
+        if changed:
+            self.still = False
+        return changed
+
+    def _drive(self, outputs: list[int], field_v: float, working: bool) -> bool:
+        applied = outputs if working else self._zeros_out
+        changed = applied != self.applied
+        if changed:
+            self.applied = list(applied)
+            self._applied_mask = to_mask(self.applied)
+        lines = self.lines
+        if lines is not None:
+            driving, tripped, level = lines.driving, lines.tripped, lines.level
+            lines.drive(self._applied_mask, field_in_range(field_v))
+            changed = changed or driving != lines.driving or tripped != lines.tripped \
+                or level != lines.level
         return changed
 
     def field_current_a(self) -> float:

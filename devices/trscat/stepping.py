@@ -208,13 +208,7 @@ class SteppingMixin:
         """
         plan = self._plan
         if plan is None:
-            plan = self._plan = []
-            for slot, io in enumerate(self.rail):
-                if io is None:
-                    continue
-                serviced = self.serviced(slot)
-                working = serviced and not self.slot_fault(slot, AN_SUPPLY_FAULTS)
-                plan.append((slot, io, working, self._slot_field_v(slot)))
+            plan = self._plan = self._slot_plan()
             skip = False
         else:
             skip = self.SKIP_STILL
@@ -233,6 +227,26 @@ class SteppingMixin:
                 changed = True
         self._all_still = not changed  # a slot skipped was still, one run is unless changed
         return changed
+
+    def _slot_plan(self) -> list[tuple[int, SlotIo, bool, float]]:
+        """(slot, io, working, field volts) of every module on the rail."""
+        plan = []
+        for slot, io in enumerate(self.rail):
+            if io is None:
+                continue
+            working = self.serviced(slot) and not self.slot_fault(slot, AN_SUPPLY_FAULTS)
+            plan.append((slot, io, working, self._slot_field_v(slot)))
+        return plan
+
+    def _apply_output_image(self) -> None:
+        """The outputs of ``out_mode`` on the terminals now (transitions.py calls it when the
+        mode leaves NORMAL): firmware's state change puts the safe or error state out itself.
+        The local cycle would only do it at the next SYNC0, and in DC-SYNC none comes while
+        SYNC0 is lost or switched off (§9.1.1). A slot changed is no longer still, so the next
+        local cycle runs it and no step skips it (docs/trscat.md "Still steps")."""
+        for slot, io, working, field_v in self._slot_plan():
+            if io.apply_outputs(self._slot_outputs(slot, io), field_v, working):
+                self._all_still = False
 
     def _slot_outputs(self, slot: int, io: SlotIo) -> list[int]:
         if self.out_mode is OutputMode.NORMAL:

@@ -112,6 +112,7 @@ class TransitionsMixin:
         def _refresh(self) -> None: ...
         def _write_f030_list(self, kinds: Sequence[ModuleKind]) -> None: ...
         def _touch(self) -> None: ...
+        def _apply_output_image(self) -> None: ...
 
     def request_state(self, target: AlState) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
@@ -212,6 +213,7 @@ class TransitionsMixin:
             self.sync.restart_free_run(self.now_us)
         if target is AlState.INIT:  # the master's PRE-OP settings go; it writes them again
             self.sync.requested = None
+        self._apply_output_image()  # §9.2 "safe-state" from now, SYNC0 or not
 
     def _fall_on_comm_error(self, code: int) -> None:
         """ETG.1020: a communication error in OP -> SAFE-OP + error; outputs per §9.3.5."""
@@ -221,6 +223,7 @@ class TransitionsMixin:
                     io.kind, io.applied, self.error_modes[slot], self.error_values[slot],
                     self.sysok_mask if slot == 0 else 0)
         self.out_mode = OutputMode.ERROR
+        self._apply_output_image()  # §9.3.6 from now: a fatal sync error has no SYNC0 left
         if code == SM_WATCHDOG:  # the sync errors made their message when they began
             self.report(check_message(code, CHECK_TEXT[code], self.now_us * 1000))
         self.esm.fall(AlState.SAFEOP, code, self.now_us)

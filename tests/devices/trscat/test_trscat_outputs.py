@@ -122,3 +122,70 @@ def test_back_to_op_follows_the_master_again() -> None:
     bench.run(0.003)
     assert bench.trs.al_state is AlState.OP
     assert bench.trs.rail[0].applied == [ch % 2 for ch in range(1, 17)]
+
+
+# ---- the output image of a state change, whether or not a local cycle follows ---------------
+def _op_with_io1_on(sysok: int) -> Bench:
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.write(0xF710, 1, sysok)
+    bench.apply("set_output", channel=1, value=1)
+    bench.run(0.01)
+    assert bench.trs.rail[0].applied[0] == 1 and bench.leds()["I/O 1"] == "on"
+    return bench
+
+
+def _io1(bench: Bench) -> tuple[int, bool, str]:
+    """I/O 1 as commanded, as driven on the terminal, as lit (§8.3)."""
+    snap = bench.trs.snapshot()
+    return (snap["slots"][0]["outputs"][0], snap["slots"][0]["lines"][0]["driving"],
+            snap["leds"]["I/O 1"])
+
+
+@pytest.mark.parametrize(("sysok", "io1"), [(0x0001, (0, False, "off")),
+                                            (0x0000, (1, True, "on"))])
+def test_fatal_sync_error_applies_the_error_outputs_without_sync0(
+        sysok: int, io1: tuple[int, bool, str]) -> None:
+    """§9.3.6: on a communication error in OP (here the fatal sync error 0x002C: SYNC0 stops)
+    a 0xF710 bit 1 puts that output to logic 0; bit 0 holds it (§9.3.5). The state change
+    applies the outputs: no local cycle follows, SYNC0 being gone (§9.1.1)."""
+    bench = _op_with_io1_on(sysok)
+    bench.apply("lose_sync0", lost=True)
+    bench.run(0.5)
+    assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.SAFEOP, 0x002C)
+    assert bench.trs.snapshot()["outputs_mode"] == "error"
+    assert _io1(bench) == io1
+    bench.request(AlState.SAFEOP)  # the master acknowledges the error: outputs as they are
+    bench.run(0.5)
+    assert _io1(bench) == io1
+
+
+def test_requested_safeop_without_sync0_is_the_safe_state() -> None:
+    """§9.2 SAFE-OP: "gli Output rimangono in 'safe-state'", from the request on, with SYNC0
+    lost before the device noticed (no local cycle runs any more)."""
+    bench = _op_with_io1_on(0)
+    bench.apply("lose_sync0", lost=True)
+    bench.request(AlState.SAFEOP)
+    assert bench.trs.al_state is AlState.SAFEOP
+    assert _io1(bench) == (0, False, "off")
+    bench.run(0.5)
+    assert bench.trs.snapshot()["outputs_mode"] == "safe"
+    assert _io1(bench) == (0, False, "off")
+
+
+@pytest.mark.parametrize("wait_s", [0.0, 0.5])
+def test_master_switching_sync0_off_then_leaving_op(wait_s: float) -> None:
+    """The master writes 0x0981 = 0 in OP (SYNC0 off, §9.1.1) and then asks for SAFE-OP, at
+    once or after the fatal sync error it caused: the outputs are off from the request on."""
+    bench = _op_with_io1_on(0)
+    bench.configure_dc(0, bench.step_us * 1000)
+    bench.run(wait_s)
+    bench.trs.request_state(AlState.SAFEOP)  # not bench.request: it would write SYNC0 on
+    bench.run(0.5)
+    assert bench.trs.al_state is AlState.SAFEOP
+    assert bench.trs.snapshot()["outputs_mode"] == ("error" if wait_s else "safe")
+    # After the fall the request acknowledges the error and the held outputs stay (§9.3.5
+    # hold, 0xF710 = 0); without the fall it is the safe state.
+    assert _io1(bench) == ((1, True, "on") if wait_s else (0, False, "off"))
+    bench.trs.request_state(AlState.PREOP)
+    assert _io1(bench) == (0, False, "off")
