@@ -35,7 +35,7 @@ from devices.trscat.commands import ACTIONS, CommandsMixin
 from devices.trscat.diagnostics import AppFault, DiagHistory
 from devices.trscat.esm import Esm
 from devices.trscat.indicators import LedInputs
-from devices.trscat.io import SlotIo, field_in_range
+from devices.trscat.io import SlotIo
 from devices.trscat.module_checks import ModuleChecks
 from devices.trscat.objects import build_od, refuse_in_state
 from devices.trscat.pdo import outputs_index
@@ -270,7 +270,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
             "box_name": self.box_name, "station_address": self.station_address,
             "leds": self.leds.snapshot(),
             "links": {"in": self.link_in, "out": self.link_out},
-            "field_supply_v": self.field_v, "field_ok": field_in_range(self.field_v),
+            "field_supply_v": self.field_v, "field_ok": self.field_ok(),
             "trs_bus": {"state": self.bus.value, "current_a": round(self.bus_current_a(), 3),
                         "communication_ok": self.od_bus_ok(2), "voltage_ok": self.od_bus_ok(3),
                         "current_ok": self.od_bus_ok(4)},

@@ -39,6 +39,7 @@ if TYPE_CHECKING:
 
 ACTIVITY_WINDOW_US = 50_000  # LINK-ACT flickers while a frame passed this recently
 AN_SUPPLY_FAULTS = frozenset({"AN_PLUS_12V", "AN_MINUS_12V"})  # §9.3.7: the module stops
+BASE_FIELD_FAULT: FaultKey = ("FIELD_SUPPLY", 0)  # 0x3220 on the base: the +24V LED's check (§8.4)
 _LATCHING = (AlState.SAFEOP, AlState.OP)  # the states in which an SM2 event latches outputs
 # Enum members as module constants: reading one off its class costs ~0.1 us in CPython 3.11
 # (the enum's descriptor), a module global a tenth of that; the steady step reads them.
@@ -259,6 +260,12 @@ class SteppingMixin:
         """Expansions take the field supply from the TRS bus (§10.3) unless their own fails."""
         return 0.0 if ("FIELD_SUPPLY", slot) in self.injected else self.field_v
 
+    def field_ok(self) -> bool:
+        """The base's check of the field supply, which the +24V LED shows (§4 "Controllo
+        software e segnalazione a led", §8.4 off "quando l'alimentazione è assente o fuori dal
+        range"): in 18..30 V and no 0x3220 injected on the base (the check failing)."""
+        return field_in_range(self.field_v) and BASE_FIELD_FAULT not in self.injected
+
     def _refresh(self, quiet: bool = False) -> None:
         """The LEDs from their inputs. ``quiet``: nothing but the time moved since the last
         refresh (no touch, no event, no slot changed), so only activity can differ."""
@@ -273,7 +280,7 @@ class SteppingMixin:
         base = self.rail[0]
         assert base is not None and base.lines is not None
         powered, esm, lines = self.powered, self.esm, base.lines
-        bus_running, field_ok = self.bus is TrsBus.RUNNING, field_in_range(self.field_v)
+        bus_running, field_ok = self.bus is TrsBus.RUNNING, self.field_ok()
         if old is not None and old.activity is activity and old.powered is powered \
                 and old.state is esm.state and old.error is esm.error \
                 and old.deadlocked is self.deadlocked and old.link_in is self.link_in \

@@ -145,6 +145,28 @@ def test_field_supply_out_of_range() -> None:
     assert bench.read(0xF100, 1) == 0b11 and bench.leds()["I/O 1"] == "on"
 
 
+def test_injected_field_supply_fault_puts_the_24v_led_out() -> None:
+    """§8.4 "È spento quando l'alimentazione è assente o fuori dal range di ammissibilità", §4
+    "Controllo software e segnalazione a led": 0x3220 injected on the base is that software
+    check failing, so the LED goes off as for the physical cause; it comes back when the
+    injection is cleared. An expansion's own 0x3220 leaves the base's LED alone."""
+    bench = Bench(["IO-E"], configured=["IO-E"])
+    bench.to_state(AlState.OP)
+    bench.apply("set_output", channel=1, value=1)
+    bench.run(0.01)
+    bench.apply("inject_fault", fault="0x3220")
+    bench.run(0.01)
+    assert bench.read(0xF100, 1) == 0b10 and bench.leds()["I/O 1"] == "off"
+    assert bench.leds()["+24V"] == "off"
+    bench.apply("clear_fault", fault="0x3220")
+    bench.run(0.01)
+    assert bench.read(0xF100, 1) == 0b11 and bench.leds()["I/O 1"] == "on"
+    assert bench.leds()["+24V"] == "on"
+    bench.apply("inject_fault", module=1, fault="0x3220")
+    bench.run(0.01)
+    assert bench.read(0xF100, 1) == 0b01 and bench.leds()["+24V"] == "on"
+
+
 def test_overcurrent_on_the_trs_bus() -> None:
     """§10.3: at most 8 A along the TRS bus; §9.3.7 0x7100 above it."""
     bench = Bench(["IO-E"], configured=["IO-E"])
