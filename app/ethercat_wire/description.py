@@ -2,7 +2,9 @@
 
 Built by process A from the device models (their 0x1018 and PDO mapping) and handed to
 process B, which turns it into an SII EEPROM image and register defaults; the ESI export
-uses the same data. Plain frozen dataclasses so they pickle across the spawn boundary.
+uses the same data plus what only a configurator needs (the PDOs not assigned by default,
+whether their content may be edited). Plain frozen dataclasses so they pickle across the
+spawn boundary.
 """
 
 from __future__ import annotations
@@ -53,3 +55,9 @@ class SlaveDescription:
     tx_pdos: tuple[Pdo, ...]
     dc_supported: bool
     fmmu_count: int = 3
+    # For the ESI only (the SII and the wire use the assigned PDOs above): whether the master
+    # may edit the PDOs' content (ESI Fixed), and the PDOs the slave has but does not assign
+    # by default (listed without Sm, so a configurator can assign them).
+    pdos_fixed: bool = True
+    spare_rx_pdos: tuple[Pdo, ...] = ()
+    spare_tx_pdos: tuple[Pdo, ...] = ()

@@ -2,8 +2,9 @@
 
 Built from the same SlaveDescription as the SII image, so a configurator that imports them
 (TwinCAT, CODESYS, IgH `ethercat` tool users, ...) expects exactly what the wire shows:
-vendor, Type ProductCode / RevisionNo, Name, Fmmu, Sm, RxPdo / TxPdo, Mailbox / CoE, Dc,
-Eeprom. One file per slave of the line.
+vendor, Type ProductCode / RevisionNo, Name, Fmmu, Sm, RxPdo / TxPdo (the assigned ones with
+their Sm, the others a master may assign without), Mailbox / CoE, Dc, Eeprom. One file per
+slave of the line.
 
     python -m app ethercat export-esi [--rig RIG] [--out static/esi/]
 """
@@ -42,8 +43,14 @@ def _text(parent: ET.Element, tag: str, text: str, **attrs: str) -> ET.Element:
     return el
 
 
-def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int) -> None:
-    el = ET.SubElement(parent, tag, {"Fixed": "1", "Sm": str(sm)})
+def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int | None, fixed: bool) -> None:
+    """One RxPdo / TxPdo. ``sm``: the sync manager it is assigned to by default; None for a
+    PDO the master may assign (ETG.2000: a PDO without Sm is not in the default assignment).
+    """
+    attrs = {"Fixed": "1" if fixed else "0"}
+    if sm is not None:
+        attrs["Sm"] = str(sm)
+    el = ET.SubElement(parent, tag, attrs)
     _text(el, "Index", hexid(pdo.index, 4))
     _text(el, "Name", pdo.name)
     for e in pdo.entries:
@@ -80,10 +87,14 @@ def device_element(desc: SlaveDescription) -> ET.Element:
         _text(dev, "Sm", SM_NAMES.get(kind, ""), **attrs)
     rx_sm = _sm_number(desc, sii.SM_TYPE_OUTPUTS, 2)
     tx_sm = _sm_number(desc, sii.SM_TYPE_INPUTS, 3)
-    for pdo in desc.rx_pdos:
-        _pdo(dev, "RxPdo", pdo, rx_sm)
-    for pdo in desc.tx_pdos:
-        _pdo(dev, "TxPdo", pdo, tx_sm)
+    # The assigned PDOs first, in assignment order (a configurator builds the image in the
+    # order it reads them), then the ones the master may add.
+    for tag, assigned, spare, sm in (("RxPdo", desc.rx_pdos, desc.spare_rx_pdos, rx_sm),
+                                     ("TxPdo", desc.tx_pdos, desc.spare_tx_pdos, tx_sm)):
+        for pdo in assigned:
+            _pdo(dev, tag, pdo, sm, desc.pdos_fixed)
+        for pdo in spare:
+            _pdo(dev, tag, pdo, None, desc.pdos_fixed)
     if desc.mailbox is not None:
         mbx = ET.SubElement(dev, "Mailbox", {"DataLinkLayer": "true"})
         ET.SubElement(mbx, "CoE", {name: "true" if desc.coe_details & bit else "false"

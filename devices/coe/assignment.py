@@ -56,6 +56,14 @@ SLOTS: dict[str, Slot] = {s.name: s for s in (
 DEFAULT_SLOT = "interpolated"  # "Di default sarà impostata la modalità Interpolated Mode"
 
 
+def pdo_name(index: int) -> str:
+    """A PDO's name in the drive's .xml, as ch. 5's TwinCAT "Process Data" screen prints it
+    ("0x1A02 ... TxPDO 3", "0x1600 ... RxPDO 1"): 'RxPDO n' / 'TxPDO n', n = (index & 0xFF) + 1.
+    """
+    kind = "RxPDO" if index < TX_MAP_FIRST else "TxPDO"
+    return f"{kind} {(index & 0xFF) + 1}"
+
+
 def default_pdos(receive: bool) -> list[Pdo]:
     """The four PDOs of one direction with the ch. 5 contents (no COB-IDs on EtherCAT)."""
     maps = DEFAULT_RPDO_MAPS if receive else DEFAULT_TPDO_MAPS

@@ -12,6 +12,7 @@ from dataclasses import replace
 from test_esc import description
 
 from app.ethercat_wire import esi, sii
+from app.ethercat_wire.description import Pdo, PdoEntry
 
 
 def parsed(desc) -> ET.Element:
@@ -87,3 +88,13 @@ def test_static_esi_files_are_those_of_the_default_rig(tmp_path):
     for path in fresh:
         assert (shipped / path.name).read_bytes() == path.read_bytes(), (
             f"static/esi/{path.name} is stale: python -m app ethercat export-esi")
+
+
+def test_spare_pdos_without_sm_and_fixed_from_the_description():
+    """ETG.2000: a PDO without Sm is one the master may assign; Fixed = content not editable."""
+    spare = Pdo(0x1601, "Spare", (PdoEntry(0x7000, 2, 8, "Byte out"),))
+    desc = replace(description(0), pdos_fixed=False, spare_rx_pdos=(spare,))
+    dev = parsed(desc).find("Descriptions/Devices/Device")
+    assert [(p.findtext("Index"), p.get("Sm"), p.get("Fixed")) for p in dev.findall("RxPdo")] == [
+        ("#x1600", "2", "0"), ("#x1601", None, "0")]
+    assert [p.get("Fixed") for p in parsed(description(0)).findall(".//TxPdo")] == ["1"]

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 from app.ethercat_wire.description import Pdo, SlaveDescription, SyncManager
@@ -107,7 +107,8 @@ class Face:
     identity_defaults: ClassVar[tuple[int, int, int]]  # vendor, product, revision (no OD yet)
 
     # The mapping objects change only with a new dictionary (the FastCAT's scan, the TRS-CAT's
-    # 0xF030, the CPX-E-EC's restart): layouts are kept per dictionary object.
+    # 0xF030, the CPX-E-EC's restart): layouts are kept per dictionary object. A master cannot
+    # edit the PDOs' content then, so it is also the ESI's Fixed flag.
     mapping_fixed: ClassVar[bool] = True
 
     def __init__(self) -> None:
@@ -205,16 +206,30 @@ class Face:
             return ()
         return image.read_pdos(od.peek, od.entry, image.assigned(od.peek, assign_index))
 
+    def spare_pdos(self, model: Any, receive: bool) -> tuple[Pdo, ...]:
+        """PDOs the model has but does not assign now (the ESI lists them without Sm)."""
+        return ()
+
+    def pdo_name(self, pdo: Pdo) -> str:
+        """A PDO's name for the SII / ESI: the name the model gives its mapping object."""
+        return pdo.name
+
     def describe(self, model: Any) -> SlaveDescription:
         vendor, product, revision, serial = self.identity(model)
         rx, tx = self.rx_pdos(model), self.tx_pdos(model)
+
+        def named(pdos: tuple[Pdo, ...]) -> tuple[Pdo, ...]:
+            return tuple(replace(p, name=self.pdo_name(p)) for p in pdos)
+
         return SlaveDescription(
             device_id=model.device_id, name=self.name, vendor_id=vendor, product_code=product,
             revision=revision, serial=serial, group=self.group, order_code=self.order_code,
             mailbox=(MAILBOX_OUT, MAILBOX_SIZE, MAILBOX_IN, MAILBOX_SIZE),
             coe_details=self.coe_details,
             sync_managers=sync_managers(image.byte_size(rx), image.byte_size(tx)),
-            rx_pdos=rx, tx_pdos=tx, dc_supported=self.dc_supported)
+            rx_pdos=named(rx), tx_pdos=named(tx), dc_supported=self.dc_supported,
+            pdos_fixed=self.mapping_fixed, spare_rx_pdos=named(self.spare_pdos(model, True)),
+            spare_tx_pdos=named(self.spare_pdos(model, False)))
 
     def ready(self, model: Any) -> bool:
         """Whether the model has its dictionary (a description now is the one a master gets)."""

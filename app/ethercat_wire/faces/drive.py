@@ -11,6 +11,8 @@ from __future__ import annotations
 import logging
 from typing import Any, ClassVar
 
+from app.ethercat_wire.description import Pdo
+from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import (
     COE_PDO_ASSIGN,
     COE_PDO_CONFIG,
@@ -19,7 +21,7 @@ from app.ethercat_wire.faces.base import (
     Face,
     NoAnswer,
 )
-from devices.coe import objects
+from devices.coe import assignment, objects
 from devices.coe.mailbox import MailboxClosed
 from devices.device import CommandError
 
@@ -39,6 +41,18 @@ class DriveFace(Face):
 
     def od(self, model: Any) -> Any:
         return model.dictionary
+
+    def spare_pdos(self, model: Any, receive: bool) -> tuple[Pdo, ...]:
+        """The default PDOs 0x1C12 / 0x1C13 do not list now (ch. 5: 8 PDOs, any assignable)."""
+        od = self.od(model)
+        first = assignment.RX_MAP_FIRST if receive else assignment.TX_MAP_FIRST
+        used = {p.index for p in (self.rx_pdos(model) if receive else self.tx_pdos(model))}
+        return tuple(image.read_pdo(od.peek, od.entry, index)
+                     for index in range(first, first + assignment.PDOS_PER_DIRECTION)
+                     if index not in used)
+
+    def pdo_name(self, pdo: Pdo) -> str:
+        return assignment.pdo_name(pdo.index)
 
     def upload_raw(self, model: Any, index: int, sub: int) -> bytes:
         try:
