@@ -3,8 +3,8 @@
 Built by process A from the device models (their 0x1018 and PDO mapping) and handed to
 process B, which turns it into an SII EEPROM image and register defaults; the ESI export
 uses the same data plus what only a configurator needs (the PDOs not assigned by default,
-whether their content may be edited). Plain frozen dataclasses so they pickle across the
-spawn boundary.
+whether their content may be edited, the modules of a slot). Plain frozen dataclasses so they
+pickle across the spawn boundary.
 """
 
 from __future__ import annotations
@@ -25,6 +25,19 @@ class Pdo:
     index: int
     name: str
     entries: tuple[PdoEntry, ...]
+
+
+@dataclass(frozen=True)
+class SlotModule:
+    """A module a configurator may put in the slave's slot (ETG.2000 Slots / Modules): a
+    predefined set of PDOs assigned to SM2 / SM3 while the module is in the slot."""
+
+    ident: int  # ModuleIdent
+    type_name: str  # Module Type (TwinCAT's Slots tab, Module column)
+    name: str  # Module Name (Description column)
+    rx_pdos: tuple[Pdo, ...]
+    tx_pdos: tuple[Pdo, ...]
+    default: bool = False
 
 
 @dataclass(frozen=True)
@@ -61,3 +74,5 @@ class SlaveDescription:
     pdos_fixed: bool = True
     spare_rx_pdos: tuple[Pdo, ...] = ()
     spare_tx_pdos: tuple[Pdo, ...] = ()
+    slot_name: str = ""  # the one slot of a non-modular slave with slot_modules
+    slot_modules: tuple[SlotModule, ...] = ()

@@ -3,8 +3,9 @@
 Built from the same SlaveDescription as the SII image, so a configurator that imports them
 (TwinCAT, CODESYS, IgH `ethercat` tool users, ...) expects exactly what the wire shows:
 vendor, Type ProductCode / RevisionNo, Name, Fmmu, Sm, RxPdo / TxPdo (the assigned ones with
-their Sm, the others a master may assign without), Mailbox / CoE, Dc, Eeprom. One file per
-slave of the line.
+their Sm, the others a master may assign without), Mailbox / CoE, Dc, Slots (+ Descriptions /
+Modules: PDO sets a configurator selects, the drive's slots), Eeprom. One file per slave of
+the line.
 
     python -m app ethercat export-esi [--rig RIG] [--out static/esi/]
 """
@@ -110,11 +111,40 @@ def device_element(desc: SlaveDescription) -> ET.Element:
             if assign:
                 _text(mode, "CycleTimeSync0", "0", Factor="1")
                 _text(mode, "ShiftTimeSync0", "0")
+    if desc.slot_modules:
+        _slots(dev, desc)
     image = sii.build(desc)
     eeprom = ET.SubElement(dev, "Eeprom")
     _text(eeprom, "ByteSize", str(len(image)))
     _text(eeprom, "ConfigData", image[:14].hex().upper())
     return dev
+
+
+def _slots(dev: ET.Element, desc: SlaveDescription) -> None:
+    """One slot taking exactly one of the modules (they are alternatives, not a modular
+    device): no 0xF030 module list to download, the slave has none."""
+    slots = ET.SubElement(dev, "Slots", {"DownloadModuleIdentList": "0"})
+    slot = ET.SubElement(slots, "Slot", {"MinInstances": "1", "MaxInstances": "1"})
+    _text(slot, "Name", desc.slot_name, LcId="1033")
+    for module in desc.slot_modules:
+        _text(slot, "ModuleIdent", hexid(module.ident), **({"Default": "1"} if module.default
+                                                           else {}))
+
+
+def modules_element(desc: SlaveDescription) -> ET.Element:
+    """Descriptions/Modules: each module's PDOs, assigned to SM2 / SM3 while it is plugged."""
+    rx_sm = _sm_number(desc, sii.SM_TYPE_OUTPUTS, 2)
+    tx_sm = _sm_number(desc, sii.SM_TYPE_INPUTS, 3)
+    modules = ET.Element("Modules")
+    for module in desc.slot_modules:
+        el = ET.SubElement(modules, "Module")
+        _text(el, "Type", module.type_name, ModuleIdent=hexid(module.ident))
+        _text(el, "Name", module.name, LcId="1033")
+        for pdo in module.rx_pdos:
+            _pdo(el, "RxPdo", pdo, rx_sm, desc.pdos_fixed)
+        for pdo in module.tx_pdos:
+            _pdo(el, "TxPdo", pdo, tx_sm, desc.pdos_fixed)
+    return modules
 
 
 def document(desc: SlaveDescription, vendor_name: str | None = None) -> ET.ElementTree:
@@ -129,6 +159,8 @@ def document(desc: SlaveDescription, vendor_name: str | None = None) -> ET.Eleme
     _text(group, "Type", desc.group)
     _text(group, "Name", desc.group, LcId="1033")
     ET.SubElement(descriptions, "Devices").append(device_element(desc))
+    if desc.slot_modules:
+        descriptions.append(modules_element(desc))
     tree = ET.ElementTree(root)
     ET.indent(tree)
     return tree

@@ -42,18 +42,22 @@ class Slot:
     mode: int  # 0x6060 for it
     rx: int
     tx: int
+    module: str = ""  # as TwinCAT's Module column prints it ("" : not in the .xml)
 
 
 # Ch. 5 "Utilizzo degli Slots". CSP (0x6060 = 8) has no slot of its own in the seed; it takes
 # the Position Mode PDOs (controlword + 0x607A target position, statusword + 0x6064): the
 # target position is what a CSP master sends every cycle (docs/ethercat-coe.md §CSP).
 SLOTS: dict[str, Slot] = {s.name: s for s in (
-    Slot("position", "Position Mode", 1, 0x1602, 0x1A02),
-    Slot("interpolated", "Profile Interpolated Mode", 7, 0x1600, 0x1A02),
-    Slot("velocity", "Profile Velocity Mode", 3, 0x1603, 0x1A03),
+    Slot("position", "Position Mode", 1, 0x1602, 0x1A02, "Position Mode"),
+    Slot("interpolated", "Profile Interpolated Mode", 7, 0x1600, 0x1A02, "Interpolated Mode"),
+    Slot("velocity", "Profile Velocity Mode", 3, 0x1603, 0x1A03, "Velocity Mode"),
     Slot("csp", "Cyclic Synchronous Position Mode", 8, 0x1602, 0x1A02),
 )}
 DEFAULT_SLOT = "interpolated"  # "Di default sarà impostata la modalità Interpolated Mode"
+# The slots the drive's .xml offers: the three of ch. 5's Slots tab ("sono disponibili i
+# seguenti slot mutualmente selezionabili"); CSP is the Position Mode slot + 0x6060 = 8.
+XML_SLOTS = tuple(s for s in SLOTS.values() if s.module)
 
 
 def pdo_name(index: int) -> str:

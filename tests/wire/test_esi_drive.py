@@ -30,9 +30,13 @@ node_id = 2
 
 
 @pytest.fixture(scope="module")
-def device() -> ET.Element:
+def root() -> ET.Element:
     (desc,) = esi.rig_descriptions(build_rig(parse_rig_spec(DRIVE_ONLY)))
-    root = ET.fromstring(ET.tostring(esi.document(desc).getroot()))
+    return ET.fromstring(ET.tostring(esi.document(desc).getroot()))
+
+
+@pytest.fixture(scope="module")
+def device(root) -> ET.Element:
     return root.find("Descriptions/Devices/Device")
 
 
@@ -64,3 +68,38 @@ def test_the_default_pdos_size_the_process_data_sync_managers(device):
     """SM2 / SM3 DefaultSize stay those of the assigned PDOs only (6 + 6 bytes)."""
     sizes = {s.text: s.get("DefaultSize") for s in device.findall("Sm")}
     assert (sizes["Outputs"], sizes["Inputs"]) == ("6", "6")
+
+
+def test_one_slot_offers_the_three_seed_modules_interpolated_by_default(root):
+    """Ch. 5 "Utilizzo degli Slots": three mutually exclusive slots; "Di default sarà impostata
+    la modalità Interpolated Mode". CSP (0x6060 = 8) is no slot of the seed's."""
+    slots = root.find("Descriptions/Devices/Device/Slots")
+    assert slots is not None and slots.get("DownloadModuleIdentList") == "0"  # no 0xF030
+    (slot,) = slots.findall("Slot")
+    assert (slot.get("MinInstances"), slot.get("MaxInstances")) == ("1", "1")
+    idents = [(m.text, m.get("Default")) for m in slot.findall("ModuleIdent")]
+    assert idents == [("#x00000001", None), ("#x00000007", "1"), ("#x00000003", None)]
+    modules = {m.find("Type").get("ModuleIdent"): m
+               for m in root.findall("Descriptions/Modules/Module")}
+    assert sorted(modules) == sorted(i for i, _ in idents)
+    rows = [(modules[i].findtext("Type"), modules[i].findtext("Name")) for i, _ in idents]
+    assert rows == [("Position Mode", "Position Mode"),
+                    ("Interpolated Mode", "Profile Interpolated Mode"),
+                    ("Velocity Mode", "Profile Velocity Mode")]
+
+
+@pytest.mark.parametrize(("ident", "rx", "tx", "label"), [
+    ("#x00000001", "#x1602", "#x1A02", "Position"),
+    ("#x00000007", "#x1600", "#x1A02", "Interpolated"),
+    ("#x00000003", "#x1603", "#x1A03", "Velocity")])
+def test_each_module_assigns_its_slots_pdos(root, device, ident, rx, tx, label):
+    """The slot's PDOs of ch. 5, assigned to SM2 / SM3 when the module is in the slot; named
+    as TwinCAT's tree shows the Velocity Mode module: 'Velocity Inputs' / 'Velocity Outputs'."""
+    (module,) = [m for m in root.findall("Descriptions/Modules/Module")
+                 if m.find("Type").get("ModuleIdent") == ident]
+    assert pdo_rows(module, "RxPdo") == [(rx, f"{label} Outputs", "2", "0")]
+    assert pdo_rows(module, "TxPdo") == [(tx, f"{label} Inputs", "3", "0")]
+    same = {p.findtext("Index"): [ET.tostring(e) for e in p.findall("Entry")]
+            for p in (*device.findall("RxPdo"), *device.findall("TxPdo"))}
+    for pdo in (*module.findall("RxPdo"), *module.findall("TxPdo")):
+        assert [ET.tostring(e) for e in pdo.findall("Entry")] == same[pdo.findtext("Index")]

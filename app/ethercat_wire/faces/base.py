@@ -18,7 +18,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo, SlaveDescription, SyncManager
+from app.ethercat_wire.description import Pdo, SlaveDescription, SlotModule, SyncManager
 from app.ethercat_wire.faces import image
 from devices.ethercat import AlState
 from devices.od import (
@@ -210,6 +210,10 @@ class Face:
         """PDOs the model has but does not assign now (the ESI lists them without Sm)."""
         return ()
 
+    def slot(self, model: Any) -> tuple[str, tuple[SlotModule, ...]]:
+        """The ESI slot of a slave whose PDO sets are chosen as modules: name and modules."""
+        return "", ()
+
     def pdo_name(self, pdo: Pdo) -> str:
         """A PDO's name for the SII / ESI: the name the model gives its mapping object."""
         return pdo.name
@@ -217,6 +221,7 @@ class Face:
     def describe(self, model: Any) -> SlaveDescription:
         vendor, product, revision, serial = self.identity(model)
         rx, tx = self.rx_pdos(model), self.tx_pdos(model)
+        slot_name, modules = self.slot(model)
 
         def named(pdos: tuple[Pdo, ...]) -> tuple[Pdo, ...]:
             return tuple(replace(p, name=self.pdo_name(p)) for p in pdos)
@@ -229,7 +234,8 @@ class Face:
             sync_managers=sync_managers(image.byte_size(rx), image.byte_size(tx)),
             rx_pdos=named(rx), tx_pdos=named(tx), dc_supported=self.dc_supported,
             pdos_fixed=self.mapping_fixed, spare_rx_pdos=named(self.spare_pdos(model, True)),
-            spare_tx_pdos=named(self.spare_pdos(model, False)))
+            spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
+            slot_modules=modules)
 
     def ready(self, model: Any) -> bool:
         """Whether the model has its dictionary (a description now is the one a master gets)."""

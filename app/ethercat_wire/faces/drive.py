@@ -4,14 +4,17 @@ SDOs go through the slave's ``sdo_upload`` / ``sdo_download`` (its panel logs th
 drive's length rule of ch. 4 applies; INIT or off the line: no mailbox, the master times out).
 The images are the slave's: ``read_inputs`` packs the TxPDOs assigned in 0x1C13 (None below
 SAFEOP), ``write_outputs`` takes the RxPDOs of 0x1C12, applied at the next frame in OP.
+For the ESI the face also names the PDOs as the seed's TwinCAT screen does, lists the ones not
+assigned and the slot's modules (docs/ethercat-coe.md §ESI file).
 """
 
 from __future__ import annotations
 
 import logging
+from dataclasses import replace
 from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo
+from app.ethercat_wire.description import Pdo, SlotModule
 from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import (
     COE_PDO_ASSIGN,
@@ -26,6 +29,7 @@ from devices.coe.mailbox import MailboxClosed
 from devices.device import CommandError
 
 logger = logging.getLogger(__name__)
+SLOT_NAME = "Selema Drive"  # ch. 5 Slots tab: the slot the modules go in
 
 
 class DriveFace(Face):
@@ -53,6 +57,20 @@ class DriveFace(Face):
 
     def pdo_name(self, pdo: Pdo) -> str:
         return assignment.pdo_name(pdo.index)
+
+    def slot(self, model: Any) -> tuple[str, tuple[SlotModule, ...]]:
+        """Ch. 5 "Utilizzo degli Slots": one slot, the three modules of TwinCAT's Slots tab,
+        each assigning its PDOs; ModuleIdent = the mode's 0x6060 value. A module's PDOs are
+        named as TwinCAT's tree shows the Velocity Mode's ("Velocity Inputs / Outputs")."""
+        od = self.od(model)
+        modules = []
+        for s in assignment.XML_SLOTS:
+            label = s.module.removesuffix(" Mode")
+            rx = replace(image.read_pdo(od.peek, od.entry, s.rx), name=f"{label} Outputs")
+            tx = replace(image.read_pdo(od.peek, od.entry, s.tx), name=f"{label} Inputs")
+            modules.append(SlotModule(s.mode, s.module, s.description, (rx,), (tx,),
+                                      default=s.name == assignment.DEFAULT_SLOT))
+        return SLOT_NAME, tuple(modules)
 
     def upload_raw(self, model: Any, index: int, sub: int) -> bytes:
         try:
