@@ -35,10 +35,22 @@ class CnfButton:
     release_at_us: int | None = None
 
     def press(self, now_us: int, hold_us: int | None = None) -> None:
+        """Push (``hold_us`` None: until :meth:`release`) or push for ``hold_us`` from now.
+
+        On a button already down the hold still counts from when it went down. A timed press
+        gives an open-ended hold its end; over a timed press it can only keep the button down
+        longer (it is still held until the first one's end). An open-ended press keeps it down
+        until released (docs/fastcat-coupler.md, "CNF button").
+        """
         if not self.pressed:
             self.pressed = True
             self.pressed_at_us = now_us
-        self.release_at_us = None if hold_us is None else self.pressed_at_us + hold_us
+            self.release_at_us = None
+        if hold_us is None:
+            self.release_at_us = None
+            return
+        end, was = now_us + hold_us, self.release_at_us
+        self.release_at_us = end if was is None else max(was, end)
 
     def release(self, now_us: int) -> int | None:
         """Let go; returns how long it was held, or None if it was not pressed.

@@ -61,6 +61,29 @@ def test_timed_hold_counts_to_its_scheduled_instant() -> None:
     assert button.release(3 * US + 5000) == 3 * US
 
 
+def test_timed_press_while_down_counts_from_the_first_press() -> None:
+    """A timed press on a button already down keeps it down ``hold`` more seconds; the hold
+    runs from when it went down (§2 counts how long the button was kept down)."""
+    button = CnfButton()
+    button.press(0)
+    button.press(5 * US, hold_us=1 * US)
+    assert not button.release_due(6 * US - 1)
+    assert button.release_due(6 * US)
+    assert button.release(6 * US) == 6 * US
+
+
+def test_second_timed_press_does_not_shorten_the_first() -> None:
+    """The button comes up when the last timed press ends, not the latest one given."""
+    button = CnfButton()
+    button.press(0, hold_us=3_500_000)
+    button.press(500_000, hold_us=1 * US)
+    assert not button.release_due(3_500_000 - 1)
+    assert button.release(3_500_000) == 3_500_000
+    button.press(10 * US, hold_us=1 * US)
+    button.press(10_500_000, hold_us=1 * US)  # ends later than the first: it extends it
+    assert button.release(12 * US) == 1_500_000
+
+
 # ---- on the coupler ---------------------------------------------------------------------------
 def test_factory_new_coupler_accepts_its_modules_and_stores_nothing() -> None:
     """No configuration in flash: nothing to compare; only CNF stores (docs)."""
@@ -221,3 +244,57 @@ def test_return_to_init_rescans_and_preop_waits_for_it() -> None:
     assert bench.fc.al_state is AlState.INIT and bench.fc.snapshot()["scan"]["active"]
     bench.run_until(lambda: bench.fc.al_state is AlState.PREOP)
     assert bench.now - t0 == scan_us(3)
+
+
+def cnf_record(bench: Bench, mark: int) -> list[tuple[float, str, str]]:
+    return [(r["t"], r["machine"], r["to"]) for r in bench.records("state", mark)
+            if r.get("machine") in ("cnf_button", "cnf")]
+
+
+def test_tap_while_held_releases_after_the_whole_press() -> None:
+    """The UI order "Hold CNF" ticked, then "Tap CNF (1 s)": the button was down 6 s, so its
+    release runs the procedure (§2 "almeno tre secondi")."""
+    bench = Bench()
+    bench.settle()
+    mark, t0 = bench.mark(), bench.now
+    bench.apply("press_cnf")
+    bench.run(5.0)
+    assert bench.fc.snapshot()["cnf"]["held_s"] == 5.0
+    bench.apply("hold_cnf", seconds=1.0)
+    bench.run(3.0)
+    release = (t0 + 6 * US) / US
+    assert cnf_record(bench, mark)[:3] == [(t0 / US, "cnf_button", "pressed"),
+                                           (release, "cnf_button", "released"),
+                                           (release, "cnf", "resetting")]
+
+
+def test_hold_ticked_during_a_timed_press_keeps_the_button_down() -> None:
+    """"Hold CNF" after a timed press: down until it is unticked; ticking it twice is one
+    press. The release then measures from the first press."""
+    bench = Bench()
+    bench.settle()
+    mark, t0 = bench.mark(), bench.now
+    bench.apply("hold_cnf", seconds=1.0)
+    bench.run(0.5)
+    bench.apply("press_cnf")
+    bench.apply("press_cnf")
+    bench.run(4.0)
+    assert bench.fc.snapshot()["cnf"]["pressed"]
+    bench.apply("release_cnf")
+    assert cnf_record(bench, mark) == [(t0 / US, "cnf_button", "pressed"),
+                                       (bench.now / US, "cnf_button", "released"),
+                                       (bench.now / US, "cnf", "resetting")]
+
+
+def test_release_during_a_timed_press_ends_it() -> None:
+    """Unticking "Hold CNF" while a timed press runs lets go now; the scheduled release does
+    not come again."""
+    bench = Bench()
+    bench.settle()
+    mark, t0 = bench.mark(), bench.now
+    bench.apply("hold_cnf", seconds=3.5)
+    bench.run(1.0)
+    bench.apply("release_cnf")
+    bench.run(5.0)
+    assert cnf_record(bench, mark) == [(t0 / US, "cnf_button", "pressed"),
+                                       ((t0 + US) / US, "cnf_button", "released")]
