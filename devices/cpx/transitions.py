@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from devices import mdp
 from devices.cpx.catalog import MAX_INPUT_BYTES
 from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_IDENT_FAILED, TEXT_IDENT_SKIPPED, DiagType
 from devices.cpx.esm import (
@@ -129,13 +130,7 @@ class TransitionsMixin:
             return None
         count = int(self.od.peek(0xF030, 0))
         configured = [int(self.od.peek(0xF030, sub)) for sub in range(1, count + 1)]
-        detected = [u.mtype.ident for u in self.units]
-        for number in range(max(len(configured), len(detected))):
-            want = configured[number] if number < len(configured) else None
-            have = detected[number] if number < len(detected) else None
-            if want != have:
-                return number
-        return None
+        return mdp.ident_mismatch(configured, [u.mtype.ident for u in self.units])
 
     def _report(self: CpxEEc, text_id: int, dtype: DiagType,
                 params: tuple[tuple[DataType, int], ...] = ()) -> None:

@@ -23,7 +23,7 @@ from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
 from devices.events import StateChanged
-from devices.fastcat.alarms import COUPLER, Alarm
+from devices.fastcat.alarms import COUPLER, REFUSAL_AL_STATUS, Alarm
 from devices.fastcat.bus import BusMixin
 from devices.fastcat.catalog import module_type
 from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
@@ -41,7 +41,7 @@ from devices.fastcat.objects import MAX_MODULES, build_od
 from devices.fastcat.rail import COUPLER_ACTIONS, MODULE_ACTIONS, RailMixin
 from devices.flash import FlashError, FlashStore, MemoryFlash
 from devices.leds import LedBank
-from devices.od import ObjectDictionary
+from devices.od import AbortCode, ObjectDictionary, SdoAbort
 
 logger = logging.getLogger(__name__)
 
@@ -150,6 +150,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self.bound: list[IoModule] = []  # the module instance each module number talks to
         self.comm_errors: list[int] = []
         self.od: ObjectDictionary | None = None
+        self._forget_configured()
 
     def cmd_power(self, on: bool) -> None:
         if on == self.powered:
@@ -208,6 +209,11 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
                 esm.accept(target, now)
         elif target in (AlState.SAFEOP, AlState.OP) and self.alarm is not None:
             esm.refuse(self.alarm.refusal_code, now)
+        elif esm.state is AlState.PREOP and target is AlState.SAFEOP \
+                and self._slot_mismatch() is not None:
+            self.slot_fault = True  # §7.5 0x14: checked on the transition to SAFEOP
+            self._evaluate_alarms()
+            esm.refuse(REFUSAL_AL_STATUS[COUPLER, 0x14], now)  # §7.7 0x0070
         elif target is AlState.OP and self.address_check and self._address_mismatch():
             self.address_fault = True  # §6.19: checked on the transition to OP
             self._evaluate_alarms()
@@ -324,6 +330,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             self.bound = list(self.scan_found)
             self.raised = []  # module numbers change with the new scan
             self.comm_errors = [0] * len(self.bound)
+            self._forget_configured()  # the master writes it again at its next start-up
             self._build_od()
         if scan.finished(self.now_us):
             if scan.cnf:
@@ -391,6 +398,19 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
 
     def od_rotary(self) -> int:
         return self.rotary_read
+
+    def od_configured(self, sub: int) -> int:
+        return self.configured[sub]
+
+    def od_set_configured(self, sub: int, value: int) -> None:
+        if self.esm.state is not AlState.PREOP:  # ETG.5001: the master's PRE-OP start-up
+            raise SdoAbort(AbortCode.CANNOT_STORE_STATE, 0xF030, sub)
+        self.configured[sub] = int(value)
+
+    def _forget_configured(self) -> None:
+        """0xF030 back to "not configured": volatile, rebuilt with the dictionary."""
+        self.configured = [0] * (MAX_MODULES + 1)
+        self.slot_fault = False
 
     # ---- what the outside sees --------------------------------------------------------------
     def _refresh(self, activity: bool | None = None) -> None:

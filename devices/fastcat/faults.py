@@ -28,6 +28,7 @@ from devices.fastcat.alarms import (
 )
 from devices.fastcat.catalog import module_type
 from devices.fastcat.objects import MAX_MODULES
+from devices.mdp import ident_mismatch
 
 if TYPE_CHECKING:
     from devices.fastcat.cnf import BusScan
@@ -56,6 +57,8 @@ class FaultsMixin:
     raised: list[Alarm]
     fresh_raised: list[Alarm]
     address_fault: bool
+    slot_fault: bool  # 0x14 found at PREOP -> SAFEOP, cause while 0xF030 still disagrees
+    configured: list[int]  # 0xF030, sub 0 = count
     address_check: int
     rotary_read: int
     master_address: int
@@ -92,6 +95,10 @@ class FaultsMixin:
             yield from self._scan_causes()
         if self.address_fault and self.address_check and self._address_mismatch():
             yield Alarm(COUPLER, 0x12)
+        if self.slot_fault:
+            slot = self._slot_mismatch()
+            if slot is not None:
+                yield Alarm(COUPLER, 0x14, slot)
         if self._answering is None:  # outside a step: asked now, as _answers(n)
             bus = self._bus_table()
             answering = [m is not None and m.responds() for m in bus]
@@ -144,6 +151,16 @@ class FaultsMixin:
 
     def _address_mismatch(self) -> bool:
         return self.rotary_read != self.master_address
+
+    def _slot_mismatch(self) -> int | None:
+        """§7.5 0x14: the first slot n where the master's 0xF030.n is not the 0xF050.n found
+        (docs/fastcat-coupler.md "0xF030"); None when they agree or nothing is configured."""
+        count = self.configured[0]
+        if count == 0:
+            return None
+        pos = ident_mismatch(self.configured[1:count + 1],
+                             [m.mtype.product_code for m in self.bound], zero_unchecked=True)
+        return None if pos is None else pos + 1
 
     def _evaluate_alarms(self) -> None:
         if not self.powered or self.scan is not None or not self.booted:
@@ -214,6 +231,8 @@ class FaultsMixin:
             self.raised.remove(alarm)
         if alarm == Alarm(COUPLER, 0x12):
             self.address_fault = False
+        if (alarm.table, alarm.code) == (COUPLER, 0x14):
+            self.slot_fault = False  # checked again at the next PREOP -> SAFEOP
         return True
 
     def _clear_alarm(self) -> None:

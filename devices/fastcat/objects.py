@@ -45,6 +45,8 @@ class CouplerObjects(Protocol):
     def od_set_address_check(self, value: int) -> None: ...
     def od_rotary(self) -> int: ...
     def od_emergency_word(self) -> int: ...
+    def od_configured(self, sub: int) -> int: ...
+    def od_set_configured(self, sub: int, value: int) -> None: ...
     SKIP_SAME_WRITES: bool  # False: every write touches the coupler (the plain path, tests)
 
 
@@ -64,6 +66,7 @@ def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
     _pdos(od, modules)
     _coupler_objects(od, coupler, len(modules))
     _module_lists(od, modules)
+    _configured_list(od, coupler)
     coupler_keys = {(entry.index, entry.sub) for entry in od}
     for n, module in enumerate(modules, start=1):
         module.add_objects(od, n)
@@ -168,3 +171,15 @@ def _module_lists(od: ObjectDictionary, modules: Sequence[IoModule]) -> None:
     for n, module in enumerate(modules, start=1):
         _ro(od, 0xF050, n, f"Module detected in position {n}", DataType.UNSIGNED32,
             module.mtype.product_code)
+
+
+def _configured_list(od: ObjectDictionary, c: CouplerObjects) -> None:
+    # ETG.5001 0xF030, named by §7.5 0x14 / §7.7 0x0070: the master's configured modules,
+    # written in PRE-OP (the setter refuses other states); sub 0 = how many entries count.
+    od.add(OdEntry(0xF030, 0, "N° of entries", DataType.UNSIGNED8, Access.RW, 0,
+                   high=MAX_MODULES, getter=lambda: c.od_configured(0),
+                   setter=lambda v: c.od_set_configured(0, v)))
+    for n in range(1, MAX_MODULES + 1):
+        od.add(OdEntry(0xF030, n, f"Module configured in position {n}", DataType.UNSIGNED32,
+                       Access.RW, 0, getter=lambda n=n: c.od_configured(n),
+                       setter=lambda v, n=n: c.od_set_configured(n, v)))

@@ -14,6 +14,7 @@ import enum
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
+from devices import mdp
 from devices.ethercat import AlState
 from devices.events import StateChanged
 from devices.trscat.alarms import FaultKey, TrsBus
@@ -69,14 +70,9 @@ class OutputMode(enum.Enum):
 
 
 def ident_mismatch(configured: Sequence[int], detected: Sequence[int]) -> int | None:
-    """The first slot where 0xF030 and 0xF050 differ (§9.3.2), or None when they match."""
-    n_cfg, n_det = configured[0], detected[0]
-    for slot in range(max(n_cfg, n_det)):
-        got = configured[slot + 1] if slot < n_cfg else None
-        want = detected[slot + 1] if slot < n_det else None
-        if got != want:
-            return slot
-    return None
+    """The first slot where 0xF030 and 0xF050 (sub 0 = count) differ (§9.3.2), or None when
+    they match. A 0 entry is an unused expansion position, compared as it is."""
+    return mdp.ident_mismatch(configured[1:configured[0] + 1], detected[1:detected[0] + 1])
 
 
 class TransitionsMixin:
