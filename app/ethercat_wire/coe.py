@@ -320,7 +320,7 @@ class CoeServer:
         else:
             code, dtype = OBJECT_RECORD, 0
         max_sub = max(e.sub for e in entries)
-        name = self._name(entries[0].name, INFO_FIXED + 6)
+        name = self._name(self.face.object_name(index, entries[0].name), INFO_FIXED + 6)
         return self._info_message(INFO_OD_RES, 0,
                                   struct.pack("<HHBB", index, dtype, max_sub, code) + name)
 

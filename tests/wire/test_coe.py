@@ -317,3 +317,16 @@ def test_cpx_pdo_assignment_is_answered_in_address_order(rig):
         assert [upload(assign, s) for s in range(1, count + 1)] == [p.index for p in pdos]
     (abort,) = srv.handle(mbx("00 20 2f 12 1c 00 00 00 00 00"))  # the assignment is fixed
     assert abort[8:].hex(" ") == "80 12 1c 00 02 00 01 06"
+
+
+@pytest.mark.parametrize(("index", "name"), [
+    (0x1600, "Receive PDO 1 mapping parameter"), (0x1A02, "Transmit PDO 3 mapping parameter"),
+    (0x1003, "Pre-defined error field"), (0x1018, "Identity object")])
+def test_the_drives_records_are_described_by_their_object_name(rig, index, name):
+    """SDO Info 'get object description' names the object (seed 004 ch. 4: '0x1A02 Transmit
+    PDO 3 Mapping Parameter', '0x1003 Pre Defined Error Field'), not its sub 0 ('Number of
+    mapped objects', 'Number of errors'), as the drive's EDS does on its CANopen side."""
+    model = rig.devices["drive_ecat-ecat"]
+    srv = CoeServer(face_for(model), model)
+    (reply,) = srv.handle(mbx("00 80 03 00 00 00 " + struct.pack("<H", index).hex(" ")))
+    assert reply[8] & 0x7F == 0x04 and reply[18:].decode("latin-1") == name

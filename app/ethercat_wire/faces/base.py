@@ -214,6 +214,11 @@ class Face:
         """The ESI slot of a slave whose PDO sets are chosen as modules: name and modules."""
         return "", ()
 
+    def object_name(self, index: int, sub0_name: str) -> str:
+        """The name SDO Information gives an object: its sub 0's, where the model names sub 0
+        after the object (a record whose sub 0 is a count names it in ``object_name``)."""
+        return sub0_name
+
     def pdo_name(self, pdo: Pdo) -> str:
         """A PDO's name for the SII / ESI: the name the model gives its mapping object."""
         return pdo.name

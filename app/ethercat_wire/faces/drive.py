@@ -24,6 +24,7 @@ from app.ethercat_wire.faces.base import (
     Face,
     NoAnswer,
 )
+from devices.canopen.comm_objects import RECORD_NAMES
 from devices.coe import assignment, objects
 from devices.coe.mailbox import MailboxClosed
 from devices.device import CommandError
@@ -57,6 +58,11 @@ class DriveFace(Face):
 
     def pdo_name(self, pdo: Pdo) -> str:
         return assignment.pdo_name(pdo.index)
+
+    def object_name(self, index: int, sub0_name: str) -> str:
+        """The drive's dictionary is the CANopen one (ch. 5: "l'unica differenza ... 0x603F"),
+        whose records name sub 0 as a count: the object's name is the EDS's."""
+        return RECORD_NAMES.get(index, sub0_name)
 
     def slot(self, model: Any) -> tuple[str, tuple[SlotModule, ...]]:
         """Ch. 5 "Utilizzo degli Slots": one slot, the three modules of TwinCAT's Slots tab,
