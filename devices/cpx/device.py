@@ -95,7 +95,7 @@ class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMa
         self.units: list[CpxModule] = [self.bus, *self.modules]
         self.history = DiagHistory(flags=self.history_flags)
         self.diagnosis = Diagnosis(self.device_id, self.emit, self.history,
-                                   self._filter_no_error)
+                                   self._filter_no_error, self._reports_errors)
         self.od: ObjectDictionary | None = None
         self.space: AddressSpace | None = None
         self.space_error: str = ""
@@ -394,6 +394,11 @@ class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMa
 
     def _filter_no_error(self) -> bool:
         return self.od is not None and bool(self.od.peek(0x2401, 0))
+
+    def _reports_errors(self) -> bool:
+        """CPX error messages reach the PLC only with the I/O diagnostic interface active
+        since the last start (§2.5 note; docs/cpx-e-ec.md choice 33)."""
+        return self.switches.active_mode is DiagMode.IO_DIAGNOSIS
 
     def has_fault(self, name: str) -> bool:
         return name in self.fault_names

@@ -7,6 +7,10 @@ when 0x10F3:5 bit 0 is set, an emergency; a fault going is an information messag
 error 0 (unless 0x2401 "Filter No Error" is set) and, once no fault is left, the "no error"
 emergency 0x0000 of Tab. 21. Within the reported errors the most severe class comes first,
 then the lowest module number (CPX-E system description; it drives SF and the interface).
+The messages and emergencies of CPX errors are the CPX-E system's error messages, which reach
+the PLC only with the I/O diagnostic interface active (§2.5, the note before §2.5.1): the
+``reports`` predicate says so; the registers, the status bits and the alarm events do not
+depend on it (docs/cpx-e-ec.md choice 33).
 """
 
 from __future__ import annotations
@@ -89,11 +93,12 @@ class ActiveError:
 
 class Diagnosis:
     def __init__(self, device: str, emit: Callable[[Event], None], history: DiagHistory,
-                 filter_no_error: Callable[[], bool]) -> None:
+                 filter_no_error: Callable[[], bool], reports: Callable[[], bool]) -> None:
         self.device = device
         self.emit = emit
         self.history = history
         self.filter_no_error = filter_no_error
+        self.reports = reports
         self.active: list[ActiveError] = []
         self.mailbox: list[bytes] = []
 
@@ -132,7 +137,7 @@ class Diagnosis:
             self._gone(error, t_us, t_ns)
         for error in new:
             self._raised(error, t_us, t_ns)
-        if gone and not self.active:
+        if gone and not self.active and self.reports():
             self._emergency(emergency_frame(EMCY_NO_ERROR, 0, 0, 0, 0, 0), t_us)
 
     def clear(self) -> None:
@@ -144,6 +149,8 @@ class Diagnosis:
         cpx = error.cause.error
         self.emit(AlarmChanged(t_us, self.device, code=fmt_hex(cpx.text_id, 4),
                                name=cpx.symbol, active=True, module=error.fault.module))
+        if not self.reports():
+            return
         self.store(DiagMessage(diag_code(DIAG_CODE_CPX, cpx.number), DiagType.ERROR,
                                cpx.text_id, t_ns, error.params), t_us)
         self._emergency(emergency_frame(emcy_code_for(error.cause), self.error_register,
@@ -154,7 +161,7 @@ class Diagnosis:
         cpx = error.cause.error
         self.emit(AlarmChanged(t_us, self.device, code=fmt_hex(cpx.text_id, 4),
                                name=cpx.symbol, active=False, module=error.fault.module))
-        if not self.filter_no_error():
+        if self.reports() and not self.filter_no_error():
             self.store(DiagMessage(diag_code(DIAG_CODE_CPX, 0), DiagType.INFO,
                                    CPX_TEXT_ID_BASE, t_ns, error.params), t_us)
 

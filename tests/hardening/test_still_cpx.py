@@ -377,7 +377,8 @@ def test_cpx_alone_at_other_step_lengths(seed: int, full: bool) -> None:
 def test_values_taken_as_they_are_are_deeply_immutable() -> None:
     """stillness.VALUES are compared by ==, not copied: frozen dataclasses whose instances
     hash (so no list, dict or set inside), as every instance in a worked model does."""
-    model = CpxEEc("cpx", random.Random(5), modules=["CPX-E-16DI", "CPX-E-8DO"])
+    # the I/O diagnostic interface (DIL 1 on): the errors are stored as DiagMessages (§2.5)
+    model = CpxEEc("cpx", random.Random(5), modules=["CPX-E-16DI", "CPX-E-8DO"], dil1=True)
     model.apply("short_circuit", {"on": True, "channel": 1}, 2)
     model.apply("supply", {"out": 12.0})  # U_OUT low: an error of module 2 (Tab. 21)
     for t in range(1, 200):

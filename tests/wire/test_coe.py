@@ -274,12 +274,22 @@ def enable_emergencies(srv: CoeServer) -> None:
     assert srv.handle(mbx(f"00 20 {command:02x} f3 10 05 01 00 00 00"))[0][8] == 0x60
 
 
-@pytest.mark.parametrize(("device", "fault", "code"), [
-    ("trscat", ("trscat", "inject_fault", {"fault": "SOFTWARE_ERROR"}), 0x6100),  # §9.3.7
-    ("cpx", ("cpx/1", "short_circuit", {"on": True}), None),  # §2.5.3, sensor supply (KZS)
+@pytest.fixture(scope="module")
+def sti_rig():
+    """The line with its CPX-E-EC on the I/O diagnostic interface (DIL 1 on, DIL 2 off): the
+    one mode in which CPX errors send emergencies (seed 002 §2.5, docs/cpx-e-ec.md choice 33)."""
+    rig = line_rig("PREOP", cpx_dil=(True, False))
+    rig.devices["master"].set_external(True)
+    return rig
+
+
+@pytest.mark.parametrize(("line", "device", "fault", "code"), [
+    ("rig", "trscat", ("trscat", "inject_fault", {"fault": "SOFTWARE_ERROR"}), 0x6100),  # §9.3.7
+    ("sti_rig", "cpx", ("cpx/1", "short_circuit", {"on": True}), None),  # §2.5.3, KZS
 ])
-def test_trscat_and_cpx_emergencies_travel_as_coe_service_1(rig, device, fault, code):
+def test_trscat_and_cpx_emergencies_travel_as_coe_service_1(request, line, device, fault, code):
     """Seed 001 §9.3.7 and seed 002 §2.5.3: the model's 8-byte frame behind CoE service 1."""
+    rig = request.getfixturevalue(line)
     model = rig.devices[device]
     srv = CoeServer(face_for(model), model)
     enable_emergencies(srv)

@@ -22,9 +22,10 @@ from devices.od import Access, DataType, OdEntry
 TIMEOUT_US = 8_000_000
 
 
-def line_rig(state: str = "OP"):
-    """The rig of ``RIG`` with every slave brought to ``state`` by the built-in master."""
-    rig = build_rig(parse_rig_spec(line_spec()))
+def line_rig(state: str = "OP", **spec):
+    """The rig of ``line_spec(**spec)`` with every slave brought to ``state`` by the built-in
+    master."""
+    rig = build_rig(parse_rig_spec(line_spec(**spec)))
     for device in rig.devices.values():
         if "power" in device.ACTIONS:
             device.apply("power", {"on": True}, None)

@@ -19,6 +19,9 @@ US = 1_000_000
 # The CPX-E system of seed 002 §2.3.2 (Fig. 4 / Tab. 9): modules 1 ... 5 behind the bus
 # module, which runs with status bits (DIL 1 off, DIL 2 on).
 TAB9_MODULES = ("CPX-E-16DI", "CPX-E-8DO", "CPX-E-8DO", "CPX-E-4AI-U-I", "CPX-E-4AO-U-I")
+# DIL 1 on, DIL 2 off (Tab. 6): the I/O diagnostic interface, the one mode in which the CPX-E
+# system's error messages (0x10F3, emergencies) reach the PLC (§2.5 note, choice 33).
+STI: dict[str, Any] = {"dil1": True, "dil2": False}
 
 
 class Bench:

@@ -7,7 +7,7 @@ import json
 import random
 
 import pytest
-from cpx_bench import TAB9_MODULES, Bench, tab9
+from cpx_bench import STI, TAB9_MODULES, Bench, tab9
 
 from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_SM_ADDRESS, TEXT_SM_SETTINGS, TEXT_SM_SIZE
 from devices.cpx.device import CpxEEc
@@ -230,7 +230,7 @@ def test_brown_out_powers_it_down_after_20_ms() -> None:
 
 
 def test_power_cycle_clears_the_history() -> None:
-    bench = tab9().to_op()
+    bench = tab9(**STI).to_op()
     bench.apply("short_circuit", module=1, on=True)
     bench.run(0.01)
     assert bench.cpx.history.count >= 2

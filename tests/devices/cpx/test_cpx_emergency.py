@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from cpx_bench import Bench, tab9
+from cpx_bench import STI, Bench, tab9
 
 from devices.cpx.codes import (
     CAUSES,
@@ -94,7 +94,7 @@ def test_physical_cause_to_emergency(name: str, modules: list[Any],
                                      actions: list[tuple[str, int | None, dict[str, Any]]],
                                      expected: dict[str, int]) -> None:
     """Cause -> Tab. 21 code, Tab. 22 register, Tab. 23 status bits, Tab. 24-26 bytes."""
-    bench = Bench(modules, history_flags=0x0001).to_op()
+    bench = Bench(modules, history_flags=0x0001, **STI).to_op()
     for action, module, args in actions:
         bench.apply(action, module=module, **args)
     since = len(bench.events)
@@ -111,7 +111,7 @@ def test_physical_cause_to_emergency(name: str, modules: list[Any],
 def test_no_emergency_unless_enabled() -> None:
     """Tab. 19: 0x10F3:5 bit 0 = 0 (the default) sends no emergency; the history still
     stores the message."""
-    bench = tab9().to_op()
+    bench = tab9(**STI).to_op()
     bench.apply("short_circuit", module=1, on=True)
     bench.run(0.01)
     assert bench.records("emergency") == []
@@ -124,7 +124,7 @@ def test_no_emergency_unless_enabled() -> None:
 
 def test_emergencies_reach_the_master() -> None:
     """8-byte frames through the mailbox: taken by the master from PREOP on."""
-    bench = Bench(["8DO"], master=False, history_flags=0x0001)
+    bench = Bench(["8DO"], master=False, history_flags=0x0001, **STI)
     bench.apply("supply", out=12.0)
     bench.run(0.01)
     assert bench.cpx.take_emergencies() == []  # INIT: the mailbox does not run

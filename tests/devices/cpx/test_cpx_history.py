@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 
 import pytest
-from cpx_bench import Bench, tab9
+from cpx_bench import STI, Bench, tab9
 
 from app.ethercat_wire.faces.cpx import CpxFace
 from app.ui.panels.object_dictionary import read_rows, render
@@ -172,8 +172,9 @@ def test_reading_past_sub0_is_refused() -> None:
 
 def test_short_circuit_message_on_the_device_matches_tab15() -> None:
     """§2.5.2: a short circuit at output 0 of module 2 (the CPX-E-8DO of the §2.3.2 system)
-    is stored as the Tab. 15 message, with the device's own time stamp."""
-    bench = tab9().to_op()
+    is stored as the Tab. 15 message, with the device's own time stamp (I/O diagnostic
+    interface on: §2.5 note)."""
+    bench = tab9(**STI).to_op()
     bench.apply("write_object", index=0x7002, sub=1, value=1)
     bench.apply("short_circuit", module=2, channel=0, on=True)
     shorted_at = bench.now
@@ -189,7 +190,7 @@ def test_short_circuit_message_on_the_device_matches_tab15() -> None:
 
 def shorted_tab9() -> tuple[Bench, int, bytes]:
     """The Tab. 15 case (short circuit at output 0 of module 2): bench, newest sub, bytes."""
-    bench = tab9().to_op()
+    bench = tab9(**STI).to_op()
     bench.apply("write_object", index=0x7002, sub=1, value=1)
     bench.apply("short_circuit", module=2, channel=0, on=True)
     bench.run(0.01)
@@ -249,7 +250,7 @@ def test_new_message_available_falls_on_every_read_path(path: str) -> None:
 @pytest.mark.parametrize("path", READ_PATHS)
 def test_acknowledge_mode_reads_leave_new_message_available(path: str) -> None:
     """Tab. 18 bit 4 = 1 (Acknowledge): only writing sub 3 lowers it, on any read path."""
-    bench = tab9().to_op()
+    bench = tab9(**STI).to_op()
     bench.apply("write_object", index=0x10F3, sub=5, value=FLAG_ACKNOWLEDGE)
     bench.apply("short_circuit", module=1, on=True)
     bench.run(0.01)
@@ -279,7 +280,7 @@ def test_an_empty_message_slot_shows_no_bytes() -> None:
 
 def test_error_going_is_an_info_message_unless_filtered() -> None:
     """0x2401 "Filter No Error": 0 stores the 'no error' message (CPX error 0), else not."""
-    bench = tab9().to_op()
+    bench = tab9(**STI).to_op()
     bench.apply("short_circuit", module=1, on=True)
     bench.run(0.01)
     bench.apply("short_circuit", module=1, on=False)
