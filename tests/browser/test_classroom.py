@@ -58,6 +58,18 @@ def _row_display(page: Any, label: str) -> str:
         ".display"))
 
 
+def _folder_display(page: Any, title: str) -> str:
+    """The CSS display of a folder (its bordered wrapper, which holds the title and the rows:
+    viser 1.1.1's components/Folder.tsx), found by its title."""
+    return str(page.evaluate(
+        """title => {
+            const head = [...document.querySelectorAll("div")].find(
+                d => d.firstChild && d.firstChild.nodeType === 3
+                     && d.firstChild.textContent === title);
+            return head ? getComputedStyle(head.parentElement).display : "missing";
+        }""", title))
+
+
 def _button_display(page: Any, name: str) -> str:
     found = page.get_by_role("button", name=name, exact=True, include_hidden=True).first
     return str(found.evaluate("e => getComputedStyle(e.parentElement).display"))
@@ -93,6 +105,11 @@ def test_trainee_injection_refused_instructor_allowed_download(
                 "Servo drive": (("Alarm", "Alarm cause", "Load jammed"),
                                 ("Drive power", "Jog")),
                 "Line": (("Cable plug", "Frames to lose", "DC fault"), ("Target state",))}
+        # A folder whose every row is the instructor's goes as a whole (no empty title); a
+        # folder that keeps a trainee's row stays.
+        folders = {"FastCAT": ((), ("Faults", "Modules", "Address and causes")),
+                   "Servo drive": (("Alarms and load",), ("Motion",)),
+                   "Line": (("Cables and power", "Frames and DC"), ("Master",))}
         for tab, (hidden, shown) in tabs.items():
             for page in pages:  # a tab's widgets are in the page once it was opened
                 for each in page.get_by_role("tab", name=tab, exact=True).all():
@@ -102,6 +119,12 @@ def test_trainee_injection_refused_instructor_allowed_download(
                 assert _row_display(trainee, label) == "none", label
             for label in shown:
                 assert _row_display(trainee, label) != "none", label
+            hidden_folders, shown_folders = folders[tab]
+            for title in hidden_folders:
+                assert _folder_display(instructor, title) not in ("none", "missing"), title
+                assert _folder_display(trainee, title) == "none", title
+            for title in shown_folders:
+                assert _folder_display(trainee, title) not in ("none", "missing"), title
         assert _button_display(instructor, "Lose frames") != "none"
         assert _button_display(trainee, "Lose frames") == "none"
         assert _button_display(trainee, "Resync") != "none"

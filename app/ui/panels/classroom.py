@@ -36,7 +36,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, Sent, notify
 from app.ui.panels.classroom_access import TokenForm, read_browser_token
 from app.ui.panels.classroom_html import history_html, instructor_html, trainee_html
-from app.ui.panels.widgets import widget_uuid
+from app.ui.panels.widgets import instructor_folders, widget_uuid
 from app.ui.style import INSTRUCTOR_CLASS
 from devices.device import CommandError
 from devices.events import LogLine
@@ -53,16 +53,31 @@ START, END = "Start exercise", "End and score"
 
 def trainee_css(widgets: Sequence[Any] = ()) -> str:
     """The style a trainee's page gets: no element of :data:`INSTRUCTOR_CLASS` (the injected
-    causes in the state tables) and no row of these server-level widgets (fault pickers, the
-    boxes that follow an injected physical fault). viser 1.1.1 has no per-client visibility
-    for a server-level widget; its client renders a widget's uuid as the input's ``id`` and
-    its label's ``for``, inside the row's two wrappers (components/common.tsx): the rule
-    hides that outer wrapper, padding and all (tests/browser/test_classroom.py)."""
+    causes in the state tables), no row of these server-level widgets (fault pickers, the
+    boxes that follow an injected physical fault) and no folder left with none of its rows
+    (:func:`instructor_folders`: no empty "Alarms and load" title). viser 1.1.1 has no
+    per-client visibility for a server-level widget; its client renders a widget's uuid as
+    the input's ``id`` and its label's ``for``, inside the row's two wrappers
+    (components/common.tsx): the rule hides that outer wrapper, padding and all. A folder
+    is its bordered wrapper, four levels above its rows (wrapper, collapse, box, container:
+    components/Folder.tsx), found by one of its own rows (tests/browser/test_classroom.py)."""
     rules = [f".{INSTRUCTOR_CLASS}"]
     for uuid in map(widget_uuid, widgets):
         rules.append(f'div:has(> div > div > p > label[for="{uuid}"])')  # a labelled input
         rules.append(f'div:has(> button[id="{uuid}"])')  # a button
+    for folder in instructor_folders(widgets):
+        for uuid in map(widget_uuid, _rows(folder)):
+            rules.append(f'div:has(> {_FOLDER_TO_ROW} > div > div > p > label[for="{uuid}"])')
+            rules.append(f'div:has(> {_FOLDER_TO_ROW} > button[id="{uuid}"])')
     return f"<style>{', '.join(rules)} {{ display: none !important; }}</style>"
+
+
+_FOLDER_TO_ROW = "div > div > div > div"  # collapse, box, container, the row's wrapper
+
+
+def _rows(folder: Any) -> list[Any]:
+    """A folder's own widgets (not its sub-folders, whose rows sit deeper)."""
+    return [c for c in folder._children.values() if not isinstance(c, viser.GuiFolderHandle)]
 
 
 @dataclass

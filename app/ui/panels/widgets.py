@@ -23,7 +23,7 @@ the callbacks ignore those (:func:`from_user`), so the view never echoes a comma
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import viser
@@ -47,6 +47,32 @@ def widget_uuid(handle: Any) -> str:
     pyproject.toml) keeps it on the handle's private ``_impl``; the classroom's trainee CSS
     needs it to hide a widget on some pages only."""
     return str(handle._impl.uuid)
+
+
+def instructor_folders(widgets: Sequence[Any]) -> list[Any]:
+    """The folders whose every child is one of ``widgets`` or such a folder: hiding the rows of
+    ``widgets`` alone leaves their titles on the page, empty. viser 1.1.1 (pinned) keeps a
+    folder's children on its private ``_children`` and a widget's folder on
+    ``_impl.parent_container_id``."""
+    hidden = {widget_uuid(w) for w in widgets}
+    candidates: dict[str, Any] = {}
+    for widget in widgets:
+        impl = widget._impl
+        parent = impl.gui_api._container_handle_from_uuid.get(impl.parent_container_id)
+        if isinstance(parent, viser.GuiFolderHandle):
+            candidates[widget_uuid(parent)] = parent
+    found: list[Any] = []
+    while candidates:  # a folder hidden may empty its own folder: up until nothing changes
+        uuid, folder = candidates.popitem()
+        if uuid in hidden or not folder._children or not set(folder._children) <= hidden:
+            continue
+        hidden.add(uuid)
+        found.append(folder)
+        impl = folder._impl
+        parent = impl.gui_api._container_handle_from_uuid.get(impl.parent_container_id)
+        if isinstance(parent, viser.GuiFolderHandle):
+            candidates[widget_uuid(parent)] = parent
+    return found
 
 
 def from_user(event: viser.GuiEvent) -> bool:
