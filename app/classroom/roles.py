@@ -112,6 +112,12 @@ def instructor_only(kind: str, action: str, args: Mapping[str, Any] | None = Non
     return next((r for r in INSTRUCTOR_ONLY if r.matches(kind, action, given)), None)
 
 
+def makes_faults(kind: str, action: str) -> bool:
+    """Whether ``action`` is instructor-only on a device of ``kind`` for some arguments: such
+    an action belongs in a form a trainee does not see (the Line tab's "trscat faults")."""
+    return any(r.kind in (kind, ANY_KIND) and r.action == action for r in INSTRUCTOR_ONLY)
+
+
 def allowed(role: Role, kind: str, action: str, args: Mapping[str, Any] | None = None) -> bool:
     return role is Role.INSTRUCTOR or instructor_only(kind, action, args) is None
 

@@ -104,12 +104,14 @@ def test_trainee_injection_refused_instructor_allowed_download(
                             ("Reset fault", "Power", "Hold CNF", "Module")),
                 "Servo drive": (("Alarm", "Alarm cause", "Load jammed"),
                                 ("Drive power", "Jog")),
-                "Line": (("Cable plug", "Frames to lose", "DC fault"), ("Target state",))}
+                "Line": (("Cable plug", "Frames to lose", "DC fault", "Fault action"),
+                         ("Target state",))}
         # A folder whose every row is the instructor's goes as a whole (no empty title); a
         # folder that keeps a trainee's row stays.
         folders = {"FastCAT": ((), ("Faults", "Modules", "Address and causes")),
                    "Servo drive": (("Alarms and load",), ("Motion",)),
-                   "Line": (("Cables and power", "Frames and DC"), ("Master",))}
+                   "Line": (("Cables and power", "Frames and DC", "trscat faults"),
+                            ("Master", "Slave actions", "trscat"))}
         for tab, (hidden, shown) in tabs.items():
             for page in pages:  # a tab's widgets are in the page once it was opened
                 for each in page.get_by_role("tab", name=tab, exact=True).all():

@@ -2,12 +2,15 @@
 
 Master (its ACTIONS, docs/ethercat-master.md): pull / plug cable i, power a slave off / on,
 lose the next N frames, a DC fault (drift, jitter, lost SYNC0) and its clearing, resync and
-the target state. Slaves: a "Device" picker and, for the picked one, a "Target" (the device or
-one of its expansions / modules, ``cpx/2``) and a form generated from its own action table
-(TRS-CAT: inject_fault, link, field_supply, drop_frames, lose_sync0, unplug / plug for an
-expansion, ...; CPX-E-EC: inject_fault, short_circuit, wire_break, force, supply, cable, ...),
-so a fault added to a model appears here unchanged; the model refuses what does not apply to
-the target. The FastCAT keeps its own tab. Every command goes through ``CommandSender``.
+the target state. Slaves ("Slave actions"): a "Device" picker and, for the picked one, a
+"Target" (the device or one of its expansions / modules, ``cpx/2``) and two forms generated
+from its own action table, so an action added to a model appears here unchanged: operation
+(TRS-CAT set_input, set_output, acknowledge_messages, ...; CPX-E-EC force, set_input, set_dil,
+restart, ...) and, in a folder "trscat faults", what can make a fault (``roles.makes_faults``:
+inject_fault, link, field_supply, drop_frames, unplug / plug, ...; short_circuit, wire_break,
+supply, cable, ...), which a trainee's page does not show. The model refuses what does not
+apply to the target. The FastCAT keeps its own tab. Every command goes through
+``CommandSender``.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from typing import Any
 
 import viser
 
+from app.classroom.roles import makes_faults
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.widgets import from_user, set_options
@@ -61,9 +65,11 @@ def leading_int(text: str) -> int:
 class LineControls:
     def __init__(self, server: viser.ViserServer, sender: CommandSender, master_id: str,
                  order: Sequence[str], actions: Mapping[str, Mapping[str, Action]],
-                 devices: Mapping[str, Mapping[str, Any]], own_tabs: Sequence[str]) -> None:
+                 devices: Mapping[str, Mapping[str, Any]], own_tabs: Sequence[str],
+                 kinds: Mapping[str, str]) -> None:
         """``devices``: the first snapshot of each device (its parts); ``own_tabs``: devices
-        with their own controls (the FastCAT), left out of "Slave faults"."""
+        with their own controls (the FastCAT), left out of "Slave actions"; ``kinds``: each
+        device's kind (which of its actions can make a fault)."""
         gui = server.gui
         self._order = list(order)
         self.master_id = master_id
@@ -91,18 +97,29 @@ class LineControls:
         self.instructor_only = [self.cable, cable_buttons, self.slave_power, power_buttons,
                                 self.frames, lose, self.dc_fault, dc_buttons]
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
+        self.fault_forms: dict[str, ActionForm] = {}
         faulty = [d for d in order if d not in own_tabs]
-        with gui.add_folder("Slave faults"):
+        with gui.add_folder("Slave actions"):
             self.picker = gui.add_dropdown("Device", tuple(faulty) or ("-",))
             for device in faulty:
                 shown = {n: a for n, a in (actions.get(device) or {}).items()
                          if n not in HIDDEN}
+                kind = kinds.get(device, "")
+                faults = {n: a for n, a in shown.items() if makes_faults(kind, n)}
                 folder = gui.add_folder(device, visible=device == self.picker.value)
                 with folder:
                     target = gui.add_dropdown("Target", tuple(targets(device,
                                                                       devices.get(device) or {})))
-                    form = ActionForm(gui, shown, self._applier(sender, target))
+                    apply = self._applier(sender, target)
+                    form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
+                                      apply)
+                    # The instructor's: its folder goes from a trainee's page as a whole
+                    # (rebuilt parameter rows and all; docs/classroom.md).
+                    with gui.add_folder(f"{device} faults", expand_by_default=False):
+                        fault_form = ActionForm(gui, faults, apply, label="Fault action")
                 self.forms[device] = (folder, form)
+                self.fault_forms[device] = fault_form
+                self.instructor_only += fault_form.handles
 
         @cable_buttons.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -141,8 +158,12 @@ class LineControls:
             sender.send(client, str(target.value), name, args)
         return apply
 
+    def all_forms(self) -> dict[str, list[ActionForm]]:
+        """Every slave form, per device: operation, then faults (tests)."""
+        return {d: [form, self.fault_forms[d]] for d, (_folder, form) in self.forms.items()}
+
     def select(self, device: str) -> None:
-        """Show the fault form of ``device`` (a click on it in the 3D view, or the picker)."""
+        """Show the forms of ``device`` (a click on it in the 3D view, or the picker)."""
         if device not in self.forms:
             return
         if self.picker.value != device:

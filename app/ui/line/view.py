@@ -3,7 +3,7 @@ Slave tabs, the Line controls, and focus (a click on a device, or a scenario ``F
 its panels pick it and the camera moves toward it).
 
 viser cannot switch a browser's tab from the server, so focus picks the device in the Slave
-tab, the Slave faults form and the Objects tab, and tells the clicking browser where to look.
+tab, the Slave actions form and the Objects tab, and tells the clicking browser where to look.
 """
 
 from __future__ import annotations
@@ -79,7 +79,10 @@ class LineView:
     def __init__(self, server: viser.ViserServer, sender: CommandSender, frame: Frame,
                  master_id: str, rail_lengths: Mapping[str, float],
                  actions: Mapping[str, Mapping[str, Any]], side: Any,
-                 control_tab: Callable[[str, Any], Any], aspect: float) -> None:
+                 control_tab: Callable[[str, Any], Any], aspect: float,
+                 kinds: Mapping[str, str] | None = None) -> None:
+        """``kinds``: each device's kind, which sorts its actions into operation and faults
+        (app.classroom.roles)."""
         self._server = server
         self._sender = sender
         self.master_id = master_id
@@ -102,7 +105,7 @@ class LineView:
         with control_tab("Line", viser.Icon.TOPOLOGY_STAR_3):
             self.controls = LineControls(server, sender, master_id, order, actions,
                                          frame.snapshot.get("devices") or {},
-                                         list(rail_lengths))
+                                         list(rail_lengths), kinds or {})
         self.focused: str | None = None
         self.home: Box = self.scene.bounds()  # what "Show the whole line" frames (dashboard)
 

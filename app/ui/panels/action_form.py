@@ -72,6 +72,19 @@ class ActionForm:
         def _(event: viser.GuiEvent) -> None:
             self.submit(event.client)
 
+    @property
+    def choice(self) -> Any:
+        """The action picker."""
+        return self._choice
+
+    @property
+    def handles(self) -> tuple[Any, ...]:
+        """The form's own widgets: picker, Parameters folder (rebuilt inside), Apply."""
+        return (self._choice, self._params, self._button)
+
+    def options(self) -> tuple[str, ...]:
+        return tuple(self._choice.options)
+
     def restrict(self, names: Sequence[str]) -> None:
         """Offer only these actions (those the selected module accepts)."""
         options = tuple(n for n in self._actions if n in set(names)) or ("(none)",)
