@@ -2,7 +2,14 @@
 
 Only for views; the node records, :mod:`devices.canopen.decode` names. Frames are kept in a
 ring (the last :data:`FRAME_LOG`), with the last SDO and PDO exchange kept apart so a view can
-show them even when heartbeats or cyclic PDOs have scrolled them away.
+show them even when cyclic PDOs have scrolled them away.
+
+A heartbeat that repeats the last one of its COB-ID (same state) is no row of the ring: it is
+counted on that COB-ID's heartbeat line (:meth:`BusMonitor.heartbeats`: state, count, last
+time, period), as a CAN analyser's receive list shows a periodic frame once with its count and
+cycle time. Otherwise one node's heartbeats (every 0x1017 ms) pushed a trainee's SDO exchange
+out of the view's last rows within seconds. The boot-up and a heartbeat with a new state stay
+rows: they are events. Node guarding answers toggle bit 7 each time, so they stay rows.
 """
 
 from __future__ import annotations
@@ -28,15 +35,19 @@ class BusMonitor:
         self.sdo_request: dict[str, Any] | None = None
         self.sdo_response: dict[str, Any] | None = None
         self.counts = {"rx": 0, "tx": 0}
+        self._beats: dict[str, dict[str, Any]] = {}  # heartbeat lines by COB-ID
 
     def record(self, frame: CanFrame, ctx: Context) -> None:
         kind, text = describe(frame.can_id, frame.data, frame.rtr, ctx)
         direction = "rx" if frame.rx else "tx"
         self.counts[direction] += 1
-        self.frames.append({"t": frame.t_us / 1e6, "dir": direction,
-                            "id": f"0x{frame.can_id:03X}", "dlc": frame.length,
-                            "data": "R" if frame.rtr else fmt_bytes(frame.data),
-                            "kind": kind, "text": text})
+        row = {"t": frame.t_us / 1e6, "dir": direction, "id": f"0x{frame.can_id:03X}",
+               "dlc": frame.length, "data": "R" if frame.rtr else fmt_bytes(frame.data),
+               "kind": kind, "text": text}
+        beat = kind == "NMT-EC" and not frame.rtr and len(frame.data) == 1 and frame.data[0]
+        if beat and self._beat(row):
+            return
+        self.frames.append(row)
         if kind == "SDO":
             self.last_sdo = text
             parts = sdo_parts(frame.can_id, frame.data)
@@ -49,8 +60,25 @@ class BusMonitor:
         elif kind == "PDO":
             self.last_pdo = text
 
+    def _beat(self, row: dict[str, Any]) -> bool:
+        """Count a heartbeat (or a guarding answer) on its line; True when it repeats the
+        last one of its COB-ID and direction, so it is no row."""
+        key = f"{row['id']} {row['dir']}"
+        beat = self._beats.get(key)
+        if beat is None or beat["data"] != row["data"]:
+            self._beats[key] = {**row, "count": 1, "period": None}
+            return False
+        beat["period"] = round(row["t"] - beat["t"], 6)
+        beat.update(t=row["t"], count=beat["count"] + 1)
+        return True
+
     def recent(self, count: int) -> list[dict[str, Any]]:
         return list(self.frames)[-count:]
+
+    def heartbeats(self) -> list[dict[str, Any]]:
+        """One line per heartbeat COB-ID and direction: the last state's row (``t`` its last
+        time), ``count`` in a row with that state, ``period`` (s) between the last two."""
+        return [dict(b) for b in self._beats.values()]
 
 
 def pdo_text(pdos: Iterable[Pdo], can_id: int, data: bytes) -> str | None:

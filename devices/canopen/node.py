@@ -559,6 +559,7 @@ class CanOpenNode(ProcessData, DeviceModel):
             "last_sdo_exchange": {"request": self.monitor.sdo_request,
                                   "response": self.monitor.sdo_response},
             "frames": self.monitor.recent(FRAMES_IN_SNAPSHOT),
+            "heartbeats": self.monitor.heartbeats(),
             "bus": {**self.monitor.counts, "syncs": self.syncs,
                     "load": round(self.bus_load, 4), "dropped": self.line.dropped},
         }

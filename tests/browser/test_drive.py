@@ -295,6 +295,22 @@ def test_frame_log_newest_first_and_escaped() -> None:
     assert "no frames yet" in frames_html([])
 
 
+def test_frame_log_heartbeat_line() -> None:
+    """Repeated heartbeats are one line above the log (devices/canopen/monitor.py): state,
+    count, period, last time, as a CAN analyser's receive list shows a periodic frame."""
+    beats = [{"t": 12.5, "dir": "tx", "id": "0x702", "dlc": 1, "data": "05",
+              "kind": "NMT-EC", "text": "node 2: Operational", "count": 37, "period": 0.5}]
+    html = frames_html([], heartbeats=beats)
+    line = html[html.index('id="fr-can-hb"'):html.index("</p>")]
+    for part in ("0x702", "node 2: Operational", "05", "37 in a row", "every 0.500 s",
+                 "last 12.500"):
+        assert part in line, (part, line)
+    assert html.index('id="fr-can-hb"') < html.index('id="fr-frames"')
+    first = frames_html([], heartbeats=[{**beats[0], "count": 1, "period": None}])
+    assert "every" not in first and "1 in a row" in first
+    assert 'id="fr-can-hb"' not in frames_html([])
+
+
 def test_canopen_status_says_why_it_is_silent() -> None:
     html = status_html(NODE, {"active": False, "bitrate": 500000}, {"powered": True,
                                                                     "fieldbus": "modbus"})

@@ -121,8 +121,26 @@ def status_html(node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any])
     return head + kv_table(status_rows(node, drive), "fr-can")
 
 
-def frames_html(frames: Sequence[Mapping[str, Any]], rows: int = FRAME_ROWS) -> str:
-    """The bus monitor, newest first: time | dir | COB-ID | type | data | meaning."""
+def heartbeat_html(beats: Sequence[Mapping[str, Any]]) -> str:
+    """The heartbeat lines above the log (the node's ``heartbeats``): a heartbeat repeating
+    its COB-ID's state is counted there, not logged (devices/canopen/monitor.py)."""
+    lines = []
+    for b in beats:
+        period = b.get("period")
+        every = f" · every {float(period):.3f} s" if period else ""
+        lines.append(f"Heartbeat {esc(b.get('id', ''))} {esc(b.get('dir', ''))} · "
+                     f"{esc(b.get('text', ''))} ({esc(b.get('data', ''))}) · "
+                     f"{int(b.get('count', 0))} in a row{every} · "
+                     f"last {float(b.get('t', 0.0)):.3f}")
+    if not lines:
+        return ""
+    return f'<p class="fr-note fr-hb" id="fr-can-hb">{"<br>".join(lines)}</p>'
+
+
+def frames_html(frames: Sequence[Mapping[str, Any]], rows: int = FRAME_ROWS,
+                heartbeats: Sequence[Mapping[str, Any]] = ()) -> str:
+    """The bus monitor, newest first: time | dir | COB-ID | type | data | meaning; repeated
+    heartbeats on their line above (:func:`heartbeat_html`)."""
     body = "".join(
         f'<tr class="{"fr-rx" if f.get("dir") == "rx" else ""} '
         f'{KIND_CLASS.get(str(f.get("kind")), "")}">'
@@ -133,7 +151,8 @@ def frames_html(frames: Sequence[Mapping[str, Any]], rows: int = FRAME_ROWS) -> 
         for f in list(frames)[::-1][:rows])
     if not body:
         body = '<tr><td colspan="6" class="fr-muted">no frames yet</td></tr>'
-    return ('<div class="fr-frames-wrap"><table class="fr-frames" id="fr-frames"><colgroup>'
+    return (heartbeat_html(heartbeats) +
+            '<div class="fr-frames-wrap"><table class="fr-frames" id="fr-frames"><colgroup>'
             '<col style="width:5.4em"><col style="width:2em"><col style="width:3.9em">'
             '<col style="width:4.5em"><col style="width:8.2em"><col></colgroup><thead><tr>'
             '<th>time</th><th title="rx: to the drive, tx: from the drive">dir</th>'
@@ -283,7 +302,8 @@ class CanOpenMonitor:
 
     def update(self, node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any]) -> None:
         self._show("status", self._status, status_html(node_id, node, drive))
-        self._show("frames", self._frames, frames_html(node.get("frames") or []))
+        self._show("frames", self._frames, frames_html(node.get("frames") or [],
+                                                       heartbeats=node.get("heartbeats") or []))
         self._show("pdos", self._pdos, pdo_html(node))
 
     def _show(self, key: str, handle: Any, content: str) -> None:

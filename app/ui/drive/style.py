@@ -30,6 +30,9 @@ DRIVE_CSS = """
 .fr-frames td.fr-t { white-space: nowrap; }
 .fr-frames tr.fr-rx td { color: #1f4f8f; }
 .fr-frames tr.fr-emcy td { color: #a11616; }
+/* Repeated heartbeats: one line each above the log (canopen_panel.heartbeat_html). */
+.fr-hb { font-size: 0.68em; margin: 0 0 3px 0; color: #555;
+         font-family: ui-monospace, Menlo, Consolas, monospace; }
 .fr-frames-wrap { max-height: 300px; overflow-y: auto; border: 1px solid #e3e5e8; }
 .fr-pdo { width: 100%; border-collapse: collapse; font-size: 0.68em;
           font-family: ui-monospace, Menlo, Consolas, monospace; }
