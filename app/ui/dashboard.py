@@ -36,6 +36,7 @@ from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
 from app.ui.panels.object_dictionary import ObjectDictionaryPanel
 from app.ui.panels.state import StatePanel
+from app.ui.panels.widgets import short_label_css
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
 from app.ui.style import CSS
 from devices.device import Action
@@ -199,6 +200,12 @@ class Dashboard:
             self.scenario_player = ScenarioPlayerPanel(server, runtime, self._caption)
         self.decoder = DecoderPanel(server, runtime, self._side)
         # ---- end of scenario player, code decoder ----
+        # The Fault and Alarm boxes' longest names whole: one style at the end of the control
+        # panel (inside a folder it would be a row of it; the classroom's folder check counts).
+        short = [*(self._panels.control.short_labels if self._panels else ()),
+                 *(self._drives.controls.short_labels if self._drives else ())]
+        if short:
+            server.gui.add_html(short_label_css(short))
 
     # ---- construction -------------------------------------------------------------------
     def _configure_look(self) -> None:

@@ -145,6 +145,7 @@ class DrivePanel:
         # What makes a fault, or shows one outright (the box follows the drive): not on a
         # trainee's page (the classroom's trainee CSS; docs/classroom.md).
         self.instructor_only = (self._alarm, alarm_ops, self._jam)
+        self.short_labels = (self._alarm,)  # the longest names whole (widgets.short_label_css)
         with gui.add_folder("Registers and parameters", expand_by_default=False):
             self._register = gui.add_dropdown("Register", REGISTER_OPTIONS,
                                               initial_value=register_option(R.PROFILE_VELOCITY))

@@ -129,6 +129,9 @@ class ControlPanel:
         # on a trainee's page (the classroom's trainee CSS; docs/classroom.md).
         self.instructor_only = (self._table, self._fault, self._target, actions, self._link,
                                 self._tbus_low)
+        # Boxes whose longest option needs the room of a narrower label column (the dashboard's
+        # widgets.short_label_css; a style row in the folder would be a row of its own).
+        self.short_labels = (self._fault,)
 
         if master_id is not None:
             self._master_controls(gui, master_id)

@@ -49,6 +49,19 @@ def widget_uuid(handle: Any) -> str:
     return str(handle._impl.uuid)
 
 
+SHORT_LABEL_EM = 4.25  # "Fault", "Alarm" and the column's right padding, at any folder depth
+
+
+def short_label_css(handles: Sequence[Any]) -> str:
+    """A style giving these rows' labels a narrower column (:data:`SHORT_LABEL_EM`, viser's
+    is 7.25 em less 0.64 em per folder level), so the box gets the room: the Fault and Alarm
+    boxes cut the longest "0x0A UNKNOWN_SDO_RD_ANSWER" / "24 ABS_ENCODER_COMMUNICATION" by
+    a few characters at 1280x720 (tests/browser/test_picker_text.py). The label box is the
+    ``<p>``'s parent (viser 1.1.1 components/common.tsx); its width is an inline style."""
+    rules = ", ".join(f'div:has(> p > label[for="{widget_uuid(h)}"])' for h in handles)
+    return f"<style>{rules} {{ width: {SHORT_LABEL_EM}em !important; }}</style>"
+
+
 def instructor_folders(widgets: Sequence[Any]) -> list[Any]:
     """The folders whose every child is one of ``widgets`` or such a folder: hiding the rows of
     ``widgets`` alone leaves their titles on the page, empty. viser 1.1.1 (pinned) keeps a

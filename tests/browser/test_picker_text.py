@@ -1,0 +1,51 @@
+"""The closed Fault and drive Alarm boxes show their longest option whole at 1280x720: the
+options are "0x0B UNKNOWN_SDO_WR_ANSWER"-style code + manual name, and the box cut the last
+characters of the longest ones (the list and the hint showed them whole)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from helpers import LiveDashboard, open_dashboard, wait_until
+
+from app.ui.dashboard import fault_options
+from app.ui.drive.drive_panel import alarm_options
+
+pytestmark = pytest.mark.browser
+
+CLIPPED_JS = "e => e.scrollWidth > e.clientWidth ? [e.scrollWidth, e.clientWidth] : null"
+
+
+def _longest(options: Any) -> str:
+    return max(options, key=len)
+
+
+def _shown_whole(page: Any, label: str, value: str) -> None:
+    box = page.get_by_label(label, exact=True).first
+    wait_until(lambda: box.input_value() == value, what=f"{label} showing {value}")
+    clipped = box.evaluate(CLIPPED_JS)
+    assert clipped is None, f"{label} box cuts {value!r}: text {clipped[0]} px in {clipped[1]} px"
+
+
+def test_longest_fault_and_alarm_names_fit_the_closed_box(live: LiveDashboard, page: Any
+                                                          ) -> None:
+    panels = live.dashboard._panels
+    drives = live.dashboard.drives
+    assert panels is not None and drives is not None
+    control = panels.control
+    open_dashboard(page, live)
+    for table, label in (("coupler", "coupler codes (§7.5)"), ("module", "module codes (§7.6)")):
+        control._table.value = label
+        longest = _longest(f.label for f in fault_options() if f.table == table)
+        wait_until(lambda longest=longest: longest in control._fault.options,
+                   what=f"the {table} options")
+        control._fault.value = longest
+        _shown_whole(page, "Fault", longest)
+    page.get_by_role("tab", name="Servo drive", exact=True).first.click()
+    for fieldbus in ("ethercat", "profinet"):
+        longest = _longest(alarm_options(fieldbus))
+        alarm = drives.controls._alarm
+        alarm.options = alarm_options(fieldbus)
+        alarm.value = longest
+        _shown_whole(page, "Alarm", longest)
