@@ -48,7 +48,14 @@ def request_refusal(current: AlState, target: AlState,
 @dataclass
 class Esm(Generic[K]):
     """One slave's ESM. A subclass names its ``ErrorKind`` enum in ``kinds`` (members NONE and
-    REFUSED at least) and redeclares ``error`` with that enum's NONE as the default."""
+    REFUSED at least) and redeclares ``error`` with that enum's NONE as the default.
+
+    Every move to INIT from another state, whatever the path (a master's request, a fall, a
+    restart), calls ``stop_mailbox``: the mailbox runs from PREOP only (ETG.1000.6), and a
+    slave stack stops its mailbox handler on the way to INIT, disabling SM0 / SM1 and freeing
+    the send queue (Beckhoff SSC MBX_StopMailboxHandler), so the emergencies the master has not
+    read yet are lost. The slave model passes what drops its queue; its histories (0x1003,
+    0x10F3, ...) are objects and stay."""
 
     emit: Callable[[Event], None]
     device: str
@@ -56,6 +63,7 @@ class Esm(Generic[K]):
     requested: AlState = AlState.INIT
     error: K = None  # type: ignore[assignment]  # each subclass: its ErrorKind.NONE
     code: int = NO_ERROR
+    stop_mailbox: Callable[[], None] | None = None
 
     kinds: ClassVar[type[enum.Enum]]
     machine: ClassVar[str] = ""  # StateChanged.machine; empty for the device's main machine
@@ -109,6 +117,8 @@ class Esm(Generic[K]):
             before, self.state = self.state, target
             self.emit(StateChanged(t_us, self.device, from_state=before.label,
                                    to_state=target.label, machine=self.machine))
+            if target is AlState.INIT and self.stop_mailbox is not None:
+                self.stop_mailbox()
 
 
 class AlStatusView:
