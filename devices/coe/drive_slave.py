@@ -87,9 +87,9 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.serial = self.rng.getrandbits(32)
         self.link = True
         self.on_line = False
-        self.esm = Esm(self.emit, drive.device_id)
-        self.csp = Csp(drive)
         self.emergencies = EmergencyMailbox()
+        self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
+        self.csp = Csp(drive)
         self.leds = LedBank(drive.device_id)
         self.sdo_log: deque[dict[str, Any]] = deque(maxlen=SDO_LOG)
         self._led_inputs: LedInputs | None = None

@@ -6,7 +6,8 @@ table is :mod:`devices.servo.alarms`). A CoE emergency is the CANopen one in a m
 (ETG.1000.6): error code (2 bytes, little endian), error register 0x1001, five vendor bytes —
 so the frame is built as the CANopen node builds it (:mod:`devices.canopen.emcy`): the alarm
 number in the first vendor byte, the DS 301 "error reset" 0x0000 when the last alarm goes.
-The mailbox runs from PREOP on; an alarm raised before waits until then.
+The mailbox runs from PREOP on; an alarm raised before waits until then. The way to INIT
+stops the mailbox (devices/esm.py): the frames the master has not read are lost, 0x1003 stays.
 """
 
 from __future__ import annotations
@@ -44,6 +45,10 @@ class EmergencyMailbox:
         self.known = []
         self.pending.clear()
         self.history.clear()
+
+    def stop(self) -> None:
+        """The mailbox stops (any state -> INIT): what the master has not read is lost."""
+        self.pending.clear()
 
     def watch(self, drive: ServoDrive) -> list[bytes]:
         """Frames for the alarms latched since the last call (and the error reset)."""

@@ -7,7 +7,7 @@ from __future__ import annotations
 import random
 
 import pytest
-from coe_bench import CIA402_ENABLE, make_bench
+from coe_bench import CIA402_ENABLE, Bench, make_bench
 
 from devices.ethercat import AlState
 from devices.master import EtherCatMaster
@@ -48,6 +48,35 @@ def test_emergencies_wait_for_the_mailbox() -> None:
     bench.run(5)
     assert bench.emergencies == [] and bench.slave.take_emergencies() == []
     bench.go(P)
+    bench.run(1)
+    assert [frame[:2] for frame in bench.emergencies] == [b"\x20\x32"]
+
+
+def unread_emergency(bench: Bench) -> None:
+    """Alarm 5 (0x3220) raised in PREOP with the cable out: queued, the master cannot read it."""
+    bench.go(P)
+    bench.slave.set_link(False)
+    bench.drive.apply("inject_alarm", {"code": "5"})
+    bench.run(5)
+    assert [r["code"] for r in bench.kinds("emergency")] == ["0x3220"]
+    assert bench.emergencies == []
+    bench.slave.set_link(True)
+
+
+def test_unread_emergencies_are_lost_through_init() -> None:
+    """The mailbox stops on the way to INIT and its queue goes (ETG.1000.6, SSC
+    MBX_StopMailboxHandler); 0x1003 is an object and keeps the alarm."""
+    bench = make_bench()
+    unread_emergency(bench)
+    bench.go(AlState.INIT, P)
+    bench.run(5)
+    assert bench.emergencies == []
+    assert bench.read(0x1003, 1) == 5 << 16 | 0x3220
+
+
+def test_unread_emergencies_wait_without_init() -> None:
+    bench = make_bench()
+    unread_emergency(bench)
     bench.run(1)
     assert [frame[:2] for frame in bench.emergencies] == [b"\x20\x32"]
 
