@@ -82,7 +82,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
         self.link_out = out_link
         self.field_v = float(field_supply_v)
         self.injected: list[FaultKey] = []
-        self.esm = Esm(self.emit, device_id)
+        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
         self.leds = LedBank(device_id)
         self._led_inputs: LedInputs | None = None
         self.powered = False
@@ -161,6 +161,11 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
             return []
         out, self.mailbox = self.mailbox, []
         return out
+
+    def _stop_mailbox(self) -> None:
+        """Any state -> INIT (devices/esm.py): the emergencies not read yet are lost; the
+        0x10F3 history keeps its messages."""
+        self.mailbox = []
 
     def read_object(self, index: int, sub: int) -> Any:
         """SDO upload (raises SdoAbort with the DS301 code)."""

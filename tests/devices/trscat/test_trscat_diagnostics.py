@@ -349,6 +349,37 @@ def test_emergency_only_with_flag_bit0() -> None:
     assert bench.trs.take_emergencies() == [bytes.fromhex("2032050000000000")]
 
 
+def unread_emergency() -> Bench:
+    """FIELD_SUPPLY (0x3220) with the cable out: sent as an emergency the master cannot read."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.write(0x10F3, 5, 0x0001)
+    bench.apply("link", port="in", connected=False)
+    bench.apply("inject_fault", fault="FIELD_SUPPLY")
+    bench.run(0.01)
+    assert [r["code"] for r in bench.records("emergency")] == ["0x3220"]
+    assert bench.trs.take_emergencies() == []
+    bench.apply("link", port="in", connected=True)
+    return bench
+
+
+def test_unread_emergencies_are_lost_through_init() -> None:
+    """The mailbox stops on the way to INIT and its queue goes (ETG.1000.6, SSC
+    MBX_StopMailboxHandler); the 0x10F3 history is an object and keeps the message."""
+    bench = unread_emergency()
+    stored = bench.read(0x10F3, 2)
+    bench.request(AlState.INIT)
+    bench.request(AlState.PREOP)
+    assert bench.trs.al_state is AlState.PREOP
+    assert bench.trs.take_emergencies() == []
+    assert bench.read(0x10F3, 2) == stored
+
+
+def test_unread_emergencies_wait_without_init() -> None:
+    bench = unread_emergency()
+    assert bench.trs.take_emergencies() == [bytes.fromhex("2032050000000000")]
+
+
 def test_f100_and_device_txpdo_mapping() -> None:
     """§9.3.4: 0x1AFF = 0xF100:1..4 one to one, plus sub 5 = 0x10F3:4."""
     bench = Bench()
