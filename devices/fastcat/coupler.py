@@ -97,7 +97,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self._quiet = False  # faults.py: the last alarm search in a step found no cause
         self._scan_causes_key: tuple[Any, ...] | None = None
         self._led_key: tuple[Any, ...] = ()
-        self.esm = Esm(self.emit, device_id)
+        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
         self.cnf = CnfButton()
         self.leds = LedBank(device_id)
         self.cnf_phase = ScanPhase.IDLE
@@ -188,6 +188,11 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             return []
         out, self.mailbox = self.mailbox, []
         return out
+
+    def _stop_mailbox(self) -> None:
+        """Any state -> INIT (devices/esm.py; a master's request, the CNF procedure, power
+        loss): the emergencies not read yet are lost. 0x5400 follows the latched alarm."""
+        self.mailbox = []
 
     def request_state(self, target: AlState) -> None:
         """AL control write. The answer is in ``al_status`` / ``al_status_code``."""

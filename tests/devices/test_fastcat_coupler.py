@@ -434,6 +434,39 @@ def test_link_loss() -> None:
     assert bench.fc.take_emergencies() == [bytes.fromhex("00FF81" "0000001300")]  # 8-byte frame
 
 
+def unread_emergency() -> Bench:
+    """§7.5 0x13 with the cable out in OP: queued, the master cannot read it."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.apply("link", connected=False)
+    bench.step()
+    assert bench.emergencies() == ["00 00 00 13 00"] and bench.fc.take_emergencies() == []
+    bench.apply("link", connected=True)
+    return bench
+
+
+@pytest.mark.parametrize("way", ["request", "cnf"])
+def test_unread_emergencies_are_lost_through_init(way: str) -> None:
+    """The mailbox stops on the way to INIT, a master's request or the CNF procedure, and its
+    queue goes (ETG.1000.6, SSC MBX_StopMailboxHandler)."""
+    bench = unread_emergency()
+    if way == "request":
+        bench.fc.request_state(AlState.INIT)
+    else:
+        bench.apply("hold_cnf", seconds=3.0)
+        bench.run(3.1)
+    assert bench.fc.al_state is AlState.INIT
+    bench.fc.request_state(AlState.PREOP)
+    bench.run_until(lambda: bench.fc.al_state is AlState.PREOP)
+    assert bench.fc.take_emergencies() == []
+
+
+def test_unread_emergencies_wait_without_init() -> None:
+    bench = unread_emergency()
+    bench.run(0.01)
+    assert bench.fc.take_emergencies() == [bytes.fromhex("00FF81" "0000001300")]
+
+
 def test_no_module_on_the_bus() -> None:
     """§7.5 0x10 NO_MOD; a booting error: ERR flickering (docs)."""
     bench = Bench([])
