@@ -82,7 +82,7 @@ class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMa
         self.link_out = out_connected
         self.injected: list[Injected] = []
         self.fault_names: frozenset[str] = frozenset()
-        self.esm = Esm(self.emit, device_id)
+        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
         self.leds = LedBank(device_id)
         self.powered = False
         self.low_since_us: int | None = None
@@ -245,6 +245,11 @@ class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMa
         if out:
             self.touch()
         return out
+
+    def _stop_mailbox(self) -> None:
+        """Any state -> INIT (devices/esm.py): the emergencies not read yet are lost; the
+        0x10F3 history keeps its messages."""
+        self.diagnosis.mailbox = []
 
     def set_link(self, connected: bool, port: str = "in") -> None:
         """A cable on port X1 (IN, from the master's side) or X2 (OUT)."""

@@ -135,6 +135,38 @@ def test_emergencies_reach_the_master() -> None:
     assert bench.cpx.take_emergencies() == []
 
 
+def unread_emergency() -> Bench:
+    """An undervoltage at U_OUT (0x3320) in PREOP with the cable out: queued, unread."""
+    bench = Bench(["8DO"], master=False, history_flags=0x0001)
+    bench.run(0.01)
+    bench.cpx.request_state(AlState.PREOP)
+    assert bench.cpx.al_state is AlState.PREOP
+    bench.cpx.set_link(False)
+    bench.apply("supply", out=12.0)
+    bench.run(0.01)
+    assert [r["code"] for r in bench.records("emergency")] == ["0x3320"]
+    assert bench.cpx.take_emergencies() == []
+    bench.cpx.set_link(True)
+    return bench
+
+
+def test_unread_emergencies_are_lost_through_init() -> None:
+    """The mailbox stops on the way to INIT and its queue goes (ETG.1000.6, SSC
+    MBX_StopMailboxHandler); the 0x10F3 history is an object and keeps the message."""
+    bench = unread_emergency()
+    stored = bench.cpx.history.count
+    bench.cpx.request_state(AlState.INIT)
+    bench.cpx.request_state(AlState.PREOP)
+    assert bench.cpx.al_state is AlState.PREOP
+    assert bench.cpx.take_emergencies() == []
+    assert bench.cpx.history.count == stored >= 1
+
+
+def test_unread_emergencies_wait_without_init() -> None:
+    bench = unread_emergency()
+    assert [f[:2] for f in bench.cpx.take_emergencies()] == [bytes((0x20, 0x33))]
+
+
 def test_status_bits_as_inputs() -> None:
     """§2.4.2: with status bits on, the 8 bits are the bus module's inputs I0 ... I7; the
     CPX system's example "short circuit at the output" sets bits 5 and 1."""
