@@ -59,8 +59,15 @@ class Esc:
 
     # ---- what process A tells the ESC ----
     def set_al_status(self, status: int, code: int) -> None:
+        was = _U16.unpack_from(self.mem, R.AL_STATUS)[0] & R.AL_STATE_MASK
         _U16.pack_into(self.mem, R.AL_STATUS, status & 0xFFFF)
         _U16.pack_into(self.mem, R.AL_STATUS_CODE, code & 0xFFFF)
+        if status & R.AL_STATE_MASK == R.AL_STATE_INIT and was != R.AL_STATE_INIT:
+            # the slave stack stopped its mailbox (SSC MBX_StopMailboxHandler: SM1 disabled,
+            # send queue freed): what the master has not read is lost, as in the model
+            self._mbx_queue.clear()
+            self._mbx_full = self._mbx_last = None
+            self._set_mbx_status(self.sms.mbx_in, False)
 
     def queue_mailbox(self, data: bytes) -> None:
         self._mbx_queue.append(bytes(data))

@@ -34,6 +34,8 @@ DL_STATUS = 0x0110
 AL_CONTROL = 0x0120
 AL_STATUS = 0x0130
 AL_STATUS_CODE = 0x0134
+AL_STATE_MASK = 0x0F  # AL status bits 0-3: the state (bit 4 is the error flag)
+AL_STATE_INIT = 0x01
 PDI_CONTROL = 0x0140
 # SII EEPROM interface
 EEPROM_CONFIG = 0x0500

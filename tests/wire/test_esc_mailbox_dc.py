@@ -166,3 +166,24 @@ def test_armw_spreads_the_reference_time_and_0x092c_shows_the_difference():
     assert diff == 0x80000000 | 500
     same = struct.unpack("<I", one(line, Cmd.FPRD, 0x1003, R.DC_SYSTEM_DIFF, bytes(4)).data)[0]
     assert same == 0
+
+
+def test_a_slave_going_to_init_drops_what_sm1_holds():
+    """The slave stack stops its mailbox on every transition to INIT (ETG.1000.6; SSC
+    MBX_StopMailboxHandler disables SM1 and frees the send queue): replies and emergencies the
+    master has not read are lost, even when the master writes the same SM config again (SOEM
+    ecx_reconfig_slave). Staying in a state with a mailbox keeps them."""
+    line, _, _ = mailbox_line()
+    esc = line.escs[0]
+    esc.set_al_status(0x0004, 0)  # SAFEOP
+    esc.queue_mailbox(b"\x0a\x00\x00\x00\x00\x13" + bytes(10))
+    esc.queue_mailbox(b"\x0a\x00\x00\x00\x00\x23" + bytes(10))
+    esc.set_al_status(0x0014, 0x001B)  # still SAFEOP, error flag: nothing goes
+    assert sm1_status(line) & 0x08
+    esc.set_al_status(0x0001, 0)  # INIT
+    assert sm1_status(line) & 0x08 == 0
+    one(line, Cmd.FPWR, 0x1001, R.SM0, SM0_CFG + SM1_CFG)
+    esc.set_al_status(0x0002, 0)
+    assert sm1_status(line) & 0x08 == 0
+    esc.queue_mailbox(b"\x0a\x00\x00\x00\x00\x33" + bytes(10))
+    assert one(line, Cmd.FPRD, 0x1001, 0x1080, bytes(128)).data[5] == 0x33
