@@ -137,7 +137,7 @@ def test_emergencies_reach_the_master() -> None:
 
 def unread_emergency() -> Bench:
     """An undervoltage at U_OUT (0x3320) in PREOP with the cable out: queued, unread."""
-    bench = Bench(["8DO"], master=False, history_flags=0x0001)
+    bench = Bench(["8DO"], master=False, history_flags=0x0001, **STI)
     bench.run(0.01)
     bench.cpx.request_state(AlState.PREOP)
     assert bench.cpx.al_state is AlState.PREOP
