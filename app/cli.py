@@ -23,6 +23,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from app.out_paths import check_out, check_record, prepare_out
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.scenario import (
     EXAMPLES_DIR,
@@ -145,9 +146,16 @@ def _scenario(args: argparse.Namespace) -> int:
     # The whole file is checked against the rig before anything starts (a server, a browser,
     # a recording): a wrong file is one error line and exit 2 in every mode.
     check_against(scenario, rig)
+    if args.screenshots and not args.out:
+        raise ScenarioError("--screenshots needs --out DIR")
+    # So are the output paths: a bad one must not cost a run, nor leave a recording that
+    # looks complete beside a traceback.
+    if args.record:
+        check_record(args.record)
+    out = check_out(args.out) if args.out else None
+    if out is not None:
+        prepare_out(out)
     if args.screenshots:
-        if not args.out:
-            raise ScenarioError("--screenshots needs --out DIR")
         from app.screenshots import run_with_screenshots
 
         result = run_with_screenshots(scenario, rig, args.out, record=args.record,
@@ -165,9 +173,7 @@ def _scenario(args: argparse.Namespace) -> int:
     lines = [json.dumps(e.to_record(), default=str) for e in result.events]
     if not args.quiet:
         sys.stdout.write("".join(line + "\n" for line in lines))
-    if args.out:
-        out = Path(args.out)
-        out.mkdir(parents=True, exist_ok=True)
+    if out is not None:
         (out / "events.jsonl").write_text("".join(line + "\n" for line in lines),
                                           encoding="utf-8")
     for failure in result.failures:
@@ -215,6 +221,9 @@ def _serve(args: argparse.Namespace) -> int:
         raise RigConfigError("--instructor-token", "", "an empty token")
     access_token = Access.for_host(args.host, args.instructor_token).token
     exercises = _exercise_files(args.exercises)
+    if args.record and not args.no_record:  # before any rig starts serving
+        for i in range(count):
+            check_record(_record_path(args, Path(args.state_dir), "", "", i, count) or "")
     served, extras = [], []
     stamp = time.strftime("%Y%m%d-%H%M%S")
     try:

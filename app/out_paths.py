@@ -1,0 +1,59 @@
+"""Where a run writes: ``--out DIR`` and ``--record FILE`` checked before anything runs.
+
+A path that cannot take the output is a user's mistake like a wrong scenario file: one
+``fieldrig: error:`` line and exit 2 before the run, not a traceback after it (with a recording
+that looked complete).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+from app.rig_config import RigConfigError
+
+
+def _writable_parent(path: Path, flag: str) -> None:
+    """The nearest existing ancestor of ``path`` must be a directory this process may write
+    in (the missing ones are created at the start)."""
+    parent = path.parent
+    while not parent.exists() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise RigConfigError(flag, "", f"{path}: {parent} is not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise RigConfigError(flag, "", f"{path}: cannot write in {parent}")
+
+
+def check_record(path: str | Path, flag: str = "--record") -> Path:
+    """A file a recording can be written to (created or replaced); nothing is created."""
+    target = Path(path)
+    if target.is_dir():
+        raise RigConfigError(flag, "", f"{target} is a directory; give a file name, e.g. "
+                                       f"{target / 'run.rrd'}")
+    if target.exists() and not os.access(target, os.W_OK):
+        raise RigConfigError(flag, "", f"{target}: cannot write to it")
+    _writable_parent(target, flag)
+    return target
+
+
+def check_out(path: str | Path) -> Path:
+    """A directory ``--out`` may be (existing or to be created); nothing is created."""
+    out = Path(path)
+    if out.exists():
+        if not out.is_dir():
+            raise RigConfigError("--out", "", f"{out} is a file, not a directory")
+        if not os.access(out, os.W_OK | os.X_OK):
+            raise RigConfigError("--out", "", f"{out}: cannot write in it")
+    else:
+        _writable_parent(out, "--out")
+    return out
+
+
+def prepare_out(out: Path) -> list[Path]:
+    """Create ``out``."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise RigConfigError("--out", "", f"{out}: {exc.strerror or exc}") from None
+    return []

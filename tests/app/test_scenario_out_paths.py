@@ -1,0 +1,76 @@
+"""``scenario run --out/--record`` with a path that cannot take the output (docs/scenarios.md).
+
+A bad output path is the same class of mistake as a wrong scenario file: one ``fieldrig:
+error:`` line, exit 2, checked before the run, nothing written.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from app.cli import main
+
+SHORT = ('[scenario]\nname = "short"\nduration_s = 0.05\n'
+         '[[step]]\nat = 0.0\ncaption = "hello"\n')
+
+
+@pytest.fixture
+def scenario(tmp_path: Path) -> Path:
+    path = tmp_path / "short.toml"
+    path.write_text(SHORT, encoding="utf-8")
+    return path
+
+
+def one_error_line(err: str) -> str:
+    assert err.splitlines() == [err.strip()], err  # one line, no traceback
+    assert err.startswith("fieldrig: error: "), err
+    return err
+
+
+def test_out_naming_a_file_is_refused_before_the_run(
+        scenario: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    taken = tmp_path / "taken"
+    taken.write_text("mine", encoding="utf-8")
+    record = tmp_path / "run.rrd"
+    code = main(["scenario", "run", str(scenario), "--out", str(taken), "--record",
+                 str(record), "--quiet"])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""
+    assert "--out" in one_error_line(err)
+    assert taken.read_text(encoding="utf-8") == "mine"
+    assert not record.exists()  # the run did not happen: no recording that looks complete
+
+
+def test_record_naming_a_directory_is_refused_before_the_run(
+        scenario: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    folder = tmp_path / "recordings"
+    folder.mkdir()
+    out_dir = tmp_path / "out"
+    code = main(["scenario", "run", str(scenario), "--out", str(out_dir), "--record",
+                 str(folder)])
+    out, err = capsys.readouterr()
+    assert code == 2 and out == ""  # no event lines: the run did not happen
+    assert "--record" in one_error_line(err)
+    assert list(folder.iterdir()) == []
+    assert not (out_dir / "events.jsonl").exists()
+
+
+def test_record_under_a_file_is_refused(
+        scenario: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    (tmp_path / "plain").write_text("", encoding="utf-8")
+    code = main(["scenario", "run", str(scenario), "--record", str(tmp_path / "plain" / "x.rrd"),
+                 "--quiet"])
+    assert code == 2
+    assert "--record" in one_error_line(capsys.readouterr().err)
+
+
+def test_served_record_naming_a_directory_is_refused(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(["--record", str(tmp_path), "--run-for", "0", "--port", "18931",
+                 "--modbus-port", "18932", "--state-dir", str(tmp_path / "var")])
+    out, err = capsys.readouterr()
+    assert code == 2
+    assert "--record" in one_error_line(err)
+    assert "serving" not in out
