@@ -2,15 +2,22 @@
 
 A path that cannot take the output is a user's mistake like a wrong scenario file: one
 ``fieldrig: error:`` line and exit 2 before the run, not a traceback after it (with a recording
-that looked complete).
+that looked complete). ``--out`` gets this run's files only: the files a previous run wrote
+there (``events.jsonl``, ``NN-name.png``) go first; no other file is touched
+(docs/scenarios.md "Output folder").
 """
 
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 from app.rig_config import RigConfigError
+
+# What a run writes into --out (app/screenshots.py image_name, app/cli.py): nothing else is
+# ever removed.
+RUN_FILE = re.compile(r"(events\.jsonl|\d{2,}-[A-Za-z0-9_.-]+\.png)")
 
 
 def _writable_parent(path: Path, flag: str) -> None:
@@ -51,9 +58,14 @@ def check_out(path: str | Path) -> Path:
 
 
 def prepare_out(out: Path) -> list[Path]:
-    """Create ``out``."""
+    """Create ``out`` and remove what an earlier run wrote there; the files removed."""
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise RigConfigError("--out", "", f"{out}: {exc.strerror or exc}") from None
-    return []
+    removed = []
+    for entry in sorted(out.iterdir()):
+        if RUN_FILE.fullmatch(entry.name) and entry.is_file() and not entry.is_symlink():
+            entry.unlink()
+            removed.append(entry)
+    return removed

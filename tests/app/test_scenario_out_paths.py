@@ -1,7 +1,9 @@
 """``scenario run --out/--record`` with a path that cannot take the output (docs/scenarios.md).
 
 A bad output path is the same class of mistake as a wrong scenario file: one ``fieldrig:
-error:`` line, exit 2, checked before the run, nothing written.
+error:`` line, exit 2, checked before the run, nothing written. An ``--out`` that holds a
+previous run's files gets this run's only (the old ``NN-*.png`` and ``events.jsonl`` go; other
+files stay).
 """
 
 from __future__ import annotations
@@ -74,3 +76,22 @@ def test_served_record_naming_a_directory_is_refused(
     assert code == 2
     assert "--record" in one_error_line(err)
     assert "serving" not in out
+
+
+def test_a_previous_run_s_files_are_replaced_and_others_kept(
+        scenario: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    old = ["01-op.png", "02-in_alarm.png", "12-x.y.png"]
+    for name in old:
+        (out_dir / name).write_bytes(b"old picture")
+    (out_dir / "events.jsonl").write_text("old\n", encoding="utf-8")
+    kept = ["notes.txt", "op.png", "1-op.png", "01-op.png.bak", "events.jsonl.old"]
+    for name in kept:
+        (out_dir / name).write_text("keep", encoding="utf-8")
+    (out_dir / "03-sub.png").mkdir()  # not a file FieldRig wrote
+    assert main(["scenario", "run", str(scenario), "--out", str(out_dir), "--quiet"]) == 0
+    capsys.readouterr()
+    assert sorted(p.name for p in out_dir.iterdir()) == sorted(
+        [*kept, "03-sub.png", "events.jsonl"])
+    assert '"caption"' in (out_dir / "events.jsonl").read_text(encoding="utf-8")
