@@ -24,7 +24,7 @@ import re
 import socket
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -87,10 +87,16 @@ class ServedRig:
     quiet: bool = False
 
     @classmethod
-    def start(cls, rig: Rig, quiet: bool = False) -> ServedRig:
-        """``quiet``: nothing of viser's on the output (``scenario run --quiet``)."""
+    def start(cls, rig: Rig, quiet: bool = False,
+              before_start: Callable[[Runtime], object] | None = None) -> ServedRig:
+        """``quiet``: nothing of viser's on the output (``scenario run --quiet``).
+        ``before_start(runtime)``: attach listeners that must see every event: the first work
+        the dashboard queues already journals the events a rig emits when built (its devices
+        powered by the rig file)."""
         runtime = Runtime(rig)
         runtime.set_paused(True)
+        if before_start is not None:
+            before_start(runtime)
         port = free_port()
         with _viser_output(quiet):
             server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
@@ -254,41 +260,64 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
                               "(apt-get install -y chromium)")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    served = ServedRig.start(rig, quiet=quiet)
-    events: list[Event] = []
-    served.runtime.add_listener(events.extend)  # every journalled batch, in order
-    recorder = None
-    if record:
-        from app.recording import RigRecorder, attach_to_runtime
-
-        recorder = RigRecorder(record)
-        attach_to_runtime(served.runtime, recorder)
     images: list[Path] = []
-    failures: list[str] = []
-    try:
-        with Chromium(chromium) as browser:
-            page = browser.open(served, show_player=True)
-            panel = served.dashboard.scenario_player
-            panel.load(scenario, fresh=rig)
-            player = panel.player
-            done = 0
-            while True:
-                view = player.view()
-                for step in scenario.steps[done:view.applied]:
-                    if step.kind == "checkpoint":
-                        images.append(_shoot(page, out, len(images) + 1, step))
-                done = view.applied
-                if view.status is Status.FINISHED:
-                    failures = list(view.failures)
-                    break
-                player.step()
-            page.close()
-    finally:
-        served.stop()
-        if recorder is not None:
-            recorder.close()
+    with served_run(rig, record=record, quiet=quiet) as (served, events), \
+            Chromium(chromium) as browser:
+        page = browser.open(served, show_player=True)
+        failures = play(served, scenario, rig,
+                        lambda step: images.append(_shoot(page, out, len(images) + 1, step)))
+        page.close()
     (out / "events.jsonl").write_text(event_lines(events), encoding="utf-8")
     return ScreenshotRun(events, failures, images)
+
+
+@contextlib.contextmanager
+def served_run(rig: Rig, *, record: str | None = None,
+               quiet: bool = False) -> Iterator[tuple[ServedRig, list[Event]]]:
+    """``rig`` served paused, with the list its events go to (and ``record``: a recording of
+    it); stopped (and the recording closed) at the end."""
+    events: list[Event] = []
+    recorder = None
+    if record:
+        from app.recording import RigRecorder
+
+        recorder = RigRecorder(record)
+
+    def attach(runtime: Runtime) -> None:
+        runtime.add_listener(events.extend)  # every journalled batch, in order
+        if recorder is not None:
+            from app.recording import attach_to_runtime
+
+            attach_to_runtime(runtime, recorder)
+
+    try:
+        served = ServedRig.start(rig, quiet=quiet, before_start=attach)
+        try:
+            yield served, events
+        finally:
+            served.stop()
+    finally:
+        if recorder is not None:
+            recorder.close()
+
+
+def play(served: ServedRig, scenario: Scenario, rig: Rig,
+         at_checkpoint: Callable[[Step], object]) -> list[str]:
+    """Play ``scenario`` on the served, untouched ``rig`` step by step with the dashboard's
+    player; ``at_checkpoint(step)`` once the rig stands at each checkpoint. The failures."""
+    panel = served.dashboard.scenario_player
+    panel.load(scenario, fresh=rig)
+    player = panel.player
+    done = 0
+    while True:
+        view = player.view()
+        for step in scenario.steps[done:view.applied]:
+            if step.kind == "checkpoint":
+                at_checkpoint(step)
+        done = view.applied
+        if view.status is Status.FINISHED:
+            return list(view.failures)
+        player.step()
 
 
 def _shoot(page: DashboardPage, out: Path, number: int, step: Step) -> Path:

@@ -1,0 +1,81 @@
+"""The events of a ``--screenshots`` run (the dashboard's player on a served runtime) are the
+lines ``scenario run`` prints, byte for byte, and a ``--record`` of it records every one of
+them (docs/scenarios.md "Screenshots for CI").
+
+No browser: the events and the recording come from the served runtime and the player alone
+(app/screenshots.py ``served_run`` and ``play``, which ``run_with_screenshots`` shoots
+between). Rigs that power their devices when built (ethercat_line, nine_analog) have events
+at t = 0 before any step: the test of module_lost_in_op alone (default rig, powered by a step)
+never saw them.
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import pytest
+from rerun.chunk import RrdReader
+
+from app.recording.event_text import log_path
+from app.rig_config import build_rig, load_rig_spec
+from app.scenario import EXAMPLES_DIR, load_scenario
+from app.screenshots import play, served_run
+
+SCENARIOS = ["cable_pulled", "too_many_analog", "module_lost_in_op"]
+
+
+def text_rows(record: Path) -> Counter[tuple[str, int]]:
+    """(entity, sim time in us) of every text-log row of the recording."""
+    reader = RrdReader(str(record))
+    found: Counter[tuple[str, int]] = Counter()
+    for chunk in reader.stream(store=reader.recordings()[0]):
+        batch = chunk.to_record_batch()
+        if "TextLog:text" in batch.schema.names and "sim_time" in batch.schema.names:
+            found.update((chunk.entity_path.lstrip("/"), t // dt.timedelta(microseconds=1))
+                         for t in batch.column("sim_time").to_pylist())
+    return found
+
+
+def fresh(scenario_name: str) -> tuple[Any, Any]:
+    scenario = load_scenario(EXAMPLES_DIR / f"{scenario_name}.toml")
+    assert scenario.rig is not None or scenario_name == "module_lost_in_op"
+    rig_file = scenario.rig or str(EXAMPLES_DIR.parent / "rigs" / "default.toml")
+    return scenario, build_rig(load_rig_spec(rig_file), state_dir=None)
+
+
+def served_play(name: str, record: Path | None = None) -> tuple[Any, list[Any]]:
+    """Play example ``name`` on its served rig: the scenario and the events journalled."""
+    scenario, rig = fresh(name)
+    checkpoints: list[str] = []
+    with served_run(rig, record=None if record is None else str(record),
+                    quiet=True) as (served, events):
+        failures = play(served, scenario, rig, lambda step: checkpoints.append(step.text))
+    assert failures == []
+    assert checkpoints == [s.text for s in scenario.steps if s.kind == "checkpoint"]
+    return scenario, events
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_a_recording_of_a_served_play_has_every_event(
+        name: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import app.recording
+
+    class SlowToOpen(app.recording.RigRecorder):
+        """A recording file that takes a moment to open (a cold start of the CLI, a slow
+        disk): the served rig must not run without the recorder meanwhile."""
+
+        def __init__(self, *args: Any, **kwargs: Any) -> None:
+            time.sleep(0.5)
+            super().__init__(*args, **kwargs)
+
+    monkeypatch.setattr(app.recording, "RigRecorder", SlowToOpen)
+    record = tmp_path / "run.rrd"
+    _, events = served_play(name, record)
+    assert any(e.t_us == 0 and e.to_record()["device"] != "scenario" for e in events)
+    # Every event is a text-log row of its device, at its time (none lost at t = 0).
+    wanted = Counter((log_path(e).lstrip("/"), e.t_us) for e in events)
+    assert wanted - text_rows(record) == Counter()
