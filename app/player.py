@@ -193,7 +193,9 @@ class Player:
                 self._generation += 1
             # The [[on]] tables ride on the fresh master's ECAT_Notify hook, as in `scenario run`.
             install_reactions(scenario, rig, self._failures)
-            self._apply_due(rig.clock.now_us)  # steps at 0 s come before the first step
+            # Steps at 0 s come before the first step, after what the fresh rig emitted when
+            # built, as app.scenario.run_scenario orders them.
+            self._apply_due(rig.clock.now_us, rig.take_events())
             self.runtime.set_speed(self.runtime.speed)  # rebase the wall clock on time 0
 
         self.runtime.submit(install).result(timeout=WAIT_S)
@@ -281,12 +283,13 @@ class Player:
         self._started = True
         self._apply_due(now_us)
 
-    def _apply_due(self, now_us: int) -> None:
+    def _apply_due(self, now_us: int, before: list[Event] | None = None) -> None:
         """Apply the steps ``scenario run`` applies at ``now_us``: those before the next
-        simulation step (app.scenario._run_until stops at the last step not past them)."""
+        simulation step (app.scenario._run_until stops at the last step not past them).
+        ``before``: events to journal ahead of theirs."""
         rig = self.runtime.rig
         horizon = now_us + rig.clock.step_us
-        events: list[Event] = []
+        events: list[Event] = list(before or ())
         with self._lock:
             scenario = self._scenario
             if scenario is None:

@@ -413,9 +413,14 @@ def run_scenario(scenario: Scenario, rig: Rig,
     every simulation step (and after each applied step) with the events it produced.
     """
     check_against(scenario, rig)
-    events: list[Event] = []
     failures: list[str] = []
     install_reactions(scenario, rig, failures)
+    # What the rig emitted when built (devices its file powers) comes first, at t = 0: left
+    # to the first step it came after that step's events at 1 ms of the devices before, and
+    # a served runtime (the player, --screenshots) takes it at its first queued work anyway.
+    events = rig.take_events()
+    if on_tick is not None and events:
+        on_tick(rig, events)
     for step in scenario.steps:
         events.extend(_run_until(rig, step.t_us, on_tick))
         applied = apply_step(step, rig, failures)

@@ -4,9 +4,9 @@ them (docs/scenarios.md "Screenshots for CI").
 
 No browser: the events and the recording come from the served runtime and the player alone
 (app/screenshots.py ``served_run`` and ``play``, which ``run_with_screenshots`` shoots
-between). Rigs that power their devices when built (ethercat_line, nine_analog) have events
-at t = 0 before any step: the test of module_lost_in_op alone (default rig, powered by a step)
-never saw them.
+between). Rigs that power their devices when built have events at t = 0
+before any step; the browser test of module_lost_in_op alone never saw them out of place, as
+its first step is a command, which takes them in both paths.
 """
 
 from __future__ import annotations
@@ -22,8 +22,8 @@ from rerun.chunk import RrdReader
 
 from app.recording.event_text import log_path
 from app.rig_config import build_rig, load_rig_spec
-from app.scenario import EXAMPLES_DIR, load_scenario
-from app.screenshots import play, served_run
+from app.scenario import EXAMPLES_DIR, load_scenario, run_scenario
+from app.screenshots import event_lines, play, served_run
 
 SCENARIOS = ["cable_pulled", "too_many_analog", "module_lost_in_op"]
 
@@ -79,3 +79,19 @@ def test_a_recording_of_a_served_play_has_every_event(
     # Every event is a text-log row of its device, at its time (none lost at t = 0).
     wanted = Counter((log_path(e).lstrip("/"), e.t_us) for e in events)
     assert wanted - text_rows(record) == Counter()
+
+
+@pytest.mark.parametrize("name", SCENARIOS)
+def test_a_served_play_gives_the_lines_of_scenario_run(name: str) -> None:
+    scenario, rig = fresh(name)
+    expected = event_lines(run_scenario(scenario, rig).events)
+    _, events = served_play(name)
+    assert event_lines(events) == expected
+
+
+def test_scenario_run_gives_events_in_time_order() -> None:
+    """The events a rig emits when built come first, not inside the first step's, after the
+    events at 1 ms of the devices before them (the served runtime cannot order them so)."""
+    scenario, rig = fresh("cable_pulled")
+    times = [e.t_us for e in run_scenario(scenario, rig).events]
+    assert times == sorted(times)
