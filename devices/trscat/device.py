@@ -122,7 +122,9 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
             return
         self.clear_all_alarms()
         self.powered = on
+        was = self.sync_state
         self._power_up_state()
+        self.sync_state = was  # the new sync unit's state is a change like any other (event)
         if on:
             slots = 1 + len(self._chain())
             self.detect_done_us = self.now_us + DETECT_BASE_US + DETECT_PER_SLOT_US * slots
@@ -130,6 +132,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
         else:
             self.esm.reset(self.now_us)
             self._set_bus(TrsBus.OFF)
+        self._sync_event()
         self._refresh()
 
     def _chain(self) -> list[ModuleKind]:
