@@ -16,6 +16,7 @@ import viser
 from app.ui.commands import CommandSender
 from app.ui.panels.state import al_status_text
 from app.ui.panels.widgets import Synced
+from app.ui.repeats import Run, collapse_repeats, repeat_suffix
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import describe_al_status_code
 from devices.events import US_PER_S
@@ -132,11 +133,16 @@ def _stamp(line: Mapping[str, Any]) -> str:
     return str(line.get("timestamp") or f"{float(line.get('t', 0)):.3f} s")
 
 
+def _log_row(run: Run[Mapping[str, Any]]) -> str:
+    text = str(run.first.get("text", "")) + repeat_suffix(run.count, float(run.last.get("t", 0)))
+    return f'<tr><td class="fr-ts">{esc(_stamp(run.first))}</td><td>{esc(text)}</td></tr>'
+
+
 def log_table(lines: Sequence[Mapping[str, Any]]) -> str:
-    """The master's lines as it printed them, newest first."""
-    rows = "".join(
-        f'<tr><td class="fr-ts">{esc(_stamp(line))}</td><td>{esc(line.get("text", ""))}</td>'
-        "</tr>" for line in list(lines)[-LOG_ROWS:][::-1])
+    """The master's lines as it printed them, newest first; a run of repeated lines (its
+    retries) is one row, "... x12, last 52.3 s", so the emergency before it stays in view."""
+    runs = collapse_repeats(list(lines), key=lambda line: str(line.get("text", "")))
+    rows = "".join(_log_row(run) for run in runs[-LOG_ROWS:][::-1])
     body = rows or '<tr><td colspan="2" class="fr-muted">no lines yet</td></tr>'
     return ('<div class="fr-log-wrap"><table class="fr-log" id="fr-line-log"><colgroup>'
             '<col style="width:30%"><col></colgroup><thead><tr><th>Timestamp</th>'
@@ -162,6 +168,7 @@ class MasterPanel:
         self._style_sync = Synced(server, self._style, sender, lambda client, style: sender.send(
             client, master_id, "set_log_style", {"style": style}))
         self._log = gui.add_html(log_table([]))
+        self._log_seen: tuple[Any, ...] = ()
 
     def _set(self, key: str, handle: Any, content: str) -> None:
         if self._cache.get(key) != content:
@@ -179,7 +186,13 @@ class MasterPanel:
         self._set("live", self._live, live_table(master))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))
-        self._set("log", self._log, log_table(master.get("log") or []))
+        log = master.get("log") or []
+        # Collapsing the whole log (up to 500 lines) each frame would cost; it changes seldom.
+        seen = (len(log), master.get("log_style"), log[-1].get("t") if log else None,
+                log[-1].get("text") if log else None)
+        if seen != self._log_seen:
+            self._log_seen = seen
+            self._set("log", self._log, log_table(log))
 
     def text(self, key: str) -> str:
         """What a block shows: ``title``, ``status``, ``live``, ``slaves`` or ``log``."""

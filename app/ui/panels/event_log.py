@@ -3,18 +3,20 @@
 Rows come from two places: the built-in master's logger lines (its snapshot's ``log``, with
 the AMS port 65535 and the TwinCAT timestamp the master printed) and the device events a
 technician also wants in the same list (ESM state changes, emergencies, alarms raised and
-cleared, scenario captions), stamped with the same clock. Newest first, bounded.
+cleared, scenario captions), stamped with the same clock. Newest first, bounded; a run of
+repeated rows (a master's retries) is one row with a count (app/ui/repeats.py).
 """
 
 from __future__ import annotations
 
 import collections
 from collections.abc import Callable, Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import viser
 
+from app.ui.repeats import collapse_repeats, repeat_suffix
 from app.ui.style import esc
 from devices.events import (
     US_PER_S,
@@ -73,6 +75,15 @@ def event_message(event: Event, device_kind: str = "") -> tuple[str, bool] | Non
     return None
 
 
+def collapse_rows(rows: Iterable[LogRow]) -> list[LogRow]:
+    """Rows oldest first -> newest first, each run of repeated rows (same server and message)
+    as one: the first row's timestamp, "... x12, last 52.3 s" after the message."""
+    runs = collapse_repeats(list(rows), key=lambda r: (r.server, r.message))
+    return [replace(run.first, message=run.first.message
+                    + repeat_suffix(run.count, run.last.t_us / US_PER_S))
+            for run in reversed(runs)]
+
+
 def render_rows(rows: Iterable[LogRow]) -> str:
     body = "".join(
         f'<tr class="{"fr-err" if r.error else ""}"><td class="fr-srv">{esc(r.server)}</td>'
@@ -101,6 +112,7 @@ class EventLogPanel:
         self._order = 0
         self._html = server.gui.add_html(render_rows([]))
         self._last = ""
+        self._seen: tuple[Any, ...] = ()
 
     def add_events(self, events: Iterable[Event]) -> None:
         for event in events:
@@ -117,18 +129,26 @@ class EventLogPanel:
                                             self._timestamp(event.t_us), text, error))
 
     def update(self, master_snap: Mapping[str, Any] | None) -> None:
+        log = list((master_snap or {}).get("log", []))
+        # The whole of the master's log, not its last rows: collapsed, its retries take a row
+        # or two and the emergency before them stays in view. Read again only when it changed.
+        seen = (self._order, len(log), (master_snap or {}).get("log_style"),
+                log[-1].get("t") if log else None, log[-1].get("text") if log else None)
+        if seen == self._seen:
+            return
+        self._seen = seen
         rows = list(self._device_rows)
-        for i, line in enumerate((master_snap or {}).get("log", [])[-MAX_ROWS:]):
+        for i, line in enumerate(log):
             text = str(line.get("text", ""))
             rows.append(LogRow(
-                round(float(line.get("t", 0.0)) * US_PER_S), -MAX_ROWS + i,
+                round(float(line.get("t", 0.0)) * US_PER_S), i - len(log),
                 f"({line.get('port', '')})", str(line.get("timestamp", "")), text,
                 any(w in text.lower() for w in _ERROR_WORDS)))
-        # Newest first; the master's lines of an instant come after the device's own events
+        # Oldest first; the master's lines of an instant come after the device's own events
         # (the master reads them a cycle later), hence the negative order for master lines
         # only breaks ties among themselves.
-        rows.sort(key=lambda r: (r.t_us, r.server.startswith("("), r.order), reverse=True)
-        content = render_rows(rows[:MAX_ROWS])
+        rows.sort(key=lambda r: (r.t_us, r.server.startswith("("), r.order))
+        content = render_rows(collapse_rows(rows)[:MAX_ROWS])
         if content != self._last:
             self._html.content = content
             self._last = content
