@@ -101,6 +101,19 @@ del R, N
 DRIVE_ALARMS: dict[int, AlarmSpec] = {a.code: a for a in _DRIVE_ALARMS}
 
 
+# How a master of each fieldbus resets the alarms (the drive log's hint). Modbus: Alm_rst, R00
+# bit 3 (ch. 1, ch. 2 "valore: 0x0008"). CANopen and CoE: 0x80 on 0x6040, bit 7 (ch. 4
+# examples "0x0080"; ch. 5 "Reset allarmi": "scrittura 0x80 su oggetto 0x6040"). Profinet: its
+# shared memory's Control Word (ch. "Profinet IO", input group 1, next to the CiA 402 objects;
+# the seed names no reset bit: read as 0x6040's, docs/servo-drive.md "Reset").
+RESET_HINT: dict[str, str] = {
+    "modbus": "R00 bit 3",
+    "canopen": "0x6040 = 0x80 (bit 7)",
+    "ethercat": "0x6040 = 0x80 (bit 7)",
+    "profinet": "Control Word = 0x80 (bit 7)",
+}
+RESET_HINT_ANY = "R00 bit 3 or 0x6040 bit 7"  # c9 names no fieldbus: both views are there
+
 _TABLES: dict[str, dict[int, AlarmSpec]] = {}
 
 
