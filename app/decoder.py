@@ -45,7 +45,7 @@ CPX = "CPX-E-EC"
 CANOPEN = "CANopen (DS 301)"
 SDO = "SDO abort"
 
-MAX_FASTCAT_MODULE = 16  # seed 000 §2: at most 16 modules on a coupler
+MAX_FASTCAT_MODULE = fastcat.MAX_MODULES  # seed 000 §2: at most 16 modules on a coupler
 
 # DS 301 error register 0x1001 bit names (seed 004 ch. 4), keyed by devices.canopen.emcy's bits.
 _REGISTER_NAMES = {
@@ -281,27 +281,22 @@ def _number(value: int, digits: int) -> list[Meaning]:
 
 def al_status(code: int) -> list[Meaning]:
     """Seed 000 §7.7: the ETG codes, and the FastCAT's 0x80XX (module in byte 1, coupler code
-    in byte 0; a module alarm leaves byte 0 at 0)."""
+    in byte 0; a module alarm leaves byte 0 at 0), read by the FastCAT's decoder, as the State
+    and Line tabs read it (``devices.fastcat.alarms.decode_al_status``)."""
     if code in AL_STATUS_CODES:
         return [Meaning(ETHERCAT, f"AL status code {fmt_hex(code, 4)}",
                         _sentence(AL_STATUS_CODES[code]), "seed 000 §7.7")]
-    if code < fastcat.AL_STATUS_MANUFACTURER:
-        return []
-    module, coupler_code = code >> 8 & 0x7F, code & 0xFF
-    if module > MAX_FASTCAT_MODULE:
+    found = fastcat.decode_al_status(code)
+    if found is None:
         return []
     title = f"AL status code {fmt_hex(code, 4)} (manufacturer area)"
-    where = f"module {module}" if module else "the coupler itself (module 0)"
-    if coupler_code == 0:
-        if not module:
-            return []
+    where = f"module {found.module}" if found.module else "the coupler itself (module 0)"
+    row = found.coupler
+    if row is None:
         return [Meaning(FASTCAT, title, f"FastCAT: a module alarm on {where}; the module code "
                         "is in byte 2 of the emergency and of 0x5400.", "seed 000 §7.7")]
-    row = fastcat.COUPLER_CODES.get(coupler_code)
-    if row is None:
-        return []
     return [Meaning(FASTCAT, title, f"FastCAT: {where}, coupler code "
-                    f"{fmt_hex(coupler_code, 2)} {row.symbol}: {row.description}.",
+                    f"{fmt_hex(row.code, 2)} {row.symbol}: {row.description}.",
                     "seed 000 §7.5, §7.7")]
 
 

@@ -86,13 +86,6 @@ def fault_options() -> list[FaultOption]:
             for table in CODE_TABLES.values() for row in table.values()]
 
 
-def code_name(table: str, code: int) -> str | None:
-    from devices.fastcat.alarms import CODE_TABLES
-
-    row = CODE_TABLES.get(table, {}).get(code)
-    return row.symbol if row is not None else None
-
-
 def _param_range(action: Action | None, default: tuple[int, int]) -> tuple[int, int]:
     """(low, high) of an action's first parameter, e.g. set_rotary(value 1..15)."""
     param = action.params[0] if action is not None and action.params else None
@@ -242,7 +235,7 @@ class Dashboard:
                                   list(CATALOG))
         side = self._side = gui.add_panel()
         with side.add_tab("State", viser.Icon.GAUGE):
-            state = StatePanel(self.server, code_name)
+            state = StatePanel(self.server)
             gui.add_markdown("**Event log**")
             # Every device's own events (the drives' alarms too), the master's via its log.
             log = EventLogPanel(self.server, {d: str(info["kind"]) for d, info in

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 from devices.device import CommandError
 from devices.events import fmt_hex
+from devices.fastcat.objects import MAX_MODULES
 
 COUPLER = "coupler"
 MODULE = "module"
@@ -202,6 +203,48 @@ def manufacturer_al_status(table: str, code: int, module: int) -> int:
     """§7.7: 0x8000 | module number in byte 1 | coupler code in byte 0 (module codes -> 0)."""
     coupler_code = code if table == COUPLER else 0
     return AL_STATUS_MANUFACTURER | (module & 0xFF) << 8 | coupler_code
+
+
+
+@dataclass(frozen=True)
+class ManufacturerAlStatus:
+    """A decoded §7.7 0x80XX code: the one reading of it every view uses."""
+
+    module: int  # byte 1 (without the 0x80 of the area); 0: the coupler itself
+    coupler: AlarmCode | None  # byte 0; None: a module alarm, which has no coupler code
+    module_code: AlarmCode | None = None  # a module alarm's code, when 0x5400 gives it
+
+    @property
+    def text(self) -> str:
+        """``module 2: coupler code 0x04 MISSING_NODE_ANSWER``; a module alarm names its module
+        code when known (``module 4: module code 0x0B TARATURA``)."""
+        where = f"module {self.module}" if self.module else "coupler"
+        if self.coupler is not None:
+            return f"{where}: coupler code {fmt_hex(self.coupler.code, 2)} {self.coupler.symbol}"
+        if self.module_code is not None:
+            code = self.module_code
+            return f"{where}: module code {fmt_hex(code.code, 2)} {code.symbol}"
+        return f"{where}: module alarm, its code in byte 2 of 0x5400"
+
+
+def decode_al_status(code: int, word: int | None = None) -> ManufacturerAlStatus | None:
+    """§7.7: 0x8000 | module in byte 1 | coupler code in byte 0 (0 for a module alarm); None
+    when ``code`` is no such code. ``word``: 0x5400 (§6.23), read for a module alarm's module
+    code when its byte 0 is the same module (the emergency of this alarm)."""
+    if code < AL_STATUS_MANUFACTURER or code > 0xFFFF:
+        return None
+    module, coupler_code = code >> 8 & 0x7F, code & 0xFF
+    if module > MAX_MODULES:
+        return None
+    if coupler_code:
+        row = COUPLER_CODES.get(coupler_code)
+        return ManufacturerAlStatus(module, row) if row is not None else None
+    if not module:
+        return None  # 0x8000: neither a module nor a coupler code
+    known = None
+    if word is not None and word & 0xFF == module and not word >> 24 & 0xFF:
+        known = MODULE_CODES.get(word >> 16 & 0xFF)
+    return ManufacturerAlStatus(module, None, known)
 
 
 # AL status code when a latched alarm makes the coupler refuse PREOP -> SAFEOP or SAFEOP -> OP.

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from devices.device import CommandError
 from devices.ethercat import AlState, emergency_frame
+from devices.ethercat import describe_al_status_code as generic_al_status_text
 from devices.events import AlarmChanged, EmergencySent, Event, fmt_hex
 from devices.fastcat.alarms import (
     COUPLER,
@@ -24,6 +25,7 @@ from devices.fastcat.alarms import (
     EMERGENCY_REGISTER,
     MODULE,
     Alarm,
+    decode_al_status,
     parse_fault,
 )
 from devices.fastcat.catalog import module_type
@@ -281,4 +283,10 @@ class FaultsMixin:
 
     def od_emergency_word(self) -> int:
         return self.alarm.word if self.alarm is not None else 0
+
+    def describe_al_status_code(self, code: int) -> str:
+        """The master's text for this coupler's AL status code: 0x80XX read as the State and
+        Codes tabs read it (§7.7), the module code of a module alarm from 0x5400."""
+        found = decode_al_status(code, self.od_emergency_word())
+        return found.text if found is not None else generic_al_status_text(code)
 

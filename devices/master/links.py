@@ -51,6 +51,15 @@ class Slave(Protocol):
     def set_power(self, on: bool) -> None: ...
     def sdo_download(self, index: int, sub: int, data: bytes) -> None: ...
     def sdo_upload(self, index: int, sub: int) -> bytes: ...
+    # Optional: describe_al_status_code(code) -> str, the slave's reading of its own
+    # manufacturer AL status codes (al_status_code_text).
+
+
+def al_status_code_text(slave: Slave, code: int) -> str:
+    """A slave with manufacturer codes of its own reads them (optional
+    ``describe_al_status_code``: the FastCAT's 0x80XX, seed 000 §7.7); else the ETG text."""
+    own = getattr(slave, "describe_al_status_code", None)
+    return str(own(code)) if own is not None else describe_al_status_code(code)
 
 
 def next_state(current: AlState, target: AlState) -> AlState:
@@ -117,6 +126,6 @@ class SlaveLink:
                 "requested": self.requested.label if self.requested else None,
                 "al_status": slave.al_status if present else 0,
                 "al_status_code": code,
-                "al_status_text": describe_al_status_code(code),
+                "al_status_text": al_status_code_text(slave, code),
                 "diagnosis": self.diagnosis, "dc": self.dc,
                 "counters": self.counters.snapshot()}

@@ -51,7 +51,7 @@ class _Server:
 
 def _panel() -> tuple[StatePanel, _Html, _Html]:
     server = _Server()
-    panel = StatePanel(server, lambda _table, _code: None)  # type: ignore[arg-type]
+    panel = StatePanel(server)  # type: ignore[arg-type]
     title, table = server.gui.handles
     return panel, title, table
 

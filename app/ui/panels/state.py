@@ -1,26 +1,25 @@
 """The state panel: what a commissioning engineer reads off the coupler and the master.
 
 ESM state, Fault active (0x5100:1), emergency data (0x5400), AL status and AL status code with
-their meaning (seed 000 §7.7; manufacturer codes 0x80XX decoded as module number in byte 1 and
-coupler code in byte 0), the latched alarm, CNF phase and scan progress. Server-level HTML
-handles, so every browser sees the same text: the title line (box, station, simulated time)
-and the table are two handles, each rewritten only when its own text changes. The time moves
-ten times a second; the table only when a value in it does, so a click's answer is not queued
-behind a stream of identical tables (benchmarks 2 and 3, docs/performance.md).
+their meaning (seed 000 §7.7; manufacturer codes 0x80XX read by the FastCAT's one decoder,
+``devices.fastcat.alarms.decode_al_status``, as the Line and Codes tabs), the latched alarm,
+CNF phase and scan progress. Server-level HTML handles, so every browser sees the same text:
+the title line (box, station, simulated time) and the table are two handles, each rewritten
+only when its own text changes. The time moves ten times a second; the table only when a
+value in it does, so a click's answer is not queued behind a stream of identical tables
+(benchmarks 2 and 3, docs/performance.md).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any
 
 import viser
 
 from app.ui.style import badge, esc, kv_table
-from devices.ethercat import MANUFACTURER_AREA, AlState, describe_al_status_code
-
-# (table, code) -> symbolic name, e.g. ("coupler", 0x04) -> "MISSING_NODE_ANSWER".
-CodeName = Callable[[str, int], str | None]
+from devices.ethercat import AlState, describe_al_status_code
+from devices.fastcat.alarms import decode_al_status
 
 
 def al_status_text(value: int) -> str:
@@ -33,16 +32,11 @@ def al_status_text(value: int) -> str:
     return f"{name} + error" if value & 0x10 else name
 
 
-def al_code_text(code: int, code_name: CodeName) -> str:
-    """The meaning of an AL status code; 0x80XX names the module and the coupler code."""
-    text = describe_al_status_code(code)
-    if code >= MANUFACTURER_AREA:
-        module, coupler_code = (code >> 8) & 0x7F, code & 0xFF
-        name = code_name("coupler", coupler_code)
-        what = f"coupler code 0x{coupler_code:02X}" + (f" {name}" if name else "")
-        where = f"module {module}" if module else "coupler"
-        return f"{where}: {what}"
-    return text
+def al_code_text(code: int, word: int | None = None) -> str:
+    """The meaning of an AL status code; a FastCAT 0x80XX names the module and the coupler
+    code, or for a module alarm its module code when 0x5400 (``word``) holds it."""
+    found = decode_al_status(code, word)
+    return found.text if found is not None else describe_al_status_code(code)
 
 
 def alarm_text(alarm: Mapping[str, Any] | None) -> str:
@@ -67,7 +61,7 @@ def rotary_text(snap: Mapping[str, Any]) -> str:
     return text + f", address check {'on' if snap.get('address_check') else 'off'}"
 
 
-def state_rows(snap: Mapping[str, Any], code_name: CodeName) -> list[tuple[str, str]]:
+def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
     esm = str(snap.get("esm", "?"))
     requested = str(snap.get("requested", esm))
     esm_html = badge(esm, "ok" if esm == "OP" else "warn")
@@ -78,6 +72,7 @@ def state_rows(snap: Mapping[str, Any], code_name: CodeName) -> list[tuple[str, 
     fault = bool(snap.get("fault_active"))
     al_status = int(snap.get("al_status", 0))
     al_code = int(snap.get("al_status_code", 0))
+    word = int(snap.get("emergency_data", 0))
     cnf = snap.get("cnf") or {}
     scan = snap.get("scan") or {}
     phase = str(cnf.get("phase", "idle"))
@@ -101,9 +96,9 @@ def state_rows(snap: Mapping[str, Any], code_name: CodeName) -> list[tuple[str, 
     return [
         ("ESM state", esm_html),
         ("Fault active", badge("TRUE", "bad") if fault else badge("FALSE", "ok")),
-        ("0x5400", esc(f"0x{int(snap.get('emergency_data', 0)):08X}")),
+        ("0x5400", esc(f"0x{word:08X}")),
         ("AL status", esc(f"0x{al_status:04X} {al_status_text(al_status)}")),
-        ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code, code_name)}")),
+        ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code, word)}")),
         ("Alarm", alarm_text(snap.get("alarm"))),
         ("CNF", esc(phase)),
         ("Configuration", config),
@@ -125,8 +120,7 @@ def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: 
 
 
 class StatePanel:
-    def __init__(self, server: viser.ViserServer, code_name: CodeName) -> None:
-        self._code_name = code_name
+    def __init__(self, server: viser.ViserServer) -> None:
         # Two bare <div>s one after the other lay out as the one <div> they replace: the
         # title's bottom margin collapses through its div (no padding, no border), so the
         # screenshots do not move.
@@ -140,6 +134,6 @@ class StatePanel:
         heading = title(snap, master_snap, t_us)
         if heading != self._shown_title:
             self._title.content = self._shown_title = heading
-        table = kv_table(state_rows(snap, self._code_name), "fr-state")
+        table = kv_table(state_rows(snap), "fr-state")
         if table != self._shown_table:
             self._table.content = self._shown_table = table
