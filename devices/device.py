@@ -44,6 +44,10 @@ class Param:
     # CommandError for a value the model refuses whatever its state, so a scenario file is
     # refused before it runs and not at the step (app.scenario.check_against).
     parse: Callable[[Any], object] | None = None
+    # Where the device's snapshot holds the value this parameter has now, as a dotted key
+    # ("switches.dil1"): a form starts from it rather than from ``default`` (a switch that is
+    # ON shows ticked; the dashboard reads it, the model never does).
+    current: str = ""
 
     def check(self, value: Any) -> Any:
         if self.type is float and isinstance(value, int) and not isinstance(value, bool):

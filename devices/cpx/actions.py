@@ -41,10 +41,11 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
            (Param("port", str, choices=("in", "out")), Param("connected", bool))),
     Action("set_rotary", "Turn the three hex rotary switches (0 = the master assigns the "
                          "address, 1 ... 4095 = Explicit Device ID); read at the next start",
-           (Param("value", int, low=0, high=ROTARY_MAX),)),
+           (Param("value", int, low=0, high=ROTARY_MAX, current="switches.rotary"),)),
     Action("set_dil", "Set DIL 1 / DIL 2 (Tab. 6: off/off no diagnosis, off/on status bits, "
                       "on/off I/O diagnostic interface, on/on bootloader); read at the next "
-                      "start", (Param("dil1", bool), Param("dil2", bool))),
+                      "start", (Param("dil1", bool, current="switches.dil1"),
+                                Param("dil2", bool, current="switches.dil2"))),
     Action("restart", "Restart the bus node (switch changes take effect, §2.1.7)"),
     Action("set_input", "A sensor at a CPX-E-16DI input switches on or off",
            (_CHANNEL, Param("on", bool)), module="required"),

@@ -98,6 +98,8 @@ class LineControls:
                                 self.frames, lose, self.dc_fault, dc_buttons]
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         self.fault_forms: dict[str, ActionForm] = {}
+        # Each device's latest snapshot: a form starts from the present values (Param.current).
+        self._snapshots: dict[str, Mapping[str, Any]] = dict(devices)
         faulty = [d for d in order if d not in own_tabs]
         with gui.add_folder("Slave actions"):
             self.picker = gui.add_dropdown("Device", tuple(faulty) or ("-",))
@@ -112,7 +114,7 @@ class LineControls:
                                                                       devices.get(device) or {})))
                     apply = self._applier(sender, target)
                     form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
-                                      apply)
+                                      apply, current=self._current(device))
                     # The instructor's: its folder goes from a trainee's page as a whole
                     # (rebuilt parameter rows and all; docs/classroom.md).
                     with gui.add_folder(f"{device} faults", expand_by_default=False):
@@ -152,6 +154,9 @@ class LineControls:
         def _(event: viser.GuiEvent) -> None:
             self.select(self.picker.value)
 
+    def _current(self, device: str) -> Any:
+        return lambda: self._snapshots.get(device)
+
     @staticmethod
     def _applier(sender: CommandSender, target: Any) -> Any:
         def apply(client: viser.ClientHandle | None, name: str, args: dict[str, Any]) -> None:
@@ -171,6 +176,9 @@ class LineControls:
         for name, (folder, _form) in self.forms.items():
             folder.visible = name == device
 
-    def update(self, master: Mapping[str, Any]) -> None:
+    def update(self, master: Mapping[str, Any],
+               devices: Mapping[str, Mapping[str, Any]] | None = None) -> None:
+        if devices is not None:
+            self._snapshots = dict(devices)  # replaced whole: read from callback threads
         set_options(self.cable, cable_options(master, self._order))
         set_options(self.slave_power, slave_options(master, self._order))

@@ -141,6 +141,16 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
     return (kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(diag))
 
 
+def switches_text(switches: Mapping[str, Any]) -> str:
+    """"rotary 000, I/O diagnostic interface"; with switches moved since the last start, what
+    the firmware runs with and what a restart would apply (seed 002 §2.1.7)."""
+    mode, rotary = switches.get("mode", "-"), switches.get("rotary_hex", "-")
+    if not switches.get("pending"):
+        return f"rotary {rotary}, {mode}"
+    active = f"rotary {int(switches.get('active_rotary', 0)):03X}, {switches.get('active_mode')}"
+    return f"active: {active}; set: rotary {rotary}, {mode}"
+
+
 def cpx_html(snap: Mapping[str, Any]) -> str:
     states = snap.get("led_states") or {}
     switches = snap.get("switches") or {}
@@ -148,8 +158,7 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
     diagnosis = snap.get("diagnosis") or {}
     rows = [
         *esm_rows(snap),
-        ("Switches", esc(f"rotary {switches.get('rotary_hex', '-')}, "
-                         f"{switches.get('mode', '-')}") +
+        ("Switches", esc(switches_text(switches)) +
          (" " + badge("restart to apply", "warn") if switches.get("pending") else "")),
         ("Supply", esc(f"U_EL/SEN {supply.get('el_sen_v', '-')} V, "
                        f"U_OUT {supply.get('out_v', '-')} V")),

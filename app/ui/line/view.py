@@ -231,4 +231,4 @@ class LineView:
         self.scene.update(frame.snapshot, frame.t_us)
         self.master.update(master, frame.t_us)
         self.slave.update(devices)
-        self.controls.update(master)
+        self.controls.update(master, devices)

@@ -7,8 +7,10 @@ without knowing device logic, and a module action added to a model appears here 
 
 from __future__ import annotations
 
+import contextlib
 import threading
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from typing import Any
 
 import viser
@@ -18,9 +20,27 @@ from devices.device import Action, CommandError, Param
 
 # Called with (client, action name, args) when the user applies the form.
 Apply = Callable[[viser.ClientHandle | None, str, dict[str, Any]], None]
+# The target device's latest snapshot, read when a form is built (Param.current).
+Current = Callable[[], Mapping[str, Any] | None]
+
+_MISSING = object()
 
 
-def _widget(gui: viser.GuiApi, p: Param) -> Any:
+def current_value(snapshot: Mapping[str, Any] | None, key: str) -> Any:
+    """The value at a dotted key of a snapshot ("switches.dil1"), or _MISSING."""
+    value: Any = snapshot
+    for part in key.split(".") if key else ():
+        if not isinstance(value, Mapping) or part not in value:
+            return _MISSING
+        value = value[part]
+    return value if key else _MISSING
+
+
+def _widget(gui: viser.GuiApi, p: Param, now: Any = _MISSING) -> Any:
+    """``now``: the value the device has now (Param.current); else the default."""
+    if now is not _MISSING:
+        with contextlib.suppress(CommandError):  # one the form cannot hold: the default
+            p = replace(p, default=p.check(now))
     hint = p.doc or None
     if p.choices:
         options = tuple(str(c) for c in p.choices)
@@ -51,8 +71,11 @@ def _value(p: Param, handle: Any) -> Any:
 
 class ActionForm:
     def __init__(self, gui: viser.GuiApi, actions: Mapping[str, Action], apply: Apply,
-                 label: str = "Action") -> None:
+                 label: str = "Action", current: Current | None = None) -> None:
+        """``current``: the target device's latest snapshot, for the parameters that say
+        where their present value is (Param.current)."""
         self._gui = gui
+        self._current = current
         self._actions = dict(sorted(actions.items()))
         self._apply = apply
         names = tuple(self._actions) or ("(none)",)
@@ -85,6 +108,17 @@ class ActionForm:
     def options(self) -> tuple[str, ...]:
         return tuple(self._choice.options)
 
+    def values(self) -> dict[str, Any]:
+        """What the parameter widgets hold now, by parameter name."""
+        with self._lock:
+            return {p.name: handle.value for p, handle in self._widgets}
+
+    def rebuild(self) -> None:
+        """Build the picked action's parameters again, from the device's present values."""
+        with self._lock:
+            self._built_for = None
+        self._build()
+
     def restrict(self, names: Sequence[str]) -> None:
         """Offer only these actions (those the selected module accepts)."""
         options = tuple(n for n in self._actions if n in set(names)) or ("(none)",)
@@ -109,8 +143,10 @@ class ActionForm:
                 self._params.visible = False
                 return
             self._choice.hint = action.doc or None
+            snapshot = self._current() if self._current is not None else None
             with self._params:
-                self._widgets = [(p, _widget(self._gui, p)) for p in action.params]
+                self._widgets = [(p, _widget(self._gui, p, current_value(snapshot, p.current)))
+                                 for p in action.params]
             self._params.visible = bool(self._widgets)
 
     def submit(self, client: viser.ClientHandle | None) -> None:
