@@ -24,7 +24,7 @@ from app.ui.line.io_bodies import (
     module_error,
     module_note,
 )
-from app.ui.line.master_panel import dc_text, log_table, slaves_table
+from app.ui.line.master_panel import dc_text, live_table, log_table, slaves_table
 from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
 from app.ui.line.view import camera_for, focus_target
@@ -205,3 +205,14 @@ def test_slave_panel_texts() -> None:
         "history": {"messages": [{"sub": 7, "type": "error", "text_id": "0x3702",
                                   "text": "Short circuit/overload"}]}})
     assert "short 3" in cpx and "Short circuit/overload" in cpx and "0x3702" in cpx
+
+
+def test_u8_diag_status_and_units_that_do_not_wrap_alone() -> None:
+    """The review: "0xF100 diag status 0x0007" printed a U8 (seed 001 §9.3.4) with 4 hex
+    digits, and "cycle 1000 µs" wrapped with "µs" alone on the next line."""
+    html = slave_html("trscat", {"kind": "trscat", "esm": "OP", "diag_status": 7})
+    assert "0x07<" in html and "0x0007" not in html
+    live = live_table({"stats": {"frames": 12, "lost_frames": 0, "cycle_us": 1000},
+                       "dc": {"state": "COMPENSATING", "deviation_ns": 35, "window_ns": 1000}})
+    assert "cycle 1000\u00a0µs" in live
+    assert "deviation 35\u00a0ns / window 1000\u00a0ns" in live

@@ -22,6 +22,7 @@ from devices.ethercat import describe_al_status_code
 from devices.events import US_PER_S
 
 LOG_ROWS = 40
+NBSP = "\u00a0"  # between a number and its unit: a narrow cell wraps them together
 LOG_STYLES = ("twincat", "sirio", "pegaso", "aitraceprint")
 DC_TONE = {"COMPENSATING": "ok", "NOT_SYNCHRONIZED": "bad", "IDLE": "muted"}
 
@@ -97,7 +98,8 @@ def dc_text(dc: Mapping[str, Any]) -> str:
     if dc.get("fault"):
         out += " " + badge(f"fault: {dc['fault']}", "bad")
     if "deviation_ns" in dc:
-        out += esc(f" deviation {dc['deviation_ns']} ns / window {dc.get('window_ns', '?')} ns")
+        out += esc(f" deviation {dc['deviation_ns']}{NBSP}ns / window "
+                   f"{dc.get('window_ns', '?')}{NBSP}ns")
     return out
 
 
@@ -125,7 +127,7 @@ def live_table(master: Mapping[str, Any]) -> str:
     stats = master.get("stats") or {}
     rows = [("DC", dc_text(master.get("dc") or {})),
             ("Frames", esc(f"{stats.get('frames', '-')} sent, {stats.get('lost_frames', 0)} "
-                           f"lost, cycle {stats.get('cycle_us', '-')} µs"))]
+                           f"lost, cycle {stats.get('cycle_us', '-')}{NBSP}µs"))]
     return kv_table(rows, "fr-line-master")
 
 

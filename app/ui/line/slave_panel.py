@@ -123,7 +123,7 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
         *sync_rows(sync),
         ("Outputs", esc(snap.get("outputs_mode", "-")) +
          (" " + badge("PREOP deadlock", "bad") if snap.get("deadlocked") else "")),
-        ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):04X}")),
+        ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):02X}")),  # U8, §9.3.4
         ("Alarms", esc(", ".join(alarm_text(a) for a in snap.get("alarms") or []) or "none")),
         ("Injected", esc(", ".join(str(a) for a in snap.get("injected") or []) or "none"))]
     slots = "".join(
