@@ -37,8 +37,10 @@ def test_the_decoder_reads_a_module_alarm_without_a_coupler_code() -> None:
     known = decode_al_status(0x8400, word=0x000B0004)  # 0x5400: module 4, module code 0x0B
     assert known is not None and known.text == "module 4: module code 0x0B TARATURA"
     # 0x5400 of another alarm (module 2) does not name module 4's code.
-    assert decode_al_status(0x8400, word=0x000B0002).text == found.text  # type: ignore[union-attr]
-    assert decode_al_status(0x8204).text == "module 2: coupler code 0x04 MISSING_NODE_ANSWER"  # type: ignore[union-attr]
+    assert decode_al_status(0x8400, word=0x000B0002) == found
+    coupler = decode_al_status(0x8204)
+    assert coupler is not None
+    assert coupler.text == "module 2: coupler code 0x04 MISSING_NODE_ANSWER"
     assert decode_al_status(0x8000) is None and decode_al_status(0x0052) is None
 
 
