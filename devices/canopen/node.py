@@ -409,7 +409,9 @@ class CanOpenNode(ProcessData, DeviceModel):
             self.line = CanLine(self.bitrate, busy_until_us=now_us)
             self._enter_initialisation(now_us, now_us + BOOT_US)
         elif was_active:  # powered off, or c9 no longer CANopen: silent from now on
-            self.state = NmtState.INITIALISATION
+            # Reported like every NMT change (the recording's lane and the event log follow
+            # it): back to the power-on state, as the DS402 machine and the CoE ESM go.
+            self._set_state(NmtState.INITIALISATION, now_us)
             self._boot_at = None
 
     def _enter_initialisation(self, t: int, boot_at: int) -> None:

@@ -133,3 +133,24 @@ def test_reset_node_restores_power_on_values_reset_communication_keeps_them() ->
     assert bench.node.state is NmtState.PRE_OPERATIONAL
     assert bench.read(0x1017) == 0
     assert bench.read(0x6081) != 12345
+
+
+@pytest.mark.parametrize("start", sorted(REACH, key=str))
+def test_power_off_reports_the_nmt_change(start: NmtState) -> None:
+    """A node that falls silent with its drive reports it like every NMT change: the event
+    stream must not keep the old state (the recording's NMT lane and the event log follow
+    it). Power-off is Initialisation's vocabulary, as the drive's DS402 machine and the CoE
+    slave's ESM fall to their power-on states; the snapshot shows "Off"."""
+    bench = make_bench()
+    for step in REACH[start]:
+        bench.nmt(step)
+    before = len(bench.kinds("state"))
+    bench.drive.apply("power", {"on": False})
+    bench.run(2)
+    assert bench.node.snapshot()["nmt"] == "Off"
+    nmt = [e for e in bench.kinds("state")[before:] if e.get("machine") == "nmt"]
+    assert [(e["from"], e["to"]) for e in nmt] == [(start.label, "Initialisation")]
+    bench.drive.apply("power", {"on": True})
+    bench.run(60)  # power-up: Initialisation already, then boot-up -> Pre-operational
+    nmt = [e for e in bench.kinds("state")[before:] if e.get("machine") == "nmt"]
+    assert [(e["from"], e["to"]) for e in nmt][1:] == [("Initialisation", "Pre-operational")]
