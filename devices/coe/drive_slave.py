@@ -53,7 +53,6 @@ from devices.device import Action, CommandError, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AlState, describe_al_status_code
 from devices.events import EmergencySent
-from devices.leds import LedBank
 from devices.od import OdEntry, SdoAbort
 from devices.servo.drive import ServoDrive
 
@@ -90,7 +89,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.emergencies = EmergencyMailbox()
         self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
         self.csp = Csp(drive)
-        self.leds = LedBank(drive.device_id)
+        self.leds = drive.network_leds  # on the drive's front; this slave drives them
         self.sdo_log: deque[dict[str, Any]] = deque(maxlen=SDO_LOG)
         self._led_inputs: LedInputs | None = None
         self._power_seen: object | None = None
@@ -465,7 +464,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
             "esm": esm.state.label if self.on_line else OFF, "requested": esm.requested.label,
             "al_status": esm.register, "al_status_code": esm.code,
             "al_status_text": describe_al_status_code(esm.code), "error": esm.error.value,
-            "leds": self.leds.snapshot(), "slot": self.slot(), "csp": self.csp.active,
+            "slot": self.slot(), "csp": self.csp.active,
             "mode_display": self.csp.mode_display(),
             "rx_assign": [f"0x{i:04X}" for i in self.rx_assign.assigned],
             "tx_assign": [f"0x{i:04X}" for i in self.tx_assign.assigned],

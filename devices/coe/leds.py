@@ -15,11 +15,10 @@ from dataclasses import dataclass
 from devices.coe.esm import ErrorKind
 from devices.ethercat import AlState
 from devices.leds import LedPattern
+from devices.servo.leds import ERROR, LINK, STATUS
 from devices.trscat.indicators import RUN_BY_STATE, link_led
 
-LINK = "L/A"
-STATUS = "Status"
-ERROR = "Error"
+__all__ = ["ERROR", "LINK", "STATUS", "LedInputs", "wanted_patterns"]
 
 # ETG.1300 ERR: blinking = invalid configuration, single flash = local error (the slave left
 # its state on its own), double flash = process data watchdog timeout.

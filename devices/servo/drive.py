@@ -22,6 +22,7 @@ from devices.servo.config import DriveConfig
 from devices.servo.ds402 import State
 from devices.servo.errors import AccessError
 from devices.servo.io import INPUT_NAMES, LatchFilter
+from devices.servo.leds import network_leds
 from devices.servo.modes import MODE_CLASSES, Mode
 from devices.servo.motion import Trajectory
 from devices.servo.od_map import IndirectAccess, build_object_dictionary
@@ -78,6 +79,8 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         self.trajectory = Trajectory(start)
         self.wired: dict[str, bool] = {"ten": config.ten_wired, "ien": config.ien_wired}
         self.meter = CurrentMeter()
+        # L/A, Status, Error on the front: the EtherCAT slave drives them (devices/servo/leds.py)
+        self.network_leds = network_leds(device_id)
         self.powered = False
         self.state = State.NOT_READY_TO_SWITCH_ON
         self.params: dict[int, int] = {}

@@ -249,4 +249,5 @@ class DriveReadings:
                      "carriage": self.plant.theta * f, "motor_turns": self.plant.theta},
             "current": {"o1": round(self.meter.instant), "o2": round(self.meter.rms),
                         "o3": round(self.meter.overload)},
+            "leds": self.network_leds.snapshot(),
         }

@@ -117,7 +117,7 @@ NETWORK = {"leds": {"L/A": "flickering", "Status": "single_flash", "Error": "dou
 
 
 def all_boxes(scene: AxisScene, snap: Mapping[str, Any], px: float) -> list[Box]:
-    scene.update("drive_co", snap, NETWORK, 0)
+    scene.update("drive_co", {**snap, **NETWORK}, 0)
     return [label_box(label, px) for label in scene.labels()]
 
 
@@ -164,7 +164,7 @@ def test_labels_stay_in_their_axis_band(axes: Axes) -> None:
 def test_switch_labels_name_the_seed_switches(axes: Axes) -> None:
     """NL, home and PL, each hanging from its own switch."""
     scene = next(iter(axes.scenes.values()))
-    scene.update("drive", drive_snap(AXES[0], 0.0), None, 0)
+    scene.update("drive", drive_snap(AXES[0], 0.0), 0)
     texts = sorted(str(label.text) for label in scene.labels())
     assert {"NL", "home", "PL"} <= set(texts)
 

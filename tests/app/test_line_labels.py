@@ -111,7 +111,7 @@ def blinking(snap: Snapshot) -> None:
     cpx.update({"Run": {"pattern": "single_flash", "colour": "orange"},
                 "Error": {"pattern": "blinking", "colour": "orange"},
                 "SF": {"pattern": "double_flash", "colour": "red"}})
-    devices(snap)["drive_ec-ecat"]["leds"].update(Status="single_flash", Error="double_flash")
+    devices(snap)["drive_ec"]["leds"].update(Status="single_flash", Error="double_flash")
 
 
 def expansion_and_module_faults(snap: Snapshot) -> None:

@@ -234,10 +234,9 @@ class AxisScene:
             setattr(node, attr, value)
             self._sent[key] = value
 
-    def update(self, drive_id: str, snap: Mapping[str, Any],
-               network: Mapping[str, Any] | None, t_us: int) -> None:
-        """Bring the axis to the drive snapshot ``snap`` at simulated time ``t_us``;
-        ``network`` is the snapshot of the drive's EtherCAT side, if the rig has one."""
+    def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
+        """Bring the axis to the drive snapshot ``snap`` at simulated time ``t_us`` (its
+        ``leds``: the network LEDs, which its EtherCAT slave drives)."""
         axis = snap.get("axis") or {}
         if self._travel is None:
             self._travel = Travel.of(axis, self.length)
@@ -260,11 +259,10 @@ class AxisScene:
         for key, (box, _label) in self._switches.items():
             lit = bool(limits.get(key))
             self._send(f"switch_{key}", box, "color", SWITCH_LIT[key] if lit else SWITCH_OFF)
-        self._update_drive(drive_id, snap, network, t_us)
+        self._update_drive(drive_id, snap, t_us)
         self._send("legend", self._legend, "text", legend_label(snap))
 
-    def _update_drive(self, drive_id: str, snap: Mapping[str, Any],
-                      network: Mapping[str, Any] | None, t_us: int) -> None:
+    def _update_drive(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
         bus = BUS_SHORT.get(str(snap.get("fieldbus", "")), str(snap.get("fieldbus", "")))
         self._send("name", self._name, "text", f"{drive_id} · {bus} {snap.get('node_id', '')}")
         lit = display_segments(str(snap.get("display", "")) if snap.get("powered") else "")
@@ -272,7 +270,7 @@ class AxisScene:
             for seg, box in boxes.items():
                 colour = SEGMENT_ON if seg in lit[digit] else SEGMENT_OFF
                 self._send(f"seg{digit}{seg}", box, "color", colour)
-        leds = (network or {}).get("leds") or {}
+        leds = snap.get("leds") or {}
         for name, (box, label, colour) in self._leds.items():
             pattern = str(leds.get(name, "off"))
             self._send(f"led_{name}", box, "color", led_color(colour, pattern, t_us))

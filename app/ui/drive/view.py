@@ -38,7 +38,7 @@ def axes_height(drives: int) -> float:
 def companion(snapshot: Mapping[str, Any], drive_id: str, kind: str | None = None,
               key: str | None = None) -> tuple[str | None, dict[str, Any]]:
     """A device that serves ``drive_id`` on a fieldbus (its snapshot names the drive), by kind
-    or by a key its snapshot has: the CANopen node, the EtherCAT slave with the LEDs."""
+    or by a key its snapshot has: the CANopen node, the EtherCAT slave."""
     for device_id, snap in (snapshot.get("devices") or {}).items():
         if not isinstance(snap, Mapping) or snap.get("drive") != drive_id:
             continue
@@ -121,8 +121,7 @@ class DriveView:
     def update(self, frame: Frame) -> None:
         devices = frame.snapshot.get("devices") or {}
         for drive_id, scene in self.scenes.items():
-            _, network = companion(frame.snapshot, drive_id, key="leds")
-            scene.update(drive_id, devices.get(drive_id) or {}, network, frame.t_us)
+            scene.update(drive_id, devices.get(drive_id) or {}, frame.t_us)
         snap = dict(devices.get(self.selected) or {})
         self.state.update(self.selected, snap, frame.t_us)
         self.words.update(self.selected, snap)

@@ -158,6 +158,16 @@ class Body:
                 self.z0 - BODY_H / 2 + 0.5)
 
 
+def as_drawn(devices: Mapping[str, Any], device: str) -> Mapping[str, Any]:
+    """A slave's snapshot as the line shows it: a drive's EtherCAT side carries its drive's
+    network LEDs (the drive owns them, devices/servo/leds.py; the slave only drives them)."""
+    snap = devices.get(device) or {}
+    drive = snap.get("drive")
+    if drive is None or "leds" in snap:
+        return snap
+    return {**snap, "leds": (devices.get(drive) or {}).get("leds") or {}}
+
+
 class SlaveBody(Body):
     """Any EtherCAT slave with ``leds`` in its snapshot: the drive's CoE side, or a kind the
     dashboard does not draw in detail. LEDs in snapshot order, red for the error LED."""

@@ -16,7 +16,7 @@ from typing import Any
 
 import viser
 
-from app.ui.line.bodies import Body, MasterBody, RailFrame, SlaveBody
+from app.ui.line.bodies import Body, MasterBody, RailFrame, SlaveBody, as_drawn
 from app.ui.line.cables import Cable, OnCable, route
 from app.ui.line.io_bodies import CpxBody, TrsCatBody
 from app.ui.rail_scene import BODY_H
@@ -85,7 +85,7 @@ class LineScene:
         self.bodies: dict[str, Body] = {master_id: self.master}
         x_row2 = ROW2_X0
         for device in self.order:
-            snap = devices.get(device) or {}
+            snap = as_drawn(devices, device)
             if device in rail_lengths:  # the FastCAT rail is row 1 (at x = 0)
                 self.bodies[device] = RailFrame(server, device, 0.0, 0.0, rail_lengths[device])
                 continue
@@ -133,7 +133,7 @@ class LineScene:
         self.master.update_master_frame(master, self.master.update(master, t_us))
         for position, device in enumerate(self.order):
             body = self.bodies[device]
-            words = body.update(devices.get(device) or {}, t_us)
+            words = body.update(as_drawn(devices, device), t_us)
             body.update_frame(entries.get(device, {}), position, words, master.get("target"))
         plugged = {int(c.get("index", i)): bool(c.get("plugged", True))
                    for i, c in enumerate(master.get("cables") or [])}

@@ -10,7 +10,7 @@ from typing import Any
 
 import viser
 
-from app.ui.line.bodies import led_colour
+from app.ui.line.bodies import as_drawn, led_colour
 from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_error
 from app.ui.panels.state import al_status_text
 from app.ui.panels.widgets import Mirror
@@ -222,7 +222,7 @@ class SlavePanel:
             self.picker.value = device
 
     def update(self, devices: Mapping[str, Any]) -> None:
-        content = slave_html(self.selected, devices.get(self.selected) or {})
+        content = slave_html(self.selected, as_drawn(devices, self.selected))
         if content != self._last:
             self._html.content = content
             self._last = content
