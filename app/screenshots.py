@@ -36,7 +36,7 @@ from app.rig import Rig
 from app.runtime import Runtime
 from app.scenario import Scenario, ScenarioError, Step, check_against
 from app.ui.dashboard import Dashboard
-from app.ui.panels.scenario_player import STATUS_ID
+from app.ui.panels.scenario_player import PLAYER_FOLDER, STATUS_ID
 from devices.events import Event
 
 logger = logging.getLogger(__name__)
@@ -51,6 +51,10 @@ VIEWPORT = {"width": 1280, "height": 720}
 WALL_TIMEOUT_S = 60.0
 PAINT_PAUSE_MS = 300  # after the frame arrived: labels and HTML settle, then the canvas paints
 POINTER_PARK = (640, 12)  # on the title bar: no hover outline, no tooltip
+# A rig without tabs has the "Scenario player" folder after the others in the control panel,
+# below the fold of a 720 px page: the panel is scrolled to put its title at the top, the
+# status lines (which grow with a caption or failures) below it.
+TITLE_TO_TOP_JS = "el => el.scrollIntoView({block: 'start', inline: 'nearest'})"
 
 
 class ScreenshotError(ScenarioError):
@@ -167,6 +171,8 @@ class Chromium:
 class DashboardPage:
     page: Any  # playwright Page
     served: ServedRig
+    # No tabs and the player wanted in the picture: scroll to it before each screenshot
+    scroll_to_player: bool = False
 
     def load(self, show_player: bool = False) -> None:
         """Open the dashboard; ``show_player``: leave the control panel on the Scenario tab
@@ -193,8 +199,9 @@ class DashboardPage:
         tab (its status block is the frame marker :meth:`sync` reads), then go back unless
         ``stay``."""
         tab = self.page.get_by_role("tab", name="Scenario", exact=True)
-        if not tab.count():
-            return  # no tabs: the player sits in the control panel itself
+        if not tab.count():  # no tabs: the player is the control panel's last folder
+            self.scroll_to_player = stay
+            return
         tabs = tab.locator("xpath=ancestor::*[@role='tablist'][1]")
         selected = tabs.locator("[role=tab][aria-selected=true]").first.inner_text().strip()
         tab.click()
@@ -211,6 +218,8 @@ class DashboardPage:
             "a => { const m = document.getElementById(a.id);"
             " return m !== null && Number(m.dataset.frame) >= a.seq; }",
             arg={"id": STATUS_ID, "seq": seq}, timeout=WALL_TIMEOUT_S * 1000)
+        if self.scroll_to_player:  # each time: the folders above may have grown since
+            self.page.get_by_text(PLAYER_FOLDER, exact=True).first.evaluate(TITLE_TO_TOP_JS)
         self.page.evaluate("() => new Promise(r => requestAnimationFrame("
                            "() => requestAnimationFrame(r)))")
         self.page.mouse.move(*POINTER_PARK)

@@ -11,6 +11,7 @@ import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import pytest
 from helpers import MAX_DIFF_FRACTION, diff_fraction
@@ -20,6 +21,7 @@ from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.scenario import load_scenario, run_scenario
 from app.screenshots import event_lines, image_name, run_with_screenshots
 from app.testing import fieldrig  # noqa: F401  (the plugin's fixture, as users get it)
+from app.ui.panels.scenario_player import STATUS_ID
 
 pytestmark = pytest.mark.browser
 
@@ -127,3 +129,46 @@ def test_the_comparison_forgives_a_one_pixel_shift_but_not_a_changed_led() -> No
     ImageDraw.Draw(red).ellipse((90, 40, 100, 50), fill=(220, 0, 0))
     fraction, mask = diff_fraction(red, base)
     assert fraction > 0.003 and mask.getpixel((95, 45)) == 255
+
+
+# ---- a rig without tabs: the player folder sits below the others ----------------------------
+NINE_ANALOG = DEFAULT_RIG.parent / "nine_analog.toml"
+TOO_MANY_ANALOG = DEFAULT_RIG.parent.parent / "scenarios" / "too_many_analog.toml"
+# Is the element on screen and not covered or scrolled out of its panel: the page's topmost
+# element at a point near its top and near its bottom is the element or inside it.
+SHOWN_JS = """el => { const r = el.getBoundingClientRect();
+  if (r.height === 0 || r.width === 0) return false;
+  const x = r.left + Math.min(r.width / 2, 40);
+  return [r.top + 2, r.bottom - 2].every(y => { const at = document.elementFromPoint(x, y);
+    return at !== null && (el === at || el.contains(at)); }); }"""
+
+
+def player_on_screen_at_checkpoints() -> list[tuple[str, bool, bool]]:
+    """(checkpoint, player folder title shown, status shown) as the screenshot run has the
+    page at each checkpoint of too_many_analog on the nine_analog rig (no control tabs)."""
+    from app.screenshots import Chromium, play, served_run
+
+    seen: list[tuple[str, bool, bool]] = []
+    rig = build_rig(load_rig_spec(NINE_ANALOG))
+    with served_run(rig, quiet=True) as (served, _events), Chromium() as browser:
+        page = browser.open(served, show_player=True)
+
+        def look(step: Any) -> None:
+            page.sync()
+            title = page.page.get_by_text("Scenario player", exact=True).first
+            status = page.page.locator(f"#{STATUS_ID}")
+            seen.append((step.text, bool(title.evaluate(SHOWN_JS)),
+                         bool(status.evaluate(SHOWN_JS))))
+
+        assert play(served, load_scenario(TOO_MANY_ANALOG), rig, look) == []
+        page.close()
+    return seen
+
+
+def test_screenshots_show_the_player_on_a_rig_without_tabs() -> None:
+    """docs/scenarios.md: the pictures show the scenario player (scenario, time, step,
+    caption). On nine_analog the control panel has no tabs and the "Scenario player" folder
+    comes after Power, Faults, Modules: below the fold of a 720 px page unless brought up."""
+    with ThreadPoolExecutor(1) as pool:  # a Playwright of its own (see shoot())
+        seen = pool.submit(player_on_screen_at_checkpoints).result(timeout=300)
+    assert seen == [("max_analog_alarm", True, True)]

@@ -37,6 +37,7 @@ CHOOSE = "(choose a scenario)"
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 5.0, 10.0)
 PLAY, PAUSE, STEP, RESTART = "Play", "Pause", "Step", "Restart"
 STATUS_ID = "fr-player"
+PLAYER_FOLDER = "Scenario player"  # the folder's title (screenshots scroll to it)
 
 
 @dataclass(frozen=True)
@@ -146,7 +147,7 @@ class ScenarioPlayerPanel:
         self._loaded: Path | None = None
         self._busy = threading.Lock()  # one playback command at a time, in click order
         gui = server.gui
-        with gui.add_folder("Scenario player"):
+        with gui.add_folder(PLAYER_FOLDER):
             self._pick = gui.add_dropdown("Scenario", (CHOOSE, *self._entries),
                                           initial_value=CHOOSE)
             # The box cuts a long name ("CPX-E-EC: short circuit at a digital outp"): the
