@@ -9,6 +9,7 @@ applied between frames. A poll loop on the socket and the connection, nothing el
 
 from __future__ import annotations
 
+import ctypes
 import logging
 import os
 import select
@@ -29,6 +30,7 @@ PACKET_OUTGOING = 4
 FRAME_BUFFER = 2048
 POLL_MS = 10
 RT_PRIORITY = 10  # SCHED_FIFO priority asked for when allowed: frames answered before batch work
+MCL_CURRENT, MCL_FUTURE = 1, 2  # <sys/mman.h>
 
 
 def build_line(descriptions: list[SlaveDescription], outbox: list[tuple],
@@ -47,6 +49,21 @@ def realtime_priority() -> bool:
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(RT_PRIORITY))
     except (AttributeError, OSError) as exc:
         logger.info("no real-time priority for the wire process (%s): timing as scheduled", exc)
+        return False
+    return True
+
+
+def lock_memory() -> bool:
+    """mlockall (root / CAP_IPC_LOCK), as real-time EtherCAT stacks do: a page of B's evicted
+    and faulted back in from disk (this host runs DAMON's proactive reclaim, which evicts cold
+    pages with memory free) stalls an answer past the master's 2 ms. B is one small
+    interpreter, so locking it all costs a few tens of MB."""
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.mlockall(MCL_CURRENT | MCL_FUTURE) != 0:
+            raise OSError(ctypes.get_errno(), os.strerror(ctypes.get_errno()))
+    except (AttributeError, OSError) as exc:
+        logger.info("wire process memory not locked (%s): pages may fault", exc)
         return False
     return True
 
@@ -119,6 +136,7 @@ def run(iface: str, descriptions: list[SlaveDescription], conn: Connection) -> N
         conn.send((messages.ERROR, f"cannot open a raw socket on {iface}: {exc}"))
         return
     realtime_priority()
+    lock_memory()
     conn.send((messages.READY, iface))
     try:
         serve(sock, line, conn, outbox)

@@ -33,6 +33,7 @@ pysoem = pytest.importorskip("pysoem", reason="pysoem (the SOEM master) is not i
 from wire_line import line_spec, veth_pair  # noqa: E402
 
 from app.ethercat_wire.bridge import start_wire  # noqa: E402
+from app.ethercat_wire.wire_process import lock_memory  # noqa: E402
 from app.rig_config import build_rig, load_rig_spec, parse_rig_spec  # noqa: E402
 from app.runtime import Runtime  # noqa: E402
 from devices.ethercat import AlState  # noqa: E402
@@ -79,6 +80,7 @@ def master_main(iface: str, conn) -> None:
 
     with contextlib.suppress(OSError):  # like process B: keep time on a loaded machine
         os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+    lock_memory()  # like process B: no page of ours faulted back in mid-cycle
     master = ps.Master()
     master.open(iface)
     # mailbox answers go through process A's simulation thread: allow for a busy machine
