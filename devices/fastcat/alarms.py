@@ -205,7 +205,6 @@ def manufacturer_al_status(table: str, code: int, module: int) -> int:
     return AL_STATUS_MANUFACTURER | (module & 0xFF) << 8 | coupler_code
 
 
-
 @dataclass(frozen=True)
 class ManufacturerAlStatus:
     """A decoded §7.7 0x80XX code: the one reading of it every view uses."""

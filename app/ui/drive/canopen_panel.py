@@ -287,7 +287,6 @@ class CanOpenMaster:
         self._sender.submit(client, f"CANopen {label}", run)
 
 
-
 class CanOpenMonitor:
     """The CANopen tab (left panel): status, the frame log, the PDO mapping."""
 
