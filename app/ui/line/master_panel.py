@@ -135,6 +135,14 @@ def _stamp(line: Mapping[str, Any]) -> str:
     return str(line.get("timestamp") or f"{float(line.get('t', 0)):.3f} s")
 
 
+def log_signature(master: Mapping[str, Any]) -> tuple[Any, ...]:
+    """What tells that the master's log changed (length, style, newest line) without reading
+    all of it: collapsing the whole log (up to 500 lines) each frame would cost."""
+    log = master.get("log") or []
+    return (len(log), master.get("log_style"), log[-1].get("t") if log else None,
+            log[-1].get("text") if log else None)
+
+
 def _log_row(run: Run[Mapping[str, Any]]) -> str:
     text = str(run.first.get("text", "")) + repeat_suffix(run.count, float(run.last.get("t", 0)))
     return f'<tr><td class="fr-ts">{esc(_stamp(run.first))}</td><td>{esc(text)}</td></tr>'
@@ -188,13 +196,10 @@ class MasterPanel:
         self._set("live", self._live, live_table(master))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))
-        log = master.get("log") or []
-        # Collapsing the whole log (up to 500 lines) each frame would cost; it changes seldom.
-        seen = (len(log), master.get("log_style"), log[-1].get("t") if log else None,
-                log[-1].get("text") if log else None)
+        seen = log_signature(master)
         if seen != self._log_seen:
             self._log_seen = seen
-            self._set("log", self._log, log_table(log))
+            self._set("log", self._log, log_table(master.get("log") or []))
 
     def text(self, key: str) -> str:
         """What a block shows: ``title``, ``status``, ``live``, ``slaves`` or ``log``."""

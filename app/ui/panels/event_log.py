@@ -16,6 +16,7 @@ from typing import Any
 
 import viser
 
+from app.ui.line.master_panel import log_signature
 from app.ui.repeats import collapse_repeats, repeat_suffix
 from app.ui.style import esc
 from devices.events import (
@@ -132,8 +133,7 @@ class EventLogPanel:
         log = list((master_snap or {}).get("log", []))
         # The whole of the master's log, not its last rows: collapsed, its retries take a row
         # or two and the emergency before them stays in view. Read again only when it changed.
-        seen = (self._order, len(log), (master_snap or {}).get("log_style"),
-                log[-1].get("t") if log else None, log[-1].get("text") if log else None)
+        seen = (self._order, *log_signature(master_snap or {}))
         if seen == self._seen:
             return
         self._seen = seen
