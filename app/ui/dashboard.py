@@ -134,6 +134,9 @@ class Dashboard:
         self._thread: threading.Thread | None = None
         self._event_seq = 0
         self._frame_seq = -1
+        # Published only once the frame's views are written (tests and the screenshot tool
+        # read the widgets as soon as it moves; _frame_seq moves at the start of a tick).
+        self._drawn_seq = -1
         self._t_us = -1
         self._events_untold = False  # events taken while no browser was there (take_events)
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
@@ -418,6 +421,7 @@ class Dashboard:
                     self._drives.tick(time.monotonic(), frame.t_us)
                 self.scenario_player.update(frame)  # scenario player, code decoder
                 self.decoder.update()
+            self._drawn_seq = frame.seq
 
     def take_events(self) -> None:
         """The new events into the logs and the caption, without updating the views (no
@@ -481,7 +485,7 @@ class Dashboard:
     @property
     def rendered_seq(self) -> int:
         """Sequence number of the last frame written to the handles (tests wait on it)."""
-        return self._frame_seq
+        return self._drawn_seq
 
     def scene_colors(self) -> dict[str, tuple[int, int, int]]:
         """LED colours shown for the first coupler (tests)."""

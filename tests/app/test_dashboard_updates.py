@@ -9,6 +9,7 @@
 from __future__ import annotations
 
 import threading
+import time
 from typing import Any
 
 import pytest
@@ -108,5 +109,35 @@ def test_update_thread_ticks_on_published_frames(monkeypatch: pytest.MonkeyPatch
         ticked.clear()
         assert ticked.wait(timeout=30)
         assert served.dashboard.rendered_seq >= seq
+    finally:
+        served.stop()
+
+
+def test_rendered_seq_moves_only_once_the_views_are_written() -> None:
+    """A reader waiting on rendered_seq (tests, the screenshot tool) then reads the widgets:
+    during a tick the new frame must not be announced yet. It was, at the tick's start, and
+    test_cpx_switch_form read the Line tab's form before the tick had reached it."""
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.screenshots import ServedRig
+
+    served = ServedRig.start(build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+    try:
+        line = served.dashboard.line
+        assert line is not None
+        seen: list[tuple[int, int]] = []
+        update = line.update
+
+        def update_and_look(frame: Any) -> None:
+            seen.append((frame.seq, served.dashboard.rendered_seq))
+            update(frame)
+        line.update = update_and_look  # type: ignore[method-assign]
+        served.advance(0.01)
+        seq = served.runtime.frame.seq
+        deadline = time.monotonic() + 30
+        while served.dashboard.rendered_seq < seq and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert served.dashboard.rendered_seq >= seq, "the dashboard did not draw the frame"
+        assert seen, "the Line view was not updated"
+        assert all(announced < drawn for drawn, announced in seen), seen
     finally:
         served.stop()
