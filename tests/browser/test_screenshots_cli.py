@@ -141,6 +141,10 @@ SHOWN_JS = """el => { const r = el.getBoundingClientRect();
   const x = r.left + Math.min(r.width / 2, 40);
   return [r.top + 2, r.bottom - 2].every(y => { const at = document.elementFromPoint(x, y);
     return at !== null && (el === at || el.contains(at)); }); }"""
+# The status block is rewritten with every frame of a paused rig (its data-frame marker): a
+# locator's element can be replaced between Playwright resolving it and evaluating on it (a
+# detached node, no box). Found and measured in one task instead.
+STATUS_SHOWN_JS = f"id => ({SHOWN_JS})(document.getElementById(id))"
 
 
 def player_on_screen_at_checkpoints() -> list[tuple[str, bool, bool]]:
@@ -156,9 +160,8 @@ def player_on_screen_at_checkpoints() -> list[tuple[str, bool, bool]]:
         def look(step: Any) -> None:
             page.sync()
             title = page.page.get_by_text("Scenario player", exact=True).first
-            status = page.page.locator(f"#{STATUS_ID}")
             seen.append((step.text, bool(title.evaluate(SHOWN_JS)),
-                         bool(status.evaluate(SHOWN_JS))))
+                         bool(page.page.evaluate(STATUS_SHOWN_JS, STATUS_ID))))
 
         assert play(served, load_scenario(TOO_MANY_ANALOG), rig, look) == []
         page.close()
