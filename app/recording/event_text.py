@@ -7,12 +7,13 @@ the shared code tables where the rig has one (AL status codes, seed 000 §7.7).
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from app.recording.signals import device_path, state_lane
 from devices.ethercat import describe_al_status_code
 from devices.events import Event
+from devices.master.links import al_status_code_text
 
 INFO, WARN, ERROR = "INFO", "WARN", "ERROR"
 
@@ -28,6 +29,22 @@ def _emergency(r: dict[str, Any]) -> str:
 
 def _al_status(r: dict[str, Any]) -> str:
     return f"AL status code {r['code']}: {describe_al_status_code(int(r['code'], 16))}"
+
+
+# Reads an AL status code as the device that set it reads it: (device id, code) -> text.
+AlStatusReader = Callable[[str, int], str]
+
+
+def al_status_reader(devices: Mapping[str, Any]) -> AlStatusReader:
+    """A slave with manufacturer codes of its own names them (the FastCAT's 0x80XX: the
+    module and the coupler code, seed 000 §7.7), as the master's log and the State and Codes
+    tabs do; any other device gets the ETG text."""
+    def read(device_id: str, code: int) -> str:
+        device = devices.get(device_id)
+        if device is None:
+            return describe_al_status_code(code)
+        return al_status_code_text(device, code)
+    return read
 
 
 def _alarm(r: dict[str, Any]) -> str:
@@ -65,7 +82,13 @@ def level(event: Event, record: dict[str, Any]) -> str:
     return INFO
 
 
-def text(event: Event, record: dict[str, Any]) -> str:
+def text(event: Event, record: dict[str, Any], al_status: AlStatusReader | None = None) -> str:
+    """``al_status``: the rig's reading of AL status codes (:func:`al_status_reader`), read
+    when the event is recorded (a FastCAT module alarm's text takes its module code from
+    0x5400 at that moment); without it, the ETG text."""
+    if al_status is not None and event.kind == "al_status":
+        code = int(record["code"], 16)
+        return f"AL status code {record['code']}: {al_status(event.device, code)}"
     fmt = FORMATS.get(event.kind)
     if fmt is None:
         extra = ", ".join(f"{k}={v}" for k, v in record.items()

@@ -118,6 +118,9 @@ class RigRecorder:
         # lit / dark row is computed from at each time (resample); None: no sample to repeat.
         self._repeat: list[tuple[_Column, tuple[float, ...], LedPattern | None]] | None = None
         self.runs = 1  # how many times the rig clock started from the beginning, plus one
+        # The rig's own reading of AL status codes (event_text.al_status_reader), set by
+        # attach_to_runtime / scenario_observer; None: the ETG text only.
+        self.al_status: event_text.AlStatusReader | None = None
 
     # ---- what the simulation side calls ----------------------------------------------------
     def quiet_until(self, now_us: int, step_us: int) -> int:
@@ -235,7 +238,7 @@ class RigRecorder:
         record = event.to_record()
         column = self._texts.setdefault(event_text.log_path(event), _Column())
         column.times.append(event.t_us + self._offset_us)
-        column.values.append(event_text.text(event, record))
+        column.values.append(event_text.text(event, record, self.al_status))
         column.levels.append(event_text.level(event, record))
         self._buffered += 1
         lane = event_text.lane_change(event, record)
@@ -339,6 +342,7 @@ def attach_to_runtime(runtime: Runtime, recorder: RigRecorder, repeat: bool = Tr
     events only. ``repeat``: a sample due while the rig's revision has not moved repeats the
     last one instead of taking a snapshot (the same rows; "Repeated samples")."""
     rig = runtime.rig
+    recorder.al_status = event_text.al_status_reader(rig.devices)
 
     def on_batch(events: list[Event]) -> None:
         t_us = rig.clock.now_us
@@ -369,6 +373,8 @@ def scenario_observer(recorder: RigRecorder) -> Callable[[Rig, list[Event]], Non
     """A per-simulation-step hook for a headless run: ``hook(rig, events_of_the_step)``."""
 
     def on_tick(rig: Rig, events: list[Event]) -> None:
+        if recorder.al_status is None:
+            recorder.al_status = event_text.al_status_reader(rig.devices)
         t_us = rig.clock.now_us
         recorder.observe(t_us, rig.snapshot() if recorder.sample_due(t_us) else None, events)
 

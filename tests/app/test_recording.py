@@ -196,7 +196,7 @@ def test_every_event_is_one_text_line_at_its_time(run: Run, chunks: Chunks) -> N
         logged = rows(chunks, f"rig/{device}/events", "TextLog:text")
         assert [t for t, _ in logged] == [e.t_us for e in mine]
         assert [text for _, text in logged] == [
-            event_text.text(e, e.to_record()) for e in mine]
+            event_text.text(e, e.to_record(), run.recorder.al_status) for e in mine]
 
 
 def test_emergency_and_alarm_are_warnings_and_errors(run: Run, chunks: Chunks) -> None:
@@ -210,6 +210,23 @@ def test_emergency_and_alarm_are_warnings_and_errors(run: Run, chunks: Chunks) -
     assert by_text[event_text.text(emcy, emcy.to_record())] == "WARN"
     assert by_text[event_text.text(alarm, alarm.to_record())] == "ERROR"
     assert by_text["state: OP -> PREOP"] == "INFO"
+
+
+def test_the_fastcat_al_status_code_is_read_as_the_coupler_reads_it(chunks: Chunks) -> None:
+    """Seed 000 §7.7: 0x80XX carries the module (byte 1) and the coupler code (byte 0); the
+    State and Codes tabs and the master's log read it so. The recording said "Manufacturer
+    specific" for every one of them."""
+    texts = [t for _, t in rows(chunks, "rig/fastcat/events", "TextLog:text")
+             if t.startswith("AL status code 0x8")]
+    assert texts == ["AL status code 0x8204: module 2: coupler code 0x04 MISSING_NODE_ANSWER"]
+
+
+def test_al_status_reader_falls_back_to_the_etg_text() -> None:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    read = event_text.al_status_reader(rig.devices)
+    assert read("fastcat", 0x8001) == "coupler: coupler code 0x01 MODULE_CHANGED"
+    assert read("trscat", 0x8204) == "Manufacturer specific"  # no codes of its own
+    assert read("gone", 0x001B) == "Sync manager watchdog"
 
 
 @pytest.mark.parametrize("led", ["RUN", "ERR", "LINK", "1.yellow"])
