@@ -25,6 +25,7 @@ class Pdo:
     index: int
     name: str
     entries: tuple[PdoEntry, ...]
+    mandatory: bool = False  # ESI Mandatory: a configurator may not leave it unassigned
 
 
 @dataclass(frozen=True)

@@ -49,6 +49,8 @@ def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int | None, fixed: bool) ->
     PDO the master may assign (ETG.2000: a PDO without Sm is not in the default assignment).
     """
     attrs = {"Fixed": "1" if fixed else "0"}
+    if pdo.mandatory:
+        attrs["Mandatory"] = "1"
     if sm is not None:
         attrs["Sm"] = str(sm)
     el = ET.SubElement(parent, tag, attrs)

@@ -39,6 +39,7 @@ class ObjectSpec:
     high: int | None = None
     pdo: bool = False  # mapped in the module's RxPDO / TxPDO (§5)
     single: bool = False  # the value is sub 0 itself (no "N° of entries")
+    pdo_entry: str = ""  # the entry's name in the PDOs (ESI / SII); "" = ``entry_name``
 
 
 RO, RW = Access.RO, Access.RW
@@ -63,14 +64,18 @@ OBJECTS: dict[int, ObjectSpec] = {s.base: s for s in (
     ObjectSpec(0x4003, "Disable encoders", "Disable enc {}", BOOL, RW, RW, 0, "6.14"),
     ObjectSpec(0x4500, "Analog input type", "Type of analog input {}", U8, RW, RW, 4, "6.15",
                low=1, high=5),
-    ObjectSpec(0x6000, "Digital inputs", "Digital input {}", BOOL, RO, RO, 0, "6.24", pdo=True),
-    ObjectSpec(0x6400, "Analog inputs", "Analog input {}", I16, RO, RO, 0, "6.25", pdo=True),
+    ObjectSpec(0x6000, "Digital inputs", "Digital input {}", BOOL, RO, RO, 0, "6.24", pdo=True,
+               pdo_entry="Digital inp {}"),
+    ObjectSpec(0x6400, "Analog inputs", "Analog input {}", I16, RO, RO, 0, "6.25", pdo=True,
+               pdo_entry="Analog inp {}"),  # §4's screen
     ObjectSpec(0x6500, "Encoders position", "Position encoder {}", I32, RW, RW, 0, "6.26",
                pdo=True),
     ObjectSpec(0x6600, "Encoders operating status", "Operating status", U16, RO, RO, 0, "6.27",
                pdo=True, single=True),
-    ObjectSpec(0x7000, "Digital outputs", "Digital output {}", BOOL, RW, RW, 0, "6.28", pdo=True),
-    ObjectSpec(0x7400, "Analog outputs", "Analog output {}", I16, RW, RW, 0, "6.29", pdo=True),
+    ObjectSpec(0x7000, "Digital outputs", "Digital output {}", BOOL, RW, RW, 0, "6.28", pdo=True,
+               pdo_entry="Digital out {}"),
+    ObjectSpec(0x7400, "Analog outputs", "Analog output {}", I16, RW, RW, 0, "6.29", pdo=True,
+               pdo_entry="Analog out {}"),
     ObjectSpec(0x7600, "Encoders operating parameters", "Operating parameters", U16, RW, RW, 0,
                "6.30", pdo=True, single=True),
 )}
@@ -108,6 +113,16 @@ def add_object(od: ObjectDictionary, base: int, n: int, count: int, get: Channel
     for ch in range(count):
         od.add(entry(ch + 1, spec.entry_name.format(ch + 1), ch))
     return index
+
+
+def pdo_entry_name(index: int, sub: int, name: str) -> str:
+    """The name of mapped entry ``index:sub`` in the PDOs, its object's sub being ``name``:
+    §4's screen lists 0x6420:1 as "Analog inp 1" where §6.25 names the sub "Analog input 1";
+    the other channel objects follow that style (docs/fastcat-coupler.md)."""
+    spec = OBJECTS.get(index & ~(MODULE_STRIDE * 0xF))
+    if spec is None or not spec.pdo_entry or spec.single:
+        return name
+    return spec.pdo_entry.format(sub)
 
 
 def pdo_entries(base: int, n: int, count: int) -> list[tuple[int, int, int]]:

@@ -32,6 +32,13 @@ COUPLER_TXPDO = 0x1AFF  # §5: always present, the Fault active bit
 RXPDO_ASSIGN = 0x1C12
 TXPDO_ASSIGN = 0x1C13
 MAX_MODULES = 16  # §2
+# PDO names as a configurator lists them (§4 "Slave settings": 0x1AFF "Status", a DB16's
+# 0x1A00 "Inputs", an AI8D's / AI8C's "Analog inputs"); the rest in the same style, by the
+# module's §2 column. Module PDOs: (RxPDO, TxPDO).
+COUPLER_PDO_NAMES = ("Control", "Status")
+MODULE_PDO_NAMES = {"digital": ("Outputs", "Inputs"),
+                    "analog": ("Analog outputs", "Analog inputs"),
+                    "encoder": ("Encoder outputs", "Encoder inputs")}
 
 
 class CouplerObjects(Protocol):
@@ -115,12 +122,13 @@ def _mapping(od: ObjectDictionary, index: int, name: str,
 def _pdos(od: ObjectDictionary, modules: Sequence[IoModule]) -> None:
     rx_assigned = [COUPLER_RXPDO]
     tx_assigned = [COUPLER_TXPDO]
-    _mapping(od, COUPLER_RXPDO, "Coupler control", [(0x5200, 1, 1)])
-    _mapping(od, COUPLER_TXPDO, "Coupler status", [(0x5100, 1, 1)])
+    _mapping(od, COUPLER_RXPDO, COUPLER_PDO_NAMES[0], [(0x5200, 1, 1)])
+    _mapping(od, COUPLER_TXPDO, COUPLER_PDO_NAMES[1], [(0x5100, 1, 1)])
     for n, module in enumerate(modules, start=1):
         rx, tx = module.rx_entries(n), module.tx_entries(n)
-        _mapping(od, RXPDO_BASE + n - 1, f"Module {n} outputs", rx)
-        _mapping(od, TXPDO_BASE + n - 1, f"Module {n} inputs", tx)
+        rx_name, tx_name = MODULE_PDO_NAMES[module.mtype.group]
+        _mapping(od, RXPDO_BASE + n - 1, rx_name, rx)
+        _mapping(od, TXPDO_BASE + n - 1, tx_name, tx)
         if rx:
             rx_assigned.append(RXPDO_BASE + n - 1)
         if tx:

@@ -18,7 +18,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo, SlaveDescription, SlotModule, SyncManager
+from app.ethercat_wire.description import (
+    Pdo,
+    PdoEntry,
+    SlaveDescription,
+    SlotModule,
+    SyncManager,
+)
 from app.ethercat_wire.faces import image
 from devices.ethercat import AlState
 from devices.od import (
@@ -223,13 +229,24 @@ class Face:
         """A PDO's name for the SII / ESI: the name the model gives its mapping object."""
         return pdo.name
 
+    def pdo_entry_name(self, entry: PdoEntry) -> str:
+        """A mapped entry's name for the SII / ESI: its object's, unless the device names it
+        otherwise in its PDOs."""
+        return entry.name
+
+    def pdo_mandatory(self, pdo: Pdo) -> bool:
+        """Whether the ESI marks the PDO Mandatory (a configurator cannot unassign it)."""
+        return False
+
     def describe(self, model: Any) -> SlaveDescription:
         vendor, product, revision, serial = self.identity(model)
         rx, tx = self.rx_pdos(model), self.tx_pdos(model)
         slot_name, modules = self.slot(model)
 
         def named(pdos: tuple[Pdo, ...]) -> tuple[Pdo, ...]:
-            return tuple(replace(p, name=self.pdo_name(p)) for p in pdos)
+            return tuple(replace(p, name=self.pdo_name(p), mandatory=self.pdo_mandatory(p),
+                                 entries=tuple(replace(e, name=self.pdo_entry_name(e))
+                                               for e in p.entries)) for p in pdos)
 
         return SlaveDescription(
             device_id=model.device_id, name=self.name, vendor_id=vendor, product_code=product,

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+from app.ethercat_wire.description import Pdo, PdoEntry
 from app.ethercat_wire.faces.base import Face
-from devices.fastcat import objects
+from devices.fastcat import module_od, objects
 
 
 class FastCatFace(Face):
@@ -24,3 +25,11 @@ class FastCatFace(Face):
     dc_supported = False  # seed 000 names no distributed clock
     identity_defaults: ClassVar[tuple[int, int, int]] = (
         objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
+
+    def pdo_entry_name(self, entry: PdoEntry) -> str:
+        """§4's screen: 0x6420:1 is "Analog inp 1" in the PDO, "Analog input 1" in §6.25."""
+        return module_od.pdo_entry_name(entry.index, entry.sub, entry.name)
+
+    def pdo_mandatory(self, pdo: Pdo) -> bool:
+        """§4's screen ticks Mandatory for 0x1AFF; §5 has 0x16FF / 0x1AFF always present."""
+        return pdo.index in (objects.COUPLER_RXPDO, objects.COUPLER_TXPDO)
