@@ -70,6 +70,7 @@ class AlarmsMixin:
     if TYPE_CHECKING:  # defined by DeviceModel / TrsCat; stubs here would shadow them
         def emit(self, event: Event) -> None: ...
         def _leave_to(self, target: AlState) -> None: ...
+        def _apply_output_image(self) -> None: ...
 
     # ---- causes -------------------------------------------------------------------------------
     def serviced(self, slot: int) -> bool:
@@ -124,6 +125,9 @@ class AlarmsMixin:
             self.shutdown = key
             self._set_bus(TrsBus.SHUTDOWN)
             self._log(f"TRS bus shut down: 0x{fault.code:04X} {fault.text}")
+            # Every module stops now, not at the next local cycle: in DC-SYNC none comes
+            # while SYNC0 is lost or switched off (§9.1.1), and held outputs would stay on.
+            self._apply_output_image()
         if fault.deadlock and not self.deadlocked:
             self.deadlocked = True
             self._log("internal software error: back to PRE-OP, deadlock until power-off")

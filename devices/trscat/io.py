@@ -216,15 +216,32 @@ class SlotIo:
         return changed
 
     def apply_outputs(self, outputs: list[int], field_v: float, working: bool) -> bool:
-        """Drive ``outputs`` now, outside a local cycle: what a state change does to the
-        terminals (seed 001 §9.2: the safe state is the state's, not the next SYNC0's). No
-        sample is taken: the inputs wait for the next local cycle, and the §3 debounce keeps
-        its count. True when the terminals or the image changed; the slot is then not still.
+        """Drive ``outputs`` now, outside a local cycle: what a state change or a TRS bus
+        shutdown does to the terminals (seed 001 §9.2: the safe state is the state's, not the
+        next SYNC0's; §9.3.7: a module the bus no longer services stops). No sample is taken:
+        the §3 debounce keeps its count. A working slot's inputs wait for the next local
+        cycle; a stopped one's TxPDO image reads 0 from now, as ``cycle`` would give it. True
+        when the terminals or an image changed; the slot is then not still.
         """
         changed = self._drive(outputs, field_v, working)
+        if not working:
+            changed = self._stop_inputs() or changed
         if changed:
             self.still = False
         return changed
+
+    def _stop_inputs(self) -> bool:
+        """The TxPDO image of a module not working: 0 (what ``cycle`` sends for it)."""
+        if self.lines is not None:
+            if not self._inputs_mask:
+                return False
+            self._inputs_mask = 0
+            self.inputs = list(self._zeros_in)
+            return True
+        if self.inputs == self._zeros_in:
+            return False
+        self.inputs = self._zeros_in
+        return True
 
     def _drive(self, outputs: list[int], field_v: float, working: bool) -> bool:
         applied = outputs if working else self._zeros_out

@@ -241,10 +241,12 @@ class SteppingMixin:
 
     def _apply_output_image(self) -> None:
         """The outputs of ``out_mode`` on the terminals now (transitions.py calls it when the
-        mode leaves NORMAL): firmware's state change puts the safe or error state out itself.
-        The local cycle would only do it at the next SYNC0, and in DC-SYNC none comes while
-        SYNC0 is lost or switched off (§9.1.1). A slot changed is no longer still, so the next
-        local cycle runs it and no step skips it (docs/trscat.md "Still steps")."""
+        mode leaves NORMAL, alarms.py when the TRS bus shuts down and every slot stops):
+        firmware puts the safe or error state out at the state change, and a module the bus
+        no longer services stops there. The local cycle would only do it at the next SYNC0,
+        and in DC-SYNC none comes while SYNC0 is lost or switched off (§9.1.1). A slot changed
+        is no longer still, so the next local cycle runs it and no step skips it
+        (docs/trscat.md "Still steps")."""
         for slot, io, working, field_v in self._slot_plan():
             if io.apply_outputs(self._slot_outputs(slot, io), field_v, working):
                 self._all_still = False

@@ -189,3 +189,61 @@ def test_master_switching_sync0_off_then_leaving_op(wait_s: float) -> None:
     assert _io1(bench) == ((1, True, "on") if wait_s else (0, False, "off"))
     bench.trs.request_state(AlState.PREOP)
     assert _io1(bench) == (0, False, "off")
+
+
+# ---- TRS bus shutdown: every module stops at once, SYNC0 or not ------------------------------
+def _driven(bench: Bench) -> list[tuple[list[int], bool, list[int]]]:
+    """Per digital slot: outputs applied, any line driven, the TxPDO inputs image."""
+    out = []
+    for io in bench.trs.rail:
+        if io is not None and io.lines is not None:
+            out.append((list(io.applied), io.lines.driving != 0, list(io.inputs)))
+    return out
+
+
+def _op_dc_with_outputs_on() -> Bench:
+    bench = Bench(["IO-E", "IO-E"], configured=["IO-E", "IO-E"])
+    bench.to_state(AlState.OP)
+    for module in (None, 1, 2):
+        bench.apply("set_output", module=module, channel=1, value=1)
+    bench.run(0.01)
+    assert all(applied[0] == 1 and driving for applied, driving, _ in _driven(bench))
+    assert bench.leds()["I/O 1"] == "on"
+    return bench
+
+
+def _stop_sync0(bench: Bench, how: str) -> None:
+    if how == "lose_sync0":
+        bench.apply("lose_sync0", lost=True)
+    elif how == "0x0981=0":  # the master switches SYNC0 off (§9.1.1)
+        bench.configure_dc(0, bench.step_us * 1000)
+
+
+SHUTDOWNS = [("inject_fault", {"fault": "TRS_UNDERVOLTAGE"}),
+             ("inject_fault", {"fault": "TRS_OVERCURRENT"}),
+             ("inject_fault", {"fault": "TRS_COMM_ERROR"}),
+             ("unplug", {"module": 2})]  # §7: unplugged under power, 0x7500
+
+
+@pytest.mark.parametrize("how", ["lose_sync0", "0x0981=0"])
+@pytest.mark.parametrize("fall", [True, False], ids=["after-the-fall", "still-in-op"])
+@pytest.mark.parametrize(("action", "args"), SHUTDOWNS, ids=lambda v: str(v))
+def test_bus_shutdown_stops_every_module_without_sync0(how: str, fall: bool, action: str,
+                                                       args: dict) -> None:
+    """§9.3.7 "shutdown irreversibile del bus TRS", §8.2: the modules stop at the shutdown,
+    outputs off and inputs 0, as the leaving of OP puts its outputs out at once: in DC-SYNC no
+    local cycle follows while SYNC0 is lost or off (§9.1.1). Here the outputs are held by the
+    fatal sync error (0xF710 = 0, §9.3.5 hold) or still those of OP."""
+    bench = _op_dc_with_outputs_on()
+    _stop_sync0(bench, how)
+    bench.run(0.5 if fall else 0.001)
+    assert bench.trs.al_state is (AlState.SAFEOP if fall else AlState.OP)
+    assert _driven(bench)[0][:2] == ([1] + [0] * 15, True)  # held (or OP): I/O 1 still on
+    bench.apply(action, **args)
+    bench.step()
+    assert bench.trs.snapshot()["trs_bus"]["state"] == "shutdown"
+    for applied, driving, inputs in _driven(bench):
+        assert (applied, driving, inputs) == ([0] * 16, False, [0] * 16)
+    assert bench.leds()["I/O 1"] == "off"
+    bench.run(0.5)
+    assert bench.leds()["I/O 1"] == "off" and not any(d for _, d, _ in _driven(bench))
