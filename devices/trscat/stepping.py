@@ -259,8 +259,14 @@ class SteppingMixin:
         return [0] * io.kind.outputs
 
     def _slot_field_v(self, slot: int) -> float:
-        """Expansions take the field supply from the TRS bus (§10.3) unless their own fails."""
-        return 0.0 if ("FIELD_SUPPLY", slot) in self.injected else self.field_v
+        """Expansions take the field supply from the TRS bus (§10.3: the base's +24Vdc "di
+        norma viene erogata verso il bus TRS, per fornire l'alimentazione alle eventuali
+        espansioni"): none where their own 0x3220 is injected, none anywhere with the base's
+        (that supply failing, as ``field_supply`` out of range)."""
+        injected = self.injected
+        if ("FIELD_SUPPLY", slot) in injected or BASE_FIELD_FAULT in injected:
+            return 0.0
+        return self.field_v
 
     def field_ok(self) -> bool:
         """The base's check of the field supply, which the +24V LED shows (§4 "Controllo

@@ -167,6 +167,61 @@ def test_injected_field_supply_fault_puts_the_24v_led_out() -> None:
     assert bench.read(0xF100, 1) == 0b01 and bench.leds()["+24V"] == "on"
 
 
+# What a trainee sees of a TRS-CAT; the field volts and the instructor's list of injections
+# are the two things by which an injected 0x3220 may differ from the supply really absent.
+_NOT_SEEN = ("field_supply_v", "injected")
+
+
+def _seen(bench: Bench) -> dict:
+    snap = {k: v for k, v in bench.trs.snapshot().items() if k not in _NOT_SEEN}
+    snap["0xF100:1"] = bench.read(0xF100, 1)
+    snap["alarm events"] = [(r["t"], r["code"], r.get("module", 0), r["active"])
+                            for r in bench.records("alarm")]
+    snap["led events"] = [(r["t"], r["led"], r["pattern"]) for r in bench.records("led")]
+    return snap
+
+
+def _io1_driven(seen: dict) -> list[bool]:
+    return [slot["lines"][0]["driving"] for slot in seen["slots"]]
+
+
+def _supply_cut_and_back(sync_mode: str, cut: tuple[str, dict], back: tuple[str, dict]
+                         ) -> tuple[dict, dict]:
+    """What is seen with the cause present 10 ms, then 10 ms after it went."""
+    bench = Bench(["IO-E", "IO-E"], configured=["IO-E", "IO-E"], sync_mode=sync_mode)
+    bench.to_state(AlState.OP)
+    for module in (None, 1, 2):
+        bench.apply("set_output", module=module, channel=1, value=1)
+        bench.apply("set_load", module=module, channel=1, amps=0.25)
+    bench.run(0.01)
+    bench.clear()
+    bench.apply(cut[0], **cut[1])
+    bench.run(0.01)
+    during = _seen(bench)
+    bench.apply(back[0], **back[1])
+    bench.run(0.01)
+    return during, _seen(bench)
+
+
+@pytest.mark.parametrize("sync_mode", ["dc", "free_run"])
+def test_injected_field_supply_fault_on_the_base_is_the_supply_absent(sync_mode: str) -> None:
+    """§10.3: the +24Vdc of the base "viene utilizzata per il driver degli output ed è quella
+    che di norma viene erogata verso il bus TRS, per fornire l'alimentazione alle eventuali
+    espansioni"; §9.3.7 0x3220 "su base" is that supply failing, so the expansions' outputs go
+    unpowered too, as with ``field_supply`` 0 V: outputs, LEDs, 0xF100, alarms, messages and
+    the TRS bus current alike; and back when cleared."""
+    phys_during, phys_after = _supply_cut_and_back(
+        sync_mode, ("field_supply", {"volts": 0.0}), ("field_supply", {"volts": 24.0}))
+    inj_during, inj_after = _supply_cut_and_back(
+        sync_mode, ("inject_fault", {"fault": "0x3220"}), ("clear_fault", {"fault": "0x3220"}))
+    assert _io1_driven(phys_during) == [False] * 3
+    assert _io1_driven(inj_during) == [False] * 3
+    assert inj_during["trs_bus"]["current_a"] == 0.0
+    assert inj_during == phys_during
+    assert _io1_driven(inj_after) == [True] * 3
+    assert inj_after == phys_after
+
+
 def test_overcurrent_on_the_trs_bus() -> None:
     """§10.3: at most 8 A along the TRS bus; §9.3.7 0x7100 above it."""
     bench = Bench(["IO-E"], configured=["IO-E"])
