@@ -158,11 +158,19 @@ class DriveStateMachine:
             self._transition(Command.FAULT)
 
     def _fault_reset(self: ServoDrive) -> None:
+        """Every way in (R00 bit 3, 0x6040 bit 7, the panel's pulse) comes here: DSP 402
+        resets in Fault only (transition 15). During the fault reaction the alarm stays: a
+        reset there used to clear it and the ramp then ended in Fault with no code."""
+        if self.state is State.FAULT_REACTION_ACTIVE:
+            self.log(f"alarm reset ignored: alarm {self.alarms.active} still stopping the axis "
+                     "(reset in Fault)")
+        if self.state is not State.FAULT:
+            return
         for code in self.alarms.reset(self.alarm_table):
             spec = self.alarm_table[code]
             self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code), name=spec.name,
                                    active=False))
         if self.alarms.latched:
             self.log(f"alarm reset refused: alarm {self.alarms.active} persists")
-        elif self.state is State.FAULT:
+        else:
             self._transition(Command.FAULT_RESET)
