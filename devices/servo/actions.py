@@ -148,7 +148,7 @@ class DriveActions:
     def cmd_inject_alarm(self: ServoDrive, code: str) -> None:
         number = self._alarm(code)
         self._powered()
-        self.raise_alarm(number, lasting=True)
+        self.raise_alarm(number, injected=True)
 
     def cmd_clear_alarm(self: ServoDrive, code: str) -> None:
         number = self._alarm(code)

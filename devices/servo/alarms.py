@@ -11,7 +11,7 @@ goes off (docs/servo-drive.md §Alarms).
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 GENERIC_ERROR_CODE = 0x1000  # DS402 "generic error", for the codes ch. 5 prints "-" or omits
 
@@ -151,27 +151,36 @@ class AlarmBank:
 
     A cause is what keeps an alarm from being reset: an injected fault until it is cleared, or a
     condition the model sees (e.g. a flash write that failed). Event alarms (following error,
-    limit switch, homing error) have no lasting cause once the axis is released.
+    limit switch, homing error) have no lasting cause once the axis is released. An injected
+    cause is a fault of the hardware: it outlasts a power cycle (:meth:`after_power_cycle`).
     """
 
     latched: list[int]
     causes: set[int]
     changes: int = 0  # counts every change: a drive skipping still steps sees one (stillness.py)
+    injected: set[int] = field(default_factory=set)  # causes from inject_alarm, not cleared
 
     @classmethod
     def empty(cls) -> AlarmBank:
         return cls([], set())
+
+    def after_power_cycle(self) -> list[int]:
+        """The injected causes still present, in the order their alarms came: the drive finds
+        them again at power-up (the CoE slave's mapping cause goes with its mapping)."""
+        return [c for c in self.latched if c in self.causes and c in self.injected]
 
     @property
     def active(self) -> int:
         """alarm_code R46: the first alarm still latched, 0 when none."""
         return self.latched[0] if self.latched else 0
 
-    def latch(self, code: int, lasting_cause: bool) -> bool:
+    def latch(self, code: int, lasting_cause: bool, injected: bool = False) -> bool:
         """Latch an alarm; True when it was not latched before."""
         self.changes += 1
         if lasting_cause:
             self.causes.add(code)
+        if injected:
+            self.injected.add(code)
         if code in self.latched:
             return False
         self.latched.append(code)
@@ -180,6 +189,7 @@ class AlarmBank:
     def remove_cause(self, code: int) -> None:
         self.changes += 1
         self.causes.discard(code)
+        self.injected.discard(code)
 
     def reset(self, table: dict[int, AlarmSpec]) -> list[int]:
         """Alarm reset: drop the resettable alarms whose cause is gone; return them."""

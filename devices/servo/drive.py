@@ -123,6 +123,7 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         self.mode_logic: Mode = MODE_CLASSES[1]()
 
     def _power_up(self) -> None:
+        lasting = self.alarms.after_power_cycle()  # a fault in the hardware is still there
         self._reset_runtime()
         self.params, self.regs = self._first_power_up_values()
         bad_flash = self._load_image(self.flash.load(), include_mode=True)
@@ -139,6 +140,11 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         if bad_flash:
             self.log(f"flash content rejected: {bad_flash}")
             self.raise_alarm(9)
+        # The self test finds an injected fault whose cause was not cleared ("la condizione di
+        # allarme persiste", ch. 5): in Not ready to switch on, as the rejected image's alarm 9,
+        # so the drive comes up in Fault (13, 14) before any master can enable it.
+        for code in lasting:
+            self.raise_alarm(code, injected=True)
 
     def _power_down(self) -> None:
         if self.saving:

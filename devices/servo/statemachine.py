@@ -145,10 +145,11 @@ class DriveStateMachine:
         return moved
 
     # ---- alarms ------------------------------------------------------------------------------
-    def raise_alarm(self: ServoDrive, code: int, lasting: bool = False) -> None:
+    def raise_alarm(self: ServoDrive, code: int, lasting: bool = False,
+                    injected: bool = False) -> None:
         self._touched = True  # also raised from outside (the CoE slave's checks)
         spec = self.alarm_table[code]
-        if self.alarms.latch(code, lasting):
+        if self.alarms.latch(code, lasting or injected, injected):
             self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code), name=spec.name,
                                    active=True))
             self.log(f"alarm {code} {spec.name}: {spec.description} ({spec.effect.value})")
