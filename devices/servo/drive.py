@@ -272,9 +272,11 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
 
     @property
     def motion_enabled(self) -> bool:
-        """Ien_st: in operation, with the Ien_cmd command and the IEN consent."""
+        """Ien_st: in operation, with the Ien_cmd command and the IEN consent, not saving (a
+        save started with IEN low holds the axis until it is over: saving.may_save)."""
         return self.state is State.OPERATION_ENABLED and self.ien_cmd \
-            and self.input_level("ien") and self.input_level("ten")
+            and self.input_level("ien") and self.input_level("ten") \
+            and self.saving_until is None
 
     def motion_blocked(self) -> str | None:
         """Why a motion command would not move the axis now, in the operator's words; None

@@ -2,7 +2,8 @@
 
 Seed 004 ch. 2 "Salvataggio su flash" (mode -50 + control word 0x20 or 0x3802 = 0x0011, not in
 torque, no Modbus answer for the few seconds of the save), ch. 4 (0x1010:1 = 0x65766173: with
-the motor enabled the save completes when it is disabled), ch. 5 (0x2007 = 0x11, "--" on the
+the motor enabled the save completes when it is disabled, "segnali IEN e/o TEN disabilitati":
+also with IEN low in torque), ch. 5 (0x2007 = 0x11, "--" on the
 display during the save). The FlashStore writes atomically, and only when the save completes:
 a power cut in the middle keeps the previous content.
 """
@@ -13,6 +14,7 @@ from typing import TYPE_CHECKING
 
 from devices.flash import FlashError
 from devices.servo import flashsave
+from devices.servo.ds402 import State
 from devices.servo.parameters import C9_BY_FIELDBUS, default_parameters
 from devices.servo.registers import R, default_registers
 
@@ -29,11 +31,21 @@ class DriveFlash:
         if self.saving:
             return
         self.save_done = False
-        if self.state.in_torque:
-            self.save_pending = trigger
-            self.log(f"flash save requested ({trigger}) in torque: it runs when torque goes off")
-        else:
+        if self.may_save:
             self._start_save(trigger)
+        else:
+            self.save_pending = trigger
+            self.log(f"flash save requested ({trigger}) with the motor enabled: it runs when "
+                     "torque goes off or IEN goes low")
+
+    @property
+    def may_save(self: ServoDrive) -> bool:
+        """Ch. 4: "possibile solo se il motore non è abilitato (segnali IEN e/o TEN
+        disabilitati)": out of torque, or in operation with the IEN input low (motion not
+        enabled, the axis held). Not during a quick stop or fault reaction: their ramp runs."""
+        state = self.state
+        return not state.in_torque or (state is State.OPERATION_ENABLED
+                                       and not self.wired.get("ien", False))
 
     def _start_save(self: ServoDrive, trigger: str) -> None:
         self.save_pending = None
@@ -43,7 +55,7 @@ class DriveFlash:
         self.log(f"saving to flash ({trigger})")
 
     def _update_saving(self: ServoDrive) -> None:
-        if self.save_pending and not self.state.in_torque:
+        if self.save_pending and self.may_save:
             self._start_save(self.save_pending)
         if self.saving_until is not None and self._t_us >= self.saving_until:
             self.saving_until = None

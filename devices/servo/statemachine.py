@@ -106,9 +106,15 @@ class DriveStateMachine:
         What it does depends only on (state, controlword, its source, TEN); inputs whose last
         evaluation moved nothing are remembered and not evaluated again (a moving drive
         evaluates every tick, docs/servo-drive.md §Step cost)."""
-        if not self.powered or self.saving:
+        if not self.powered:
             return
         ten = self.wired.get("ten", False)  # input_level("ten"): TEN is no switch
+        if self.saving:
+            # The state holds still while saving, but TEN is the hardware consent: a save
+            # started with IEN low (in torque, saving.may_save) loses the torque with it.
+            if not ten:
+                self._transition(Command.TORQUE_LOST)
+            return
         inputs = (self.state, self.cw, self.cw_source, ten)
         if inputs == self._quiet_evaluation:
             return

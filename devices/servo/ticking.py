@@ -113,7 +113,8 @@ class DriveTick:
             if state is _ENABLED:
                 # motion_allowed, with the state known to be enabled
                 allowed = self.ien_cmd and wired.get("ien", False) \
-                    and wired.get("ten", False) and not self.cw & _CW_HALT
+                    and wired.get("ten", False) and not self.cw & _CW_HALT \
+                    and self.saving_until is None
                 if allowed:
                     mode = self.mode_logic
                     if type(mode) is _VELOCITY:

@@ -165,7 +165,8 @@ class DrivePanel:
             c7 = PARAMETER_BY_NAME["c7"]
             self._c7 = gui.add_number("Node (c7)", 1, min=c7.low, max=c7.high, step=1)
             write_bus = gui.add_button("Write c9 and c7")
-            save = gui.add_button("Save to flash", hint="only without torque; a few seconds")
+            save = gui.add_button("Save to flash",
+                                  hint="only without torque or with IEN low; a few seconds")
             gui.add_html('<p class="fr-muted" style="font-size:0.75em">c9, c7 and n1 are read '
                          "at power-up: write, save, then switch Drive power off and on.</p>")
         with gui.add_folder("Other drive actions", expand_by_default=False):

@@ -82,7 +82,7 @@ def state_badge(snap: Mapping[str, Any]) -> str:
     if snap.get("saving"):
         html += " " + badge("saving to flash", "warn")
     elif snap.get("save_pending"):
-        html += ' <span class="fr-muted">save waits for torque off</span>'
+        html += ' <span class="fr-muted">save waits for torque off or IEN low</span>'
     return html
 
 
