@@ -15,7 +15,7 @@ from typing import Any
 from devices.device import CommandError, DeviceModel
 from devices.events import LogLine
 from devices.flash import FlashStore
-from devices.servo import ds402
+from devices.servo import control, ds402
 from devices.servo.actions import DriveActions
 from devices.servo.alarms import AlarmBank, AlarmSpec, Effect, alarm_table
 from devices.servo.config import DriveConfig
@@ -291,7 +291,9 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         if not (self.ien_cmd and self.input_level("ien")):
             return "motion not enabled (IEN input or Ien_cmd off) - switch IEN on"
         if self.cw & ds402.CW_HALT:
-            return "halted (0x6040 bit 8) - clear the halt bit"
+            # The panel's Enable (R00 = 3) and Move write a control word without it
+            stopped = control.HALT_HINT.get(self.fieldbus, control.HALT_HINT_ANY)
+            return f"{stopped} - Enable or Move clears it"
         return None
 
     @property
