@@ -181,6 +181,9 @@ class SlotIo:
         self._applied_mask = 0
         self._inputs_mask = 0
         self.still = False  # the last cycle changed nothing (set by cycle)
+        # (working, field supply in range) of the last drive: the driver follows a change of
+        # either at once, local cycle or not (stepping.py _redrive_on_supply_change).
+        self.driven_with = (False, False)
         if self.lines is not None:
             self.lines.reset()
 
@@ -218,7 +221,8 @@ class SlotIo:
     def apply_outputs(self, outputs: list[int], field_v: float, working: bool) -> bool:
         """Drive ``outputs`` now, outside a local cycle: what a state change or a TRS bus
         shutdown does to the terminals (seed 001 §9.2: the safe state is the state's, not the
-        next SYNC0's; §9.3.7: a module the bus no longer services stops). No sample is taken:
+        next SYNC0's; §9.3.7: a module the bus no longer services stops), and a driver that
+        lost or regained its field supply (§10.3). No sample is taken:
         the §3 debounce keeps its count. A working slot's inputs wait for the next local
         cycle; a stopped one's TxPDO image reads 0 from now, as ``cycle`` would give it. True
         when the terminals or an image changed; the slot is then not still.
@@ -244,6 +248,8 @@ class SlotIo:
         return True
 
     def _drive(self, outputs: list[int], field_v: float, working: bool) -> bool:
+        powered = field_in_range(field_v)
+        self.driven_with = (working, powered)
         applied = outputs if working else self._zeros_out
         changed = applied != self.applied
         if changed:
@@ -252,7 +258,7 @@ class SlotIo:
         lines = self.lines
         if lines is not None:
             driving, tripped, level = lines.driving, lines.tripped, lines.level
-            lines.drive(self._applied_mask, field_in_range(field_v))
+            lines.drive(self._applied_mask, powered)
             changed = changed or driving != lines.driving or tripped != lines.tripped \
                 or level != lines.level
         return changed

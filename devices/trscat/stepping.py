@@ -157,8 +157,10 @@ class SteppingMixin:
         if not quiet:
             self._plan = None
         changed = False
+        cycled = False
         esm = self.esm
         for t, sm_event in self.sync.cycles_until(now_us):
+            cycled = True
             if sm_event and esm.state in _LATCHING:
                 if self._plc_written or not self.SKIP_STILL:
                     self._latch_outputs(t)
@@ -169,6 +171,8 @@ class SteppingMixin:
                 self.skipped_slot_cycles += len(self._plan)
             elif self._local_cycle():
                 changed = True
+        if not (quiet or cycled) and self._redrive_on_supply_change():
+            changed = True
         # _check_sync has nothing to do when the sync state (SyncUnit.state, written out) is
         # the one last seen and not an error: DC_RUNNING or FREE_RUN.
         sync = self.sync
@@ -250,6 +254,29 @@ class SteppingMixin:
         for slot, io, working, field_v in self._slot_plan():
             if io.apply_outputs(self._slot_outputs(slot, io), field_v, working):
                 self._all_still = False
+
+    def _redrive_on_supply_change(self) -> bool:
+        """In a step with no local cycle, drive again each slot whose field supply or working
+        state changed since its last drive; True when one changed.
+
+        An output driver that loses its supply does not wait for a SYNC0 (§10.3: the +24Vdc
+        "viene utilizzata per il driver degli output"), nor does one that gets it back: in
+        DC-SYNC with SYNC0 lost or switched off (§9.1.1) no local cycle would ever come. The
+        image driven is the one the module holds: in OP its applied outputs (the master's
+        newer ones wait for a local cycle, as ever), else the safe or error image of the state
+        (what the next local cycle drives). Only a step that is not quiet can find a change:
+        the plan's inputs move only through a touch or with an event. No sample is taken."""
+        normal = self.out_mode is OutputMode.NORMAL
+        changed = False
+        for slot, io, working, field_v in self._slot_plan():
+            if io.driven_with == (working, field_in_range(field_v)):
+                continue
+            outputs = io.applied if normal else self._slot_outputs(slot, io)
+            if io.apply_outputs(outputs, field_v, working):
+                changed = True
+        if changed:
+            self._all_still = False
+        return changed
 
     def _slot_outputs(self, slot: int, io: SlotIo) -> list[int]:
         if self.out_mode is OutputMode.NORMAL:

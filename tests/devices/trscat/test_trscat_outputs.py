@@ -247,3 +247,113 @@ def test_bus_shutdown_stops_every_module_without_sync0(how: str, fall: bool, act
     assert bench.leds()["I/O 1"] == "off"
     bench.run(0.5)
     assert bench.leds()["I/O 1"] == "off" and not any(d for _, d, _ in _driven(bench))
+
+
+# ---- the field supply without SYNC0: the output drivers follow it at once --------------------
+# (cut, restore) of the base's +24Vdc: out of range, or its check failing (0x3220 on the base).
+SUPPLY = {"field_supply": (("field_supply", {"volts": 0.0}), ("field_supply", {"volts": 24.0})),
+          "0x3220": (("inject_fault", {"fault": "0x3220"}), ("clear_fault", {"fault": "0x3220"}))}
+
+
+def _terminals(bench: Bench) -> list[tuple[list[int], int]]:
+    """Per digital slot: the outputs it holds and the lines its driver really drives."""
+    return [(list(io.applied), io.lines.driving) for io in bench.trs.rail
+            if io is not None and io.lines is not None]
+
+
+def _powered(held: list[tuple[list[int], int]]) -> list[tuple[list[int], int]]:
+    return [(applied, sum(v << i for i, v in enumerate(applied))) for applied, _ in held]
+
+
+@pytest.mark.parametrize("how", ["lose_sync0", "0x0981=0"])
+@pytest.mark.parametrize("fall", [True, False], ids=["after-the-fall", "still-in-op"])
+@pytest.mark.parametrize("supply", list(SUPPLY))
+def test_field_supply_switches_the_drivers_without_sync0(how: str, fall: bool,
+                                                         supply: str) -> None:
+    """§10.3: the base's +24Vdc "viene utilizzata per il driver degli output" (and feeds the
+    expansions over the TRS bus): without it no output is driven, whether or not a local
+    cycle comes, and in DC-SYNC none does while SYNC0 is lost or off (§9.1.1). The module
+    keeps its image (held by the fatal sync error, §9.3.5, or still OP's): with the supply
+    back it is driven again, without new outputs from the master (taken only at a cycle)."""
+    bench = _op_dc_with_outputs_on()
+    _stop_sync0(bench, how)
+    bench.run(0.5 if fall else 0.001)
+    state = AlState.SAFEOP if fall else AlState.OP
+    assert bench.trs.al_state is state
+    held = _terminals(bench)
+    assert held == _powered(held) and held[0][0] == [1] + [0] * 15
+    bench.apply("set_output", channel=2, value=1)  # the master's new data: waits for a cycle
+    (cut, cut_args), (restore, restore_args) = SUPPLY[supply]
+    bench.apply(cut, **cut_args)
+    bench.step()
+    assert bench.trs.al_state is state
+    assert _terminals(bench) == [(applied, 0) for applied, _ in held]
+    assert (bench.leds()["I/O 1"], bench.leds()["+24V"]) == ("off", "off")
+    bench.apply(restore, **restore_args)
+    bench.step()
+    assert _terminals(bench) == held
+    assert (bench.leds()["I/O 1"], bench.leds()["+24V"]) == ("on", "on")
+    bench.run(0.5)
+    assert _terminals(bench) == held and bench.leds()["I/O 1"] == "on"
+
+
+@pytest.mark.parametrize("how", ["lose_sync0", "0x0981=0"])
+def test_field_supply_back_after_sync0_lost_drives_the_held_image(how: str) -> None:
+    """The supply went while SYNC0 ran (the local cycle took the drivers off), then SYNC0 went
+    and the fatal sync error held the outputs (§9.3.5): the supply back drives them at once."""
+    bench = _op_dc_with_outputs_on()
+    held = _terminals(bench)
+    bench.apply("field_supply", volts=0.0)
+    bench.run(0.01)
+    assert _terminals(bench) == [(applied, 0) for applied, _ in held]
+    _stop_sync0(bench, how)
+    bench.run(0.5)
+    assert bench.trs.al_state is AlState.SAFEOP
+    bench.apply("field_supply", volts=24.0)
+    bench.step()
+    assert _terminals(bench) == held
+    assert (bench.leds()["I/O 1"], bench.leds()["+24V"]) == ("on", "on")
+
+
+def test_field_supply_back_without_sync0_drives_the_error_image() -> None:
+    """After the fatal sync error the module holds its error image (§9.3.6: 0xF710 bit 1 puts
+    I/O 1 to 0, I/O 2 held, §9.3.5): the supply back drives that image, not OP's."""
+    bench = _op_with_io1_on(0x0001)
+    bench.apply("set_output", channel=2, value=1)
+    bench.run(0.01)
+    bench.apply("lose_sync0", lost=True)
+    bench.run(0.5)
+    assert bench.trs.snapshot()["outputs_mode"] == "error"
+    assert bench.trs.rail[0].latched[:2] == [1, 1]  # OP's image, still latched
+    image = ([0, 1] + [0] * 14, 0b10)
+    assert _terminals(bench) == [image]
+    bench.apply("field_supply", volts=0.0)
+    bench.step()
+    assert _terminals(bench) == [(image[0], 0)]
+    bench.apply("field_supply", volts=24.0)
+    bench.step()
+    assert _terminals(bench) == [image]
+    assert (bench.leds()["I/O 1"], bench.leds()["I/O 2"]) == ("off", "on")
+
+
+def test_an_e_supply_fault_without_sync0_stops_the_module_at_once() -> None:
+    """0x5114 (§9.3.7) on a TRS-AN-E stops that module (outputs 0 V, inputs 0): like the field
+    supply, its own supply failing does not wait for a SYNC0; cleared, the held image is out
+    again. The TxPDO inputs wait for a local cycle (none while SYNC0 is lost, §9.1.1)."""
+    bench = Bench(["AN-E"], configured=["AN-E"])
+    bench.to_state(AlState.OP)
+    bench.apply("set_output", module=1, channel=1, value=1000)
+    bench.apply("set_analog_input", module=1, channel=1, volts=5.0)
+    bench.run(0.01)
+    bench.apply("lose_sync0", lost=True)
+    bench.run(0.5)
+    an_e = bench.trs.rail[1]
+    assert bench.trs.al_state is AlState.SAFEOP and an_e.applied == [1000, 0]
+    inputs = list(an_e.inputs)
+    assert inputs[0] > 0
+    bench.apply("inject_fault", module=1, fault="AN_PLUS_12V")
+    bench.run(0.002)  # the alarm is raised, then the module stops (as at a local cycle)
+    assert (an_e.applied, an_e.inputs) == ([0, 0], [0] * len(inputs))
+    bench.apply("clear_fault", module=1, fault="AN_PLUS_12V")
+    bench.run(0.002)
+    assert (an_e.applied, an_e.inputs) == ([1000, 0], [0] * len(inputs))
