@@ -5,8 +5,9 @@ with the model's snapshot:
 
 - seed 000 §2: CNF acts on its release after a hold of at least 3 s; a shorter hold is
   ignored. Clicks at one simulated instant (the runtime is paused) are holds of 0 s: ignored,
-  however many; a hold left pressed by a closed browser stays pressed (a button does not
-  release itself) until someone releases it, and then the configuration procedure runs.
+  however many; holds of 0.2 to 2.9 s with the rig stepped between press and release too; a
+  hold left pressed by a closed browser stays pressed (a button does not release itself)
+  until someone releases it, and then the configuration procedure runs.
 - seed 000 §6.17: 0x5200:1 Reset fault is the checkbox's level; the last click wins.
 - seed 004 ch. 2: "Enable" is R00 = 3 (torque and motion on), "Disable" R00 = 0 (CiA 402
   Switch on disabled): the last click decides.
@@ -42,6 +43,7 @@ from helpers import (
 )
 
 from app.ui.commands import Sent, gate_for
+from app.ui.rail_scene import led_color
 
 pytestmark = pytest.mark.browser
 
@@ -121,6 +123,63 @@ def views_agree(live: LiveDashboard, *pages: Any) -> None:
                    what="the Hold CNF box to mirror the model")
         wait_until(lambda p=page: checked(p, "Reset fault") == bit,
                    what="the Reset fault box to mirror 0x5200:1")
+
+
+LED_COLOURS = {"RUN": "green", "ERR": "red", "LINK": "green"}  # N.red / N.yellow by name
+
+
+def leds_agree(live: LiveDashboard) -> None:
+    """The 3D view's LEDs show the model's patterns at the frame's time (a paused runtime
+    keeps publishing that time): the colour each box was last sent to every page."""
+    live.settle()
+    frame = live.runtime.frame
+    leds = frame.snapshot["devices"]["fastcat"]["leds"]
+    expected = {name: led_color(LED_COLOURS.get(name) or name.split(".")[1], pattern,
+                                frame.t_us) for name, pattern in leds.items()}
+    assert live.dashboard.scene_colors() == expected
+
+
+def cnf_procedures(live: LiveDashboard) -> list[str]:
+    """The CNF procedure's phases entered so far (StateChanged, machine "cnf")."""
+    _, events = live.runtime.events_since(0)
+    return [e.to_state for e in events if e.kind == "state"
+            and getattr(e, "machine", "") == "cnf" and e.device == "fastcat"]
+
+
+def test_cnf_holds_shorter_than_3_s_on_a_stepping_rig(live: LiveDashboard, page) -> None:
+    """Seed 000 §2: CNF acts on its release after a hold of at least 3 s. Holds of 0.2, 1 and
+    2.9 simulated seconds, clicked in the page with the rig stepped between press and
+    release, are ignored; a 3.2 s hold runs the procedure (reset, scan, store) and the line
+    comes back to OP. After each, the page and the 3D LEDs show the model."""
+    open_dashboard(page, live)
+    live.advance(BOOT_S)
+    box = page.get_by_label("Hold CNF", exact=True)
+    before = cnf_procedures(live)
+    for held_s in (0.2, 1.0, 2.9):
+        box.check()
+        live.wait_for_state(lambda s: s["cnf"]["pressed"], what="CNF pressed")
+        live.advance(held_s)
+        box.uncheck()
+        live.wait_for_state(lambda s: not s["cnf"]["pressed"], what="CNF released")
+        live.advance(1.0)
+        snap = live.snapshot()
+        assert (snap["esm"], snap["cnf"]["phase"], snap["alarm"]) == ("OP", "idle", None)
+        assert cnf_procedures(live) == before, f"a {held_s} s hold started the procedure"
+        views_agree(live, page)
+        leds_agree(live)
+    box.check()
+    live.wait_for_state(lambda s: s["cnf"]["pressed"], what="CNF pressed")
+    live.advance(3.2)
+    box.uncheck()
+    live.wait_for_state(lambda s: not s["cnf"]["pressed"], what="CNF released")
+    live.advance(0.2)
+    assert cnf_procedures(live) != before, "a 3.2 s hold did not start the procedure"
+    leds_agree(live)
+    live.advance(10.0)
+    snap = live.snapshot()
+    assert (snap["esm"], snap["cnf"]["phase"], snap["alarm"]) == ("OP", "idle", None)
+    views_agree(live, page)
+    leds_agree(live)
 
 
 def test_rapid_clicks_on_cnf_reset_fault_and_a_drive_button(live: LiveDashboard, page) -> None:
