@@ -1,14 +1,18 @@
 """Soak: the default rig in the live runtime for simulated minutes (an hour with ``--full``) at
-the 1 ms cycle, with faults injected and reset in a loop.
+the 1 ms cycle, with faults injected and reset in a loop, served as ``python -m app`` serves
+it: the dashboard drawing every frame on a viser server and the Rerun recorder attached.
 
-Issue 7 "Hardening". Every 10 s of simulated time: a FastCAT module is unplugged and plugged
-back, the coupler's fault is reset (0x5200:1 rising edge, seed 000 §6.17), the drive gets an
-alarm, its cause is removed and it is reset (seed 004 ch.2, R00 alarm reset). The script runs in
-the simulation thread as a step listener, at exact simulated instants. Checked: every cycle
-left its traces (alarms raised and cleared) and the rig is back to OP without alarm at the end;
-the process grows by less than 10 MB between the end of the warm-up and the end; the runtime's
-event journal and the master's log stay within their caps, and no other list in the snapshot
-grows.
+Issue 7 "Hardening". Every 10 s of simulated time, on every device of the line: a FastCAT module
+is unplugged and plugged back and the coupler's fault is reset (0x5200:1 rising edge, seed 000
+§6.17); the TRS-CAT loses its field supply and gets it back (0x3220, seed 001); the CPX-E-EC's
+outputs supply drops and returns (seed 002); the Modbus and CANopen drives get an alarm, its
+cause is removed and it is reset (seed 004 ch. 2 / 4); the cable into the EtherCAT drive is
+pulled and plugged back, and its sync-timeout alarm reset. The script runs in the simulation
+thread as a step listener, at exact simulated instants. Checked: every cycle left its traces
+(alarms raised and cleared on each device) and the line is back to OP without alarm at the
+end; the process (simulation, dashboard, recorder) grows by less than 10 MB between the end of
+the warm-up and the end; the runtime's event journal and the master's log stay within their
+caps, and no other list in the snapshot grows.
 
 The runtime is paused and driven with ``Runtime.advance`` in 10 s chunks: the simulation thread
 steps, journals and calls the step listeners exactly as it does live, as fast as the machine
@@ -22,8 +26,10 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+from app.recording import RigRecorder, attach_to_runtime
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import JOURNAL_LENGTH, Runtime
+from app.screenshots import ServedRig
 from devices.events import Event
 from devices.master import LOG_LENGTH
 
@@ -37,13 +43,25 @@ CHUNK_TIMEOUT_S = 600.0  # wall time for 10 s of simulated time: only against a 
 # (seconds into the cycle, target, action, arguments)
 SCRIPT: tuple[tuple[float, str, str, dict[str, Any]], ...] = (
     (0.0, "fastcat/3", "unplug", {}),
+    (0.5, "trscat", "field_supply", {"volts": 0.0}),
+    (1.0, "cpx", "inject_fault", {"fault": "undervoltage_out"}),
+    (1.5, "trscat", "field_supply", {"volts": 24.0}),
     (2.0, "fastcat/3", "plug", {"type": "DO16"}),
+    (2.5, "cpx", "clear_fault", {"fault": "undervoltage_out"}),
     (3.0, "fastcat", "set_reset_fault", {"on": True}),
     (3.1, "fastcat", "set_reset_fault", {"on": False}),
     (4.0, "drive", "inject_alarm", {"code": "16"}),
+    (4.2, "drive_co", "inject_alarm", {"code": "16"}),
     (5.0, "drive", "clear_alarm", {"code": "16"}),
+    (5.05, "drive_co", "clear_alarm", {"code": "16"}),
     (5.1, "drive", "alarm_reset", {}),
+    (5.15, "drive_co", "alarm_reset", {}),
+    (5.5, "master", "pull_cable", {"cable": 3}),  # into the EtherCAT drive: alarm 34
+    (6.0, "master", "plug_cable", {"cable": 3}),
+    (8.0, "drive_ec", "alarm_reset", {}),  # the line is back in OP by now
 )
+# Devices that raise and clear at least one alarm every cycle
+ALARMED = ("fastcat", "trscat", "cpx", "drive", "drive_co", "drive_ec")
 
 
 BOUNDED = {".devices.master.log"}  # fills up to LOG_LENGTH, checked above
@@ -99,13 +117,12 @@ def _advance_to(runtime: Runtime, t_us: int) -> None:
         runtime.advance(min(PERIOD_S * US, t_us - now)).result(CHUNK_TIMEOUT_S)
 
 
-def test_faults_in_a_loop_keep_memory_and_logs_bounded(full: bool) -> None:
+def test_faults_in_a_loop_keep_memory_and_logs_bounded(full: bool, tmp_path: Path) -> None:
     cycles = (3600 if full else 60) // PERIOD_S
     end_us = (FIRST_CYCLE_S + (cycles - 1) * PERIOD_S + SETTLED_S) * US  # the last cycle done
     rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    runtime = Runtime(rig)
-    runtime.set_paused(True)
-    loop = FaultLoop(runtime)
+    recorder = RigRecorder(tmp_path / "soak.rrd")
+    loops: list[FaultLoop] = []
     kinds: Counter[str] = Counter()
     alarms: Counter[tuple[str, bool]] = Counter()
 
@@ -114,13 +131,20 @@ def test_faults_in_a_loop_keep_memory_and_logs_bounded(full: bool) -> None:
         alarms.update((e.device, bool(getattr(e, "active", False))) for e in events
                       if e.kind == "alarm")
 
-    runtime.add_listener(count)
-    runtime.add_step_listener(loop.on_step)
-    for device_id, info in rig.describe().items():  # powered, as `python -m app` starts it
-        if "power" in info["actions"]:
-            runtime.command(device_id, "power", {"on": True})
-    runtime.start()
+    def attach(runtime: Runtime) -> None:
+        loops.append(FaultLoop(runtime))
+        runtime.add_listener(count)
+        runtime.add_step_listener(loops[0].on_step)
+        attach_to_runtime(runtime, recorder)
+
+    # Paused and stepped by advance(); the dashboard draws every frame published (as with a
+    # browser connected), the recorder samples and logs as it does live.
+    served = ServedRig.start(rig, quiet=True, before_start=attach)
+    runtime, loop = served.runtime, loops[0]
     try:
+        for device_id, info in rig.describe().items():  # powered, as `python -m app` does
+            if "power" in info["actions"]:
+                runtime.command(device_id, "power", {"on": True}).result(60)
         _advance_to(runtime, (FIRST_CYCLE_S + WARM_UP_CYCLES * PERIOD_S) * US)
         gc.collect()
         rss_warm = rss_bytes()
@@ -130,15 +154,22 @@ def test_faults_in_a_loop_keep_memory_and_logs_bounded(full: bool) -> None:
         rss_end = rss_bytes()
         snap = runtime.submit(rig.snapshot).result(60)
         _seq, journal = runtime.events_since(0)
+        drawn = served.dashboard.rendered_seq
     finally:
-        runtime.stop()
+        served.stop()
+        recorder.close()
     assert not loop.refused, loop.refused[:5]
     assert loop.applied >= cycles * len(SCRIPT)
-    # every cycle raised and cleared an alarm on both devices
-    for device in ("fastcat", "drive"):
+    # every cycle raised and cleared an alarm on every device
+    for device in ALARMED:
         assert alarms[(device, True)] >= cycles and alarms[(device, False)] >= cycles, alarms
-    fastcat, drive = snap["devices"]["fastcat"], snap["devices"]["drive"]
-    assert fastcat["esm"] == "OP" and not fastcat["fault_active"] and drive["alarm"] is None
+    devices = snap["devices"]
+    fastcat = devices["fastcat"]
+    assert fastcat["esm"] == "OP" and not fastcat["fault_active"]
+    assert [s["state"] for s in devices["master"]["slaves"]] == ["OP"] * 4
+    assert devices["trscat"]["alarms"] == [] and devices["cpx"]["diagnosis"]["errors"] == []
+    assert all(devices[d]["alarm"] is None for d in ("drive", "drive_co", "drive_ec"))
+    assert drawn > 0 and recorder.path.stat().st_size > 0  # both ran beside the rig
     growth = rss_end - rss_warm
     print(f"soak: {cycles} cycles, RSS {rss_warm / 2**20:.1f} -> {rss_end / 2**20:.1f} MB, "
           f"journal {len(journal)} events, events {sum(kinds.values())}")
