@@ -15,14 +15,23 @@ saves new content in a loop, alternating two contents:
 Around each write of the flash file it prints ``begin`` (with the hash of the content about to
 be written) and ``end``. Nothing else: the parent reads these lines and kills the process with
 SIGKILL at random points, most of them inside a write.
+
+    python tests/hardening/flash_child.py fastcat|drive PATH STEP
+
+With STEP (one of STOP_POINTS), the first write stops the process at that step of
+FileFlash.save (after printing ``stopped``): the parent's SIGKILL then lands exactly there, a
+moment a random kill of a sub-millisecond write rarely hits.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 import random
+import signal
 import sys
+from collections.abc import Callable
 from typing import Any
 
 from app.flash_file import FileFlash
@@ -98,8 +107,38 @@ def run_drive(flash: TracedFlash) -> None:
             drive.step(t)
 
 
+# The steps of FileFlash.save, each named by the call it is about to make: the temporary file
+# written but not synced; synced, not yet renamed over the flash file; renamed, the directory
+# not yet synced.
+STOP_POINTS = ("fsync_file", "replace", "fsync_dir")
+
+
+def stop_before(point: str) -> None:
+    """Make the first write stop the process just before the call named ``point``."""
+    fsync, replace = os.fsync, os.replace
+    calls = {"fsync": 0}
+
+    def stopped(name: str, call: Callable[..., None]) -> Callable[..., None]:
+        def run(*args: object) -> None:
+            if name == point:
+                say(event="stopped", at=point)
+                os.kill(os.getpid(), signal.SIGSTOP)  # the parent kills it here
+            call(*args)
+        return run
+
+    def fsync_either(fd: int) -> None:
+        calls["fsync"] += 1  # the first fsync is the file's, the second the directory's
+        name = "fsync_file" if calls["fsync"] == 1 else "fsync_dir"
+        stopped(name, fsync)(fd)
+
+    os.fsync = fsync_either
+    os.replace = stopped("replace", replace)
+
+
 def main() -> None:
     kind, path = sys.argv[1], sys.argv[2]
+    if len(sys.argv) > 3:
+        stop_before(sys.argv[3])
     flash = TracedFlash(path, kind)
     (run_fastcat if kind == "fastcat" else run_drive)(flash)
 

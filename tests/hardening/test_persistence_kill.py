@@ -7,7 +7,8 @@ app.flash_file.FileFlash again and again; this test kills it with SIGKILL, most 
 without error and hold the content of the last completed write or of the write that was under
 way (only the new one once that write was reported done); the next process started on the file
 must load that content into the device and accept it. Rounds per device: 4 in CI, 60 with
-``--full``.
+``--full``. A random kill rarely lands inside a sub-millisecond write, so each step of the
+write is also killed on purpose (the child stops itself there: flash_child.STOP_POINTS).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from flash_child import content_value, digest
+from flash_child import STOP_POINTS, content_value, digest
 
 from app.flash_file import FileFlash
 
@@ -34,8 +35,8 @@ READY_TIMEOUT_S = 120.0  # wall time for a child to start and announce (a loaded
 
 
 class Child:
-    def __init__(self, kind: str, path: Path) -> None:
-        self.proc = subprocess.Popen([sys.executable, str(CHILD), kind, str(path)],
+    def __init__(self, kind: str, path: Path, *stop_at: str) -> None:
+        self.proc = subprocess.Popen([sys.executable, str(CHILD), kind, str(path), *stop_at],
                                      cwd=HERE.parents[1], stdout=subprocess.PIPE, text=True)
         self.lines: list[dict[str, Any]] = []
 
@@ -108,3 +109,36 @@ def test_killed_writer_leaves_old_or_new_content(kind: str, full: bool, tmp_path
         if payload is not None:
             assert content_value(kind, payload) == values[on_disk]
     assert kills_inside > 0
+
+
+@pytest.mark.parametrize("point", STOP_POINTS)
+@pytest.mark.parametrize("kind", ["fastcat", "drive"])
+def test_killed_at_each_step_of_a_write(kind: str, point: str, tmp_path: Path) -> None:
+    """The kill lands exactly at one step of FileFlash.save (the child stops itself there):
+    before the temporary file is synced or renamed the file holds the old content, from the
+    rename on the new one; either way it loads and the next process accepts it. A first write
+    (no file before) and a second one (an old content to keep) are both killed."""
+    path = tmp_path / f"{kind}.flash"
+    for first in (True, False):
+        before = digest(FileFlash(path).load())
+        assert (before == "none") is first
+        child = Child(kind, path, point)
+        loaded = child.next()
+        assert loaded["event"] == "loaded" and loaded["sha"] == before
+        begin = child.next()
+        assert begin["event"] == "begin"
+        assert child.next() == {"event": "stopped", "at": point}
+        child.kill()
+        on_disk = digest(FileFlash(path).load())
+        expected = before if point != "fsync_dir" else begin["sha"]
+        assert on_disk == expected, (point, first)
+        if point != "fsync_dir":  # the file kept the old content: write the new one for real
+            writer = Child(kind, path)
+            assert writer.next()["sha"] == before
+            while writer.next()["event"] != "end":
+                pass
+            writer.kill()
+        after = Child(kind, path)
+        loaded = after.next()  # the next process loads the file and accepts it
+        assert loaded["sha"] == digest(FileFlash(path).load()) and not loaded["alarm"]
+        after.kill()
