@@ -129,12 +129,20 @@ def _in_range(low: float, high: float) -> Callable[[Any], str | None]:
     return lambda v: None if low <= v <= high else f"must be between {low} and {high}, got {v}"
 
 
+def not_utf8(exc: UnicodeDecodeError) -> str:
+    """Why a file is refused when it is not UTF-8 (an editor's Latin-1 or UTF-16 save): the
+    first bad byte and its offset, so that it can be found in a hex view."""
+    return f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} at offset {exc.start}"
+
+
 def load_rig_spec(path: str | Path) -> RigSpec:
     source = str(path)
     try:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise RigConfigError(source, "", f"cannot read rig file: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise RigConfigError(source, "", not_utf8(exc)) from None
     return parse_rig_spec(text, source)
 
 

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from app.rig import Rig
-from app.rig_config import RigConfigError
+from app.rig_config import RigConfigError, not_utf8
 from app.targets import parse_target
 from devices.device import UNKNOWN_MODULE, CommandError
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
@@ -125,6 +125,8 @@ def load_scenario(path: str | Path) -> Scenario:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError(f"{source}: cannot read scenario: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{source}: {not_utf8(exc)}") from None
     scenario = parse_scenario(text, source, base_dir=Path(path).resolve().parent)
     # A file is a whole scenario: without its [scenario] table (an empty file, a step list
     # saved without its head) or without a step it is a wrong file, which CI must see as

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from app.rig_config import not_utf8
 from app.scenario import Scenario, ScenarioError, parse_scenario
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
@@ -99,6 +100,8 @@ def load_exercise(path: str | Path) -> tuple[Scenario, ExerciseSpec]:
         text = Path(path).read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError(f"{source}: cannot read: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{source}: {not_utf8(exc)}") from None
     rest, table = split_exercise(text, source)
     if table is None:
         raise ScenarioError(f"{source}: no [exercise] table")

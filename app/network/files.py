@@ -41,7 +41,7 @@ def uses_dc(device: Any) -> bool:
 
 
 def _read(path: Path, rig_source: str, key: str) -> str:
-    from app.rig_config import RigConfigError
+    from app.rig_config import RigConfigError, not_utf8
 
     try:
         if path.stat().st_size > MAX_BYTES:
@@ -50,8 +50,8 @@ def _read(path: Path, rig_source: str, key: str) -> str:
     except OSError as exc:
         raise RigConfigError(rig_source, key, f"cannot read {path}: "
                                               f"{exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise RigConfigError(str(path), "", "not UTF-8 text") from None
+    except UnicodeDecodeError as exc:
+        raise RigConfigError(str(path), "", not_utf8(exc)) from None
 
 
 def resolve(rig_source: str, name: str) -> Path:

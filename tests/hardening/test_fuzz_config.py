@@ -9,8 +9,10 @@ Issue 7 "Hardening". Hypothesis feeds
 to ``parse_rig_spec`` + ``build_rig`` (RigConfigError only) and ``parse_scenario`` +
 ``check_against`` the default rig (ScenarioError / RigConfigError only); every message is one
 line. Files that are refused also go to the CLI, in process (``app.cli.main``): exit 2 and one
-line on stderr. A few go to a real ``python -m app`` process. Examples: 120 per property in CI,
-1,500 with ``--full``.
+line on stderr. A few go to a real ``python -m app`` process. The shipped files also go as
+bytes (in another encoding, bytes inserted, overwritten or cut) to ``load_rig_spec`` /
+``load_scenario``: a file that is not UTF-8 is refused at its first bad byte. Examples: 120 per
+property in CI, 1,500 with ``--full``.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from hypothesis import strategies as st
 
 from app.cli import main as cli_main
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec, parse_rig_spec
-from app.scenario import ScenarioError, check_against, parse_scenario
+from app.scenario import ScenarioError, check_against, load_scenario, parse_scenario
 
 ROOT = Path(__file__).resolve().parents[2]
 RIG_FILES = sorted((ROOT / "static" / "rigs").glob("*.toml"))
@@ -279,6 +281,86 @@ def test_scenarios_with_wrong_values(full: bool, tmp_path: Path) -> None:
     def prop(text: str) -> None:
         if _tolerating_known(_scenario, text):
             _cli_refuses(tmp_path, text)
+
+    prop()
+
+
+# ---- bytes: files an editor saved in another encoding, or damaged -------------------------------
+ENCODINGS = ("latin-1", "cp1252", "utf-16", "utf-16-be", "utf-8-sig", "utf-8")
+
+
+@st.composite
+def edited_bytes(draw: st.DrawFn, texts: list[str]) -> bytes:
+    """A shipped file in another encoding (most of them hold a non-ASCII character: a §, an
+    arrow), then bytes inserted, overwritten with a non-ASCII byte, or cut off (mid-character)."""
+    encoding = draw(st.sampled_from(ENCODINGS))
+    data = draw(st.sampled_from(texts)).encode(encoding, errors="replace")
+    for _ in range(draw(st.integers(0, 3))):
+        kind = draw(st.sampled_from(["insert", "overwrite", "cut"]))
+        i = draw(st.integers(0, len(data)))
+        if kind == "insert":
+            data = data[:i] + draw(st.binary(min_size=1, max_size=4)) + data[i:]
+        elif kind == "overwrite":
+            data = data[:i] + bytes([draw(st.integers(0x80, 0xFF))]) + data[i + 1:]
+        else:
+            data = data[:i]
+    return data
+
+
+def _file_tree(tmp: Path) -> Path:
+    """tmp/rigs and tmp/networks are the shipped ones, so that the relative paths of a rig
+    (``../networks/...``) and of a scenario (``../rigs/...``) in tmp/fuzz/ still resolve."""
+    for name in ("rigs", "networks"):
+        if not (tmp / name).exists():
+            (tmp / name).symlink_to(ROOT / "static" / name, target_is_directory=True)
+    (tmp / "fuzz").mkdir(exist_ok=True)
+    return tmp / "fuzz" / "fuzz.toml"
+
+
+def _not_utf8_is_named(data: bytes, exc: BaseException, path: Path) -> None:
+    """A file that is not UTF-8 is refused for that, at its first bad byte."""
+    _one_line(exc)
+    assert str(exc).startswith(str(path)), str(exc)
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as bad:
+        assert str(exc).endswith(f"not UTF-8 text: byte 0x{data[bad.start]:02x} at offset "
+                                 f"{bad.start}"), str(exc)
+
+
+def test_rig_files_as_bytes(full: bool, tmp_path: Path) -> None:
+    path = _file_tree(tmp_path)
+
+    @_examples(full)
+    @given(edited_bytes(RIG_TEXTS))
+    def prop(data: bytes) -> None:
+        path.write_bytes(data)
+        try:
+            build_rig(load_rig_spec(path), state_dir=None)
+        except RigConfigError as exc:
+            _not_utf8_is_named(data, exc, path)
+
+    prop()
+
+
+def test_scenario_files_as_bytes(full: bool, tmp_path: Path) -> None:
+    path = _file_tree(tmp_path)
+
+    @_examples(full)
+    @given(edited_bytes(SCENARIO_TEXTS))
+    def prop(data: bytes) -> None:
+        path.write_bytes(data)
+        try:
+            scenario = load_scenario(path)
+            check_against(scenario, build_rig(load_rig_spec(scenario.rig or DEFAULT_RIG),
+                                              state_dir=None))
+        except REFUSALS as exc:
+            _not_utf8_is_named(data, exc, path)
+            out, err = io.StringIO(), io.StringIO()
+            with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+                code = cli_main(["scenario", "run", str(path), "--quiet"])
+            assert code == 2 and err.getvalue() == f"fieldrig: error: {exc}\n", \
+                (code, err.getvalue())
 
     prop()
 
