@@ -27,6 +27,7 @@ the bus (docs/hardening.md, README).
 
 from __future__ import annotations
 
+import ipaddress
 import logging
 import re
 import socket
@@ -77,9 +78,7 @@ def open_bus(interface: str, channel: str | None = None) -> can.BusABC:
     A CANopen master in another process opens its side the same way, so both meet on the
     same interface: ``canopen.Network(open_bus("udp_multicast", CHANNEL)).connect()``.
     """
-    if interface not in INTERFACES:
-        raise CanBusError(f"CAN interface {interface!r} is not one of {', '.join(INTERFACES)}")
-    channel = channel or DEFAULT_CHANNEL[interface]
+    channel = check_channel(interface, channel)
     try:
         if interface == "udp_multicast":
             return _open_udp(channel)
@@ -89,7 +88,25 @@ def open_bus(interface: str, channel: str | None = None) -> can.BusABC:
             from exc
 
 
-def _open_udp(channel: str) -> can.BusABC:
+def check_channel(interface: str, channel: str | None = None) -> str:
+    """The channel ``open_bus`` will use, refused (CanBusError) when it cannot be one: the
+    command line checks it before anything serves."""
+    if interface not in INTERFACES:
+        raise CanBusError(f"CAN interface {interface!r} is not one of {', '.join(INTERFACES)}")
+    channel = channel or DEFAULT_CHANNEL[interface]
+    if interface == "udp_multicast":
+        try:
+            _udp_channel(channel)
+        except ValueError as exc:
+            raise CanBusError(f"cannot open CAN interface {interface} channel {channel}: "
+                              f"{exc}") from None
+    return channel
+
+
+def _udp_channel(channel: str) -> tuple[str, int, str]:
+    """(group, port, interface address or "any") of GROUP[:PORT][@ADDRESS|@any]; ValueError
+    for what the socket calls would refuse with a traceback (OverflowError for a port beyond
+    65535) or turn into something else (port 0: a port the kernel picks, no one to meet)."""
     match = _CHANNEL.match(channel)
     if match is None:
         raise ValueError("the channel is GROUP[:PORT][@ADDRESS], e.g. 239.74.163.2:43113 "
@@ -97,6 +114,26 @@ def _open_udp(channel: str) -> can.BusABC:
                          "interface to use, or @any; default 127.0.0.1)")
     group, port = match["group"], int(match["port"] or UDP_DEFAULT_PORT)
     iface = match["iface"] or UDP_DEFAULT_INTERFACE
+    if not 0 < port < 65536:
+        raise ValueError(f"port {port} is not a UDP port (1..65535)")
+    if not _ipv4(group) or not ipaddress.IPv4Address(group).is_multicast:
+        raise ValueError(f"{group} is not an IPv4 multicast group (224.0.0.0 to "
+                         "239.255.255.255)")
+    if iface != ANY_INTERFACE and not _ipv4(iface):
+        raise ValueError(f"{iface} is not an IPv4 address (@ADDRESS: one of this host's)")
+    return group, port, iface
+
+
+def _ipv4(text: str) -> bool:
+    try:
+        ipaddress.IPv4Address(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _open_udp(channel: str) -> can.BusABC:
+    group, port, iface = _udp_channel(channel)
     if iface == ANY_INTERFACE:
         return can.Bus(interface="udp_multicast", channel=group, port=port, fd=False)
     return InterfaceUdpMulticastBus(group, port, iface)

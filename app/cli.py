@@ -217,6 +217,7 @@ def _serve(args: argparse.Namespace) -> int:
     if count > 1 and args.can_interface != "virtual":
         raise RigConfigError("--can-interface", "", "several rigs in one process need the "
                              "'virtual' CAN interface (one bus per rig)")
+    _check_can_channel(args)
     if args.instructor_token is not None and not args.instructor_token.strip():
         raise RigConfigError("--instructor-token", "", "an empty token")
     access_token = Access.for_host(args.host, args.instructor_token).token
@@ -327,6 +328,17 @@ def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{port}",
           flush=True)
     return server
+
+
+def _check_can_channel(args: argparse.Namespace) -> None:
+    """A channel that cannot be one is refused before any rig serves (it was a traceback from
+    bind() once the dashboard and the Modbus line were up)."""
+    from app.canopen_bus import CanBusError, check_channel
+
+    try:
+        check_channel(args.can_interface, args.can_channel)
+    except CanBusError as exc:
+        raise RigConfigError("--can-channel", "", str(exc)) from None
 
 
 def _start_canopen(runtime: Any, args: argparse.Namespace, channel: str | None) -> Any:

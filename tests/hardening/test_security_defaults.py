@@ -195,6 +195,35 @@ def test_a_bad_can_channel_is_one_clear_error(channel: str) -> None:
         open_bus("udp_multicast", channel)
 
 
+@pytest.mark.parametrize(("channel", "why"), [
+    ("239.1.1.1:99999", "port 99999 is not a UDP port"),  # was OverflowError from bind()
+    ("239.1.1.1:70000@any", "port 70000 is not a UDP port"),
+    ("239.1.1.1:0", "port 0 is not a UDP port"),  # was bound to a port the kernel picked
+    ("999.1.1.1:43113", "999.1.1.1 is not an IPv4 multicast group"),
+    ("10.1.1.1:43113@any", "10.1.1.1 is not an IPv4 multicast group"),
+    ("239.1.1.1:43113@999.1.1.1", "999.1.1.1 is not an IPv4 address"),
+])
+def test_a_can_channel_out_of_range_is_one_clear_error(channel: str, why: str) -> None:
+    with pytest.raises(CanBusError, match=f"channel {channel}: {why}"):
+        open_bus("udp_multicast", channel).shutdown()
+
+
+def test_the_cli_refuses_a_bad_can_channel_before_serving(tmp_path: Path) -> None:
+    """One line and exit 2, before the dashboard or the Modbus line listens (it was a
+    traceback after both had started)."""
+    port, modbus = _free_port(), _free_port()
+    proc = subprocess.run(
+        [sys.executable, "-m", "app", "--can-interface", "udp_multicast", "--can-channel",
+         "239.1.1.1:99999", "--port", str(port), "--modbus-port", str(modbus), "--no-record",
+         "--state-dir", str(tmp_path), "--run-for", "0"],
+        cwd=ROOT, capture_output=True, text=True, timeout=START_TIMEOUT_S)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr == ("fieldrig: error: --can-channel: cannot open CAN interface "
+                           "udp_multicast channel 239.1.1.1:99999: port 99999 is not a UDP "
+                           "port (1..65535)\n")
+    assert "FieldRig:" not in proc.stdout, proc.stdout  # nothing was served
+
+
 def test_modbus_server_defaults_to_loopback() -> None:
     host = inspect.signature(DriveModbusServer).parameters["host"].default
     assert _loopback(host)
