@@ -225,16 +225,21 @@ def _serve(args: argparse.Namespace) -> int:
     if args.record and not args.no_record:  # before any rig starts serving
         for i in range(count):
             check_record(_record_path(args, Path(args.state_dir), "", "", i, count) or "")
+    state_dirs = [Path(args.state_dir) / (f"rig{i + 1}" if count > 1 else "")
+                  for i in range(count)]
+    rigs = [build_rig(load_rig_spec(rig_file), state_dir=state_dir)
+            for rig_file, state_dir in zip(rig_files, state_dirs, strict=True)]
+    _check_listen(args, rigs)
     served, extras = [], []
     stamp = time.strftime("%Y%m%d-%H%M%S")
     try:
-        for i, rig_file in enumerate(rig_files):
-            state_dir = Path(args.state_dir) / (f"rig{i + 1}" if count > 1 else "")
-            rig = build_rig(load_rig_spec(rig_file), state_dir=state_dir)
+        for i, (rig, state_dir) in enumerate(zip(rigs, state_dirs, strict=True)):
             record = _record_path(args, state_dir, rig.name, stamp, i, count)
             one = serve_rig(rig, Access(access_token), host=args.host, port=args.port + i,
                             speed=args.speed, record=record, exercise_files=exercises)
             served.append(one)
+            if one.port != args.port + i:  # taken between the check and now: viser moved on
+                raise RigConfigError("--port", "", f"{args.port + i} was taken while starting")
             _power_on(one.runtime)
             extras.append(_start_modbus(one.runtime, args, args.modbus_port + i))
             extras.append(_start_canopen(one.runtime, args,
@@ -317,9 +322,8 @@ def _can_channel(args: argparse.Namespace, i: int) -> str:
 def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     """The drives' Modbus line (pymodbus), when the rig has drives; None otherwise."""
     from app.modbus.server import DriveModbusServer
-    from devices.servo.drive import ServoDrive
 
-    drives = [d for d in runtime.rig.devices.values() if isinstance(d, ServoDrive)]
+    drives = _modbus_drives(runtime.rig)
     if not drives:
         return None
     server = DriveModbusServer(drives, runtime.submit, host=args.host, port=port,
@@ -328,6 +332,24 @@ def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{port}",
           flush=True)
     return server
+
+
+def _check_listen(args: argparse.Namespace, rigs: list[Any]) -> None:
+    """Every port the rigs will listen on, on ``--host``, before the first serves (viser hangs
+    on a host it cannot bind, and moves on from a port in use: app/listen_check.py)."""
+    from app.listen_check import ListenError, check_listen
+
+    web = [("--port", args.port + i) for i in range(len(rigs))]
+    modbus = [("--modbus-port", args.modbus_port + i) for i, rig in enumerate(rigs)
+              if _modbus_drives(rig)]
+    both = sorted({p for _, p in web} & {p for _, p in modbus})
+    if both:
+        raise RigConfigError("--modbus-port", "", f"{both[0]} is also a dashboard port "
+                             f"(--port {args.port}, one port per rig from there)")
+    try:
+        check_listen(args.host, web + modbus)
+    except ListenError as exc:
+        raise RigConfigError(exc.flag, "", exc.reason) from None
 
 
 def _check_can_channel(args: argparse.Namespace) -> None:
@@ -339,6 +361,12 @@ def _check_can_channel(args: argparse.Namespace) -> None:
         check_channel(args.can_interface, args.can_channel)
     except CanBusError as exc:
         raise RigConfigError("--can-channel", "", str(exc)) from None
+
+
+def _modbus_drives(rig: Any) -> list[Any]:
+    from devices.servo.drive import ServoDrive
+
+    return [d for d in rig.devices.values() if isinstance(d, ServoDrive)]
 
 
 def _start_canopen(runtime: Any, args: argparse.Namespace, channel: str | None) -> Any:
