@@ -67,3 +67,11 @@ def test_a_wildcard_host_is_shown_by_the_machine_name() -> None:
     assert one.instructor_url == f"http://{name}:8081/?token=tok"
     loopback = ServedRig(None, None, None, None, token, None, "127.0.0.1", 8080)  # type: ignore[arg-type]
     assert loopback.shown_url == loopback.url == "http://127.0.0.1:8080/"
+
+
+def test_an_ipv6_host_is_shown_in_brackets() -> None:
+    """--host ::1 printed http://::1:8192/, which no browser opens (RFC 3986 §3.2.2)."""
+    token = SimpleNamespace(access=SimpleNamespace(token="tok"))
+    six = ServedRig(None, None, None, None, token, None, "::1", 8192)  # type: ignore[arg-type]
+    assert six.url == six.shown_url == "http://[::1]:8192/"
+    assert six.instructor_url == "http://[::1]:8192/?token=tok"

@@ -40,7 +40,9 @@ class ServedRig:
 
     @property
     def url(self) -> str:
-        return f"http://{self.host}:{self.port}/"
+        # An IPv6 literal goes in brackets (RFC 3986 §3.2.2): http://::1:8080/ opens nothing
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"http://{host}:{self.port}/"
 
     @property
     def shown_url(self) -> str:
