@@ -108,8 +108,23 @@ def commands_applied(live: LiveDashboard, page: Any) -> None:
     live.settle()
 
 
+LED_COLOURS = {"RUN": "green", "ERR": "red", "LINK": "green"}  # N.red / N.yellow by name
+
+
+def leds_agree(live: LiveDashboard) -> None:
+    """The 3D view's LEDs show the model's patterns at the frame's time (a paused runtime
+    keeps publishing that time): the colour each box was last sent to every page."""
+    live.settle()
+    frame = live.runtime.frame
+    leds = frame.snapshot["devices"]["fastcat"]["leds"]
+    expected = {name: led_color(LED_COLOURS.get(name) or name.split(".")[1], pattern,
+                                frame.t_us) for name, pattern in leds.items()}
+    assert live.dashboard.scene_colors() == expected
+
+
 def views_agree(live: LiveDashboard, *pages: Any) -> None:
-    """Each page shows the snapshot's ESM state, CNF phase and the checkboxes' model values."""
+    """Each page shows the snapshot's ESM state, CNF phase and the checkboxes' model values;
+    the 3D view's LEDs show the model's patterns."""
     snap = live.snapshot()
     pressed = bool(snap["cnf"]["pressed"])
     bit = bool(reset_bit(live))
@@ -123,20 +138,7 @@ def views_agree(live: LiveDashboard, *pages: Any) -> None:
                    what="the Hold CNF box to mirror the model")
         wait_until(lambda p=page: checked(p, "Reset fault") == bit,
                    what="the Reset fault box to mirror 0x5200:1")
-
-
-LED_COLOURS = {"RUN": "green", "ERR": "red", "LINK": "green"}  # N.red / N.yellow by name
-
-
-def leds_agree(live: LiveDashboard) -> None:
-    """The 3D view's LEDs show the model's patterns at the frame's time (a paused runtime
-    keeps publishing that time): the colour each box was last sent to every page."""
-    live.settle()
-    frame = live.runtime.frame
-    leds = frame.snapshot["devices"]["fastcat"]["leds"]
-    expected = {name: led_color(LED_COLOURS.get(name) or name.split(".")[1], pattern,
-                                frame.t_us) for name, pattern in leds.items()}
-    assert live.dashboard.scene_colors() == expected
+    leds_agree(live)
 
 
 def cnf_procedures(live: LiveDashboard) -> list[str]:
@@ -166,7 +168,6 @@ def test_cnf_holds_shorter_than_3_s_on_a_stepping_rig(live: LiveDashboard, page)
         assert (snap["esm"], snap["cnf"]["phase"], snap["alarm"]) == ("OP", "idle", None)
         assert cnf_procedures(live) == before, f"a {held_s} s hold started the procedure"
         views_agree(live, page)
-        leds_agree(live)
     box.check()
     live.wait_for_state(lambda s: s["cnf"]["pressed"], what="CNF pressed")
     live.advance(3.2)
@@ -179,7 +180,6 @@ def test_cnf_holds_shorter_than_3_s_on_a_stepping_rig(live: LiveDashboard, page)
     snap = live.snapshot()
     assert (snap["esm"], snap["cnf"]["phase"], snap["alarm"]) == ("OP", "idle", None)
     views_agree(live, page)
-    leds_agree(live)
 
 
 def test_rapid_clicks_on_cnf_reset_fault_and_a_drive_button(live: LiveDashboard, page) -> None:
