@@ -5,24 +5,19 @@ matter (parameters, the save command 0x3802, R00..R133 at 0x8000, the Siemens ma
 40001 / 44097, the edges around them) with valid function codes of bad lengths, quantities and
 byte counts, truncated and mutated frames, and garbage.
 
-The oracle is the rule set of docs/modbus.md (seed 004 ch.2 "Codici funzione", "Eccezioni"):
-an answer is a correct response, exception 02, or silence; anything rejected (exception 02 or
-silence) leaves every drive as it was; a broadcast (unit 0) is never answered.
+The oracle that judges each answer (what the line owes a request, worked out without the
+code under test) is in modbus_oracle.py; ``judge`` and ``line_state`` are re-exported here.
 """
 
 from __future__ import annotations
 
 import random
 from collections.abc import Callable, Iterator, Sequence
-from typing import Any
 
-from app.modbus.pdu import Exception02, Outcome, Reply, Silence
-from devices.servo.drive import ServoDrive
+from modbus_oracle import FC03, FC06, FC16, judge, line_state
 
-FC03, FC06, FC16 = 0x03, 0x06, 0x10
-E3_ADDRESS, E3_SIEMENS = 58, 9
-SIEMENS_PARAMETER_BASE, SIEMENS_REGISTER_BASE = 40001, 44097
-REGISTER_BASE = 0x8000
+__all__ = ["FC03", "FC06", "FC16", "judge", "line_state", "requests", "well_formed"]
+
 ADDRESSES = (0, 1, 2, 3, 20, 22, 23, 34, 35, 40, 54, 58, 67, 81, 90, 99, 100, 0x3801, 0x3802,
              0x3803, 0x7FFF, 0x8000, 0x8001, 0x8002, 0x8005, 0x8006, 0x8084, 0x8085, 0x8086,
              0x9C40, 0x9C41, 0x9C42, 0x9C73, 0x9CA4, 0xAC40, 0xAC41, 0xAC42, 0xAC4A, 0xACC6,
@@ -30,18 +25,6 @@ ADDRESSES = (0, 1, 2, 3, 20, 22, 23, 34, 35, 40, 54, 58, 67, 81, 90, 99, 100, 0x
 VALUES = (0, 1, 2, 3, 5, 6, 7, 9, 0x0F, 0x11, 0x20, 0x40, 0x80, 0xFF, 0x7FFF, 0x8000,
           0xFFCE, 0xFFFF)  # 0xFFCE = -50: mode "save/load" on R01
 QUANTITIES = (0, 1, 2, 3, 4, 8, 124, 125, 126, 0x7D00, 0xFFFF)
-
-State = tuple[Any, ...]
-
-
-def drive_state(drive: ServoDrive) -> State:
-    """Everything a request could change: the snapshot plus the raw parameter and register
-    tables. Nothing steps between two captures, so no field varies with time in between."""
-    return drive.snapshot(), dict(drive.params), dict(drive.regs)
-
-
-def line_state(drives: Sequence[ServoDrive]) -> list[State]:
-    return [drive_state(d) for d in drives]
 
 
 # ---- the generator ---------------------------------------------------------------------------
@@ -126,77 +109,3 @@ def requests(rng: random.Random, n: int, units: Sequence[int]) -> Iterator[tuple
     makers = [maker for _name, maker, weight in KINDS for _ in range(weight)]
     for _ in range(n):
         yield unit_id(rng, units), rng.choice(makers)(rng)
-
-
-# ---- the oracle ------------------------------------------------------------------------------
-def length_ok(pdu: bytes) -> bool:
-    """The request has the exact length its function code asks for (ch.2 "Codice 03/06/16")."""
-    if len(pdu) < 1 or pdu[0] not in (FC03, FC06, FC16):
-        return False
-    if pdu[0] in (FC03, FC06):
-        return len(pdu) == 5
-    return len(pdu) >= 6 and pdu[3:5] in (b"\0\1", b"\0\2") and pdu[5] == 2 * pdu[4] \
-        and len(pdu) == 6 + pdu[5]
-
-
-def expected_read(drive: ServoDrive, address: int, quantity: int) -> bytes | None:
-    """The data of a correct FC 03 response, from the address table of docs/modbus.md."""
-    if drive.read_parameter(E3_ADDRESS) == E3_SIEMENS:
-        if address >= SIEMENS_REGISTER_BASE:
-            register, parameter = address - SIEMENS_REGISTER_BASE, None
-        elif address >= SIEMENS_PARAMETER_BASE:
-            register, parameter = None, address - SIEMENS_PARAMETER_BASE
-        else:
-            return None
-    elif address >= REGISTER_BASE:
-        register, parameter = address - REGISTER_BASE, None
-    else:
-        register, parameter = None, address
-    if register is not None:
-        if quantity == 1:
-            return _u16(drive.read_register(register))
-        return b"".join((drive.read_register(n) & 0xFFFF_FFFF).to_bytes(4, "big")
-                        for n in range(register, register + quantity // 2))
-    assert parameter is not None
-    return b"".join(_u16(drive.read_parameter(a)) for a in range(parameter, parameter + quantity))
-
-
-def judge(drives: Sequence[ServoDrive], unit: int, pdu: bytes, outcome: Outcome,
-          before: list[State]) -> str | None:
-    """Why ``outcome`` is wrong for this request (None: it is right)."""
-    after = line_state(drives)
-    listening = [d for d, (snap, _p, _r) in zip(drives, before, strict=True)
-                 if snap["node_id"] == unit and snap["responding"] and snap["fieldbus"] == "modbus"]
-    if isinstance(outcome, Silence):
-        if unit == 0 and length_ok(pdu) and pdu[0] in (FC06, FC16):
-            return None  # a broadcast write is applied and never answered
-        return None if after == before else f"state changed by a request without reply " \
-                                             f"({outcome.reason})"
-    if unit == 0:
-        return "a broadcast was answered"
-    if len(listening) != 1:
-        return f"answered for unit {unit}, held by {len(listening)} listening drives"
-    if isinstance(outcome, Exception02):
-        if not length_ok(pdu) or outcome.function_code != pdu[0]:
-            return "exception 02 to a request of the wrong length or for another function"
-        if pdu[0] == FC03 and not 1 <= int.from_bytes(pdu[3:5], "big") <= 125:
-            return "exception 02 to a quantity outside 1..125 (must be silence)"
-        return None if after == before else "state changed by a request answered with 02"
-    if not isinstance(outcome, Reply):
-        return f"unknown outcome {outcome!r}"
-    return _judge_reply(listening[0], pdu, outcome.pdu)
-
-
-def _judge_reply(drive: ServoDrive, pdu: bytes, reply: bytes) -> str | None:
-    if not length_ok(pdu):
-        return f"a reply to a request of the wrong length: {pdu.hex(' ')}"
-    if pdu[0] == FC03:
-        address, quantity = int.from_bytes(pdu[1:3], "big"), int.from_bytes(pdu[3:5], "big")
-        data = expected_read(drive, address, quantity)
-        if data is None or reply != bytes((FC03, len(data))) + data or \
-                len(data) != 2 * quantity:
-            return f"FC 03 reply {reply.hex(' ')} (expected data {data!r})"
-        return None
-    if pdu[0] == FC06:
-        return None if reply == pdu else f"FC 06 reply {reply.hex(' ')} is not the echo"
-    return None if reply == pdu[:5] else f"FC 16 reply {reply.hex(' ')} is not addr + quantity"
