@@ -12,7 +12,11 @@ says why:
   validates or answers a request itself (its own decoder answers exception 01 to an unknown
   function code and exception 04 to an unknown unit id);
 - :class:`_DriveRequestHandler` takes each request when it is framed and answers it (or not)
-  from our outcome, instead of pymodbus's shared ``last_pdu`` slot.
+  from our outcome, instead of pymodbus's shared ``last_pdu`` slot. With MBAP framing it also
+  checks each header before pymodbus frames it: a header with a protocol id other than 0 or a
+  length outside 2..254 closes the connection at once (pymodbus would wait for more data, or
+  cut the stream at a wrong place, and silently lose the valid frames behind it), and it
+  lifts pymodbus's 264-byte receive limit, which flushed a long pipeline of valid frames.
 """
 
 from __future__ import annotations
@@ -26,7 +30,7 @@ from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
 from pymodbus.exceptions import ModbusIOException
-from pymodbus.framer import FramerType
+from pymodbus.framer import FramerSocket, FramerType
 from pymodbus.pdu import DecodePDU, ModbusPDU
 from pymodbus.server import ModbusTcpServer
 from pymodbus.server.requesthandler import ServerRequestHandler
@@ -43,6 +47,17 @@ Call = Callable[[Callable[[], T]], T]
 FRAMERS = {"socket": FramerType.SOCKET, "rtu": FramerType.RTU}
 SAVE_REPLY_POLL_S = 0.02
 SAVE_REPLY_GIVE_UP_S = 30.0  # a save lasts "a few seconds" (ch.2); past this the reply is lost
+# MBAP: transaction id (2), protocol id (2, always 0), length (2) = unit id + PDU, unit id (1).
+# A PDU is 1..253 bytes (Modbus/TCP ADU at most 260 bytes), so the length is 2..254.
+MBAP_HEADER, MBAP_LENGTHS = 7, range(2, 255)
+# pymodbus empties a connection's receive buffer past 264 bytes (transport.py,
+# datagram_received): with MBAP every complete frame is taken at once, so only a partial frame
+# ever stays behind and the buffer may hold whatever one read of a pipelining client brings.
+MBAP_RECEIVE_BUFFER = 1 << 20
+# After a broken header the server ends its side (FIN) once the requests before it are
+# answered, reads and drops what the client still sends, and closes after this long: closing
+# at once with unread input would reset the connection and lose those replies in transit.
+BROKEN_STREAM_LINGER_S = 2.0
 
 
 class _RawPdu(ModbusPDU):
@@ -73,23 +88,79 @@ class _DriveRequestHandler(ServerRequestHandler):
     def __init__(self, server: _DriveTcpServer) -> None:
         super().__init__(server, None, None, None)
         self._answer = server.answer
+        self._mbap = isinstance(self.framer, FramerSocket)
+        if self._mbap:
+            self.max_buffer_size = MBAP_RECEIVE_BUFFER
+        self.in_flight = 0  # requests taken, not yet answered (or silenced)
+        self._broken = False  # a broken MBAP header came: nothing more is served
+
+    def begin(self) -> None:
+        self.in_flight += 1
+
+    def end(self) -> None:
+        self.in_flight -= 1
+        if self._broken and not self.in_flight:
+            self._hang_up()
 
     def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
         # pymodbus frames one request per call; take every complete one in the buffer, so that
         # a request sent right behind a (never answered) broadcast is not left waiting.
+        if self._broken:
+            return len(data)  # the stream is lost: dropped until the connection closes
         used = 0
         while used < len(data):
+            frame = data[used:]
+            if self._mbap:
+                size = self._mbap_size(frame)
+                if size is None:
+                    break  # a partial frame: wait for the rest
+                frame = frame[:size]  # pymodbus sees exactly one frame
             try:
-                step = TransactionManager.callback_data(self, data[used:], addr)
+                step = TransactionManager.callback_data(self, frame, addr)
             except ModbusIOException:
                 return len(data)  # unreadable: discarded, no reply (pymodbus: exception 01)
             request, self.last_pdu = self.last_pdu, None  # pymodbus's handler never sees it
             used += step
             if isinstance(request, _RawPdu):
                 self._answer(self, request, addr)
-            if not step or request is None:
+            if not step or (request is None and not self._mbap):
                 break
         return used
+
+    def _mbap_size(self, data: bytes) -> int | None:
+        """The size of the MBAP frame at the start of ``data``; None while it is incomplete.
+
+        A header that breaks the framing closes the connection (Modbus Messaging on TCP/IP
+        Implementation Guide: an invalid MBAP header is dropped or the connection closed):
+        behind it the stream cannot be cut into frames again, and every valid request that
+        followed would be lost in silence. The client sees the close and reconnects.
+        """
+        if len(data) < MBAP_HEADER:
+            return None
+        protocol, length = int.from_bytes(data[2:4], "big"), int.from_bytes(data[4:6], "big")
+        if protocol or length not in MBAP_LENGTHS:
+            logger.info("Modbus/TCP header %s (protocol id %d, length %d): connection closed",
+                        data[:MBAP_HEADER].hex(" "), protocol, length)
+            self._broken = True
+            if not self.in_flight:
+                self._hang_up()
+            return None
+        return 6 + length if len(data) >= 6 + length else None
+
+    def _hang_up(self) -> None:
+        """End our side once every reply before the broken header is on its way."""
+        transport = self.transport
+        if transport is None or transport.is_closing():
+            return
+        if getattr(transport, "can_write_eof", lambda: False)():
+            transport.write_eof()  # type: ignore[attr-defined]
+            asyncio.get_running_loop().call_later(BROKEN_STREAM_LINGER_S, self._close_if_open)
+        else:
+            self.close()
+
+    def _close_if_open(self) -> None:
+        if self.transport is not None:  # pymodbus's close() fails on a connection already lost
+            self.close()
 
 
 class _DriveTcpServer(ModbusTcpServer):
@@ -184,8 +255,9 @@ class DriveModbusServer:
     # ---- one request ---------------------------------------------------------------------
     def _answer(self, handler: _DriveRequestHandler, request: _RawPdu,
                 addr: tuple | None) -> None:
+        handler.begin()  # ended when the request is answered or silenced
         if self._call is None:
-            self._spawn(self._serve(handler, request, addr))
+            self._spawn(self._serve(handler, request, addr), handler)
             return
         # Answered right here, in frame order; only a reply held back by a save waits (ch.2).
         try:
@@ -194,16 +266,19 @@ class DriveModbusServer:
         except Exception:  # a model fault must not take the line down: the drive stays silent
             logger.exception("Modbus request %s to unit %d failed", request.frame.hex(" "),
                              request.dev_id)
+            handler.end()
             return
         if isinstance(outcome, Reply) and outcome.after_save:
-            self._spawn(self._reply_after_save(handler, request, addr, outcome))
+            self._spawn(self._reply_after_save(handler, request, addr, outcome), handler)
         else:
             self._reply(handler, request, addr, outcome)
+            handler.end()
 
-    def _spawn(self, coro: Any) -> None:
+    def _spawn(self, coro: Any, handler: _DriveRequestHandler) -> None:
         task = asyncio.get_running_loop().create_task(coro)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
+        task.add_done_callback(lambda _task: handler.end())
 
     async def _serve(self, handler: _DriveRequestHandler, request: _RawPdu,
                      addr: tuple | None) -> None:

@@ -230,3 +230,111 @@ def test_broken_framing_over_tcp(framer: str, full: bool) -> None:
     want = serve_line(drives, 1, PROBE)  # the server is gone: this thread may touch the drives
     assert isinstance(want, Reply)
     assert probe == _adu(framer, 1, want.pdu, 0xBEEF)
+
+
+# ---- pipelining: what a bad MBAP header does to the frames behind it --------------------------
+BAD_MBAP = {  # header fields that break the MBAP framing (Implementation Guide: "invalid")
+    "protocol id 1": {"proto": 1}, "protocol id 0xFFFF": {"proto": 0xFFFF},
+    "length 0": {"length": 0}, "length 1": {"length": 1}, "length 255": {"length": 255},
+    "length 0xFFFF": {"length": 0xFFFF},
+}
+
+
+def _mbap(unit: int, pdu: bytes, tid: int, proto: int = 0, length: int | None = None) -> bytes:
+    length = len(pdu) + 1 if length is None else length
+    return tid.to_bytes(2, "big") + proto.to_bytes(2, "big") + length.to_bytes(2, "big") + \
+        bytes((unit,)) + pdu
+
+
+def _stream(port: int, frames: list[bytes], gap_s: float) -> tuple[bytes, bool]:
+    """Send ``frames`` on one connection (one write, or one per frame ``gap_s`` apart); the
+    bytes that came back and whether the server closed the connection."""
+    got, closed = b"", False
+    with socket.create_connection(("127.0.0.1", port), timeout=REPLY_WAIT_S) as sock:
+        try:
+            if gap_s:
+                for frame in frames:
+                    sock.sendall(frame)
+                    time.sleep(gap_s)
+            else:
+                sock.sendall(b"".join(frames))
+        except OSError:
+            closed = True  # reset while sending: closed
+        sock.settimeout(QUIET_S * 3)
+        while not closed:
+            try:
+                chunk = sock.recv(65536)
+            except TimeoutError:
+                break
+            except OSError:
+                chunk = b""
+            closed, got = not chunk, got + chunk
+    return got, closed
+
+
+def _answered_tids(stream: bytes) -> list[int]:
+    tids, at = [], 0
+    while at + 6 <= len(stream):
+        size = 6 + int.from_bytes(stream[at + 4:at + 6], "big")
+        tids.append(int.from_bytes(stream[at:at + 2], "big"))
+        at += size
+    return tids
+
+
+def _pipeline_problem(owed: list[bool], bad: list[bool], tids: list[int], closed: bool
+                      ) -> str | None:
+    """Every frame owed a reply is answered while the connection is open; after a bad header
+    the server may close it, but not after dropping a valid frame first."""
+    answered = set(tids)
+    if not answered <= {1 + i for i, o in enumerate(owed) if o}:
+        return f"answers to frames owed none: {sorted(answered)}"
+    first_bad = bad.index(True) if True in bad else len(owed)
+    owed_tids = [1 + i for i, o in enumerate(owed) if o]
+    before = [t for t in owed_tids if t <= first_bad]
+    after = [t for t in owed_tids if t > first_bad]
+    if not set(before) <= answered:
+        return f"frames before the bad header not answered: {sorted(set(before) - answered)}"
+    got_after = [t for t in after if t in answered]
+    if not closed and got_after != after:
+        return f"valid frames dropped on an open connection: {sorted(set(after) - answered)}"
+    if closed and got_after != after[:len(got_after)]:
+        return "valid frames dropped before the connection was closed"
+    return None
+
+
+@pytest.mark.parametrize("gap_s", [0.0, 0.005], ids=["one write", "frame by frame"])
+@pytest.mark.parametrize("bad_kind", list(BAD_MBAP))
+def test_a_bad_mbap_header_never_swallows_the_valid_frames_behind_it(bad_kind: str,
+                                                                     gap_s: float) -> None:
+    """Issue 7 audit: after one MBAP header with length 0 (or protocol id 1) the next 22 of 40
+    valid frames got no answer on the still open connection. The server must drop the bad
+    frame or close the connection at once (Modbus Messaging on TCP/IP Implementation Guide),
+    never lose the frames behind it silently. Well-framed garbage PDUs (owed silence) are mixed
+    in: they must not disturb the frames behind them either."""
+    rng = random.Random(f"{SEED}-{bad_kind}-{gap_s}")
+    start = line_state(_pristine())
+    pdus: list[tuple[int, bytes, bool]] = []  # unit, PDU, bad header
+    while len(pdus) < 48:
+        unit, pdu = next(requests(rng, 1, NODES))
+        if pdu and due(start, unit, pdu).kind != "write" and unit != 0:
+            pdus.append((unit, pdu, False))
+    pdus.insert(6, (1, PROBE, True))
+    frames = [_mbap(unit, pdu, 1 + i, **(BAD_MBAP[bad_kind] if is_bad else {}))
+              for i, (unit, pdu, is_bad) in enumerate(pdus)]
+    owed = [not is_bad and due(start, unit, pdu).kind != "silence"
+            for unit, pdu, is_bad in pdus]
+    with _served("socket", _pristine()) as server:
+        got, closed = _stream(server.port, frames, gap_s)
+        probe = _exchange(server.port, [_adu("socket", 1, PROBE, 0xBEEF)], [True])[0]
+    problem = _pipeline_problem(owed, [b for _u, _p, b in pdus], _answered_tids(got), closed)
+    assert problem is None, f"{bad_kind}: {problem}"
+    assert probe[:2] == b"\xbe\xef"  # the server still serves new connections
+
+
+def test_a_long_pipeline_in_one_write_is_answered_in_full() -> None:
+    """Many valid frames in one TCP segment (more than pymodbus's 264-byte receive buffer):
+    every one is answered, none is flushed away with the buffer."""
+    frames = [_mbap(1, PROBE, 1 + i) for i in range(200)]
+    with _served("socket", _pristine()) as server:
+        got, closed = _stream(server.port, frames, 0.0)
+    assert not closed and _answered_tids(got) == list(range(1, 201))
