@@ -21,7 +21,9 @@ What the shim adds, each for a reason the library leaves open:
 - A segment request outside a segmented transfer of its direction (an upload segment with no
   upload under way, a download segment with no download) aborts with 0x05040001, "command
   specifier not valid": the library would run into its empty buffer and answer 0x08000000
-  with a logged traceback. The shim follows the transfer from the answers it sends.
+  with a logged traceback. The shim follows the transfer from the answers it sends, and a
+  client's "abort SDO transfer" ends it (the library only notes the code and would take the
+  next segment into the aborted transfer).
 """
 
 from __future__ import annotations
@@ -39,7 +41,7 @@ from devices.od import AbortCode, DataType, OdEntry, SdoAbort, encode
 SDO_RX_BASE = 0x600  # client -> server (request)
 SDO_TX_BASE = 0x580  # server -> client (response)
 _CCS_DOWNLOAD, _CCS_UPLOAD = 0x20, 0x40
-_CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT = 0x00, 0x60
+_CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT, _CCS_ABORT = 0x00, 0x60, 0x80
 _SCS_UPLOAD_SEGMENT, _SCS_DOWNLOAD_SEGMENT, _SCS_UPLOAD, _SCS_DOWNLOAD, _SCS_ABORT = (
     0x00, 0x20, 0x40, 0x60, 0x80)
 _EXPEDITED, _SIZE_GIVEN, _LAST_SEGMENT = 0x02, 0x01, 0x01
@@ -99,6 +101,8 @@ class SdoChannel:
         request = bytes(data[:8]).ljust(8, b"\0")
         command, ccs = request[0], request[0] & 0xE0
         self._request = request
+        if ccs == _CCS_ABORT:
+            self._transfer = None  # "Abort SDO Transfer" from the client ends it (CiA 301)
         if (ccs == _CCS_UPLOAD_SEGMENT and self._transfer != _UP) or \
                 (ccs == _CCS_DOWNLOAD_SEGMENT and self._transfer != _DOWN):
             if self.server._index is None:

@@ -9,7 +9,7 @@ parametri" (0x2000), the 0x2005 / 0x2006 descriptions and "Salvataggio su flash"
 from __future__ import annotations
 
 import pytest
-from canopen_bench import CANOPEN_ENABLE, make_bench
+from canopen_bench import CANOPEN_ENABLE, h, make_bench
 
 from devices.canopen.comm_objects import VENDOR_ID
 
@@ -214,3 +214,19 @@ def test_save_requested_in_torque_runs_when_torque_goes_off() -> None:
     bench.ok(0x6040, 0, 0x0002, 2)
     bench.run(5)
     assert bench.drive.saving
+
+
+@pytest.mark.parametrize("segment", ["0B A0 0F 00 00 00 00 00", "60 00 00 00 00 00 00 00"])
+def test_the_clients_abort_ends_the_transfer(segment: str) -> None:
+    """DS 301 "Abort SDO Transfer": after the client aborts a segmented download (or upload),
+    a segment is outside any transfer: 0x05040001, and nothing is written. (The node went on
+    with the aborted download: the fuzz test found a last segment written into it.)"""
+    bench = make_bench(device_name=SEED_NAME)
+    start = "21 17 10 00 02 00 00 00" if segment.startswith("0B") else "40 08 10 00 00 00 00 00"
+    first = bench.sdo(start)
+    assert first[:2] in ("60", "41")
+    node = bench.node.node_id
+    assert bench.request(0x600 + node, h(f"80 {start[3:11]} 00 00 04 05"), 0x580 + node) is None
+    heartbeat = bench.node.heartbeat_ms
+    assert bench.sdo(segment) == f"80 {start[3:11]} 01 00 04 05"
+    assert bench.node.heartbeat_ms == heartbeat
