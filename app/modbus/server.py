@@ -125,7 +125,7 @@ class _DriveRequestHandler(ServerRequestHandler):
                 self._answer(self, request, addr)
             if not step or (request is None and not self._mbap):
                 break
-        return used
+        return len(data) if self._broken else used  # a lost stream is dropped at once
 
     def _mbap_size(self, data: bytes) -> int | None:
         """The size of the MBAP frame at the start of ``data``; None while it is incomplete.
