@@ -172,9 +172,10 @@ def _fuzz(kind: type[Bench], n: int) -> None:
             continue
         answers = [frame for cob_id, frame in sent if cob_id == SDO_TX + node_id]
         served = state in (NmtState.PRE_OPERATIONAL, NmtState.OPERATIONAL)
-        if state is NmtState.INITIALISATION or node.sdo is not sdo_seen:
+        if node.sdo is not sdo_seen or (state is NmtState.INITIALISATION and not answers):
             oracle.reset()
-            continue  # it may boot within this step: either way is right
+            continue  # it may boot within this step: silence is right, an answer is judged
+        served = served or state is NmtState.INITIALISATION
         if not served or len(answers) > 1:
             if answers:
                 failures.append(f"#{i} {state.label} {data.hex(' ')}: {len(answers)} answers")
