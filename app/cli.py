@@ -21,9 +21,12 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from app.out_paths import check_out, check_record, prepare_out
+
+if TYPE_CHECKING:
+    from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.scenario import (
     EXAMPLES_DIR,
@@ -221,7 +224,6 @@ def _serve(args: argparse.Namespace) -> int:
     if args.instructor_token is not None and not args.instructor_token.strip():
         raise RigConfigError("--instructor-token", "", "an empty token")
     access_token = Access.for_host(args.host, args.instructor_token).token
-    exercises = _exercise_files(args.exercises)
     if args.record and not args.no_record:  # before any rig starts serving
         for i in range(count):
             check_record(_record_path(args, Path(args.state_dir), "", "", i, count) or "")
@@ -229,6 +231,7 @@ def _serve(args: argparse.Namespace) -> int:
                   for i in range(count)]
     rigs = [build_rig(load_rig_spec(rig_file), state_dir=state_dir)
             for rig_file, state_dir in zip(rig_files, state_dirs, strict=True)]
+    exercises = _exercise_files(args.exercises, rigs[0])  # --rigs N: N copies of one file
     _check_listen(args, rigs)
     served, extras = [], []
     stamp = time.strftime("%Y%m%d-%H%M%S")
@@ -301,17 +304,32 @@ def _record_path(args: argparse.Namespace, state_dir: Path, name: str, stamp: st
     return str(state_dir / "recordings" / f"{safe}-{stamp}.rrd")
 
 
-def _exercise_files(directory: str | None) -> list[Path]:
-    """The exercise files of ``--exercises DIR``, each checked now (a broken one: exit 2)."""
+def _exercise_files(directory: str | None, rig: Rig) -> list[Path]:
+    """The exercise files of ``--exercises DIR``, each checked now against the rig served, as
+    ``scenario run`` checks a scenario: its commands, and its hidden fault among the rig's
+    (a broken one: exit 2; before, an unknown fault surfaced only at *Play file and start*)."""
     if directory is None:
         return []
     from app.classroom.exercise_file import load_exercise
+    from app.classroom.faults import catalog
 
     files = sorted(Path(directory).glob("*.toml"))
     if not files:
         raise RigConfigError("--exercises", "", f"no *.toml in {directory}")
+    faults = catalog(rig.describe(), rig.snapshot())
     for path in files:
-        load_exercise(path)
+        scenario, spec = load_exercise(path)
+        try:
+            check_against(scenario, rig)
+        except ScenarioError as exc:
+            raise ScenarioError(f"{path}: {exc}") from None
+        try:
+            faults.fault(spec.fault)
+        except (KeyError, ValueError) as exc:
+            known = sorted({f.id.split(":")[0] + ":..." for f in faults.faults})
+            raise ScenarioError(f"{path}: [exercise] fault: {exc.args[0] if exc.args else exc}"
+                                f" on this rig (ids start {', '.join(known)}; "
+                                "docs/classroom.md)") from None
     return files
 
 

@@ -10,6 +10,7 @@ import urllib.request
 from pathlib import Path
 from types import SimpleNamespace
 
+import pytest
 from served_process import free_ports, start_serving
 
 from app.cli import main
@@ -54,6 +55,36 @@ def test_broken_exercise_file_exits_2(tmp_path: Path, capsys: object) -> None:
     empty.mkdir()
     assert main(["--exercises", str(empty), "--state-dir", str(tmp_path / "s"),
                  "--run-for", "0"]) == 2
+
+
+EXERCISE = """[scenario]
+name = "x"
+[[step]]
+at = 0.0
+target = "{target}"
+action = "power"
+on = true
+[exercise]
+fault = "{fault}"
+"""
+
+
+@pytest.mark.parametrize(("target", "fault", "said"), [
+    ("drive", "no:such:fault", "no hidden fault 'no:such:fault' on this rig"),
+    ("drive", "fastcat:inject:coupler:0x99", "no hidden fault"),
+    ("nosuchdevice", "fastcat:inject:coupler:0x04", "nosuchdevice"),
+])
+def test_an_exercise_the_rig_cannot_play_exits_2_before_serving(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], target: str, fault: str,
+        said: str) -> None:
+    """docs/classroom.md: every file is checked at start. A fault id the rig does not have,
+    or a step the rig would refuse, passed the start and failed only at *Play file and
+    start* (a KeyError in the instructor's page)."""
+    (tmp_path / "ex.toml").write_text(EXERCISE.format(target=target, fault=fault))
+    assert main(["--exercises", str(tmp_path), "--state-dir", str(tmp_path / "s"),
+                 "--run-for", "0", "--no-record"]) == 2
+    err = capsys.readouterr().err
+    assert "ex.toml" in err and said in err and "Traceback" not in err
 
 
 def test_a_wildcard_host_is_shown_by_the_machine_name() -> None:
