@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import re
+import tempfile
 from pathlib import Path
 
 from app.rig_config import RigConfigError
@@ -30,6 +31,15 @@ def _writable_parent(path: Path, flag: str) -> None:
         raise RigConfigError(flag, "", f"{path}: {parent} is not a directory")
     if not os.access(parent, os.W_OK | os.X_OK):
         raise RigConfigError(flag, "", f"{path}: cannot write in {parent}")
+    # access() answers yes to root for any directory, /proc included, where no file can be
+    # made: a trial file (removed at once) is the answer that holds for every user.
+    try:
+        fd, trial = tempfile.mkstemp(prefix=".fieldrig-check-", dir=parent)
+    except OSError as exc:
+        raise RigConfigError(flag, "", f"{path}: cannot write in {parent}: "
+                                       f"{exc.strerror or exc}") from None
+    os.close(fd)
+    os.unlink(trial)
 
 
 def check_record(path: str | Path, flag: str = "--record") -> Path:
@@ -38,8 +48,13 @@ def check_record(path: str | Path, flag: str = "--record") -> Path:
     if target.is_dir():
         raise RigConfigError(flag, "", f"{target} is a directory; give a file name, e.g. "
                                        f"{target / 'run.rrd'}")
-    if target.exists() and not os.access(target, os.W_OK):
-        raise RigConfigError(flag, "", f"{target}: cannot write to it")
+    if target.exists():
+        try:  # open for appending writes nothing; it fails where access() may say yes (root)
+            with open(target, "ab"):
+                pass
+        except OSError as exc:
+            raise RigConfigError(flag, "", f"{target}: cannot write to it: "
+                                           f"{exc.strerror or exc}") from None
     _writable_parent(target, flag)
     return target
 
