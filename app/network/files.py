@@ -9,6 +9,8 @@ finds it at start-up, logs it and leaves the slave in PREOP, as a real master do
 
 from __future__ import annotations
 
+import codecs
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -40,18 +42,42 @@ def uses_dc(device: Any) -> bool:
     return False
 
 
+# The encoding an XML declaration names (XML 1.0 §4.3.3): TwinCAT and other configurators
+# often write ENI / ESI files as ISO-8859-1 and say so there.
+_DECLARED = re.compile(rb"<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z][A-Za-z0-9._-]*)[\"']")
+
+
+def decode_xml(data: bytes) -> str:
+    """The text of an XML file as its parser would read it: a UTF-16 or UTF-8 byte order mark,
+    else the declared encoding, else UTF-8. LookupError for an encoding Python lacks,
+    UnicodeDecodeError for bytes that are not in it."""
+    if data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        return data.decode("utf-16")
+    if data.startswith(codecs.BOM_UTF8):
+        data = data[len(codecs.BOM_UTF8):]
+    declared = _DECLARED.match(data)
+    return data.decode(declared.group(1).decode("ascii") if declared else "utf-8")
+
+
 def _read(path: Path, rig_source: str, key: str) -> str:
     from app.rig_config import RigConfigError, not_utf8
 
     try:
         if path.stat().st_size > MAX_BYTES:
             raise RigConfigError(str(path), "", f"larger than {MAX_BYTES} bytes")
-        return path.read_text(encoding="utf-8")
+        return decode_xml(path.read_bytes())
     except OSError as exc:
         raise RigConfigError(rig_source, key, f"cannot read {path}: "
                                               f"{exc.strerror or exc}") from None
+    except LookupError as exc:
+        raise RigConfigError(str(path), "", f"declares an encoding Python does not know: "
+                                            f"{exc}") from None
     except UnicodeDecodeError as exc:
-        raise RigConfigError(str(path), "", not_utf8(exc)) from None
+        if exc.encoding.replace("-", "").lower() in ("utf8", "utf8sig"):
+            raise RigConfigError(str(path), "", not_utf8(exc)) from None
+        raise RigConfigError(str(path), "", f"not {exc.encoding} text as it declares: byte "
+                                            f"0x{exc.object[exc.start]:02x} at offset "
+                                            f"{exc.start}") from None
 
 
 def resolve(rig_source: str, name: str) -> Path:

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from app.cli import main
-from app.rig_config import DEFAULT_RIG
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 
 ROOT = Path(__file__).resolve().parents[2]
 UTF16 = b"\xff\xfe[scenario]\n"  # an editor's "Unicode" save: a byte order mark first
@@ -79,6 +79,42 @@ def test_a_network_description(tmp_path: Path, capsys: pytest.CaptureFixture[str
     line = _run(["--rig", str(tmp_path / "rig.toml"), "--state-dir", str(tmp_path / "s"),
                  "--no-record", "--run-for", "0"], capsys)
     assert line == f"fieldrig: error: {eni}: not UTF-8 text: byte 0xff at offset 16"
+
+
+def _rig_with_eni(tmp_path: Path, eni: Path) -> Path:
+    rig = DEFAULT_RIG.read_text(encoding="utf-8")
+    rig = re.sub(r'(?m)^eni = ".*"$', f'eni = "{eni}"', rig)
+    rig = re.sub(r'(?m)^mapping = ".*"$',
+                 f'mapping = "{(DEFAULT_RIG.parent / "../networks/default.mapping.xml")}"', rig)
+    (tmp_path / "rig.toml").write_text(rig, encoding="utf-8")
+    return tmp_path / "rig.toml"
+
+
+@pytest.mark.parametrize("encoding", ["ISO-8859-1", "windows-1252", "UTF-16"])
+def test_a_network_description_in_the_encoding_it_declares(tmp_path: Path,
+                                                           encoding: str) -> None:
+    """XML 1.0 §4.3.3: a file says its encoding in its declaration, and configurators write
+    ENI files as ISO-8859-1 (a German device name with an umlaut). It was read as UTF-8 and
+    refused as "not UTF-8 text"; it is now read as declared, and the rig builds."""
+    shipped = (DEFAULT_RIG.parent / "../networks/default.eni.xml").read_text(encoding="utf-8")
+    text = shipped.replace('encoding="utf-8"', f'encoding="{encoding}"', 1)
+    text = text.replace("<!-- Generated", "<!-- Gerät, generated", 1)
+    assert "Gerät" in text and encoding in text
+    eni = tmp_path / "latin.eni.xml"
+    eni.write_bytes(text.encode(encoding))
+    rig = build_rig(load_rig_spec(_rig_with_eni(tmp_path, eni)), state_dir=None)
+    assert "master" in rig.devices
+
+
+def test_a_network_description_not_in_its_declared_encoding(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    eni = tmp_path / "bad.eni.xml"
+    eni.write_bytes(b'<?xml version="1.0" encoding="ascii"?><EtherCATConfig>\xe9'
+                    b"</EtherCATConfig>")
+    line = _run(["--rig", str(_rig_with_eni(tmp_path, eni)), "--state-dir",
+                 str(tmp_path / "s"), "--no-record", "--run-for", "0"], capsys)
+    assert line == (f"fieldrig: error: {eni}: not ascii text as it declares: byte 0xe9 at "
+                    "offset 54")
 
 
 def test_the_real_cli(tmp_path: Path) -> None:
