@@ -29,15 +29,19 @@ def _writable_parent(path: Path, flag: str) -> None:
         parent = parent.parent
     if not parent.is_dir():
         raise RigConfigError(flag, "", f"{path}: {parent} is not a directory")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise RigConfigError(flag, "", f"{path}: cannot write in {parent}")
-    # access() answers yes to root for any directory, /proc included, where no file can be
-    # made: a trial file (removed at once) is the answer that holds for every user.
+    _can_make_files(parent, flag, f"{path}: cannot write in {parent}")
+
+
+def _can_make_files(directory: Path, flag: str, refused: str) -> None:
+    """A file can be made in ``directory``. access() answers yes to root for any directory,
+    /proc and /sys included, where no file can be made: a trial file (removed at once) is
+    the answer that holds for every user."""
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise RigConfigError(flag, "", refused)
     try:
-        fd, trial = tempfile.mkstemp(prefix=".fieldrig-check-", dir=parent)
+        fd, trial = tempfile.mkstemp(prefix=".fieldrig-check-", dir=directory)
     except OSError as exc:
-        raise RigConfigError(flag, "", f"{path}: cannot write in {parent}: "
-                                       f"{exc.strerror or exc}") from None
+        raise RigConfigError(flag, "", f"{refused}: {exc.strerror or exc}") from None
     os.close(fd)
     os.unlink(trial)
 
@@ -65,8 +69,7 @@ def check_out(path: str | Path) -> Path:
     if out.exists():
         if not out.is_dir():
             raise RigConfigError("--out", "", f"{out} is a file, not a directory")
-        if not os.access(out, os.W_OK | os.X_OK):
-            raise RigConfigError("--out", "", f"{out}: cannot write in it")
+        _can_make_files(out, "--out", f"{out}: cannot write in it")
     else:
         _writable_parent(out, "--out")
     return out

@@ -97,13 +97,15 @@ def test_a_previous_run_s_files_are_replaced_and_others_kept(
     assert '"caption"' in (out_dir / "events.jsonl").read_text(encoding="utf-8")
 
 
-@pytest.mark.parametrize("flag", ["--record", "--out"])
+@pytest.mark.parametrize(("flag", "path"), [("--record", "/proc/fieldrig-check.rrd"),
+                                            ("--out", "/proc/fieldrig-out"),
+                                            ("--out", "/proc")])
 def test_a_place_no_file_can_be_made_is_refused_for_root_too(
-        scenario: Path, capsys: pytest.CaptureFixture[str], flag: str) -> None:
+        scenario: Path, capsys: pytest.CaptureFixture[str], flag: str, path: str) -> None:
     """access() says yes to root for /proc, where no file can be made: the recorder's file
-    sink then failed after the run had started (a RuntimeError traceback, exit 1). A trial
-    file is the check that holds for every user (CI runs as root)."""
-    path = "/proc/fieldrig-check.rrd" if flag == "--record" else "/proc/fieldrig-out"
+    sink then failed after the run had started (a RuntimeError traceback, exit 1), and so did
+    events.jsonl in an existing --out there. A trial file is the check that holds for every
+    user (CI runs as root)."""
     code = main(["scenario", "run", str(scenario), flag, path, "--quiet"])
     err = one_error_line(capsys.readouterr().err)
     assert code == 2 and flag in err and "/proc" in err
