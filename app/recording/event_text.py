@@ -27,12 +27,14 @@ def _emergency(r: dict[str, Any]) -> str:
     return f"EMCY {r['code']} register {r['register']} data [{r['data']}]"
 
 
-def _al_status(r: dict[str, Any]) -> str:
-    return f"AL status code {r['code']}: {describe_al_status_code(int(r['code'], 16))}"
-
-
 # Reads an AL status code as the device that set it reads it: (device id, code) -> text.
 AlStatusReader = Callable[[str, int], str]
+
+
+def _al_status(r: dict[str, Any], device: str = "", read: AlStatusReader | None = None) -> str:
+    code = int(r["code"], 16)
+    meaning = read(device, code) if read is not None else describe_al_status_code(code)
+    return f"AL status code {r['code']}: {meaning}"
 
 
 def al_status_reader(devices: Mapping[str, Any]) -> AlStatusReader:
@@ -87,8 +89,7 @@ def text(event: Event, record: dict[str, Any], al_status: AlStatusReader | None 
     when the event is recorded (a FastCAT module alarm's text takes its module code from
     0x5400 at that moment); without it, the ETG text."""
     if al_status is not None and event.kind == "al_status":
-        code = int(record["code"], 16)
-        return f"AL status code {record['code']}: {al_status(event.device, code)}"
+        return _al_status(record, event.device, al_status)
     fmt = FORMATS.get(event.kind)
     if fmt is None:
         extra = ", ".join(f"{k}={v}" for k, v in record.items()
