@@ -129,10 +129,12 @@ def _in_range(low: float, high: float) -> Callable[[Any], str | None]:
     return lambda v: None if low <= v <= high else f"must be between {low} and {high}, got {v}"
 
 
-def not_utf8(exc: UnicodeDecodeError) -> str:
-    """Why a file is refused when it is not UTF-8 (an editor's Latin-1 or UTF-16 save): the
-    first bad byte and its offset, so that it can be found in a hex view."""
-    return f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} at offset {exc.start}"
+def not_utf8(exc: UnicodeDecodeError, declared: str | None = None) -> str:
+    """Why a file is refused when it is not UTF-8 (an editor's Latin-1 or UTF-16 save), or not
+    in the encoding it ``declared`` (an XML declaration): the first bad byte and its offset,
+    so that it can be found in a hex view."""
+    what = f"{declared} text as it declares" if declared else "UTF-8 text"
+    return f"not {what}: byte 0x{exc.object[exc.start]:02x} at offset {exc.start}"
 
 
 def load_rig_spec(path: str | Path) -> RigSpec:

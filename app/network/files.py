@@ -73,11 +73,9 @@ def _read(path: Path, rig_source: str, key: str) -> str:
         raise RigConfigError(str(path), "", f"declares an encoding Python does not know: "
                                             f"{exc}") from None
     except UnicodeDecodeError as exc:
-        if exc.encoding.replace("-", "").lower() in ("utf8", "utf8sig"):
-            raise RigConfigError(str(path), "", not_utf8(exc)) from None
-        raise RigConfigError(str(path), "", f"not {exc.encoding} text as it declares: byte "
-                                            f"0x{exc.object[exc.start]:02x} at offset "
-                                            f"{exc.start}") from None
+        utf8 = exc.encoding.replace("-", "").lower() in ("utf8", "utf8sig")
+        raise RigConfigError(str(path), "", not_utf8(exc, None if utf8 else exc.encoding)) \
+            from None
 
 
 def resolve(rig_source: str, name: str) -> Path:
