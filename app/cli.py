@@ -24,9 +24,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from app.out_paths import check_out, check_record, prepare_out
-
-if TYPE_CHECKING:
-    from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.scenario import (
     EXAMPLES_DIR,
@@ -35,6 +32,9 @@ from app.scenario import (
     load_scenario,
     run_scenario,
 )
+
+if TYPE_CHECKING:
+    from app.rig import Rig
 
 EXIT_BAD_INPUT = 2
 EXIT_SCENARIO_FAILED = 1
@@ -352,7 +352,7 @@ def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     return server
 
 
-def _check_listen(args: argparse.Namespace, rigs: list[Any]) -> None:
+def _check_listen(args: argparse.Namespace, rigs: list[Rig]) -> None:
     """Every port the rigs will listen on, on ``--host``, before the first serves (viser hangs
     on a host it cannot bind, and moves on from a port in use: app/listen_check.py)."""
     from app.listen_check import ListenError, check_listen
@@ -381,7 +381,7 @@ def _check_can_channel(args: argparse.Namespace) -> None:
         raise RigConfigError("--can-channel", "", str(exc)) from None
 
 
-def _modbus_drives(rig: Any) -> list[Any]:
+def _modbus_drives(rig: Rig) -> list[Any]:
     from devices.servo.drive import ServoDrive
 
     return [d for d in rig.devices.values() if isinstance(d, ServoDrive)]
