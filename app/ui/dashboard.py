@@ -133,10 +133,9 @@ class Dashboard:
         self._wake = threading.Event()  # set by the runtime's frame listener
         self._thread: threading.Thread | None = None
         self._event_seq = 0
+        # The last frame whose views are written: set at the end of a tick, as tests and the
+        # screenshot tool read the widgets as soon as it moves (rendered_seq).
         self._frame_seq = -1
-        # Published only once the frame's views are written (tests and the screenshot tool
-        # read the widgets as soon as it moves; _frame_seq moves at the start of a tick).
-        self._drawn_seq = -1
         self._t_us = -1
         self._events_untold = False  # events taken while no browser was there (take_events)
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
@@ -399,7 +398,7 @@ class Dashboard:
                 events = self._take_events()
                 fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events \
                     or self._events_untold
-                self._frame_seq, self._t_us, self._events_untold = frame.seq, frame.t_us, False
+                self._t_us, self._events_untold = frame.t_us, False
                 if fresh:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
                     for scene, snap in zip(self._scenes, snaps, strict=True):
@@ -421,7 +420,7 @@ class Dashboard:
                     self._drives.tick(time.monotonic(), frame.t_us)
                 self.scenario_player.update(frame)  # scenario player, code decoder
                 self.decoder.update()
-            self._drawn_seq = frame.seq
+            self._frame_seq = frame.seq
 
     def take_events(self) -> None:
         """The new events into the logs and the caption, without updating the views (no
@@ -485,7 +484,7 @@ class Dashboard:
     @property
     def rendered_seq(self) -> int:
         """Sequence number of the last frame written to the handles (tests wait on it)."""
-        return self._drawn_seq
+        return self._frame_seq
 
     def scene_colors(self) -> dict[str, tuple[int, int, int]]:
         """LED colours shown for the first coupler (tests)."""
