@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from devices.device import CommandError
+from devices.ethercat import describe_al_status_code
 from devices.events import fmt_hex
 from devices.fastcat.objects import MAX_MODULES
 
@@ -245,6 +246,14 @@ def decode_al_status(code: int, word: int | None = None) -> ManufacturerAlStatus
         known = MODULE_CODES.get(word >> 16 & 0xFF)
     return ManufacturerAlStatus(module, None, known)
 
+
+
+def al_status_meaning(code: int, word: int | None = None) -> str:
+    """What an AL status code of this coupler means: a 0x80XX read by :func:`decode_al_status`
+    (``word``: 0x5400), any other code by its ETG text. The model's own reading and the State
+    tab's (from the snapshot) both come from here."""
+    found = decode_al_status(code, word)
+    return found.text if found is not None else describe_al_status_code(code)
 
 # AL status code when a latched alarm makes the coupler refuse PREOP -> SAFEOP or SAFEOP -> OP.
 # A configuration mismatch is what §7.7 0x0052 describes ("connection to an unexpected device.

@@ -17,7 +17,6 @@ from typing import TYPE_CHECKING, Any
 
 from devices.device import CommandError
 from devices.ethercat import AlState, emergency_frame
-from devices.ethercat import describe_al_status_code as generic_al_status_text
 from devices.events import AlarmChanged, EmergencySent, Event, fmt_hex
 from devices.fastcat.alarms import (
     COUPLER,
@@ -25,7 +24,7 @@ from devices.fastcat.alarms import (
     EMERGENCY_REGISTER,
     MODULE,
     Alarm,
-    decode_al_status,
+    al_status_meaning,
     parse_fault,
 )
 from devices.fastcat.catalog import module_type
@@ -287,6 +286,5 @@ class FaultsMixin:
     def describe_al_status_code(self, code: int) -> str:
         """The master's text for this coupler's AL status code: 0x80XX read as the State and
         Codes tabs read it (§7.7), the module code of a module alarm from 0x5400."""
-        found = decode_al_status(code, self.od_emergency_word())
-        return found.text if found is not None else generic_al_status_text(code)
+        return al_status_meaning(code, self.od_emergency_word())
 

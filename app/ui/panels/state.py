@@ -18,8 +18,8 @@ from typing import Any
 import viser
 
 from app.ui.style import badge, esc, kv_table
-from devices.ethercat import AlState, describe_al_status_code
-from devices.fastcat.alarms import decode_al_status
+from devices.ethercat import AlState
+from devices.fastcat.alarms import al_status_meaning
 
 
 def al_status_text(value: int) -> str:
@@ -35,8 +35,7 @@ def al_status_text(value: int) -> str:
 def al_code_text(code: int, word: int | None = None) -> str:
     """The meaning of an AL status code; a FastCAT 0x80XX names the module and the coupler
     code, or for a module alarm its module code when 0x5400 (``word``) holds it."""
-    found = decode_al_status(code, word)
-    return found.text if found is not None else describe_al_status_code(code)
+    return al_status_meaning(code, word)
 
 
 def alarm_text(alarm: Mapping[str, Any] | None) -> str:
