@@ -53,6 +53,14 @@ class Sim:
     def kinds(self, kind: str) -> list[dict]:
         return [e.to_record() for e in self.events if e.kind == kind]
 
+    def run_into_ls1(self) -> None:
+        """Mode 3 (velocity), R13 = -150000, R00 = 3: the carriage runs into the negative limit
+        switch and raises alarm 20 LS1 (seed 004 ch. 5)."""
+        self.w(1, 3)
+        self.w(13, -150000)
+        self.w(0, 3)
+        self.run_until(lambda: self.drive.read_register(46) == 20, 5_000)
+
 
 def make_sim(config: DriveConfig | None = None, flash: MemoryFlash | None = None,
              boot: bool = True) -> Sim:

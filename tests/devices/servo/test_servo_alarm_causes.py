@@ -19,7 +19,7 @@ def _power_cycle(sim: Sim) -> None:
 
 
 def test_an_injected_cause_outlasts_a_power_cycle() -> None:
-    """/tmp/s13/rv-drive/t17.py: inject 8, a refused reset, a power cycle, enable."""
+    """A review's run: inject 8, a refused reset, a power cycle, enable."""
     sim = make_sim()
     drive = sim.drive
     drive.apply("inject_alarm", {"code": POSITION_SENSOR})
@@ -59,10 +59,7 @@ def test_a_cleared_cause_does_not_come_back() -> None:
 def test_an_event_alarm_does_not_come_back() -> None:
     """A limit switch alarm (20) has no lasting cause: a power cycle clears it."""
     sim = make_sim()
-    sim.w(1, 3)
-    sim.w(13, -150000)
-    sim.w(0, 3)
-    sim.run_until(lambda: sim.drive.read_register(46) == 20, 5_000)
+    sim.run_into_ls1()
     _power_cycle(sim)
     assert sim.drive.read_register(46) == 0
     assert sim.drive.state is State.SWITCH_ON_DISABLED

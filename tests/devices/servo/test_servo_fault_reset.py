@@ -71,12 +71,9 @@ def test_a_reset_during_the_fault_reaction_changes_nothing(
 
 
 def test_the_reviewers_run_into_ls1_keeps_alarm_20_until_fault() -> None:
-    """/tmp/s13/rv-drive/t13.py: R01 = 3, R13 = -150000, R00 = 3, run into LS1, reset."""
+    """A review's run: R01 = 3, R13 = -150000, R00 = 3, run into LS1, reset at once."""
     sim = make_sim()
-    sim.w(1, 3)
-    sim.w(13, -150000)
-    sim.w(0, 3)
-    sim.run_until(lambda: sim.drive.read_register(46) == 20, 5_000)
+    sim.run_into_ls1()
     assert sim.drive.state is State.FAULT_REACTION_ACTIVE
     sim.w(0, 0x0B)
     sim.w(0, 0x03)

@@ -35,7 +35,7 @@ def _in_torque_ien_low(fieldbus: str = "modbus") -> Sim:
 @pytest.mark.parametrize(("fieldbus", "trigger"), [
     ("modbus", "0x3802"), ("canopen", "0x1010"), ("ethercat", "0x2007")])
 def test_a_save_runs_with_ien_low_and_ten_high(fieldbus: str, trigger: str) -> None:
-    """/tmp/s13/rv-drive/t15.py: the save used to wait for ever."""
+    """A review's run: a save asked with IEN low in torque used to wait for ever."""
     sim = _in_torque_ien_low(fieldbus)
     drive = sim.drive
     if trigger == "0x3802":

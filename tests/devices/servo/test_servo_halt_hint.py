@@ -34,7 +34,7 @@ def _stopped(fieldbus: str) -> Sim:
 
 @pytest.mark.parametrize(("fieldbus", "answer"), HINTS)
 def test_jog_after_stop_names_the_stop_bit_of_the_fieldbus(fieldbus: str, answer: str) -> None:
-    """/tmp/s13/rv-drive/t14.py."""
+    """A review's run: Stop, then Jog."""
     sim = _stopped(fieldbus)
     assert sim.drive.apply("jog", {"direction": -1}) == answer
     sim.run(300)
