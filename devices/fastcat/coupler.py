@@ -475,7 +475,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
                 "description": alarm.info.description, "module": alarm.module,
                 "resettable": alarm.resettable,
                 "cause_present": alarm in self._present_causes()},
-            "injected": [{"fault": a.info.symbol, "module": a.module or None}
+            "injected": [{"fault": a.info.symbol, "code": a.code, "module": a.module or None}
                          for a in self.injected],
             "link": self.link, "tbus_low": self.tbus_low,
             # §6.17 0x5200:1, the level the master or the dashboard last wrote. Without supply

@@ -82,8 +82,12 @@ def test_state_rows_show_fault_emergency_word_and_alarm() -> None:
             "cnf": {"pressed": False, "held_s": 0.0, "phase": "idle"},
             "scan": {"active": False, "done": 7, "total": 7},
             "stored_config": ["DB16"], "detected": ["DB16"], "rotary_switch": 3,
-            "rotary_read": 1, "address_check": True}
+            "rotary_read": 1, "address_check": True,
+            "injected": [{"fault": "MISSING_NODE_ANSWER", "code": 4, "module": 2},
+                         {"fault": "ADDRESS_ERROR", "code": 0x20, "module": None}]}
     rows = dict(state_rows(snap))
+    assert rows["Injected"] == "0x04 MISSING_NODE_ANSWER on module 2, 0x20 ADDRESS_ERROR"
+    assert "none" in dict(state_rows({**snap, "injected": []}))["Injected"]
     assert "TRUE" in rows["Fault active"]
     assert rows["0x5400"] == "0x04000002"
     assert rows["AL status"] == "0x0012 PREOP + error"

@@ -103,7 +103,18 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         ("Configuration", config),
         ("Rotary switch", esc(rotary_text(snap))),
         ("Causes", esc(", ".join(causes)) if causes else '<span class="fr-muted">none</span>'),
+        ("Injected", injected_text(snap.get("injected") or [])),
     ]
+
+
+def injected_text(injected: list[Mapping[str, Any]]) -> str:
+    """The causes an instructor injected: without this row an injected alarm read "cause
+    present" next to "Causes: none" (the row of the physical causes)."""
+    if not injected:
+        return '<span class="fr-muted">none</span>'
+    return esc(", ".join(f"0x{int(i.get('code', 0)):02X} {i.get('fault', '?')}"
+                         + (f" on module {i['module']}" if i.get("module") else "")
+                         for i in injected))
 
 
 def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: int) -> str:
