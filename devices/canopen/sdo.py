@@ -109,7 +109,9 @@ class SdoChannel:
                 self.server._index, self.server._subindex = 0, 0
             self.server.abort(int(AbortCode.INVALID_COMMAND))
             return
-        if ccs in (_CCS_DOWNLOAD, _CCS_UPLOAD):
+        if ccs not in (_CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT, _CCS_ABORT):
+            # Every request but a segment names its object, and an abort of it must name
+            # that object (ch. 4), also a block transfer or an unknown command specifier.
             self.server._index = int.from_bytes(request[1:3], "little")
             self.server._subindex = request[3]
         elif self.server._index is None:

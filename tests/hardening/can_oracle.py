@@ -125,6 +125,8 @@ class SdoOracle:
                 return self._initiate_download(node, request, answer, index, sub)
             return self._initiate_upload(node, answer, index, sub)
         if ccs in (CCS_BLOCK_DOWNLOAD, CCS_INVALID):
+            if answer[1:4] != request[1:4]:  # the abort names the request's object (ch. 4)
+                return "the abort names another object"
             return _abort_is(answer, AbortCode.INVALID_COMMAND, "a block download / ccs 7")
         direction = "up" if ccs == CCS_UPLOAD_SEGMENT else "down"
         if transfer is None or transfer.direction != direction:

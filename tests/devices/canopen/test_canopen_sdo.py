@@ -98,6 +98,20 @@ def _state(bench) -> tuple:
             [p.describe() for p in (*node.rpdos, *node.tpdos)])
 
 
+@pytest.mark.parametrize("request_hex", [
+    "E0 00 10 00 00 00 00 00",  # no such command specifier
+    "C0 17 10 00 00 00 00 00",  # block download (not supported; a block upload switches to
+                                # the segmented protocol, as CiA 301 allows)
+])
+def test_an_unknown_command_aborts_naming_its_own_object(request_hex: str) -> None:
+    """Ch. 4: the abort "deve avere anche l'indirizzo della voce del dizionario relativo
+    all'oggetto che ha causato l'interruzione": the request's, not the last transfer's."""
+    _script(make_bench(device_name=SEED_NAME), [
+        ("40 18 10 01 00 00 00 00", "43 18 10 01 8F 07 00 00"),
+        (request_hex, f"80 {request_hex[3:11]} 01 00 04 05"),
+    ])
+
+
 def test_toggle_bit_not_alternated() -> None:
     _script(make_bench(device_name=SEED_NAME), [
         ("40 08 10 00 00 00 00 00", "41 08 10 00 1A 00 00 00"),
