@@ -75,6 +75,7 @@ class AbortCode(enum.IntEnum):
     UNSUPPORTED_ACCESS = 0x0601_0000
     WRITE_ONLY = 0x0601_0001
     READ_ONLY = 0x0601_0002
+    CA_VARIABLE_LENGTH = 0x0601_0004  # ETG.1000.6: complete access to a variable-length object
     NO_OBJECT = 0x0602_0000
     NOT_MAPPABLE = 0x0604_0041
     PDO_TOO_LONG = 0x0604_0042
@@ -98,6 +99,8 @@ ABORT_TEXT: dict[AbortCode, str] = {
     AbortCode.UNSUPPORTED_ACCESS: "Unsupported access to an object",
     AbortCode.WRITE_ONLY: "Attempt to read a write only object",
     AbortCode.READ_ONLY: "Attempt to write a read only object",
+    AbortCode.CA_VARIABLE_LENGTH: "SDO complete access not supported for objects of variable "
+                                  "length",
     AbortCode.NO_OBJECT: "Object does not exist in the object dictionary",
     AbortCode.NOT_MAPPABLE: "Object cannot be mapped to the PDO",
     AbortCode.PDO_TOO_LONG: "The number and length of the objects to be mapped would exceed "

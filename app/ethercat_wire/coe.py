@@ -15,7 +15,10 @@ access and range checks, its DS301 abort codes). Layouts are ETG.1000.6 as SOEM 
   service-3 response for a malformed answer (``PacketError(1, 3)``);
 - the sizes are the object's type: a download of the wrong length aborts 0x0607001x
   (the drive keeps its own ch. 4 length rule through its face);
-- complete access is not served (abort 0x06010000), so no face announces it.
+- complete access (bit 0x10 of an initiate) is served for a face whose CoE details announce
+  it (bit 0x20), else aborted 0x06010000; the whole object's layout, and the rule that a
+  download is all or nothing, are :mod:`app.ethercat_wire.complete_access`'s. The answers echo
+  the bit; a long one is segmented as any other.
 
 The command specifiers are the ``canopen`` library's constants. Its ``SdoServer`` is not reused:
 it serves CAN frames (8 bytes, 7-byte segments, a toggle per CAN segment) while a CoE normal
@@ -32,7 +35,8 @@ from typing import Any
 
 from canopen.sdo import constants as cs
 
-from app.ethercat_wire.faces.base import MAILBOX_SIZE, Face, NoAnswer
+from app.ethercat_wire import complete_access
+from app.ethercat_wire.faces.base import COE_COMPLETE_ACCESS, MAILBOX_SIZE, Face, NoAnswer
 from devices.od import AbortCode, Access, OdEntry, SdoAbort
 
 logger = logging.getLogger(__name__)
@@ -94,6 +98,7 @@ class _Download:
     size: int
     data: bytearray = field(default_factory=bytearray)
     toggle: int = 0
+    whole: bool = False  # a complete access
 
 
 class CoeServer:
@@ -163,10 +168,11 @@ class CoeServer:
         if ccs == cs.REQUEST_ABORTED:
             return b""  # never sent: the caller drops an empty answer
         try:
-            if command & COMPLETE_ACCESS:
+            whole = bool(command & COMPLETE_ACCESS)
+            if whole and (sub > 1 or not self.face.coe_details & COE_COMPLETE_ACCESS):
                 raise SdoAbort(AbortCode.UNSUPPORTED_ACCESS, index, sub)
             if ccs == cs.REQUEST_UPLOAD:
-                return self._initiate_upload(index, sub)
+                return self._initiate_upload(index, sub, whole)
             if ccs == cs.REQUEST_DOWNLOAD:
                 return self._initiate_download(command, index, sub, body)
             raise SdoAbort(AbortCode.INVALID_COMMAND, index, sub)
@@ -182,17 +188,27 @@ class CoeServer:
     def _response(self, command: int, index: int, sub: int, data: bytes = b"") -> bytes:
         return SDO_HEADER.pack(COE_SDO_RESPONSE << 12, command, index, sub) + data
 
-    def _initiate_upload(self, index: int, sub: int) -> bytes:
-        data = self.face.upload_raw(self.model, index, sub)
+    def _initiate_upload(self, index: int, sub: int, whole: bool = False) -> bytes:
+        if whole:
+            data = complete_access.upload(self.face, self.model, index, sub)
+        else:
+            data = self.face.upload_raw(self.model, index, sub)
+        ca = COMPLETE_ACCESS if whole else 0
         if 0 < len(data) <= 4:
             command = cs.RESPONSE_UPLOAD | cs.EXPEDITED | cs.SIZE_SPECIFIED | (4 - len(data)) << 2
-            return self._response(command, index, sub, data.ljust(4, b"\0"))
+            return self._response(command | ca, index, sub, data.ljust(4, b"\0"))
         room = self.mailbox_size - MBX_HEADER.size - SDO_FIXED
         first, rest = data[:room], data[room:]
         if rest:
             self._upload = _Upload(index, sub, rest)
-        return self._response(cs.RESPONSE_UPLOAD | cs.SIZE_SPECIFIED, index, sub,
+        return self._response(cs.RESPONSE_UPLOAD | cs.SIZE_SPECIFIED | ca, index, sub,
                               struct.pack("<I", len(data)) + first)
+
+    def _write(self, whole: bool, index: int, sub: int, data: bytes) -> None:
+        if whole:
+            complete_access.download(self.face, self.model, index, sub, data)
+        else:
+            self.face.download_raw(self.model, index, sub, data)
 
     def _segment_upload(self, command: int) -> bytes:
         up = self._upload
@@ -214,21 +230,24 @@ class CoeServer:
         return coe_header(COE_SDO_RESPONSE) + bytes((reply,)) + chunk
 
     def _initiate_download(self, command: int, index: int, sub: int, body: bytes) -> bytes:
+        whole = bool(command & COMPLETE_ACCESS)
+        answer = cs.RESPONSE_DOWNLOAD | (COMPLETE_ACCESS if whole else 0)
         if command & cs.EXPEDITED:
             n = 4 - (command >> 2 & 0x03) if command & cs.SIZE_SPECIFIED else 4
-            self.face.download_raw(self.model, index, sub, body[6:6 + n])
-            return self._response(cs.RESPONSE_DOWNLOAD, index, sub, bytes(4))
+            self._write(whole, index, sub, body[6:6 + n])
+            return self._response(answer, index, sub, bytes(4))
         if len(body) < SDO_FIXED:
             raise SdoAbort(AbortCode.INVALID_COMMAND, index, sub)
         size = struct.unpack_from("<I", body, 6)[0]
         data = body[SDO_FIXED:]
         if len(data) >= size:
-            self.face.download_raw(self.model, index, sub, data[:size])
+            self._write(whole, index, sub, data[:size])
         else:  # segments follow: refuse a missing or read-only object now, not at the end
-            if not self.face.entry(self.model, index, sub).access.writable:
+            entry = self.face.entry(self.model, index, sub)
+            if not whole and not entry.access.writable:  # a whole object may have RW subs
                 raise SdoAbort(AbortCode.READ_ONLY, index, sub)
-            self._download = _Download(index, sub, size, bytearray(data))
-        return self._response(cs.RESPONSE_DOWNLOAD, index, sub, bytes(4))
+            self._download = _Download(index, sub, size, bytearray(data), whole=whole)
+        return self._response(answer, index, sub, bytes(4))
 
     def _segment_download(self, command: int, body: bytes) -> bytes:
         down = self._download
@@ -248,7 +267,7 @@ class CoeServer:
             if len(down.data) != down.size:
                 return self.abort(down.index, down.sub, AbortCode.TYPE_MISMATCH)
             try:
-                self.face.download_raw(self.model, down.index, down.sub, bytes(down.data))
+                self._write(down.whole, down.index, down.sub, bytes(down.data))
             except SdoAbort as exc:
                 return self.abort(down.index, down.sub, exc.code)
         return coe_header(COE_SDO_RESPONSE) + bytes((cs.RESPONSE_SEGMENT_DOWNLOAD | toggle,)) \

@@ -47,6 +47,7 @@ RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
 SM_COMM_TYPE = 0x1C00
 SM_TYPES = (1, 2, 3, 4)  # ETG.1000.6 0x1C00: mailbox out, mailbox in, outputs, inputs
 COE_SDO, COE_SDO_INFO, COE_PDO_ASSIGN, COE_PDO_CONFIG = 0x01, 0x02, 0x04, 0x08  # SII GENERAL
+COE_COMPLETE_ACCESS = 0x20  # the same byte (ETG.2010); the CoE server serves it only then
 
 
 def _sm_type_objects(od: ObjectDictionary | None = None) -> ObjectDictionary:
