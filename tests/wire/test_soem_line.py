@@ -3,7 +3,8 @@
 Issue 8 acceptance, end to end: this test process is process A (rig + runtime + the bridge,
 which spawns process B, the emulated ESCs, on one end of a veth pair); pysoem runs in a third
 process on the other end (it holds the GIL during its calls: ethercat-wire-notes.md). Checked:
-config_init finds every slave with its name and 0x1018 identity; config_map; PREOP -> SAFEOP ->
+config_init finds every slave with its name and 0x1018 identity; config_map (the TRS-CAT's
+mapping by complete access, seed 001 §9.3); PREOP -> SAFEOP ->
 OP; cycles at 4 ms with no working-counter error (10,000 with --full, CI_CYCLES without);
 outputs written by the master reach the model (seed 000 §6.28, DO16) and inputs changed in the
 model reach the master (§6.24, DI16); sdo_read 0x1018 on every slave; the FastCAT fault of
@@ -179,11 +180,11 @@ def master_main(iface: str, conn) -> None:
                 late += 1
         return Cycles(wrong, lost, late, [bytes(s.input) for s in master.slaves])
 
-    def sdo_read(pos, index, sub):
-        return bytes(master.slaves[pos].sdo_read(index, sub))
+    def sdo_read(pos, index, sub, ca=False):
+        return bytes(master.slaves[pos].sdo_read(index, sub, ca=ca))
 
-    def sdo_write(pos, index, sub, data):
-        master.slaves[pos].sdo_write(index, sub, data)
+    def sdo_write(pos, index, sub, data, ca=False):
+        master.slaves[pos].sdo_write(index, sub, data, ca=ca)
 
     def emergency(pos, timeout_s):
         end = time.monotonic() + timeout_s
@@ -309,6 +310,24 @@ def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
     master("sdo_write", 1, 0xF030, 2, original)
     state, _ = master("slave_state", 1, AlState.PREOP | 0x10, 3.0)  # acknowledge the error
     assert state & 0x0F == AlState.PREOP
+
+
+def test_trscat_objects_read_and_written_whole_by_complete_access(session):
+    """Seed 001 §9.3: the TRS-CAT serves complete access (and announces it, so config_map
+    below reads its mapping with ecx_readPDOmapCA). SOEM's own requests: 0x1C12 / 0x1C13 whole
+    = sub 0 padded to 16 bits + the subs; 0xF030 written whole in PRE-OP (the expansion left
+    out), 0x1C12 follows (§9.3.2), then the list put back."""
+    _, _, master, _ = session
+    for index in (0x1C12, 0x1C13):
+        n = master("sdo_read", 1, index, 0)[0]
+        subs = b"".join(master("sdo_read", 1, index, s) for s in range(1, n + 1))
+        assert master("sdo_read", 1, index, 0, True) == bytes((n, 0)) + subs
+    f030 = master("sdo_read", 1, 0xF030, 0, True)
+    assert f030[:2] == b"\x02\x00"
+    master("sdo_write", 1, 0xF030, 0, b"\x01\x00" + f030[2:6], True)  # the integrated module
+    assert master("sdo_read", 1, 0x1C12, 0, True) == struct.pack("<BBH", 1, 0, 0x1600)
+    master("sdo_write", 1, 0xF030, 0, f030, True)
+    assert master("sdo_read", 1, 0xF030, 0, True) == f030
 
 
 def test_map_and_bring_the_line_to_op(session):

@@ -11,7 +11,13 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from app.ethercat_wire.faces.base import COE_SDO, COE_SDO_INFO, Face, NoAnswer
+from app.ethercat_wire.faces.base import (
+    COE_COMPLETE_ACCESS,
+    COE_SDO,
+    COE_SDO_INFO,
+    Face,
+    NoAnswer,
+)
 from devices.device import CommandError
 from devices.trscat import objects
 
@@ -22,9 +28,10 @@ class TrsCatFace(Face):
     group = "TRS-CAT"
     order_code = "TRS-CAT"
     dc_supported = True  # §9.1.1 DC-SYNC on SYNC0
-    # §9: "SDO information service con accesso completo e la possibilità di segmentare":
-    # complete access is not served over this wire (docs/ethercat-wire.md), so not announced.
-    coe_details = COE_SDO | COE_SDO_INFO
+    # §9 / §9.3: "SDO information service con accesso completo e la possibilità di segmentare
+    # i frame": complete access announced (SOEM's config_map then reads the mapping with it;
+    # docs/ethercat-wire.md "SDO complete access").
+    coe_details = COE_SDO | COE_SDO_INFO | COE_COMPLETE_ACCESS
     identity_defaults: ClassVar[tuple[int, int, int]] = (
         objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
 
