@@ -58,7 +58,7 @@ class HomingMethod:
     description: str
     phases: tuple[Phase, ...]  # when the home switch is off at the start
     phases_on_home: tuple[Phase, ...] | None = None  # when it is on (methods 3, 4, 19, 20)
-    limits: frozenset[str] = frozenset()  # limit switches the method itself searches
+    limits: frozenset[str] = frozenset()  # limit switches it searches: the only ones it uses
 
     def plan(self, home_switch_on: bool) -> tuple[Phase, ...]:
         if home_switch_on and self.phases_on_home is not None:
@@ -96,6 +96,16 @@ METHODS: dict[int, HomingMethod] = {m.number: m for m in (
     HomingMethod(35, "the current position", ()),
 )}
 del P, U
+NO_LIMITS: frozenset[str] = frozenset()
+
+
+def limits_used(method: int) -> frozenset[str]:
+    """The limit switch inputs homing method ``method`` (R18 / 0x6098) uses. Only those act as
+    limit switches; the others are generic digital inputs (seed 004 ch. 2 l. 1488-1494, ch. 4
+    l. 3910-3917: homing on the home switch alone frees pins 8 and 9). An unsupported method
+    uses none."""
+    found = METHODS.get(method)
+    return found.limits if found is not None else NO_LIMITS
 
 
 class HomingStatus(enum.Enum):
@@ -145,11 +155,6 @@ class HomingRun:
                 if self.phase is None:
                     self.home = position
         return ended
-
-    def unexpected_limit(self, changes: list[tuple[str, bool, float]]) -> bool:
-        """A limit switch came on that this method does not search: the homing fails."""
-        return any(level and signal in ("neg_limit", "pos_limit")
-                   and signal not in self.method.limits for signal, level, _ in changes)
 
 
 class Homing(Mode):
@@ -209,9 +214,9 @@ class Homing(Mode):
     def observe(self, d: ServoDrive, changes: Changes) -> None:
         if self.status is not HomingStatus.SEARCHING or self.run is None:
             return
-        if self.run.unexpected_limit(changes):
-            self.fail(d, "a limit switch the method does not search was hit")
-        elif self.run.observe(changes):
+        # a limit input the method does not search is a digital input for it (limits_used):
+        # the search runs on, to the end stop and alarm 16 if nothing ends it before
+        if self.run.observe(changes):
             self.next_phase(d)
 
     def step(self, d: ServoDrive, dt: float) -> None:

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 from devices.servo import control, ds402
 from devices.servo.display import display_text
 from devices.servo.ds402 import State
+from devices.servo.homing import limits_used
 from devices.servo.io import INPUT_NAMES, input_word, output_levels
 from devices.servo.motion import Limits, Shape
 from devices.servo.registers import MODE_NAMES, R
@@ -186,7 +187,7 @@ class DriveReadings:
             state=self.state, mode=self.mode, motion_enabled=self.motion_enabled,
             stopping=stopping, latched=self.latched_flag, latch_input=levels["latch"],
             target_reached=self.powered and self.mode_logic.target_reached(self),
-            limit_active=levels["neg_limit"] or levels["pos_limit"],
+            limit_active=any(levels[name] for name in limits_used(self.reg(R.HOMING_METHOD))),
             save_done=self.save_done, load_done=self.load_done,
             velocity_forced_zero=not self.motion_enabled, **mode_flags)
 

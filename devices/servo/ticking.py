@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING
 
 from devices.servo import ds402
 from devices.servo.ds402 import Command, State
+from devices.servo.homing import limits_used as _limits_used
 from devices.servo.mode_base import Changes, Mode
 from devices.servo.modes import Velocity as _VELOCITY
 from devices.servo.plant import SETTLED_REV as _SETTLED_REV
@@ -52,6 +53,7 @@ _VELOCITY_THRESHOLD = int(R.VELOCITY_THRESHOLD)
 _VELOCITY_WINDOW = int(R.VELOCITY_WINDOW)
 _TARGET_VELOCITY = int(R.TARGET_VELOCITY)
 _AUX_IN_1 = int(R.AUX_IN_1)
+_HOMING_METHOD = int(R.HOMING_METHOD)
 _IN_TORQUE_ORDERED = ds402._IN_TORQUE_ORDERED  # CurrentMeter.update's test
 _I1 = 35  # parameter i1, the position loop gain (position_lag_s)
 _CW_HALT = ds402.CW_HALT
@@ -219,15 +221,17 @@ class DriveTick:
         if type(mode).observe is not _NO_OBSERVER:  # the crossings are for homing only
             mode.observe(self, self._changes(before, levels, theta_before, theta_after))
         neg_limit, pos_limit = levels["neg_limit"], levels["pos_limit"]
-        # Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing
-        # (with no limit switch active there is nothing to check).
+        # Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing, a
+        # switch the homing method in force (R18 now) uses; else the pin is a digital input
+        # (limits_used). With no limit input active there is nothing to check.
         if (neg_limit or pos_limit) and self.state is _ENABLED:
             mode = self.mode_logic
             if type(mode).busy is _NEVER_BUSY or not mode.busy:
+                used = _limits_used(self.regs[_HOMING_METHOD])
                 velocity = trajectory.velocity
-                if neg_limit and velocity < 0.0:
+                if neg_limit and velocity < 0.0 and "neg_limit" in used:
                     self.raise_alarm(20)
-                elif pos_limit and velocity > 0.0:
+                elif pos_limit and velocity > 0.0 and "pos_limit" in used:
                     self.raise_alarm(21)
         # _check_following_error, inline: alarm 16 when |error| > R03 for longer than R04 ms
         regs = self.regs

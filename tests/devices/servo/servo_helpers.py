@@ -54,8 +54,10 @@ class Sim:
         return [e.to_record() for e in self.events if e.kind == kind]
 
     def run_into_ls1(self) -> None:
-        """Mode 3 (velocity), R13 = -150000, R00 = 3: the carriage runs into the negative limit
-        switch and raises alarm 20 LS1 (seed 004 ch. 5)."""
+        """Homing method 1 (R18, which makes pin 8 a limit switch), mode 3 (velocity),
+        R13 = -150000, R00 = 3: the carriage runs into the negative limit switch and raises
+        alarm 20 LS1 (seed 004 ch. 5)."""
+        self.w(18, 1)
         self.w(1, 3)
         self.w(13, -150000)
         self.w(0, 3)

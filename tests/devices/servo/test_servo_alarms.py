@@ -129,8 +129,11 @@ def test_following_error_flag_in_positioner() -> None:
 
 @pytest.mark.parametrize(("velocity", "code"), [(-30000, 20), (30000, 21)])
 def test_limit_switches_raise_ls1_ls2(velocity: int, code: int) -> None:
-    """Alarms 20 / 21 (LS1 / LS2, 0x603F 0x8612) when the axis runs into a limit switch."""
+    """Alarms 20 / 21 (LS1 / LS2, 0x603F 0x8612) when the axis runs into a limit switch the
+    homing method uses (17 / 18: the switch's edge; tests/devices/servo/
+    test_servo_limit_inputs.py for the methods that leave the pins digital inputs)."""
     sim = make_sim(DriveConfig(neg_limit=-12000, pos_limit=12000))
+    sim.w(18, 17 if code == 20 else 18)
     sim.w(1, 3)
     sim.w(13, velocity)
     sim.w(0, 0x03)

@@ -308,13 +308,17 @@ def test_homing_interrupted_by_clearing_the_start_bit() -> None:
     assert sim.drive.read_register(46) == 0  # interrupted, not an alarm
 
 
-def test_homing_hitting_an_unexpected_limit_switch_fails() -> None:
+def test_homing_past_a_limit_switch_it_does_not_search_runs_into_the_end_stop() -> None:
+    """Method 3 (home switch) with the home switch beyond LS2: for this method pin 9 is a
+    digital input (seed 004 ch. 2 l. 1488-1494), so the search goes on to the mechanical end
+    stop and the following error (alarm 16) ends it. It used to fail at LS2 with alarm 14."""
     cfg = DriveConfig(neg_limit=-18000, pos_limit=18000, home_switch=30000)
     sim = make_sim(cfg)
     for n, v in ((18, 3), (20, 12000), (22, 1000)):
         sim.w(n, v)
     _home(sim)
-    assert sim.drive.read_register(46) == 14
+    assert sim.drive.read_register(46) == 16
+    assert sim.drive.read_register(48) & 1 << 9
 
 
 @pytest.mark.parametrize(("method", "fast", "slow"), [

@@ -23,6 +23,7 @@ from devices.od import SdoAbort
 from devices.servo import ds402
 from devices.servo.drive import DriveConfig, ServoDrive
 from devices.servo.ds402 import Command, State
+from devices.servo.homing import limits_used
 from devices.servo.registers import R
 from devices.servo.stillness import state_key
 
@@ -73,13 +74,15 @@ class PlainDrive(ServoDrive):
             self.raise_alarm(15)
 
     def _check_limits(self, levels: dict[str, bool]) -> None:
-        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing."""
+        """Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing, one
+        that the homing method in force (R18) uses."""
         if self.state is not State.OPERATION_ENABLED or self.mode_logic.busy:
             return
+        used = limits_used(self.regs[R.HOMING_METHOD])
         velocity = self.trajectory.velocity
-        if levels["neg_limit"] and velocity < 0.0:
+        if levels["neg_limit"] and velocity < 0.0 and "neg_limit" in used:
             self.raise_alarm(20)
-        elif levels["pos_limit"] and velocity > 0.0:
+        elif levels["pos_limit"] and velocity > 0.0 and "pos_limit" in used:
             self.raise_alarm(21)
 
     def _move(self, dt: float, lag: float) -> None:
