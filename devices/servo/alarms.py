@@ -103,14 +103,14 @@ DRIVE_ALARMS: dict[int, AlarmSpec] = {a.code: a for a in _DRIVE_ALARMS}
 
 # How a master of each fieldbus resets the alarms (the drive log's hint). Modbus: Alm_rst, R00
 # bit 3 (ch. 1, ch. 2 "valore: 0x0008"). CANopen and CoE: 0x80 on 0x6040, bit 7 (ch. 4
-# examples "0x0080"; ch. 5 "Reset allarmi": "scrittura 0x80 su oggetto 0x6040"). Profinet: its
-# shared memory's Control Word (ch. "Profinet IO", input group 1, next to the CiA 402 objects;
-# the seed names no reset bit: read as 0x6040's, docs/servo-drive.md "Reset").
+# examples "0x0080"; ch. 5 "Reset allarmi": "scrittura 0x80 su oggetto 0x6040"). Profinet:
+# "scrivendo il codice 0x08 nella Control Word" (ch. 6 "Reset allarmi"), which is R00: the
+# ch. 6 example writes 0x0008, 0x0003, 0x0043 to "Registro 0 control_word".
 RESET_HINT: dict[str, str] = {
     "modbus": "R00 bit 3",
     "canopen": "0x6040 = 0x80 (bit 7)",
     "ethercat": "0x6040 = 0x80 (bit 7)",
-    "profinet": "Control Word = 0x80 (bit 7)",
+    "profinet": "Control Word = 0x08 (R00 bit 3)",
 }
 RESET_HINT_ANY = "R00 bit 3 or 0x6040 bit 7"  # c9 names no fieldbus: both views are there
 

@@ -25,12 +25,12 @@ BIT7 = 0x80
 
 # The stop / halt bit as a master of each fieldbus sees it (the panel's notice), beside
 # alarms.RESET_HINT: Modbus Stp_cmd, R00 bit 2 (ch. 1); CANopen and CoE 0x6040 bit 8 halt
-# (ch. 4, DSP 402); Profinet's Control Word read as 0x6040's (docs/servo-drive.md "Reset").
+# (ch. 4, DSP 402); Profinet's Control Word is R00 (ch. 6 example), so Stp_cmd, bit 2.
 HALT_HINT: dict[str, str] = {
     "modbus": "stopped (Stp_cmd, R00 bit 2)",
     "canopen": "halted (0x6040 bit 8)",
     "ethercat": "halted (0x6040 bit 8)",
-    "profinet": "halted (Control Word bit 8)",
+    "profinet": "stopped (Stp_cmd, Control Word bit 2)",
 }
 HALT_HINT_ANY = "halted (R00 bit 2 or 0x6040 bit 8)"  # c9 names no fieldbus: both views
 

@@ -16,7 +16,7 @@ HINTS = [
     ("modbus", "stopped (Stp_cmd, R00 bit 2) - Enable or Move clears it"),
     ("canopen", "halted (0x6040 bit 8) - Enable or Move clears it"),
     ("ethercat", "halted (0x6040 bit 8) - Enable or Move clears it"),
-    ("profinet", "halted (Control Word bit 8) - Enable or Move clears it"),
+    ("profinet", "stopped (Stp_cmd, Control Word bit 2) - Enable or Move clears it"),
 ]
 
 
@@ -61,3 +61,18 @@ def test_a_canopen_masters_halt_is_named_as_0x6040_bit_8() -> None:
     sim.cw(*CANOPEN_ENABLE)
     sim.cw(0x010F)  # halt
     assert sim.drive.motion_blocked() == "halted (0x6040 bit 8) - Enable or Move clears it"
+
+
+def test_a_profinet_masters_stop_is_stp_cmd_of_its_control_word() -> None:
+    """Seed 004 ch. 6: the Profinet Control Word is R00 (the worked example writes 0x0003,
+    0x0043, 0x0023 to "Registro 0 control_word"), so its stop is Stp_cmd, bit 2 (ch. 1)."""
+    sim = make_sim(DriveConfig(fieldbus="profinet"))
+    sim.w(1, 3)
+    sim.w(13, 6000)
+    sim.w(0, 0x03)
+    sim.run(300)
+    sim.w(0, 0x07)  # Stp_cmd
+    sim.run(1_000)
+    assert round(sim.drive.velocity_user) == 0
+    assert sim.drive.motion_blocked() == \
+        "stopped (Stp_cmd, Control Word bit 2) - Enable or Move clears it"
