@@ -24,8 +24,11 @@ if TYPE_CHECKING:
 
 PARAMETER_APPLY_US = 20_000  # "Ogni modifica è attiva dopo un intervallo di tempo di circa 20 ms"
 HANDSHAKE_US = 3_000  # "occorre aspettare almeno 3 ms tra la scrittura dell'indirizzo e la lettura"
-# DSP 402 0x6502 bits 0 pp, 2 pv, 5 hm, 6 ip; bits 16.. manufacturer: -1, -2, -127 in order.
-SUPPORTED_DRIVE_MODES = 0x0000_0065 | 0x0007_0000
+# The modes 0x6060 takes and their 0x6502 bits: ch. 4 lists 1, 3, 6, 7, -1, -2, -127
+# (l. 3131-3145). DSP 402 bits 0 pp, 2 pv, 5 hm, 6 ip; bits 16.. manufacturer: -1, -2, -127 in
+# order. -50 (save / load) is the Modbus chapter's R01 mode, not an object dictionary one.
+OD_MODE_BITS: dict[int, int] = {1: 0, 3: 2, 6: 5, 7: 6, -1: 16, -2: 17, -127: 18}
+SUPPORTED_DRIVE_MODES = sum(1 << bit for bit in OD_MODE_BITS.values())  # 0x00070065
 
 D = DataType
 RO, RW, WO = Access.RO, Access.RW, Access.WO
@@ -41,6 +44,14 @@ def _guard(index: int, sub: int, action: Callable[[], None]) -> None:
         raise SdoAbort(_ABORT_BY_KIND[exc.kind], index, sub) from exc
     except CommandError as exc:  # powered off, saving
         raise SdoAbort(AbortCode.CANNOT_STORE_STATE, index, sub) from exc
+
+
+def _set_od_mode(drive: ServoDrive, mode: int) -> None:
+    """0x6060: a mode 0x6502 lists (a value range abort for any other, -50 included)."""
+    if mode not in OD_MODE_BITS:
+        raise AccessError("value", f"mode {mode} is not one of 0x6502's "
+                                   f"{', '.join(str(m) for m in OD_MODE_BITS)}")
+    drive.set_mode(mode)
 
 
 def _fit(dtype: DataType, value: int) -> int:
@@ -212,7 +223,8 @@ def build_object_dictionary(drive: ServoDrive) -> ObjectDictionary:
     add(0x603F, 0, "Error code", D.UNSIGNED16, RO, drive.error_code)
     add(0x6040, 0, "Controlword", D.UNSIGNED16, RW, lambda: drive.cw, drive.write_controlword)
     add(0x6041, 0, "Statusword", D.UNSIGNED16, RO, lambda: drive.statusword)
-    add(0x6060, 0, "Modes of operation", D.INTEGER8, WO, lambda: drive.mode, drive.set_mode)
+    add(0x6060, 0, "Modes of operation", D.INTEGER8, WO, lambda: drive.mode,
+        lambda mode: _set_od_mode(drive, mode))
     add(0x6061, 0, "Modes of operation display", D.INTEGER8, RO, lambda: drive.mode)
     reg(0x6064, 0, "Position actual value", D.INTEGER32, RO, R.POSITION_ACTUAL_VALUE)
     reg(0x6065, 0, "Following error window", D.UNSIGNED32, RW, R.FOLLOWING_ERROR_WINDOW)

@@ -244,3 +244,20 @@ def test_the_clients_abort_ends_the_transfer(segment: str) -> None:
     heartbeat = bench.node.heartbeat_ms
     assert bench.sdo(segment) == f"80 {start[3:11]} 01 00 04 05"
     assert bench.node.heartbeat_ms == heartbeat
+
+
+@pytest.mark.parametrize("mode", [1, 3, 6, 7, -1, -2, -127, -50])
+def test_0x6060_takes_the_modes_0x6502_lists(mode: int) -> None:
+    """Ch. 4 lists the CANopen modes 1, 3, 6, 7, -1, -2, -127 (l. 3131-3145), as 0x6502 does;
+    -50 (save / load) is the Modbus chapter's R01 mode. It used to be taken on 0x6060 and 0x6061
+    then read -50. A refusal is abort 0x06090030 and leaves the mode as it was."""
+    bench = make_bench()
+    answer = bench.write(0x6060, 0, mode, 1)
+    if mode == -50:
+        assert answer == "80 60 60 00 30 00 09 06"
+        assert bench.drive.mode == 1
+        bench.drive.write_register(1, -50)  # Modbus R01 keeps it
+        assert bench.drive.mode == -50
+    else:
+        assert answer.startswith("60")
+        assert bench.drive.mode == mode

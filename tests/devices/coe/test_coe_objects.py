@@ -52,6 +52,7 @@ def test_objects_present_on_coe(index: int, sub: int, present: bool) -> None:
     (lambda b: b.write(0x1018, 1, 1, 4), "0x06010002"),
     (lambda b: b.write(0x6040, 0, 0x0F, 4), "0x06070012"),  # longer than the object
     (lambda b: b.write(0x6060, 0, 5, 1), "0x06090030"),  # no mode 5
+    (lambda b: b.write(0x6060, 0, -50, 1), "0x06090030"),  # -50 is Modbus R01's, not in 0x6502
     (lambda b: b.write(0x2007, 0, 0x12, 1), "0x06090030"),  # save takes 0x11 only
     (lambda b: b.write(0x1003, 0, 1, 1), "0x06090030"),  # sub 0 takes 0 only
     (lambda b: b.write(0x6040, 0, 0x06, 1), "ok"),  # shorter data is extended (ch. 4)
