@@ -45,6 +45,7 @@ READY_TIMEOUT_S = 30.0  # models ready (FastCAT scan) and process B up, each
 INPUTS_PERIOD_US = 2_000  # SM3 image refreshed with a frame, at most this often (sim. time)
 UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
 AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
+AL_ID_REQUEST = 0x20  # AL control bit 5 (ETG.1000.6): the slave's face passes it on
 # Frames handed to the models (docs in _FrameClock): a steady cycle at the reported rate.
 PERIOD_SMOOTHING = 0.3  # weight of the newest report in the cycle estimate
 CYCLE_TOLERANCE = 0.25  # B's cycle measurements within this of each other agree
@@ -166,6 +167,7 @@ class _Slave:
     coe: CoeServer
     status: tuple[int, int] | None = None  # last AL status / code sent
     inputs: bytes | None = None  # last SM3 image sent
+    alias: int | None = None  # configured station alias B shows (its description's, then sent)
     inputs_due_us: int = 0
     clock: _FrameClock = field(default_factory=lambda: _FrameClock())
 
@@ -308,7 +310,10 @@ class WireBridge:
         return all(s.face.ready(s.model) for s in self._slaves)
 
     def _describe(self) -> list[SlaveDescription]:
-        return [s.face.describe(s.model) for s in self._slaves]
+        descriptions = [s.face.describe(s.model) for s in self._slaves]
+        for s, desc in zip(self._slaves, descriptions, strict=True):
+            s.alias = desc.station_alias
+        return descriptions
 
     def _on_step(self, now_us: int) -> None:
         if self._stop.is_set():
@@ -384,6 +389,10 @@ class WireBridge:
         if status != s.status:
             s.status = status
             self._send(msg.AL_STATUS, s.position, *status)
+        alias = s.face.station_alias(s.model)
+        if alias != s.alias:  # a restart read moved switches (B starts with the description's)
+            s.alias = alias
+            self._send(msg.ALIAS, s.position, alias)
         if handed and now_us >= s.inputs_due_us:  # the inputs a frame would carry
             s.inputs_due_us = now_us + INPUTS_PERIOD_US
             data = s.face.inputs(s.model)
@@ -442,12 +451,13 @@ class WireBridge:
             state = AlState(value & AL_STATE_MASK)
         except ValueError:
             s.face.refuse_unknown_state(s.model, UNKNOWN_STATE)
-            return
-        external = getattr(self._master, "external_request", None)
-        if external is not None:
-            external(s.position, state)  # the master notes it and asks the slave model
         else:
-            s.face.request_state(s.model, state)
+            external = getattr(self._master, "external_request", None)
+            if external is not None:
+                external(s.position, state)  # the master notes it and asks the slave model
+            else:
+                s.face.request_state(s.model, state)
+        s.face.request_id(s.model, bool(value & AL_ID_REQUEST))
 
     def _schedule_frames(self, counts: dict[int, int], now_us: int) -> None:
         """B's frame counts since its last report, over the wall time since then (a report

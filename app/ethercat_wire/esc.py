@@ -17,6 +17,7 @@ from collections import deque
 
 from app.ethercat_wire import dc, messages
 from app.ethercat_wire import registers as R
+from app.ethercat_wire import sii as sii_image
 from app.ethercat_wire.datagrams import Cmd, Datagram, get_wkc, parse, set_adp, set_wkc
 from app.ethercat_wire.description import SlaveDescription
 
@@ -40,7 +41,7 @@ class Esc:
         self.sii = bytearray(sii)
         self.clock = clock
         self.outbox = outbox
-        self.mem = R.power_on(desc)
+        self.mem = R.power_on(desc, _U16.unpack_from(self.sii, sii_image.ALIAS_BYTE)[0])
         self.station = 0
         self.index = position  # index among the slaves visible on the wire
         self.downstream = 0  # visible slaves after this one
@@ -68,6 +69,12 @@ class Esc:
             self._mbx_queue.clear()
             self._mbx_full = self._mbx_last = None
             self._set_mbx_status(self.sms.mbx_in, False)
+
+    def set_alias(self, alias: int) -> None:
+        """The slave restarted with another configured station alias: SII word 4 (and the
+        CRC of the ESC configuration area) rewritten, 0x0012 reloaded from it."""
+        sii_image.set_alias(self.sii, alias)
+        _U16.pack_into(self.mem, R.STATION_ALIAS, alias & 0xFFFF)
 
     def queue_mailbox(self, data: bytes) -> None:
         self._mbx_queue.append(bytes(data))

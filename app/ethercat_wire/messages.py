@@ -23,10 +23,11 @@ AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0
 MAILBOX_REPLY = "mailbox_reply"  # ("mailbox_reply", pos, data): queued for SM1, in order
 INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
 LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
+ALIAS = "alias"  # ("alias", pos, value): configured station alias after a restart
 STOP = "stop"  # ("stop",)
 
 B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, STATS, ERROR)
-A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, STOP)
+A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, STOP)
 
 CYCLE_REPORT_S = 0.010  # "cycle" at most this often
 STATS_REPORT_S = 0.100  # "stats" this often

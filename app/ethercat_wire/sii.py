@@ -24,6 +24,7 @@ CAT_TXPDO = 50
 CAT_RXPDO = 51
 CAT_END = 0xFFFF
 FIRST_CATEGORY_WORD = 0x40
+ALIAS_BYTE, CRC_BYTE = 0x04 * 2, 0x07 * 2  # word 4 configured station alias, word 7 CRC-8
 MBX_COE = 0x0004
 PORT_MII = 0x1  # GENERAL physical port nibble
 
@@ -104,11 +105,17 @@ def _sm_index(desc: SlaveDescription, kind: int, default: int) -> int:
     return default
 
 
+def set_alias(image: bytearray, alias: int) -> None:
+    """Word 4, the configured station alias, and the CRC-8 of words 0-6 after it."""
+    struct.pack_into("<H", image, ALIAS_BYTE, alias & 0xFFFF)
+    image[CRC_BYTE] = crc8(bytes(image[:CRC_BYTE]))
+
+
 def build(desc: SlaveDescription, alias: int = 0) -> bytes:
     """The whole EEPROM image, padded with 0xFF to its declared size."""
     words = bytearray(FIRST_CATEGORY_WORD * 2)
-    struct.pack_into("<HHHHH", words, 0, R.PDI_SPI, 0, 0, 0, alias)
-    words[14] = crc8(bytes(words[:14]))
+    struct.pack_into("<H", words, 0, R.PDI_SPI)
+    set_alias(words, alias)
     struct.pack_into("<IIII", words, 0x08 * 2, desc.vendor_id, desc.product_code,
                      desc.revision, desc.serial)
     if desc.mailbox is not None:

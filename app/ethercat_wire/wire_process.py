@@ -36,7 +36,7 @@ MCL_CURRENT, MCL_FUTURE = 1, 2  # <sys/mman.h>
 def build_line(descriptions: list[SlaveDescription], outbox: list[tuple],
                clock: dc.DcClock | None = None) -> Line:
     clock = clock or dc.DcClock()
-    escs = [Esc(pos, desc, sii.build(desc), clock, outbox)
+    escs = [Esc(pos, desc, sii.build(desc, desc.station_alias), clock, outbox)
             for pos, desc in enumerate(descriptions)]
     return Line(escs, outbox)
 
@@ -111,6 +111,8 @@ def apply_message(line: Line, msg: tuple) -> bool:
         esc.set_inputs(msg[2])
     elif tag == messages.LINK:
         line.set_link(msg[1], bool(msg[2]))
+    elif tag == messages.ALIAS:
+        esc.set_alias(msg[2])
     else:
         logger.warning("unknown message from process A: %r", tag)
     return True

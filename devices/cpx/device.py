@@ -16,6 +16,7 @@ from typing import Any, ClassVar
 from devices.cpx.actions import ACTIONS, OperatorMixin
 from devices.cpx.addressing import AddressSpace, assign_addresses, check_configuration
 from devices.cpx.catalog import ModuleType, module_type
+from devices.cpx.device_id import DeviceIdMixin
 from devices.cpx.diagnosis import Diagnosis
 from devices.cpx.esm import SM_WATCHDOG, SYNC_ERROR, ErrorKind, Esm
 from devices.cpx.faults import Injected
@@ -45,8 +46,8 @@ PD_STATES = frozenset({AlState.SAFEOP, AlState.OP})  # the sync error counter co
 QUIET_HORIZON_STEPS = 1 << 40  # a quiet span with no clock comparison left to flip: "forever"
 
 
-class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMailbox,
-             AlStatusView, DeviceModel):
+class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, OperatorMixin,
+             CoeMailbox, AlStatusView, DeviceModel):
     KIND = "cpx_e_ec"
     QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
@@ -105,6 +106,7 @@ class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMa
         self.last_frame_us: int | None = None
         self.last_pd_us = self.now_us
         self.sync_counter = 0
+        self.id_requested = False
 
     def _start(self) -> None:
         """Power-up or restart: switches and modules read, dictionary built, INIT (§2.1.7)."""
@@ -510,7 +512,7 @@ class CpxEEc(StillStepping, TransitionsMixin, ModuleChecks, OperatorMixin, CoeMa
             "esm": self.esm.state.label, "requested": self.esm.requested.label,
             "al_status": self.esm.register, "al_status_code": self.esm.code,
             "box_name": self.box_name, "station_address": self.station_address,
-            "explicit_device_id": self.explicit_device_id,
+            "explicit_device_id": self.explicit_device_id, "id_loaded": self.id_loaded,
             "leds": self.leds.channel_patterns(), "led_states": self.leds.snapshot(),
             "switches": self.switches.snapshot(),
             "supply": {"el_sen_v": self.el_sen_v, "out_v": self.out_v,

@@ -26,6 +26,10 @@ SM_WATCHDOG = 0x001B  # Tab. 12 double flash: Sync Manager watchdog
 INVALID_OUTPUT_CONFIG = 0x001D  # SM2 size
 INVALID_INPUT_CONFIG = 0x001E  # SM3 size
 IDENT_MISMATCH = 0x0070  # 0xF030 and 0xF050 differ (Tab. 17 Text-ID 0x3800)
+# ETG.1000.6 AL control / AL status bit 5 (ETG.1020 Explicit Device Identification): the
+# master's "ID request" and the slave's "ID loaded", the ID then in the AL status code.
+AL_CONTROL_ID_REQUEST = 0x0020
+AL_STATUS_ID_LOADED = 0x0020
 
 TRANSITIONS: frozenset[tuple[AlState, AlState]] = ALLOWED_TRANSITIONS | {
     (AlState.INIT, AlState.BOOT), (AlState.BOOT, AlState.INIT)}

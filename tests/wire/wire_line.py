@@ -13,11 +13,12 @@ import pytest
 LINE = ("fastcat", "trscat", "cpx", "drive_ecat-ecat")
 
 
-def line_spec(name: str = "wire", seed: int = 3, cpx_dil: tuple[bool, bool] = (False, True)
-              ) -> str:
+def line_spec(name: str = "wire", seed: int = 3, cpx_dil: tuple[bool, bool] = (False, True),
+              cpx_rotary: int = 0) -> str:
     """A rig file with the master and the four slaves of the default line, one expansion and
     four CPX modules: every slave has outputs and inputs (SOEM's expected WKC 3 per slave).
-    The CPX-E-EC runs with status bits unless ``cpx_dil`` (DIL 1, DIL 2; Tab. 6) says else."""
+    The CPX-E-EC runs with status bits unless ``cpx_dil`` (DIL 1, DIL 2; Tab. 6) says else,
+    its rotary switches (Explicit Device ID, Tab. 5) at ``cpx_rotary``."""
     dil1, dil2 = (str(d).lower() for d in cpx_dil)
     return f"""
 [rig]
@@ -37,6 +38,7 @@ configured = ["TRS-IO-E"]
 id = "cpx"
 dil1 = {dil1}
 dil2 = {dil2}
+rotary_switch = {cpx_rotary}
 modules = ["CPX-E-16DI", "CPX-E-8DO", "CPX-E-4AI-U-I", "CPX-E-4AO-U-I"]
 [[servo]]
 id = "drive_ecat"

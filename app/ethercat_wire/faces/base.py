@@ -258,7 +258,7 @@ class Face:
             rx_pdos=named(rx), tx_pdos=named(tx), dc_supported=self.dc_supported,
             pdos_fixed=self.mapping_fixed, spare_rx_pdos=named(self.spare_pdos(model, True)),
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
-            slot_modules=modules)
+            slot_modules=modules, station_alias=self.station_alias(model))
 
     def ready(self, model: Any) -> bool:
         """Whether the model has its dictionary (a description now is the one a master gets)."""
@@ -300,6 +300,14 @@ class Face:
     def request_state(self, model: Any, state: AlState) -> None:
         """AL control: the model accepts or refuses (with its own AL status code)."""
         model.request_state(state)
+
+    def request_id(self, model: Any, on: bool) -> None:
+        """AL control bit 5, ID request (ETG.1000.6): only a slave with an Explicit Device ID
+        answers it, in its AL status (ETG.1020); the others ignore the bit."""
+
+    def station_alias(self, model: Any) -> int:
+        """The configured station alias (SII word 4, register 0x0012); 0 = none."""
+        return 0
 
     def refuse_unknown_state(self, model: Any, code: int) -> None:
         """An AL control value that is no ESM state: ETG.1000.6 code 0x0012 on the model's

@@ -54,6 +54,12 @@ class CpxFace(Face):
         except CommandError as exc:
             raise NoAnswer(str(exc)) from None
 
+    def request_id(self, model: Any, on: bool) -> None:
+        model.request_id(on)  # seed 002 Tab. 5: the Explicit Device ID (devices/cpx/device_id.py)
+
+    def station_alias(self, model: Any) -> int:
+        return int(model.station_alias)
+
     def wire_objects(self, model: Any) -> ObjectDictionary | None:
         od = self.od(model)
         if od is None or (RX_ASSIGN, 0) in od:

@@ -1,0 +1,54 @@
+"""Explicit Device ID (seed 002 §2.1.7 Tab. 5, §2.1 "Hot Connect") as a master reads it.
+
+The three rotary switches give the bus module its Explicit Device ID, 1 ... 4095; 0 = none
+(the master assigns the address). ETG.1000.6 / ETG.1020 "Requesting ID mechanism": a master
+writes AL control with bit 5 (ID request); while the bit stays set in its AL control writes
+the slave answers AL status bit 5 ("ID loaded") and the ID in the AL status code 0x0134
+instead of 0x0000 — not over an error code, not in BOOT (Beckhoff SSC SetALStatus does the
+same). The ID in force is the one read at the last start (``Switches.explicit_device_id``); it
+is also the configured station alias the wire shows at 0x0012 / SII word 4. A switch at 0
+answers "ID loaded" with 0: no Explicit Device ID (docs/cpx-e-ec.md choice 35).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from devices.cpx.esm import AL_STATUS_ID_LOADED
+from devices.ethercat import AlState
+
+if TYPE_CHECKING:
+    from devices.cpx.device import CpxEEc
+
+
+class DeviceIdMixin:
+    """The ID request of :class:`~devices.cpx.device.CpxEEc` and the AL status it answers."""
+
+    id_requested: bool = False  # RAM: a restart forgets it (devices/cpx/device.py)
+
+    def request_id(self: CpxEEc, on: bool) -> None:
+        """AL control bit 5 of the master's AL control write (every write carries it)."""
+        if not self.reachable() or self.has_fault("ac_failure"):
+            return  # no application answers AL control (Tab. 12, choice 25)
+        if on != self.id_requested:
+            self.touch()
+            self.id_requested = on
+
+    @property
+    def id_loaded(self: CpxEEc) -> bool:
+        esm = self.esm
+        return self.id_requested and self.application_runs and not esm.error_flag and \
+            esm.code == 0 and esm.state is not AlState.BOOT
+
+    @property
+    def station_alias(self: CpxEEc) -> int:
+        """The Explicit Device ID in force (0 = none): the configured station alias."""
+        return self.switches.explicit_device_id
+
+    @property
+    def al_status(self: CpxEEc) -> int:
+        return self.esm.register | (AL_STATUS_ID_LOADED if self.id_loaded else 0)
+
+    @property
+    def al_status_code(self: CpxEEc) -> int:
+        return self.station_alias if self.id_loaded else self.esm.code
