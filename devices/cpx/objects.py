@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
+from devices.cpx.assignment import RX_ASSIGN, TX_ASSIGN, TxAssignment, address_order
 from devices.cpx.catalog import ModuleType
 from devices.cpx.history import FIRST_SUB, INDEX, MAX_MESSAGES, DiagHistory
 from devices.cpx.messages import MESSAGE_BYTES
@@ -41,6 +42,7 @@ class CpxObjects(Protocol):
     serial: int
     units: list[CpxModule]  # module 0 (the bus module) first
     history: DiagHistory
+    tx_assign: TxAssignment
 
     def od_error_register(self) -> int: ...
     def od_status_register(self) -> int: ...
@@ -69,6 +71,7 @@ def build_od(dev: CpxObjects) -> ObjectDictionary:
         _module_parameters(od, unit)
     _ro(od, DIAG_PDO, 0, "Diag History – TxPDO", DataType.UNSIGNED8, 1)
     _fixed(od, DIAG_PDO, 1, "Input Mapping 01", NEW_MESSAGE_MAPPING)
+    _assignment(od, dev)
     _global_settings(od)
     _terminal_info(od, dev)
     _module_lists(od, dev)
@@ -111,6 +114,22 @@ def _history(od: ObjectDictionary, dev: CpxObjects) -> None:
         # information service reports it); the value is the stored message's bytes.
         _ro(od, INDEX, sub, f"Subindex {sub:03d}", DataType.OCTET_STRING,
             bytes(MESSAGE_BYTES), getter=lambda sub=sub: dev.od_history_message(sub))
+
+
+def _assignment(od: ObjectDictionary, dev: CpxObjects) -> None:
+    """0x1C12 read-only, 0x1C13 written in PREOP (devices/cpx/assignment.py); beyond Tab. 27
+    (docs/cpx-e-ec.md choice 13)."""
+    rx = address_order(dev.units, receive=True)
+    _ro(od, RX_ASSIGN, 0, "RxPDO assign", DataType.UNSIGNED8, len(rx))
+    for sub, pdo in enumerate(rx, start=1):
+        _ro(od, RX_ASSIGN, sub, f"RxPDO assign {sub}", DataType.UNSIGNED16, pdo)
+    tx = dev.tx_assign
+    od.add(OdEntry(TX_ASSIGN, 0, "TxPDO assign", DataType.UNSIGNED8, Access.RW, tx.count,
+                   getter=lambda: tx.count, setter=tx.set_count))
+    for sub in range(1, len(tx.entries) + 1):
+        od.add(OdEntry(TX_ASSIGN, sub, f"TxPDO assign {sub}", DataType.UNSIGNED16, Access.RW,
+                       0, getter=lambda sub=sub: tx.entries[sub - 1],
+                       setter=lambda value, sub=sub: tx.set_entry(sub, value)))
 
 
 def _fixed(od: ObjectDictionary, index: int, sub: int, name: str, value: int) -> None:

@@ -1,0 +1,69 @@
+"""«New Message Available» in the process data (seed 002 §2.5.2 l. 539-541; Tab. 27 l. 674-675
+0x1A40 "Diag History – TxPDO"): an optional TxPDO a master assigns through 0x1C13 in PREOP
+(ETG.1000.6 / CiA 301: sub 0 = 0, the entries, sub 0 = n); devices/cpx/assignment.py."""
+
+from __future__ import annotations
+
+import pytest
+from cpx_bench import STI, TAB9_MODULES, Bench
+
+from devices.cpx.assignment import DIAG_PDO, TX_ASSIGN
+from devices.ethercat import AlState
+from devices.od import AbortCode, SdoAbort
+
+MODULE_TX = [0x1A00, 0x1A04, 0x1A01]  # Tab. 9 with STI: bus module, 4AI, 16DI
+
+
+def _read(bench: Bench) -> list[int]:
+    cpx = bench.cpx
+    return [cpx.cmd_read_object(TX_ASSIGN, s)
+            for s in range(1, cpx.cmd_read_object(TX_ASSIGN, 0) + 1)]
+
+
+def assign(bench: Bench, pdos: list[int]) -> None:
+    cpx = bench.cpx
+    cpx.cmd_write_object(TX_ASSIGN, 0, 0)
+    for sub, pdo in enumerate(pdos, start=1):
+        cpx.cmd_write_object(TX_ASSIGN, sub, pdo)
+    cpx.cmd_write_object(TX_ASSIGN, 0, len(pdos))
+
+
+@pytest.fixture
+def bench() -> Bench:
+    bench = Bench(TAB9_MODULES, master=False, **STI)
+    bench.cpx.request_state(AlState.PREOP)
+    return bench
+
+
+def test_default_assignment_is_the_modules_only(bench: Bench) -> None:
+    assert _read(bench) == MODULE_TX
+    assert DIAG_PDO not in _read(bench)
+
+
+def test_master_assigns_0x1a40_in_preop(bench: Bench) -> None:
+    assign(bench, [*MODULE_TX, DIAG_PDO])
+    assert _read(bench) == [*MODULE_TX, DIAG_PDO]
+    bench.apply("restart")  # RAM: a start brings the default back
+    assert _read(bench) == MODULE_TX
+
+
+@pytest.mark.parametrize(("sub", "value", "code"), [
+    (1, 0x1A41, AbortCode.VALUE_RANGE),  # no such TxPDO
+    (1, 0x1601, AbortCode.VALUE_RANGE),  # an RxPDO
+])
+def test_unknown_pdo_refused(bench: Bench, sub: int, value: int, code: AbortCode) -> None:
+    bench.cpx.cmd_write_object(TX_ASSIGN, 0, 0)
+    with pytest.raises(SdoAbort) as exc:
+        bench.cpx.cmd_write_object(TX_ASSIGN, sub, value)
+    assert exc.value.code == code
+
+
+def test_entry_while_sub0_not_zero_and_outside_preop_refused(bench: Bench) -> None:
+    with pytest.raises(SdoAbort) as exc:
+        bench.cpx.cmd_write_object(TX_ASSIGN, 4, DIAG_PDO)
+    assert exc.value.code == AbortCode.UNSUPPORTED_ACCESS
+    bench.cpx.request_state(AlState.INIT)
+    with pytest.raises(SdoAbort) as exc:
+        bench.cpx.cmd_write_object(TX_ASSIGN, 0, 0)
+    assert exc.value.code == AbortCode.CANNOT_STORE_STATE
+    assert _read(bench) == MODULE_TX

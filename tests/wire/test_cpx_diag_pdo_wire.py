@@ -1,0 +1,46 @@
+"""0x1A40 "Diag History – TxPDO" on the wire (seed 002 l. 539-541, Tab. 27 l. 674-675): the
+ESI offers it unassigned, a master assigns it with SDO downloads to 0x1C13 in PREOP, and the
+SM3 image then carries 0x10F3:4 New Message Available, which follows the history."""
+
+from __future__ import annotations
+
+import pytest
+from test_faces import line_rig
+
+from app.ethercat_wire.faces import face_for
+from devices.cpx.assignment import DIAG_PDO, TX_ASSIGN
+from devices.od import AbortCode, SdoAbort
+
+
+def test_0x1a40_assigned_over_sdo_carries_new_message_available():
+    rig = line_rig("PREOP", cpx_dil=(True, False))  # STI: CPX errors go to 0x10F3
+    cpx = rig.devices["cpx"]
+    face = face_for(cpx)
+    desc = face.describe(cpx)
+    assert DIAG_PDO in [p.index for p in desc.spare_tx_pdos]
+    assert DIAG_PDO not in [p.index for p in desc.tx_pdos]
+    before = len(face.inputs(cpx))
+    tx = list(face.tx_pdos(cpx))
+    face.download_raw(cpx, TX_ASSIGN, 0, b"\x00")
+    for sub, pdo in enumerate([*(p.index for p in tx), DIAG_PDO], start=1):
+        face.download_raw(cpx, TX_ASSIGN, sub, pdo.to_bytes(2, "little"))
+    face.download_raw(cpx, TX_ASSIGN, 0, bytes([len(tx) + 1]))
+    assert [p.index for p in face.tx_pdos(cpx)][-1] == DIAG_PDO
+    assert face.describe(cpx).spare_tx_pdos == ()
+    bits = sum(e.bits for p in tx for e in p.entries)
+    assert len(face.inputs(cpx)) == before + 1 == bits // 8 + 1
+
+    def flag() -> int:
+        return face.inputs(cpx)[bits // 8] & 1
+
+    assert flag() == 0
+    cpx.apply("inject_fault", {"fault": "module_failure"}, 1)  # CPX error 129, module 1
+    rig.run_until(rig.clock.now_us + 50_000)
+    assert cpx.history.count and flag() == 1  # a new message logged
+    newest = cpx.history.newest
+    face.upload_raw(cpx, 0x10F3, newest)  # Overwrite mode: reading the newest lowers it
+    assert flag() == 0
+    with pytest.raises(SdoAbort) as exc:
+        face.download_raw(cpx, TX_ASSIGN, 0, b"\x00")
+        face.download_raw(cpx, TX_ASSIGN, 1, (0x1A41).to_bytes(2, "little"))
+    assert exc.value.code == AbortCode.VALUE_RANGE
