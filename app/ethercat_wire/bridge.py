@@ -37,6 +37,7 @@ from app.ethercat_wire.description import SlaveDescription
 from app.ethercat_wire.faces import Face, face_for
 from app.rig_config import RigConfigError
 from devices.ethercat import AlState
+from devices.sync_managers import SmSetup
 
 logger = logging.getLogger(__name__)
 
@@ -424,7 +425,7 @@ class WireBridge:
             self._schedule_frames(message[1], now_us)
         elif tag == msg.STATS:
             self._stats(message[1])
-        elif tag in (msg.AL_CONTROL, msg.MAILBOX, msg.OUTPUTS, msg.DC):
+        elif tag in (msg.AL_CONTROL, msg.MAILBOX, msg.OUTPUTS, msg.DC, msg.SM):
             s = self._slave(message[1])
             if s is not None:
                 self._for_slave(s, tag, message[2])
@@ -439,6 +440,8 @@ class WireBridge:
                 self._send(msg.MAILBOX_REPLY, s.position, reply)
         elif tag == msg.OUTPUTS:
             s.face.apply_outputs(s.model, bytes(payload))
+        elif tag == msg.SM:
+            s.face.configure_sync_managers(s.model, [SmSetup(*r) for r in payload])
         else:
             self.dc[s.position] = dict(payload)
             s.face.configure_dc(s.model, dict(payload))

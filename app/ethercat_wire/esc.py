@@ -46,6 +46,7 @@ class Esc:
         self.index = position  # index among the slaves visible on the wire
         self.downstream = 0  # visible slaves after this one
         self.sms = R.SmRoles()
+        self._sm_registers: tuple[tuple[int, int, int, bool], ...] = ()
         self.fmmus: tuple[R.FmmuMap, ...] = ()
         self._plan: list[tuple[int, int, int, bool, bool, bool]] = []
         self._bit_fmmus: tuple[R.FmmuMap, ...] = ()
@@ -183,6 +184,10 @@ class Esc:
 
     # ---- sync managers and the mailbox transport ----
     def _sm_config_written(self, ado: int, end: int) -> None:
+        registers = R.sm_registers(self.mem, max(4, len(self.desc.sync_managers)))
+        if registers != self._sm_registers:  # the slave checks them at its transitions
+            self._sm_registers = registers
+            self.outbox.append((messages.SM, self.position, registers))
         before = self.sms
         self.sms = R.decode_sms(self.mem, max(4, len(self.desc.sync_managers)))
         self._replan()

@@ -13,6 +13,9 @@ MAILBOX = "mailbox"  # ("mailbox", pos, data): complete SM0 message, header incl
 OUTPUTS = "outputs"  # ("outputs", pos, data): SM2 image after a master write changed it
 CYCLE = "cycle"  # ("cycle", {pos: n_frames}): exchanges per slave, at most every 10 ms
 DC = "dc"  # ("dc", pos, {"activation", "sync0_cycle_ns", "start_time_ns"})
+# ("sm", pos, ((start, length, control, enabled), ...)): SM0.. registers after a master write
+# changed them
+SM = "sm"
 # ("stats", {"frames", "lrw", "cycle_us", "wkc_errors"}), every 100 ms: counts since B started,
 # cycle_us the mean process-data period of the last 100 ms (wire_process.Stats)
 STATS = "stats"
@@ -26,7 +29,7 @@ LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
 ALIAS = "alias"  # ("alias", pos, value): configured station alias after a restart
 STOP = "stop"  # ("stop",)
 
-B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, STATS, ERROR)
+B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR)
 A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, STOP)
 
 CYCLE_REPORT_S = 0.010  # "cycle" at most this often

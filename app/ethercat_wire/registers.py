@@ -171,6 +171,16 @@ class SmRoles:
     inputs: SmConfig | None = None  # process data the master reads (SM3)
 
 
+def sm_registers(mem: bytearray, count: int) -> tuple[tuple[int, int, int, bool], ...]:
+    """SM0.. as the master wrote them: (start, length, control, enabled)."""
+    out = []
+    for n in range(count):
+        start, length, control, _status, activate, _pdi = struct.unpack_from(
+            "<HHBBBB", mem, SM0 + SM_SIZE * n)
+        out.append((start, length, control, bool(activate & 0x01)))
+    return tuple(out)
+
+
 def decode_sms(mem: bytearray, count: int) -> SmRoles:
     roles: dict[str, SmConfig] = {}
     for n in range(count):

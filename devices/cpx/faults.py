@@ -10,6 +10,7 @@ import enum
 from dataclasses import dataclass
 
 from devices.device import CommandError
+from devices.sync_managers import SmFault
 
 
 class Target(enum.Enum):
@@ -44,11 +45,11 @@ FAULTS: dict[str, FaultSpec] = {f.name: f for f in (
               "is refused (without a module: the bus module, slot 1)"),
     FaultSpec("f030_not_written", Target.DEVICE, "§2.5.2 Tab. 17 0x3801",
               "The PLC does not write 0xF030: the ident check is skipped"),
-    FaultSpec("sm_invalid_address", Target.SYNC_MANAGER, "§2.5.2 Tab. 17 0x0011",
+    FaultSpec(SmFault.ADDRESS.value, Target.SYNC_MANAGER, "§2.5.2 Tab. 17 0x0011",
               "The master configures sync manager sm= with an invalid address"),
-    FaultSpec("sm_invalid_size", Target.SYNC_MANAGER, "§2.5.2 Tab. 17 0x0012",
+    FaultSpec(SmFault.SIZE.value, Target.SYNC_MANAGER, "§2.5.2 Tab. 17 0x0012",
               "The master configures sync manager sm= with an invalid size"),
-    FaultSpec("sm_invalid_settings", Target.SYNC_MANAGER, "§2.5.2 Tab. 17 0x0013",
+    FaultSpec(SmFault.SETTINGS.value, Target.SYNC_MANAGER, "§2.5.2 Tab. 17 0x0013",
               "The master configures sync manager sm= with invalid settings"),
     FaultSpec("bus_cycle_time", Target.DEVICE, "§2.5.2 Tab. 17 0x000F",
               "The local timer is too slow to measure the bus cycle (a warning at "
@@ -64,8 +65,8 @@ FAULTS: dict[str, FaultSpec] = {f.name: f for f in (
               "Flash checksum error of the application controller, found at the next start"),
 )}
 
-SM_FAULT_TEXT = {"sm_invalid_address": 0x0011, "sm_invalid_size": 0x0012,
-                 "sm_invalid_settings": 0x0013}  # Tab. 17 Text-IDs
+SM_FAULT_TEXT = {SmFault.ADDRESS: 0x0011, SmFault.SIZE: 0x0012,
+                 SmFault.SETTINGS: 0x0013}  # Tab. 17 Text-IDs
 SYNC_MANAGERS = range(4)  # SM0/SM1 mailbox, SM2 outputs, SM3 inputs
 
 

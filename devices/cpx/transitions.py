@@ -15,14 +15,13 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from devices import mdp
+from devices import sync_managers as smc
 from devices.cpx.catalog import MAX_INPUT_BYTES
 from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_IDENT_FAILED, TEXT_IDENT_SKIPPED, DiagType
 from devices.cpx.esm import (
     IDENT_MISMATCH,
     INVALID_INPUT_CONFIG,
-    INVALID_MAILBOX_PREOP,
     INVALID_OUTPUT_CONFIG,
-    INVALID_SM_CONFIG,
     NO_VALID_FIRMWARE,
     SM_WATCHDOG,
     SYNC_ERROR,
@@ -97,19 +96,14 @@ class TransitionsMixin:
         return None
 
     def _sm_check(self: CpxEEc, sync_managers: tuple[int, ...]) -> int | None:
-        for fault in self.injected:
-            if fault.name in SM_FAULT_TEXT and fault.sm in sync_managers:
-                text_id = SM_FAULT_TEXT[fault.name]
-                self._report(text_id, DiagType.ERROR,
-                             ((DataType.UNSIGNED8, fault.sm),
-                              (DataType.UNSIGNED16, SM_BAD_VALUE[text_id])))
-                if fault.sm in (0, 1):
-                    return INVALID_MAILBOX_PREOP
-                if fault.name == "sm_invalid_size":
-                    return INVALID_OUTPUT_CONFIG if fault.sm == 2 else \
-                        INVALID_INPUT_CONFIG
-                return INVALID_SM_CONFIG
-        return None
+        found = smc.injected_fault([(f.name, f.sm) for f in self.injected], sync_managers)
+        if found is None:
+            return None
+        sm, fault = found
+        text_id = SM_FAULT_TEXT[fault]
+        self._report(text_id, DiagType.ERROR,
+                     ((DataType.UNSIGNED8, sm), (DataType.UNSIGNED16, SM_BAD_VALUE[text_id])))
+        return smc.fault_code(sm, fault)
 
     def _ident_check(self: CpxEEc) -> int | None:
         """0xF030 (written by the PLC in PREOP) against 0xF050 (Tab. 17 0x3800 / 0x3801)."""

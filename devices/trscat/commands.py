@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 from devices.device import Action, CommandError, Param
 from devices.ethercat import AlState
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
+from devices.sync_managers import SM_FAULTS
 from devices.trscat.alarms import FaultKey, TrsBus
 from devices.trscat.catalog import (
     EXPANSIONS,
@@ -40,6 +41,8 @@ if TYPE_CHECKING:
 _CHANNEL = Param("channel", int, low=1, high=16, doc="channel, from 1")
 _FAULT = Param("fault", str, parse=parse_fault,
                doc="a seed 001 §9.3.7 code (0x3220) or name (FIELD_SUPPLY)")
+_SM_FAULT = (Param("fault", str, choices=tuple(SM_FAULTS)),
+             Param("sm", int, low=0, high=3, doc="0 / 1 mailbox, 2 outputs, 3 inputs"))
 SENSOR_ON_V = 24.0  # set_input(on=True): a PNP sensor puts the field voltage on the terminal
 
 ACTIONS: dict[str, Action] = {a.name: a for a in (
@@ -73,6 +76,10 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
            module="optional"),
     Action("clear_fault", "Remove an injected cause (the TRS bus stays down after 0x7100, "
                           "0x7500, 0x6100 until power-off)", (_FAULT,), module="optional"),
+    Action("inject_sm_fault", "The master sets up sync manager sm wrong: SM0 / SM1 refuse "
+                              "INIT -> PREOP (0x0016), SM2 / SM3 PREOP -> SAFEOP (0x0017; "
+                              "a size 0x001D / 0x001E) (§9.2)", _SM_FAULT),
+    Action("clear_sm_fault", "The master sets sync manager sm up right again", _SM_FAULT),
     Action("drop_frames", "The next N master frames never reach SM2 (lost / CRC error)",
            (Param("count", int, low=0, high=1_000_000),)),
     Action("lose_sync0", "Stop or restore the SYNC0 pulses (§9.1.1)", (Param("lost", bool),)),

@@ -20,6 +20,7 @@ from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
 from devices.leds import LedBank
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
+from devices.sync_managers import SmSetup
 from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
 from devices.trscat.catalog import (
     BY_IDENT,
@@ -39,6 +40,7 @@ from devices.trscat.io import SlotIo
 from devices.trscat.module_checks import ModuleChecks
 from devices.trscat.objects import build_od, refuse_in_state
 from devices.trscat.pdo import outputs_index
+from devices.trscat.sm_checks import SmChecksMixin, SmKey
 from devices.trscat.spans import SpansMixin
 from devices.trscat.stepping import SteppingMixin
 from devices.trscat.sync import MODE_BY_NAME, SyncUnit
@@ -48,8 +50,8 @@ DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
 
 
-class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChecks, CommandsMixin,
-             CoeMailbox, AlStatusView, DeviceModel):
+class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsMixin, ModuleChecks,
+             CommandsMixin, CoeMailbox, AlStatusView, DeviceModel):
     KIND = "trscat"
     QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
@@ -82,6 +84,8 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
         self.link_out = out_link
         self.field_v = float(field_supply_v)
         self.injected: list[FaultKey] = []
+        self.injected_sm: list[SmKey] = []
+        self.sm_setup: tuple[SmSetup, ...] | None = None  # a master on the wire wrote them
         self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
         self.leds = LedBank(device_id)
         self._led_inputs: LedInputs | None = None
@@ -222,7 +226,11 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
         self._set_bus(TrsBus.RUNNING)
         self._rebuild_od()
         if self.esm.state is AlState.INIT and self.esm.requested is AlState.PREOP:
-            self._enter(AlState.PREOP)
+            code = self._run_checks(AlState.INIT, AlState.PREOP)
+            if code is None:
+                self._enter(AlState.PREOP)
+            else:
+                self.esm.refuse(code, self.now_us)
 
     # ---- object dictionary ------------------------------------------------------------------
     def _rebuild_od(self) -> None:
@@ -297,6 +305,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, AlarmsMixin, ModuleChe
             "alarms": [{"code": f"0x{f.code:04X}", "name": name, "slot": slot}
                        for (name, slot), f in self.active.items()],
             "injected": [{"fault": name, "slot": slot} for name, slot in self.injected],
+            "injected_sm": [{"fault": name, "sm": sm} for name, sm in self.injected_sm],
             "diagnosis": self.diag.snapshot(),
         }
 

@@ -24,13 +24,17 @@ SM_WATCHDOG = 0x001B
 FATAL_SYNC_ERROR = 0x002C  # SYNC0 lost
 CYCLE_TOO_SMALL = 0x002E  # SYNC0 cycle below 0x1C32:5 (500 us)
 INVALID_DC_SYNC = 0x0030
+# devices/sync_managers.py: 0x0016 (SM0 / SM1), 0x0017, 0x001D (SM2), 0x001E (SM3)
 MODULE_IDENT_MISMATCH = 0x0070  # 0xF030 != 0xF050 at PS (§9.2; code of seed 000 §7.7)
 
 # §9.2: what the device verifies on each transition, in this order (device methods).
-# INIT -> PREOP has no check that refuses: it waits for the power-up detection (§9.2 INIT).
+# INIT -> PREOP also waits for the power-up detection (§9.2 INIT). At PS the order is a field
+# engineer's: nothing runs deadlocked; then the sync managers (without them no frame reaches
+# the device), the DC (when the frames are taken), the modules (0xF030 = 0xF050).
 TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
-    (AlState.INIT, AlState.PREOP): (),
-    (AlState.PREOP, AlState.SAFEOP): ("check_not_deadlocked", "check_dc", "check_idents"),
+    (AlState.INIT, AlState.PREOP): ("check_mailbox",),
+    (AlState.PREOP, AlState.SAFEOP): ("check_not_deadlocked", "check_sync_managers",
+                                      "check_dc", "check_idents"),
     (AlState.SAFEOP, AlState.OP): ("check_sync", "check_outputs"),
 }
 

@@ -96,3 +96,12 @@ def test_a_powered_node_in_op_reads_as_before() -> None:
     assert state["Sync state"].startswith("on SYNC0 (DC running)"), state["Sync state"]
     assert expansion_note(snap, 1) == expansion_note(snap, 2) == ""
     assert all("not seen" not in r for r in io_rows(slave_html("trscat", snap)))
+
+
+def test_an_injected_sm_fault_is_named_in_the_injected_row(booted: Any) -> None:
+    """The instructor's SM fault (docs/trscat.md ESM) is an injected cause like the others:
+    without it in the row, a refused PREOP -> SAFEOP read 'Injected: none'."""
+    snap = {**booted.devices["trscat"].snapshot(),
+            "injected_sm": [{"fault": "sm_invalid_size", "sm": 2}]}
+    row = slave_html("trscat", snap).split("<th>Injected</th>", 1)[1].split("</tr>", 1)[0]
+    assert "sm_invalid_size" in row

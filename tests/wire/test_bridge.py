@@ -210,6 +210,22 @@ def test_dc_settings_are_kept_and_offered_to_the_model(wire):
     wait_for(lambda: bridge.dc.get(1) == settings)
 
 
+def test_sm_registers_reach_the_model_which_checks_them(wire):
+    """Seed 001 §9.2 PS: the TRS-CAT (position 1) refuses SAFE-OP when the SM2 the master
+    wrote is not as long as its outputs (2 bytes, the integrated module and a TRS-IO-E: 4)."""
+    _runtime, _bridge, b = wire
+    good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
+            (0x1400, 6, 0x20, True))
+    b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
+    b.send(msg.AL_CONTROL, 1, 0x02)
+    b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
+    b.send(msg.AL_CONTROL, 1, 0x04)
+    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
+    b.send(msg.SM, 1, good)
+    b.send(msg.AL_CONTROL, 1, 0x04)
+    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x04, 0))
+
+
 def test_a_dead_wire_process_hands_the_line_back(wire):
     runtime, bridge, b = wire
     b.conn.close()  # process B gone: the pipe breaks

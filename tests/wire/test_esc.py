@@ -182,6 +182,21 @@ def configure(line: Line, logical: int = 0x10000) -> None:
         one(line, Cmd.FPWR, st, R.FMMU0, out + inp)
 
 
+def test_sm_registers_go_to_process_a_when_they_change():
+    """The slave checks its sync managers at INIT -> PREOP and PREOP -> SAFEOP (seed 001 §9.2):
+    A gets SM0..SM3 as written; the same registers again (SOEM's repeat toggle, a rewrite)
+    send nothing."""
+    line, outbox, _ = make_line(1)
+    addressed(line)
+    sm0 = struct.pack("<HHBBBB", 0x1000, 128, 0x26, 0, 1, 0)
+    one(line, Cmd.FPWR, 0x1001, R.SM0, sm0)
+    assert outbox == [(messages.SM, 0, ((0x1000, 128, 0x26, True), (0, 0, 0, False),
+                                        (0, 0, 0, False), (0, 0, 0, False)))]
+    outbox.clear()
+    one(line, Cmd.FPWR, 0x1001, R.SM0, sm0)
+    assert outbox == []
+
+
 def test_lrw_wkc_is_three_per_slave_and_data_moves_both_ways():
     line, outbox, _ = make_line(3)
     configure(line)

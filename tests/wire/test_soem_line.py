@@ -296,18 +296,15 @@ def test_sdo_read_0x1018_on_every_slave(session):
         assert struct.unpack("<I", master("sdo_read", pos, 0x1018, 2))[0] == desc.product_code
 
 
-def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
-    """Seed 001 §9.3.2: 0xF030 (detected) differs from 0xF050 (configured) -> 0x0070. SYNC0
-    is configured first, as for the line: PS takes the mode from the DC registers and checks
-    them before 0xF030 (§9.1.1, §9.2)."""
+def test_trscat_refuses_safeop_before_its_process_data_sms_are_set_up(session):
+    """Seed 001 §9.2 PS (l. 501-502): the TRS-CAT checks the SM channels of the process data.
+    SOEM writes SM2 / SM3 only in config_map: asked for SAFE-OP before, the TRS-CAT finds SM2
+    disabled while 0x1C12 assigns outputs -> 0x001D (checked before the DC and 0xF030)."""
     _, _, master, _ = session
     master("dc", [1])
-    original = master("sdo_read", 1, 0xF030, 2)
-    master("sdo_write", 1, 0xF030, 2, struct.pack("<I", 0x414E2D45))  # "TRS-AN-E" ident
     state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)
     assert (state & 0x0F, state & 0x10) == (AlState.PREOP, 0x10)
-    assert al_status == 0x0070
-    master("sdo_write", 1, 0xF030, 2, original)
+    assert al_status == 0x001D
     state, _ = master("slave_state", 1, AlState.PREOP | 0x10, 3.0)  # acknowledge the error
     assert state & 0x0F == AlState.PREOP
 
@@ -362,6 +359,24 @@ def test_config_map_reads_every_mapping_without_an_sdo_abort(session):
     CoE mapping (0x1C00, 0x1C12 / 0x1C13, 0x16xx / 0x1Axx), even when it then fell back to the
     SII PDOs; a master should find every mapping it asks for."""
     assert session[3] == []
+
+
+def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
+    """Seed 001 §9.3.2: 0xF030 (configured) differs from 0xF050 (detected) -> 0x0070. A TRS-XX-E
+    in place of the TRS-IO-E keeps the image sizes (one word each way), so the sync managers
+    config_map set up still fit and the check reached is the modules'."""
+    _, _, master, _ = session
+    assert master("slave_state", 1, AlState.PREOP, 3.0)[0] & 0x0F == AlState.PREOP
+    original = master("sdo_read", 1, 0xF030, 2)
+    master("sdo_write", 1, 0xF030, 2, struct.pack("<I", 0x58582D45))  # "TRS-XX-E" ident
+    state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)
+    assert (state & 0x0F, state & 0x10) == (AlState.PREOP, 0x10)
+    assert al_status == 0x0070
+    master("sdo_write", 1, 0xF030, 2, original)
+    state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)  # SM sizes fit again
+    assert (state & 0x1F, al_status) == (AlState.SAFEOP, 0)
+    states = master("state", AlState.OP, 10.0)
+    assert [s & 0x1F for s, _ in states] == [AlState.OP] * 4, states
 
 
 def test_fastcat_fault_reaches_the_master_as_the_seed_emergency(session):

@@ -4,11 +4,14 @@ A face translates between a slave model and the wire; it never decides. The mode
 whether a requested state is allowed and with which AL status code (``request_state``), what
 its objects hold (its ``od``) and what its outputs do. Faces run in the simulation thread only.
 
-Sync manager layout (the same for every slave, SII category 41): SM0 mailbox out 0x1000 and
-SM1 mailbox in 0x1080, 128 bytes each; SM2 outputs at 0x1100, SM3 inputs at 0x1400 (room for
-768 output bytes, more than any slave of the rig maps). Control bytes are the usual ones: 0x26
-(mailbox, write, PDI IRQ), 0x22 (mailbox, read), 0x64 (3-buffer, write, watchdog), 0x20
-(3-buffer, read). An SM with no process data is disabled (length 0, enable 0).
+Sync manager layout (the same for every slave, SII category 41; defined in
+devices/sync_managers.py, as a slave that checks what its master wrote knows it): SM0 mailbox
+out 0x1000 and SM1 mailbox in 0x1080, 128 bytes each; SM2 outputs at 0x1100, SM3 inputs at
+0x1400 (room for 768 output bytes, more than any slave of the rig maps). Control bytes are the
+usual ones: 0x26 (mailbox, write, PDI IRQ), 0x22 (mailbox, read), 0x64 (3-buffer, write,
+watchdog), 0x20 (3-buffer, read). An SM with no process data is disabled (length 0, enable 0).
+The SM registers a master writes go to the model (``configure_sync_managers``), which checks
+them at its transitions (the TRS-CAT, seed 001 §9.2).
 """
 
 from __future__ import annotations
@@ -37,12 +40,18 @@ from devices.od import (
     decode,
     encode,
 )
+from devices.sync_managers import (  # the layout the slaves check (their ESI)
+    INPUTS_START,
+    MAILBOX_IN,
+    MAILBOX_OUT,
+    MAILBOX_SIZE,
+    OUTPUTS_START,
+    SM_CONTROL,
+    SmSetup,
+)
 
 logger = logging.getLogger(__name__)
 
-MAILBOX_OUT, MAILBOX_IN, MAILBOX_SIZE = 0x1000, 0x1080, 128
-OUTPUTS_START, INPUTS_START = 0x1100, 0x1400
-SM_CONTROL = (0x26, 0x22, 0x64, 0x20)
 RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
 SM_COMM_TYPE = 0x1C00
 SM_TYPES = (1, 2, 3, 4)  # ETG.1000.6 0x1C00: mailbox out, mailbox in, outputs, inputs
@@ -322,6 +331,15 @@ class Face:
         if configure is None:
             return False
         configure(**settings)
+        return True
+
+    def configure_sync_managers(self, model: Any, setups: Sequence[SmSetup]) -> bool:
+        """The SM registers the master wrote, for a model that checks them; False when the
+        model takes none."""
+        configure = getattr(model, "configure_sync_managers", None)
+        if configure is None or not model.reachable():
+            return False
+        configure(setups)
         return True
 
     def al_status(self, model: Any) -> tuple[int, int]:

@@ -125,7 +125,9 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
          (" " + badge("PREOP deadlock", "bad") if snap.get("deadlocked") else "")),
         ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):02X}")),  # U8, §9.3.4
         ("Alarms", esc(", ".join(alarm_text(a) for a in snap.get("alarms") or []) or "none")),
-        ("Injected", esc(", ".join(str(a) for a in snap.get("injected") or []) or "none"))]
+        # the application causes, then the sync manager faults (checked at IP / PS)
+        ("Injected", esc(", ".join(str(a) for a in [*(snap.get("injected") or []),
+                                                    *(snap.get("injected_sm") or [])]) or "none"))]
     slots = "".join(
         f"<tr><td>{esc(s.get('slot'))}</td><td>{slot_type(s)}</td>"
         f"<td>{esc(ident_text(s.get('ident', 0)))}</td>"
