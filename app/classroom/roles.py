@@ -75,10 +75,12 @@ INSTRUCTOR_ONLY: tuple[Rule, ...] = (
             ("module_failure", {"active": True}, FAULT), ("set_encoder_ppr", {}, BREAK),
             ("wire_thermocouple", {}, BREAK)),
     *_rules("servo", ("power", {"on": False}, FAULT), ("jam_load", {"active": True}, FAULT)),
-    # The line (seed 003): cables, slave supplies, lost frames and DC faults are the
-    # instructor's; plugging back, powering on and clearing are repairs.
+    # The line (seed 003): cables, slave supplies, lost frames, damaged cables and DC faults
+    # are the instructor's; plugging back, powering on, repairing and clearing are repairs
+    # (clearing the ESC error counters is the trainee's diagnosis, as a master's write).
     *_rules("master", ("pull_cable", {}, FAULT), ("power_slave", {"on": False}, FAULT),
-            ("lose_frames", {}, FAULT), ("dc_fault", {}, FAULT)),
+            ("lose_frames", {}, FAULT), ("damage_cable", {}, FAULT),
+            ("dc_fault", {}, FAULT)),
     *_rules("servo_ecat", ("link", {"connected": False}, FAULT)),
     *_rules("trscat",
             ("power", {"on": False}, FAULT), ("field_supply", {}, FAULT),

@@ -23,6 +23,16 @@ MASTER_ACTIONS: Mapping[str, Action] = {a.name: a for a in (
            (Param("position", int, low=0), Param("on", bool))),
     Action("lose_frames", "The next N cycles' frames are lost (communication error)",
            (Param("count", int, low=1, high=1_000_000),)),
+    Action("damage_cable", "Damage cable N (its numbering as pull_cable): it spoils the given "
+                           "percentage of the frames that cross it, either way; the ESCs "
+                           "behind it count CRC errors (0x0300-0x030C), the master loses "
+                           "those frames",
+           (Param("cable", int, low=0), Param("percent", int, low=1, high=100))),
+    Action("repair_cable", "Repair cable N: no new errors (the counters stay until cleared)",
+           (Param("cable", int, low=0),)),
+    Action("clear_esc_errors", "Clear the ESC error counters of the slave at line position N "
+                               "(a write to 0x0300 and 0x0310 as a master makes it)",
+           (Param("position", int, low=0),)),
     Action("dc_fault", "Distributed clocks fault: drift, jitter over the sync window, "
                        "SYNC0 lost (seed 003 NOT_SYNCHRONIZED)",
            (Param("kind", str, choices=DC_FAULTS),)),

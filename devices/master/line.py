@@ -1,10 +1,12 @@
-"""The line as the master sees it: cables, the slaves' power, lost frames, slaves lost and found.
+"""The line as the master sees it: cables, the slaves' power, lost frames, slaves lost and found,
+damaged cables and the ESC error counters they move (esc_errors.py).
 
 Cable N feeds line position N (from the master for N = 0, else from slave N-1's OUT port). The
 master's frames reach a position when every cable up to it is plugged and every slave before
 it is powered (an unpowered slave passes nothing on). The ports' physical links follow the
-cables and the neighbours' power (the slaves' LINK LEDs, the FastCAT's 0x13). See
-docs/ethercat-master.md "Line faults".
+cables and the neighbours' power (the slaves' LINK LEDs, the FastCAT's 0x13); a link that
+goes down counts in the ESC's lost link counter of that port. See docs/ethercat-master.md
+"Line faults" and "Damaged cable".
 """
 
 from __future__ import annotations
@@ -13,11 +15,16 @@ from typing import TYPE_CHECKING
 
 from devices.ethercat import AlState
 from devices.events import CommError
+from devices.master.esc_errors import IN, OUT, run_frame
 from devices.master.links import Slave, SlaveLink
 from devices.master.still import StillCounts
 
 if TYPE_CHECKING:
+    import random
+
     from devices.events import Event
+
+CRC_REPORT_US = 1_000_000  # a damaged cable's lost frames: one log line a second at most
 
 
 class LineMixin:
@@ -31,6 +38,10 @@ class LineMixin:
     phys_in: list[bool]
     phys_out: list[bool]
     to_lose: int
+    damaged: dict[int, float]
+    rng: random.Random
+    crc_unreported: int
+    crc_report_us: int
     lost_frames: int
     network_op: bool
     external: bool
@@ -58,8 +69,21 @@ class LineMixin:
         self._apply_physical_links(self._powered_all())
 
     def cmd_power_slave(self, position: int, on: bool) -> None:
-        self.links[self._position(position, "position")].slave.set_power(on)
+        link = self.links[self._position(position, "position")]
+        if on and not self._powered(position):
+            link.esc.clear()  # the ESC's power-on: its counters start at 0
+        link.slave.set_power(on)
         self._apply_physical_links(self._powered_all())
+
+    def cmd_damage_cable(self, cable: int, percent: int) -> None:
+        self.damaged[self._position(cable, "cable")] = percent / 100
+
+    def cmd_repair_cable(self, cable: int) -> None:
+        self.damaged.pop(self._position(cable, "cable"), None)
+
+    def cmd_clear_esc_errors(self, position: int) -> None:
+        esc = self.links[self._position(position, "position")].esc
+        esc.write(0x0300, 0x14)  # 0x0300-0x0313: every block, as one write clears them
 
     def cmd_lose_frames(self, count: int) -> None:
         self.to_lose += count
@@ -106,11 +130,15 @@ class LineMixin:
             if want_in != self.phys_in[p]:
                 self.phys_in[p] = want_in
                 link.slave.set_link(want_in, "in")
+                if not want_in and powered[p]:  # an unpowered ESC counts nothing
+                    link.esc.lose_link(IN)
             if p + 1 < n:
                 want_out = self.cables[p + 1] and powered[p + 1]
                 if want_out != self.phys_out[p]:
                     self.phys_out[p] = want_out
                     link.slave.set_link(want_out, "out")
+                    if not want_out and powered[p]:
+                        link.esc.lose_link(OUT)
 
     def _powered_all(self) -> list[bool]:
         return [bool(getattr(link.slave, "powered", True)) for link in self.links]
@@ -142,6 +170,41 @@ class LineMixin:
                                           reason="lost_frames", count=burst))
         if first:
             self._log(None, "lost_frames", count=burst)
+
+    def _spoiled(self) -> bool:
+        """This cycle's frame through the damaged cables, out to the last slave it reaches
+        (the one before a slave that is off) and back: True when it comes back spoiled,
+        lost to the master as in :meth:`_lose_frame`."""
+        last = -1
+        for p, ok in enumerate(self._line_reach):
+            if not (ok and self._line_powered[p]):
+                break
+            last = p
+        if last < 0 or not run_frame([link.esc for link in self.links], last, self.damaged,
+                                     self.rng):
+            return False
+        self._lose_spoiled()
+        return True
+
+    def _lose_spoiled(self) -> None:
+        """A frame a damaged cable spoiled: counted as a lost frame, per slave. It goes on as
+        long as the cable stays damaged, so the event and the log line come at the first one
+        and then at most once a second, with the frames lost since the last one."""
+        self.lost_frames += 1
+        self.crc_unreported += 1
+        for link in self.links:
+            if link.present:
+                link.counters.lost_frames += 1
+        if self.now_us < self.crc_report_us:
+            return
+        count, self.crc_unreported = self.crc_unreported, 0
+        self.crc_report_us = self.now_us + CRC_REPORT_US
+        for link in self.links:
+            if link.present:
+                self._event(CommError(self.now_us, self.device_id, position=link.position,
+                                      address=link.slave.station_address,
+                                      reason="lost_frames", count=count))
+        self._log(None, "lost_frames", count=count)
 
     def _find(self, link: SlaveLink) -> bool:
         """The slave answers (again); True when it is a recovery after a loss."""

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from devices.ethercat import AlState, describe_al_status_code
+from devices.master.esc_errors import EscErrors
 from devices.master.network import SlaveDescription
 
 RANK = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2, AlState.OP: 3}
@@ -110,6 +111,8 @@ class SlaveLink:
     start_time_us: int | None = None
     dc_derived: bool = False  # DC use when no network description is given
     counters: Counters = field(default_factory=Counters)
+    # Its ESC's error counters 0x0300-0x0313 (esc_errors.py): the line's physics counts them.
+    esc: EscErrors = field(default_factory=EscErrors)
 
     @property
     def dc(self) -> bool:
@@ -128,4 +131,4 @@ class SlaveLink:
                 "al_status_code": code,
                 "al_status_text": al_status_code_text(slave, code),
                 "diagnosis": self.diagnosis, "dc": self.dc,
-                "counters": self.counters.snapshot()}
+                "counters": self.counters.snapshot(), "esc_errors": self.esc.snapshot()}

@@ -125,6 +125,9 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.frames = 0
         self.lost_frames = 0
         self.to_lose = 0
+        self.damaged: dict[int, float] = {}  # cable -> share of its crossings spoiled
+        self.crc_unreported = 0  # frames a damaged cable lost since the last log line
+        self.crc_report_us = 0  # no log line of those before
         self.next_cycle_us = 0
         self.network_op = False
         self.link_up = False
@@ -248,8 +251,10 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         if cycle:
             self.next_cycle_us = now_us + self.cycle_us
         external = self.external
-        lost = cycle and not external and self.to_lose > 0 and first
-        if lost:
+        # A healthy line pays one test of an empty dict for the damaged cables.
+        lost = cycle and not external and first and (
+            self.to_lose > 0 or (bool(self.damaged) and self._spoiled()))
+        if lost and self.to_lose > 0:  # _spoiled counted its own
             self._lose_frame()
         exchange = cycle and not lost and not external
         target = self.target

@@ -3,12 +3,13 @@
 A quiet span is a run of the master's *quiet cycles* (still.py) with nothing due in between:
 every step a cycle, every slave reachable, present, with an empty mailbox, in the state the
 last watch kept and left unserved (at its target, or not due for a retry before the span
-ends), no frame to lose, no wire master, no hook queued, the line as last applied, and the DC
-unit either COMPENSATING without a fault with a window no narrower than the healthy noise (so
-that every draw falls in it) or IDLE without DC slaves. Each of those steps would then do
-exactly this: pass each slave one frame (its ``skip_frames`` does that for the whole span, the
-slave having said ``frames_quiet``), count a frame, draw the healthy deviation once
-(``DcUnit.compensate``, which resets ``outside``), and count what it left out. Nothing else
+ends), no frame to lose, no damaged cable (its draws), no wire master, no hook queued, the
+line as last applied, and the DC unit either COMPENSATING without a fault with a window no
+narrower than the healthy noise (so that every draw falls in it) or IDLE without DC slaves.
+Each of those steps would then do exactly this: pass each slave one frame (its
+``skip_frames`` does that for the whole span, the slave having said ``frames_quiet``), count
+a frame, draw the healthy deviation once (``DcUnit.compensate``, which resets ``outside``),
+and count what it left out. Nothing else
 moves: the states, the reach and the slaves' answers stay as they are while every other model
 of the rig is quiet too, which the rig checks before it skips.
 """
@@ -32,7 +33,8 @@ class SpanMixin:
 
     def quiet_until(self: EtherCatMaster, step_us: int) -> int:
         now = self.now_us
-        if not self.SKIP_STILL or self.external or self.to_lose or self.hooks.queued:
+        if not self.SKIP_STILL or self.external or self.to_lose or self.damaged \
+                or self.hooks.queued:
             return now
         watched = self._watched
         if watched is None or self.cycle_us > step_us or self.next_cycle_us > now + step_us:

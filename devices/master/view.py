@@ -25,6 +25,7 @@ class ViewMixin:
     log_style: str
     dc: DcUnit
     cables: list[bool]
+    damaged: dict[int, float]
     frames: int
     lost_frames: int
     cycle_us: int
@@ -51,6 +52,10 @@ class ViewMixin:
         p = link.position
         return link.diagnostic(bool(getattr(link.slave, "powered", True)), self._connected(p))
 
+    def _damaged_percent(self, cable: int) -> int | None:
+        share = self.damaged.get(cable)
+        return None if share is None else round(share * 100)
+
     # ---- view -------------------------------------------------------------------------------
     @property
     def phase(self) -> str:
@@ -70,7 +75,8 @@ class ViewMixin:
                 "log_style": self.log_style, "log_styles": list(STYLES),
                 "dc": self.dc.snapshot(),
                 "cables": [{"index": i, "from": "master" if i == 0 else names[i - 1],
-                            "to": names[i], "plugged": self.cables[i]}
+                            "to": names[i], "plugged": self.cables[i],
+                            "damaged": self._damaged_percent(i)}
                            for i in range(len(self.links))],
                 "slaves": [self._diagnostic(link) for link in self.links],
                 "stats": {"frames": self.frames, "lost_frames": self.lost_frames,

@@ -260,12 +260,15 @@ def test_snapshot_has_the_contract_keys() -> None:
     assert set(view) >= {"kind", "id", "target", "external", "link", "phase", "log_style",
                          "log_styles", "dc", "cables", "slaves", "stats", "log"}
     assert set(view["dc"]) == {"state", "fault", "deviation_ns", "window_ns"}
-    assert view["cables"][0] == {"index": 0, "from": "master", "to": "fastcat", "plugged": True}
+    assert view["cables"][0] == {"index": 0, "from": "master", "to": "fastcat", "plugged": True,
+                                 "damaged": None}
     assert view["cables"][3]["from"] == "cpx"
     assert set(view["slaves"][0]) >= {"position", "device", "name", "station_address",
                                       "present", "powered", "link", "state", "requested",
                                       "al_status", "al_status_code", "al_status_text", "dc",
-                                      "counters"}
+                                      "counters", "esc_errors"}
+    assert set(view["slaves"][0]["esc_errors"]) == {"invalid", "rx", "forwarded", "lost_link",
+                                                    "epu"}
     assert set(view["stats"]) == {"frames", "lost_frames", "cycle_us"}
     assert view["log_styles"] == ["twincat", "sirio", "pegaso", "aitraceprint"]
 
