@@ -13,7 +13,10 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
 - back to B go the AL status / code when they change, the SM3 image when it changes (packed
   when a frame is handed to the model, at most every ``INPUTS_PERIOD_US``), emergencies as
   CoE mailbox messages, and ``link`` when a slave drops off the line (cable pulled, powered
-  off: from that position on nothing answers).
+  off: from that position on nothing answers), and each slave's ESC error counters
+  0x0300-0x0313 as the model counts them (``esc_errors``, when they changed, looked at every
+  ``ESC_ERRORS_PERIOD_US``); a master's write there comes back as ``esc_errors_write`` and
+  clears the model's (``external_esc_write``).
 
 Positions are 0-based line positions; the line is re-read every step, so a rig reset in place
 (scenario player) gets fresh faces and is switched to external mode again.
@@ -43,6 +46,7 @@ logger = logging.getLogger(__name__)
 
 ETHERTYPE_ECAT = 0x88A4
 READY_TIMEOUT_S = 30.0  # models ready (FastCAT scan) and process B up, each
+ESC_ERRORS_PERIOD_US = 10_000  # error counters compared with what B holds this often
 INPUTS_PERIOD_US = 2_000  # SM3 image refreshed with a frame, at most this often (sim. time)
 UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
 AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
@@ -170,6 +174,7 @@ class _Slave:
     inputs: bytes | None = None  # last SM3 image sent
     alias: int | None = None  # configured station alias B shows (its description's, then sent)
     inputs_due_us: int = 0
+    esc_errors: bytes = bytes(20)  # 0x0300-0x0313 last sent (B powers on with zeros)
     clock: _FrameClock = field(default_factory=lambda: _FrameClock())
 
 
@@ -188,6 +193,7 @@ class WireBridge:
         self._slaves: list[_Slave] = []
         self._master: Any = None
         self._link_down: int | None = None
+        self._esc_errors_due_us = 0
         self._last_report_wall: float | None = None  # when B's last frame report came
         self._step_wall: float | None = None  # the wall time the last step stood for
         self._step_us: int | None = None
@@ -336,6 +342,19 @@ class WireBridge:
             if down is not None:
                 self._send(msg.LINK, down, False)
             self._link_down = down
+        if now_us >= self._esc_errors_due_us:
+            self._esc_errors_due_us = now_us + ESC_ERRORS_PERIOD_US
+            for s in self._slaves:
+                self._sync_esc_errors(s)
+
+    def _sync_esc_errors(self, s: _Slave) -> None:
+        links = getattr(self._master, "links", None)
+        if links is None or s.position >= len(links) or not hasattr(links[s.position], "esc"):
+            return
+        data = links[s.position].esc.registers()
+        if data != s.esc_errors:
+            s.esc_errors = data
+            self._send(msg.ESC_ERRORS, s.position, data)
 
     def _defer(self, message: tuple[Any, ...], now_us: int) -> bool:
         """Hold an AL control write (and what came after it) while frames the master sent
@@ -425,6 +444,12 @@ class WireBridge:
             self._schedule_frames(message[1], now_us)
         elif tag == msg.STATS:
             self._stats(message[1])
+        elif tag == msg.ESC_ERRORS_WRITE:
+            s = self._slave(message[1])
+            write = getattr(self._master, "external_esc_write", None)
+            if s is not None and write is not None:
+                write(s.position, int(message[2]), int(message[3]))
+                self._sync_esc_errors(s)
         elif tag in (msg.AL_CONTROL, msg.MAILBOX, msg.OUTPUTS, msg.DC, msg.SM):
             s = self._slave(message[1])
             if s is not None:

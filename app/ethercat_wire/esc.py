@@ -20,6 +20,7 @@ from app.ethercat_wire import registers as R
 from app.ethercat_wire import sii as sii_image
 from app.ethercat_wire.datagrams import Cmd, Datagram, get_wkc, parse, set_adp, set_wkc
 from app.ethercat_wire.description import SlaveDescription
+from devices.master.esc_errors import CLEARED_TOGETHER
 
 logger = logging.getLogger(__name__)
 
@@ -85,6 +86,11 @@ class Esc:
         self._inputs = bytes(data)
         self._place_inputs()
 
+    def set_error_counters(self, data: bytes) -> None:
+        """0x0300-0x0313 as the model counts them (a damaged cable, lost links)."""
+        self.mem[R.ERROR_COUNTERS:R.ERROR_COUNTERS_END] = data[:R.ERROR_COUNTERS_END
+                                                                - R.ERROR_COUNTERS]
+
     def set_last(self, last: bool) -> None:
         _U16.pack_into(self.mem, R.DL_STATUS, R.dl_status(last))
 
@@ -123,6 +129,8 @@ class Esc:
     def _after_register_write(self, ado: int, end: int, data: bytes) -> None:
         if ado < R.STATION_ADDRESS + 2 and end > R.STATION_ADDRESS:
             self.station = _U16.unpack_from(self.mem, R.STATION_ADDRESS)[0]
+        if ado < R.ERROR_COUNTERS_END and end > R.ERROR_COUNTERS:
+            self._error_counters_written(ado, end)
         if ado < R.AL_CONTROL + 2 and end > R.AL_CONTROL:
             value = _U16.unpack_from(self.mem, R.AL_CONTROL)[0]
             self.outbox.append((messages.AL_CONTROL, self.position, value))
@@ -135,6 +143,14 @@ class Esc:
             self._sm_config_written(ado, end)
         if ado >= R.DC_RECEIVE_TIME_PORT0 and end <= R.DC_CYCLE0 + 8:
             self._dc_write(ado, end, data)
+
+    def _error_counters_written(self, ado: int, end: int) -> None:
+        """The ESC's rule: a write clears each block it touches, whatever the value (here at
+        once, for the master's next read); the model clears the same."""
+        for first, last in CLEARED_TOGETHER:
+            if ado < last and end > first:
+                self.mem[first:last] = bytes(last - first)
+        self.outbox.append((messages.ESC_ERRORS_WRITE, self.position, ado, end - ado))
 
     def _dc_read(self, ado: int, end: int) -> None:
         if ado < R.DC_RECEIVE_TIME_PU and end > R.DC_SYSTEM_TIME:

@@ -20,6 +20,9 @@ SM = "sm"
 # cycle_us the mean process-data period of the last 100 ms (wire_process.Stats)
 STATS = "stats"
 ERROR = "error"  # ("error", text)
+# ("esc_errors_write", pos, ado, length): a master wrote into 0x0300-0x0313 (it clears counters;
+# B cleared its copy already, A's model clears the same)
+ESC_ERRORS_WRITE = "esc_errors_write"
 
 # A -> B
 AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0x0134
@@ -27,10 +30,11 @@ MAILBOX_REPLY = "mailbox_reply"  # ("mailbox_reply", pos, data): queued for SM1,
 INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
 LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
 ALIAS = "alias"  # ("alias", pos, value): configured station alias after a restart
+ESC_ERRORS = "esc_errors"  # ("esc_errors", pos, data): 0x0300-0x0313 as the model counts them
 STOP = "stop"  # ("stop",)
 
-B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR)
-A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, STOP)
+B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR, ESC_ERRORS_WRITE)
+A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, ESC_ERRORS, STOP)
 
 CYCLE_REPORT_S = 0.010  # "cycle" at most this often
 STATS_REPORT_S = 0.100  # "stats" this often

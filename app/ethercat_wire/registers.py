@@ -11,6 +11,8 @@ import struct
 from dataclasses import dataclass
 
 from app.ethercat_wire.description import SlaveDescription
+from devices.master.esc_errors import BASE as ERROR_COUNTERS
+from devices.master.esc_errors import END as ERROR_COUNTERS_END
 
 MEMORY_SIZE = 0x10000  # 64 KiB per slave: 4 KiB registers + 60 KiB process RAM
 PROCESS_RAM = 0x1000
@@ -104,6 +106,9 @@ READ_ONLY: tuple[tuple[int, int], ...] = (
     (DL_STATUS, DL_STATUS + 2),
     (AL_STATUS, AL_STATUS + 6),  # AL status and status code come from the device (process A)
     (PDI_CONTROL, PDI_CONTROL + 2),
+    # 0x0300-0x0313: counted by the model (devices/master/esc_errors.py); a write clears
+    # blocks of them (esc.py) and stores nothing
+    (ERROR_COUNTERS, ERROR_COUNTERS_END),
     (DC_RECEIVE_TIME_PORT0, DC_SYSTEM_TIME),  # port receive times: a write only latches
     (DC_RECEIVE_TIME_PU, DC_SYSTEM_OFFSET),
 )

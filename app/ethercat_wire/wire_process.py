@@ -113,6 +113,8 @@ def apply_message(line: Line, msg: tuple) -> bool:
         line.set_link(msg[1], bool(msg[2]))
     elif tag == messages.ALIAS:
         esc.set_alias(msg[2])
+    elif tag == messages.ESC_ERRORS:
+        esc.set_error_counters(msg[2])
     else:
         logger.warning("unknown message from process A: %r", tag)
     return True

@@ -231,6 +231,10 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self._log(link, "emergency", code=code, register=register, data=data)
         self._flush_log()  # outside a step: nothing else of this slave's instant follows
 
+    def external_esc_write(self, position: int, ado: int, length: int) -> None:
+        """A wire master's write into a slave's 0x0300-0x0313: the ESC clears those blocks."""
+        self.links[self._position(position, "position")].esc.write(ado, length)
+
     def external_stats(self, frames: int, lost_frames: int, cycle_us: int,
                        wkc_errors: int) -> None:
         self.frames, self.lost_frames, self.cycle_us = frames, lost_frames, cycle_us

@@ -261,3 +261,15 @@ def test_a_pause_between_two_long_measurements_keeps_the_period():
     assert clock.period_us == 4_000.0
     clock.master_cycle(20_000.0)  # two in a row with frames: the master now runs at 20 ms
     assert clock.period_us == 20_000.0
+
+
+def test_the_models_esc_error_counters_reach_b_and_a_masters_write_clears_them(wire):
+    """A pulled cable counts a lost link at both its ends (0x0310 + port); B gets the
+    counters to answer reads of 0x0300-0x0313; a master's write there clears the model's."""
+    runtime, _bridge, b = wire
+    runtime.command("master", "pull_cable", {"cable": 2}).result(timeout=WAIT_S)
+    counted = b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and any(m[2]))
+    assert counted[2][0x10:0x12] == b"\x00\x01"  # port 1 (OUT) lost its link
+    b.send(msg.ESC_ERRORS_WRITE, 1, 0x0310, 1)
+    b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and not any(m[2]))
+    assert sim(runtime, lambda: master_view(runtime).links[1].esc.lost_link) == [0] * 4

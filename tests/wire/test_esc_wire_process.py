@@ -157,3 +157,19 @@ def test_the_wire_process_answers_frames_and_reports(veth):
     finally:
         if proc.is_alive():
             proc.terminate()
+
+
+def test_error_counters_read_at_0x0300_are_the_models_and_a_write_clears_them():
+    """ET1100 0x0300-0x0313 (docs/ethercat-master.md "Damaged cable"): what A counts is what a
+    master reads; a write to 0x0300 clears 0x0300-0x030B at once (0x030C and the lost link
+    counters stay) and goes to A, whose model clears the same."""
+    line, outbox, _ = make_line(3)
+    counters = bytes([5, 0, 0, 2, 0, 0, 0, 0, 0, 7, 0, 0, 9, 0, 0, 0, 1, 3, 0, 0])
+    assert apply_message(line, (messages.ESC_ERRORS, 1, counters))
+    one(line, Cmd.APWR, -1, R.STATION_ADDRESS, b"\x02\x10")
+    assert one(line, Cmd.FPRD, 0x1002, 0x0300, bytes(20)).data == counters
+    assert one(line, Cmd.APRD, 0, 0x0300, bytes(20)).data == bytes(20)  # the others: none
+    one(line, Cmd.FPWR, 0x1002, 0x0300, b"\0\0")
+    after = one(line, Cmd.FPRD, 0x1002, 0x0300, bytes(20)).data
+    assert after == bytes(12) + bytes([9, 0, 0, 0, 1, 3, 0, 0])
+    assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2) in outbox
