@@ -79,7 +79,9 @@ def master(frame: int, **changes: Any) -> dict[str, Any]:
     slave = {"position": 0, "station_address": 1001, "name": "Box 1 (FastCAT)", "state": "OP",
              "requested": "OP", "al_status": 8, "al_status_code": 0, "dc": False, "link": True,
              "counters": {"lost_frames": 0, "wkc_errors": 0, "emergencies": 0,
-                          "state_changes": 3}}
+                          "state_changes": 3},
+             "esc_errors": {"invalid": [0, 0], "rx": [0, 0], "forwarded": [0, 0],
+                            "lost_link": [0, 0], "epu": 0}}
     snap = {"id": "master", "phase": "running", "target": "OP", "link": True,
             "dc": {"state": "COMPENSATING", "fault": None, "deviation_ns": (frame * 37) % 41 - 20,
                    "window_ns": 1000},
@@ -94,7 +96,7 @@ def shown_by(recorder: Recorder) -> dict[str, str]:
     """GUI id -> what its first content says (``status``, ``live``, ...), from the writes."""
     markers = {'<b>EtherCAT master</b>': "title", 'id="fr-line-master-status"': "status",
                'id="fr-line-master"': "live", 'id="fr-line-slaves"': "slaves",
-               'id="fr-line-log"': "log"}
+               'id="fr-line-log"': "log", 'id="fr-line-esc-errors"': "esc_errors"}
     names = {}
     for (uuid, prop), values in recorder.sent.items():
         if prop == "content":
@@ -120,7 +122,8 @@ def idle_master(server: Any) -> Idle:
     t0 = 8_000_000
     panel.update(master(0), t0)
     names = shown_by(recorder)
-    assert sorted(names.values()) == ["live", "log", "slaves", "status", "title"]
+    assert sorted(names.values()) == ["esc_errors", "live", "log", "slaves", "status",
+                                      "title"]
     recorder.clear()
     for n in range(1, FRAMES + 1):
         panel.update(master(n), t0 + n * FRAME_US)
@@ -132,11 +135,12 @@ def idle_master(server: Any) -> Idle:
 
 
 def test_idle_master_sends_only_its_moving_values(server: Any) -> None:
-    """Phase, target, link, the slave table and the log: not resent while only the time, the
-    frame counter and the DC deviation move. The time: once a tenth of a second it shows."""
+    """Phase, target, link, the slave table, the ESC error counters and the log: not resent
+    while only the time, the frame counter and the DC deviation move. The time: once a tenth
+    of a second it shows."""
     idle = idle_master(server)
     counts = idle.counts
-    assert counts["status"] == counts["slaves"] == counts["log"] == 0
+    assert counts["status"] == counts["slaves"] == counts["log"] == counts["esc_errors"] == 0
     tenths = round(idle.t_end / 100_000) - round(8_000_000 / 100_000)
     assert tenths - 1 <= counts["title"] <= tenths + 1
     assert counts["live"] == FRAMES  # the counter moved every frame: written every frame

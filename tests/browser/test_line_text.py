@@ -24,7 +24,13 @@ from app.ui.line.io_bodies import (
     module_error,
     module_note,
 )
-from app.ui.line.master_panel import dc_text, live_table, log_table, slaves_table
+from app.ui.line.master_panel import (
+    dc_text,
+    esc_errors_table,
+    live_table,
+    log_table,
+    slaves_table,
+)
 from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
 from app.ui.line.view import camera_for, focus_target
@@ -170,6 +176,29 @@ def test_master_panel_table_and_controls() -> None:
                      {"t": 1.5, "text": "second <b>"}])
     assert log.index("second &lt;b&gt;") < log.index("first")  # newest first, escaped
     assert "1.500 s" in log
+
+
+def test_esc_error_counters_per_slave_and_port_and_the_damaged_cable() -> None:
+    """docs/ethercat-master.md "Damaged cable": cable 2 spoils frames; the CPX-E-EC behind it
+    counts them invalid on port 0 (IN), the TRS-CAT before it forwarded on port 1 (OUT)."""
+    quiet = {"invalid": [0, 0], "rx": [0, 0], "forwarded": [0, 0], "lost_link": [0, 0],
+             "epu": 0}
+    slaves = [{**SLAVE, "position": 1, "name": "Box 2 (TRS-CAT)",
+               "esc_errors": {**quiet, "forwarded": [0, 12]}},
+              {**SLAVE, "position": 2, "name": "Box 3 (CPX-E-EC)",
+               "esc_errors": {**quiet, "invalid": [12, 0], "epu": 12, "lost_link": [1, 0]}},
+              {**SLAVE, "position": 3, "name": "Box 4"}]  # a master without the counters
+    html = esc_errors_table(slaves)
+    rows = html.split("<tr>")[2:]
+    assert len(rows) == 3
+    assert "0/<wbr>0/<wbr>0" in rows[0] and "0/<wbr>12/<wbr>0" in rows[0]
+    assert '<span class="fr-line-bad">12/<wbr>0/<wbr>1</span>' in rows[1]
+    assert rows[1].count("12") == 2  # port 0's invalid and the processing unit
+    assert rows[2].count("-") >= 3
+    assert "invalid frames (0x0300) / forwarded (0x0308) / lost links (0x0310)" in html
+    master = {"cables": [{"index": 2, "from": "trscat", "to": "cpx", "plugged": True,
+                          "damaged": 20}]}
+    assert cable_options(master, []) == ["2 trscat -> cpx (damaged 20 %)"]
 
 
 def test_targets_and_focus_names() -> None:

@@ -1,6 +1,7 @@
 """The line's controls (control panel, tab "Line"): the master's faults and every slave's.
 
-Master (its ACTIONS, docs/ethercat-master.md): pull / plug cable i, power a slave off / on,
+Master (its ACTIONS, docs/ethercat-master.md): pull / plug cable i, damage it (a share of
+its frames spoiled) / repair it, power a slave off / on, clear a slave's ESC error counters,
 lose the next N frames, a DC fault (drift, jitter, lost SYNC0) and its clearing, resync and
 the target state. Slaves ("Slave actions"): a "Device" picker and, for the picked one, a
 "Target" (the device or one of its expansions / modules, ``cpx/2``) and two forms generated
@@ -37,7 +38,12 @@ def cable_options(master: Mapping[str, Any], order: Sequence[str]) -> list[str]:
         {"index": i, "from": order[i - 1] if i else "master", "to": d, "plugged": True}
         for i, d in enumerate(order)]
     return [f"{c.get('index', i)} {c.get('from', '?')} -> {c.get('to', '?')}"
-            f"{'' if c.get('plugged', True) else ' (pulled)'}" for i, c in enumerate(cables)]
+            f"{'' if c.get('plugged', True) else ' (pulled)'}{_damage(c.get('damaged'))}"
+            for i, c in enumerate(cables)]
+
+
+def _damage(percent: Any) -> str:
+    return "" if percent is None else f" (damaged {percent} %)"
 
 
 def slave_options(master: Mapping[str, Any], order: Sequence[str]) -> list[str]:
@@ -81,6 +87,9 @@ class LineControls:
         with gui.add_folder("Cables and power"):
             self.cable = gui.add_dropdown("Cable", tuple(cable_options({}, order)) or ("-",))
             cable_buttons = gui.add_button_group("Cable plug", ("Pull", "Plug"))
+            self.damage = gui.add_number("Frames spoiled %", 10, min=1, max=100, step=1,
+                                         hint="share of the frames crossing the cable")
+            damage_buttons = gui.add_button_group("Cable damage", ("Damage", "Repair"))
             self.slave_power = gui.add_dropdown("Slave to power", tuple(slave_options({}, order))
                                                 or ("-",))
             power_buttons = gui.add_button_group("Slave power", ("Power off", "Power on"))
@@ -91,11 +100,16 @@ class LineControls:
             dc_buttons = gui.add_button_group("DC", ("Inject", "Clear"))
         with gui.add_folder("Master", expand_by_default=False):
             gui.add_button("Resync").on_click(master("resync"))
+            # A trainee's diagnosis (TwinCAT's "Clear CRC"): a master's write of 0x0300-0x0313.
+            self.esc_slave = gui.add_dropdown("ESC counters of",
+                                              tuple(slave_options({}, order)) or ("-",))
+            clear_esc = gui.add_button("Clear ESC error counters")
             self.target = gui.add_dropdown("Target state", TARGETS, initial_value="OP")
         # What makes a fault, and says which one was made: not on a trainee's page (the
         # classroom's trainee CSS; docs/classroom.md). Resync and the target state stay.
-        self.instructor_only = [self.cable, cable_buttons, self.slave_power, power_buttons,
-                                self.frames, lose, self.dc_fault, dc_buttons]
+        self.instructor_only = [self.cable, cable_buttons, self.damage, damage_buttons,
+                                self.slave_power, power_buttons, self.frames, lose,
+                                self.dc_fault, dc_buttons]
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         self.fault_forms: dict[str, ActionForm] = {}
         # Each device's latest snapshot: a form starts from the present values (Param.current).
@@ -127,6 +141,20 @@ class LineControls:
         def _(event: viser.GuiEvent) -> None:
             verb = "pull_cable" if cable_buttons.value == "Pull" else "plug_cable"
             send(event.client, master_id, verb, {"cable": leading_int(self.cable.value)})
+
+        @damage_buttons.on_click
+        def _(event: viser.GuiEvent) -> None:
+            cable = leading_int(self.cable.value)
+            if damage_buttons.value == "Damage":
+                send(event.client, master_id, "damage_cable",
+                     {"cable": cable, "percent": int(self.damage.value)})
+            else:
+                send(event.client, master_id, "repair_cable", {"cable": cable})
+
+        @clear_esc.on_click
+        def _(event: viser.GuiEvent) -> None:
+            send(event.client, master_id, "clear_esc_errors",
+                 {"position": leading_int(self.esc_slave.value)})
 
         @power_buttons.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -182,3 +210,4 @@ class LineControls:
             self._snapshots = dict(devices)  # replaced whole: read from callback threads
         set_options(self.cable, cable_options(master, self._order))
         set_options(self.slave_power, slave_options(master, self._order))
+        set_options(self.esc_slave, slave_options(master, self._order))

@@ -1,6 +1,7 @@
 """The master panel (left panel, tab "Line"): phase, DC, frame statistics, one row per slave
-(position, station address, name, state, AL status with code and text, DC, link, counters)
-and the master's log in the style picked in the "Log style" dropdown (seed 003 and the FastCAT
+(position, station address, name, state, AL status with code and text, DC, link, counters),
+each slave's ESC error counters per port (docs/ethercat-master.md "Damaged cable") and the
+master's log in the style picked in the "Log style" dropdown (seed 003 and the FastCAT
 seed §7.2-§7.4 styles; the master renders the lines, ``set_log_style``).
 
 Read with ``.get()`` defaults: a master without DC or counters still gets its table.
@@ -90,6 +91,40 @@ def slaves_table(slaves: Sequence[Mapping[str, Any]], target: str | None = None)
             f'changes">Cnt</th></tr></thead><tbody>{body}</tbody></table>')
 
 
+def _port_cell(errors: Mapping[str, Any], port: int) -> str:
+    """``invalid/forwarded/lost link`` of one port, marked when the port saw anything."""
+    numbers = [int((errors.get(key) or [0, 0])[port]) for key in
+               ("invalid", "forwarded", "lost_link")]
+    text = "/<wbr>".join(esc(n) for n in numbers)
+    return f'<span class="fr-line-bad">{text}</span>' if any(numbers) else text
+
+
+def esc_errors_table(slaves: Sequence[Mapping[str, Any]]) -> str:
+    """One row per slave: its ESC's counters at port 0 (IN) and port 1 (OUT), and the
+    processing unit's. The slave with invalid frames on port 0 sits right behind the bad
+    cable, the one with invalid frames on port 1 right before it."""
+    rows = []
+    for i, s in enumerate(slaves):
+        errors = s.get("esc_errors")
+        name = f"{esc(s.get('position', i))} {esc(s.get('name', s.get('device', '?')))}"
+        if errors is None:
+            cells = '<td class="fr-muted">-</td>' * 3
+        else:
+            epu = int(errors.get("epu", 0))
+            epu_html = f'<span class="fr-line-bad">{epu}</span>' if epu else "0"
+            cells = (f"<td>{_port_cell(errors, 0)}</td><td>{_port_cell(errors, 1)}</td>"
+                     f"<td>{epu_html}</td>")
+        rows.append(f"<tr><td>{name}</td>{cells}</tr>")
+    body = "".join(rows) or '<tr><td colspan="4" class="fr-muted">no slaves</td></tr>'
+    legend = "invalid frames (0x0300) / forwarded (0x0308) / lost links (0x0310)"
+    return ('<table class="fr-log fr-line" id="fr-line-esc-errors"><colgroup>'
+            '<col style="width:40%"><col style="width:22%"><col style="width:22%">'
+            '<col style="width:16%"></colgroup><thead><tr><th>ESC errors</th>'
+            f'<th title="{legend}">Port 0 IN</th><th title="{legend}">Port 1 OUT</th>'
+            '<th title="processing unit errors (0x030C)">PU</th></tr></thead>'
+            f"<tbody>{body}</tbody></table>")
+
+
 def dc_text(dc: Mapping[str, Any]) -> str:
     if not dc:
         return '<span class="fr-muted">not reported</span>'
@@ -172,6 +207,7 @@ class MasterPanel:
         self._status = gui.add_html(status_table({}))
         self._live = gui.add_html(live_table({}))
         self._slaves = gui.add_html(slaves_table([]))
+        self._esc_errors = gui.add_html(esc_errors_table([]))
         self._style = gui.add_dropdown("Log style", LOG_STYLES, initial_value=LOG_STYLES[0],
                                        hint="how the master prints its log (set_log_style)")
         # The style is the master's (its snapshot's "log_style"): every page ends up showing it.
@@ -196,11 +232,13 @@ class MasterPanel:
         self._set("live", self._live, live_table(master))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))
+        self._set("esc_errors", self._esc_errors, esc_errors_table(master.get("slaves") or []))
         seen = log_signature(master)
         if seen != self._log_seen:
             self._log_seen = seen
             self._set("log", self._log, log_table(master.get("log") or []))
 
     def text(self, key: str) -> str:
-        """What a block shows: ``title``, ``status``, ``live``, ``slaves`` or ``log``."""
+        """What a block shows: ``title``, ``status``, ``live``, ``slaves``, ``esc_errors`` or
+        ``log``."""
         return self._cache.get(key, "")
