@@ -104,8 +104,9 @@ def test_trainee_injection_refused_instructor_allowed_download(
                             ("Reset fault", "Power", "Hold CNF", "Module")),
                 "Servo drive": (("Alarm", "Alarm cause", "Load jammed"),
                                 ("Drive power", "Jog")),
-                "Line": (("Cable plug", "Frames to lose", "DC fault", "Fault action"),
-                         ("Target state",))}
+                "Line": (("Cable plug", "Cable damage", "Spoiled %", "Frames to lose",
+                          "DC fault", "Fault action"),
+                         ("Target state", "ESC counters of"))}
         # A folder whose every row is the instructor's goes as a whole (no empty title); a
         # folder that keeps a trainee's row stays.
         folders = {"FastCAT": ((), ("Faults", "Modules", "Address and causes")),

@@ -87,8 +87,8 @@ class LineControls:
         with gui.add_folder("Cables and power"):
             self.cable = gui.add_dropdown("Cable", tuple(cable_options({}, order)) or ("-",))
             cable_buttons = gui.add_button_group("Cable plug", ("Pull", "Plug"))
-            self.damage = gui.add_number("Frames spoiled %", 10, min=1, max=100, step=1,
-                                         hint="share of the frames crossing the cable")
+            self.damage = gui.add_number("Spoiled %", 10, min=1, max=100, step=1,
+                                         hint="share of the frames the cable spoils")
             damage_buttons = gui.add_button_group("Cable damage", ("Damage", "Repair"))
             self.slave_power = gui.add_dropdown("Slave to power", tuple(slave_options({}, order))
                                                 or ("-",))
