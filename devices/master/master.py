@@ -255,11 +255,11 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         if cycle:
             self.next_cycle_us = now_us + self.cycle_us
         external = self.external
-        # A healthy line pays one test of an empty dict for the damaged cables.
-        lost = cycle and not external and first and (
-            self.to_lose > 0 or (bool(self.damaged) and self._spoiled()))
-        if lost and self.to_lose > 0:  # _spoiled counted its own
+        lost = cycle and not external and self.to_lose > 0 and first
+        if lost:
             self._lose_frame()
+        elif self.damaged and cycle and not external and first:  # healthy: one dict's truth
+            lost = self._spoiled()
         exchange = cycle and not lost and not external
         target = self.target
         # The target of a DC slave (SAFEOP while DC holds): _target_of_dc, inlined.
