@@ -146,15 +146,20 @@ def test_trainee_injection_refused_instructor_allowed_download(
         wait_until(lambda: _injected(served), what="the instructor's injection")
 
         # A hidden physical fault is not named on the trainee's page: the state table's
-        # Causes row is the instructor's.
+        # Causes and Injected rows are the instructor's.
         served.runtime.command("fastcat", "tbus_voltage", {"low": True}).result(timeout=10)
-        causes = "#fr-state tr.fr-instructor"
-        wait_until(lambda: "Tbus supply low" in instructor.locator(causes).inner_text(),
-                   what="the Causes row on the instructor's page")
-        wait_until(lambda: "Tbus supply low" in trainee.locator(causes).inner_text(),
-                   what="the Causes row in the trainee's page")
-        assert instructor.locator(causes).is_visible()
-        assert not trainee.locator(causes).is_visible()
+        rows = "#fr-state tr.fr-instructor"
+        for page, whose in ((instructor, "the instructor's page"), (trainee, "the trainee's page")):
+            row = page.locator(rows)
+            wait_until(lambda row=row: "Tbus supply low" in row.nth(0).inner_text(),
+                       what=f"the Causes row in {whose}")
+            wait_until(lambda row=row: "Injected" in row.nth(1).inner_text()
+                       and "0x" in row.nth(1).inner_text(), what=f"the Injected row in {whose}")
+        assert instructor.locator(rows).nth(0).is_visible()
+        assert instructor.locator(rows).nth(1).is_visible()
+        assert trainee.locator(rows).count() == 2
+        assert not trainee.locator(rows).nth(0).is_visible()
+        assert not trainee.locator(rows).nth(1).is_visible()
 
         with instructor.expect_download(timeout=30_000) as download:
             instructor.get_by_role("button", name="Download recording").click()
