@@ -5,9 +5,11 @@ The three rotary switches give the bus module its Explicit Device ID, 1 ... 4095
 writes AL control with bit 5 (ID request); while the bit stays set in its AL control writes
 the slave answers AL status bit 5 ("ID loaded") and the ID in the AL status code 0x0134
 instead of 0x0000 — not over an error code, not in BOOT (Beckhoff SSC SetALStatus does the
-same). The ID in force is the one read at the last start (``Switches.explicit_device_id``); it
-is also the configured station alias the wire shows at 0x0012 / SII word 4. A switch at 0
-answers "ID loaded" with 0: no Explicit Device ID (docs/cpx-e-ec.md choice 35).
+same). Only the wire shows it (``al_status_on_wire``, the face's ``al_status``): the
+model's ``al_status`` / ``al_status_code`` stay the ESM's. The ID in force is the one read at
+the last start (``Switches.explicit_device_id``); it is also the configured station alias the
+wire shows at 0x0012 / SII word 4. A switch at 0 answers "ID loaded" with 0: no Explicit
+Device ID (docs/cpx-e-ec.md choice 35).
 """
 
 from __future__ import annotations
@@ -45,10 +47,10 @@ class DeviceIdMixin:
         """The Explicit Device ID in force (0 = none): the configured station alias."""
         return self.switches.explicit_device_id
 
-    @property
-    def al_status(self: CpxEEc) -> int:
-        return self.esm.register | (AL_STATUS_ID_LOADED if self.id_loaded else 0)
-
-    @property
-    def al_status_code(self: CpxEEc) -> int:
-        return self.station_alias if self.id_loaded else self.esm.code
+    def al_status_on_wire(self: CpxEEc) -> tuple[int, int]:
+        """0x0130 / 0x0134 as a master on the wire reads them: with the ID loaded, bit 0x20 and
+        the ID. ``al_status`` / ``al_status_code`` stay the ESM's: the built-in master, which
+        never requests the ID, reads them as state and error (its diagnostic, its log)."""
+        if self.id_loaded:
+            return self.esm.register | AL_STATUS_ID_LOADED, self.station_alias
+        return self.esm.register, self.esm.code

@@ -51,3 +51,15 @@ def test_switches_show_the_active_mode_and_the_one_set() -> None:
         "active: rotary 000, I/O diagnostic interface; set: rotary 0A1, I/O diagnostic interface")
     steady = {**switches, "mode": "I/O diagnostic interface", "pending": False}
     assert switches_text(steady) == "rotary 000, I/O diagnostic interface"
+
+
+def test_the_panel_says_when_the_wire_shows_the_explicit_device_id() -> None:
+    """The panel's AL status rows are the ESM's (the model's al_status / al_status_code); while
+    a wire master's ID request is answered the wire shows 0x0020 and the ID at 0x0134 instead,
+    so the panel names the ID and says it is loaded (seed 002 Tab. 5, docs/cpx-e-ec.md 35)."""
+    snap = {"al_status": 0x02, "al_status_code": 0, "explicit_device_id": 0x11,
+            "id_loaded": True, "switches": {"rotary_hex": "011", "mode": "status bits"}}
+    html = cpx_html(snap)
+    assert "0x0002" in html and "ID loaded" in html
+    assert "0x0022" in html and "0x0011" in html  # what 0x0130 / 0x0134 show
+    assert "ID loaded" not in cpx_html({**snap, "id_loaded": False})

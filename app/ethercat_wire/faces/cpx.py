@@ -45,6 +45,12 @@ class CpxFace(Face):
     def request_id(self, model: Any, on: bool) -> None:
         model.request_id(on)  # seed 002 Tab. 5: the Explicit Device ID (devices/cpx/device_id.py)
 
+    def al_status(self, model: Any) -> tuple[int, int]:
+        """With the ID loaded, AL status bit 0x20 and the ID at 0x0134 (devices/cpx/device_id.py);
+        the model's al_status_code stays its ESM's error code."""
+        status, code = model.al_status_on_wire()
+        return int(status), int(code)
+
     def station_alias(self, model: Any) -> int:
         return int(model.station_alias)
 

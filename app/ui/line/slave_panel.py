@@ -153,6 +153,19 @@ def switches_text(switches: Mapping[str, Any]) -> str:
     return f"active: {active}; set: rotary {rotary}, {mode}"
 
 
+def id_text(snap: Mapping[str, Any]) -> str:
+    """The Explicit Device ID row: while a wire master's ID request is answered the wire shows
+    AL status 0x0020 and the ID at 0x0134, not the ESM's rows above (devices/cpx/device_id.py).
+    """
+    ident = int(snap.get("explicit_device_id", 0))
+    text = esc(f"0x{ident:03X}" if ident else "0x000 (none: stored address)")
+    if not snap.get("id_loaded"):
+        return text
+    status = int(snap.get("al_status", 0)) | 0x20
+    return (text + " " + badge("ID loaded", "ok") +
+            esc(f" wire: 0x0130 = 0x{status:04X}, 0x0134 = 0x{ident:04X}"))
+
+
 def cpx_html(snap: Mapping[str, Any]) -> str:
     states = snap.get("led_states") or {}
     switches = snap.get("switches") or {}
@@ -162,6 +175,7 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         *esm_rows(snap),
         ("Switches", esc(switches_text(switches)) +
          (" " + badge("restart to apply", "warn") if switches.get("pending") else "")),
+        ("Explicit Device ID", id_text(snap)),
         ("Supply", esc(f"U_EL/SEN {supply.get('el_sen_v', '-')} V, "
                        f"U_OUT {supply.get('out_v', '-')} V")),
         ("Error register", esc(f"0x{int(diagnosis.get('error_register', 0)):02X}")),
