@@ -44,3 +44,22 @@ def test_0x1a40_assigned_over_sdo_carries_new_message_available():
         face.download_raw(cpx, TX_ASSIGN, 0, b"\x00")
         face.download_raw(cpx, TX_ASSIGN, 1, (0x1A41).to_bytes(2, "little"))
     assert exc.value.code == AbortCode.VALUE_RANGE
+
+
+def test_sii_and_esi_announce_pdo_assignment():
+    """0x1C13 is writable, so the SII GENERAL CoE byte has PDO Assign (0x04) and the ESI says
+    PdoAssign="true": a configurator that trusts the ESI assigns 0x1A40. Before: 0x03 / false.
+    The shipped static/esi file is checked against a fresh export by test_sii_esi.py."""
+    import xml.etree.ElementTree as ET
+
+    from app.ethercat_wire import esi, sii
+    from app.ethercat_wire.faces.base import COE_PDO_ASSIGN
+
+    cpx = line_rig("PREOP").devices["cpx"]
+    desc = face_for(cpx).describe(cpx)
+    assert desc.coe_details & COE_PDO_ASSIGN
+    general = sii.categories(sii.build(desc))[sii.CAT_GENERAL][0]
+    assert general[5] & COE_PDO_ASSIGN
+    coe = ET.fromstring(ET.tostring(esi.document(desc).getroot())).find(".//Mailbox/CoE")
+    assert coe is not None and coe.get("PdoAssign") == "true"
+    assert coe.get("PdoConfig") == "false"  # the mappings stay fixed (Tab. 27 sub 0 RO)

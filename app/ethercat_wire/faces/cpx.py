@@ -15,7 +15,15 @@ from typing import Any, ClassVar
 
 from app.ethercat_wire.description import Pdo
 from app.ethercat_wire.faces import image
-from app.ethercat_wire.faces.base import TX_ASSIGN, Face, Layout, NoAnswer
+from app.ethercat_wire.faces.base import (
+    COE_PDO_ASSIGN,
+    COE_SDO,
+    COE_SDO_INFO,
+    TX_ASSIGN,
+    Face,
+    Layout,
+    NoAnswer,
+)
 from devices.cpx import objects
 from devices.cpx.assignment import DIAG_PDO
 from devices.device import CommandError
@@ -27,6 +35,9 @@ class CpxFace(Face):
     group = "CPX-E"
     order_code = "CPX-E-EC"
     dc_supported = True  # §2.1.4 Distributed Clocks
+    # 0x1C13 is written in PREOP (0x1A40, seed 002 l. 539-541): SII GENERAL / ESI PdoAssign.
+    # No PdoConfig: the mappings are fixed (Tab. 27, sub 0 RO).
+    coe_details = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN
     identity_defaults: ClassVar[tuple[int, int, int]] = (
         objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
 
