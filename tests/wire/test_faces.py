@@ -1,8 +1,8 @@
 """The wire faces against the slave models: identity, image sizes, outputs in, inputs out, ESM.
 
 Identity is each model's 0x1018; the SM2 / SM3 lengths are what a master computes from the
-mapping objects it reads (0x1C12 / 0x1C13 -> 0x16xx / 0x1Axx, ETG.1000.6; the CPX-E-EC, which
-has no assignment objects in seed 002 Tab. 27, by its address rules §2.3.1); outputs written
+mapping objects it reads (0x1C12 / 0x1C13 -> 0x16xx / 0x1Axx, ETG.1000.6; the CPX-E-EC assigns
+its module PDOs by its address rules §2.3.1, devices/cpx/assignment.py); outputs written
 through the face reach the model (seed 000 §5 / §6.28: a DO16 channel the master sets drives
 the terminal); state refusals keep the model's own codes (seed 001 §9.3.2: 0x0070).
 """
