@@ -16,7 +16,7 @@ their default contents are the ch. 5 table, which the CANopen node uses too.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from devices.canopen.pdo import (
     DEFAULT_RPDO_MAPS,
@@ -24,7 +24,7 @@ from devices.canopen.pdo import (
     MAX_ENTRIES,
     Pdo,
 )
-from devices.od import AbortCode, SdoAbort
+from devices.pdo_assign import PdoAssignment
 
 RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
 RX_MAP_FIRST, TX_MAP_FIRST = 0x1600, 0x1A00
@@ -75,18 +75,14 @@ def default_pdos(receive: bool) -> list[Pdo]:
             for n, m in enumerate(maps)]
 
 
-@dataclass
-class Assignment:
-    """0x1C12 or 0x1C13: sub 0 = count, subs 1..4 = the assigned PDO indices, in order.
+class Assignment(PdoAssignment):
+    """0x1C12 or 0x1C13 of the drive: sub 0 = count, subs 1..4 = the assigned PDO indices, in
+    order; only the four default PDOs of the direction exist (devices/pdo_assign.py has the
+    rules; the PREOP guard is devices/coe/objects.py's, as for the mapping objects)."""
 
-    Changed as a mapping is (ETG.1000.6 / DS 301): sub 0 = 0, the entries, then sub 0 = n;
-    an entry written while sub 0 is not 0 aborts 0x06010000.
-    """
-
-    index: int
-    first: int  # 0x1600 or 0x1A00
-    entries: list[int] = field(default_factory=lambda: [0] * PDOS_PER_DIRECTION)
-    count: int = 0
+    def __init__(self, index: int, first: int) -> None:
+        super().__init__(index, range(first, first + PDOS_PER_DIRECTION), PDOS_PER_DIRECTION)
+        self.first = first  # 0x1600 or 0x1A00
 
     @classmethod
     def default(cls, receive: bool) -> Assignment:
@@ -95,35 +91,6 @@ class Assignment:
         out = cls(index, first)
         out.assign(pdos)
         return out
-
-    @property
-    def assigned(self) -> list[int]:
-        return self.entries[:self.count]
-
-    def allowed(self, pdo_index: int) -> bool:
-        return self.first <= pdo_index < self.first + PDOS_PER_DIRECTION
-
-    def set_entry(self, sub: int, value: int) -> None:
-        if self.count != 0:
-            raise SdoAbort(AbortCode.UNSUPPORTED_ACCESS, self.index, sub)
-        if value != 0 and not self.allowed(value):  # only the default PDOs exist
-            raise SdoAbort(AbortCode.VALUE_RANGE, self.index, sub)
-        self.entries[sub - 1] = value
-
-    def set_count(self, value: int) -> None:
-        if value > PDOS_PER_DIRECTION:
-            raise SdoAbort(AbortCode.VALUE_TOO_HIGH, self.index, 0)
-        chosen = self.entries[:value]
-        if 0 in chosen or len(set(chosen)) != len(chosen):
-            raise SdoAbort(AbortCode.VALUE_RANGE, self.index, 0)
-        self.count = value
-
-    def assign(self, pdo_indices: Sequence[int]) -> None:
-        """The whole sequence at once, as a configuration tool writes it."""
-        self.set_count(0)
-        for sub, value in enumerate(pdo_indices, start=1):
-            self.set_entry(sub, value)
-        self.set_count(len(pdo_indices))
 
 
 def assigned_pdos(assignment: Assignment, pdos: Sequence[Pdo]) -> list[Pdo]:
@@ -147,7 +114,7 @@ def mapping_problem(assignment: Assignment, pdos: Sequence[Pdo]) -> str | None:
 
 def slot_of(rx: Assignment, tx: Assignment, mode: int) -> str | None:
     """The slot whose PDOs are assigned (Position and CSP share theirs: the mode decides)."""
-    found = [s for s in SLOTS.values() if rx.assigned == [s.rx] and tx.assigned == [s.tx]]
+    found = [s for s in SLOTS.values() if rx.assigned == (s.rx,) and tx.assigned == (s.tx,)]
     for slot in found:
         if slot.mode == mode:
             return slot.name

@@ -14,11 +14,10 @@ brings back the default (RAM).
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
 
 from devices.cpx.addressing import GROUP_ORDER
 from devices.cpx.modules import CpxModule
-from devices.od import AbortCode, SdoAbort
+from devices.pdo_assign import PdoAssignment
 
 RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
 RXPDO_BASE, TXPDO_BASE = 0x1600, 0x1A00
@@ -34,44 +33,10 @@ def address_order(units: Sequence[CpxModule], receive: bool) -> tuple[int, ...]:
                  and (unit.mtype.outputs if receive else unit.mtype.inputs))
 
 
-@dataclass
-class TxAssignment:
-    """0x1C13: the module TxPDOs by default; 0x1A40 may be added (or anything rearranged)."""
-
-    default: tuple[int, ...]
-    may_write: Callable[[], bool]  # PREOP only
-    entries: list[int] = field(default_factory=list)
-    count: int = 0
-
-    def __post_init__(self) -> None:
-        self.entries = [*self.default, 0]  # room for the module PDOs and 0x1A40
-        self.count = len(self.default)
-
-    @property
-    def allowed(self) -> tuple[int, ...]:
-        return (*self.default, DIAG_PDO)
-
-    @property
-    def assigned(self) -> tuple[int, ...]:
-        return tuple(self.entries[:self.count])
-
-    def _check_state(self, sub: int) -> None:
-        if not self.may_write():
-            raise SdoAbort(AbortCode.CANNOT_STORE_STATE, TX_ASSIGN, sub)
-
-    def set_entry(self, sub: int, value: int) -> None:
-        self._check_state(sub)
-        if self.count != 0:
-            raise SdoAbort(AbortCode.UNSUPPORTED_ACCESS, TX_ASSIGN, sub)
-        if value != 0 and value not in self.allowed:
-            raise SdoAbort(AbortCode.VALUE_RANGE, TX_ASSIGN, sub)
-        self.entries[sub - 1] = value
-
-    def set_count(self, value: int) -> None:
-        self._check_state(0)
-        if value > len(self.entries):
-            raise SdoAbort(AbortCode.VALUE_TOO_HIGH, TX_ASSIGN, 0)
-        chosen = self.entries[:value]
-        if 0 in chosen or len(set(chosen)) != len(chosen):
-            raise SdoAbort(AbortCode.VALUE_RANGE, TX_ASSIGN, 0)
-        self.count = value
+def tx_assignment(default: tuple[int, ...], may_write: Callable[[], bool]) -> PdoAssignment:
+    """0x1C13: the module TxPDOs by default (room for them and 0x1A40), written in PREOP only
+    (``may_write``); the rules are devices/pdo_assign.py's."""
+    out = PdoAssignment(TX_ASSIGN, (*default, DIAG_PDO), len(default) + 1, may_write)
+    out.entries[:len(default)] = default  # the start's default, not a master's write
+    out.count = len(default)
+    return out

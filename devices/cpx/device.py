@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 
 from devices.cpx.actions import ACTIONS, OperatorMixin
 from devices.cpx.addressing import AddressSpace, assign_addresses, check_configuration
-from devices.cpx.assignment import TxAssignment, address_order
+from devices.cpx.assignment import address_order, tx_assignment
 from devices.cpx.catalog import ModuleType, module_type
 from devices.cpx.device_id import DeviceIdMixin
 from devices.cpx.diagnosis import Diagnosis
@@ -96,8 +96,8 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         self.bus = CpxModule(0, BUS_MODULE[self.switches.active_mode])
         self.units: list[CpxModule] = [self.bus, *self.modules]
         # 0x1C13 (RAM): the default at every start, written by a master in PREOP only
-        self.tx_assign = TxAssignment(address_order(self.units, receive=False),
-                                      lambda: self.esm.state is AlState.PREOP)
+        self.tx_assign = tx_assignment(address_order(self.units, receive=False),
+                                       lambda: self.esm.state is AlState.PREOP)
         self.history = DiagHistory(flags=self.history_flags)
         self.diagnosis = Diagnosis(self.device_id, self.emit, self.history,
                                    self._filter_no_error, self._reports_errors)

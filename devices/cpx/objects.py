@@ -12,12 +12,13 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
-from devices.cpx.assignment import RX_ASSIGN, TX_ASSIGN, TxAssignment, address_order
+from devices.cpx.assignment import RX_ASSIGN, TX_ASSIGN, address_order
 from devices.cpx.catalog import ModuleType
 from devices.cpx.history import FIRST_SUB, INDEX, MAX_MESSAGES, DiagHistory
 from devices.cpx.messages import MESSAGE_BYTES
 from devices.cpx.modules import ANALOG_RANGES, CpxModule
 from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
+from devices.pdo_assign import PdoAssignment
 
 DEVICE_TYPE = 0x0456_1389  # Tab. 27 (0x1389 = 5001, MDP)
 DEVICE_NAME = "CPX-E-EC"  # Tab. 27
@@ -42,7 +43,7 @@ class CpxObjects(Protocol):
     serial: int
     units: list[CpxModule]  # module 0 (the bus module) first
     history: DiagHistory
-    tx_assign: TxAssignment
+    tx_assign: PdoAssignment
 
     def od_error_register(self) -> int: ...
     def od_status_register(self) -> int: ...

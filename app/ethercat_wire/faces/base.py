@@ -69,17 +69,6 @@ def _sm_type_objects(od: ObjectDictionary | None = None) -> ObjectDictionary:
     return od
 
 
-def assignment_objects(rx: Sequence[int], tx: Sequence[int]) -> ObjectDictionary:
-    """0x1C00 with read-only 0x1C12 / 0x1C13 listing ``rx`` / ``tx`` (for a slave whose
-    dictionary has the PDOs but no assignment objects)."""
-    od = _sm_type_objects()
-    for index, name, pdos in ((RX_ASSIGN, "RxPDO assign", rx), (TX_ASSIGN, "TxPDO assign", tx)):
-        od.add(OdEntry(index, 0, name, DataType.UNSIGNED8, Access.RO, len(pdos)))
-        for sub, pdo in enumerate(pdos, start=1):
-            od.add(OdEntry(index, sub, f"{name} {sub}", DataType.UNSIGNED16, Access.RO, pdo))
-    return od
-
-
 # 0x1C00 describes the sync managers, which the wire lays out (the table above), so the wire
 # answers it for a slave whose dictionary has the PDO assignment but not 0x1C00: a master reads
 # it before 0x1C12 / 0x1C13 (SOEM ecx_readPDOmap) and falls back to the SII PDOs without it.
