@@ -172,7 +172,9 @@ class _Slave:
     coe: CoeServer
     status: tuple[int, int] | None = None  # last AL status / code sent
     inputs: bytes | None = None  # last SM3 image sent
-    alias: int | None = None  # configured station alias B shows (its description's, then sent)
+    # (starts, configured station alias) B was last told (the description's, then sent): a new
+    # start reloads 0x0012 (None: from the stored SII word 4)
+    alias: tuple[int, int | None] | None = None
     inputs_due_us: int = 0
     esc_errors: bytes = bytes(20)  # 0x0300-0x0313 last sent (B powers on with zeros)
     clock: _FrameClock = field(default_factory=lambda: _FrameClock())
@@ -319,7 +321,7 @@ class WireBridge:
     def _describe(self) -> list[SlaveDescription]:
         descriptions = [s.face.describe(s.model) for s in self._slaves]
         for s, desc in zip(self._slaves, descriptions, strict=True):
-            s.alias = desc.station_alias
+            s.alias = (s.face.power_ups(s.model), desc.station_alias)
         return descriptions
 
     def _on_step(self, now_us: int) -> None:
@@ -409,10 +411,10 @@ class WireBridge:
         if status != s.status:
             s.status = status
             self._send(msg.AL_STATUS, s.position, *status)
-        alias = s.face.station_alias(s.model)
-        if alias != s.alias:  # a restart read moved switches (B starts with the description's)
+        alias = (s.face.power_ups(s.model), s.face.station_alias(s.model))
+        if alias != s.alias:  # a start (B starts with the description's)
             s.alias = alias
-            self._send(msg.ALIAS, s.position, alias)
+            self._send(msg.ALIAS, s.position, alias[1])
         if handed and now_us >= s.inputs_due_us:  # the inputs a frame would carry
             s.inputs_due_us = now_us + INPUTS_PERIOD_US
             data = s.face.inputs(s.model)

@@ -70,8 +70,9 @@ class SlaveDescription:
     dc_supported: bool
     fmmu_count: int = 3
     # Configured station alias (SII word 4, loaded into 0x0012): the CPX-E-EC's Explicit
-    # Device ID in force (seed 002 Tab. 5); 0 for the others.
-    station_alias: int = 0
+    # Device ID in force (seed 002 Tab. 5), None at its switch 0 (the stored alias, 0 in a
+    # fresh EEPROM); 0 for the others.
+    station_alias: int | None = 0
     # For the ESI only (the SII and the wire use the assigned PDOs above): whether the master
     # may edit the PDOs' content (ESI Fixed), and the PDOs the slave has but does not assign
     # by default (listed without Sm, so a configurator can assign them).

@@ -72,11 +72,14 @@ class Esc:
             self._mbx_full = self._mbx_last = None
             self._set_mbx_status(self.sms.mbx_in, False)
 
-    def set_alias(self, alias: int) -> None:
-        """The slave restarted with another configured station alias: SII word 4 (and the
-        CRC of the ESC configuration area) rewritten, 0x0012 reloaded from it."""
-        sii_image.set_alias(self.sii, alias)
-        _U16.pack_into(self.mem, R.STATION_ALIAS, alias & 0xFFFF)
+    def set_alias(self, alias: int | None) -> None:
+        """The slave restarted (an ESC power-up): with a configured station alias of its own,
+        SII word 4 (and the CRC of the ESC configuration area) rewritten; None: the stored
+        word 4 stays (the CPX-E-EC at switch 0). 0x0012 is loaded from word 4 either way."""
+        if alias is not None:
+            sii_image.set_alias(self.sii, alias)
+        stored = _U16.unpack_from(self.sii, sii_image.ALIAS_BYTE)[0]
+        _U16.pack_into(self.mem, R.STATION_ALIAS, stored)
 
     def queue_mailbox(self, data: bytes) -> None:
         self._mbx_queue.append(bytes(data))

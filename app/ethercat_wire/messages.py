@@ -29,7 +29,7 @@ AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0
 MAILBOX_REPLY = "mailbox_reply"  # ("mailbox_reply", pos, data): queued for SM1, in order
 INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
 LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
-ALIAS = "alias"  # ("alias", pos, value): configured station alias after a restart
+ALIAS = "alias"  # ("alias", pos, value | None): a restart; None: the stored SII alias
 ESC_ERRORS = "esc_errors"  # ("esc_errors", pos, data): 0x0300-0x0313 as the model counts them
 STOP = "stop"  # ("stop",)
 

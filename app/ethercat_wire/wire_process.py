@@ -36,7 +36,7 @@ MCL_CURRENT, MCL_FUTURE = 1, 2  # <sys/mman.h>
 def build_line(descriptions: list[SlaveDescription], outbox: list[tuple],
                clock: dc.DcClock | None = None) -> Line:
     clock = clock or dc.DcClock()
-    escs = [Esc(pos, desc, sii.build(desc, desc.station_alias), clock, outbox)
+    escs = [Esc(pos, desc, sii.build(desc, desc.station_alias or 0), clock, outbox)
             for pos, desc in enumerate(descriptions)]
     return Line(escs, outbox)
 

@@ -115,6 +115,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
     def _start(self) -> None:
         """Power-up or restart: switches and modules read, dictionary built, INIT (§2.1.7)."""
         self.switches.read_at_start()
+        self.power_ups += 1
         self._clear_runtime()
         for module, ranges in zip(self.modules, self.default_ranges, strict=True):
             module.reset(ranges)

@@ -67,6 +67,31 @@ def test_id_request_through_the_bridge(wire):
     sim(runtime, lambda: model.apply("set_rotary", {"value": 0x456}, None))
     sim(runtime, lambda: model.apply("restart", {}, None))
     b.expect(lambda m: m == (msg.ALIAS, CPX, 0x456))
+    # Tab. 5: at 0 the stored address stays: "no ID" (None), at every start (an ESC reloads
+    # 0x0012 from SII word 4 at power-up), even when nothing else changed
+    sim(runtime, lambda: model.apply("set_rotary", {"value": 0}, None))
+    sim(runtime, lambda: model.apply("restart", {}, None))
+    b.expect(lambda m: m == (msg.ALIAS, CPX, None))
+    sim(runtime, lambda: model.apply("restart", {}, None))
+    b.expect(lambda m: m == (msg.ALIAS, CPX, None))
+
+
+def test_switch_at_zero_keeps_the_stored_alias():
+    """Tab. 5 l. 253 «0 = сохраненный адрес EtherCAT»: a restart with the switches at 0 leaves
+    SII word 4 as stored (here by a master's alias tool) and loads 0x0012 from it; before, it
+    wrote 0 over both."""
+    rig = line_rig("PREOP", cpx_rotary=0)
+    model = rig.devices["cpx"]
+    desc = face_for(model).describe(model)
+    assert desc.station_alias is None
+    line = build_line([desc], [])
+    assert alias_of(line) == (0, 0)  # a fresh EEPROM stores no alias
+    sii.set_alias(line.escs[0].sii, 0x077)  # `ethercat alias -p 0 0x77` (word 4 + CRC)
+    assert alias_of(line) == (0, 0x077)  # the ESC loads 0x0012 at power-up only
+    apply_message(line, (msg.ALIAS, 0, None))  # the CPX restarted, switches at 0
+    assert alias_of(line) == (0x077, 0x077)
+    apply_message(line, (msg.ALIAS, 0, ID))  # a restart with the switches at 0x123
+    assert alias_of(line) == (ID, ID)
 
 
 def test_the_esc_forwards_the_raw_al_control_and_shows_the_answer():

@@ -303,8 +303,14 @@ class Face:
         """AL control bit 5, ID request (ETG.1000.6): only a slave with an Explicit Device ID
         answers it, in its AL status (ETG.1020); the others ignore the bit."""
 
-    def station_alias(self, model: Any) -> int:
-        """The configured station alias (SII word 4, register 0x0012); 0 = none."""
+    def station_alias(self, model: Any) -> int | None:
+        """The configured station alias the slave sets (SII word 4, register 0x0012); 0 = none;
+        None: it sets none, the alias stored in SII word 4 stays (the CPX-E-EC at switch 0)."""
+        return 0
+
+    def power_ups(self, model: Any) -> int:
+        """How often the slave started: each start is an ESC power-up, which loads 0x0012 from
+        SII word 4 (only a slave with a station alias of its own needs it)."""
         return 0
 
     def refuse_unknown_state(self, model: Any, code: int) -> None:

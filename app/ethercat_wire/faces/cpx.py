@@ -62,8 +62,12 @@ class CpxFace(Face):
         status, code = model.al_status_on_wire()
         return int(status), int(code)
 
-    def station_alias(self, model: Any) -> int:
-        return int(model.station_alias)
+    def station_alias(self, model: Any) -> int | None:
+        alias = model.station_alias  # None: switches at 0, the stored alias (Tab. 5)
+        return None if alias is None else int(alias)
+
+    def power_ups(self, model: Any) -> int:
+        return int(model.power_ups)
 
     def layout(self, model: Any, receive: bool) -> Layout:
         """As the base, but 0x1C13 changes in PREOP (0x1A40, devices/cpx/assignment.py):

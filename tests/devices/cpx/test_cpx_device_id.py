@@ -100,3 +100,19 @@ def test_the_model_al_status_stays_the_esm_s_for_the_built_in_master() -> None:
     bench.run(0.05)
     changes = [e for e in bench.events if type(e).__name__ == "SlaveStateChange"]
     assert changes and all(getattr(e, "code", 0) == 0 for e in changes)
+
+
+def test_switch_at_zero_keeps_the_stored_address() -> None:
+    """Tab. 5 l. 253: «0 = сохраненный адрес EtherCAT, "Explicit Device ID" не задан»: at 0
+    the model gives no station alias (None: the wire keeps SII word 4 as stored and loads
+    0x0012 from it at each start, docs/cpx-e-ec.md choice 35); an ID request answers 0."""
+    bench = _preop(Bench(master=False, rotary_switch=0x123))
+    assert bench.cpx.station_alias == 0x123
+    ups = bench.cpx.power_ups
+    bench.apply("set_rotary", value=0)
+    bench.apply("restart")
+    assert bench.cpx.station_alias is None and bench.cpx.explicit_device_id == 0
+    assert bench.cpx.power_ups == ups + 1  # a start: the ESC reloads 0x0012 from its SII
+    bench.cpx.request_state(AlState.PREOP)
+    al_control(bench, AlState.PREOP, True)
+    assert wire(bench) == (0x22, 0x0000)
