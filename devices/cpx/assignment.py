@@ -7,7 +7,8 @@ Message Available" данным процесса»: 0x1A40 "Diag History – TxP
 optional TxPDO, not assigned by default, which a master assigns through 0x1C13 in PREOP as
 ETG.1000.6 / CiA 301 change an assignment: sub 0 = 0, the entries, sub 0 = n. Aborts: outside
 PREOP 0x08000022, an entry while sub 0 is not 0 0x06010000, a PDO the device does not have
-(or one twice) 0x06090030, sub 0 past the entries 0x06090031. A start (restart, power-up)
+(or one twice) 0x06090030, sub 0 past the entries 0x06090031; 0x1A40 anywhere but last
+0x06090030 (``TxAssignment``). A start (restart, power-up)
 brings back the default (RAM).
 """
 
@@ -17,6 +18,7 @@ from collections.abc import Callable, Sequence
 
 from devices.cpx.addressing import GROUP_ORDER
 from devices.cpx.modules import CpxModule
+from devices.od import AbortCode, SdoAbort
 from devices.pdo_assign import PdoAssignment
 
 RX_ASSIGN, TX_ASSIGN = 0x1C12, 0x1C13
@@ -33,10 +35,24 @@ def address_order(units: Sequence[CpxModule], receive: bool) -> tuple[int, ...]:
                  and (unit.mtype.outputs if receive else unit.mtype.inputs))
 
 
-def tx_assignment(default: tuple[int, ...], may_write: Callable[[], bool]) -> PdoAssignment:
+class TxAssignment(PdoAssignment):
+    """0x1C13 with the device's one layout rule: 0x1A40 only after the module TxPDOs.
+
+    Tab. 27 maps one bit in 0x1A40 (sub 0 = 1, RO: no padding entry a master could add), and
+    §2.3.1 / Tab. 9 give every module's data byte addresses; 0x1A40 before a module would move
+    that module's data by a bit. Last, the bit takes a byte of its own at the end of SM3 (7
+    bits unused) and every module stays where the addressing rules put it."""
+
+    def check_sequence(self, chosen: Sequence[int]) -> None:
+        super().check_sequence(chosen)
+        if DIAG_PDO in chosen[:-1]:
+            raise SdoAbort(AbortCode.VALUE_RANGE, self.index, 0)
+
+
+def tx_assignment(default: tuple[int, ...], may_write: Callable[[], bool]) -> TxAssignment:
     """0x1C13: the module TxPDOs by default (room for them and 0x1A40), written in PREOP only
     (``may_write``); the rules are devices/pdo_assign.py's."""
-    out = PdoAssignment(TX_ASSIGN, (*default, DIAG_PDO), len(default) + 1, may_write)
+    out = TxAssignment(TX_ASSIGN, (*default, DIAG_PDO), len(default) + 1, may_write)
     out.entries[:len(default)] = default  # the start's default, not a master's write
     out.count = len(default)
     return out

@@ -63,3 +63,28 @@ def test_sii_and_esi_announce_pdo_assignment():
     coe = ET.fromstring(ET.tostring(esi.document(desc).getroot())).find(".//Mailbox/CoE")
     assert coe is not None and coe.get("PdoAssign") == "true"
     assert coe.get("PdoConfig") == "false"  # the mappings stay fixed (Tab. 27 sub 0 RO)
+
+
+def test_0x1a40_first_is_refused_and_last_keeps_every_module_byte():
+    """Seed 002 §2.3.1 / Tab. 9: module data at byte addresses. 0x1A40 (one bit, Tab. 27) is
+    accepted only after the module TxPDOs: the SM3 bytes before it are those of the default
+    assignment, and the bit sits in a byte of its own (7 bits unused)."""
+    rig = line_rig("PREOP", cpx_dil=(True, False))
+    cpx = rig.devices["cpx"]
+    face = face_for(cpx)
+    tx = [p.index for p in face.tx_pdos(cpx)]
+    before = face.inputs(cpx)
+
+    def write(pdos: list[int]) -> None:
+        face.download_raw(cpx, TX_ASSIGN, 0, b"\x00")
+        for sub, pdo in enumerate(pdos, start=1):
+            face.download_raw(cpx, TX_ASSIGN, sub, pdo.to_bytes(2, "little"))
+        face.download_raw(cpx, TX_ASSIGN, 0, bytes([len(pdos)]))
+
+    with pytest.raises(SdoAbort) as exc:
+        write([DIAG_PDO, *tx])
+    assert exc.value.code == AbortCode.VALUE_RANGE
+    write([*tx, DIAG_PDO])
+    after = face.inputs(cpx)
+    assert after[:len(before)] == before and len(after) == len(before) + 1
+    assert after[-1] & 0xFE == 0

@@ -67,3 +67,24 @@ def test_entry_while_sub0_not_zero_and_outside_preop_refused(bench: Bench) -> No
         bench.cpx.cmd_write_object(TX_ASSIGN, 0, 0)
     assert exc.value.code == AbortCode.CANNOT_STORE_STATE
     assert _read(bench) == MODULE_TX
+
+
+@pytest.mark.parametrize("pdos", [
+    [DIAG_PDO, *MODULE_TX],  # first: every module's data one bit later
+    [*MODULE_TX[:2], DIAG_PDO, MODULE_TX[2]],  # the 16DI off its byte
+])
+def test_0x1a40_only_after_the_module_data(bench: Bench, pdos: list[int]) -> None:
+    """Tab. 27: 0x1A40 maps one bit (sub 0 = 1, RO: no padding entry); §2.3.1 / Tab. 9 give
+    every module's data its byte address. Anywhere but last the bit would move the module
+    data after it off those addresses, so sub 0 = n refuses it (0x06090030) and 0x1C13 stays
+    empty until a valid n (docs/cpx-e-ec.md choice 36)."""
+    cpx = bench.cpx
+    cpx.cmd_write_object(TX_ASSIGN, 0, 0)
+    for sub, pdo in enumerate(pdos, start=1):
+        cpx.cmd_write_object(TX_ASSIGN, sub, pdo)
+    with pytest.raises(SdoAbort) as exc:
+        cpx.cmd_write_object(TX_ASSIGN, 0, len(pdos))
+    assert (exc.value.code, exc.value.sub) == (AbortCode.VALUE_RANGE, 0)
+    assert cpx.cmd_read_object(TX_ASSIGN, 0) == 0
+    assign(bench, [*MODULE_TX, DIAG_PDO])  # last: accepted
+    assert _read(bench) == [*MODULE_TX, DIAG_PDO]
