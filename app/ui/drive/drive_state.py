@@ -215,24 +215,31 @@ def event_text(event: Event) -> tuple[str, bool] | None:
 
 
 class DriveLog:
-    """The last drive events, newest first (the dashboard's event log shows the coupler's)."""
+    """Each drive's last events, newest first (the dashboard's event log shows the coupler's).
+
+    One bounded list per drive: with one list for all, a busy drive's events pushed a quiet
+    one's out, and a drive in Fault read "no drive events yet" (docs/dashboard.md)."""
 
     def __init__(self, rows: int = LOG_ROWS) -> None:
-        self._rows: collections.deque[tuple[int, str, str, bool]] = collections.deque(
-            maxlen=rows)
+        self._size = rows
+        self._rows: dict[str, collections.deque[tuple[int, str, bool]]] = {}
 
     def add(self, events: Iterable[Event]) -> None:
         for event in events:
             found = event_text(event)
-            if found is not None:
-                self._rows.append((event.t_us, event.device, *found))
+            if found is None:
+                continue
+            rows = self._rows.get(event.device)
+            if rows is None:
+                rows = self._rows[event.device] = collections.deque(maxlen=self._size)
+            rows.append((event.t_us, *found))
 
     def html(self, device: str) -> str:
-        rows = [r for r in reversed(self._rows) if r[1] == device]
+        rows = list(reversed(self._rows.get(device, ())))
         if not rows:
             return '<p class="fr-muted fr-drive-log">no drive events yet</p>'
         items = "".join(f'<li class="{"fr-err" if err else ""}">{t / US_PER_S:8.3f} s '
-                        f"{esc(text)}</li>" for t, _, text, err in rows)
+                        f"{esc(text)}</li>" for t, text, err in rows)
         return f'<ul class="fr-drive-log" id="fr-drive-log">{items}</ul>'
 
     def clear(self) -> None:
