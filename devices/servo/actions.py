@@ -169,7 +169,9 @@ class DriveActions:
     def cmd_enable(self: ServoDrive, on: bool) -> None:
         self.cmd_write_register(R.CONTROL_WORD, control.TEN_CMD | control.IEN_CMD if on else 0)
 
-    def cmd_alarm_reset(self: ServoDrive) -> None:
+    def cmd_alarm_reset(self: ServoDrive) -> str | None:
+        """The reset pulse; the answer says why the drive stays in Fault (the drive log says
+        it too), None when the reset went through or there was nothing to reset."""
         self._powered()
         if self.cw_source == "register":
             r00 = self.regs[R.CONTROL_WORD] & ~control.ALM_RST
@@ -179,6 +181,7 @@ class DriveActions:
             cw = self.cw & ~ds402.CW_FAULT_RESET
             self.write_controlword(cw | ds402.CW_FAULT_RESET)
             self.write_controlword(cw)
+        return self.reset_refusal()
 
     def cmd_start(self: ServoDrive) -> None:
         self._powered()

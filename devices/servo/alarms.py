@@ -169,6 +169,11 @@ class AlarmBank:
         them again at power-up (the CoE slave's mapping cause goes with its mapping)."""
         return [c for c in self.latched if c in self.causes and c in self.injected]
 
+    def injected_causes(self) -> list[int]:
+        """The injected causes not cleared yet, in the order their alarms came."""
+        return [c for c in self.latched if c in self.injected] + sorted(
+            c for c in self.injected if c not in self.latched)
+
     @property
     def active(self) -> int:
         """alarm_code R46: the first alarm still latched, 0 when none."""

@@ -240,6 +240,9 @@ class DriveReadings:
             "ten": levels["ten"], "ien": levels["ien"],
             "inputs": {name: levels[name] for name in INPUT_NAMES},
             "outputs": self.outputs(), "alarm": alarm, "alarms": list(self.alarms.latched),
+            # the instructor's: what inject_alarm left until clear_alarm (docs/classroom.md)
+            "injected": [{"code": c, "name": self.alarm_table[c].name}
+                         for c in self.alarms.injected_causes()],
             "error_code": self.error_code(), "display": self.display, "saving": self.saving,
             "save_pending": self.save_pending is not None, "homed": self.homed,
             "jammed": self.plant.jammed,

@@ -169,8 +169,7 @@ class DriveStateMachine:
         resets in Fault only (transition 15). During the fault reaction the alarm stays: a
         reset there used to clear it and the ramp then ended in Fault with no code."""
         if self.state is State.FAULT_REACTION_ACTIVE:
-            self.log(f"alarm reset ignored: alarm {self.alarms.active} still stopping the axis "
-                     "(reset in Fault)")
+            self.log(f"alarm reset ignored: {self.reset_refusal()}")
         if self.state is not State.FAULT:
             return
         for code in self.alarms.reset(self.alarm_table):
@@ -178,6 +177,21 @@ class DriveStateMachine:
             self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code), name=spec.name,
                                    active=False))
         if self.alarms.latched:
-            self.log(f"alarm reset refused: alarm {self.alarms.active} persists")
+            self.log(f"alarm reset refused: {self.reset_refusal()}")
         else:
             self._transition(Command.FAULT_RESET)
+
+    def reset_refusal(self: ServoDrive) -> str | None:
+        """Why an alarm reset now leaves the drive in Fault, None when nothing holds it. In what
+        the drive shows ("la condizione di allarme persiste", ch. 5): a cause, never whether it
+        was injected (the answer reaches a trainee's page; ``injected`` is the snapshot's)."""
+        code = self.alarms.active
+        if self.state is State.FAULT_REACTION_ACTIVE:
+            return f"alarm {code} still stopping the axis: reset in Fault"
+        if self.state is not State.FAULT or not code:
+            return None
+        if code in self.alarms.causes:
+            return f"alarm {code} persists: the cause persists"
+        if not self.alarm_table[code].resettable:  # ch. 6: Profinet 30-33
+            return f"alarm {code} is not resettable: switch the drive off and on"
+        return f"alarm {code} persists"

@@ -19,6 +19,7 @@ from typing import Any
 import pytest
 from fake_viser import Handle
 
+from app.classroom.roles import Role
 from app.ui.drive.drive_panel import DrivePanel, mode_option
 from app.ui.line.master_panel import LOG_STYLES, MasterPanel
 from app.ui.panels.modules import ModulePanel
@@ -274,6 +275,36 @@ def test_jog_tells_the_clicking_page_why_the_drive_does_not_move(
     sender.drain()
     assert sender.sent == [("drive1", "jog", {"direction": 1})]
     assert client.notices == notices
+
+
+class _RoleSender(_AnsweringSender):
+    def __init__(self, answer: Any, role: Role) -> None:
+        super().__init__(answer)
+        self._role = role
+
+    def role(self, client: Any) -> Role:
+        return self._role
+
+
+@pytest.mark.parametrize(("role", "body"), [
+    (Role.TRAINEE, "alarm 16 persists: the cause persists"),
+    (Role.INSTRUCTOR, "alarm 16 persists: the cause persists · injected: 16 FOLLOWING_ERROR "
+                      "(Clear alarm removes it, then reset)"),
+])
+def test_a_refused_alarm_reset_tells_the_clicking_page_why(loop, role: Role, body: str) -> None:
+    """Alarm reset with an injected alarm changed nothing on screen; the model's answer
+    (cmd_alarm_reset) now reaches the page that clicked, and names the injected cause only
+    to the instructor (docs/classroom.md)."""
+    server, sender = Server(loop), _RoleSender("alarm 16 persists: the cause persists", role)
+    panel = DrivePanel(server, None, sender, lambda: "drive1", {})  # type: ignore[arg-type]
+    snap = {**DRIVE, "injected": [{"code": 16, "name": "FOLLOWING_ERROR"}]}
+    frames(loop, server, lambda: panel.update(snap))
+    client = _Client()
+    server.gui.handles["Alarm reset"].user(client, None, click=True)  # type: ignore[arg-type]
+    turn(loop, server)
+    sender.drain()
+    assert sender.sent == [("drive1", "alarm_reset", {})]
+    assert client.notices == [("drive1: alarm reset refused", body)]
 
 
 # ---- rail modules (seed 000 §2, §6.30) ----------------------------------------------------

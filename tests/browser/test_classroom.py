@@ -208,3 +208,38 @@ def test_exercise_answered_by_the_trainee(served: ServedRig, browser: Any) -> No
     finally:
         instructor.context.close()
         trainee.context.close()
+
+
+def test_a_refused_drive_alarm_reset_per_role(served: ServedRig, browser: Any) -> None:
+    """An injected alarm 16 on the Modbus drive: Alarm reset is refused on both pages, each
+    told why where it clicked; only the instructor's page names the injected cause (the Drive
+    tab's Injected row, the notification), the trainee's reads "the cause persists"."""
+    served.runtime.advance(1_000_000).result(timeout=30)  # the drive past its self test
+    served.runtime.command("drive", "inject_alarm", {"code": "16"}).result(timeout=10)
+    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
+    trainee = _page(browser, f"{served.url}?fixedDpr=1")
+    try:
+        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
+        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+        for page in (instructor, trainee):
+            page.get_by_role("tab", name="Servo drive", exact=True).click()
+            page.get_by_role("tab", name="Drive", exact=True).click()
+        row = "#fr-drive tr.fr-instructor"
+        wait_until(lambda: "16 FOLLOWING_ERROR" in instructor.locator(row).inner_text(),
+                   what="the Injected row on the instructor's page")
+        assert instructor.locator(row).is_visible()
+        assert trainee.locator(row).count() == 1 and not trainee.locator(row).is_visible()
+
+        toast = ".mantine-Notification-root"
+        trainee.get_by_role("button", name="Alarm reset", exact=True).click()
+        told = trainee.locator(toast, has_text="alarm reset refused")
+        wait_until(lambda: told.count() == 1, what="the trainee's refusal")
+        assert "alarm 16 persists: the cause persists" in told.inner_text()
+        assert "inject" not in told.inner_text().lower()
+        instructor.get_by_role("button", name="Alarm reset", exact=True).click()
+        told = instructor.locator(toast, has_text="alarm reset refused")
+        wait_until(lambda: told.count() == 1, what="the instructor's refusal")
+        assert "injected: 16 FOLLOWING_ERROR" in told.inner_text()
+    finally:
+        instructor.context.close()
+        trainee.context.close()

@@ -15,9 +15,10 @@ from typing import Any
 
 import viser
 
+from app.classroom.roles import Role
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
-from app.ui.drive.drive_state import FIELDBUS_NAMES
+from app.ui.drive.drive_state import FIELDBUS_NAMES, injected_names
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.widgets import DetailHint, Mirror, Synced, set_options
 from app.ui.style import esc
@@ -72,6 +73,16 @@ def parameter_details() -> dict[str, str]:
     return out
 
 
+def reset_refusal_text(why: str, injected: list[Mapping[str, Any]]) -> str:
+    """A refused Alarm reset in words: the model's reason (what the drive shows, "the cause
+    persists"), and for the instructor (``injected`` given only to them) which injected cause
+    holds it; a trainee is never told a cause was injected (docs/classroom.md)."""
+    names = injected_names(injected)
+    if not names:
+        return why
+    return f"{why} · injected: {names} (Clear alarm removes it, then reset)"
+
+
 def alarm_options(fieldbus: str) -> tuple[str, ...]:
     return tuple(alarm_details(fieldbus))
 
@@ -115,6 +126,7 @@ class DrivePanel:
         self._result_lock = threading.Lock()
         self._result = ""  # parked by a read's future (simulation thread), shown by update()
         self._shown_result: str | None = None
+        self._injected: list[Mapping[str, Any]] = []  # the last frame's (snapshot injected)
         gui = server.gui
 
         with gui.add_folder("Drive power and torque"):
@@ -188,7 +200,7 @@ class DrivePanel:
         self._mirrors = {"c9": Mirror(self._c9), "c7": Mirror(self._c7)}
 
         on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
-        reset.on_click(lambda e: self._do(e, "alarm_reset"))
+        reset.on_click(lambda e: self._alarm_reset(e))
         home.on_click(lambda e: self._do(e, "home"))
         on_button(jog, lambda e, b: self._jog(e, JOG[b]))
         on_button(moves, self._positioner)
@@ -215,6 +227,19 @@ class DrivePanel:
                 notify(client, f"{target}: jog", f"{target}: {why}")
 
         self._sender.send(client, target, "jog", {"direction": direction}, done=answered)
+
+    def _alarm_reset(self, event: viser.GuiEvent) -> None:
+        """Alarm reset; when the drive stays in Fault the clicking page is told why (the model's
+        answer), and an instructor also which injected cause holds it."""
+        target, client = self._target(), event.client
+        instructor = self._sender.role(client) is Role.INSTRUCTOR
+
+        def answered(why: Any) -> None:
+            if why:
+                text = reset_refusal_text(str(why), self._injected if instructor else [])
+                notify(client, f"{target}: alarm reset refused", text, error=True)
+
+        self._sender.send(client, target, "alarm_reset", {}, done=answered)
 
     def _apply(self, client: viser.ClientHandle | None, action: str,
                args: dict[str, Any]) -> None:
@@ -302,6 +327,7 @@ class DrivePanel:
 
     # ---- view -----------------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any]) -> None:
+        self._injected = list(snap.get("injected") or [])
         fieldbus = str(snap.get("fieldbus", self._fieldbus))
         if fieldbus != self._fieldbus:  # Profinet numbers 30..33 differently (ch. 6)
             self._fieldbus = fieldbus

@@ -99,6 +99,12 @@ def alarm_html(snap: Mapping[str, Any]) -> str:
     return html
 
 
+def injected_names(injected: Iterable[Mapping[str, Any]]) -> str:
+    """``"16 FOLLOWING_ERROR"``: the alarm causes an instructor injected (snapshot
+    ``injected``), "" when none."""
+    return ", ".join(f"{i.get('code', '?')} {i.get('name', '')}".strip() for i in injected)
+
+
 def _on(flag: Any, on: str = "on", off: str = "off") -> str:
     return on if flag else off
 
@@ -124,6 +130,10 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         ("Position", position),
         ("Velocity", esc(f"{velocity:.0f} u/s · following error {fe:.1f}")),
         ("Alarm", alarm_html(snap)),
+        # The instructor's (style.CAUSE_ROWS): without it an injected alarm's refused reset
+        # read "persists" with no word of why (docs/classroom.md hides it from trainees).
+        ("Injected", esc(injected_names(snap.get("injected") or []))
+         or '<span class="fr-muted">none</span>'),
         ("TEN / IEN", consents),
         ("Outputs", esc(f"End of Job {_on(outputs.get('end_of_job'))} · Near to target "
                         f"{_on(outputs.get('near_target'))} · Brake "

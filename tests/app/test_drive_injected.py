@@ -1,0 +1,39 @@
+"""The Drive tab names the injected alarm causes for the instructor, and a refused alarm reset
+says why (trainee-eyes review, session 14: Alarm reset with an injected alarm changed nothing on
+screen, and only the drive log below the plots said "alarm 16 persists").
+
+The *Injected* row is a :data:`app.ui.style.CAUSE_ROWS` row, as the FastCAT's and the slaves':
+hidden on a trainee's page (docs/classroom.md); the refusal's text for a trainee is the model's
+answer alone, "the cause persists", never the injected cause.
+"""
+
+from __future__ import annotations
+
+from app.ui.drive.drive_panel import reset_refusal_text
+from app.ui.drive.drive_state import state_rows
+from app.ui.style import INSTRUCTOR_CLASS, kv_table
+
+IN_FAULT = {"powered": True, "ds402_state": "Fault", "alarm": {"code": 16,
+            "name": "FOLLOWING_ERROR", "description": "", "effect": ""}, "alarms": [16]}
+INJECTED = [{"code": 16, "name": "FOLLOWING_ERROR"}]
+WHY = "alarm 16 persists: the cause persists"
+
+
+def test_the_injected_row_names_the_causes_for_the_instructor_only() -> None:
+    rows = dict(state_rows({**IN_FAULT, "injected": INJECTED}))
+    assert "16 FOLLOWING_ERROR" in rows["Injected"]
+    assert "none" in dict(state_rows({**IN_FAULT, "injected": []}))["Injected"]
+    html = kv_table(state_rows({**IN_FAULT, "injected": INJECTED}), "fr-drive")
+    assert f'<tr class="{INSTRUCTOR_CLASS}"><th>Injected</th><td>16 FOLLOWING_ERROR' in html
+
+
+def test_a_trainee_reads_the_models_reason_and_no_injected_cause() -> None:
+    text = reset_refusal_text(WHY, [])
+    assert text == WHY
+    assert "inject" not in text.lower()
+
+
+def test_the_instructor_reads_which_injected_cause_holds_the_alarm() -> None:
+    text = reset_refusal_text(WHY, INJECTED)
+    assert text.startswith(WHY)
+    assert "injected: 16 FOLLOWING_ERROR" in text and "Clear alarm" in text
