@@ -216,6 +216,11 @@ class Diagnosis:
                 return min(channels) if channels else 0
         return 0
 
+    def of_module(self, module: int) -> list[dict[str, object]]:
+        """What is diagnosed on module ``module`` now: the causes behind its error LED."""
+        return [{"cause": e.fault.cause, "channel": e.fault.channel}
+                for e in self.ranked() if e.fault.module == module]
+
     def snapshot(self) -> dict[str, object]:
         return {"error_register": self.error_register, "status_bits": self.status_bits,
                 "error_class": self.error_class,

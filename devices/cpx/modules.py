@@ -276,13 +276,20 @@ class CpxModule:
                 out.append(ModuleFault(n, "wire_break", ch, output=True))
         return out
 
+    def short_idle(self) -> list[int]:
+        """Shorted channels that draw no current now (an output switched off, a current
+        range): the module cannot see them, whatever the wiring (docs/cpx-e-ec.md choice 30)."""
+        return [ch for ch in sorted(self.shorted)
+                if ch < len(self.commanded) and not self._short_bites(ch)]
+
     def snapshot(self) -> dict[str, Any]:
         out: dict[str, Any] = {
             "module": self.number, "type": self.mtype.name, "short": self.mtype.short,
             "ident": f"0x{self.mtype.ident:08X}", "inputs": list(self.in_values),
             "outputs": list(self.out_values), "driven": list(self.driven),
             "energised": list(self.energised),
-            "shorted": sorted(self.shorted), "sensor_supply_short": self.sensor_supply_short,
+            "shorted": sorted(self.shorted), "short_idle": self.short_idle(),
+            "sensor_supply_short": self.sensor_supply_short,
             "wire_broken": sorted(self.wire_broken), "failed": self.failed,
             "forced": {str(k): v for k, v in sorted(self.forced.items())}}
         if self.is_digital_input:

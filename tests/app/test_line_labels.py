@@ -114,6 +114,12 @@ def blinking(snap: Snapshot) -> None:
     devices(snap)["drive_ec"]["leds"].update(Status="single_flash", Error="double_flash")
 
 
+def diagnosed(cause: str, *channels: int | None) -> list[dict[str, Any]]:
+    """What the CPX-E-EC diagnoses on a module (its snapshot's "diagnosed"): the red LED and
+    the note follow it, not the wiring (docs/cpx-e-ec.md choice 30)."""
+    return [{"cause": cause, "channel": c} for c in channels]
+
+
 def expansion_and_module_faults(snap: Snapshot) -> None:
     """Seed 001 §9.3.7: an application error on expansion 2, another type found there; seed
     002 §2.5: a short circuit on the 8DO's channel 3 (the line_cpx_short screenshot)."""
@@ -122,6 +128,7 @@ def expansion_and_module_faults(snap: Snapshot) -> None:
     trs["f050"][3] = 0x494F2D45  # §9.3.2: IO-E found where AN-E is configured: two lines
     modules = devices(snap)["cpx"]["modules"]
     modules[1]["shorted"] = [3]
+    modules[1]["diagnosed"] = diagnosed("short_circuit_outputs", 3)
 
 
 def every_module_faulted(snap: Snapshot) -> None:
@@ -129,10 +136,10 @@ def every_module_faulted(snap: Snapshot) -> None:
     sensor-supply short, six of the 8DO's outputs shorted, wires broken), side by side, with
     the blink words under the CPX (SF flashing)."""
     modules = devices(snap)["cpx"]["modules"]
-    modules[0]["sensor_supply_short"] = True
-    modules[1]["shorted"] = [0, 1, 3, 4, 6, 7]
-    modules[2]["wire_broken"] = [0, 2]
-    modules[3]["wire_broken"] = [0, 1, 2, 3]
+    modules[0]["diagnosed"] = diagnosed("short_circuit_sensor_supply", None)
+    modules[1]["diagnosed"] = diagnosed("short_circuit_outputs", 0, 1, 3, 4, 6, 7)
+    modules[2]["diagnosed"] = diagnosed("wire_break", 0, 2)
+    modules[3]["diagnosed"] = diagnosed("wire_break", 0, 1, 2, 3)
     devices(snap)["cpx"]["led_states"]["SF"] = {"pattern": "triple_flash", "colour": "red"}
 
 

@@ -17,6 +17,7 @@ from helpers import LiveDashboard, choose, compare_screenshot, open_dashboard, w
 
 from app.rig_config import DEFAULT_RIG
 from app.ui.line.painter import COLOURS
+from app.ui.line.slave_panel import slave_html
 from devices.events import Focus
 
 pytestmark = pytest.mark.browser
@@ -155,14 +156,19 @@ def test_line_trscat_outputs_fallback(line: LiveDashboard, page: Any) -> None:
 
 
 def test_line_cpx_short_circuit(line: LiveDashboard, page: Any) -> None:
-    """§2.5: the PLC switches on output 3 of the 8DO (module 2, 0x7002:4), then it is shorted:
-    0x10F3 message, EMCY 0x2320 in the master's log, SF LED, the module's red LED."""
-    line.command("cpx", "write_object", {"index": 0x7002, "sub": 4, "value": 1})
+    """§2.5: output 3 of the 8DO (module 2) is shorted while off: nothing is diagnosed
+    (docs/cpx-e-ec.md choice 30), so the module's red LED stays off and the Slave tab says
+    why; the PLC switches it on (0x7002:4): 0x10F3 message, EMCY 0x2320 in the master's log,
+    SF LED, the module's red LED."""
+    line.command("cpx/2", "short_circuit", {"on": True, "channel": 3})
     line.advance(0.5)
     view = line.dashboard.line
     assert view is not None
-    assert view.scene.led_colours("cpx")["m2.3"] == COLOURS["yellow"]  # output 3 driven
-    line.command("cpx/2", "short_circuit", {"on": True, "channel": 3})
+    assert line.snapshot("cpx")["leds"]["SF"] == "off"
+    assert view.scene.led_colours("cpx")["m2.error"] != COLOURS["red"]
+    assert view.scene.text("cpx", "m2_note") == ""
+    assert "short 3 (output off: not diagnosed)" in slave_html("cpx", line.snapshot("cpx"))
+    line.command("cpx", "write_object", {"index": 0x7002, "sub": 4, "value": 1})
     line.advance(1.0)
     snap = line.snapshot("cpx")
     assert snap["leds"]["SF"] != "off"
@@ -182,12 +188,17 @@ def test_line_cpx_short_circuit(line: LiveDashboard, page: Any) -> None:
 def test_line_cpx_every_module_faulted(line: LiveDashboard, page: Any) -> None:
     """§2.5 on every module at once: a failed 16DI, six of the 8DO's outputs shorted, every
     wire of the 4AI broken, one of the 4AO's: each red LED on, each note under its own plate
-    and clear of its neighbours' ("short" / "6 ch.", "wire" / "0-3")."""
+    and clear of its neighbours' ("short" / "6 ch.", "wire" / "0-3"). The module sees each
+    fault (docs/cpx-e-ec.md choice 30): the shorted outputs are switched on, the broken
+    wires are in the 4-20 mA range (0x2003 / 0x2004, code 6)."""
     line.command("cpx/1", "inject_fault", {"fault": "module_failure"})
     for channel in (0, 1, 3, 4, 6, 7):
+        line.command("cpx", "write_object", {"index": 0x7002, "sub": channel + 1, "value": 1})
         line.command("cpx/2", "short_circuit", {"on": True, "channel": channel})
     for channel in range(4):
+        line.command("cpx", "write_object", {"index": 0x2003, "sub": channel + 1, "value": 6})
         line.command("cpx/3", "wire_break", {"on": True, "channel": channel})
+    line.command("cpx", "write_object", {"index": 0x2004, "sub": 2, "value": 6})
     line.command("cpx/4", "wire_break", {"on": True, "channel": 1})
     line.advance(1.0)
     view = line.dashboard.line

@@ -93,13 +93,27 @@ def test_expansion_note() -> None:
     assert expansion_note(snap, 1) == "not seen"
 
 
+def diagnosed(cause: str, *channels: int) -> list[dict[str, Any]]:
+    """A module snapshot's "diagnosed" (devices/cpx/diagnosis.py of_module)."""
+    return [{"cause": cause, "channel": c} for c in channels] or [
+        {"cause": cause, "channel": None}]
+
+
 @pytest.mark.parametrize(("module", "error", "levels"), [
     ({"short": "16DI", "inputs": [1, 0, 1]}, "", [True, False, True]),
-    ({"short": "8DO", "driven": [0, 0, 0, 1], "shorted": [3]}, "short 3",
+    ({"short": "8DO", "driven": [0, 0, 0, 1], "shorted": [3],
+      "diagnosed": diagnosed("short_circuit_outputs", 3)}, "short 3",
      [False, False, False, True]),
-    ({"short": "4AI-U-I", "inputs": [5, 0], "wire_broken": [0, 1]}, "wire 0,1", []),
-    ({"short": "16DI", "inputs": [], "failed": True}, "failed", []),
-    ({"short": "16DI", "sensor_supply_short": True}, "sensor short", []),
+    ({"short": "4AI-U-I", "inputs": [5, 0], "wire_broken": [0, 1],
+      "diagnosed": diagnosed("wire_break", 0, 1)}, "wire 0,1", []),
+    ({"short": "16DI", "inputs": [], "failed": True,
+      "diagnosed": diagnosed("module_failure")}, "failed", []),
+    ({"short": "16DI", "sensor_supply_short": True,
+      "diagnosed": diagnosed("short_circuit_sensor_supply")}, "sensor short", []),
+    # docs/cpx-e-ec.md choice 30: wired, but the output is off: the module sees nothing
+    ({"short": "8DO", "driven": [0] * 8, "shorted": [3], "short_idle": [3],
+      "diagnosed": []}, "", [False] * 8),
+    ({"short": "4AI-U-I", "inputs": [0] * 4, "wire_broken": [0], "diagnosed": []}, "", []),
 ])
 def test_cpx_module_led_and_channels(module: dict[str, Any], error: str,
                                      levels: list[bool]) -> None:
@@ -116,12 +130,14 @@ def test_channel_lists_shorten_runs(channels: list[int], text: str) -> None:
 
 
 @pytest.mark.parametrize(("module", "note"), [
-    ({"shorted": [3]}, "short 3"),  # one line when it fits a plate
-    ({"wire_broken": [0, 1]}, "wire\n0,1"),
-    ({"shorted": list(range(8))}, "short\n0-7"),
-    ({"shorted": [0, 1, 3, 4, 6, 7]}, "short\n6 ch."),  # too long for a line: the count
-    ({"sensor_supply_short": True}, "sensor\nshort"),
-    ({"failed": True, "shorted": [1]}, "failed"),
+    ({"diagnosed": diagnosed("short_circuit_outputs", 3)}, "short 3"),  # one line if it fits
+    ({"diagnosed": diagnosed("wire_break", 0, 1)}, "wire\n0,1"),
+    ({"diagnosed": diagnosed("short_circuit_outputs", *range(8))}, "short\n0-7"),
+    # too long for a line: the count
+    ({"diagnosed": diagnosed("short_circuit_outputs", 0, 1, 3, 4, 6, 7)}, "short\n6 ch."),
+    ({"diagnosed": diagnosed("short_circuit_sensor_supply")}, "sensor\nshort"),
+    ({"diagnosed": diagnosed("module_failure"), "shorted": [1]}, "failed"),
+    ({"shorted": [3], "short_idle": [3], "diagnosed": []}, ""),  # not diagnosed: no note
     ({}, ""),
 ])
 def test_module_note_takes_two_lines_at_most(module: dict[str, Any], note: str) -> None:
@@ -230,10 +246,36 @@ def test_slave_panel_texts() -> None:
     assert "0x0012 PREOP + error" in html and "0x0070" in html and "IO-B" in html
     assert "blinking" in html
     cpx = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP", "modules": [
-        {"module": 2, "short": "8DO", "outputs": [0, 0, 0, 1], "shorted": [3]}],
+        {"module": 2, "short": "8DO", "outputs": [0, 0, 0, 1], "shorted": [3],
+         "diagnosed": diagnosed("short_circuit_outputs", 3)}],
         "history": {"messages": [{"sub": 7, "type": "error", "text_id": "0x3702",
                                   "text": "Short circuit/overload"}]}})
     assert "short 3" in cpx and "Short circuit/overload" in cpx and "0x3702" in cpx
+
+
+@pytest.mark.parametrize(("module", "fault"), [
+    ({"short": "8DO", "shorted": [3], "short_idle": [3], "diagnosed": []},
+     "short 3 (output off: not diagnosed)"),
+    ({"short": "4AO-U-I", "shorted": [2], "short_idle": [2], "diagnosed": []},
+     "short 2 (current range: not diagnosed)"),
+    ({"short": "8DO", "shorted": [1, 3], "short_idle": [3],
+      "diagnosed": diagnosed("short_circuit_outputs", 1)},
+     "short 1; short 3 (output off: not diagnosed)"),
+    ({"short": "8DO", "shorted": [3], "short_idle": [], "diagnosed": []},
+     "short 3 (not diagnosed)"),  # 0x2400:3 off, or the application not running
+    ({"short": "4AI-U-I", "wire_broken": [0], "diagnosed": []}, "wire 0 (not diagnosed)"),
+    ({"short": "16DI", "sensor_supply_short": True, "diagnosed": []},
+     "sensor short (not diagnosed)"),
+])
+def test_cpx_slave_tab_says_what_is_wired_but_not_diagnosed(module: dict[str, Any],
+                                                            fault: str) -> None:
+    """The review (23_cpx_short.png): the 8DO's output 3 shorted while off showed a red LED
+    and "short 3" with SF off, 0x1001 = 0 and no 0x10F3 message. The red LED follows the
+    diagnosis now; the Slave tab still names the wiring, and why the module does not see
+    it (docs/cpx-e-ec.md choice 30)."""
+    html = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP",
+                              "modules": [{"module": 2, **module}]})
+    assert f">{fault}<" in html
 
 
 def test_u8_diag_status_and_units_that_do_not_wrap_alone() -> None:

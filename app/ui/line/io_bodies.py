@@ -7,8 +7,9 @@ CPX-E-EC (seed 002 tables 11-13): Run, Error, LA IN, LA OUT, PS, PL, SF, M in th
 model reports (Run / Error also orange), then one plate per module with a red error LED and a
 yellow LED per channel. The seed names no per-channel LED in the snapshot, so the plates show
 the channel signal (inputs for input modules, driven outputs for output modules) and light the
-module's error LED on a short circuit, a wire break, a module failure or a sensor-supply short,
-as the modules' own LEDs do.
+module's error LED on a short circuit, a wire break, a module failure or a sensor-supply short
+the bus module diagnoses (the module snapshot's "diagnosed"), as the modules' own LEDs do: a
+short on an output switched off is wired but not seen (docs/cpx-e-ec.md choice 30).
 
 A plate is one module wide (1.0) and its labels keep their size on screen: a type longer
 than TYPE_LINE characters ("4AI-U-I") takes two lines ("4AI-" / "U-I") hanging from under
@@ -107,17 +108,49 @@ def module_note(module: Mapping[str, Any]) -> str:
     return f"{reason}\n{listed if len(listed) <= NOTE_LINE else f'{len(channels)} ch.'}"
 
 
+# The causes a module's red LED shows (devices/cpx/codes.py CAUSES), worst first, in the
+# plate's words; an undervoltage of U_OUT has the PL LED of the bus module.
+LED_CAUSES = {"module_failure": "failed", "short_circuit_sensor_supply": "sensor short",
+              "short_circuit_outputs": "short", "wire_break": "wire"}
+
+
 def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
-    """Why the red LED is on (a failure first, as the module reports it) and the channels."""
-    if module.get("failed"):
-        return "failed", []
-    if module.get("sensor_supply_short"):
-        return "sensor short", []
-    if module.get("shorted"):
-        return "short", sorted({int(c) for c in module["shorted"]})
-    if module.get("wire_broken"):
-        return "wire", sorted({int(c) for c in module["wire_broken"]})
+    """Why the red LED is on (the worst cause the bus module diagnoses on the module, as its
+    snapshot's "diagnosed" says: not the wiring, docs/cpx-e-ec.md choice 30) and the
+    channels."""
+    causes = {str(d.get("cause")): d.get("channel") for d in module.get("diagnosed") or []}
+    for cause, word in LED_CAUSES.items():
+        if cause in causes:
+            return word, _diagnosed_channels(module, cause)
     return "", []
+
+
+def _diagnosed_channels(module: Mapping[str, Any], cause: str) -> list[int]:
+    return sorted({int(d["channel"]) for d in module.get("diagnosed") or []
+                   if d.get("cause") == cause and d.get("channel") is not None})
+
+
+def module_fault_text(module: Mapping[str, Any]) -> str:
+    """The Slave tab's Fault column: what the red LED says, then what is wired but not
+    diagnosed, and why ("short 3 (output off: not diagnosed)"), so that a trainee who
+    injected a fault is not left wondering why SF and 0x1001 stay quiet."""
+    causes = {d.get("cause") for d in module.get("diagnosed") or []}
+    idle = {int(c) for c in module.get("short_idle") or []}
+    shorts = {int(c) for c in module.get("shorted") or []} - set(
+        _diagnosed_channels(module, "short_circuit_outputs"))
+    wires = {int(c) for c in module.get("wire_broken") or []} - set(
+        _diagnosed_channels(module, "wire_break"))
+    why = "output off" if "DO" in str(module.get("short", "")) else "current range"
+    hidden = [(f"short {channel_list(sorted(shorts & idle))}", why, bool(shorts & idle)),
+              (f"short {channel_list(sorted(shorts - idle))}", "", bool(shorts - idle)),
+              (f"wire {channel_list(sorted(wires))}", "", bool(wires)),
+              ("sensor short", "", bool(module.get("sensor_supply_short"))
+               and "short_circuit_sensor_supply" not in causes),
+              ("failed", "", bool(module.get("failed")) and "module_failure" not in causes)]
+    parts = [module_error(module)] if module_error(module) else []
+    parts += [f"{what} ({f'{reason}: ' if reason else ''}not diagnosed)"
+              for what, reason, shown in hidden if shown]
+    return "; ".join(parts)
 
 
 def channel_list(channels: Sequence[int]) -> str:

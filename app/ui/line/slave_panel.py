@@ -11,7 +11,7 @@ from typing import Any
 import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
-from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_error
+from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_text
 from app.ui.panels.state import al_status_text
 from app.ui.panels.widgets import Mirror
 from app.ui.rail_scene import PATTERN_WORDS
@@ -186,7 +186,7 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         f"<tr><td>{esc(m.get('module'))}</td><td>{esc(m.get('short', m.get('type')))}</td>"
         f"<td>{esc(bits(m.get('inputs') or []))}</td>"
         f"<td>{esc(bits(m.get('outputs') or []))}</td>"
-        f"<td class=\"fr-line-bad\">{esc(module_error(m))}</td></tr>"
+        f"<td class=\"fr-line-bad\">{esc(module_fault_text(m))}</td></tr>"
         for m in snap.get("modules") or [])
     io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>#</th><th>Module</th>'
           "<th>Inputs</th><th>Outputs</th><th>Fault</th></tr></thead>"

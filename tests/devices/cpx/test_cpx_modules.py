@@ -103,3 +103,23 @@ def test_rig_options() -> None:
     assert m.analog_in == [0.0, 4.0, 0.0, 0.0]  # sensors at rest: no wire break
     with pytest.raises(ValueError, match="4 channels"):
         CpxModule.build(1, module_type("4AI-U-I"), {"ranges": ["0-10V"]})
+
+
+def test_snapshot_says_which_wired_faults_the_module_diagnoses() -> None:
+    """docs/cpx-e-ec.md choice 30: an output short counts only while the output is switched
+    on. The review: the dashboard lit the 8DO's red LED from the wiring ("shorted") while the
+    device diagnosed nothing; each module's snapshot now carries what the bus module
+    diagnoses on it ("diagnosed") and which shorts draw no current now ("short_idle")."""
+    bench = Bench(["16DI", "8DO"], seed=3).to_op()
+    bench.apply("short_circuit", module=2, channel=3, on=True)
+    bench.run(0.01)
+    module = bench.cpx.snapshot()["modules"][1]
+    assert module["shorted"] == [3]
+    assert module["diagnosed"] == [] and module["short_idle"] == [3]
+    assert bench.cpx.snapshot()["diagnosis"]["error_register"] == 0
+    bench.apply("write_object", index=0x7002, sub=4, value=1)  # the PLC switches output 3 on
+    bench.run(0.01)
+    module = bench.cpx.snapshot()["modules"][1]
+    assert module["diagnosed"] == [{"cause": "short_circuit_outputs", "channel": 3}]
+    assert module["short_idle"] == []
+    assert bench.cpx.snapshot()["modules"][0]["diagnosed"] == []
