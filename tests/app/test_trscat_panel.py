@@ -26,7 +26,7 @@ def rows(html: str) -> dict[str, str]:
     """The state table's rows as text: {"Field supply": "24.0 V ok", ...}."""
     table = html.split('id="fr-slave-state">', 1)[1].split("</table>", 1)[0]
     return {re.sub("<[^>]+>", "", k): " ".join(re.sub("<[^>]+>", " ", v).split())
-            for k, v in re.findall(r"<tr><th>(.*?)</th><td>(.*?)</td></tr>", table)}
+            for k, v in re.findall(r"<tr[^>]*><th>(.*?)</th><td>(.*?)</td></tr>", table)}
 
 
 def io_rows(html: str) -> list[str]:
@@ -105,3 +105,27 @@ def test_an_injected_sm_fault_is_named_in_the_injected_row(booted: Any) -> None:
             "injected_sm": [{"fault": "sm_invalid_size", "sm": 2}]}
     row = slave_html("trscat", snap).split("<th>Injected</th>", 1)[1].split("</tr>", 1)[0]
     assert "sm_invalid_size" in row
+
+
+@pytest.mark.parametrize(("injected", "injected_sm", "text"), [
+    ([{"fault": "TRS_OVERCURRENT", "slot": None}], [], "TRS_OVERCURRENT"),
+    ([{"fault": "CONFIG_ERROR", "slot": 2}], [{"fault": "sm_invalid_size", "sm": 2}],
+     "CONFIG_ERROR on slot 2, sm_invalid_size on SM2"),
+    ([], [], "none"),
+])
+def test_the_injected_row_reads_as_the_fastcat_s(booted: Any, injected: list[Any],
+                                                 injected_sm: list[Any], text: str) -> None:
+    """The review (20_trscat_fault.png): the row showed the raw Python dict "{'fault':
+    'TRS_OVERCURRENT', 'slot': None}"; it is written as the FastCAT's State tab writes its
+    injected causes (app/ui/panels/state.py injected_text)."""
+    snap = {**booted.devices["trscat"].snapshot(), "injected": injected,
+            "injected_sm": injected_sm}
+    assert rows(slave_html("trscat", snap))["Injected"] == text
+
+
+def test_the_cpx_injected_row_names_its_faults() -> None:
+    snap = {"kind": "cpx_e_ec", "esm": "OP",
+            "injected": ["module_failure module 1", "sm_invalid_size SM2"]}
+    assert rows(slave_html("cpx", snap))["Injected"] == (
+        "module_failure module 1, sm_invalid_size SM2")
+    assert rows(slave_html("cpx", {**snap, "injected": []}))["Injected"] == "none"

@@ -12,7 +12,7 @@ import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
 from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_text
-from app.ui.panels.state import al_status_text
+from app.ui.panels.state import al_status_text, injected_text
 from app.ui.panels.widgets import Mirror
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import badge, esc, kv_table
@@ -126,8 +126,8 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
         ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):02X}")),  # U8, §9.3.4
         ("Alarms", esc(", ".join(alarm_text(a) for a in snap.get("alarms") or []) or "none")),
         # the application causes, then the sync manager faults (checked at IP / PS)
-        ("Injected", esc(", ".join(str(a) for a in [*(snap.get("injected") or []),
-                                                    *(snap.get("injected_sm") or [])]) or "none"))]
+        ("Injected", injected_text([*(snap.get("injected") or []),
+                                    *(snap.get("injected_sm") or [])]))]
     slots = "".join(
         f"<tr><td>{esc(s.get('slot'))}</td><td>{slot_type(s)}</td>"
         f"<td>{esc(ident_text(s.get('ident', 0)))}</td>"
@@ -179,7 +179,7 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         ("Supply", esc(f"U_EL/SEN {supply.get('el_sen_v', '-')} V, "
                        f"U_OUT {supply.get('out_v', '-')} V")),
         ("Error register", esc(f"0x{int(diagnosis.get('error_register', 0)):02X}")),
-        ("Injected", esc(", ".join(str(a) for a in snap.get("injected") or []) or "none"))]
+        ("Injected", injected_text(snap.get("injected") or []))]
     names = [(n, str((states.get(n) or {}).get("colour", c)),
               str((states.get(n) or {}).get("pattern", "off"))) for n, c in CPX_COLOURS.items()]
     modules = "".join(

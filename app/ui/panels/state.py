@@ -12,7 +12,7 @@ value in it does, so a click's answer is not queued behind a stream of identical
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import viser
@@ -107,14 +107,29 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
     ]
 
 
-def injected_text(injected: list[Mapping[str, Any]]) -> str:
+# Where an injected cause sits, in the words of the device's manual: a FastCAT module, a
+# TRS-CAT slot, a sync manager.
+INJECTED_WHERE = (("module", "module {}"), ("slot", "slot {}"), ("sm", "SM{}"))
+
+
+def injected_text(injected: Sequence[Mapping[str, Any] | str]) -> str:
     """The causes an instructor injected: without this row an injected alarm read "cause
-    present" next to "Causes: none" (the row of the physical causes)."""
+    present" next to "Causes: none" (the row of the physical causes). One formatter for every
+    device's State / Slave tab: "0x04 MISSING_NODE_ANSWER on module 2" (FastCAT, with its
+    code), "CONFIG_ERROR on slot 2", "sm_invalid_size on SM2" (TRS-CAT); a device that names
+    its causes itself (the CPX-E-EC's labels) is shown as it names them."""
     if not injected:
         return '<span class="fr-muted">none</span>'
-    return esc(", ".join(f"0x{int(i.get('code', 0)):02X} {i.get('fault', '?')}"
-                         + (f" on module {i['module']}" if i.get("module") else "")
-                         for i in injected))
+    return esc(", ".join(_injected_one(i) for i in injected))
+
+
+def _injected_one(cause: Mapping[str, Any] | str) -> str:
+    if isinstance(cause, str):
+        return cause
+    code = f"0x{int(cause['code']):02X} " if cause.get("code") is not None else ""
+    where = "".join(" on " + word.format(cause[key]) for key, word in INJECTED_WHERE
+                    if cause.get(key) is not None)
+    return f"{code}{cause.get('fault', '?')}{where}"
 
 
 def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: int) -> str:
