@@ -46,6 +46,13 @@ class TrsBus(enum.Enum):
     SHUTDOWN = "shutdown"  # irreversible TRS bus error (§8.2, §9.3.7); BUS LED off
 
 
+# Why every slot's outputs are off whatever the ESM's output mode: a bus not running services
+# no module (§9.3.7: "a module the bus no longer services stops"). SHUTDOWN is latched: only
+# the logic supply off and on ends it (§8.2 "irreversibile").
+OUTPUTS_STOPPED_BY = {TrsBus.OFF: "node off", TrsBus.DETECTING: "bus detecting",
+                      TrsBus.SHUTDOWN: "bus down"}
+
+
 class AlarmsMixin:
     """Alarm handling of :class:`~devices.trscat.device.TrsCat`."""
 

@@ -21,7 +21,7 @@ from devices.ethercat import AlState
 from devices.leds import LedBank
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.sync_managers import SmSetup
-from devices.trscat.alarms import AlarmsMixin, FaultKey, TrsBus
+from devices.trscat.alarms import OUTPUTS_STOPPED_BY, AlarmsMixin, FaultKey, TrsBus
 from devices.trscat.catalog import (
     BY_IDENT,
     INTEGRATED,
@@ -287,7 +287,8 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
             "leds": self.leds.snapshot(),
             "links": {"in": self.link_in, "out": self.link_out},
             "field_supply_v": self.field_v, "field_ok": self.field_ok(),
-            "trs_bus": {"state": self.bus.value, "current_a": round(self.bus_current_a(), 3),
+            "trs_bus": {"state": self.bus.value, "latched": self.bus is TrsBus.SHUTDOWN,
+                        "current_a": round(self.bus_current_a(), 3),
                         "communication_ok": self.od_bus_ok(2), "voltage_ok": self.od_bus_ok(3),
                         "current_ok": self.od_bus_ok(4)},
             "sync": {"mode": sync.mode.label, "sync_control": sync.sync_control,
@@ -297,6 +298,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
                      "dc_activation": sync.dc_activation, "sync0_cycle_ns": sync.dc_cycle_ns,
                      "sync0_start_ns": sync.dc_start_ns},
             "outputs_mode": self.out_mode.value, "deadlocked": self.deadlocked,
+            "outputs_stopped": OUTPUTS_STOPPED_BY.get(self.bus),
             "f030": list(self.f030), "f050": list(self.f050),
             "diag_status": self.od_diag_status() if self.detected else 0,
             "error_values": list(self.error_values), "error_modes": list(self.error_modes),

@@ -129,3 +129,31 @@ def test_the_cpx_injected_row_names_its_faults() -> None:
     assert rows(slave_html("cpx", snap))["Injected"] == (
         "module_failure module 1, sm_invalid_size SM2")
     assert rows(slave_html("cpx", {**snap, "injected": []}))["Injected"] == "none"
+
+
+def test_a_latched_bus_shutdown_says_what_to_do() -> None:
+    """The review (20_ / 21_trscat_cleared.png): after clear_fault TRS_OVERCURRENT the panel
+    read "TRS bus shutdown" and "Outputs normal", nothing telling the trainee that only the
+    logic supply off and on brings the bus back (docs/trscat.md, §8.2 "irreversibile") nor
+    that every slot's outputs are off."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    for _ in range(BOOT_STEPS):
+        rig.step()
+    assert rows(slave_html("trscat", rig.devices["trscat"].snapshot()))["Outputs"] == "normal"
+    rig.apply("trscat", "inject_fault", {"fault": "TRS_OVERCURRENT"})
+    for _ in range(10):
+        rig.step()
+    rig.apply("trscat", "clear_fault", {"fault": "TRS_OVERCURRENT"})
+    for _ in range(10):
+        rig.step()
+    state = rows(slave_html("trscat", rig.devices["trscat"].snapshot()))
+    assert state["TRS bus"] == "shutdown (latched: switch the logic supply off and on)"
+    assert state["Outputs"] == "off (bus down)"
+    rig.apply("master", "power_slave", {"position": 1, "on": False})
+    for _ in range(200):
+        rig.step()
+    rig.apply("master", "power_slave", {"position": 1, "on": True})
+    for _ in range(BOOT_STEPS):
+        rig.step()
+    state = rows(slave_html("trscat", rig.devices["trscat"].snapshot()))
+    assert state["TRS bus"] == "running" and state["Outputs"] == "normal"

@@ -110,6 +110,22 @@ def slot_type(slot: Mapping[str, Any]) -> str:
             (esc(f" (configured {configured})") if configured else ""))
 
 
+def bus_text(bus: Mapping[str, Any]) -> str:
+    """The TRS bus state; a latched shutdown with the one way out (docs/trscat.md: clearing
+    the cause does not bring the bus back), or a trainee waits for a recovery that never
+    comes."""
+    state = str(bus.get("state", "-"))
+    return f"{state} (latched: switch the logic supply off and on)" if bus.get("latched") \
+        else state
+
+
+def outputs_text(snap: Mapping[str, Any]) -> str:
+    """What the outputs do: the ESM's output mode, unless the model says every slot is
+    stopped ("off (bus down)": the mode still reads "normal" in OP)."""
+    stopped = snap.get("outputs_stopped")
+    return f"off ({stopped})" if stopped else str(snap.get("outputs_mode", "-"))
+
+
 def trscat_html(snap: Mapping[str, Any]) -> str:
     leds = snap.get("leds") or {}
     sync = snap.get("sync") or {}
@@ -119,9 +135,9 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
         ("Logic supply", badge("on", "ok") if snap.get("powered", True)
          else badge("off", "bad") + esc(" (Vdd)")),
         ("Field supply", field_supply(snap)),
-        ("TRS bus", esc(bus.get("state", "-"))),
+        ("TRS bus", esc(bus_text(bus))),
         *sync_rows(sync),
-        ("Outputs", esc(snap.get("outputs_mode", "-")) +
+        ("Outputs", esc(outputs_text(snap)) +
          (" " + badge("PREOP deadlock", "bad") if snap.get("deadlocked") else "")),
         ("0xF100 diag status", esc(f"0x{int(snap.get('diag_status', 0)):02X}")),  # U8, §9.3.4
         ("Alarms", esc(", ".join(alarm_text(a) for a in snap.get("alarms") or []) or "none")),

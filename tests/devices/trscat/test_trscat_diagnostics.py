@@ -107,11 +107,18 @@ def test_shutdown_is_irreversible_until_power_off(name: str) -> None:
     bench.run(0.002)
     bench.apply("clear_fault", fault=name)
     bench.run(0.01)
-    assert bench.trs.snapshot()["trs_bus"]["state"] == "shutdown"
+    snap = bench.trs.snapshot()
+    # The review (21_trscat_cleared.png): nothing said the shutdown is latched, and Outputs
+    # read "normal" (the OP mode) while every slot's outputs were off.
+    assert snap["trs_bus"]["state"] == "shutdown" and snap["trs_bus"]["latched"] is True
+    assert snap["outputs_stopped"] == "bus down"
     bench.apply("power", on=False)
+    assert bench.trs.snapshot()["outputs_stopped"] == "node off"
     bench.apply("power", on=True)
     bench.to_state(AlState.OP)
-    assert bench.trs.snapshot()["trs_bus"]["state"] == "running"
+    snap = bench.trs.snapshot()
+    assert snap["trs_bus"]["state"] == "running" and snap["trs_bus"]["latched"] is False
+    assert snap["outputs_stopped"] is None
     assert bench.read(0xF100, 1) == 1 and not bench.trs.snapshot()["alarms"]
 
 
