@@ -236,6 +236,8 @@ def test_camera_frames_the_box_and_looks_from_above() -> None:
 
 def test_slave_panel_texts() -> None:
     assert bits([1, 0, 1, 1]) == "1011" and bits([0.5, 2.0]) == "0.5 2"
+    # by 8, so that a narrow cell wraps between groups, not inside 16 digits (22_cpx_form.png)
+    assert bits([1] + [0] * 15) == "10000000 00000000" and bits([0] * 8) == "00000000"
     assert alarm_text({"code": "0xA000", "name": "CONFIG_ERROR", "slot": 2}) == (
         "0xA000 CONFIG_ERROR (slot 2)")
     html = slave_html("trscat", {"kind": "trscat", "esm": "PREOP", "requested": "SAFEOP",

@@ -88,6 +88,23 @@ def test_canopen_time_column_keeps_its_numbers_whole(live: LiveDashboard, page: 
     assert split_words(page, "#fr-frames td") == []
 
 
+def test_slave_io_tables_keep_their_bit_groups_whole(live: LiveDashboard,
+                                                     page: Any) -> None:
+    """The review (22_cpx_form.png): the CPX-E-EC module table broke the 16DI's sixteen
+    input bits as "00000000000" / "00000"; they are grouped by 8 (app/ui/line/slave_panel.py
+    bits), so the cell wraps between the groups."""
+    open_dashboard(page, live)
+    live.advance(BOOT_S)
+    view = live.dashboard.line
+    assert view is not None
+    view.focus(None, "cpx")
+    for tab in page.get_by_role("tab", name="Slave").all():
+        tab.click()
+    table = page.locator("#fr-slave-io")
+    wait_until(lambda: "16DI" in table.inner_text(), what="the CPX-E-EC module table")
+    assert split_words(page, "#fr-slave-io td") == []
+
+
 # The Server cells whose text the column clips (overflow hidden: wider content than cell).
 CLIPPED_JS = """
 sel => [...document.querySelectorAll(sel)]

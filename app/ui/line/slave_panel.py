@@ -21,10 +21,16 @@ from devices.ethercat import describe_al_status_code
 MESSAGES = 6  # newest 0x10F3 messages shown
 
 
+BIT_GROUP = 8  # bits per word of a bit string: a narrow cell wraps between words only
+
+
 def bits(values: Sequence[Any]) -> str:
-    """``[1, 0, 1]`` -> ``"101"`` (channel 1 first); analog values as numbers."""
+    """``[1, 0, 1]`` -> ``"101"`` (channel 1 first), in groups of BIT_GROUP ("10000000
+    00000000"); analog values as numbers."""
     if all(isinstance(v, bool) or v in (0, 1) for v in values):
-        return "".join("1" if v else "0" for v in values) or "-"
+        digits = "".join("1" if v else "0" for v in values)
+        return " ".join(digits[i:i + BIT_GROUP]
+                        for i in range(0, len(digits), BIT_GROUP)) or "-"
     return " ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
 
 
