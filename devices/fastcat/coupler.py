@@ -26,6 +26,7 @@ from devices.events import StateChanged
 from devices.fastcat.alarms import COUPLER, REFUSAL_AL_STATUS, Alarm
 from devices.fastcat.bus import BusMixin
 from devices.fastcat.catalog import module_type
+from devices.fastcat.causes import cause_facts, config_view
 from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
 from devices.fastcat.esm import Esm, request_refusal
 from devices.fastcat.faults import FaultsMixin
@@ -463,6 +464,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
     def snapshot(self) -> dict[str, Any]:
         alarm = self.alarm
         scan = self.scan
+        causes = cause_facts(self)
+        present = {(c["table"], c["code"], c["module"]) for c in causes}
         return {
             "kind": self.KIND, "id": self.device_id, "powered": self.powered,
             "esm": self.esm.state.label, "requested": self.esm.requested.label,
@@ -474,7 +477,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
                 "table": alarm.table, "code": alarm.code, "name": alarm.info.symbol,
                 "description": alarm.info.description, "module": alarm.module,
                 "resettable": alarm.resettable,
-                "cause_present": alarm in self._present_causes()},
+                "cause_present": (alarm.table, alarm.code, alarm.module) in present},
             "injected": [{"fault": a.info.symbol, "code": a.code, "module": a.module or None}
                          for a in self.injected],
             "link": self.link, "tbus_low": self.tbus_low,
@@ -492,6 +495,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             "rail": [self._slot_snapshot(slot, m) for slot, m in enumerate(self.rail, start=1)],
             "stored_config": None if self.stored is None else list(self.stored),
             "detected": [name for _slot, name in self.detected],
+            # The facts behind the causes, the rail against flash and the last scan
+            # (causes.py): the State tab's Causes and Configuration rows.
+            "causes": causes, "config": config_view(self),
         }
 
     def _slot_snapshot(self, slot: int, module: IoModule | None) -> dict[str, Any]:

@@ -79,19 +79,6 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         phase = f"pressed {float(cnf.get('held_s', 0.0)):.1f} s"
     if scan.get("active"):
         phase += f", scan {scan.get('done', 0)}/{scan.get('total', 0)}"
-    stored = snap.get("stored_config")
-    detected = snap.get("detected")
-    if stored is None:
-        config = badge("none stored", "warn")
-    elif detected is not None and list(stored) != list(detected):
-        config = badge("differs from flash", "bad")
-    else:
-        config = badge("matches flash", "ok")
-    causes = []
-    if not snap.get("link", True):
-        causes.append("EtherCAT cable out")
-    if snap.get("tbus_low"):
-        causes.append("Tbus supply low")
     return [
         ("ESM state", esm_html),
         ("Fault active", badge("TRUE", "bad") if fault else badge("FALSE", "ok")),
@@ -100,11 +87,45 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code, word)}")),
         ("Alarm", alarm_text(snap.get("alarm"))),
         ("CNF", esc(phase)),
-        ("Configuration", config),
+        ("Configuration", config_text(snap)),
         ("Rotary switch", esc(rotary_text(snap))),
-        ("Causes", esc(", ".join(causes)) if causes else '<span class="fr-muted">none</span>'),
+        ("Causes", causes_text(snap)),
         ("Injected", injected_text(snap.get("injected") or [])),
     ]
+
+
+def causes_text(snap: Mapping[str, Any]) -> str:
+    """The rail's physical causes as the model words them (snapshot ``causes``, made by
+    devices/fastcat/causes.py): an injected cause is the Injected row's."""
+    causes = [str(c.get("text", "")) for c in snap.get("causes") or [] if not c.get("injected")]
+    return esc("; ".join(causes)) if causes else '<span class="fr-muted">none</span>'
+
+
+def config_text(snap: Mapping[str, Any]) -> str:
+    """The rail as a scan would find it now against flash (snapshot ``config``), and a note
+    when the last scan is older than the rail: before, flash was compared with the last scan
+    only and read "matches flash" with another module on the rail."""
+    stored = snap.get("stored_config")
+    config = snap.get("config") or {}
+    now = [tuple(entry) for entry in config.get("now") or []]
+    if stored is None:
+        html = badge("none stored", "warn")
+    elif config.get("vs_flash") is None:
+        html = badge("matches flash", "ok")
+    else:
+        n = int(config["vs_flash"])
+        here = f"{now[n - 1][1]} in slot {now[n - 1][0]}" if n <= len(now) else "none"
+        flash = stored[n - 1] if n <= len(stored) else "none"
+        html = (f'{badge("differs from flash", "bad")} <span>module {n}: {esc(here)}, '
+                f"flash {esc(flash)}</span>")
+    if config.get("vs_scan") is not None:
+        n = int(config["vs_scan"])
+        scanned = list(snap.get("detected") or [])
+        found = f"it found {scanned[n - 1]} as module {n}" if n <= len(scanned) \
+            else f"it found no module {n}"
+        html += (f'<br><span class="fr-muted">last scan older than the rail: {esc(found)}'
+                 "</span>")
+    return html
 
 
 # Where an injected cause sits, in the words of the device's manual: a FastCAT module, a

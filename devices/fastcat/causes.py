@@ -1,0 +1,112 @@
+"""The physical facts behind the FastCAT's alarm causes, and the rail against flash, for views.
+
+The cause search (faults.py) gives alarm codes; a technician at the rail wants the fact behind
+each one: a slot empty that the last scan found (§7.5 0x04), a module of another type than the
+scan found there (0x01), the last scan against flash (0x01 / 0x02 / 0x10), the cable (0x13),
+the Tbus supply (§7.6 0x0C), a module's own alarm. This module words them from the coupler's
+state and compares the rail as a scan would find it now with flash and with the last scan
+(seed 000 §2, §3). Read-only: nothing here changes the coupler.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+from devices.fastcat.alarms import COUPLER, MODULE, Alarm
+
+if TYPE_CHECKING:
+    from devices.fastcat.coupler import FastCat
+
+LOW_VOLTAGE = (MODULE, 0x0C)  # §7.6: reported only with a module scanned
+
+
+def first_difference(a: Sequence[Any], b: Sequence[Any]) -> int | None:
+    """The first module number (from 1) where two module lists differ; None if equal."""
+    for i in range(max(len(a), len(b))):
+        if i >= len(a) or i >= len(b) or a[i] != b[i]:
+            return i + 1
+    return None
+
+
+def cause_facts(fc: FastCat) -> list[dict[str, Any]]:
+    """Every cause present now (report order), what it is on the rail, and whether an
+    instructor injected it. Tbus low with no module scanned raises nothing but is a fact."""
+    out = []
+    for alarm in dict.fromkeys(fc._present_causes()):
+        out.append({"table": alarm.table, "code": alarm.code, "name": alarm.info.symbol,
+                    "module": alarm.module, "injected": alarm in fc.injected,
+                    "text": _fact(fc, alarm)})
+    if fc.tbus_low and not any((c["table"], c["code"]) == LOW_VOLTAGE for c in out):
+        out.append({"table": None, "code": None, "name": "", "module": 0, "injected": False,
+                    "text": "Tbus supply low"})
+    return out
+
+
+def config_view(fc: FastCat) -> dict[str, Any]:
+    """The rail as a scan would find it now (slot, type per module number), and the first
+    module number where it differs from flash and from the last scan (only while a last scan
+    stands: powered, booted, no scan running)."""
+    now = [(slot, m.mtype.name) for slot, m in enumerate(fc.rail, start=1)
+           if m is not None and m.responds()]
+    names = [name for _slot, name in now]
+    scan_stands = fc.powered and fc.booted and fc.scan is None
+    return {"now": [list(entry) for entry in now],
+            "vs_flash": None if fc.stored is None else first_difference(fc.stored, names),
+            "vs_scan": first_difference(fc.detected, now) if scan_stands else None}
+
+
+def _fact(fc: FastCat, alarm: Alarm) -> str:
+    if alarm in fc.injected:
+        return "injected"
+    n, key = alarm.module, (alarm.table, alarm.code)
+    scanned = fc.detected[n - 1] if 0 < n <= len(fc.detected) else None
+    if key == (COUPLER, 0x13):
+        return "EtherCAT cable out"
+    if key == (COUPLER, 0x11):
+        return "the configuration could not be written to flash"
+    if key == (COUPLER, 0x10):
+        return "the last scan found no module"
+    if key == (COUPLER, 0x04) and scanned is not None:
+        return _silent(fc, n, *scanned)
+    if key == (COUPLER, 0x01):
+        return "; ".join(_changed(fc, n, scanned)) or alarm.info.description
+    if key == (COUPLER, 0x02) and fc.stored is not None:
+        return (f"flash has {len(fc.stored)} modules, the last scan found {len(fc.detected)}: "
+                f"module {n} ({fc.stored[n - 1]}) missing")
+    if key == (COUPLER, 0x12):
+        return (f"rotary switch read {fc.rotary_read} at power-up, the master's address is "
+                f"{fc.master_address}")
+    if key == (COUPLER, 0x14):
+        return f"the master's 0xF030:{n} is not the module found (0xF050:{n})"
+    if key == LOW_VOLTAGE:
+        return "Tbus supply low"
+    if alarm.table == MODULE and scanned is not None:
+        return f"module {n} ({scanned[1]}, slot {scanned[0]}): {alarm.info.description}"
+    return alarm.info.description
+
+
+def _silent(fc: FastCat, n: int, slot: int, name: str) -> str:
+    module = fc.rail[slot - 1] if slot <= len(fc.rail) else None
+    if module is None:
+        return f"slot {slot} empty (module {n}: the last scan found a {name} there)"
+    if not module.powered:
+        return f"module {n} ({name}, slot {slot}) does not answer: its supply is off"
+    return f"module {n} ({name}, slot {slot}) does not answer"
+
+
+def _changed(fc: FastCat, n: int, scanned: tuple[int, str] | None) -> list[str]:
+    """0x01 has two sources: the last scan against flash, a module now against the scan."""
+    out = []
+    stored = fc.stored
+    if scanned is not None and stored is not None \
+            and (n > len(stored) or stored[n - 1] != scanned[1]):
+        flash = stored[n - 1] if n <= len(stored) else "no module"
+        out.append(f"the last scan found a {scanned[1]} as module {n}, flash has {flash}")
+    if scanned is not None:
+        slot, name = scanned
+        module = fc.rail[slot - 1] if slot <= len(fc.rail) else None
+        if module is not None and module.mtype.name != name:
+            out.append(f"slot {slot} holds a {module.mtype.name}, the last scan found a "
+                       f"{name} there (module {n})")
+    return out

@@ -1,0 +1,106 @@
+"""The FastCAT State tab names the rail's physical causes and tells the truth about flash.
+
+Seed 000 §2 / §7.5: a module pulled or replaced by another type latches 0x04 / 0x01 with its
+cause present. Before, the Causes row listed only the cable and the Tbus ("none" next to
+"cause present") and the Configuration badge compared flash with the last scan only, so it
+stayed "matches flash" with another module on the rail (/tmp/s14/ui/11_reset_wrongmodule.png).
+"""
+
+from __future__ import annotations
+
+import random
+
+from app.ui.panels.state import state_rows
+from devices.ethercat import AlState
+from devices.fastcat.coupler import FastCat
+from devices.flash import MemoryFlash
+
+STEP_US = 1_000
+RAIL = ("DB16", "DI16", "DO16", "AI8D")
+
+
+class Coupler:
+    """A FastCAT stepped by hand, its configuration stored by a CNF press (§2)."""
+
+    def __init__(self) -> None:
+        self.fc = FastCat("fastcat", random.Random(3), [(m, {}) for m in RAIL],
+                          flash=MemoryFlash())
+        self.now = 0
+        self.run(3.0)
+        self.fc.apply("hold_cnf", {"seconds": 3.5})
+        self.run(7.0)
+        assert self.fc.stored == list(RAIL)
+        for target in (AlState.PREOP, AlState.SAFEOP, AlState.OP):
+            self.fc.request_state(target)
+        assert self.fc.al_state is AlState.OP
+
+    def run(self, seconds: float) -> None:
+        end = self.now + round(seconds * 1_000_000)
+        while self.now < end:
+            self.now += STEP_US
+            self.fc.step(self.now)
+
+    def apply(self, action: str, module: int | None = None, **args: object) -> None:
+        self.fc.apply(action, args, module)
+        self.run(0.01)
+
+    def reset_fault(self) -> None:
+        self.apply("set_reset_fault", on=False)
+        self.apply("set_reset_fault", on=True)
+
+    def rows(self) -> dict[str, str]:
+        return dict(state_rows(self.fc.snapshot()))
+
+
+def test_a_pulled_module_is_named_in_causes_and_configuration() -> None:
+    rig = Coupler()
+    assert "matches flash" in rig.rows()["Configuration"]
+    rig.apply("unplug", module=3)
+    rows = rig.rows()
+    assert "MISSING_NODE_ANSWER" in rows["Alarm"] and "cause present" in rows["Alarm"]
+    assert "slot 3 empty" in rows["Causes"] and "DO16" in rows["Causes"]
+    assert "differs from flash" in rows["Configuration"]
+    assert "matches flash" not in rows["Configuration"]
+    assert "older than the rail" in rows["Configuration"]
+
+
+def test_a_module_of_another_type_is_named_in_causes_and_configuration() -> None:
+    """The reviewer's steps: OP, unplug the DO16 of slot 3, plug a DB16, Reset fault."""
+    rig = Coupler()
+    rig.apply("unplug", module=3)
+    rig.apply("plug", module=3, type="DB16")
+    rig.reset_fault()
+    rows = rig.rows()
+    assert "cause present" in rows["Alarm"]
+    assert "slot 3 holds a DB16" in rows["Causes"] and "DO16" in rows["Causes"]
+    config = rows["Configuration"]
+    assert "differs from flash" in config and "module 3: DB16" in config
+    assert "flash DO16" in config and "older than the rail" in config
+
+
+def test_the_right_module_back_matches_flash_and_leaves_no_cause() -> None:
+    rig = Coupler()
+    rig.apply("unplug", module=3)
+    rig.apply("plug", module=3, type="DO16")
+    rig.reset_fault()
+    rows = rig.rows()
+    assert rig.fc.alarm is None
+    assert "none" in rows["Causes"]
+    assert "matches flash" in rows["Configuration"] and "older" not in rows["Configuration"]
+
+
+def test_cable_and_tbus_are_still_named() -> None:
+    rig = Coupler()
+    rig.apply("tbus_voltage", low=True)
+    rig.apply("link", connected=False)
+    causes = rig.rows()["Causes"]
+    assert "EtherCAT cable out" in causes and "Tbus supply low" in causes
+
+
+def test_an_injected_cause_stays_out_of_causes() -> None:
+    """Injected causes have their own row (Injected); Causes is the rail's physical ones."""
+    rig = Coupler()
+    rig.apply("inject_fault", module=2, fault="MISSING_NODE_ANSWER")
+    rows = rig.rows()
+    assert "MISSING_NODE_ANSWER on module 2" in rows["Injected"]
+    assert "none" in rows["Causes"]
