@@ -5,7 +5,8 @@ each one: a slot empty that the last scan found (§7.5 0x04), a module of anothe
 scan found there (0x01), the last scan against flash (0x01 / 0x02 / 0x10), the cable (0x13),
 the Tbus supply (§7.6 0x0C), a module's own alarm. This module words them from the coupler's
 state and compares the rail as a scan would find it now with flash and with the last scan
-(seed 000 §2, §3). Read-only: nothing here changes the coupler.
+(seed 000 §2, §3), and names the module that belongs in an empty slot. Read-only: nothing
+here changes the coupler.
 """
 
 from __future__ import annotations
@@ -110,3 +111,18 @@ def _changed(fc: FastCat, n: int, scanned: tuple[int, str] | None) -> list[str]:
             out.append(f"slot {slot} holds a {module.mtype.name}, the last scan found a "
                        f"{name} there (module {n})")
     return out
+
+
+def expected_in_slot(fc: FastCat, slot: int) -> tuple[str | None, str | None]:
+    """(type, "flash" | "last scan") of the module that belongs in an empty slot. Flash
+    counts modules, not slots: this slot is module k + 1 when k slots before it hold a module
+    now or held one at the last scan (the ones pulled since count: they belong there too)."""
+    scanned = dict(fc.detected)
+    if fc.stored is not None:
+        k = sum(1 for s in range(1, slot)
+                if (s <= len(fc.rail) and fc.rail[s - 1] is not None) or s in scanned)
+        if k < len(fc.stored):
+            return fc.stored[k], "flash"
+    if slot in scanned:
+        return scanned[slot], "last scan"
+    return None, None

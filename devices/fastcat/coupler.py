@@ -26,7 +26,7 @@ from devices.events import StateChanged
 from devices.fastcat.alarms import COUPLER, REFUSAL_AL_STATUS, Alarm
 from devices.fastcat.bus import BusMixin
 from devices.fastcat.catalog import module_type
-from devices.fastcat.causes import cause_facts, config_view
+from devices.fastcat.causes import cause_facts, config_view, expected_in_slot
 from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
 from devices.fastcat.esm import Esm, request_refusal
 from devices.fastcat.faults import FaultsMixin
@@ -501,8 +501,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         }
 
     def _slot_snapshot(self, slot: int, module: IoModule | None) -> dict[str, Any]:
-        if module is None:
-            return {"slot": slot, "type": None}
+        if module is None:  # what belongs here: the dashboard's Plug offers it
+            expected, source = expected_in_slot(self, slot)
+            return {"slot": slot, "type": None, "expected": expected, "expected_from": source}
         numbers = [n for n, m in enumerate(self.bound, start=1)
                    if m is module and self.detected[n - 1][0] == slot]
         return {**module.snapshot(), "slot": slot, "type": module.mtype.name,

@@ -392,3 +392,25 @@ def test_rail_clicks_are_commanded_in_click_order(loop) -> None:
     turn(loop, server)
     sender.drain()
     assert sender.sent == [("fastcat/1", "unplug", {}), ("fastcat/1", "plug", {"type": "AX2"})]
+
+
+def test_an_empty_slot_presets_plug_type_to_the_module_that_belongs_there(loop) -> None:
+    """§2: the module pulled from slot 2 is the one to put back: selecting the empty slot sets
+    Plug type to the type the model expects there (flash, else the last scan); a type the user
+    picks afterwards is left alone while the selection stays. Before, it stayed on the first
+    catalog type."""
+    server, sender = Server(loop), Sender()
+    runtime = SimpleNamespace(rig=None)
+    panel = ModulePanel(server, runtime, sender, "fastcat", {},  # type: ignore[arg-type]
+                        ["DB16", "DI16", "AX2"])
+    snap = {"rail": [{"slot": 1, "type": "DB16"},
+                     {"slot": 2, "type": None, "expected": "DI16", "expected_from": "flash"}]}
+    frames(loop, server, lambda: panel.update(snap))
+    module, plug = server.gui.handles["Module"], server.gui.handles["Plug type"]
+    assert plug.value == "DB16"
+    module.user("page A", next(o for o in module.options if o.startswith("2")))
+    frames(loop, server, lambda: panel.update(snap))
+    assert plug.value == "DI16"
+    plug.user("page A", "AX2")
+    frames(loop, server, lambda: panel.update(snap))
+    assert plug.value == "AX2"

@@ -378,7 +378,8 @@ def test_unplug_in_op_is_missing_node_answer() -> None:
         ("alarm", "0x04"), ("emergency", "02 00 00 04 00"), ("al_status", "0x8204"),
         ("state", "PREOP")]
     assert bench.read(0x5300, 2) == 10 and bench.read(0x5300, 1) == 0
-    assert bench.fc.snapshot()["rail"][1] == {"slot": 2, "type": None}
+    assert bench.fc.snapshot()["rail"][1] == {"slot": 2, "type": None, "expected": "AI8D",
+                                              "expected_from": "last scan"}
     bench.reset_fault()
     assert bench.fc.alarm is not None  # still missing
     bench.apply("plug", module=2, type="AI8D")

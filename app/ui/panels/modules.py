@@ -34,6 +34,15 @@ def module_index(base: int, slot: int) -> int:
     return base + 0x10 * (slot - 1)
 
 
+def plug_preset(entry: Mapping[str, Any] | None, catalog: Sequence[str]) -> str | None:
+    """The Plug type to offer for a rail entry: for an empty slot, the type the model says
+    belongs there (flash, else the last scan: ``expected``); None for a taken slot."""
+    if not entry or entry.get("type") is not None:
+        return None
+    expected = entry.get("expected")
+    return str(expected) if expected in catalog else None
+
+
 def encoder_text(entry: Mapping[str, Any]) -> str:
     rows = []
     for k, enc in enumerate(entry.get("encoders") or [], start=1):
@@ -62,6 +71,7 @@ class ModulePanel:
         self._sender = sender
         self._id = device_id
         self._rail: list[Mapping[str, Any]] = []
+        self._catalog = tuple(catalog)
         module_actions = {n: a for n, a in actions.items() if a.module != "none"}
         self._speed = _speed_params(module_actions.get("set_shaft_speed"))
         gui = server.gui
@@ -171,6 +181,10 @@ class ModulePanel:
         selected module takes (its type decides) for the generated form."""
         entry = self._entry()
         self._encoder_folder.visible = bool(entry and entry.get("encoders") is not None)
+        # Offered on a selection or rail change only: a type picked afterwards stays.
+        preset = plug_preset(entry, self._catalog)
+        if preset is not None:
+            self._plug_type.value = preset
         slot = self._slot()
         if slot is None or not (entry and entry.get("type")):
             self._set_available([])
