@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from devices.device import CommandError
 from devices.ethercat import AlState, emergency_frame
-from devices.events import AlarmChanged, EmergencySent, Event, fmt_hex
+from devices.events import AlarmChanged, EmergencySent, Event, LogLine, fmt_hex
 from devices.fastcat.alarms import (
     COUPLER,
     EMERGENCY_CODE,
@@ -279,6 +279,18 @@ class FaultsMixin:
         if rising and self._try_reset(resync=False):  # §6.17: the rising edge resets
             self._evaluate_alarms()
             self._refresh()
+        elif rising and self.alarm is not None:
+            self._log_refused_reset(self.alarm)
+
+    def _log_refused_reset(self, alarm: Alarm) -> None:
+        """The device does nothing (§7); the log says the edge was taken and why it did not
+        reset, as the servo drive logs "alarm reset refused" (a trainee saw no trace)."""
+        why = ("not resettable (code above 0x7F): it needs a resync" if not alarm.resettable
+               else "cause still present")
+        where = f" module {alarm.module}" if alarm.module else ""
+        self.emit(LogLine(self.now_us, self.device_id,
+                          text=f"Reset fault refused: alarm {fmt_hex(alarm.code, 2)} "
+                               f"{alarm.info.symbol}{where}, {why}"))
 
     def od_emergency_word(self) -> int:
         return self.alarm.word if self.alarm is not None else 0

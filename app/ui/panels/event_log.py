@@ -25,6 +25,7 @@ from devices.events import (
     Caption,
     EmergencySent,
     Event,
+    LogLine,
     StateChanged,
 )
 
@@ -48,6 +49,9 @@ class LogRow:
 # The name of a device kind's main state machine (StateChanged.machine == ""), when it is not
 # the EtherCAT ESM: a servo drive's is CiA 402 (its EtherCAT side reports machine "esm").
 _MAIN_MACHINE = {"servo": "CiA 402"}
+# Device kinds whose own log lines are rows here: the FastCAT logs only what a trainee must see
+# (a refused Reset fault); the drives' lines (homing, modes, flash) go to their own tab's log.
+_LOGGED_KINDS = frozenset({"fastcat"})
 
 
 def event_message(event: Event, device_kind: str = "") -> tuple[str, bool] | None:
@@ -73,6 +77,8 @@ def event_message(event: Event, device_kind: str = "") -> tuple[str, bool] | Non
         return f"alarm {event.code} {event.name}{where} {verb}", event.active
     if isinstance(event, Caption):
         return f"» {event.text}", False
+    if isinstance(event, LogLine) and device_kind in _LOGGED_KINDS:
+        return event.text, "refused" in event.text.lower()
     return None
 
 
