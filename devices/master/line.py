@@ -69,10 +69,7 @@ class LineMixin:
         self._apply_physical_links(self._powered_all())
 
     def cmd_power_slave(self, position: int, on: bool) -> None:
-        link = self.links[self._position(position, "position")]
-        if on and not self._powered(position):
-            link.esc.clear()  # the ESC's power-on: its counters start at 0
-        link.slave.set_power(on)
+        self.links[self._position(position, "position")].slave.set_power(on)
         self._apply_physical_links(self._powered_all())
 
     def cmd_damage_cable(self, cable: int, percent: int) -> None:
@@ -121,7 +118,14 @@ class LineMixin:
         return self._line_reach
 
     def _apply_physical_links(self, powered: list[bool]) -> None:
-        """Each port's link as the cables and the neighbours' power make it (LINK LEDs)."""
+        """Each port's link as the cables and the neighbours' power make it (LINK LEDs); an
+        ESC switched on since the last call starts with its counters at 0, whichever action
+        switched it (the master's power_slave or the slave's own power)."""
+        before = self._line_powered
+        if len(before) == len(powered):  # not the first call: the master's start is at 0
+            for link, was, now in zip(self.links, before, powered, strict=True):
+                if now and not was:
+                    link.esc.clear()
         self._line_cables, self._line_powered = list(self.cables), list(powered)
         self._line_reach = self._reach(powered)
         n = len(self.links)

@@ -187,3 +187,40 @@ def test_a_damaged_line_is_never_quiet_a_healthy_one_again_after_repair() -> Non
     assert m.quiet_until(step) == m.now_us
     rig.apply("master", "repair_cable", {"cable": 1})
     assert not m.damaged
+
+
+@pytest.mark.parametrize(("device", "position"), [
+    ("master", 1), ("fastcat", 0), ("trscat", 1), ("cpx", 2), ("drive_ec", 3)])
+def test_an_esc_switched_on_starts_at_0_whoever_switched_it(device: str, position: int) -> None:
+    """docs/ethercat-master.md: "An ESC switched on starts at 0" — through the master's
+    power_slave and through the slave's own power action alike (the line notices the power
+    change at the master's next step)."""
+    rig = default_in_op()
+    rig.apply("master", "damage_cable", {"cable": position, "percent": 100})
+    run_ms(rig, 5)
+    rig.apply("master", "repair_cable", {"cable": position})
+    assert errors(rig)[position]["invalid"][IN] == 5
+    for on in (False, True):
+        if device == "master":
+            rig.apply("master", "power_slave", {"position": position, "on": on})
+        else:
+            rig.apply(device, "power", {"on": on})
+        run_ms(rig, 50)
+    assert errors(rig)[position] == EscErrors().snapshot()
+
+
+def test_a_power_on_is_applied_at_one_step_the_steps_after_it_skip_the_line() -> None:
+    """The power-on clear rides on the line's own change test (docs/performance.md): one
+    step applies the change, the next ones skip the line and keep what the ESC counts."""
+    rig = default_in_op()
+    m = master(rig)
+    rig.apply("trscat", "power", {"on": False})
+    run_ms(rig, 5)
+    rig.apply("trscat", "power", {"on": True})
+    skipped = m.skipped.line
+    run_ms(rig, 5)
+    assert m.skipped.line == skipped + 4
+    m.links[1].esc.invalid[IN] = 7
+    run_ms(rig, 5)
+    assert m.skipped.line == skipped + 9
+    assert m.links[1].esc.invalid[IN] == 7
