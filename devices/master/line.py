@@ -77,6 +77,13 @@ class LineMixin:
 
     def cmd_repair_cable(self, cable: int) -> None:
         self.damaged.pop(self._position(cable, "cable"), None)
+        if self.damaged:
+            return
+        # The line is healthy: the frames lost since the last report belong to this damage,
+        # reported now, not added to the first report of a later one.
+        count, self.crc_unreported, self.crc_report_us = self.crc_unreported, 0, 0
+        if count:
+            self._report_spoiled(count)
 
     def cmd_clear_esc_errors(self, position: int) -> None:
         esc = self.links[self._position(position, "position")].esc
@@ -203,6 +210,10 @@ class LineMixin:
             return
         count, self.crc_unreported = self.crc_unreported, 0
         self.crc_report_us = self.now_us + CRC_REPORT_US
+        self._report_spoiled(count)
+
+    def _report_spoiled(self, count: int) -> None:
+        """``count`` frames the damaged cables spoiled: one event per slave, one log line."""
         for link in self.links:
             if link.present:
                 self._event(CommError(self.now_us, self.device_id, position=link.position,

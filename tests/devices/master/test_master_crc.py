@@ -224,3 +224,33 @@ def test_a_power_on_is_applied_at_one_step_the_steps_after_it_skip_the_line() ->
     run_ms(rig, 5)
     assert m.skipped.line == skipped + 9
     assert m.links[1].esc.invalid[IN] == 7
+
+
+def test_the_last_frames_of_a_damage_are_reported_at_the_repair_not_with_a_later_one() -> None:
+    """Repairing the last damaged cable reports the frames lost since the last report (the
+    same comm_error / log line); a later, unrelated damage starts counting at 0 and is
+    reported at its first lost frame."""
+    rig = default_in_op()
+    m = master(rig)
+
+    def comm_counts(steps: int) -> tuple[list[int], int]:
+        events = []
+        for _ in range(steps):
+            events += rig.step()
+        records = [e.to_record() for e in events]
+        return ([r["count"] for r in records
+                 if r["event"] == "comm_error" and r["position"] == 0],
+                sum(1 for r in records if r["event"] == "log" and "lost" in r["text"]))
+
+    rig.apply("master", "damage_cable", {"cable": 1, "percent": 100})
+    assert comm_counts(1500) == ([1, 1000], 2)
+    rig.take_events()
+    rig.apply("master", "repair_cable", {"cable": 1})
+    records = [e.to_record() for e in rig.take_events()]
+    assert [r["count"] for r in records
+            if r["event"] == "comm_error" and r["position"] == 0] == [499]
+    assert sum(1 for r in records if r["event"] == "log" and "499" in r["text"]) == 1
+    assert m.crc_unreported == 0
+    comm_counts(5000)
+    rig.apply("master", "damage_cable", {"cable": 1, "percent": 100})
+    assert comm_counts(1) == ([1], 1)
