@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING
 from devices.ethercat import AlState
 from devices.events import CommError
 from devices.master.esc_errors import IN, OUT, run_frame
-from devices.master.links import Slave, SlaveLink
+from devices.master.links import Slave, SlaveLink, own_in_link
 from devices.master.still import StillCounts
 
 if TYPE_CHECKING:
@@ -184,11 +184,12 @@ class LineMixin:
 
     def _spoiled(self) -> bool:
         """This cycle's frame through the damaged cables, out to the last slave it reaches
-        (the one before a slave that is off) and back: True when it comes back spoiled,
-        lost to the master as in :meth:`_lose_frame`."""
+        (the one before a slave that is off or whose own IN link is down: not reachable, as
+        :meth:`step` has it) and back: True when it comes back spoiled, lost to the master as
+        in :meth:`_lose_frame`."""
         last = -1
         for p, ok in enumerate(self._line_reach):
-            if not (ok and self._line_powered[p]):
+            if not (ok and self._slaves[p].reachable()):
                 break
             last = p
         if last < 0 or not run_frame([link.esc for link in self.links], last, self.damaged,
@@ -227,7 +228,7 @@ class LineMixin:
         self._watched = None  # presence and reached_op change: the next watch runs in full
         link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
         link.pending, link.identity_ok, link.reached_op = None, None, False
-        link.stalled = False
+        link.stalled, link.in_link = False, True  # reached: its IN link is up
         if link.diagnosis.startswith("no link"):
             link.diagnosis = ""
         if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
@@ -235,6 +236,23 @@ class LineMixin:
             if slave.al_state is not AlState.INIT and not self.external:
                 self._request(link, AlState.INIT)
         return link.lost_once
+
+    def _unreached(self, link: SlaveLink) -> None:
+        """The frames do not reach ``link``'s slave this step (off the healthy path). When
+        its own IN link went down since it was last reached or unreached, a cable pulled at
+        the slave, not through the master's cables or power (``phys_in`` / ``phys_out`` still
+        up): the ESC rule's lost link at both ends of that cable, as :meth:`_apply_physical_links`
+        counts a master's pull."""
+        p = link.position
+        up = own_in_link(link.slave)
+        if link.in_link and not up:
+            powered = self._line_powered
+            if self.phys_in[p] and powered[p]:
+                link.esc.lose_link(IN)
+            if p > 0 and self.phys_out[p - 1] and powered[p - 1]:
+                self.links[p - 1].esc.lose_link(OUT)
+        link.in_link = up
+        self._lose(link)
 
     def _lose(self, link: SlaveLink) -> None:
         if not link.present:

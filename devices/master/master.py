@@ -274,7 +274,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc, esm_view \
                 in rows:
             if not (first if p == 0 else reach[p] and reachable()):
-                self._lose(link)
+                self._unreached(link)
                 quiet = False
                 continue
             if not link.present:

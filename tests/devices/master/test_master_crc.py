@@ -254,3 +254,51 @@ def test_the_last_frames_of_a_damage_are_reported_at_the_repair_not_with_a_later
     comm_counts(5000)
     rig.apply("master", "damage_cable", {"cable": 1, "percent": 100})
     assert comm_counts(1) == ([1], 1)
+
+
+# A slave's own IN cable pulled (its own action, not the master's pull_cable): (device,
+# action, args to pull, position).
+OWN_IN_PULLS = [
+    ("fastcat", "link", {"connected": False}, 0),
+    ("trscat", "link", {"port": "in", "connected": False}, 1),
+    ("cpx", "cable", {"port": "in", "connected": False}, 2),
+    ("drive_ec-ecat", "link", {"connected": False}, 3),
+]
+
+
+@pytest.mark.parametrize(("device", "action", "args", "position"), OWN_IN_PULLS)
+def test_a_cable_pulled_at_the_slave_carries_no_frame_to_count(
+        device: str, action: str, args: dict, position: int) -> None:
+    """The cable into a slave whose own IN link is down carries no frame: damaged, it spoils
+    nothing, no ESC counts an invalid frame there (the frame turns at the slave before, as
+    the master's step treats a slave that is not reachable)."""
+    rig = default_in_op()
+    m = master(rig)
+    rig.apply(device, action, args)
+    run_ms(rig, 100)
+    lost = m.lost_frames
+    rig.apply("master", "damage_cable", {"cable": position, "percent": 100})
+    run_ms(rig, 10)
+    e = errors(rig)
+    assert [s["invalid"] for s in e] == [[0, 0]] * 4
+    assert [s["forwarded"] for s in e] == [[0, 0]] * 4
+    assert [s["epu"] for s in e] == [0] * 4
+    assert m.lost_frames == lost
+
+
+@pytest.mark.parametrize(("device", "action", "args", "position"), OWN_IN_PULLS)
+def test_a_cable_pulled_at_the_slave_counts_a_lost_link_on_both_its_ends(
+        device: str, action: str, args: dict, position: int) -> None:
+    """As the master's pull_cable (ESC rule, 0x0310 + port): the slave's IN port and the OUT
+    port of the slave before it (the master has no ESC) count the link that went down, once;
+    plugged again, nothing more."""
+    rig = default_in_op()
+    rig.apply(device, action, args)
+    run_ms(rig, 5)
+    rig.apply(device, action, {**args, "connected": True})
+    run_ms(rig, 5)
+    want = [[0, 0] for _ in range(4)]
+    want[position][IN] = 1
+    if position:
+        want[position - 1][OUT] = 1
+    assert [s["lost_link"] for s in errors(rig)] == want
