@@ -2,10 +2,12 @@
 
 Every slave of the rig has the same layout (its ESI / SII: SM0 mailbox out, SM1 mailbox in,
 SM2 outputs, SM3 inputs). A slave checks the mailbox sync managers at INIT -> PREOP (AL status
-code 0x0016) and the process-data ones at PREOP -> SAFEOP (0x0017; a wrong size 0x001D for
-the outputs, 0x001E for the inputs), as ETG.1000.6 and the ETG sample stack's CheckSmSettings
-do. The check is the device's, on what the master wrote (a master on the wire) or on a fault
-injected by name (the built-in master configures the sync managers right).
+code 0x0016) and the process-data ones at PREOP -> SAFEOP: whatever is wrong with SM2 (size,
+address, direction / mode) is 0x001D, with SM3 0x001E. That is the ETG sample stack's
+CheckSmSettings (each SM2 fault ends in ALSTATUSCODE_INVALIDSMOUTCFG, each SM3 one in
+ALSTATUSCODE_INVALIDSMINCFG; 0x0017 "Invalid sync manager configuration" is not used there)
+with ETG.1000.6's codes. The check is the device's, on what the master wrote (a master on the
+wire) or on a fault injected by name (the built-in master configures the sync managers right).
 """
 
 from __future__ import annotations
@@ -28,9 +30,11 @@ PROCESS_DATA_SMS = (2, 3)
 MODE_DIRECTION_MASK = 0x0F
 
 INVALID_MAILBOX_PREOP = 0x0016  # "Invalid mailbox configuration (PreOP state)"
-INVALID_SM_CONFIG = 0x0017  # "Invalid sync manager configuration"
-INVALID_OUTPUT_CONFIG = 0x001D  # SM2
-INVALID_INPUT_CONFIG = 0x001E  # SM3
+INVALID_OUTPUT_CONFIG = 0x001D  # SM2, any fault
+INVALID_INPUT_CONFIG = 0x001E  # SM3, any fault
+# The AL status code of a fault on each sync manager: one per SM, whatever the fault.
+SM_FAULT_CODE = (INVALID_MAILBOX_PREOP, INVALID_MAILBOX_PREOP, INVALID_OUTPUT_CONFIG,
+                 INVALID_INPUT_CONFIG)
 
 
 class SmFault(enum.Enum):
@@ -55,12 +59,9 @@ class SmSetup:
 
 
 def fault_code(sm: int, fault: SmFault) -> int:
-    """The AL status code that refuses the transition for ``fault`` on sync manager ``sm``."""
-    if sm in MAILBOX_SMS:
-        return INVALID_MAILBOX_PREOP
-    if fault is SmFault.SIZE:
-        return INVALID_OUTPUT_CONFIG if sm == 2 else INVALID_INPUT_CONFIG
-    return INVALID_SM_CONFIG
+    """The AL status code that refuses the transition for ``fault`` on sync manager ``sm``:
+    the SM's own (SM_FAULT_CODE); ``fault`` names what in the device's diagnosis only."""
+    return SM_FAULT_CODE[sm]
 
 
 def setup_fault(sm: int, setup: SmSetup | None, pd_bytes: int = 0) -> SmFault | None:

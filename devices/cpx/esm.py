@@ -20,11 +20,10 @@ NO_ERROR = esm.NO_ERROR
 INVALID_STATE_CHANGE = esm.INVALID_STATE_CHANGE
 NO_VALID_FIRMWARE = 0x0014  # bootloader mode or a booting error: no application runs
 INVALID_MAILBOX_PREOP = sync_managers.INVALID_MAILBOX_PREOP  # SM0 / SM1 at INIT -> PREOP
-INVALID_SM_CONFIG = sync_managers.INVALID_SM_CONFIG
 SYNC_ERROR = 0x001A  # Tab. 12 single flash: OP -> SAFEOP because of a sync error
 SM_WATCHDOG = 0x001B  # Tab. 12 double flash: Sync Manager watchdog
-INVALID_OUTPUT_CONFIG = sync_managers.INVALID_OUTPUT_CONFIG  # SM2 size, > 64 bytes (§2.2)
-INVALID_INPUT_CONFIG = sync_managers.INVALID_INPUT_CONFIG  # SM3 size, > 64 bytes
+INVALID_OUTPUT_CONFIG = sync_managers.INVALID_OUTPUT_CONFIG  # SM2, > 64 bytes (§2.2)
+INVALID_INPUT_CONFIG = sync_managers.INVALID_INPUT_CONFIG  # SM3, > 64 bytes
 IDENT_MISMATCH = 0x0070  # 0xF030 and 0xF050 differ (Tab. 17 Text-ID 0x3800)
 # ETG.1000.6 AL control / AL status bit 5 (ETG.1020 Explicit Device Identification): the
 # master's "ID request" and the slave's "ID loaded", the ID then in the AL status code.

@@ -2,8 +2,8 @@
 
 INIT -> PREOP: an application must run (not the bootloader of Tab. 6, no booting error of
 Tab. 12: AL status code 0x0014) and the mailbox sync managers SM0 / SM1 must be valid
-(0x0016). PREOP -> SAFEOP: the process-data sync managers SM2 / SM3 (0x0017, 0x001D, 0x001E,
-with the Text-IDs 0x0011 ... 0x0013 of Tab. 17 in the history), the 64-byte address space
+(0x0016). PREOP -> SAFEOP: the process-data sync managers SM2 / SM3 (0x001D / 0x001E whatever
+is wrong, the Text-IDs 0x0011 ... 0x0013 of Tab. 17 in the history), the 64-byte address space
 (§2.2), the bus-cycle measurement (0x000F, a warning) and the ident check, 0xF030 against
 0xF050 (0x0070 with Text-ID 0x3800; skipped with 0x3801 when the PLC did not write 0xF030).
 SAFEOP -> OP: process data arrive (Sync Manager watchdog, 0x001B) and the sync events are

@@ -77,8 +77,8 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("clear_fault", "Remove an injected cause (the TRS bus stays down after 0x7100, "
                           "0x7500, 0x6100 until power-off)", (_FAULT,), module="optional"),
     Action("inject_sm_fault", "The master sets up sync manager sm wrong: SM0 / SM1 refuse "
-                              "INIT -> PREOP (0x0016), SM2 / SM3 PREOP -> SAFEOP (0x0017; "
-                              "a size 0x001D / 0x001E) (§9.2)", _SM_FAULT),
+                              "INIT -> PREOP (0x0016), SM2 / SM3 PREOP -> SAFEOP "
+                              "(0x001D / 0x001E) (§9.2)", _SM_FAULT),
     Action("clear_sm_fault", "The master sets sync manager sm up right again", _SM_FAULT),
     Action("drop_frames", "The next N master frames never reach SM2 (lost / CRC error)",
            (Param("count", int, low=0, high=1_000_000),)),

@@ -24,7 +24,7 @@ SM_WATCHDOG = 0x001B
 FATAL_SYNC_ERROR = 0x002C  # SYNC0 lost
 CYCLE_TOO_SMALL = 0x002E  # SYNC0 cycle below 0x1C32:5 (500 us)
 INVALID_DC_SYNC = 0x0030
-# devices/sync_managers.py: 0x0016 (SM0 / SM1), 0x0017, 0x001D (SM2), 0x001E (SM3)
+# devices/sync_managers.py: 0x0016 (SM0 / SM1), 0x001D (SM2), 0x001E (SM3)
 MODULE_IDENT_MISMATCH = 0x0070  # 0xF030 != 0xF050 at PS (§9.2; code of seed 000 §7.7)
 
 # §9.2: what the device verifies on each transition, in this order (device methods).

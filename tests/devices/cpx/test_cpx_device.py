@@ -144,8 +144,12 @@ SM_CASES = [
     ("sm_invalid_settings", 1, AlState.PREOP, 0x0016, TEXT_SM_SETTINGS),
     ("sm_invalid_size", 2, AlState.SAFEOP, 0x001D, TEXT_SM_SIZE),
     ("sm_invalid_size", 3, AlState.SAFEOP, 0x001E, TEXT_SM_SIZE),
-    ("sm_invalid_address", 3, AlState.SAFEOP, 0x0017, TEXT_SM_ADDRESS),
-    ("sm_invalid_settings", 2, AlState.SAFEOP, 0x0017, TEXT_SM_SETTINGS),
+    # SM2 / SM3: 0x001D / 0x001E whatever is wrong (ETG sample stack, CheckSmSettings); the
+    # history's Text-ID names what (Tab. 17)
+    ("sm_invalid_address", 3, AlState.SAFEOP, 0x001E, TEXT_SM_ADDRESS),
+    ("sm_invalid_settings", 2, AlState.SAFEOP, 0x001D, TEXT_SM_SETTINGS),
+    ("sm_invalid_address", 2, AlState.SAFEOP, 0x001D, TEXT_SM_ADDRESS),
+    ("sm_invalid_settings", 3, AlState.SAFEOP, 0x001E, TEXT_SM_SETTINGS),
 ]
 
 

@@ -66,7 +66,11 @@ def test_a_bad_mailbox_refuses_preop_after_the_detection_too() -> None:
     (_with(2, length=3), 0x001D),
     (_with(2, enabled=False), 0x001D),
     (_with(3, length=2), 0x001E),
-    (_with(2, control=0x20), 0x0017),  # SM2 set up for the master to read
+    # The wrong direction / mode: the SM's own code as the ETG sample stack's CheckSmSettings
+    # gives every SM2 / SM3 fault (0x001D / 0x001E), not 0x0017
+    (_with(2, control=0x20), 0x001D),  # SM2 set up for the master to read
+    (_with(2, control=0x66), 0x001D),  # SM2 as a mailbox (1-buffer)
+    (_with(3, control=0x24), 0x001E),  # SM3 set up for the master to write
     (_with(3, start=0x1800), None),  # where the process data sit is the master's choice
 ])
 def test_process_data_setup_is_checked_at_preop_to_safeop(setups, code) -> None:
@@ -112,7 +116,8 @@ def test_sm_is_checked_before_dc_and_idents() -> None:
     ("sm_invalid_settings", 1, AlState.INIT, 0x0016),
     ("sm_invalid_size", 2, AlState.PREOP, 0x001D),
     ("sm_invalid_size", 3, AlState.PREOP, 0x001E),
-    ("sm_invalid_settings", 2, AlState.PREOP, 0x0017),
+    ("sm_invalid_settings", 2, AlState.PREOP, 0x001D),
+    ("sm_invalid_address", 3, AlState.PREOP, 0x001E),
 ])
 def test_injected_sm_faults_with_the_built_in_master(fault, sm, state, code) -> None:
     bench = Bench(master=True)
