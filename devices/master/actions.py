@@ -31,7 +31,7 @@ MASTER_ACTIONS: Mapping[str, Action] = {a.name: a for a in (
     Action("repair_cable", "Repair cable N: no new errors (the counters stay until cleared)",
            (Param("cable", int, low=0),)),
     Action("clear_esc_errors", "Clear the ESC error counters of the slave at line position N "
-                               "(a write to 0x0300 and 0x0310 as a master makes it)",
+                               "(a master's write of 0x0300-0x0313)",
            (Param("position", int, low=0),)),
     Action("dc_fault", "Distributed clocks fault: drift, jitter over the sync window, "
                        "SYNC0 lost (seed 003 NOT_SYNCHRONIZED)",

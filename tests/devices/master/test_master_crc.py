@@ -302,3 +302,18 @@ def test_a_cable_pulled_at_the_slave_counts_a_lost_link_on_both_its_ends(
     if position:
         want[position - 1][OUT] = 1
     assert [s["lost_link"] for s in errors(rig)] == want
+
+
+def test_clear_esc_errors_help_names_the_write_the_command_makes() -> None:
+    """The command writes 0x0300-0x0313 (0x030C, the processing unit's counter, included); a
+    write to 0x0300 and one to 0x0310 would leave 0x030C: the help names the range."""
+    from devices.master.actions import MASTER_ACTIONS
+
+    doc = MASTER_ACTIONS["clear_esc_errors"].doc
+    assert "a master's write of 0x0300-0x0313" in doc
+    rig = default_in_op()
+    rig.apply("master", "damage_cable", {"cable": 2, "percent": 100})
+    run_ms(rig, 5)
+    assert errors(rig)[2]["epu"] == 5
+    rig.apply("master", "clear_esc_errors", {"position": 2})
+    assert errors(rig)[2] == EscErrors().snapshot()
