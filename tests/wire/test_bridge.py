@@ -21,6 +21,7 @@ from wire_line import LINE
 
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire.bridge import WireBridge, _FrameClock, check_interface
+from app.player import reset_in_place
 from app.rig_config import RigConfigError
 from app.runtime import Runtime
 
@@ -273,3 +274,14 @@ def test_the_models_esc_error_counters_reach_b_and_a_masters_write_clears_them(w
     b.send(msg.ESC_ERRORS_WRITE, 1, 0x0310, 1)
     b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and not any(m[2]))
     assert sim(runtime, lambda: master_view(runtime).links[1].esc.lost_link) == [0] * 4
+
+
+def test_a_rig_reset_in_place_brings_b_the_fresh_zero_counters(wire):
+    """A scenario load resets the rig in place (app/player.py): the same device objects, so
+    the bridge keeps its slaves and what it last sent B; the fresh master's zeros differ from
+    the counted ones and reach B (B's ESC is not switched off by a reset)."""
+    runtime, _bridge, b = wire
+    runtime.command("master", "pull_cable", {"cable": 2}).result(timeout=WAIT_S)
+    b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and any(m[2]))
+    sim(runtime, lambda: reset_in_place(runtime.rig, line_rig("OP")))
+    b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and not any(m[2]))
