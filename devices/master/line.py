@@ -160,6 +160,12 @@ class LineMixin:
                 return f"cable {p} pulled"
             if p < position and not self._powered(p):
                 return f"the slave at position {p} is off"
+            slave = self._slaves[p]
+            if p < position and not own_in_link(slave):
+                return f"no link on the IN port of the slave at position {p}"
+            if p < position and not getattr(slave, "link_out", True) and self.cables[p + 1] \
+                    and self._powered(p + 1):  # else the next cable or slave says why
+                return f"no link on the OUT port of the slave at position {p}"
         if not self._powered(position):
             return "powered off"
         return "no link on its IN port"
@@ -184,14 +190,17 @@ class LineMixin:
 
     def _spoiled(self) -> bool:
         """This cycle's frame through the damaged cables, out to the last slave it reaches
-        (the one before a slave that is off or whose own IN link is down: not reachable, as
-        :meth:`step` has it) and back: True when it comes back spoiled, lost to the master as
-        in :meth:`_lose_frame`."""
+        (the one before a slave that is off or whose own IN link is down, or one whose own OUT
+        link is down, as :meth:`step` has it) and back: True when it comes back spoiled, lost
+        to the master as in :meth:`_lose_frame`."""
         last = -1
         for p, ok in enumerate(self._line_reach):
-            if not (ok and self._slaves[p].reachable()):
+            slave = self._slaves[p]
+            if not (ok and slave.reachable()):
                 break
             last = p
+            if not getattr(slave, "link_out", True):
+                break  # its own OUT cable pulled: the frame turns here
         if last < 0 or not run_frame([link.esc for link in self.links], last, self.damaged,
                                      self.rng):
             return False

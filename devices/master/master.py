@@ -271,12 +271,15 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         quiet = exchange and skip and watched is not None
         served = 0
         recovered = []
+        cut = False  # a slave's own IN or OUT cable pulled: no frame passes it (_spoiled too)
         for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc, esm_view \
                 in rows:
-            if not (first if p == 0 else reach[p] and reachable()):
+            if cut or not (first if p == 0 else reach[p] and reachable()):
                 self._unreached(link)
                 quiet = False
+                cut = True
                 continue
+            cut = not getattr(slave, "link_out", True)
             if not link.present:
                 if self._find(link):
                     recovered.append(p)
