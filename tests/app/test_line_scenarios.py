@@ -100,11 +100,11 @@ def test_trscat_outputs_fallback() -> None:
 def test_trscat_outputs_fallback_values() -> None:
     """The outputs at the checkpoint: 1 and 3 on by 0xF700 / 0xF701, 2 and 4 off, 5 and 6
     off by the SysOK mask 0xF710 although the PLC had them on (seed 001 §9.3.5, §9.3.6)."""
-    from app.rig_config import build_rig, load_rig_spec
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
     from app.scenario import load_scenario, run_scenario
 
     scenario = load_scenario(ROOT / "static" / "scenarios" / "trscat_outputs_fallback.toml")
-    rig = build_rig(load_rig_spec(scenario.rig))
+    rig = build_rig(load_rig_spec(scenario.rig or DEFAULT_RIG))
     seen: dict[str, list[int]] = {}
 
     def on_step(step: Any, rig: Any) -> None:

@@ -1,9 +1,11 @@
 """The Scenario tab on the default dashboard (``python -m app``): the library lists every
-scenario of ``static/scenarios/``, also those written for another rig file (the EtherCAT line,
-nine analog modules). Those are marked in the picker with the rig they need, listed after the
-ones that play here, and Play on one is refused with a short notice that gives the command to
-serve its rig first; the two device lists go to the server log, not into the notice (a notice
-of ~1,200 characters was clipped, title and fix cut off)."""
+scenario of ``static/scenarios/``, also those written for another rig file (nine analog
+modules). Those are marked in the picker with the rig they need, listed after the ones that
+play here, and Play on one is refused with a short notice that gives the command to serve its
+rig first; the two device lists go to the server log, not into the notice (a notice of ~1,200
+characters was clipped, title and fix cut off). The EtherCAT line's scenarios run on the
+default rig, which is that line: they play here, unmarked (before, they named
+ethercat_line.toml, whose drive is drive_ecat, and Play refused them)."""
 
 from __future__ import annotations
 
@@ -21,7 +23,9 @@ from app.scenario import load_scenario
 from app.screenshots import free_port
 from app.ui.panels.scenario_player import CHOOSE, PLAY, ScenarioPlayerPanel, library
 
-LINE_RIG = Path("static/rigs/ethercat_line.toml")
+NINE_RIG = Path("static/rigs/nine_analog.toml")
+LINE_SCENARIOS = ("cable_pulled", "cpx_short_circuit", "dc_sync_lost",
+                  "trscat_expansion_mismatch", "trscat_outputs_fallback")
 
 
 class _Client:
@@ -65,28 +69,36 @@ def test_scenarios_for_another_rig_are_marked_and_listed_last(
     for label, entry in zip(options[1 + len(here):], other, strict=True):
         stem = _rig_of(entry.path).stem
         assert label == f"[rig {stem}] {entry.label}"
-    assert "[rig ethercat_line] Distributed clocks: SYNC0 lost" in options
     assert "[rig nine_analog] Too many analog modules" in options
     # The empty status tells how to play the marked ones.
     status = str(panel._status.content)
     assert "[rig NAME]" in status
-    for rig in ("ethercat_line", "nine_analog"):
-        assert f"python -m app --rig static/rigs/{rig}.toml" in status
+    assert "python -m app --rig static/rigs/nine_analog.toml" in status
+    assert "ethercat_line" not in status
+
+
+@pytest.mark.parametrize("stem", LINE_SCENARIOS)
+def test_the_line_scenarios_play_on_the_default_rig(panel: ScenarioPlayerPanel,
+                                                     stem: str) -> None:
+    """The default rig is the EtherCAT line: its scenarios are listed plainly, Play takes them."""
+    scenario = load_scenario(Path("static/scenarios") / f"{stem}.toml")
+    assert panel.player.mismatch(scenario) is None
+    assert scenario.name in panel._pick.options
 
 
 def test_play_on_another_rig_is_refused_short_fix_first(
         panel: ScenarioPlayerPanel, caplog: pytest.LogCaptureFixture) -> None:
     client = _Client()
-    panel._pick.value = next(o for o in panel._pick.options if "SYNC0 lost" in o)
+    panel._pick.value = next(o for o in panel._pick.options if "Too many analog" in o)
     with caplog.at_level(logging.WARNING):
         panel._run(client, PLAY)  # type: ignore[arg-type]
     [(title, body, color)] = client.notes
     assert (title, color) == ("Scenario: Play refused", "red")
     assert len(body) <= 250, body  # fits the notice without clipping
-    assert body.startswith(f"Serve its rig: python -m app --rig {LINE_RIG}"), body
-    assert "drive_ecat" not in body and "drive_ec (" not in body  # no device lists
+    assert body.startswith(f"Serve its rig: python -m app --rig {NINE_RIG}"), body
+    assert "drive_co" not in body and "drive_ec (" not in body  # no device lists
     # The device lists are in the log, for whoever wants the detail.
-    assert any("drive_ecat (servo)" in r.getMessage() for r in caplog.records)
+    assert any("drive_co (servo)" in r.getMessage() for r in caplog.records)
     assert panel.player.view().scenario is None  # nothing loaded
 
 
@@ -98,3 +110,23 @@ def test_the_picked_scenario_is_whole_in_the_hint(panel: ScenarioPlayerPanel) ->
     panel._pick.value = label
     assert panel._pick.hint == (f"{label} (cpx_short_circuit.toml): Seed 002 §2.5: an output "
                                 "of the CPX-E-8DO (module 2) is shorted while it is on.")
+
+
+def test_the_picked_scenario_is_named_whole_in_the_status(panel: ScenarioPlayerPanel) -> None:
+    """The closed box cuts a long name ("[rig ethercat_line] CPX-E-EC: short circ"): the
+    status block under it names the picked scenario whole before Play, and for one marked for
+    another rig the command that serves it, so nobody needs to hover or press Play to read it."""
+    frame = panel._runtime.frame
+    entry = next(e for e in library() if e.path.name == "cpx_short_circuit.toml")
+    panel._pick.value = entry.label
+    panel.update(frame)
+    status = str(panel._status.content)
+    assert f"Picked: <b>{entry.scenario.name}</b> (cpx_short_circuit.toml)" in status, status
+    assert "Serve its rig" not in status
+    marked = next(o for o in panel._pick.options if o.startswith("[rig nine_analog]"))
+    panel._pick.value = marked
+    panel.update(frame)
+    status = str(panel._status.content)
+    assert "Picked: <b>Too many analog modules</b> (too_many_analog.toml)" in status, status
+    assert "written for static/rigs/nine_analog.toml: serve it with python -m app --rig " \
+        "static/rigs/nine_analog.toml" in status, status

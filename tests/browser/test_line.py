@@ -252,7 +252,7 @@ def test_scenario_focus_steps_pick_the_device(dashboard_for: Any) -> None:
     from app.scenario import load_scenario
 
     scenario = load_scenario(ROOT / "static" / "scenarios" / "cpx_short_circuit.toml")
-    live = dashboard_for(ROOT / "static" / "rigs" / "ethercat_line.toml")
+    live = dashboard_for(LINE_RIG)  # the default rig, which its scenarios run on
     view, objects = live.dashboard.line, live.dashboard.objects
     assert view is not None and objects is not None
     view.slave.select("trscat")

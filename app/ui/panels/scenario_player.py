@@ -45,6 +45,7 @@ class Entry:
     label: str  # what the picker shows: the scenario's name
     path: Path
     scenario: Scenario  # as the picker read it (Play reads the file again)
+    other_rig: Path | None = None  # the rig file it is written for, when not the served one
 
 
 def entry_detail(entry: Entry) -> str:
@@ -82,7 +83,7 @@ def marked(entries: list[Entry], player: Player) -> tuple[list[Entry], list[Path
             here.append(entry)
             continue
         other.append(Entry(f"[rig {why.rig_file.stem}] {entry.label}", entry.path,
-                           entry.scenario))
+                           entry.scenario, why.rig_file))
         if why.rig_file not in rigs:
             rigs.append(why.rig_file)
     return here + other, rigs
@@ -96,25 +97,38 @@ def other_rig_hint(rigs: list[Path]) -> str:
             + "; ".join(f"python -m app --rig {shown_path(r)}" for r in rigs) + ".")
 
 
+def picked_text(entry: Entry) -> str:
+    """The picked scenario's whole name and file (the closed box cuts a long name: "[rig
+    ethercat_line] CPX-E-EC: short circ"), and the command that serves its rig when it is
+    written for another: what a trainee reads before Play, without hovering."""
+    text = f"Picked: <b>{esc(entry.scenario.name)}</b> ({esc(entry.path.name)})"
+    if entry.other_rig is None:
+        return text + ": Play loads it."
+    rig = shown_path(entry.other_rig)
+    return text + esc(f", written for {rig}: serve it with python -m app --rig {rig}.")
+
+
 def speed_label(speed: float) -> str:
     return f"{speed:g}x"
 
 
-def status_html(view: PlayerView, frame: Frame, hint: str = "") -> str:
+def status_html(view: PlayerView, frame: Frame, hint: str = "", picked: str = "") -> str:
     marker = (f'id="{STATUS_ID}" data-frame="{frame.seq}" data-t-us="{frame.t_us}" '
               f'data-applied="{view.applied}" data-generation="{view.generation}" '
               f'data-status="{view.status.name.lower()}"')
-    return (f'<div {marker} style="font-size:0.85em">{status_text(view, frame.t_us, hint)}'
+    return (f'<div {marker} style="font-size:0.85em">{status_text(view, frame.t_us, hint, picked)}'
             "</div>")
 
 
-def status_text(view: PlayerView, t_us: int, hint: str = "") -> str:
+def status_text(view: PlayerView, t_us: int, hint: str = "", picked: str = "") -> str:
     """What the status block says (inside the marker): the scenario, its state and time, the
     step, the caption, the checkpoint and the failures; ``hint`` follows the "no scenario"
-    text (how to play the scenarios marked for another rig)."""
+    text (how to play the scenarios marked for another rig); ``picked`` (HTML,
+    :func:`picked_text`) names a picked scenario that is not the loaded one."""
     scenario = view.scenario
     if scenario is None:
-        return ('<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
+        return ((f"{picked}<br>" if picked else "")
+                + '<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
                 "restarts factory-fresh and the scenario drives it."
                 + (f" {esc(hint)}" if hint else "") + "</span>")
     total = len(scenario.steps)
@@ -130,6 +144,8 @@ def status_text(view: PlayerView, t_us: int, hint: str = "") -> str:
     if view.checkpoint:
         lines.append(f'<span class="fr-muted">checkpoint {esc(view.checkpoint)}</span>')
     lines.extend(f'<span style="color:#a11616">{esc(f)}</span>' for f in view.failures)
+    if picked:
+        lines.append(picked)
     return "<br>".join(lines)
 
 
@@ -242,6 +258,14 @@ class ScenarioPlayerPanel:
         if self._pick.value != label:
             self._pick.value = label
 
+    def _picked(self) -> str:
+        """:func:`picked_text` of the picked entry, "" when none or when it is the loaded one."""
+        entry = self._entries.get(str(self._pick.value))
+        loaded = self._loaded
+        if entry is None or (loaded is not None and entry.path.resolve() == loaded.resolve()):
+            return ""
+        return picked_text(entry)
+
     # ---- the dashboard's update thread -----------------------------------------------------
     def update(self, frame: Frame) -> None:
         """``frame``: the one the dashboard is writing (the marker names it).
@@ -252,12 +276,13 @@ class ScenarioPlayerPanel:
         every frame written, as the screenshot tooling needs: it steps a paused rig and waits
         until ``data-frame`` reaches the runtime's frame (app/screenshots.py ``sync``)."""
         view = self.player.view()
+        picked = self._picked()
         said = (view.applied, view.generation, view.status,
-                status_text(view, frame.t_us, self.hint))
+                status_text(view, frame.t_us, self.hint, picked))
         if said == self._said and not self._runtime.paused:
             return
         self._said = said
-        content = status_html(view, frame, self.hint)
+        content = status_html(view, frame, self.hint, picked)
         if content != self._last:
             self._status.content = content
             self._last = content

@@ -7,7 +7,7 @@ event then said "from": "free_run" while the lane still showed dc_running).
 
 from __future__ import annotations
 
-from app.rig_config import build_rig, load_rig_spec
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.scenario import EXAMPLES_DIR, load_scenario
 
 SCENARIO = EXAMPLES_DIR / "trscat_expansion_mismatch.toml"
@@ -15,7 +15,7 @@ SCENARIO = EXAMPLES_DIR / "trscat_expansion_mismatch.toml"
 
 def test_power_off_reports_the_sync_machine_s_change() -> None:
     scenario = load_scenario(SCENARIO)
-    rig = build_rig(load_rig_spec(scenario.rig), state_dir=None)
+    rig = build_rig(load_rig_spec(scenario.rig or DEFAULT_RIG), state_dir=None)
     trscat = rig.devices["trscat"]
     rig.run_until(4_000_000)
     rig.take_events()
