@@ -47,6 +47,13 @@ def collapse_repeats(items: Sequence[T], key: Callable[[T], Hashable],
     return runs
 
 
-def repeat_suffix(count: int, last_t_s: float) -> str:
-    """`` x12, last 52.3 s``: how many times, and the simulated time of the last one."""
-    return f" x{count}, last {last_t_s:.1f} s" if count > 1 else ""
+def repeat_suffix(count: int, first_stamp: str, last_stamp: str) -> str:
+    """`` x12, last 14.52.31 949 ms``: how many times, and when the last one was, as the row's
+    own Timestamp column reads (the TwinCAT stamp; its date only when it is not the first
+    one's). Simulated seconds there ("last 52.3 s") read as "52 s ago" next to a wall-clock
+    stamp."""
+    if count < 2:
+        return ""
+    date, _, time = last_stamp.partition(" ")
+    same_day = "/" in date and time and first_stamp.partition(" ")[0] == date
+    return f" x{count}, last {time if same_day else last_stamp}"

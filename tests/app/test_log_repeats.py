@@ -4,7 +4,9 @@ Seed 000 §7.1 / §7.7 has the trainee read "CoE - Emergency (Hex: ff00, 81, ...
 state change ... with code 0x8204" in the logger. With module 2 unplugged in OP the master
 retries every 2.14 s and prints two lines each time; before, the State tab's event log (50
 rows) and the Line tab's master log (40 rows) held neither line ~48 s after the alarm. Now a
-run of repeated rows is one row with a count and the last time (docs/dashboard.md).
+run of repeated rows is one row with a count and the last time (docs/dashboard.md), in the
+format of the row's own stamp: "x3, last 14.55.23 915 ms", not "x3, last 119.1 s" (simulated
+seconds next to a wall-clock stamp read as "119 s ago").
 """
 
 from __future__ import annotations
@@ -49,10 +51,11 @@ def test_line_tab_log_keeps_the_root_cause(unplugged_60s: RigSession) -> None:
     assert any("abnormal state change" in m and "0x8204" in m for m in shown), shown
     failed = [m for m in shown if FAILED in m]
     assert len(failed) == 1, shown
-    # One row per run, with its count and the time of its last line (simulated seconds).
+    # One row per run, with its count and the time of its last line, as its stamp reads
+    # ("12/11/2019 14.52.34 645 ms"; the date left out, it is the first line's).
     count = sum(FAILED in line["text"] for line in log)
-    last = [line["t"] for line in log if FAILED in line["text"]][-1]
-    assert failed[0].endswith(f" x{count}, last {last:.1f} s"), failed[0]
+    last = [line["timestamp"] for line in log if FAILED in line["text"]][-1]
+    assert failed[0].endswith(f" x{count}, last {last.split(' ', 1)[1]}"), failed[0]
 
 
 def test_state_tab_event_log_keeps_the_root_cause(unplugged_60s: RigSession) -> None:
@@ -66,7 +69,8 @@ def test_state_tab_event_log_keeps_the_root_cause(unplugged_60s: RigSession) -> 
     assert any(m.startswith("Emergency sent (code 0xFF00") for m in shown), shown
     assert sum(FAILED in m for m in shown) == 1, shown
     assert sum(ABORTED in m for m in shown) == 1, shown
-    assert re.search(r" x\d+, last \d+\.\d s$", next(m for m in shown if ABORTED in m))
+    assert re.search(r" x\d+, last \d\d\.\d\d\.\d\d \d{3} ms$",
+                     next(m for m in shown if ABORTED in m))
 
 
 def test_runs_of_one_or_several_lines_collapse_and_others_stay() -> None:
@@ -89,7 +93,7 @@ def test_event_log_rows_of_other_servers_are_not_merged() -> None:
             row(4, "fastcat", "a")]
     out = collapse_rows(rows)  # oldest first in, newest first out
     assert [(r.server, r.message) for r in out] == [
-        ("fastcat", "a x2, last 0.0 s"), ("(65535)", "a"), ("fastcat", "a")]
+        ("fastcat", "a x2, last ts4"), ("(65535)", "a"), ("fastcat", "a")]
     assert out[0].timestamp == "ts3"  # the run's first line: the Timestamp column stays ordered
 
 
@@ -112,7 +116,26 @@ def test_event_log_reads_the_master_log_beyond_its_rows() -> None:
     """The master's lines older than the last 50 count too: the emergency 60 lines back."""
     panel = EventLogPanel(_Server(), {}, lambda t_us: f"{t_us}")  # type: ignore[arg-type]
     lines: list[dict[str, Any]] = [{"t": 4.0, "port": 65535, "text": "CoE - Emergency"}]
-    lines += [{"t": 5.0 + i, "port": 65535, "text": f"{FAILED} {ABORTED}"} for i in range(60)]
+    lines += [{"t": 5.0 + i, "port": 65535, "text": f"{FAILED} {ABORTED}",
+               "timestamp": f"12/11/2019 14.{52 + i // 60}.{i % 60:02d} 000 ms"}
+              for i in range(60)]
     panel.update({"log": lines})
     content = str(panel._html.content)
-    assert "CoE - Emergency" in content and " x60, last 64.0 s" in content
+    assert "CoE - Emergency" in content and " x60, last 14.52.59 000 ms" in content
+
+
+def test_the_last_time_reads_as_the_row_s_stamp() -> None:
+    """The Timestamp column is the rig's wall clock (TwinCAT style): the last time of a run is
+    printed the same way, the date only when it is not the first line's."""
+    from app.ui.repeats import repeat_suffix
+
+    first, last = "12/11/2019 14.53.24 815 ms", "12/11/2019 14.55.23 915 ms"
+    assert repeat_suffix(3, first, last) == " x3, last 14.55.23 915 ms"
+    assert repeat_suffix(2, first, "13/11/2019 00.00.01 000 ms") == (
+        " x2, last 13/11/2019 00.00.01 000 ms")
+    assert repeat_suffix(1, first, first) == ""
+    # The master's plain style (no epoch): its stamp is simulated seconds, kept whole.
+    assert repeat_suffix(4, "4.000 s", "10.420 s") == " x4, last 10.420 s"
+    line = {"t": 4.0, "timestamp": first, "text": "a"}
+    assert "a x2, last 14.53.26 815 ms" in log_table(
+        [line, {**line, "t": 6.0, "timestamp": "12/11/2019 14.53.26 815 ms"}])

@@ -179,13 +179,15 @@ def log_signature(master: Mapping[str, Any]) -> tuple[Any, ...]:
 
 
 def _log_row(run: Run[Mapping[str, Any]]) -> str:
-    text = str(run.first.get("text", "")) + repeat_suffix(run.count, float(run.last.get("t", 0)))
+    text = str(run.first.get("text", "")) + repeat_suffix(run.count, _stamp(run.first),
+                                                          _stamp(run.last))
     return f'<tr><td class="fr-ts">{esc(_stamp(run.first))}</td><td>{esc(text)}</td></tr>'
 
 
 def log_table(lines: Sequence[Mapping[str, Any]]) -> str:
     """The master's lines as it printed them, newest first; a run of repeated lines (its
-    retries) is one row, "... x12, last 52.3 s", so the emergency before it stays in view."""
+    retries) is one row, "... x12, last 14.52.31 949 ms", so the emergency before it stays in
+    view."""
     runs = collapse_repeats(list(lines), key=lambda line: str(line.get("text", "")))
     rows = "".join(_log_row(run) for run in runs[-LOG_ROWS:][::-1])
     body = rows or '<tr><td colspan="2" class="fr-muted">no lines yet</td></tr>'

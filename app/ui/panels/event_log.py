@@ -84,10 +84,10 @@ def event_message(event: Event, device_kind: str = "") -> tuple[str, bool] | Non
 
 def collapse_rows(rows: Iterable[LogRow]) -> list[LogRow]:
     """Rows oldest first -> newest first, each run of repeated rows (same server and message)
-    as one: the first row's timestamp, "... x12, last 52.3 s" after the message."""
+    as one: the first row's timestamp, "... x12, last 14.52.31 949 ms" after the message."""
     runs = collapse_repeats(list(rows), key=lambda r: (r.server, r.message))
     return [replace(run.first, message=run.first.message
-                    + repeat_suffix(run.count, run.last.t_us / US_PER_S))
+                    + repeat_suffix(run.count, run.first.timestamp, run.last.timestamp))
             for run in reversed(runs)]
 
 
