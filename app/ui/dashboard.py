@@ -242,7 +242,7 @@ class Dashboard:
             # Every device's own events (the drives' alarms too), the master's via its log.
             log = EventLogPanel(self.server, {d: str(info["kind"]) for d, info in
                                               described.items() if d != self.master_id},
-                                self._timestamp_fn())
+                                self._timestamp_fn(), self._scenario_title)
         with side.add_tab("Objects", viser.Icon.LIST_DETAILS):
             objects = ObjectDictionaryPanel(self.server, self.runtime, self._sender, device_id,
                                             self._od_ids(described, device_id))
@@ -385,6 +385,11 @@ class Dashboard:
                 self.server.flush()
             except Exception:  # a view bug must not freeze the dashboard for good
                 logger.exception("dashboard update failed")
+
+    def _scenario_title(self) -> str:
+        """The loaded scenario's name, "" before any (the event log's new-run row)."""
+        scenario = self.scenario_player.player.view().scenario
+        return scenario.name if scenario is not None else ""
 
     @staticmethod
     def _device_snap(snapshot: Mapping[str, Any], device_id: str | None) -> dict[str, Any]:

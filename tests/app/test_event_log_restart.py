@@ -1,0 +1,70 @@
+"""The event log after a scenario Play (docs/dashboard.md "Event log"): loading a scenario
+restarts the simulated clock at 0 on a factory-fresh rig, so the previous session's rows,
+stamped later, sorted above the new run's and the top of the newest-first log showed stale
+events (the trainee-eyes review, 39_scenario_later.png). Now the log starts afresh at a load:
+the previous rows go, a row "scenario '...' started" is at the bottom, the new run above it.
+"""
+
+from __future__ import annotations
+
+import html
+import re
+from collections.abc import Iterator
+
+import pytest
+import viser
+
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.runtime import Runtime
+from app.scenario import EXAMPLES_DIR, load_scenario
+from app.screenshots import free_port
+from app.ui.dashboard import Dashboard
+
+TIMEOUT_S = 60
+
+
+def log_rows(dashboard: Dashboard) -> list[tuple[str, str, str]]:
+    """(server, timestamp, message) of each row of the event log, newest first."""
+    assert dashboard._panels is not None
+    content = str(dashboard._panels.log._html.content)
+    return [(html.unescape(s), html.unescape(t.replace("<br>", " ")), html.unescape(m))
+            for s, t, m in re.findall(
+                r'<td class="fr-srv">(.*?)</td><td class="fr-ts">(.*?)</td><td>(.*?)</td>',
+                content)]
+
+
+@pytest.fixture
+def dashboard() -> Iterator[Dashboard]:
+    runtime = Runtime(build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
+    runtime.set_paused(True)
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    dashboard = Dashboard(server, runtime)  # ticked by the test
+    runtime.start()
+    try:
+        yield dashboard
+    finally:
+        runtime.stop()
+        server.stop()
+
+
+def test_a_scenario_load_starts_the_log_afresh(dashboard: Dashboard) -> None:
+    runtime = dashboard.runtime
+    # A session before the scenario: the line powered and a module pulled at 20 s.
+    runtime.command("fastcat", "power", {"on": True}).result(timeout=TIMEOUT_S)
+    runtime.advance(20_000_000).result(timeout=TIMEOUT_S)
+    runtime.command("fastcat/2", "unplug", {}).result(timeout=TIMEOUT_S)
+    runtime.advance(1_000_000).result(timeout=TIMEOUT_S)
+    dashboard.tick()
+    assert any("14.51.5" in ts for _, ts, _ in log_rows(dashboard))  # 14.51.30 + 21 s
+    scenario = load_scenario(EXAMPLES_DIR / "cnf_scan.toml")
+    dashboard.scenario_player.load(scenario)
+    runtime.advance(2_000_000).result(timeout=TIMEOUT_S)
+    dashboard.tick()
+    rows = log_rows(dashboard)
+    assert rows, "the new run logged nothing"
+    # Nothing of the session before: every row is of the new run (epoch 14.51.30 + 2 s).
+    stale = [r for r in rows if not re.search(r"14\.51\.3[0-2] ", r[1])]
+    assert not stale, stale
+    assert rows[-1][0] == "scenario" and rows[-1][2] == (
+        f"» scenario '{scenario.name}' started: the rig is factory-fresh, the clock at 0 s")
+    assert rows[-1][1] == "12/11/2019 14.51.30 000 ms"
