@@ -251,6 +251,12 @@ class Runtime:
                         self._sim_waiting = False
                         self._step_or_skip(target)
                         self._journal_events(self._drain_work())
+                    if self._paused or self._rebase:
+                        # The work just taken paused the rig or moved its clock (a scenario
+                        # load resets it to 0): ``target`` belongs to the old clock. Going on
+                        # ran a fresh rig at CPU speed up to the old time ("finished · t =
+                        # 0.0 s", then "t = 756.8 s of 16 s"); the next round starts afresh.
+                        break
             if now >= next_publish or self._publish_soon:
                 self._sim_waiting = True
                 with self._rig_lock:

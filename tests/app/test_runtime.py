@@ -207,3 +207,35 @@ def test_idle_runtime_keeps_real_time_and_answers_at_once() -> None:
         assert answered < 0.25  # queued work wakes the thread (not after an idle nap)
     finally:
         runtime.stop()
+
+
+def test_work_that_pauses_and_resets_the_clock_stops_the_running_batch() -> None:
+    """A scenario load on a running rig (app/player.py) pauses, then resets the clock to 0 in
+    the simulation thread. Taken between two steps of a running batch, the batch went on up to
+    its target, the old clock's time: the review saw "finished · t = 0.0 s of 16 s" a few
+    seconds after Play and then "t = 756.8 s of 16 s" (the whole scenario and 12 minutes more
+    run at CPU speed on the fresh rig). The batch stops once such work ran."""
+    rig = Rig("t", {"c": Counter("c")}, SimClock(step_us=1000))
+    rt = Runtime(rig, speed=1000.0)
+    loaded = threading.Event()
+
+    def reset() -> None:  # as app.player.reset_in_place: a fresh device, the clock at 0
+        rig.devices["c"].__dict__ = Counter("c").__dict__
+        rig.clock.now_us = 0
+        rt.set_speed(rt.speed)  # as Player.load: the wall clock rebased on time 0
+        loaded.set()
+
+    def on_step(now_us: int) -> None:  # in the batch: the work is taken after this step
+        if now_us >= 50_000 and not loaded.is_set() and not rt.paused:
+            rt.set_paused(True)
+            rt.submit(reset)
+
+    rt.add_step_listener(on_step)
+    rt.start()
+    try:
+        assert loaded.wait(timeout=5)
+        time.sleep(0.2)
+        after = rt.submit(lambda: rig.clock.now_us).result(timeout=5)
+    finally:
+        rt.stop()
+    assert after == 0, f"the paused clock ran on to {after / 1e6:.3f} s after the reset"
