@@ -75,6 +75,7 @@ class DecoderPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, side: Any = None) -> None:
         self._runtime = runtime
         self._seq = 0
+        self._t_us = 0  # the newest event's time: an older one means the clock went back
         self._reported: collections.deque[tuple[str, str]] = collections.deque(
             maxlen=MAX_REPORTED)
         gui = server.gui
@@ -125,10 +126,29 @@ class DecoderPanel:
     def update(self) -> None:
         """Take the codes of the events journalled since the last call."""
         self._seq, events = self._runtime.events_since(self._seq)
-        fresh = [found for found in map(reported_code, events) if found is not None]
+        fresh: list[tuple[str, str]] = []
+        restarted = False
+        for event in events:
+            if event.t_us < self._t_us:  # the clock went back: a scenario load, a new run
+                self._reported.clear()
+                fresh.clear()
+                restarted = True
+            self._t_us = event.t_us
+            found = reported_code(event)
+            if found is not None:
+                fresh.append(found)
         if not fresh:
+            if restarted:
+                self._picker.options = (NONE,)
+                self._picker.value = NONE
             return
-        self._reported.extend(fresh)
+        for label, text in fresh:
+            # One option per label, the newest: viser's dropdown (a Mantine Select) throws on
+            # a duplicate option once shown, and React then blanks the whole page for good
+            # (a replayed scenario reported "6.0 s fastcat emergency ..." a second time).
+            for old in [r for r in self._reported if r[0] == label]:
+                self._reported.remove(old)
+            self._reported.append((label, text))
         labels = [label for label, _ in reversed(self._reported)]
         current = str(self._picker.value)
         self._picker.options = tuple(labels)
