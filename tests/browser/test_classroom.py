@@ -243,3 +243,37 @@ def test_a_refused_drive_alarm_reset_per_role(served: ServedRig, browser: Any) -
     finally:
         instructor.context.close()
         trainee.context.close()
+
+
+def test_an_undiagnosed_cpx_short_per_role(served: ServedRig, browser: Any) -> None:
+    """The reviewer's rv3/cpx_leak.py on a served rig: output 3 of the 8DO shorted while off
+    is no fault the CPX-E-EC reports (docs/cpx-e-ec.md choice 30), so the Slave tab's Fault
+    cell names it on the instructor's page only (docs/classroom.md)."""
+    served.runtime.command("master", "set_target", {"state": "OP"}).result(timeout=10)
+    served.runtime.advance(3_000_000).result(timeout=30)
+    served.runtime.command("cpx/2", "inject_fault",
+                           {"fault": "short_circuit", "channel": 3}).result(timeout=10)
+    served.runtime.advance(1_000_000).result(timeout=30)
+    line = served.dashboard.line
+    assert line is not None
+    line.slave.select("cpx")
+    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
+    trainee = _page(browser, f"{served.url}?fixedDpr=1")
+    try:
+        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
+        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+        for page in (instructor, trainee):
+            for tab in page.get_by_role("tab", name="Slave", exact=True).all():
+                tab.click()
+        cell = "#fr-slave-io span.fr-instructor"
+        wait_until(lambda: "short 3 (output off: not diagnosed)"
+                   in instructor.locator(cell).inner_text(),
+                   what="the undiagnosed short on the instructor's page")
+        assert instructor.locator(cell).is_visible()
+        wait_until(lambda: trainee.locator(cell).count() == 1,
+                   what="the Fault cell on the trainee's page")
+        assert not trainee.locator(cell).is_visible()
+        assert "not diagnosed" not in trainee.locator("#fr-slave-io").inner_text()
+    finally:
+        instructor.context.close()
+        trainee.context.close()

@@ -9,10 +9,13 @@ names). The snapshots are built by hand in the master snapshot contract's shape.
 from __future__ import annotations
 
 import itertools
+import re
+from html import unescape
 from typing import Any
 
 import pytest
 
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.ui.line.bodies import blink_words, header_text, state_tone
 from app.ui.line.cables import label_point, pulled_route, route
 from app.ui.line.controls import cable_options, slave_options, targets
@@ -255,29 +258,66 @@ def test_slave_panel_texts() -> None:
     assert "short 3" in cpx and "Short circuit/overload" in cpx and "0x3702" in cpx
 
 
-@pytest.mark.parametrize(("module", "fault"), [
+def _shown(html: str, trainee: bool) -> str:
+    """The text of a Slave tab's page: the instructor's whole; a trainee's without the
+    elements of class fr-instructor, which trainee_css hides (docs/classroom.md)."""
+    if trainee:
+        html = re.sub(r'<span class="fr-instructor">.*?</span>', "", html)
+        html = re.sub(r'<tr class="fr-instructor">.*?</tr>', "", html)
+    return unescape(re.sub(r"<[^>]+>", "", html))
+
+
+def _fault_cell(html: str) -> str:
+    return re.findall(r'<td class="fr-line-bad">(.*?)</td>', html)[0]
+
+
+@pytest.mark.parametrize(("module", "fault", "seen"), [
     ({"short": "8DO", "shorted": [3], "short_idle": [3], "diagnosed": []},
-     "short 3 (output off: not diagnosed)"),
+     "short 3 (output off: not diagnosed)", ""),
     ({"short": "4AO-U-I", "shorted": [2], "short_idle": [2], "diagnosed": []},
-     "short 2 (current range: not diagnosed)"),
+     "short 2 (current range: not diagnosed)", ""),
     ({"short": "8DO", "shorted": [1, 3], "short_idle": [3],
       "diagnosed": diagnosed("short_circuit_outputs", 1)},
-     "short 1; short 3 (output off: not diagnosed)"),
+     "short 1; short 3 (output off: not diagnosed)", "short 1"),
     ({"short": "8DO", "shorted": [3], "short_idle": [], "diagnosed": []},
-     "short 3 (not diagnosed)"),  # 0x2400:3 off, or the application not running
-    ({"short": "4AI-U-I", "wire_broken": [0], "diagnosed": []}, "wire 0 (not diagnosed)"),
+     "short 3 (not diagnosed)", ""),  # 0x2400:3 off, or the application not running
+    ({"short": "4AI-U-I", "wire_broken": [0], "diagnosed": []}, "wire 0 (not diagnosed)", ""),
     ({"short": "16DI", "sensor_supply_short": True, "diagnosed": []},
-     "sensor short (not diagnosed)"),
+     "sensor short (not diagnosed)", ""),
+    ({"short": "16DI", "failed": True, "diagnosed": []}, "failed (not diagnosed)", ""),
+    ({"short": "4AI-U-I", "wire_broken": [0, 1], "diagnosed": diagnosed("wire_break", 0)},
+     "wire 0; wire 1 (not diagnosed)", "wire 0"),
 ])
 def test_cpx_slave_tab_says_what_is_wired_but_not_diagnosed(module: dict[str, Any],
-                                                            fault: str) -> None:
+                                                            fault: str, seen: str) -> None:
     """The review (23_cpx_short.png): the 8DO's output 3 shorted while off showed a red LED
     and "short 3" with SF off, 0x1001 = 0 and no 0x10F3 message. The red LED follows the
     diagnosis now; the Slave tab still names the wiring, and why the module does not see
-    it (docs/cpx-e-ec.md choice 30)."""
+    it (docs/cpx-e-ec.md choice 30), to the instructor only: a cause the device does not
+    report is the injected one, which no trainee's page names (docs/classroom.md). What the
+    device diagnoses stays for everyone."""
     html = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP",
                               "modules": [{"module": 2, **module}]})
-    assert f">{fault}<" in html
+    cell = _fault_cell(html)
+    assert _shown(cell, trainee=False) == fault
+    assert _shown(cell, trainee=True) == seen
+    assert "&lt;" not in cell and "&amp;" not in cell  # escaped once, not twice
+
+
+def test_cpx_slave_tab_hides_an_injected_short_from_a_trainee() -> None:
+    """The reviewer's reproducer (rv3/cpx_leak.py): cpx/2 inject_fault short_circuit on
+    channel 3 of the 8DO, output off: the device reports nothing (no diagnosis, 0x1001 = 0,
+    the Injected row "none"), yet the Fault cell named the short on every page."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.run_until(3_000_000)
+    rig.apply("cpx/2", "inject_fault", {"fault": "short_circuit", "channel": 3})
+    rig.run_until(4_000_000)
+    snap = rig.snapshot()["devices"]["cpx"]
+    assert snap["modules"][1]["shorted"] == [3] and not snap["modules"][1]["diagnosed"]
+    html = slave_html("cpx", snap)
+    assert "short 3 (output off: not diagnosed)" in _shown(html, trainee=False)
+    assert "short 3" not in _shown(html, trainee=True)
+    assert "diagnosed" not in _shown(html, trainee=True)
 
 
 def test_u8_diag_status_and_units_that_do_not_wrap_alone() -> None:

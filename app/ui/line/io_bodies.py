@@ -130,10 +130,12 @@ def _diagnosed_channels(module: Mapping[str, Any], cause: str) -> list[int]:
                    if d.get("cause") == cause and d.get("channel") is not None})
 
 
-def module_fault_text(module: Mapping[str, Any]) -> str:
-    """The Slave tab's Fault column: what the red LED says, then what is wired but not
-    diagnosed, and why ("short 3 (output off: not diagnosed)"), so that a trainee who
-    injected a fault is not left wondering why SF and 0x1001 stay quiet."""
+def module_fault_parts(module: Mapping[str, Any]) -> tuple[str, list[str]]:
+    """The Slave tab's Fault column as plain texts: what the red LED says, then what is
+    wired but not diagnosed, and why ("short 3 (output off: not diagnosed)"), so that an
+    instructor who injected a fault is not left wondering why SF and 0x1001 stay quiet. The
+    second part names a cause the device does not report: the instructor's only
+    (docs/classroom.md)."""
     causes = {d.get("cause") for d in module.get("diagnosed") or []}
     idle = {int(c) for c in module.get("short_idle") or []}
     shorts = {int(c) for c in module.get("shorted") or []} - set(
@@ -147,10 +149,8 @@ def module_fault_text(module: Mapping[str, Any]) -> str:
               ("sensor short", "", bool(module.get("sensor_supply_short"))
                and "short_circuit_sensor_supply" not in causes),
               ("failed", "", bool(module.get("failed")) and "module_failure" not in causes)]
-    parts = [module_error(module)] if module_error(module) else []
-    parts += [f"{what} ({f'{reason}: ' if reason else ''}not diagnosed)"
-              for what, reason, shown in hidden if shown]
-    return "; ".join(parts)
+    return module_error(module), [f"{what} ({f'{reason}: ' if reason else ''}not diagnosed)"
+                                  for what, reason, shown in hidden if shown]
 
 
 def channel_list(channels: Sequence[int]) -> str:

@@ -11,11 +11,11 @@ from typing import Any
 import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
-from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_text
+from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_parts
 from app.ui.panels.state import al_status_text, injected_text
 from app.ui.panels.widgets import Mirror
 from app.ui.rail_scene import PATTERN_WORDS
-from app.ui.style import badge, esc, kv_table
+from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
 from devices.ethercat import describe_al_status_code
 
 MESSAGES = 6  # newest 0x10F3 messages shown
@@ -188,6 +188,19 @@ def id_text(snap: Mapping[str, Any]) -> str:
             esc(f" wire: 0x0130 = 0x{status:04X}, 0x0134 = 0x{ident:04X}"))
 
 
+def fault_cell(module: Mapping[str, Any]) -> str:
+    """A module's Fault cell (HTML, each text escaped once): what the device diagnoses for
+    everyone, what is wired but not diagnosed in a span of INSTRUCTOR_CLASS, separator and
+    all: an undiagnosed cause is an injected one, which no trainee's page may name
+    (docs/classroom.md; the reviewer's rv3/cpx_leak.py)."""
+    seen, hidden = module_fault_parts(module)
+    if not hidden:
+        return esc(seen)
+    tail = "; ".join(hidden)
+    tail = f"; {tail}" if seen else tail
+    return esc(seen) + f'<span class="{INSTRUCTOR_CLASS}">{esc(tail)}</span>'
+
+
 def cpx_html(snap: Mapping[str, Any]) -> str:
     states = snap.get("led_states") or {}
     switches = snap.get("switches") or {}
@@ -208,7 +221,7 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         f"<tr><td>{esc(m.get('module'))}</td><td>{esc(m.get('short', m.get('type')))}</td>"
         f"<td>{esc(bits(m.get('inputs') or []))}</td>"
         f"<td>{esc(bits(m.get('outputs') or []))}</td>"
-        f"<td class=\"fr-line-bad\">{esc(module_fault_text(m))}</td></tr>"
+        f"<td class=\"fr-line-bad\">{fault_cell(m)}</td></tr>"
         for m in snap.get("modules") or [])
     io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>#</th><th>Module</th>'
           "<th>Inputs</th><th>Outputs</th><th>Fault</th></tr></thead>"
