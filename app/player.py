@@ -132,6 +132,7 @@ class Player:
         self._failures: list[str] = []
         self._finished = False
         self._generation = 0
+        self._load_seq = 0  # Runtime.journal_seq when the last load installed its rig
         self._started = False  # a simulation step has run since the load
         # rig file -> (its rig's name, why it cannot replace the running rig) or None
         self._fits: dict[Path, tuple[str, str] | None] = {}
@@ -191,6 +192,9 @@ class Player:
                 self._failures = []
                 self._finished = self._started = False
                 self._generation += 1
+                # Where the new run starts in the journal: a view splits its batch of events
+                # there (app/ui/runs.py); the clock going back does not tell a load at 0 s.
+                self._load_seq = self.runtime.journal_seq
             # The [[on]] tables ride on the fresh master's ECAT_Notify hook, as in `scenario run`.
             install_reactions(scenario, rig, self._failures)
             # Steps at 0 s come before the first step, after what the fresh rig emitted when
@@ -259,6 +263,11 @@ class Player:
                               steps[self._next] if self._next < len(steps) else None,
                               self._caption, self._checkpoint, tuple(self._failures),
                               self._generation)
+
+    def last_load(self) -> tuple[int, int]:
+        """(generation, load_seq) of the last load: what a view needs to start afresh."""
+        with self._lock:
+            return self._generation, self._load_seq
 
     def _barrier(self) -> None:
         """Wait until the work queued so far ran: the journal has the captions of the steps

@@ -204,6 +204,12 @@ class Runtime:
             newer.reverse()
             return self._event_seq, newer
 
+    @property
+    def journal_seq(self) -> int:
+        """The sequence number of the last event journalled (what ``events_since`` returns)."""
+        with self._lock:
+            return self._event_seq
+
     def journal(self, events: list[Event]) -> None:
         """Add events that did not come from a model (captions of a scenario played live)."""
         self.submit(lambda: self._journal_events(list(events)))

@@ -38,6 +38,7 @@ from app.ui.panels.object_dictionary import ObjectDictionaryPanel
 from app.ui.panels.state import StatePanel
 from app.ui.panels.widgets import short_label_css
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
+from app.ui.runs import RunSplitter
 from app.ui.style import CSS
 from devices.device import Action
 from devices.events import US_PER_S, Caption, Event
@@ -193,7 +194,9 @@ class Dashboard:
 
         with self._control_tab("Scenario", viser.Icon.PLAYER_PLAY):
             self.scenario_player = ScenarioPlayerPanel(server, runtime, self._caption)
-        self.decoder = DecoderPanel(server, runtime, self._side)
+        last_load = self.scenario_player.player.last_load
+        self._runs = RunSplitter(last_load)  # where a load starts a new run in a batch
+        self.decoder = DecoderPanel(server, runtime, self._side, last_load)
         # ---- end of scenario player, code decoder ----
         # The Fault and Alarm boxes' longest names whole: one style at the end of the control
         # panel (inside a folder it would be a row of it; the classroom's folder check counts).
@@ -436,11 +439,15 @@ class Dashboard:
 
     def _take_events(self) -> list[Event]:
         self._event_seq, events = self.runtime.events_since(self._event_seq)
-        panels = self._panels
-        if panels is not None:
-            panels.log.add_events(events)
-        if self._drives is not None:
-            self._drives.add_events(events)
+        split = self._runs.split(self._event_seq, events)
+        if split is None:
+            self._log_events(events)
+        else:  # a scenario load: the logs start afresh where it happened
+            old, new = split
+            self._log_events(old)
+            if self._panels is not None:
+                self._panels.log.new_run()
+            self._log_events(new)
         if self._line is not None:
             self._line.add_events(events)
         captions = [e.text for e in events if isinstance(e, Caption)]
@@ -448,6 +455,12 @@ class Dashboard:
             self._caption.text = caption_lines(captions[-1])
             self._caption.visible = True
         return events
+
+    def _log_events(self, events: list[Event]) -> None:
+        if self._panels is not None:
+            self._panels.log.add_events(events)
+        if self._drives is not None:
+            self._drives.add_events(events)
 
     def _place_caption(self, where: tuple[float, float]) -> None:
         self._caption.position = (where[0], -BODY_D, where[1])

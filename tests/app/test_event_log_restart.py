@@ -68,3 +68,53 @@ def test_a_scenario_load_starts_the_log_afresh(dashboard: Dashboard) -> None:
     assert rows[-1][0] == "scenario" and rows[-1][2] == (
         f"» scenario '{scenario.name}' started: the rig is factory-fresh, the clock at 0 s")
     assert rows[-1][1] == "12/11/2019 14.51.30 000 ms"
+
+
+def test_a_load_at_0_s_starts_the_log_afresh_too(dashboard: Dashboard) -> None:
+    """A load while the clock is still at 0 s (another scenario picked before Play) puts no
+    clock back: the log used to keep the first scenario's rows and never said the second
+    one started. The load itself starts the run (the Player's generation)."""
+    first = load_scenario(EXAMPLES_DIR / "cnf_scan.toml")
+    dashboard.scenario_player.load(first)
+    dashboard.tick()
+    assert any(first.name in m for _, _, m in log_rows(dashboard))
+    second = load_scenario(EXAMPLES_DIR / "module_lost_in_op.toml")
+    dashboard.scenario_player.load(second)
+    dashboard.tick()
+    rows = log_rows(dashboard)
+    assert rows[-1] == ("scenario", "12/11/2019 14.51.30 000 ms",
+                        f"» scenario '{second.name}' started: the rig is factory-fresh, "
+                        "the clock at 0 s")
+    assert not [r for r in rows if first.name in r[2]], rows
+    # The first scenario's caption ("The rig is switched on. The coupler scans ...") is gone.
+    assert not [r for r in rows if "coupler scans its internal bus" in r[2]], rows
+
+
+def test_restart_before_play_gives_no_repeated_rows(dashboard: Dashboard) -> None:
+    """Restart before Play (the same scenario loaded twice at 0 s): the run's rows once each,
+    not "x2" rows of both loads collapsed into one."""
+    scenario = load_scenario(EXAMPLES_DIR / "cnf_scan.toml")
+    dashboard.scenario_player.load(scenario)
+    dashboard.tick()
+    once = log_rows(dashboard)
+    dashboard.scenario_player.player.restart()
+    dashboard.tick()
+    rows = log_rows(dashboard)
+    assert not [r for r in rows if " x2, last " in r[2]], rows
+    assert rows == once
+
+
+def test_events_of_the_old_run_in_the_same_batch_stay_out(dashboard: Dashboard) -> None:
+    """Events of the session before and of the new run taken in one tick: the load splits
+    the batch where it happened (the journal's sequence number at the load), so the old
+    run's rows never land under the new run's "started" row."""
+    runtime = dashboard.runtime
+    dashboard.tick()
+    runtime.command("fastcat", "power", {"on": True}).result(timeout=TIMEOUT_S)
+    runtime.command("fastcat/2", "unplug", {}).result(timeout=TIMEOUT_S)
+    scenario = load_scenario(EXAMPLES_DIR / "cnf_scan.toml")
+    dashboard.scenario_player.load(scenario)
+    dashboard.tick()
+    rows = log_rows(dashboard)
+    assert rows[-1][2].startswith(f"» scenario '{scenario.name}' started"), rows
+    assert not [r for r in rows if "module 2" in r[2] or "unplug" in r[2]], rows

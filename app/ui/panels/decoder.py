@@ -20,6 +20,7 @@ import viser
 from app.decoder import DecodeError, Meaning, decode
 from app.runtime import Runtime
 from app.ui.panels.widgets import from_user
+from app.ui.runs import LastLoad, RunSplitter
 from app.ui.style import esc
 from devices.events import AlarmChanged, AlStatusChanged, EmergencySent, Event, fmt_bytes
 
@@ -70,12 +71,14 @@ def result_html(query: str, meanings: Iterable[Meaning] | None, error: str = "")
 
 class DecoderPanel:
     """``side``: the dashboard's left panel (the decoder gets a tab there); None puts it in a
-    folder of the current container instead."""
+    folder of the current container instead. ``last_load``: the scenario player's
+    (Player.last_load): the Reported list starts afresh at each load; None for no player."""
 
-    def __init__(self, server: viser.ViserServer, runtime: Runtime, side: Any = None) -> None:
+    def __init__(self, server: viser.ViserServer, runtime: Runtime, side: Any = None,
+                 last_load: LastLoad | None = None) -> None:
         self._runtime = runtime
         self._seq = 0
-        self._t_us = 0  # the newest event's time: an older one means the clock went back
+        self._runs = RunSplitter(last_load or (lambda: (0, 0)))
         self._reported: collections.deque[tuple[str, str]] = collections.deque(
             maxlen=MAX_REPORTED)
         gui = server.gui
@@ -126,14 +129,13 @@ class DecoderPanel:
     def update(self) -> None:
         """Take the codes of the events journalled since the last call."""
         self._seq, events = self._runtime.events_since(self._seq)
+        split = self._runs.split(self._seq, events)
+        restarted = split is not None
+        if split is not None:  # a scenario load: only the new run's codes
+            self._reported.clear()
+            events = split[1]
         fresh: list[tuple[str, str]] = []
-        restarted = False
         for event in events:
-            if event.t_us < self._t_us:  # the clock went back: a scenario load, a new run
-                self._reported.clear()
-                fresh.clear()
-                restarted = True
-            self._t_us = event.t_us
             found = reported_code(event)
             if found is not None:
                 fresh.append(found)

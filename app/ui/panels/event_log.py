@@ -5,8 +5,9 @@ the AMS port 65535 and the TwinCAT timestamp the master printed) and the device 
 technician also wants in the same list (ESM state changes, emergencies, alarms raised and
 cleared, scenario captions), stamped with the same clock. Newest first, bounded; a run of
 repeated rows (a master's retries) is one row with a count (app/ui/repeats.py). A scenario load
-puts the clock back to 0 on a factory-fresh rig: the log starts afresh there, with a row saying
-so, since the earlier rows, stamped later, would sort above the new run's.
+puts the clock back to 0 on a factory-fresh rig: the log starts afresh there (the dashboard
+calls :meth:`EventLogPanel.new_run` where the load splits its batch, app/ui/runs.py), with a
+row saying so, since the earlier rows would sort among (or, stamped later, above) the new run's.
 """
 
 from __future__ import annotations
@@ -111,7 +112,7 @@ def render_rows(rows: Iterable[LogRow]) -> str:
 
 
 def new_run_message(title: str) -> str:
-    """The row that starts the log after the clock went back to 0 (a scenario load)."""
+    """The row that starts the log at a scenario load (the clock at 0)."""
     what = f"scenario '{title}' started" if title else "the rig restarted"
     return f"» {what}: the rig is factory-fresh, the clock at 0 s"
 
@@ -121,23 +122,18 @@ class EventLogPanel:
                  timestamp: Timestamp, run_title: Callable[[], str] = str) -> None:
         """``device_kinds``: id -> kind of every device whose own events are logged (all of
         the rig's but the master, whose lines come from its snapshot's ``log``);
-        ``run_title``: the loaded scenario's name ("" for none), read when the clock goes
-        back."""
+        ``run_title``: the loaded scenario's name ("" for none), read at :meth:`new_run`."""
         self._kinds = dict(device_kinds)
         self._timestamp = timestamp
         self._run_title = run_title
         self._device_rows: collections.deque[LogRow] = collections.deque(maxlen=MAX_ROWS)
         self._order = 0
-        self._t_us = 0  # the newest event's time: an older one means the clock went back
         self._html = server.gui.add_html(render_rows([]))
         self._last = ""
         self._seen: tuple[Any, ...] = ()
 
     def add_events(self, events: Iterable[Event]) -> None:
         for event in events:
-            if event.t_us < self._t_us:
-                self._new_run()
-            self._t_us = event.t_us
             if event.device not in self._kinds and not isinstance(event, Caption):
                 continue
             # LEDs, log lines, reads, ... give None: a moving drive emits none of the kinds
@@ -150,10 +146,11 @@ class EventLogPanel:
             self._device_rows.append(LogRow(event.t_us, self._order, event.device,
                                             self._timestamp(event.t_us), text, error))
 
-    def _new_run(self) -> None:
-        """The clock went back to 0 (a scenario load or restart, app/player.py): the rows of
-        the previous run go, or, stamped later, they would top the newest-first log. The
-        master's lines need nothing: the fresh master's log starts empty."""
+    def new_run(self) -> None:
+        """A scenario load or restart (app/player.py): the rows of the previous run go, or
+        they would sit among the new run's (a load at 0 s) or, stamped later, top the
+        newest-first log. The master's lines need nothing: the fresh master's log starts
+        empty."""
         self._device_rows.clear()
         self._order += 1
         self._device_rows.append(LogRow(0, self._order, "scenario", self._timestamp(0),
