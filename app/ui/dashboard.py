@@ -447,6 +447,8 @@ class Dashboard:
             self._log_events(old)
             if self._panels is not None:
                 self._panels.log.new_run()
+            if self._drives is not None:
+                self._drives.new_run()
             self._log_events(new)
         if self._line is not None:
             self._line.add_events(events)

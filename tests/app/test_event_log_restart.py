@@ -118,3 +118,22 @@ def test_events_of_the_old_run_in_the_same_batch_stay_out(dashboard: Dashboard) 
     rows = log_rows(dashboard)
     assert rows[-1][2].startswith(f"» scenario '{scenario.name}' started"), rows
     assert not [r for r in rows if "module 2" in r[2] or "unplug" in r[2]], rows
+
+
+def test_a_load_clears_every_drives_log(dashboard: Dashboard) -> None:
+    """The Drive tab's log (app/ui/drive/drive_state.py DriveLog) had no caller of its clear:
+    a drive's rows of the session before stayed under the new run, whichever drive the tab
+    showed."""
+    from devices.events import LogLine
+
+    assert dashboard.drives is not None
+    runtime = dashboard.runtime
+    runtime.journal([LogLine(0, "drive", text="old run: homing started"),
+                     LogLine(0, "drive_ec", text="old run: mode change")])
+    runtime.submit(lambda: None).result(timeout=TIMEOUT_S)  # journalled
+    dashboard.tick()
+    log = dashboard.drives.words.log
+    assert "old run: homing started" in log.html("drive")
+    dashboard.scenario_player.load(load_scenario(EXAMPLES_DIR / "cnf_scan.toml"))
+    dashboard.tick()
+    assert "old run" not in log.html("drive") + log.html("drive_ec")

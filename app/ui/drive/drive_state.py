@@ -253,6 +253,7 @@ class DriveLog:
         return f'<ul class="fr-drive-log" id="fr-drive-log">{items}</ul>'
 
     def clear(self) -> None:
+        """At a scenario load (DriveView.new_run): the new run's rows only."""
         self._rows.clear()
 
 

@@ -118,6 +118,10 @@ class DriveView:
         mine = set(self.drive_ids)
         self.words.log.add(e for e in events if e.device in mine)
 
+    def new_run(self) -> None:
+        """A scenario load: no drive's rows of the previous run stay in the Drive log."""
+        self.words.log.clear()
+
     def update(self, frame: Frame) -> None:
         devices = frame.snapshot.get("devices") or {}
         for drive_id, scene in self.scenes.items():
