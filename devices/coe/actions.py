@@ -77,7 +77,8 @@ class SlaveActions:
         self.write_outputs(raw)
 
     def cmd_link(self: DriveEcatSlave, connected: bool) -> None:
-        self.link = connected
+        self.plugs = (connected, True)  # the operator's own plug at IN (the only port)
+        self.link = self.line_in and connected
         self._refresh()
 
     def slot(self: DriveEcatSlave) -> str | None:

@@ -85,6 +85,9 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.station_address = station_address
         self.serial = self.rng.getrandbits(32)
         self.link = True
+        # The IN link: the line's cable (line_in, the master's set_link) and the operator's
+        # own plug (plugs: IN, OUT; the master folds them into its line model).
+        self.line_in, self.plugs = True, (True, True)
         self.on_line = False
         self.emergencies = EmergencyMailbox()
         self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
@@ -130,7 +133,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
     def set_link(self, connected: bool, port: str = "in") -> None:
         """The cable on the IN port; the OUT port is not modelled (last on the line)."""
         if port == "in":
-            self.link = connected
+            self.line_in = connected
+            self.link = connected and self.plugs[0]
 
     def set_power(self, on: bool) -> None:
         """The drive's own supply: its EtherCAT side follows it."""

@@ -99,10 +99,9 @@ class OperatorMixin:
             self.out_v = out
 
     def cmd_cable(self: CpxEEc, port: str, connected: bool) -> None:
-        if port == "in":
-            self.link_in = connected
-        else:
-            self.link_out = connected
+        inp, out = self.plugs
+        self.plugs = (connected, out) if port == "in" else (inp, connected)
+        self._ports()
         self._refresh_leds()
 
     def cmd_set_rotary(self: CpxEEc, value: int) -> None:

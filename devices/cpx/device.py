@@ -80,8 +80,12 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         self.default_ranges = [list(m.ranges) for m in self.modules]
         self.el_sen_v = 0.0
         self.out_v = SUPPLY_NOMINAL_V
-        self.link_in = True
-        self.link_out = out_connected
+        # Each port's link: the cable the line gives it (line_in / line_out, the master's
+        # set_link) and the operator's own plug at the port (plugs: IN, OUT; the master
+        # folds them into its line model). Kept apart, so neither undoes the other.
+        self.plugs = (True, True)
+        self.line_in, self.line_out = True, out_connected
+        self.link_in, self.link_out = True, out_connected
         self.injected: list[Injected] = []
         self.fault_names: frozenset[str] = frozenset()
         self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
@@ -262,9 +266,15 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         """A cable on port X1 (IN, from the master's side) or X2 (OUT)."""
         self.touch()
         if port == "in":
-            self.link_in = connected
+            self.line_in = connected
         else:
-            self.link_out = connected
+            self.line_out = connected
+        self._ports()
+
+    def _ports(self) -> None:
+        """Each port's link: the line's cable there and the slave's own plug."""
+        self.link_in = self.line_in and self.plugs[0]
+        self.link_out = self.line_out and self.plugs[1]
 
     def set_power(self, on: bool) -> None:
         self.touch()

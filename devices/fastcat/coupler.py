@@ -81,6 +81,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self.station_address = station_address
         self.serial = self.rng.getrandbits(32)
         self.link = True
+        # The IN link: the line's cable (line_in, the master's set_link) and the operator's
+        # own plug (plugs: IN, OUT; the master folds them into its line model).
+        self.line_in, self.plugs = True, (True, True)
         self.tbus_low = False
         self.injected: list[Alarm] = []
         # Speed (docs/performance.md). A step is skipped when it would repeat one that changed

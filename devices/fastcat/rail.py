@@ -83,6 +83,8 @@ class RailMixin:
     device_id: str
     tbus_low: bool
     link: bool
+    line_in: bool
+    plugs: tuple[bool, bool]
     rotary_switch: int
     od: ObjectDictionary | None
     flash: FlashStore
@@ -203,14 +205,16 @@ class RailMixin:
         self.tbus_low = low
 
     def cmd_link(self, connected: bool) -> None:
-        self.link = connected
+        self.plugs = (connected, True)  # the operator's own plug at IN (the only port)
+        self.link = self.line_in and connected
 
     # ---- the line, as the EtherCAT master drives it (devices/master) ------------------------
     def set_link(self, connected: bool, port: str = "in") -> None:
         """The cable on the IN port (the coupler's only port): no link raises 0x13."""
         if port == "in":
             self._touched = True
-            self.link = connected
+            self.line_in = connected
+            self.link = connected and self.plugs[0]
 
     def set_power(self, on: bool) -> None:
         self._touched = True

@@ -3,9 +3,13 @@ damaged cables and the ESC error counters they move (esc_errors.py).
 
 Cable N feeds line position N (from the master for N = 0, else from slave N-1's OUT port). The
 master's frames reach a position when every cable up to it is plugged and every slave before
-it is powered (an unpowered slave passes nothing on). The ports' physical links follow the
-cables and the neighbours' power (the slaves' LINK LEDs, the FastCAT's 0x13); a link that
-goes down counts in the ESC's lost link counter of that port. See docs/ethercat-master.md
+it is powered (an unpowered slave passes nothing on). A cable is plugged when the master's
+``cables`` has it so and both its ends are: the slaves' own plugs (``plugs``: IN, OUT; the
+TRS-CAT's ``link``, the CPX-E-EC's ``cable``, the FastCAT's and the drive's ``link``), so a
+slave's own OUT pulled is the cable after it pulled, its own IN the cable before it. The
+ports' physical links follow those cables and the neighbours' power (the slaves' LINK LEDs,
+the FastCAT's 0x13); a link that goes down counts in the ESC's lost link counter of the ports
+at both ends. See docs/ethercat-master.md
 "Line faults" and "Damaged cable".
 """
 
@@ -16,7 +20,7 @@ from typing import TYPE_CHECKING
 from devices.ethercat import AlState
 from devices.events import CommError
 from devices.master.esc_errors import IN, OUT, run_frame
-from devices.master.links import Slave, SlaveLink, own_in_link
+from devices.master.links import Slave, SlaveLink
 from devices.master.still import StillCounts
 
 if TYPE_CHECKING:
@@ -34,6 +38,8 @@ class LineMixin:
     _slaves: tuple[Slave, ...]
     _power_names: tuple[str, ...]  # ("powered",) per slave: getattr's arguments in _line
     _power_defaults: tuple[bool, ...]  # (True,) per slave
+    _plug_names: tuple[str, ...]  # ("plugs",) per slave: the slaves' own plugs, as power
+    _plug_defaults: tuple[tuple[bool, bool], ...]  # (True, True) per slave
     cables: list[bool]
     phys_in: list[bool]
     phys_out: list[bool]
@@ -51,6 +57,7 @@ class LineMixin:
     skipped: StillCounts
     _line_cables: list[bool]
     _line_powered: list[bool]
+    _line_plugs: list[tuple[bool, bool]]
     _line_reach: list[bool]
     _watched: list[AlState | None] | None
 
@@ -96,55 +103,80 @@ class LineMixin:
         return bool(getattr(self.links[position].slave, "powered", True))
 
     def _connected(self, position: int) -> bool:
-        """The master's frames reach this position: every cable up to it plugged, every
-        slave before it powered (an unpowered slave does not pass frames on)."""
-        return all(self.cables[: position + 1]) and all(
+        """The master's frames reach this position: every cable up to it plugged (at both
+        ends, :meth:`_plugged`), every slave before it powered (an unpowered slave does not
+        pass frames on). Read afresh: a slave's own plug may have moved since the last step."""
+        return all(self._plugged(self._plugs_all())[: position + 1]) and all(
             self._powered(p) for p in range(position))
 
-    def _reach(self, powered: list[bool]) -> list[bool]:
+    def _plugs_all(self) -> list[tuple[bool, bool]]:
+        return list(map(getattr, self._slaves, self._plug_names, self._plug_defaults))
+
+    def _plugged(self, plugs: list[tuple[bool, bool]]) -> list[bool]:
+        """Each cable as the line has it: in the master's ``cables`` and plugged at both its
+        ends (the IN of the slave it feeds, the OUT of the slave before it)."""
+        out, before = [], True  # cable 0 comes from the master
+        for cable, (inp, after) in zip(self.cables, plugs, strict=True):
+            out.append(bool(cable and inp and before))
+            before = after
+        return out
+
+    def _reach(self, powered: list[bool], plugged: list[bool]) -> list[bool]:
         """:meth:`_connected` for every position at once (one pass, each step)."""
         out, ok = [], True
         for p in range(len(self.links)):
-            ok = ok and self.cables[p] and (p == 0 or powered[p - 1])
+            ok = ok and plugged[p] and (p == 0 or powered[p - 1])
             out.append(ok)
         return out
 
     def _line(self, skip: bool) -> list[bool]:
-        """Each position's reach, the physical links brought up to date first. With the cables
-        and the power as they were last applied, applying them again would set no link (every
-        ``phys_in`` / ``phys_out`` already is what they make it) and give the same reach."""
+        """Each position's reach, the physical links brought up to date first. With the cables,
+        the slaves' own plugs and the power as they were last applied, applying them again
+        would set no link (every ``phys_in`` / ``phys_out`` already is what they make it) and
+        give the same reach."""
         # The values as the slaves give them (bools all, but == would also take 1 for True):
         # compared only; applied as bools. map() with the getattr builtin makes the same
         # getattr(slave, "powered", True) calls as a list comprehension, without its frame
         # (~0.3 us a step on the default line).
+        # The plugs: a slave replaces its tuple only when its own cable action moves it, so
+        # the comparison mostly meets the same objects.
         powered = list(map(getattr, self._slaves, self._power_names, self._power_defaults))
-        if skip and powered == self._line_powered and self.cables == self._line_cables:
+        plugs = list(map(getattr, self._slaves, self._plug_names, self._plug_defaults))
+        if skip and powered == self._line_powered and plugs == self._line_plugs \
+                and self.cables == self._line_cables:
             self.skipped.line += 1
             return self._line_reach
-        self._apply_physical_links([bool(on) for on in powered])
+        self._apply_physical_links([bool(on) for on in powered], plugs)
         return self._line_reach
 
-    def _apply_physical_links(self, powered: list[bool]) -> None:
-        """Each port's link as the cables and the neighbours' power make it (LINK LEDs); an
-        ESC switched on since the last call starts with its counters at 0, whichever action
-        switched it (the master's power_slave or the slave's own power)."""
+    def _apply_physical_links(self, powered: list[bool],
+                              plugs: list[tuple[bool, bool]] | None = None) -> None:
+        """Each port's link as the cables (plugged at both ends, :meth:`_plugged`) and the
+        neighbours' power make it (LINK LEDs), a change to down counted by the ESCs at both
+        ends of the cable, whichever end it was pulled at; an ESC switched on since the last
+        call starts with its counters at 0, whichever action switched it (the master's
+        power_slave or the slave's own power)."""
+        if plugs is None:
+            plugs = self._plugs_all()
         before = self._line_powered
         if len(before) == len(powered):  # not the first call: the master's start is at 0
             for link, was, now in zip(self.links, before, powered, strict=True):
                 if now and not was:
                     link.esc.clear()
         self._line_cables, self._line_powered = list(self.cables), list(powered)
-        self._line_reach = self._reach(powered)
+        self._line_plugs = plugs
+        plugged = self._plugged(plugs)
+        self._line_reach = self._reach(powered, plugged)
         n = len(self.links)
         for p, link in enumerate(self.links):
-            want_in = self.cables[p] and (p == 0 or powered[p - 1])
+            want_in = plugged[p] and (p == 0 or powered[p - 1])
             if want_in != self.phys_in[p]:
                 self.phys_in[p] = want_in
                 link.slave.set_link(want_in, "in")
                 if not want_in and powered[p]:  # an unpowered ESC counts nothing
                     link.esc.lose_link(IN)
             if p + 1 < n:
-                want_out = self.cables[p + 1] and powered[p + 1]
+                want_out = plugged[p + 1] and powered[p + 1]
                 if want_out != self.phys_out[p]:
                     self.phys_out[p] = want_out
                     link.slave.set_link(want_out, "out")
@@ -155,15 +187,15 @@ class LineMixin:
         return [bool(getattr(link.slave, "powered", True)) for link in self.links]
 
     def _cause(self, position: int) -> str:
+        plugs = self._plugs_all()
         for p in range(position + 1):
             if not self.cables[p]:
                 return f"cable {p} pulled"
             if p < position and not self._powered(p):
                 return f"the slave at position {p} is off"
-            slave = self._slaves[p]
-            if p < position and not own_in_link(slave):
+            if p < position and not plugs[p][0]:
                 return f"no link on the IN port of the slave at position {p}"
-            if p < position and not getattr(slave, "link_out", True) and self.cables[p + 1] \
+            if p < position and not plugs[p][1] and self.cables[p + 1] \
                     and self._powered(p + 1):  # else the next cable or slave says why
                 return f"no link on the OUT port of the slave at position {p}"
         if not self._powered(position):
@@ -190,17 +222,14 @@ class LineMixin:
 
     def _spoiled(self) -> bool:
         """This cycle's frame through the damaged cables, out to the last slave it reaches
-        (the one before a slave that is off or whose own IN link is down, or one whose own OUT
-        link is down, as :meth:`step` has it) and back: True when it comes back spoiled, lost
-        to the master as in :meth:`_lose_frame`."""
+        (the one before a slave that is off or whose IN link is down: not reachable, as
+        :meth:`step` has it) and back: True when it comes back spoiled, lost to the master as
+        in :meth:`_lose_frame`."""
         last = -1
         for p, ok in enumerate(self._line_reach):
-            slave = self._slaves[p]
-            if not (ok and slave.reachable()):
+            if not (ok and self._slaves[p].reachable()):
                 break
             last = p
-            if not getattr(slave, "link_out", True):
-                break  # its own OUT cable pulled: the frame turns here
         if last < 0 or not run_frame([link.esc for link in self.links], last, self.damaged,
                                      self.rng):
             return False
@@ -237,7 +266,7 @@ class LineMixin:
         self._watched = None  # presence and reached_op change: the next watch runs in full
         link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
         link.pending, link.identity_ok, link.reached_op = None, None, False
-        link.stalled, link.in_link = False, True  # reached: its IN link is up
+        link.stalled = False
         if link.diagnosis.startswith("no link"):
             link.diagnosis = ""
         if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
@@ -247,20 +276,7 @@ class LineMixin:
         return link.lost_once
 
     def _unreached(self, link: SlaveLink) -> None:
-        """The frames do not reach ``link``'s slave this step (off the healthy path). When
-        its own IN link went down since it was last reached or unreached, a cable pulled at
-        the slave, not through the master's cables or power (``phys_in`` / ``phys_out`` still
-        up): the ESC rule's lost link at both ends of that cable, as :meth:`_apply_physical_links`
-        counts a master's pull."""
-        p = link.position
-        up = own_in_link(link.slave)
-        if link.in_link and not up:
-            powered = self._line_powered
-            if self.phys_in[p] and powered[p]:
-                link.esc.lose_link(IN)
-            if p > 0 and self.phys_out[p - 1] and powered[p - 1]:
-                self.links[p - 1].esc.lose_link(OUT)
-        link.in_link = up
+        """The frames do not reach ``link``'s slave this step (off the healthy path)."""
         self._lose(link)
 
     def _lose(self, link: SlaveLink) -> None:

@@ -63,17 +63,6 @@ def al_status_code_text(slave: Slave, code: int) -> str:
     return str(own(code)) if own is not None else describe_al_status_code(code)
 
 
-def own_in_link(slave: Slave) -> bool:
-    """The slave's IN link as the slave has it: what the master's cables and the power before
-    it give it (``set_link``) and its own cable action (TRS-CAT ``link port=in``, CPX-E-EC
-    ``cable port=in``: ``link_in``; FastCAT, the drive: ``link``). True without either."""
-    for name in ("link_in", "link"):
-        value = getattr(slave, name, None)
-        if value is not None:
-            return bool(value)
-    return True
-
-
 def next_state(current: AlState, target: AlState) -> AlState:
     """One ESM step from ``current`` toward ``target`` (down: straight there)."""
     if current is AlState.BOOT:  # BOOT is left only through INIT (ETG.1000.6)
@@ -112,9 +101,6 @@ class SlaveLink:
     seen: AlState | None = None  # the state last reported in a SlaveStateChange
     reached_op: bool = False  # ECAT_Resync fired for this slave since it was (re)found
     lost_once: bool = False  # absent after having been present: its return is a recovery
-    # The slave's IN link as it had it when last unreached (own_in_link): a change to down is
-    # a pulled cable at the slave itself. True again once it is found.
-    in_link: bool = True
     diagnosis: str = ""  # the master's own finding (identity mismatch, init command failed)
     identity_ok: bool | None = None  # None: not checked yet
     # Its last transition was refused or stopped by the master (retried): DC START_TIME does

@@ -137,11 +137,14 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.skipped = StillCounts()
         self._line_cables: list[bool] = []
         self._line_powered: list[bool] = []
+        self._line_plugs: list[tuple[bool, bool]] = []
         self._line_reach: list[bool] = []
         self._watched: list[AlState | None] | None = None
         self._slaves = tuple(link.slave for link in self.links)  # the line is fixed
         self._power_names = ("powered",) * len(self._slaves)
         self._power_defaults = (True,) * len(self._slaves)
+        self._plug_names = ("plugs",) * len(self._slaves)
+        self._plug_defaults = ((True, True),) * len(self._slaves)
         self._dc_links = [link for link in self.links if link.dc]
         self._uses_dc = [link.dc for link in self.links]
         # The step's loop, one row per position (the line is fixed): each slave's bound calls
@@ -271,15 +274,12 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         quiet = exchange and skip and watched is not None
         served = 0
         recovered = []
-        cut = False  # a slave's own IN or OUT cable pulled: no frame passes it (_spoiled too)
         for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc, esm_view \
                 in rows:
-            if cut or not (first if p == 0 else reach[p] and reachable()):
+            if not (first if p == 0 else reach[p] and reachable()):
                 self._unreached(link)
                 quiet = False
-                cut = True
                 continue
-            cut = not getattr(slave, "link_out", True)
             if not link.present:
                 if self._find(link):
                     recovered.append(p)

@@ -46,7 +46,9 @@ class SpanMixin:
         elif dc.state is not DcState.IDLE or self._dc_links:
             return now
         powered = list(map(getattr, self._slaves, self._power_names, self._power_defaults))
-        if powered != self._line_powered or self.cables != self._line_cables:
+        plugs = list(map(getattr, self._slaves, self._plug_names, self._plug_defaults))
+        if powered != self._line_powered or plugs != self._line_plugs \
+                or self.cables != self._line_cables:
             return now
         target = self.target
         held = AlState.SAFEOP if self.dc_hold and RANK[target] > RANK[AlState.SAFEOP] \

@@ -109,6 +109,7 @@ class CommandsMixin:
     field_v: float
     link_in: bool
     link_out: bool
+    plugs: tuple[bool, bool]
     bus: TrsBus
     rail: list[SlotIo | None]
     detected: list[ModuleKind]
@@ -146,10 +147,9 @@ class CommandsMixin:
         self.field_v = volts
 
     def cmd_link(self, port: str, connected: bool) -> None:
-        if port == "in":
-            self.link_in = connected
-        else:
-            self.link_out = connected
+        inp, out = self.plugs
+        self.plugs = (connected, out) if port == "in" else (inp, connected)
+        self._ports()
 
     def cmd_set_input(self, channel: int, on: bool, module: int | None) -> None:
         self.cmd_set_input_voltage(channel, SENSOR_ON_V if on else 0.0, module)

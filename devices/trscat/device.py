@@ -80,8 +80,12 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         self.box_name = box_name
         self.station_address = station_address
         self.serial = self.rng.getrandbits(32)
-        self.link_in = True
-        self.link_out = out_link
+        # Each port's link: the cable the line gives it (line_in / line_out, the master's
+        # set_link) and the operator's own plug at the port (plugs: IN, OUT; the master
+        # folds them into its line model). Kept apart, so neither undoes the other.
+        self.plugs = (True, True)
+        self.line_in, self.line_out = True, out_link
+        self.link_in, self.link_out = True, out_link
         self.field_v = float(field_supply_v)
         self.injected: list[FaultKey] = []
         self.injected_sm: list[SmKey] = []
@@ -188,10 +192,16 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         """A cable on port IN (from the master's side) or OUT (to the next slave)."""
         self._touch()
         if port == "in":
-            self.link_in = connected
+            self.line_in = connected
         else:
-            self.link_out = connected
+            self.line_out = connected
+        self._ports()
         self._refresh()
+
+    def _ports(self) -> None:
+        """Each port's link: the line's cable there and the slave's own plug."""
+        self.link_in = self.line_in and self.plugs[0]
+        self.link_out = self.line_out and self.plugs[1]
 
     def set_power(self, on: bool) -> None:
         self.cmd_power(on)

@@ -285,3 +285,11 @@ def test_a_rig_reset_in_place_brings_b_the_fresh_zero_counters(wire):
     b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and any(m[2]))
     sim(runtime, lambda: reset_in_place(runtime.rig, line_rig("OP")))
     b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and not any(m[2]))
+
+
+def test_a_slave_s_own_pulled_out_cable_takes_the_slaves_behind_it_off_the_wire(wire):
+    runtime, _bridge, b = wire
+    runtime.command("trscat", "link", {"connected": False, "port": "out"}).result(timeout=WAIT_S)
+    b.expect(lambda m: m == (msg.LINK, 2, False))
+    runtime.command("trscat", "link", {"connected": True, "port": "out"}).result(timeout=WAIT_S)
+    b.expect(lambda m: m == (msg.LINK, 0, True))

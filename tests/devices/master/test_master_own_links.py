@@ -37,3 +37,101 @@ def test_a_slave_s_own_cable_cuts_the_line_behind_it(device, action, port, kept)
     rig.apply(device, action, {"connected": True, "port": port})
     rig.advance(8000)
     assert _present(rig) == [True] * 4
+
+
+def _rig():
+    rig = build_rig(load_rig_spec("static/rigs/default.toml"))
+    rig.advance(8000)
+    assert _present(rig) == [True] * 4
+    return rig
+
+
+def _leds(rig, device: str) -> dict[str, str]:
+    leds = rig.snapshot()["devices"][device]["leds"]
+    return {name: led if isinstance(led, str) else led["pattern"] for name, led in leds.items()}
+
+
+@pytest.mark.parametrize("how", ["pull_cable", "own_out", "own_in"])
+def test_the_neighbour_sees_the_cut_as_when_the_master_pulls_the_cable(how) -> None:
+    """Cable 2 (TRS-CAT OUT -> CPX-E-EC IN) pulled at either end, or by the master: both ports
+    of that cable lose their link (LEDs, reachable, the master's reach) alike."""
+    rig = _rig()
+    master, trs, cpx = (rig.devices[d] for d in ("master", "trscat", "cpx"))
+    if how == "pull_cable":
+        rig.apply("master", "pull_cable", {"cable": 2})
+    elif how == "own_out":
+        rig.apply("trscat", "link", {"connected": False, "port": "out"})
+    else:
+        rig.apply("cpx", "cable", {"connected": False, "port": "in"})
+    rig.advance(300)
+    assert (trs.link_out, cpx.link_in, cpx.reachable()) == (False, False, False)
+    assert not master._connected(2) and not master._connected(3) and master._connected(1)
+    assert _leds(rig, "cpx")["LA IN"] == "off"
+    assert _leds(rig, "trscat")["LINK-ACT OUT"] == "off"
+    if how == "pull_cable":
+        rig.apply("master", "plug_cable", {"cable": 2})
+    elif how == "own_out":
+        rig.apply("trscat", "link", {"connected": True, "port": "out"})
+    else:
+        rig.apply("cpx", "cable", {"connected": True, "port": "in"})
+    rig.advance(8000)
+    assert (trs.link_out, cpx.link_in, cpx.reachable()) == (True, True, True)
+    assert master._connected(3) and _present(rig) == [True] * 4
+    assert _leds(rig, "cpx")["LA IN"] != "off"
+
+
+def test_the_slave_s_own_plug_and_the_master_s_cable_do_not_overwrite_each_other() -> None:
+    rig = _rig()
+    trs, cpx = rig.devices["trscat"], rig.devices["cpx"]
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.advance(300)
+    # Pulling and plugging back the TRS-CAT's OUT plug does not plug the master's cable in.
+    rig.apply("trscat", "link", {"connected": False, "port": "out"})
+    rig.apply("trscat", "link", {"connected": True, "port": "out"})
+    rig.advance(300)
+    assert (trs.link_out, cpx.link_in) == (False, False)
+    assert _leds(rig, "trscat")["LINK-ACT OUT"] == "off"
+    # The master's cable back in while the TRS-CAT's own plug is out: still no link.
+    rig.apply("trscat", "link", {"connected": False, "port": "out"})
+    rig.apply("master", "plug_cable", {"cable": 2})
+    rig.advance(300)
+    assert (trs.link_out, cpx.link_in) == (False, False)
+    assert _present(rig) == [True, True, False, False]
+    rig.apply("trscat", "link", {"connected": True, "port": "out"})
+    rig.advance(8000)
+    assert (trs.link_out, cpx.link_in) == (True, True)
+    assert _present(rig) == [True] * 4
+
+
+def test_external_mode_delivers_no_frame_past_a_slave_s_own_pulled_cable() -> None:
+    rig = _rig()
+    master, cpx = rig.devices["master"], rig.devices["cpx"]
+    master.set_external(True)
+    rig.apply("trscat", "link", {"connected": False, "port": "out"})
+    rig.advance(300)
+    before = cpx.last_frame_us
+    master.external_frame(2)
+    assert cpx.last_frame_us == before and not master._connected(2)
+    rig.apply("trscat", "link", {"connected": True, "port": "out"})
+    rig.advance(10)
+    master.external_frame(2)
+    assert cpx.last_frame_us == master.now_us
+
+
+@pytest.mark.parametrize(("device", "lost", "port_down"), [
+    ("drive_ec-ecat", [3], ("cpx", "link_out")),  # the last slave's IN: the CPX-E-EC's OUT
+    ("fastcat", [0, 1, 2, 3], None),  # cable 0: the master's own port, no slave's
+])
+def test_the_drive_s_and_the_fastcat_s_own_link_are_their_in_cable(device, lost,
+                                                                  port_down) -> None:
+    rig = _rig()
+    rig.apply(device, "link", {"connected": False})
+    rig.advance(300)
+    assert [not p for p in _present(rig)] == [p in lost for p in range(4)]
+    if port_down is not None:
+        assert getattr(rig.devices[port_down[0]], port_down[1]) is False
+    rig.apply(device, "link", {"connected": True})
+    rig.advance(8000)
+    assert _present(rig) == [True] * 4
+    if port_down is not None:
+        assert getattr(rig.devices[port_down[0]], port_down[1]) is True

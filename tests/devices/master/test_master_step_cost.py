@@ -38,10 +38,12 @@ class PlainMaster(EtherCatMaster):
 
     def _line(self, skip: bool) -> list[bool]:
         powered = [getattr(slave, "powered", True) for slave in self._slaves]
-        if skip and powered == self._line_powered and self.cables == self._line_cables:
+        plugs = [getattr(slave, "plugs", (True, True)) for slave in self._slaves]
+        if skip and powered == self._line_powered and plugs == self._line_plugs \
+                and self.cables == self._line_cables:
             self.skipped.line += 1
             return self._line_reach
-        self._apply_physical_links([bool(on) for on in powered])
+        self._apply_physical_links([bool(on) for on in powered], plugs)
         return self._line_reach
 
 
@@ -71,6 +73,9 @@ OPERATIONS = (
     ("master", "clear_dc_fault", lambda g: {}),
     ("master", "resync", lambda g: {}),
     ("master", "set_target", lambda g: {"state": g.choice(("PREOP", "SAFEOP", "OP", "OP"))}),
+    # The slaves' own plugs, folded into the line (and into _line's skip key).
+    ("trscat", "link", lambda g: {"port": g.choice(("in", "out")), "connected": g.random() < .6}),
+    ("cpx", "cable", lambda g: {"port": g.choice(("in", "out")), "connected": g.random() < .6}),
 )
 
 
