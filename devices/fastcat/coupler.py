@@ -483,7 +483,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
                 "cause_present": (alarm.table, alarm.code, alarm.module) in present},
             "injected": [{"fault": a.info.symbol, "code": a.code, "module": a.module or None}
                          for a in self.injected],
-            "link": self.link, "tbus_low": self.tbus_low,
+            "link": self.link, "plugs": list(self.plugs), "tbus_low": self.tbus_low,
             # §6.17 0x5200:1, the level the master or the dashboard last wrote. Without supply
             # there is no object: it reads as its default (False) until it is written again.
             "reset_fault": self.powered and bool(self.reset_bit),

@@ -238,6 +238,8 @@ class ControlPanel:
             self._cnf_progress.color = "green" if held >= CNF_HOLD_S else "blue"
         if "rotary_switch" in snap:
             self._rotary_sync.follow(int(snap["rotary_switch"]))
-        self._link_sync.follow(bool(snap.get("link", True)))
+        # The coupler's own plug, not the line's link: after the master's pull_cable 0 the box
+        # stays ticked (ticking it could not plug the master's cable back in).
+        self._link_sync.follow(bool((snap.get("plugs") or [snap.get("link", True)])[0]))
         self._tbus_sync.follow(bool(snap.get("tbus_low", False)))
         set_options(self._target, [COUPLER_TARGET, *fault_targets(snap.get("rail") or [])])
