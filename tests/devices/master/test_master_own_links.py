@@ -22,9 +22,7 @@ def _present(rig) -> list[bool]:
     ("cpx", "cable", "out", 3),
 ])
 def test_a_slave_s_own_cable_cuts_the_line_behind_it(device, action, port, kept) -> None:
-    rig = build_rig(load_rig_spec("static/rigs/default.toml"))
-    rig.advance(8000)
-    assert _present(rig) == [True] * 4
+    rig = _rig()
     rig.apply(device, action, {"connected": False, "port": port})
     events = rig.advance(300)
     assert _present(rig) == [True] * kept + [False] * (4 - kept)
@@ -51,29 +49,29 @@ def _leds(rig, device: str) -> dict[str, str]:
     return {name: led if isinstance(led, str) else led["pattern"] for name, led in leds.items()}
 
 
+def _cable_2(rig, how: str, connected: bool) -> None:
+    """Cable 2 (TRS-CAT OUT -> CPX-E-EC IN) pulled or plugged by the master or at one end."""
+    if how == "pull_cable":
+        rig.apply("master", "plug_cable" if connected else "pull_cable", {"cable": 2})
+    elif how == "own_out":
+        rig.apply("trscat", "link", {"connected": connected, "port": "out"})
+    else:
+        rig.apply("cpx", "cable", {"connected": connected, "port": "in"})
+
+
 @pytest.mark.parametrize("how", ["pull_cable", "own_out", "own_in"])
 def test_the_neighbour_sees_the_cut_as_when_the_master_pulls_the_cable(how) -> None:
     """Cable 2 (TRS-CAT OUT -> CPX-E-EC IN) pulled at either end, or by the master: both ports
     of that cable lose their link (LEDs, reachable, the master's reach) alike."""
     rig = _rig()
     master, trs, cpx = (rig.devices[d] for d in ("master", "trscat", "cpx"))
-    if how == "pull_cable":
-        rig.apply("master", "pull_cable", {"cable": 2})
-    elif how == "own_out":
-        rig.apply("trscat", "link", {"connected": False, "port": "out"})
-    else:
-        rig.apply("cpx", "cable", {"connected": False, "port": "in"})
+    _cable_2(rig, how, connected=False)
     rig.advance(300)
     assert (trs.link_out, cpx.link_in, cpx.reachable()) == (False, False, False)
     assert not master._connected(2) and not master._connected(3) and master._connected(1)
     assert _leds(rig, "cpx")["LA IN"] == "off"
     assert _leds(rig, "trscat")["LINK-ACT OUT"] == "off"
-    if how == "pull_cable":
-        rig.apply("master", "plug_cable", {"cable": 2})
-    elif how == "own_out":
-        rig.apply("trscat", "link", {"connected": True, "port": "out"})
-    else:
-        rig.apply("cpx", "cable", {"connected": True, "port": "in"})
+    _cable_2(rig, how, connected=True)
     rig.advance(8000)
     assert (trs.link_out, cpx.link_in, cpx.reachable()) == (True, True, True)
     assert master._connected(3) and _present(rig) == [True] * 4
