@@ -48,19 +48,23 @@ def run_ms(rig: Rig, ms: int) -> None:
     rig.run_until(rig.clock.now_us + ms * 1000)
 
 
+def damaged_for(rig: Rig, cable: int, percent: int, ms: int) -> tuple[int, list[dict]]:
+    """Cable ``cable`` damaged for ``ms``: the frames the master lost meanwhile, and the
+    slaves' ESC counters then."""
+    lost = master(rig).lost_frames
+    rig.apply("master", "damage_cable", {"cable": cable, "percent": percent})
+    run_ms(rig, ms)
+    return master(rig).lost_frames - lost, errors(rig)
+
+
 def test_every_crossing_spoiled_moves_the_counters_of_the_ports_behind_the_cable() -> None:
     """Cable 2 spoils every frame: the CPX-E-EC (first to receive it, port 0) counts it
     invalid and marks it; the drive after it counts it forwarded on port 0; on the way back
     every slave before the cable counts it forwarded on port 1; the processing units of the
     CPX-E-EC and the drive (forward direction only) count it; the master loses every frame."""
     rig = default_in_op()
-    m = master(rig)
-    lost = m.lost_frames
-    rig.apply("master", "damage_cable", {"cable": 2, "percent": 100})
-    run_ms(rig, 10)
-    n = m.lost_frames - lost
+    n, e = damaged_for(rig, 2, 100, 10)
     assert n == 10
-    e = errors(rig)
     assert [s["invalid"] for s in e] == [[0, 0], [0, 0], [n, 0], [0, 0]]
     assert [s["forwarded"] for s in e] == [[0, n], [0, n], [0, n], [n, 0]]
     assert [s["epu"] for s in e] == [0, 0, n, n]
@@ -75,12 +79,7 @@ def test_a_share_of_the_frames_spoiled_forward_or_on_the_way_back() -> None:
     TRS-CAT's port 1 (the first ESC to receive it), forwarded at the FastCAT's port 1. The
     slaves that no spoiled frame reached first count nothing as invalid."""
     rig = default_in_op()
-    m = master(rig)
-    lost = m.lost_frames
-    rig.apply("master", "damage_cable", {"cable": 2, "percent": 50})
-    run_ms(rig, 200)  # n stays below 0xFF, where counting stops
-    n = m.lost_frames - lost
-    e = errors(rig)
+    n, e = damaged_for(rig, 2, 50, 200)  # n stays below 0xFF, where counting stops
     forward, back = e[2]["invalid"][IN], e[1]["invalid"][OUT]
     assert forward > 0 and back > 0 and forward + back == n
     assert 100 < n < 200  # 1 - 0.5 * 0.5 of 200 frames, roughly
@@ -88,22 +87,14 @@ def test_a_share_of_the_frames_spoiled_forward_or_on_the_way_back() -> None:
     assert e[3]["forwarded"][IN] == forward and e[2]["forwarded"][OUT] == forward
     assert e[1]["forwarded"][OUT] == forward and e[0]["forwarded"][OUT] == n
     # deterministic: the rig's random generator draws the crossings
-    again = default_in_op()
-    again.apply("master", "damage_cable", {"cable": 2, "percent": 50})
-    run_ms(again, 200)
-    assert errors(again) == e
+    assert damaged_for(default_in_op(), 2, 50, 200)[1] == e
 
 
 def test_cable_0_spoiled_on_the_way_back_reaches_no_slave() -> None:
     """The first slave counts what cable 0 spoils on the way out; what it spoils on the way
     back only the master sees (a lost frame, no ESC counter)."""
     rig = default_in_op()
-    m = master(rig)
-    lost = m.lost_frames
-    rig.apply("master", "damage_cable", {"cable": 0, "percent": 50})
-    run_ms(rig, 200)
-    n = m.lost_frames - lost
-    e = errors(rig)
+    n, e = damaged_for(rig, 0, 50, 200)
     assert 0 < e[0]["invalid"][IN] < n
     assert all(s["invalid"][OUT] == 0 for s in e)
     assert e[3]["forwarded"][IN] == e[0]["invalid"][IN]
