@@ -9,6 +9,7 @@ footer a closed recording gets).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import re
 import subprocess
@@ -49,6 +50,21 @@ def _page(browser: Any, url: str) -> Any:
     return page
 
 
+@contextlib.contextmanager
+def _both_pages(served: ServedRig, browser: Any) -> Iterator[tuple[Any, Any]]:
+    """The instructor's page (with the token) and a trainee's, each loaded and told its role;
+    both closed afterwards."""
+    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
+    trainee = _page(browser, f"{served.url}?fixedDpr=1")
+    try:
+        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
+        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+        yield instructor, trainee
+    finally:
+        instructor.context.close()
+        trainee.context.close()
+
+
 def _row_display(page: Any, label: str) -> str:
     """The CSS display of a labelled widget's row (label, <p>, label box, row, row wrapper:
     viser 1.1.1's components/common.tsx)."""
@@ -83,11 +99,7 @@ def _injected(served: ServedRig) -> list[Any]:
 def test_trainee_injection_refused_instructor_allowed_download(
         served: ServedRig, browser: Any, caplog: pytest.LogCaptureFixture,
         tmp_path: Path) -> None:
-    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
-    trainee = _page(browser, f"{served.url}?fixedDpr=1")
-    try:
-        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
-        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+    with _both_pages(served, browser) as (instructor, trainee):
         # The trainee's page has no instructor controls.
         assert trainee.get_by_role("button", name="Download recording").count() == 0
         assert trainee.get_by_label("Hidden fault", exact=True).count() == 0
@@ -171,19 +183,12 @@ def test_trainee_injection_refused_instructor_allowed_download(
         verify = subprocess.run([*RERUN, "rrd", "verify", "--check-footers=false", str(saved)],
                                 capture_output=True, text=True, timeout=120)
         assert verify.returncode == 0, verify.stderr
-    finally:
-        instructor.context.close()
-        trainee.context.close()
 
 
 def test_exercise_answered_by_the_trainee(served: ServedRig, browser: Any) -> None:
     served.runtime.command("master", "set_target", {"state": "OP"}).result(timeout=10)
     served.runtime.advance(3_000_000).result(timeout=30)
-    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
-    trainee = _page(browser, f"{served.url}?fixedDpr=1")
-    try:
-        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
-        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+    with _both_pages(served, browser) as (instructor, trainee):
         choose(instructor, "Hidden fault", "fastcat: inject coupler 0x04")
         instructor.get_by_role("button", name="Start exercise").click()
         wait_until(lambda: served.classroom.exercise is not None, what="the exercise")
@@ -205,9 +210,6 @@ def test_exercise_answered_by_the_trainee(served: ServedRig, browser: Any) -> No
         assert report["right"] and report["fixed"], report
         assert f"Score {report['score']['total']} / 100" in board.inner_text()
         assert report["score"]["total"] >= 90
-    finally:
-        instructor.context.close()
-        trainee.context.close()
 
 
 def test_a_refused_drive_alarm_reset_per_role(served: ServedRig, browser: Any) -> None:
@@ -216,11 +218,7 @@ def test_a_refused_drive_alarm_reset_per_role(served: ServedRig, browser: Any) -
     tab's Injected row, the notification), the trainee's reads "the cause persists"."""
     served.runtime.advance(1_000_000).result(timeout=30)  # the drive past its self test
     served.runtime.command("drive", "inject_alarm", {"code": "16"}).result(timeout=10)
-    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
-    trainee = _page(browser, f"{served.url}?fixedDpr=1")
-    try:
-        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
-        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+    with _both_pages(served, browser) as (instructor, trainee):
         for page in (instructor, trainee):
             page.get_by_role("tab", name="Servo drive", exact=True).click()
             page.get_by_role("tab", name="Drive", exact=True).click()
@@ -240,9 +238,6 @@ def test_a_refused_drive_alarm_reset_per_role(served: ServedRig, browser: Any) -
         told = instructor.locator(toast, has_text="alarm reset refused")
         wait_until(lambda: told.count() == 1, what="the instructor's refusal")
         assert "injected: 16 FOLLOWING_ERROR" in told.inner_text()
-    finally:
-        instructor.context.close()
-        trainee.context.close()
 
 
 def test_an_undiagnosed_cpx_short_per_role(served: ServedRig, browser: Any) -> None:
@@ -257,11 +252,7 @@ def test_an_undiagnosed_cpx_short_per_role(served: ServedRig, browser: Any) -> N
     line = served.dashboard.line
     assert line is not None
     line.slave.select("cpx")
-    instructor = _page(browser, f"{served.url}?token={TOKEN}&fixedDpr=1")
-    trainee = _page(browser, f"{served.url}?fixedDpr=1")
-    try:
-        wait_for_text(instructor, "You are the instructor", timeout=LOADED_S)
-        wait_for_text(trainee, "You are a trainee", timeout=LOADED_S)
+    with _both_pages(served, browser) as (instructor, trainee):
         for page in (instructor, trainee):
             for tab in page.get_by_role("tab", name="Slave", exact=True).all():
                 tab.click()
@@ -274,6 +265,3 @@ def test_an_undiagnosed_cpx_short_per_role(served: ServedRig, browser: Any) -> N
                    what="the Fault cell on the trainee's page")
         assert not trainee.locator(cell).is_visible()
         assert "not diagnosed" not in trainee.locator("#fr-slave-io").inner_text()
-    finally:
-        instructor.context.close()
-        trainee.context.close()
