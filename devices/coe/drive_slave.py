@@ -46,13 +46,14 @@ from devices.coe.esm import (
     Esm,
     request_refusal,
 )
-from devices.coe.leds import LedInputs, wanted_patterns
+from devices.coe.leds import LedInputs, alarm_led, wanted_patterns
 from devices.coe.mailbox import SdoServices
 from devices.coe.objects import build_coe_dictionary
 from devices.device import Action, CommandError, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AlState, describe_al_status_code
 from devices.events import EmergencySent
+from devices.leds import LedPattern
 from devices.od import OdEntry, SdoAbort
 from devices.servo.drive import ServoDrive
 
@@ -71,6 +72,7 @@ SDO_LOG = 20
 # quiet_until's answer when nothing in the slave itself ends the span (whole steps past it)
 QUIET_FOREVER_STEPS = 1 << 40
 OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
+OFF_LED = LedPattern.OFF
 
 
 class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
@@ -339,7 +341,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
                                                and now_us - last <= ACTIVITY_WINDOW_US) \
                 or old.state is not esm.state or old.on_line is not on_line \
                 or old.link is not self.link or old.error is not esm.error \
-                or old.drive_alarm is not (on_line and bool(drive.alarms.latched)):
+                or old.drive_alarm is not (alarm_led(drive.alarms.latched)
+                                           if on_line else OFF_LED):
             self._refresh()
 
     # ---- quiet spans (docs/ethercat-coe.md "Quiet spans") -------------------------------------
@@ -366,7 +369,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         if old.activity is not activity or old.state is not state \
                 or old.on_line is not on_line or old.link is not self.link \
                 or old.error is not esm.error \
-                or old.drive_alarm is not (on_line and bool(drive.alarms.latched)):
+                or old.drive_alarm is not (alarm_led(drive.alarms.latched)
+                                           if on_line else OFF_LED):
             return now
         # Without frames the activity input flips at the first step past last + 50 ms: the
         # span ends at the last step on or before it (frames would keep it, as they would
@@ -438,7 +442,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         activity = self.last_frame_us is not None and now - self.last_frame_us <= \
             ACTIVITY_WINDOW_US
         on_line, esm = self.on_line, self.esm
-        drive_alarm = on_line and bool(self.drive.alarms.latched)
+        drive_alarm = alarm_led(self.drive.alarms.latched) if on_line else OFF_LED
         old = self._led_inputs
         if old is not None and old.activity is activity and old.state is esm.state \
                 and old.on_line is on_line and old.link is self.link \

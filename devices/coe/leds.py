@@ -4,8 +4,9 @@
 sempre acceso ethercat è in operational mode ... ETG-1300"; "Error rosso: segnalazione
 warning/allarmi in ethercat. La frequenza di lampeggio è funzione della tipologia di allarme
 ... ETG-1300". Status is the ETG.1300 RUN indicator and L/A its link/activity indicator (the
-tables are the TRS-CAT's, which are ETG.1300's). Error is ETG.1300 ERR for the EtherCAT
-errors; a drive alarm with no EtherCAT error lights it steadily (docs/ethercat-coe.md §LEDs).
+tables are the TRS-CAT's, which are ETG.1300's). Error is ETG.1300 ERR: the ESM's errors and
+the drive alarms that are ETG.1300 causes; an alarm of the motor or the axis leaves it dark
+(docs/ethercat-coe.md §LEDs).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from devices.leds import LedPattern
 from devices.servo.leds import ERROR, LINK, STATUS
 from devices.trscat.indicators import RUN_BY_STATE, link_led
 
-__all__ = ["ERROR", "LINK", "STATUS", "LedInputs", "wanted_patterns"]
+__all__ = ["ERROR", "LINK", "STATUS", "LedInputs", "alarm_led", "wanted_patterns"]
 
 # ETG.1300 ERR: blinking = invalid configuration, single flash = local error (the slave left
 # its state on its own), double flash = process data watchdog timeout.
@@ -28,7 +29,27 @@ ERROR_BY_KIND: dict[ErrorKind, LedPattern] = {
     ErrorKind.LOCAL: LedPattern.SINGLE_FLASH,
     ErrorKind.WATCHDOG: LedPattern.DOUBLE_FLASH,
 }
-DRIVE_ALARM = LedPattern.ON
+# The drive alarms (ch. 5 "Codici allarmi specifici") that are an ETG.1300 ERR cause by
+# themselves: on = application controller failure (7 "Processore DSP in fault"; 30-32 the
+# drive's internal communication, the controller behind the ESC not answering), flickering =
+# booting error (35 "Errore caricamento eeprom ethercat"). 33 / 34 come with their ESM error
+# (refused SAFEOP, SM watchdog). Every other alarm leaves EtherCAT in working order: off.
+ERROR_BY_ALARM: dict[int, LedPattern] = {
+    7: LedPattern.ON, 30: LedPattern.ON, 31: LedPattern.ON, 32: LedPattern.ON,
+    35: LedPattern.FLICKERING,
+}
+# ETG.1300 ERR rows, most severe first (as the CPX-E-EC's Tab. 12, docs/cpx-e-ec.md choice 29)
+_SEVERITY = (LedPattern.ON, LedPattern.FLICKERING, LedPattern.BLINKING,
+             LedPattern.DOUBLE_FLASH, LedPattern.SINGLE_FLASH, LedPattern.OFF)
+_RANK = {p: i for i, p in enumerate(_SEVERITY)}
+
+
+def alarm_led(latched: list[int]) -> LedPattern:
+    """The ERR pattern the latched drive alarms ask for by themselves (OFF for most)."""
+    if not latched:
+        return LedPattern.OFF  # the usual case, checked every step
+    found = [ERROR_BY_ALARM[c] for c in latched if c in ERROR_BY_ALARM]
+    return min(found, key=_RANK.__getitem__, default=LedPattern.OFF)
 
 
 @dataclass(frozen=True)
@@ -38,14 +59,12 @@ class LedInputs:
     activity: bool
     state: AlState
     error: ErrorKind
-    drive_alarm: bool
+    drive_alarm: LedPattern  # alarm_led() of the drive's latched alarms
 
 
 def wanted_patterns(s: LedInputs) -> dict[str, LedPattern]:
     if not s.on_line:
         return dict.fromkeys((LINK, STATUS, ERROR), LedPattern.OFF)
-    error = ERROR_BY_KIND[s.error]
-    if error is LedPattern.OFF and s.drive_alarm:
-        error = DRIVE_ALARM
+    error = min(ERROR_BY_KIND[s.error], s.drive_alarm, key=_RANK.__getitem__)
     return {LINK: link_led(True, s.link, s.activity), STATUS: RUN_BY_STATE[s.state],
             ERROR: error}

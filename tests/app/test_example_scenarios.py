@@ -108,9 +108,10 @@ def test_config_mismatch_at_power_up(capsys, tmp_path) -> None:
 
 def test_config_mismatch_explains_the_drive_alarm_it_causes(capsys, tmp_path) -> None:
     """Powering the FastCAT off cuts the EtherCAT line behind it: drive_ec loses the master's
-    process data and raises alarm 34 SYNC_TIMEOUT (Fault, Error LED lit) and keeps it at the
-    mismatch checkpoint. No caption said so, and a customer asks; one must, while the caption
-    on screen at the checkpoint still tells the scenario's point."""
+    process data and raises alarm 34 SYNC_TIMEOUT (Fault; Error LED double flash until the
+    master restarts it) and keeps it at the mismatch checkpoint. No caption said so, and a
+    customer asks; one must, while the caption on screen at the checkpoint still tells the
+    scenario's point."""
     records = run("config_mismatch", capsys, tmp_path)
     at = next(r["t"] for r in records if r["event"] == "checkpoint" and r["name"] == "mismatch")
     alarms = {(r["device"], r["code"]): r for r in records

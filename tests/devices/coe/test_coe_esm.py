@@ -151,12 +151,34 @@ def test_status_led_follows_the_esm(state: AlState, pattern: str) -> None:
     assert bench.slave.leds.snapshot()["Status"] == pattern
 
 
-def test_error_led_blinks_on_a_refusal_and_is_on_with_a_drive_alarm() -> None:
+def test_error_led_blinks_on_a_refusal() -> None:
     bench = make_bench()
     bench.go(PREOP, OP)
     assert bench.slave.leds.snapshot()["Error"] == "blinking"
+
+
+# Ch. 5: Error "La frequenza di lampeggio è funzione della tipologia di allarme ... ETG-1300":
+# ETG.1300 ERR by the alarm's kind. On = application controller failure (7 DSP in fault,
+# 30-32 the drive's internal communication), flickering = booting error (35 EtherCAT EEPROM
+# load); an alarm of the motor or the axis leaves EtherCAT in working order: off (it is on
+# the display and in 0x603F, ch. 5 "Codici allarmi specifici"). docs/ethercat-coe.md §LEDs.
+@pytest.mark.parametrize(("code", "pattern"), [
+    (2, "off"), (3, "off"), (16, "off"), (7, "on"), (30, "on"), (31, "on"), (32, "on"),
+    (35, "flickering")])
+def test_error_led_follows_the_kind_of_drive_alarm(code: int, pattern: str) -> None:
+    bench = make_bench()
     bench.go(PREOP)
-    bench.drive.apply("inject_alarm", {"code": "2"})
+    bench.drive.apply("inject_alarm", {"code": str(code)})
+    bench.run(1)
+    assert bench.drive.alarms.latched == [code]
+    assert bench.slave.leds.snapshot()["Error"] == pattern
+
+
+def test_an_application_controller_failure_outranks_an_esm_error() -> None:
+    """A refused request (blinking) with alarm 7 latched: ON, the most severe ERR row."""
+    bench = make_bench()
+    bench.go(PREOP, OP)
+    bench.drive.apply("inject_alarm", {"code": "7"})
     bench.run(1)
     assert bench.slave.leds.snapshot()["Error"] == "on"
 
