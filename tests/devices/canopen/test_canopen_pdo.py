@@ -83,6 +83,27 @@ def test_synchronous_cyclic_every_n_syncs(n: int) -> None:
     assert all(hexs(f.data) == "40 86" for f in frames)  # statusword 0x8640: switch on disabled
 
 
+def test_synchronous_tpdo_carries_the_values_of_the_sync_that_sends_it() -> None:
+    """A synchronous TPDO's data are sampled at the SYNC that sends it, not at the one before:
+    ch. 4 "Position feedback e StatusWord verranno trasmessi dal drive ad ogni Sync" and the
+    note "[0x6064] viene aggiornato internamente ogni ms. L'istante in cui la posizione viene
+    campionata ha dunque un'incertezza pari ad 1 ms" (CiA 301 alike). The generic
+    introduction's "i consumatori ricevono le variabili di processo catturate al Sync
+    precedente" is not this drive's behaviour (docs/canopen.md §PDOs)."""
+    bench = make_bench()
+    bench.ok(0x1800, 2, 1, 1)
+    bench.nmt(NmtCommand.START)
+    bench.send(0x080)
+    bench.run(5)
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["40 86"]  # switch on disabled
+    bench.ok(0x6040, 0, 0x0006, 2)  # shutdown: ready to switch on, between two SYNCs
+    bench.run(5)
+    bench.take()
+    bench.send(0x080)
+    bench.run(5)
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["31 86"]  # the state at this SYNC
+
+
 def test_synchronous_acyclic_only_after_an_event() -> None:
     """Type 0: "viene inviato al Sync successivo il verificarsi di uno specifico evento"."""
     bench = make_bench()
