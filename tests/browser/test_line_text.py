@@ -320,6 +320,23 @@ def test_cpx_slave_tab_hides_an_injected_short_from_a_trainee() -> None:
     assert "diagnosed" not in _shown(html, trainee=True)
 
 
+def test_cpx_u_out_undervoltage_lights_the_output_modules_red_led() -> None:
+    """Seed 002 Tab. 21-24: U_OUT too low is a diagnosis of a module (0x3320, 0x1001 bit 2
+    "Сбой напряжения нагрузки на модуле выходов", status bit 4 with the module type, byte 4
+    the module's number); the bus module diagnoses it on each module with outputs (error 8,
+    docs/cpx-e-ec.md "Physical cause -> codes"), and a module's red LED shows what is
+    diagnosed on it (choice 30). The 8DO and the 4AO light it; the input modules do not."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.run_until(3_000_000)
+    rig.apply("cpx", "supply", {"out": 15.0})
+    rig.run_until(4_000_000)
+    modules = rig.snapshot()["devices"]["cpx"]["modules"]
+    assert [[d["cause"] for d in m["diagnosed"]] for m in modules] == [
+        [], ["undervoltage_out"], [], ["undervoltage_out"]]
+    assert [module_error(m) for m in modules] == ["", "U_OUT low", "", "U_OUT low"]
+    assert module_note(modules[1]) == "U_OUT\nlow"
+
+
 def test_u8_diag_status_and_units_that_do_not_wrap_alone() -> None:
     """The review: "0xF100 diag status 0x0007" printed a U8 (seed 001 §9.3.4) with 4 hex
     digits, and "cycle 1000 µs" wrapped with "µs" alone on the next line."""

@@ -7,9 +7,10 @@ CPX-E-EC (seed 002 tables 11-13): Run, Error, LA IN, LA OUT, PS, PL, SF, M in th
 model reports (Run / Error also orange), then one plate per module with a red error LED and a
 yellow LED per channel. The seed names no per-channel LED in the snapshot, so the plates show
 the channel signal (inputs for input modules, driven outputs for output modules) and light the
-module's error LED on a short circuit, a wire break, a module failure or a sensor-supply short
-the bus module diagnoses (the module snapshot's "diagnosed"), as the modules' own LEDs do: a
-short on an output switched off is wired but not seen (docs/cpx-e-ec.md choice 30).
+module's error LED on a short circuit, a wire break, a module failure, a sensor-supply short or
+a U_OUT undervoltage the bus module diagnoses (the module snapshot's "diagnosed"), as the
+modules' own LEDs do: a short on an output switched off is wired but not seen
+(docs/cpx-e-ec.md choice 30).
 
 A plate is one module wide (1.0) and its labels keep their size on screen: a type longer
 than TYPE_LINE characters ("4AI-U-I") takes two lines ("4AI-" / "U-I") hanging from under
@@ -109,9 +110,11 @@ def module_note(module: Mapping[str, Any]) -> str:
 
 
 # The causes a module's red LED shows (devices/cpx/codes.py CAUSES), worst first, in the
-# plate's words; an undervoltage of U_OUT has the PL LED of the bus module.
+# plate's words. U_OUT low is diagnosed on each module with outputs (seed 002 Tab. 22-24 name
+# the module), so their LEDs light as well as the bus module's PL (docs/cpx-e-ec.md choice 30).
 LED_CAUSES = {"module_failure": "failed", "short_circuit_sensor_supply": "sensor short",
-              "short_circuit_outputs": "short", "wire_break": "wire"}
+              "short_circuit_outputs": "short", "wire_break": "wire",
+              "undervoltage_out": "U_OUT low"}
 
 
 def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
