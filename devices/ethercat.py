@@ -106,6 +106,14 @@ AL_STATUS_CODES: dict[int, str] = {
     0x0083: "The slave temperature is too high",
 }
 
+def sync_error_reached(counter: int, limit: int) -> bool:
+    """The sync error of 0x10F1:2 (ETG.1020 "Sync Error Counter Limit"): the slave's missed-
+    event counter has reached the limit. ETG's sample stack (SSC ecatappl.c) keeps the SM sync
+    sequence valid only while the counter is below the limit, so the miss that brings it to
+    the limit is the error. Every slave model asks this (hot paths write it out as ``>=``)."""
+    return counter >= limit
+
+
 def emergency_frame(code: int, register: int, data: bytes) -> bytes:
     """A CoE emergency as it travels in the mailbox: error code (little endian), error
     register, 5 manufacturer bytes (ETG.1000.6 / DS301; seed 000 §7, seed 002 §2.5.3)."""

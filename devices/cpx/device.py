@@ -32,7 +32,7 @@ from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
 from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
-from devices.ethercat import AlState
+from devices.ethercat import AlState, sync_error_reached
 from devices.events import AlarmChanged, LogLine, fmt_hex
 from devices.od import ObjectDictionary
 
@@ -225,7 +225,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         if first - self.last_pd_us > WATCHDOG_US:
             return False  # process data again would end the SM watchdog's expiry
         if self.esm.state in PD_STATES:
-            return (self.sync_counter > SYNC_ERROR_COUNTER_LIMIT) == ("sync_error" in faults)
+            return self.sync_error() == ("sync_error" in faults)
         return True
 
     def skip_frames(self, n: int, last_us: int) -> None:
@@ -333,7 +333,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         return self.now_us - self.last_pd_us > WATCHDOG_US
 
     def sync_error(self) -> bool:
-        return self.sync_counter > SYNC_ERROR_COUNTER_LIMIT
+        return sync_error_reached(self.sync_counter, SYNC_ERROR_COUNTER_LIMIT)
 
     def _supervise(self) -> None:
         """OP -> SAFEOP on the Sync Manager watchdog or a sync error (Tab. 12)."""
@@ -345,8 +345,8 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
                               "process data for 100 ms, OP -> SAFEOP"))
         elif self.sync_error():
             self.esm.fall(AlState.SAFEOP, ErrorKind.SYNC, SYNC_ERROR, self.now_us)
-            self.emit(LogLine(self.now_us, self.device_id, text="sync error counter over "
-                              "0x10F1:2, OP -> SAFEOP"))
+            self.emit(LogLine(self.now_us, self.device_id, text="sync error counter "
+                              "reached 0x10F1:2, OP -> SAFEOP"))
 
     def _process_data(self) -> None:
         state = self.esm.state
@@ -438,7 +438,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         esm, now, last, low = self.esm, self.now_us, self.last_frame_us, self.low_since_us
         return (esm.state, esm.error, esm.code, esm.requested,
                 now - self.last_pd_us > WATCHDOG_US,
-                self.sync_counter > SYNC_ERROR_COUNTER_LIMIT,
+                self.sync_counter >= SYNC_ERROR_COUNTER_LIMIT,  # sync_error_reached
                 last is not None and now - last <= ACTIVITY_WINDOW_US,
                 now - (last if last is not None else self.power_on_us) > WATCHDOG_US,
                 low is not None and now - low >= BRIDGING_US)
@@ -464,7 +464,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         silent = first - base > WATCHDOG_US
         bridged = low is not None and first - low >= BRIDGING_US
         if still.clock != (esm.state, esm.error, esm.code, esm.requested, pd_over,
-                           self.sync_counter > SYNC_ERROR_COUNTER_LIMIT, traffic, silent,
+                           self.sync_counter >= SYNC_ERROR_COUNTER_LIMIT, traffic, silent,
                            bridged):
             return now  # the next step is not the still one
         # The last time each comparison still has its value at ``first`` (none: no end).

@@ -29,7 +29,6 @@ from devices.cpx.esm import (
     request_refusal,
 )
 from devices.cpx.faults import SM_FAULT_TEXT
-from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT
 from devices.ethercat import AlState
 from devices.od import DataType
 
@@ -80,7 +79,7 @@ class TransitionsMixin:
         if current is AlState.SAFEOP and target is AlState.OP:  # outputs must be valid
             if self.now_us - self.last_pd_us > WATCHDOG_US:
                 return SM_WATCHDOG, ErrorKind.WATCHDOG
-            if self.sync_counter > SYNC_ERROR_COUNTER_LIMIT:
+            if self.sync_error():
                 return SYNC_ERROR, ErrorKind.SYNC
             return None
         if current is AlState.PREOP and target is AlState.SAFEOP:

@@ -26,6 +26,8 @@ import random
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from devices.ethercat import sync_error_reached
+
 FREE_RUN_CYCLE_US = 500  # §9.1.1 "tempo di ciclo locale fisso pari a 500 us"
 MIN_CYCLE_NS = 500_000  # §9.3.1 0x1C32:5 / 0x1C33:5
 CALC_COPY_NS = 100_000  # §9.3.1 0x1C32:6 / 0x1C33:6
@@ -126,15 +128,15 @@ class SyncUnit:
     @property
     def sync_error(self) -> bool:
         """0x1C32:32 / 0x1C33:32."""
-        return self.running and self.sm_missed >= SYNC_ERROR_LIMIT
+        return self.running and sync_error_reached(self.sm_missed, SYNC_ERROR_LIMIT)
 
     @property
     def fatal(self) -> bool:
-        return self.running and self.without_sync0 >= SYNC_ERROR_LIMIT
+        return self.running and sync_error_reached(self.without_sync0, SYNC_ERROR_LIMIT)
 
     @property
     def state(self) -> SyncState:
-        # ``fatal`` and ``sync_error`` written out: this is read twice per step.
+        # ``fatal`` and ``sync_error`` (sync_error_reached) written out: read twice per step.
         if not self.running:
             return SyncState.FREE_RUN
         if self.without_sync0 >= SYNC_ERROR_LIMIT:

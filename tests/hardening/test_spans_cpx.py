@@ -283,13 +283,13 @@ def test_frames_against_skip_frames(case: str) -> None:
     def make() -> tuple[Rig, CpxEEc]:
         rig = build(STEP_US)
         going_down = case == "OP, sync counter going down"
-        model = settle(rig, CASES[case], 3 if going_down else 400)
+        model = settle(rig, CASES[case], 4 if going_down else 400)
         if going_down:  # OP -> SAFEOP, the counter at its cap (7); cleared, back in OP
             model.apply("clear_fault", {"fault": "sync_error"})
-            rig.advance(3)  # 7 -> 4: not over the limit, OP may be entered again
+            rig.advance(4)  # 7 -> 3: under the limit (4), OP may be entered again
             model.request_state(AlState.OP)
-            rig.advance(2)  # 4 -> 2, the still step proved: the span's frames count it down
-            assert model.esm.state is AlState.OP and model.sync_counter == 2
+            rig.advance(2)  # 3 -> 1, the still step proved: the span's frames count it down
+            assert model.esm.state is AlState.OP and model.sync_counter == 1
         return rig, model
     total = frames_against_skip(make, 4)
     assert total >= 8

@@ -7,7 +7,7 @@ import json
 import random
 
 import pytest
-from cpx_bench import STI, TAB9_MODULES, Bench, tab9
+from cpx_bench import STEP_US, STI, TAB9_MODULES, Bench, tab9
 
 from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_SM_ADDRESS, TEXT_SM_SETTINGS, TEXT_SM_SIZE
 from devices.cpx.device import CpxEEc
@@ -101,6 +101,51 @@ def test_sync_error_until_cleared() -> None:
     assert bench.cpx.al_state is AlState.SAFEOP and bench.cpx.al_status_code == 0x001A
     bench.apply("clear_fault", fault="sync_error")
     bench.to_op()
+
+
+def _cycle(bench: Bench, missed: bool) -> None:
+    """One master cycle whose SM event is missed (the "sync_error" fault) or arrives."""
+    if missed != bench.cpx.has_fault("sync_error"):
+        bench.apply("inject_fault" if missed else "clear_fault", fault="sync_error")
+    bench.cpx.exchange_frame(bench.now + STEP_US)
+    bench.step()
+
+
+def _counter_at_limit_minus_three(bench: Bench) -> int:
+    """Miss, then good cycles until one more miss (+3) brings the counter exactly to the
+    limit: the counter before that miss."""
+    limit = bench.apply("read_object", index=0x10F1, sub=2)
+    _cycle(bench, True)
+    while bench.cpx.sync_counter > limit - 3:
+        _cycle(bench, False)
+    assert bench.cpx.sync_counter == limit - 3
+    return limit
+
+
+def test_sync_error_when_the_counter_reaches_0x10f1_2() -> None:
+    """Seed 002 names 0x10F1:2 (Tab. 27) and the sync error's single flash (Tab. 12), not
+    the comparison: the ETG rule of the sample stack (and of the TRS-CAT) is an error once
+    the counter reaches the limit. The miss before it leaves the slave in OP."""
+    bench = tab9(master=False)
+    for target in (AlState.PREOP, AlState.SAFEOP, AlState.OP):
+        bench.cpx.request_state(target)
+    limit = _counter_at_limit_minus_three(bench)
+    assert bench.cpx.al_state is AlState.OP
+    _cycle(bench, True)  # the counter reaches the limit
+    assert bench.cpx.sync_counter == limit
+    assert bench.cpx.al_state is AlState.SAFEOP and bench.cpx.al_status_code == 0x001A
+
+
+def test_op_refused_with_the_counter_at_0x10f1_2() -> None:
+    bench = tab9(master=False)
+    for target in (AlState.PREOP, AlState.SAFEOP):
+        bench.cpx.request_state(target)
+    limit = _counter_at_limit_minus_three(bench)
+    _cycle(bench, True)
+    assert bench.cpx.sync_counter == limit
+    bench.apply("clear_fault", fault="sync_error")
+    bench.cpx.request_state(AlState.OP)
+    assert bench.cpx.al_state is AlState.SAFEOP and bench.cpx.al_status_code == 0x001A
 
 
 def test_application_controller_failure_ignores_the_master() -> None:
