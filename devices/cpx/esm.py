@@ -24,6 +24,7 @@ SYNC_ERROR = 0x001A  # Tab. 12 single flash: OP -> SAFEOP because of a sync erro
 SM_WATCHDOG = 0x001B  # Tab. 12 double flash: Sync Manager watchdog
 INVALID_OUTPUT_CONFIG = sync_managers.INVALID_OUTPUT_CONFIG  # SM2, > 64 bytes (§2.2)
 INVALID_INPUT_CONFIG = sync_managers.INVALID_INPUT_CONFIG  # SM3, > 64 bytes
+INVALID_INPUT_MAPPING = 0x0024  # 0x1C13 left at sub 0 = 0 (devices/cpx/assignment.py)
 IDENT_MISMATCH = 0x0070  # 0xF030 and 0xF050 differ (Tab. 17 Text-ID 0x3800)
 # ETG.1000.6 AL control / AL status bit 5 (ETG.1020 Explicit Device Identification): the
 # master's "ID request" and the slave's "ID loaded", the ID then in the AL status code.

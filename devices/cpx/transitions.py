@@ -21,6 +21,7 @@ from devices.cpx.codes import TEXT_BUS_CYCLE, TEXT_IDENT_FAILED, TEXT_IDENT_SKIP
 from devices.cpx.esm import (
     IDENT_MISMATCH,
     INVALID_INPUT_CONFIG,
+    INVALID_INPUT_MAPPING,
     INVALID_OUTPUT_CONFIG,
     NO_VALID_FIRMWARE,
     SM_WATCHDOG,
@@ -86,6 +87,8 @@ class TransitionsMixin:
             code = self._sm_check((2, 3))
             if code is not None:
                 return code
+            if not self.tx_assign.complete():  # a 0x1C13 change left half-way (choice 37)
+                return INVALID_INPUT_MAPPING
             if self.space is not None and self.space_error:  # more than 64 bytes (§2.2)
                 return INVALID_INPUT_CONFIG if self.space.input_bytes > MAX_INPUT_BYTES \
                     else INVALID_OUTPUT_CONFIG

@@ -88,3 +88,50 @@ def test_0x1a40_only_after_the_module_data(bench: Bench, pdos: list[int]) -> Non
     assert cpx.cmd_read_object(TX_ASSIGN, 0) == 0
     assign(bench, [*MODULE_TX, DIAG_PDO])  # last: accepted
     assert _read(bench) == [*MODULE_TX, DIAG_PDO]
+
+
+@pytest.mark.parametrize("pdos", [
+    [MODULE_TX[1], MODULE_TX[0], MODULE_TX[2]],  # reordered: the 4AI's data before I0
+    [MODULE_TX[0], MODULE_TX[2], MODULE_TX[1]],  # the 16DI before the 4AI: off I72 ... I87
+    MODULE_TX[:2],  # the 16DI left out
+    [MODULE_TX[0], MODULE_TX[2], DIAG_PDO],  # the 4AI left out, 0x1A40 last
+    [MODULE_TX[1], MODULE_TX[0], MODULE_TX[2], DIAG_PDO],  # reordered, 0x1A40 last
+])
+def test_module_txpdos_only_as_the_addressing_rules_place_them(
+        bench: Bench, pdos: list[int]) -> None:
+    """§2.3.1: the bus module assigns the addresses itself — the bus module's diagnosis,
+    analog, then digital modules, each by module number — and Tab. 9 is the image a PLC
+    programmer reads addresses from. A 0x1C13 that reorders or leaves out module TxPDOs
+    would move module data off those addresses: sub 0 = n refuses it (0x06090030), as it
+    refuses 0x1A40 before a module (docs/cpx-e-ec.md choice 37)."""
+    cpx = bench.cpx
+    cpx.cmd_write_object(TX_ASSIGN, 0, 0)
+    for sub, pdo in enumerate(pdos, start=1):
+        cpx.cmd_write_object(TX_ASSIGN, sub, pdo)
+    with pytest.raises(SdoAbort) as exc:
+        cpx.cmd_write_object(TX_ASSIGN, 0, len(pdos))
+    assert (exc.value.code, exc.value.sub) == (AbortCode.VALUE_RANGE, 0)
+    assert cpx.cmd_read_object(TX_ASSIGN, 0) == 0
+
+
+def test_safeop_refused_while_0x1c13_is_left_empty(bench: Bench) -> None:
+    """Sub 0 = 0 is the first step of a change (CiA 301), not an assignment: PREOP -> SAFEOP
+    with the modules' inputs unassigned is refused with 0x0024 Invalid Input Mapping."""
+    cpx = bench.cpx
+    cpx.cmd_write_object(TX_ASSIGN, 0, 0)
+    cpx.request_state(AlState.SAFEOP)
+    assert cpx.al_state is AlState.PREOP and cpx.al_status_code == 0x0024
+    cpx.cmd_write_object(TX_ASSIGN, 0, len(MODULE_TX))  # the entries are still there
+    cpx.request_state(AlState.SAFEOP)
+    assert cpx.al_state is AlState.SAFEOP and cpx.al_status_code == 0
+
+
+def test_an_empty_default_is_an_assignment() -> None:
+    """Without modules with inputs and without diagnosis (DIL off / off) the default 0x1C13 is
+    empty: sub 0 = 0 is then the module's own assignment and SAFEOP is reached."""
+    bench = Bench(["CPX-E-8DO"], master=False)
+    cpx = bench.cpx
+    cpx.request_state(AlState.PREOP)
+    assert cpx.cmd_read_object(TX_ASSIGN, 0) == 0
+    cpx.request_state(AlState.SAFEOP)
+    assert cpx.al_state is AlState.SAFEOP
