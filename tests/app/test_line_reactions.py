@@ -78,7 +78,7 @@ style = "sirio"
 """
 
 
-@pytest.mark.parametrize(("slave", "fires"), [("cpx", True), ("drive_ecat-ecat", True),
+@pytest.mark.parametrize(("slave", "fires"), [("cpx", True), ("drive_ec-ecat", True),
                                               ("trscat", False)])
 def test_network_recovery_reaction_filters_on_the_recovered_slaves(slave: str,
                                                                    fires: bool) -> None:

@@ -90,6 +90,20 @@ def test_ethercat_line_rig_builds_in_line_order() -> None:
         ("Drive 4 (SelemaDriveECAT)", 1004)]
 
 
+def test_ethercat_line_rig_names_its_devices_as_the_default_rig() -> None:
+    """The line rig is the default rig without the CANopen drive: its scenarios play on the
+    default rig, so a device id (and the master's line entry) means the same device in both."""
+    from app.rig_config import build_rig
+
+    line = build_rig(load_rig_spec(DEFAULT_RIG.parent / "ethercat_line.toml"), state_dir=None)
+    default = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    kinds = {name: type(device) for name, device in default.devices.items()}
+    assert {name: type(device) for name, device in line.devices.items()}.items() \
+        <= kinds.items()
+    assert load_rig_spec(DEFAULT_RIG.parent / "ethercat_line.toml").line \
+        == load_rig_spec(DEFAULT_RIG).line
+
+
 def test_bad_slave_configuration_is_one_clear_error() -> None:
     from app.rig_config import build_rig
 

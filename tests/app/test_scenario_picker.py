@@ -5,7 +5,7 @@ play here, and Play on one is refused with a short notice that gives the command
 rig first; the two device lists go to the server log, not into the notice (a notice of ~1,200
 characters was clipped, title and fix cut off). The EtherCAT line's scenarios run on the
 default rig, which is that line: they play here, unmarked (before, they named
-ethercat_line.toml, whose drive is drive_ecat, and Play refused them)."""
+ethercat_line.toml, whose drive was then drive_ecat, and Play refused them)."""
 
 from __future__ import annotations
 

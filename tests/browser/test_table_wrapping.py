@@ -121,8 +121,8 @@ def test_event_log_server_column_shows_every_name_whole(live: LiveDashboard, pag
     live.advance(1.0)
     t_us = live.runtime.frame.t_us
     # The devices that emit under their own id (a drive's -can / -ecat companions emit under
-    # the drive's), and the longest id of static/rigs/, ethercat_line's "drive_ecat", as a
-    # caption's device (the log keeps captions from any device).
+    # the drive's), and a 10-character id ("drive_ecat", ethercat_line's drive until it took
+    # the default rig's "drive_ec"), as a caption's device (the log keeps captions from any).
     names = ["fastcat", "trscat", "cpx", "drive", "drive_co", "drive_ec"]
     live.runtime.journal([StateChanged(t_us, d, "A", "B", machine="test") for d in names]
                          + [Caption(t_us, "drive_ecat", text="longest id"),

@@ -103,8 +103,8 @@ def render_rows(rows: Iterable[LogRow]) -> str:
     if not body:
         body = '<tr><td colspan="3" class="fr-muted">no messages yet</td></tr>'
     # Timestamp column: the date and the time of day on two lines, as narrow as they get.
-    # Server column: 7em holds the longest id of static/rigs/ ("drive_ecat", 64 px at the
-    # log's 10.7 px font, + 8 px padding); 4.8em clipped "scenario" to "scenari".
+    # Server column: 7em holds a 10-character id ("drive_ecat", 64 px at the log's 10.7 px
+    # font, + 8 px padding; static/rigs/' longest is 8); 4.8em clipped "scenario" to "scenari".
     return ('<div class="fr-log-wrap"><table class="fr-log" id="fr-log"><colgroup>'
             '<col style="width:7em"><col style="width:10.4em"><col></colgroup><thead><tr>'
             '<th>Server</th><th>Timestamp</th>'

@@ -127,10 +127,10 @@ def test_dc_slaves_go_to_op_only_after_start_time() -> None:
             name = link.slave.device_id
             if link.slave.al_state is AlState.OP and name not in first_op:
                 first_op[name] = (rig.clock.now_us, master.dc.state)
-    assert set(first_op) == {"fastcat", "trscat", "cpx", "drive_ecat-ecat"}
+    assert set(first_op) == {"fastcat", "trscat", "cpx", "drive_ec-ecat"}
     assert first_op["trscat"][1] is first_op["cpx"][1] is DcState.COMPENSATING
     # the drive (no DC) reaches OP while the master is still waiting for START_TIME
-    assert first_op["drive_ecat-ecat"][1] is not DcState.COMPENSATING
+    assert first_op["drive_ec-ecat"][1] is not DcState.COMPENSATING
     assert [s["state"] for s in master_view(rig)["slaves"]] == ["OP"] * 4
 
 

@@ -11,7 +11,7 @@ from app.rig_config import build_rig, load_rig_spec
 from devices.device import CommandError
 from devices.ethercat import AlState
 
-POSITIONS = {"fastcat": 0, "trscat": 1, "cpx": 2, "drive_ecat-ecat": 3}
+POSITIONS = {"fastcat": 0, "trscat": 1, "cpx": 2, "drive_ec-ecat": 3}
 
 
 def test_start_up_waits_for_link_then_brings_every_slave_to_op() -> None:
@@ -155,7 +155,7 @@ def test_a_slave_brought_back_at_once_still_raises_its_state_changes() -> None:
                      if e.kind == "slave_state" else None)
     rig.apply("master", "lose_frames", {"count": 150})
     events = rig.run_until(IN_OP_US + US)
-    for name in ("cpx", "drive_ecat-ecat"):
+    for name in ("cpx", "drive_ec-ecat"):
         p = POSITIONS[name]
         mine = [r for r in (e.to_record() for e in events) if r["device"] == "master"
                 and (r.get("position") == p or (r["event"] == "log"

@@ -91,7 +91,7 @@ def test_generated_description_of_the_line() -> None:
     Text-ID 0x3801); DC for the TRS-CAT in DC-SYNC and the CPX-E-EC with 16DI / 8DO."""
     slaves = parse_eni((NETWORKS / "ethercat_line.eni.xml").read_text())
     rig = build_rig(load_rig_spec(LINE_RIG))
-    assert [s.device for s in slaves] == ["fastcat", "trscat", "cpx", "drive_ecat-ecat"]
+    assert [s.device for s in slaves] == ["fastcat", "trscat", "cpx", "drive_ec-ecat"]
     assert [s.station_address for s in slaves] == [1001, 1002, 1003, 1004]
     assert [s.dc for s in slaves] == [False, True, True, False]
     cpx = rig.devices["cpx"]
