@@ -16,7 +16,11 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
   off: from that position on nothing answers), and each slave's ESC error counters
   0x0300-0x0313 as the model counts them (``esc_errors``, when they changed, looked at every
   ``ESC_ERRORS_PERIOD_US``); a master's write there comes back as ``esc_errors_write`` and
-  clears the model's (``external_esc_write``).
+  clears the model's (``external_esc_write``);
+- the master's damaged cables go to B (``damage``, with the seed of the generator B draws
+  their crossings from, ``frame_seed``), which spoils the wire master's frames as the model
+  says (damage.py); what that counted comes back as ``esc_counts`` batches, added to the
+  model's counters (``external_esc_counts``), and ``esc_errors`` names the last batch applied.
 
 Positions are 0-based line positions; the line is re-read every step, so a rig reset in place
 (scenario player) gets fresh faces and is switched to external mode again.
@@ -40,6 +44,7 @@ from app.ethercat_wire.description import SlaveDescription
 from app.ethercat_wire.faces import Face, face_for
 from app.rig_config import RigConfigError
 from devices.ethercat import AlState
+from devices.master.esc_errors import frame_seed
 from devices.sync_managers import SmSetup
 
 logger = logging.getLogger(__name__)
@@ -196,6 +201,9 @@ class WireBridge:
         self._master: Any = None
         self._link_down: int | None = None
         self._esc_errors_due_us = 0
+        self._esc_seq = 0  # the last esc_counts batch added to the model's counters
+        self._seed: int | None = None  # of the crossings B draws (frame_seed), per master
+        self._damage: tuple[dict[int, float], int | None] | None = None  # last sent
         self._last_report_wall: float | None = None  # when B's last frame report came
         self._step_wall: float | None = None  # the wall time the last step stood for
         self._step_us: int | None = None
@@ -298,6 +306,8 @@ class WireBridge:
         if master is None:
             raise RigConfigError(OPTION, "", "the rig has no EtherCAT line ([master] line)")
         self._master = master
+        rng = getattr(master, "rng", None)
+        self._seed = frame_seed(rng) if rng is not None else None
         if hasattr(master, "set_external"):
             master.set_external(True)
         else:
@@ -344,19 +354,36 @@ class WireBridge:
             if down is not None:
                 self._send(msg.LINK, down, False)
             self._link_down = down
+        damage = (dict(getattr(self._master, "damaged", {})), self._seed)
+        if damage != self._damage and damage[1] is not None:
+            self._damage = damage
+            self._send(msg.DAMAGE, *damage)
         if now_us >= self._esc_errors_due_us:
             self._esc_errors_due_us = now_us + ESC_ERRORS_PERIOD_US
             for s in self._slaves:
                 self._sync_esc_errors(s)
 
-    def _sync_esc_errors(self, s: _Slave) -> None:
+    def _sync_esc_errors(self, s: _Slave, counted: bool = False) -> None:
+        """The model's counters to B when they changed, or when a batch of B's was just added
+        (``counted``: B stops adding it on top)."""
         links = getattr(self._master, "links", None)
         if links is None or s.position >= len(links) or not hasattr(links[s.position], "esc"):
             return
         data = links[s.position].esc.registers()
-        if data != s.esc_errors:
+        if data != s.esc_errors or counted:
             s.esc_errors = data
-            self._send(msg.ESC_ERRORS, s.position, data)
+            self._send(msg.ESC_ERRORS, s.position, data, self._esc_seq)
+
+    def _esc_counts(self, seq: int, counts: dict[int, bytes]) -> None:
+        add = getattr(self._master, "external_esc_counts", None)
+        if add is None:
+            return
+        self._esc_seq = seq
+        for position, data in counts.items():
+            s = self._slave(int(position))
+            if s is not None:
+                add(s.position, bytes(data))
+                self._sync_esc_errors(s, counted=True)
 
     def _defer(self, message: tuple[Any, ...], now_us: int) -> bool:
         """Hold an AL control write (and what came after it) while frames the master sent
@@ -446,6 +473,8 @@ class WireBridge:
             self._schedule_frames(message[1], now_us)
         elif tag == msg.STATS:
             self._stats(message[1])
+        elif tag == msg.ESC_COUNTS:
+            self._esc_counts(int(message[1]), message[2])
         elif tag == msg.ESC_ERRORS_WRITE:
             s = self._slave(message[1])
             write = getattr(self._master, "external_esc_write", None)

@@ -18,6 +18,7 @@ from collections import deque
 from app.ethercat_wire import dc, messages
 from app.ethercat_wire import registers as R
 from app.ethercat_wire import sii as sii_image
+from app.ethercat_wire.damage import Damage, WireCounters
 from app.ethercat_wire.datagrams import Cmd, Datagram, get_wkc, parse, set_adp, set_wkc
 from app.ethercat_wire.description import SlaveDescription
 from devices.master.esc_errors import CLEARED_TOGETHER
@@ -59,6 +60,7 @@ class Esc:
         self._outputs = b""
         self._inputs = b""
         self.master_time: tuple[int, int] | None = None  # (time written to 0x0910, local ns)
+        self.counters = WireCounters()  # 0x0300-0x0313: the model's and the wire's counts
 
     # ---- what process A tells the ESC ----
     def set_al_status(self, status: int, code: int) -> None:
@@ -89,10 +91,14 @@ class Esc:
         self._inputs = bytes(data)
         self._place_inputs()
 
-    def set_error_counters(self, data: bytes) -> None:
-        """0x0300-0x0313 as the model counts them (a damaged cable, lost links)."""
-        self.mem[R.ERROR_COUNTERS:R.ERROR_COUNTERS_END] = data[:R.ERROR_COUNTERS_END
-                                                                - R.ERROR_COUNTERS]
+    def set_error_counters(self, data: bytes, seq: int) -> None:
+        """0x0300-0x0313 as the model counts them (a damaged cable, lost links), the wire's
+        count batches up to ``seq`` included (damage.py)."""
+        self.counters.from_model(data, seq)
+        self.show_error_counters()
+
+    def show_error_counters(self) -> None:
+        self.mem[R.ERROR_COUNTERS:R.ERROR_COUNTERS_END] = self.counters.registers()
 
     def set_last(self, last: bool) -> None:
         _U16.pack_into(self.mem, R.DL_STATUS, R.dl_status(last))
@@ -153,6 +159,7 @@ class Esc:
         for first, last in CLEARED_TOGETHER:
             if ado < last and end > first:
                 self.mem[first:last] = bytes(last - first)
+        self.counters.write(ado, end - ado)
         self.outbox.append((messages.ESC_ERRORS_WRITE, self.position, ado, end - ado))
 
     def _dc_read(self, ado: int, end: int) -> None:
@@ -358,6 +365,7 @@ class Line:
         self.frames = 0
         self.pd_frames = 0  # frames carrying LRD/LWR/LRW
         self.wkc_errors = 0  # process-data datagrams short of the WKC of the whole line
+        self.damage = Damage()  # the damaged cables, as the model says (damage.py)
         self._relink()
 
     def set_link(self, position: int, up: bool) -> None:
@@ -367,6 +375,14 @@ class Line:
         else:
             self.link_ok[position] = False
         self._relink()
+
+    @property
+    def spoiled(self) -> int:
+        """Frames a damaged cable spoiled (not answered) since the line started."""
+        return self.damage.spoiled
+
+    def take_esc_counts(self) -> tuple[int, dict[int, bytes]] | None:
+        return self.damage.take(self.escs)
 
     def _relink(self) -> None:
         n = next((i for i, ok in enumerate(self.link_ok) if not ok), len(self.escs))
@@ -380,6 +396,8 @@ class Line:
         """Run every datagram of `frame` past the visible slaves; False: drop the frame."""
         if not self.visible:
             return False
+        if self.damage.shares and self.damage.spoils(self.visible):
+            return False  # lost, as the built-in master loses it
         self.frames += 1
         pd = False
         for dg in parse(frame):

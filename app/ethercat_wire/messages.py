@@ -23,6 +23,9 @@ ERROR = "error"  # ("error", text)
 # ("esc_errors_write", pos, ado, length): a master wrote into 0x0300-0x0313 (it clears counters;
 # B cleared its copy already, A's model clears the same)
 ESC_ERRORS_WRITE = "esc_errors_write"
+# ("esc_counts", seq, {pos: data}): what the damaged cables added to 0x0300-0x0313 (data as
+# those registers) since the last batch; seq numbers the batches from 1, at most every 10 ms
+ESC_COUNTS = "esc_counts"
 
 # A -> B
 AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0x0134
@@ -30,11 +33,17 @@ MAILBOX_REPLY = "mailbox_reply"  # ("mailbox_reply", pos, data): queued for SM1,
 INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
 LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
 ALIAS = "alias"  # ("alias", pos, value | None): a restart; None: the stored SII alias
-ESC_ERRORS = "esc_errors"  # ("esc_errors", pos, data): 0x0300-0x0313 as the model counts them
+# ("esc_errors", pos, data, seq): 0x0300-0x0313 as the model counts them, the esc_counts
+# batches up to seq included
+ESC_ERRORS = "esc_errors"
+# ("damage", {cable: share}, seed): the damaged cables (share of the crossings spoiled) and the
+# seed of the generator that draws the crossings (devices/master/esc_errors.py)
+DAMAGE = "damage"
 STOP = "stop"  # ("stop",)
 
-B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR, ESC_ERRORS_WRITE)
-A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, ESC_ERRORS, STOP)
+B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR, ESC_ERRORS_WRITE,
+          ESC_COUNTS)
+A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, ESC_ERRORS, DAMAGE, STOP)
 
 CYCLE_REPORT_S = 0.010  # "cycle" at most this often
 STATS_REPORT_S = 0.100  # "stats" this often

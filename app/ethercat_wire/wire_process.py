@@ -80,9 +80,10 @@ def open_socket(iface: str) -> socket.socket:
 
 
 class Stats:
-    """Counters reported to A: frames, process-data frames and WKC errors since B started
-    (cumulative), and the mean interval between process-data frames over the last report
-    period (the cycle; 0.0 when none came). B cannot see frames the master lost on its side."""
+    """Counters reported to A: frames, process-data frames, WKC errors and frames a damaged
+    cable spoiled since B started (cumulative), and the mean interval between process-data
+    frames over the last report period (the cycle; 0.0 when none came). B cannot see frames
+    the master lost on its side."""
 
     def __init__(self) -> None:
         self.last_pd = 0
@@ -94,7 +95,7 @@ class Stats:
         cycle_us = (now - self.last_t) * 1e6 / n if n else 0.0
         self.last_pd, self.last_t = line.pd_frames, now
         return {"frames": line.frames, "lrw": line.pd_frames, "cycle_us": round(cycle_us, 1),
-                "wkc_errors": line.wkc_errors}
+                "wkc_errors": line.wkc_errors, "lost_frames": line.spoiled}
 
 
 def apply_message(line: Line, msg: tuple) -> bool:
@@ -102,6 +103,9 @@ def apply_message(line: Line, msg: tuple) -> bool:
     tag = msg[0]
     if tag == messages.STOP:
         return False
+    if tag == messages.DAMAGE:
+        line.damage.set(msg[1], msg[2])
+        return True
     esc = line.escs[msg[1]]
     if tag == messages.AL_STATUS:
         esc.set_al_status(msg[2], msg[3])
@@ -114,7 +118,7 @@ def apply_message(line: Line, msg: tuple) -> bool:
     elif tag == messages.ALIAS:
         esc.set_alias(msg[2])
     elif tag == messages.ESC_ERRORS:
-        esc.set_error_counters(msg[2])
+        esc.set_error_counters(msg[2], msg[3])
     else:
         logger.warning("unknown message from process A: %r", tag)
     return True
@@ -208,6 +212,9 @@ def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]
             counts = cycle_counts(line)
             if counts:
                 mail.post((messages.CYCLE, counts))
+            batch = line.take_esc_counts()
+            if batch is not None:  # in order with the master's writes (not replaceable)
+                mail.post((messages.ESC_COUNTS, *batch))
             next_cycle = now + messages.CYCLE_REPORT_S
         if now >= next_stats:
             mail.post((messages.STATS, stats.report(line)))

@@ -20,6 +20,10 @@ II 3.33-3.37, ETG.1000.4), as docs/ethercat-master.md "Damaged cable" writes the
   0x030D clears 0x030D, one to any of 0x0310-0x0313 clears the four (the value is ignored).
 
 The line's ports: port 0 (IN) towards the master, port 1 (OUT) onwards.
+
+A wire master's frames (docs/ethercat-wire.md "Damaged cable") go through the same
+``run_frame`` in the wire process, with a generator seeded by ``frame_seed`` from the master's;
+its counts come back to the model as batches that ``EscErrors.add`` adds.
 """
 
 from __future__ import annotations
@@ -61,6 +65,28 @@ class EscErrors:
         out[0x0C], out[0x0D] = self.epu, self.pdi
         return bytes(out)
 
+    @classmethod
+    def from_registers(cls, data: bytes) -> EscErrors:
+        """The counters ``registers`` wrote (0x030E / 0x030F ignored)."""
+        data = bytes(data).ljust(END - BASE, b"\0")
+        return cls(invalid=list(data[0:8:2]), rx=list(data[1:8:2]),
+                   forwarded=list(data[0x08:0x0C]), epu=data[0x0C], pdi=data[0x0D],
+                   lost_link=list(data[0x10:0x14]))
+
+    def add(self, other: EscErrors) -> None:
+        """``other``'s counts counted here too, each stopping at 0xFF: the same as counting
+        them one by one (another process's frames, counted there)."""
+        for mine, theirs in ((self.invalid, other.invalid), (self.rx, other.rx),
+                             (self.forwarded, other.forwarded),
+                             (self.lost_link, other.lost_link)):
+            for port in range(PORTS):
+                mine[port] = min(TOP, mine[port] + theirs[port])
+        self.epu = min(TOP, self.epu + other.epu)
+        self.pdi = min(TOP, self.pdi + other.pdi)
+
+    def counted(self) -> bool:
+        return any(self.registers())
+
     def write(self, ado: int, length: int) -> bool:
         """A master's write to [ado, ado + length): the blocks it touches are cleared.
         True when the write touched the counters."""
@@ -100,6 +126,15 @@ class EscErrors:
 def _bump(counts: list[int], port: int) -> None:
     if counts[port] < TOP:
         counts[port] += 1
+
+
+def frame_seed(master_rng: random.Random) -> int:
+    """The seed of the generator that draws a wire master's crossings (run_frame's ``rng`` in
+    the wire process): from a copy of the master's generator, so it follows the rig's seed
+    while the master's own sequence (its DC measurement) keeps every draw."""
+    copy = random.Random()
+    copy.setstate(master_rng.getstate())
+    return copy.getrandbits(64)
 
 
 def run_frame(errors: list[EscErrors], last: int, damaged: dict[int, float],

@@ -37,6 +37,7 @@ from devices.events import (
 )
 from devices.master.actions import MASTER_ACTIONS
 from devices.master.dc import START_DELAY_US, DcState, DcUnit
+from devices.master.esc_errors import EscErrors
 from devices.master.hooks import Callback, Hooks
 from devices.master.line import LineMixin
 from devices.master.links import RANK, Slave, SlaveLink, next_state
@@ -237,6 +238,12 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
     def external_esc_write(self, position: int, ado: int, length: int) -> None:
         """A wire master's write into a slave's 0x0300-0x0313: the ESC clears those blocks."""
         self.links[self._position(position, "position")].esc.write(ado, length)
+
+    def external_esc_counts(self, position: int, data: bytes) -> None:
+        """What a damaged cable counted in a slave's ESC on a wire master's frames (the wire
+        process ran them through run_frame): added to the counters here."""
+        esc = self.links[self._position(position, "position")].esc
+        esc.add(EscErrors.from_registers(data))
 
     def external_stats(self, frames: int, lost_frames: int, cycle_us: int,
                        wkc_errors: int) -> None:

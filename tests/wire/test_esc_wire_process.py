@@ -165,7 +165,7 @@ def test_error_counters_read_at_0x0300_are_the_models_and_a_write_clears_them():
     counters stay) and goes to A, whose model clears the same."""
     line, outbox, _ = make_line(3)
     counters = bytes([5, 0, 0, 2, 0, 0, 0, 0, 0, 7, 0, 0, 9, 0, 0, 0, 1, 3, 0, 0])
-    assert apply_message(line, (messages.ESC_ERRORS, 1, counters))
+    assert apply_message(line, (messages.ESC_ERRORS, 1, counters, 0))  # no wire batch yet
     one(line, Cmd.APWR, -1, R.STATION_ADDRESS, b"\x02\x10")
     assert one(line, Cmd.FPRD, 0x1002, 0x0300, bytes(20)).data == counters
     assert one(line, Cmd.APRD, 0, 0x0300, bytes(20)).data == bytes(20)  # the others: none

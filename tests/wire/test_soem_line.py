@@ -448,6 +448,43 @@ def wait_for_line(proc: subprocess.Popen, text: str, timeout_s: float) -> None:
     raise AssertionError(f"the app did not print {text!r}: {''.join(seen)[-2000:]}")
 
 
+def esc_errors(runtime: Runtime) -> list[dict]:
+    panel = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
+    return [s["esc_errors"] for s in panel["slaves"]]
+
+
+def test_a_damaged_cable_loses_the_masters_frames_and_the_escs_count_them(session):
+    """The dashboard damages cable 1 (into the TRS-CAT), every crossing spoiled: none of the
+    master's frames comes back and the ESC counters count each as in embedded mode
+    (docs/ethercat-master.md "Damaged cable": the TRS-CAT first to receive it, invalid on
+    port 0 and marked; the slaves after it forwarded on port 0, the processing units of
+    positions 1-3; forwarded on port 1 on the way back). Repaired: the frames come back.
+    The outage is long enough for the slaves to react (the TRS-CAT's missed SM events, seed
+    001 §9.3.7): only lost frames are checked after it, not working counters."""
+    runtime, _, master, _ = session
+    before = esc_errors(runtime)
+    lost = model_call(runtime, lambda: runtime.rig.devices["master"].lost_frames)
+    model_call(runtime, lambda: runtime.rig.apply("master", "damage_cable",
+                                                  {"cable": 1, "percent": 100}))
+    time.sleep(0.1)
+    c = master("cycles", 20, PERIOD_S, {})
+    assert len(c.lost) == 20 and c.wrong == [], c
+    model_call(runtime, lambda: runtime.rig.apply("master", "repair_cable", {"cable": 1}))
+    time.sleep(0.3)  # B's batches every 10 ms, its statistics every 100 ms
+    after = esc_errors(runtime)
+    n = after[1]["invalid"][0] - before[1]["invalid"][0]
+    assert n >= 20  # the cycles' frames, and any other the master sent meanwhile
+    delta = [{k: [a - b for a, b in zip(x[k], y[k], strict=True)] for k in
+              ("invalid", "forwarded")} | {"epu": x["epu"] - y["epu"]}
+             for x, y in zip(after, before, strict=True)]
+    assert [d["invalid"] for d in delta] == [[0, 0], [n, 0], [0, 0], [0, 0]]
+    assert [d["forwarded"] for d in delta] == [[0, n], [0, n], [n, n], [n, 0]]
+    assert [d["epu"] for d in delta] == [0, n, n, n]
+    assert model_call(runtime, lambda: runtime.rig.devices["master"].lost_frames) - lost == n
+    c = master("cycles", 200, PERIOD_S, {})
+    assert len(c.lost) <= 200 * CI_LOST_PER_1000 // 1000, c.lost
+
+
 def test_a_pulled_cable_makes_slaves_vanish_from_the_wire(session):
     """The dashboard pulls cable 2 (into the CPX-E-EC): the CPX-E-EC and the drive vanish, the
     master's working counter falls short and the master panel counts the WKC errors; plugged

@@ -1,0 +1,218 @@
+"""A damaged cable on the wire: process B spoils the wire master's frames as the built-in master's
+(devices/master/esc_errors.py ``run_frame``: the same share per crossing, one draw per crossing
+in the same order, a generator seeded as the model says) and the ESC error counters count them
+as in embedded mode; the counts reach the model (``esc_counts``) and come back with the model's
+own (``esc_errors`` + the last batch applied), so a master reads each count once.
+docs/ethercat-wire.md "Damaged cable"; docs/ethercat-master.md "Damaged cable".
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import random
+import socket
+
+import pytest
+from test_bridge import WAIT_S, FakeB, master_view, sim, wait_for
+from test_esc import description, make_line, one
+from test_esc_wire_process import answer, drain
+from test_faces import line_rig
+from wire_line import veth_pair
+
+from app.ethercat_wire import datagrams as D
+from app.ethercat_wire import messages, wire_process
+from app.ethercat_wire import registers as R
+from app.ethercat_wire.bridge import WireBridge
+from app.ethercat_wire.datagrams import Cmd, Request
+from app.ethercat_wire.esc import Line
+from app.ethercat_wire.wire_process import Stats, apply_message
+from app.runtime import Runtime
+from devices.master.esc_errors import EscErrors, frame_seed, run_frame
+
+IN, OUT = 0, 1
+SEED = 1234
+
+
+def frame() -> bytearray:
+    return D.build([Request(Cmd.BRD, 0, R.TYPE, b"\0\0", idx=0x11)])
+
+
+def counters(line: Line, pos: int) -> bytes:
+    """0x0300-0x0313 of the slave at ``pos`` as a master reads them (the line healthy)."""
+    return one(line, Cmd.APRD, -pos, R.ERROR_COUNTERS, bytes(20)).data
+
+
+def damage(line: Line, shares: dict[int, float]) -> None:
+    assert apply_message(line, (messages.DAMAGE, shares, SEED))
+
+
+def test_a_damaged_cable_spoils_the_frames_as_the_built_in_master_does():
+    """Cable 2 spoils half of its crossings: the frames B drops are those run_frame spoils
+    with the same generator, and every slave's counters are run_frame's."""
+    line, _, _ = make_line(4)
+    damage(line, {2: 0.5})
+    answered = [line.process(frame()) for _ in range(200)]
+    ref, rng = [EscErrors() for _ in range(4)], random.Random(SEED)
+    spoiled = [run_frame(ref, 3, {2: 0.5}, rng) for _ in range(200)]
+    assert answered == [not s for s in spoiled]
+    assert 50 < sum(spoiled) < 200 and line.spoiled == sum(spoiled)
+    assert line.frames == 200 - sum(spoiled)  # a spoiled frame is not answered, as lost
+    damage(line, {})  # repaired: the counters stay
+    assert [counters(line, p) for p in range(4)] == [e.registers() for e in ref]
+    assert ref[2].invalid[IN] > 0 and ref[1].invalid[OUT] > 0 and ref[0].forwarded[OUT] > 0
+
+
+def test_an_undamaged_line_loses_nothing_and_counts_nothing():
+    line, _, _ = make_line(3)
+    damage(line, {})
+    assert all(line.process(frame()) for _ in range(100))
+    assert line.spoiled == 0 and [counters(line, p) for p in range(3)] == [bytes(20)] * 3
+    assert line.take_esc_counts() is None
+
+
+def test_a_damaged_cable_behind_a_cut_is_not_crossed():
+    """Cable 2 damaged, cable 1 pulled: the frames turn back at slave 0, as the built-in
+    master's reach the last slave they get to."""
+    line, _, _ = make_line(3)
+    apply_message(line, (messages.LINK, 1, False))
+    damage(line, {2: 1.0})
+    assert all(line.process(frame()) for _ in range(20))
+    damage(line, {0: 1.0})
+    assert not line.process(frame())
+
+
+def test_counts_go_to_the_model_once_and_its_answer_does_not_count_them_twice():
+    line, _, _ = make_line(2)
+    damage(line, {1: 1.0})
+    for _ in range(3):
+        assert not line.process(frame())
+    seq, counts = line.take_esc_counts()
+    assert set(counts) == {0, 1}
+    assert EscErrors.from_registers(counts[1]).invalid[IN] == 3
+    assert EscErrors.from_registers(counts[0]).forwarded[OUT] == 3
+    assert line.take_esc_counts() is None  # taken once
+    for _ in range(2):
+        line.process(frame())
+    model = EscErrors(lost_link=[1, 0, 0, 0])  # a lost link the model counted meanwhile
+    # sent before the model had the batch: the batch still shows on top of it
+    apply_message(line, (messages.ESC_ERRORS, 1, model.registers(), seq - 1))
+    shown = EscErrors.from_registers(line.escs[1].counters.registers())
+    assert shown.invalid[IN] == 5 and shown.lost_link[IN] == 1
+    model.add(EscErrors.from_registers(counts[1]))  # the model with the batch added
+    apply_message(line, (messages.ESC_ERRORS, 1, model.registers(), seq))
+    damage(line, {})
+    shown = EscErrors.from_registers(counters(line, 1))
+    assert shown.invalid[IN] == 5 and shown.lost_link[IN] == 1
+
+
+def test_a_masters_write_clears_what_the_model_has_not_taken_yet():
+    line, outbox, _ = make_line(2)
+    damage(line, {1: 1.0})
+    line.process(frame())
+    line.take_esc_counts()  # sent to A, not yet answered
+    line.process(frame())
+    damage(line, {})
+    one(line, Cmd.APWR, -1, 0x0300, b"\0\0")  # clears 0x0300-0x030B
+    shown = EscErrors.from_registers(counters(line, 1))
+    assert shown.invalid == [0] * 4 and shown.epu == 2
+    assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2) in outbox
+
+
+def test_statistics_count_the_spoiled_frames_as_lost():
+    line, _, _ = make_line(2)
+    damage(line, {0: 1.0})
+    line.process(frame())
+    assert Stats().report(line)["lost_frames"] == 1
+
+
+def test_the_seed_is_drawn_from_a_copy_of_the_masters_generator():
+    """The wire's generator follows the rig's seed without taking a draw from the master's
+    (its DC measurement keeps its own sequence)."""
+    rng = random.Random(8)
+    state = rng.getstate()
+    assert frame_seed(rng) == frame_seed(random.Random(8)) != frame_seed(random.Random(9))
+    assert rng.getstate() == state
+
+
+# ---- process A: the model's damage reaches B, B's counts reach the model ------------------
+@pytest.fixture
+def wire():
+    runtime = Runtime(line_rig("OP"))
+    runtime.start()
+    b = FakeB()
+    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
+    bridge.start(timeout_s=WAIT_S)
+    yield runtime, bridge, b
+    bridge.stop()
+    runtime.stop()
+
+
+def test_the_models_damage_reaches_b_and_b_s_counts_reach_the_model(wire):
+    runtime, _bridge, b = wire
+    first = b.expect(lambda m: m[0] == messages.DAMAGE)
+    seed = first[2]  # frame_seed of the master's generator as the bridge attached
+    assert first == (messages.DAMAGE, {}, seed) and isinstance(seed, int)
+    runtime.command("master", "damage_cable", {"cable": 2, "percent": 30}).result(WAIT_S)
+    b.expect(lambda m: m == (messages.DAMAGE, {2: 0.3}, seed))
+    counted = EscErrors(invalid=[4, 0, 0, 0], epu=4)
+    b.send(messages.ESC_COUNTS, 1, {2: counted.registers()})
+    b.expect(lambda m: m == (messages.ESC_ERRORS, 2, counted.registers(), 1))
+    assert sim(runtime, lambda: master_view(runtime).links[2].esc.snapshot()) == \
+        counted.snapshot()
+    b.send(messages.STATS, {"frames": 10, "lrw": 10, "cycle_us": 4000.0, "wkc_errors": 0,
+                            "lost_frames": 4})
+    wait_for(lambda: sim(runtime, lambda: master_view(runtime).lost_frames) == 4)
+    runtime.command("master", "repair_cable", {"cable": 2}).result(WAIT_S)
+    b.expect(lambda m: m == (messages.DAMAGE, {}, seed))
+
+
+# ---- process B on a veth pair: frames from the master's side ------------------------------
+@pytest.fixture
+def veth():
+    with veth_pair("k") as pair:
+        yield pair
+
+
+def test_the_wire_process_drops_what_a_damaged_cable_spoils(veth):
+    master_if, slave_if = veth
+    ctx = multiprocessing.get_context("spawn")
+    a_end, b_end = ctx.Pipe()
+    proc = ctx.Process(target=wire_process.run,
+                       args=(slave_if, [description(i) for i in range(3)], b_end), daemon=True)
+    proc.start()
+    sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(D.ETHERTYPE))
+    try:
+        assert a_end.poll(30) and a_end.recv() == (messages.READY, slave_if)
+        sock.bind((master_if, D.ETHERTYPE))
+        for _ in range(5):  # undamaged: every frame answered
+            sock.send(frame())
+            assert D.replies(answer(sock, 2))[0].wkc == 3
+        a_end.send((messages.DAMAGE, {1: 1.0}, SEED))
+        wait_for(lambda: _unanswered(sock))
+        got = drain(a_end)
+        deadline_msgs = [m for m in got if m[0] == messages.ESC_COUNTS]
+        while not deadline_msgs:
+            assert a_end.poll(5), "no esc_counts from B"
+            m = a_end.recv()
+            if m[0] == messages.ESC_COUNTS:
+                deadline_msgs.append(m)
+        counts = deadline_msgs[0][2]
+        assert EscErrors.from_registers(counts[1]).invalid[IN] >= 1
+        assert EscErrors.from_registers(counts[0]).forwarded[OUT] >= 1
+        a_end.send((messages.DAMAGE, {}, SEED))
+        wait_for(lambda: not _unanswered(sock))
+        a_end.send((messages.STOP,))
+        proc.join(timeout=5)
+    finally:
+        sock.close()
+        if proc.is_alive():
+            proc.terminate()
+
+
+def _unanswered(sock: socket.socket) -> bool:
+    sock.send(frame())
+    try:
+        answer(sock, 0.2)
+    except AssertionError:
+        return True
+    return False
