@@ -115,6 +115,7 @@ def reset_in_place(running: Rig, fresh: Rig) -> None:
     running.clock.step_us = fresh.clock.step_us
     running.clock.now_us = fresh.clock.now_us
     running.pending = []
+    running.loads += 1
     running.touch()
 
 

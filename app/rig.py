@@ -44,6 +44,10 @@ class Rig:
         self.revision = 0
         self._promised_us = -1  # every device's steps up to here are quiet (quiet_steps)
         self.skipped_steps = 0  # steps advance() skipped in quiet spans (tests look)
+        # Scenario loads that made this rig factory-fresh in place (app/player.py
+        # reset_in_place): what tells the recorder and the drive plots a new run started.
+        # The clock going back does not: a load at 0 s puts nothing back.
+        self.loads = 0
 
     def device(self, device_id: str) -> DeviceModel:
         found = self.devices.get(device_id)

@@ -114,6 +114,10 @@ class RigRecorder:
         self._closed = False
         self._offset_us = 0  # added to rig times: a restarted rig continues the timeline
         self._last_t_us = 0  # the latest rig time observed
+        # The rig's load count (Rig.loads, set by attach_to_runtime / scenario_observer) and
+        # its value at the last observation (None: none yet). A change is a new run.
+        self.load_count: Callable[[], int] | None = None
+        self._load: int | None = None
         # What the last sample gave each scalar column: its row, or the LED pattern its
         # lit / dark row is computed from at each time (resample); None: no sample to repeat.
         self._repeat: list[tuple[_Column, tuple[float, ...], LedPattern | None]] | None = None
@@ -125,16 +129,17 @@ class RigRecorder:
     # ---- what the simulation side calls ----------------------------------------------------
     def quiet_until(self, now_us: int, step_us: int) -> int:
         """Up to when no sample is due (a quiet rig's steps before then need no snapshot).
-        None while the clock is behind the last observation: the next step's observation
-        starts the new run (``_restart``) and its sample grid."""
+        None after a load: the next step's observation starts the new run (``_restart``) and
+        its sample grid."""
         due = self._next_sample_us
-        if due is None or now_us < self._last_t_us:
+        if due is None or self._loaded():
             return now_us
         return max(now_us, due - 1)
 
     def sample_due(self, t_us: int) -> bool:
-        """Whether a snapshot taken at ``t_us`` would be recorded (take one only then)."""
-        return self._next_sample_us is None or t_us >= self._next_sample_us
+        """Whether a snapshot taken at ``t_us`` would be recorded (take one only then); after
+        a load, the new run's first observation is (its full first sample)."""
+        return self._next_sample_us is None or t_us >= self._next_sample_us or self._loaded()
 
     def observe(self, t_us: int, snapshot: Mapping[str, Any] | None,
                 events: Iterable[Event]) -> None:
@@ -143,8 +148,10 @@ class RigRecorder:
         with self._lock:
             if self._closed:
                 return
-            if t_us < self._last_t_us:
+            if self._loaded():
                 self._restart(t_us)
+            if self.load_count is not None:
+                self._load = self.load_count()
             self._last_t_us = t_us
             for event in events:
                 self._event(event)
@@ -156,11 +163,12 @@ class RigRecorder:
         """Record at ``t_us`` the sample :meth:`observe` would record for a snapshot equal to
         the last one sampled (a rig whose revision has not moved: app.rig.Rig.revision), without
         taking one: every signal as it was, each LED lit or dark by its pattern at ``t_us``.
-        False (nothing recorded) when there is no sample to repeat or the clock went back."""
+        False (nothing recorded) when there is no sample to repeat or a load started a new run
+        (the next observation starts it)."""
         with self._lock:
             if self._closed:
                 return True
-            if self._repeat is None or t_us < self._last_t_us:
+            if self._repeat is None or self._loaded():
                 return False
             self._last_t_us = t_us
             at = t_us + self._offset_us
@@ -180,6 +188,14 @@ class RigRecorder:
                 or self._buffered >= self.max_buffered_rows):
             self._send_buffers()
             self._last_flush_us = t_us
+
+    def _loaded(self) -> bool:
+        """Whether a scenario load happened since the last observation.
+        A load, not the clock going back, starts a new run: a load at 0 s (right after start,
+        or twice in a row) puts no clock back, and nothing else does."""
+        if self.load_count is None or self._load is None:
+            return False
+        return self.load_count() != self._load
 
     # ---- what owners call ------------------------------------------------------------------
     def flush(self, timeout_s: float = 10.0) -> None:
@@ -214,9 +230,10 @@ class RigRecorder:
 
     # ---- buffering ---------------------------------------------------------------------------
     def _restart(self, t_us: int) -> None:
-        """The rig clock went back (a scenario loaded: the rig restarted factory-fresh). The
-        new run goes on the same timeline after the last one, one sample period apart, and
-        starts with a full sample, as the first run did (docs/recording.md)."""
+        """A scenario loaded (Rig.loads moved: the rig restarted factory-fresh, its clock
+        at ``t_us``, 0 s). The new run goes on the same timeline after the last one, one
+        sample period apart, and starts with a full sample, as the first run did
+        (docs/recording.md)."""
         self._send_buffers(hold=True)
         self._offset_us += self._last_t_us - t_us + self.sample_period_us
         self.runs += 1
@@ -343,6 +360,7 @@ def attach_to_runtime(runtime: Runtime, recorder: RigRecorder, repeat: bool = Tr
     last one instead of taking a snapshot (the same rows; "Repeated samples")."""
     rig = runtime.rig
     recorder.al_status = event_text.al_status_reader(rig.devices)
+    recorder.load_count = lambda: rig.loads
 
     def on_batch(events: list[Event]) -> None:
         t_us = rig.clock.now_us
@@ -375,6 +393,7 @@ def scenario_observer(recorder: RigRecorder) -> Callable[[Rig, list[Event]], Non
     def on_tick(rig: Rig, events: list[Event]) -> None:
         if recorder.al_status is None:
             recorder.al_status = event_text.al_status_reader(rig.devices)
+            recorder.load_count = lambda: rig.loads
         t_us = rig.clock.now_us
         recorder.observe(t_us, rig.snapshot() if recorder.sample_due(t_us) else None, events)
 

@@ -137,3 +137,32 @@ def test_a_load_clears_every_drives_log(dashboard: Dashboard) -> None:
     dashboard.scenario_player.load(load_scenario(EXAMPLES_DIR / "cnf_scan.toml"))
     dashboard.tick()
     assert "old run" not in log.html("drive") + log.html("drive_ec")
+
+
+def test_a_load_starts_the_drive_plots_afresh(dashboard: Dashboard) -> None:
+    """The drive plots (app/ui/drive/plots.py) took a new run from the clock going back at
+    the next simulation step: a scenario loaded and left paused at 0 s (and one loaded right
+    after another) kept the old run's curve, to be joined by the new run's samples. The load
+    itself (Rig.loads) starts them afresh."""
+    import numpy as np
+
+    assert dashboard.drives is not None
+    sampler, plots = dashboard.drives.sampler, dashboard.drives.plots
+    run = [1]  # which run a sample is of: the plots' position
+
+    sampler._snapshot = lambda: {"position_counts": run[0], "velocity": 0.0,
+                                 "following_error": 0.0}
+    runtime = dashboard.runtime
+    runtime.advance(50_000).result(timeout=TIMEOUT_S)
+    assert list(sampler.columns()[1]) == [1, 1]  # at 20 and 40 ms
+    scenario = load_scenario(EXAMPLES_DIR / "cnf_scan.toml")
+    for run[0] in (2, 3):  # the second load right after the first, 30 ms of run 2 between
+        dashboard.scenario_player.load(scenario)
+        dashboard.tick()
+        assert len(sampler.columns()[0]) == 0, run
+        plots.update(0.0, 0, force=True)  # unless the tick sent them
+        assert not [v for chart in plots._charts for v in np.asarray(chart.data[1]) if v], run
+        runtime.advance(30_000).result(timeout=TIMEOUT_S)
+        dashboard.tick()
+        t, position = sampler.columns()[:2]
+        assert list(t) == [0.02] and list(position) == [run[0]], (t, position)

@@ -500,15 +500,19 @@ def test_led_names_with_spaces_and_slashes_stay_one_part(tmp_path: Path) -> None
     assert device_path("fastcat", "led", "2.yellow") == "rig/fastcat/led/2.yellow"
 
 
-def test_drive_plots_start_afresh_when_the_clock_goes_back() -> None:
-    """The dashboard's drive plots (app/ui/drive/plots.py) follow a restarted rig clock the
-    way the recorder does: the old run's samples go, the new run's start at 0."""
+def test_drive_plots_start_afresh_at_a_load() -> None:
+    """The dashboard's drive plots (app/ui/drive/plots.py) follow a scenario load (the rig's
+    load count) the way the recorder does: the old run's samples go, the new run's start at
+    0 (tests/app/test_event_log_restart.py: a load at 0 s, two loads in a row)."""
     from app.ui.drive.plots import SAMPLE_US, DriveSampler
 
-    sampler = DriveSampler(lambda: {"position_counts": 1, "velocity": 2, "following_error": 0})
+    loads = [0]
+    sampler = DriveSampler(lambda: {"position_counts": 1, "velocity": 2, "following_error": 0},
+                           loads=lambda: loads[0])
     for t_us in range(0, 2 * S, 1000):
         sampler.on_step(t_us)
     assert len(sampler.columns()[0]) == 2 * S // SAMPLE_US
+    loads[0] += 1
     for t_us in range(0, 100_000, 1000):
         sampler.on_step(t_us)
     times = sampler.columns()[0]

@@ -42,6 +42,7 @@ SIGNALS: tuple[tuple[str, str, str], ...] = (
 )
 
 SnapshotFn = Callable[[], Mapping[str, Any] | None]
+LoadCount = Callable[[], int]  # the rig's scenario loads (Rig.loads)
 
 
 def line_points(values: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
@@ -69,8 +70,11 @@ def line_points(values: np.ndarray, t: np.ndarray | None = None) -> np.ndarray:
 class DriveSampler:
     """A ring of (t, position, velocity, following error), filled in the simulation thread."""
 
-    def __init__(self, snapshot: SnapshotFn, window_s: float = WINDOW_S) -> None:
+    def __init__(self, snapshot: SnapshotFn, window_s: float = WINDOW_S,
+                 loads: LoadCount = lambda: 0) -> None:
         self._snapshot = snapshot
+        self._loads = loads
+        self._load = loads()  # the load the samples are of
         self._lock = threading.Lock()
         self._rows: collections.deque[tuple[float, ...]] = collections.deque(
             maxlen=int(window_s * 1e6 / SAMPLE_US) + 1)
@@ -82,15 +86,13 @@ class DriveSampler:
         """Runtime step listener (simulation thread): one sample every SAMPLE_US."""
         if not self.active:
             return
-        if self._next_us is not None and now_us < self._next_us - SAMPLE_US:
-            # The clock went back (a scenario loaded, the rig restarted): a fresh timeline.
-            self._next_us = None
-            self.reset()
-        if self._next_us is None:  # samples on multiples of SAMPLE_US: the same every run
-            self._next_us = -(-now_us // SAMPLE_US) * SAMPLE_US
-        if now_us < self._next_us:
-            return
-        self._next_us = now_us - now_us % SAMPLE_US + SAMPLE_US
+        self.new_run()
+        with self._lock:  # new_run may reset the timeline from the view's thread
+            if self._next_us is None:  # samples on multiples of SAMPLE_US: the same every run
+                self._next_us = -(-now_us // SAMPLE_US) * SAMPLE_US
+            if now_us < self._next_us:
+                return
+            self._next_us = now_us - now_us % SAMPLE_US + SAMPLE_US
         snap = self._snapshot()
         if not snap:
             return
@@ -105,9 +107,23 @@ class DriveSampler:
         if not self.active:
             return FAR_US
         due = self._next_us
-        if due is None or now_us < due - SAMPLE_US:
+        if due is None or self._loads() != self._load:
             return now_us  # the next step sets the timeline (or starts a fresh one)
         return due - 1
+
+    def new_run(self) -> bool:
+        """Start afresh if a scenario was loaded since the samples began (either thread: the
+        simulation's next step or the view at the load, whichever comes first). The load, not
+        the clock going back: a load at 0 s, or right after another, puts no clock back, and
+        a paused rig takes no step to see it by."""
+        load = self._loads()
+        with self._lock:
+            if load == self._load:
+                return False
+            self._load, self._next_us = load, None
+            self._rows.clear()
+            self.version += 1
+        return True
 
     def reset(self) -> None:
         """Forget the samples (another drive was selected); called from the view."""
@@ -163,8 +179,12 @@ class DrivePlots:
         if not force and now - self._sent_at < SEND_PERIOD_S:
             return False
         columns = self._sampler.columns()
-        if len(columns[0]) == 0:
-            return False
+        if len(columns[0]) == 0:  # a new run (or drive) without a sample yet: blank charts
+            for chart in self._charts:
+                chart.data = (np.zeros(1), np.zeros(1))
+            self._sent_range, self._sent_samples = None, 0
+            self._sent_version, self._sent_at = version, now
+            return True
         t_end = max(float(columns[0][-1]), t_us / 1e6)
         x_range = (max(0.0, t_end - WINDOW_S), max(t_end, WINDOW_S))
         scales = None if x_range == self._sent_range else {

@@ -73,7 +73,7 @@ class DriveView:
         if any(self._nodes.values()):
             self.master = CanOpenMaster(server, runtime, sender,
                                         lambda: self._nodes.get(self.selected))
-        self.sampler = DriveSampler(self._selected_snapshot)
+        self.sampler = DriveSampler(self._selected_snapshot, loads=lambda: runtime.rig.loads)
         runtime.add_step_listener(self.sampler.on_step,
                                   quiet_until=self.sampler.quiet_until)
         with side.add_tab("Drive", viser.Icon.ENGINE):
@@ -119,8 +119,10 @@ class DriveView:
         self.words.log.add(e for e in events if e.device in mine)
 
     def new_run(self) -> None:
-        """A scenario load: no drive's rows of the previous run stay in the Drive log."""
+        """A scenario load: no drive's rows of the previous run stay in the Drive log, nor
+        its samples in the plots (a paused rig takes no step that would clear them)."""
         self.words.log.clear()
+        self.sampler.new_run()
 
     def update(self, frame: Frame) -> None:
         devices = frame.snapshot.get("devices") or {}
