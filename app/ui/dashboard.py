@@ -193,7 +193,7 @@ class Dashboard:
         from app.ui.panels.scenario_player import ScenarioPlayerPanel
 
         with self._control_tab("Scenario", viser.Icon.PLAYER_PLAY):
-            self.scenario_player = ScenarioPlayerPanel(server, runtime, self._caption)
+            self.scenario_player = ScenarioPlayerPanel(server, runtime)
         last_load = self.scenario_player.player.last_load
         self._runs = RunSplitter(last_load)  # where a load starts a new run in a batch
         self.decoder = DecoderPanel(server, runtime, self._side, last_load)
@@ -440,19 +440,22 @@ class Dashboard:
     def _take_events(self) -> list[Event]:
         self._event_seq, events = self.runtime.events_since(self._event_seq)
         split = self._runs.split(self._event_seq, events)
+        run = events  # the current run's events
         if split is None:
             self._log_events(events)
-        else:  # a scenario load: the logs start afresh where it happened
-            old, new = split
+        else:  # a scenario load: the logs and the caption start afresh where it happened
+            old, run = split
             self._log_events(old)
             if self._panels is not None:
                 self._panels.log.new_run()
             if self._drives is not None:
                 self._drives.new_run()
-            self._log_events(new)
+            self._log_events(run)
+            # The old run's narration is over, its captions in this batch too.
+            self._caption.visible = False
         if self._line is not None:
             self._line.add_events(events)
-        captions = [e.text for e in events if isinstance(e, Caption)]
+        captions = [e.text for e in run if isinstance(e, Caption)]
         if captions:
             self._caption.text = caption_lines(captions[-1])
             self._caption.visible = True

@@ -166,3 +166,34 @@ def test_a_load_starts_the_drive_plots_afresh(dashboard: Dashboard) -> None:
         dashboard.tick()
         t, position = sampler.columns()[:2]
         assert list(t) == [0.02] and list(position) == [run[0]], (t, position)
+
+
+def test_a_load_clears_the_caption(dashboard: Dashboard) -> None:
+    """The caption label above the rig (a sales engineer's narration) kept the previous
+    scenario's last caption over a new one with none at 0 s: the player's panel hid it before
+    the load, but a caption of the old run the dashboard had not taken yet (it ticks ~30 times
+    a second; the old scenario plays on while the new rig is built) came in one batch with
+    the load and was shown again. The load itself (the dashboard's split of its batch) hides
+    it; a caption of the new run shows."""
+    from devices.events import Caption
+
+    runtime = dashboard.runtime
+    quiet_start = load_scenario(EXAMPLES_DIR / "module_lost_in_op.toml")  # first caption 6 s
+    assert not [s for s in quiet_start.steps if s.kind == "caption" and s.t_us == 0]
+    runtime.journal([Caption(0, "scenario", text="old run: the cable is pulled")])
+    runtime.submit(lambda: None).result(timeout=TIMEOUT_S)  # journalled, not yet taken
+    dashboard.scenario_player.load(quiet_start)
+    dashboard.tick()
+    assert dashboard.caption == ""
+    # Shown and taken before the load, then a load that is not the panel's (Player.restart).
+    runtime.journal([Caption(0, "scenario", text="old run: shown")])
+    runtime.submit(lambda: None).result(timeout=TIMEOUT_S)
+    dashboard.tick()
+    assert dashboard.caption == "old run: shown"
+    dashboard.scenario_player.player.restart()
+    dashboard.tick()
+    assert dashboard.caption == ""
+    # A scenario with a caption at 0 s shows it at the load.
+    dashboard.scenario_player.load(load_scenario(EXAMPLES_DIR / "cnf_scan.toml"))
+    dashboard.tick()
+    assert dashboard.caption.startswith("The rig is switched on."), dashboard.caption

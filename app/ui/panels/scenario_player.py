@@ -152,11 +152,10 @@ def status_text(view: PlayerView, t_us: int, hint: str = "", picked: str = "") -
 class ScenarioPlayerPanel:
     """Build inside the container it belongs to (a tab or the control panel)."""
 
-    def __init__(self, server: viser.ViserServer, runtime: Runtime, caption: Any = None,
+    def __init__(self, server: viser.ViserServer, runtime: Runtime,
                  directory: Path = SCENARIO_DIR, default_rig: Path = DEFAULT_RIG) -> None:
         self.player = Player(runtime, default_rig)
         self._runtime = runtime
-        self._caption = caption  # the dashboard's caption label: hidden on a (re)load
         entries, rigs = marked(library(directory), self.player)
         self._entries = {e.label: e for e in entries}
         self.hint = other_rig_hint(rigs)
@@ -238,8 +237,6 @@ class ScenarioPlayerPanel:
 
     def load(self, scenario: Scenario, path: Path | None = None, fresh: Rig | None = None) -> None:
         """Load ``scenario`` (on ``fresh``, see :meth:`app.player.Player.load`)."""
-        if self._caption is not None:  # the last run's narration is over (before the load:
-            self._caption.visible = False  # a caption at 0 s comes with the load itself)
         self.player.load(scenario, fresh)
         self._loaded = path if path is not None else Path(scenario.source)
         self._show_picked(scenario, self._loaded)
