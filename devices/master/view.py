@@ -34,6 +34,8 @@ class ViewMixin:
     if TYPE_CHECKING:
         def _connected(self, position: int) -> bool: ...
         def _target_of(self, link: SlaveLink) -> AlState: ...
+        def _plugs_all(self) -> list[tuple[bool, bool]]: ...
+        def _plugged(self, plugs: list[tuple[bool, bool]]) -> list[bool]: ...
 
     # ---- diagnostic structures (seed 003: by position from 0, or by physical address) -------
     def slave_at(self, position: int) -> dict[str, Any]:
@@ -56,6 +58,25 @@ class ViewMixin:
         share = self.damaged.get(cable)
         return None if share is None else round(share * 100)
 
+    def _cable_views(self, names: list[str]) -> list[dict[str, Any]]:
+        """Each cable as the line has it (line.py ``_plugged``): plugged only when the
+        master's ``cables`` has it and both its ends are. ``pulled_at``: the ends a slave's
+        own plug has out ("trscat OUT", "cpx IN"), ``master_pulled``: the master's
+        ``pull_cable`` has it out (what its pull / plug controls move). Read afresh, as the
+        slaves' ``link``: a plug is out from the slave's own action on, while the port at the
+        cable's other end follows at the master's next step."""
+        plugs = self._plugs_all()
+        plugged = self._plugged(plugs)
+        out = []
+        for i, name in enumerate(names):
+            before = names[i - 1] if i else "master"
+            ends = [f"{before} OUT"] if i and not plugs[i - 1][1] else []
+            ends += [] if plugs[i][0] else [f"{name} IN"]
+            out.append({"index": i, "from": before, "to": name, "plugged": plugged[i],
+                        "master_pulled": not self.cables[i], "pulled_at": ends,
+                        "damaged": self._damaged_percent(i)})
+        return out
+
     # ---- view -------------------------------------------------------------------------------
     @property
     def phase(self) -> str:
@@ -74,10 +95,7 @@ class ViewMixin:
                 "external": self.external, "link": self.link_up, "phase": self.phase,
                 "log_style": self.log_style, "log_styles": list(STYLES),
                 "dc": self.dc.snapshot(),
-                "cables": [{"index": i, "from": "master" if i == 0 else names[i - 1],
-                            "to": names[i], "plugged": self.cables[i],
-                            "damaged": self._damaged_percent(i)}
-                           for i in range(len(self.links))],
+                "cables": self._cable_views(names),
                 "slaves": [self._diagnostic(link) for link in self.links],
                 "stats": {"frames": self.frames, "lost_frames": self.lost_frames,
                           "cycle_us": self.cycle_us},

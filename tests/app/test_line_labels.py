@@ -6,7 +6,8 @@ view, so every focus or zoom only widens the gaps). The line is the default rig'
 the dashboard as a browser gets it and booted to OP; the tests then show it the texts a
 trainee meets at their longest:
 
-- every cable pulled ("cable i pulled", seed 003: the slaves behind it "not seen", "no link");
+- every cable pulled ("cable i pulled", seed 003: the slaves behind it "not seen", "no link"),
+  also at the slaves' own plugs ("pulled at trscat OUT", docs/ethercat-master.md);
 - every DC state of seed 003 (devices/master/dc.py DcState: WAITING_START_TIME and
   NOT_SYNCHRONIZED are the longest) on the master's screen;
 - the CPX-E modules with the longest names side by side (seed 002 §2.3.2: 4AI-U-I, 4AO-U-I;
@@ -92,6 +93,19 @@ def cables_pulled(*pulled: int) -> Callable[[Snapshot], None]:
     return apply
 
 
+def plugs_out(ends: str, master_too: bool = False) -> Callable[[Snapshot], None]:
+    """Every cable out at a slave's own plug (``ends``: "in", "out" or "both"; cable 0 has no
+    OUT end of a slave), optionally pulled by the master too: the cable labels at their
+    longest ("cable 2 / pulled, also / at trscat OUT and cpx IN")."""
+    def apply(snap: Snapshot) -> None:
+        cables_pulled(0, 1, 2, 3)(snap)
+        for cable in devices(snap)["master"]["cables"]:
+            at = [f"{cable['from']} OUT"] if ends != "in" and cable["index"] else []
+            at += [f"{cable['to']} IN"] if ends != "out" or not cable["index"] else []
+            cable.update(master_pulled=master_too, pulled_at=at)
+    return apply
+
+
 def al_codes_and_power(snap: Snapshot) -> None:
     """Headers at their longest: a state with its AL status code (seed 000 §7.7), and a slave
     the master sees without power."""
@@ -153,6 +167,8 @@ STATES: dict[str, Callable[[Snapshot], None]] = {
     "running": lambda snap: None,
     "every_cable_pulled": cables_pulled(0, 1, 2, 3),
     **{f"cable_{i}_pulled": cables_pulled(i) for i in range(4)},
+    **{f"every_cable_pulled_at_{e}": plugs_out(e) for e in ("in", "out", "both")},
+    "every_cable_pulled_everywhere": plugs_out("both", master_too=True),
     "al_codes_and_power": al_codes_and_power,
     "blinking": blinking,
     "faults": expansion_and_module_faults,

@@ -111,6 +111,28 @@ def test_line_cable_pulled_and_replugged(line: LiveDashboard, page: Any) -> None
     assert [s["state"] for s in slaves(line)] == ["OP"] * 4
 
 
+def test_line_cable_pulled_at_a_slave_s_own_plug(line: LiveDashboard, page: Any) -> None:
+    """docs/ethercat-master.md: the TRS-CAT's own OUT plug out is cable 2 out at that end
+    (the master's cable stays in): red, hanging at the TRS-CAT's port, and the Line tab
+    names the end. Before, the cable stayed green while the master lost the CPX-E-EC."""
+    line.command("trscat", "link", {"connected": False, "port": "out"})
+    line.advance(1.0)
+    view = line.dashboard.line
+    assert view is not None
+    cable = view.scene.cables[2]
+    assert cable.plugged is False and cable.master_plugged is True
+    assert slave(line, "cpx")["link"] is False
+    open_dashboard(page, line)
+    open_tabs(page, "Line")
+    status = page.locator("#fr-line-master-status")
+    wait_until(lambda: "pulled at trscat OUT" in status.inner_text(),
+               what="the Line tab to name the end that is out")
+    line.command("trscat", "link", {"connected": True, "port": "out"})
+    line.advance(6.0)
+    assert cable.plugged is True and [s["state"] for s in slaves(line)] == ["OP"] * 4
+    wait_until(lambda: "Cables" not in status.inner_text(), what="the Cables row to go")
+
+
 def test_line_trscat_expansion_mismatch(line: LiveDashboard, page: Any) -> None:
     """§9.3.2: expansion 2 swapped for another type with the node off; at power-up the
     master's 0xF030 no longer matches what the node finds, PREOP -> SAFEOP is refused."""

@@ -17,7 +17,7 @@ import pytest
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.ui.line.bodies import blink_words, header_text, state_tone
-from app.ui.line.cables import label_point, pulled_route, route
+from app.ui.line.cables import Cable, cable_label, label_point, pulled_route, pulled_text, route
 from app.ui.line.controls import cable_options, slave_options, targets
 from app.ui.line.io_bodies import (
     channel_levels,
@@ -33,6 +33,7 @@ from app.ui.line.master_panel import (
     live_table,
     log_table,
     slaves_table,
+    status_table,
 )
 from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
@@ -159,6 +160,85 @@ def test_cable_routes() -> None:
     assert label_point(wrap) == ((9.95 - 3.35) / 2, -3.5)
 
 
+
+@pytest.mark.parametrize(("cable", "text"), [
+    ({"plugged": True, "master_pulled": False, "pulled_at": []}, ""),
+    ({"plugged": False}, "pulled"),  # a snapshot without the ends: the master's own pull
+    ({"plugged": False, "master_pulled": True, "pulled_at": []}, "pulled"),
+    ({"plugged": False, "master_pulled": False, "pulled_at": ["trscat OUT"]},
+     "pulled at trscat OUT"),
+    ({"plugged": False, "master_pulled": False, "pulled_at": ["trscat OUT", "cpx IN"]},
+     "pulled at trscat OUT and cpx IN"),
+    ({"plugged": False, "master_pulled": True, "pulled_at": ["cpx IN"]},
+     "pulled, also at cpx IN"),
+])
+def test_pulled_text_says_which_end_is_out(cable: dict[str, Any], text: str) -> None:
+    """docs/ethercat-master.md: a cable is plugged only when both its ends are; the snapshot
+    names the ends a slave's own plug has out (``pulled_at``) apart from the master's pull."""
+    assert pulled_text(cable) == text
+
+
+def test_a_cable_s_label_says_pulled_whichever_end_is_out() -> None:
+    short, long = [(0.0, 0.0), (1.0, 0.0)], [(0.0, 0.0), (4.0, 0.0)]
+    assert cable_label(2, True, short) == "cable 2"
+    assert cable_label(2, False, short) == "cable 2\npulled"
+    assert cable_label(2, False, long) == "cable 2 pulled"
+
+
+class _Node:
+    def __init__(self, text: str = "") -> None:
+        self.text, self.clicked = text, None
+
+    def on_click(self, handler: Any) -> None:
+        self.clicked = handler
+
+    def remove(self) -> None:
+        pass
+
+
+class _Scene:
+    def __init__(self) -> None:
+        self.boxes: list[_Node] = []
+        self.labels: list[_Node] = []
+
+    def add_box(self, name: str, **_kw: Any) -> _Node:
+        self.boxes.append(_Node())
+        return self.boxes[-1]
+
+    def add_label(self, name: str, text: str, **_kw: Any) -> _Node:
+        self.labels.append(_Node(text))
+        return self.labels[-1]
+
+
+@pytest.mark.parametrize(("cable", "colour_plugged", "verb_plugged"), [
+    ({"plugged": True, "master_pulled": False, "pulled_at": []}, True, True),
+    ({"plugged": False, "master_pulled": True, "pulled_at": []}, False, False),
+    # Out at the CPX-E-EC's own IN: drawn pulled, the click still pulls the master's cable
+    ({"plugged": False, "master_pulled": False, "pulled_at": ["cpx IN"]}, False, True),
+    ({"plugged": False, "master_pulled": True, "pulled_at": ["cpx IN"]}, False, False),
+])
+def test_a_cable_is_drawn_as_the_snapshot_says_and_clicks_the_master_s_cable(
+        cable: dict[str, Any], colour_plugged: bool, verb_plugged: bool) -> None:
+    """The 3D cable shows the cable's real state (both ends); a click moves the master's
+    ``cables`` as before (pull when the master has it in, plug when it has it out)."""
+    scene, clicks = _Scene(), []
+    server: Any = type("Server", (), {"scene": scene})()
+    drawn = Cable(server, 2, [(0.0, 0.0), (1.0, 0.0)],
+                  lambda client, index, plugged: clicks.append((index, plugged)))
+    drawn.show(cable)
+    assert drawn.plugged is colour_plugged
+    assert drawn.label_text == cable_label(2, colour_plugged, drawn.points)
+    assert scene.boxes[0].clicked is not None
+    scene.boxes[0].clicked(type("Event", (), {"client": None})())
+    assert clicks == [(2, verb_plugged)]
+
+
+def test_a_cable_pulled_at_its_out_end_hangs_there() -> None:
+    points = [(0.0, 0.0), (2.0, 0.0)]
+    at_out = pulled_route(points, at_start=True)
+    assert at_out[-1] == (2.0, 0.0)  # the IN end stays in its port
+    assert at_out[1] == (1.1, 0.0) and at_out[0][1] < 0  # the OUT end stops short and hangs
+
 MASTER: dict[str, Any] = {
     "target": "OP", "slaves": [
         {**SLAVE, "position": 0, "device": "fastcat", "station_address": 1001},
@@ -195,6 +275,18 @@ def test_master_panel_table_and_controls() -> None:
                      {"t": 1.5, "text": "second <b>"}])
     assert log.index("second &lt;b&gt;") < log.index("first")  # newest first, escaped
     assert "1.500 s" in log
+
+
+def test_the_master_panel_says_which_cable_is_out_and_at_which_end() -> None:
+    """The Line tab: a cable out at a slave's own plug is named with that end, as the
+    snapshot's ``pulled_at`` says; no row while every cable is in."""
+    assert "Cables" not in status_table({"cables": MASTER["cables"][:2]})
+    own = {"cables": [*MASTER["cables"][:2],
+                      {"index": 2, "from": "trscat", "to": "cpx", "plugged": False,
+                       "master_pulled": False, "pulled_at": ["trscat OUT"]}]}
+    html = status_table(own)
+    assert "<th>Cables</th>" in html and "2 trscat -&gt; cpx pulled at trscat OUT" in html
+    assert "2 trscat -&gt; cpx pulled<" in status_table(MASTER)  # the master's own pull
 
 
 def test_esc_error_counters_per_slave_and_port_and_the_damaged_cable() -> None:

@@ -1,21 +1,27 @@
 """The cables of the line: one polyline of thin boxes per cable, clickable to pull / re-plug.
 
-Cable ``i`` feeds line position ``i`` (master snapshot ``cables``). Plugged: a dark green
-cable from the upstream port (right side, low) to the downstream port (left side, low),
-wrapping under the row when the next device starts a new row. Pulled: red, and its end hangs
-loose in front of the port it came out of, with "pulled" next to it.
+Cable ``i`` feeds line position ``i`` (master snapshot ``cables``). Plugged (the snapshot's
+``plugged``: the master's cable and both ends, docs/ethercat-master.md): a dark green cable
+from the upstream port (right side, low) to the downstream port (left side, low), wrapping
+under the row when the next device starts a new row. Pulled: red, and its end hangs loose in
+front of the port it came out of (the downstream IN port's, or the upstream OUT port's when
+only a slave's own OUT plug is out, ``pulled_at``), with "pulled" next to it.
 
 The label sits over the middle of the cable's longest stretch. Between two bodies of a row
 that stretch is narrower than "cable 2 pulled" at the default camera (labels keep their size
 on screen), so there "pulled" goes on a second line; the long stretch between the rows keeps
-one line, under the rail's legend.
+one line, under the rail's legend. The end that is out is not written there (it does not fit
+between two bodies); the Line tab's status says it (:func:`pulled_text`).
+
+A click moves the master's own cable (``master_pulled``), as the Line controls' Pull / Plug
+do: it pulls a cable the master has in, also one drawn pulled because a slave's plug is out.
 """
 
 from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import viser
@@ -30,7 +36,7 @@ THICK = 0.14
 CABLE_Y = FRONT_Y - 0.15
 ONE_LINE_STRETCH = 2.5  # a stretch at least this long takes "cable i pulled" on one line
 LABEL_LIFT = 0.12  # the label's bottom over the cable
-# Called with (client, cable index, plugged now) on a click.
+# Called with (client, cable index, the master's cable plugged now) on a click.
 OnCable = Callable[[viser.ClientHandle | None, int, bool], None]
 
 
@@ -44,11 +50,34 @@ def route(start: Point, end: Point, gap_z: float) -> list[Point]:
             end]
 
 
-def pulled_route(points: Sequence[Point]) -> list[Point]:
-    """The cable with its plug out: the last stretch stops short and the end hangs down."""
+def pulled_route(points: Sequence[Point], at_start: bool = False) -> list[Point]:
+    """The cable with its plug out: the last stretch stops short and the end hangs down;
+    ``at_start``: the first stretch, out of the upstream (OUT) port."""
+    if at_start:
+        return pulled_route(points[::-1])[::-1]
     *head, (xa, za), (xb, zb) = points
     cut = (xa + 0.45 * (xb - xa), za + 0.45 * (zb - za))
     return [*head, (xa, za), cut, (cut[0] + 0.2, cut[1] - 0.7)]
+
+
+def pulled_text(cable: Mapping[str, Any]) -> str:
+    """"" for a plugged cable, else what the snapshot says is out: "pulled" (the master's
+    ``pull_cable``), "pulled at trscat OUT" (a slave's own plug), "pulled, also at cpx IN"
+    (both)."""
+    if cable.get("plugged", True):
+        return ""
+    ends = [str(end) for end in cable.get("pulled_at") or []]
+    if not ends:
+        return "pulled"
+    at = "at " + " and ".join(ends)
+    return f"pulled, also {at}" if cable.get("master_pulled") else f"pulled {at}"
+
+
+def hangs_at_start(cable: Mapping[str, Any]) -> bool:
+    """Only the upstream device's own OUT plug is out: that end hangs."""
+    ends = list(cable.get("pulled_at") or [])
+    return not cable.get("master_pulled") and bool(ends) and all(
+        str(end).endswith(" OUT") for end in ends)
 
 
 def longest_stretch(points: Sequence[Point]) -> tuple[Point, Point]:
@@ -62,7 +91,10 @@ def label_point(points: Sequence[Point]) -> Point:
 
 
 def cable_label(index: int, plugged: bool, points: Sequence[Point]) -> str:
-    """"cable 2", or "cable 2 pulled" (on two lines where the stretch is short)."""
+    """"cable 2", or "cable 2 pulled" (on two lines where the stretch is short). Which end is
+    out is drawn (the end that hangs), not written: "pulled at trscat OUT" does not fit
+    between two bodies at the default camera (tests/app/test_line_labels.py); the Line tab's
+    status says it."""
     if plugged:
         return f"cable {index}"
     sep = " " if math.dist(*longest_stretch(points)) >= ONE_LINE_STRETCH else "\n"
@@ -77,18 +109,25 @@ class Cable:
         self.points = points
         self._on_click = on_click
         self._nodes: list[Any] = []
-        self.plugged: bool | None = None
+        self.plugged: bool | None = None  # as drawn: the cable and both its ends
+        self.master_plugged = True  # what a click moves
         self.label_text = ""
+        self._drawn: tuple[bool, bool] | None = None
 
-    def show(self, plugged: bool) -> None:
-        """Redraw when the plug state changes (a handful of boxes)."""
-        if plugged == self.plugged:
+    def show(self, cable: Mapping[str, Any]) -> None:
+        """Draw the snapshot's ``cable``; redraw when what it shows changes (a handful of
+        boxes)."""
+        plugged = bool(cable.get("plugged", True))
+        # An older snapshot without the key: its "plugged" was the master's cable.
+        self.master_plugged = not cable.get("master_pulled", not plugged)
+        at_start = hangs_at_start(cable)
+        if (plugged, at_start) == self._drawn:
             return
-        self.plugged = plugged
+        self._drawn, self.plugged = (plugged, at_start), plugged
         for node in self._nodes:
             node.remove()
         self._nodes = []
-        points = self.points if plugged else pulled_route(self.points)
+        points = self.points if plugged else pulled_route(self.points, at_start)
         colour = PLUGGED if plugged else PULLED
         root = f"/line/cable{self.index}"
         for n, (a, b) in enumerate(itertools.pairwise(points)):
@@ -109,4 +148,4 @@ class Cable:
             anchor="bottom-center", font_screen_scale=0.58))
 
     def _clicked(self, event: Any) -> None:
-        self._on_click(event.client, self.index, bool(self.plugged))
+        self._on_click(event.client, self.index, self.master_plugged)

@@ -1,5 +1,6 @@
-"""The master panel (left panel, tab "Line"): phase, DC, frame statistics, one row per slave
-(position, station address, name, state, AL status with code and text, DC, link, counters),
+"""The master panel (left panel, tab "Line"): phase, the cables that are out and at which end,
+DC, frame statistics, one row per slave (position, station address, name, state, AL status
+with code and text, DC, link, counters),
 each slave's ESC error counters per port (docs/ethercat-master.md "Damaged cable") and the
 master's log in the style picked in the "Log style" dropdown (seed 003 and the FastCAT
 seed §7.2-§7.4 styles; the master renders the lines, ``set_log_style``).
@@ -15,6 +16,7 @@ from typing import Any
 import viser
 
 from app.ui.commands import CommandSender
+from app.ui.line.cables import pulled_text
 from app.ui.panels.state import al_status_text
 from app.ui.panels.widgets import Synced
 from app.ui.repeats import Run, collapse_repeats, repeat_suffix
@@ -144,13 +146,26 @@ def title(master: Mapping[str, Any], t_us: int) -> str:
             f' · <span class="fr-muted">t = {t_us / US_PER_S:.1f} s</span></p>')
 
 
+def pulled_cables(master: Mapping[str, Any]) -> str:
+    """Each cable that is out, as the snapshot has it (plugged only when both ends are, and
+    which end a slave's own plug has out): "2 trscat -> cpx pulled at trscat OUT"; "" when
+    every cable is in."""
+    return "<br>".join(
+        esc(f"{c.get('index', i)} {c.get('from', '?')} -> {c.get('to', '?')} {pulled_text(c)}")
+        for i, c in enumerate(master.get("cables") or []) if not c.get("plugged", True))
+
+
 def status_table(master: Mapping[str, Any]) -> str:
-    """Phase, target and link: what changes only when the line does."""
+    """Phase, target, link and the cables that are out: what changes only when the line
+    does."""
     phase = str(master.get("phase", "-")).replace("_", " ")
     mode = " (external master)" if master.get("external") else ""
     rows = [("Phase", badge(phase, "ok" if phase == "running" else "warn") + esc(mode)),
             ("Target", esc(master.get("target", "-"))),
             ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad"))]
+    pulled = pulled_cables(master)
+    if pulled:  # a row only then: the healthy line's panel stays as it was
+        rows.append(("Cables", f'<span class="fr-line-bad">{pulled}</span>'))
     return kv_table(rows, "fr-line-master-status")
 
 

@@ -135,10 +135,9 @@ class LineScene:
             body = self.bodies[device]
             words = body.update(as_drawn(devices, device), t_us)
             body.update_frame(entries.get(device, {}), position, words, master.get("target"))
-        plugged = {int(c.get("index", i)): bool(c.get("plugged", True))
-                   for i, c in enumerate(master.get("cables") or [])}
+        cables = {int(c.get("index", i)): c for i, c in enumerate(master.get("cables") or [])}
         for cable in self.cables:
-            cable.show(plugged.get(cable.index, True))
+            cable.show(cables.get(cable.index, {}))
 
     # ---- tests ----------------------------------------------------------------------------
     def led_colours(self, device: str) -> dict[str, tuple[int, int, int]]:

@@ -261,7 +261,7 @@ def test_snapshot_has_the_contract_keys() -> None:
                          "log_styles", "dc", "cables", "slaves", "stats", "log"}
     assert set(view["dc"]) == {"state", "fault", "deviation_ns", "window_ns"}
     assert view["cables"][0] == {"index": 0, "from": "master", "to": "fastcat", "plugged": True,
-                                 "damaged": None}
+                                 "master_pulled": False, "pulled_at": [], "damaged": None}
     assert view["cables"][3]["from"] == "cpx"
     assert set(view["slaves"][0]) >= {"position", "device", "name", "station_address",
                                       "present", "powered", "link", "state", "requested",

@@ -133,3 +133,68 @@ def test_the_drive_s_and_the_fastcat_s_own_link_are_their_in_cable(device, lost,
     assert _present(rig) == [True] * 4
     if port_down is not None:
         assert getattr(rig.devices[port_down[0]], port_down[1]) is True
+
+
+def _cables(rig) -> list[dict]:
+    return rig.snapshot()["devices"]["master"]["cables"]
+
+
+@pytest.mark.parametrize(("how", "pulled_at", "master_pulled"), [
+    ("pull_cable", [], True),
+    ("own_out", ["trscat OUT"], False),
+    ("own_in", ["cpx IN"], False),
+])
+def test_the_snapshot_s_cable_is_plugged_only_when_both_its_ends_are(how, pulled_at,
+                                                                     master_pulled) -> None:
+    """The line view: a cable pulled at a slave's own port reads pulled, at that end, as the
+    slaves' ``link`` reads it lost; the master's own pull is told apart (``master_pulled``),
+    which is what its pull / plug controls move."""
+    rig = _rig()
+    _cable_2(rig, how, connected=False)
+    rig.advance(300)
+    cables = _cables(rig)
+    assert [c["plugged"] for c in cables] == [True, True, False, True]
+    assert [c["pulled_at"] for c in cables] == [[], [], pulled_at, []]
+    assert [c["master_pulled"] for c in cables] == [False, False, master_pulled, False]
+    links = [s["link"] for s in rig.snapshot()["devices"]["master"]["slaves"]]
+    assert links == [all(c["plugged"] for c in cables[: p + 1]) for p in range(4)]
+    _cable_2(rig, how, connected=True)
+    rig.advance(10)
+    assert all(c["plugged"] and not c["pulled_at"] and not c["master_pulled"]
+               for c in _cables(rig))
+
+
+def test_a_cable_pulled_at_both_ends_and_by_the_master_names_every_one() -> None:
+    rig = _rig()
+    for how in ("pull_cable", "own_out", "own_in"):
+        _cable_2(rig, how, connected=False)
+    cable = _cables(rig)[2]
+    assert (cable["plugged"], cable["master_pulled"]) == (False, True)
+    assert cable["pulled_at"] == ["trscat OUT", "cpx IN"]
+    _cable_2(rig, "pull_cable", connected=True)  # the master's cable back: still out at both
+    assert (_cables(rig)[2]["plugged"], _cables(rig)[2]["master_pulled"]) == (False, False)
+
+
+@pytest.mark.parametrize(("device", "cable", "end"), [
+    ("fastcat", 0, "fastcat IN"), ("drive_ec-ecat", 3, "drive_ec-ecat IN")])
+def test_the_fastcat_s_and_the_drive_s_own_link_is_their_in_end(device, cable, end) -> None:
+    rig = _rig()
+    rig.apply(device, "link", {"connected": False})
+    cables = _cables(rig)
+    assert [c["plugged"] for c in cables] == [c["index"] != cable for c in cables]
+    assert cables[cable]["pulled_at"] == [end]
+
+
+def test_the_cable_reads_pulled_at_once_its_other_end_s_port_a_step_later() -> None:
+    """docs/ethercat-master.md: the slave's own port goes down with its action, the other end's
+    port at the master's next step (1 ms). The cable is the plug as it is: out at once, as
+    the slaves' ``link`` (the master's reach, read afresh) has it."""
+    rig = _rig()
+    trs = rig.devices["trscat"]
+    rig.apply("cpx", "cable", {"connected": False, "port": "in"})
+    snap = rig.snapshot()["devices"]["master"]
+    assert snap["cables"][2]["plugged"] is False and snap["cables"][2]["pulled_at"] == ["cpx IN"]
+    assert [s["link"] for s in snap["slaves"]] == [True, True, False, False]
+    assert trs.link_out is True  # the TRS-CAT's OUT port follows at the master's next step
+    rig.advance(1)
+    assert trs.link_out is False
