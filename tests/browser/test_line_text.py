@@ -237,7 +237,9 @@ def test_a_cable_pulled_at_its_out_end_hangs_there() -> None:
     points = [(0.0, 0.0), (2.0, 0.0)]
     at_out = pulled_route(points, at_start=True)
     assert at_out[-1] == (2.0, 0.0)  # the IN end stays in its port
-    assert at_out[1] == (1.1, 0.0) and at_out[0][1] < 0  # the OUT end stops short and hangs
+    assert at_out[1] == (1.1, 0.0)  # the OUT end stops short and hangs, toward the OUT port
+    assert at_out[0][1] < 0 and at_out[0][0] < 1.1
+
 
 MASTER: dict[str, Any] = {
     "target": "OP", "slaves": [

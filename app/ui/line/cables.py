@@ -57,7 +57,8 @@ def pulled_route(points: Sequence[Point], at_start: bool = False) -> list[Point]
         return pulled_route(points[::-1])[::-1]
     *head, (xa, za), (xb, zb) = points
     cut = (xa + 0.45 * (xb - xa), za + 0.45 * (zb - za))
-    return [*head, (xa, za), cut, (cut[0] + 0.2, cut[1] - 0.7)]
+    ahead = -0.2 if xb < xa else 0.2  # the loose end falls on, away from where it came from
+    return [*head, (xa, za), cut, (cut[0] + ahead, cut[1] - 0.7)]
 
 
 def pulled_text(cable: Mapping[str, Any]) -> str:
