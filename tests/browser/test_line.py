@@ -113,8 +113,9 @@ def test_line_cable_pulled_and_replugged(line: LiveDashboard, page: Any) -> None
 
 def test_line_cable_pulled_at_a_slave_s_own_plug(line: LiveDashboard, page: Any) -> None:
     """docs/ethercat-master.md: the TRS-CAT's own OUT plug out is cable 2 out at that end
-    (the master's cable stays in): red, hanging at the TRS-CAT's port, and the Line tab
-    names the end. Before, the cable stayed green while the master lost the CPX-E-EC."""
+    (the master's cable stays in): red, hanging at the TRS-CAT's port, and the Line tabs
+    (the master panel, the controls' cable list) name the end. Before, the cable stayed
+    green while the master lost the CPX-E-EC."""
     line.command("trscat", "link", {"connected": False, "port": "out"})
     line.advance(1.0)
     view = line.dashboard.line
@@ -122,6 +123,8 @@ def test_line_cable_pulled_at_a_slave_s_own_plug(line: LiveDashboard, page: Any)
     cable = view.scene.cables[2]
     assert cable.plugged is False and cable.master_plugged is True
     assert slave(line, "cpx")["link"] is False
+    # The Line controls' Cable list (Pull / Plug move the master's cable) says so too.
+    assert "2 trscat -> cpx (pulled at trscat OUT)" in view.controls.cable.options
     open_dashboard(page, line)
     open_tabs(page, "Line")
     status = page.locator("#fr-line-master-status")

@@ -291,6 +291,20 @@ def test_the_master_panel_says_which_cable_is_out_and_at_which_end() -> None:
     assert "2 trscat -&gt; cpx pulled<" in status_table(MASTER)  # the master's own pull
 
 
+def test_the_cable_list_says_where_a_cable_is_out() -> None:
+    """The Line controls' Cable list (Pull / Plug move the master's cable): a cable out at a
+    slave's own plug reads pulled there, from the master's snapshot of a real line."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.advance(10)
+    rig.apply("trscat", "link", {"connected": False, "port": "out"})
+    rig.apply("master", "pull_cable", {"cable": 3})
+    rig.apply("drive_ec-ecat", "link", {"connected": False})
+    master = rig.snapshot()["devices"]["master"]
+    assert cable_options(master, []) == [
+        "0 master -> fastcat", "1 fastcat -> trscat", "2 trscat -> cpx (pulled at trscat OUT)",
+        "3 cpx -> drive_ec-ecat (pulled, also at drive_ec-ecat IN)"]
+
+
 def test_esc_error_counters_per_slave_and_port_and_the_damaged_cable() -> None:
     """docs/ethercat-master.md "Damaged cable": cable 2 spoils frames; the CPX-E-EC behind it
     counts them invalid on port 0 (IN), the TRS-CAT before it forwarded on port 1 (OUT)."""

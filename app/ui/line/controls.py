@@ -23,6 +23,7 @@ import viser
 
 from app.classroom.roles import makes_faults
 from app.ui.commands import CommandSender
+from app.ui.line.cables import pulled_text
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.widgets import from_user, set_options
 from devices.device import Action
@@ -34,12 +35,19 @@ HIDDEN = {"read_object", "write_object"}
 
 
 def cable_options(master: Mapping[str, Any], order: Sequence[str]) -> list[str]:
+    """One entry per cable, marked as the snapshot has it: "(pulled)" by the master's
+    ``pull_cable``, "(pulled at trscat OUT)" when a slave's own plug has it out (Pull / Plug
+    move the master's cable only: Plug does not bring that one back)."""
     cables = master.get("cables") or [
         {"index": i, "from": order[i - 1] if i else "master", "to": d, "plugged": True}
         for i, d in enumerate(order)]
     return [f"{c.get('index', i)} {c.get('from', '?')} -> {c.get('to', '?')}"
-            f"{'' if c.get('plugged', True) else ' (pulled)'}{_damage(c.get('damaged'))}"
-            for i, c in enumerate(cables)]
+            f"{_pulled(c)}{_damage(c.get('damaged'))}" for i, c in enumerate(cables)]
+
+
+def _pulled(cable: Mapping[str, Any]) -> str:
+    text = pulled_text(cable)
+    return f" ({text})" if text else ""
 
 
 def _damage(percent: Any) -> str:
