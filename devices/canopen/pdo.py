@@ -94,6 +94,7 @@ class Pdo:
     last_data: bytes | None = None
     syncs: int = 0
     buffered: bytes | None = None  # synchronous RPDO data waiting for the next Sync
+    sampled: bytes | None = None  # synchronous TPDO data recorded at the last Sync (for RTR)
     # (dictionary, count, entries, [(entry, stored values, key)]) for pack_planned; a cache
     _plan: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
     # (the configuration it was made for, describe()'s dict); a cache
@@ -149,6 +150,7 @@ class Pdo:
         self.last_data = None
         self.syncs = 0
         self.buffered = None
+        self.sampled = None
 
     # ---- SDO writes of the communication record -----------------------------------------
     def set_cob_id(self, value: int) -> None:
@@ -162,6 +164,7 @@ class Pdo:
             raise SdoAbort(AbortCode.VALUE_RANGE, self.comm_index, 2)
         self.trans_type = value
         self.syncs = 0
+        self.sampled = None  # a record from an earlier synchronous spell is not this one's
 
     # ---- SDO writes of the mapping -------------------------------------------------------
     def set_count(self, value: int, lookup: Lookup) -> None:

@@ -4,9 +4,10 @@ A mixin of :class:`~devices.canopen.node.CanOpenNode`. SYNC (Pre-operational and
 the synchronous RPDOs received since the previous SYNC take effect ("attuati al Sync
 immediatamente successivo"), the drive takes the Sync (the interpolator takes its set-point),
 then the synchronous TPDOs go out with the values of that instant: type 0 when they changed,
-type n every n SYNCs. Asynchronous RPDOs take effect when they arrive; asynchronous TPDOs go on
-a change or on their event timer, never within the inhibit time of the previous one. A TPDO
-with no object mapped (0x1A0x:0 = 0) is never sent: a PDO carries one to eight bytes.
+type n every n SYNCs; every SYNC records them, sent or not, and a remote request gets that
+record. Asynchronous RPDOs take effect when they arrive; asynchronous TPDOs go on a change or
+on their event timer, never within the inhibit time of the previous one. A TPDO with no
+object mapped (0x1A0x:0 = 0) is never sent: a PDO carries one to eight bytes.
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ class ProcessData:
         for pdo in self.tpdos:
             if not (pdo.valid and pdo.synchronous):
                 continue
-            data = self._pack(pdo)
+            # recorded at every SYNC, sent or not: a remote request gets this record
+            data = pdo.sampled = self._pack(pdo)
             if data is None:
                 continue
             if pdo.trans_type == 0:
@@ -74,13 +76,17 @@ class ProcessData:
                 logger.info("%s: %s: %s", self.drive.device_id, pdo.name, exc)
 
     def _pdo_request(self: CanOpenNode, can_id: int, t: int) -> None:
-        """A remote request for a TPDO (COB-ID bit 30 clear): the current data at once; a
-        TPDO with nothing mapped leaves it unanswered, as a switched-off one does."""
+        """A remote request for a TPDO (COB-ID bit 30 clear), answered at once: a synchronous
+        one with the data recorded at the last SYNC ("con i valori rilevati" at the SYNC,
+        ch. 4 l. 2218-2222), the data of this instant before any SYNC and for an asynchronous
+        one; a TPDO with nothing mapped leaves it unanswered, as a switched-off one does."""
         if self.state is not NmtState.OPERATIONAL:
             return
         for pdo in self.tpdos:
             if pdo.valid and pdo.can_id == can_id and not pdo.cob_id & COB_NO_RTR:
-                data = self._pack(pdo)
+                data = pdo.sampled if pdo.synchronous else None
+                if data is None:
+                    data = self._pack(pdo)
                 if data is not None:
                     self._send_pdo(pdo, data, t)
 

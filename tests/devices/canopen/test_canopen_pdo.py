@@ -104,6 +104,39 @@ def test_synchronous_tpdo_carries_the_values_of_the_sync_that_sends_it() -> None
     assert [hexs(f.data) for f in _tpdos(bench)] == ["31 86"]  # the state at this SYNC
 
 
+@pytest.mark.parametrize("trans_type", [0, 1, 4])
+def test_remote_request_for_a_synchronous_tpdo_gets_the_values_of_the_last_sync(
+        trans_type: int) -> None:
+    """Seed 004 ch. 4 (l. 2218-2222): the device records its inputs at every SYNC, sent or
+    not, "in quanto può accadere che le variabili di processo sincrono registrati in un PDO
+    vengono richiesti da RTR. In questo caso il dispositivo CANopen deve trasmettere il PDO
+    corrispondente con i valori rilevati" at that SYNC: a change after the SYNC is not in the
+    answer. Before the first SYNC nothing is recorded: the values of that instant."""
+    bench = make_bench()
+    bench.ok(0x1800, 2, trans_type, 1)
+    bench.nmt(NmtCommand.START)
+    bench.run(5)
+    bench.send(0x181, rtr=True, dlc=2)
+    bench.run(2)
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["40 86"]  # no SYNC yet: this instant
+    bench.send(0x080)
+    bench.run(5)
+    bench.take()
+    bench.ok(0x6040, 0, 0x0006, 2)  # shutdown after the SYNC: ready to switch on
+    bench.run(5)
+    bench.take()
+    bench.send(0x181, rtr=True, dlc=2)
+    bench.run(2)
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["40 86"]  # recorded at the SYNC
+    for _ in range(trans_type or 1):  # type n: SYNCs that do not send it still record
+        bench.send(0x080)
+        bench.run(5)
+    bench.take()
+    bench.send(0x181, rtr=True, dlc=2)
+    bench.run(2)
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["31 86"]
+
+
 def test_synchronous_acyclic_only_after_an_event() -> None:
     """Type 0: "viene inviato al Sync successivo il verificarsi di uno specifico evento"."""
     bench = make_bench()
@@ -352,7 +385,8 @@ def test_seed_interpolator_example_sync_and_rpdo_loop(node_id: int) -> None:
 
 
 def test_remote_request_for_a_tpdo() -> None:
-    """A remote frame on TPDO1's COB-ID (bit 30 clear) gets the current data in Operational."""
+    """A remote frame on TPDO1's COB-ID (bit 30 clear) gets the current data in Operational
+    (type 255, asynchronous: nothing recorded at a SYNC)."""
     bench = _started()
     bench.send(0x181, rtr=True, dlc=2)
     bench.run(2)
