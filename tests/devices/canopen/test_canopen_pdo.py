@@ -137,6 +137,22 @@ def test_remote_request_for_a_synchronous_tpdo_gets_the_values_of_the_last_sync(
     assert [hexs(f.data) for f in _tpdos(bench)] == ["31 86"]
 
 
+@pytest.mark.parametrize(("index", "trans_type", "result"), [
+    (0x1800, 0, OK), (0x1800, 240, OK), (0x1800, 254, OK), (0x1800, 255, OK),
+    (0x1800, 241, "0x06090030"), (0x1800, 251, "0x06090030"),
+    (0x1800, 252, "0x06090030"), (0x1800, 253, "0x06090030"),
+    (0x1803, 252, "0x06090030"), (0x1400, 252, "0x06090030"), (0x1400, 253, "0x06090030"),
+])
+def test_transmission_types_the_drive_has(index: int, trans_type: int, result: str) -> None:
+    """The drive's types (ch. 4 "Servizio PDO": 0, 1..240, 254/255; "Modi PDO: sincrono
+    (ciclico e aciclico), asincrono"): the RTR-only 252/253 of the generic table and the
+    reserved 241..251 are refused with DS 301's "value range of parameter exceeded", and the
+    type stays."""
+    bench = make_bench()
+    assert _abort(bench.write(index, 2, trans_type, 1)) == result
+    assert bench.read(index, 2) == (trans_type if result == OK else 255)
+
+
 def test_synchronous_acyclic_only_after_an_event() -> None:
     """Type 0: "viene inviato al Sync successivo il verificarsi di uno specifico evento"."""
     bench = make_bench()
