@@ -44,7 +44,7 @@ class StateChanged(Event):
 
     from_state: str = ""
     to_state: str = ""
-    machine: str = ""  # empty for the device's main state machine (the EtherCAT ESM)
+    machine: str = ""  # empty for the main machine: the ESM, a drive's CiA 402 (architecture.md)
     kind: ClassVar[str] = "state"
 
     def fields(self) -> dict[str, Any]:
