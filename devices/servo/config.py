@@ -6,9 +6,18 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from devices.servo.errors import AccessError
-from devices.servo.parameters import C9_BY_FIELDBUS, PARAMETER_BY_NAME, check_node_number
+from devices.servo.parameters import (
+    C9_BY_FIELDBUS,
+    FIELDBUS_BY_C9,
+    PARAMETER_BY_NAME,
+    check_node_number,
+    node_range,
+)
 from devices.servo.plant import AxisGeometry
 from devices.servo.registers import register_spec
+
+BUS_NAMES = {"modbus": "Modbus", "canopen": "CANopen", "ethercat": "EtherCAT",
+             "profinet": "PROFINET"}
 
 
 @dataclass(frozen=True)
@@ -37,11 +46,21 @@ class DriveConfig:
     registers: Mapping[int, int] = field(default_factory=dict)  # register values likewise
 
     def __post_init__(self) -> None:
-        if not 1 <= self.node_id <= 99:
-            raise ValueError(f"node_id {self.node_id} is outside 1..99 (parameter c7)")
         if self.fieldbus not in C9_BY_FIELDBUS:
             raise ValueError(f"fieldbus {self.fieldbus!r} is not one of "
                              f"{', '.join(C9_BY_FIELDBUS)}")
+        # The range of the bus the drive powers up on (c9 in ``parameters`` overrides
+        # fieldbus): "outside 1..99" for a Modbus node 500 sent the technician past the
+        # reserved 91..255 (seed 004 ch. 2).
+        given = {str(k).lower(): v for k, v in self.parameters.items()}
+        c9 = given.get("c9", C9_BY_FIELDBUS[self.fieldbus])
+        low, high = node_range(c9)
+        if not low <= self.node_id <= high:
+            bus = FIELDBUS_BY_C9.get(c9, "")
+            raise ValueError(f"node_id {self.node_id} is outside {low}..{high} on "
+                             f"{BUS_NAMES.get(bus, f'c9 = {c9}')} (parameter c7"
+                             + ("; 91..255 are reserved, seed 004 ch. 2)"
+                                if bus == "modbus" else ")"))
         if not 1 <= self.feed_constant <= 0x3FFFF:
             raise ValueError(f"feed_constant {self.feed_constant} is outside 1..0x3FFFF (R02)")
         if not self.neg_limit < self.pos_limit:
@@ -63,7 +82,6 @@ class DriveConfig:
                 raise ValueError(f"parameters: {exc}") from None
         # c7 / c9 in ``parameters`` override node_id / fieldbus at first power-up
         # (saving.py); a Modbus drive at 91..99 would sit on reserved addresses (ch. 2).
-        given = {str(k).lower(): v for k, v in self.parameters.items()}
         try:
             check_node_number(given.get("c7", self.node_id),
                               given.get("c9", C9_BY_FIELDBUS[self.fieldbus]))

@@ -156,6 +156,13 @@ def parameter_by_name_or_address(key: str | int) -> ParameterSpec:
     return parameter_spec(key)
 
 
+def node_range(c9: int) -> tuple[int, int]:
+    """The node numbers c7 may take on the fieldbus c9 selects: 1..90 on Modbus, else c7's own
+    1..99."""
+    spec = PARAMETER_BY_NAME["c7"]
+    return spec.low, NODE_HIGH_BY_C9.get(c9, spec.high)
+
+
 def check_node_number(c7: int, c9: int) -> None:
     """c7 against the fieldbus c9 selects (the per-parameter range is the widest, 1..99)."""
     high = NODE_HIGH_BY_C9.get(c9)

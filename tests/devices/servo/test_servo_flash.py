@@ -189,6 +189,10 @@ def test_rig_node_number_range_follows_the_fieldbus() -> None:
     for fieldbus in ("canopen", "ethercat", "profinet"):
         assert make_sim(DriveConfig(node_id=99, fieldbus=fieldbus)).drive.node_id == 99
     assert make_sim(DriveConfig(node_id=1, parameters={"c9": 5, "c7": 95})).drive.node_id == 95
+    # c9 = 5 in parameters: the drive powers up on CANopen, where node 95 is fine
+    assert make_sim(DriveConfig(node_id=95, parameters={"c9": 5})).drive.node_id == 95
+    with pytest.raises(ValueError, match=r"outside 1\.\.90 on Modbus"):
+        DriveConfig(node_id=95, fieldbus="canopen", parameters={"c9": 3})
     assert make_sim(DriveConfig(node_id=90)).drive.node_id == 90
 
 
