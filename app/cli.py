@@ -6,7 +6,7 @@ Classroom (issue 6, docs/classroom.md): ``--rig`` again or ``--rigs N`` serves s
 port each from ``--port`` up; a non-loopback ``--host`` asks for an instructor token (printed,
 or ``--instructor-token``); every served session is recorded unless ``--no-record``.
 Bad input (a broken rig or scenario file, a bad flag) prints one line and exits 2, with no
-traceback.
+traceback. ``--run-for SECONDS`` stops serving after that many wall seconds (exit 0).
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from app.cli_parser import Parser
 from app.out_paths import check_out, check_record, prepare_out
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.scenario import (
@@ -38,13 +39,20 @@ if TYPE_CHECKING:
 
 EXIT_BAD_INPUT = 2
 EXIT_SCENARIO_FAILED = 1
+# In every --help (docs/scenarios.md says the same): keep it in step with the codes above.
+EXIT_CODES_HELP = (
+    f"exit codes: 0 ok (serving: stopped by Ctrl-C, SIGTERM or --run-for); "
+    f"{EXIT_SCENARIO_FAILED} a scenario step failed (scenario run); "
+    f"{EXIT_BAD_INPUT} bad input: a bad flag, a wrong rig, scenario or exercise file, an output "
+    "path that cannot take the output, a host or port that cannot be served (one 'fieldrig: "
+    "error:' line, no traceback)")
 
 
 def _serve_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m app",
-                                description="FieldRig: serve the dashboard of a virtual rig. "
-                                            "Subcommands: 'scenario run FILE', 'scenario "
-                                            "list'.")
+    p = Parser(prog="python -m app", epilog=EXIT_CODES_HELP,
+               description="FieldRig: serve the dashboard of a virtual rig. Subcommands: "
+                           "'scenario run FILE', 'scenario list', 'ethercat export-esi' "
+                           "(each with --help).")
     _rig_flags(p)
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only)")
@@ -87,14 +95,14 @@ def _serve_parser() -> argparse.ArgumentParser:
 
 
 def _scenario_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m app scenario",
-                                description="Run a scenario headless, as fast as possible, and "
-                                            "print its events as JSON lines ('run FILE'), or "
-                                            "list the example scenarios ('list').")
+    p = Parser(prog="python -m app scenario", epilog=EXIT_CODES_HELP,
+               description="Run a scenario headless, as fast as possible, and print its "
+                           "events as JSON lines ('run FILE'), or list the example scenarios "
+                           "('list').")
     sub = p.add_subparsers(dest="verb", required=True)
     sub.add_parser("list", help="the example scenarios, one per line: file, name and rig file "
                                 "(tab-separated)")
-    run = sub.add_parser("run", help="run a scenario file")
+    run = sub.add_parser("run", help="run a scenario file", epilog=EXIT_CODES_HELP)
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, help="directory for events.jsonl")
     run.add_argument("--quiet", action="store_true",

@@ -12,13 +12,13 @@ the line.
 
 from __future__ import annotations
 
-import argparse
 import re
 import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
+from app.cli_parser import Parser
 from app.ethercat_wire import sii
 from app.ethercat_wire.description import Pdo, SlaveDescription
 
@@ -199,8 +199,7 @@ def rig_descriptions(rig: Any) -> list[SlaveDescription]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m app ethercat",
-                                     description="EtherCAT wire tools (issue 8).")
+    parser = Parser(prog="python -m app ethercat", description="EtherCAT wire tools (issue 8).")
     sub = parser.add_subparsers(dest="verb", required=True)
     export = sub.add_parser("export-esi", help="write ESI XML files for the rig's line")
     export.add_argument("--rig", default=None, help="rig file (default: the default rig)")

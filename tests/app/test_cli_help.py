@@ -1,0 +1,63 @@
+"""What a pipeline reads of the CLI's help and errors: every subcommand and flag is in the help
+and the README, every error line starts the same, and the help lists the exit codes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from app.cli import EXIT_BAD_INPUT, EXIT_SCENARIO_FAILED, _serve_parser, main
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def help_of(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
+    with pytest.raises(SystemExit) as info:
+        main([*argv, "--help"])
+    assert info.value.code == 0
+    return " ".join(capsys.readouterr().out.split())  # argparse wraps where it likes
+
+
+def error_of(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == EXIT_BAD_INPUT
+    return capsys.readouterr().err
+
+
+def test_the_top_help_names_every_subcommand(capsys) -> None:
+    text = help_of([], capsys)
+    for command in ("scenario run", "scenario list", "ethercat export-esi"):
+        assert command in text
+
+
+@pytest.mark.parametrize("argv", [[], ["scenario"], ["scenario", "run"]], ids=" ".join)
+def test_the_help_lists_the_exit_codes(argv: list[str], capsys) -> None:
+    text = help_of(argv, capsys)
+    assert "exit codes: 0 ok" in text
+    assert f"{EXIT_SCENARIO_FAILED} a scenario step failed" in text
+    assert f"{EXIT_BAD_INPUT} bad input" in text
+
+
+@pytest.mark.parametrize("argv", [
+    ["--port", "eighty"],
+    ["--no-such-flag"],
+    ["scenario"],
+    ["scenario", "run"],
+    ["scenario", "run", "x.toml", "--bogus"],
+    ["ethercat"],
+], ids=" ".join)
+def test_argparse_errors_start_as_ours(argv: list[str], capsys) -> None:
+    """A pipeline greps one prefix: argparse's own errors said ``python -m app: error:``."""
+    err = error_of(argv, capsys)
+    assert "\nfieldrig: error: " in "\n" + err
+    assert "python -m app: error" not in err and "scenario: error" not in err
+
+
+def test_every_serve_flag_is_in_the_readme() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    flags = [option for action in _serve_parser()._actions for option in action.option_strings
+             if option.startswith("--") and option != "--help"]
+    assert "--run-for" in flags
+    assert [f for f in flags if f"`{f}" not in readme] == []
