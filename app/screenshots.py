@@ -20,9 +20,11 @@ import contextlib
 import io
 import json
 import logging
+import os
 import re
 import socket
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -46,6 +48,8 @@ LAUNCH_ARGS = (
     "--no-sandbox", "--disable-gpu", "--disable-background-networking",
     "--disable-component-update", "--disable-sync", "--no-first-run",
     "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
+    # Crashpad kept its database in ~/.config/chromium/Crash Reports even when nothing crashed
+    "--disable-crash-reporter",
 )
 VIEWPORT = {"width": 1280, "height": 720}
 WALL_TIMEOUT_S = 60.0
@@ -133,8 +137,32 @@ def _viser_output(quiet: bool) -> contextlib.AbstractContextManager[Any]:
     return contextlib.redirect_stdout(io.StringIO() if quiet else sys.stderr)
 
 
+def private_home(home: str) -> dict[str, str]:
+    """The environment Chromium runs in: this process's, with ``home`` as its HOME and XDG
+    config, cache and data dirs. A CI job's ``--screenshots`` run left
+    ``~/.config/chromium/Crash Reports`` and ``~/.cache/dconf`` (GLib's settings cache) in the
+    user's home; Playwright's temporary profile covers only Chromium's user data dir."""
+    return {**os.environ, "HOME": home, "XDG_CONFIG_HOME": os.path.join(home, ".config"),
+            "XDG_CACHE_HOME": os.path.join(home, ".cache"),
+            "XDG_DATA_HOME": os.path.join(home, ".local", "share")}
+
+
+def launch(playwright: Any, executable: str = CHROMIUM) -> tuple[Any, Callable[[], None]]:
+    """Headless Chromium with :data:`LAUNCH_ARGS` in a home of its own (:func:`private_home`);
+    the browser, and what to call after closing it (removes that home). The browser tests
+    launch theirs with it too."""
+    home = tempfile.TemporaryDirectory(prefix="fieldrig-chromium-", ignore_cleanup_errors=True)
+    try:
+        browser = playwright.chromium.launch(executable_path=executable, args=list(LAUNCH_ARGS),
+                                             env=private_home(home.name))
+    except Exception:
+        home.cleanup()
+        raise
+    return browser, home.cleanup
+
+
 class Chromium:
-    """Headless Chromium through Playwright; a context manager."""
+    """Headless Chromium through Playwright (:func:`launch`); a context manager."""
 
     def __init__(self, executable: str = CHROMIUM) -> None:
         if not Path(executable).exists():
@@ -144,8 +172,7 @@ class Chromium:
 
         self._playwright = sync_playwright().start()
         try:
-            self.browser = self._playwright.chromium.launch(executable_path=executable,
-                                                            args=list(LAUNCH_ARGS))
+            self.browser, self._remove_home = launch(self._playwright, executable)
         except Exception:
             self._playwright.stop()
             raise
@@ -157,8 +184,11 @@ class Chromium:
         return page
 
     def close(self) -> None:
-        self.browser.close()
-        self._playwright.stop()
+        try:
+            self.browser.close()
+            self._playwright.stop()
+        finally:
+            self._remove_home()
 
     def __enter__(self) -> Chromium:
         return self

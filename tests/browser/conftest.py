@@ -13,7 +13,6 @@ from typing import Any
 import pytest
 from helpers import (
     CHROMIUM,
-    LAUNCH_ARGS,
     VIEWPORT,
     LiveDashboard,
     start_dashboard,
@@ -53,10 +52,13 @@ def browser() -> Iterator[Any]:
                     "command does it)")
     from playwright.sync_api import sync_playwright
 
+    from app.screenshots import launch
+
     with sync_playwright() as pw:
-        chromium = pw.chromium.launch(executable_path=CHROMIUM, args=LAUNCH_ARGS)
+        chromium, remove_home = launch(pw)  # LAUNCH_ARGS, a home of its own
         yield chromium
         chromium.close()
+        remove_home()
 
 
 @pytest.fixture
