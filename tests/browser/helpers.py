@@ -27,7 +27,6 @@ from app.rig import Rig
 from app.screenshots import CHROMIUM, VIEWPORT, ServedRig, free_port
 
 __all__ = ["CHROMIUM", "VIEWPORT", "free_port"]  # re-exported for the tests
-LAUNCH_ARGS = list(screenshots.LAUNCH_ARGS)
 HERE = Path(__file__).resolve().parent
 BASELINES = HERE / "baselines"
 OUTPUT = HERE / "output"
