@@ -16,7 +16,7 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
   off: from that position on nothing answers), and each slave's ESC error counters
   0x0300-0x0313 as the model counts them (``esc_errors``, when they changed, looked at every
   ``ESC_ERRORS_PERIOD_US``); a master's write there comes back as ``esc_errors_write`` and
-  clears the model's (``external_esc_write``);
+  clears the model's (``external_esc_write``), answered with its number;
 - the master's damaged cables go to B (``damage``, with the seed of the generator B draws
   their crossings from, ``frame_seed``), which spoils the wire master's frames as the model
   says (damage.py); what that counted comes back as ``esc_counts`` batches, added to the
@@ -201,7 +201,7 @@ class WireBridge:
         self._master: Any = None
         self._link_down: int | None = None
         self._esc_errors_due_us = 0
-        self._esc_seq = 0  # the last esc_counts batch added to the model's counters
+        self._esc_seq = 0  # the last esc_counts batch or esc_errors_write the model took
         self._seed: int | None = None  # of the crossings B draws (frame_seed), per master
         self._damage: tuple[dict[int, float], int | None] | None = None  # last sent
         self._last_report_wall: float | None = None  # when B's last frame report came
@@ -364,8 +364,8 @@ class WireBridge:
                 self._sync_esc_errors(s)
 
     def _sync_esc_errors(self, s: _Slave, counted: bool = False) -> None:
-        """The model's counters to B when they changed, or when a batch of B's was just added
-        (``counted``: B stops adding it on top)."""
+        """The model's counters to B when they changed, or when a batch or a write of B's was
+        just taken (``counted``: B stops adding the batch on top, applying the write again)."""
         links = getattr(self._master, "links", None)
         if links is None or s.position >= len(links) or not hasattr(links[s.position], "esc"):
             return
@@ -478,9 +478,10 @@ class WireBridge:
         elif tag == msg.ESC_ERRORS_WRITE:
             s = self._slave(message[1])
             write = getattr(self._master, "external_esc_write", None)
+            self._esc_seq = int(message[4])
             if s is not None and write is not None:
                 write(s.position, int(message[2]), int(message[3]))
-                self._sync_esc_errors(s)
+                self._sync_esc_errors(s, counted=True)  # acknowledged: B stops applying it
         elif tag in (msg.AL_CONTROL, msg.MAILBOX, msg.OUTPUTS, msg.DC, msg.SM):
             s = self._slave(message[1])
             if s is not None:

@@ -8,9 +8,12 @@ master's NIC drops it), as the built-in master loses it.
 
 The counters stay the model's: B sends what the frames added as batches (``esc_counts``, at
 most every 10 ms) and A answers with the model's registers and the last batch they include
-(``esc_errors``, seq). What a master reads at 0x0300-0x0313 is the model's answer plus the
-batches it does not include yet plus what is not sent yet, so each count shows at once and
-once (``WireCounters``).
+(``esc_errors``, seq). A master's write clears B's copy at once and goes to A numbered in the
+same sequence as the batches (``esc_errors_write``, ..., seq); A acknowledges its number in
+its answer. What a master reads at 0x0300-0x0313 is the model's answer with the writes it does
+not include yet applied again, plus the batches it does not include yet, plus what is not sent
+yet, so each count shows at once and once and a cleared one does not come back
+(``WireCounters``).
 """
 
 from __future__ import annotations
@@ -24,12 +27,27 @@ if TYPE_CHECKING:
     from app.ethercat_wire.esc import Esc
 
 
+class Numbers:
+    """One sequence for the batches of counts and the master's writes, numbered in the order B
+    sends them to A (A handles them in that order: its answer tagged n includes every batch
+    and write numbered up to n)."""
+
+    def __init__(self) -> None:
+        self.last = 0
+
+    def next(self) -> int:
+        self.last += 1
+        return self.last
+
+
 class WireCounters:
     """One ESC's 0x0300-0x0313: the model's, and what this process counted on top of it."""
 
-    def __init__(self) -> None:
+    def __init__(self, numbers: Numbers | None = None) -> None:
+        self.numbers = numbers or Numbers()  # the line's (Line binds them)
         self.model = EscErrors()  # as A last sent them
         self.sent: list[tuple[int, EscErrors]] = []  # batches A had not applied then
+        self.writes: list[tuple[int, int, int]] = []  # (seq, ado, length) A had not applied
         self.counting = EscErrors()  # since the last batch
 
     def registers(self) -> bytes:
@@ -40,16 +58,26 @@ class WireCounters:
         return shown.registers()
 
     def from_model(self, data: bytes, seq: int) -> None:
+        """A's counters, which include the batches and writes numbered up to ``seq``: the
+        master's later writes clear them again (A answers a batch before it has seen a write
+        sent after it: what the master cleared must not come back meanwhile)."""
         self.model = EscErrors.from_registers(data)
         self.sent = [(s, batch) for s, batch in self.sent if s > seq]
+        self.writes = [w for w in self.writes if w[0] > seq]
+        for _seq, ado, length in self.writes:
+            self.model.write(ado, length)
 
-    def write(self, ado: int, length: int) -> None:
+    def write(self, ado: int, length: int) -> int:
         """A master's write: each block it touches cleared here, in the batches the model has
-        not applied and in what is not sent (A clears the model's after the batches sent)."""
+        not applied and in what is not sent (A clears the model's after the batches sent).
+        Returns its number, for A to acknowledge."""
+        seq = self.numbers.next()
+        self.writes.append((seq, ado, length))
         self.model.write(ado, length)
         for _seq, batch in self.sent:
             batch.write(ado, length)
         self.counting.write(ado, length)
+        return seq
 
     def take(self, seq: int) -> bytes | None:
         """What was counted since the last batch, now batch ``seq``; None: nothing."""
@@ -67,7 +95,7 @@ class Damage:
         self.shares: dict[int, float] = {}
         self.seed: int | None = None
         self.rng = random.Random(0)
-        self.seq = 0  # the last batch taken
+        self.numbers = Numbers()  # the batches' and the master's writes' (WireCounters)
         self.spoiled = 0  # frames lost to it since B started
 
     def set(self, shares: dict[int, float], seed: int) -> None:
@@ -88,7 +116,7 @@ class Damage:
 
     def take(self, escs: list[Esc]) -> tuple[int, dict[int, bytes]] | None:
         """The next batch for A: (seq, {position: counts since the last batch})."""
-        seq = self.seq + 1
+        seq = self.numbers.last + 1
         counts = {}
         for esc in escs:
             data = esc.counters.take(seq)
@@ -96,5 +124,5 @@ class Damage:
                 counts[esc.position] = data
         if not counts:
             return None
-        self.seq = seq
+        self.numbers.last = seq
         return seq, counts

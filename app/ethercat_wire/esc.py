@@ -159,8 +159,8 @@ class Esc:
         for first, last in CLEARED_TOGETHER:
             if ado < last and end > first:
                 self.mem[first:last] = bytes(last - first)
-        self.counters.write(ado, end - ado)
-        self.outbox.append((messages.ESC_ERRORS_WRITE, self.position, ado, end - ado))
+        seq = self.counters.write(ado, end - ado)
+        self.outbox.append((messages.ESC_ERRORS_WRITE, self.position, ado, end - ado, seq))
 
     def _dc_read(self, ado: int, end: int) -> None:
         if ado < R.DC_RECEIVE_TIME_PU and end > R.DC_SYSTEM_TIME:
@@ -366,6 +366,8 @@ class Line:
         self.pd_frames = 0  # frames carrying LRD/LWR/LRW
         self.wkc_errors = 0  # process-data datagrams short of the WKC of the whole line
         self.damage = Damage()  # the damaged cables, as the model says (damage.py)
+        for esc in escs:  # the master's writes numbered with the batches
+            esc.counters.numbers = self.damage.numbers
         self._relink()
 
     def set_link(self, position: int, up: bool) -> None:

@@ -20,8 +20,9 @@ SM = "sm"
 # cycle_us the mean process-data period of the last 100 ms (wire_process.Stats)
 STATS = "stats"
 ERROR = "error"  # ("error", text)
-# ("esc_errors_write", pos, ado, length): a master wrote into 0x0300-0x0313 (it clears counters;
-# B cleared its copy already, A's model clears the same)
+# ("esc_errors_write", pos, ado, length, seq): a master wrote into 0x0300-0x0313 (it clears
+# counters; B cleared its copy already, A's model clears the same); seq: its number in the
+# sequence of the esc_counts batches, acknowledged in A's esc_errors
 ESC_ERRORS_WRITE = "esc_errors_write"
 # ("esc_counts", seq, {pos: data}): what the damaged cables added to 0x0300-0x0313 (data as
 # those registers) since the last batch; seq numbers the batches from 1, at most every 10 ms
@@ -34,7 +35,7 @@ INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
 LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
 ALIAS = "alias"  # ("alias", pos, value | None): a restart; None: the stored SII alias
 # ("esc_errors", pos, data, seq): 0x0300-0x0313 as the model counts them, the esc_counts
-# batches up to seq included
+# batches and esc_errors_write up to seq included
 ESC_ERRORS = "esc_errors"
 # ("damage", {cable: share}, seed): the damaged cables (share of the crossings spoiled) and the
 # seed of the generator that draws the crossings (devices/master/esc_errors.py)

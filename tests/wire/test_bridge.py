@@ -271,9 +271,17 @@ def test_the_models_esc_error_counters_reach_b_and_a_masters_write_clears_them(w
     runtime.command("master", "pull_cable", {"cable": 2}).result(timeout=WAIT_S)
     counted = b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and any(m[2]))
     assert counted[2][0x10:0x12] == b"\x00\x01"  # port 1 (OUT) lost its link
-    b.send(msg.ESC_ERRORS_WRITE, 1, 0x0310, 1)
-    b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and not any(m[2]))
+    b.send(msg.ESC_ERRORS_WRITE, 1, 0x0310, 1, 1)
+    b.expect(lambda m: m == (msg.ESC_ERRORS, 1, bytes(20), 1))
     assert sim(runtime, lambda: master_view(runtime).links[1].esc.lost_link) == [0] * 4
+
+
+def test_a_masters_write_is_acknowledged_with_its_number_even_when_nothing_changes(wire):
+    """B applies a write again on every answer of A's older than the write: A's answer to it
+    carries its number (messages.py), so B stops, also when the counters were zero."""
+    _runtime, _bridge, b = wire
+    b.send(msg.ESC_ERRORS_WRITE, 0, 0x0300, 2, 7)
+    b.expect(lambda m: m == (msg.ESC_ERRORS, 0, bytes(20), 7))
 
 
 def test_a_rig_reset_in_place_brings_b_the_fresh_zero_counters(wire):

@@ -172,4 +172,4 @@ def test_error_counters_read_at_0x0300_are_the_models_and_a_write_clears_them():
     one(line, Cmd.FPWR, 0x1002, 0x0300, b"\0\0")
     after = one(line, Cmd.FPRD, 0x1002, 0x0300, bytes(20)).data
     assert after == bytes(12) + bytes([9, 0, 0, 0, 1, 3, 0, 0])
-    assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2) in outbox
+    assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2, 1) in outbox  # the first numbered

@@ -115,7 +115,52 @@ def test_a_masters_write_clears_what_the_model_has_not_taken_yet():
     one(line, Cmd.APWR, -1, 0x0300, b"\0\0")  # clears 0x0300-0x030B
     shown = EscErrors.from_registers(counters(line, 1))
     assert shown.invalid == [0] * 4 and shown.epu == 2
-    assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2) in outbox
+    assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2, 2) in outbox  # after batch 1
+
+
+def test_the_models_answer_to_a_batch_before_a_masters_write_does_not_bring_back_the_cleared():
+    """B sends batch k; the master clears the counters; A, which has not seen the write yet,
+    adds batch k and answers at once (tagged k). The write is numbered after batch k, in the
+    same sequence, so B clears the model's copy again until A's answer to the write (tagged
+    with its number) comes: a cleared count does not come back, a count after the write shows
+    once (docs/ethercat-wire.md "Damaged cable")."""
+    line, outbox, _ = make_line(2)
+    damage(line, {1: 1.0})
+    for _ in range(5):
+        line.process(frame())
+    seq, counts = line.take_esc_counts()  # B -> A: batch k
+    damage(line, {})
+    one(line, Cmd.APWR, -1, R.ERROR_COUNTERS, bytes(20))  # the master clears slave 1
+    write = outbox[-1]  # B -> A: esc_errors_write
+    damage(line, {1: 1.0})
+    line.process(frame())  # counted after the write
+    damage(line, {})
+    model = EscErrors()  # A adds batch k and answers before it handles the write
+    model.add(EscErrors.from_registers(counts[1]))
+    apply_message(line, (messages.ESC_ERRORS, 1, model.registers(), seq))
+    shown = EscErrors.from_registers(counters(line, 1))
+    assert shown.invalid[IN] == 1 and shown.epu == 1
+    assert write[:4] == (messages.ESC_ERRORS_WRITE, 1, R.ERROR_COUNTERS, 20) and write[4] > seq
+    model.write(R.ERROR_COUNTERS, 20)  # A handles the write and answers with its number
+    apply_message(line, (messages.ESC_ERRORS, 1, model.registers(), write[4]))
+    shown = EscErrors.from_registers(counters(line, 1))
+    assert shown.invalid[IN] == 1 and shown.epu == 1
+    assert line.escs[1].counters.writes == []  # acknowledged: not applied again
+
+
+def test_batches_and_writes_share_one_sequence_in_the_order_b_sends_them():
+    line, outbox, _ = make_line(2)
+    damage(line, {1: 1.0})
+    line.process(frame())
+    first, _ = line.take_esc_counts()
+    damage(line, {})
+    one(line, Cmd.APWR, 0, 0x0310, b"\0")
+    one(line, Cmd.APWR, -1, 0x030C, b"\0")
+    damage(line, {1: 1.0})
+    line.process(frame())
+    last, _ = line.take_esc_counts()
+    writes = [m[4] for m in outbox if m[0] == messages.ESC_ERRORS_WRITE]
+    assert [first, *writes, last] == [first, first + 1, first + 2, first + 3]
 
 
 def test_statistics_count_the_spoiled_frames_as_lost():
