@@ -18,12 +18,16 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
   ``ESC_ERRORS_PERIOD_US``); a master's write there comes back as ``esc_errors_write`` and
   clears the model's (``external_esc_write``), answered with its number;
 - the master's damaged cables go to B (``damage``, with the seed of the generator B draws
-  their crossings from, ``frame_seed``), which spoils the wire master's frames as the model
-  says (damage.py); what that counted comes back as ``esc_counts`` batches, added to the
-  model's counters (``external_esc_counts``), and ``esc_errors`` names the last batch applied.
+  their crossings from, ``frame_seed``, and the run), which spoils the wire master's frames as
+  the model says (damage.py); what that counted comes back as ``esc_counts`` batches, added to
+  the model's counters (``external_esc_counts``), and ``esc_errors`` names the last batch
+  applied.
 
-Positions are 0-based line positions; the line is re-read every step, so a rig reset in place
-(scenario player) gets fresh faces and is switched to external mode again.
+Positions are 0-based line positions. A scenario load resets the rig in place (the same
+master object, its fresh state not in external mode; ``Rig.loads`` counts the loads): the
+bridge attaches again, switches the master to external mode and starts a new run (the clock
+went back to 0: frame and report timing start again; B gets the damage and seed again and
+drops what the old run counted; batches and statistics of the old run are not taken).
 """
 
 from __future__ import annotations
@@ -132,6 +136,11 @@ class _FrameClock:
         if self.next_us < now_us - self.period_us:
             self.next_us = now_us  # the master (re)starts: no catching up on the pause
 
+    def restart(self) -> None:
+        """The simulated clock went back (a scenario load): the next frame at once, none owed
+        from the old run; B's cycle measurement stays (the wire master did not change)."""
+        self.next_us, self.owed = 0.0, 0
+
     def master_cycle(self, cycle_us: float) -> None:
         """B's mean process-data period over its last stats interval, on B's own clock. The
         estimate from the reports is only as good as A's timing of them: a starved pump or a
@@ -199,11 +208,12 @@ class WireBridge:
         self._pump_thread: threading.Thread | None = None
         self._slaves: list[_Slave] = []
         self._master: Any = None
+        self._run: int | None = None  # the rig's loads when attached (B's "run")
         self._link_down: int | None = None
         self._esc_errors_due_us = 0
         self._esc_seq = 0  # the last esc_counts batch or esc_errors_write the model took
         self._seed: int | None = None  # of the crossings B draws (frame_seed), per master
-        self._damage: tuple[dict[int, float], int | None] | None = None  # last sent
+        self._damage: tuple[dict[int, float], int | None, int | None] | None = None  # last sent
         self._last_report_wall: float | None = None  # when B's last frame report came
         self._step_wall: float | None = None  # the wall time the last step stood for
         self._step_us: int | None = None
@@ -305,7 +315,10 @@ class WireBridge:
         master = self.runtime.rig.devices.get("master")
         if master is None:
             raise RigConfigError(OPTION, "", "the rig has no EtherCAT line ([master] line)")
-        self._master = master
+        run = getattr(self.runtime.rig, "loads", 0)
+        if self._master is not None and (master is not self._master or run != self._run):
+            self._new_run()
+        self._master, self._run = master, run
         rng = getattr(master, "rng", None)
         self._seed = frame_seed(rng) if rng is not None else None
         if hasattr(master, "set_external"):
@@ -315,15 +328,32 @@ class WireBridge:
                            "line next to the wire master")
         line = [link.slave for link in master.links]
         old = {id(s.model): s for s in self._slaves}
-        self._slaves = [old.get(id(model)) or self._new_slave(pos, model)
+        by_position = dict(enumerate(self._slaves))
+        self._slaves = [old.get(id(model)) or self._new_slave(pos, model, by_position.get(pos))
                         for pos, model in enumerate(line)]
         for pos, s in enumerate(self._slaves):
             s.position = pos
 
+    def _new_run(self) -> None:
+        """The rig was loaded afresh: its clock went back to 0 and its master is a fresh one,
+        which must not see what the old run's frames counted."""
+        self._damage = None  # sent again: B starts the crossings from the seed, counts afresh
+        self._esc_errors_due_us = 0
+        self._deferred_since = None
+        for s in self._slaves:
+            s.inputs_due_us = 0
+            s.clock.restart()
+
     @staticmethod
-    def _new_slave(position: int, model: Any) -> _Slave:
+    def _new_slave(position: int, model: Any, was: _Slave | None = None) -> _Slave:
+        """A fresh face for ``model``; ``was``: the slave B holds at this position (a load
+        gives the master fresh slave objects), whose state B keeps until told otherwise."""
         face = face_for(model)
-        return _Slave(position, model, face, CoeServer(face, model))
+        s = _Slave(position, model, face, CoeServer(face, model))
+        if was is not None:
+            s.status, s.inputs, s.alias = was.status, was.inputs, was.alias
+            s.esc_errors, s.clock = was.esc_errors, was.clock
+        return s
 
     def _all_ready(self) -> bool:
         return all(s.face.ready(s.model) for s in self._slaves)
@@ -337,8 +367,11 @@ class WireBridge:
     def _on_step(self, now_us: int) -> None:
         if self._stop.is_set():
             return
-        if self.runtime.rig.devices.get("master") is not self._master:
-            self._attach()  # the rig was rebuilt in place
+        rig = self.runtime.rig
+        master = rig.devices.get("master")
+        if master is not self._master or getattr(rig, "loads", 0) != self._run or \
+                not getattr(master, "external", True):
+            self._attach()  # a scenario load (the rig reset in place) or a new rig
         while self._inbox and not self._defer(self._inbox[0], now_us):
             self._handle(self._inbox.popleft(), now_us)
         if self._inbox:  # held: B's statistics (the cycle) still count meanwhile
@@ -354,7 +387,7 @@ class WireBridge:
             if down is not None:
                 self._send(msg.LINK, down, False)
             self._link_down = down
-        damage = (dict(getattr(self._master, "damaged", {})), self._seed)
+        damage = (dict(getattr(self._master, "damaged", {})), self._seed, self._run)
         if damage != self._damage and damage[1] is not None:
             self._damage = damage
             self._send(msg.DAMAGE, *damage)
@@ -374,11 +407,11 @@ class WireBridge:
             s.esc_errors = data
             self._send(msg.ESC_ERRORS, s.position, data, self._esc_seq)
 
-    def _esc_counts(self, seq: int, counts: dict[int, bytes]) -> None:
-        add = getattr(self._master, "external_esc_counts", None)
-        if add is None:
-            return
+    def _esc_counts(self, seq: int, counts: dict[int, bytes], run: int | None) -> None:
         self._esc_seq = seq
+        add = getattr(self._master, "external_esc_counts", None)
+        if add is None or run != self._run:  # the old run's: not the fresh model's (B dropped
+            return                            # the batch too)
         for position, data in counts.items():
             s = self._slave(int(position))
             if s is not None:
@@ -474,7 +507,7 @@ class WireBridge:
         elif tag == msg.STATS:
             self._stats(message[1])
         elif tag == msg.ESC_COUNTS:
-            self._esc_counts(int(message[1]), message[2])
+            self._esc_counts(int(message[1]), message[2], message[3])
         elif tag == msg.ESC_ERRORS_WRITE:
             s = self._slave(message[1])
             write = getattr(self._master, "external_esc_write", None)
@@ -536,7 +569,7 @@ class WireBridge:
         for s in self._slaves:
             s.clock.master_cycle(float(stats.get("cycle_us", 0)))
         external = getattr(self._master, "external_stats", None)
-        if external is not None:
+        if external is not None and stats.get("run") == self._run:  # not the old run's counts
             external(frames=int(stats.get("frames", 0)),
                      lost_frames=int(stats.get("lost_frames", 0)),
                      cycle_us=round(float(stats.get("cycle_us", 0))),

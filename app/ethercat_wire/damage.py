@@ -79,6 +79,11 @@ class WireCounters:
         self.counting.write(ado, length)
         return seq
 
+    def new_run(self) -> None:
+        """A scenario load (A's new run): what this process counted and the fresh model has
+        not taken belongs to the old run. The writes stay: A takes them into the fresh model."""
+        self.sent, self.counting = [], EscErrors()
+
     def take(self, seq: int) -> bytes | None:
         """What was counted since the last batch, now batch ``seq``; None: nothing."""
         if not self.counting.counted():
@@ -94,14 +99,20 @@ class Damage:
     def __init__(self) -> None:
         self.shares: dict[int, float] = {}
         self.seed: int | None = None
+        self.run: int | None = None  # A's run (the rig's scenario loads) of the last "damage"
         self.rng = random.Random(0)
         self.numbers = Numbers()  # the batches' and the master's writes' (WireCounters)
-        self.spoiled = 0  # frames lost to it since B started
+        self.spoiled = 0  # frames lost to it in this run
 
-    def set(self, shares: dict[int, float], seed: int) -> None:
+    def set(self, shares: dict[int, float], seed: int, run: int) -> bool:
+        """True: a new run (a scenario load; the seed may be the same): the crossings start
+        again from the seed."""
         self.shares = {int(cable): float(share) for cable, share in shares.items()}
-        if seed != self.seed:  # a new rig (A attached again): its own sequence
-            self.seed, self.rng = seed, random.Random(seed)
+        if (seed, run) == (self.seed, self.run):
+            return False
+        self.seed, self.run, self.rng = seed, run, random.Random(seed)
+        self.spoiled = 0
+        return True
 
     def spoils(self, visible: list[Esc]) -> bool:
         """This frame through the damaged cables, out to the last visible slave and back (as

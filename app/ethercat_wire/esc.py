@@ -380,8 +380,17 @@ class Line:
 
     @property
     def spoiled(self) -> int:
-        """Frames a damaged cable spoiled (not answered) since the line started."""
+        """Frames a damaged cable spoiled (not answered) in this run."""
         return self.damage.spoiled
+
+    def set_damage(self, shares: dict[int, float], seed: int, run: int) -> None:
+        """A's damaged cables; a new run (a scenario load) drops what the old one counted and
+        A has not taken, and starts the statistics again (A's master is a fresh one)."""
+        if self.damage.set(shares, seed, run):
+            for esc in self.escs:
+                esc.counters.new_run()
+                esc.show_error_counters()
+            self.frames = self.wkc_errors = 0
 
     def take_esc_counts(self) -> tuple[int, dict[int, bytes]] | None:
         return self.damage.take(self.escs)

@@ -16,16 +16,18 @@ DC = "dc"  # ("dc", pos, {"activation", "sync0_cycle_ns", "start_time_ns"})
 # ("sm", pos, ((start, length, control, enabled), ...)): SM0.. registers after a master write
 # changed them
 SM = "sm"
-# ("stats", {"frames", "lrw", "cycle_us", "wkc_errors"}), every 100 ms: counts since B started,
-# cycle_us the mean process-data period of the last 100 ms (wire_process.Stats)
+# ("stats", {"frames", "lrw", "cycle_us", "wkc_errors", "lost_frames", "run"}), every 100 ms:
+# counts in A's run (the last "damage" run; lrw since B started), cycle_us the mean
+# process-data period of the last 100 ms (wire_process.Stats)
 STATS = "stats"
 ERROR = "error"  # ("error", text)
 # ("esc_errors_write", pos, ado, length, seq): a master wrote into 0x0300-0x0313 (it clears
 # counters; B cleared its copy already, A's model clears the same); seq: its number in the
 # sequence of the esc_counts batches, acknowledged in A's esc_errors
 ESC_ERRORS_WRITE = "esc_errors_write"
-# ("esc_counts", seq, {pos: data}): what the damaged cables added to 0x0300-0x0313 (data as
-# those registers) since the last batch; seq numbers the batches from 1, at most every 10 ms
+# ("esc_counts", seq, {pos: data}, run): what the damaged cables added to 0x0300-0x0313 (data
+# as those registers) since the last batch, in A's run (the last "damage" run); seq numbers the
+# batches from 1, at most every 10 ms
 ESC_COUNTS = "esc_counts"
 
 # A -> B
@@ -37,8 +39,9 @@ ALIAS = "alias"  # ("alias", pos, value | None): a restart; None: the stored SII
 # ("esc_errors", pos, data, seq): 0x0300-0x0313 as the model counts them, the esc_counts
 # batches and esc_errors_write up to seq included
 ESC_ERRORS = "esc_errors"
-# ("damage", {cable: share}, seed): the damaged cables (share of the crossings spoiled) and the
-# seed of the generator that draws the crossings (devices/master/esc_errors.py)
+# ("damage", {cable: share}, seed, run): the damaged cables (share of the crossings spoiled),
+# the seed of the generator that draws the crossings (devices/master/esc_errors.py) and the
+# run (the rig's scenario loads, Rig.loads): a new run starts the crossings and counts afresh
 DAMAGE = "damage"
 STOP = "stop"  # ("stop",)
 

@@ -80,10 +80,10 @@ def open_socket(iface: str) -> socket.socket:
 
 
 class Stats:
-    """Counters reported to A: frames, process-data frames, WKC errors and frames a damaged
-    cable spoiled since B started (cumulative), and the mean interval between process-data
-    frames over the last report period (the cycle; 0.0 when none came). B cannot see frames
-    the master lost on its side."""
+    """Counters reported to A: frames, WKC errors and frames a damaged cable spoiled in A's
+    run (since B started or A's last scenario load; ``run``: which), process-data frames since
+    B started, and the mean interval between process-data frames over the last report period
+    (the cycle; 0.0 when none came). B cannot see frames the master lost on its side."""
 
     def __init__(self) -> None:
         self.last_pd = 0
@@ -95,7 +95,8 @@ class Stats:
         cycle_us = (now - self.last_t) * 1e6 / n if n else 0.0
         self.last_pd, self.last_t = line.pd_frames, now
         return {"frames": line.frames, "lrw": line.pd_frames, "cycle_us": round(cycle_us, 1),
-                "wkc_errors": line.wkc_errors, "lost_frames": line.spoiled}
+                "wkc_errors": line.wkc_errors, "lost_frames": line.spoiled,
+                "run": line.damage.run}
 
 
 def apply_message(line: Line, msg: tuple) -> bool:
@@ -104,7 +105,7 @@ def apply_message(line: Line, msg: tuple) -> bool:
     if tag == messages.STOP:
         return False
     if tag == messages.DAMAGE:
-        line.damage.set(msg[1], msg[2])
+        line.set_damage(msg[1], msg[2], msg[3])
         return True
     esc = line.escs[msg[1]]
     if tag == messages.AL_STATUS:
@@ -214,7 +215,7 @@ def serve(sock: socket.socket, line: Line, conn: Connection, outbox: list[tuple]
                 mail.post((messages.CYCLE, counts))
             batch = line.take_esc_counts()
             if batch is not None:  # in order with the master's writes (not replaceable)
-                mail.post((messages.ESC_COUNTS, *batch))
+                mail.post((messages.ESC_COUNTS, *batch, line.damage.run))
             next_cycle = now + messages.CYCLE_REPORT_S
         if now >= next_stats:
             mail.post((messages.STATS, stats.report(line)))

@@ -17,12 +17,12 @@ from typing import Any
 
 import pytest
 from test_faces import line_rig
-from wire_line import LINE
+from wire_line import LINE, line_spec
 
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire.bridge import WireBridge, _FrameClock, check_interface
 from app.player import reset_in_place
-from app.rig_config import RigConfigError
+from app.rig_config import RigConfigError, build_rig, parse_rig_spec
 from app.runtime import Runtime
 
 WAIT_S = 10.0
@@ -149,7 +149,8 @@ def test_frames_and_stats_reach_the_master(wire):
     b.send(msg.CYCLE, {pos: 3 for pos in range(len(LINE))})
     wait_for(lambda: sim(runtime, lambda: drive.frames) >= before[1] + 3)
     assert sim(runtime, lambda: master_view(runtime).frames) >= before[0] + 3 * len(LINE)
-    b.send(msg.STATS, {"frames": 1234, "lrw": 1200, "cycle_us": 4000.0, "wkc_errors": 2})
+    b.send(msg.STATS, {"frames": 1234, "lrw": 1200, "cycle_us": 4000.0, "wkc_errors": 2,
+                       "run": 0})
     wait_for(lambda: runtime.frame.snapshot["devices"]["master"]["stats"]["cycle_us"] == 4000)
     snap = runtime.frame.snapshot["devices"]["master"]
     assert snap["external"] is True
@@ -293,6 +294,20 @@ def test_a_rig_reset_in_place_brings_b_the_fresh_zero_counters(wire):
     b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and any(m[2]))
     sim(runtime, lambda: reset_in_place(runtime.rig, line_rig("OP")))
     b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and not any(m[2]))
+
+
+def test_after_a_load_at_0_s_the_bridge_keeps_its_timing_on_the_fresh_clock(wire):
+    """A load puts the clock back to 0 s (app/player.py): the bridge's schedules start again
+    with it, so the fresh model's ESC counters (and frames, inputs) do not wait for the
+    simulated time the old run had reached (here over 3 s)."""
+    runtime, _bridge, b = wire
+    fresh = build_rig(parse_rig_spec(line_spec()))
+    assert fresh.clock.now_us < 100_000 and \
+        sim(runtime, lambda: runtime.rig.clock.now_us) > 2_000_000
+    sim(runtime, lambda: reset_in_place(runtime.rig, fresh))
+    runtime.command("master", "pull_cable", {"cable": 2}).result(timeout=WAIT_S)
+    b.expect(lambda m: m[0] == msg.ESC_ERRORS and m[1] == 1 and any(m[2]))
+    assert sim(runtime, lambda: runtime.rig.clock.now_us) < 1_000_000
 
 
 def test_a_slave_s_own_pulled_out_cable_takes_the_slaves_behind_it_off_the_wire(wire):

@@ -26,11 +26,13 @@ from app.ethercat_wire.bridge import WireBridge
 from app.ethercat_wire.datagrams import Cmd, Request
 from app.ethercat_wire.esc import Line
 from app.ethercat_wire.wire_process import Stats, apply_message
+from app.player import reset_in_place
 from app.runtime import Runtime
 from devices.master.esc_errors import EscErrors, frame_seed, run_frame
 
 IN, OUT = 0, 1
 SEED = 1234
+RUN = 0  # the rig's loads (messages.DAMAGE)
 
 
 def frame() -> bytearray:
@@ -43,7 +45,7 @@ def counters(line: Line, pos: int) -> bytes:
 
 
 def damage(line: Line, shares: dict[int, float]) -> None:
-    assert apply_message(line, (messages.DAMAGE, shares, SEED))
+    assert apply_message(line, (messages.DAMAGE, shares, SEED, RUN))
 
 
 def test_a_damaged_cable_spoils_the_frames_as_the_built_in_master_does():
@@ -170,6 +172,25 @@ def test_statistics_count_the_spoiled_frames_as_lost():
     assert Stats().report(line)["lost_frames"] == 1
 
 
+def test_a_new_run_restarts_the_crossings_and_drops_the_old_runs_counts():
+    """A scenario load (a new run: the same seed may come again) restarts B's crossings; what
+    the old run counted and A has not taken (a batch on its way, the count not sent) and the
+    statistics of the old run are dropped: the fresh model's counters are the ESC's."""
+    line, _, _ = make_line(2)
+    damage(line, {1: 1.0})
+    for _ in range(3):
+        line.process(frame())
+    line.take_esc_counts()  # on its way to A
+    line.process(frame())  # not sent yet
+    assert apply_message(line, (messages.DAMAGE, {}, SEED, 1))
+    assert Stats().report(line)["lost_frames"] == 0 and line.frames == 0
+    assert counters(line, 1) == bytes(20)
+    assert apply_message(line, (messages.DAMAGE, {1: 0.5}, SEED, 1))
+    answered = [line.process(frame()) for _ in range(50)]
+    ref, rng = [EscErrors() for _ in range(2)], random.Random(SEED)
+    assert answered == [not run_frame(ref, 1, {1: 0.5}, rng) for _ in range(50)]
+
+
 def test_the_seed_is_drawn_from_a_copy_of_the_masters_generator():
     """The wire's generator follows the rig's seed without taking a draw from the master's
     (its DC measurement keeps its own sequence)."""
@@ -196,19 +217,48 @@ def test_the_models_damage_reaches_b_and_b_s_counts_reach_the_model(wire):
     runtime, _bridge, b = wire
     first = b.expect(lambda m: m[0] == messages.DAMAGE)
     seed = first[2]  # frame_seed of the master's generator as the bridge attached
-    assert first == (messages.DAMAGE, {}, seed) and isinstance(seed, int)
+    assert first == (messages.DAMAGE, {}, seed, 0) and isinstance(seed, int)
     runtime.command("master", "damage_cable", {"cable": 2, "percent": 30}).result(WAIT_S)
-    b.expect(lambda m: m == (messages.DAMAGE, {2: 0.3}, seed))
+    b.expect(lambda m: m == (messages.DAMAGE, {2: 0.3}, seed, 0))
     counted = EscErrors(invalid=[4, 0, 0, 0], epu=4)
-    b.send(messages.ESC_COUNTS, 1, {2: counted.registers()})
+    b.send(messages.ESC_COUNTS, 1, {2: counted.registers()}, 0)
     b.expect(lambda m: m == (messages.ESC_ERRORS, 2, counted.registers(), 1))
     assert sim(runtime, lambda: master_view(runtime).links[2].esc.snapshot()) == \
         counted.snapshot()
     b.send(messages.STATS, {"frames": 10, "lrw": 10, "cycle_us": 4000.0, "wkc_errors": 0,
-                            "lost_frames": 4})
+                            "lost_frames": 4, "run": 0})
     wait_for(lambda: sim(runtime, lambda: master_view(runtime).lost_frames) == 4)
     runtime.command("master", "repair_cable", {"cable": 2}).result(WAIT_S)
-    b.expect(lambda m: m == (messages.DAMAGE, {}, seed))
+    b.expect(lambda m: m == (messages.DAMAGE, {}, seed, 0))
+
+
+def test_a_scenario_load_puts_the_master_in_external_mode_again_and_b_in_the_new_run(wire):
+    """A load resets the rig in place (the same master object, its fresh state not external):
+    the bridge attaches again, so the built-in master does not drive the line next to the
+    wire master (a damaged cable would be counted twice), and B gets the new run (damage and
+    seed sent again, even when the same). The old run's counts on their way are dropped."""
+    runtime, _bridge, b = wire
+    first = b.expect(lambda m: m[0] == messages.DAMAGE)
+    runtime.command("master", "damage_cable", {"cable": 2, "percent": 100}).result(WAIT_S)
+    b.expect(lambda m: m[0] == messages.DAMAGE and m[1] == {2: 1.0})
+    sim(runtime, lambda: reset_in_place(runtime.rig, line_rig("OP")))
+    new = b.expect(lambda m: m[0] == messages.DAMAGE and m[1] == {})
+    assert sim(runtime, lambda: master_view(runtime).external) is True
+    assert new[3] == first[3] + 1  # a new run (its seed from the fresh master's generator)
+    runtime.command("master", "damage_cable", {"cable": 2, "percent": 100}).result(WAIT_S)
+    b.expect(lambda m: m == (messages.DAMAGE, {2: 1.0}, new[2], new[3]))
+    start = sim(runtime, lambda: runtime.rig.clock.now_us)
+    wait_for(lambda: sim(runtime, lambda: runtime.rig.clock.now_us) > start + 100_000)
+    master = master_view(runtime)  # only B's frames cross the cable: nothing counted here
+    assert sim(runtime, lambda: [link.esc.registers() for link in master.links]) == \
+        [bytes(20)] * 4
+    assert sim(runtime, lambda: master.lost_frames) == 0
+    old = EscErrors(invalid=[9, 0, 0, 0], epu=9)
+    b.send(messages.ESC_COUNTS, 1, {2: old.registers()}, first[3])  # the old run's
+    counted = EscErrors(invalid=[1, 0, 0, 0], epu=1)
+    b.send(messages.ESC_COUNTS, 2, {2: counted.registers()}, new[3])
+    b.expect(lambda m: m == (messages.ESC_ERRORS, 2, counted.registers(), 2))
+    assert sim(runtime, lambda: master.links[2].esc.registers()) == counted.registers()
 
 
 # ---- process B on a veth pair: frames from the master's side ------------------------------
@@ -232,7 +282,7 @@ def test_the_wire_process_drops_what_a_damaged_cable_spoils(veth):
         for _ in range(5):  # undamaged: every frame answered
             sock.send(frame())
             assert D.replies(answer(sock, 2))[0].wkc == 3
-        a_end.send((messages.DAMAGE, {1: 1.0}, SEED))
+        a_end.send((messages.DAMAGE, {1: 1.0}, SEED, RUN))
         wait_for(lambda: _unanswered(sock))
         got = drain(a_end)
         deadline_msgs = [m for m in got if m[0] == messages.ESC_COUNTS]
@@ -244,7 +294,7 @@ def test_the_wire_process_drops_what_a_damaged_cable_spoils(veth):
         counts = deadline_msgs[0][2]
         assert EscErrors.from_registers(counts[1]).invalid[IN] >= 1
         assert EscErrors.from_registers(counts[0]).forwarded[OUT] >= 1
-        a_end.send((messages.DAMAGE, {}, SEED))
+        a_end.send((messages.DAMAGE, {}, SEED, RUN))
         wait_for(lambda: not _unanswered(sock))
         a_end.send((messages.STOP,))
         proc.join(timeout=5)
