@@ -236,15 +236,16 @@ class LineMixin:
         self._lose_spoiled()
         return True
 
-    def _lose_spoiled(self) -> None:
-        """A frame a damaged cable spoiled: counted as a lost frame, per slave. It goes on as
-        long as the cable stays damaged, so the event and the log line come at the first one
-        and then at most once a second, with the frames lost since the last one."""
-        self.lost_frames += 1
-        self.crc_unreported += 1
+    def _lose_spoiled(self, count: int = 1) -> None:
+        """``count`` frames a damaged cable spoiled (a wire master's come in batches): counted
+        as lost frames, per slave. It goes on as long as the cable stays damaged, so the event
+        and the log line come at the first one and then at most once a second, with the frames
+        lost since the last one."""
+        self.lost_frames += count
+        self.crc_unreported += count
         for link in self.links:
             if link.present:
-                link.counters.lost_frames += 1
+                link.counters.lost_frames += count
         if self.now_us < self.crc_report_us:
             return
         count, self.crc_unreported = self.crc_unreported, 0

@@ -247,7 +247,12 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
 
     def external_stats(self, frames: int, lost_frames: int, cycle_us: int,
                        wkc_errors: int) -> None:
-        self.frames, self.lost_frames, self.cycle_us = frames, lost_frames, cycle_us
+        """The wire master's statistics, totals in this run. Its lost frames are the frames
+        a damaged cable spoiled (the wire process sees no other loss): those new since the
+        last report go the built-in master's way (per slave, events, log lines)."""
+        self.frames, self.cycle_us = frames, cycle_us
+        if lost_frames > self.lost_frames:
+            self._lose_spoiled(lost_frames - self.lost_frames)
         for link in self.links:
             link.counters.wkc_errors = wkc_errors
 

@@ -169,6 +169,28 @@ def test_lost_frames_of_a_damaged_cable_are_logged_once_a_second_at_most() -> No
     assert len(lines) == 2
 
 
+def test_a_wire_masters_lost_frames_are_counted_and_reported_as_the_built_in_masters() -> None:
+    """External mode: the frames process B lost to a damaged cable (its statistics: a total
+    in the run) go the built-in master's way: counted per slave, comm_error per slave and a
+    log line at the first, then at most once a second with those lost since
+    (docs/ethercat-wire.md "Damaged cable")."""
+    rig = default_in_op()
+    m = master(rig)
+    m.set_external(True)
+    events = []
+    for lost, ms in ((3, 1), (8, 1), (8, 1000), (10, 1)):
+        m.external_stats(frames=100, lost_frames=lost, cycle_us=1000, wkc_errors=0)
+        for _ in range(ms):
+            events += rig.step()
+    records = [e.to_record() for e in events]
+    comm = [r for r in records if r["event"] == "comm_error" and r["position"] == 0]
+    assert [r["count"] for r in comm] == [3, 7]
+    assert m.lost_frames == 10
+    assert [link.counters.lost_frames for link in m.links] == [10] * len(m.links)
+    lines = [r for r in records if r["event"] == "log" and "lost" in r["text"]]
+    assert len(lines) == 2
+
+
 def test_a_damaged_line_is_never_quiet_a_healthy_one_again_after_repair() -> None:
     rig = default_in_op()
     m = master(rig)
