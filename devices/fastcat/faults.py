@@ -259,10 +259,7 @@ class FaultsMixin:
         self.injected.remove(alarm)
 
     def _fault(self, fault: str, module: int | None) -> Alarm:
-        row = parse_fault(fault)
-        if row.table == MODULE and module is None:
-            raise CommandError(f"{row.symbol} is a module alarm (§7.6): target "
-                               f"'{self.device_id}/N'")
+        row = parse_fault(fault)  # a module alarm without a module: RailMixin.check_command
         if module is not None and not 1 <= module <= MAX_MODULES:
             raise CommandError(f"module {module}: modules are numbered 1..{MAX_MODULES}")
         return Alarm(row.table, row.code, module or 0)

@@ -15,7 +15,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from devices.device import UNKNOWN_MODULE, Action, CommandError, Param
-from devices.fastcat.alarms import parse_fault
+from devices.fastcat.alarms import MODULE, parse_fault
 from devices.fastcat.catalog import CATALOG, module_type
 from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES
@@ -30,6 +30,7 @@ _FAULT = Param("fault", str, parse=parse_fault, doc="a §7.5 / §7.6 symbol or c
 # Commands that act on the module at the rail position (the others put one there or name
 # the position only, e.g. a module alarm).
 _NEED_MODULE = ("unplug", "module_power")
+_FAULT_ACTIONS = ("inject_fault", "clear_fault")
 
 COUPLER_ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("power", "Switch the coupler supply on or off", (Param("on", bool),)),
@@ -95,7 +96,14 @@ class RailMixin:
                       module: int | None = None) -> dict[str, Any]:
         if action == "write_object" and isinstance(args.get("value"), bool):
             args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
-        return super().check_command(action, args, module)  # type: ignore[misc]
+        kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
+        # Here, not in the command itself: a scenario's check before the run calls this only.
+        if action in _FAULT_ACTIONS and module is None:
+            row = parse_fault(kwargs["fault"])
+            if row.table == MODULE:
+                raise CommandError(f"{row.symbol} is a module alarm (§7.6): target "
+                                   f"'{self.device_id}/N'")
+        return kwargs
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
         self._touched = self._modules_touched = True  # a full next step (FastCat.step)

@@ -128,3 +128,21 @@ def test_a_plug_the_trscat_cannot_fit_is_refused_before_the_run(tmp_path, capsys
     steps = "".join(step(f"trscat/{n}", "plug", at=0.1 * n, type="TRS-AC-E") for n in (3, 4, 5))
     line = refused(tmp_path, capsys, steps)
     assert "step[2] (at 0.5 s): 2 standard + 3 smart expansions do not fit a TRS-CAT" in line
+
+
+@pytest.mark.parametrize("action", ["inject_fault", "clear_fault"])
+@pytest.mark.parametrize("fault", ["module:0x04", "ALARM_IO_FAULT", "TARATURA"])
+def test_a_fastcat_module_fault_on_the_coupler_is_refused_before_the_run(
+        tmp_path, capsys, action, fault) -> None:
+    """A module fault (§7.6) on target "fastcat" passed the check and failed only at run time,
+    exit 1 after the whole run; the rule now sits in the model's check_command."""
+    line = refused(tmp_path, capsys, step("fastcat", action, fault=fault))
+    assert "step[0] (at 0.5 s): " in line and "is a module alarm (§7.6): target " \
+        "'fastcat/N'" in line, line
+
+
+def test_a_fastcat_module_fault_on_a_module_target_passes_the_check(tmp_path, capsys) -> None:
+    steps = (step("fastcat", "power", at=0.0, on=True)
+             + step("fastcat/3", "inject_fault", at=0.5, fault="module:0x04")
+             + step("fastcat/3", "clear_fault", at=1.0, fault="module:0x04"))
+    assert run_steps(tmp_path, steps) == 0, capsys.readouterr().err

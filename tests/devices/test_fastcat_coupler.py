@@ -563,3 +563,12 @@ def test_same_commands_same_events() -> None:
         bench.run(9.0)
         return bench.records()
     assert run() == run()
+
+
+def test_a_module_fault_without_a_module_is_refused_by_the_command_check() -> None:
+    """The scenario check before a run calls check_command only: the rule must sit there."""
+    fc = Bench().fc
+    with pytest.raises(CommandError, match=r"module alarm \(§7.6\): target 'fastcat/N'"):
+        fc.check_command("inject_fault", {"fault": "module:0x04"})
+    fc.check_command("inject_fault", {"fault": "module:0x04"}, module=3)
+    fc.check_command("inject_fault", {"fault": "MISSING_NODE_ANSWER"})
