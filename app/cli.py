@@ -71,6 +71,9 @@ def _serve_parser() -> argparse.ArgumentParser:
     p.add_argument("--exercises", default=None, metavar="DIR",
                    help="exercise files (*.toml with an [exercise] table) the instructor may "
                         "play from the Classroom folder (docs/classroom.md)")
+    p.add_argument("--scenarios", default=None, metavar="DIR",
+                   help="your own scenario files (*.toml): the Scenario tab lists them first, "
+                        "then the shipped ones (docs/scenarios.md)")
     p.add_argument("--instructor-token", default=None, metavar="TOKEN",
                    help="the instructor's token (default with a non-loopback --host: a new "
                         "one, printed at start)")
@@ -240,6 +243,10 @@ def _serve(args: argparse.Namespace) -> int:
     rigs = [build_rig(load_rig_spec(rig_file), state_dir=state_dir)
             for rig_file, state_dir in zip(rig_files, state_dirs, strict=True)]
     exercises = _exercise_files(args.exercises, rigs[0])  # --rigs N: N copies of one file
+    if args.scenarios is not None:  # checked now: a broken own file is exit 2, not a gap
+        from app.ui.panels.scenario_player import own_scenarios
+
+        own_scenarios(args.scenarios)
     _check_listen(args, rigs)
     served, extras = [], []
     stamp = time.strftime("%Y%m%d-%H%M%S")
@@ -247,7 +254,8 @@ def _serve(args: argparse.Namespace) -> int:
         for i, (rig, state_dir) in enumerate(zip(rigs, state_dirs, strict=True)):
             record = _record_path(args, state_dir, rig.name, stamp, i, count)
             one = serve_rig(rig, Access(access_token), host=args.host, port=args.port + i,
-                            speed=args.speed, record=record, exercise_files=exercises)
+                            speed=args.speed, record=record, exercise_files=exercises,
+                            scenarios=Path(args.scenarios) if args.scenarios else None)
             served.append(one)
             if one.port != args.port + i:  # taken between the check and now: viser moved on
                 raise RigConfigError("--port", "", f"{args.port + i} was taken while starting")

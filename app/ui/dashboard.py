@@ -22,6 +22,7 @@ import urllib.parse
 from collections.abc import Callable, Mapping
 from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import viser
@@ -110,7 +111,7 @@ def _kind_ids(described: Mapping[str, Mapping[str, Any]], kind: str) -> list[str
 
 class Dashboard:
     def __init__(self, server: viser.ViserServer, runtime: Runtime,
-                 draw_unwatched: bool = False) -> None:
+                 draw_unwatched: bool = False, scenarios: Path | None = None) -> None:
         self.server = server
         self.runtime = runtime
         # False: no view is computed while no browser is connected (the thread only takes
@@ -193,7 +194,7 @@ class Dashboard:
         from app.ui.panels.scenario_player import ScenarioPlayerPanel
 
         with self._control_tab("Scenario", viser.Icon.PLAYER_PLAY):
-            self.scenario_player = ScenarioPlayerPanel(server, runtime)
+            self.scenario_player = ScenarioPlayerPanel(server, runtime, own=scenarios)
         last_load = self.scenario_player.player.last_load
         self._runs = RunSplitter(last_load)  # where a load starts a new run in a batch
         self.decoder = DecoderPanel(server, runtime, self._side, last_load)

@@ -68,11 +68,12 @@ class ServedRig:
 
 def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 8080,
               speed: float = 1.0, record: str | Path | None = None,
-              paused: bool = False, exercise_files: Sequence[Path] = ()) -> ServedRig:
+              paused: bool = False, exercise_files: Sequence[Path] = (),
+              scenarios: Path | None = None) -> ServedRig:
     """Start serving ``rig``: runtime, recorder (when ``record`` names a file), access gate,
     viser server, dashboard and classroom folder. ``paused``: the clock waits (tests);
     ``exercise_files``: the exercise files the instructor may play (app/classroom/
-    exercise_file.py)."""
+    exercise_file.py); ``scenarios``: the folder of ``--scenarios DIR`` (the picker's own)."""
     runtime = Runtime(rig, speed=speed)
     runtime.set_paused(paused)
     recorder = None
@@ -81,7 +82,7 @@ def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 
         attach_to_runtime(runtime, recorder)
     install_gate(runtime, access)
     server = viser.ViserServer(host=host, port=port, verbose=False)
-    dashboard = Dashboard(server, runtime)
+    dashboard = Dashboard(server, runtime, scenarios=scenarios)
     classroom = ClassroomPanel(server, runtime, CommandSender(runtime), recorder,
                                download_name=f"{_slug(rig.name)}.rrd",
                                player=getattr(dashboard, "scenario_player", None),

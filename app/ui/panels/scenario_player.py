@@ -1,5 +1,6 @@
-"""The scenario player panel: pick a scenario of ``static/scenarios/``, play, pause, step,
-restart, speed 0.25x..10x, and what is on now (step, caption, failures).
+"""The scenario player panel: pick a scenario of ``static/scenarios/`` (and of ``--scenarios
+DIR``, listed first), play, pause, step, restart, speed 0.25x..10x, and what is on now (step,
+caption, failures).
 
 The callbacks run in viser's thread pool and only call :class:`app.player.Player`, which hands
 the work to the simulation thread. Captions reach the 3D view as Caption events of the
@@ -23,9 +24,9 @@ import viser
 from app.classroom.roles import Operation
 from app.player import Player, PlayerView, RigMismatch, Status, describe_step, shown_path
 from app.rig import Rig
-from app.rig_config import DEFAULT_RIG, RigConfigError
+from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.runtime import Frame, Runtime
-from app.scenario import EXAMPLES_DIR, Scenario, ScenarioError, load_scenario
+from app.scenario import EXAMPLES_DIR, Scenario, ScenarioError, check_against, load_scenario
 from app.ui.commands import CommandSender, notify
 from app.ui.panels.widgets import DetailHint, from_user
 from app.ui.style import esc
@@ -55,18 +56,69 @@ def entry_detail(entry: Entry) -> str:
     return f"{entry.label} ({entry.path.name})" + (f": {first}." if first else "")
 
 
-def library(directory: Path = SCENARIO_DIR) -> list[Entry]:
-    """The scenarios of ``directory`` by name (file stem added when two share a name); a file
-    that does not load is left out with a warning, not shown broken."""
+def scenario_files(directory: Path) -> list[Path]:
+    """The ``*.toml`` files of ``directory``, sorted; OSError when it cannot be listed (a
+    glob would hide an unreadable folder as an empty one)."""
+    return sorted(p for p in directory.iterdir() if p.suffix == ".toml" and p.is_file())
+
+
+def library(*directories: Path) -> list[Entry]:
+    """The scenarios of ``directories`` (default: the shipped ones), folder by folder, by name.
+    Two that share a name are told apart by the file stem, and an own one that also shares
+    the stem of a shipped one by its folder too; a file that does not load is left out with a
+    warning, not shown broken."""
     found: list[tuple[Scenario, Path]] = []
-    for path in sorted(directory.glob("*.toml")):
-        try:
-            found.append((load_scenario(path), path))
-        except ScenarioError as exc:
-            logger.warning("scenario left out of the picker: %s", exc)
+    seen: set[Path] = set()
+    for directory in directories or (SCENARIO_DIR,):
+        if directory.resolve() in seen:  # --scenarios static/scenarios: listed once
+            continue
+        seen.add(directory.resolve())
+        for path in scenario_files(directory):
+            try:
+                found.append((load_scenario(path), path))
+            except ScenarioError as exc:
+                logger.warning("scenario left out of the picker: %s", exc)
     names = [s.name for s, _ in found]
-    return [Entry(s.name if names.count(s.name) == 1 else f"{s.name} ({p.stem})", p, s)
-            for s, p in found]
+    stems = [(s.name, p.stem) for s, p in found]
+
+    def label(scenario: Scenario, path: Path) -> str:
+        if names.count(scenario.name) == 1:
+            return scenario.name
+        if stems.count((scenario.name, path.stem)) == 1 \
+                or path.parent.resolve() == SCENARIO_DIR.resolve():
+            return f"{scenario.name} ({path.stem})"
+        return f"{scenario.name} ({path.parent.name}/{path.stem})"
+
+    return [Entry(label(s, p), p, s) for s, p in found]
+
+
+def own_scenarios(directory: str | Path, default_rig: Path = DEFAULT_RIG) -> Path:
+    """``--scenarios DIR`` checked before anything serves, as ``scenario run`` checks a file:
+    a folder that can be listed, with ``*.toml`` files that load and that their rig (the
+    default rig when they name none, as Play builds it) takes. Raises RigConfigError (the
+    folder) or ScenarioError (a file: its own message): one line and exit 2 at start, not a
+    scenario missing from the picker in front of a customer."""
+    folder = Path(directory)
+    if not folder.exists():
+        raise RigConfigError("--scenarios", "", f"{folder}: no such folder")
+    if not folder.is_dir():
+        raise RigConfigError("--scenarios", "", f"{folder}: not a folder (give the folder "
+                                                "that holds the *.toml files)")
+    try:
+        files = scenario_files(folder)
+    except OSError as exc:
+        raise RigConfigError("--scenarios", "", f"{folder}: cannot read it "
+                                                f"({exc.strerror or exc})") from None
+    if not files:
+        raise RigConfigError("--scenarios", "", f"{folder}: no *.toml in it")
+    rigs: dict[Path, Rig] = {}
+    for path in files:
+        scenario = load_scenario(path)
+        rig_file = Path(scenario.rig).resolve() if scenario.rig else default_rig.resolve()
+        if rig_file not in rigs:
+            rigs[rig_file] = build_rig(load_rig_spec(rig_file), state_dir=None)
+        check_against(scenario, rigs[rig_file])
+    return folder
 
 
 def marked(entries: list[Entry], player: Player) -> tuple[list[Entry], list[Path]]:
@@ -153,10 +205,13 @@ class ScenarioPlayerPanel:
     """Build inside the container it belongs to (a tab or the control panel)."""
 
     def __init__(self, server: viser.ViserServer, runtime: Runtime,
-                 directory: Path = SCENARIO_DIR, default_rig: Path = DEFAULT_RIG) -> None:
+                 directory: Path = SCENARIO_DIR, default_rig: Path = DEFAULT_RIG,
+                 own: Path | None = None) -> None:
+        """``own``: the folder of ``--scenarios DIR``, listed before ``directory``."""
         self.player = Player(runtime, default_rig)
         self._runtime = runtime
-        entries, rigs = marked(library(directory), self.player)
+        folders = (own, directory) if own is not None else (directory,)
+        entries, rigs = marked(library(*folders), self.player)
         self._entries = {e.label: e for e in entries}
         self.hint = other_rig_hint(rigs)
         self._loaded: Path | None = None
