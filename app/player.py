@@ -209,9 +209,16 @@ class Player:
         logger.info("scenario '%s' loaded", scenario.name)
 
     def restart(self) -> None:
-        """Back to the start of the loaded scenario, on a factory-fresh rig again."""
+        """Back to the start of the loaded scenario, on a factory-fresh rig again, playing on
+        if it was playing (a demo goes on from 0 s; a paused one waits at 0 s)."""
         scenario = self._require()
+        playing = self.playing()
         self.load(scenario)
+        if playing:
+            self.play()
+
+    def playing(self) -> bool:
+        return self.view().status is Status.PLAYING
 
     def play(self) -> None:
         self._require()

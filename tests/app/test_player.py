@@ -378,3 +378,50 @@ def test_next_step_shows_object_indexes_in_hex() -> None:
     write = Step(3, 2_000_000, "command", "drive", "write_register", {"register": 12,
                                                                       "value": 6000})
     assert describe_step(write) == "2 s: drive write_register register=12 value=6000"
+
+
+def test_restart_while_playing_plays_again_from_0(live: Live, scenario: Scenario) -> None:
+    """A demo's Restart goes on playing (before: "ready · t = 0.0 s", waiting for Play)."""
+    live.quiet()
+    live.player.load(scenario)
+    live.player.set_speed(MIN_SPEED)
+    live.player.play()
+    live.wait(lambda: live.t_us > 0, "the clock to run")
+    live.player.restart()
+    assert live.player.view().status is Status.PLAYING
+    assert live.player.view().generation == 2
+    live.wait(lambda: live.t_us > 0, "the clock to run again after the restart")
+
+
+def test_restart_while_paused_stays_paused(live: Live, scenario: Scenario) -> None:
+    live.quiet()
+    live.player.load(scenario)
+    live.player.step()
+    live.player.restart()
+    assert live.t_us == 0 and live.runtime.paused
+    assert live.player.view().status is Status.READY
+
+
+def test_the_panels_restart_keeps_playing(live: Live, tmp_path: Path) -> None:
+    """The Restart button goes through the panel (it loads the picked file again)."""
+    import viser
+
+    from app.screenshots import free_port
+    from app.ui.panels.scenario_player import PAUSE, RESTART, ScenarioPlayerPanel
+
+    path = tmp_path / "small_scenario.toml"  # beside small.toml (the scenario fixture's)
+    path.write_text(SCENARIO, encoding="utf-8")
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        panel = ScenarioPlayerPanel(server, live.runtime)
+        panel.load(load_scenario(path), path)
+        panel.player.set_speed(MIN_SPEED)
+        panel.player.play()
+        panel._run(None, RESTART)
+        assert panel.player.view().status is Status.PLAYING
+        assert panel.player.view().generation == 2
+        panel._run(None, PAUSE)
+        panel._run(None, RESTART)
+        assert panel.player.view().status is Status.READY and live.runtime.paused
+    finally:
+        server.stop()

@@ -251,8 +251,11 @@ class ScenarioPlayerPanel:
             elif choice == STEP:
                 self._ensure_loaded()
                 self.player.step()
-            elif choice == RESTART:
+            elif choice == RESTART:  # playing on if it was playing (docs/scenarios.md)
+                playing = self.player.playing()
                 self._ensure_loaded(force=True)
+                if playing:
+                    self.player.play()
         except RigMismatch as exc:  # the fix first and short; the device lists to the log
             logger.warning("%s", exc)
             notify(client, f"Scenario: {choice} refused", exc.fix, error=True)
