@@ -51,3 +51,20 @@ def test_the_table_is_the_drives_own_fieldbus(rig, text: str, message: str) -> N
 def test_codes_of_the_drives_table_pass(rig) -> None:
     check_against(parse_scenario(alarm("pn", "PROFINET_INIT_1") + alarm("mb", 35)
                                  + alarm("mb", "16"), "s.toml"), rig)
+
+
+def test_a_refused_alarm_reset_is_the_drives_reaction_not_a_failed_step(tmp_path,
+                                                                         capsys) -> None:
+    """Seed 004 ch. 5 / ch. 6 "Reset allarmi": a reset that does not succeed means the alarm
+    condition persists; the drive answers no error, it stays in Fault. The step passes (exit
+    0) and the run says so in the drive's log line; expect_error does not fit it."""
+    head = "[scenario]\nname = \"t\"\nduration_s = 2\n" + alarm("drive", 16)
+    reset = "[[step]]\nat = 1.0\ntarget = \"drive\"\naction = \"alarm_reset\"\n"
+    path = tmp_path / "s.toml"
+    path.write_text(head + reset, encoding="utf-8")
+    assert main(["scenario", "run", str(path), "--quiet", "--out", str(tmp_path / "o")]) == 0
+    events = (tmp_path / "o" / "events.jsonl").read_text(encoding="utf-8")
+    assert '"text": "alarm reset refused: alarm 16 persists' in events, events
+    path.write_text(head + reset + "expect_error = true\n", encoding="utf-8")
+    assert main(["scenario", "run", str(path), "--quiet"]) == 1
+    assert "expected an error, the command was accepted" in capsys.readouterr().err
