@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import datetime as dt
 import random
+import re
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -137,6 +138,30 @@ def not_utf8(exc: UnicodeDecodeError, declared: str | None = None) -> str:
     return f"not {what}: byte 0x{exc.object[exc.start]:02x} at offset {exc.start}"
 
 
+# What people write for a TOML boolean (``on = True``, ``on = yes``) and what TOML takes.
+_BOOLEAN_WORDS = {"true": "true", "false": "false", "yes": "true", "no": "false",
+                  "on": "true", "off": "false"}
+
+
+def not_toml(exc: tomllib.TOMLDecodeError, text: str) -> str:
+    """tomllib's message, and for its "Invalid value" the commonest cause fixed on the line it
+    names: an unquoted text value (``fault = module:0x04``) or a boolean written ``True`` or
+    ``yes``. One line."""
+    said = f"not valid TOML: {exc}"
+    found = re.match(r"Invalid value \(at line (\d+),", str(exc))
+    lines = text.splitlines()
+    if found is None or int(found[1]) > len(lines):
+        return said
+    key, sep, value = lines[int(found[1]) - 1].partition("=")
+    value = value.split(" #", 1)[0].strip()
+    if not sep or not value:
+        return said
+    boolean = _BOOLEAN_WORDS.get(value.lower())
+    if boolean is not None:
+        return f"{said}: a yes/no value is true or false, lower case: {key.strip()} = {boolean}"
+    return f'{said}: text values need quotes: {key.strip()} = "{value}"'
+
+
 def load_rig_spec(path: str | Path) -> RigSpec:
     source = str(path)
     try:
@@ -152,7 +177,7 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise RigConfigError(source, "", f"not valid TOML: {exc}") from None
+        raise RigConfigError(source, "", not_toml(exc, text)) from None
     top = _Table(source, "", data)
     rig = _Table(source, "rig", top.get("rig", dict, {}))
     name = rig.get("name", str, "rig")

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from app.rig import Rig
-from app.rig_config import RigConfigError, not_utf8
+from app.rig_config import RigConfigError, not_toml, not_utf8
 from app.targets import parse_target
 from devices.device import UNKNOWN_MODULE, CommandError
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
@@ -149,7 +149,7 @@ def parse_scenario(text: str, source: str = "<scenario>",
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise fail("", f"not valid TOML: {exc}") from None
+        raise fail("", not_toml(exc, text)) from None
     unknown = sorted(set(data) - {"scenario", "step", "on"})
     if unknown:
         raise fail(unknown[0], "unknown key (a scenario has [scenario], [[step]] and [[on]] "

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from app.rig_config import not_utf8
+from app.rig_config import not_toml, not_utf8
 from app.scenario import Scenario, ScenarioError, parse_scenario
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
@@ -49,7 +49,7 @@ def split_exercise(text: str, source: str = "<exercise>") -> tuple[str, Mapping[
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{source}: not valid TOML: {exc}") from None
+        raise ScenarioError(f"{source}: {not_toml(exc, text)}") from None
     table = data.get("exercise")
     if table is None:
         return text, None

@@ -170,3 +170,37 @@ def test_an_unknown_device_names_what_each_targetable_id_is() -> None:
         "drive_co, drive_co-can (the CANopen node of drive_co), drive_ec, drive_ec-can (the "
         "CANopen node of drive_ec), drive_ec-ecat (the EtherCAT CoE slave of drive_ec), "
         "master)")
+
+
+@pytest.mark.parametrize(("line", "hint"), [
+    ("fault = module:0x04", 'text values need quotes: fault = "module:0x04"'),
+    ("name = Sales demo  # mine", 'text values need quotes: name = "Sales demo"'),
+    ("on = True", "a yes/no value is true or false, lower case: on = true"),
+    ("on = no", "a yes/no value is true or false, lower case: on = false"),
+])
+def test_an_invalid_toml_value_gets_a_hint(line: str, hint: str) -> None:
+    """tomllib's "Invalid value (at line 3, column 9)" alone did not say what to change; its
+    commonest cause is an unquoted text value. One line still."""
+    text = f"[scenario]\nname = \"x\"\n{line}\n"
+    with pytest.raises(ScenarioError) as exc:
+        parse_scenario(text, "bad.toml")
+    column = line.index("=") + 3
+    assert str(exc.value) == f"bad.toml: not valid TOML: Invalid value (at line 3, column " \
+                             f"{column}): {hint}"
+
+
+def test_the_hint_is_for_invalid_values_only() -> None:
+    with pytest.raises(ScenarioError) as exc:
+        parse_scenario("[scenario]\nname = \"x\n", "bad.toml")
+    assert str(exc.value) == "bad.toml: not valid TOML: Illegal character '\\n' (at line 2, " \
+                             "column 10)"
+
+
+def test_rig_and_exercise_files_get_the_hint_too() -> None:
+    from app.classroom.exercise_file import split_exercise
+    from app.rig_config import RigConfigError, parse_rig_spec
+
+    with pytest.raises(RigConfigError, match=r'text values need quotes: type = "DI16"$'):
+        parse_rig_spec("[rig]\ntype = DI16\n", "r.toml")
+    with pytest.raises(ScenarioError, match=r'text values need quotes: fault = "x"$'):
+        split_exercise("[exercise]\nfault = x\n", "e.toml")
