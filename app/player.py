@@ -186,6 +186,7 @@ class Player:
             rig = self.runtime.rig
             if fresh is not rig:
                 reset_in_place(rig, fresh)
+            rig.scenario = scenario.name  # before the load's events: the recorder's run row
             with self._lock:
                 self._scenario = scenario
                 self._next = 0

@@ -30,6 +30,9 @@ class Rig:
     devices: dict[str, DeviceModel]
     clock: SimClock = field(default_factory=SimClock)
     seed: int = 0
+    # The name of the scenario played on this rig ("" none), set by run_scenario and the
+    # player's load: a recording names it (app/recording), or a handed-over file says no demo.
+    scenario: str = ""
 
     # False: advance() steps one step at a time (the quiet-span differential tests).
     SKIP_SPANS: ClassVar[bool] = True

@@ -415,6 +415,7 @@ def run_scenario(scenario: Scenario, rig: Rig,
     every simulation step (and after each applied step) with the events it produced.
     """
     check_against(scenario, rig)
+    rig.scenario = scenario.name
     failures: list[str] = []
     install_reactions(scenario, rig, failures)
     # What the rig emitted when built (devices its file powers) comes first, at t = 0: left

@@ -300,6 +300,7 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     images: list[Path] = []
+    rig.scenario = scenario.name  # a --record recording is named after it from its start
     with served_run(rig, record=record, quiet=quiet) as (served, events), \
             Chromium(chromium) as browser:
         page = browser.open(served, show_player=True)

@@ -125,6 +125,8 @@ class RigRecorder:
         # The rig's own reading of AL status codes (event_text.al_status_reader), set by
         # attach_to_runtime / scenario_observer; None: the ETG text only.
         self.al_status: event_text.AlStatusReader | None = None
+        # The scenario played on the rig ("" none: Rig.scenario), set with al_status.
+        self.scenario_of: Callable[[], str] | None = None
 
     # ---- what the simulation side calls ----------------------------------------------------
     def quiet_until(self, now_us: int, step_us: int) -> int:
@@ -247,7 +249,19 @@ class RigRecorder:
         column = self._texts.setdefault(event_text.RIG_LOG, _Column())
         column.times.append(at)
         column.values.append(f"run {self.runs}: the rig restarted (rig time 0 s is "
-                             f"{at / 1e6:g} s of this recording)")
+                             f"{at / 1e6:g} s of this recording)"
+                             + (f": scenario '{self._scenario()}'" if self._scenario() else ""))
+        column.levels.append("INFO")
+        self._buffered += 1
+
+    def _scenario(self) -> str:
+        """The scenario played on the rig ("" none)."""
+        return self.scenario_of() if self.scenario_of is not None else ""
+
+    def _session_row(self, at: int, text: str) -> None:
+        column = self._texts.setdefault(event_text.RIG_LOG, _Column())
+        column.times.append(at)
+        column.values.append(text)
         column.levels.append("INFO")
         self._buffered += 1
 
@@ -299,8 +313,12 @@ class RigRecorder:
 
     def _start(self, snapshot: Mapping[str, Any], t_us: int) -> None:
         self._named = True
+        scenario = self._scenario()  # a handed-over file says which demo it is
         if snapshot.get("rig"):
-            self._rec.send_recording_name(str(snapshot["rig"]))
+            self._rec.send_recording_name(str(snapshot["rig"])
+                                          + (f" · {scenario}" if scenario else ""))
+        if scenario:
+            self._session_row(t_us + self._offset_us, f"run {self.runs}: scenario '{scenario}'")
         if self._send_blueprint:
             self._rec.send_blueprint(rig_blueprint(snapshot, t_us))
 
@@ -361,6 +379,7 @@ def attach_to_runtime(runtime: Runtime, recorder: RigRecorder, repeat: bool = Tr
     rig = runtime.rig
     recorder.al_status = event_text.al_status_reader(rig.devices)
     recorder.load_count = lambda: rig.loads
+    recorder.scenario_of = lambda: rig.scenario
 
     def on_batch(events: list[Event]) -> None:
         t_us = rig.clock.now_us
@@ -394,6 +413,7 @@ def scenario_observer(recorder: RigRecorder) -> Callable[[Rig, list[Event]], Non
         if recorder.al_status is None:
             recorder.al_status = event_text.al_status_reader(rig.devices)
             recorder.load_count = lambda: rig.loads
+            recorder.scenario_of = lambda: rig.scenario
         t_us = rig.clock.now_us
         recorder.observe(t_us, rig.snapshot() if recorder.sample_due(t_us) else None, events)
 
