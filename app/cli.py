@@ -6,7 +6,9 @@ Classroom (issue 6, docs/classroom.md): ``--rig`` again or ``--rigs N`` serves s
 port each from ``--port`` up; a non-loopback ``--host`` asks for an instructor token (printed,
 or ``--instructor-token``); every served session is recorded unless ``--no-record``.
 Bad input (a broken rig or scenario file, a bad flag) prints one line and exits 2, with no
-traceback. ``--run-for SECONDS`` stops serving after that many wall seconds (exit 0).
+traceback; so does the machine failing a run (a file that cannot be written, the browser of
+``--screenshots`` dying), with exit 3 (docs/scenarios.md "Exit codes").
+``--run-for SECONDS`` stops serving after that many wall seconds (exit 0).
 """
 
 from __future__ import annotations
@@ -24,10 +26,11 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from app.cli_parser import Parser
-from app.out_paths import check_out, check_record, prepare_out
+from app.out_paths import EVENTS_FILE, check_out, check_record, image_name, prepare_out
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.scenario import (
     EXAMPLES_DIR,
+    Scenario,
     ScenarioError,
     check_against,
     load_scenario,
@@ -37,15 +40,17 @@ from app.scenario import (
 if TYPE_CHECKING:
     from app.rig import Rig
 
-EXIT_BAD_INPUT = 2
 EXIT_SCENARIO_FAILED = 1
+EXIT_BAD_INPUT = 2
+EXIT_MACHINE_FAILED = 3  # an OSError (a file system, the screenshots' browser): not the input
 # In every --help (docs/scenarios.md says the same): keep it in step with the codes above.
 EXIT_CODES_HELP = (
     f"exit codes: 0 ok (serving: stopped by Ctrl-C, SIGTERM or --run-for); "
     f"{EXIT_SCENARIO_FAILED} a scenario step failed (scenario run); "
     f"{EXIT_BAD_INPUT} bad input: a bad flag, a wrong rig, scenario or exercise file, an output "
-    "path that cannot take the output, a host or port that cannot be served (one 'fieldrig: "
-    "error:' line, no traceback)")
+    "path that cannot take the output, a host or port that cannot be served; "
+    f"{EXIT_MACHINE_FAILED} the machine failed the run (a file that cannot be written, the "
+    "screenshots' browser); every error one 'fieldrig: error:' line, no traceback")
 
 
 def _serve_parser() -> argparse.ArgumentParser:
@@ -149,6 +154,16 @@ def main(argv: list[str] | None = None) -> int:
     except (RigConfigError, ScenarioError) as exc:
         print(f"fieldrig: error: {exc}", file=sys.stderr)
         return EXIT_BAD_INPUT
+    except OSError as exc:  # screenshots.ScreenshotError and devices' FlashError too
+        print(f"fieldrig: error: {_os_error_text(exc)}", file=sys.stderr)
+        return EXIT_MACHINE_FAILED
+
+
+def _os_error_text(exc: OSError) -> str:
+    """``PATH: Is a directory`` rather than ``[Errno 21] Is a directory: 'PATH'``."""
+    if exc.strerror and exc.filename is not None:
+        return f"{exc.filename}: {exc.strerror}"
+    return str(exc) or type(exc).__name__
 
 
 def _scenario(args: argparse.Namespace) -> int:
@@ -166,7 +181,7 @@ def _scenario(args: argparse.Namespace) -> int:
     # looks complete beside a traceback.
     if args.record:
         check_record(args.record)
-    out = check_out(args.out) if args.out else None
+    out = check_out(args.out, _run_files(scenario, args.screenshots)) if args.out else None
     if out is not None:
         prepare_out(out)
     if args.screenshots:
@@ -193,6 +208,12 @@ def _scenario(args: argparse.Namespace) -> int:
     for failure in result.failures:
         print(f"fieldrig: scenario step failed: {failure}", file=sys.stderr)
     return EXIT_SCENARIO_FAILED if result.failures else 0
+
+
+def _run_files(scenario: Scenario, screenshots: bool) -> list[str]:
+    """The names the run writes into --out: its events, and a picture per checkpoint."""
+    checkpoints = [s for s in scenario.steps if s.kind == "checkpoint"] if screenshots else []
+    return [EVENTS_FILE, *(image_name(i, s.text) for i, s in enumerate(checkpoints, 1))]
 
 
 def _scenario_list() -> int:

@@ -12,13 +12,20 @@ from __future__ import annotations
 import os
 import re
 import tempfile
+from collections.abc import Iterable
 from pathlib import Path
 
 from app.rig_config import RigConfigError
 
-# What a run writes into --out (app/screenshots.py image_name, app/cli.py): nothing else is
-# ever removed.
+# What a run writes into --out (image_name, app/cli.py): nothing else is ever removed.
+EVENTS_FILE = "events.jsonl"
 RUN_FILE = re.compile(r"(events\.jsonl|\d{2,}-[A-Za-z0-9_.-]+\.png)")
+
+
+def image_name(number: int, checkpoint: str) -> str:
+    """``03-in_alarm.png``: numbered in scenario order, the name made file-safe."""
+    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", checkpoint).strip("_.") or "checkpoint"
+    return f"{number:02d}-{safe}.png"
 
 
 def _writable_parent(path: Path, flag: str) -> None:
@@ -63,13 +70,21 @@ def check_record(path: str | Path, flag: str = "--record") -> Path:
     return target
 
 
-def check_out(path: str | Path) -> Path:
-    """A directory ``--out`` may be (existing or to be created); nothing is created."""
+def check_out(path: str | Path, names: Iterable[str] = (EVENTS_FILE,)) -> Path:
+    """A directory ``--out`` may be (existing or to be created), where each of ``names`` (the
+    files this run will write) is free or a file of an earlier run; nothing is created."""
     out = Path(path)
     if out.exists():
         if not out.is_dir():
             raise RigConfigError("--out", "", f"{out} is a file, not a directory")
         _can_make_files(out, "--out", f"{out}: cannot write in it")
+        for name in names:
+            # Not removed before the run (not a file a run wrote): the run failed on it at
+            # the end (events.jsonl) or mid-run (a screenshot), after all the work.
+            taken = out / name
+            if taken.is_symlink() or (taken.exists() and not taken.is_file()):
+                raise RigConfigError("--out", "", f"{taken} is in the way (not a file); this "
+                                                  "run writes its file there")
     else:
         _writable_parent(out, "--out")
     return out
@@ -84,6 +99,10 @@ def prepare_out(out: Path) -> list[Path]:
     removed = []
     for entry in sorted(out.iterdir()):
         if RUN_FILE.fullmatch(entry.name) and entry.is_file() and not entry.is_symlink():
-            entry.unlink()
+            try:
+                entry.unlink()
+            except OSError as exc:
+                raise RigConfigError("--out", "", f"{entry}: cannot remove the earlier "
+                                                  f"run's file: {exc.strerror or exc}") from None
             removed.append(entry)
     return removed

@@ -21,7 +21,6 @@ import io
 import json
 import logging
 import os
-import re
 import socket
 import sys
 import tempfile
@@ -33,10 +32,11 @@ from typing import Any
 
 import viser
 
+from app.out_paths import image_name
 from app.player import Status
 from app.rig import Rig
 from app.runtime import Runtime
-from app.scenario import Scenario, ScenarioError, Step, check_against
+from app.scenario import Scenario, Step, check_against
 from app.ui.dashboard import Dashboard
 from app.ui.panels.scenario_player import PLAYER_FOLDER, STATUS_ID
 from devices.events import Event
@@ -61,9 +61,24 @@ POINTER_PARK = (640, 12)  # on the title bar: no hover outline, no tooltip
 TITLE_TO_TOP_JS = "el => el.scrollIntoView({block: 'start', inline: 'nearest'})"
 
 
-class ScreenshotError(ScenarioError):
-    """The browser side failed (no Chromium, a page that never connects): one line for the
-    CLI, like a bad scenario file."""
+class ScreenshotError(OSError):
+    """The browser side failed (no Chromium, a page that never connects, Chromium dying): the
+    machine failed the run, not its input. An OSError, as a file that cannot be written is:
+    one line and exit 3 for the CLI (docs/scenarios.md "Exit codes")."""
+
+
+@contextlib.contextmanager
+def _browser_failures() -> Iterator[None]:
+    """Playwright's errors (TargetClosedError when Chromium dies, its TimeoutError) as
+    :class:`ScreenshotError`, with the first line of their message (the rest is the
+    browser's log)."""
+    from playwright.sync_api import Error as PlaywrightError
+
+    try:
+        yield
+    except PlaywrightError as exc:
+        first = (exc.message or type(exc).__name__).splitlines()[0]
+        raise ScreenshotError(f"the browser failed: {first}") from exc
 
 
 def free_port() -> int:
@@ -274,12 +289,6 @@ class ScreenshotRun:
     images: list[Path] = field(default_factory=list)
 
 
-def image_name(number: int, checkpoint: str) -> str:
-    """``03-in_alarm.png``: numbered in scenario order, the name made file-safe."""
-    safe = re.sub(r"[^A-Za-z0-9_.-]+", "_", checkpoint).strip("_.") or "checkpoint"
-    return f"{number:02d}-{safe}.png"
-
-
 def event_lines(events: list[Event]) -> str:
     """The JSON lines of ``scenario run`` (app/cli.py)."""
     return "".join(json.dumps(e.to_record(), default=str) + "\n" for e in events)
@@ -301,7 +310,8 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
     out.mkdir(parents=True, exist_ok=True)
     images: list[Path] = []
     rig.scenario = scenario.name  # a --record recording is named after it from its start
-    with served_run(rig, record=record, quiet=quiet) as (served, events), \
+    with _browser_failures(), \
+            served_run(rig, record=record, quiet=quiet) as (served, events), \
             Chromium(chromium) as browser:
         page = browser.open(served, show_player=True)
         failures = play(served, scenario, rig,
