@@ -17,6 +17,7 @@ import argparse
 import contextlib
 import json
 import logging
+import os
 import signal
 import sys
 import threading
@@ -199,15 +200,28 @@ def _scenario(args: argparse.Namespace) -> int:
             recorder.close()
     else:
         result = run_scenario(scenario, rig)
-    lines = [json.dumps(e.to_record(), default=str) for e in result.events]
+    text = "".join(json.dumps(e.to_record(), default=str) + "\n" for e in result.events)
+    if out is not None:  # first: a reader of stdout that stops early must not cost the file
+        (out / EVENTS_FILE).write_text(text, encoding="utf-8")
     if not args.quiet:
-        sys.stdout.write("".join(line + "\n" for line in lines))
-    if out is not None:
-        (out / "events.jsonl").write_text("".join(line + "\n" for line in lines),
-                                          encoding="utf-8")
+        _stdout(text)
     for failure in result.failures:
         print(f"fieldrig: scenario step failed: {failure}", file=sys.stderr)
     return EXIT_SCENARIO_FAILED if result.failures else 0
+
+
+def _stdout(text: str) -> None:
+    """Write to stdout. A reader that stopped reading (``| head -1``, ``| true``) is not an
+    error: what it did not take goes to devnull (the recipe of the Python docs' "Note on
+    SIGPIPE", so the flush at exit does not fail again) and the exit code stays the
+    command's own (docs/scenarios.md "Exit codes")."""
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
 
 
 def _run_files(scenario: Scenario, screenshots: bool) -> list[str]:
@@ -232,7 +246,7 @@ def _scenario_list() -> int:
             continue
         rig = Path(scenario.rig) if scenario.rig else DEFAULT_RIG
         name = " ".join(scenario.name.split())  # one line, one column, whatever the file says
-        print(f"{shown_path(path)}\t{name}\t{shown_path(rig)}")
+        _stdout(f"{shown_path(path)}\t{name}\t{shown_path(rig)}\n")
     return EXIT_BAD_INPUT if broken else 0
 
 
