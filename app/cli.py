@@ -27,7 +27,14 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from app.cli_parser import Parser
-from app.out_paths import EVENTS_FILE, check_out, check_record, image_name, prepare_out
+from app.out_paths import (
+    EVENTS_FILE,
+    check_out,
+    check_record,
+    image_name,
+    prepare_out,
+    write_events,
+)
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.scenario import (
     EXAMPLES_DIR,
@@ -170,6 +177,30 @@ def _os_error_text(exc: OSError) -> str:
 def _scenario(args: argparse.Namespace) -> int:
     if args.verb == "list":
         return _scenario_list()
+    # A CI job's timeout (SIGTERM) ends a run as Ctrl-C does: the recording is closed, the
+    # server and browser of --screenshots stopped, and one line says what is left.
+    with _sigterm_as_interrupt():
+        try:
+            return _scenario_run(args)
+        except KeyboardInterrupt as exc:
+            return _interrupted(args, exc)
+
+
+def _interrupted(args: argparse.Namespace, exc: KeyboardInterrupt) -> int:
+    """One line; exit 128 + the signal, as a shell reports a process the signal ended. An
+    --out without events.jsonl (removed before the run, written last) is a run that did not
+    finish: its pictures so far stay (docs/scenarios.md "Output folder")."""
+    signum = exc.signum if isinstance(exc, Terminated) else signal.SIGINT
+    what = []
+    if args.out and not (Path(args.out) / EVENTS_FILE).exists():
+        what.append(f"{args.out} is incomplete (no {EVENTS_FILE})")
+    if args.record and Path(args.record).exists():
+        what.append(f"{args.record} stops at the interruption")
+    print("fieldrig: interrupted" + (": " + "; ".join(what) if what else ""), file=sys.stderr)
+    return 128 + signum
+
+
+def _scenario_run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.file)
     rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
     rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
@@ -202,7 +233,7 @@ def _scenario(args: argparse.Namespace) -> int:
         result = run_scenario(scenario, rig)
     text = "".join(json.dumps(e.to_record(), default=str) + "\n" for e in result.events)
     if out is not None:  # first: a reader of stdout that stops early must not cost the file
-        (out / EVENTS_FILE).write_text(text, encoding="utf-8")
+        write_events(out, text)
     if not args.quiet:
         _stdout(text)
     for failure in result.failures:
@@ -322,18 +353,26 @@ def _serve(args: argparse.Namespace) -> int:
     return 0
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised as Ctrl-C's KeyboardInterrupt is (``scenario run`` tells them apart
+    for its exit code)."""
+
+    signum = signal.SIGTERM
+
+
 @contextlib.contextmanager
 def _sigterm_as_interrupt() -> Iterator[None]:
-    """SIGTERM stops serving as Ctrl-C does. A service manager (systemd, docker, a CI job's
-    timeout) stops a process with SIGTERM, whose default action ends it at once: the
-    recordings were left without the footer a closed Rerun file gets, and the servers were not
-    shut down. Only the main thread may set a handler; the previous one is put back."""
+    """SIGTERM stops serving, or a scenario run, as Ctrl-C does. A service manager (systemd,
+    docker, a CI job's timeout) stops a process with SIGTERM, whose default action ends it at
+    once: the recordings were left without the footer a closed Rerun file gets, the servers
+    were not shut down, and a run said nothing. Only the main thread may set a handler; the
+    previous one is put back."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
     def interrupt(_signum: int, _frame: object) -> None:
-        raise KeyboardInterrupt
+        raise Terminated
 
     previous = signal.signal(signal.SIGTERM, interrupt)
     try:

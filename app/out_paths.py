@@ -106,3 +106,19 @@ def prepare_out(out: Path) -> list[Path]:
                                                   f"run's file: {exc.strerror or exc}") from None
             removed.append(entry)
     return removed
+
+
+def write_events(out: Path, text: str) -> Path:
+    """``out/events.jsonl``, the last file of a run, whole or not at all: written to a
+    temporary file in ``out`` and renamed over (atomic on POSIX), so a reader never sees half
+    a file and a folder without it is a run that did not finish (docs/scenarios.md "Output
+    folder"). The temporary file goes if the write fails or is interrupted."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{EVENTS_FILE}.", dir=out)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, out / EVENTS_FILE)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return out / EVENTS_FILE

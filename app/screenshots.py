@@ -32,7 +32,7 @@ from typing import Any
 
 import viser
 
-from app.out_paths import image_name
+from app.out_paths import image_name, write_events
 from app.player import Status
 from app.rig import Rig
 from app.runtime import Runtime
@@ -317,7 +317,7 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
         failures = play(served, scenario, rig,
                         lambda step: images.append(_shoot(page, out, len(images) + 1, step)))
         page.close()
-    (out / "events.jsonl").write_text(event_lines(events), encoding="utf-8")
+    write_events(out, event_lines(events))
     return ScreenshotRun(events, failures, images)
 
 
