@@ -31,6 +31,7 @@ from app.out_paths import (
     EVENTS_FILE,
     check_out,
     check_record,
+    check_state_dir,
     image_name,
     prepare_out,
     write_events,
@@ -203,6 +204,8 @@ def _interrupted(args: argparse.Namespace, exc: KeyboardInterrupt) -> int:
 def _scenario_run(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.file)
     rig_path = args.rig or scenario.rig or str(DEFAULT_RIG)
+    if args.state_dir is not None:  # before build_rig reads the flash files there
+        check_state_dir(args.state_dir)
     rig = build_rig(load_rig_spec(rig_path), state_dir=args.state_dir)
     # The whole file is checked against the rig before anything starts (a server, a browser,
     # a recording): a wrong file is one error line and exit 2 in every mode.

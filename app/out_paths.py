@@ -1,4 +1,5 @@
-"""Where a run writes: ``--out DIR`` and ``--record FILE`` checked before anything runs.
+"""Where a run writes: ``--out DIR``, ``--record FILE`` and ``scenario run --state-dir DIR``
+checked before anything runs.
 
 A path that cannot take the output is a user's mistake like a wrong scenario file: one
 ``fieldrig: error:`` line and exit 2 before the run, not a traceback after it (with a recording
@@ -88,6 +89,20 @@ def check_out(path: str | Path, names: Iterable[str] = (EVENTS_FILE,)) -> Path:
     else:
         _writable_parent(out, "--out")
     return out
+
+
+def check_state_dir(path: str | Path) -> Path:
+    """A directory ``scenario run --state-dir`` may keep flash files in (existing or to be
+    created); nothing is created. A run whose flash write fails gives another result than
+    the one asked for (a SAVE_FLASH alarm): that is a bad flag, said before the run."""
+    state = Path(path)
+    if state.exists():
+        if not state.is_dir():
+            raise RigConfigError("--state-dir", "", f"{state} is a file, not a directory")
+        _can_make_files(state, "--state-dir", f"{state}: cannot write flash files in it")
+    else:
+        _writable_parent(state, "--state-dir")
+    return state
 
 
 def prepare_out(out: Path) -> list[Path]:

@@ -109,3 +109,28 @@ def test_a_place_no_file_can_be_made_is_refused_for_root_too(
     code = main(["scenario", "run", str(scenario), flag, path, "--quiet"])
     err = one_error_line(capsys.readouterr().err)
     assert code == 2 and flag in err and "/proc" in err
+
+
+@pytest.mark.parametrize("where", ["a file", "/proc/fieldrig-state", "/proc"])
+def test_a_state_dir_that_cannot_keep_flash_is_refused_before_the_run(
+        scenario: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str], where: str) -> None:
+    """A file was a FlashError traceback; a folder no file can be made in (for root too:
+    /proc) ran to exit 0 with another result than asked for, a SAVE_FLASH alarm in it, as
+    the flash write the run needed failed. A served rig keeps that simulated flash failure
+    (docs/rig-file.md "Where the flash lives"); a scenario run is refused."""
+    state_dir = tmp_path / "plain" if where == "a file" else Path(where)
+    if where == "a file":
+        state_dir.write_text("mine", encoding="utf-8")
+    code = main(["scenario", "run", str(scenario), "--state-dir", str(state_dir), "--quiet"])
+    err = one_error_line(capsys.readouterr().err)
+    assert code == 2 and "--state-dir" in err and str(state_dir) in err
+    if where == "a file":
+        assert state_dir.read_text(encoding="utf-8") == "mine"
+
+
+def test_a_state_dir_to_be_made_is_fine(scenario: Path, tmp_path: Path,
+                                        capsys: pytest.CaptureFixture[str]) -> None:
+    state_dir = tmp_path / "new" / "state"
+    assert main(["scenario", "run", str(scenario), "--state-dir", str(state_dir),
+                 "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
