@@ -121,7 +121,11 @@ def _scenario_parser() -> argparse.ArgumentParser:
                                 "(tab-separated)")
     run = sub.add_parser("run", help="run a scenario file", epilog=EXIT_CODES_HELP)
     run.add_argument("file", help="scenario TOML file")
-    run.add_argument("--out", default=None, help="directory for events.jsonl")
+    run.add_argument("--out", default=None, metavar="DIR",
+                     help="directory for events.jsonl (and the screenshots); it gets this "
+                          "run's files only: before the run it removes any events.jsonl and "
+                          "NN-name.png there (an earlier run's, or yours of those names), "
+                          "each said on stderr; other files stay")
     run.add_argument("--quiet", action="store_true",
                      help="do not print events on stdout (with --screenshots: nor viser's "
                           "banner on stderr)")
@@ -218,7 +222,9 @@ def _scenario_run(args: argparse.Namespace) -> int:
         check_record(args.record)
     out = check_out(args.out, _run_files(scenario, args.screenshots)) if args.out else None
     if out is not None:
-        prepare_out(out)
+        for removed in prepare_out(out):  # stderr: stdout is the event lines a pipeline reads
+            print(f"fieldrig: removed {removed} (--out holds this run's files only)",
+                  file=sys.stderr)
     if args.screenshots:
         from app.screenshots import run_with_screenshots
 

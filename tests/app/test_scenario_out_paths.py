@@ -134,3 +134,27 @@ def test_a_state_dir_to_be_made_is_fine(scenario: Path, tmp_path: Path,
     assert main(["scenario", "run", str(scenario), "--state-dir", str(state_dir),
                  "--quiet"]) == 0
     assert capsys.readouterr().err == ""
+
+
+def test_each_removed_file_is_said_on_stderr_not_stdout(
+        scenario: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A user's own ``01-op.png`` in --out goes like an earlier run's: each removal is one
+    line on stderr (stdout is the event lines a pipeline parses)."""
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    for name in ("01-op.png", "events.jsonl"):
+        (out_dir / name).write_text("mine", encoding="utf-8")
+    (out_dir / "notes.txt").write_text("keep", encoding="utf-8")
+    assert main(["scenario", "run", str(scenario), "--out", str(out_dir)]) == 0
+    out, err = capsys.readouterr()
+    why = "(--out holds this run's files only)"
+    assert err.splitlines() == [f"fieldrig: removed {out_dir / '01-op.png'} {why}",
+                                f"fieldrig: removed {out_dir / 'events.jsonl'} {why}"]
+    assert "removed" not in out
+
+
+def test_out_help_says_it_removes_files(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["scenario", "run", "--help"])
+    help_text = " ".join(capsys.readouterr().out.split())
+    assert "removes" in help_text and "events.jsonl" in help_text and "NN-name.png" in help_text
