@@ -59,7 +59,8 @@ EXIT_CODES_HELP = (
     f"{EXIT_BAD_INPUT} bad input: a bad flag, a wrong rig, scenario or exercise file, an output "
     "path that cannot take the output, a host or port that cannot be served; "
     f"{EXIT_MACHINE_FAILED} the machine failed the run (a file that cannot be written, the "
-    "screenshots' browser); every error one 'fieldrig: error:' line, no traceback")
+    "screenshots' browser); 130 / 143 a scenario run interrupted by SIGINT / SIGTERM; every "
+    "error one 'fieldrig: error:' line, no traceback")
 
 
 def _serve_parser() -> argparse.ArgumentParser:
