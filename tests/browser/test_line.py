@@ -272,7 +272,7 @@ def test_objects_tab_shows_every_slave(line: LiveDashboard, device: str, index: 
 def test_scenario_focus_steps_pick_the_device(dashboard_for: Any) -> None:
     """A line scenario played in the dashboard (static/scenarios/cpx_short_circuit.toml): its
     ``focus = "cpx:2"`` steps pick the CPX-E-EC in the Slave tab, the Slave actions form and
-    the Objects tab, as a click would; its ``focus = "master"`` only moves the camera."""
+    the Objects tab, as a click would."""
     from app.player import Status
     from app.scenario import load_scenario
 

@@ -1,0 +1,100 @@
+"""Each example scenario's checkpoint picture is on the device its caption is about.
+
+``scenario run --screenshots`` takes a checkpoint's picture where the last ``focus`` step left
+the camera (and the left panel's tab, docs/dashboard.md "Focus"), under the last caption. A
+sales walkthrough found captions about the TRS-CAT and the CPX-E-EC over pictures of the
+master (trscat_expansion_mismatch ``safeop_refused``, cpx_short_circuit ``short_circuit``).
+
+What a caption is about is a judgement, written down once in EXPECTED for every checkpoint
+whose caption names a device; the tests check that the judgement names a device the caption
+names, that no checkpoint is left unjudged, and that the scenario files focus as judged.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from app.scenario import Scenario, load_scenario
+
+SCENARIOS = sorted((Path(__file__).resolve().parents[2] / "static" / "scenarios")
+                   .glob("*.toml"))
+# How captions name the default rig's devices (the line's bodies and the drive's axis).
+NAMES = {
+    "master": r"\bmaster\b",
+    "fastcat": r"\bFastCAT\b|\bcoupler\b",
+    "trscat": r"\bTRS-CAT\b",
+    "cpx": r"\bCPX-E\b",
+    "drive_ec": r"\bdrive_ec\b",
+    "drive": r"\bdrive\b(?!_)|\bmotor\b",
+}
+# (scenario, checkpoint) -> the device the picture must be on; None: the whole line (no focus
+# step before it), where every device of the line is in view and the left panel stays on the
+# FastCAT's State tab.
+EXPECTED: dict[tuple[str, str], str | None] = {
+    # "The line powers up: the master sees link, then brings ... to OP": the Line tab's
+    # slave table shows every slave's state.
+    ("cable_pulled", "line_in_op"): "master",
+    ("cable_pulled", "cable_pulled"): "cpx",  # cut off behind cable 2
+    ("cable_pulled", "recovered"): "master",  # "the master finds both slaves again"
+    ("cnf_scan", "op"): None,  # the coupler's own scan: the whole rail in view
+    ("config_mismatch", "mismatch"): None,
+    ("cpx_short_circuit", "output_on"): "cpx",
+    ("cpx_short_circuit", "short_circuit"): "cpx",  # the module's red LED, SF, 0x10F3
+    ("dc_sync_lost", "compensating"): "master",  # the master's DC state
+    # "... the master cannot follow the network clock any more: NOT_SYNCHRONIZED": the
+    # master's screen, and the Line tab's slave table with the DC slaves in SAFEOP.
+    ("dc_sync_lost", "not_synchronized"): "master",
+    ("dc_sync_lost", "resynchronized"): "master",
+    ("drive_jammed_load", "following_error"): "drive",  # alarm 16 on the Drive tab
+    ("module_lost_in_op", "recovered"): None,
+    ("trscat_expansion_mismatch", "line_in_op"): None,
+    ("trscat_expansion_mismatch", "safeop_refused"): "trscat",  # PREOP, ERROR blinking
+    ("trscat_expansion_mismatch", "fixed"): "trscat",
+    ("trscat_outputs_fallback", "outputs_on"): "trscat",
+    ("trscat_outputs_fallback", "outputs_fallback"): "trscat",
+    # "... takes the TRS-CAT back to OP and the outputs follow the PLC again": its LEDs.
+    ("trscat_outputs_fallback", "recovered"): "trscat",
+}
+
+
+def checkpoints(scenario: Scenario) -> list[tuple[str, str, str | None]]:
+    """(checkpoint, caption shown, focused device) at each checkpoint, in play order."""
+    caption, focus, out = "", None, []
+    for step in scenario.steps:
+        if step.kind == "caption":
+            caption = step.text
+        elif step.kind == "focus":
+            focus = step.target.split(":", 1)[0]
+        elif step.kind == "checkpoint":
+            out.append((step.text, caption, focus))
+    return out
+
+
+def named(caption: str) -> set[str]:
+    return {device for device, pattern in NAMES.items() if re.search(pattern, caption)}
+
+
+ALL = [(path.stem, name, caption, focus) for path in SCENARIOS
+       for name, caption, focus in checkpoints(load_scenario(path))]
+
+
+def test_every_checkpoint_naming_a_device_is_judged() -> None:
+    unjudged = [(stem, name) for stem, name, caption, _ in ALL
+                if named(caption) and (stem, name) not in EXPECTED]
+    assert unjudged == []
+    assert set(EXPECTED) <= {(stem, name) for stem, name, _, _ in ALL}  # no stale entry
+
+
+@pytest.mark.parametrize(("stem", "name", "caption", "focus"), ALL,
+                         ids=[f"{a}-{b}" for a, b, _, _ in ALL])
+def test_the_checkpoint_is_focused_on_the_device_of_its_caption(
+        stem: str, name: str, caption: str, focus: str | None) -> None:
+    if (stem, name) not in EXPECTED:
+        pytest.skip("the caption names no device")
+    expected = EXPECTED[(stem, name)]
+    assert expected is None or expected in named(caption), (expected, caption)
+    assert focus == expected, (f"{stem} checkpoint {name}: focus {focus!r}, the caption is "
+                               f"about {expected!r}: {caption}")
