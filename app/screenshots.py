@@ -39,6 +39,7 @@ from app.runtime import Runtime
 from app.scenario import Scenario, Step, check_against
 from app.ui.dashboard import Dashboard
 from app.ui.panels.scenario_player import PLAYER_FOLDER, STATUS_ID
+from app.ui.tab_switch import SNIPPET_ID
 from devices.events import Event
 
 logger = logging.getLogger(__name__)
@@ -263,6 +264,9 @@ class DashboardPage:
             "a => { const m = document.getElementById(a.id);"
             " return m !== null && Number(m.dataset.frame) >= a.seq; }",
             arg={"id": STATUS_ID, "seq": seq}, timeout=WALL_TIMEOUT_S * 1000)
+        # A focus step's tab switch (app/ui/tab_switch.py) has clicked its tab.
+        self.page.wait_for_function(f"() => !document.querySelector('#{SNIPPET_ID}"
+                                    ":not([data-done])')", timeout=WALL_TIMEOUT_S * 1000)
         if self.scroll_to_player:  # each time: the folders above may have grown since
             self.page.get_by_text(PLAYER_FOLDER, exact=True).first.evaluate(TITLE_TO_TOP_JS)
         self.page.evaluate("() => new Promise(r => requestAnimationFrame("

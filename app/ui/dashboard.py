@@ -31,7 +31,7 @@ import viser.theme
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.drive.view import DriveView, axes_height
-from app.ui.line.view import LineView
+from app.ui.line.view import LineView, focus_target
 from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
@@ -41,8 +41,9 @@ from app.ui.panels.widgets import short_label_css
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
 from app.ui.runs import RunSplitter
 from app.ui.style import CSS
+from app.ui.tab_switch import TabSwitcher, tab_for
 from devices.device import Action
-from devices.events import US_PER_S, Caption, Event
+from devices.events import US_PER_S, Caption, Event, Focus
 
 logger = logging.getLogger(__name__)
 
@@ -141,6 +142,7 @@ class Dashboard:
         self._t_us = -1
         self._events_untold = False  # events taken while no browser was there (take_events)
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
+        self._tabs = TabSwitcher(server)  # a scenario focus step opens its device's tab
         self._configure_look()
         self._panels: _Panels | None = None
         if self.device_id is not None:
@@ -456,11 +458,32 @@ class Dashboard:
             self._caption.visible = False
         if self._line is not None:
             self._line.add_events(events)
+        self._focus_tabs(run)
         captions = [e.text for e in run if isinstance(e, Caption)]
         if captions:
             self._caption.text = caption_lines(captions[-1])
             self._caption.visible = True
         return events
+
+    def focus_tab(self, device: str) -> str | None:
+        """The left panel's tab that shows ``device`` (None: no tab of its own here)."""
+        line = self._line.scene.order if self._line is not None else ()
+        return tab_for(device, master=self.master_id if self._line is not None else None,
+                       coupler=self.device_id, line=line, drives=self.drive_ids)
+
+    def _focus_tabs(self, events: list[Event]) -> None:
+        """A scenario's focus step opens the focused device's tab in every browser (a demo
+        follows the narration; a click in the 3D view only names the tabs, LineView.focus),
+        and picks a drive in the drive panels."""
+        focus = [e for e in events if isinstance(e, Focus) and e.device == "scenario"]
+        if not focus:
+            return
+        device = focus_target(str(focus[-1].target))
+        if self._drives is not None and device in self._drives.drive_ids:
+            self._drives.focus(device)
+        tab = self.focus_tab(device)
+        if tab is not None:
+            self._tabs.open(tab)
 
     def _log_events(self, events: list[Event]) -> None:
         if self._panels is not None:

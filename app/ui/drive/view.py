@@ -105,6 +105,14 @@ class DriveView:
         if self.master is not None:
             self.master.forget()
 
+    def focus(self, drive_id: str) -> None:
+        """A scenario's focus step on a drive: the panels and the picker show it."""
+        if drive_id == self.selected:
+            return
+        self.select(drive_id)
+        if self._picker is not None:
+            self._picker.value = drive_id
+
     def _selected_snapshot(self) -> Mapping[str, Any] | None:
         """Simulation thread (the sampler): the selected drive's snapshot, taken now."""
         device = self._runtime.rig.devices.get(self.selected)

@@ -2,8 +2,9 @@
 Slave tabs, the Line controls, and focus (a click on a device, or a scenario ``Focus`` event:
 its panels pick it and the camera moves toward it).
 
-viser cannot switch a browser's tab from the server, so focus picks the device in the Slave
-tab, the Slave actions form and the Objects tab, and tells the clicking browser where to look.
+Focus picks the device in the Slave tab, the Slave actions form and the Objects tab, and tells
+the clicking browser where to look; a scenario's focus step also opens the device's tab (the
+dashboard does, app/ui/tab_switch.py).
 """
 
 from __future__ import annotations
