@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 import viser
-from label_boxes import VIEW_HEIGHT_PX, label_box, px_per_unit
+from label_boxes import TOUCH_PX, VIEW_HEIGHT_PX, label_box, px_per_unit
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
@@ -132,3 +132,67 @@ def test_a_focused_view_shows_the_caption_and_the_whole_device(dashboard: Dashbo
     line.show_all()  # "Show the whole line": the caption goes back above the whole line
     assert float(label.position[2]) >= line.bounds().z_max
     assert abs(float(label.position[0]) - line.home_caption[0]) < 1e-9
+
+
+# ---- what the caption may not cover in a focused view -----------------------------------------
+Rect = tuple[float, float, float, float]  # left, top, right, bottom in view pixels
+
+
+def rect_on_screen(camera: Any, x0: float, x1: float, z0: float, z1: float, y: float) -> Rect:
+    corners = [project(camera, (x, y, z)) for x in (x0, x1) for z in (z0, z1)]
+    return (min(c[0] for c in corners), min(c[1] for c in corners),
+            max(c[0] for c in corners), max(c[1] for c in corners))
+
+
+def solid_on_screen(camera: Any, handle: viser.BoxHandle) -> Rect:
+    """A box of the scene (a body, an LED, a cable stretch turned about y) by its front face."""
+    (x, y, z), (w, d, h) = handle.position, handle.dimensions
+    qw, _, qy, _ = (float(v) for v in handle.wxyz)
+    angle = 2 * math.atan2(qy, qw)  # cables turn about +y only (app/ui/line/cables.py)
+    half_x = abs(math.cos(angle)) * w / 2 + abs(math.sin(angle)) * h / 2
+    half_z = abs(math.sin(angle)) * w / 2 + abs(math.cos(angle)) * h / 2
+    return rect_on_screen(camera, x - half_x, x + half_x, z - half_z, z + half_z, y - d / 2)
+
+
+def label_on_screen(camera: Any, handle: viser.LabelHandle) -> Rect:
+    box = label_box(handle, px_per_unit(camera, handle.position))
+    return rect_on_screen(camera, box.x0, box.x1, box.z0, box.z1, float(handle.position[1]))
+
+
+def covered(a: Rect, b: Rect) -> bool:
+    return (min(a[2], b[2]) - max(a[0], b[0]) > TOUCH_PX
+            and min(a[3], b[3]) - max(a[1], b[1]) > TOUCH_PX)
+
+
+@pytest.mark.parametrize("device", ["master", "fastcat", "trscat", "cpx", "drive_ec-ecat"])
+def test_a_focused_caption_covers_no_cable_label_or_body(dashboard: Dashboard,
+                                                         device: str) -> None:
+    """The sales walkthrough's close-ups of the CPX-E-EC had the caption over cable 1 and its
+    label (the cable runs between the rows, above row 2's headers): the caption goes above
+    the highest part of the scene over the focused device, so in the focused view it covers
+    nothing of the line, the rail or their labels."""
+    line = dashboard.line
+    assert line is not None
+    dashboard.runtime._journal_events([Caption(0, "scenario", text=longest_caption())])
+    dashboard.tick()
+    line.focus(None, device)
+    position, look_at = line.focus_camera(device, VIEW_WIDTH_PX / VIEW_HEIGHT_PX)
+    camera = SimpleNamespace(position=position, look_at=look_at, up=(0.0, 0.0, 1.0),
+                             fov=dashboard.server.initial_camera.fov)
+    caption = label_on_screen(camera, dashboard._caption)
+    hits = []
+    nodes = dict(dashboard.server.scene._handle_from_node_name)  # what browsers are sent
+    for name, handle in nodes.items():
+        if name == "/caption" or not getattr(handle, "visible", True):
+            continue
+        if isinstance(handle, viser.LabelHandle) and str(handle.text).strip():
+            rect = label_on_screen(camera, handle)
+        elif isinstance(handle, viser.BoxHandle):
+            rect = solid_on_screen(camera, handle)
+        else:
+            continue
+        if rect[3] > 0 and rect[1] < VIEW_HEIGHT_PX and covered(caption, rect):
+            hits.append((name, str(getattr(handle, "text", ""))))
+    assert any("/cable" in name for name in nodes)  # the cables are among what is checked
+    assert hits == [], (device, hits)
+    line.show_all()

@@ -17,7 +17,7 @@ from typing import Any
 import viser
 
 from app.ui.line.bodies import Body, MasterBody, RailFrame, SlaveBody, as_drawn
-from app.ui.line.cables import Cable, OnCable, route
+from app.ui.line.cables import LABEL_LIFT, THICK, Cable, OnCable, label_point, route
 from app.ui.line.io_bodies import CpxBody, TrsCatBody
 from app.ui.rail_scene import BODY_H
 
@@ -30,6 +30,8 @@ CABLE_GAP_Z = -BODY_H / 2 - 1.35
 LEGEND_DEPTH = 1.2  # room under row 2 for the LED words
 CABLE_OUT = 0.5
 TOP_EXTRA = 0.75  # state bar and header above a row
+# A cable label's height at the closest zoom (a focus: ~60 px a unit; 0.58 of a 12 px em).
+CABLE_LABEL_H = 0.2
 # Called with (client, device id) when a body is clicked.
 OnFocus = Callable[[viser.ClientHandle | None, str], None]
 
@@ -124,6 +126,29 @@ class LineScene:
             return None
         return Box(body.x0, body.x0 + body.width, body.z0 - BODY_H / 2 - 0.6,
                    body.z0 + BODY_H / 2 + TOP_EXTRA)
+
+    def top_over(self, x_min: float, x_max: float, floor: float) -> float:
+        """The highest point of the scene above ``floor`` between ``x_min`` and ``x_max``:
+        the bodies with their state bars and headers, the cables and their labels (``floor``
+        when nothing is there). A focused device's caption goes above it: under row 1 the
+        line's cable 1 and its label run between the rows, just over row 2's headers."""
+        top = floor
+
+        def over(a: float, b: float) -> bool:
+            return min(b, x_max) > max(a, x_min)
+
+        for body in self.bodies.values():
+            body_top = body.z0 + BODY_H / 2 + TOP_EXTRA
+            if body_top > floor and over(body.x0, body.x0 + body.width):
+                top = max(top, body_top)
+        for cable in self.cables:
+            for (xa, za), (xb, zb) in zip(cable.points, cable.points[1:], strict=False):
+                if max(za, zb) > floor and over(min(xa, xb), max(xa, xb)):
+                    top = max(top, max(za, zb) + THICK / 2)
+            label = label_point(cable.points)
+            if label[1] > floor and over(label[0] - 0.5, label[0] + 0.5):
+                top = max(top, label[1] + LABEL_LIFT + CABLE_LABEL_H)
+        return top
 
     # ---- per frame ------------------------------------------------------------------------
     def update(self, snapshot: Mapping[str, Any], t_us: int) -> None:

@@ -60,15 +60,17 @@ def camera_for(box: Box, aspect: float, margin: float = CAMERA_MARGIN, lift: flo
     return (centre[0], -distance, centre[2] + distance * CAMERA_RISE), centre
 
 
-def focus_frame(box: Box) -> tuple[Box, tuple[float, float]]:
+def focus_frame(box: Box, ceiling: float | None = None) -> tuple[Box, tuple[float, float]]:
     """What a focus on a device of ``box`` frames, and where the caption goes: centred above
-    the device, with room for it in the framed box. Placed above the whole line, the caption
-    was out of every focused view, so a demo viewer lost the narration at each focus step."""
+    the device and above ``ceiling``, the highest part of the scene over it (LineScene.top_over;
+    default: the device's top), with room for it in the framed box. Placed above the whole
+    line, the caption was out of every focused view, so a demo viewer lost the narration at
+    each focus step; placed right on a row 2 device it covered cable 1 and its label."""
     width = max(box.x_max - box.x_min, FOCUS_MIN_W)
     centre = (box.x_min + box.x_max) / 2
-    framed = Box(centre - width / 2, centre + width / 2, box.z_min,
-                 box.z_max + FOCUS_CAPTION_ROOM)
-    return framed, (centre, box.z_max + CAPTION_GAP)
+    top = box.z_max if ceiling is None else max(ceiling, box.z_max)
+    framed = Box(centre - width / 2, centre + width / 2, box.z_min, top + FOCUS_CAPTION_ROOM)
+    return framed, (centre, top + CAPTION_GAP)
 
 
 def focus_target(target: str) -> str:
@@ -163,7 +165,7 @@ class LineView:
             where = "tab Line (left and right)"
         box = self.scene.focus_box(device)
         if move and box is not None:
-            target, caption = focus_frame(box)
+            target, caption = self.focus_view(box)
             if client is None:
                 self.move_camera(target, caption=caption)
             else:
@@ -177,7 +179,14 @@ class LineView:
         """(position, look_at) a focus on ``device`` gives a view of ``aspect`` (tests)."""
         box = self.scene.focus_box(device)
         assert box is not None, device
-        return camera_for(focus_frame(box)[0], aspect)
+        return camera_for(self.focus_view(box)[0], aspect)
+
+    def focus_view(self, box: Box) -> tuple[Box, tuple[float, float]]:
+        """focus_frame for ``box``, the caption above what the view shows over the device:
+        everything within the framed width (the caption is as wide as the view at most)."""
+        width = max(box.x_max - box.x_min, FOCUS_MIN_W) / 2 + CAMERA_MARGIN
+        centre = (box.x_min + box.x_max) / 2
+        return focus_frame(box, self.scene.top_over(centre - width, centre + width, box.z_max))
 
     @property
     def home_caption(self) -> tuple[float, float]:
