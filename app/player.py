@@ -132,6 +132,7 @@ class Player:
         self._checkpoint = ""
         self._failures: list[str] = []
         self._finished = False
+        self._run_on = False  # the rig keeps running after the last step (an exercise file)
         self._generation = 0
         self._load_seq = 0  # Runtime.journal_seq when the last load installed its rig
         self._started = False  # a simulation step has run since the load
@@ -163,11 +164,13 @@ class Player:
         rig_name, why = found
         return RigMismatch(scenario, path, rig_name, self.runtime.rig.name, why)
 
-    def load(self, scenario: Scenario, fresh: Rig | None = None) -> None:
+    def load(self, scenario: Scenario, fresh: Rig | None = None, run_on: bool = False) -> None:
         """Make the rig factory-fresh and stand before the scenario's first step, paused.
 
         ``fresh``: the rig to install (default: built from the scenario's rig file, or
-        ``default_rig``); pass the runtime's own untouched rig to play on it as it is. Raises
+        ``default_rig``); pass the runtime's own untouched rig to play on it as it is.
+        ``run_on``: the rig is not paused at the scenario's end (an exercise file sets the
+        stage and its hidden fault has to develop on a running rig afterwards). Raises
         ScenarioError / RigConfigError before anything changes when the scenario does not fit.
         """
         if fresh is None:
@@ -193,6 +196,7 @@ class Player:
                 self._caption = self._checkpoint = ""
                 self._failures = []
                 self._finished = self._started = False
+                self._run_on = run_on
                 self._generation += 1
                 # Where the new run starts in the journal: a view splits its batch of events
                 # there (app/ui/runs.py); the clock going back does not tell a load at 0 s.
@@ -223,7 +227,7 @@ class Player:
 
     def play(self) -> None:
         self._require()
-        if not self._finished:
+        if not self._finished or self._run_on:
             self.runtime.set_paused(False)
 
     def pause(self) -> None:
@@ -323,9 +327,10 @@ class Player:
             done = self._next >= len(scenario.steps) and horizon > scenario.end_us
             if done:
                 self._finished = True
+            pause = done and not self._run_on
         if events:
             self.runtime.journal(events)
-        if done:
+        if pause:
             self.runtime.set_paused(True)
             logger.info("scenario '%s' finished at %.3f s", scenario.name, now_us / 1e6)
 

@@ -97,3 +97,48 @@ def test_refused_commands_start_afresh_with_each_exercise(served: ServedRig) -> 
     classroom.refusals.append("#3 fastcat: power makes a fault (instructor only)")
     classroom.start_exercise("fastcat:inject:coupler:0x04")
     assert list(classroom.refusals) == []
+
+
+ENDS_WITH_THE_FAULT = """\
+[scenario]
+name = "Line in OP"
+duration_s = 1
+
+[[step]]
+at = 0.0
+target = "fastcat"
+action = "power"
+on = true
+
+[exercise]
+fault = "fastcat:inject:coupler:0x04"
+at_s = 1.0
+"""
+
+
+def test_the_rig_runs_on_after_the_file_so_the_fault_shows(tmp_path: Path) -> None:
+    """The fault goes in at the file's last instant: the player paused the rig at the
+    scenario's end, so the clock stood at 1 s, the coupler never reported the fault and the
+    exercise timer ran on over a rig that showed nothing. The rig here is as served: running,
+    its clock not advanced by hand."""
+    path = tmp_path / "ends_with_the_fault.toml"
+    path.write_text(ENDS_WITH_THE_FAULT)
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    one = serve_rig(rig, Access(None), port=0, exercise_files=[path])
+    try:
+        assert not one.runtime.paused
+        one.classroom.start_from_file(path)
+        deadline = time.monotonic() + 30
+        while True:
+            snap = one.runtime.submit(one.runtime.rig.snapshot).result(timeout=10)
+            fastcat = snap["devices"]["fastcat"]
+            if one.classroom.exercise is not None and fastcat["fault_active"]:
+                break
+            assert time.monotonic() < deadline, (
+                f"no fault shown: t={one.runtime.frame.t_us} us, paused="
+                f"{one.runtime.paused}, exercise={one.classroom.exercise is not None}")
+            time.sleep(0.1)
+        assert fastcat["alarm"]["code"] == 0x04
+        assert not one.runtime.paused and one.runtime.frame.t_us > 1_000_000
+    finally:
+        one.stop()

@@ -152,7 +152,8 @@ class ClassroomPanel:
 
     def start_from_file(self, path: Path, client: viser.ClientHandle | None = None) -> int:
         """Play an exercise file's scenario from a factory-fresh rig and inject its hidden
-        fault at its time (a watcher thread); returns that time in simulated us."""
+        fault at its time (a watcher thread), the rig running on after the file's end;
+        returns that time in simulated us."""
         if not self._sender.allow(client, Operation.EXERCISE, "start an exercise"):
             raise PermissionError("exercises are for the instructor")
         if self._player is None:
@@ -162,7 +163,9 @@ class ClassroomPanel:
         with self._lock:
             if self.exercise is not None and self.exercise.phase is not Phase.FINISHED:
                 raise ValueError("an exercise is running: end it first")
-        self._player.load(scenario, path)
+        # The rig runs on after the file's last step: paused there, the hidden fault would
+        # never develop (the clock stands at the injection time).
+        self._player.load(scenario, path, run_on=True)
         generation = self._player.player.view().generation
         at = start_us(scenario, spec)
         self._player.player.play()

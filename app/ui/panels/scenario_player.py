@@ -293,9 +293,10 @@ class ScenarioPlayerPanel:
         if force or path != self._loaded or (restart_finished and finished):
             self.load(load_scenario(path), path)
 
-    def load(self, scenario: Scenario, path: Path | None = None, fresh: Rig | None = None) -> None:
-        """Load ``scenario`` (on ``fresh``, see :meth:`app.player.Player.load`)."""
-        self.player.load(scenario, fresh)
+    def load(self, scenario: Scenario, path: Path | None = None, fresh: Rig | None = None,
+             run_on: bool = False) -> None:
+        """Load ``scenario`` (on ``fresh``; ``run_on``: see :meth:`app.player.Player.load`)."""
+        self.player.load(scenario, fresh, run_on)
         self._loaded = path if path is not None else Path(scenario.source)
         self._show_picked(scenario, self._loaded)
 
