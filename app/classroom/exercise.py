@@ -16,7 +16,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from app.classroom.faults import Catalog, HiddenFault, fault_gone
+from app.classroom.faults import Catalog, HiddenFault, fault_gone, other_faults
 from app.classroom.scoring import RULES, Score, ScoringRules, score
 
 
@@ -49,6 +49,7 @@ class Exercise:
     answered_s: float | None = None
     finished_s: float | None = None
     fixed: bool | None = None
+    others: list[str] = field(default_factory=list)  # other faults on the device at the end
     result: Score | None = None
 
     def __post_init__(self) -> None:
@@ -83,11 +84,12 @@ class Exercise:
                 return self.result
             self.finished_s = round(now_s - self.started_s, 3)
             self.fixed = fault_gone(self.fault, snapshot)
+            self.others = other_faults(self.fault, snapshot)
             refused = sum(1 for a in self.actions if a.refused)
             self.result = score(cause_right=self.cause_right, fixed=self.fixed,
                                 seconds=self.finished_s, actions=len(self.actions),
                                 refused=refused, rules=self.rules,
-                                named=self.answer is not None)
+                                named=self.answer is not None, others=self.others)
             self.phase = Phase.FINISHED
             return self.result
 
@@ -101,6 +103,7 @@ class Exercise:
             "answer": named.label if named else self.answer, "right": self.cause_right,
             "answered_by": self.answered_by,
             "answered_s": self.answered_s, "finished_s": self.finished_s, "fixed": self.fixed,
+            "others": list(self.others),
             "actions": [{"t": a.at_s, "client": a.client_id, "role": a.role, "text": a.text,
                          "refused": a.refused} for a in self.actions],
             "score": None if self.result is None else {

@@ -189,15 +189,77 @@ def catalog(described: Mapping[str, Mapping[str, Any]],
 
 
 ALARM_KEYS = ("alarm", "alarms")  # snapshot keys that hold a device's active alarm(s)
+INJECTED_KEY = "injected"  # the snapshot key of a device's injected causes
+NAME_KEYS = ("name", "fault", "cause")  # how an alarm or injected entry names its code
+
+
+def _code(cause: str) -> tuple[str, int | str]:
+    """(form, value) of a cause id: ``fastcat:coupler:0x04`` -> ("coupler", 4),
+    ``drive:alarm:16`` -> ("alarm", 16), ``trscat:fault:CONFIG_ERROR`` -> ("fault", ...)."""
+    _, form, value = cause.split(":", 2)
+    return form, value if form == "fault" else int(value, 0)
+
+
+def _module(fault: HiddenFault) -> int | None:
+    """The module a module fault was put on (its target ``device/N``)."""
+    target = fault.inject[0].target if fault.inject else fault.device
+    _, _, module = target.partition("/")
+    return int(module) if module.isdigit() else None
+
+
+def _is_own(entry: Any, fault: HiddenFault) -> bool:
+    """Whether an alarm or injected entry of the device's snapshot is ``fault``'s code: the
+    FastCAT's {table, code, module} (an injected one has no table: module None is the coupler
+    table), the drive's {code} or bare code, the slaves' {name} / {fault} or bare name."""
+    form, value = _code(fault.cause)
+    if form == "fault":
+        names = [entry] if isinstance(entry, str) else (
+            [entry.get(k) for k in NAME_KEYS] if isinstance(entry, Mapping) else [])
+        return str(value).casefold() in {str(n).casefold() for n in names if n}
+    if not isinstance(entry, Mapping):
+        return isinstance(entry, int) and form == "alarm" and entry == value
+    if entry.get("code") != value:
+        return False
+    if form == "alarm":
+        return True
+    table = entry.get("table") or ("coupler" if entry.get("module") is None else "module")
+    module = _module(fault)
+    return table == form and (module is None or entry.get("module") in (module, None))
+
+
+def _entries(snap: Mapping[str, Any], keys: tuple[str, ...]) -> list[Any]:
+    found: list[Any] = []
+    for key in keys:
+        value = snap.get(key)
+        found.extend(value if isinstance(value, list) else [value] if value else [])
+    return found
 
 
 def fault_gone(fault: HiddenFault, snapshot: Mapping[str, Any]) -> bool:
-    """Whether the rig no longer shows ``fault``: its device has no alarm and is back to the
-    repaired values (``snapshot``: the rig's)."""
+    """Whether the rig no longer shows ``fault``: its cause is removed (not injected any more,
+    the physical repair holds) and its device shows its code no more (``snapshot``: the
+    rig's). Another fault on the device does not count here (:func:`other_faults`)."""
     snap = (snapshot.get("devices") or {}).get(fault.device) or {}
-    if any(snap.get(key) for key in ALARM_KEYS):
-        return False
-    injected = snap.get("injected") or []
-    if any(command.action == "inject_fault" for command in fault.inject) and injected:
+    if any(_is_own(e, fault) for e in _entries(snap, (*ALARM_KEYS, INJECTED_KEY))):
         return False
     return all(snap.get(key) == value for key, value in fault.gone.items())
+
+
+def other_faults(fault: HiddenFault, snapshot: Mapping[str, Any]) -> list[str]:
+    """The other alarms and injected causes ``fault``'s device still has ("fastcat
+    LINK_LOSS"): the result names them, the score does not count them."""
+    snap = (snapshot.get("devices") or {}).get(fault.device) or {}
+    others = [e for e in _entries(snap, (*ALARM_KEYS, INJECTED_KEY)) if not _is_own(e, fault)]
+    named = {e.get("code") for e in others if isinstance(e, Mapping)}
+    labels: list[str] = []
+    for entry in others:
+        if isinstance(entry, Mapping):
+            name = next((entry[k] for k in NAME_KEYS if entry.get(k)), entry.get("code"))
+        elif isinstance(entry, int) and entry in named:
+            continue  # a drive's bare code next to its {code, name}
+        else:
+            name = f"alarm {entry}" if isinstance(entry, int) else entry
+        label = f"{fault.device} {name}"
+        if label not in labels:
+            labels.append(label)
+    return labels

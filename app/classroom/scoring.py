@@ -7,13 +7,14 @@ server refused (trying to inject, reset or load a scenario). The total never goe
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 
 @dataclass(frozen=True)
 class ScoringRules:
     cause_points: int = 50  # the named cause is the injected one
-    fixed_points: int = 30  # the device shows no alarm and the repair holds at the end
+    fixed_points: int = 30  # the fault's code is gone and its repair holds at the end
     time_points: int = 20  # all of them up to ``par_s``, none from ``limit_s`` on
     par_s: float = 120.0
     limit_s: float = 600.0
@@ -59,16 +60,18 @@ def time_points(rules: ScoringRules, seconds: float) -> int:
 
 
 def score(*, cause_right: bool, fixed: bool, seconds: float, actions: int, refused: int,
-          rules: ScoringRules = RULES, named: bool = True) -> Score:
+          rules: ScoringRules = RULES, named: bool = True, others: Sequence[str] = ()) -> Score:
     """``actions``: commands the trainee's connections sent (refused ones included),
     ``refused``: how many of them the server refused; ``named``: a cause was named at all
-    (an exercise the instructor ended before any answer)."""
+    (an exercise the instructor ended before any answer); ``others``: other faults the
+    device still has, named in the result but not the trainee's to fix."""
+    still = f"; another fault is still present: {', '.join(others)}" if others else ""
     parts = [
         Part("cause", rules.cause_points if cause_right else 0,
              "named the injected cause" if cause_right
              else "named another cause" if named else "no cause named"),
         Part("fixed", rules.fixed_points if fixed else 0,
-             "the fault is gone" if fixed else "the rig still shows the fault"),
+             ("the fault is gone" if fixed else "the rig still shows the fault") + still),
         Part("time", time_points(rules, seconds) if cause_right and fixed else 0,
              f"{seconds:.0f} s (par {rules.par_s:g} s, none from {rules.limit_s:g} s)"
              + ("" if cause_right and fixed else "; only counts for a right, working fix")),

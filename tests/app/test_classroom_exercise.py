@@ -9,7 +9,7 @@ from typing import Any
 import pytest
 
 from app.classroom.exercise import Exercise, Phase
-from app.classroom.faults import catalog, fault_gone
+from app.classroom.faults import catalog, fault_gone, other_faults
 from app.classroom.scoring import RULES, ScoringRules, score, time_points
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
@@ -182,3 +182,48 @@ def test_only_the_page_that_answered_reads_answer_recorded(rig_catalog: Any) -> 
     assert "Answer recorded" in trainee_html(report, 6.0, mine=True)
     other = trainee_html(report, 6.0, mine=False)
     assert "Answer recorded" not in other and "Another trainee named a cause" in other
+
+
+def test_another_fault_on_the_device_does_not_cost_the_fix(rig_catalog: Any) -> None:
+    """docs/classroom.md "fault_gone": the exercise's own fault is scored. A second fault the
+    instructor put on the same device (the cable pulled) cost the trainee the 30 points and
+    read "the rig still shows the fault"; it is named in the result instead."""
+    rig = _powered_rig()
+    fault = rig_catalog.fault("fastcat:inject:coupler:0x04")
+    other = rig_catalog.fault("fastcat:cable")
+    _run(rig, fault.inject)
+    rig.run_until(rig.clock.now_us + 500_000)
+    exercise = Exercise(fault, started_s=0.0)
+    assert exercise.name_cause(10.0, fault.cause) is True
+    _run(rig, fault.repair)
+    _run(rig, other.inject)
+    rig.run_until(rig.clock.now_us + 500_000)
+    rig.apply("fastcat", "set_reset_fault", {"on": True})
+    rig.run_until(rig.clock.now_us + 500_000)
+    shown = rig.snapshot()["devices"]["fastcat"]["alarm"]
+    assert shown["name"] == "LINK_LOSS", shown
+    assert fault_gone(fault, rig.snapshot())
+    assert not fault_gone(other, rig.snapshot())
+    result = exercise.finish(20.0, rig.snapshot())
+    fixed = next(p for p in result.parts if p.rule == "fixed")
+    assert exercise.fixed and fixed.points == RULES.fixed_points and result.total == 100
+    assert fixed.why == "the fault is gone; another fault is still present: fastcat LINK_LOSS"
+    assert exercise.report(rig_catalog)["others"] == ["fastcat LINK_LOSS"]
+
+
+@pytest.mark.parametrize(("shown", "gone", "others"), [
+    ({"alarm": {"code": 1, "name": "IGBT"}, "alarms": [1],
+      "injected": [{"code": 1, "name": "IGBT"}]}, True, ["drive IGBT"]),
+    ({"alarm": {"code": 16, "name": "FOLLOWING_ERROR"}, "alarms": [16, 1],
+      "injected": [{"code": 1, "name": "IGBT"}]}, False, ["drive IGBT"]),
+    ({"alarm": None, "alarms": [], "injected": [{"code": 16, "name": "FOLLOWING_ERROR"}]},
+     False, []),
+])
+def test_own_fault_of_a_drive(rig_catalog: Any, shown: dict[str, Any], gone: bool,
+                              others: list[str]) -> None:
+    """A drive shows several alarms: its own code shown, or its cause still injected, is
+    not gone; another alarm is another fault."""
+    fault = rig_catalog.fault("drive:inject:alarm:16")
+    snapshot = {"devices": {"drive": shown}}
+    assert fault_gone(fault, snapshot) is gone
+    assert other_faults(fault, snapshot) == others
