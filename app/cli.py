@@ -410,7 +410,7 @@ def _exercise_files(directory: str | None, rig: Rig) -> list[Path]:
     (a broken one: exit 2; before, an unknown fault surfaced only at *Play file and start*)."""
     if directory is None:
         return []
-    from app.classroom.exercise_file import load_exercise
+    from app.classroom.exercise_file import check_exercise, load_exercise
     from app.classroom.faults import catalog
 
     files = sorted(Path(directory).glob("*.toml"))
@@ -423,13 +423,7 @@ def _exercise_files(directory: str | None, rig: Rig) -> list[Path]:
             check_against(scenario, rig)
         except ScenarioError as exc:
             raise ScenarioError(f"{path}: {exc}") from None
-        try:
-            faults.fault(spec.fault)
-        except (KeyError, ValueError) as exc:
-            known = sorted({f.id.split(":")[0] + ":..." for f in faults.faults})
-            raise ScenarioError(f"{path}: [exercise] fault: {exc.args[0] if exc.args else exc}"
-                                f" on this rig (ids start {', '.join(known)}; "
-                                "docs/classroom.md)") from None
+        check_exercise(scenario, spec, rig, faults)
     return files
 
 

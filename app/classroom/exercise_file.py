@@ -12,7 +12,7 @@
 
     [exercise]
     fault = "fastcat:inject:coupler:0x04"   # a hidden fault id (app/classroom/faults.py)
-    module = 3                              # for module codes (§7.6): the module number
+    module = 3                              # module codes (§7.6): the module number, required
     at_s = 5.0                              # inject at this simulated time (default: the end)
 
 The ``[exercise]`` table is cut out and the rest is read as a scenario
@@ -29,8 +29,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from app.classroom.faults import Catalog, HiddenFault
+from app.rig import Rig
 from app.rig_config import not_toml, not_utf8
 from app.scenario import Scenario, ScenarioError, parse_scenario
+from devices.device import CommandError
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
 _ANY_HEADER = re.compile(r"^\s*\[")
@@ -113,3 +116,28 @@ def load_exercise(path: str | Path) -> tuple[Scenario, ExerciseSpec]:
 def start_us(scenario: Scenario, spec: ExerciseSpec) -> int:
     """When the hidden fault goes in, in simulated microseconds."""
     return scenario.end_us if spec.at_s is None else round(spec.at_s * 1_000_000)
+
+
+def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
+                   faults: Catalog) -> HiddenFault:
+    """The hidden fault ``spec`` names, as it will be injected on ``rig``; ScenarioError when
+    the rig has no such fault or its device would refuse the injection. The injection is
+    checked by the device's own check_command (a FastCAT module code, §7.6, needs a
+    ``fastcat/N`` target: ``module = N`` here), as a scenario's commands are before a run."""
+    source = scenario.source
+    try:
+        fault = faults.fault(spec.fault).at(spec.module)
+    except (KeyError, ValueError) as exc:
+        known = sorted({f.id.split(":")[0] + ":..." for f in faults.faults})
+        raise ScenarioError(f"{source}: [exercise] fault: {exc.args[0] if exc.args else exc}"
+                            f" on this rig (ids start {', '.join(known)}; "
+                            "docs/classroom.md)") from None
+    for command in fault.inject:
+        try:
+            rig.check(command.target, command.action, dict(command.args))
+        except CommandError as exc:
+            hint = "; give its module: module = N" if fault.module and spec.module is None \
+                else ""
+            raise ScenarioError(f"{source}: [exercise] fault {spec.fault!r}: {exc}{hint}") \
+                from None
+    return fault

@@ -73,6 +73,8 @@ fault = "{fault}"
     ("drive", "no:such:fault", "no hidden fault 'no:such:fault' on this rig"),
     ("drive", "fastcat:inject:coupler:0x99", "no hidden fault"),
     ("nosuchdevice", "fastcat:inject:coupler:0x04", "nosuchdevice"),
+    # a module code (§7.6) without `module =`: the FastCAT model's own check_command rule
+    ("fastcat", "fastcat:inject:module:0x0B", "module alarm (§7.6)"),
 ])
 def test_an_exercise_the_rig_cannot_play_exits_2_before_serving(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], target: str, fault: str,
@@ -106,3 +108,18 @@ def test_an_ipv6_host_is_shown_in_brackets() -> None:
     six = ServedRig(None, None, None, None, token, None, "::1", 8192)  # type: ignore[arg-type]
     assert six.url == six.shown_url == "http://[::1]:8192/"
     assert six.instructor_url == "http://[::1]:8192/?token=tok"
+
+
+def test_a_module_fault_with_its_module_passes_the_start_check(tmp_path: Path) -> None:
+    """The module check asks for `module =`, and takes a file that gives it."""
+    from app.classroom.exercise_file import check_exercise, load_exercise
+    from app.classroom.faults import catalog
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+
+    path = tmp_path / "ex.toml"
+    path.write_text(EXERCISE.format(target="fastcat", fault="fastcat:inject:module:0x0B")
+                    + "module = 2\n")
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    scenario, spec = load_exercise(path)
+    fault = check_exercise(scenario, spec, rig, catalog(rig.describe(), rig.snapshot()))
+    assert fault.inject[0].target == "fastcat/2"
