@@ -22,6 +22,7 @@ cut works on the text: from the ``[exercise]`` header line to the next table hea
 
 from __future__ import annotations
 
+import difflib
 import re
 import tomllib
 from collections.abc import Mapping
@@ -32,7 +33,7 @@ from typing import Any
 from app.classroom.faults import Catalog, HiddenFault
 from app.rig import Rig
 from app.rig_config import not_toml, not_utf8
-from app.scenario import Scenario, ScenarioError, parse_scenario
+from app.scenario import Scenario, ScenarioError, check_against, parse_scenario
 from devices.device import CommandError
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
@@ -120,17 +121,18 @@ def start_us(scenario: Scenario, spec: ExerciseSpec) -> int:
 
 def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
                    faults: Catalog) -> HiddenFault:
-    """The hidden fault ``spec`` names, as it will be injected on ``rig``; ScenarioError when
-    the rig has no such fault or its device would refuse the injection. The injection is
-    checked by the device's own check_command (a FastCAT module code, §7.6, needs a
-    ``fastcat/N`` target: ``module = N`` here), as a scenario's commands are before a run."""
+    """The hidden fault ``spec`` names, as it will be injected on ``rig``; ScenarioError (one
+    line, the file named once) when the rig would refuse a step (:func:`check_against`), has
+    no such fault or its device would refuse the injection. The injection is checked by the
+    device's own check_command (a FastCAT module code, §7.6, needs a ``fastcat/N`` target:
+    ``module = N`` here), as a scenario's commands are before a run."""
+    check_against(scenario, rig)  # its errors name scenario.source, the file, already
     source = scenario.source
     try:
         fault = faults.fault(spec.fault).at(spec.module)
     except (KeyError, ValueError) as exc:
-        known = sorted({f.id.split(":")[0] + ":..." for f in faults.faults})
         raise ScenarioError(f"{source}: [exercise] fault: {exc.args[0] if exc.args else exc}"
-                            f" on this rig (ids start {', '.join(known)}; "
+                            f" on this rig ({known_ids(spec.fault, faults)}; "
                             "docs/classroom.md)") from None
     for command in fault.inject:
         try:
@@ -141,3 +143,27 @@ def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
             raise ScenarioError(f"{source}: [exercise] fault {spec.fault!r}: {exc}{hint}") \
                 from None
     return fault
+
+
+def known_ids(fault_id: str, faults: Catalog) -> str:
+    """What to write instead of an unknown ``fault_id``: the hidden faults of the device it
+    names, ids that share a prefix folded (``fastcat:inject:coupler:{0x01,0x02}``), or the
+    closest ids of the rig when it names no device that has any."""
+    device = fault_id.partition("@")[0].split(":", 1)[0]
+    ids = [f.id for f in faults.faults if f.device == device]
+    if not ids:
+        everything = [f.id for f in faults.faults]
+        closest = difflib.get_close_matches(fault_id, everything, n=5, cutoff=0.5)
+        if closest:
+            return f"closest: {', '.join(closest)}"
+        return f"devices with hidden faults: {', '.join(sorted({f.device for f in faults.faults}))}"
+    groups: dict[str, list[str]] = {}  # id head -> code tails; a physical fault: itself, []
+    for one in ids:
+        head, _, tail = one.rpartition(":")
+        if head == device:
+            groups[one] = []
+        else:
+            groups.setdefault(head, []).append(tail)
+    shown = [head if not tails else f"{head}:{tails[0]}" if len(tails) == 1
+             else f"{head}:{{{','.join(tails)}}}" for head, tails in groups.items()]
+    return f"{device}'s hidden faults: {', '.join(shown)}"

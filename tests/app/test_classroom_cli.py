@@ -123,3 +123,27 @@ def test_a_module_fault_with_its_module_passes_the_start_check(tmp_path: Path) -
     scenario, spec = load_exercise(path)
     fault = check_exercise(scenario, spec, rig, catalog(rig.describe(), rig.snapshot()))
     assert fault.inject[0].target == "fastcat/2"
+
+
+@pytest.mark.parametrize(("target", "fault", "said"), [
+    # the ids of the device named, on the one line
+    ("fastcat", "fastcat:inject:coupler:0x99",
+     "fastcat's hidden faults: fastcat:inject:coupler:{0x01,0x02,"),
+    ("fastcat", "fastcat:inject:coupler:0x99", ", fastcat:cable, fastcat:tbus_low"),
+    # a device the rig does not have: the closest ids
+    ("fastcat", "fastcatt:cable", "closest: fastcat:cable"),
+    # a bad step: the file named once
+    ("fastcatt", "fastcat:cable", "ex.toml: step[0] (at 0 s): no device 'fastcatt'"),
+])
+def test_an_exercise_error_is_one_line_that_helps(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], target: str, fault: str,
+        said: str) -> None:
+    """An unknown id listed only prefixes ("ids start cpx:..., drive:..."), and a bad step
+    named the file twice ("x.toml: x.toml: step[0] ...")."""
+    path = tmp_path / "ex.toml"
+    path.write_text(EXERCISE.format(target=target, fault=fault))
+    assert main(["--exercises", str(tmp_path), "--state-dir", str(tmp_path / "s"),
+                 "--run-for", "0", "--no-record"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.count(str(path)) == 1, err
+    assert said in err, err
