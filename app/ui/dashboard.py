@@ -36,6 +36,7 @@ from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
 from app.ui.panels.object_dictionary import ObjectDictionaryPanel
+from app.ui.panels.per_client import instructor_for
 from app.ui.panels.state import StatePanel
 from app.ui.panels.widgets import short_label_css
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
@@ -132,6 +133,10 @@ class Dashboard:
         # The panels drive the first coupler; every coupler gets its rail in the 3D view.
         self.device_id = self.fastcat_ids[0] if self.fastcat_ids else None
         self._sender = CommandSender(runtime)
+        # What names an injected cause or picks a fault is built per instructor connection
+        # with a token (app/ui/panels/per_client.py); the first views to update it redraw.
+        self.instructor = instructor_for(server, self._sender.gate.access)
+        self.instructor.on_built = self._redraw
         self._stop = threading.Event()
         self._wake = threading.Event()  # set by the runtime's frame listener
         self._thread: threading.Thread | None = None
@@ -141,6 +146,7 @@ class Dashboard:
         self._frame_seq = -1
         self._t_us = -1
         self._events_untold = False  # events taken while no browser was there (take_events)
+        self._stale = False  # an instructor's parts were built: write the views again
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
         self._tabs = TabSwitcher(server)  # a scenario focus step opens its device's tab
         self._configure_look()
@@ -408,8 +414,8 @@ class Dashboard:
             with self.server.atomic():
                 events = self._take_events()
                 fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events \
-                    or self._events_untold
-                self._t_us, self._events_untold = frame.t_us, False
+                    or self._events_untold or self._stale
+                self._t_us, self._events_untold, self._stale = frame.t_us, False, False
                 if fresh:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
                     for scene, snap in zip(self._scenes, snaps, strict=True):
@@ -432,6 +438,11 @@ class Dashboard:
                 self.scenario_player.update(frame)  # scenario player, code decoder
                 self.decoder.update()
             self._frame_seq = frame.seq
+
+    def _redraw(self) -> None:
+        """New instructor widgets start from their defaults: the next tick writes them."""
+        self._stale = True
+        self._wake.set()
 
     def take_events(self) -> None:
         """The new events into the logs and the caption, without updating the views (no

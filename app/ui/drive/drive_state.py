@@ -16,6 +16,7 @@ from typing import Any
 
 import viser
 
+from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
@@ -278,7 +279,9 @@ class DriveStatePanel:
 
     def __init__(self, server: viser.ViserServer) -> None:
         self._title = _Html(server, "")
-        self._table = _Html(server, kv_table([("CiA 402 state", "-")], "fr-drive"))
+        # The Injected row: the instructor's connections only (RoleHtml).
+        self._table = RoleHtml(server, instructor_for(server),
+                               kv_table([("CiA 402 state", "-")], "fr-drive"), "fr-drive-causes")
 
     def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
         self._title.show(title(drive_id, snap, t_us))

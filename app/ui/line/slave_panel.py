@@ -12,6 +12,7 @@ import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
 from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_parts
+from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.panels.state import al_status_text, injected_text
 from app.ui.panels.widgets import Mirror
 from app.ui.rail_scene import PATTERN_WORDS
@@ -198,7 +199,8 @@ def fault_cell(module: Mapping[str, Any]) -> str:
         return esc(seen)
     tail = "; ".join(hidden)
     tail = f"; {tail}" if seen else tail
-    return esc(seen) + f'<span class="{INSTRUCTOR_CLASS}">{esc(tail)}</span>'
+    where = esc(f"module {module.get('module', '?')}")
+    return esc(seen) + f'<span class="{INSTRUCTOR_CLASS}" data-where="{where}">{esc(tail)}</span>'
 
 
 def cpx_html(snap: Mapping[str, Any]) -> str:
@@ -261,8 +263,8 @@ class SlavePanel:
     def __init__(self, server: viser.ViserServer, order: Sequence[str]) -> None:
         self.picker = server.gui.add_dropdown("Slave", tuple(order) or ("-",))
         self._mirror = Mirror(self.picker)
-        self._html = server.gui.add_html("")
-        self._last = ""
+        # The Injected rows and undiagnosed module faults: the instructor's only (RoleHtml).
+        self._html = RoleHtml(server, instructor_for(server), "", "fr-slave-causes")
 
     @property
     def selected(self) -> str:
@@ -273,11 +275,8 @@ class SlavePanel:
             self.picker.value = device
 
     def update(self, devices: Mapping[str, Any]) -> None:
-        content = slave_html(self.selected, as_drawn(devices, self.selected))
-        if content != self._last:
-            self._html.content = content
-            self._last = content
+        self._html.show(slave_html(self.selected, as_drawn(devices, self.selected)))
 
     @property
     def content(self) -> str:
-        return self._last
+        return self._html.content

@@ -98,11 +98,14 @@ class ClassroomPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  recorder: RigRecorder | None = None, download_name: str = "fieldrig.rrd",
                  player: Any = None, exercise_files: Sequence[Path] = (),
-                 instructor_widgets: Sequence[Any] = ()) -> None:
+                 instructor_widgets: Sequence[Any] = (),
+                 on_instructor: Callable[[viser.ClientHandle], None] | None = None) -> None:
         """``player``: the dashboard's ScenarioPlayerPanel, which plays an exercise file's
         scenario; ``exercise_files``: what the instructor may pick from;
         ``instructor_widgets``: the dashboard's widgets a trainee's page does not show
-        (:func:`trainee_css`)."""
+        (:func:`trainee_css`); ``on_instructor``: called with each connection whose role is
+        (now) the instructor (the dashboard builds its instructor parts for it)."""
+        self._on_instructor = on_instructor
         self._trainee_css = trainee_css(instructor_widgets)
         self._server, self._runtime, self._sender = server, runtime, sender
         self.access = sender.gate.access
@@ -272,6 +275,8 @@ class ClassroomPanel:
         with self._lock:
             self._views[client.client_id] = view
         self._refresh(view)
+        if role is Role.INSTRUCTOR and self._on_instructor is not None:
+            self._on_instructor(client)
 
     def _answer_controls(self, client: viser.ClientHandle, view: _View) -> None:
         gui = client.gui

@@ -87,7 +87,8 @@ def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 
                                download_name=f"{_slug(rig.name)}.rrd",
                                player=getattr(dashboard, "scenario_player", None),
                                exercise_files=exercise_files,
-                               instructor_widgets=dashboard.instructor_widgets())
+                               instructor_widgets=dashboard.instructor_widgets(),
+                               on_instructor=dashboard.instructor.promote)
     runtime.start()
     dashboard.start()
     return ServedRig(rig, runtime, server, dashboard, classroom, recorder, host,

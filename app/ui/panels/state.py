@@ -17,6 +17,7 @@ from typing import Any
 
 import viser
 
+from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import AlState
 from devices.fastcat.alarms import al_status_meaning
@@ -171,15 +172,14 @@ class StatePanel:
         # title's bottom margin collapses through its div (no padding, no border), so the
         # screenshots do not move.
         self._title = server.gui.add_html("")
-        self._table = server.gui.add_html(kv_table([("ESM state", "-")], "fr-state"))
+        # The Causes and Injected rows go to the instructor's connections only (RoleHtml).
+        self._table = RoleHtml(server, instructor_for(server),
+                               kv_table([("ESM state", "-")], "fr-state"), "fr-state-causes")
         self._shown_title = ""
-        self._shown_table = ""
 
     def update(self, snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None = None,
                t_us: int = 0) -> None:
         heading = title(snap, master_snap, t_us)
         if heading != self._shown_title:
             self._title.content = self._shown_title = heading
-        table = kv_table(state_rows(snap), "fr-state")
-        if table != self._shown_table:
-            self._table.content = self._shown_table = table
+        self._table.show(kv_table(state_rows(snap), "fr-state"))

@@ -1,0 +1,200 @@
+"""The instructor's elements: built per instructor connection, so no other browser gets them.
+
+viser sends a server-level widget, its value and every change of it to every browser, so a
+fault picker or a table row naming an injected cause reached every trainee's page however
+its style hid it (developer tools showed it). With a token (a classroom) such an element is
+a part: built with ``client.gui`` for each connection that is the instructor, inside the
+server-level container it belongs in and at the place it was registered (viser's ``order``).
+On an open rig (no token: every browser is the instructor) a part is built once, server-level,
+when registered: the dashboard looks and works as before (docs/classroom.md).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import re
+import threading
+from collections.abc import Callable
+from typing import Any, Generic, TypeVar
+
+import viser
+from viser._gui_api import _apply_default_order  # viser 1.1.1, pinned
+
+from app.classroom.roles import Access, Role
+from app.ui.style import INSTRUCTOR_CLASS
+
+T = TypeVar("T")
+ORDER_STEP = 1e-6  # a part's widgets sit between its reserved order and the next widget's
+
+
+class _Ordered:
+    """A ``GuiApi`` whose ``add_*`` calls take increasing orders from ``base`` on."""
+
+    def __init__(self, gui: viser.GuiApi, base: float) -> None:
+        self._gui, self._next = gui, base
+
+    def __getattr__(self, name: str) -> Any:
+        attr = getattr(self._gui, name)
+        if not name.startswith("add_"):
+            return attr
+
+        def add(*args: Any, **kwargs: Any) -> Any:
+            if kwargs.get("order") is None:
+                self._next += ORDER_STEP
+                kwargs["order"] = self._next
+            return attr(*args, **kwargs)
+
+        return add
+
+
+class Part(Generic[T]):
+    """What one ``build(gui)`` made, per instructor connection (or once, shared)."""
+
+    def __init__(self, server: viser.ViserServer, build: Callable[[Any], T],
+                 shared: bool) -> None:
+        self._build = build
+        self._lock = threading.Lock()
+        self._built: dict[int | None, T] = {}
+        if shared:
+            self._built[None] = build(server.gui)
+            return
+        gui = server.gui
+        uuid = gui._get_container_uuid()
+        self._container = None if uuid == "root" else gui._container_handle_from_uuid[uuid]
+        self._order = float(_apply_default_order(None))
+
+    def build_for(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            if client.client_id in self._built:
+                return
+        container = self._container if self._container is not None \
+            else contextlib.nullcontext()
+        with container:
+            built = self._build(_Ordered(client.gui, self._order))
+        with self._lock:
+            self._built[client.client_id] = built
+
+    def forget(self, client_id: int) -> None:
+        with self._lock:
+            self._built.pop(client_id, None)
+
+    def each(self) -> list[T]:
+        """Every copy built so far (update them all)."""
+        with self._lock:
+            return list(self._built.values())
+
+
+class Instructor:
+    """The dashboard's instructor parts and the connections they are built for."""
+
+    def __init__(self, server: viser.ViserServer, access: Access) -> None:
+        self.server = server
+        self.access = access
+        self.shared = access.open
+        self._parts: list[Part[Any]] = []
+        self._lock = threading.Lock()  # one connection's build at a time
+        self.on_built: Callable[[], None] = lambda: None  # the dashboard redraws
+        if not self.shared:
+            server.on_client_disconnect(self._gone)
+
+    def part(self, build: Callable[[Any], T]) -> Part[T]:
+        """Register ``build(gui)``, called where the part's widgets go (inside its folder):
+        built now on an open rig, else for each instructor connection (:meth:`promote`)."""
+        part = Part(self.server, build, self.shared)
+        self._parts.append(part)
+        return part
+
+    def promote(self, client: viser.ClientHandle) -> None:
+        """Build every part for ``client`` if it is the instructor (idempotent)."""
+        if self.shared or self.access.role(client.client_id) is not Role.INSTRUCTOR:
+            return
+        with self._lock:
+            for part in self._parts:
+                part.build_for(client)
+        self.on_built()
+
+    def _gone(self, client: viser.ClientHandle) -> None:
+        for part in self._parts:
+            part.forget(client.client_id)
+
+
+_ATTR = "_fieldrig_instructor"
+
+
+def instructor_for(server: viser.ViserServer, access: Access | None = None) -> Instructor:
+    """The server's :class:`Instructor`, made on the first call (with ``access``; an open
+    one when none is given: a dashboard built without a classroom)."""
+    found = getattr(server, _ATTR, None)
+    if found is None:
+        found = Instructor(server, access if access is not None else Access(None))
+        setattr(server, _ATTR, found)
+    return found
+
+
+class InstructorHtml:
+    """An HTML element for the instructor only (the injected causes under a state table)."""
+
+    def __init__(self, instructor: Instructor) -> None:
+        self._content = ""
+        self._part = instructor.part(lambda gui: gui.add_html(self._content))
+
+    def show(self, content: str) -> None:
+        if content == self._content:
+            return
+        self._content = content
+        for handle in self._part.each():
+            if handle.content != content:
+                handle.content = content
+
+
+_ROW = re.compile(rf'<tr class="{INSTRUCTOR_CLASS}">.*?</tr>', re.S)
+_SPAN = re.compile(rf'<span class="{INSTRUCTOR_CLASS}" data-where="([^"]*)">(.*?)</span>', re.S)
+
+
+def split_instructor(html: str, table_id: str) -> tuple[str, str]:
+    """(what every browser may get, the instructor's table): the rows of
+    :data:`app.ui.style.CAUSE_ROWS` and the spans of :data:`INSTRUCTOR_CLASS` (a CPX-E-EC
+    module's wired but undiagnosed fault) go from the first into the second."""
+    rows = _ROW.findall(html)
+    spans = [f"{where}: {text.lstrip('; ')}" for where, text in _SPAN.findall(html)]
+    public = _SPAN.sub("", _ROW.sub("", html))
+    if spans:
+        rows.append(f'<tr class="{INSTRUCTOR_CLASS}"><th>Not diagnosed</th>'
+                    f"<td>{'; '.join(spans)}</td></tr>")
+    if not rows:
+        return public, ""
+    return public, f'<table class="fr-kv" id="{table_id}">{"".join(rows)}</table>'
+
+
+class RoleHtml:
+    """A server-level HTML element whose content may hold the instructor's rows: on an open
+    rig it shows them (one element, as before); with a token every browser gets the content
+    without them and the instructor's connections a table of them right under it."""
+
+    def __init__(self, server: viser.ViserServer, instructor: Instructor, content: str,
+                 causes_id: str) -> None:
+        self._shared = instructor.shared
+        self._causes_id = causes_id
+        self.handle = server.gui.add_html(self._public(content))
+        self._causes = None if self._shared else InstructorHtml(instructor)
+        self._last = content
+
+    def _public(self, content: str) -> str:
+        return content if self._shared else split_instructor(content, self._causes_id)[0]
+
+    def show(self, content: str) -> None:
+        if content == self._last:
+            return
+        self._last = content
+        if self._causes is None:
+            self.handle.content = content
+            return
+        public, causes = split_instructor(content, self._causes_id)
+        if self.handle.content != public:
+            self.handle.content = public
+        self._causes.show(causes)
+
+    @property
+    def content(self) -> str:
+        """Everything, the instructor's rows included (tests)."""
+        return self._last

@@ -1,0 +1,186 @@
+"""Nothing that names an injected cause or an instructor's fault pick reaches a trainee's
+browser (docs/classroom.md "What a trainee does not see"). The causes were rows of the shared
+state tables and the fault pickers server-level widgets, hidden by the trainee's CSS only: the
+page's HTML held "0x0B TARATURA on module 4" and the picked ``value="0x0B TARATURA"``, for
+any trainee who opened the developer tools. Two websocket connections stand in for the
+browsers; what each receives is viser's wire messages."""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import msgspec
+import pytest
+import viser
+import zstandard
+from websockets.sync.client import connect
+
+from app.classroom.roles import Access, Role
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+
+TOKEN = "s3cret"
+
+
+class Page:
+    """A browser as viser's server sees it: a websocket; keeps every message it receives."""
+
+    def __init__(self, port: int) -> None:
+        self._ws = connect(f"ws://127.0.0.1:{port}",
+                           subprotocols=[f"viser-v{viser.__version__}"])  # type: ignore[list-item]
+        self.messages: list[dict[str, Any]] = []
+        self._lock = threading.Lock()
+        threading.Thread(target=self._read, daemon=True).start()
+        # viser counts a connection as a client from its first camera message.
+        self._ws.send(msgspec.msgpack.encode({
+            "type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0),
+            "position": (0.0, -5.0, 1.0), "fov": 0.9, "near": 0.01, "far": 100.0,
+            "image_height": 720, "image_width": 1280, "look_at": (0.0, 0.0, 0.0),
+            "up_direction": (0.0, 0.0, 1.0)}))
+
+    def _read(self) -> None:
+        unzip = zstandard.ZstdDecompressor()
+        try:
+            while True:
+                frame = self._ws.recv()
+                assert isinstance(frame, bytes)
+                size = int.from_bytes(frame[:8], "little")
+                packed = int.from_bytes(frame[8:16], "little")
+                inner = unzip.decompress(frame[16:16 + packed], max_output_size=size)
+                with self._lock:
+                    self.messages += msgspec.msgpack.decode(inner)["messages"]
+        except Exception:  # closed
+            return
+
+    def received(self) -> list[dict[str, Any]]:
+        with self._lock:
+            return list(self.messages)
+
+    def widget(self, label: str, option: str | None = None) -> str:
+        """The uuid of a widget this page got, by label (and one of its options)."""
+        for m in self.received():
+            props = m.get("props") or {}
+            if props.get("label") == label and (option is None
+                                                or option in (props.get("options") or ())):
+                return str(m["uuid"])
+        raise KeyError(label)
+
+    def set(self, uuid: str, value: Any) -> None:
+        """What the browser sends when its user changes a widget (or clicks a button)."""
+        self._ws.send(msgspec.msgpack.encode(
+            {"type": "GuiUpdateMessage", "uuid": uuid, "updates": {"value": value}}))
+
+    def close(self) -> None:
+        self._ws.close()
+
+
+def values(page: Page) -> list[Any]:
+    """Every widget value the page was given: at creation and by later updates."""
+    found = []
+    for m in page.received():
+        if "value" in m and "props" in m:
+            found.append(m["value"])
+        if m.get("type") == "GuiUpdateMessage" and "value" in (m.get("updates") or {}):
+            found.append(m["updates"]["value"])
+    return found
+
+
+def text(page: Page) -> str:
+    return msgspec.json.encode(page.received()).decode()
+
+
+def _wait(predicate: Any, timeout: float = 20.0) -> Any:
+    deadline = time.monotonic() + timeout
+    while not (value := predicate()):
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.05)
+    return value
+
+
+@pytest.fixture(scope="module")
+def pages() -> Iterator[tuple[Page, Page]]:
+    """A trainee's and the instructor's page after the instructor picked and injected a module
+    fault (0x0B on module 4) from its page, a coupler code and pulled the line's cable 2."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    trainee, instructor = Page(served.port), Page(served.port)
+    try:
+        _play(served, trainee, instructor)
+        yield trainee, instructor
+    finally:
+        trainee.close()
+        instructor.close()
+        served.stop()
+
+
+def _command(served: ServedRig, target: str, action: str, args: dict[str, Any]) -> None:
+    served.runtime.command(target, action, args).result(timeout=10)
+
+
+def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
+    clients = _wait(lambda: len(served.server.get_clients()) == 2
+                    and served.server.get_clients())
+    first, second = sorted(clients)
+    # The instructor showed the token (its page's localStorage, simulated).
+    assert served.classroom.access.present(second, TOKEN)
+    served.classroom._promoted(clients[second])
+    assert served.classroom.access.role(first) is Role.TRAINEE
+    _wait(lambda: "Hidden fault" in text(instructor))
+    # The instructor picks a module fault on module 4 and injects it, from the page.
+    table = _wait(lambda: _try(instructor.widget, "Table"))
+    instructor.set(table, "module codes (§7.6)")
+    time.sleep(0.3)
+    instructor.set(instructor.widget("Fault"), "0x0B TARATURA")
+    # The Target box lists the rail's modules once the coupler has numbered them.
+    _command(served, "fastcat", "power", {"on": True})
+    _command(served, "master", "set_target", {"state": "OP"})
+    served.runtime.advance(3_000_000).result(timeout=30)
+    _wait(lambda: "4 AI8D" in str([m.get("updates") for m in instructor.received()
+                                    if m.get("type") == "GuiUpdateMessage"]))
+    instructor.set(instructor.widget("Target", "coupler (no module)"), "4 AI8D")
+    time.sleep(0.3)  # the picks arrive before the click
+    instructor.set(instructor.widget("Injection"), "Inject")
+    _wait(lambda: served.runtime.submit(served.rig.snapshot).result(timeout=5)
+          ["devices"]["fastcat"]["injected"])
+    # A coupler cause, and the line's cable 2 picked and pulled in the Line tab.
+    _command(served, "fastcat", "inject_fault", {"fault": "coupler:0x04"})
+    instructor.set(instructor.widget("Cable"), "2 trscat -> cpx")
+    time.sleep(0.3)
+    instructor.set(instructor.widget("Cable plug"), "Pull")
+    _wait(lambda: "0x0B TARATURA on module 4" in text(instructor))
+    _wait(lambda: "2 trscat -> cpx (pulled)" in values(instructor))
+    _wait(lambda: "0x04 MISSING_NODE_ANSWER" in text(instructor))
+    time.sleep(1.0)  # what the trainee would get has had the time to arrive
+
+
+def test_a_trainee_receives_no_injected_cause(pages: tuple[Page, Page]) -> None:
+    trainee, instructor = pages
+    assert "<th>Injected</th>" in text(instructor)  # the instructor sees the causes
+    got = text(trainee)
+    assert "ESM state" in got  # the trainee did get the state table
+    for leak in ("TARATURA on module", "MISSING_NODE_ANSWER on", "<th>Injected</th>",
+                 "<th>Causes</th>"):
+        assert leak not in got, leak
+
+
+def test_a_trainee_receives_no_fault_pick(pages: tuple[Page, Page]) -> None:
+    trainee, instructor = pages
+    assert "Hidden fault" not in text(trainee)
+    # The instructor's own picks are not echoed to its page (viser sends a page's change to
+    # the other pages: that is how the trainees got them); the pulled cable's new label is.
+    assert "2 trscat -> cpx (pulled)" in values(instructor)
+    picked = values(trainee)
+    for pick in ("0x0B TARATURA", "4 AI8D", "2 trscat -> cpx (pulled)", "2 trscat -> cpx",
+                 "module codes (§7.6)"):
+        assert pick not in picked, pick
+
+
+def _try(fn: Any, *args: Any) -> Any:
+    try:
+        return fn(*args)
+    except KeyError:
+        return None
