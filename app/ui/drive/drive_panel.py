@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import viser
@@ -20,7 +21,8 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive.drive_state import FIELDBUS_NAMES, injected_names
 from app.ui.panels.action_form import ActionForm
-from app.ui.panels.widgets import DetailHint, Mirror, Synced, set_options
+from app.ui.panels.per_client import instructor_for
+from app.ui.panels.widgets import DetailHint, Mirror, Synced, set_options, short_label_css
 from app.ui.style import esc
 from devices.device import Action
 from devices.servo import control
@@ -116,6 +118,16 @@ def on_button(group: Any, fn: Callable[[viser.GuiEvent, str], None]) -> None:
     group.on_click(clicked)
 
 
+@dataclass(frozen=True)
+class _AlarmForm:
+    """The instructor's alarm rows of one connection (or the shared ones)."""
+
+    alarm: Any
+    ops: Any
+    jam: Synced
+    hint: DetailHint
+
+
 class DrivePanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  target: Target, actions: Mapping[str, Action]) -> None:
@@ -148,16 +160,16 @@ class DrivePanel:
                                             min=-0x8000_0000, max=0x7FFF_FFFF)
             run = gui.add_button("Run at velocity", hint="mode 3, R13 = target velocity")
             jog = gui.add_button_group("Jog", tuple(JOG))
-        with gui.add_folder("Alarms and load"):
-            self._alarm = gui.add_dropdown("Alarm", alarm_options(self._fieldbus))
-            self._alarm_hint = DetailHint(self._alarm, lambda: alarm_details(self._fieldbus))
-            alarm_ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
-            self._jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
-                                         "following error, alarm 16")
-        # What makes a fault, or shows one outright (the box follows the drive): not on a
-        # trainee's page (the classroom's trainee CSS; docs/classroom.md).
-        self.instructor_only = (self._alarm, alarm_ops, self._jam)
-        self.short_labels = (self._alarm,)  # the longest names whole (widgets.short_label_css)
+        # What makes a fault, or shows one outright (the box follows the drive): the folder is
+        # built per instructor connection with a token, so a trainee's browser never gets it
+        # (app/ui/panels/per_client.py; docs/classroom.md).
+        self._server = server
+        instructor = instructor_for(server)
+        self._alarms = instructor.part(self._alarm_form)
+        shared = self._alarms.each()[0] if instructor.shared else None
+        self.instructor_only = (shared.alarm, shared.ops, shared.jam.handle) if shared else ()
+        # The longest names whole (widgets.short_label_css)
+        self.short_labels = (shared.alarm,) if shared else ()
         with gui.add_folder("Registers and parameters", expand_by_default=False):
             self._register = gui.add_dropdown("Register", REGISTER_OPTIONS,
                                               initial_value=register_option(R.PROFILE_VELOCITY))
@@ -193,8 +205,6 @@ class DrivePanel:
                                                          {"name": "ten", "value": bool(on)})),
             ("ien", self._ien, lambda c, on: self._apply(c, "set_input",
                                                          {"name": "ien", "value": bool(on)})),
-            ("jammed", self._jam, lambda c, on: self._apply(c, "jam_load",
-                                                            {"active": bool(on)})),
             ("mode", self._mode, lambda c, option: self._apply(
                 c, "set_mode", {"mode": leading_int(option)})))}
         self._mirrors = {"c9": Mirror(self._c9), "c7": Mirror(self._c7)}
@@ -205,9 +215,6 @@ class DrivePanel:
         on_button(jog, lambda e, b: self._jog(e, JOG[b]))
         on_button(moves, self._positioner)
         run.on_click(lambda e: self._run_velocity(e))
-        on_button(alarm_ops, lambda e, b: self._do(
-            e, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
-            code=str(leading_int(self._alarm.value))))
         on_button(reg_ops, self._register_access)
         on_button(par_ops, self._parameter_access)
         write_bus.on_click(lambda e: self._write_fieldbus(e))
@@ -325,16 +332,35 @@ class DrivePanel:
         self._sequence(event, "c9 / c7", steps, done=lambda _r: self._park(
             f"c9 = {c9}, c7 = {c7} written: save, then power the drive off and on"))
 
+    def _alarm_form(self, gui: Any) -> _AlarmForm:
+        with gui.add_folder("Alarms and load"):
+            alarm = gui.add_dropdown("Alarm", alarm_options(self._fieldbus))
+            ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
+            jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
+                                   "following error, alarm 16")
+        if not instructor_for(self._server).shared:  # per client: the narrower label
+            gui.add_html(short_label_css([alarm]))
+        form = _AlarmForm(alarm, ops, Synced(self._server, jam, self._sender, lambda c, on: (
+            self._apply(c, "jam_load", {"active": bool(on)}))),
+            DetailHint(alarm, lambda: alarm_details(self._fieldbus)))
+        on_button(ops, lambda e, b: self._do(
+            e, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
+            code=str(leading_int(alarm.value))))
+        return form
+
     # ---- view -----------------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any]) -> None:
         self._injected = list(snap.get("injected") or [])
         fieldbus = str(snap.get("fieldbus", self._fieldbus))
         if fieldbus != self._fieldbus:  # Profinet numbers 30..33 differently (ch. 6)
             self._fieldbus = fieldbus
-            set_options(self._alarm, list(alarm_options(fieldbus)))
-            self._alarm_hint.refresh()
-        for name in ("powered", "ten", "ien", "jammed"):
+            for form in self._alarms.each():
+                set_options(form.alarm, list(alarm_options(fieldbus)))
+                form.hint.refresh()
+        for name in ("powered", "ten", "ien"):
             self._synced[name].follow(bool(snap.get(name)))
+        for form in self._alarms.each():
+            form.jam.follow(bool(snap.get("jammed")))
         option = mode_option(snap.get("mode"))
         if option is not None:
             self._synced["mode"].follow(option)

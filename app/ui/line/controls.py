@@ -17,6 +17,7 @@ apply to the target. The FastCAT keeps its own tab. Every command goes through
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import viser
@@ -25,6 +26,7 @@ from app.classroom.roles import makes_faults
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user, set_options
 from devices.device import Action
 
@@ -76,6 +78,37 @@ def leading_int(text: str) -> int:
     return int(str(text).split(" ", 1)[0])
 
 
+@dataclass(frozen=True)
+class _Cables:
+    """The instructor's "Cables and power" rows of one connection (or the shared ones)."""
+
+    cable: Any
+    plug: Any
+    damage: Any
+    damage_ops: Any
+    slave_power: Any
+    power: Any
+
+    @property
+    def handles(self) -> list[Any]:
+        return [self.cable, self.plug, self.damage, self.damage_ops, self.slave_power,
+                self.power]
+
+
+@dataclass(frozen=True)
+class _Frames:
+    """The instructor's "Frames and DC" rows of one connection (or the shared ones)."""
+
+    frames: Any
+    lose: Any
+    dc_fault: Any
+    dc_ops: Any
+
+    @property
+    def handles(self) -> list[Any]:
+        return [self.frames, self.lose, self.dc_fault, self.dc_ops]
+
+
 class LineControls:
     def __init__(self, server: viser.ViserServer, sender: CommandSender, master_id: str,
                  order: Sequence[str], actions: Mapping[str, Mapping[str, Action]],
@@ -92,20 +125,15 @@ class LineControls:
         def master(action: str, args: dict[str, Any] | None = None) -> Any:
             return lambda event: send(event.client, master_id, action, args or {})
 
-        with gui.add_folder("Cables and power"):
-            self.cable = gui.add_dropdown("Cable", tuple(cable_options({}, order)) or ("-",))
-            cable_buttons = gui.add_button_group("Cable plug", ("Pull", "Plug"))
-            self.damage = gui.add_number("Spoiled %", 10, min=1, max=100, step=1,
-                                         hint="share of the frames the cable spoils")
-            damage_buttons = gui.add_button_group("Cable damage", ("Damage", "Repair"))
-            self.slave_power = gui.add_dropdown("Slave to power", tuple(slave_options({}, order))
-                                                or ("-",))
-            power_buttons = gui.add_button_group("Slave power", ("Power off", "Power on"))
-        with gui.add_folder("Frames and DC"):
-            self.frames = gui.add_number("Frames to lose", 10, min=1, max=100000, step=1)
-            lose = gui.add_button("Lose frames")
-            self.dc_fault = gui.add_dropdown("DC fault", DC_FAULTS)
-            dc_buttons = gui.add_button_group("DC", ("Inject", "Clear"))
+        # What makes a fault, and says which one was made (the cable list marks the pulled
+        # ones): built per instructor connection with a token, so a trainee's browser never
+        # gets it nor what the instructor picks (app/ui/panels/per_client.py;
+        # docs/classroom.md). Resync and the target state stay everyone's.
+        self._send, self._master_id = send, master_id
+        self._master_state: Mapping[str, Any] = {}
+        instructor = instructor_for(server)
+        self._cables = instructor.part(self._cable_form)
+        self._frames = instructor.part(self._frames_form)
         with gui.add_folder("Master", expand_by_default=False):
             gui.add_button("Resync").on_click(master("resync"))
             # A trainee's diagnosis (TwinCAT's "Clear CRC"): a master's write of 0x0300-0x0313.
@@ -113,11 +141,16 @@ class LineControls:
                                               tuple(slave_options({}, order)) or ("-",))
             clear_esc = gui.add_button("Clear ESC error counters")
             self.target = gui.add_dropdown("Target state", TARGETS, initial_value="OP")
-        # What makes a fault, and says which one was made: not on a trainee's page (the
-        # classroom's trainee CSS; docs/classroom.md). Resync and the target state stay.
-        self.instructor_only = [self.cable, cable_buttons, self.damage, damage_buttons,
-                                self.slave_power, power_buttons, self.frames, lose,
-                                self.dc_fault, dc_buttons]
+        cables = self._cables.each()[0] if instructor.shared else None
+        frames = self._frames.each()[0] if instructor.shared else None
+        # Open rig: the server-level widgets, as before (tests, Dashboard.instructor_widgets).
+        self.cable = cables.cable if cables else None
+        self.damage = cables.damage if cables else None
+        self.slave_power = cables.slave_power if cables else None
+        self.frames = frames.frames if frames else None
+        self.dc_fault = frames.dc_fault if frames else None
+        self.instructor_only: list[Any] = [*cables.handles, *frames.handles] \
+            if cables and frames else []
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         self.fault_forms: dict[str, ActionForm] = {}
         # Each device's latest snapshot: a form starts from the present values (Param.current).
@@ -139,47 +172,16 @@ class LineControls:
                                       apply, current=self._current(device))
                     # The instructor's: its folder goes from a trainee's page as a whole
                     # (rebuilt parameter rows and all; docs/classroom.md).
-                    with gui.add_folder(f"{device} faults", expand_by_default=False):
-                        fault_form = ActionForm(gui, faults, apply, label="Fault action")
+                    part = instructor.part(self._fault_folder(device, faults, apply))
                 self.forms[device] = (folder, form)
-                self.fault_forms[device] = fault_form
-                self.instructor_only += fault_form.handles
-
-        @cable_buttons.on_click
-        def _(event: viser.GuiEvent) -> None:
-            verb = "pull_cable" if cable_buttons.value == "Pull" else "plug_cable"
-            send(event.client, master_id, verb, {"cable": leading_int(self.cable.value)})
-
-        @damage_buttons.on_click
-        def _(event: viser.GuiEvent) -> None:
-            cable = leading_int(self.cable.value)
-            if damage_buttons.value == "Damage":
-                send(event.client, master_id, "damage_cable",
-                     {"cable": cable, "percent": int(self.damage.value)})
-            else:
-                send(event.client, master_id, "repair_cable", {"cable": cable})
+                if instructor.shared:
+                    self.fault_forms[device] = part.each()[0]
+                    self.instructor_only += self.fault_forms[device].handles
 
         @clear_esc.on_click
         def _(event: viser.GuiEvent) -> None:
             send(event.client, master_id, "clear_esc_errors",
                  {"position": leading_int(self.esc_slave.value)})
-
-        @power_buttons.on_click
-        def _(event: viser.GuiEvent) -> None:
-            send(event.client, master_id, "power_slave",
-                 {"position": leading_int(self.slave_power.value),
-                  "on": power_buttons.value == "Power on"})
-
-        @lose.on_click
-        def _(event: viser.GuiEvent) -> None:
-            send(event.client, master_id, "lose_frames", {"count": int(self.frames.value)})
-
-        @dc_buttons.on_click
-        def _(event: viser.GuiEvent) -> None:
-            if dc_buttons.value == "Inject":
-                send(event.client, master_id, "dc_fault", {"kind": self.dc_fault.value})
-            else:
-                send(event.client, master_id, "clear_dc_fault", {})
 
         @self.target.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -189,6 +191,70 @@ class LineControls:
         @self.picker.on_update
         def _(event: viser.GuiEvent) -> None:
             self.select(self.picker.value)
+
+    def _cable_form(self, gui: Any) -> _Cables:
+        send, master_id, order = self._send, self._master_id, self._order
+        with gui.add_folder("Cables and power"):
+            form = _Cables(
+                gui.add_dropdown("Cable", tuple(cable_options(self._master_state, order))
+                                 or ("-",)),
+                gui.add_button_group("Cable plug", ("Pull", "Plug")),
+                gui.add_number("Spoiled %", 10, min=1, max=100, step=1,
+                               hint="share of the frames the cable spoils"),
+                gui.add_button_group("Cable damage", ("Damage", "Repair")),
+                gui.add_dropdown("Slave to power", tuple(slave_options(self._master_state,
+                                                                       order)) or ("-",)),
+                gui.add_button_group("Slave power", ("Power off", "Power on")))
+
+        @form.plug.on_click
+        def _(event: viser.GuiEvent) -> None:
+            verb = "pull_cable" if form.plug.value == "Pull" else "plug_cable"
+            send(event.client, master_id, verb, {"cable": leading_int(form.cable.value)})
+
+        @form.damage_ops.on_click
+        def _(event: viser.GuiEvent) -> None:
+            cable = leading_int(form.cable.value)
+            if form.damage_ops.value == "Damage":
+                send(event.client, master_id, "damage_cable",
+                     {"cable": cable, "percent": int(form.damage.value)})
+            else:
+                send(event.client, master_id, "repair_cable", {"cable": cable})
+
+        @form.power.on_click
+        def _(event: viser.GuiEvent) -> None:
+            send(event.client, master_id, "power_slave",
+                 {"position": leading_int(form.slave_power.value),
+                  "on": form.power.value == "Power on"})
+
+        return form
+
+    def _frames_form(self, gui: Any) -> _Frames:
+        send, master_id = self._send, self._master_id
+        with gui.add_folder("Frames and DC"):
+            form = _Frames(gui.add_number("Frames to lose", 10, min=1, max=100000, step=1),
+                           gui.add_button("Lose frames"), gui.add_dropdown("DC fault", DC_FAULTS),
+                           gui.add_button_group("DC", ("Inject", "Clear")))
+
+        @form.lose.on_click
+        def _(event: viser.GuiEvent) -> None:
+            send(event.client, master_id, "lose_frames", {"count": int(form.frames.value)})
+
+        @form.dc_ops.on_click
+        def _(event: viser.GuiEvent) -> None:
+            if form.dc_ops.value == "Inject":
+                send(event.client, master_id, "dc_fault", {"kind": form.dc_fault.value})
+            else:
+                send(event.client, master_id, "clear_dc_fault", {})
+
+        return form
+
+    @staticmethod
+    def _fault_folder(device: str, faults: Mapping[str, Action], apply: Any) -> Any:
+        """The slave's fault form, in a closed folder of its own."""
+        def build(gui: Any) -> ActionForm:
+            with gui.add_folder(f"{device} faults", expand_by_default=False):
+                return ActionForm(gui, faults, apply, label="Fault action")
+        return build
 
     def _current(self, device: str) -> Any:
         return lambda: self._snapshots.get(device)
@@ -200,8 +266,10 @@ class LineControls:
         return apply
 
     def all_forms(self) -> dict[str, list[ActionForm]]:
-        """Every slave form, per device: operation, then faults (tests)."""
-        return {d: [form, self.fault_forms[d]] for d, (_folder, form) in self.forms.items()}
+        """Every server-level slave form, per device: operation, then faults (open rig;
+        with a token the fault forms are the instructor connections') (tests)."""
+        return {d: [form, *([self.fault_forms[d]] if d in self.fault_forms else [])]
+                for d, (_folder, form) in self.forms.items()}
 
     def select(self, device: str) -> None:
         """Show the forms of ``device`` (a click on it in the 3D view, or the picker)."""
@@ -216,6 +284,9 @@ class LineControls:
                devices: Mapping[str, Mapping[str, Any]] | None = None) -> None:
         if devices is not None:
             self._snapshots = dict(devices)  # replaced whole: read from callback threads
-        set_options(self.cable, cable_options(master, self._order))
-        set_options(self.slave_power, slave_options(master, self._order))
+        self._master_state = master
+        cables, slaves = cable_options(master, self._order), slave_options(master, self._order)
+        for form in self._cables.each():
+            set_options(form.cable, cables)
+            set_options(form.slave_power, slaves)
         set_options(self.esc_slave, slave_options(master, self._order))

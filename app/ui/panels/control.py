@@ -17,12 +17,14 @@ from typing import Any
 import viser
 
 from app.ui.commands import CommandSender
+from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import (
     DetailHint,
     Synced,
     UserChange,
     on_user_change,
     set_options,
+    short_label_css,
 )
 
 CNF_HOLD_S = 3.0  # seed 000 §2: "almeno tre secondi"
@@ -68,6 +70,16 @@ class FaultOption:
         return f"{self.table}:0x{self.code:02X}"
 
 
+@dataclass(frozen=True)
+class _FaultForm:
+    """The instructor's fault injection rows of one connection (or the shared ones)."""
+
+    table: Any
+    fault: Any
+    target: Any
+    actions: Any
+
+
 TABLE_LABELS = {"coupler": "coupler codes (§7.5)", "module": "module codes (§7.6)"}
 
 
@@ -110,11 +122,12 @@ class ControlPanel:
                                           hint="CNF pressed while checked; release after 3 s")
             self._cnf_progress = gui.add_progress_bar(0.0, color="blue")
 
+        # What makes a fault, or shows one outright (the two boxes follow the coupler): built
+        # per instructor connection with a token, so a trainee's browser never gets them nor
+        # what the instructor picks in them (app/ui/panels/per_client.py, docs/classroom.md).
+        self._instructor = instructor_for(server)
         with gui.add_folder("Faults"):
-            self._table = gui.add_dropdown("Table", tuple(TABLE_LABELS.values()))
-            self._fault = gui.add_dropdown("Fault", self._fault_labels("coupler"))
-            self._target = gui.add_dropdown("Target", (COUPLER_TARGET,))
-            actions = gui.add_button_group("Injection", ("Inject", "Clear"))
+            self._forms = self._instructor.part(self._fault_form)
             self._reset = gui.add_checkbox("Reset fault", False, hint=RESET_HINT)
             self._reset_note = gui.add_html("", visible=False)
             self._reset_note_bit: bool | None = None
@@ -123,15 +136,20 @@ class ControlPanel:
             low, high = rotary_range
             self._rotary = gui.add_slider("Rotary switch", min=low, max=high, step=1,
                                           initial_value=max(low, 1))
-            self._link = gui.add_checkbox("EtherCAT cable in", True)
-            self._tbus_low = gui.add_checkbox("Tbus supply low", False)
-        # What makes a fault, or shows one outright (the two boxes follow the coupler): not
-        # on a trainee's page (the classroom's trainee CSS; docs/classroom.md).
-        self.instructor_only = (self._table, self._fault, self._target, actions, self._link,
-                                self._tbus_low)
+            self._boxes = self._instructor.part(self._cause_boxes)
+        shared = self._forms.each()[0] if self._instructor.shared else None
+        boxes = self._boxes.each()[0] if self._instructor.shared else None
+        # Open rig: the server-level widgets, as before (tests, Dashboard.instructor_widgets).
+        self._table = shared.table if shared else None
+        self._fault = shared.fault if shared else None
+        self._target = shared.target if shared else None
+        self._link = boxes[0].handle if boxes else None
+        self._tbus_low = boxes[1].handle if boxes else None
+        self.instructor_only = (shared.table, shared.fault, shared.target, shared.actions,
+                                self._link, self._tbus_low) if shared and boxes else ()
         # Boxes whose longest option needs the room of a narrower label column (the dashboard's
         # widgets.short_label_css; a style row in the folder would be a row of its own).
-        self.short_labels = (self._fault,)
+        self.short_labels = (shared.fault,) if shared else ()
 
         if master_id is not None:
             self._master_controls(gui, master_id)
@@ -147,11 +165,6 @@ class ControlPanel:
             self._reset, lambda c, on: self._send(c, device, "set_reset_fault", {"on": bool(on)}))
         self._rotary_sync = self._synced(
             self._rotary, lambda c, v: self._send(c, device, "set_rotary", {"value": int(v)}))
-        self._link_sync = self._synced(
-            self._link, lambda c, on: self._send(c, device, "link", {"connected": bool(on)}))
-        self._tbus_sync = self._synced(
-            self._tbus_low, lambda c, low: self._send(c, device, "tbus_voltage",
-                                                      {"low": bool(low)}))
 
         @press.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -161,24 +174,41 @@ class ControlPanel:
         def _(event: viser.GuiEvent) -> None:
             self._send(event.client, self._id, "hold_cnf", {"seconds": CNF_SHORT_S})
 
-        self._fault_hint = DetailHint(self._fault, lambda: {
-            f.label: f.detail for f in self._faults[self._table_key()]})
+    def _fault_form(self, gui: Any) -> _FaultForm:
+        form = _FaultForm(gui.add_dropdown("Table", tuple(TABLE_LABELS.values())),
+                          gui.add_dropdown("Fault", self._fault_labels("coupler")),
+                          gui.add_dropdown("Target", (COUPLER_TARGET,)),
+                          gui.add_button_group("Injection", ("Inject", "Clear")))
+        if not self._instructor.shared:  # the Fault box's narrower label (short_label_css)
+            gui.add_html(short_label_css([form.fault]))
+        hint = DetailHint(form.fault, lambda: {
+            f.label: f.detail for f in self._faults[self._table_key(form.table)]})
 
-        @self._table.on_update
+        @form.table.on_update
         def _(event: viser.GuiEvent) -> None:
-            set_options(self._fault, list(self._fault_labels(self._table_key())))
-            self._fault_hint.refresh()
+            set_options(form.fault, list(self._fault_labels(self._table_key(form.table))))
+            hint.refresh()
 
-        @actions.on_click
+        @form.actions.on_click
         async def _(event: viser.GuiEvent) -> None:
             # On viser's loop: the group's value is still the button of this click.
             verb = "inject_fault" if event.target.value == "Inject" else "clear_fault"
-            fault = self._selected_fault()
+            fault = self._selected_fault(form)
             if fault is None:
                 return
-            module = option_slot(self._target.value)  # byte 0 of the emergency (§7)
+            module = option_slot(form.target.value)  # byte 0 of the emergency (§7)
             target = self._id if module is None else f"{self._id}/{module}"
             self._send(event.client, target, verb, {"fault": fault.ref})
+
+        return form
+
+    def _cause_boxes(self, gui: Any) -> tuple[Synced, Synced]:
+        device = self._id
+        link = self._synced(gui.add_checkbox("EtherCAT cable in", True), lambda c, on: self._send(
+            c, device, "link", {"connected": bool(on)}))
+        tbus = self._synced(gui.add_checkbox("Tbus supply low", False), lambda c, low: self._send(
+            c, device, "tbus_voltage", {"low": bool(low)}))
+        return link, tbus
 
     def _synced(self, handle: Any, command: UserChange) -> Synced:
         return Synced(self._server, handle, self._sender, command)
@@ -197,18 +227,19 @@ class ControlPanel:
         on_user_change(target, lambda client, state: self._send(
             client, master_id, "set_target", {"state": state}))
 
-    def _table_key(self) -> str:
+    @staticmethod
+    def _table_key(table: Any) -> str:
         for key, label in TABLE_LABELS.items():
-            if label == self._table.value:
+            if label == table.value:
                 return key
         return "coupler"
 
     def _fault_labels(self, table: str) -> tuple[str, ...]:
         return tuple(f.label for f in self._faults[table]) or ("(no codes)",)
 
-    def _selected_fault(self) -> FaultOption | None:
-        for fault in self._faults[self._table_key()]:
-            if fault.label == self._fault.value:
+    def _selected_fault(self, form: _FaultForm) -> FaultOption | None:
+        for fault in self._faults[self._table_key(form.table)]:
+            if fault.label == form.fault.value:
                 return fault
         return None
 
@@ -240,6 +271,10 @@ class ControlPanel:
             self._rotary_sync.follow(int(snap["rotary_switch"]))
         # The coupler's own plug, not the line's link: after the master's pull_cable 0 the box
         # stays ticked (ticking it could not plug the master's cable back in).
-        self._link_sync.follow(bool((snap.get("plugs") or [snap.get("link", True)])[0]))
-        self._tbus_sync.follow(bool(snap.get("tbus_low", False)))
-        set_options(self._target, [COUPLER_TARGET, *fault_targets(snap.get("rail") or [])])
+        plugged = bool((snap.get("plugs") or [snap.get("link", True)])[0])
+        for link, tbus in self._boxes.each():
+            link.follow(plugged)
+            tbus.follow(bool(snap.get("tbus_low", False)))
+        targets = [COUPLER_TARGET, *fault_targets(snap.get("rail") or [])]
+        for form in self._forms.each():
+            set_options(form.target, targets)

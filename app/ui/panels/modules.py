@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import viser
@@ -19,6 +20,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.control import module_options, option_slot
+from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import Synced, set_options
 from app.ui.style import esc
 from devices.device import Action
@@ -54,6 +56,16 @@ def encoder_text(entry: Mapping[str, Any]) -> str:
     return f'<table class="fr-kv">{"".join(rows)}</table>' if rows else ""
 
 
+@dataclass(frozen=True)
+class _RailForm:
+    """The instructor's rail rows of one connection (or the shared ones)."""
+
+    ops: Any
+    plug_type: Any
+    swap_with: Any
+    powered: Synced
+
+
 def _speed_params(action: Action | None) -> tuple[str, str] | None:
     """(encoder param, rpm param) of set_shaft_speed, found by type: int = which, float = rpm."""
     if action is None:
@@ -78,13 +90,14 @@ class ModulePanel:
 
         with gui.add_folder("Modules"):
             self._module = gui.add_dropdown("Module", ("1",), hint="slot number and type")
-            rail_ops = gui.add_button_group("Rail", ("Unplug", "Plug", "Swap"))
-            self._plug_type = gui.add_dropdown("Plug type", tuple(catalog))
-            self._swap_with = gui.add_dropdown("Swap with", ("1",))
-            self._powered = gui.add_checkbox("Module powered", True)
-        # Plugging, swapping and a module's supply are the instructor's (the box follows the
-        # module): not on a trainee's page (the classroom's trainee CSS; docs/classroom.md).
-        self.instructor_only = (rail_ops, self._plug_type, self._swap_with, self._powered)
+            # Plugging, swapping and a module's supply are the instructor's (the box follows
+            # the module): built per instructor connection with a token, so a trainee's
+            # browser never gets them (app/ui/panels/per_client.py; docs/classroom.md).
+            self._server = server
+            self._rails = instructor_for(server).part(self._rail_form)
+        shared = self._rails.each()[0] if instructor_for(server).shared else None
+        self.instructor_only = (shared.ops, shared.plug_type, shared.swap_with,
+                                shared.powered.handle) if shared else ()
 
         with gui.add_folder("Encoder (AX2)", visible=False) as self._encoder_folder:
             self._encoder_state = gui.add_html("")
@@ -104,7 +117,6 @@ class ModulePanel:
 
         # The boxes are values of the selected module: every page ends up showing the model's
         # (Synced). A change commands the module selected when it reaches the server.
-        self._powered_sync = Synced(server, self._powered, sender, self._module_power)
         self._zero_syncs = [Synced(server, box, sender,
                                    lambda client, on, k=k: self._zero_cycle(client, k, bool(on)))
                             for k, box in enumerate(self._zero)]
@@ -112,21 +124,6 @@ class ModulePanel:
         @self._module.on_update
         def _(event: viser.GuiEvent) -> None:
             self._selection_changed()
-
-        @rail_ops.on_click
-        async def _(event: viser.GuiEvent) -> None:
-            # On viser's loop: the group's value is still the button of this click.
-            button = event.target.value
-            target = self._target()
-            if target is None:
-                return
-            if button == "Unplug":
-                self._sender.send(event.client, target, "unplug")
-            elif button == "Plug":
-                self._sender.send(event.client, target, "plug", {"type": self._plug_type.value})
-            else:
-                other = option_slot(self._swap_with.value)
-                self._sender.send(event.client, target, "swap", {"other": other})
 
         @set_speed.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -136,6 +133,31 @@ class ModulePanel:
             which, rpm = self._speed
             self._sender.send(event.client, target, "set_shaft_speed",
                               {which: int(self._encoder.value), rpm: float(self._rpm.value)})
+
+    def _rail_form(self, gui: Any) -> _RailForm:
+        form = _RailForm(gui.add_button_group("Rail", ("Unplug", "Plug", "Swap")),
+                         gui.add_dropdown("Plug type", self._catalog),
+                         gui.add_dropdown("Swap with", tuple(module_options(self._rail))
+                                          or ("1",)),
+                         Synced(self._server, gui.add_checkbox("Module powered", True),
+                                self._sender, self._module_power))
+
+        @form.ops.on_click
+        async def _(event: viser.GuiEvent) -> None:
+            # On viser's loop: the group's value is still the button of this click.
+            button = event.target.value
+            target = self._target()
+            if target is None:
+                return
+            if button == "Unplug":
+                self._sender.send(event.client, target, "unplug")
+            elif button == "Plug":
+                self._sender.send(event.client, target, "plug", {"type": form.plug_type.value})
+            else:
+                other = option_slot(form.swap_with.value)
+                self._sender.send(event.client, target, "swap", {"other": other})
+
+        return form
 
     # ---- helpers ------------------------------------------------------------------------
     def _slot(self) -> int | None:
@@ -184,7 +206,8 @@ class ModulePanel:
         # Offered on a selection or rail change only: a type picked afterwards stays.
         preset = plug_preset(entry, self._catalog)
         if preset is not None:
-            self._plug_type.value = preset
+            for form in self._rails.each():
+                form.plug_type.value = preset
         slot = self._slot()
         if slot is None or not (entry and entry.get("type")):
             self._set_available([])
@@ -210,7 +233,8 @@ class ModulePanel:
         if changed:
             options = module_options(rail)
             set_options(self._module, options)
-            set_options(self._swap_with, options)
+            for form in self._rails.each():
+                set_options(form.swap_with, options)
             self._selection_changed()
         with self._available_lock:
             available, self._available = self._available, None
@@ -221,7 +245,8 @@ class ModulePanel:
             return
         # The selected module's values: after a selection change the next frame shows the new
         # module's (a Synced at rest shows what it last followed, so only a difference is sent).
-        self._powered_sync.follow(bool(entry.get("powered", True)))
+        for form in self._rails.each():
+            form.powered.follow(bool(entry.get("powered", True)))
         if entry.get("encoders") is not None:
             command = int(entry.get("command", 0))  # 0x7600 as the module holds it
             for k, synced in enumerate(self._zero_syncs):
