@@ -255,7 +255,10 @@ def _stdout(text: str) -> None:
     """Write to stdout. A reader that stopped reading (``| head -1``, ``| true``) is not an
     error: what it did not take goes to devnull (the recipe of the Python docs' "Note on
     SIGPIPE", so the flush at exit does not fail again) and the exit code stays the
-    command's own (docs/scenarios.md "Exit codes")."""
+    command's own (docs/scenarios.md "Exit codes"). No stdout at all (``>&-``: Python then
+    has sys.stdout None) is the same: nothing is written."""
+    if sys.stdout is None:
+        return
     try:
         sys.stdout.write(text)
         sys.stdout.flush()
