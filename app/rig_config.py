@@ -143,23 +143,37 @@ _BOOLEAN_WORDS = {"true": "true", "false": "false", "yes": "true", "no": "false"
                   "on": "true", "off": "false"}
 
 
+# A bare word where a value belongs (``DO16``, ``True``, ``module:0x04``): it ends where a
+# value in an array or inline table ends. Anything else (``-abc``, ``.5``, ``@b``) gets no
+# guess. A ``key =`` line's whole value is one text (``name = Sales demo``).
+_BARE_WORD = re.compile(r"[A-Za-z_][^\s,\]}#\"'\[{]*")
+_WHOLE_VALUE = re.compile(r"\s*(?P<key>[^=\[{#\"']+?)\s*=\s*(?P<value>[A-Za-z_][^#\"'\[\]{}]*?)"
+                          r"\s*(?:\s#.*)?")
+
+
 def not_toml(exc: tomllib.TOMLDecodeError, text: str) -> str:
-    """tomllib's message, and for its "Invalid value" the commonest cause fixed on the line it
-    names: an unquoted text value (``fault = module:0x04``) or a boolean written ``True`` or
-    ``yes``. One line."""
+    """tomllib's message, and for its "Invalid value" the commonest cause fixed at the line
+    and column it names: an unquoted text value (``fault = module:0x04``, ``[..., DO16]``) or
+    a boolean written ``True`` or ``yes``. Only the bare word there is changed; no hint when
+    there is none. One line."""
     said = f"not valid TOML: {exc}"
-    found = re.match(r"Invalid value \(at line (\d+),", str(exc))
+    found = re.match(r"Invalid value \(at line (\d+), column (\d+)\)", str(exc))
     lines = text.splitlines()
-    if found is None or int(found[1]) > len(lines):
+    if found is None or not 1 <= int(found[1]) <= len(lines):
         return said
-    key, sep, value = lines[int(found[1]) - 1].partition("=")
-    value = value.split(" #", 1)[0].strip()
-    if not sep or not value:
-        return said
-    boolean = _BOOLEAN_WORDS.get(value.lower())
+    line, column = lines[int(found[1]) - 1], int(found[2]) - 1
+    whole = _WHOLE_VALUE.fullmatch(line)
+    if whole is not None and whole.start("value") == column:  # the old hint: key = "value"
+        word, before, after = whole["value"], f"{whole['key']} = ", ""
+    else:
+        token = _BARE_WORD.match(line, column)
+        if token is None:
+            return said
+        word, before, after = token[0], line[:column].lstrip(), line[token.end():].rstrip()
+    boolean = _BOOLEAN_WORDS.get(word.lower())
     if boolean is not None:
-        return f"{said}: a yes/no value is true or false, lower case: {key.strip()} = {boolean}"
-    return f'{said}: text values need quotes: {key.strip()} = "{value}"'
+        return f"{said}: a yes/no value is true or false, lower case: {before}{boolean}{after}"
+    return f'{said}: text values need quotes: {before}"{word}"{after}'
 
 
 def load_rig_spec(path: str | Path) -> RigSpec:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import tomllib
+
 import pytest
 
 from app.scenario import ScenarioError, parse_scenario
@@ -187,6 +189,40 @@ def test_an_invalid_toml_value_gets_a_hint(line: str, hint: str) -> None:
     column = line.index("=") + 3
     assert str(exc.value) == f"bad.toml: not valid TOML: Invalid value (at line 3, column " \
                              f"{column}): {hint}"
+
+
+@pytest.mark.parametrize(("line", "hint"), [
+    ('modules = ["DB16", "DI16", DO16]',
+     'text values need quotes: modules = ["DB16", "DI16", "DO16"]'),
+    ("args = { on = True }", "a yes/no value is true or false, lower case: args = { on = true }"),
+    ("values = [1, 2, x]", 'text values need quotes: values = [1, 2, "x"]'),
+    ("fault = module:0x04", 'text values need quotes: fault = "module:0x04"'),
+    ("on = True", "a yes/no value is true or false, lower case: on = true"),
+])
+def test_the_hint_fixes_the_token_at_the_column(line: str, hint: str) -> None:
+    """Only the bare word at tomllib's column is fixed: the hint quoted everything right of
+    the first ``=`` (``modules = "["DB16", "DI16", DO16]"``), a fix that did not parse."""
+    text = f"[scenario]\nname = \"x\"\n{line}\n"
+    with pytest.raises(ScenarioError) as exc:
+        parse_scenario(text, "bad.toml")
+    assert str(exc.value).endswith(f"(at line 3, column {_bad_column(line)}): {hint}")
+    fixed = hint.split(": ", 1)[1]
+    tomllib.loads(fixed)  # the hint's line is valid TOML
+
+
+def _bad_column(line: str) -> int:
+    try:
+        tomllib.loads(line)
+    except tomllib.TOMLDecodeError as exc:
+        return int(str(exc).rsplit("column ", 1)[1].rstrip(")"))
+    raise AssertionError(f"{line} parses")
+
+
+@pytest.mark.parametrize("line", ["x = [1, @b]", "x = -abc", "x = .5", "x = [1, -y]"])
+def test_no_hint_when_the_column_is_not_a_bare_word(line: str) -> None:
+    with pytest.raises(ScenarioError) as exc:
+        parse_scenario(f"[scenario]\nname = \"x\"\n{line}\n", "bad.toml")
+    assert str(exc.value).endswith(f"(at line 3, column {_bad_column(line)})")
 
 
 def test_the_hint_is_for_invalid_values_only() -> None:
