@@ -319,6 +319,8 @@ def _serve(args: argparse.Namespace) -> int:
             check_record(_record_path(args, Path(args.state_dir), "", "", i, count) or "")
     state_dirs = [Path(args.state_dir) / (f"rig{i + 1}" if count > 1 else "")
                   for i in range(count)]
+    for state_dir in state_dirs:  # before build_rig reads the flash files there
+        check_state_dir(state_dir, writable=False)
     rigs = [build_rig(load_rig_spec(rig_file), state_dir=state_dir)
             for rig_file, state_dir in zip(rig_files, state_dirs, strict=True)]
     exercises = _exercise_files(args.exercises, rigs[0])  # --rigs N: N copies of one file

@@ -1,5 +1,5 @@
-"""Where a run writes: ``--out DIR``, ``--record FILE`` and ``scenario run --state-dir DIR``
-checked before anything runs.
+"""Where a run writes: ``--out DIR``, ``--record FILE`` and ``--state-dir DIR`` checked before
+anything runs.
 
 A path that cannot take the output is a user's mistake like a wrong scenario file: one
 ``fieldrig: error:`` line and exit 2 before the run, not a traceback after it (with a recording
@@ -29,15 +29,16 @@ def image_name(number: int, checkpoint: str) -> str:
     return f"{number:02d}-{safe}.png"
 
 
-def _writable_parent(path: Path, flag: str) -> None:
+def _writable_parent(path: Path, flag: str, writable: bool = True) -> None:
     """The nearest existing ancestor of ``path`` must be a directory this process may write
-    in (the missing ones are created at the start)."""
+    in (the missing ones are created at the start); with ``writable`` False, a directory."""
     parent = path.parent
     while not parent.exists() and parent != parent.parent:
         parent = parent.parent
     if not parent.is_dir():
         raise RigConfigError(flag, "", f"{path}: {parent} is not a directory")
-    _can_make_files(parent, flag, f"{path}: cannot write in {parent}")
+    if writable:
+        _can_make_files(parent, flag, f"{path}: cannot write in {parent}")
 
 
 def _can_make_files(directory: Path, flag: str, refused: str) -> None:
@@ -91,17 +92,21 @@ def check_out(path: str | Path, names: Iterable[str] = (EVENTS_FILE,)) -> Path:
     return out
 
 
-def check_state_dir(path: str | Path) -> Path:
-    """A directory ``scenario run --state-dir`` may keep flash files in (existing or to be
-    created); nothing is created. A run whose flash write fails gives another result than
-    the one asked for (a SAVE_FLASH alarm): that is a bad flag, said before the run."""
+def check_state_dir(path: str | Path, writable: bool = True) -> Path:
+    """A directory ``--state-dir`` may keep flash files in (existing or to be created);
+    nothing is created. A scenario run whose flash write fails gives another result than the
+    one asked for (a SAVE_FLASH alarm): that is a bad flag, said before the run. Serving
+    (``writable`` False) refuses only what cannot be a directory at all (a file, a path under
+    a file): a directory that cannot be written is the devices' simulated flash failure
+    there (docs/rig-file.md "Where the flash lives")."""
     state = Path(path)
     if state.exists():
         if not state.is_dir():
             raise RigConfigError("--state-dir", "", f"{state} is a file, not a directory")
-        _can_make_files(state, "--state-dir", f"{state}: cannot write flash files in it")
+        if writable:
+            _can_make_files(state, "--state-dir", f"{state}: cannot write flash files in it")
     else:
-        _writable_parent(state, "--state-dir")
+        _writable_parent(state, "--state-dir", writable)
     return state
 
 
