@@ -26,7 +26,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from app.cli_parser import Parser
+from app.cli_parser import EXIT_BAD_INPUT, EXIT_MACHINE_FAILED, EXIT_SCENARIO_FAILED, Parser
 from app.out_paths import (
     EVENTS_FILE,
     check_out,
@@ -49,22 +49,9 @@ from app.scenario import (
 if TYPE_CHECKING:
     from app.rig import Rig
 
-EXIT_SCENARIO_FAILED = 1
-EXIT_BAD_INPUT = 2
-EXIT_MACHINE_FAILED = 3  # an OSError (a file system, the screenshots' browser): not the input
-# In every --help (docs/scenarios.md says the same): keep it in step with the codes above.
-EXIT_CODES_HELP = (
-    f"exit codes: 0 ok (serving: stopped by Ctrl-C, SIGTERM or --run-for); "
-    f"{EXIT_SCENARIO_FAILED} a scenario step failed (scenario run); "
-    f"{EXIT_BAD_INPUT} bad input: a bad flag, a wrong rig, scenario or exercise file, an output "
-    "path that cannot take the output, a host or port that cannot be served; "
-    f"{EXIT_MACHINE_FAILED} the machine failed the run (a file that cannot be written, the "
-    "screenshots' browser); 130 / 143 a scenario run interrupted by SIGINT / SIGTERM; every "
-    "error one 'fieldrig: error:' line, no traceback")
-
 
 def _serve_parser() -> argparse.ArgumentParser:
-    p = Parser(prog="python -m app", epilog=EXIT_CODES_HELP,
+    p = Parser(prog="python -m app",
                description="FieldRig: serve the dashboard of a virtual rig. Subcommands: "
                            "'scenario run FILE', 'scenario list', 'ethercat export-esi' "
                            "(each with --help).")
@@ -113,14 +100,14 @@ def _serve_parser() -> argparse.ArgumentParser:
 
 
 def _scenario_parser() -> argparse.ArgumentParser:
-    p = Parser(prog="python -m app scenario", epilog=EXIT_CODES_HELP,
+    p = Parser(prog="python -m app scenario",
                description="Run a scenario headless, as fast as possible, and print its "
                            "events as JSON lines ('run FILE'), or list the example scenarios "
                            "('list').")
     sub = p.add_subparsers(dest="verb", required=True)
     sub.add_parser("list", help="the example scenarios, one per line: file, name and rig file "
                                 "(tab-separated)")
-    run = sub.add_parser("run", help="run a scenario file", epilog=EXIT_CODES_HELP)
+    run = sub.add_parser("run", help="run a scenario file")
     run.add_argument("file", help="scenario TOML file")
     run.add_argument("--out", default=None, metavar="DIR",
                      help="directory for events.jsonl (and the screenshots); it gets this "

@@ -3,6 +3,7 @@ and the README, every error line starts the same, and the help lists the exit co
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -32,12 +33,31 @@ def test_the_top_help_names_every_subcommand(capsys) -> None:
         assert command in text
 
 
-@pytest.mark.parametrize("argv", [[], ["scenario"], ["scenario", "run"]], ids=" ".join)
-def test_the_help_lists_the_exit_codes(argv: list[str], capsys) -> None:
-    text = help_of(argv, capsys)
-    assert "exit codes: 0 ok" in text
-    assert f"{EXIT_SCENARIO_FAILED} a scenario step failed" in text
-    assert f"{EXIT_BAD_INPUT} bad input" in text
+def every_help(capsys: pytest.CaptureFixture[str]) -> dict[str, str]:
+    """The help of every command and subcommand: the entry points main dispatches on, then
+    each subcommand their help's usage line names (``{list,run}``), and so on down."""
+    found: dict[str, str] = {}
+    todo: list[list[str]] = [[], ["scenario"], ["ethercat"]]
+    while todo:
+        argv = todo.pop()
+        text = help_of(argv, capsys)
+        found[" ".join(argv)] = text
+        verbs = re.search(r"\{([\w,-]+)\} \.\.\.", text.split(" options:")[0])
+        todo += [[*argv, verb] for verb in verbs[1].split(",")] if verbs else []
+    return found
+
+
+def test_every_help_lists_the_exit_codes(capsys) -> None:
+    """README: the exit codes are "at the end of every --help"; scenario list, ethercat and
+    ethercat export-esi lacked them."""
+    helps = every_help(capsys)
+    assert {"", "scenario", "scenario run", "scenario list", "ethercat",
+            "ethercat export-esi"} <= set(helps)
+    for argv, text in helps.items():
+        assert "exit codes: 0 ok" in text, argv
+        assert f"{EXIT_SCENARIO_FAILED} a scenario step failed" in text, argv
+        assert f"{EXIT_BAD_INPUT} bad input" in text, argv
+        assert text.endswith("no traceback"), argv  # at the end
 
 
 @pytest.mark.parametrize("argv", [
