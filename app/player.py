@@ -213,10 +213,12 @@ class Player:
         self._barrier()
         logger.info("scenario '%s' loaded", scenario.name)
 
-    def restart(self) -> None:
-        """Back to the start of the loaded scenario, on a factory-fresh rig again, playing on
-        if it was playing (a demo goes on from 0 s; a paused one waits at 0 s)."""
-        scenario = self._require()
+    def restart(self, scenario: Scenario | None = None) -> None:
+        """Back to the start of the loaded scenario (or of ``scenario``: the dashboard's
+        picked file, read again), on a factory-fresh rig again, playing on if it was playing
+        (a demo goes on from 0 s; a paused one waits at 0 s). The one place Restart's rule
+        lives: the Scenario panel's button comes here."""
+        scenario = scenario if scenario is not None else self._require()
         playing = self.playing()
         self.load(scenario)
         if playing:

@@ -402,8 +402,10 @@ def test_restart_while_paused_stays_paused(live: Live, scenario: Scenario) -> No
     assert live.player.view().status is Status.READY
 
 
-def test_the_panels_restart_keeps_playing(live: Live, tmp_path: Path) -> None:
-    """The Restart button goes through the panel (it loads the picked file again)."""
+def test_the_panels_restart_keeps_playing(live: Live, tmp_path: Path,
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    """The Restart button goes through the panel (it loads the picked file again) to
+    Player.restart: "playing on" is decided in one place (the panel had its own copy)."""
     import viser
 
     from app.screenshots import free_port
@@ -415,6 +417,14 @@ def test_the_panels_restart_keeps_playing(live: Live, tmp_path: Path) -> None:
     try:
         panel = ScenarioPlayerPanel(server, live.runtime)
         panel.load(load_scenario(path), path)
+        restarts: list[Scenario | None] = []
+        restart = panel.player.restart
+
+        def counted(scenario: Scenario | None = None) -> None:
+            restarts.append(scenario)
+            restart(scenario)
+
+        monkeypatch.setattr(panel.player, "restart", counted)
         panel.player.set_speed(MIN_SPEED)
         panel.player.play()
         panel._run(None, RESTART)
@@ -423,5 +433,7 @@ def test_the_panels_restart_keeps_playing(live: Live, tmp_path: Path) -> None:
         panel._run(None, PAUSE)
         panel._run(None, RESTART)
         assert panel.player.view().status is Status.READY and live.runtime.paused
+        assert len(restarts) == 2
+        assert all(s is not None and s.source == str(path) for s in restarts)  # read again
     finally:
         server.stop()

@@ -251,11 +251,11 @@ class ScenarioPlayerPanel:
             elif choice == STEP:
                 self._ensure_loaded()
                 self.player.step()
-            elif choice == RESTART:  # playing on if it was playing (docs/scenarios.md)
-                playing = self.player.playing()
-                self._ensure_loaded(force=True)
-                if playing:
-                    self.player.play()
+            elif choice == RESTART:  # the picked file, read again (docs/scenarios.md)
+                path = self._picked_path()
+                scenario = load_scenario(path)
+                self.player.restart(scenario)
+                self._note_loaded(scenario, path)
         except RigMismatch as exc:  # the fix first and short; the device lists to the log
             logger.warning("%s", exc)
             notify(client, f"Scenario: {choice} refused", exc.fix, error=True)
@@ -280,23 +280,29 @@ class ScenarioPlayerPanel:
         self._ensure_loaded(restart_finished=True)
         self.player.play()
 
-    def _ensure_loaded(self, force: bool = False, restart_finished: bool = False) -> None:
-        """Load the picked scenario when it is not the one loaded (or when asked to)."""
+    def _picked_path(self) -> Path:
+        """The picked scenario's file, else the loaded one's."""
         entry = self._entries.get(str(self._pick.value))
-        if entry is None:
-            if self._loaded is None:
-                raise ScenarioError("pick a scenario first")
-            path = self._loaded
-        else:
-            path = entry.path
+        if entry is not None:
+            return entry.path
+        if self._loaded is None:
+            raise ScenarioError("pick a scenario first")
+        return self._loaded
+
+    def _ensure_loaded(self, restart_finished: bool = False) -> None:
+        """Load the picked scenario when it is not the one loaded (or when asked to)."""
+        path = self._picked_path()
         finished = self.player.view().status is Status.FINISHED
-        if force or path != self._loaded or (restart_finished and finished):
+        if path != self._loaded or (restart_finished and finished):
             self.load(load_scenario(path), path)
 
     def load(self, scenario: Scenario, path: Path | None = None, fresh: Rig | None = None,
              run_on: bool = False) -> None:
         """Load ``scenario`` (on ``fresh``; ``run_on``: see :meth:`app.player.Player.load`)."""
         self.player.load(scenario, fresh, run_on)
+        self._note_loaded(scenario, path)
+
+    def _note_loaded(self, scenario: Scenario, path: Path | None = None) -> None:
         self._loaded = path if path is not None else Path(scenario.source)
         self._show_picked(scenario, self._loaded)
 
