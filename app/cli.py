@@ -229,7 +229,9 @@ def _scenario_run(args: argparse.Namespace) -> int:
     else:
         result = run_scenario(scenario, rig)
     text = "".join(json.dumps(e.to_record(), default=str) + "\n" for e in result.events)
-    if out is not None:  # first: a reader of stdout that stops early must not cost the file
+    # The one writer of events.jsonl (--screenshots too), first: a reader of stdout that
+    # stops early must not cost the file.
+    if out is not None:
         write_events(out, text)
     if not args.quiet:
         _stdout(text)

@@ -3,8 +3,9 @@
 ``python -m app scenario run FILE --out DIR --screenshots`` serves the dashboard on a free
 loopback port with the simulation *paused*, opens it in headless Chromium (Debian's, driven by
 Playwright; never a Playwright browser download), plays the scenario step by step with the
-dashboard's own scenario player, and at each checkpoint writes ``DIR/<NN>-<name>.png``; the
-events go to ``DIR/events.jsonl``, the same lines ``scenario run`` prints.
+dashboard's own scenario player, and at each checkpoint writes ``DIR/<NN>-<name>.png``; it
+returns the events, which the CLI writes to ``DIR/events.jsonl`` as for every run (the same
+lines ``scenario run`` prints; the CLI owns ``--out``: app/cli.py).
 
 What makes two runs give the same pictures: a fixed 1280x720 viewport at device pixel ratio 1
 (and viser's ``fixedDpr``, so slow software WebGL does not lower the resolution), the camera
@@ -32,7 +33,7 @@ from typing import Any
 
 import viser
 
-from app.out_paths import image_name, write_events
+from app.out_paths import image_name
 from app.player import Status
 from app.rig import Rig
 from app.runtime import Runtime
@@ -302,7 +303,8 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
                          record: str | None = None, chromium: str = CHROMIUM,
                          quiet: bool = False) -> ScreenshotRun:
     """Play ``scenario`` on the untouched ``rig`` in a served dashboard; one PNG per checkpoint
-    and ``events.jsonl`` into ``out_dir``. ``quiet``: viser prints nothing.
+    into ``out_dir``, and the events returned (``events.jsonl`` is the caller's: the CLI
+    writes it last, for every run alike). ``quiet``: viser prints nothing.
 
     The scenario is checked against the rig and the browser looked for first, so a wrong file
     or a missing Chromium is one error line and no server starts."""
@@ -321,7 +323,6 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
         failures = play(served, scenario, rig,
                         lambda step: images.append(_shoot(page, out, len(images) + 1, step)))
         page.close()
-    write_events(out, event_lines(events))
     return ScreenshotRun(events, failures, images)
 
 

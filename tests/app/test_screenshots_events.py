@@ -96,3 +96,55 @@ def test_scenario_run_gives_events_in_time_order() -> None:
     scenario, rig = fresh("cable_pulled")
     times = [e.t_us for e in run_scenario(scenario, rig).events]
     assert times == sorted(times)
+
+
+def test_scenario_run_screenshots_writes_events_jsonl_once(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``events.jsonl`` has one owner, the CLI (it owns ``--out``: cleared before, written
+    last and before stdout). With ``--screenshots`` run_with_screenshots wrote it, then the
+    CLI again. The browser is a stand-in here: the pictures are not the point."""
+    import os
+
+    import app.screenshots
+    from app.cli import main
+
+    class NoBrowser:
+        def __init__(self, _executable: str) -> None:
+            pass
+
+        def __enter__(self) -> NoBrowser:
+            return self
+
+        def __exit__(self, *_exc: object) -> None:
+            pass
+
+        def open(self, _served: object, show_player: bool = False) -> Any:
+            return self
+
+        def close(self) -> None:
+            pass
+
+    def shoot(_page: object, out: Path, number: int, step: Any) -> Path:
+        path = out / app.screenshots.image_name(number, step.text)
+        path.write_bytes(b"png")
+        return path
+
+    written: list[str] = []
+    replace = os.replace
+
+    def counted(src: Any, dst: Any) -> None:
+        if Path(dst).name == "events.jsonl":
+            written.append(str(dst))
+        replace(src, dst)
+
+    monkeypatch.setattr(app.screenshots, "Chromium", NoBrowser)
+    monkeypatch.setattr(app.screenshots, "_shoot", shoot)
+    monkeypatch.setattr(os, "replace", counted)
+    out = tmp_path / "out"
+    scenario = EXAMPLES_DIR / "module_lost_in_op.toml"
+    assert main(["scenario", "run", str(scenario), "--out", str(out), "--screenshots",
+                 "--quiet"]) == 0
+    assert written == [str(out / "events.jsonl")]
+    rig = build_rig(load_rig_spec(EXAMPLES_DIR.parent / "rigs" / "default.toml"), state_dir=None)
+    expected = event_lines(run_scenario(load_scenario(scenario), rig).events)
+    assert (out / "events.jsonl").read_text(encoding="utf-8") == expected
