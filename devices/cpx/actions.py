@@ -15,7 +15,12 @@ from devices.cpx.catalog import IO_MODULES, module_type
 from devices.cpx.faults import FAULTS, Injected, Target, check_target, fault_spec
 from devices.cpx.history import FIRST_SUB
 from devices.cpx.history import INDEX as HISTORY
-from devices.cpx.module_checks import check_kind, module_listing, modules_layout
+from devices.cpx.module_checks import (
+    FAULT_ACTIONS,
+    check_kind,
+    module_listing,
+    modules_layout,
+)
 from devices.cpx.modules import CpxModule
 from devices.cpx.switches import ROTARY_MAX
 from devices.device import Action, CommandError, Param
@@ -84,7 +89,12 @@ class OperatorMixin:
                       module: int | None = None) -> dict[str, Any]:
         if action == "write_object" and isinstance(args.get("value"), bool):
             args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
-        return super().check_command(action, args, module)  # type: ignore[misc]
+        kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
+        # Here, not in the handler: the checks before a run (a scenario's [[on]] commands, an
+        # exercise file's fault) call this only.
+        if action in FAULT_ACTIONS:
+            check_target(fault_spec(kwargs["fault"]), module, kwargs["channel"], kwargs["sm"])
+        return kwargs
 
     # ---- supplies, cables, switches -----------------------------------------------------
     def cmd_power(self: CpxEEc, on: bool) -> None:
@@ -183,8 +193,7 @@ class OperatorMixin:
 
     def _apply_fault(self: CpxEEc, fault: str, channel: int | None, sm: int | None,
                      module: int | None, present: bool) -> None:
-        spec = fault_spec(fault)
-        check_target(spec, module, channel, sm)
+        spec = fault_spec(fault)  # its target: check_command
         if spec.name == "short_circuit":
             self.cmd_short_circuit(module, present, channel)  # type: ignore[arg-type]
             return

@@ -12,13 +12,13 @@ from collections.abc import Callable, Mapping
 from typing import TYPE_CHECKING, Any
 
 from devices.cpx.catalog import ModuleKind, ModuleType, module_type
-from devices.cpx.faults import check_target, fault_spec
+from devices.cpx.faults import fault_spec
 from devices.device import UNKNOWN_MODULE, CommandError
 
 if TYPE_CHECKING:
     from devices.cpx.modules import CpxModule
 
-_FAULT_ACTIONS = ("inject_fault", "clear_fault")
+FAULT_ACTIONS = ("inject_fault", "clear_fault")
 _PHYSICAL_FAULTS = ("short_circuit", "wire_break")  # inject_fault runs their actions
 
 
@@ -83,7 +83,7 @@ _KIND_CHECKS: dict[str, Callable[[ModuleType, int, int | None], None]] = {
 def check_kind(mtype: ModuleType, module: int, action: str, args: Mapping[str, Any]) -> None:
     """Refuse what module ``module`` of type ``mtype`` cannot take whatever its state: an
     action its type has nothing for, a channel it does not have (Tab. 21-23)."""
-    if action in _FAULT_ACTIONS:
+    if action in FAULT_ACTIONS:
         action = fault_spec(args["fault"]).name
     check = _KIND_CHECKS.get(action)
     if check is None:
@@ -116,8 +116,7 @@ class ModuleChecks:
 
     def check_module(self, action: str, args: Mapping[str, Any], module: int | None,
                      layout: dict[int, Any]) -> None:
-        if action in _FAULT_ACTIONS:  # the handler's order: the fault's target first
-            check_target(fault_spec(args["fault"]), module, args["channel"], args["sm"])
+        # The fault's target (a module fault without a module, ...): check_command, first.
         if module is None:
             return
         if module not in layout:

@@ -68,6 +68,9 @@ def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
     return f"{at:%d/%m/%Y %H.%M.%S} {at.microsecond // 1000:03d} ms"
 
 
+_LINE_PARAMS = frozenset({"cable", "position"})  # line positions 0 .. slaves - 1
+
+
 class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel):
     KIND = "master"
     SKIP_STILL = True  # False: every part of every step in full (test_still_master.py)
@@ -182,6 +185,15 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.target = AlState[state]
         for link in self.links:
             link.next_try_us = self.now_us
+
+    def check_command(self, action: str, args: Mapping[str, Any],
+                      module: int | None = None) -> dict[str, Any]:
+        kwargs = super().check_command(action, args, module)
+        # The line is fixed when the rig is built: a scenario's or an exercise's check before
+        # the run refuses a position past its end, as the command would.
+        for what in _LINE_PARAMS.intersection(kwargs):
+            self._position(kwargs[what], what)
+        return kwargs
 
     def _position(self, value: int, what: str) -> int:
         if not 0 <= value < len(self.links):

@@ -23,12 +23,15 @@ from devices.trscat.catalog import (
 from devices.trscat.diagnostics import FAULTS, parse_fault
 from devices.trscat.io import SlotIo
 from devices.trscat.module_checks import (
+    FAULT_ACTIONS,
     channel_index,
+    check_fault_target,
     check_output,
     check_plug,
     check_slot_fault,
     device_fault,
     no_expansion,
+    plug_position,
 )
 from devices.trscat.objects import refuse_in_state
 from devices.trscat.sync import MODE_BY_NAME, SyncMode, SyncUnit
@@ -131,7 +134,15 @@ class CommandsMixin:
                       module: int | None = None) -> dict[str, Any]:
         if action == "write_object" and isinstance(args.get("value"), bool):
             args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
-        return super().check_command(action, args, module)  # type: ignore[misc]
+        kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
+        # Here, not only in the handlers: the checks before a run (a scenario's [[on]]
+        # commands, an exercise file's fault) call this only. What depends on the expansions
+        # a step finds is check_module's.
+        if action in FAULT_ACTIONS:
+            check_fault_target(self.device_id, kwargs["fault"], module)
+        elif action == "plug" and module is not None:
+            plug_position(module)
+        return kwargs
 
     # ---- slots and channels -------------------------------------------------------------------
     def slot_io(self, module: int | None) -> SlotIo:

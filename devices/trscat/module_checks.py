@@ -24,7 +24,7 @@ from devices.trscat.diagnostics import Target, parse_fault
 if TYPE_CHECKING:
     from devices.trscat.io import SlotIo
 
-_FAULT_ACTIONS = ("inject_fault", "clear_fault")
+FAULT_ACTIONS = ("inject_fault", "clear_fault")
 _DIGITAL = ((IoShape.DIGITAL,), False)
 # The channels each action names: of which shapes, and whether outputs are counted.
 _CHANNELS: dict[str, tuple[tuple[IoShape, ...], bool]] = {
@@ -64,7 +64,7 @@ def check_slot_fault(fault: str, kind: ModuleKind, slot: int) -> None:
 
 def check_kind(kind: ModuleKind, slot: int, action: str, args: Mapping[str, Any]) -> None:
     """Refuse what slot ``slot`` holding ``kind`` cannot take whatever its state."""
-    if action in _FAULT_ACTIONS:
+    if action in FAULT_ACTIONS:
         check_slot_fault(args["fault"], kind, slot)
     elif action in _CHANNELS:
         index = channel_index(kind, action, args["channel"])
@@ -120,6 +120,13 @@ def device_fault(device_id: str, fault: str, module: int | None) -> bool:
     return True
 
 
+def check_fault_target(device_id: str, fault: str, module: int | None) -> None:
+    """Refuse a fault whatever the expansions: one of the TRS-CAT itself on an expansion, a
+    TRS-AN-E fault on the TRS-CAT (slot 0 always holds the integrated I/O)."""
+    if not device_fault(device_id, fault, module) and module is None:
+        check_slot_fault(fault, INTEGRATED, 0)
+
+
 class ModuleChecks:
     """The scenario-check hooks of :class:`~devices.trscat.device.TrsCat`."""
 
@@ -131,7 +138,7 @@ class ModuleChecks:
 
     def check_module(self, action: str, args: Mapping[str, Any], module: int | None,
                      layout: dict[int, Any]) -> None:
-        if action in _FAULT_ACTIONS and device_fault(self.device_id, args["fault"], module):
+        if action in FAULT_ACTIONS and device_fault(self.device_id, args["fault"], module):
             return
         if action == "plug" and module is not None:
             kind = expansion_kind(args["type"])

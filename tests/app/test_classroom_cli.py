@@ -75,6 +75,10 @@ fault = "{fault}"
     ("nosuchdevice", "fastcat:inject:coupler:0x04", "nosuchdevice"),
     # a module code (§7.6) without `module =`: the FastCAT model's own check_command rule
     ("fastcat", "fastcat:inject:module:0x0B", "module alarm (§7.6)"),
+    # the CPX-E-EC's and the TRS-CAT's module faults: their check_command rules too
+    ("cpx", "cpx:inject:fault:module_failure", "module_failure needs a module: target 'cpx/N'"
+     "; give its module: module = N"),
+    ("trscat", "trscat:inject:fault:AN_PLUS_12V", "AN_PLUS_12V (0x5114) is a TRS-AN-E fault"),
 ])
 def test_an_exercise_the_rig_cannot_play_exits_2_before_serving(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], target: str, fault: str,

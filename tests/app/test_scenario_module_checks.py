@@ -146,3 +146,22 @@ def test_a_fastcat_module_fault_on_a_module_target_passes_the_check(tmp_path, ca
              + step("fastcat/3", "inject_fault", at=0.5, fault="module:0x04")
              + step("fastcat/3", "clear_fault", at=1.0, fault="module:0x04"))
     assert run_steps(tmp_path, steps) == 0, capsys.readouterr().err
+
+
+def on(target: str, action: str, **args: object) -> str:
+    return step(target, action, **args).replace("[[step]]\nat = 0.5", "[[on]]\nevent = \"resync\"")
+
+
+@pytest.mark.parametrize(("target", "action", "args", "said"), [
+    ("cpx", "inject_fault", {"fault": "module_failure"},
+     "module_failure needs a module: target 'cpx/N'"),
+    ("trscat/1", "inject_fault", {"fault": "CONFIG_ERROR"},
+     "CONFIG_ERROR is a fault of the TRS-CAT itself: target 'trscat'"),
+    ("master", "pull_cable", {"cable": 9}, "cable 9: the line has positions 0..3"),
+])
+def test_an_on_command_any_rig_would_refuse_is_refused_before_the_run(
+        tmp_path, capsys, target, action, args, said) -> None:
+    """An [[on]] command is checked by check_command only (its modules are left to the run):
+    these passed and failed when their event came, exit 1 after the run."""
+    line = refused(tmp_path, capsys, step("master", "resync") + on(target, action, **args))
+    assert line.endswith(f"on[0]: {said}"), line
