@@ -164,6 +164,12 @@ class Player:
         rig_name, why = found
         return RigMismatch(scenario, path, rig_name, self.runtime.rig.name, why)
 
+    def fresh_rig(self, scenario: Scenario) -> Rig:
+        """The factory-fresh rig :meth:`load` installs for ``scenario`` (RigConfigError when
+        its rig file does not load). Flash in memory, as `scenario run` has it: a played
+        scenario starts from the factory state and never writes the served rig's flash."""
+        return build_rig(load_rig_spec(self.rig_path(scenario)), state_dir=None)
+
     def load(self, scenario: Scenario, fresh: Rig | None = None, run_on: bool = False) -> None:
         """Make the rig factory-fresh and stand before the scenario's first step, paused.
 
@@ -174,9 +180,7 @@ class Player:
         ScenarioError / RigConfigError before anything changes when the scenario does not fit.
         """
         if fresh is None:
-            # Flash in memory, as `scenario run` has it: a played scenario starts from the
-            # factory state and never writes the served rig's flash files.
-            fresh = build_rig(load_rig_spec(self.rig_path(scenario)), state_dir=None)
+            fresh = self.fresh_rig(scenario)
         check_against(scenario, fresh)
         if fresh is not self.runtime.rig:
             why = compatible(self.runtime.rig, fresh)

@@ -142,3 +142,39 @@ def test_the_rig_runs_on_after_the_file_so_the_fault_shows(tmp_path: Path) -> No
         assert not one.runtime.paused and one.runtime.frame.t_us > 1_000_000
     finally:
         one.stop()
+
+
+class _Client:
+    """What the panel's notification path writes to (viser's ClientHandle.add_notification)."""
+
+    client_id = 7
+
+    def __init__(self) -> None:
+        self.notes: list[tuple[str, str, str]] = []
+
+    def add_notification(self, title: str, body: str, color: str, **_: object) -> None:
+        self.notes.append((title, body, color))
+
+
+@pytest.mark.parametrize(("fault", "said"), [
+    ("fastcat:inject:module:0x0B", "module alarm (§7.6): target 'fastcat/N'; give its module"),
+    ("cpx:inject:fault:module_failure", "module_failure needs a module: target 'cpx/N'"),
+])
+def test_a_file_edited_after_the_start_is_checked_at_play(served: ServedRig, tmp_path: Path,
+                                                          fault: str, said: str) -> None:
+    """Play file and start looked the fault id up only: a file edited after the server's
+    start check played its scenario and failed in the injection thread (a logged warning, the
+    exercise silently without its fault). Now it is refused, nothing loaded, with one line."""
+    path = tmp_path / "lost_node.toml"
+    path.write_text(FILE.replace("fastcat:inject:coupler:0x04", fault))
+    classroom, player = served.classroom, served.classroom._player.player
+    generation = player.view().generation
+    client = _Client()
+    play = lambda: classroom.start_from_file(path)  # noqa: E731
+    classroom._guarded(client, play, "started")  # type: ignore[arg-type]
+    [(title, body, color)] = client.notes
+    assert (title, color) == ("Exercise", "red")
+    assert said in body and body.startswith(f"{path}: [exercise] fault"), body
+    assert "\n" not in body
+    assert player.view().generation == generation and served.runtime.paused
+    assert classroom.exercise is None

@@ -27,7 +27,7 @@ from typing import Any
 import viser
 
 from app.classroom.exercise import Exercise, Phase
-from app.classroom.exercise_file import load_exercise, start_us
+from app.classroom.exercise_file import check_exercise, load_exercise, start_us
 from app.classroom.faults import Catalog, catalog
 from app.classroom.roles import Operation, Role
 from app.recording import RigRecorder
@@ -162,13 +162,16 @@ class ClassroomPanel:
         if self._player is None:
             raise ValueError("this dashboard has no scenario player")
         scenario, spec = load_exercise(path)
-        self.catalog.fault(spec.fault)  # KeyError before anything changes
+        # The file may have changed since the server's start check: checked again, on the rig
+        # it will play on, before anything changes (ScenarioError, one line).
+        fresh = self._player.player.fresh_rig(scenario)
+        check_exercise(scenario, spec, fresh, self.catalog)
         with self._lock:
             if self.exercise is not None and self.exercise.phase is not Phase.FINISHED:
                 raise ValueError("an exercise is running: end it first")
         # The rig runs on after the file's last step: paused there, the hidden fault would
         # never develop (the clock stands at the injection time).
-        self._player.load(scenario, path, run_on=True)
+        self._player.load(scenario, path, fresh=fresh, run_on=True)
         generation = self._player.player.view().generation
         at = start_us(scenario, spec)
         self._player.player.play()
