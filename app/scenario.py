@@ -151,6 +151,10 @@ def parse_scenario(text: str, source: str = "<scenario>",
     except tomllib.TOMLDecodeError as exc:
         raise fail("", not_toml(exc, text)) from None
     unknown = sorted(set(data) - {"scenario", "step", "on"})
+    if "exercise" in unknown:  # not a broken scenario: a classroom file (docs/classroom.md)
+        raise fail("[exercise]", "an exercise file, played with its hidden fault by the "
+                                 "instructor's Play file and start (Classroom folder, python "
+                                 "-m app --exercises DIR), not as a scenario")
     if unknown:
         raise fail(unknown[0], "unknown key (a scenario has [scenario], [[step]] and [[on]] "
                                "tables)")

@@ -178,3 +178,43 @@ def test_a_file_edited_after_the_start_is_checked_at_play(served: ServedRig, tmp
     assert "\n" not in body
     assert player.view().generation == generation and served.runtime.paused
     assert classroom.exercise is None
+
+
+def test_the_scenario_tab_after_an_exercise_file(served: ServedRig, tmp_path: Path) -> None:
+    """After the file's scenario ended, Play and Restart in the Scenario tab reloaded the file
+    as a plain scenario and were refused with "exercise: unknown key (a scenario has
+    [scenario], [[step]] and [[on]] tables)". Play now goes on with the loaded file (the rig
+    runs on, as Play file and start left it); Restart, which would reset the rig under the
+    running exercise without its hidden fault, is refused with one line naming the way."""
+    path = tmp_path / "lost_node.toml"
+    classroom = served.classroom
+    panel = classroom._player
+    classroom.start_from_file(path)
+    served.runtime.advance(4_500_000).result(timeout=60)
+    deadline = time.monotonic() + 10
+    while classroom.exercise is None:
+        assert time.monotonic() < deadline, "the exercise did not start"
+        time.sleep(0.05)
+    generation = panel.player.view().generation
+    panel.player.pause()
+    client = _Client()
+    panel._run(client, "Play")  # type: ignore[arg-type]
+    assert client.notes == [] and not served.runtime.paused
+    assert panel.player.view().generation == generation
+    panel._run(client, "Restart")  # type: ignore[arg-type]
+    [(title, body, color)] = client.notes
+    assert (title, color) == ("Scenario: Restart refused", "red")
+    assert "\n" not in body and "lost_node.toml" in body and "exercise file" in body \
+        and "Play file and start" in body, body
+    assert panel.player.view().generation == generation
+    assert classroom.exercise is not None and classroom.exercise.phase.name == "RUNNING"
+
+
+def test_an_exercise_file_read_as_a_scenario_says_what_it_is(tmp_path: Path) -> None:
+    """`scenario run` or the Scenario tab on an exercise file said only "exercise: unknown
+    key": the file is not broken, it is played another way."""
+    with pytest.raises(ScenarioError) as caught:
+        parse_scenario(FILE, "ex.toml")
+    said = str(caught.value)
+    assert said.startswith("ex.toml: [exercise]: an exercise file") and "\n" not in said
+    assert "Play file and start" in said and "--exercises" in said, said

@@ -215,6 +215,7 @@ class ScenarioPlayerPanel:
         self._entries = {e.label: e for e in entries}
         self.hint = other_rig_hint(rigs)
         self._loaded: Path | None = None
+        self._exercise_file: Path | None = None  # the loaded file, when an exercise file
         self._busy = threading.Lock()  # one playback command at a time, in click order
         gui = server.gui
         with gui.add_folder(PLAYER_FOLDER):
@@ -293,6 +294,8 @@ class ScenarioPlayerPanel:
         """Load the picked scenario when it is not the one loaded (or when asked to)."""
         path = self._picked_path()
         finished = self.player.view().status is Status.FINISHED
+        if restart_finished and path == self._exercise_file:
+            return  # Play goes on: the rig runs on after an exercise file (Player.play)
         if path != self._loaded or (restart_finished and finished):
             self.load(load_scenario(path), path)
 
@@ -301,9 +304,13 @@ class ScenarioPlayerPanel:
         """Load ``scenario`` (on ``fresh``; ``run_on``: see :meth:`app.player.Player.load`)."""
         self.player.load(scenario, fresh, run_on)
         self._note_loaded(scenario, path)
+        # run_on: an exercise file (the Classroom's Play file and start); reading it again as
+        # a scenario is refused (app.scenario.parse_scenario says how it is played)
+        self._exercise_file = self._loaded if run_on else None
 
     def _note_loaded(self, scenario: Scenario, path: Path | None = None) -> None:
         self._loaded = path if path is not None else Path(scenario.source)
+        self._exercise_file = None
         self._show_picked(scenario, self._loaded)
 
     def _details(self) -> dict[str, str]:
