@@ -296,8 +296,9 @@ def _focus_target(text: str, fail: Callable[[str, str], ScenarioError], path: st
     return device if module is None else f"{device}:{module}"
 
 
-def check_against(scenario: Scenario, rig: Rig) -> None:
-    """Refuse a scenario whose commands the rig would not take, before anything runs.
+def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
+    """Refuse a scenario whose commands the rig would not take, before anything runs; the
+    modules each device holds after the steps (for a command that comes after them).
 
     Arguments are checked against the devices' declared actions (types, ranges, choices and
     the models' own tables, Param.parse); a module target against the modules its device holds
@@ -337,6 +338,7 @@ def check_against(scenario: Scenario, rig: Rig) -> None:
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: on[{reaction.number - 1}]: {exc}") \
                 from None
+    return layouts
 
 
 def _module_layouts(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:

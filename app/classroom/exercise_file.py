@@ -34,6 +34,7 @@ from app.classroom.faults import Catalog, HiddenFault
 from app.rig import Rig
 from app.rig_config import not_toml, not_utf8
 from app.scenario import Scenario, ScenarioError, check_against, parse_scenario
+from app.targets import parse_target
 from devices.device import CommandError
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
@@ -126,7 +127,8 @@ def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
     no such fault or its device would refuse the injection. The injection is checked by the
     device's own check_command (a FastCAT module code, §7.6, needs a ``fastcat/N`` target:
     ``module = N`` here), as a scenario's commands are before a run."""
-    check_against(scenario, rig)  # its errors name scenario.source, the file, already
+    # its errors name scenario.source, the file, already; the modules after the file's steps
+    layouts = check_against(scenario, rig)
     source = scenario.source
     try:
         fault = faults.fault(spec.fault).at(spec.module)
@@ -136,7 +138,12 @@ def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
                             "docs/classroom.md)") from None
     for command in fault.inject:
         try:
-            rig.check(command.target, command.action, dict(command.args))
+            args = rig.check(command.target, command.action, dict(command.args))
+            device_id, module = parse_target(command.target)
+            device = rig.device(device_id)
+            # a module the device does not hold then: refused here, not at the injection
+            device.check_module(command.action, args, module,
+                                layouts.setdefault(device_id, device.module_layout()))
         except CommandError as exc:
             hint = "; give its module: module = N" if fault.module and spec.module is None \
                 else ""

@@ -129,6 +129,27 @@ def test_a_module_fault_with_its_module_passes_the_start_check(tmp_path: Path) -
     assert fault.inject[0].target == "fastcat/2"
 
 
+@pytest.mark.parametrize(("fault", "module", "said"), [
+    # the default rig's CPX-E-EC holds modules 1..4, its TRS-CAT one TRS-AN-E at 2
+    ("cpx:inject:fault:module_failure", 9, "cpx: no module 9 (modules: 1=16DI"),
+    ("trscat:inject:fault:AN_PLUS_12V", 5, "trscat: no expansion at position 5"),
+])
+def test_an_exercise_module_the_device_does_not_hold_exits_2(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], fault: str, module: int,
+        said: str) -> None:
+    """`module = 9` on a four-module CPX-E-EC passed the start check (check_command knows
+    no modules) and failed only at the injection, in the instructor's background thread. The
+    modules the device holds after the file's steps are checked as a scenario's are
+    (check_module)."""
+    device = fault.split(":", 1)[0]
+    (tmp_path / "ex.toml").write_text(EXERCISE.format(target=device, fault=fault)
+                                      + f"module = {module}\n")
+    assert main(["--exercises", str(tmp_path), "--state-dir", str(tmp_path / "s"),
+                 "--run-for", "0", "--no-record"]) == 2
+    err = capsys.readouterr().err
+    assert "ex.toml" in err and said in err and "Traceback" not in err, err
+
+
 @pytest.mark.parametrize(("target", "fault", "said"), [
     # the ids of the device named, on the one line
     ("fastcat", "fastcat:inject:coupler:0x99",
