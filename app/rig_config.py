@@ -143,37 +143,64 @@ _BOOLEAN_WORDS = {"true": "true", "false": "false", "yes": "true", "no": "false"
                   "on": "true", "off": "false"}
 
 
-# A bare word where a value belongs (``DO16``, ``True``, ``module:0x04``): it ends where a
-# value in an array or inline table ends. Anything else (``-abc``, ``.5``, ``@b``) gets no
-# guess. A ``key =`` line's whole value is one text (``name = Sales demo``).
-_BARE_WORD = re.compile(r"[A-Za-z_][^\s,\]}#\"'\[{]*")
-_WHOLE_VALUE = re.compile(r"\s*(?P<key>[^=\[{#\"']+?)\s*=\s*(?P<value>[A-Za-z_][^#\"'\[\]{}]*?)"
-                          r"\s*(?:\s#.*)?")
+# A bare word where a value belongs (``DO16``, ``True``, ``module:0x04``, ``Übung``): it ends
+# where a value in an array or inline table ends. Anything else (``-abc``, ``.5``, ``@b``) gets
+# no guess. A ``key =`` line's whole value is one text (``name = Sales demo``).
+_WORD_START = r"[^\W\d]"  # a letter of any script, or _
+_BARE_WORD = re.compile(_WORD_START + r"[^\s,\]}#\"'\[{]*")
+_WHOLE_VALUE = re.compile(r"\s*(?P<key>[^=\[{#\"']+?)\s*=\s*(?P<value>" + _WORD_START
+                          + r"[^#\"'\[\]{}]*?)\s*(?:\s#.*)?")
+_INVALID_VALUE = re.compile(r"Invalid value \(at line (\d+), column (\d+)\)")
+_MAX_FIXES = 16  # bare words fixed on one line before the hint gives up on showing it
 
 
 def not_toml(exc: tomllib.TOMLDecodeError, text: str) -> str:
     """tomllib's message, and for its "Invalid value" the commonest cause fixed at the line
     and column it names: an unquoted text value (``fault = module:0x04``, ``[..., DO16]``) or
-    a boolean written ``True`` or ``yes``. Only the bare word there is changed; no hint when
-    there is none. One line."""
+    a boolean written ``True`` or ``yes``. The hint shows the line with every bare word on it
+    fixed when that line then parses, else only the fixed word (a value continued from the
+    line before); no hint when there is no bare word at the column. One line."""
     said = f"not valid TOML: {exc}"
-    found = re.match(r"Invalid value \(at line (\d+), column (\d+)\)", str(exc))
+    found = _INVALID_VALUE.match(str(exc))
     lines = text.splitlines()
     if found is None or not 1 <= int(found[1]) <= len(lines):
         return said
-    line, column = lines[int(found[1]) - 1], int(found[2]) - 1
+    first = _fix_word(lines[int(found[1]) - 1], int(found[2]) - 1)
+    if first is None:
+        return said
+    line, word, boolean = first
+    shown: str | None = None
+    for _ in range(_MAX_FIXES):
+        try:
+            tomllib.loads(line)
+        except tomllib.TOMLDecodeError as again:
+            more = _INVALID_VALUE.match(str(again))
+            step = _fix_word(line, int(more[2]) - 1) if more and more[1] == "1" else None
+            if step is None:
+                break
+            line = step[0]
+        else:
+            shown = line
+            break
+    if boolean is not None:
+        return f"{said}: a yes/no value is true or false, lower case: {shown or boolean}"
+    return f'{said}: text values need quotes: {shown or chr(34) + word + chr(34)}'
+
+
+def _fix_word(line: str, column: int) -> tuple[str, str, str | None] | None:
+    """``line`` with the bare word at ``column`` (0-based) quoted or made a TOML boolean, the
+    word, and the boolean it became (None: quoted); None when no bare word starts there."""
     whole = _WHOLE_VALUE.fullmatch(line)
-    if whole is not None and whole.start("value") == column:  # the old hint: key = "value"
+    if whole is not None and whole.start("value") == column:  # key = "the whole value"
         word, before, after = whole["value"], f"{whole['key']} = ", ""
     else:
         token = _BARE_WORD.match(line, column)
         if token is None:
-            return said
+            return None
         word, before, after = token[0], line[:column].lstrip(), line[token.end():].rstrip()
     boolean = _BOOLEAN_WORDS.get(word.lower())
-    if boolean is not None:
-        return f"{said}: a yes/no value is true or false, lower case: {before}{boolean}{after}"
-    return f'{said}: text values need quotes: {before}"{word}"{after}'
+    return f"{before}{boolean if boolean is not None else chr(34) + word + chr(34)}{after}", \
+        word, boolean
 
 
 def load_rig_spec(path: str | Path) -> RigSpec:

@@ -198,6 +198,11 @@ def test_an_invalid_toml_value_gets_a_hint(line: str, hint: str) -> None:
     ("values = [1, 2, x]", 'text values need quotes: values = [1, 2, "x"]'),
     ("fault = module:0x04", 'text values need quotes: fault = "module:0x04"'),
     ("on = True", "a yes/no value is true or false, lower case: on = true"),
+    # every bare word of the line, so that the line shown parses
+    ("y = [DO16, DI16]", 'text values need quotes: y = ["DO16", "DI16"]'),
+    ("args = { on = True, off = no }",
+     "a yes/no value is true or false, lower case: args = { on = true, off = false }"),
+    ("name = Übung", 'text values need quotes: name = "Übung"'),
 ])
 def test_the_hint_fixes_the_token_at_the_column(line: str, hint: str) -> None:
     """Only the bare word at tomllib's column is fixed: the hint quoted everything right of
@@ -216,6 +221,15 @@ def _bad_column(line: str) -> int:
     except tomllib.TOMLDecodeError as exc:
         return int(str(exc).rsplit("column ", 1)[1].rstrip(")"))
     raise AssertionError(f"{line} parses")
+
+
+def test_a_line_that_cannot_parse_alone_gets_the_word_only() -> None:
+    """A value continued from the line before: the line alone is no TOML, so the hint names
+    the word to quote, not a fragment of a line (it showed ``"DO16",``)."""
+    text = '[scenario]\nname = "x"\nmodules = ["DB16",\n  DO16,\n]\n'
+    with pytest.raises(ScenarioError) as exc:
+        parse_scenario(text, "bad.toml")
+    assert str(exc.value).endswith('(at line 4, column 3): text values need quotes: "DO16"')
 
 
 @pytest.mark.parametrize("line", ["x = [1, @b]", "x = -abc", "x = .5", "x = [1, -y]"])
