@@ -210,12 +210,14 @@ def _module(fault: HiddenFault) -> int | None:
 def _is_own(entry: Any, fault: HiddenFault) -> bool:
     """Whether an alarm or injected entry of the device's snapshot is ``fault``'s code: the
     FastCAT's {table, code, module} (an injected one has no table: module None is the coupler
-    table), the drive's {code} or bare code, the slaves' {name} / {fault} or bare name."""
+    table), the drive's {code} or bare code, the slaves' {name} / {fault} at the fault's module
+    or slot (and channel): the TRS-CAT's {fault, slot}, the CPX-E-EC's {fault, module, ...}."""
     form, value = _code(fault.cause)
     if form == "fault":
-        names = [entry] if isinstance(entry, str) else (
-            [entry.get(k) for k in NAME_KEYS] if isinstance(entry, Mapping) else [])
-        return str(value).casefold() in {str(n).casefold() for n in names if n}
+        if not isinstance(entry, Mapping):
+            return False
+        names = {str(entry[k]).casefold() for k in NAME_KEYS if entry.get(k)}
+        return str(value).casefold() in names and _same_place(entry, fault)
     if not isinstance(entry, Mapping):
         return isinstance(entry, int) and form == "alarm" and entry == value
     if entry.get("code") != value:
@@ -225,6 +227,24 @@ def _is_own(entry: Any, fault: HiddenFault) -> bool:
     table = entry.get("table") or ("coupler" if entry.get("module") is None else "module")
     module = _module(fault)
     return table == form and (module is None or entry.get("module") in (module, None))
+
+
+# Where a slave's entry sits: a CPX-E-EC module, a TRS-CAT slot (the target's N either way).
+PLACE_KEYS = ("module", "slot")
+# How other_faults names where another fault sits ("cpx module_ident_mismatch module 3").
+PLACE_WORDS = (("module", "module {}"), ("slot", "slot {}"), ("channel", "channel {}"),
+               ("sm", "SM{}"))
+
+
+def _same_place(entry: Mapping[str, Any], fault: HiddenFault) -> bool:
+    """A named fault put on module / slot N (and channel C) is not the same fault elsewhere;
+    one put on no module in particular is its name anywhere."""
+    module = _module(fault)
+    if module is None:
+        return True
+    place = next((entry[k] for k in PLACE_KEYS if entry.get(k) is not None), None)
+    channel = fault.inject[0].args.get("channel") if fault.inject else None
+    return place == module and entry.get("channel") == channel
 
 
 def _entries(snap: Mapping[str, Any], keys: tuple[str, ...]) -> list[Any]:
@@ -255,6 +275,9 @@ def other_faults(fault: HiddenFault, snapshot: Mapping[str, Any]) -> list[str]:
     for entry in others:
         if isinstance(entry, Mapping):
             name = next((entry[k] for k in NAME_KEYS if entry.get(k)), entry.get("code"))
+            if entry.get("fault"):  # an injected named fault: where it sits
+                name = " ".join([str(name), *(word.format(entry[k]) for k, word in PLACE_WORDS
+                                              if entry.get(k) is not None)])
         elif isinstance(entry, int) and entry in named:
             continue  # a drive's bare code next to its {code, name}
         else:

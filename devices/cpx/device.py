@@ -544,5 +544,5 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             "space_error": self.space_error,
             "diagnosis": self.diagnosis.snapshot(), "history": self.history.snapshot(),
             "f030_written": self.f030_written, "sync_counter": self.sync_counter,
-            "injected": [f.label() for f in self.injected],
+            "injected": [f.entry() for f in self.injected],
         }

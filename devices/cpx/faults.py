@@ -83,6 +83,12 @@ class Injected:
                  f"SM{self.sm}" if self.sm is not None else ""]
         return " ".join([self.name, *[w for w in where if w]])
 
+    def entry(self) -> dict[str, str | int | None]:
+        """The snapshot's form, as the TRS-CAT's: a reader matches a fault by its name and
+        where it sits without parsing :meth:`label`."""
+        return {"fault": self.name, "module": self.module, "channel": self.channel,
+                "sm": self.sm}
+
 
 def fault_spec(name: str) -> FaultSpec:
     spec = FAULTS.get(name.strip().lower())

@@ -227,3 +227,31 @@ def test_own_fault_of_a_drive(rig_catalog: Any, shown: dict[str, Any], gone: boo
     snapshot = {"devices": {"drive": shown}}
     assert fault_gone(fault, snapshot) is gone
     assert other_faults(fault, snapshot) == others
+
+
+def _finish_fixed(fault: Any, rig: Rig) -> Any:
+    exercise = Exercise(fault, started_s=0.0)
+    assert exercise.name_cause(10.0, fault.cause) is True
+    result = exercise.finish(20.0, rig.snapshot())
+    return exercise, next(p for p in result.parts if p.rule == "fixed")
+
+
+def test_own_fault_of_the_cpx(rig_catalog: Any) -> None:
+    """The CPX-E-EC's injected entries were labels ("module_ident_mismatch module 2"), which
+    never equalled the fault's name: the fault read gone while injected (30 points for
+    nothing) and was named as "another fault". Its entries are {fault, module, ...} now."""
+    rig = _powered_rig()
+    base = rig_catalog.fault("cpx:inject:fault:module_ident_mismatch")
+    fault, other = base.at(2), base.at(3)
+    _run(rig, fault.inject)
+    rig.run_until(rig.clock.now_us + 100_000)
+    assert not fault_gone(fault, rig.snapshot())
+    assert other_faults(fault, rig.snapshot()) == []
+    _run(rig, other.inject)  # the same fault on another module is another fault
+    _run(rig, fault.repair)
+    rig.run_until(rig.clock.now_us + 100_000)
+    assert fault_gone(fault, rig.snapshot())
+    assert not fault_gone(other, rig.snapshot())
+    exercise, fixed = _finish_fixed(fault, rig)
+    assert exercise.fixed and fixed.points == RULES.fixed_points
+    assert exercise.others == ["cpx module_ident_mismatch module 3"]

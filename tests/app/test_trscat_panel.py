@@ -124,10 +124,17 @@ def test_the_injected_row_reads_as_the_fastcat_s(booted: Any, injected: list[Any
 
 
 def test_the_cpx_injected_row_names_its_faults() -> None:
+    """The CPX-E-EC's entries are {fault, module, channel, sm} (they were its labels, which
+    the exercise scoring could not match), written as the other slaves' are."""
     snap = {"kind": "cpx_e_ec", "esm": "OP",
-            "injected": ["module_failure module 1", "sm_invalid_size SM2"]}
+            "injected": [{"fault": "module_ident_mismatch", "module": 1, "channel": None,
+                          "sm": None},
+                         {"fault": "short_circuit", "module": 2, "channel": 3, "sm": None},
+                         {"fault": "sm_invalid_size", "module": None, "channel": None,
+                          "sm": 2}]}
     assert rows(slave_html("cpx", snap))["Injected"] == (
-        "module_failure module 1, sm_invalid_size SM2")
+        "module_ident_mismatch on module 1, short_circuit on module 2 channel 3, "
+        "sm_invalid_size on SM2")
     assert rows(slave_html("cpx", {**snap, "injected": []}))["Injected"] == "none"
 
 

@@ -129,29 +129,28 @@ def config_text(snap: Mapping[str, Any]) -> str:
     return html
 
 
-# Where an injected cause sits, in the words of the device's manual: a FastCAT module, a
-# TRS-CAT slot, a sync manager.
-INJECTED_WHERE = (("module", "module {}"), ("slot", "slot {}"), ("sm", "SM{}"))
+# Where an injected cause sits, in the words of the device's manual: a FastCAT or CPX-E-EC
+# module (and a CPX channel), a TRS-CAT slot, a sync manager.
+INJECTED_WHERE = (("module", "module {}"), ("channel", "channel {}"), ("slot", "slot {}"),
+                  ("sm", "SM{}"))
 
 
-def injected_text(injected: Sequence[Mapping[str, Any] | str]) -> str:
+def injected_text(injected: Sequence[Mapping[str, Any]]) -> str:
     """The causes an instructor injected: without this row an injected alarm read "cause
     present" next to "Causes: none" (the row of the physical causes). One formatter for every
     device's State / Slave tab: "0x04 MISSING_NODE_ANSWER on module 2" (FastCAT, with its
-    code), "CONFIG_ERROR on slot 2", "sm_invalid_size on SM2" (TRS-CAT); a device that names
-    its causes itself (the CPX-E-EC's labels) is shown as it names them."""
+    code), "CONFIG_ERROR on slot 2", "sm_invalid_size on SM2" (TRS-CAT), "short_circuit on
+    module 2 channel 3" (CPX-E-EC)."""
     if not injected:
         return '<span class="fr-muted">none</span>'
     return esc(", ".join(_injected_one(i) for i in injected))
 
 
-def _injected_one(cause: Mapping[str, Any] | str) -> str:
-    if isinstance(cause, str):
-        return cause
+def _injected_one(cause: Mapping[str, Any]) -> str:
     code = f"0x{int(cause['code']):02X} " if cause.get("code") is not None else ""
-    where = "".join(" on " + word.format(cause[key]) for key, word in INJECTED_WHERE
-                    if cause.get(key) is not None)
-    return f"{code}{cause.get('fault', '?')}{where}"
+    where = " ".join(word.format(cause[key]) for key, word in INJECTED_WHERE
+                     if cause.get(key) is not None)
+    return f"{code}{cause.get('fault', '?')}{' on ' + where if where else ''}"
 
 
 def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: int) -> str:
