@@ -20,7 +20,7 @@ from devices.cpx.catalog import ModuleType, module_type
 from devices.cpx.device_id import DeviceIdMixin
 from devices.cpx.diagnosis import Diagnosis
 from devices.cpx.esm import SM_WATCHDOG, SYNC_ERROR, ErrorKind, Esm
-from devices.cpx.faults import Injected
+from devices.cpx.faults import Injected, held
 from devices.cpx.history import DiagHistory
 from devices.cpx.indicators import wanted_leds
 from devices.cpx.leds import LedBank
@@ -544,5 +544,6 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             "space_error": self.space_error,
             "diagnosis": self.diagnosis.snapshot(), "history": self.history.snapshot(),
             "f030_written": self.f030_written, "sync_counter": self.sync_counter,
-            "injected": [f.entry() for f in self.injected],
+            # the named faults it has, module conditions included (a failed module is a fault)
+            "injected": [f.entry() for f in held(self.injected, self.modules)],
         }

@@ -7,7 +7,9 @@ the bus module or of its EtherCAT side. Cause -> code mapping: docs/cpx-e-ec.md.
 from __future__ import annotations
 
 import enum
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 from devices.device import CommandError
 from devices.sync_managers import SmFault
@@ -88,6 +90,28 @@ class Injected:
         where it sits without parsing :meth:`label`."""
         return {"fault": self.name, "module": self.module, "channel": self.channel,
                 "sm": self.sm}
+
+
+class ModuleState(Protocol):
+    """What of an I/O module (devices/cpx/modules.py CpxModule) the physical faults set."""
+
+    number: int
+    failed: bool
+    sensor_supply_short: bool
+    shorted: set[int]
+    wire_broken: set[int]
+
+
+def held(injected: Sequence[Injected], modules: Sequence[ModuleState]) -> list[Injected]:
+    """The named faults the device has now: those kept as injected, then those that set a
+    module's condition (module_failure, short_circuit, wire_break), which live on the module
+    only: without them a failed module read as no fault (an exercise's fault_gone)."""
+    physical = [
+        *(Injected("module_failure", m.number) for m in modules if m.failed),
+        *(Injected("short_circuit", m.number) for m in modules if m.sensor_supply_short),
+        *(Injected("short_circuit", m.number, c) for m in modules for c in sorted(m.shorted)),
+        *(Injected("wire_break", m.number, c) for m in modules for c in sorted(m.wire_broken))]
+    return [*injected, *physical]
 
 
 def fault_spec(name: str) -> FaultSpec:

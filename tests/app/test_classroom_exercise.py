@@ -255,3 +255,20 @@ def test_own_fault_of_the_cpx(rig_catalog: Any) -> None:
     exercise, fixed = _finish_fixed(fault, rig)
     assert exercise.fixed and fixed.points == RULES.fixed_points
     assert exercise.others == ["cpx module_ident_mismatch module 3"]
+
+
+@pytest.mark.parametrize("fault_id", ["cpx:inject:fault:module_failure@2",
+                                      "cpx:inject:fault:short_circuit@1"])
+def test_a_cpx_physical_fault_is_present_while_the_module_has_it(rig_catalog: Any,
+                                                                 fault_id: str) -> None:
+    """module_failure and short_circuit set a module's condition and were never in the CPX
+    snapshot's injected list: the failure read gone while the module still failed."""
+    rig = _powered_rig()
+    fault = rig_catalog.fault(fault_id)
+    _run(rig, fault.inject)
+    rig.run_until(rig.clock.now_us + 100_000)
+    assert not fault_gone(fault, rig.snapshot())
+    assert other_faults(fault, rig.snapshot()) == []
+    _run(rig, fault.repair)
+    rig.run_until(rig.clock.now_us + 100_000)
+    assert fault_gone(fault, rig.snapshot())
