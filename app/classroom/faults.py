@@ -271,11 +271,12 @@ def other_faults(fault: HiddenFault, snapshot: Mapping[str, Any]) -> list[str]:
     snap = (snapshot.get("devices") or {}).get(fault.device) or {}
     others = [e for e in _entries(snap, (*ALARM_KEYS, INJECTED_KEY)) if not _is_own(e, fault)]
     named = {e.get("code") for e in others if isinstance(e, Mapping)}
+    named_faults = _code(fault.cause)[0] == "fault"  # a TRS-CAT's or CPX-E-EC's
     labels: list[str] = []
     for entry in others:
         if isinstance(entry, Mapping):
             name = next((entry[k] for k in NAME_KEYS if entry.get(k)), entry.get("code"))
-            if entry.get("fault"):  # an injected named fault: where it sits
+            if named_faults:  # a slave's: where it sits, the alarm and its cause alike
                 name = " ".join([str(name), *(word.format(entry[k]) for k, word in PLACE_WORDS
                                               if entry.get(k) is not None)])
         elif isinstance(entry, int) and entry in named:

@@ -272,3 +272,37 @@ def test_a_cpx_physical_fault_is_present_while_the_module_has_it(rig_catalog: An
     _run(rig, fault.repair)
     rig.run_until(rig.clock.now_us + 100_000)
     assert fault_gone(fault, rig.snapshot())
+
+
+TWO_AN_E = """[rig]
+name = "two TRS-AN-E"
+
+[[trscat]]
+id = "trscat"
+expansions = ["TRS-AN-E", "TRS-AN-E"]
+configured = ["TRS-AN-E", "TRS-AN-E"]
+"""
+
+
+def test_a_trscat_fault_on_another_slot_is_another_fault(tmp_path: Any) -> None:
+    """A TRS-CAT module fault was matched by its name only: the same fault on the other
+    TRS-AN-E counted as the exercise's own (not gone, and never named as another)."""
+    path = tmp_path / "two_an_e.toml"
+    path.write_text(TWO_AN_E)
+    rig = build_rig(load_rig_spec(path), state_dir=None)
+    rig.apply("trscat", "power", {"on": True})
+    rig.run_until(1_000_000)
+    base = catalog(rig.describe(), rig.snapshot()).fault("trscat:inject:fault:AN_PLUS_12V")
+    fault, other = base.at(1), base.at(2)
+    _run(rig, fault.inject)
+    rig.run_until(rig.clock.now_us + 100_000)
+    assert not fault_gone(fault, rig.snapshot())
+    assert other_faults(fault, rig.snapshot()) == []
+    _run(rig, other.inject)
+    _run(rig, fault.repair)
+    rig.run_until(rig.clock.now_us + 100_000)
+    assert fault_gone(fault, rig.snapshot())
+    assert not fault_gone(other, rig.snapshot())
+    exercise, fixed = _finish_fixed(fault, rig)
+    assert exercise.fixed and fixed.points == RULES.fixed_points
+    assert exercise.others == ["trscat AN_PLUS_12V slot 2"]
