@@ -38,6 +38,7 @@ from app.ui.line.master_panel import (
 from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
 from app.ui.line.view import camera_for, focus_target
+from app.ui.panels.per_client import split_instructor
 
 SLAVE: dict[str, Any] = {
     "position": 1, "device": "trscat", "name": "Box 2 (TRS-CAT)", "station_address": 1002,
@@ -367,11 +368,11 @@ def test_slave_panel_texts() -> None:
 
 
 def _shown(html: str, trainee: bool) -> str:
-    """The text of a Slave tab's page: the instructor's whole; a trainee's without the
-    elements of class fr-instructor, which trainee_css hides (docs/classroom.md)."""
+    """The text of a Slave tab's page: the instructor's whole; a trainee's what a classroom
+    sends every browser, the instructor's rows and spans taken out (split_instructor,
+    docs/classroom.md)."""
     if trainee:
-        html = re.sub(r'<span class="fr-instructor">.*?</span>', "", html)
-        html = re.sub(r'<tr class="fr-instructor">.*?</tr>', "", html)
+        html = split_instructor(html, "fr-slave-causes")[0]
     return unescape(re.sub(r"<[^>]+>", "", html))
 
 
