@@ -105,17 +105,45 @@ class Instructor:
         return part
 
     def promote(self, client: viser.ClientHandle) -> None:
-        """Build every part for ``client`` if it is the instructor (idempotent)."""
+        """Build every part for ``client`` if it is the instructor (idempotent); nothing is
+        kept for a page that closed meanwhile."""
         if self.shared or self.access.role(client.client_id) is not Role.INSTRUCTOR:
             return
         with self._lock:
-            for part in self._parts:
-                part.build_for(client)
+            try:
+                for part in self._parts:
+                    part.build_for(client)
+            except KeyError:
+                if connected(self.server, client):
+                    raise
+            # Checked under the lock _gone takes: a page that leaves after this check is
+            # forgotten by _gone, one that left before it by this.
+            if not connected(self.server, client):
+                self._forget(client)
+                return
         self.on_built()
 
     def _gone(self, client: viser.ClientHandle) -> None:
+        with self._lock:  # not while a build of it is under way (promote)
+            self._forget(client)
+
+    def _forget(self, client: viser.ClientHandle) -> None:
         for part in self._parts:
             part.forget(client.client_id)
+        release_gone(client)
+
+
+def connected(server: viser.ViserServer, client: viser.ClientHandle) -> bool:
+    """False once viser has let ``client`` go: it leaves ``get_clients()`` before the
+    disconnect callbacks run (viser 1.1.1, _viser.py)."""
+    return client.client_id in server.get_clients()
+
+
+def release_gone(client: viser.ClientHandle) -> None:
+    """Unhook a gone client's elements from the server's containers. viser does it when the
+    client leaves; what a build still made for it afterwards would stay in those containers
+    (and a removal of one would cascade into the dead connection). Idempotent."""
+    client.gui._release_cross_scope_nesting()
 
 
 _ATTR = "_fieldrig_instructor"
