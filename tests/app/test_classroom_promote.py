@@ -9,8 +9,10 @@ connect build logged a traceback. Two websocket connections stand in for the bro
 
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 import viser
@@ -19,6 +21,8 @@ from test_classroom_leak import TOKEN, Page, _wait
 from app.classroom.roles import Access
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.screenshots import free_port
+from app.ui.panels import classroom as classroom_module
+from app.ui.panels.classroom import ClassroomPanel
 from app.ui.panels.classroom_rig import ServedRig, serve_rig
 
 
@@ -64,3 +68,45 @@ def test_a_page_gone_while_promoted_keeps_no_instructor_part(served: ServedRig) 
     assert [p for p in instructor._parts if cid in p._built] == []
     assert built == []  # no redraw for a page that is not there
     assert _in_server_containers(client) == 0
+
+
+def test_a_page_gone_during_its_connect_build_logs_nothing(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The connect callback ran in viser's pool: its KeyError was printed as a traceback."""
+    pages: list[Page] = []
+    servers: list[ServedRig] = []
+    failures: list[BaseException] = []
+    done: list[viser.ClientHandle] = []
+    connect, trainee_html = ClassroomPanel._connect, classroom_module.trainee_html
+
+    def recording_connect(self: ClassroomPanel, client: viser.ClientHandle) -> None:
+        try:
+            connect(self, client)
+        except BaseException as exc:
+            failures.append(exc)
+            raise
+        finally:
+            done.append(client)
+
+    left = threading.Event()
+
+    def leave(*args: Any) -> str:  # inside the client's "Exercise" folder, being built
+        if not left.is_set():
+            left.set()
+            page, served = _wait(lambda: pages and pages[0]), servers[0]
+            _left(page, served, next(iter(served.server.get_clients())))
+        return trainee_html(*args)
+
+    # Registered at construction: the patched callback is the one the server calls.
+    monkeypatch.setattr(ClassroomPanel, "_connect", recording_connect)
+    monkeypatch.setattr(classroom_module, "trainee_html", leave)
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    servers.append(serve_rig(rig, Access(TOKEN), port=free_port(), paused=True))
+    try:
+        pages.append(Page(servers[0].port))
+        client = _wait(lambda: done and done[0])
+        assert failures == []
+        assert servers[0].classroom._views == {}
+        assert _in_server_containers(client) == 0
+    finally:
+        servers[0].stop()

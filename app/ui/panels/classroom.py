@@ -36,6 +36,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, Sent, notify
 from app.ui.panels.classroom_access import TokenForm, read_browser_token
 from app.ui.panels.classroom_html import history_html, instructor_html, trainee_html
+from app.ui.panels.per_client import connected, release_gone
 from app.ui.panels.widgets import instructor_folders, widget_uuid
 from app.ui.style import INSTRUCTOR_CLASS
 from devices.device import CommandError
@@ -230,7 +231,8 @@ class ClassroomPanel:
 
     # ---- connections ------------------------------------------------------------------------
     def _connect(self, client: viser.ClientHandle) -> None:
-        self._build(client)
+        if not self._build(client):
+            return  # the page closed meanwhile
         if not self.access.open:  # its own thread: it waits for the page to render
             def alive() -> bool:
                 return (not self._stop.is_set()
@@ -250,11 +252,26 @@ class ClassroomPanel:
         notify(client, "Instructor", "You are the instructor of this rig.")
         self._build(client)
 
-    def _build(self, client: viser.ClientHandle) -> None:
+    def _build(self, client: viser.ClientHandle) -> bool:
+        """Build ``client``'s part of the folder; False if its page closed meanwhile (then
+        nothing of it is kept, and no traceback: viser's KeyError from a client folder it
+        already released is that case)."""
         with self._build_lock:  # a connect and a login of one browser never interleave
-            self._build_locked(client)
+            try:
+                built = self._build_locked(client)
+            except KeyError:
+                if connected(self._server, client):
+                    raise
+                built = False
+            if built and self._on_instructor is not None \
+                    and self.access.role(client.client_id) is Role.INSTRUCTOR:
+                self._on_instructor(client)
+        if not built:
+            logger.debug("connection %s closed during its build", client.client_id)
+            release_gone(client)
+        return built
 
-    def _build_locked(self, client: viser.ClientHandle) -> None:
+    def _build_locked(self, client: viser.ClientHandle) -> bool:
         role = self.access.role(client.client_id)
         with self._lock:
             old = self._views.pop(client.client_id, None)
@@ -276,10 +293,13 @@ class ClassroomPanel:
             if role is Role.INSTRUCTOR:
                 self._instructor_controls(client, view)
         with self._lock:
+            # Under the lock _disconnect takes, which runs after viser let the client go: a
+            # view stored here is removed by it, one of a page already gone is not stored.
+            if not connected(self._server, client):
+                return False
             self._views[client.client_id] = view
         self._refresh(view)
-        if role is Role.INSTRUCTOR and self._on_instructor is not None:
-            self._on_instructor(client)
+        return True
 
     def _answer_controls(self, client: viser.ClientHandle, view: _View) -> None:
         gui = client.gui
