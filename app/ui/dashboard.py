@@ -146,7 +146,11 @@ class Dashboard:
         self._frame_seq = -1
         self._t_us = -1
         self._events_untold = False  # events taken while no browser was there (take_events)
-        self._stale = False  # an instructor's parts were built: write the views again
+        # Redraws asked (an instructor's parts were built: write the views again) and the
+        # last one a tick wrote: a count, as a flag reset by the tick lost a redraw asked
+        # between its read and its reset (on a paused rig nothing else redraws).
+        self._redraws = self._redrawn = 0
+        self._redraw_lock = threading.Lock()
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
         self._tabs = TabSwitcher(server)  # a scenario focus step opens its device's tab
         self._configure_look()
@@ -412,10 +416,11 @@ class Dashboard:
         with self._lock:
             frame, panels = self.runtime.frame, self._panels
             with self.server.atomic():
+                redraws = self._redraws  # first: one asked from here on is the next tick's
                 events = self._take_events()
                 fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events \
-                    or self._events_untold or self._stale
-                self._t_us, self._events_untold, self._stale = frame.t_us, False, False
+                    or self._events_untold or redraws != self._redrawn
+                self._t_us, self._events_untold, self._redrawn = frame.t_us, False, redraws
                 if fresh:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
                     for scene, snap in zip(self._scenes, snaps, strict=True):
@@ -441,7 +446,8 @@ class Dashboard:
 
     def _redraw(self) -> None:
         """New instructor widgets start from their defaults: the next tick writes them."""
-        self._stale = True
+        with self._redraw_lock:
+            self._redraws += 1
         self._wake.set()
 
     def take_events(self) -> None:

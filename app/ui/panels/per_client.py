@@ -167,8 +167,8 @@ class InstructorHtml:
         self._part = instructor.part(lambda gui: gui.add_html(self._content))
 
     def show(self, content: str) -> None:
-        if content == self._content:
-            return
+        # Every copy, even for content shown before: one built meanwhile (promote) started
+        # from the content its build read and was not among the copies yet.
         self._content = content
         for handle in self._part.each():
             if handle.content != content:
@@ -206,21 +206,24 @@ class RoleHtml:
         self.handle = server.gui.add_html(self._public(content))
         self._causes = None if self._shared else InstructorHtml(instructor)
         self._last = content
+        self._last_causes = "" if self._shared else split_instructor(content, causes_id)[1]
+        if self._causes is not None:
+            self._causes.show(self._last_causes)
 
     def _public(self, content: str) -> str:
         return content if self._shared else split_instructor(content, self._causes_id)[0]
 
     def show(self, content: str) -> None:
-        if content == self._last:
-            return
-        self._last = content
-        if self._causes is None:
-            self.handle.content = content
-            return
-        public, causes = split_instructor(content, self._causes_id)
-        if self.handle.content != public:
-            self.handle.content = public
-        self._causes.show(causes)
+        if content != self._last:
+            self._last = content
+            if self._causes is None:
+                self.handle.content = content
+                return
+            public, self._last_causes = split_instructor(content, self._causes_id)
+            if self.handle.content != public:
+                self.handle.content = public
+        if self._causes is not None:  # unchanged too: an instructor's copy may be new
+            self._causes.show(self._last_causes)
 
     @property
     def content(self) -> str:

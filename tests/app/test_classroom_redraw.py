@@ -1,0 +1,97 @@
+"""A newly promoted instructor's tables are written by the next redraw (docs/classroom.md
+"Per connection"). Before: a copy built while the update thread showed new rows kept the
+old ones (``RoleHtml.show`` / ``InstructorHtml.show`` skipped content they had shown), and a
+redraw asked for while a tick was deciding was lost (``Dashboard._stale`` reset after it was
+read, without a lock): on a paused rig nothing else redraws."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+import viser
+from test_classroom_leak import TOKEN, Page, _wait
+
+from app.classroom.roles import Access
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.panels.classroom_rig import serve_rig
+from app.ui.panels.per_client import RoleHtml, instructor_for
+from app.ui.style import INSTRUCTOR_CLASS
+
+
+def _table(cause: str) -> str:
+    return (f'<table><tr><th>ESM</th><td>OP</td></tr><tr class="{INSTRUCTOR_CLASS}">'
+            f"<th>Injected</th><td>{cause}</td></tr></table>")
+
+
+@pytest.fixture
+def server() -> Iterator[viser.ViserServer]:
+    server = viser.ViserServer(port=free_port(), verbose=False)
+    try:
+        yield server
+    finally:
+        server.stop()
+
+
+def test_a_copy_built_during_an_update_is_written_by_the_redraw(
+        server: viser.ViserServer) -> None:
+    instructor = instructor_for(server, Access(TOKEN))
+    html = RoleHtml(server, instructor, _table("0x04 old"), "causes")
+    page = Page(server.get_port())
+    cid, client = next(iter(_wait(lambda: server.get_clients()).items()))
+    assert instructor.access.present(cid, TOKEN)
+    (part,) = instructor._parts
+    build = part._build
+
+    def build_then_update(gui: Any) -> Any:  # the update thread shows new rows meanwhile
+        built = build(gui)
+        html.show(_table("0x0B new"))
+        return built
+
+    part._build = build_then_update  # type: ignore[method-assign]
+    instructor.on_built = lambda: html.show(_table("0x0B new"))  # the redraw's tick
+    try:
+        instructor.promote(client)
+        (copy,) = part.each()
+        assert "0x0B new" in copy.content
+    finally:
+        page.close()
+
+
+class _Frame:
+    """A paused rig's frame whose second ``t_us`` read (the tick deciding) asks a redraw."""
+
+    def __init__(self, frame: Any, redraw: Any) -> None:
+        self.seq, self.snapshot, self._t_us = frame.seq, frame.snapshot, frame.t_us
+        self._redraw, self._reads = redraw, 0
+
+    @property
+    def t_us(self) -> int:
+        self._reads += 1
+        if self._reads == 2:
+            self._redraw()
+        return self._t_us
+
+
+def test_a_redraw_asked_during_a_tick_is_not_lost(monkeypatch: pytest.MonkeyPatch) -> None:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    try:
+        dashboard = served.dashboard
+        dashboard.tick()  # the paused frame is drawn, its events taken: nothing new after it
+        dashboard.tick()
+        assert served.runtime.events_since(dashboard._event_seq)[1] == []
+        assert dashboard._panels is not None
+        drawn: list[int] = []
+        monkeypatch.setattr(dashboard._panels.state, "update",
+                            lambda *args: drawn.append(1))
+        monkeypatch.setattr(served.runtime, "_frame",
+                            _Frame(served.runtime.frame, dashboard._redraw))
+        dashboard.tick()  # the redraw comes while this tick decides
+        drawn.clear()
+        dashboard.tick()
+        assert drawn, "the redraw was lost"
+    finally:
+        served.stop()
