@@ -95,3 +95,32 @@ def test_a_redraw_asked_during_a_tick_is_not_lost(monkeypatch: pytest.MonkeyPatc
         assert drawn, "the redraw was lost"
     finally:
         served.stop()
+
+
+def test_a_late_instructor_plug_type_starts_at_the_preset() -> None:
+    """Seed 000 §2 (a module pulled and put back): Plug offers the type that belongs in the
+    picked empty slot (test_module_plug_preset.py). An instructor promoted after the pick got
+    a box at the catalog's first type (DB16): the preset was set on a pick or rail change
+    only, for the copies there were then."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    try:
+        served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
+        served.runtime.advance(3_000_000).result(timeout=30)
+        served.runtime.command("fastcat/3", "unplug", {}).result(timeout=10)
+        served.runtime.advance(100_000).result(timeout=30)
+        served.dashboard.tick()
+        assert served.dashboard._panels is not None
+        modules = served.dashboard._panels.modules
+        assert "3 (empty)" in modules._module.options
+        modules._module.value = "3 (empty)"
+        modules._selection_changed()  # the pick, as its on_update does
+        page = Page(served.port)
+        cid, client = next(iter(_wait(lambda: served.server.get_clients()).items()))
+        assert served.classroom.access.present(cid, TOKEN)
+        served.dashboard.instructor.promote(client)
+        (form,) = modules._rails.each()
+        assert form.plug_type.value == "DO16"
+        page.close()
+    finally:
+        served.stop()

@@ -136,7 +136,11 @@ class ModulePanel:
 
     def _rail_form(self, gui: Any) -> _RailForm:
         form = _RailForm(gui.add_button_group("Rail", ("Unplug", "Plug", "Swap")),
-                         gui.add_dropdown("Plug type", self._catalog),
+                         # A copy built after the pick (a late instructor) starts at the
+                         # preset too, not at the catalog's first type.
+                         gui.add_dropdown("Plug type", self._catalog,
+                                          initial_value=plug_preset(self._entry(),
+                                                                    self._catalog)),
                          gui.add_dropdown("Swap with", tuple(module_options(self._rail))
                                           or ("1",)),
                          Synced(self._server, gui.add_checkbox("Module powered", True),
