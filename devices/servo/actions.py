@@ -26,6 +26,10 @@ _PARAM = Param("parameter", str, parse=parameter_by_name_or_address,
                doc="parameter name (d3) or Modbus address (3, 0x0003)")
 _VALUE32 = Param("value", int, low=-0x8000_0000, high=0xFFFF_FFFF)
 _ALARM = Param("code", str, doc="alarm code (16) or name (FOLLOWING_ERROR)")
+# The simulator's words for an injected physical cause, not anything the drive shows: a
+# dashboard with trainees keeps these lines off their pages (docs/classroom.md).
+JAM_LOG = {True: "load jammed", False: "load free"}
+CAUSE_LOG_LINES = frozenset(JAM_LOG.values())
 
 ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("write_register", "write register Rn as a master would", (_REG, _VALUE32)),
@@ -158,7 +162,7 @@ class DriveActions:
 
     def cmd_jam_load(self: ServoDrive, active: bool) -> None:
         self.plant.jammed = active
-        self.log("load jammed" if active else "load free")
+        self.log(JAM_LOG[active])
 
     def cmd_power(self: ServoDrive, on: bool) -> None:
         if on and not self.powered:

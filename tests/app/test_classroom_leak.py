@@ -104,7 +104,8 @@ def _wait(predicate: Any, timeout: float = 20.0) -> Any:
 @pytest.fixture(scope="module")
 def pages() -> Iterator[tuple[Page, Page]]:
     """A trainee's and the instructor's page after the instructor picked and injected a module
-    fault (0x0B on module 4) from its page, a coupler code and pulled the line's cable 2."""
+    fault (0x0B on module 4) from its page, a coupler code, pulled the line's cable 2 and
+    jammed the Modbus drive's load."""
     rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
     served = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
     trainee, instructor = Page(served.port), Page(served.port)
@@ -154,6 +155,10 @@ def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
     _wait(lambda: "0x0B TARATURA on module 4" in text(instructor))
     _wait(lambda: "2 trscat -> cpx (pulled)" in values(instructor))
     _wait(lambda: "0x04 MISSING_NODE_ANSWER" in text(instructor))
+    # A physical cause on the Modbus drive: the load jammed (the Alarms and load folder's box).
+    _command(served, "drive", "jam_load", {"active": True})
+    served.runtime.advance(100_000).result(timeout=30)
+    _wait(lambda: "load jammed" in text(instructor))
     time.sleep(1.0)  # what the trainee would get has had the time to arrive
 
 
@@ -165,6 +170,19 @@ def test_a_trainee_receives_no_injected_cause(pages: tuple[Page, Page]) -> None:
     for leak in ("TARATURA on module", "MISSING_NODE_ANSWER on", "<th>Injected</th>",
                  "<th>Causes</th>"):
         assert leak not in got, leak
+
+
+def test_a_trainee_receives_no_jammed_load(pages: tuple[Page, Page]) -> None:
+    """The jam named itself on every page: the Drive tab's TEN / IEN badge, the 3D caption
+    under the axis ("switches: home · load jammed") and the Drive log line; a trainee must
+    see only its symptoms (the axis not following, alarm 16 when it moves)."""
+    trainee, instructor = pages
+    assert "load jammed" in text(instructor)  # the instructor's causes table
+    got = text(trainee)
+    assert "TEN " in got and "switches: " in got  # the trainee did get the row and the caption
+    # "jammed" is in a scenario's title in the Scenario tab's list: that is no cause.
+    assert "load jammed" not in got.lower()
+    assert got.count("jammed") == got.count("error on a jammed load")
 
 
 def test_a_trainee_receives_no_fault_pick(pages: tuple[Page, Page]) -> None:

@@ -9,9 +9,11 @@ answer alone, "the cause persists", never the injected cause.
 
 from __future__ import annotations
 
+from app.ui.drive.axis_scene import legend_parts, legend_text
 from app.ui.drive.drive_panel import reset_refusal_text
-from app.ui.drive.drive_state import state_rows
+from app.ui.drive.drive_state import DriveLog, state_rows
 from app.ui.style import INSTRUCTOR_CLASS, kv_table
+from devices.events import LogLine
 
 IN_FAULT = {"powered": True, "ds402_state": "Fault", "alarm": {"code": 16,
             "name": "FOLLOWING_ERROR", "description": "", "effect": ""}, "alarms": [16]}
@@ -37,3 +39,25 @@ def test_the_instructor_reads_which_injected_cause_holds_the_alarm() -> None:
     text = reset_refusal_text(WHY, INJECTED)
     assert text.startswith(WHY)
     assert "injected: 16 FOLLOWING_ERROR" in text and "Clear alarm" in text
+
+
+def test_a_jammed_load_is_the_instructors_causes_row_not_the_consents() -> None:
+    """The jam (an injected physical cause) was a badge in the shared TEN / IEN row."""
+    rows = dict(state_rows({**IN_FAULT, "ten": True, "ien": True, "jammed": True}))
+    assert "load jammed" in rows["Causes"]
+    assert "jammed" not in rows["TEN / IEN"]
+    assert "Causes" not in dict(state_rows(IN_FAULT))  # only while jammed, as the badge was
+    html = kv_table(state_rows({**IN_FAULT, "jammed": True}), "fr-drive")
+    assert f'<tr class="{INSTRUCTOR_CLASS}"><th>Causes</th>' in html
+
+
+def test_with_trainees_the_scene_and_the_drive_log_name_no_jam() -> None:
+    snap = {"position_counts": 0, "velocity": 0.0, "limits": {"home": True}, "jammed": True}
+    assert "load jammed" in legend_text(snap)  # an open rig: as before
+    assert "jammed" not in " · ".join(legend_parts(snap, causes=False))
+    events = [LogLine(1, "drive", text="load jammed"), LogLine(2, "drive", text="power off")]
+    for causes, shown in ((True, True), (False, False)):
+        log = DriveLog(causes=causes)
+        log.add(events)
+        assert ("load jammed" in log.html("drive")) is shown
+        assert "power off" in log.html("drive")

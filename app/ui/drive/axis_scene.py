@@ -135,8 +135,11 @@ class AxisScene:
     """Scene nodes of one drive's axis under ``/<drive_id>_axis``; server-level."""
 
     def __init__(self, server: viser.ViserServer, drive_id: str, z: float,
-                 length: float) -> None:
+                 length: float, causes: bool = True) -> None:
         self._server = server
+        # The scene is the same for every browser: with trainees (causes=False) it shows no
+        # injected cause, neither the caption's "load jammed" nor the red carriage.
+        self.causes = causes
         self._root = f"/{drive_id}_axis"
         self.z = z
         self.length = length
@@ -250,7 +253,7 @@ class AxisScene:
         self._send("carriage_label", self._carriage_label, "text",
                    f"{snap.get('position_counts', 0)}")
         self._send("carriage_color", self._carriage, "color",
-                   CARRIAGE_JAMMED if snap.get("jammed") else CARRIAGE)
+                   CARRIAGE_JAMMED if self.causes and snap.get("jammed") else CARRIAGE)
         # The nib turns with the motor shaft: one turn per motor revolution.
         angle = 2 * math.pi * (float(axis.get("motor_turns", 0.0)) % 1.0)
         nib = (round(0.17 * math.sin(angle), 3), round(0.17 * math.cos(angle), 3))
@@ -260,7 +263,7 @@ class AxisScene:
             lit = bool(limits.get(key))
             self._send(f"switch_{key}", box, "color", SWITCH_LIT[key] if lit else SWITCH_OFF)
         self._update_drive(drive_id, snap, t_us)
-        self._send("legend", self._legend, "text", legend_label(snap))
+        self._send("legend", self._legend, "text", legend_label(snap, self.causes))
 
     def _update_drive(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
         bus = BUS_SHORT.get(str(snap.get("fieldbus", "")), str(snap.get("fieldbus", "")))
@@ -292,14 +295,15 @@ class AxisScene:
         return float(position[0]) if position else TRAVEL_X0
 
 
-def legend_parts(snap: Mapping[str, Any]) -> list[str]:
-    """The axis in words: what a still picture cannot show by itself."""
+def legend_parts(snap: Mapping[str, Any], causes: bool = True) -> list[str]:
+    """The axis in words: what a still picture cannot show by itself; ``causes=False`` (a
+    rig with trainees) leaves out the injected jam (docs/classroom.md)."""
     velocity = float(snap.get("velocity", 0.0))
     limits = snap.get("limits") or {}
     hit = [name for key, _, name in SWITCHES if limits.get(key)]
     parts = [f"position {snap.get('position_counts', 0)}", f"velocity {velocity:.0f} u/s",
              f"switches: {', '.join(hit) if hit else 'none'}"]
-    if snap.get("jammed"):
+    if causes and snap.get("jammed"):
         parts.append("load jammed")
     return parts
 
@@ -309,8 +313,8 @@ def legend_text(snap: Mapping[str, Any]) -> str:
     return " · ".join(legend_parts(snap))
 
 
-def legend_label(snap: Mapping[str, Any]) -> str:
+def legend_label(snap: Mapping[str, Any], causes: bool = True) -> str:
     """The caption as the scene shows it: the motion on the first line, the switches (and a
     jammed load) on the second, so that it stays within the travel's width."""
-    parts = legend_parts(snap)
+    parts = legend_parts(snap, causes)
     return " · ".join(parts[:2]) + "\n" + " · ".join(parts[2:])

@@ -20,6 +20,7 @@ from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
+from devices.servo.actions import CAUSE_LOG_LINES
 from devices.servo.registers import MODE_NAMES
 
 FIELDBUS_NAMES = {"modbus": "Modbus RTU", "canopen": "CANopen", "ethercat": "EtherCAT",
@@ -120,10 +121,10 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
     if snap.get("homed"):
         position += " " + badge("homed", "ok")
     consents = f"TEN {_on(snap.get('ten'))} · IEN {_on(snap.get('ien'))}"
-    if snap.get("jammed"):
-        consents += " · " + badge("load jammed", "bad")
-    else:
-        consents = esc(consents)
+    # A jammed load is an injected physical cause (the instructor's Load jammed box): an
+    # instructor's row too, a trainee reads its symptoms only. Only while jammed, as the
+    # badge it was in the TEN / IEN row.
+    causes = [("Causes", badge("load jammed", "bad"))] if snap.get("jammed") else []
     return [
         ("CiA 402 state", state_badge(snap) + ' <span class="fr-muted">display</span> '
          f'<b>{esc(snap.get("display", "") or "(dark)")}</b>'),
@@ -135,7 +136,8 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         # read "persists" with no word of why (docs/classroom.md hides it from trainees).
         ("Injected", esc(injected_names(snap.get("injected") or []))
          or '<span class="fr-muted">none</span>'),
-        ("TEN / IEN", consents),
+        ("TEN / IEN", esc(consents)),
+        *causes,
         ("Outputs", esc(f"End of Job {_on(outputs.get('end_of_job'))} · Near to target "
                         f"{_on(outputs.get('near_target'))} · Brake "
                         f"{_on(outputs.get('brake'), 'released', 'held')}")),
@@ -229,16 +231,20 @@ class DriveLog:
     """Each drive's last events, newest first (the dashboard's event log shows the coupler's).
 
     One bounded list per drive: with one list for all, a busy drive's events pushed a quiet
-    one's out, and a drive in Fault read "no drive events yet" (docs/dashboard.md)."""
+    one's out, and a drive in Fault read "no drive events yet" (docs/dashboard.md).
+    ``causes=False`` (a rig with trainees) leaves out the lines naming an injected cause
+    ("load jammed"): the log is one element every browser gets."""
 
-    def __init__(self, rows: int = LOG_ROWS) -> None:
+    def __init__(self, rows: int = LOG_ROWS, causes: bool = True) -> None:
         self._size = rows
+        self._causes = causes
         self._rows: dict[str, collections.deque[tuple[int, str, bool]]] = {}
 
     def add(self, events: Iterable[Event]) -> None:
         for event in events:
             found = event_text(event)
-            if found is None:
+            if found is None or (not self._causes and isinstance(event, LogLine)
+                                 and event.text in CAUSE_LOG_LINES):
                 continue
             rows = self._rows.get(event.device)
             if rows is None:
@@ -279,7 +285,7 @@ class DriveStatePanel:
 
     def __init__(self, server: viser.ViserServer) -> None:
         self._title = _Html(server, "")
-        # The Injected row: the instructor's connections only (RoleHtml).
+        # The Causes and Injected rows: the instructor's connections only (RoleHtml).
         self._table = RoleHtml(server, instructor_for(server),
                                kv_table([("CiA 402 state", "-")], "fr-drive"), "fr-drive-causes")
 
@@ -296,7 +302,7 @@ class StatusWordsPanel:
         self._words = _Html(server, "")
         server.gui.add_markdown("**Drive log**")
         self._log_html = _Html(server, DriveLog().html(""))
-        self.log = DriveLog()
+        self.log = DriveLog(causes=instructor_for(server).shared)
 
     def update(self, drive_id: str, snap: Mapping[str, Any]) -> None:
         self._words.show(words_html(snap))

@@ -26,6 +26,7 @@ from app.ui.drive.drive_panel import DrivePanel
 from app.ui.drive.drive_state import DriveStatePanel, StatusWordsPanel
 from app.ui.drive.plots import DrivePlots, DriveSampler
 from app.ui.drive.style import DRIVE_CSS
+from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user
 from devices.events import Event
 
@@ -86,7 +87,9 @@ class DriveView:
             with side.add_tab("CANopen", viser.Icon.NETWORK):
                 gui.add_html(DRIVE_CSS)
                 self.canopen = CanOpenMonitor(server)
-        self.scenes = {d: AxisScene(server, d, top_z - AXIS_TOP - i * AXIS_SPACING, length)
+        causes = instructor_for(server).shared  # no injected cause in a classroom's scene
+        self.scenes = {d: AxisScene(server, d, top_z - AXIS_TOP - i * AXIS_SPACING, length,
+                                    causes)
                        for i, d in enumerate(self.drive_ids if axis_ids is None else axis_ids)}
 
         if self._picker is not None:
