@@ -153,6 +153,7 @@ class LineControls:
             if cables and frames else []
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         self.fault_forms: dict[str, ActionForm] = {}
+        self.targets: dict[str, Any] = {}  # each slave's Target dropdown (tests)
         # Each device's latest snapshot: a form starts from the present values (Param.current).
         self._snapshots: dict[str, Mapping[str, Any]] = dict(devices)
         faulty = [d for d in order if d not in own_tabs]
@@ -167,6 +168,7 @@ class LineControls:
                 with folder:
                     target = gui.add_dropdown("Target", tuple(targets(device,
                                                                       devices.get(device) or {})))
+                    self.targets[device] = target
                     apply = self._applier(sender, target)
                     form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
                                       apply, current=self._current(device))

@@ -36,12 +36,22 @@ def current_value(snapshot: Mapping[str, Any] | None, key: str) -> Any:
     return value if key else _MISSING
 
 
+def blank_allowed(p: Param) -> bool:
+    """An optional parameter with no default: "not given" means something to the device (the
+    CPX-E-EC's short_circuit without channel is the sensor supply, inject_fault without sm a
+    fault of no sync manager). A number box always holds a number (viser keeps the last one
+    when emptied), so it went as 0: such a parameter is a text box, blank = left out."""
+    return not p.required and p.default is None and not p.choices and p.type is not bool
+
+
 def _widget(gui: viser.GuiApi, p: Param, now: Any = _MISSING) -> Any:
     """``now``: the value the device has now (Param.current); else the default."""
     if now is not _MISSING:
         with contextlib.suppress(CommandError):  # one the form cannot hold: the default
             p = replace(p, default=p.check(now))
     hint = p.doc or None
+    if blank_allowed(p):
+        return gui.add_text(p.name, "", hint=f"{p.doc + '; ' if p.doc else ''}blank: not given")
     if p.choices:
         options = tuple(str(c) for c in p.choices)
         initial = str(p.default) if p.default is not None and str(p.default) in options else None
@@ -62,6 +72,8 @@ def _value(p: Param, handle: Any) -> Any:
         for choice in p.choices:
             if str(choice) == value:
                 return choice
+    if p.type is int and isinstance(value, str):  # a blank-able box: "3", "0x3"
+        return int(value.strip(), 0)
     if p.type is int:
         return int(value)
     if p.type is float:
@@ -113,6 +125,11 @@ class ActionForm:
         with self._lock:
             return {p.name: handle.value for p, handle in self._widgets}
 
+    def handle(self, name: str) -> Any:
+        """The widget of the picked action's parameter ``name`` (tests)."""
+        with self._lock:
+            return next(h for p, h in self._widgets if p.name == name)
+
     def rebuild(self) -> None:
         """Build the picked action's parameters again, from the device's present values."""
         with self._lock:
@@ -156,7 +173,8 @@ class ActionForm:
         with self._lock:
             widgets = list(self._widgets)
         try:
-            args = {p.name: _value(p, h) for p, h in widgets}
+            args = {p.name: _value(p, h) for p, h in widgets
+                    if not (blank_allowed(p) and not str(h.value).strip())}
         except (TypeError, ValueError) as exc:
             notify(client, name, f"bad parameter: {exc}", error=True)
             return
