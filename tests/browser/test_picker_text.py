@@ -45,7 +45,7 @@ def test_longest_fault_and_alarm_names_fit_the_closed_box(live: LiveDashboard, p
     page.get_by_role("tab", name="Servo drive", exact=True).first.click()
     for fieldbus in ("ethercat", "profinet"):
         longest = _longest(alarm_options(fieldbus))
-        alarm = drives.controls._alarm
+        alarm = drives.controls._alarms.each()[0].alarm  # an open rig: the one shared form
         alarm.options = alarm_options(fieldbus)
         alarm.value = longest
         _shown_whole(page, "Alarm", longest)
