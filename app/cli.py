@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import logging
 import os
 import signal
@@ -32,6 +31,7 @@ from app.out_paths import (
     check_out,
     check_record,
     check_state_dir,
+    event_lines,
     image_name,
     prepare_out,
     write_events,
@@ -228,7 +228,7 @@ def _scenario_run(args: argparse.Namespace) -> int:
             recorder.close()
     else:
         result = run_scenario(scenario, rig)
-    text = "".join(json.dumps(e.to_record(), default=str) + "\n" for e in result.events)
+    text = event_lines(result.events)
     # The one writer of events.jsonl (--screenshots too), first: a reader of stdout that
     # stops early must not cost the file.
     if out is not None:

@@ -10,6 +10,7 @@ there (``events.jsonl``, ``NN-name.png``) go first; no other file is touched
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import tempfile
@@ -17,6 +18,7 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from app.rig_config import RigConfigError
+from devices.events import Event
 
 # What a run writes into --out (image_name, app/cli.py): nothing else is ever removed.
 EVENTS_FILE = "events.jsonl"
@@ -142,3 +144,8 @@ def write_events(out: Path, text: str) -> Path:
         Path(tmp).unlink(missing_ok=True)
         raise
     return out / EVENTS_FILE
+
+
+def event_lines(events: Iterable[Event]) -> str:
+    """The JSON lines of ``scenario run``: stdout and ``events.jsonl`` (docs/scenarios.md)."""
+    return "".join(json.dumps(e.to_record(), default=str) + "\n" for e in events)

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import contextlib
 import io
-import json
 import logging
 import os
 import socket
@@ -292,11 +291,6 @@ class ScreenshotRun:
     events: list[Event]
     failures: list[str]
     images: list[Path] = field(default_factory=list)
-
-
-def event_lines(events: list[Event]) -> str:
-    """The JSON lines of ``scenario run`` (app/cli.py)."""
-    return "".join(json.dumps(e.to_record(), default=str) + "\n" for e in events)
 
 
 def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,

@@ -20,10 +20,11 @@ from typing import Any
 import pytest
 from rerun.chunk import RrdReader
 
+from app.out_paths import event_lines
 from app.recording.event_text import log_path
 from app.rig_config import build_rig, load_rig_spec
 from app.scenario import EXAMPLES_DIR, load_scenario, run_scenario
-from app.screenshots import event_lines, play, served_run
+from app.screenshots import play, served_run
 
 SCENARIOS = ["cable_pulled", "too_many_analog", "module_lost_in_op"]
 

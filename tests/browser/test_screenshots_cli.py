@@ -17,9 +17,10 @@ import pytest
 from helpers import MAX_DIFF_FRACTION, diff_fraction
 from PIL import Image
 
+from app.out_paths import event_lines
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.scenario import load_scenario, run_scenario
-from app.screenshots import ScreenshotRun, event_lines, image_name, run_with_screenshots
+from app.screenshots import ScreenshotRun, image_name, run_with_screenshots
 from app.testing import fieldrig  # noqa: F401  (the plugin's fixture, as users get it)
 from app.ui.panels.scenario_player import STATUS_ID
 
