@@ -1,8 +1,9 @@
 """What the browser benchmarks share: headless Chromium, servers in child processes, and the
 default rig live behind the dashboard.
 
-- Chromium: Debian's, through Playwright, with the screenshot CLI's arguments
-  (``app.screenshots``: software WebGL, no network chatter); never a Playwright download.
+- Chromium: Debian's, through Playwright, launched as the screenshot CLI does
+  (``app.screenshots.launch``: software WebGL, no network chatter, a private home); never a
+  Playwright download.
 - :class:`ServerProcess`: a benchmark's server runs as ``python -m bench.NAME serve ...`` in
   a process of its own (its threads do not share a GIL with the measuring side), says
   ``ready`` on stdout, and stops when its stdin closes.
@@ -19,7 +20,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from app.screenshots import CHROMIUM, LAUNCH_ARGS, VIEWPORT, free_port
+from app.screenshots import CHROMIUM, VIEWPORT, free_port, launch
 
 __all__ = ["CHROMIUM", "VIEWPORT", "ServerProcess", "chromium", "free_port", "serve_dashboard"]
 
@@ -29,17 +30,20 @@ READY = "ready"
 
 @contextmanager
 def chromium() -> Iterator[Any]:
-    """A headless Chromium browser (Playwright), closed on exit."""
+    """A headless Chromium browser (Playwright) in a home of its own, as the screenshot CLI
+    launches it (``app.screenshots.launch``: a benchmark run leaves nothing in ``~``); closed
+    on exit."""
     from playwright.sync_api import sync_playwright
 
     if not Path(CHROMIUM).exists():
         raise RuntimeError(f"{CHROMIUM} is missing (apt-get install chromium)")
     with sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=CHROMIUM, args=list(LAUNCH_ARGS))
+        browser, remove_home = launch(pw)
         try:
             yield browser
         finally:
             browser.close()
+            remove_home()
 
 
 class ServerProcess:
