@@ -26,7 +26,7 @@ from devices.trscat.diagnostics import (
     app_message,
     emergency_frame,
 )
-from devices.trscat.esm import UNSPECIFIED_ERROR, Esm
+from devices.trscat.esm import MODULE_IDENT_MISMATCH, UNSPECIFIED_ERROR, Esm
 from devices.trscat.io import BUS_MAX_A, SlotIo, field_in_range
 
 if TYPE_CHECKING:
@@ -142,6 +142,11 @@ class AlarmsMixin:
                 else self.esm.state
             self._leave_to(target)
             self.esm.fall(target, UNSPECIFIED_ERROR, self.now_us)
+        elif fault.config_check and self.esm.state in (AlState.SAFEOP, AlState.OP):
+            # Only an injection raises it above PRE-OP (the real check runs at PS): show it
+            # as the device would after that check, not as a silent alarm in OP.
+            self._leave_to(AlState.PREOP)
+            self.esm.fall(AlState.PREOP, MODULE_IDENT_MISMATCH, self.now_us)
 
     def _clear(self, key: FaultKey) -> None:
         fault = self.active.pop(key)

@@ -70,12 +70,17 @@ class AppFault:
     target: Target
     bus_shutdown: bool = False  # §9.3.7 "shutdown irreversibile del bus TRS"
     deadlock: bool = False  # §9.3.7 0x6100: ESM back to PRE-OP, deadlock
+    # §9.2 PS "0xF030 = 0xF050": the error the slot configuration check gives. Raised above
+    # PRE-OP (only an injection can) it takes the device back to PRE-OP as that check would
+    # have left it, so LEDs and AL status tell the same as on a real TRS-CAT.
+    config_check: bool = False
     bus_flag: Bus = Bus.NONE
 
 
 # §9.3.7 "messaggi applicativi di errore".
 FAULTS: dict[str, AppFault] = {f.name: f for f in (
-    AppFault("CONFIG_ERROR", 0xA000, "Configuration error", 0x01, Target.DEVICE),
+    AppFault("CONFIG_ERROR", 0xA000, "Configuration error", 0x01, Target.DEVICE,
+             config_check=True),
     AppFault("TRS_OVERCURRENT", 0x7100,
              "Internal hardware error: power error, TRS bus overcurrent", 0x03, Target.DEVICE,
              bus_shutdown=True, bus_flag=Bus.CURRENT),

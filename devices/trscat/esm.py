@@ -55,6 +55,9 @@ FALL_KIND: dict[int, ErrorKind] = {
     FATAL_SYNC_ERROR: ErrorKind.LOCAL,
     SM_WATCHDOG: ErrorKind.WATCHDOG,
     UNSPECIFIED_ERROR: ErrorKind.APPLICATION,
+    # An injected 0xA000 in SAFE-OP / OP: the device is where a refused PS leaves it, and
+    # ETG.1300 shows a configuration error as blinking ("invalid configuration").
+    MODULE_IDENT_MISMATCH: ErrorKind.REFUSED,
 }
 
 

@@ -219,3 +219,45 @@ def test_op_needs_valid_outputs() -> None:
     bench.run(0.2)
     bench.request(AlState.OP)
     assert bench.trs.al_state is AlState.SAFEOP and bench.trs.al_status_code == 0x0019
+
+
+@pytest.mark.parametrize("state", [AlState.SAFEOP, AlState.OP])
+def test_injected_config_error_shows_as_a_refused_configuration(state: AlState) -> None:
+    """§9.3.7 0xA000 injected while the device is in SAFE-OP / OP: it shows what a TRS-CAT
+    with a configuration error shows (§9.2 PS check, §8.1 / ETG.1300): back in PRE-OP, AL
+    status 0x12 with code 0x0070, ERROR LED blinking ("invalid configuration"), outputs in
+    the safe state; SAFE-OP stays refused until the fault is cleared."""
+    bench = Bench(["IO-E"], configured=["IO-E"])
+    bench.to_state(state)
+    bench.apply("set_output", channel=1, value=1)
+    bench.run(0.005)
+    bench.apply("inject_fault", fault="CONFIG_ERROR")
+    bench.run(0.005)
+    trs = bench.trs
+    assert (trs.al_state, trs.al_status, trs.al_status_code) == (AlState.PREOP, 0x12, 0x0070)
+    assert bench.leds()["ERROR"] == "blinking"
+    assert bench.leds()["I/O 1"] == "off"
+    bench.request(AlState.SAFEOP)
+    assert (trs.al_state, trs.al_status_code) == (AlState.PREOP, 0x0070)
+    assert bench.leds()["ERROR"] == "blinking"
+    bench.apply("clear_fault", fault="CONFIG_ERROR")
+    bench.request(AlState.SAFEOP)
+    assert trs.al_state is AlState.SAFEOP and bench.leds()["ERROR"] == "off"
+
+
+def test_injected_config_error_under_the_master() -> None:
+    """The built-in master sees the fall and retries: every retry is refused with 0x0070 and
+    the ERROR LED keeps blinking; cleared, the master brings the device back to OP."""
+    bench = Bench(["IO-E"], configured=["IO-E"], master=True)
+    bench.run(1.0)
+    assert bench.trs.al_state is AlState.OP
+    bench.apply("inject_fault", fault="CONFIG_ERROR")
+    patterns = set()
+    for _ in range(3000):
+        bench.step()
+        patterns.add(bench.leds()["ERROR"])
+    assert bench.trs.al_state is AlState.PREOP and bench.trs.al_status_code == 0x0070
+    assert bench.leds()["ERROR"] == "blinking" and "blinking" in patterns
+    bench.apply("clear_fault", fault="CONFIG_ERROR")
+    bench.run(5.0)
+    assert bench.trs.al_state is AlState.OP
