@@ -535,9 +535,11 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             "ports": {"in": self.link_in, "out": self.link_out, "traffic": self.traffic()},
             "application": self.application_runs, "boot_failed": self.boot_failed,
             "bus_module": self.bus.snapshot(),
-            # each module with what the bus module diagnoses on it (its red LED), not only
-            # its wiring: a short on an output switched off is no fault yet (choice 30)
-            "modules": [{**m.snapshot(), "diagnosed": self.diagnosis.of_module(m.number)}
+            # each module with what the bus module diagnoses on it and the red LED that
+            # shows, not only its wiring: a short on an output switched off is no fault yet
+            # (choice 30)
+            "modules": [{**m.snapshot(), "diagnosed": self.diagnosis.of_module(m.number),
+                         "error_led": self.diagnosis.error_led(m.number)}
                         for m in self.modules],
             "addresses": [a.row() for a in assign_addresses(self.bus.mtype, mtypes)],
             "address_space": self.space.snapshot() if self.space else None,

@@ -36,6 +36,7 @@ from devices.cpx.codes import (
     emcy_code_for,
 )
 from devices.cpx.history import DiagHistory
+from devices.cpx.leds import module_error_led
 from devices.cpx.messages import DiagMessage, channel_param, emergency_frame
 from devices.cpx.modules import ModuleFault
 from devices.events import AlarmChanged, EmergencySent, Event, LogLine, fmt_hex
@@ -220,6 +221,11 @@ class Diagnosis:
         """What is diagnosed on module ``module`` now: the causes behind its error LED."""
         return [{"cause": e.fault.cause, "channel": e.fault.channel}
                 for e in self.ranked() if e.fault.module == module]
+
+    def error_led(self, module: int) -> dict[str, object]:
+        """Module ``module``'s red LED: the worst cause diagnosed on it (leds.py)."""
+        return module_error_led([(e.fault.cause, e.fault.channel) for e in self.active
+                                 if e.fault.module == module])
 
     def snapshot(self) -> dict[str, object]:
         return {"error_register": self.error_register, "status_bits": self.status_bits,

@@ -15,7 +15,7 @@ where the ".orange" channel is lit, the LED's own colour where the plain channel
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 from devices.events import Event, LedChanged
@@ -129,6 +129,28 @@ SF_BY_CLASS: dict[int, LedState] = {
 # M, yellow (§2.1.6): on while something is forced.
 M_TABLE: dict[bool, LedState] = {True: _s(LedPattern.ON, Colour.YELLOW),
                                  False: _s(LedPattern.OFF, Colour.YELLOW)}
+
+# A module's red error LED (§2.4.1 refers the module LEDs to the CPX-E system description;
+# FieldRig, docs/cpx-e-ec.md choice 30): on while the bus module diagnoses a cause on the
+# module. One LED shows one cause, the worst diagnosed, in this order (devices/cpx/codes.py
+# CAUSES), with that cause's channels. U_OUT low is diagnosed on each module with outputs
+# (Tab. 21-24 name the module), so their LEDs light as well as the bus module's PL.
+MODULE_LED_CAUSES = ("module_failure", "short_circuit_sensor_supply", "short_circuit_outputs",
+                     "wire_break", "undervoltage_out")
+MODULE_ERROR_LED: dict[bool, LedState] = {True: _s(LedPattern.ON, Colour.RED),
+                                          False: _s(LedPattern.OFF, Colour.RED)}
+
+
+def module_error_led(diagnosed: Sequence[tuple[str, int | None]]) -> dict[str, object]:
+    """A module's red LED from what is diagnosed on it, (cause, channel) pairs: its pattern
+    and colour, the cause it shows (None when dark) and that cause's channels."""
+    causes = {cause for cause, _channel in diagnosed}
+    shown = next((c for c in MODULE_LED_CAUSES if c in causes), None)
+    state = MODULE_ERROR_LED[shown is not None]
+    return {"pattern": state.pattern.value, "colour": state.colour.value, "cause": shown,
+            "channels": sorted({ch for cause, ch in diagnosed
+                                if cause == shown and ch is not None})}
+
 
 LED_NAMES = ("Run", "Error", "LA IN", "LA OUT", "PS", "PL", "SF", "M")
 BICOLOUR = {"Run": Colour.GREEN, "Error": Colour.RED}  # own colour; the other one is orange

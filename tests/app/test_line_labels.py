@@ -38,6 +38,7 @@ from app.ui.line.bodies import DC_LINE, wrap
 from app.ui.line.io_bodies import TYPE_LINE, short_type
 from app.ui.line.scene import LineScene
 from devices.cpx.catalog import IO_MODULES
+from devices.cpx.leds import module_error_led
 from devices.master.dc import DcState
 from devices.trscat.catalog import EXPANSIONS
 
@@ -128,10 +129,12 @@ def blinking(snap: Snapshot) -> None:
     devices(snap)["drive_ec"]["leds"].update(Status="single_flash", Error="double_flash")
 
 
-def diagnosed(cause: str, *channels: int | None) -> list[dict[str, Any]]:
-    """What the CPX-E-EC diagnoses on a module (its snapshot's "diagnosed"): the red LED and
-    the note follow it, not the wiring (docs/cpx-e-ec.md choice 30)."""
-    return [{"cause": cause, "channel": c} for c in channels]
+def diagnose(module: dict[str, Any], cause: str, *channels: int | None) -> None:
+    """What the CPX-E-EC diagnoses on a module (its snapshot's "diagnosed") and the red LED
+    the model derives from it ("error_led"): the LED and the note follow the diagnosis, not
+    the wiring (docs/cpx-e-ec.md choice 30)."""
+    module["diagnosed"] = [{"cause": cause, "channel": c} for c in channels]
+    module["error_led"] = module_error_led([(cause, c) for c in channels])
 
 
 def expansion_and_module_faults(snap: Snapshot) -> None:
@@ -142,7 +145,7 @@ def expansion_and_module_faults(snap: Snapshot) -> None:
     trs["f050"][3] = 0x494F2D45  # §9.3.2: IO-E found where AN-E is configured: two lines
     modules = devices(snap)["cpx"]["modules"]
     modules[1]["shorted"] = [3]
-    modules[1]["diagnosed"] = diagnosed("short_circuit_outputs", 3)
+    diagnose(modules[1], "short_circuit_outputs", 3)
 
 
 def every_module_faulted(snap: Snapshot) -> None:
@@ -150,10 +153,10 @@ def every_module_faulted(snap: Snapshot) -> None:
     sensor-supply short, six of the 8DO's outputs shorted, wires broken), side by side, with
     the blink words under the CPX (SF flashing)."""
     modules = devices(snap)["cpx"]["modules"]
-    modules[0]["diagnosed"] = diagnosed("short_circuit_sensor_supply", None)
-    modules[1]["diagnosed"] = diagnosed("short_circuit_outputs", 0, 1, 3, 4, 6, 7)
-    modules[2]["diagnosed"] = diagnosed("wire_break", 0, 2)
-    modules[3]["diagnosed"] = diagnosed("wire_break", 0, 1, 2, 3)
+    diagnose(modules[0], "short_circuit_sensor_supply", None)
+    diagnose(modules[1], "short_circuit_outputs", 0, 1, 3, 4, 6, 7)
+    diagnose(modules[2], "wire_break", 0, 2)
+    diagnose(modules[3], "wire_break", 0, 1, 2, 3)
     devices(snap)["cpx"]["led_states"]["SF"] = {"pattern": "triple_flash", "colour": "red"}
 
 
@@ -304,3 +307,12 @@ def test_module_types_break_after_a_hyphen_only(name: str) -> None:
     text = wrap(name, TYPE_LINE)
     assert unwrap(text) == name
     assert all(len(line) <= TYPE_LINE for line in text.split("\n")), text
+
+
+def test_the_fault_states_show_the_notes_they_measure(line: Line) -> None:
+    """The fault states measure the notes at their longest only if the plates show them:
+    the notes follow the model's "error_led", which the states set with "diagnosed"."""
+    show(line, "every_module_faulted")
+    notes = {name: str(h.text) for name, h in nodes(line).items()
+             if isinstance(h, viser.LabelHandle) and name.endswith("_note") and "cpx" in name}
+    assert sorted(notes.values()) == ["sensor\nshort", "short\n6 ch.", "wire\n0,2", "wire\n0-3"]

@@ -39,6 +39,7 @@ from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
 from app.ui.line.view import camera_for, focus_target
 from app.ui.panels.per_client import split_instructor
+from devices.cpx.leds import module_error_led
 
 SLAVE: dict[str, Any] = {
     "position": 1, "device": "trscat", "name": "Box 2 (TRS-CAT)", "station_address": 1002,
@@ -104,6 +105,13 @@ def diagnosed(cause: str, *channels: int) -> list[dict[str, Any]]:
         {"cause": cause, "channel": None}]
 
 
+def modelled(module: dict[str, Any]) -> dict[str, Any]:
+    """The hand-built module with the "error_led" the model derives from its "diagnosed"
+    (devices/cpx/leds.py module_error_led), as devices/cpx/device.py snapshot adds it."""
+    pairs = [(d["cause"], d["channel"]) for d in module.get("diagnosed") or []]
+    return {**module, "error_led": module_error_led(pairs)}
+
+
 @pytest.mark.parametrize(("module", "error", "levels"), [
     ({"short": "16DI", "inputs": [1, 0, 1]}, "", [True, False, True]),
     ({"short": "8DO", "driven": [0, 0, 0, 1], "shorted": [3],
@@ -122,7 +130,7 @@ def diagnosed(cause: str, *channels: int) -> list[dict[str, Any]]:
 ])
 def test_cpx_module_led_and_channels(module: dict[str, Any], error: str,
                                      levels: list[bool]) -> None:
-    assert module_error(module) == error
+    assert module_error(modelled(module)) == error
     assert channel_levels(module) == levels
 
 
@@ -146,7 +154,7 @@ def test_channel_lists_shorten_runs(channels: list[int], text: str) -> None:
     ({}, ""),
 ])
 def test_module_note_takes_two_lines_at_most(module: dict[str, Any], note: str) -> None:
-    assert module_note(module) == note
+    assert module_note(modelled(module)) == note
     assert all(len(line) <= 7 for line in note.split("\n"))
 
 
@@ -359,9 +367,9 @@ def test_slave_panel_texts() -> None:
                                       "ident": "0x494F2D42", "inputs": [1, 0]}]})
     assert "0x0012 PREOP + error" in html and "0x0070" in html and "IO-B" in html
     assert "blinking" in html
-    cpx = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP", "modules": [
+    cpx = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP", "modules": [modelled(
         {"module": 2, "short": "8DO", "outputs": [0, 0, 0, 1], "shorted": [3],
-         "diagnosed": diagnosed("short_circuit_outputs", 3)}],
+         "diagnosed": diagnosed("short_circuit_outputs", 3)})],
         "history": {"messages": [{"sub": 7, "type": "error", "text_id": "0x3702",
                                   "text": "Short circuit/overload"}]}})
     assert "short 3" in cpx and "Short circuit/overload" in cpx and "0x3702" in cpx
@@ -406,7 +414,7 @@ def test_cpx_slave_tab_says_what_is_wired_but_not_diagnosed(module: dict[str, An
     report is the injected one, which no trainee's page names (docs/classroom.md). What the
     device diagnoses stays for everyone."""
     html = slave_html("cpx", {"kind": "cpx_e_ec", "esm": "OP",
-                              "modules": [{"module": 2, **module}]})
+                              "modules": [modelled({"module": 2, **module})]})
     cell = _fault_cell(html)
     assert _shown(cell, trainee=False) == fault
     assert _shown(cell, trainee=True) == seen

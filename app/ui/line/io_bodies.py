@@ -7,10 +7,9 @@ CPX-E-EC (seed 002 tables 11-13): Run, Error, LA IN, LA OUT, PS, PL, SF, M in th
 model reports (Run / Error also orange), then one plate per module with a red error LED and a
 yellow LED per channel. The seed names no per-channel LED in the snapshot, so the plates show
 the channel signal (inputs for input modules, driven outputs for output modules) and light the
-module's error LED on a short circuit, a wire break, a module failure, a sensor-supply short or
-a U_OUT undervoltage the bus module diagnoses (the module snapshot's "diagnosed"), as the
-modules' own LEDs do: a short on an output switched off is wired but not seen
-(docs/cpx-e-ec.md choice 30).
+module's error LED as the model says (the module snapshot's "error_led": the worst cause the
+bus module diagnoses on it and its channels), as the modules' own LEDs do: a short on an
+output switched off is wired but not seen (docs/cpx-e-ec.md choice 30).
 
 A plate is one module wide (1.0) and its labels keep their size on screen: a type longer
 than TYPE_LINE characters ("4AI-U-I") takes two lines ("4AI-" / "U-I") hanging from under
@@ -109,23 +108,21 @@ def module_note(module: Mapping[str, Any]) -> str:
     return f"{reason}\n{listed if len(listed) <= NOTE_LINE else f'{len(channels)} ch.'}"
 
 
-# The causes a module's red LED shows (devices/cpx/codes.py CAUSES), worst first, in the
-# plate's words. U_OUT low is diagnosed on each module with outputs (seed 002 Tab. 22-24 name
-# the module), so their LEDs light as well as the bus module's PL (docs/cpx-e-ec.md choice 30).
-LED_CAUSES = {"module_failure": "failed", "short_circuit_sensor_supply": "sensor short",
-              "short_circuit_outputs": "short", "wire_break": "wire",
-              "undervoltage_out": "U_OUT low"}
+# The plate's words for the cause a module's red LED shows. Which cause that is (the worst
+# diagnosed) and on which channels is the model's: the module snapshot's "error_led"
+# (devices/cpx/leds.py MODULE_LED_CAUSES, docs/cpx-e-ec.md choice 30).
+LED_WORDS = {"module_failure": "failed", "short_circuit_sensor_supply": "sensor short",
+             "short_circuit_outputs": "short", "wire_break": "wire",
+             "undervoltage_out": "U_OUT low"}
 
 
 def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
-    """Why the red LED is on (the worst cause the bus module diagnoses on the module, as its
-    snapshot's "diagnosed" says: not the wiring, docs/cpx-e-ec.md choice 30) and the
-    channels."""
-    causes = {str(d.get("cause")): d.get("channel") for d in module.get("diagnosed") or []}
-    for cause, word in LED_CAUSES.items():
-        if cause in causes:
-            return word, _diagnosed_channels(module, cause)
-    return "", []
+    """The words and channels of the module's red LED, as its snapshot's "error_led" says."""
+    led = module.get("error_led") or {}
+    cause = led.get("cause")
+    if led.get("pattern", "off") == "off" or cause is None:
+        return "", []
+    return LED_WORDS.get(str(cause), str(cause)), [int(c) for c in led.get("channels") or []]
 
 
 def _diagnosed_channels(module: Mapping[str, Any], cause: str) -> list[int]:
@@ -286,8 +283,9 @@ class CpxBody(Body):
         by_number = {int(m.get("module", 0)): m for m in snap.get("modules") or []}
         for number, _short, channels in self.modules:
             module = by_number.get(number, {})
-            error = module_error(module)
-            self.paint.set_led(f"m{number}.error", "red", "on" if error else "off", t_us)
+            led = module.get("error_led") or {}
+            self.paint.set_led(f"m{number}.error", str(led.get("colour", "red")),
+                               str(led.get("pattern", "off")), t_us)
             self.paint.set_text(f"m{number}_note", module_note(module))
             levels = channel_levels(module)
             for ch in range(channels):

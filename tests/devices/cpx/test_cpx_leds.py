@@ -212,3 +212,48 @@ def test_a_short_dip_is_bridged() -> None:
     bench.apply("supply", el_sen=24.0)
     bench.run(0.1)
     assert bench.cpx.powered and bench.cpx.al_state is AlState.OP
+
+
+def _error_led(bench: Bench, module: int) -> dict[str, object]:
+    led: dict[str, object] = bench.cpx.snapshot()["modules"][module - 1]["error_led"]
+    return led
+
+
+def test_module_error_led_shows_the_worst_diagnosed_cause() -> None:
+    """A module's red LED (§2.4.1 refers its patterns to the CPX-E system description;
+    docs/cpx-e-ec.md choice 30): on while the bus module diagnoses a cause on the module, and
+    the model says which one it shows — the worst of those diagnosed (failure, sensor-supply
+    short, output short, wire break, U_OUT low) — and on which channels. The view only words
+    it; before, the dashboard ranked the causes itself."""
+    bench = Bench(["16DI", "8DO", ("4AI-U-I", {"ranges": "4-20mA"})], seed=3).to_op()
+    dark = {"pattern": "off", "colour": "red", "cause": None, "channels": []}
+    assert [_error_led(bench, m) for m in (1, 2, 3)] == [dark] * 3
+    bench.apply("wire_break", module=3, channel=2, on=True)
+    bench.apply("wire_break", module=3, channel=0, on=True)
+    bench.run(0.01)
+    assert _error_led(bench, 3) == {"pattern": "on", "colour": "red", "cause": "wire_break",
+                                    "channels": [0, 2]}
+    bench.apply("short_circuit", module=3, on=True)  # the sensor supply: worse, no channel
+    bench.run(0.01)
+    assert _error_led(bench, 3) == {"pattern": "on", "colour": "red",
+                                    "cause": "short_circuit_sensor_supply", "channels": []}
+    bench.apply("inject_fault", module=3, fault="module_failure")
+    bench.run(0.01)
+    assert _error_led(bench, 3)["cause"] == "module_failure"
+    for channel in (5, 3):
+        bench.apply("short_circuit", module=2, channel=channel, on=True)
+        bench.apply("write_object", index=0x7002, sub=channel + 1, value=1)
+    bench.run(0.01)
+    assert _error_led(bench, 2) == {"pattern": "on", "colour": "red",
+                                    "cause": "short_circuit_outputs", "channels": [3, 5]}
+    bench.apply("supply", out=15.0)  # U_OUT low as well: the shorts still show
+    bench.run(0.01)
+    causes = {d["cause"] for d in bench.cpx.snapshot()["modules"][1]["diagnosed"]}
+    assert causes == {"short_circuit_outputs", "undervoltage_out"}
+    assert _error_led(bench, 2)["cause"] == "short_circuit_outputs"
+    for channel in (5, 3):
+        bench.apply("short_circuit", module=2, channel=channel, on=False)
+    bench.run(0.01)
+    assert _error_led(bench, 2) == {"pattern": "on", "colour": "red",
+                                    "cause": "undervoltage_out", "channels": []}
+    assert _error_led(bench, 1) == dark
