@@ -135,6 +135,22 @@ def test_cpx_short_circuit() -> None:
     assert pick(name, "focus", target="cpx:2")
 
 
+def test_cpx_short_circuit_description_names_the_message_channel() -> None:
+    """The description tells the trainee what 0x10F3 holds before they read it: parameter 2
+    of the message (Tab. 16, docs/cpx-e-ec.md choice 9: bits 6-7 the direction, 10 output,
+    bits 0-5 the channel) is 0x80 | 3 for output 3. It said "0x80 | 2", which does not match
+    the 0x83 the trainee reads from 0x10F3 in the same run."""
+    from app.scenario import load_scenario
+
+    name = "cpx_short_circuit"
+    newest = pick(name, "read", "cpx", address="0x10F3:2")[0]["value"]
+    raw = pick(name, "read", "cpx", address=f"0x10F3:{newest}")[0]["value"].split()
+    channel = int(raw[21], 16)  # Tab. 15: the byte after parameter 2's flags "05 00"
+    assert channel == 0x83
+    description = load_scenario(ROOT / "static" / "scenarios" / f"{name}.toml").description
+    assert f"channel 0x80 | {channel & 0x3F}" in " ".join(description.split())
+
+
 def test_dc_sync_lost() -> None:
     """Seed 003 DC: COMPENSATING -> NOT_SYNCHRONIZED with the DC slaves in SAFEOP (TRS-CAT
     fatal sync error 0x002C, CPX-E-EC sync error 0x001A), then SYNCHRONIZING,
