@@ -224,7 +224,7 @@ def _trscat_emcy(code: int, vendor: bytes) -> list[Meaning]:
 
 
 def _cpx_emcy(code: int, register: int, data: bytes) -> list[Meaning]:
-    """Seed 002 Tab. 20-23: status bits, module, CPX error number in bytes 3-5 of the frame."""
+    """Seed 002 Tab. 20-26: status bits, module, CPX error number (bytes 3-5) and byte 7."""
     if code not in cpx.EMCY_CODES:
         return []
     text = _sentence(cpx.EMCY_CODES[code])
@@ -233,10 +233,13 @@ def _cpx_emcy(code: int, register: int, data: bytes) -> list[Meaning]:
         bits = [cpx.STATUS_BITS[b] for b in range(8) if fields["status_bits"] >> b & 1]
         error = cpx.CPX_ERRORS.get(fields["cpx_error"])
         what = error.text if error else f"CPX error number {fields['cpx_error']}"
+        # Tab. 26 makes byte 7 no more precise than "e.g. the first faulty channel", and
+        # 0 is also what an error without a channel carries: the value, not a channel claim
         text += (f" Module {fields['module']}, {what}"
-                 f"{'; status: ' + ', '.join(bits) if bits else ''}.")
+                 f"{'; status: ' + ', '.join(bits) if bits else ''}; byte 7 = {fields['info']}"
+                 " (additional information, e.g. the first faulty channel).")
     return [Meaning(CPX, f"CPX-E emergency code {fmt_hex(code, 4)}", text,
-                    "seed 002 §2.5.3 Tab. 20-23")]
+                    "seed 002 §2.5.3 Tab. 20-26")]
 
 
 def _canopen_emcy(code: int) -> list[Meaning]:

@@ -188,6 +188,15 @@ def test_cpx_emergency_frame(cause: cpx.Cause) -> None:
     assert all(cpx.STATUS_BITS[b] in m.text for b in range(8) if bits >> b & 1)
 
 
+def test_cpx_emergency_byte_7_is_decoded() -> None:
+    """Tab. 20 / Tab. 26: byte 7 is the additional information, e.g. the number of the first
+    faulty channel: a wire break on channel 1 of module 3 (48 03 03 00 01) named the module
+    and the error but left the channel out."""
+    frame = cpx_frame(cpx.EMCY_LOAD_DUMP, 0x81, 0x48, 3, 3, 1)
+    m = one(decode(fmt_bytes(frame)), CPX)
+    assert "byte 7 = 1 (additional information, e.g. the first faulty channel)" in m.text
+
+
 @pytest.mark.parametrize("code", sorted(cpx.EMCY_CODES), ids=lambda c: f"0x{c:04X}")
 def test_cpx_emcy_codes(code: int) -> None:
     assert one(decode(f"0x{code:04X}"), CPX).text.startswith(cpx.EMCY_CODES[code])
