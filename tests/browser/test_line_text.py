@@ -20,6 +20,7 @@ from app.ui.line.bodies import blink_words, header_text, state_tone
 from app.ui.line.cables import Cable, cable_label, label_point, pulled_route, pulled_text, route
 from app.ui.line.controls import cable_options, slave_options, targets
 from app.ui.line.io_bodies import (
+    LED_WORDS,
     channel_levels,
     channel_list,
     expansion_note,
@@ -39,7 +40,7 @@ from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
 from app.ui.line.view import camera_for, focus_target
 from app.ui.panels.per_client import split_instructor
-from devices.cpx.leds import module_error_led
+from devices.cpx.leds import MODULE_LED_CAUSES, module_error_led
 
 SLAVE: dict[str, Any] = {
     "position": 1, "device": "trscat", "name": "Box 2 (TRS-CAT)", "station_address": 1002,
@@ -132,6 +133,12 @@ def test_cpx_module_led_and_channels(module: dict[str, Any], error: str,
                                      levels: list[bool]) -> None:
     assert module_error(modelled(module)) == error
     assert channel_levels(module) == levels
+
+
+def test_every_cause_the_model_shows_has_plate_words() -> None:
+    """The model names the cause a module's red LED shows (devices/cpx/leds.py); the plate has
+    words for each one and for nothing else (a cause without words would show its id)."""
+    assert set(LED_WORDS) == set(MODULE_LED_CAUSES)
 
 
 @pytest.mark.parametrize(("channels", "text"), [
