@@ -81,6 +81,7 @@ class FaultsMixin:
         def _answers(self, n: int) -> bool: ...
         def _bus_table(self) -> list[IoModule | None]: ...
         def _refresh(self) -> None: ...
+        def check_module_fault(self, symbol: str, module: int) -> None: ...
 
     def _present_causes(self) -> list[Alarm]:
         """Every alarm cause present now, in the order the coupler would report them."""
@@ -247,6 +248,8 @@ class FaultsMixin:
 
     def cmd_inject_fault(self, fault: str, module: int | None) -> None:
         alarm = self._fault(fault, module)
+        if alarm.table == MODULE:
+            self.check_module_fault(alarm.info.symbol, alarm.module)
         if alarm not in self.injected:
             self.injected.append(alarm)
 

@@ -89,6 +89,7 @@ class RailMixin:
     rotary_switch: int
     od: ObjectDictionary | None
     flash: FlashStore
+    detected: list[tuple[int, str]]
     _touched: bool
     _modules_touched: bool
 
@@ -132,6 +133,13 @@ class RailMixin:
                 layout[other] = here
             if there is not None:
                 layout[module] = there
+        elif action == "inject_fault":
+            row = parse_fault(args["fault"])
+            if row.table == MODULE and module not in layout:
+                # Before the run the modules are numbered by rail position, as the rig is
+                # built; a rescan's renumbering after a gap is the run's (_numbered).
+                raise CommandError(_no_module(self.device_id, row.symbol, module, module,
+                                              layout))
         elif action in MODULE_ACTIONS or action in _NEED_MODULE:
             if module not in layout:
                 raise CommandError(f"{self.device_id}: no module at rail position {module} "
@@ -151,6 +159,29 @@ class RailMixin:
         if action == "swap":
             return (module, int(args.get("other", module)))
         return ()
+
+    def _numbered(self) -> dict[int, int]:
+        """Rail position per module number: the last scan's numbering (byte 0 of the
+        emergency, §7), or the rail positions while no scan has numbered any module."""
+        if self.detected:
+            return {n: slot for n, (slot, _name) in enumerate(self.detected, start=1)}
+        return {n: n for n in range(1, len(self.rail) + 1)}
+
+    def check_module_fault(self, symbol: str, module: int) -> None:
+        """A §7.6 alarm is raised by the module itself: module ``module`` must be on the
+        rail, in the position the coupler numbered it in. Refused with the modules there are."""
+        numbered, rail = self._numbered(), self.rail
+        held = {n: m for n, slot in numbered.items()
+                if slot <= len(rail) and (m := rail[slot - 1]) is not None}
+        if module in held:
+            return
+        listing = {n: m.mtype for n, m in held.items()}
+        slot = numbered.get(module, module)
+        if slot <= len(rail) and rail[slot - 1] is not None:  # a module the scan did not number
+            raise CommandError(f"{self.device_id}: {symbol} is a module alarm (§7.6): there "
+                               f"is no module {module}: the last scan numbered "
+                               f"{len(numbered)} (modules: {_listing(listing)})")
+        raise CommandError(_no_module(self.device_id, symbol, module, slot, listing))
 
     def rail_module(self, slot: int | None) -> IoModule:
         if slot is None or not 1 <= slot <= len(self.rail) or self.rail[slot - 1] is None:
@@ -258,6 +289,18 @@ def _layout_text(layout: Mapping[int, Any], last: int | None = None) -> str:
     or a scenario check's layout (``?`` = an [[on]] command may change it)."""
     last = max(layout, default=0) if last is None else last
     return ", ".join(f"{n}={_kind_name(layout.get(n))}" for n in range(1, last + 1)) or "empty"
+
+
+def _listing(kinds: Mapping[int, Any]) -> str:
+    return ", ".join(f"{n}={_kind_name(k)}" for n, k in sorted(kinds.items())) or "none"
+
+
+def _no_module(device_id: str, symbol: str, module: int, slot: int,
+               kinds: Mapping[int, Any]) -> str:
+    """The refusal of a §7.6 fault on module ``module``, whose rail position ``slot`` is
+    empty; ``kinds``: the module numbers there are and their kinds."""
+    return (f"{device_id}: {symbol} is a module alarm (§7.6): there is no module {module}, "
+            f"rail position {slot} is empty (modules: {_listing(kinds)})")
 
 
 def _kind_name(kind: Any) -> str:

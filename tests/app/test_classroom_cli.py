@@ -133,6 +133,10 @@ def test_a_module_fault_with_its_module_passes_the_start_check(tmp_path: Path) -
     # the default rig's CPX-E-EC holds modules 1..4, its TRS-CAT one TRS-AN-E at 2
     ("cpx:inject:fault:module_failure", 9, "cpx: no module 9 (modules: 1=16DI"),
     ("trscat:inject:fault:AN_PLUS_12V", 5, "trscat: no expansion at position 5"),
+    # the FastCAT's seven modules: a §7.6 code on an empty rail position
+    ("fastcat:inject:module:0x0B", 9, "fastcat: TARATURA is a module alarm (§7.6): there is "
+     "no module 9, rail position 9 is empty (modules: 1=DB16, 2=DI16, 3=DO16, 4=AI8D, 5=AO4, "
+     "6=AI8TC, 7=AX2)"),
 ])
 def test_an_exercise_module_the_device_does_not_hold_exits_2(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], fault: str, module: int,

@@ -148,6 +148,30 @@ def test_a_fastcat_module_fault_on_a_module_target_passes_the_check(tmp_path, ca
     assert run_steps(tmp_path, steps) == 0, capsys.readouterr().err
 
 
+@pytest.mark.parametrize(("steps", "message"), [
+    (step("fastcat/8", "inject_fault", fault="TARATURA"),
+     "step[0] (at 0.5 s): fastcat: TARATURA is a module alarm (§7.6): there is no module 8, "
+     "rail position 8 is empty (modules: 1=DB16, 2=DI16, 3=DO16, 4=AI8D, 5=AO4, 6=AI8TC, "
+     "7=AX2)"),
+    (step("fastcat/5", "unplug", at=0.2) + step("fastcat/5", "inject_fault", fault="module:0x04"),
+     "step[1] (at 0.5 s): fastcat: ALARM_IO_FAULT is a module alarm (§7.6): there is no "
+     "module 5, rail position 5 is empty (modules: 1=DB16, 2=DI16, 3=DO16, 4=AI8D, 6=AI8TC, "
+     "7=AX2)"),
+])
+def test_a_fastcat_module_fault_on_an_empty_position_is_refused_before_the_run(
+        tmp_path, capsys, steps, message) -> None:
+    """A §7.6 fault on an empty rail position passed the check and the run latched an alarm
+    from a module that is not there."""
+    line = refused(tmp_path, capsys, steps)
+    assert line.endswith(message), line
+
+
+def test_a_coupler_fault_on_an_empty_position_passes_the_check(tmp_path, capsys) -> None:
+    """§7.5 0x02 MODULE_NO_PRES names a missing module: an empty position is its place."""
+    steps = step("fastcat/8", "inject_fault", fault="MODULE_NO_PRES")
+    assert run_steps(tmp_path, steps) == 0, capsys.readouterr().err
+
+
 def on(target: str, action: str, **args: object) -> str:
     return step(target, action, **args).replace("[[step]]\nat = 0.5", "[[on]]\nevent = \"resync\"")
 
