@@ -114,3 +114,8 @@ def module_type(name: str) -> ModuleType:
 
 def module_type_by_code(code: int) -> ModuleType | None:
     return _BY_CODE.get(code)
+
+
+def a_module(name: str) -> str:
+    """``a DB16``, ``an AI8D``: the article as the name is read out (A-I-8-D)."""
+    return f"{'an' if name[:1] in 'AEIOU' else 'a'} {name}"

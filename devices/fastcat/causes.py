@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any
 
 from devices.fastcat.alarms import COUPLER, MODULE, Alarm
+from devices.fastcat.catalog import a_module
 
 if TYPE_CHECKING:
     from devices.fastcat.coupler import FastCat
@@ -90,7 +91,7 @@ def _fact(fc: FastCat, alarm: Alarm) -> str:
 def _silent(fc: FastCat, n: int, slot: int, name: str) -> str:
     module = fc.rail[slot - 1] if slot <= len(fc.rail) else None
     if module is None:
-        return f"slot {slot} empty (module {n}: the last scan found a {name} there)"
+        return f"slot {slot} empty (module {n}: the last scan found {a_module(name)} there)"
     if not module.powered:
         return f"module {n} ({name}, slot {slot}) does not answer: its supply is off"
     return f"module {n} ({name}, slot {slot}) does not answer"
@@ -103,13 +104,13 @@ def _changed(fc: FastCat, n: int, scanned: tuple[int, str] | None) -> list[str]:
     if scanned is not None and stored is not None \
             and (n > len(stored) or stored[n - 1] != scanned[1]):
         flash = stored[n - 1] if n <= len(stored) else "no module"
-        out.append(f"the last scan found a {scanned[1]} as module {n}, flash has {flash}")
+        out.append(f"the last scan found {a_module(scanned[1])} as module {n}, flash has {flash}")
     if scanned is not None:
         slot, name = scanned
         module = fc.rail[slot - 1] if slot <= len(fc.rail) else None
         if module is not None and module.mtype.name != name:
-            out.append(f"slot {slot} holds a {module.mtype.name}, the last scan found a "
-                       f"{name} there (module {n})")
+            out.append(f"slot {slot} holds {a_module(module.mtype.name)}, the last scan "
+                       f"found {a_module(name)} there (module {n})")
     return out
 
 

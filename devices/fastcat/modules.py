@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 
 from devices.device import Action, CommandError, Param
 from devices.fastcat.analog import AnalogInputs, AnalogOutputs
-from devices.fastcat.catalog import ModuleType
+from devices.fastcat.catalog import ModuleType, a_module
 from devices.fastcat.digital import DigitalIo
 from devices.fastcat.encoder import FAULTS, PPR_DEFAULT, RPM_LIMIT, Ax2, EncoderInput
 from devices.od import ObjectDictionary
@@ -295,8 +295,8 @@ class IoModule:
     def apply(self, action: str, args: Mapping[str, Any]) -> Any:
         spec = self.ACTIONS.get(action)
         if spec is None:
-            raise CommandError(f"a {self.mtype.name} module has no action '{action}' (it has: "
-                               f"{', '.join(self.available_actions())})")
+            raise CommandError(f"{a_module(self.mtype.name)} module has no action '{action}' "
+                               f"(it has: {', '.join(self.available_actions())})")
         kwargs = spec.check_args(args)
         self.check_kind(self.mtype, action, kwargs)
         return getattr(self, f"cmd_{action}")(**kwargs)

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any
 
 from devices.device import UNKNOWN_MODULE, Action, CommandError, Param
 from devices.fastcat.alarms import MODULE, parse_fault
-from devices.fastcat.catalog import CATALOG, module_type
+from devices.fastcat.catalog import CATALOG, a_module, module_type
 from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES
 from devices.od import ObjectDictionary
@@ -308,4 +308,4 @@ def _kind_name(kind: Any) -> str:
 
 
 def _taken(device_id: str, module: int, name: str) -> str:
-    return f"{device_id}: rail position {module} is taken by a {name}: unplug it first"
+    return f"{device_id}: rail position {module} is taken by {a_module(name)}: unplug it first"

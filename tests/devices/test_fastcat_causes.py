@@ -4,8 +4,10 @@ scan (§2, §3), for the State tab (devices/fastcat/causes.py)."""
 
 from __future__ import annotations
 
+import pytest
 from fastcat_bench import Bench
 
+from devices.device import CommandError
 from devices.ethercat import AlState
 from devices.fastcat.causes import first_difference
 from devices.flash import MemoryFlash
@@ -65,3 +67,29 @@ def test_tbus_low_without_a_scanned_module_is_still_a_fact() -> None:
     bench = Bench()
     bench.apply("tbus_voltage", low=True)
     assert _physical(bench) == [(None, 0, "Tbus supply low")]
+
+
+
+def test_the_facts_name_an_analog_module_with_an() -> None:
+    """Every analog and encoder type starts with a vowel sound (AI8D, AO4, AX2): the State
+    tab read "the last scan found a AI8D there", a plug refusal "taken by a AO4"."""
+    bench = _stored_bench()
+    bench.apply("unplug", module=2)
+    bench.step()
+    assert _physical(bench) == [
+        (0x04, 2, "slot 2 empty (module 2: the last scan found an AI8D there)")]
+    bench.apply("plug", module=2, type="DI16")
+    bench.step()
+    assert _physical(bench)[0][2] == ("slot 2 holds a DI16, the last scan found an AI8D "
+                                      "there (module 2)")
+    with pytest.raises(CommandError) as caught:
+        bench.apply("plug", module=3, type="DB16")
+    assert str(caught.value) == "fastcat: rail position 3 is taken by an AI8C: unplug it first"
+
+
+def test_a_modules_refusal_names_it_with_its_article() -> None:
+    bench = _stored_bench()
+    with pytest.raises(CommandError, match=r"^an AI8D module has no action 'nope'"):
+        bench.fc.rail_module(2).apply("nope", {})
+    with pytest.raises(CommandError, match=r"^a DB16 module has no action 'nope'"):
+        bench.fc.rail_module(1).apply("nope", {})
