@@ -158,5 +158,7 @@ class DcUnit:
         return before, target
 
     def snapshot(self) -> dict[str, object]:
-        return {"state": self.state.value, "fault": self.fault,
+        """What the master's DC management shows: its state, the deviation it measured and
+        the window; the injected fault is the simulator's (the master's ``injected``)."""
+        return {"state": self.state.value,
                 "deviation_ns": self.deviation_ns, "window_ns": self.window_ns}

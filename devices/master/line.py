@@ -186,7 +186,9 @@ class LineMixin:
     def _powered_all(self) -> list[bool]:
         return [bool(getattr(link.slave, "powered", True)) for link in self.links]
 
-    def _cause(self, position: int) -> str:
+    def _injected_cause(self, position: int) -> str:
+        """Why the frames do not reach ``position``, as the simulator knows it ("cable 2
+        pulled"): the instructor's view only (``injected``), never a log line."""
         plugs = self._plugs_all()
         for p in range(position + 1):
             if not self.cables[p]:
@@ -201,6 +203,24 @@ class LineMixin:
         if not self._powered(position):
             return "powered off"
         return "no link on its IN port"
+
+    def _first_silent(self, position: int) -> int:
+        """The first position of the run of slaves that no longer answer, ``position`` among
+        them: what the master knows, from which slaves still answer its frames."""
+        first = position
+        while first > 0 and not self.links[first - 1].present:
+            first -= 1
+        return first
+
+    def _port_finding(self, first: int) -> str:
+        """What the master reads of the link where its frames stop: its own port's link for
+        position 0, else the DL status (0x0110) of the last slave that answers, port 1 (OUT);
+        "" when that link is up (the slave behind it does not answer)."""
+        if first == 0:
+            port_up = bool(self._line_reach) and self._line_reach[0] and self._line_powered[0]
+            return "" if port_up else "link down on the master port"
+        return "" if self.phys_out[first - 1] else \
+            f"no link on port 1 (OUT) of position {first - 1}"
 
     def _lose_frame(self) -> None:
         """One cycle's frame lost: counted per slave; one event per slave per burst."""
@@ -268,7 +288,8 @@ class LineMixin:
         link.present, link.believed, link.next_try_us = True, slave.al_state, self.now_us
         link.pending, link.identity_ok, link.reached_op = None, None, False
         link.stalled = False
-        if link.diagnosis.startswith("no link"):
+        link.injected_cause = ""
+        if link.diagnosis.startswith("no answer"):
             link.diagnosis = ""
         if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
             self._log(link, "found", state=slave.al_state.label)
@@ -276,19 +297,37 @@ class LineMixin:
                 self._request(link, AlState.INIT)
         return link.lost_once
 
-    def _unreached(self, link: SlaveLink) -> None:
-        """The frames do not reach ``link``'s slave this step (off the healthy path)."""
-        self._lose(link)
+    def _unreached(self, link: SlaveLink) -> bool:
+        """The frames do not reach ``link``'s slave this step (off the healthy path); True
+        when the master loses it now."""
+        return self._lose(link)
 
-    def _lose(self, link: SlaveLink) -> None:
+    def _lose(self, link: SlaveLink) -> bool:
+        """The slave no longer answers: the master logs and diagnoses what it sees (from which
+        position on nothing answers, the link where its frames stop); why (a cable, a supply)
+        is kept as the injected cause, the instructor's."""
         if not link.present:
-            return
-        cause = self._cause(link.position)
+            return False
         link.present, link.believed, link.pending = False, None, None
         link.lost_once, link.reached_op, link.seen = True, False, None
-        link.diagnosis = f"no link: {cause}"
+        link.injected_cause = self._injected_cause(link.position)
+        first = self._first_silent(link.position)
+        finding = self._port_finding(first)
+        link.diagnosis = f"no answer from position {first} on" + (f" ({finding})"
+                                                                  if finding else "")
         self.network_op, self._watched = False, None
         self._event(CommError(self.now_us, self.device_id, position=link.position,
                               address=link.slave.station_address, reason="link_lost",
                               count=1))
-        self._log(link, "lost", cause=cause)
+        self._log(link, "lost", first=first)
+        return True
+
+    def _report_lost(self, positions: list[int]) -> None:
+        """The master's own line for the slaves lost this step: which, from where nothing
+        answers, its AL status read's working counter (one per slave that answers, the
+        description's slave count expected) and the link it reads where the frames stop."""
+        first = self._first_silent(positions[0])
+        finding = self._port_finding(first)
+        self._log(None, "lost_line", positions=", ".join(map(str, positions)), first=first,
+                  wkc=sum(link.present for link in self.links), expected=len(self.links),
+                  finding=f"; {finding}" if finding else "")

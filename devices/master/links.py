@@ -102,6 +102,9 @@ class SlaveLink:
     reached_op: bool = False  # ECAT_Resync fired for this slave since it was (re)found
     lost_once: bool = False  # absent after having been present: its return is a recovery
     diagnosis: str = ""  # the master's own finding (identity mismatch, init command failed)
+    # Why it is lost, as the simulator knows it ("cable 2 pulled"): the instructor's view
+    # only (the snapshot's ``injected``), never the diagnosis nor the log.
+    injected_cause: str = ""
     identity_ok: bool | None = None  # None: not checked yet
     # Its last transition was refused or stopped by the master (retried): DC START_TIME does
     # not wait for it (docs/ethercat-master.md, distributed clocks).
@@ -118,13 +121,14 @@ class SlaveLink:
     def dc(self) -> bool:
         return self.description.dc if self.description is not None else self.dc_derived
 
-    def diagnostic(self, powered: bool, link: bool) -> dict[str, Any]:
-        """The per-slave diagnostic structure (seed 003), as the snapshot shows it."""
+    def diagnostic(self) -> dict[str, Any]:
+        """The per-slave diagnostic structure (seed 003), as the snapshot shows it: what the
+        master reads, not the line's truth (a slave's supply, the cables: ``injected``)."""
         slave, present = self.slave, self.present
         code = slave.al_status_code if present else 0
         return {"position": self.position, "device": slave.device_id,
                 "name": slave.box_name, "station_address": slave.station_address,
-                "present": present, "powered": powered, "link": link,
+                "present": present,
                 "state": slave.al_state.label if present else None,
                 "requested": self.requested.label if self.requested else None,
                 "al_status": slave.al_status if present else 0,

@@ -32,7 +32,9 @@ TWINCAT: dict[str, str] = {
               "{to_state}'. AL Status '0x{al_status:04X}' read and '0x{expected:04X}' "
               "expected. AL Status Code '0x{code:04X}'",
     "aborted": "state change aborted (requested '{target}', back to '{state}').",
-    "lost": "no link: slave not found on the line ({cause}).",
+    "lost": "slave lost: no answer from position {first} on.",
+    "lost_line": "slave(s) at position(s) {positions} lost: no answer from position {first} "
+                 "on (working counter {wkc}, {expected} expected){finding}.",
     "found": "found on the line again in '{state}'.",
     "identity": "identity check failed: vendor 0x{vendor:08X}, product 0x{product:08X}, "
                 "revision 0x{revision:08X} read and vendor 0x{want_vendor:08X}, product "

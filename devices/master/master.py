@@ -298,10 +298,12 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         quiet = exchange and skip and watched is not None
         served = 0
         recovered = []
+        lost_now = []
         for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc, esm_view \
                 in rows:
             if not (first if p == 0 else reach[p] and reachable()):
-                self._unreached(link)
+                if self._unreached(link):
+                    lost_now.append(p)
                 quiet = False
                 continue
             if not link.present:
@@ -339,6 +341,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             skipped.serve += served
         if exchange and first:
             self.frames += 1
+        if lost_now:
+            self._report_lost(lost_now)
         if recovered:
             self._event(NetworkRecovery(now_us, self.device_id, positions=tuple(recovered)))
             self._log(None, "recovery", positions=", ".join(map(str, recovered)))

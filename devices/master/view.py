@@ -51,8 +51,20 @@ class ViewMixin:
         raise CommandError(f"no slave with physical address {address} (addresses: {known})")
 
     def _diagnostic(self, link: SlaveLink) -> dict[str, Any]:
-        p = link.position
-        return link.diagnostic(bool(getattr(link.slave, "powered", True)), self._connected(p))
+        return link.diagnostic()
+
+    def _injected(self) -> dict[str, Any]:
+        """The line's truth, which no real master can read: why each lost slave is lost
+        (``lost``: position and cause, "cable 2 pulled"), each slave's supply (``powered``),
+        whether the master's frames physically reach it (``link``: every cable up to it
+        plugged, every slave before it powered) and the DC fault injected (``dc_fault``).
+        The instructor's view and the recording only; the master's log and diagnostic
+        structures say what it observes (docs/ethercat-master.md "What the master knows")."""
+        return {"lost": [{"position": link.position, "cause": link.injected_cause}
+                         for link in self.links if link.injected_cause],
+                "powered": [bool(getattr(link.slave, "powered", True)) for link in self.links],
+                "link": [self._connected(link.position) for link in self.links],
+                "dc_fault": self.dc.fault}
 
     def _damaged_percent(self, cable: int) -> int | None:
         share = self.damaged.get(cable)
@@ -97,6 +109,7 @@ class ViewMixin:
                 "dc": self.dc.snapshot(),
                 "cables": self._cable_views(names),
                 "slaves": [self._diagnostic(link) for link in self.links],
+                "injected": self._injected(),
                 "stats": {"frames": self.frames, "lost_frames": self.lost_frames,
                           "cycle_us": self.cycle_us},
                 "log": list(self.log)}

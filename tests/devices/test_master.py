@@ -100,7 +100,7 @@ def test_module_unplugged_in_op_logs_the_seed_lines() -> None:
     assert snap["log"][0]["port"] == 65535 and snap["log"][0]["t"] == pytest.approx(5.001)
     expected = {"name": "Box 1 (FastCAT)", "station_address": 1001, "present": True,
                 "state": "PREOP", "requested": "SAFEOP", "al_status": 0x12,
-                "al_status_code": 0x8204, "position": 0, "device": "fastcat", "link": True}
+                "al_status_code": 0x8204, "position": 0, "device": "fastcat"}
     assert [{k: s[k] for k in expected} for s in snap["slaves"]] == [expected]
     assert snap["slaves"][0]["counters"]["emergencies"] == 1
 
@@ -181,7 +181,9 @@ def test_slave_power_cycle_comes_back_to_op() -> None:
     bench.run_until(lambda: bench.fc.al_state is AlState.OP, limit_s=4.0)
     # Seed 003: the loss and the network recovery are logged; no failed transition.
     assert [e["text"] for e in bench.master.log] == [
-        "'Box 1 (FastCAT)' (1001): no link: slave not found on the line (powered off).",
+        "'Box 1 (FastCAT)' (1001): slave lost: no answer from position 0 on.",
+        "'Device 1 (EtherCAT)': slave(s) at position(s) 0 lost: no answer from position 0 on "
+        "(working counter 0, 1 expected); link down on the master port.",
         "'Box 1 (FastCAT)' (1001): found on the line again in 'INIT'.",
         "'Device 1 (EtherCAT)': network recovery: slave(s) at position(s) 0 back on the "
         "line."]
@@ -228,7 +230,7 @@ def test_log_history_is_bounded() -> None:
     bench = op_bench()
     assert bench.master is not None
     for _ in range(LOG_LENGTH + 10):
-        bench.master._log(bench.master.links[0], "lost", cause="x")
+        bench.master._log(bench.master.links[0], "lost", first=0)
     assert len(bench.master.log) == LOG_LENGTH
 
 

@@ -178,7 +178,7 @@ def test_dc_fault_sends_the_dc_slaves_to_safeop_and_recovers(
     rig.apply("master", "dc_fault", {"kind": kind})
     events = rig.run_until(IN_OP_US + US // 2)
     view = master_view(rig)
-    assert view["dc"]["state"] == "NOT_SYNCHRONIZED" and view["dc"]["fault"] == kind
+    assert view["dc"]["state"] == "NOT_SYNCHRONIZED" and view["injected"]["dc_fault"] == kind
     states = [s["state"] for s in view["slaves"]]
     assert states == ["OP", "SAFEOP", "SAFEOP", "OP"]  # DC: the TRS-CAT and the CPX-E-EC
     if codes is not None:

@@ -76,8 +76,12 @@ def test_pulled_cable_cuts_off_every_slave_behind_it(cable: int) -> None:
     lost = records(events, "comm_error")
     assert [(r["position"], r["reason"]) for r in lost] == [
         (p, "link_lost") for p in range(cable, 4)]
-    # Seed 003 diagnostic structure: why the slave is not there.
-    assert view["slaves"][cable]["diagnosis"] == f"no link: cable {cable} pulled"
+    # Seed 003 diagnostic structure: what the master sees (no answer from there on, the link
+    # where its frames stop); the cable is the instructor's injected cause.
+    where = "link down on the master port" if cable == 0 else \
+        f"no link on port 1 (OUT) of position {cable - 1}"
+    assert view["slaves"][cable]["diagnosis"] == f"no answer from position {cable} on ({where})"
+    assert view["injected"]["lost"][0] == {"position": cable, "cause": f"cable {cable} pulled"}
     if cable in (1, 3):
         return  # the recovery is the same for every cable: checked on 0 and 2
     if cable == 0:  # FastCAT seed 000 §7.5: 0x13 CO_E_LINK_LOSS "Cavo ethercat non connesso"
@@ -115,8 +119,11 @@ def test_slave_powered_off_and_on() -> None:
     rig.run_until(IN_OP_US + US // 2)
     view = master_view(rig)
     assert [s["present"] for s in view["slaves"]] == [True, True, False, False]
-    assert view["slaves"][2]["powered"] is False
-    assert view["slaves"][3]["diagnosis"] == "no link: the slave at position 2 is off"
+    assert view["injected"]["powered"][2] is False
+    assert view["slaves"][3]["diagnosis"] == \
+        "no answer from position 2 on (no link on port 1 (OUT) of position 1)"
+    assert view["injected"]["lost"][1] == {"position": 3,
+                                           "cause": "the slave at position 2 is off"}
     rig.apply("master", "power_slave", {"position": 2, "on": True})
     events = rig.run_until(IN_OP_US + 6 * US)
     assert records(events, "network_recovery")[0]["positions"] == [2, 3]
@@ -258,13 +265,14 @@ def test_unknown_positions_are_refused() -> None:
 def test_snapshot_has_the_contract_keys() -> None:
     view = master_view(line_in_op())
     assert set(view) >= {"kind", "id", "target", "external", "link", "phase", "log_style",
-                         "log_styles", "dc", "cables", "slaves", "stats", "log"}
-    assert set(view["dc"]) == {"state", "fault", "deviation_ns", "window_ns"}
+                         "log_styles", "dc", "cables", "slaves", "stats", "log", "injected"}
+    assert set(view["dc"]) == {"state", "deviation_ns", "window_ns"}
+    assert set(view["injected"]) == {"lost", "powered", "link", "dc_fault"}
     assert view["cables"][0] == {"index": 0, "from": "master", "to": "fastcat", "plugged": True,
                                  "master_pulled": False, "pulled_at": [], "damaged": None}
     assert view["cables"][3]["from"] == "cpx"
     assert set(view["slaves"][0]) >= {"position", "device", "name", "station_address",
-                                      "present", "powered", "link", "state", "requested",
+                                      "present", "state", "requested",
                                       "al_status", "al_status_code", "al_status_text", "dc",
                                       "counters", "esc_errors"}
     assert set(view["slaves"][0]["esc_errors"]) == {"invalid", "rx", "forwarded", "lost_link",

@@ -27,11 +27,19 @@ def test_a_slave_s_own_cable_cuts_the_line_behind_it(device, action, port, kept)
     events = rig.advance(300)
     assert _present(rig) == [True] * kept + [False] * (4 - kept)
     lost = [e.text for e in events
-            if e.device == "master" and "not found" in getattr(e, "text", "")]
+            if e.device == "master" and "slave lost" in getattr(e, "text", "")]
+    # What the master reads where its frames stop: the OUT port of the last slave that
+    # answers (its DL status); which end was pulled is the instructor's injected cause.
+    cut = f"no link on port 1 (OUT) of position {kept - 1}"
+    assert len(lost) == 4 - kept and all(
+        text.endswith(f"slave lost: no answer from position {kept} on.") for text in lost)
+    master = rig.snapshot()["devices"]["master"]
+    assert {s["diagnosis"] for s in master["slaves"][kept:]} == {
+        f"no answer from position {kept} on ({cut})"}
     at = NAMES.index(device)
-    cut = f"(no link on the {port.upper()} port of the slave at position {at})"
-    behind = lost[1:] if port == "in" else lost  # the slave itself: "no link on its IN port"
-    assert len(lost) == 4 - kept and behind and all(text.endswith(cut + ".") for text in behind)
+    causes = [c["cause"] for c in master["injected"]["lost"]]
+    own = f"no link on the {port.upper()} port of the slave at position {at}"
+    assert causes[1 if port == "in" else 0:] == [own] * (3 - kept if port == "in" else 4 - kept)
     rig.apply(device, action, {"connected": True, "port": port})
     rig.advance(8000)
     assert _present(rig) == [True] * 4
@@ -156,7 +164,7 @@ def test_the_snapshot_s_cable_is_plugged_only_when_both_its_ends_are(how, pulled
     assert [c["plugged"] for c in cables] == [True, True, False, True]
     assert [c["pulled_at"] for c in cables] == [[], [], pulled_at, []]
     assert [c["master_pulled"] for c in cables] == [False, False, master_pulled, False]
-    links = [s["link"] for s in rig.snapshot()["devices"]["master"]["slaves"]]
+    links = rig.snapshot()["devices"]["master"]["injected"]["link"]
     assert links == [all(c["plugged"] for c in cables[: p + 1]) for p in range(4)]
     _cable_2(rig, how, connected=True)
     rig.advance(10)
@@ -194,7 +202,7 @@ def test_the_cable_reads_pulled_at_once_its_other_end_s_port_a_step_later() -> N
     rig.apply("cpx", "cable", {"connected": False, "port": "in"})
     snap = rig.snapshot()["devices"]["master"]
     assert snap["cables"][2]["plugged"] is False and snap["cables"][2]["pulled_at"] == ["cpx IN"]
-    assert [s["link"] for s in snap["slaves"]] == [True, True, False, False]
+    assert snap["injected"]["link"] == [True, True, False, False]
     assert trs.link_out is True  # the TRS-CAT's OUT port follows at the master's next step
     rig.advance(1)
     assert trs.link_out is False
