@@ -172,6 +172,20 @@ def test_a_trainee_receives_no_injected_cause(pages: tuple[Page, Page]) -> None:
         assert leak not in got, leak
 
 
+def test_a_trainee_receives_no_line_cause_from_the_master(pages: tuple[Page, Page]) -> None:
+    """The master's log, diagnostics and Line tab say what a real master observes (the
+    slaves from position 2 on do not answer); the cable is the instructor's Injected / Causes
+    rows (docs/ethercat-master.md "What the master knows"). Before, the log line ended
+    "(cable 2 pulled)." and the Line tab's shared Cables row read "2 trscat -> cpx pulled"."""
+    trainee, instructor = pages
+    assert "2: cable 2 pulled" in text(instructor)  # the instructor's Causes row
+    got = text(trainee)
+    assert "no answer from position 2 on" in got  # the trainee did get the master's finding
+    for leak in ("cable 2 pulled)", "trscat -&gt; cpx pulled", "<th>Cables</th>",
+                 "2: cable 2 pulled"):
+        assert leak not in got, leak
+
+
 def test_a_trainee_receives_no_jammed_load(pages: tuple[Page, Page]) -> None:
     """The jam named itself on every page: the Drive tab's TEN / IEN badge, the 3D caption
     under the axis ("switches: home · load jammed") and the Drive log line; a trainee must

@@ -6,7 +6,7 @@ view, so every focus or zoom only widens the gaps). The line is the default rig'
 the dashboard as a browser gets it and booted to OP; the tests then show it the texts a
 trainee meets at their longest:
 
-- every cable pulled ("cable i pulled", seed 003: the slaves behind it "not seen", "no link"),
+- every cable pulled ("cable i pulled", seed 003: the slaves behind it "not seen"),
   also at the slaves' own plugs ("pulled at trscat OUT", docs/ethercat-master.md);
 - every DC state of seed 003 (devices/master/dc.py DcState: WAITING_START_TIME and
   NOT_SYNCHRONIZED are the longest) on the master's screen;
@@ -80,14 +80,14 @@ def devices(snap: Snapshot) -> dict[str, Any]:
 
 
 def cables_pulled(*pulled: int) -> Callable[[Snapshot], None]:
-    """Seed 003: the slaves behind a pulled cable are not seen and have no link; the master
+    """Seed 003: the slaves behind a pulled cable are not seen; the master
     without its own cable waits for a link. The drive, cut off, drops to SAFEOP by itself."""
     def apply(snap: Snapshot) -> None:
         master = devices(snap)["master"]
         for cable in master["cables"]:
             cable["plugged"] = cable["index"] not in pulled
         for slave in master["slaves"][min(pulled):]:
-            slave.update(present=False, link=False, state=None, al_status=0, al_status_code=0)
+            slave.update(present=False, state=None, al_status=0, al_status_code=0)
         if 0 in pulled:
             master.update(link=False, phase="waiting_link")
         devices(snap)["drive_ec-ecat"]["esm"] = "SAFEOP"
@@ -109,12 +109,12 @@ def plugs_out(ends: str, master_too: bool = False) -> Callable[[Snapshot], None]
 
 def al_codes_and_power(snap: Snapshot) -> None:
     """Headers at their longest: a state with its AL status code (seed 000 §7.7), and a slave
-    the master sees without power."""
+    the master lost."""
     master = devices(snap)["master"]
     master["phase"] = "init_commands"
     for slave in master["slaves"]:
         slave.update(state="PREOP", requested="SAFEOP", al_status=0x12, al_status_code=0x0070)
-    master["slaves"][-1].update(state=None, present=False, powered=False, al_status_code=0)
+    master["slaves"][-1].update(state=None, present=False, al_status_code=0)
 
 
 def blinking(snap: Snapshot) -> None:

@@ -99,7 +99,7 @@ def test_line_cable_pulled_and_replugged(line: LiveDashboard, page: Any) -> None
     line.advance(1.0)
     view = line.dashboard.line
     assert view is not None and view.scene.cables[2].plugged is False
-    assert slave(line, "cpx")["link"] is False and slave(line, "cpx")["state"] is None
+    assert slave(line, "cpx")["present"] is False and slave(line, "cpx")["state"] is None
     assert "not seen" in view.scene.text("cpx", "header")
     assert view.scene.led_colours("trscat")["RUN"] == COLOURS["green"]  # in front: still OP
     wait_until(lambda: "not seen" in page.locator("#fr-line-slaves").inner_text(),
@@ -122,7 +122,7 @@ def test_line_cable_pulled_at_a_slave_s_own_plug(line: LiveDashboard, page: Any)
     assert view is not None
     cable = view.scene.cables[2]
     assert cable.plugged is False and cable.master_plugged is True
-    assert slave(line, "cpx")["link"] is False
+    assert line.snapshot("master")["injected"]["link"][2] is False
     # The Line controls' Cable list (Pull / Plug move the master's cable) says so too.
     assert "2 trscat -> cpx (pulled at trscat OUT)" in view.controls.cable.options
     open_dashboard(page, line)
@@ -133,7 +133,7 @@ def test_line_cable_pulled_at_a_slave_s_own_plug(line: LiveDashboard, page: Any)
     line.command("trscat", "link", {"connected": True, "port": "out"})
     line.advance(6.0)
     assert cable.plugged is True and [s["state"] for s in slaves(line)] == ["OP"] * 4
-    wait_until(lambda: "Cables" not in status.inner_text(), what="the Cables row to go")
+    wait_until(lambda: "Injected" not in status.inner_text(), what="the Injected row to go")
 
 
 def test_line_trscat_expansion_mismatch(line: LiveDashboard, page: Any) -> None:

@@ -44,7 +44,7 @@ from devices.cpx.leds import MODULE_LED_CAUSES, module_error_led
 
 SLAVE: dict[str, Any] = {
     "position": 1, "device": "trscat", "name": "Box 2 (TRS-CAT)", "station_address": 1002,
-    "present": True, "powered": True, "link": True, "state": "OP", "requested": "OP",
+    "present": True, "state": "OP", "requested": "OP",
     "al_status": 8, "al_status_code": 0, "al_status_text": "No error", "dc": True,
     "counters": {"lost_frames": 1, "wkc_errors": 2, "emergencies": 3, "state_changes": 4}}
 
@@ -62,8 +62,9 @@ def test_state_tone_against_the_master_target(change: dict[str, Any], tone: str)
 @pytest.mark.parametrize(("change", "text"), [
     ({}, "1 · 1002 · OP"),
     ({"state": "PREOP", "al_status_code": 0x70}, "1 · 1002 · PREOP · AL 0x0070"),
-    ({"state": None, "link": False}, "1 · 1002 · not seen · no link"),
-    ({"state": None, "powered": False}, "1 · 1002 · not seen · power off"),
+    # What the master reads: a lost slave is not seen; why (no link, no supply) is the
+    # instructor's injected cause, not the shared scene's.
+    ({"state": None, "present": False}, "1 · 1002 · not seen"),
 ])
 def test_header_text(change: dict[str, Any], text: str) -> None:
     assert header_text({**SLAVE, **change}, 1) == text
@@ -261,7 +262,7 @@ MASTER: dict[str, Any] = {
     "target": "OP", "slaves": [
         {**SLAVE, "position": 0, "device": "fastcat", "station_address": 1001},
         {**SLAVE}, {**SLAVE, "position": 2, "device": "cpx", "station_address": 1003,
-                    "state": None, "link": False}],
+                    "state": None, "present": False}],
     "cables": [{"index": 0, "from": "master", "to": "fastcat", "plugged": True},
                {"index": 1, "from": "fastcat", "to": "trscat", "plugged": True},
                {"index": 2, "from": "trscat", "to": "cpx", "plugged": False}]}
@@ -285,10 +286,9 @@ def test_master_panel_table_and_controls() -> None:
                                          "2 trscat -> cpx (pulled)"]
     assert cable_options({}, ["fastcat", "trscat"]) == ["0 master -> fastcat",
                                                        "1 fastcat -> trscat"]
-    off = {"slaves": [{**SLAVE, "powered": False}]}
+    off = {"slaves": [SLAVE], "injected": {"powered": [False]}}
     assert slave_options(off, ["trscat"]) == ["0 trscat (off)"]
-    assert "NOT_SYNCHRONIZED" in dc_text({"state": "NOT_SYNCHRONIZED", "fault": "drift"})
-    assert "fault: drift" in dc_text({"state": "NOT_SYNCHRONIZED", "fault": "drift"})
+    assert "NOT_SYNCHRONIZED" in dc_text({"state": "NOT_SYNCHRONIZED"})
     log = log_table([{"timestamp": "12/11/2019 14.51.30 421 ms", "text": "first"},
                      {"t": 1.5, "text": "second <b>"}])
     assert log.index("second &lt;b&gt;") < log.index("first")  # newest first, escaped
@@ -296,14 +296,16 @@ def test_master_panel_table_and_controls() -> None:
 
 
 def test_the_master_panel_says_which_cable_is_out_and_at_which_end() -> None:
-    """The Line tab: a cable out at a slave's own plug is named with that end, as the
-    snapshot's ``pulled_at`` says; no row while every cable is in."""
-    assert "Cables" not in status_table({"cables": MASTER["cables"][:2]})
+    """The Line tab, instructor's rows: a cable out at a slave's own plug is named with that
+    end, as the snapshot's ``pulled_at`` says; no row while every cable is in. A trainee's
+    browser gets the table without it (a real master sees no cable)."""
+    assert "Injected" not in status_table({"cables": MASTER["cables"][:2]})
     own = {"cables": [*MASTER["cables"][:2],
                       {"index": 2, "from": "trscat", "to": "cpx", "plugged": False,
                        "master_pulled": False, "pulled_at": ["trscat OUT"]}]}
-    html = status_table(own)
-    assert "<th>Cables</th>" in html and "2 trscat -&gt; cpx pulled at trscat OUT" in html
+    public, instructor = split_instructor(status_table(own), "causes")
+    assert "<th>Injected</th>" in instructor
+    assert "2 trscat -&gt; cpx pulled at trscat OUT" in instructor and "pulled" not in public
     assert "2 trscat -&gt; cpx pulled<" in status_table(MASTER)  # the master's own pull
 
 

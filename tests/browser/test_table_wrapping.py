@@ -59,11 +59,11 @@ def test_master_slave_table_wraps_between_words(live: LiveDashboard, page: Any) 
     live.command("master", "lose_frames", {"count": 10})
     live.advance(2.0)
     slaves = live.snapshot("master")["slaves"]
-    assert slaves[1]["powered"] is False
+    assert slaves[1]["present"] is False
     for tab in page.get_by_role("tab", name="Line").all():
         tab.click()
     table = page.locator("#fr-line-slaves")
-    wait_until(lambda: "power off" in table.inner_text(), what="the TRS-CAT powered off")
+    wait_until(lambda: "not seen" in table.inner_text(), what="the TRS-CAT lost")
     assert split_words(page, "#fr-line-slaves td") == []
 
 

@@ -80,17 +80,14 @@ def state_tone(entry: Mapping[str, Any], target: str | None = None) -> str:
 
 
 def header_text(entry: Mapping[str, Any], position: int) -> str:
-    """``1 · 1002 · OP``, with the AL status code when there is one."""
+    """``1 · 1002 · OP``, with the AL status code when there is one: what the master reads
+    (a slave it lost is "not seen"; why is the instructor's, docs/ethercat-master.md)."""
     address = entry.get("station_address", "?")
     state = entry.get("state") or "not seen"
     text = f"{entry.get('position', position)} · {address} · {state}"
     code = int(entry.get("al_status_code") or 0)
     if code:
         text += f" · AL 0x{code:04X}"
-    if entry.get("powered") is False:
-        text += " · power off"
-    elif entry.get("link") is False:
-        text += " · no link"
     return text
 
 
@@ -230,12 +227,12 @@ class MasterBody(Body):
         return "external master" if snap.get("external") else ""
 
     def update_master_frame(self, snap: Mapping[str, Any], legend: str = "") -> None:
-        """The master's own frame: the bar red on a DC fault or a lost link, amber while
-        starting; the header names the target state; ``legend`` is :meth:`update`'s."""
+        """The master's own frame: the bar red out of sync (NOT_SYNCHRONIZED: what the
+        master measures, not the injected DC fault) or on a lost link, amber while starting;
+        the header names the target state; ``legend`` is :meth:`update`'s."""
         dc = snap.get("dc") or {}
         phase = snap.get("phase", "running")
-        bad = dc.get("fault") or dc.get("state") == "NOT_SYNCHRONIZED" or not snap.get("link",
-                                                                                        True)
+        bad = dc.get("state") == "NOT_SYNCHRONIZED" or not snap.get("link", True)
         entry = {"state": "running" if phase == "running" else phase,
                  "requested": "running", "al_status_code": 1 if bad else 0}
         # One text per label per frame: the slave header and then "target ..." made the

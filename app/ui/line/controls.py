@@ -57,11 +57,11 @@ def _damage(percent: Any) -> str:
 
 
 def slave_options(master: Mapping[str, Any], order: Sequence[str]) -> list[str]:
-    slaves = master.get("slaves") or []
+    # The instructor's controls: the supply is the injected truth, not the master's view.
+    powered = (master.get("injected") or {}).get("powered") or []
     out = []
     for i, device in enumerate(order):
-        entry = slaves[i] if i < len(slaves) else {}
-        off = " (off)" if entry.get("powered") is False else ""
+        off = " (off)" if i < len(powered) and powered[i] is False else ""
         out.append(f"{i} {device}{off}")
     return out
 

@@ -1,9 +1,14 @@
-"""The master panel (left panel, tab "Line"): phase, the cables that are out and at which end,
-DC, frame statistics, one row per slave (position, station address, name, state, AL status
-with code and text, DC, link, counters),
+"""The master panel (left panel, tab "Line"): phase, DC, frame statistics, one row per slave
+(position, station address, name, state, AL status with code and text, DC, whether it answers,
+counters),
 each slave's ESC error counters per port (docs/ethercat-master.md "Damaged cable") and the
 master's log in the style picked in the "Log style" dropdown (seed 003 and the FastCAT
 seed §7.2-§7.4 styles; the master renders the lines, ``set_log_style``).
+
+Everything shared is what a real master observes (docs/ethercat-master.md "What the master
+knows"); the snapshot's ``injected`` (the cables that are out and at which end, the slaves off,
+the DC fault, each lost slave's cause) goes to the status table's Injected / Causes rows, the
+instructor's only (RoleHtml).
 
 Read with ``.get()`` defaults: a master without DC or counters still gets its table.
 """
@@ -17,6 +22,7 @@ import viser
 
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
+from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.panels.state import al_status_text
 from app.ui.panels.widgets import Synced
 from app.ui.repeats import Run, collapse_repeats, repeat_suffix
@@ -53,13 +59,13 @@ def al_cell(slave: Mapping[str, Any]) -> str:
     return f"0x{status:04X} {esc(al_status_text(status))}<br>{code_html}"
 
 
-def link_cell(slave: Mapping[str, Any]) -> str:
-    if slave.get("powered") is False:
-        return badge("power off", "bad")
-    link = slave.get("link")
-    if link is None:
+def seen_cell(slave: Mapping[str, Any]) -> str:
+    """Whether the slave answers the master's frames: all the master knows of a slave it lost
+    (why is the instructor's Causes row)."""
+    present = slave.get("present")
+    if present is None:
         return '<span class="fr-muted">-</span>'
-    return badge("up", "ok") if link else badge("down", "bad")
+    return badge("yes", "ok") if present else badge("no", "bad")
 
 
 def counters_cell(slave: Mapping[str, Any]) -> str:
@@ -80,16 +86,17 @@ def slaves_table(slaves: Sequence[Mapping[str, Any]], target: str | None = None)
             f"<td>{esc(s.get('name', s.get('device', '?')))}<br>{state_badge(s, target)}</td>"
             f"<td>{al_cell(s)}</td>"
             f"<td>{'-' if dc is None else ('yes' if dc else 'no')}</td>"
-            f"<td>{link_cell(s)}</td><td>{counters_cell(s)}</td></tr>")
+            f"<td>{seen_cell(s)}</td><td>{counters_cell(s)}</td></tr>")
     body = "".join(rows) or '<tr><td colspan="6" class="fr-muted">no slaves</td></tr>'
     # Widths so that the longest word of each column fits at the 400 px left panel (words
-    # wrap whole, tests/browser/test_table_wrapping.py): "(SelemaDriveECAT)" in Name, the
-    # "power" of the "power off" badge in Link, "10/2/1/13" in Cnt.
+    # wrap whole, tests/browser/test_table_wrapping.py): "(SelemaDriveECAT)" in Name, "Seen"
+    # and its "yes" / "no", "10/2/1/13" in Cnt.
     return ('<table class="fr-log fr-line" id="fr-line-slaves"><colgroup><col style="width:9%">'
             '<col style="width:31%"><col style="width:21%"><col style="width:7%">'
             '<col style="width:15%"><col style="width:17%"></colgroup><thead><tr>'
             "<th>Pos<br>Addr</th><th>Name<br>State</th><th>AL status<br>code</th><th>DC</th>"
-            f'<th>Link</th><th title="lost frames / WKC errors / emergencies / state '
+            '<th title="the slave answers the frames of the master">Seen</th>'
+            '<th title="lost frames / WKC errors / emergencies / state '
             f'changes">Cnt</th></tr></thead><tbody>{body}</tbody></table>')
 
 
@@ -132,8 +139,6 @@ def dc_text(dc: Mapping[str, Any]) -> str:
         return '<span class="fr-muted">not reported</span>'
     state = str(dc.get("state", "-"))
     out = badge(state, DC_TONE.get(state, "warn"))
-    if dc.get("fault"):
-        out += " " + badge(f"fault: {dc['fault']}", "bad")
     if "deviation_ns" in dc:
         out += esc(f" deviation {dc['deviation_ns']}{NBSP}ns / window "
                    f"{dc.get('window_ns', '?')}{NBSP}ns")
@@ -155,17 +160,37 @@ def pulled_cables(master: Mapping[str, Any]) -> str:
         for i, c in enumerate(master.get("cables") or []) if not c.get("plugged", True))
 
 
+def injected_text(master: Mapping[str, Any]) -> str:
+    """What the instructor made of the line (the snapshot's ``injected`` and ``cables``): the
+    cables that are out, the slaves off, the DC fault; "" when nothing is."""
+    injected = master.get("injected") or {}
+    names = [str(s.get("device", i)) for i, s in enumerate(master.get("slaves") or [])]
+    parts = [pulled_cables(master)] if pulled_cables(master) else []
+    parts += [esc(f"{i} {names[i] if i < len(names) else '?'} off")
+              for i, on in enumerate(injected.get("powered") or []) if not on]
+    if injected.get("dc_fault"):
+        parts.append(esc(f"DC fault {injected['dc_fault']}"))
+    return "<br>".join(parts)
+
+
+def causes_text(master: Mapping[str, Any]) -> str:
+    """Why each lost slave is lost, as the simulator knows it ("2: cable 2 pulled")."""
+    lost = (master.get("injected") or {}).get("lost") or []
+    return "<br>".join(esc(f"{c.get('position', '?')}: {c.get('cause', '?')}") for c in lost)
+
+
 def status_table(master: Mapping[str, Any]) -> str:
-    """Phase, target, link and the cables that are out: what changes only when the line
-    does."""
+    """Phase, target and the master port's link: what changes only when the line does. The
+    Injected and Causes rows (only when there is one: the healthy line's panel stays as it
+    was) are the instructor's (:data:`app.ui.style.CAUSE_ROWS`)."""
     phase = str(master.get("phase", "-")).replace("_", " ")
     mode = " (external master)" if master.get("external") else ""
     rows = [("Phase", badge(phase, "ok" if phase == "running" else "warn") + esc(mode)),
             ("Target", esc(master.get("target", "-"))),
             ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad"))]
-    pulled = pulled_cables(master)
-    if pulled:  # a row only then: the healthy line's panel stays as it was
-        rows.append(("Cables", f'<span class="fr-line-bad">{pulled}</span>'))
+    for key, text in (("Injected", injected_text(master)), ("Causes", causes_text(master))):
+        if text:
+            rows.append((key, f'<span class="fr-line-bad">{text}</span>'))
     return kv_table(rows, "fr-line-master-status")
 
 
@@ -221,7 +246,9 @@ class MasterPanel:
         # the time and the counters move every frame, phase, target and link seldom, and each
         # handle is rewritten only when its own text changes (benchmark 3, docs/performance.md).
         self._title = gui.add_html(title({}, 0))
-        self._status = gui.add_html(status_table({}))
+        # Its Injected / Causes rows: the instructor's connections only (RoleHtml).
+        self._status = RoleHtml(server, instructor_for(server), status_table({}),
+                                "fr-line-master-causes")
         self._live = gui.add_html(live_table({}))
         self._slaves = gui.add_html(slaves_table([]))
         self._esc_errors = gui.add_html(esc_errors_table([]))
@@ -245,7 +272,10 @@ class MasterPanel:
         if master.get("log_style") in styles:
             self._style_sync.follow(master["log_style"])
         self._set("title", self._title, title(master, t_us))
-        self._set("status", self._status, status_table(master))
+        status = status_table(master)
+        if self._cache.get("status") != status:
+            self._status.show(status)
+            self._cache["status"] = status
         self._set("live", self._live, live_table(master))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))

@@ -1,0 +1,52 @@
+"""The Line tab shows a trainee what the master observes (docs/ethercat-master.md "What the
+master knows"): which slaves answer, their states and AL status codes, DC state and
+deviation. Which cable was pulled, which slave is off and which DC fault was injected are the
+instructor's rows only (docs/classroom.md: causes are built per instructor connection)."""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.ui.line.bodies import header_text
+from app.ui.line.controls import slave_options
+from app.ui.line.master_panel import live_table, slaves_table, status_table
+from app.ui.line.scene import slave_entries
+from app.ui.panels.per_client import split_instructor
+
+CAUSE_WORDS = re.compile(r"cable|pulled|power|\boff\b|drift", re.IGNORECASE)
+ORDER = ["fastcat", "trscat", "cpx", "drive_ec-ecat"]
+
+
+def _faulted_master() -> dict[str, Any]:
+    """The default line in OP, then cable 2 pulled and the DC fault ``drift`` injected."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.advance(8000)
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.apply("master", "power_slave", {"position": 1, "on": False})
+    rig.apply("master", "dc_fault", {"kind": "drift"})
+    rig.advance(200)
+    return rig.snapshot()["devices"]["master"]
+
+
+def test_the_shared_master_panel_names_no_injected_cause() -> None:
+    master = _faulted_master()
+    public, instructor = split_instructor(status_table(master), "fr-line-master-causes")
+    shared = [public, slaves_table(master["slaves"], "OP"), live_table(master)]
+    shared += [
+        header_text(entry, i) for i, entry in enumerate(slave_entries(master, ORDER).values())
+    ]
+    assert [CAUSE_WORDS.findall(text) for text in shared] == [[]] * len(shared)
+    # What the master sees: the slaves from position 1 on do not answer.
+    assert "not seen" in shared[1] and ">no<" in shared[1]
+    # The instructor's rows: the cable, the slave off, the DC fault, each lost slave's cause.
+    assert "2 trscat -&gt; cpx pulled" in instructor
+    assert "1 trscat off" in instructor and "DC fault drift" in instructor
+    assert "1: powered off" in instructor and "3: the slave at position 1 is off" in instructor
+
+
+def test_the_instructor_s_slave_list_marks_the_slaves_off() -> None:
+    """The Cables and power folder (instructor only) still says which slave is off."""
+    master = _faulted_master()
+    assert slave_options(master, ORDER)[1] == "1 trscat (off)"
