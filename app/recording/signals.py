@@ -137,6 +137,12 @@ def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str,
     for led, pattern in (snap.get("leds") or {}).items():
         if isinstance(pattern, str):
             yield led_lane(device_id, led), pattern
+    injected = snap.get("injected")
+    if isinstance(injected, Mapping) and "lost" in injected:
+        # The master's lost slaves and why (its log says only what it observes): the
+        # instructor's record of the cause, docs/ethercat-master.md "What the master knows".
+        lost = "; ".join(f"{c.get('position')}: {c.get('cause')}" for c in injected["lost"])
+        yield state_lane(device_id, "injected"), lost or "none"
 
 
 _FASTCAT_IO = (("di", "digital", True), ("do", "digital", True),
