@@ -30,6 +30,7 @@ from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
 from devices.cpx.stillness import StillStepping
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
+from devices.cpx.unseen import undiagnosed
 from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState, sync_error_reached
@@ -395,11 +396,17 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
     def u_el_sen_ok(self) -> bool:
         return self.el_sen_v >= SUPPLY_MIN_V and not self.has_fault("undervoltage_el_sen")
 
-    def _diagnose(self) -> None:
+    def monitors(self) -> Monitors | None:
+        """0x2400's monitoring switches (Tab. 27); None without a dictionary (unpowered)."""
         od = self.od
-        assert od is not None
-        monitors = Monitors(scs=bool(od.peek(0x2400, 2)), sco=bool(od.peek(0x2400, 3)),
-                            v_out=bool(od.peek(0x2400, 4)))
+        if od is None:
+            return None
+        return Monitors(scs=bool(od.peek(0x2400, 2)), sco=bool(od.peek(0x2400, 3)),
+                        v_out=bool(od.peek(0x2400, 4)))
+
+    def _diagnose(self) -> None:
+        monitors = self.monitors()
+        assert monitors is not None
         faults: list[tuple[ModuleFault, ModuleType]] = []
         if not self.u_el_sen_ok:
             faults.append((ModuleFault(0, "undervoltage_el_sen"), self.bus.mtype))
@@ -520,8 +527,17 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         return f"{self.serial:08X}"
 
     # ---- views ----------------------------------------------------------------------------
+    def _module_view(self, module: CpxModule, monitors: Monitors | None,
+                     runs: bool) -> dict[str, Any]:
+        pairs = [(e.fault.cause, e.fault.channel) for e in self.diagnosis.active
+                 if e.fault.module == module.number]
+        return {**module.snapshot(), "diagnosed": self.diagnosis.of_module(module.number),
+                "error_led": self.diagnosis.error_led(module.number),
+                "undiagnosed": undiagnosed(module, pairs, monitors, runs)}
+
     def snapshot(self) -> dict[str, Any]:
         mtypes = [m.mtype for m in self.modules]
+        monitors, runs = self.monitors(), self.application_runs
         return {
             "kind": self.KIND, "id": self.device_id, "powered": self.powered,
             "esm": self.esm.state.label, "requested": self.esm.requested.label,
@@ -537,10 +553,8 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             "bus_module": self.bus.snapshot(),
             # each module with what the bus module diagnoses on it and the red LED that
             # shows, not only its wiring: a short on an output switched off is no fault yet
-            # (choice 30)
-            "modules": [{**m.snapshot(), "diagnosed": self.diagnosis.of_module(m.number),
-                         "error_led": self.diagnosis.error_led(m.number)}
-                        for m in self.modules],
+            # (choice 30); and, the instructor's, what is wired but not diagnosed and why
+            "modules": [self._module_view(m, monitors, runs) for m in self.modules],
             "addresses": [a.row() for a in assign_addresses(self.bus.mtype, mtypes)],
             "address_space": self.space.snapshot() if self.space else None,
             "space_error": self.space_error,

@@ -210,11 +210,11 @@ class CpxModule:
         if self.is_counter:
             self._counter_control(self.commanded[0] if self.commanded else 0)
         for i, value in enumerate(self.commanded):
-            off = self.failed or not supply_ok or (i in self.shorted and self._short_bites(i))
+            off = self.failed or not supply_ok or (i in self.shorted and self.short_bites(i))
             self.energised[i] = not off
             self.driven[i] = 0 if off else value
 
-    def _short_bites(self, channel: int) -> bool:
+    def short_bites(self, channel: int) -> bool:
         """A short circuit draws current only from a driven output in a voltage range."""
         if self.mtype.analog_ranges:
             return not self.channel_range(channel).current
@@ -253,7 +253,7 @@ class CpxModule:
         if self.sensor_supply_short and monitors.scs:
             out.append(ModuleFault(n, "short_circuit_sensor_supply"))
         for ch in sorted(self.shorted):
-            if ch < len(self.commanded) and self._short_bites(ch) and monitors.sco:
+            if ch < len(self.commanded) and self.short_bites(ch) and monitors.sco:
                 out.append(ModuleFault(n, "short_circuit_outputs", ch, output=True))
         out.extend(self._wire_breaks())
         if self.mtype.has_outputs and not supply_ok and monitors.v_out:
@@ -267,20 +267,26 @@ class CpxModule:
         if not self.mtype.analog_ranges:
             return out
         for ch in range(self.mtype.channels):
-            r = self.channel_range(ch)
+            if not self.wire_watched(ch):
+                continue
             if self.mtype.inputs:  # a 4-20 mA loop reads ~0 mA when its wire is broken
                 reading = 0.0 if ch in self.wire_broken else self.analog_in[ch]
-                if r.name == "4-20mA" and reading < WIRE_BREAK_BELOW_MA:
+                if reading < WIRE_BREAK_BELOW_MA:
                     out.append(ModuleFault(n, "wire_break", ch))
-            elif ch in self.wire_broken and r.current:  # an open current loop
+            elif ch in self.wire_broken:  # an open current loop
                 out.append(ModuleFault(n, "wire_break", ch, output=True))
         return out
 
-    def short_idle(self) -> list[int]:
-        """Shorted channels that draw no current now (an output switched off, a current
-        range): the module cannot see them, whatever the wiring (docs/cpx-e-ec.md choice 30)."""
-        return [ch for ch in sorted(self.shorted)
-                if ch < len(self.commanded) and not self._short_bites(ch)]
+    def wire_watched(self, channel: int) -> bool:
+        """Whether a broken wire on ``channel`` shows: the 1CI's encoder input, a 4-20 mA
+        input (its live zero), a current output (an open loop); a voltage or 0-20 mA input
+        reads a broken wire as a valid 0, a voltage output drives an open wire unharmed."""
+        if self.is_counter:
+            return channel == 0
+        if not self.mtype.analog_ranges:
+            return False
+        r = self.channel_range(channel)
+        return r.name == "4-20mA" if self.mtype.inputs else r.current
 
     def snapshot(self) -> dict[str, Any]:
         out: dict[str, Any] = {
@@ -288,7 +294,7 @@ class CpxModule:
             "ident": f"0x{self.mtype.ident:08X}", "inputs": list(self.in_values),
             "outputs": list(self.out_values), "driven": list(self.driven),
             "energised": list(self.energised),
-            "shorted": sorted(self.shorted), "short_idle": self.short_idle(),
+            "shorted": sorted(self.shorted),
             "sensor_supply_short": self.sensor_supply_short,
             "wire_broken": sorted(self.wire_broken), "failed": self.failed,
             "forced": {str(k): v for k, v in sorted(self.forced.items())}}

@@ -21,6 +21,7 @@ from app.ui.line.cables import Cable, cable_label, label_point, pulled_route, pu
 from app.ui.line.controls import cable_options, slave_options, targets
 from app.ui.line.io_bodies import (
     LED_WORDS,
+    REASON_WORDS,
     channel_levels,
     channel_list,
     expansion_note,
@@ -41,6 +42,7 @@ from app.ui.line.slave_panel import alarm_text, bits, slave_html
 from app.ui.line.view import camera_for, focus_target
 from app.ui.panels.per_client import split_instructor
 from devices.cpx.leds import MODULE_LED_CAUSES, module_error_led
+from devices.cpx.unseen import UNSEEN_REASONS
 
 SLAVE: dict[str, Any] = {
     "position": 1, "device": "trscat", "name": "Box 2 (TRS-CAT)", "station_address": 1002,
@@ -107,6 +109,11 @@ def diagnosed(cause: str, *channels: int) -> list[dict[str, Any]]:
         {"cause": cause, "channel": None}]
 
 
+def unseen(cause: str, reason: str, *channels: int) -> list[dict[str, Any]]:
+    """A module snapshot's "undiagnosed" entry (devices/cpx/unseen.py undiagnosed)."""
+    return [{"cause": cause, "channels": list(channels), "reason": reason}]
+
+
 def modelled(module: dict[str, Any]) -> dict[str, Any]:
     """The hand-built module with the "error_led" the model derives from its "diagnosed"
     (devices/cpx/leds.py module_error_led), as devices/cpx/device.py snapshot adds it."""
@@ -126,14 +133,20 @@ def modelled(module: dict[str, Any]) -> dict[str, Any]:
     ({"short": "16DI", "sensor_supply_short": True,
       "diagnosed": diagnosed("short_circuit_sensor_supply")}, "sensor short", []),
     # docs/cpx-e-ec.md choice 30: wired, but the output is off: the module sees nothing
-    ({"short": "8DO", "driven": [0] * 8, "shorted": [3], "short_idle": [3],
-      "diagnosed": []}, "", [False] * 8),
+    ({"short": "8DO", "driven": [0] * 8, "shorted": [3], "diagnosed": [],
+      "undiagnosed": unseen("short_circuit_outputs", "output_off", 3)}, "", [False] * 8),
     ({"short": "4AI-U-I", "inputs": [0] * 4, "wire_broken": [0], "diagnosed": []}, "", []),
 ])
 def test_cpx_module_led_and_channels(module: dict[str, Any], error: str,
                                      levels: list[bool]) -> None:
     assert module_error(modelled(module)) == error
     assert channel_levels(module) == levels
+
+
+def test_every_reason_the_model_gives_has_an_entry() -> None:
+    """The model says why a wired cause is not diagnosed (devices/cpx/unseen.py); the Slave
+    tab has an entry for each reason and for nothing else (one without would show its id)."""
+    assert set(REASON_WORDS) == set(UNSEEN_REASONS)
 
 
 def test_every_cause_the_model_shows_has_plate_words() -> None:
@@ -158,7 +171,8 @@ def test_channel_lists_shorten_runs(channels: list[int], text: str) -> None:
     ({"diagnosed": diagnosed("short_circuit_outputs", 0, 1, 3, 4, 6, 7)}, "short\n6 ch."),
     ({"diagnosed": diagnosed("short_circuit_sensor_supply")}, "sensor\nshort"),
     ({"diagnosed": diagnosed("module_failure"), "shorted": [1]}, "failed"),
-    ({"shorted": [3], "short_idle": [3], "diagnosed": []}, ""),  # not diagnosed: no note
+    ({"shorted": [3], "diagnosed": [],
+      "undiagnosed": unseen("short_circuit_outputs", "output_off", 3)}, ""),  # no note
     ({}, ""),
 ])
 def test_module_note_takes_two_lines_at_most(module: dict[str, Any], note: str) -> None:
@@ -398,21 +412,35 @@ def _fault_cell(html: str) -> str:
 
 
 @pytest.mark.parametrize(("module", "fault", "seen"), [
-    ({"short": "8DO", "shorted": [3], "short_idle": [3], "diagnosed": []},
+    ({"short": "8DO", "shorted": [3], "diagnosed": [],
+      "undiagnosed": unseen("short_circuit_outputs", "output_off", 3)},
      "short 3 (output off: not diagnosed)", ""),
-    ({"short": "4AO-U-I", "shorted": [2], "short_idle": [2], "diagnosed": []},
+    ({"short": "4AO-U-I", "shorted": [2], "diagnosed": [],
+      "undiagnosed": unseen("short_circuit_outputs", "current_range", 2)},
      "short 2 (current range: not diagnosed)", ""),
-    ({"short": "8DO", "shorted": [1, 3], "short_idle": [3],
-      "diagnosed": diagnosed("short_circuit_outputs", 1)},
+    ({"short": "8DO", "shorted": [1, 3], "diagnosed": diagnosed("short_circuit_outputs", 1),
+      "undiagnosed": unseen("short_circuit_outputs", "output_off", 3)},
      "short 1; short 3 (output off: not diagnosed)", "short 1"),
-    ({"short": "8DO", "shorted": [3], "short_idle": [], "diagnosed": []},
-     "short 3 (not diagnosed)", ""),  # 0x2400:3 off, or the application not running
-    ({"short": "4AI-U-I", "wire_broken": [0], "diagnosed": []}, "wire 0 (not diagnosed)", ""),
-    ({"short": "16DI", "sensor_supply_short": True, "diagnosed": []},
+    ({"short": "8DO", "shorted": [3], "diagnosed": [],
+      "undiagnosed": unseen("short_circuit_outputs", "monitor_off", 3)},
+     "short 3 (not diagnosed)", ""),  # 0x2400:3 off
+    ({"short": "8DO", "shorted": [1, 3], "diagnosed": [],
+      "undiagnosed": [*unseen("short_circuit_outputs", "output_off", 3),
+                      *unseen("short_circuit_outputs", "monitor_off", 1)]},
+     "short 3 (output off: not diagnosed); short 1 (not diagnosed)", ""),
+    ({"short": "4AI-U-I", "wire_broken": [0], "diagnosed": [],
+      "undiagnosed": unseen("wire_break", "signal_range", 0)}, "wire 0 (not diagnosed)", ""),
+    ({"short": "16DI", "sensor_supply_short": True, "diagnosed": [],
+      "undiagnosed": unseen("short_circuit_sensor_supply", "monitor_off")},
      "sensor short (not diagnosed)", ""),
-    ({"short": "16DI", "failed": True, "diagnosed": []}, "failed (not diagnosed)", ""),
-    ({"short": "4AI-U-I", "wire_broken": [0, 1], "diagnosed": diagnosed("wire_break", 0)},
+    ({"short": "16DI", "failed": True, "diagnosed": [],
+      "undiagnosed": unseen("module_failure", "no_application")},
+     "failed (not diagnosed)", ""),
+    ({"short": "4AI-U-I", "wire_broken": [0, 1], "diagnosed": diagnosed("wire_break", 0),
+      "undiagnosed": unseen("wire_break", "pending", 1)},
      "wire 0; wire 1 (not diagnosed)", "wire 0"),
+    # the wiring alone says nothing: what is not diagnosed, and why, is the model's
+    ({"short": "8DO", "shorted": [3], "diagnosed": [], "undiagnosed": []}, "", ""),
 ])
 def test_cpx_slave_tab_says_what_is_wired_but_not_diagnosed(module: dict[str, Any],
                                                             fault: str, seen: str) -> None:

@@ -125,9 +125,13 @@ def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
     return LED_WORDS.get(str(cause), str(cause)), [int(c) for c in led.get("channels") or []]
 
 
-def _diagnosed_channels(module: Mapping[str, Any], cause: str) -> list[int]:
-    return sorted({int(d["channel"]) for d in module.get("diagnosed") or []
-                   if d.get("cause") == cause and d.get("channel") is not None})
+# The Slave tab's words for why a wired cause is not diagnosed. Which causes those are and
+# why is the model's: the module snapshot's "undiagnosed" (devices/cpx/unseen.py
+# UNSEEN_REASONS). A reason without words shows as a bare "(not diagnosed)", as the Fault
+# column always has for them (docs/dashboard.md).
+REASON_WORDS = {"output_off": "output off", "current_range": "current range",
+                "signal_range": "", "no_application": "", "module_failed": "",
+                "monitor_off": "", "pending": ""}
 
 
 def module_fault_parts(module: Mapping[str, Any]) -> tuple[str, list[str]]:
@@ -136,21 +140,15 @@ def module_fault_parts(module: Mapping[str, Any]) -> tuple[str, list[str]]:
     instructor who injected a fault is not left wondering why SF and 0x1001 stay quiet. The
     second part names a cause the device does not report: the instructor's only
     (docs/classroom.md)."""
-    causes = {d.get("cause") for d in module.get("diagnosed") or []}
-    idle = {int(c) for c in module.get("short_idle") or []}
-    shorts = {int(c) for c in module.get("shorted") or []} - set(
-        _diagnosed_channels(module, "short_circuit_outputs"))
-    wires = {int(c) for c in module.get("wire_broken") or []} - set(
-        _diagnosed_channels(module, "wire_break"))
-    why = "output off" if "DO" in str(module.get("short", "")) else "current range"
-    hidden = [(f"short {channel_list(sorted(shorts & idle))}", why, bool(shorts & idle)),
-              (f"short {channel_list(sorted(shorts - idle))}", "", bool(shorts - idle)),
-              (f"wire {channel_list(sorted(wires))}", "", bool(wires)),
-              ("sensor short", "", bool(module.get("sensor_supply_short"))
-               and "short_circuit_sensor_supply" not in causes),
-              ("failed", "", bool(module.get("failed")) and "module_failure" not in causes)]
-    return module_error(module), [f"{what} ({f'{reason}: ' if reason else ''}not diagnosed)"
-                                  for what, reason, shown in hidden if shown]
+    hidden = []
+    for entry in module.get("undiagnosed") or []:
+        cause, reason = str(entry.get("cause")), str(entry.get("reason"))
+        channels = [int(c) for c in entry.get("channels") or []]
+        what = LED_WORDS.get(cause, cause)
+        what = f"{what} {channel_list(channels)}" if channels else what
+        why = REASON_WORDS.get(reason, reason)
+        hidden.append(f"{what} ({f'{why}: ' if why else ''}not diagnosed)")
+    return module_error(module), hidden
 
 
 def channel_list(channels: Sequence[int]) -> str:

@@ -109,17 +109,19 @@ def test_snapshot_says_which_wired_faults_the_module_diagnoses() -> None:
     """docs/cpx-e-ec.md choice 30: an output short counts only while the output is switched
     on. The review: the dashboard lit the 8DO's red LED from the wiring ("shorted") while the
     device diagnosed nothing; each module's snapshot now carries what the bus module
-    diagnoses on it ("diagnosed") and which shorts draw no current now ("short_idle")."""
+    diagnoses on it ("diagnosed") and what is wired but not diagnosed, and why
+    ("undiagnosed": the short draws no current while the output is off)."""
     bench = Bench(["16DI", "8DO"], seed=3).to_op()
     bench.apply("short_circuit", module=2, channel=3, on=True)
     bench.run(0.01)
     module = bench.cpx.snapshot()["modules"][1]
     assert module["shorted"] == [3]
-    assert module["diagnosed"] == [] and module["short_idle"] == [3]
+    assert module["diagnosed"] == [] and module["undiagnosed"] == [
+        {"cause": "short_circuit_outputs", "channels": [3], "reason": "output_off"}]
     assert bench.cpx.snapshot()["diagnosis"]["error_register"] == 0
     bench.apply("write_object", index=0x7002, sub=4, value=1)  # the PLC switches output 3 on
     bench.run(0.01)
     module = bench.cpx.snapshot()["modules"][1]
     assert module["diagnosed"] == [{"cause": "short_circuit_outputs", "channel": 3}]
-    assert module["short_idle"] == []
+    assert module["undiagnosed"] == []
     assert bench.cpx.snapshot()["modules"][0]["diagnosed"] == []
