@@ -129,9 +129,12 @@ def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
 # why is the model's: the module snapshot's "undiagnosed" (devices/cpx/unseen.py
 # UNSEEN_REASONS). A reason without words shows as a bare "(not diagnosed)", as the Fault
 # column always has for them (docs/dashboard.md).
+# Every reason has words: an instructor whose fault shows nowhere needs to know which switch
+# or state hides it (0x2400 is the bus module's parameter, seed 002 Tab. 27).
 REASON_WORDS = {"output_off": "output off", "current_range": "current range",
-                "signal_range": "", "no_application": "", "module_failed": "",
-                "monitor_off": "", "pending": ""}
+                "signal_range": "signal range", "no_application": "bus module not running",
+                "module_failed": "module failed", "monitor_off": "0x2400 monitor off",
+                "pending": "next cycle"}
 
 
 def module_fault_parts(module: Mapping[str, Any]) -> tuple[str, list[str]]:
@@ -147,7 +150,7 @@ def module_fault_parts(module: Mapping[str, Any]) -> tuple[str, list[str]]:
         what = LED_WORDS.get(cause, cause)
         what = f"{what} {channel_list(channels)}" if channels else what
         why = REASON_WORDS.get(reason, reason)
-        hidden.append(f"{what} ({f'{why}: ' if why else ''}not diagnosed)")
+        hidden.append(f"{what} ({why}: not diagnosed)")
     return module_error(module), hidden
 
 
