@@ -26,10 +26,18 @@ _PARAM = Param("parameter", str, parse=parameter_by_name_or_address,
                doc="parameter name (d3) or Modbus address (3, 0x0003)")
 _VALUE32 = Param("value", int, low=-0x8000_0000, high=0xFFFF_FFFF)
 _ALARM = Param("code", str, doc="alarm code (16) or name (FOLLOWING_ERROR)")
-# The simulator's words for an injected physical cause, not anything the drive shows: a
-# dashboard with trainees keeps these lines off their pages (docs/classroom.md).
+# The simulator's words for an injected cause, put or taken away, not anything the drive
+# shows (its alarm stays latched when a cause goes, seed 004 "Reset allarmi"): a dashboard
+# with trainees keeps these lines off their pages (docs/classroom.md).
 JAM_LOG = {True: "load jammed", False: "load free"}
 CAUSE_LOG_LINES = frozenset(JAM_LOG.values())
+CAUSE_REMOVED_LOG = "cause of alarm {number} removed (reset with {hint})"
+_CAUSE_REMOVED_HEAD = CAUSE_REMOVED_LOG.split("{", 1)[0]
+
+
+def names_a_cause(text: str) -> bool:
+    """Whether a drive log line is one of the simulator's cause lines above."""
+    return text in CAUSE_LOG_LINES or text.startswith(_CAUSE_REMOVED_HEAD)
 
 ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("write_register", "write register Rn as a master would", (_REG, _VALUE32)),
@@ -158,7 +166,7 @@ class DriveActions:
         number = self._alarm(code)
         self.alarms.remove_cause(number)
         hint = RESET_HINT.get(self.fieldbus, RESET_HINT_ANY)
-        self.log(f"cause of alarm {number} removed (reset with {hint})")
+        self.log(CAUSE_REMOVED_LOG.format(number=number, hint=hint))
 
     def cmd_jam_load(self: ServoDrive, active: bool) -> None:
         self.plant.jammed = active

@@ -13,7 +13,8 @@ from app.ui.drive.axis_scene import legend_parts, legend_text
 from app.ui.drive.drive_panel import reset_refusal_text
 from app.ui.drive.drive_state import DriveLog, state_rows
 from app.ui.style import INSTRUCTOR_CLASS, kv_table
-from devices.events import LogLine
+from devices.events import AlarmChanged, LogLine
+from devices.servo.actions import CAUSE_REMOVED_LOG
 
 IN_FAULT = {"powered": True, "ds402_state": "Fault", "alarm": {"code": 16,
             "name": "FOLLOWING_ERROR", "description": "", "effect": ""}, "alarms": [16]}
@@ -61,3 +62,18 @@ def test_with_trainees_the_scene_and_the_drive_log_name_no_jam() -> None:
         log.add(events)
         assert ("load jammed" in log.html("drive")) is shown
         assert "power off" in log.html("drive")
+
+
+def test_with_trainees_the_drive_log_does_not_tell_a_cause_was_removed() -> None:
+    """clear_alarm's "cause of alarm 16 removed" (the instructor's, or the repair of a right
+    answer) told the trainees which alarm had been injected; the drive logs no such line,
+    its alarm stays latched until a reset (tests/devices/servo/test_servo_reset_hint.py pins
+    the model's text)."""
+    removed = CAUSE_REMOVED_LOG.format(number=16, hint="R00 bit 3")
+    events = [AlarmChanged(1, "drive", code=16, name="FOLLOWING_ERROR", active=True),
+              LogLine(2, "drive", text=removed)]
+    for causes, shown in ((True, True), (False, False)):
+        log = DriveLog(causes=causes)
+        log.add(events)
+        assert ("cause of alarm 16 removed" in log.html("drive")) is shown
+        assert "alarm 16 FOLLOWING_ERROR raised" in log.html("drive")

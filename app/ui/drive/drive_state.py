@@ -20,7 +20,7 @@ from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
-from devices.servo.actions import CAUSE_LOG_LINES
+from devices.servo.actions import names_a_cause
 from devices.servo.registers import MODE_NAMES
 
 FIELDBUS_NAMES = {"modbus": "Modbus RTU", "canopen": "CANopen", "ethercat": "EtherCAT",
@@ -233,7 +233,8 @@ class DriveLog:
     One bounded list per drive: with one list for all, a busy drive's events pushed a quiet
     one's out, and a drive in Fault read "no drive events yet" (docs/dashboard.md).
     ``causes=False`` (a rig with trainees) leaves out the lines naming an injected cause
-    ("load jammed"): the log is one element every browser gets."""
+    ("load jammed", "cause of alarm 16 removed"): the log is one element every browser
+    gets."""
 
     def __init__(self, rows: int = LOG_ROWS, causes: bool = True) -> None:
         self._size = rows
@@ -244,7 +245,7 @@ class DriveLog:
         for event in events:
             found = event_text(event)
             if found is None or (not self._causes and isinstance(event, LogLine)
-                                 and event.text in CAUSE_LOG_LINES):
+                                 and names_a_cause(event.text)):
                 continue
             rows = self._rows.get(event.device)
             if rows is None:
