@@ -69,6 +69,22 @@ class Page:
                 return str(m["uuid"])
         raise KeyError(label)
 
+    def last(self, label: str | None, option: str) -> str:
+        """The uuid of the newest widget offering ``option`` (and labelled ``label``): an
+        instructor's own copy comes after the shared widget of the same label."""
+        for m in reversed(self.received()):
+            props = m.get("props") or {}
+            if (label is None or props.get("label") == label) \
+                    and option in (props.get("options") or ()):
+                return str(m["uuid"])
+        raise KeyError(option)
+
+    def updates(self, uuid: str) -> list[Any]:
+        """The values the server later set on one widget of this page."""
+        return [m["updates"]["value"] for m in self.received()
+                if m.get("type") == "GuiUpdateMessage" and m.get("uuid") == uuid
+                and "value" in (m.get("updates") or {})]
+
     def set(self, uuid: str, value: Any) -> None:
         """What the browser sends when its user changes a widget (or clicks a button)."""
         self._ws.send(msgspec.msgpack.encode(
@@ -86,6 +102,15 @@ def values(page: Page) -> list[Any]:
             found.append(m["value"])
         if m.get("type") == "GuiUpdateMessage" and "value" in (m.get("updates") or {}):
             found.append(m["updates"]["value"])
+    return found
+
+
+def options(page: Page) -> set[str]:
+    """Every dropdown option the page was offered: at creation and by later updates."""
+    found: set[str] = set()
+    for m in page.received():
+        found.update((m.get("props") or {}).get("options") or ())
+        found.update((m.get("updates") or {}).get("options") or ())
     return found
 
 
@@ -159,6 +184,20 @@ def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
     _command(served, "drive", "jam_load", {"active": True})
     served.runtime.advance(100_000).result(timeout=30)
     _wait(lambda: "load jammed" in text(instructor))
+    # The FastCAT's Module I/O and the drive's Other drive actions: the instructor picks a
+    # module to fail and a fault action in each (the shared forms offered them to everyone).
+    instructor.set(instructor.last("Module", "4 AI8D"), "4 AI8D")
+    time.sleep(0.3)
+    instructor.set(_wait(lambda: _try(instructor.last, None, "module_failure")),
+                   "module_failure")
+    instructor.set(instructor.last(None, "inject_alarm"), "inject_alarm")
+    # An alarm cause put on the drive the Drive tab shows and taken away again (the
+    # exercise's repair of a right answer does the same).
+    drive = served.dashboard.drives.selected  # type: ignore[union-attr]
+    _command(served, drive, "inject_alarm", {"code": "16"})
+    _command(served, drive, "clear_alarm", {"code": "16"})
+    served.runtime.advance(100_000).result(timeout=30)
+    _wait(lambda: "alarm 16 FOLLOWING_ERROR" in text(instructor))
     time.sleep(1.0)  # what the trainee would get has had the time to arrive
 
 
@@ -216,3 +255,35 @@ def _try(fn: Any, *args: Any) -> Any:
         return fn(*args)
     except KeyError:
         return None
+
+
+# Actions that make a fault in some direction (roles.makes_faults) on the FastCAT's modules and
+# the drives: a trainee's page is offered none of them, in no form.
+FAULT_ACTIONS = ("module_failure", "encoder_fault", "output_short", "calibrated",
+                 "inject_fault", "clear_fault", "inject_alarm", "clear_alarm", "jam_load")
+
+
+def test_a_trainee_is_offered_no_fault_action(pages: tuple[Page, Page]) -> None:
+    """The FastCAT's Module I/O form and the drive's Other drive actions were shared: every
+    page got their fault actions, and the instructor's pick of one (module_failure,
+    inject_alarm) and of its module went to every trainee."""
+    trainee, instructor = pages
+    assert {"module_failure", "inject_alarm"} <= options(instructor)
+    offered = options(trainee)
+    # What an operator does stays the trainee's: the module's inputs, the drive's commands.
+    assert {"set_input", "set_analog", "move", "read_register"} <= offered
+    for action in FAULT_ACTIONS:
+        assert action not in offered, action
+    picked = values(trainee)
+    for pick in ("module_failure", "inject_alarm", "4 AI8D"):
+        assert pick not in picked, pick
+
+
+def test_a_trainee_is_not_told_a_cause_was_removed(pages: tuple[Page, Page]) -> None:
+    """The drive's "cause of alarm 16 removed" line (the instructor's clear_alarm) reached the
+    trainees' Drive log: the drive itself logs no such thing, its alarm stays latched until a
+    reset. The alarm the drive raised is in the log for everyone."""
+    trainee, _instructor = pages
+    got = text(trainee)
+    assert "alarm 16 FOLLOWING_ERROR raised" in got
+    assert "cause of alarm" not in got

@@ -127,8 +127,12 @@ def test_trainee_injection_refused_instructor_allowed_download(
                          ("Target state", "ESC counters of"))}
         # A folder whose every row is the instructor's goes as a whole (no empty title); a
         # folder that keeps a trainee's row stays.
-        folders = {"FastCAT": ((), ("Faults", "Modules", "Address and causes")),
-                   "Servo drive": (("Alarms and load",), ("Motion",)),
+        # The fault actions of Module I/O and Other drive actions are the instructor's own
+        # forms.
+        folders = {"FastCAT": (("Module faults",),
+                               ("Faults", "Modules", "Address and causes", "Module I/O")),
+                   "Servo drive": (("Alarms and load", "Drive faults"),
+                                   ("Motion", "Other drive actions")),
                    "Line": (("Cables and power", "Frames and DC", "trscat faults"),
                             ("Master", "Slave actions", "trscat"))}
         for tab, (hidden, shown) in tabs.items():

@@ -16,7 +16,7 @@ from typing import Any
 
 import viser
 
-from app.classroom.roles import Role
+from app.classroom.roles import Role, makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive.drive_state import FIELDBUS_NAMES, injected_names
@@ -39,6 +39,7 @@ FIELDBUS_OPTIONS = tuple(f"{code} {FIELDBUS_NAMES[name]}"
                          for code, name in FIELDBUS_BY_C9.items())
 START_BITS = control.BIT5 | control.BIT6 | control.BIT7  # R00 bits 5..7: mode specific
 JOG = {"Jog -": -1, "Jog 0": 0, "Jog +": 1}
+DRIVE_KIND = "servo"  # the drives' kind in app.classroom.roles
 
 
 def alarm_details(fieldbus: str) -> dict[str, str]:
@@ -194,7 +195,16 @@ class DrivePanel:
             gui.add_html('<p class="fr-muted" style="font-size:0.75em">c9, c7 and n1 are read '
                          "at power-up: write, save, then switch Drive power off and on.</p>")
         with gui.add_folder("Other drive actions", expand_by_default=False):
-            self._form = ActionForm(gui, actions, self._apply, label="Drive action")
+            # With a token the actions that make a fault (roles.makes_faults: inject / clear
+            # an alarm, jam the load, power off) are a form per instructor connection: in the
+            # shared form a trainee's page got them, and the instructor's pick of one
+            # (docs/classroom.md). An open rig keeps the one form.
+            faults = {} if instructor.shared else {
+                n: a for n, a in actions.items() if makes_faults(DRIVE_KIND, n)}
+            self._form = ActionForm(gui, {n: a for n, a in actions.items() if n not in faults},
+                                    self._apply, label="Drive action")
+            if faults:
+                instructor.part(lambda gui: self._fault_form(gui, faults))
 
         # The boxes and the mode are drive values: every page ends up showing the selected
         # drive's (Synced). c9 and c7 are a form applied by "Write c9 and c7": what a user
@@ -347,6 +357,10 @@ class DrivePanel:
             e, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
             code=str(leading_int(alarm.value))))
         return form
+
+    def _fault_form(self, gui: Any, faults: Mapping[str, Action]) -> ActionForm:
+        with gui.add_folder("Drive faults", expand_by_default=False):
+            return ActionForm(gui, faults, self._apply, label="Fault action")
 
     # ---- view -----------------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any]) -> None:

@@ -16,10 +16,12 @@ from typing import Any
 
 import viser
 
+from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.control import module_options, option_slot
+from app.ui.panels.module_faults import ModuleFaults
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import Synced, set_options
 from app.ui.style import esc
@@ -29,6 +31,7 @@ ENCODER_COMMAND_BASE = 0x7600  # §6.30, per module: + 0x10 * (N - 1)
 ZERO_CYCLE_BITS = (0x1000, 0x2000)  # §6.30: bit 12 encoder 1, bit 13 encoder 2
 # Module actions with their own widgets here; the rest go to the generated form.
 DEDICATED = frozenset({"unplug", "plug", "swap", "module_power", "set_shaft_speed"})
+KIND = "fastcat"  # the coupler's kind in app.classroom.roles
 
 
 def module_index(base: int, slot: int) -> int:
@@ -109,9 +112,17 @@ class ModulePanel:
                                                 "the zero cycle")
                           for k in range(2)]
 
+        instructor = instructor_for(server)
         with gui.add_folder("Module I/O", expand_by_default=False):
             extra = {n: a for n, a in module_actions.items() if n not in DEDICATED}
-            self._form = ActionForm(gui, extra, self._apply_form)
+            # With a token the fault actions are the instructor's own form, with its own
+            # Module picker (module_faults.py); an open rig keeps the one form.
+            faults = {} if instructor.shared else {
+                n: a for n, a in extra.items() if makes_faults(KIND, n)}
+            self._form = ActionForm(gui, {n: a for n, a in extra.items() if n not in faults},
+                                    self._apply_form)
+            self._faults = ModuleFaults(instructor, runtime, sender, device_id, faults,
+                                        lambda: self._rail) if faults else None
         self._available: list[str] | None = None  # the selected module's actions, when read
         self._available_lock = threading.Lock()
 
@@ -234,6 +245,8 @@ class ModulePanel:
                    for e in rail] != [(e.get("slot"), e.get("type"),
                                        e.get("encoders") is not None) for e in self._rail]
         self._rail = rail
+        if self._faults is not None:
+            self._faults.update(changed)
         if changed:
             options = module_options(rail)
             set_options(self._module, options)

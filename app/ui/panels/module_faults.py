@@ -1,0 +1,110 @@
+"""The instructor's module fault form (FastCAT tab, folder Module I/O), one per connection.
+
+With a token, the module actions that make a fault (``roles.makes_faults``: module_failure,
+output_short, encoder_fault, calibrated, inject_fault, ...) leave the shared Module I/O form:
+a shared form sent them and the instructor's pick of one to every trainee's page, and its
+target was the shared Module picker, so picking the module to fail moved every page's. Each
+instructor connection gets this form instead, with a Module picker of its own
+(app/ui/panels/per_client.py; docs/classroom.md). An open rig keeps the one shared form.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+import viser
+
+from app.runtime import Runtime
+from app.ui.commands import CommandSender
+from app.ui.panels.action_form import ActionForm
+from app.ui.panels.control import module_options, option_slot
+from app.ui.panels.per_client import Instructor
+from app.ui.panels.widgets import set_options
+from devices.device import Action
+
+Rail = Callable[[], Sequence[Mapping[str, Any]]]
+
+
+class _Copy:
+    """One connection's picker and form, and the actions its module takes (once read)."""
+
+    def __init__(self) -> None:
+        self.module: Any = None
+        self.form: ActionForm | None = None
+        self.available: list[str] | None = None  # parked by the simulation thread
+
+
+class ModuleFaults:
+    def __init__(
+        self,
+        instructor: Instructor,
+        runtime: Runtime,
+        sender: CommandSender,
+        device_id: str,
+        actions: Mapping[str, Action],
+        rail: Rail,
+    ) -> None:
+        self._runtime, self._sender, self._id = runtime, sender, device_id
+        self._actions = dict(actions)
+        self._rail = rail
+        self._lock = threading.Lock()
+        self._part = instructor.part(self._build)
+
+    def _build(self, gui: Any) -> _Copy:
+        copy = _Copy()
+        with gui.add_folder("Module faults", expand_by_default=False):
+            copy.module = gui.add_dropdown(
+                "Module",
+                tuple(module_options(self._rail())) or ("1",),
+                hint="the module the fault goes on",
+            )
+            copy.form = ActionForm(
+                gui,
+                self._actions,
+                lambda client, name, args: self._apply(copy, client, name, args),
+                label="Fault action",
+            )
+        copy.module.on_update(lambda _event: self._read(copy))
+        self._read(copy)
+        return copy
+
+    def _apply(
+        self, copy: _Copy, client: viser.ClientHandle | None, action: str, args: dict[str, Any]
+    ) -> None:
+        slot = option_slot(str(copy.module.value))
+        if slot is not None:
+            self._sender.send(client, f"{self._id}/{slot}", action, args)
+
+    def _read(self, copy: _Copy) -> None:
+        """Ask the model which actions the picked module takes (its type decides)."""
+        slot = option_slot(str(copy.module.value))
+        entry = next((e for e in self._rail() if e.get("slot") == slot), None)
+        if slot is None or not (entry and entry.get("type")):
+            self._park(copy, [])
+            return
+        device = self._id
+
+        def read() -> list[str]:
+            return list(self._runtime.rig.device(device).rail_module(slot).available_actions())
+
+        self._sender.submit(
+            None, "module actions", read, done=lambda names: self._park(copy, names)
+        )
+
+    def _park(self, copy: _Copy, names: list[str]) -> None:
+        with self._lock:
+            copy.available = names
+
+    def update(self, rail_changed: bool) -> None:
+        """Per frame: new rail options (then a new read), and the parked actions shown."""
+        options = module_options(list(self._rail())) if rail_changed else None
+        for copy in self._part.each():
+            if options is not None:
+                set_options(copy.module, options)
+                self._read(copy)
+            with self._lock:
+                available, copy.available = copy.available, None
+            if available is not None and copy.form is not None:
+                copy.form.restrict(available)

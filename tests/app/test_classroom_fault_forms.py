@@ -1,0 +1,156 @@
+"""The instructor's own fault forms act on what the instructor picked in them, and a trainee
+keeps the operator's forms (docs/classroom.md "What a trainee does not see").
+
+With a token the FastCAT's Module I/O and the drive's Other drive actions keep only what an
+operator does; their fault actions, and the Line tab's slave fault forms, are a form per
+instructor connection with pickers of its own (Module; Device and Target). Driven as the
+browsers drive them: through the websocket, the instructor's widgets found in its own page.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+from test_classroom_leak import TOKEN, Page, _try, _wait
+
+from app.classroom.roles import Access, Role
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[ServedRig, Page, Page]]:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    trainee, instructor = Page(live.port), Page(live.port)
+    try:
+        clients = _wait(lambda: len(live.server.get_clients()) == 2 and live.server.get_clients())
+        first, second = sorted(clients)
+        assert live.classroom.access.present(second, TOKEN)
+        live.classroom._promoted(clients[second])
+        assert live.classroom.access.role(first) is Role.TRAINEE
+        for target, action, args in (
+            ("fastcat", "power", {"on": True}),
+            ("master", "set_target", {"state": "OP"}),
+        ):
+            live.runtime.command(target, action, args).result(timeout=10)
+        live.runtime.advance(3_000_000).result(timeout=30)
+        _wait(lambda: _try(instructor.last, "Module", "4 AI8D"))
+        yield live, trainee, instructor
+    finally:
+        trainee.close()
+        instructor.close()
+        live.stop()
+
+
+def _apply(page: Page, picker: str, action: str, params: dict[str, Any]) -> None:
+    """Pick ``action`` in the form whose picker is ``picker`` (a uuid), fill its parameters
+    (built anew when the pick changes: the rows after it) and click Apply."""
+    shown = [
+        m.get("value") for m in page.received() if m.get("uuid") == picker and "props" in m
+    ] + page.updates(picker)
+    before = 0 if shown[-1] == action else len(page.received())
+    page.set(picker, action)
+    picked = next(m for m in page.received() if m.get("uuid") == picker)
+    container = picked["container_uuid"]
+    folder = next(
+        m["uuid"]
+        for m in page.received()
+        if m.get("container_uuid") == container
+        and (m.get("props") or {}).get("label") == "Parameters"
+    )
+    for label, value in params.items():
+        param = _wait(
+            lambda label=label: next(
+                (
+                    m["uuid"]
+                    for m in reversed(page.received()[before:])
+                    if m.get("container_uuid") == folder
+                    and (m.get("props") or {}).get("label") == label
+                ),
+                None,
+            )
+        )
+        page.set(param, value)
+    time.sleep(0.3)  # the values arrive before the click
+    apply = next(
+        m["uuid"]
+        for m in page.received()
+        if m.get("container_uuid") == container and (m.get("props") or {}).get("label") == "Apply"
+    )
+    page.set(apply, True)
+
+
+def _in(page: Page, folder: str, label: str) -> str:
+    """The uuid of the widget ``label`` in the page's newest folder titled ``folder``."""
+    uuid = next(
+        m["uuid"]
+        for m in reversed(page.received())
+        if m.get("type") == "GuiFolderMessage" and (m.get("props") or {}).get("label") == folder
+    )
+    return str(
+        next(
+            m["uuid"]
+            for m in page.received()
+            if m.get("container_uuid") == uuid and (m.get("props") or {}).get("label") == label
+        )
+    )
+
+
+def _read(live: ServedRig, fn: Any) -> Any:
+    return live.runtime.submit(lambda: fn(live.rig)).result(timeout=10)
+
+
+def test_the_instructor_fails_the_module_picked_in_its_own_form(
+    served: tuple[ServedRig, Page, Page],
+) -> None:
+    live, _trainee, instructor = served
+    instructor.set(_in(instructor, "Module faults", "Module"), "4 AI8D")
+    time.sleep(0.3)
+    _apply(
+        instructor,
+        _in(instructor, "Module faults", "Fault action"),
+        "module_failure",
+        {"active": True},
+    )
+    _wait(lambda: _read(live, lambda rig: rig.device("fastcat").rail_module(4).failed))
+    assert not _read(live, lambda rig: rig.device("fastcat").rail_module(1).failed)
+
+
+def test_the_instructor_injects_a_drive_alarm_from_its_own_form(
+    served: tuple[ServedRig, Page, Page],
+) -> None:
+    live, _trainee, instructor = served
+    drive = live.dashboard.drives.selected  # type: ignore[union-attr]
+    _apply(
+        instructor, _in(instructor, "Drive faults", "Fault action"), "inject_alarm", {"code": "16"}
+    )
+    _wait(lambda: _read(live, lambda rig: rig.device(drive).snapshot()["injected"]))
+
+
+def test_a_trainee_keeps_the_operators_module_form(served: tuple[ServedRig, Page, Page]) -> None:
+    """set_input on a module: a sensor on an input, what an operator does with the rail."""
+    live, trainee, _instructor = served
+    module = trainee.widget("Module")  # the shared one: a trainee gets no other
+    trainee.set(module, "1 DB16")
+    time.sleep(0.3)
+    # Module I/O's picker (the drive's and the CPX-E-EC's forms have a set_input too), once
+    # it offers what a DB16 takes (the form follows the module picked).
+    picker = _in(trainee, "Module I/O", "Action")
+    _wait(
+        lambda: (
+            ["set_input"]
+            in [
+                m["updates"].get("options")
+                for m in trainee.received()
+                if m.get("uuid") == picker and "updates" in m
+            ]
+        )
+    )
+    time.sleep(0.3)
+    _apply(trainee, picker, "set_input", {"channel": 3, "value": True})
+    _wait(lambda: _read(live, lambda rig: rig.device("fastcat").rail_module(1)._dig().field[2]))
