@@ -132,6 +132,22 @@ def test_the_instructor_injects_a_drive_alarm_from_its_own_form(
     _wait(lambda: _read(live, lambda rig: rig.device(drive).snapshot()["injected"]))
 
 
+def test_the_instructor_injures_the_slave_and_module_picked_in_its_own_form(
+    served: tuple[ServedRig, Page, Page],
+) -> None:
+    live, _trainee, instructor = served
+    instructor.set(_in(instructor, "Slave faults", "Device"), "cpx")
+    instructor.set(_in(instructor, "cpx", "Target"), "cpx/3")
+    time.sleep(0.3)
+    _apply(
+        instructor,
+        _in(instructor, "cpx", "Fault action"),
+        "inject_fault",
+        {"fault": "module_failure"},
+    )
+    _wait(lambda: _read(live, lambda rig: rig.device("cpx").modules[2].failed))
+
+
 def test_a_trainee_keeps_the_operators_module_form(served: tuple[ServedRig, Page, Page]) -> None:
     """set_input on a module: a sensor on an input, what an operator does with the rail."""
     live, trainee, _instructor = served

@@ -191,6 +191,10 @@ def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
     instructor.set(_wait(lambda: _try(instructor.last, None, "module_failure")),
                    "module_failure")
     instructor.set(instructor.last(None, "inject_alarm"), "inject_alarm")
+    # The Line tab: the instructor picks the slave and the module to injure.
+    instructor.set(instructor.last("Device", "cpx"), "cpx")
+    time.sleep(0.3)
+    instructor.set(instructor.last("Target", "cpx/2"), "cpx/2")
     # An alarm cause put on the drive the Drive tab shows and taken away again (the
     # exercise's repair of a right answer does the same).
     drive = served.dashboard.drives.selected  # type: ignore[union-attr]
@@ -277,6 +281,14 @@ def test_a_trainee_is_offered_no_fault_action(pages: tuple[Page, Page]) -> None:
     picked = values(trainee)
     for pick in ("module_failure", "inject_alarm", "4 AI8D"):
         assert pick not in picked, pick
+
+
+def test_a_trainee_does_not_see_the_slave_picked_to_injure(pages: tuple[Page, Page]) -> None:
+    """The Line tab's Device and Target pickers were the ones a fault form acted on: picking
+    cpx and its module 2 to injure moved them on every page."""
+    trainee, _instructor = pages
+    assert "cpx/2" not in values(trainee)
+    assert "cpx" not in trainee.updates(trainee.widget("Device", "cpx"))
 
 
 def test_a_trainee_is_not_told_a_cause_was_removed(pages: tuple[Page, Page]) -> None:

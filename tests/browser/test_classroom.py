@@ -127,13 +127,13 @@ def test_trainee_injection_refused_instructor_allowed_download(
                          ("Target state", "ESC counters of"))}
         # A folder whose every row is the instructor's goes as a whole (no empty title); a
         # folder that keeps a trainee's row stays.
-        # The fault actions of Module I/O and Other drive actions are the instructor's own
-        # forms.
+        # The fault actions of Module I/O and Other drive actions, and the slaves' fault
+        # forms with their own Device and Target pickers, are the instructor's own forms.
         folders = {"FastCAT": (("Module faults",),
                                ("Faults", "Modules", "Address and causes", "Module I/O")),
                    "Servo drive": (("Alarms and load", "Drive faults"),
                                    ("Motion", "Other drive actions")),
-                   "Line": (("Cables and power", "Frames and DC", "trscat faults"),
+                   "Line": (("Cables and power", "Frames and DC", "Slave faults"),
                             ("Master", "Slave actions", "trscat"))}
         for tab, (hidden, shown) in tabs.items():
             for page in pages:  # a tab's widgets are in the page once it was opened

@@ -157,6 +157,7 @@ class LineControls:
         # Each device's latest snapshot: a form starts from the present values (Param.current).
         self._snapshots: dict[str, Mapping[str, Any]] = dict(devices)
         faulty = [d for d in order if d not in own_tabs]
+        fault_tables: dict[str, Mapping[str, Action]] = {}
         with gui.add_folder("Slave actions"):
             self.picker = gui.add_dropdown("Device", tuple(faulty) or ("-",))
             for device in faulty:
@@ -172,13 +173,18 @@ class LineControls:
                     apply = self._applier(sender, target)
                     form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
                                       apply, current=self._current(device))
-                    # The instructor's: its folder goes from a trainee's page as a whole
-                    # (rebuilt parameter rows and all; docs/classroom.md).
-                    part = instructor.part(self._fault_folder(device, faults, apply))
+                    if instructor.shared:  # an open rig: under the shared Target, as before
+                        part = instructor.part(self._fault_folder(device, faults, apply))
+                        self.fault_forms[device] = part.each()[0]
+                        self.instructor_only += self.fault_forms[device].handles
+                    else:
+                        fault_tables[device] = faults
                 self.forms[device] = (folder, form)
-                if instructor.shared:
-                    self.fault_forms[device] = part.each()[0]
-                    self.instructor_only += self.fault_forms[device].handles
+        # With a token the fault forms are the instructor's whole, with a Device and a Target
+        # picker of their own: picking the slave to injure in the shared ones moved every
+        # trainee's page (docs/classroom.md).
+        self._injure = None if instructor.shared else instructor.part(
+            lambda gui: self._injure_form(gui, sender, fault_tables, devices))
 
         @clear_esc.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -257,6 +263,30 @@ class LineControls:
             with gui.add_folder(f"{device} faults", expand_by_default=False):
                 return ActionForm(gui, faults, apply, label="Fault action")
         return build
+
+    def _injure_form(self, gui: Any, sender: CommandSender,
+                     tables: Mapping[str, Mapping[str, Action]],
+                     devices: Mapping[str, Mapping[str, Any]]) -> dict[str, ActionForm]:
+        """One instructor connection's "Slave faults": its Device picker, and per slave a
+        Target picker and the fault form acting on it."""
+        folders: dict[str, Any] = {}
+        forms: dict[str, ActionForm] = {}
+        with gui.add_folder("Slave faults", expand_by_default=False):
+            picker = gui.add_dropdown("Device", tuple(tables) or ("-",))
+            for device, faults in tables.items():
+                folders[device] = gui.add_folder(device, visible=device == picker.value)
+                with folders[device]:
+                    target = gui.add_dropdown("Target", tuple(targets(
+                        device, self._snapshots.get(device) or devices.get(device) or {})))
+                    forms[device] = ActionForm(gui, faults, self._applier(sender, target),
+                                               label="Fault action")
+
+        @picker.on_update
+        def _(event: viser.GuiEvent) -> None:
+            for name, folder in folders.items():
+                folder.visible = name == picker.value
+
+        return forms
 
     def _current(self, device: str) -> Any:
         return lambda: self._snapshots.get(device)
