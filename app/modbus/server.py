@@ -17,6 +17,8 @@ says why:
   length outside 2..254 closes the connection at once (pymodbus would wait for more data, or
   cut the stream at a wrong place, and silently lose the valid frames behind it), and it
   lifts pymodbus's 264-byte receive limit, which flushed a long pipeline of valid frames.
+  With RTU framing it drops part of a frame left waiting through a pause of
+  :data:`RTU_SILENCE_S`: an incomplete frame, which pymodbus would glue to the next one.
 """
 
 from __future__ import annotations
@@ -58,6 +60,11 @@ MBAP_RECEIVE_BUFFER = 1 << 20
 # answered, reads and drops what the client still sends, and closes after this long: closing
 # at once with unread input would reset the connection and lose those replies in transit.
 BROKEN_STREAM_LINGER_S = 2.0
+# RTU framing over TCP has no character clock. Part of a frame that waits this long for its
+# rest is a frame cut by a silence: "dichiarato incompleto e ... scartato" (seed 004 ch.2, RTU
+# transmission mode). Far above a TCP segment's jitter, far below the ~1 s a master waits
+# before it retransmits ("Master": response timeout 1 s, turnaround 100-200 ms).
+RTU_SILENCE_S = 0.1
 
 
 class _RawPdu(ModbusPDU):
@@ -93,6 +100,7 @@ class _DriveRequestHandler(ServerRequestHandler):
             self.max_buffer_size = MBAP_RECEIVE_BUFFER
         self.in_flight = 0  # requests taken, not yet answered (or silenced)
         self._broken = False  # a broken MBAP header came: nothing more is served
+        self._last_data_s = 0.0  # RTU: when the last bytes came (time.monotonic)
 
     def begin(self) -> None:
         self.in_flight += 1
@@ -101,6 +109,17 @@ class _DriveRequestHandler(ServerRequestHandler):
         self.in_flight -= 1
         if self._broken and not self.in_flight:
             self._hang_up()
+
+    def datagram_received(self, data: bytes, addr: tuple | None) -> None:
+        if not self._mbap:
+            now = time.monotonic()
+            if self.recv_buffer and now - self._last_data_s > RTU_SILENCE_S:
+                # ch.2: a frame cut by a silence is incomplete and discarded; pymodbus would
+                # glue it to the next frame and lose that one too (a master's retransmission)
+                logger.debug("incomplete RTU frame %s discarded", self.recv_buffer.hex(" "))
+                self.recv_buffer = b""
+            self._last_data_s = now
+        super().datagram_received(data, addr)
 
     def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
         # pymodbus frames one request per call; take every complete one in the buffer, so that

@@ -1,0 +1,101 @@
+"""An incomplete RTU frame on the drive's line (seed 004 ch.2 "RTU transmission mode").
+
+"Se fra la trasmissione di due byte trascorre un intervallo temporale superiore a 1,5
+caratteri, il messaggio viene dichiarato incompleto e viene scartato dal ricevitore: non viene
+generata dunque nessuna risposta per il master." A master whose request was cut (a noise burst,
+a cable pulled mid-frame) times out and sends it again ("può essere eseguita una
+ritrasmissione"): the drive must answer that retransmission. RTU framing over TCP has no
+character clock; a pause of :data:`app.modbus.server.RTU_SILENCE_S` with part of a frame in the
+buffer stands for the silence (docs/modbus.md "Node numbers and the line").
+"""
+
+from __future__ import annotations
+
+import socket
+import time
+from collections.abc import Iterator
+
+import pytest
+from pymodbus.framer import FramerRTU
+from sim_helpers import FakeDrive, SimThread
+
+from app.modbus.server import RTU_SILENCE_S, DriveModbusServer
+
+h = bytes.fromhex
+PAUSE_S = 3 * RTU_SILENCE_S  # a master's pause: well past the silence
+QUIET_S = 0.3  # how long a test waits to call "no reply" silence
+REPLY_S = 3.0
+
+
+def rtu(unit: int, pdu: str) -> bytes:
+    body = bytes((unit,)) + h(pdu)
+    return body + FramerRTU.compute_CRC(body).to_bytes(2, "big")
+
+
+READ_D3 = rtu(5, "03 0003 0001")
+D3_IS_50 = rtu(5, "03 02 0032")
+
+
+@pytest.fixture(params=["submit", "call"])
+def port(request: pytest.FixtureRequest) -> Iterator[int]:
+    """An RTU-over-TCP line with a drive at node 5, served as ``python -m app`` does (``call``)
+    or through the simulation thread's queue (``submit``)."""
+    drives = [FakeDrive.default(node_id=5)]
+    with SimThread(drives) as sim:
+        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer="rtu",
+                                   call=sim.call if request.param == "call" else None)
+        server.start_in_thread()
+        try:
+            yield server.port
+        finally:
+            server.stop_in_thread()
+
+
+def receive(sock: socket.socket, wait: float) -> bytes:
+    data = b""
+    sock.settimeout(wait)
+    try:
+        while chunk := sock.recv(512):
+            data += chunk
+            sock.settimeout(0.05)  # a reply is one write: stop once the line is quiet
+    except TimeoutError:
+        pass
+    return data
+
+
+def connect(port: int) -> socket.socket:
+    sock = socket.create_connection(("127.0.0.1", port), timeout=REPLY_S)
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # each write its own segment
+    return sock
+
+
+@pytest.mark.parametrize("cut", [1, 2, 4, 6], ids=lambda n: f"{n}-bytes")
+def test_the_retransmission_after_an_incomplete_frame_is_answered(port: int, cut: int) -> None:
+    """The first ``cut`` bytes of a request, a pause, then the master sends it again in full."""
+    with connect(port) as sock:
+        sock.sendall(rtu(5, "06 0003 000A")[:cut])
+        assert receive(sock, QUIET_S) == b""
+        time.sleep(PAUSE_S)
+        sock.sendall(READ_D3)
+        assert receive(sock, REPLY_S) == D3_IS_50
+
+
+def test_a_frame_split_by_a_silence_is_incomplete_and_gets_no_reply(port: int) -> None:
+    """Both halves are discarded (the second alone is garbage); nothing is written."""
+    write = rtu(5, "06 0003 000A")
+    with connect(port) as sock:
+        sock.sendall(write[:3])
+        time.sleep(PAUSE_S)
+        sock.sendall(write[3:])
+        assert receive(sock, QUIET_S) == b""
+        time.sleep(PAUSE_S)
+        sock.sendall(READ_D3)
+        assert receive(sock, REPLY_S) == D3_IS_50
+
+
+def test_a_frame_in_pieces_without_a_silence_is_one_frame(port: int) -> None:
+    """TCP may cut a frame into segments: pieces that follow at once are still one frame."""
+    with connect(port) as sock:
+        for i in range(0, len(READ_D3), 2):
+            sock.sendall(READ_D3[i:i + 2])
+        assert receive(sock, REPLY_S) == D3_IS_50
