@@ -57,6 +57,9 @@ class Positioner(Mode):
 
     def new_set_point(self, d: ServoDrive) -> None:
         if not d.motion_allowed:
+            # Pos_str returns to zero by itself (ch. 2) even when the drive cannot start:
+            # the start is consumed, so the master's next Pos_str is a fresh 0 -> 1 edge
+            d.set_point_taken()
             return
         value = d.reg(R.AUX_IN_1) if d.input_level("select") else d.reg(R.TARGET_POSITION)
         if d.cw & ds402.CW_RELATIVE:  # from the last target, or from here after a stop
