@@ -13,6 +13,9 @@ Stepped after its drive and before the master, like the CANopen node.
   with ``write_outputs``; it is applied in OP only, through the same object dictionary as an
   SDO, and it is the drive's Sync (SM-Synchron). Inputs are valid from SAFEOP. No frame for
   the SM watchdog time in OP: back to SAFEOP with 0x001B and alarm 34 (sync timeout).
+- A drive alarm of its controller (7, 30-32: esm.CONTROLLER_ALARMS) takes the process data
+  away: SAFEOP / OP -> PREOP with 0x002B, SAFEOP refused until the alarm is reset; the
+  mailbox goes on. Any other drive alarm is the CiA 402 Fault only (ETG.6010): OP stays.
 - Mailbox: SDO upload / download / info over the dictionary of devices/coe/objects.py;
   emergencies with the 0x603F codes (8-byte frames).
 
@@ -38,12 +41,14 @@ from devices.coe.emergency import EmergencyMailbox
 from devices.coe.esm import (
     INVALID_INPUT_MAPPING,
     INVALID_OUTPUT_MAPPING,
+    NO_VALID_INPUTS_AND_OUTPUTS,
     NO_VALID_OUTPUTS,
     RANK,
     SM_WATCHDOG,
     TRANSITION_CHECKS,
     ErrorKind,
     Esm,
+    controller_alarm,
     request_refusal,
 )
 from devices.coe.leds import LedInputs, alarm_led, wanted_patterns
@@ -276,6 +281,12 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.drive.raise_alarm(MAPPING_ALARM, lasting=True)
         return code
 
+    def check_controller(self) -> int | None:
+        """No step up to process data while the drive's controller is in alarm."""
+        if controller_alarm(self.drive.alarms.latched) is None:
+            return None
+        return NO_VALID_INPUTS_AND_OUTPUTS
+
     def check_outputs(self) -> int | None:
         """SAFEOP -> OP: the master must be sending process data (SM2) already."""
         if not self.rx_assigned:
@@ -313,6 +324,21 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self._leave_op()
         self.esm.fall(AlState.SAFEOP, SM_WATCHDOG, ErrorKind.WATCHDOG, self.now_us)
 
+    def _check_controller(self) -> None:
+        """SAFEOP / OP with a controller alarm latched: no valid process data, back to PREOP."""
+        if self.esm.state not in SAFEOP_OR_HIGHER:
+            return
+        code = controller_alarm(self.drive.alarms.latched)
+        if code is None:
+            return
+        self.drive.log(f"EtherCAT: alarm {code}: no valid inputs and outputs (0x002B): "
+                       f"{self.esm.state.label} -> PREOP")
+        if self.esm.state is AlState.OP:
+            self._leave_op()
+        # a local error (ETG.1300 single flash); the latched alarm lights ERR on over it
+        self.esm.fall(AlState.PREOP, NO_VALID_INPUTS_AND_OUTPUTS, ErrorKind.LOCAL, self.now_us)
+        self.inputs, self._inputs_due = None, False
+
     # ---- time ---------------------------------------------------------------------------------
     def step(self, now_us: int) -> None:
         # DeviceModel.step, _follow_power's and _check_watchdog's first tests and _refresh's
@@ -328,6 +354,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
             last = self.last_frame_us
             if self.esm.state is AlState.OP and (last is None or now_us - last > SM_WATCHDOG_US):
                 self._check_watchdog()
+            if drive.alarms.latched:  # empty in the usual case
+                self._check_controller()
             # watch() only when the latched alarms differ from the ones it saw (cheap check)
             seen = drive.alarms.latched if drive.powered else []
             if seen != self.emergencies.known and self.esm.at_least(AlState.PREOP):

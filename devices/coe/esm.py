@@ -29,14 +29,25 @@ NO_VALID_OUTPUTS = 0x0019  # SAFEOP -> OP without process data from the master
 SM_WATCHDOG = 0x001B  # OP: no process data for the SM watchdog time
 INVALID_INPUT_MAPPING = 0x0024  # PREOP -> SAFEOP: a TxPDO assignment that cannot work
 INVALID_OUTPUT_MAPPING = 0x0025  # PREOP -> SAFEOP: an RxPDO assignment that cannot work
+NO_VALID_INPUTS_AND_OUTPUTS = 0x002B  # ETG.1000.6: O, S -> PREOP + error; P -> S refused
+
+# Ch. 5 "Codici allarmi specifici": the drive alarms that take the process data away. 7
+# "Processore DSP in fault" is the controller that makes them (statusword, positions, the
+# set-points' consumer); 30-32 are the link between it and the EtherCAT interface ("Timeout /
+# Errore 1 / Errore 2 comunicazione interna al drive"). The interface itself still runs: its
+# mailbox carries their 0x603F codes and emergencies and the reset "via coe" (ch. 5 "Reset
+# allarmi"), so the slave leaves SAFEOP / OP for PREOP with 0x002B and stays there until the
+# alarm is reset (docs/ethercat-coe.md "Drive alarms and the EtherCAT side").
+CONTROLLER_ALARMS: frozenset[int] = frozenset({7, 30, 31, 32})
 
 # Ch. 5 "Transizioni": what the slave verifies before it acknowledges a step up, in order (the
 # names are methods of the slave returning None or the refusing AL status code). I -> P has
 # nothing the drive can refuse: the master only sets up the mailbox sync managers.
 TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
     (AlState.INIT, AlState.PREOP): (),
-    (AlState.PREOP, AlState.SAFEOP): ("check_output_mapping", "check_input_mapping"),
-    (AlState.SAFEOP, AlState.OP): ("check_outputs",),
+    (AlState.PREOP, AlState.SAFEOP): ("check_controller", "check_output_mapping",
+                                      "check_input_mapping"),
+    (AlState.SAFEOP, AlState.OP): ("check_controller", "check_outputs"),
 }
 
 RANK = esm.RANK
@@ -49,6 +60,15 @@ class ErrorKind(enum.Enum):
     REFUSED = "refused"  # a requested transition refused (invalid configuration)
     LOCAL = "local"  # the slave left its state on its own
     WATCHDOG = "watchdog"  # ... because the process data stopped (SM watchdog)
+
+
+def controller_alarm(latched: list[int]) -> int | None:
+    """The first latched alarm of CONTROLLER_ALARMS, None when there is none (the usual case,
+    asked every step: an empty list answers at once)."""
+    for code in latched:
+        if code in CONTROLLER_ALARMS:
+            return code
+    return None
 
 
 request_refusal = esm.request_refusal  # ch. 5, no BOOT: 0x0013; outside the table: 0x0011

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from devices.coe.esm import ErrorKind
+from devices.coe.esm import CONTROLLER_ALARMS, ErrorKind
 from devices.ethercat import AlState
 from devices.leds import LedPattern
 from devices.servo.leds import ERROR, LINK, STATUS
@@ -30,13 +30,13 @@ ERROR_BY_KIND: dict[ErrorKind, LedPattern] = {
     ErrorKind.WATCHDOG: LedPattern.DOUBLE_FLASH,
 }
 # The drive alarms (ch. 5 "Codici allarmi specifici") that are an ETG.1300 ERR cause by
-# themselves: on = application controller failure (7 "Processore DSP in fault"; 30-32 the
-# drive's internal communication, the controller behind the ESC not answering), flickering =
-# booting error (35 "Errore caricamento eeprom ethercat"). 33 / 34 come with their ESM error
-# (refused SAFEOP, SM watchdog). Every other alarm leaves EtherCAT in working order: off.
+# themselves: on = application controller failure (CONTROLLER_ALARMS: 7 "Processore DSP in
+# fault", 30-32 the drive's internal communication; on in any ESM state, PREOP included),
+# flickering = booting error (35 "Errore caricamento eeprom ethercat"). 33 / 34 come with
+# their ESM error (refused SAFEOP, SM watchdog). Every other alarm leaves EtherCAT in working
+# order: off.
 ERROR_BY_ALARM: dict[int, LedPattern] = {
-    7: LedPattern.ON, 30: LedPattern.ON, 31: LedPattern.ON, 32: LedPattern.ON,
-    35: LedPattern.FLICKERING,
+    **dict.fromkeys(sorted(CONTROLLER_ALARMS), LedPattern.ON), 35: LedPattern.FLICKERING,
 }
 # ETG.1300 ERR rows, most severe first (as the CPX-E-EC's Tab. 12, docs/cpx-e-ec.md choice 29)
 _SEVERITY = (LedPattern.ON, LedPattern.FLICKERING, LedPattern.BLINKING,

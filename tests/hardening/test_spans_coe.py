@@ -32,6 +32,7 @@ from devices.flash import MemoryFlash
 from devices.servo.drive import DriveConfig, ServoDrive
 
 MS = 1_000
+ALARMS = ("16", "34", "7")  # an event alarm, the sync timeout, a controller alarm
 INIT, PREOP, SAFEOP, OP = AlState.INIT, AlState.PREOP, AlState.SAFEOP, AlState.OP
 FAR = 1 << 50
 
@@ -156,8 +157,8 @@ def random_op(rng: random.Random) -> tuple[str, Op]:
         (1, "read_object", lambda: _apply(slave, "read_object", index=0x1001, sub=0)),
         (1, "slot", lambda: _apply(slave, "select_slot", slot=rng.choice(
             ("position", "interpolated", "velocity", "csp")))),
-        (2, "alarm", lambda: _apply(drive, "inject_alarm", code=rng.choice(("16", "34")))),
-        (2, "clear_alarm", lambda: _apply(drive, "clear_alarm", code=rng.choice(("16", "34")))),
+        (2, "alarm", lambda: _apply(drive, "inject_alarm", code=rng.choice(ALARMS))),
+        (2, "clear_alarm", lambda: _apply(drive, "clear_alarm", code=rng.choice(ALARMS))),
         (2, "alarm_reset", lambda: _apply(drive, "alarm_reset")),
         (2, "nothing", lambda: (lambda rig: None)),
     ]

@@ -183,6 +183,110 @@ def test_an_application_controller_failure_outranks_an_esm_error() -> None:
     assert bench.slave.leds.snapshot()["Error"] == "on"
 
 
+# Ch. 5 "Codici allarmi specifici": 7 "Processore DSP in fault" and 30-32 the drive's internal
+# communication: the controller that makes the process data (statusword, positions) is gone
+# behind the EtherCAT interface. The interface keeps its mailbox (PREOP: 0x603F and the
+# emergency are how the table's codes reach the master, "Reset allarmi" goes "via coe"), but
+# no input or output can be valid: ETG.1000.6 0x002B "No Valid Inputs and Outputs", O / S ->
+# PREOP + error. docs/ethercat-coe.md "Drive alarms and the EtherCAT side".
+CONTROLLER_ALARMS = {7: 0x5220, 30: 0x1000, 31: 0x7500, 32: 0x7500}
+
+
+@pytest.mark.parametrize(("code", "error_code"), CONTROLLER_ALARMS.items())
+@pytest.mark.parametrize("start", [SAFEOP, OP])
+def test_a_controller_alarm_drops_the_slave_to_preop_with_0x002b(
+        start: AlState, code: int, error_code: int) -> None:
+    bench = make_bench()
+    bench.up_to(start)
+    bench.drive.apply("inject_alarm", {"code": str(code)})
+    bench.run(1)
+    slave = bench.slave
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (PREOP, 0x12, 0x002B)
+    assert slave.read_inputs() is None
+    assert slave.leds.snapshot() == {"L/A": "flickering", "Status": "blinking", "Error": "on"}
+    assert bench.read(0x603F) == error_code  # the mailbox still answers
+    assert [frame[:2] for frame in bench.emergencies] == [error_code.to_bytes(2, "little")]
+    assert bench.kinds("al_status")[-1]["code"] == "0x002B"
+    assert bench.kinds("state")[-1]["to"] == "PREOP"
+    assert any(f"alarm {code}" in e["text"] and "0x002B" in e["text"]
+               for e in bench.kinds("log"))
+
+
+def test_after_the_reset_err_shows_the_local_error_until_the_master_acknowledges() -> None:
+    """ETG.1300: ERR on while the controller alarm lasts; once it is reset the fall itself is
+    left, "local error" (single flash: the slave changed its state on its own), with the error
+    flag and 0x002B, until the master requests a state (acknowledge)."""
+    bench = make_bench()
+    bench.up_to(OP)
+    bench.drive.apply("inject_alarm", {"code": "30"})
+    bench.run(1)
+    bench.drive.apply("clear_alarm", {"code": "30"})
+    bench.cw(0x0080, 0x0000)
+    assert bench.drive.alarms.latched == []
+    assert (bench.slave.al_status, bench.slave.al_status_code) == (0x12, 0x002B)
+    assert bench.slave.leds.snapshot()["Error"] == "single_flash"
+    bench.go(PREOP)
+    assert (bench.slave.al_status, bench.slave.al_status_code) == (0x02, 0)
+    assert bench.slave.leds.snapshot()["Error"] == "off"
+
+
+def test_safeop_refused_while_a_controller_alarm_is_latched_then_reset_over_coe() -> None:
+    """Ch. 5 "Reset allarmi": "via coe ... scrittura 0x80 su oggetto 0x6040" in PREOP."""
+    bench = make_bench()
+    bench.up_to(PREOP)
+    bench.drive.apply("inject_alarm", {"code": "31"})
+    bench.run(1)
+    assert bench.slave.al_state is PREOP and bench.slave.al_status_code == 0
+    bench.go(SAFEOP)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (PREOP, 0x002B)
+    assert bench.slave.leds.snapshot()["Error"] == "on"
+    bench.cw(0x0080, 0x0000)
+    bench.go(SAFEOP)
+    assert bench.slave.al_status_code == 0x002B  # the cause is still there
+    bench.drive.apply("clear_alarm", {"code": "31"})
+    bench.cw(0x0080, 0x0000)
+    assert bench.drive.alarms.latched == []
+    bench.go(PREOP, SAFEOP, OP)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (OP, 0)
+    assert bench.slave.leds.snapshot()["Error"] == "off"
+
+
+@pytest.mark.parametrize("code", [1, 2, 5, 9, 16, 20, 26, 35])
+def test_a_drive_alarm_leaves_the_esm_in_op(code: int) -> None:
+    """ETG.6010: a fault of the drive is the CiA 402 Fault, 0x603F and the emergency; the ESM
+    stays in OP so the master can read and reset it through the process data."""
+    bench = make_bench()
+    bench.up_to(OP)
+    bench.drive.apply("inject_alarm", {"code": str(code)})
+    bench.run(5)
+    assert bench.drive.state.label == "Fault"
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (OP, 0)
+    assert bench.inputs("<Hi")[0] & 0x0008  # statusword bit 3 Fault, through the process data
+
+
+def test_the_built_in_master_keeps_a_controller_alarm_in_preop_until_reset() -> None:
+    bench = make_bench()
+    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
+                            retry_interval_us=200_000)
+    bench.cycling = False
+
+    def run(ms: int) -> None:
+        for _ in range(ms):
+            bench.step()
+            master.step(bench.t_us)
+
+    run(1000)
+    assert bench.slave.al_state is OP
+    bench.drive.apply("inject_alarm", {"code": "7"})
+    run(1000)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (PREOP, 0x002B)
+    bench.drive.apply("clear_alarm", {"code": "7"})
+    bench.write(0x6040, 0, 0x0080, 2)
+    bench.write(0x6040, 0, 0x0000, 2)
+    run(1000)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (OP, 0)
+
+
 def test_silent_unless_c9_was_ethercat_at_power_up() -> None:
     """Ch. 5: "Parametro drive C9 = 11 (modalità ethercat)", read at power-up (ch. 2, 4)."""
     bench = make_bench(fieldbus="modbus")

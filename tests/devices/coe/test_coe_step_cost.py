@@ -34,6 +34,7 @@ class PlainSlave(DriveEcatSlave):
         drive = self.drive
         if self.on_line:
             self._check_watchdog()
+            self._check_controller()
             seen = drive.alarms.latched if drive.powered else []
             if seen != self.emergencies.known and self.esm.at_least(AlState.PREOP):
                 for frame in self.emergencies.watch(drive):
@@ -81,7 +82,7 @@ def operate(bench: Bench, rng: random.Random) -> None:
     elif op == 6:
         action = rng.choice(("inject_alarm", "clear_alarm"))
         with contextlib.suppress(CommandError):
-            drive.apply(action, {"code": rng.choice(("4", "16"))})
+            drive.apply(action, {"code": rng.choice(("4", "16", "7"))})
     elif op == 7:
         with contextlib.suppress(CommandError):
             drive.apply("alarm_reset", {})
