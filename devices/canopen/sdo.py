@@ -24,6 +24,12 @@ What the shim adds, each for a reason the library leaves open:
   with a logged traceback. The shim follows the transfer from the answers it sends, and a
   client's "abort SDO transfer" ends it (the library only notes the code and would take the
   next segment into the aborted transfer).
+- Block upload: the drive has no block transfer (ch. 4, "supportato solo da alcuni
+  dispositivi"; its feature list names none). The library answers every block upload request
+  with a plain upload; DS 301 allows that switch only when the client's protocol switch
+  threshold (pst, byte 5 of the initiate request) is not 0 and the object is at most pst
+  bytes. Otherwise, and for a block upload's later requests, the answer is an abort 0x05040001
+  ("ogni richiesta deve essere risolta ... Tale risposta negativa si chiama abort", ch. 4).
 """
 
 from __future__ import annotations
@@ -42,6 +48,7 @@ SDO_RX_BASE = 0x600  # client -> server (request)
 SDO_TX_BASE = 0x580  # server -> client (response)
 _CCS_DOWNLOAD, _CCS_UPLOAD = 0x20, 0x40
 _CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT, _CCS_ABORT = 0x00, 0x60, 0x80
+_CCS_BLOCK_UPLOAD, _BLOCK_SUBCOMMAND = 0xA0, 0x03  # cs (bits 0-1) 0: the initiate request
 _SCS_UPLOAD_SEGMENT, _SCS_DOWNLOAD_SEGMENT, _SCS_UPLOAD, _SCS_DOWNLOAD, _SCS_ABORT = (
     0x00, 0x20, 0x40, 0x60, 0x80)
 _EXPEDITED, _SIZE_GIVEN, _LAST_SEGMENT = 0x02, 0x01, 0x01
@@ -120,7 +127,28 @@ class SdoChannel:
             self._size_given = bool(command & _SIZE_GIVEN) or not command & _EXPEDITED
             if not command & _EXPEDITED and not self._initiate_segmented(request):
                 return
+        if ccs == _CCS_BLOCK_UPLOAD and not self._may_switch_protocol(request):
+            return
         self.server.on_request(self.rx_cobid, request, 0.0)
+
+    def _may_switch_protocol(self, request: bytes) -> bool:
+        """A block upload request the library may answer with a plain upload (DS 301: an
+        initiate whose pst lets the object through); else the abort it is owed is sent."""
+        index, sub, pst = int.from_bytes(request[1:3], "little"), request[3], request[5]
+        code = AbortCode.INVALID_COMMAND
+        if not request[0] & _BLOCK_SUBCOMMAND:  # the initiate request names an object
+            try:
+                entry = self.dictionary.entry(index, sub)
+                if not entry.access.readable:
+                    raise SdoAbort(AbortCode.WRITE_ONLY, index, sub)
+                size = len(encode(entry.dtype, self.dictionary.read(index, sub)))
+            except SdoAbort as exc:
+                code = exc.code
+            else:
+                if pst and size <= pst:
+                    return True
+        self.server.abort(int(code))
+        return False
 
     def _initiate_segmented(self, request: bytes) -> bool:
         index, sub = int.from_bytes(request[1:3], "little"), request[3]

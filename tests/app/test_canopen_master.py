@@ -28,6 +28,7 @@ from pathlib import Path
 import can
 import canopen
 import pytest
+from canopen.sdo.exceptions import SdoAbortedError
 from canopen_master_process import EDS, NODE, SPEED
 
 from app.canopen_bus import CanBusError, CanOpenBus, open_bus
@@ -82,6 +83,12 @@ def test_remote_node_from_the_eds_talks_to_the_drive() -> None:
             remote.nmt.wait_for_bootup(5)
             assert remote.sdo[0x1018][1].raw == 0x078F
             assert remote.sdo[0x1008].raw == "SDrive"
+            # No block transfer in the drive: canopen's block upload (pst 0) gets the abort
+            # DS 301 owes it, not a plain upload answer it cannot parse
+            with pytest.raises(SdoAbortedError) as aborted:
+                remote.sdo[0x1008].open("rb", block_transfer=True)
+            assert aborted.value.code == 0x0504_0001
+            assert remote.sdo[0x1008].raw == "SDrive"  # the channel serves on
             remote.sdo[0x1017].raw = 50
             assert remote.nmt.wait_for_heartbeat(2) == "PRE-OPERATIONAL"
             remote.nmt.state = "OPERATIONAL"

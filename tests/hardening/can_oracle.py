@@ -14,6 +14,9 @@ and the transfer under way, which the oracle follows itself:
 - segments: 0x05040001 outside a transfer of their direction, 0x05030000 on a toggle error,
   else the next upload segment or the download confirmation (the last one writes the value,
   judged as above);
+- block upload (no block transfer in the drive): the plain upload above when the initiate
+  request's protocol switch threshold (pst, byte 5) is not 0 and the value is at most pst
+  bytes (DS 301), else 0x05040001, also for a block upload's later requests;
 - block download and command specifier 7: 0x05040001; a client's abort ends the transfer.
 """
 
@@ -30,6 +33,7 @@ NO_DATA = 0x0800_0024  # the library's "no data available" (an empty value)
 CCS_DOWNLOAD_SEGMENT, CCS_DOWNLOAD, CCS_UPLOAD, CCS_UPLOAD_SEGMENT = 0x00, 0x20, 0x40, 0x60
 CCS_ABORT, CCS_BLOCK_UPLOAD, CCS_BLOCK_DOWNLOAD, CCS_INVALID = 0x80, 0xA0, 0xC0, 0xE0
 EXPEDITED, SIZE_GIVEN, TOGGLE, LAST = 0x02, 0x01, 0x10, 0x01
+BLOCK_SUBCOMMAND = 0x03  # a block upload request's cs: 0 initiate, 1 end, 2 ack, 3 start
 WIDTH = {DataType.BOOLEAN: 1, DataType.INTEGER8: 1, DataType.UNSIGNED8: 1,
          DataType.INTEGER16: 2, DataType.UNSIGNED16: 2, DataType.INTEGER32: 4,
          DataType.UNSIGNED32: 4}
@@ -117,12 +121,18 @@ class SdoOracle:
         if ccs in (CCS_UPLOAD, CCS_BLOCK_UPLOAD, CCS_DOWNLOAD):
             if answer[1:4] != request[1:4]:
                 return "the answer names another object"
+            if ccs == CCS_BLOCK_UPLOAD and request[0] & BLOCK_SUBCOMMAND:
+                return _abort_is(answer, AbortCode.INVALID_COMMAND, "a block upload's "
+                                 "later request with no block upload under way")
             index, sub = int.from_bytes(request[1:3], "little"), request[3]
             must = _access_abort(node, index, sub, ccs == CCS_DOWNLOAD)
             if must is not None:
                 return None if aborted and code == must else f"expected abort 0x{must:08X}"
             if ccs == CCS_DOWNLOAD:
                 return self._initiate_download(node, request, answer, index, sub)
+            if ccs == CCS_BLOCK_UPLOAD and not _may_switch(node, index, sub, request[5]):
+                return _abort_is(answer, AbortCode.INVALID_COMMAND,
+                                 "a block upload its pst does not let switch")
             return self._initiate_upload(node, answer, index, sub)
         if ccs in (CCS_BLOCK_DOWNLOAD, CCS_INVALID):
             if answer[1:4] != request[1:4]:  # the abort names the request's object (ch. 4)
@@ -228,6 +238,18 @@ def _access_abort(node: CanOpenNode, index: int, sub: int, write: bool) -> int |
     if not write and not entry.access.readable:
         return int(AbortCode.WRITE_ONLY)
     return None
+
+
+def _may_switch(node: CanOpenNode, index: int, sub: int, pst: int) -> bool:
+    """DS 301: a server without block upload may answer with the plain protocol when pst is
+    not 0 and the value is at most pst bytes (a value it cannot read: the plain upload's
+    abort, judged there)."""
+    entry = node.dictionary.entry(index, sub)
+    try:
+        size = len(encode(entry.dtype, node.dictionary.read(index, sub)))
+    except SdoAbort:
+        return True
+    return bool(pst) and size <= pst
 
 
 def _abort_is(answer: bytes, code: int, why: str) -> str | None:

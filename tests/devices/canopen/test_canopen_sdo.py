@@ -100,8 +100,8 @@ def _state(bench) -> tuple:
 
 @pytest.mark.parametrize("request_hex", [
     "E0 00 10 00 00 00 00 00",  # no such command specifier
-    "C0 17 10 00 00 00 00 00",  # block download (not supported; a block upload switches to
-                                # the segmented protocol, as CiA 301 allows)
+    "C0 17 10 00 00 00 00 00",  # block download (not supported)
+    "A0 08 10 00 7F 00 00 00",  # block upload with pst = 0: no switch allowed (below)
 ])
 def test_an_unknown_command_aborts_naming_its_own_object(request_hex: str) -> None:
     """Ch. 4: the abort "deve avere anche l'indirizzo della voce del dizionario relativo
@@ -110,6 +110,36 @@ def test_an_unknown_command_aborts_naming_its_own_object(request_hex: str) -> No
         ("40 18 10 01 00 00 00 00", "43 18 10 01 8F 07 00 00"),
         (request_hex, f"80 {request_hex[3:11]} 01 00 04 05"),
     ])
+
+
+@pytest.mark.parametrize("steps", [
+    # pst = 0 ("change of transfer protocol not allowed"), with and without CRC support
+    [("A0 08 10 00 7F 00 00 00", "80 08 10 00 01 00 04 05")],
+    [("A4 18 10 01 7F 00 00 00", "80 18 10 01 01 00 04 05")],
+    # more bytes than the threshold: 0x1008 is 6 bytes, pst 4
+    [("A0 08 10 00 7F 04 00 00", "80 08 10 00 01 00 04 05")],
+    # within the threshold: the server switches to the expedited / segmented upload
+    [("A0 18 10 01 7F 04 00 00", "43 18 10 01 8F 07 00 00")],
+    [("A0 08 10 00 7F 06 00 00", "41 08 10 00 06 00 00 00"),
+     ("60 00 00 00 00 00 00 00", "03 53 44 72 69 76 65 00")],  # "SDrive"
+    # the object is checked first, as for any upload
+    [("A0 00 50 00 7F 00 00 00", "80 00 50 00 00 00 02 06")],
+    # a block upload's later requests (start, ack, end) with no block upload under way
+    [("A3 00 00 00 00 00 00 00", "80 00 00 00 01 00 04 05")],
+    # and the channel serves the next request as usual
+    [("A0 08 10 00 7F 00 00 00", "80 08 10 00 01 00 04 05"),
+     ("40 18 10 01 00 00 00 00", "43 18 10 01 8F 07 00 00")],
+])
+def test_block_upload_switches_protocol_only_within_the_threshold(steps) -> None:
+    """The drive has no SDO block transfer (ch. 4: "supportato solo da alcuni dispositivi";
+    the drive's feature list names none). DS 301 lets a server answer a block upload with the
+    expedited / segmented protocol only when the client's protocol switch threshold (pst,
+    byte 5) allows it: pst > 0 and the object no longer than pst bytes. Otherwise the request
+    cannot be served, and "ogni richiesta deve essere risolta ... Tale risposta negativa si
+    chiama abort" (ch. 4): 0x05040001. Before, every block upload got the plain upload answer,
+    which a client waiting for a block answer (canopen's BlockUploadStream, pst 0) takes for a
+    protocol error ("Unexpected response 0x41") instead of an abort."""
+    _script(make_bench(), steps)
 
 
 def test_toggle_bit_not_alternated() -> None:
