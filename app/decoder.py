@@ -284,8 +284,8 @@ def _number(value: int, digits: int) -> list[Meaning]:
 
 def al_status(code: int) -> list[Meaning]:
     """Seed 000 §7.7: the ETG codes, and the FastCAT's 0x80XX (module in byte 1, coupler code
-    in byte 0; a module alarm leaves byte 0 at 0), read by the FastCAT's decoder, as the State
-    and Line tabs read it (``devices.fastcat.alarms.decode_al_status``)."""
+    in byte 0; a module alarm has none), read by the FastCAT's decoder, as the State and Line
+    tabs read it (``devices.fastcat.alarms.decode_al_status``)."""
     if code in AL_STATUS_CODES:
         return [Meaning(ETHERCAT, f"AL status code {fmt_hex(code, 4)}",
                         _sentence(AL_STATUS_CODES[code]), "seed 000 §7.7")]
@@ -295,9 +295,6 @@ def al_status(code: int) -> list[Meaning]:
     title = f"AL status code {fmt_hex(code, 4)} (manufacturer area)"
     where = f"module {found.module}" if found.module else "the coupler itself (module 0)"
     row = found.coupler
-    if row is None:
-        return [Meaning(FASTCAT, title, f"FastCAT: a module alarm on {where}; the module code "
-                        "is in byte 2 of the emergency and of 0x5400.", "seed 000 §7.7")]
     return [Meaning(FASTCAT, title, f"FastCAT: {where}, coupler code "
                     f"{fmt_hex(row.code, 2)} {row.symbol}: {row.description}.",
                     "seed 000 §7.5, §7.7")]

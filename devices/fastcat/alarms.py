@@ -1,11 +1,13 @@
 """FastCAT alarm codes, the emergency data layout and the manufacturer AL status code.
 
 The one place for: the coupler code table (seed 000 §7.5, byte 3 of the emergency data), the
-module code table (§7.6, byte 2), the 5-byte emergency data of §7 (mirrored in 0x5400, §6.23)
-and the 0x80XX AL status code of §7.7. Symbols are the seed's ``CO_E_`` names without the
-prefix, spelled as printed (``ADDRES_NOT_OK``, ``EMICY_MASTER``); descriptions are English
-renderings of the Italian text. The AX2 codes 0x10..0x15 have no symbol in the seed: FieldRig
-names them ENC1_COUNT .. ENC2_ZERO_CYCLE (docs/fastcat-coupler.md).
+module code table (§7.6, byte 2), the 5-byte emergency data of §7 (mirrored in 0x5400, §6.23),
+the 0x80XX AL status code of §7.7 and which table it belongs to: only a coupler alarm takes the
+ESM out of SAFEOP / OP and shows in the AL status code (:data:`ESM_ALARM_TABLES`). Symbols are
+the seed's ``CO_E_`` names without the prefix, spelled as printed (``ADDRES_NOT_OK``,
+``EMICY_MASTER``); descriptions are English renderings of the Italian text. The AX2 codes
+0x10..0x15 have no symbol in the seed: FieldRig names them ENC1_COUNT .. ENC2_ZERO_CYCLE
+(docs/fastcat-coupler.md).
 """
 
 from __future__ import annotations
@@ -26,6 +28,11 @@ EMERGENCY_REGISTER = 0x81  # §7: "ErrorRegister: 0x81 (device error)"
 EMERGENCY_DATA_LEN = 5  # §7: 5 bytes, the first 4 significant
 LAST_RESETTABLE_COUPLER_CODE = 0x7F  # §7, §7.5: coupler codes above 0x7F need a resync
 AL_STATUS_MANUFACTURER = 0x8000  # §7.7: "0x80XX ... allarme manufacturer"
+# Tables whose alarms take the ESM to PREOP with 0x80XX and bar SAFEOP / OP while latched.
+# §7.7: the manufacturer code carries "allarmi gravi generati dal coupler" (byte 0 = coupler
+# code); §7: resettable alarms are reset by the Reset Fault bit "mappato nei dati scambiati
+# con il coupler", which needs process data running. So a module alarm (§7.6) keeps the ESM.
+ESM_ALARM_TABLES = frozenset({COUPLER})
 
 
 @dataclass(frozen=True)
@@ -200,10 +207,12 @@ def emergency_word(data: bytes) -> int:
     return int.from_bytes(data[:4], "little")
 
 
-def manufacturer_al_status(table: str, code: int, module: int) -> int:
-    """§7.7: 0x8000 | module number in byte 1 | coupler code in byte 0 (module codes -> 0)."""
-    coupler_code = code if table == COUPLER else 0
-    return AL_STATUS_MANUFACTURER | (module & 0xFF) << 8 | coupler_code
+def manufacturer_al_status(table: str, code: int, module: int) -> int | None:
+    """§7.7: 0x8000 | module number in byte 1 | coupler code in byte 0; None for an alarm of a
+    table outside :data:`ESM_ALARM_TABLES` (a module alarm), which has no AL status code."""
+    if table not in ESM_ALARM_TABLES:
+        return None
+    return AL_STATUS_MANUFACTURER | (module & 0xFF) << 8 | code
 
 
 @dataclass(frozen=True)
@@ -211,54 +220,39 @@ class ManufacturerAlStatus:
     """A decoded §7.7 0x80XX code: the one reading of it every view uses."""
 
     module: int  # byte 1 (without the 0x80 of the area); 0: the coupler itself
-    coupler: AlarmCode | None  # byte 0; None: a module alarm, which has no coupler code
-    module_code: AlarmCode | None = None  # a module alarm's code, when 0x5400 gives it
+    coupler: AlarmCode  # byte 0
 
     @property
     def text(self) -> str:
-        """``module 2: coupler code 0x04 MISSING_NODE_ANSWER``; a module alarm names its module
-        code when known (``module 4: module code 0x0B TARATURA``)."""
+        """``module 2: coupler code 0x04 MISSING_NODE_ANSWER``."""
         where = f"module {self.module}" if self.module else "coupler"
-        if self.coupler is not None:
-            return f"{where}: coupler code {fmt_hex(self.coupler.code, 2)} {self.coupler.symbol}"
-        if self.module_code is not None:
-            code = self.module_code
-            return f"{where}: module code {fmt_hex(code.code, 2)} {code.symbol}"
-        return f"{where}: module alarm, its code in byte 2 of 0x5400"
+        return f"{where}: coupler code {fmt_hex(self.coupler.code, 2)} {self.coupler.symbol}"
 
 
-def decode_al_status(code: int, word: int | None = None) -> ManufacturerAlStatus | None:
-    """§7.7: 0x8000 | module in byte 1 | coupler code in byte 0 (0 for a module alarm); None
-    when ``code`` is no such code. ``word``: 0x5400 (§6.23), read for a module alarm's module
-    code when its byte 0 is the same module (the emergency of this alarm)."""
+def decode_al_status(code: int) -> ManufacturerAlStatus | None:
+    """§7.7: 0x8000 | module in byte 1 | coupler code in byte 0; None when ``code`` is no such
+    code. Byte 0 = 0 (0x8N00) is none: a module alarm has no AL status code."""
     if code < AL_STATUS_MANUFACTURER or code > 0xFFFF:
         return None
     module, coupler_code = code >> 8 & 0x7F, code & 0xFF
-    if module > MAX_MODULES:
+    row = COUPLER_CODES.get(coupler_code)
+    if module > MAX_MODULES or row is None:
         return None
-    if coupler_code:
-        row = COUPLER_CODES.get(coupler_code)
-        return ManufacturerAlStatus(module, row) if row is not None else None
-    if not module:
-        return None  # 0x8000: neither a module nor a coupler code
-    known = None
-    if word is not None and word & 0xFF == module and not word >> 24 & 0xFF:
-        known = MODULE_CODES.get(word >> 16 & 0xFF)
-    return ManufacturerAlStatus(module, None, known)
+    return ManufacturerAlStatus(module, row)
 
 
-
-def al_status_meaning(code: int, word: int | None = None) -> str:
-    """What an AL status code of this coupler means: a 0x80XX read by :func:`decode_al_status`
-    (``word``: 0x5400), any other code by its ETG text. The model's own reading and the State
-    tab's (from the snapshot) both come from here."""
-    found = decode_al_status(code, word)
+def al_status_meaning(code: int) -> str:
+    """What an AL status code of this coupler means: a 0x80XX read by :func:`decode_al_status`,
+    any other code by its ETG text. The model's own reading and the State tab's (from the
+    snapshot) both come from here."""
+    found = decode_al_status(code)
     return found.text if found is not None else describe_al_status_code(code)
 
 # AL status code when a latched alarm makes the coupler refuse PREOP -> SAFEOP or SAFEOP -> OP.
 # A configuration mismatch is what §7.7 0x0052 describes ("connection to an unexpected device.
 # Perform an hardware configuration procedure"), 0xF030/0xF050 disagreeing is 0x0070; every
-# other alarm answers its 0x80XX code, as the §7.7 log shows for 0x8204.
+# other coupler alarm answers its 0x80XX code, as the §7.7 log shows for 0x8204. A module alarm
+# refuses nothing (ESM_ALARM_TABLES).
 REFUSAL_AL_STATUS: dict[tuple[str, int], int] = {
     (COUPLER, 0x01): 0x0052,
     (COUPLER, 0x02): 0x0052,
@@ -287,11 +281,19 @@ class Alarm:
         return emergency_word(self.data)
 
     @property
-    def al_status_code(self) -> int:
+    def holds_esm(self) -> bool:
+        """It takes SAFEOP / OP to PREOP and bars them while latched (a coupler alarm)."""
+        return self.table in ESM_ALARM_TABLES
+
+    @property
+    def al_status_code(self) -> int | None:
         return manufacturer_al_status(self.table, self.code, self.module)
 
     @property
-    def refusal_code(self) -> int:
+    def refusal_code(self) -> int | None:
+        """The AL status code a SAFEOP / OP request is refused with; None: not refused."""
+        if not self.holds_esm:
+            return None
         return REFUSAL_AL_STATUS.get((self.table, self.code), self.al_status_code)
 
     @property

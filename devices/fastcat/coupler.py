@@ -216,8 +216,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         elif esm.state is AlState.INIT:
             if self.scan is None:  # else INIT -> PREOP completes when the scan ends
                 esm.accept(target, now)
-        elif target in (AlState.SAFEOP, AlState.OP) and self.alarm is not None:
-            esm.refuse(self.alarm.refusal_code, now)
+        elif target in (AlState.SAFEOP, AlState.OP) and self.alarm is not None \
+                and (code := self.alarm.refusal_code) is not None:
+            esm.refuse(code, now)  # a coupler alarm; a module alarm bars nothing
         elif esm.state is AlState.PREOP and target is AlState.SAFEOP \
                 and self._slot_mismatch() is not None:
             self.slot_fault = True  # §7.5 0x14: checked on the transition to SAFEOP

@@ -3,11 +3,13 @@
 An alarm *cause* is a condition present now: injected by an operator, or physical (a module
 that does not answer, the Ethernet cable, the Tbus supply, a module's own alarm, the result of
 the last scan). The coupler latches the first cause it finds (§7: "il primo allarme ricevuto,
-che è la causa scatenante"), sends one emergency, puts every module in alarm and, in SAFEOP or
-OP, falls back to PREOP with the 0x80XX code of §7.7. Later causes send nothing while an alarm
-is latched. A Reset fault edge (§6.17) clears a resettable alarm, a resync (the line taken
-through INIT) any alarm, in both cases only once its cause is gone; the next present cause is
-then latched with a new emergency. Cause -> code mapping: docs/fastcat-coupler.md.
+che è la causa scatenante"), sends one emergency, puts every module in alarm and, for a coupler
+alarm (§7.5) in SAFEOP or OP, falls back to PREOP with the 0x80XX code of §7.7; a module alarm
+(§7.6) leaves the ESM where it is, so the Reset fault bit in the process data can clear it.
+Later causes send nothing while an alarm is latched. A Reset fault edge (§6.17) clears a
+resettable alarm, a resync (the line taken through INIT) any alarm, in both cases only once its
+cause is gone; the next present cause is then latched with a new emergency. Cause -> code
+mapping: docs/fastcat-coupler.md.
 """
 
 from __future__ import annotations
@@ -218,8 +220,9 @@ class FaultsMixin:
                                 register=EMERGENCY_REGISTER, data=alarm.data))
         frame = emergency_frame(EMERGENCY_CODE, EMERGENCY_REGISTER, alarm.data)
         self.mailbox = [*self.mailbox, frame][-MAILBOX_DEPTH:]
-        if self.esm.state in (AlState.SAFEOP, AlState.OP):  # §7.7: OP -> PREOP, 0x80XX
-            self.esm.fall(AlState.PREOP, alarm.al_status_code, now)
+        code = alarm.al_status_code
+        if code is not None and self.esm.state in (AlState.SAFEOP, AlState.OP):
+            self.esm.fall(AlState.PREOP, code, now)  # §7.7: OP -> PREOP, 0x80XX
 
     def _try_reset(self, resync: bool) -> bool:
         """Reset fault (§6.17) or resync (§7): only a resettable alarm, only without cause."""
@@ -297,6 +300,6 @@ class FaultsMixin:
 
     def describe_al_status_code(self, code: int) -> str:
         """The master's text for this coupler's AL status code: 0x80XX read as the State and
-        Codes tabs read it (§7.7), the module code of a module alarm from 0x5400."""
-        return al_status_meaning(code, self.od_emergency_word())
+        Codes tabs read it (§7.7)."""
+        return al_status_meaning(code)
 

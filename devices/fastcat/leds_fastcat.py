@@ -52,8 +52,10 @@ def err_led(powered: bool, alarm: Alarm | None, esm_error: ErrorKind) -> LedPatt
     if alarm is not None and (alarm.table, alarm.code) in ERR_BY_ALARM:
         return ERR_BY_ALARM[(alarm.table, alarm.code)]
     pattern = ERR_BY_ESM_ERROR[esm_error]
-    if pattern is LedPattern.OFF and alarm is not None:
-        return LedPattern.SINGLE_FLASH  # a latched alarm is a local error even before a refusal
+    if pattern is LedPattern.OFF and alarm is not None and alarm.holds_esm:
+        # A coupler alarm is a local error even before a refusal. A module alarm sets no error
+        # flag and keeps the ESM: ERR follows the flag (ETG.1300), the module reds show it.
+        return LedPattern.SINGLE_FLASH
     return pattern
 
 

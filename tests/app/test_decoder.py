@@ -103,9 +103,10 @@ def test_fastcat_manufacturer_al_status(row: fastcat.AlarmCode, module: int) -> 
     assert f"{where}, coupler code 0x{row.code:02X} {row.symbol}" in m.text
 
 
-def test_fastcat_module_alarm_al_status_names_the_module() -> None:
-    code = fastcat.manufacturer_al_status(fastcat.MODULE, 0x0B, 7)  # §7.7: byte 0 stays 0
-    assert "module alarm on module 7" in one(decode(f"0x{code:04X}"), FASTCAT).text
+def test_a_fastcat_module_alarm_has_no_al_status_code() -> None:
+    """§7.7 carries coupler alarms only: 0x8700 (byte 0 = 0) is no FastCAT reading."""
+    assert fastcat.manufacturer_al_status(fastcat.MODULE, 0x0B, 7) is None
+    assert family(decode("0x8700"), FASTCAT) == []
 
 
 @pytest.mark.parametrize("row", FASTCAT_ROWS, ids=lambda r: r.label)

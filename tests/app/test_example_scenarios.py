@@ -140,6 +140,13 @@ def test_ax2_zero_mark_missing_alarm_after_one_and_a_half_turns(capsys, tmp_path
     assert [e["data"] for e in emcy] == ["07 00 14 00 00"]
     assert 6.5 <= emcy[0]["t"] <= 6.51  # 1.5 turns at 60 rpm after the command at 5.0 s
     assert any(r["event"] == "alarm" and not r["active"] for r in records)
+    # A module alarm (§7.6) keeps OP: no AL status code, no state change, no master retry;
+    # Reset fault in the process data clears it in OP (§7, §7.7).
+    after = [r for r in records if r["t"] >= emcy[0]["t"]]
+    assert not [r for r in after if r["event"] in ("al_status", "slave_state")
+                or (r["event"] == "state" and r["device"] == "fastcat")]
+    assert [(r["t"], r["active"]) for r in after if r["event"] == "alarm"] == \
+        [(emcy[0]["t"], True), (8.5, False)]
 
 
 def test_too_many_analog_modules(capsys, tmp_path) -> None:

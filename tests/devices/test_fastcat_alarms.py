@@ -157,10 +157,12 @@ def test_0x5400_is_bytes_0_to_3_little_endian(table: str, code: int, module: int
     (COUPLER, 0x04, 2, 0x8204),  # §7.7 worked example
     (COUPLER, 0x04, 3, 0x8304),  # §7.4: 33540 = 0x8304 for module 3, code 04
     (COUPLER, 0x12, 0, 0x8012),
-    (MODULE, 0x0B, 2, 0x8200),  # module codes are not in the AL status code: byte 0 = 0
+    (MODULE, 0x0B, 2, None),  # §7.7 "allarmi gravi generati dal coupler": no module codes
 ])
-def test_manufacturer_al_status_code(table: str, code: int, module: int, al_code: int) -> None:
-    """§7.7: 0x8000 + module number in byte 1 + coupler code in byte 0."""
+def test_manufacturer_al_status_code(table: str, code: int, module: int,
+                                     al_code: int | None) -> None:
+    """§7.7: 0x8000 + module number in byte 1 + coupler code in byte 0; a module alarm has
+    none (docs/fastcat-coupler.md "Module alarms keep OP")."""
     assert manufacturer_al_status(table, code, module) == al_code
     assert Alarm(table, code, module).al_status_code == al_code
 
@@ -174,7 +176,7 @@ def test_al_status_example_of_section_7_4() -> None:
     (Alarm(COUPLER, 0x02, 3), 0x0052),
     (Alarm(COUPLER, 0x14, 1), 0x0070),  # 0xF030 / 0xF050 disagree
     (Alarm(COUPLER, 0x04, 2), 0x8204),  # §7.7 log: PREOP to SAFEOP refused with 0x8204
-    (Alarm(MODULE, 0x0B, 2), 0x8200),
+    (Alarm(MODULE, 0x0B, 2), None),  # a module alarm refuses no state request
 ])
-def test_refusal_code(alarm: Alarm, refusal: int) -> None:
+def test_refusal_code(alarm: Alarm, refusal: int | None) -> None:
     assert alarm.refusal_code == refusal

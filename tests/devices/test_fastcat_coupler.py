@@ -233,16 +233,21 @@ def test_inject_every_coupler_code(row: AlarmCode) -> None:
 
 @pytest.mark.parametrize("row", list(MODULE_CODES.values()), ids=lambda r: r.symbol)
 def test_inject_every_module_code(row: AlarmCode) -> None:
-    """§7.6: byte 2 = module code, byte 0 = module; AL status code 0x8N00 (docs)."""
+    """§7.6: byte 2 = module code, byte 0 = module; the ESM stays in OP with no AL status code
+    (§7.7 carries coupler alarms only, docs "Module alarms keep OP"); Reset fault clears it."""
     bench = Bench()
     bench.to_state(AlState.OP)
     bench.apply("inject_fault", module=3, fault=f"module:0x{row.code:02X}")
     bench.step()
     assert bench.emergencies() == [f"03 00 {row.code:02X} 00 00"]
-    assert bench.fc.al_status_code == 0x8300
+    assert bench.read(0x5400, 0) == row.code << 16 | 3
+    assert bench.read(0x5100, 1) is True
+    assert bench.fc.al_state is AlState.OP
+    assert (bench.fc.al_status, bench.fc.al_status_code) == (0x08, 0)
+    assert bench.records("al_status") == []
     bench.apply("clear_fault", module=3, fault=row.symbol)
     bench.reset_fault()
-    assert bench.fc.alarm is None
+    assert bench.fc.alarm is None and bench.fc.al_state is AlState.OP
 
 
 def test_module_fault_needs_a_module_and_bare_codes_are_refused() -> None:

@@ -33,10 +33,10 @@ def al_status_text(value: int) -> str:
     return f"{name} + error" if value & 0x10 else name
 
 
-def al_code_text(code: int, word: int | None = None) -> str:
+def al_code_text(code: int) -> str:
     """The meaning of an AL status code; a FastCAT 0x80XX names the module and the coupler
-    code, or for a module alarm its module code when 0x5400 (``word``) holds it."""
-    return al_status_meaning(code, word)
+    code (a module alarm has no AL status code, seed 000 §7.7)."""
+    return al_status_meaning(code)
 
 
 def alarm_text(alarm: Mapping[str, Any] | None) -> str:
@@ -85,7 +85,7 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         ("Fault active", badge("TRUE", "bad") if fault else badge("FALSE", "ok")),
         ("0x5400", esc(f"0x{word:08X}")),
         ("AL status", esc(f"0x{al_status:04X} {al_status_text(al_status)}")),
-        ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code, word)}")),
+        ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code)}")),
         ("Alarm", alarm_text(snap.get("alarm"))),
         ("CNF", esc(phase)),
         ("Configuration", config_text(snap)),
