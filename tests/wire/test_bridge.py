@@ -19,6 +19,7 @@ import pytest
 from test_faces import line_rig
 from wire_line import LINE, line_spec
 
+from app.ethercat_wire import faces
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire.bridge import WireBridge, _FrameClock, check_interface
 from app.player import reset_in_place
@@ -316,3 +317,30 @@ def test_a_slave_s_own_pulled_out_cable_takes_the_slaves_behind_it_off_the_wire(
     b.expect(lambda m: m == (msg.LINK, 2, False))
     runtime.command("trscat", "link", {"connected": True, "port": "out"}).result(timeout=WAIT_S)
     b.expect(lambda m: m == (msg.LINK, 0, True))
+
+
+def test_a_module_alarm_keeps_op_and_the_wire_masters_reset_bit_clears_it(wire):
+    """Seed 000 §7: Reset fault is "mappato nei dati scambiati con il coupler" (0x16FF bit 0
+    of SM2) and Fault active is 0x1AFF bit 0 of SM3 (§5, §6.16, §6.17). A module alarm (§7.6)
+    keeps OP with AL status code 0 (§7.7), so a wire master reads the fault and resets it
+    through the process data (docs/fastcat-coupler.md "Module alarms keep OP")."""
+    runtime, _bridge, b = wire
+    fastcat = runtime.rig.devices["fastcat"]
+
+    def fault_bit() -> int:
+        b.send(msg.CYCLE, {0: 3})  # frames: the bridge sends the SM3 image when it changed
+        return sim(runtime, lambda: faces.inputs(fastcat)[0] & 1)
+
+    b.expect(lambda m: m == (msg.AL_STATUS, 0, 8, 0))
+    runtime.command("fastcat/3", "inject_fault", {"fault": "TARATURA"}).result(timeout=WAIT_S)
+    reply = b.expect(lambda m: m[:2] == (msg.MAILBOX_REPLY, 0) and m[2][6:8] == b"\x00\x10")
+    assert reply[2][8:].hex(" ") == "00 ff 81 03 00 0b 00 00"
+    wait_for(lambda: fault_bit() == 1)
+    b.expect(lambda m: m[:2] == (msg.INPUTS, 0) and m[2][0] & 1)
+    runtime.command("fastcat/3", "clear_fault", {"fault": "TARATURA"}).result(timeout=WAIT_S)
+    b.send(msg.OUTPUTS, 0, (1).to_bytes(3, "little"))  # the Reset fault bit rises, in OP
+    wait_for(lambda: fault_bit() == 0)
+    b.expect(lambda m: m[:2] == (msg.INPUTS, 0) and not m[2][0] & 1)
+    assert sim(runtime, lambda: (fastcat.alarm, fastcat.al_status, fastcat.al_status_code)) \
+        == (None, 8, 0)
+    assert not [m for m in b.seen if m[0] == msg.AL_STATUS and m[1] == 0]  # never left OP
