@@ -182,6 +182,12 @@ class LineMixin:
                     link.slave.set_link(want_out, "out")
                     if not want_out and powered[p]:
                         link.esc.lose_link(OUT)
+        # A lost slave's injected cause follows the line while it stays lost (the instructor
+        # may take one cause away and put another): else the Causes row kept the first one.
+        # One the frames reach again keeps its cause: the next step finds it.
+        for p, link in enumerate(self.links):
+            if link.injected_cause and not (self._line_reach[p] and powered[p]):
+                link.injected_cause = self._injected_cause(p)
 
     def _powered_all(self) -> list[bool]:
         return [bool(getattr(link.slave, "powered", True)) for link in self.links]

@@ -121,3 +121,25 @@ def test_the_injected_view_holds_the_line_s_truth_and_clears_on_recovery() -> No
     view = master_view(rig)
     assert view["injected"]["lost"] == [] and view["injected"]["dc_fault"] == "drift"
     assert "fault" not in view["dc"]  # the DC unit shows its state and deviation, no cause
+
+
+def test_a_lost_slave_s_cause_follows_the_line_while_it_stays_lost() -> None:
+    """The instructor's Causes row is the line's truth now, not the one of the step the slave
+    was lost in: slave 2 off, then cable 1 pulled and slave 2 back on, slaves 1..3 are lost
+    because of the cable alone (before, 2 and 3 kept "powered off" / "the slave at position 2
+    is off" while both were on)."""
+    rig = _faulted("master", "power_slave", {"position": 2, "on": False})
+    rig.apply("master", "pull_cable", {"cable": 1})
+    rig.apply("master", "power_slave", {"position": 2, "on": True})
+    rig.run_until(IN_OP_US + US)
+    assert master_view(rig)["injected"]["lost"] == [
+        {"position": p, "cause": "cable 1 pulled"} for p in (1, 2, 3)
+    ]
+
+
+def test_a_cause_just_removed_is_kept_until_the_slave_answers() -> None:
+    """Powered again, the slave is found at the next step: until then (the frame published
+    right after the command) its cause stays the one it was lost for, not a made-up one."""
+    rig = _faulted("master", "power_slave", {"position": 3, "on": False})
+    rig.apply("master", "power_slave", {"position": 3, "on": True})
+    assert master_view(rig)["injected"]["lost"] == [{"position": 3, "cause": "powered off"}]
