@@ -179,6 +179,11 @@ def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
     instructor.set(instructor.widget("Cable plug"), "Pull")
     _wait(lambda: "0x0B TARATURA on module 4" in text(instructor))
     _wait(lambda: "2 trscat -> cpx (pulled)" in values(instructor))
+    # The slave behind the pulled cable switched off too: the instructor's Slave to power
+    # list marks it (the supply is the master's ``injected``).
+    _command(served, "master", "power_slave", {"position": 2, "on": False})
+    served.runtime.advance(100_000).result(timeout=30)  # its supply's hold-up time
+    _wait(lambda: "2 cpx (off)" in options(instructor))
     _wait(lambda: "0x04 MISSING_NODE_ANSWER" in text(instructor))
     # A physical cause on the Modbus drive: the load jammed (the Alarms and load folder's box).
     _command(served, "drive", "jam_load", {"active": True})
@@ -233,6 +238,19 @@ def test_a_trainee_receives_no_line_cause_from_the_master(pages: tuple[Page, Pag
     for leak in ("cable 2 pulled)", "trscat -&gt; cpx pulled", "<th>Cables</th>",
                  "2: cable 2 pulled"):
         assert leak not in got, leak
+
+
+def test_a_trainee_is_not_told_which_slave_is_switched_off(pages: tuple[Page, Page]) -> None:
+    """The Master folder's "ESC counters of" list is everyone's (clearing the counters is a
+    trainee's diagnosis) but it was filled from the instructor's Slave to power options,
+    which mark a slave without supply "(off)" from the master's ``injected``: a real master
+    cannot tell a slave switched off from a cable pulled (docs/ethercat-master.md "What the
+    master knows"), so every trainee read which slave the instructor had switched off."""
+    trainee, instructor = pages
+    assert "2 cpx (off)" in options(instructor)
+    offered = options(trainee)
+    assert "2 cpx" in offered  # the trainee did get the shared list
+    assert not [o for o in offered if o.endswith("(off)")]
 
 
 def test_a_trainee_receives_no_jammed_load(pages: tuple[Page, Page]) -> None:

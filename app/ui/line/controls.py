@@ -57,7 +57,8 @@ def _damage(percent: Any) -> str:
 
 
 def slave_options(master: Mapping[str, Any], order: Sequence[str]) -> list[str]:
-    # The instructor's controls: the supply is the injected truth, not the master's view.
+    # The instructor's controls: the supply is the injected truth, not the master's view
+    # ({} for a list every browser gets: no marks).
     powered = (master.get("injected") or {}).get("powered") or []
     out = []
     for i, device in enumerate(order):
@@ -141,6 +142,7 @@ class LineControls:
                                               tuple(slave_options({}, order)) or ("-",))
             clear_esc = gui.add_button("Clear ESC error counters")
             self.target = gui.add_dropdown("Target state", TARGETS, initial_value="OP")
+        self._esc_marks = instructor.shared
         cables = self._cables.each()[0] if instructor.shared else None
         frames = self._frames.each()[0] if instructor.shared else None
         # Open rig: the server-level widgets, as before (tests, Dashboard.instructor_widgets).
@@ -321,4 +323,8 @@ class LineControls:
         for form in self._cables.each():
             set_options(form.cable, cables)
             set_options(form.slave_power, slaves)
-        set_options(self.esc_slave, slave_options(master, self._order))
+        # Everyone's list: the "(off)" marks are the injected supply, which a real master
+        # cannot read (a slave off looks like its cable pulled): with a token only on the
+        # instructor's own Slave to power list (docs/classroom.md).
+        set_options(self.esc_slave, slave_options(master if self._esc_marks else {},
+                                                  self._order))
