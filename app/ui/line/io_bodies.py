@@ -127,10 +127,10 @@ def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
 
 # The Slave tab's words for why a wired cause is not diagnosed. Which causes those are and
 # why is the model's: the module snapshot's "undiagnosed" (devices/cpx/unseen.py
-# UNSEEN_REASONS). A reason without words shows as a bare "(not diagnosed)", as the Fault
-# column always has for them (docs/dashboard.md).
-# Every reason has words: an instructor whose fault shows nowhere needs to know which switch
-# or state hides it (0x2400 is the bus module's parameter, seed 002 Tab. 27).
+# UNSEEN_REASONS). Every reason has words (tests/browser/test_line_text.py checks the two
+# tables' keys; one without would show its id): an instructor whose fault shows nowhere needs
+# to know which switch or state hides it (0x2400 is the bus module's parameter, seed 002
+# Tab. 27).
 REASON_WORDS = {"output_off": "output off", "current_range": "current range",
                 "signal_range": "signal range", "no_application": "bus module not running",
                 "module_failed": "module failed", "monitor_off": "0x2400 monitor off",
