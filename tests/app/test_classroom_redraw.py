@@ -16,6 +16,7 @@ from test_classroom_leak import TOKEN, Page, _wait
 from app.classroom.roles import Access
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.screenshots import free_port
+from app.ui.line.master_panel import MasterPanel
 from app.ui.panels.classroom_rig import serve_rig
 from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import INSTRUCTOR_CLASS
@@ -124,3 +125,38 @@ def test_a_late_instructor_plug_type_starts_at_the_preset() -> None:
         page.close()
     finally:
         served.stop()
+
+
+def test_the_line_master_panel_s_causes_reach_a_copy_built_during_an_update(
+        server: viser.ViserServer) -> None:
+    """The same race on the Line tab's master panel: its Injected / Causes rows (RoleHtml)
+    were shown only when the status table changed, so the redraw's tick, with the same
+    table, did not write the copy built meanwhile: the new instructor's page read no cause
+    until the line changed again (on a paused rig, never)."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.advance(8000)
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.advance(200)
+    master = rig.snapshot()["devices"]["master"]
+    instructor = instructor_for(server, Access(TOKEN))
+    panel = MasterPanel(server, None, "master")  # type: ignore[arg-type]  # no command sent
+    page = Page(server.get_port())
+    cid, client = next(iter(_wait(lambda: server.get_clients()).items()))
+    assert instructor.access.present(cid, TOKEN)
+    assert panel._status._causes is not None
+    part = panel._status._causes._part
+    build = part._build
+
+    def build_then_update(gui: Any) -> Any:  # the update thread shows the causes meanwhile
+        built = build(gui)
+        panel.update(master, 0)
+        return built
+
+    part._build = build_then_update  # type: ignore[method-assign]
+    instructor.on_built = lambda: panel.update(master, 0)  # the redraw's tick
+    try:
+        instructor.promote(client)
+        (copy,) = part.each()
+        assert "2: cable 2 pulled" in copy.content
+    finally:
+        page.close()

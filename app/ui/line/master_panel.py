@@ -273,9 +273,10 @@ class MasterPanel:
             self._style_sync.follow(master["log_style"])
         self._set("title", self._title, title(master, t_us))
         status = status_table(master)
-        if self._cache.get("status") != status:
-            self._status.show(status)
-            self._cache["status"] = status
+        # Every tick, unchanged too: RoleHtml writes an instructor copy built meanwhile (the
+        # redraw after a promote), and compares the text itself.
+        self._status.show(status)
+        self._cache["status"] = status
         self._set("live", self._live, live_table(master))
         self._set("slaves", self._slaves, slaves_table(master.get("slaves") or [],
                                                             master.get("target")))
