@@ -42,8 +42,10 @@ def chromium() -> Iterator[Any]:
         try:
             yield browser
         finally:
-            browser.close()
-            remove_home()
+            try:
+                browser.close()
+            finally:
+                remove_home()
 
 
 class ServerProcess:
