@@ -275,14 +275,17 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         skip = self.SKIP_STILL
         reach = self._line(skip)
         rows = self._rows
+        # The port's link is its PHY's: cable 0 in and the first slave's PHY powered. Whether
+        # that slave answers is apart (a powered ESC passes frames on without its application).
         # A slave's reachable() has no side effect: position 0's answer serves twice.
-        first = bool(rows) and reach[0] and rows[0][3]()
-        self.link_up = first
+        port_up = bool(rows) and reach[0] and self._line_powered[0]
+        first = port_up and rows[0][3]()
+        self.link_up = port_up
         cycle = now_us >= self.next_cycle_us
         if cycle:
             self.next_cycle_us = now_us + self.cycle_us
         external = self.external
-        lost = cycle and not external and self.to_lose > 0 and first
+        lost = cycle and not external and self.to_lose > 0 and port_up
         if lost:
             self._lose_frame()
         elif self.damaged and cycle and not external and first:  # healthy: one dict's truth
@@ -339,7 +342,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         skipped = self.skipped
         if served:
             skipped.serve += served
-        if exchange and first:
+        if exchange and port_up:  # with link a frame goes out each cycle, answered or not
             self.frames += 1
         if lost_now:
             self._report_lost(lost_now)

@@ -95,6 +95,8 @@ class ViewMixin:
         if not self.link_up:
             return "waiting_link"
         present = [link for link in self.links if link.present]
+        if not present:  # link, and not one slave answers its frames
+            return "no_answer"
         if any(link.slave.al_state in (AlState.INIT, AlState.BOOT) for link in present):
             return "init_commands"
         if all(link.slave.al_state is self._target_of(link) for link in present):

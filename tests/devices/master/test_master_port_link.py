@@ -1,0 +1,50 @@
+"""The master port's link is a PHY property (ETG.1000.4: the link partner's PHY powered and the
+cable in), apart from whether the slave behind it answers (the working counter). A drive whose
+c9 does not select EtherCAT (seed 004 ch. 2: c9 is read at power-up) is powered, its ESC passes
+the frames on, but it does not answer: the master's port has link and the slave is silent."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from line_bench import US, master_view
+
+from app.rig import Rig
+from app.rig_config import build_rig, parse_rig_spec
+
+
+def _drive_first(c9: int | None = None, fastcat: bool = True) -> Rig:
+    """master -> the drive's CoE side -> (a FastCAT); ``c9`` the drive's at its first power-up."""
+    line = '"drive_ec-ecat", "fastcat"' if fastcat else '"drive_ec-ecat"'
+    params = f"parameters = {{ c9 = {c9} }}\n" if c9 is not None else ""
+    box = '[[fastcat]]\nid = "fastcat"\nmodules = ["DI16"]\n' if fastcat else ""
+    text = (f'[rig]\nname = "drive first"\nseed = 1\nstep_ms = 1\n[master]\nline = [{line}]\n'
+            f'[[servo]]\nid = "drive_ec"\nfieldbus = "ethercat"\nnode_id = 3\n{params}{box}')
+    return build_rig(parse_rig_spec(text))
+
+
+def _view(rig: Rig, until_us: int) -> dict[str, Any]:
+    rig.run_until(until_us)
+    return master_view(rig)
+
+
+def test_a_powered_first_slave_that_does_not_answer_leaves_the_port_link_up() -> None:
+    rig = _drive_first(c9=3)  # the drive on Modbus: powered, silent on the EtherCAT line
+    view = _view(rig, 4 * US)
+    assert [s["present"] for s in view["slaves"]] == [False, True]
+    assert view["link"] is True
+    assert view["phase"] == "running"  # the FastCAT behind it answers and is in OP
+    assert view["stats"]["frames"] > 0  # with link the master sends its frames
+    rig.apply("master", "pull_cable", {"cable": 0})
+    assert _view(rig, 4 * US + 10_000)["link"] is False
+    rig.apply("master", "plug_cable", {"cable": 0})
+    assert _view(rig, 4 * US + 20_000)["link"] is True
+    rig.apply("master", "power_slave", {"position": 0, "on": False})  # no link partner
+    assert _view(rig, 4 * US + 30_000)["link"] is False
+
+
+def test_link_up_and_no_slave_answering_is_not_waiting_for_link() -> None:
+    view = _view(_drive_first(c9=3, fastcat=False), 2 * US)
+    assert (view["link"], view["phase"]) == (True, "no_answer")
+    assert not view["slaves"][0]["present"]
+
