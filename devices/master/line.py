@@ -18,7 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from devices.ethercat import AlState
-from devices.events import CommError
+from devices.events import CommError, NetworkRecovery
 from devices.master.esc_errors import IN, OUT, run_frame
 from devices.master.links import Slave, SlaveLink
 from devices.master.still import StillCounts
@@ -54,6 +54,7 @@ class LineMixin:
     now_us: int
     device_id: str
     _bursting: bool
+    _links_moved: bool
     skipped: StillCounts
     _line_cables: list[bool]
     _line_powered: list[bool]
@@ -165,6 +166,7 @@ class LineMixin:
                     link.esc.clear()
         self._line_cables, self._line_powered = list(self.cables), list(powered)
         self._line_plugs = plugs
+        self._links_moved = True
         plugged = self._plugged(plugs)
         self._line_reach = self._reach(powered, plugged)
         n = len(self.links)
@@ -318,15 +320,35 @@ class LineMixin:
         link.lost_once, link.reached_op, link.seen = True, False, None
         link.injected_cause = self._injected_cause(link.position)
         first = self._first_silent(link.position)
-        finding = self._port_finding(first)
-        link.diagnosis = f"no answer from position {first} on" + (f" ({finding})"
-                                                                  if finding else "")
+        link.diagnosis = self._silent_finding(first)
         self.network_op, self._watched = False, None
         self._event(CommError(self.now_us, self.device_id, position=link.position,
                               address=link.slave.station_address, reason="link_lost",
                               count=1))
         self._log(link, "lost", first=first)
         return True
+
+    def _silent_finding(self, first: int) -> str:
+        """A lost slave's diagnosis: where nothing answers from, and the link read there."""
+        finding = self._port_finding(first)
+        return f"no answer from position {first} on" + (f" ({finding})" if finding else "")
+
+    def _line_news(self, lost_now: list[int], recovered: list[int]) -> None:
+        """The end of a step in which slaves were lost or found, or the ports' links moved:
+        the master's lines, then every lost slave's diagnosis as the line reads now. A slave
+        lost in an earlier step keeps no stale finding when the silent run grows towards the
+        master or shrinks back, or when the link where the frames stop comes up or goes down
+        (tests/devices/master/test_master_observed.py, test_master_port_link.py)."""
+        self._links_moved = False
+        if lost_now:
+            self._report_lost(lost_now)
+        if recovered:
+            self._event(NetworkRecovery(self.now_us, self.device_id,
+                                        positions=tuple(recovered)))
+            self._log(None, "recovery", positions=", ".join(map(str, recovered)))
+        for link in self.links:
+            if link.lost_once and not link.present:
+                link.diagnosis = self._silent_finding(self._first_silent(link.position))
 
     def _report_lost(self, positions: list[int]) -> None:
         """The master's own line for the slaves lost this step: which, from where nothing

@@ -30,7 +30,6 @@ from devices.events import (
     CoeEmergency,
     Event,
     LogLine,
-    NetworkRecovery,
     Resync,
     SlaveStateChange,
     StateChanged,
@@ -135,6 +134,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.next_cycle_us = 0
         self.network_op = False
         self.link_up = False
+        # The ports' links were applied since the last step: the lost slaves' findings may move.
+        self._links_moved = False
         self._bursting = False
         # Still steps (devices/master/still.py): the line as last applied, the states last
         # watched (None: watch again), the links that use DC (fixed by the description).
@@ -344,11 +345,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             skipped.serve += served
         if exchange and port_up:  # with link a frame goes out each cycle, answered or not
             self.frames += 1
-        if lost_now:
-            self._report_lost(lost_now)
-        if recovered:
-            self._event(NetworkRecovery(now_us, self.device_id, positions=tuple(recovered)))
-            self._log(None, "recovery", positions=", ".join(map(str, recovered)))
+        if lost_now or recovered or self._links_moved:
+            self._line_news(lost_now, recovered)
         if quiet:
             # Each state read after its own frame and mailbox (no slave's frame moves
             # another slave), none served: the list _watch_states would make is ``watched``.

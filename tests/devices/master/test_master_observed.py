@@ -143,3 +143,21 @@ def test_a_cause_just_removed_is_kept_until_the_slave_answers() -> None:
     rig = _faulted("master", "power_slave", {"position": 3, "on": False})
     rig.apply("master", "power_slave", {"position": 3, "on": True})
     assert master_view(rig)["injected"]["lost"] == [{"position": 3, "cause": "powered off"}]
+
+
+def test_each_lost_slave_names_the_current_first_silent_position() -> None:
+    """Cable 3 out, then cable 2: the gap grows towards the master and the CPX-E-EC's and the
+    drive's diagnoses both say where nothing answers now; cable 2 back, the drive's says
+    position 3 again."""
+    rig = _faulted("master", "pull_cable", {"cable": 3})
+    behind_2 = "no answer from position 3 on (no link on port 1 (OUT) of position 2)"
+    assert [s["diagnosis"] for s in master_view(rig)["slaves"]] == ["", "", "", behind_2]
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.run_until(IN_OP_US + US)
+    behind_1 = "no answer from position 2 on (no link on port 1 (OUT) of position 1)"
+    assert [s["diagnosis"] for s in master_view(rig)["slaves"]] == ["", "", behind_1, behind_1]
+    rig.apply("master", "plug_cable", {"cable": 2})
+    rig.run_until(IN_OP_US + 2 * US)
+    view = master_view(rig)
+    assert [s["present"] for s in view["slaves"]] == [True, True, True, False]
+    assert [s["diagnosis"] for s in view["slaves"]] == ["", "", "", behind_2]

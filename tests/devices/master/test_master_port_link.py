@@ -12,6 +12,8 @@ from line_bench import US, master_view
 from app.rig import Rig
 from app.rig_config import build_rig, parse_rig_spec
 
+SAVE_US = 3_500_000  # the drive's flash save takes 3 s (seed 004 ch. 4, flashsave.py)
+
 
 def _drive_first(c9: int | None = None, fastcat: bool = True) -> Rig:
     """master -> the drive's CoE side -> (a FastCAT); ``c9`` the drive's at its first power-up."""
@@ -48,3 +50,23 @@ def test_link_up_and_no_slave_answering_is_not_waiting_for_link() -> None:
     assert (view["link"], view["phase"]) == (True, "no_answer")
     assert not view["slaves"][0]["present"]
 
+
+def test_a_slave_silent_behind_a_port_with_link_is_diagnosed_without_a_link_finding() -> None:
+    """The drive powered off: link down on the master port. Powered again with c9 = 3 (Modbus)
+    latched: the port has link, the FastCAT is found again, the drive stays silent and its
+    diagnosis drops the link finding the port no longer reads."""
+    rig = _drive_first()
+    rig.run_until(4 * US)
+    rig.apply("drive_ec", "write_parameter", {"parameter": "c9", "value": 3})
+    rig.apply("drive_ec", "save", {})
+    rig.run_until(4 * US + SAVE_US)
+    rig.apply("drive_ec", "power", {"on": False})
+    view = _view(rig, 5 * US + SAVE_US)
+    assert view["link"] is False
+    assert [s["diagnosis"] for s in view["slaves"]] == [
+        "no answer from position 0 on (link down on the master port)"] * 2
+    rig.apply("drive_ec", "power", {"on": True})
+    view = _view(rig, 8 * US + SAVE_US)
+    assert view["link"] is True
+    assert [s["present"] for s in view["slaves"]] == [False, True]
+    assert [s["diagnosis"] for s in view["slaves"]] == ["no answer from position 0 on", ""]
