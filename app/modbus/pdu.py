@@ -26,6 +26,13 @@ from typing import Protocol
 
 from devices.device import CommandError
 from devices.servo.errors import AccessError
+from devices.servo.modbus_map import (  # e3 = 9: the Siemens map (ch.2), the model's data
+    E3_ADDRESS,
+    SIEMENS,
+    SIEMENS_PARAMETER_BASE,
+    SIEMENS_REGISTER_BASE,
+    active_map,
+)
 from devices.servo.parameters import MODBUS_NODE_HIGH  # 91..255 reserved (ch.2)
 from devices.servo.parameters import SAVE_COMMAND_ADDRESS as SAVE_ADDRESS
 from devices.servo.registers import REGISTER_BASE  # R00 at 0x8000 ... R133 at 0x8085
@@ -39,13 +46,7 @@ ILLEGAL_DATA_ADDRESS = 0x02  # the only exception code the drive implements (ch.
 BROADCAST_UNIT = 0  # ch.2 "Composizione del frame": 0 = broadcast, 1..90 drives
 MAX_READ_QUANTITY = 125  # ch.2 "Codice 03": quantity of registers 1 to 125 (0x7D)
 
-# Parameter e3 ("Parametro Eccezioni", address 58) = 9 moves the map for Siemens PLCs
-# (ch.2 "Estensione della mappatura"): d1 at 40001 + 1 = 0x9C42, R00 at 44097 + 0 = 0xAC41.
 MODBUS = "modbus"  # drive.fieldbus when c9 = 3
-E3_ADDRESS = 58
-E3_SIEMENS_MAP = 9
-SIEMENS_PARAMETER_BASE = 40001
-SIEMENS_REGISTER_BASE = 44097
 
 
 class ModbusDrive(Protocol):
@@ -197,7 +198,7 @@ def _locate(drive: ModbusDrive, address: int) -> _Target:
 
 def _siemens_map(drive: ModbusDrive) -> bool:
     try:
-        return drive.read_parameter(E3_ADDRESS) == E3_SIEMENS_MAP
+        return active_map(drive.read_parameter(E3_ADDRESS)) == SIEMENS
     except AccessError:
         return False
 

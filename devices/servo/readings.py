@@ -11,6 +11,7 @@ from devices.servo.display import display_text
 from devices.servo.ds402 import State
 from devices.servo.homing import limits_used
 from devices.servo.io import INPUT_NAMES, input_word, output_levels
+from devices.servo.modbus_map import E3_ADDRESS, active_map
 from devices.servo.motion import Limits, Shape
 from devices.servo.registers import MODE_NAMES, R
 
@@ -225,6 +226,9 @@ class DriveReadings:
         return {
             "kind": "servo", "id": self.device_id, "powered": self.powered,
             "responding": self.responding, "fieldbus": self.fieldbus, "node_id": self.node_id,
+            # the Modbus address map e3 selects, read at every request (ch. 2): the panel's
+            # address hints follow it
+            "modbus_map": active_map(self.params.get(E3_ADDRESS, 0)),
             "ds402_state": self.state.label, "controlword": self.cw, "statusword": sw,
             "control_register": self.regs[R.CONTROL_WORD], "status_register": r05,
             "status_bits": {name: bool(r05 >> bit & 1)

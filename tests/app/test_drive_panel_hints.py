@@ -1,19 +1,26 @@
 """The drive's Register and Parameter boxes cut labels such as "c9 operating mode / fieldbus
 (3 Modbus, ...)" (the box holds about 25 characters): the picked one's whole label, range,
-access and Modbus address are the box's hint (seed 004 ch. 1 "Registri", "Parametri")."""
+access and Modbus address are the box's hint (seed 004 ch. 1 "Registri", "Parametri"). The
+address is the one of the map the drive serves: e3 = 9 moves it for Siemens PLCs (ch. 2
+"Estensione della mappatura"); the drive's snapshot says which (``modbus_map``)."""
 
 from __future__ import annotations
 
+import asyncio
 from collections.abc import Callable
 from typing import Any
+
+from test_widgets_synced_panels import DRIVE, Sender, Server, frames
 
 from app.ui.drive.drive_panel import (
     PARAMETER_OPTIONS,
     REGISTER_OPTIONS,
+    DrivePanel,
     parameter_details,
     register_details,
 )
 from app.ui.panels.widgets import DetailHint
+from devices.servo.modbus_map import NORMAL, SIEMENS
 
 
 class Dropdown:
@@ -56,3 +63,36 @@ def test_the_hint_follows_the_pick() -> None:
     assert box.hint == register_details()[REGISTER_OPTIONS[0]]
     box.pick("R05 status_word")
     assert box.hint == "R05 status_word: 0..255, read only; Modbus 0x8005"
+
+
+def test_the_siemens_map_s_addresses_as_the_seed_s_examples() -> None:
+    """Ch. 2 "Esempi ... per PLC Siemens": d1 at 40001 + 1 = 40002 = 0x9C42, d3 at 0x9C44,
+    R00 at 44097 + 0 = 0xAC41, R09 at 0xAC4A."""
+    registers, parameters = register_details(SIEMENS), parameter_details(SIEMENS)
+    siemens = "(e3 = 9, Siemens map)"
+    assert parameters["d1 speed loop proportional gain KP"].endswith(
+        f"; Modbus 40002 = 0x9C42 {siemens}")
+    d3 = next(label for label in parameters if label.startswith("d3 "))
+    assert parameters[d3].endswith(f"; Modbus 40004 = 0x9C44 {siemens}")
+    assert registers["R00 control_word"].endswith(f"; Modbus 44097 = 0xAC41 {siemens}")
+    assert registers["R09 target_position"].endswith(f"; Modbus 44106 = 0xAC4A {siemens}")
+    assert register_details(NORMAL) == register_details()
+
+
+def test_the_panel_s_hints_follow_the_drive_s_map() -> None:
+    loop = asyncio.new_event_loop()
+    try:
+        server, sender = Server(loop), Sender()
+        panel = DrivePanel(server, None, sender, lambda: "drive", {})  # type: ignore[arg-type]
+        register, parameter = server.gui.handles["Register"], server.gui.handles["Parameter"]
+        register.value = "R05 status_word"
+        parameter.value = "d1 speed loop proportional gain KP"
+        frames(loop, server, lambda: panel.update({**DRIVE, "modbus_map": SIEMENS}))
+        assert register.hint == register_details(SIEMENS)["R05 status_word"]
+        assert parameter.hint == parameter_details(SIEMENS)[parameter.value]
+        assert "0xAC46" in register.hint and "0x9C42" in parameter.hint
+        frames(loop, server, lambda: panel.update({**DRIVE, "modbus_map": NORMAL}))
+        assert register.hint == "R05 status_word: 0..255, read only; Modbus 0x8005"
+        assert parameter.hint.endswith("; Modbus 0x0001")
+    finally:
+        loop.close()

@@ -27,6 +27,7 @@ from app.ui.style import esc
 from devices.device import Action
 from devices.servo import control
 from devices.servo.alarms import alarm_table
+from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, register_address
 from devices.servo.parameters import FIELDBUS_BY_C9, PARAMETER_BY_NAME, PARAMETERS
 from devices.servo.registers import MODE_NAMES, REGISTERS, R
 
@@ -50,29 +51,41 @@ def alarm_details(fieldbus: str) -> dict[str, str]:
     return {f"{a.code} {a.name}": f"{a.code} {a.name}: {a.description}" for a in alarms}
 
 
-def register_details() -> dict[str, str]:
-    """``"R24 master_encoder_increments"`` -> its range, access and Modbus address (ch. 1
-    "Registri"): the box holds about 25 characters, so the hint carries the label whole."""
+def modbus_words(address: int, address_map: str) -> str:
+    """A Modbus address as the manual writes it under the map: hex in the normal one (ch. 1),
+    decimal and hex with the map named in the Siemens one (ch. 2: "40001 + 1 = 40002 =
+    0x9C42")."""
+    if address_map == SIEMENS:
+        return f"Modbus {address} = 0x{address:04X} (e3 = 9, Siemens map)"
+    return f"Modbus 0x{address:04X}"
+
+
+def register_details(address_map: str = NORMAL) -> dict[str, str]:
+    """``"R24 master_encoder_increments"`` -> its range, access and Modbus address under the
+    drive's map (ch. 1 "Registri", ch. 2 "Estensione della mappatura"): the box holds about
+    25 characters, so the hint carries the label whole."""
     out = {}
     for n, spec in sorted(REGISTERS.items()):
         access = ("read only" if not spec.writable
                   else "kept by Save to flash" if spec.saveable else "not saved")
+        where = modbus_words(register_address(n, address_map), address_map)
         out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {spec.low}..{spec.high}, "
-                                        f"{access}; Modbus 0x{spec.address:04X}")
+                                        f"{access}; {where}")
     return out
 
 
-def parameter_details() -> dict[str, str]:
-    """``"c9 operating mode / fieldbus"`` -> its range, default and Modbus address (ch. 1
-    "Parametri"), and whether it acts only at the next power-up."""
+def parameter_details(address_map: str = NORMAL) -> dict[str, str]:
+    """``"c9 operating mode / fieldbus"`` -> its range, default and Modbus address under the
+    drive's map (ch. 1 "Parametri", ch. 2), and whether it acts only at the next power-up."""
     out = {}
     for spec in PARAMETERS.values():
         unit = " %" if spec.unit == "%" else ""
         when = "; read at power-up" if spec.power_up else ""
         access = "" if spec.writable else ", read only"
+        where = modbus_words(parameter_address(spec.address, address_map), address_map)
         out[f"{spec.name} {spec.meaning}"] = (
             f"{spec.name} {spec.meaning}: {spec.low}..{spec.high}{unit}, default "
-            f"{spec.default}{access}{when}; Modbus 0x{spec.address:04X}")
+            f"{spec.default}{access}{when}; {where}")
     return out
 
 
@@ -136,6 +149,7 @@ class DrivePanel:
         self._sender = sender
         self._target = target
         self._fieldbus = "modbus"
+        self._modbus_map = NORMAL  # the drive's (snapshot modbus_map): the address hints
         self._result_lock = threading.Lock()
         self._result = ""  # parked by a read's future (simulation thread), shown by update()
         self._shown_result: str | None = None
@@ -178,9 +192,11 @@ class DrivePanel:
                                                   min=-0x8000_0000, max=0xFFFF_FFFF)
             reg_ops = gui.add_button_group("Register access", ("Read register",
                                                                "Write register"))
-            self._register_hint = DetailHint(self._register, register_details)
+            self._register_hint = DetailHint(self._register,
+                                             lambda: register_details(self._modbus_map))
             self._parameter = gui.add_dropdown("Parameter", PARAMETER_OPTIONS)
-            self._parameter_hint = DetailHint(self._parameter, parameter_details)
+            self._parameter_hint = DetailHint(self._parameter,
+                                              lambda: parameter_details(self._modbus_map))
             self._parameter_value = gui.add_number("Parameter value", 0, step=1, min=0,
                                                    max=0xFFFF)
             par_ops = gui.add_button_group("Parameter access", ("Read param.", "Write param."))
@@ -371,6 +387,11 @@ class DrivePanel:
             for form in self._alarms.each():
                 set_options(form.alarm, list(alarm_options(fieldbus)))
                 form.hint.refresh()
+        address_map = str(snap.get("modbus_map", self._modbus_map))
+        if address_map != self._modbus_map:  # e3 = 9 moves every address (ch. 2)
+            self._modbus_map = address_map
+            self._register_hint.refresh()
+            self._parameter_hint.refresh()
         for name in ("powered", "ten", "ien"):
             self._synced[name].follow(bool(snap.get(name)))
         for form in self._alarms.each():
