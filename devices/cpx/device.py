@@ -533,7 +533,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
                  if e.fault.module == module.number]
         return {**module.snapshot(), "diagnosed": self.diagnosis.of_module(module.number),
                 "error_led": self.diagnosis.error_led(module.number),
-                "undiagnosed": undiagnosed(module, pairs, monitors, runs)}
+                "undiagnosed": undiagnosed(module, pairs, monitors, runs, self.u_out_ok)}
 
     def snapshot(self) -> dict[str, Any]:
         mtypes = [m.mtype for m in self.modules]

@@ -4,8 +4,9 @@ A module turns field signals into its input objects (0x60xx) when the bus module
 drives its outputs from the output objects (0x70xx) the PLC wrote, and reports the faults it
 sees (short circuit, wire break, undervoltage of U_OUT, a failed module) as causes the bus
 module reports (devices/cpx/codes.py CAUSES). Detection follows the physics: an output short
-circuit is seen only while the output is switched on, a wire break on an analog input only in
-the 4-20 mA range. Scaling and thresholds not in seed 002 are FieldRig's (docs/cpx-e-ec.md).
+circuit is seen only while the output is switched on and has its load supply U_OUT, a wire
+break on an analog input only in the 4-20 mA range. Scaling and thresholds not in seed 002
+are FieldRig's (docs/cpx-e-ec.md).
 """
 
 from __future__ import annotations
@@ -252,8 +253,11 @@ class CpxModule:
             return [ModuleFault(n, "module_failure")]
         if self.sensor_supply_short and monitors.scs:
             out.append(ModuleFault(n, "short_circuit_sensor_supply"))
+        # Without U_OUT no output is energised: nothing flows into a short, U_OUT low is
+        # all the module sees (docs/cpx-e-ec.md choice 38).
         for ch in sorted(self.shorted):
-            if ch < len(self.commanded) and self.short_bites(ch) and monitors.sco:
+            if ch < len(self.commanded) and supply_ok and self.short_bites(ch) and \
+                    monitors.sco:
                 out.append(ModuleFault(n, "short_circuit_outputs", ch, output=True))
         out.extend(self._wire_breaks())
         if self.mtype.has_outputs and not supply_ok and monitors.v_out:

@@ -19,6 +19,8 @@ from devices.cpx.modules import CpxModule, Monitors
 UNSEEN_REASONS: dict[str, str] = {
     "output_off": "a digital output switched off draws no current into its short",
     "current_range": "an analog output in a current range limits its current: no short",
+    "no_load_supply": "U_OUT (the load supply) is out of tolerance: an output without it is "
+                      "not energised and draws no current into its short (choice 38)",
     "signal_range": "a broken wire shows only on a 4-20 mA input, a current output, the 1CI",
     "no_application": "the application controller does not run (unpowered, bootloader, AC "
                       "failure, booting error): nothing new is diagnosed",
@@ -42,21 +44,25 @@ def wired(module: CpxModule) -> list[Wired]:
             *([("module_failure", None)] if module.failed else [])]
 
 
-def _physics(module: CpxModule, cause: str, channel: int | None) -> str | None:
+def _physics(module: CpxModule, cause: str, channel: int | None,
+             load_supply: bool) -> str | None:
     if cause == "short_circuit_outputs" and channel is not None and \
-            channel < len(module.commanded) and not module.short_bites(channel):
-        return "current_range" if module.mtype.analog_ranges else "output_off"
+            channel < len(module.commanded):
+        if not module.short_bites(channel):
+            return "current_range" if module.mtype.analog_ranges else "output_off"
+        if not load_supply:
+            return "no_load_supply"
     if cause == "wire_break" and channel is not None and not module.wire_watched(channel):
         return "signal_range"
     return None
 
 
 def reason(module: CpxModule, cause: str, channel: int | None, monitors: Monitors | None,
-           runs: bool) -> str:
+           runs: bool, load_supply: bool) -> str:
     """Why ``cause`` on ``channel``, wired, is not diagnosed now (an id of UNSEEN_REASONS).
     ``monitors`` are 0x2400's switches (None without a dictionary: unpowered), ``runs`` whether
-    the application controller runs."""
-    physical = _physics(module, cause, channel)
+    the application controller runs, ``load_supply`` whether U_OUT is in tolerance."""
+    physical = _physics(module, cause, channel, load_supply)
     if physical is not None:
         return physical
     if not runs or monitors is None:
@@ -70,7 +76,7 @@ def reason(module: CpxModule, cause: str, channel: int | None, monitors: Monitor
 
 
 def undiagnosed(module: CpxModule, diagnosed: Collection[Wired], monitors: Monitors | None,
-                runs: bool) -> list[dict[str, object]]:
+                runs: bool, load_supply: bool) -> list[dict[str, object]]:
     """The module's wired causes not in ``diagnosed`` (its (cause, channel) pairs), one entry
     per cause and reason: ``{"cause", "channels", "reason"}``, ``channels`` empty for a cause
     of the whole module."""
@@ -78,8 +84,8 @@ def undiagnosed(module: CpxModule, diagnosed: Collection[Wired], monitors: Monit
     for cause, channel in wired(module):
         if (cause, channel) in diagnosed:
             continue
-        channels = groups.setdefault((cause, reason(module, cause, channel, monitors, runs)),
-                                     [])
+        why = reason(module, cause, channel, monitors, runs, load_supply)
+        channels = groups.setdefault((cause, why), [])
         if channel is not None:
             channels.append(channel)
     order = list(UNSEEN_REASONS)

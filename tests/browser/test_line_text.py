@@ -437,6 +437,10 @@ def _fault_cell(html: str) -> str:
     ({"short": "16DI", "failed": True, "diagnosed": [],
       "undiagnosed": unseen("module_failure", "no_application")},
      "failed (bus module not running: not diagnosed)", ""),
+    # U_OUT missing: the output is not energised, its short draws no current (choice 30)
+    ({"short": "8DO", "shorted": [3], "diagnosed": diagnosed("undervoltage_out"),
+      "undiagnosed": unseen("short_circuit_outputs", "no_load_supply", 3)},
+     "U_OUT low; short 3 (no load supply: not diagnosed)", "U_OUT low"),
     ({"short": "4AI-U-I", "wire_broken": [0, 1], "diagnosed": diagnosed("wire_break", 0),
       "undiagnosed": unseen("wire_break", "pending", 1)},
      "wire 0; wire 1 (next cycle: not diagnosed)", "wire 0"),

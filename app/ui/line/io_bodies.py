@@ -132,6 +132,7 @@ def _error_parts(module: Mapping[str, Any]) -> tuple[str, list[int]]:
 # to know which switch or state hides it (0x2400 is the bus module's parameter, seed 002
 # Tab. 27).
 REASON_WORDS = {"output_off": "output off", "current_range": "current range",
+                "no_load_supply": "no load supply",
                 "signal_range": "signal range", "no_application": "bus module not running",
                 "module_failed": "module failed", "monitor_off": "0x2400 monitor off",
                 "pending": "next cycle"}

@@ -246,14 +246,19 @@ def test_module_error_led_shows_the_worst_diagnosed_cause() -> None:
     bench.run(0.01)
     assert _error_led(bench, 2) == {"pattern": "on", "colour": "red",
                                     "cause": "short_circuit_outputs", "channels": [3, 5]}
-    bench.apply("supply", out=15.0)  # U_OUT low as well: the shorts still show
+    # U_OUT low: the outputs are not energised, their shorts draw no current and go; U_OUT
+    # low is what the module diagnoses and shows (choice 30)
+    bench.apply("supply", out=15.0)
     bench.run(0.01)
     causes = {d["cause"] for d in bench.cpx.snapshot()["modules"][1]["diagnosed"]}
-    assert causes == {"short_circuit_outputs", "undervoltage_out"}
-    assert _error_led(bench, 2)["cause"] == "short_circuit_outputs"
+    assert causes == {"undervoltage_out"}
+    assert _error_led(bench, 2) == {"pattern": "on", "colour": "red",
+                                    "cause": "undervoltage_out", "channels": []}
+    bench.apply("supply", out=24.0)
+    bench.run(0.01)
+    assert _error_led(bench, 2)["channels"] == [3, 5]
     for channel in (5, 3):
         bench.apply("short_circuit", module=2, channel=channel, on=False)
     bench.run(0.01)
-    assert _error_led(bench, 2) == {"pattern": "on", "colour": "red",
-                                    "cause": "undervoltage_out", "channels": []}
+    assert _error_led(bench, 2) == dark
     assert _error_led(bench, 1) == dark

@@ -56,6 +56,19 @@ def test_u_out_missing_switches_the_outputs_off() -> None:
     assert m.faults(Monitors(v_out=False), supply_ok=False) == []
 
 
+def test_a_short_without_u_out_draws_no_current() -> None:
+    """An output commanded on without its load supply is not energised: its short is not
+    seen (digital or voltage output), only U_OUT low (docs/cpx-e-ec.md choice 30)."""
+    for name, values in (("8DO", [1] * 8), ("4AO-U-I", [1000] * 4)):
+        m = module(name)
+        m.shorted.add(2)
+        m.drive_outputs(values, supply_ok=False)
+        assert [f.cause for f in m.faults(Monitors(), supply_ok=False)] == ["undervoltage_out"]
+        m.drive_outputs(values, supply_ok=True)
+        assert [(f.cause, f.channel) for f in m.faults(Monitors(), supply_ok=True)] == [
+            ("short_circuit_outputs", 2)]
+
+
 def test_counter_counts_resets_and_latches() -> None:
     """CPX-E-1CI: control bit 0 sets the counter to 0, bit 1 latches it (FieldRig layout)."""
     m = module("1CI")

@@ -113,6 +113,7 @@ def test_wired_since_the_last_diagnosis_is_pending() -> None:
 
 
 def test_every_reason_the_model_gives_is_documented_data() -> None:
-    assert set(UNSEEN_REASONS) == {"output_off", "current_range", "signal_range",
-                                   "module_failed", "monitor_off", "no_application", "pending"}
+    assert set(UNSEEN_REASONS) == {"output_off", "current_range", "no_load_supply",
+                                   "signal_range", "module_failed", "monitor_off",
+                                   "no_application", "pending"}
     assert all(UNSEEN_REASONS.values())

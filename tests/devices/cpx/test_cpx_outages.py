@@ -1,0 +1,80 @@
+"""What the CPX-E-EC diagnoses while a supply or its application controller is missing
+(docs/cpx-e-ec.md choices 25 and 30; seed 002 Tab. 12 red on, Tab. 20-26, Tab. 29).
+
+Before, an output short stayed diagnosed (0x3702 besides 0x3708) with U_OUT missing, though an
+output without its load supply drives no current into the short; and the errors diagnosed
+before an application controller failure stayed active through it, so a cause removed
+meanwhile still showed as diagnosed until the fault was cleared."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from cpx_bench import STI, Bench
+
+from devices.cpx.codes import CPX_TEXT_ID_BASE, DiagType
+
+SHORT, UNDERVOLTAGE = CPX_TEXT_ID_BASE + 2, CPX_TEXT_ID_BASE + 8  # 0x3702, 0x3708
+NO_ERROR = CPX_TEXT_ID_BASE  # the information message of an error going (choice 20)
+
+
+def diagnosed(bench: Bench, module: int) -> list[tuple[str, int | None]]:
+    return [(d["cause"], d["channel"])
+            for d in bench.cpx.snapshot()["modules"][module - 1]["diagnosed"]]
+
+
+def unseen(bench: Bench, module: int) -> list[dict[str, Any]]:
+    return bench.cpx.snapshot()["modules"][module - 1]["undiagnosed"]
+
+
+def alarms(bench: Bench, since: int) -> list[tuple[str, bool, int]]:
+    return [(r["code"], r["active"], r["module"]) for r in bench.records("alarm", since)]
+
+
+def messages(bench: Bench, since: int = 0) -> list[tuple[DiagType, int, int]]:
+    """The 0x10F3 messages from the ``since``-th on: type, Text-ID, module (parameter 1)."""
+    return [(m.dtype, m.text_id, m.params[0][1])
+            for _sub, m in bench.cpx.history.ordered()[since:]]
+
+
+def shorted_output() -> Bench:
+    """16DI + 8DO in OP, I/O diagnostic interface, emergencies on; output 3 of the 8DO on
+    and shorted: diagnosed."""
+    bench = Bench(["16DI", "8DO"], history_flags=0x0001, **STI).to_op()
+    bench.apply("write_object", index=0x7002, sub=4, value=1)
+    bench.apply("short_circuit", module=2, channel=3, on=True)
+    bench.run(0.01)
+    assert diagnosed(bench, 2) == [("short_circuit_outputs", 3)]
+    return bench
+
+
+def test_without_u_out_a_short_is_not_diagnosed_the_undervoltage_is() -> None:
+    """U_OUT off: the output is not energised and draws no current into its short, so the
+    module reports U_OUT low only (0x3320); the short goes as any cause that goes."""
+    bench = shorted_output()
+    since, stored = len(bench.events), bench.cpx.history.count
+    bench.apply("supply", out=0.0)
+    bench.run(0.01)
+    assert diagnosed(bench, 2) == [("undervoltage_out", None)]
+    assert unseen(bench, 2) == [{"cause": "short_circuit_outputs", "channels": [3],
+                                 "reason": "no_load_supply"}]
+    assert alarms(bench, since) == [("0x3702", False, 2), ("0x3708", True, 2)]
+    assert messages(bench, stored) == [(DiagType.INFO, NO_ERROR, 2),
+                                       (DiagType.ERROR, UNDERVOLTAGE, 2)]
+    assert [r["code"] for r in bench.records("emergency", since)] == ["0x3320"]
+    assert bench.cpx.modules[1].driven[3] == 0
+
+
+def test_the_short_is_diagnosed_again_when_u_out_returns() -> None:
+    bench = shorted_output()
+    bench.apply("supply", out=0.0)
+    bench.run(0.01)
+    since, stored = len(bench.events), bench.cpx.history.count
+    bench.apply("supply", out=24.0)
+    bench.run(0.01)
+    assert diagnosed(bench, 2) == [("short_circuit_outputs", 3)]
+    assert unseen(bench, 2) == []
+    assert alarms(bench, since) == [("0x3708", False, 2), ("0x3702", True, 2)]
+    assert messages(bench, stored) == [(DiagType.INFO, NO_ERROR, 2),
+                                       (DiagType.ERROR, SHORT, 2)]
+    assert [r["code"] for r in bench.records("emergency", since)] == ["0x2320"]
