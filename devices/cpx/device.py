@@ -34,7 +34,7 @@ from devices.cpx.unseen import undiagnosed
 from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState, sync_error_reached
-from devices.events import AlarmChanged, LogLine, fmt_hex
+from devices.events import LogLine
 from devices.od import ObjectDictionary
 
 SUPPLY_NOMINAL_V = 24.0  # Tab. 29: U_EL/SEN 24 V DC +- 25 %
@@ -136,10 +136,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         self.esm.reset(self.now_us)
 
     def _stop(self) -> None:
-        for error in self.diagnosis.active:
-            cpx = error.cause.error
-            self.emit(AlarmChanged(self.now_us, self.device_id, code=fmt_hex(cpx.text_id, 4),
-                                   name=cpx.symbol, active=False, module=error.fault.module))
+        self.diagnosis.halt(self.now_us)
         self._outputs_dead()
         self.esm.reset(self.now_us)
         self._clear_runtime()
@@ -305,6 +302,8 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             self._diagnose()
         else:
             self._outputs_dead()
+            if self.diagnosis.active:  # the application stopped under them (AC failure)
+                self.diagnosis.halt(self.now_us)
         self._refresh_leds()
 
     def _outputs_dead(self) -> None:

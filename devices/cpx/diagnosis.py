@@ -146,10 +146,23 @@ class Diagnosis:
         self.active = []
         self.mailbox = []
 
-    def _raised(self, error: ActiveError, t_us: int, t_ns: int) -> None:
+    def halt(self, t_us: int) -> None:
+        """The application controller stops (power lost, AC failure): it diagnoses nothing
+        from now on, so what it diagnosed is no longer shown; the alarms clear. Nothing goes
+        into 0x10F3 or the mailbox: the controller that would write them does not run, and
+        the start that ends the stop empties them (docs/cpx-e-ec.md choice 39)."""
+        for error in self.active:
+            self._alarm(error, False, t_us)
+        self.active = []
+
+    def _alarm(self, error: ActiveError, active: bool, t_us: int) -> None:
         cpx = error.cause.error
         self.emit(AlarmChanged(t_us, self.device, code=fmt_hex(cpx.text_id, 4),
-                               name=cpx.symbol, active=True, module=error.fault.module))
+                               name=cpx.symbol, active=active, module=error.fault.module))
+
+    def _raised(self, error: ActiveError, t_us: int, t_ns: int) -> None:
+        cpx = error.cause.error
+        self._alarm(error, True, t_us)
         if not self.reports():
             return
         self.store(DiagMessage(diag_code(DIAG_CODE_CPX, cpx.number), DiagType.ERROR,
@@ -159,9 +172,7 @@ class Diagnosis:
                                         error.fault.channel or 0), t_us)
 
     def _gone(self, error: ActiveError, t_us: int, t_ns: int) -> None:
-        cpx = error.cause.error
-        self.emit(AlarmChanged(t_us, self.device, code=fmt_hex(cpx.text_id, 4),
-                               name=cpx.symbol, active=False, module=error.fault.module))
+        self._alarm(error, False, t_us)
         if self.reports() and not self.filter_no_error():
             self.store(DiagMessage(diag_code(DIAG_CODE_CPX, 0), DiagType.INFO,
                                    CPX_TEXT_ID_BASE, t_ns, error.params), t_us)

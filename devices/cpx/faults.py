@@ -62,7 +62,8 @@ FAULTS: dict[str, FaultSpec] = {f.name: f for f in (
     FaultSpec("sync_error", Target.DEVICE, "§2.4.1 Tab. 12 single flash",
               "Sync events are missed: OP -> SAFEOP with a sync error"),
     FaultSpec("ac_failure", Target.DEVICE, "§2.4.1 Tab. 12 red on",
-              "The application controller stops answering; clearing it restarts the module"),
+              "The application controller stops answering (nothing is diagnosed); clearing "
+              "it restarts the module"),
     FaultSpec("booting_error", Target.DEVICE, "§2.4.1 Tab. 12 flickering",
               "Flash checksum error of the application controller, found at the next start"),
 )}

@@ -23,7 +23,7 @@ UNSEEN_REASONS: dict[str, str] = {
                       "not energised and draws no current into its short (choice 38)",
     "signal_range": "a broken wire shows only on a 4-20 mA input, a current output, the 1CI",
     "no_application": "the application controller does not run (unpowered, bootloader, AC "
-                      "failure, booting error): nothing new is diagnosed",
+                      "failure, booting error): nothing is diagnosed",
     "module_failed": "a failed module reports its failure only (0x5000)",
     "monitor_off": "monitoring switched off: 0x2400:2 Monitor SCS (sensor supply), 0x2400:3 "
                    "Monitor SCO (outputs), Tab. 27",

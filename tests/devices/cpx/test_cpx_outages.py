@@ -32,9 +32,11 @@ def alarms(bench: Bench, since: int) -> list[tuple[str, bool, int]]:
 
 
 def messages(bench: Bench, since: int = 0) -> list[tuple[DiagType, int, int]]:
-    """The 0x10F3 messages from the ``since``-th on: type, Text-ID, module (parameter 1)."""
+    """The 0x10F3 messages of CPX errors from the ``since``-th message on: type, Text-ID,
+    module (parameter 1); the EtherCAT side's (Tab. 17) are left out."""
     return [(m.dtype, m.text_id, m.params[0][1])
-            for _sub, m in bench.cpx.history.ordered()[since:]]
+            for _sub, m in bench.cpx.history.ordered()[since:]
+            if CPX_TEXT_ID_BASE <= m.text_id <= CPX_TEXT_ID_BASE + 0xFF]
 
 
 def shorted_output() -> Bench:
@@ -78,3 +80,51 @@ def test_the_short_is_diagnosed_again_when_u_out_returns() -> None:
     assert messages(bench, stored) == [(DiagType.INFO, NO_ERROR, 2),
                                        (DiagType.ERROR, SHORT, 2)]
     assert [r["code"] for r in bench.records("emergency", since)] == ["0x2320"]
+
+
+def test_an_application_controller_failure_leaves_nothing_diagnosed() -> None:
+    """Tab. 12 red on: the application controller, which diagnoses, does not run. What it
+    diagnosed goes with it (the alarms clear, as at a power loss), nothing is diagnosed
+    meanwhile, and a cause removed during the failure is not shown as diagnosed."""
+    bench = shorted_output()
+    bench.apply("short_circuit", module=1, on=True)  # the 16DI's sensor supply
+    bench.run(0.01)
+    assert diagnosed(bench, 1) == [("short_circuit_sensor_supply", None)]
+    since, stored = len(bench.events), bench.cpx.history.count
+    bench.apply("inject_fault", fault="ac_failure")
+    bench.run(0.01)
+    snap = bench.cpx.snapshot()
+    assert snap["diagnosis"]["errors"] == []
+    assert [m["diagnosed"] for m in snap["modules"]] == [[], []]
+    assert [m["error_led"]["pattern"] for m in snap["modules"]] == ["off", "off"]
+    assert sorted(alarms(bench, since)) == [("0x3702", False, 1), ("0x3702", False, 2)]
+    assert bench.cpx.history.count == stored  # no controller writes a message
+    assert bench.records("emergency", since) == []
+    assert unseen(bench, 1) == [{"cause": "short_circuit_sensor_supply", "channels": [],
+                                 "reason": "no_application"}]
+    assert unseen(bench, 2) == [{"cause": "short_circuit_outputs", "channels": [3],
+                                 "reason": "output_off"}]  # no application: outputs off
+    bench.apply("short_circuit", module=2, channel=3, on=False)  # removed meanwhile
+    bench.run(0.01)
+    assert diagnosed(bench, 2) == []
+
+
+def test_recovery_restarts_and_diagnoses_what_is_still_there() -> None:
+    """Clearing the failure restarts the bus module (choice 25): the RAM state starts empty
+    (0x10F3, the mailbox), so the removed short has nothing to go from; what is still wired
+    is found at the first diagnosis and reported as a new error, once."""
+    bench = shorted_output()
+    bench.apply("short_circuit", module=1, on=True)
+    bench.run(0.01)
+    bench.apply("inject_fault", fault="ac_failure")
+    bench.run(0.01)
+    bench.apply("short_circuit", module=2, channel=3, on=False)
+    bench.run(0.01)
+    since = len(bench.events)
+    bench.apply("clear_fault", fault="ac_failure")
+    bench.to_op()
+    bench.run(0.01)
+    assert diagnosed(bench, 1) == [("short_circuit_sensor_supply", None)]
+    assert diagnosed(bench, 2) == []
+    assert alarms(bench, since) == [("0x3702", True, 1)]
+    assert messages(bench) == [(DiagType.ERROR, SHORT, 1)]

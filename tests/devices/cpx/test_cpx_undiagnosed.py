@@ -90,7 +90,7 @@ def test_a_failed_module_reports_its_failure_only() -> None:
 
 
 def test_no_application_no_diagnosis() -> None:
-    """Tab. 12 red on: the application controller does not answer, nothing new is diagnosed."""
+    """Tab. 12 red on: the application controller does not answer, nothing is diagnosed."""
     bench = Bench(MODULES, seed=3).to_op()
     bench.apply("inject_fault", fault="ac_failure")
     bench.apply("short_circuit", module=1, on=True)
