@@ -323,3 +323,29 @@ def test_a_trainee_is_not_told_a_cause_was_removed(pages: tuple[Page, Page]) -> 
     got = text(trainee)
     assert "alarm 16 FOLLOWING_ERROR raised" in got
     assert "cause of alarm" not in got
+
+
+def _cable_nodes(page: Page, index: int) -> list[dict[str, Any]]:
+    """The scene nodes of the line's cable ``index`` this page was sent, in order."""
+    root = f"/line/cable{index}/"
+    return [m for m in page.received() if str(m.get("name", "")).startswith(root)
+            and m.get("type") in ("BoxMessage", "LabelMessage")]
+
+
+def _drawn(nodes: list[dict[str, Any]]) -> tuple[set[tuple[int, ...]], list[str]]:
+    return ({tuple(m["props"]["color"]) for m in nodes if m["type"] == "BoxMessage"},
+            [m["props"]["text"] for m in nodes if m["type"] == "LabelMessage"])
+
+
+def test_a_trainee_s_scene_shows_no_pulled_cable(pages: tuple[Page, Page]) -> None:
+    """The 3D line drew the instructor's pulled cable 2 red and hanging, labelled "cable 2
+    pulled", on every page. A trainee sees what the real rig shows: the cable in its ports
+    (the LINK / ACT LEDs at both ends dark); the instructor's page still shows it pulled."""
+    from app.ui.line.cables import PLUGGED, PULLED
+
+    trainee, instructor = pages
+    colours, labels = _drawn(_cable_nodes(trainee, 2))
+    assert labels and colours  # the trainee did get the cable
+    assert colours == {PLUGGED} and all("pulled" not in t for t in labels), (colours, labels)
+    colours, labels = _drawn(_cable_nodes(instructor, 2))
+    assert PULLED in colours and "pulled" in labels[-1], (colours, labels)

@@ -15,6 +15,12 @@ between two bodies); the Line tab's status says it (:func:`pulled_text`).
 
 A click moves the master's own cable (``master_pulled``), as the Line controls' Pull / Plug
 do: it pulls a cable the master has in, also one drawn pulled because a slave's plug is out.
+
+With an instructor token a pulled cable is a hidden cause (only the instructor pulls one, the
+master's or a slave's own plug): the shared drawing (``causes=False``) shows every cable in
+its ports, as a trainee sees the real rig (the LINK / ACT LEDs at both ends go dark), and each
+instructor connection draws the cables as they are under the same node names, which shadow
+the shared ones on that page only (``client.scene``, viser 1.1.1; app/ui/line/scene.py).
 """
 
 from __future__ import annotations
@@ -103,9 +109,12 @@ def cable_label(index: int, plugged: bool, points: Sequence[Point]) -> str:
 
 
 class Cable:
-    def __init__(self, server: viser.ViserServer, index: int, points: list[Point],
-                 on_click: OnCable) -> None:
-        self._scene = server.scene
+    def __init__(self, owner: viser.ViserServer | viser.ClientHandle, index: int,
+                 points: list[Point], on_click: OnCable, causes: bool = True) -> None:
+        """``owner``: the server (every page) or one connection (its page only);
+        ``causes=False`` draws every cable plugged (a trainee's view, module docstring)."""
+        self._scene = owner.scene
+        self.causes = causes
         self.index = index
         self.points = points
         self._on_click = on_click
@@ -122,6 +131,10 @@ class Cable:
         # An older snapshot without the key: its "plugged" was the master's cable.
         self.master_plugged = not cable.get("master_pulled", not plugged)
         at_start = hangs_at_start(cable)
+        if not self.causes:
+            # A click does what the drawing offers (pull): a refused "plug_cable" would tell
+            # the trainee the cable is out.
+            plugged, at_start, self.master_plugged = True, False, True
         if (plugged, at_start) == self._drawn:
             return
         self._drawn, self.plugged = (plugged, at_start), plugged
@@ -131,10 +144,11 @@ class Cable:
         points = self.points if plugged else pulled_route(self.points, at_start)
         colour = PLUGGED if plugged else PULLED
         root = f"/line/cable{self.index}"
-        for n, (a, b) in enumerate(itertools.pairwise(points)):
+        # Numbered as drawn: a pulled cable has one stretch more than the same cable plugged,
+        # so an instructor's copy shadows every node of the shared (plugged) drawing.
+        stretches = [(a, b) for a, b in itertools.pairwise(points) if math.dist(a, b) >= 1e-6]
+        for n, (a, b) in enumerate(stretches):
             length = math.dist(a, b)
-            if length < 1e-6:
-                continue
             angle = math.atan2(-(b[1] - a[1]), b[0] - a[0])  # about +y: x turns toward -z
             box = self._scene.add_box(
                 f"{root}/seg{n}", color=colour, dimensions=(length + THICK, THICK, THICK),

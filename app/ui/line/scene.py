@@ -10,6 +10,7 @@ start of row 2. Line order, names and states come from the master snapshot (``sl
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -19,7 +20,10 @@ import viser
 from app.ui.line.bodies import Body, MasterBody, RailFrame, SlaveBody, as_drawn
 from app.ui.line.cables import LABEL_LIFT, THICK, Cable, OnCable, label_point, route
 from app.ui.line.io_bodies import CpxBody, TrsCatBody
+from app.ui.panels.per_client import instructor_for
 from app.ui.rail_scene import BODY_H
+
+logger = logging.getLogger(__name__)
 
 MASTER_X0 = -3.8  # the master (2.6 wide) ends 1.2 before the rail: room for cable 0
 ROW2_X0 = -3.0
@@ -98,8 +102,14 @@ class LineScene:
             body.build()
             for node in body.clickables:
                 node.on_click(lambda event, d=device: on_focus(event.client, d))
-        self.cables = [Cable(server, i, self._route(i), on_cable)
+        # With a token the shared cables show no pulled one (a hidden cause); each instructor
+        # connection draws them as they are over the shared ones (app/ui/line/cables.py).
+        instructor = instructor_for(server)
+        self.cables = [Cable(server, i, self._route(i), on_cable, instructor.shared)
                        for i in range(len(self.order))]
+        self._own_cables = instructor.scene_part(
+            lambda client: [Cable(client, i, self._route(i), on_cable)
+                            for i in range(len(self.order))])
 
     def _route(self, index: int) -> list[tuple[float, float]]:
         upstream = self.bodies[self.order[index - 1]] if index else self.master
@@ -163,6 +173,12 @@ class LineScene:
         cables = {int(c.get("index", i)): c for i, c in enumerate(master.get("cables") or [])}
         for cable in self.cables:
             cable.show(cables.get(cable.index, {}))
+        for own in self._own_cables.each():
+            try:
+                for cable in own:
+                    cable.show(cables.get(cable.index, {}))
+            except Exception:  # a page that just left: forgotten by its disconnect
+                logger.debug("instructor's cables not drawn", exc_info=True)
 
     # ---- tests ----------------------------------------------------------------------------
     def led_colours(self, device: str) -> dict[str, tuple[int, int, int]]:

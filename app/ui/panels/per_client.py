@@ -84,6 +84,25 @@ class Part(Generic[T]):
             return list(self._built.values())
 
 
+class ScenePart(Part[T]):
+    """What one ``build(client)`` made for each instructor connection: scene nodes of its
+    own (``client.scene``), which shadow the shared nodes of the same names on that page only
+    (viser 1.1.1). Never built on an open rig, whose shared scene shows everything."""
+
+    def __init__(self, build: Callable[[viser.ClientHandle], T]) -> None:
+        self._build_scene = build
+        self._lock = threading.Lock()
+        self._built: dict[int | None, T] = {}
+
+    def build_for(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            if client.client_id in self._built:
+                return
+        built = self._build_scene(client)
+        with self._lock:
+            self._built[client.client_id] = built
+
+
 class Instructor:
     """The dashboard's instructor parts and the connections they are built for."""
 
@@ -102,6 +121,14 @@ class Instructor:
         built now on an open rig, else for each instructor connection (:meth:`promote`)."""
         part = Part(self.server, build, self.shared)
         self._parts.append(part)
+        return part
+
+    def scene_part(self, build: Callable[[viser.ClientHandle], T]) -> Part[T]:
+        """Register ``build(client)`` for each instructor connection's own scene nodes
+        (:class:`ScenePart`); nothing is built on an open rig."""
+        part: Part[T] = ScenePart(build)
+        if not self.shared:
+            self._parts.append(part)
         return part
 
     def promote(self, client: viser.ClientHandle) -> None:
