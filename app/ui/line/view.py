@@ -2,9 +2,12 @@
 Slave tabs, the Line controls, and focus (a click on a device, or a scenario ``Focus`` event:
 its panels pick it and the camera moves toward it).
 
-Focus picks the device in the Slave tab, the Slave actions form and the Objects tab, and tells
-the clicking browser where to look; a scenario's focus step also opens the device's tab (the
-dashboard does, app/ui/tab_switch.py).
+Focus picks the device in the Slave tab, the Slave actions form and the Objects tab (shared
+pickers: every page shows the pick), and tells the clicking browser where to look; a
+scenario's focus step also opens the device's tab (the dashboard does, app/ui/tab_switch.py).
+A click (and "Show the whole line") moves the camera of the browser that clicked only: each
+operator of a rig looks where they want (docs/dashboard.md "Several browsers"). A scenario's
+focus moves every browser's, and the caption with it: a demo follows the narration.
 """
 
 from __future__ import annotations
@@ -114,7 +117,7 @@ class LineView:
 
         @whole.on_click
         def _(event: viser.GuiEvent) -> None:
-            self.show_all()
+            self.show_all(event.client)
 
         @self.slave.picker.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -150,7 +153,8 @@ class LineView:
 
     # ---- focus ----------------------------------------------------------------------------
     def focus(self, client: viser.ClientHandle | None, device: str, move: bool = True) -> None:
-        """Pick ``device`` in the panels and move every browser's camera toward it."""
+        """Pick ``device`` in the panels and move the camera toward it: ``client``'s (a
+        click), every browser's when None (a scenario's focus step)."""
         if device not in self.scene.bodies:
             logger.info("focus on %r: not a device of the line", device)
             return
@@ -169,7 +173,9 @@ class LineView:
             if client is None:
                 self.move_camera(target, caption=caption)
             else:
-                timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target, 0.0, caption))
+                # The caption stays where the scenario put it: it is every page's.
+                timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target, 0.0, None),
+                                        {"client": client})
                 timer.daemon = True
                 timer.start()
         notify(client, f"{device} selected", f"its panels: {where}")
@@ -193,24 +199,30 @@ class LineView:
         """(x, z) of the caption's bottom centre in the whole line's view: above the line."""
         return (self.home.x_min + self.home.x_max) / 2, self.bounds().z_max + CAPTION_GAP
 
-    def show_all(self) -> None:
-        self.move_camera(self.home, CAPTION_LIFT, self.home_caption)
+    def show_all(self, client: viser.ClientHandle | None = None) -> None:
+        """The whole line in ``client``'s view (its button), every browser's when None."""
+        if client is not None:
+            self.move_camera(self.home, CAPTION_LIFT, client=client)
+        else:
+            self.move_camera(self.home, CAPTION_LIFT, self.home_caption)
 
     def move_camera(self, box: Box, lift: float = 0.0,
-                    caption: tuple[float, float] | None = None) -> None:
-        """Every browser's camera onto ``box``, each fitted to its own 3D view (the canvas
-        between the panels, whatever the window's size); ``caption``: where the scenario
-        caption goes for that view."""
+                    caption: tuple[float, float] | None = None,
+                    client: viser.ClientHandle | None = None) -> None:
+        """``client``'s camera onto ``box`` (every browser's when None), each fitted to its
+        own 3D view (the canvas between the panels, whatever the window's size);
+        ``caption``: where the scenario caption goes for that view."""
         if caption is not None and self.on_caption_moved is not None:
             self.on_caption_moved(caption)
-        for client in self._server.get_clients().values():
+        clients = [client] if client is not None else self._server.get_clients().values()
+        for each in clients:
             try:
-                position, look_at = camera_for(box, self._client_aspect(client), lift=lift)
-                with client.atomic():  # position first: it drags look_at along (viser)
-                    client.camera.position = position
-                    client.camera.look_at = look_at
+                position, look_at = camera_for(box, self._client_aspect(each), lift=lift)
+                with each.atomic():  # position first: it drags look_at along (viser)
+                    each.camera.position = position
+                    each.camera.look_at = look_at
             except Exception:  # a browser that just left
-                logger.debug("camera move for client %s failed", client.client_id,
+                logger.debug("camera move for client %s failed", each.client_id,
                              exc_info=True)
 
     def _client_aspect(self, client: viser.ClientHandle) -> float:
