@@ -170,3 +170,72 @@ def test_a_trainee_keeps_the_operators_module_form(served: tuple[ServedRig, Page
     time.sleep(0.3)
     _apply(trainee, picker, "set_input", {"channel": 3, "value": True})
     _wait(lambda: _read(live, lambda rig: rig.device("fastcat").rail_module(1)._dig().field[2]))
+
+
+def test_the_instructor_powers_off_the_module_picked_in_its_own_rail_rows(
+    served: tuple[ServedRig, Page, Page],
+) -> None:
+    """The Rail / Module powered rows acted on the shared Module picker: picking the module to
+    switch off moved every trainee's picker to it. With a token they have their own."""
+    live, trainee, instructor = served
+    instructor.set(_in(instructor, "Rail and power", "Module"), "6 AI8TC")
+    time.sleep(0.3)
+    instructor.set(_in(instructor, "Rail and power", "Module powered"), False)
+    _wait(lambda: not _read(live, lambda rig: rig.device("fastcat").rail_module(6).powered))
+    assert _read(live, lambda rig: rig.device("fastcat").rail_module(1).powered)
+    time.sleep(0.5)
+    shared = trainee.widget("Module")  # the shared picker: a trainee gets no other
+    assert "6 AI8TC" not in trainee.updates(shared)
+    assert "6 AI8TC" not in [m.get("value") for m in trainee.received()]
+    _read(live, lambda rig: rig.apply("fastcat/6", "module_power", {"on": True}))
+
+
+def test_the_instructor_jams_the_drive_picked_in_its_own_alarm_rows(
+    served: tuple[ServedRig, Page, Page],
+) -> None:
+    """Alarms and load acted on the shared Servo drive picker (every page's Drive tab)."""
+    live, trainee, instructor = served
+    assert live.dashboard.drives.selected == "drive"  # type: ignore[union-attr]
+    instructor.set(_in(instructor, "Alarms and load", "Drive"), "drive_co")
+    time.sleep(0.3)
+    instructor.set(_in(instructor, "Alarms and load", "Load jammed"), True)
+    _wait(lambda: _read(live, lambda rig: rig.device("drive_co").snapshot()["jammed"]))
+    assert not _read(live, lambda rig: rig.device("drive").snapshot()["jammed"])
+    # The drive faults form acts on its own pick too.
+    instructor.set(_in(instructor, "Drive faults", "Drive"), "drive_ec")
+    time.sleep(0.3)
+    _apply(instructor, _in(instructor, "Drive faults", "Fault action"), "jam_load",
+           {"active": True})
+    _wait(lambda: _read(live, lambda rig: rig.device("drive_ec").snapshot()["jammed"]))
+    time.sleep(0.5)
+    assert live.dashboard.drives.selected == "drive"  # type: ignore[union-attr]
+    picked = trainee.updates(trainee.widget("Servo drive"))
+    assert "drive_co" not in picked and "drive_ec" not in picked
+    for drive in ("drive_co", "drive_ec"):
+        _read(live, lambda rig, d=drive: rig.apply(d, "jam_load", {"active": False}))
+
+
+def test_the_instructor_reads_the_causes_of_the_slave_picked_in_its_own_picker(
+    served: tuple[ServedRig, Page, Page],
+) -> None:
+    """The Slave tab's Injected rows were the shared Slave picker's slave: to read a slave's
+    causes the instructor picked it there, on every trainee's page too."""
+    live, trainee, instructor = served
+    line = live.dashboard.line
+    assert line is not None and line.slave.selected == "trscat"
+    _read(live, lambda rig: rig.apply("cpx/2", "inject_fault",
+                                      {"fault": "short_circuit", "channel": 3}))
+    live.runtime.advance(500_000).result(timeout=30)
+    instructor.set(_in(instructor, "Slave causes", "Slave"), "cpx")
+    folder = next(m["uuid"] for m in reversed(instructor.received())
+                  if m.get("type") == "GuiFolderMessage"
+                  and (m.get("props") or {}).get("label") == "Slave causes")
+    table = next(m["uuid"] for m in instructor.received()
+                 if m.get("container_uuid") == folder and m.get("type") == "GuiHtmlMessage")
+    _wait(lambda: any("short 3" in str((m.get("updates") or {}).get("content", ""))
+                      for m in instructor.received() if m.get("uuid") == table))
+    time.sleep(0.5)
+    assert line.slave.selected == "trscat"
+    assert "cpx" not in trainee.updates(trainee.widget("Slave", "trscat"))
+    _read(live, lambda rig: rig.apply("cpx/2", "clear_fault",
+                                      {"fault": "short_circuit", "channel": 3}))

@@ -129,7 +129,7 @@ def test_trainee_injection_refused_instructor_allowed_download(
         # folder that keeps a trainee's row stays.
         # The fault actions of Module I/O and Other drive actions, and the slaves' fault
         # forms with their own Device and Target pickers, are the instructor's own forms.
-        folders = {"FastCAT": (("Module faults",),
+        folders = {"FastCAT": (("Module faults", "Rail and power"),
                                ("Faults", "Modules", "Address and causes", "Module I/O")),
                    "Servo drive": (("Alarms and load", "Drive faults"),
                                    ("Motion", "Other drive actions")),

@@ -10,8 +10,8 @@ one function in the simulation thread. Labels are unique across the dashboard ("
 from __future__ import annotations
 
 import threading
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import viser
@@ -132,20 +132,27 @@ def on_button(group: Any, fn: Callable[[viser.GuiEvent, str], None]) -> None:
     group.on_click(clicked)
 
 
-@dataclass(frozen=True)
+@dataclass
 class _AlarmForm:
-    """The instructor's alarm rows of one connection (or the shared ones)."""
+    """The instructor's alarm rows of one connection (or the shared ones); ``drive``: its own
+    Drive picker (a token and several drives), None when the rows act on the shared one."""
 
     alarm: Any
     ops: Any
     jam: Synced
     hint: DetailHint
+    drive: Any = None
+    fieldbus: list[str] = field(default_factory=lambda: ["modbus"])  # its drive's, as shown
 
 
 class DrivePanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
-                 target: Target, actions: Mapping[str, Action]) -> None:
+                 target: Target, actions: Mapping[str, Action],
+                 drive_ids: Sequence[str] = ()) -> None:
+        """``drive_ids``: the drives the shared Servo drive picker offers (several: with a
+        token the instructor's forms get a Drive picker of their own)."""
         self._runtime = runtime
+        self._drive_ids = tuple(drive_ids)
         self._sender = sender
         self._target = target
         self._fieldbus = "modbus"
@@ -358,35 +365,51 @@ class DrivePanel:
         self._sequence(event, "c9 / c7", steps, done=lambda _r: self._park(
             f"c9 = {c9}, c7 = {c7} written: save, then power the drive off and on"))
 
+    def _own_drive(self, gui: Any) -> Any:
+        """With a token and several drives, an instructor's form gets a Drive picker of its
+        own: on the shared Servo drive picker the instructor's pick of the drive to jam or
+        alarm went to every trainee's page (docs/classroom.md). None: the shared one."""
+        if instructor_for(self._server).shared or len(self._drive_ids) < 2:
+            return None
+        return gui.add_dropdown("Drive", self._drive_ids, initial_value=self._target(),
+                                hint="the drive this form acts on")
+
+    def _send_to(self, own: Any, client: viser.ClientHandle | None, action: str,
+                 args: dict[str, Any]) -> None:
+        target = self._target() if own is None else str(own.value)
+        self._sender.send(client, target, action, args)
+
     def _alarm_form(self, gui: Any) -> _AlarmForm:
         with gui.add_folder("Alarms and load"):
-            alarm = gui.add_dropdown("Alarm", alarm_options(self._fieldbus))
+            own = self._own_drive(gui)
+            fieldbus = [self._fieldbus]
+            alarm = gui.add_dropdown("Alarm", alarm_options(fieldbus[0]))
             ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
             jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
                                    "following error, alarm 16")
         if not instructor_for(self._server).shared:  # per client: the narrower label
             gui.add_html(short_label_css([alarm]))
         form = _AlarmForm(alarm, ops, Synced(self._server, jam, self._sender, lambda c, on: (
-            self._apply(c, "jam_load", {"active": bool(on)}))),
-            DetailHint(alarm, lambda: alarm_details(self._fieldbus)))
-        on_button(ops, lambda e, b: self._do(
-            e, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
-            code=str(leading_int(alarm.value))))
+            self._send_to(own, c, "jam_load", {"active": bool(on)}))),
+            DetailHint(alarm, lambda: alarm_details(fieldbus[0])), own, fieldbus)
+        on_button(ops, lambda e, b: self._send_to(
+            own, e.client, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
+            {"code": str(leading_int(alarm.value))}))
         return form
 
     def _fault_form(self, gui: Any, faults: Mapping[str, Action]) -> ActionForm:
         with gui.add_folder("Drive faults", expand_by_default=False):
-            return ActionForm(gui, faults, self._apply, label="Fault action")
+            own = self._own_drive(gui)
+            return ActionForm(gui, faults, lambda c, name, args: self._send_to(
+                own, c, name, args), label="Fault action")
 
     # ---- view -----------------------------------------------------------------------------
-    def update(self, snap: Mapping[str, Any]) -> None:
+    def update(self, snap: Mapping[str, Any],
+               devices: Mapping[str, Any] | None = None) -> None:
+        """``snap``: the selected drive's snapshot; ``devices``: every device's (an
+        instructor's form with its own Drive picker shows its drive's)."""
         self._injected = list(snap.get("injected") or [])
-        fieldbus = str(snap.get("fieldbus", self._fieldbus))
-        if fieldbus != self._fieldbus:  # Profinet numbers 30..33 differently (ch. 6)
-            self._fieldbus = fieldbus
-            for form in self._alarms.each():
-                set_options(form.alarm, list(alarm_options(fieldbus)))
-                form.hint.refresh()
+        fieldbus = self._fieldbus = str(snap.get("fieldbus", self._fieldbus))
         address_map = str(snap.get("modbus_map", self._modbus_map))
         if address_map != self._modbus_map:  # e3 = 9 moves every address (ch. 2)
             self._modbus_map = address_map
@@ -395,7 +418,14 @@ class DrivePanel:
         for name in ("powered", "ten", "ien"):
             self._synced[name].follow(bool(snap.get(name)))
         for form in self._alarms.each():
-            form.jam.follow(bool(snap.get("jammed")))
+            own = snap if form.drive is None else (devices or {}).get(str(form.drive.value))
+            own = own or {}
+            bus = str(own.get("fieldbus", form.fieldbus[0]))
+            if bus != form.fieldbus[0]:  # Profinet numbers 30..33 differently (ch. 6)
+                form.fieldbus[0] = bus
+                set_options(form.alarm, list(alarm_options(bus)))
+                form.hint.refresh()
+            form.jam.follow(bool(own.get("jammed")))
         option = mode_option(snap.get("mode"))
         if option is not None:
             self._synced["mode"].follow(option)

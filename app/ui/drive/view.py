@@ -69,7 +69,7 @@ class DriveView:
             self._picker = gui.add_dropdown("Servo drive", tuple(self.drive_ids))
         gui.add_html(DRIVE_CSS)  # in each tab: an inactive tab's content is not mounted
         self.controls = DrivePanel(server, runtime, sender, lambda: self.selected,
-                                   described[self.selected]["actions"])
+                                   described[self.selected]["actions"], self.drive_ids)
         self.master: CanOpenMaster | None = None
         if any(self._nodes.values()):
             self.master = CanOpenMaster(server, runtime, sender,
@@ -142,7 +142,7 @@ class DriveView:
         snap = dict(devices.get(self.selected) or {})
         self.state.update(self.selected, snap, frame.t_us)
         self.words.update(self.selected, snap)
-        self.controls.update(snap)
+        self.controls.update(snap, devices)
         if self.canopen is not None:
             node_id = self._nodes.get(self.selected) or ""
             self.canopen.update(node_id, devices.get(node_id) or {}, snap)

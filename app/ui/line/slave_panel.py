@@ -6,13 +6,14 @@ side; the FastCAT has its own State tab. A click on a slave in the 3D view picks
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
 from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_parts
-from app.ui.panels.per_client import RoleHtml, instructor_for
+from app.ui.panels.per_client import RoleHtml, instructor_for, split_instructor
 from app.ui.panels.state import al_status_text, injected_text
 from app.ui.panels.widgets import Mirror
 from app.ui.rail_scene import PATTERN_WORDS
@@ -259,12 +260,54 @@ def slave_html(device: str, snap: Mapping[str, Any]) -> str:
     return title + ecat_html(snap)
 
 
+@dataclass(frozen=True)
+class _Causes:
+    """One instructor connection's Slave picker and the causes of the slave it picked."""
+
+    picker: Any
+    html: Any
+
+
+NO_CAUSE = '<p class="fr-muted">no injected cause</p>'
+
+
 class SlavePanel:
     def __init__(self, server: viser.ViserServer, order: Sequence[str]) -> None:
-        self.picker = server.gui.add_dropdown("Slave", tuple(order) or ("-",))
+        self._options = tuple(order) or ("-",)
+        self.picker = server.gui.add_dropdown("Slave", self._options)
         self._mirror = Mirror(self.picker)
-        # The Injected rows and undiagnosed module faults: the instructor's only (RoleHtml).
-        self._html = RoleHtml(server, instructor_for(server), "", "fr-slave-causes")
+        # The Injected rows and undiagnosed module faults: the instructor's only. With a token
+        # they are a folder per instructor connection with a Slave picker of its own: on the
+        # shared picker the instructor's pick of the slave whose causes to read went to every
+        # trainee's page (docs/classroom.md). Its picker follows the shared one's picks (a
+        # click in the 3D view), and picks on its own without moving anyone's.
+        instructor = instructor_for(server)
+        self._html = RoleHtml(server, instructor, "", "fr-slave-causes", own_causes=False)
+        self._causes = None if instructor.shared else instructor.part(self._causes_form)
+        self._devices: Mapping[str, Any] = {}
+        if self._causes is not None:
+            self.picker.on_update(lambda _event: self._follow())
+
+    def _causes_form(self, gui: Any) -> _Causes:
+        with gui.add_folder("Slave causes"):
+            form = _Causes(gui.add_dropdown("Slave", self._options, initial_value=self.selected,
+                                            hint="the slave whose injected causes show"),
+                           gui.add_html(NO_CAUSE))
+        form.picker.on_update(lambda _event: self._show(form))
+        return form
+
+    def _follow(self) -> None:
+        assert self._causes is not None
+        for form in self._causes.each():
+            if form.picker.value != self.selected:
+                form.picker.value = self.selected
+
+    def _show(self, form: _Causes) -> None:
+        device = str(form.picker.value)
+        html = split_instructor(slave_html(device, as_drawn(self._devices, device)),
+                                "fr-slave-causes")[1] or NO_CAUSE
+        if form.html.content != html:
+            form.html.content = html
 
     @property
     def selected(self) -> str:
@@ -275,7 +318,11 @@ class SlavePanel:
             self.picker.value = device
 
     def update(self, devices: Mapping[str, Any]) -> None:
+        self._devices = devices
         self._html.show(slave_html(self.selected, as_drawn(devices, self.selected)))
+        if self._causes is not None:
+            for form in self._causes.each():
+                self._show(form)
 
     @property
     def content(self) -> str:

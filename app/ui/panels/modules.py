@@ -61,12 +61,14 @@ def encoder_text(entry: Mapping[str, Any]) -> str:
 
 @dataclass(frozen=True)
 class _RailForm:
-    """The instructor's rail rows of one connection (or the shared ones)."""
+    """The instructor's rail rows of one connection (or the shared ones); ``module``: its own
+    Module picker (with a token), None when the rows act on the shared one (an open rig)."""
 
     ops: Any
     plug_type: Any
     swap_with: Any
     powered: Synced
+    module: Any = None
 
 
 def _speed_params(action: Action | None) -> tuple[str, str] | None:
@@ -146,45 +148,78 @@ class ModulePanel:
                               {which: int(self._encoder.value), rpm: float(self._rpm.value)})
 
     def _rail_form(self, gui: Any) -> _RailForm:
+        if instructor_for(self._server).shared:
+            return self._rail_rows(gui, None)
+        # With a token the rows get a Module picker of their own, in a folder of their own:
+        # on the shared picker the instructor's pick of the module to pull or switch off went
+        # to every trainee's page (docs/classroom.md).
+        options = tuple(module_options(self._rail)) or ("1",)
+        with gui.add_folder("Rail and power"):
+            # Starts at the shared pick (public anyway): what the instructor looked at.
+            own = gui.add_dropdown("Module", options, hint="the module the rail rows act on",
+                                   initial_value=self._module.value
+                                   if self._module.value in options else None)
+            return self._rail_rows(gui, own)
+
+    def _rail_rows(self, gui: Any, own: Any) -> _RailForm:
+        def target() -> str | None:
+            return self._target(None if own is None else own.value)
+
         form = _RailForm(gui.add_button_group("Rail", ("Unplug", "Plug", "Swap")),
                          # A copy built after the pick (a late instructor) starts at the
                          # preset too, not at the catalog's first type.
                          gui.add_dropdown("Plug type", self._catalog,
-                                          initial_value=plug_preset(self._entry(),
-                                                                    self._catalog)),
+                                          initial_value=plug_preset(
+                                              self._entry(None if own is None else own.value),
+                                              self._catalog)),
                          gui.add_dropdown("Swap with", tuple(module_options(self._rail))
                                           or ("1",)),
                          Synced(self._server, gui.add_checkbox("Module powered", True),
-                                self._sender, self._module_power))
+                                self._sender, lambda client, on: self._module_power(
+                                    client, on, target())),
+                         own)
+        if own is not None:
+            own.on_update(lambda _event: self._preset(form))
 
         @form.ops.on_click
         async def _(event: viser.GuiEvent) -> None:
             # On viser's loop: the group's value is still the button of this click.
             button = event.target.value
-            target = self._target()
-            if target is None:
+            target_now = target()
+            if target_now is None:
                 return
             if button == "Unplug":
-                self._sender.send(event.client, target, "unplug")
+                self._sender.send(event.client, target_now, "unplug")
             elif button == "Plug":
-                self._sender.send(event.client, target, "plug", {"type": form.plug_type.value})
+                self._sender.send(event.client, target_now, "plug",
+                                  {"type": form.plug_type.value})
             else:
                 other = option_slot(form.swap_with.value)
-                self._sender.send(event.client, target, "swap", {"other": other})
+                self._sender.send(event.client, target_now, "swap", {"other": other})
 
         return form
 
     # ---- helpers ------------------------------------------------------------------------
-    def _slot(self) -> int | None:
-        return option_slot(str(self._module.value))
+    def _slot(self, option: Any = None) -> int | None:
+        """The slot of ``option`` (an instructor's own pick), else of the shared picker's."""
+        return option_slot(str(self._module.value if option is None else option))
 
-    def _target(self) -> str | None:
-        slot = self._slot()
+    def _target(self, option: Any = None) -> str | None:
+        slot = self._slot(option)
         return None if slot is None else f"{self._id}/{slot}"
 
-    def _entry(self) -> Mapping[str, Any] | None:
-        slot = self._slot()
+    def _entry(self, option: Any = None) -> Mapping[str, Any] | None:
+        slot = self._slot(option)
         return next((e for e in self._rail if e.get("slot") == slot), None)
+
+    def _form_entry(self, form: _RailForm) -> Mapping[str, Any] | None:
+        return self._entry(None if form.module is None else form.module.value)
+
+    def _preset(self, form: _RailForm) -> None:
+        """Offer the Plug type the model expects in the form's module (an empty slot)."""
+        preset = plug_preset(self._form_entry(form), self._catalog)
+        if preset is not None:
+            form.plug_type.value = preset
 
     def _apply_form(self, client: viser.ClientHandle | None, action: str,
                     args: dict[str, Any]) -> None:
@@ -192,8 +227,8 @@ class ModulePanel:
         if target is not None:
             self._sender.send(client, target, action, args)
 
-    def _module_power(self, client: viser.ClientHandle | None, on: Any) -> None:
-        target = self._target()
+    def _module_power(self, client: viser.ClientHandle | None, on: Any,
+                      target: str | None) -> None:
         if target is not None:
             self._sender.send(client, target, "module_power", {"on": bool(on)})
 
@@ -219,10 +254,9 @@ class ModulePanel:
         entry = self._entry()
         self._encoder_folder.visible = bool(entry and entry.get("encoders") is not None)
         # Offered on a selection or rail change only: a type picked afterwards stays.
-        preset = plug_preset(entry, self._catalog)
-        if preset is not None:
-            for form in self._rails.each():
-                form.plug_type.value = preset
+        for form in self._rails.each():
+            if form.module is None:  # an own picker's rows follow their own pick
+                self._preset(form)
         slot = self._slot()
         if slot is None or not (entry and entry.get("type")):
             self._set_available([])
@@ -252,18 +286,23 @@ class ModulePanel:
             set_options(self._module, options)
             for form in self._rails.each():
                 set_options(form.swap_with, options)
+                if form.module is not None:
+                    set_options(form.module, options)
+                    self._preset(form)
             self._selection_changed()
         with self._available_lock:
             available, self._available = self._available, None
         if available is not None:
             self._form.restrict(available)
+        # The picked module's values: after a selection change the next frame shows the new
+        # module's (a Synced at rest shows what it last followed, so only a difference is sent).
+        for form in self._rails.each():
+            own = self._form_entry(form)
+            if own is not None:
+                form.powered.follow(bool(own.get("powered", True)))
         entry = self._entry()
         if entry is None:
             return
-        # The selected module's values: after a selection change the next frame shows the new
-        # module's (a Synced at rest shows what it last followed, so only a difference is sent).
-        for form in self._rails.each():
-            form.powered.follow(bool(entry.get("powered", True)))
         if entry.get("encoders") is not None:
             command = int(entry.get("command", 0))  # 0x7600 as the module holds it
             for k, synced in enumerate(self._zero_syncs):

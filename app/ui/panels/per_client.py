@@ -227,11 +227,13 @@ class RoleHtml:
     without them and the instructor's connections a table of them right under it."""
 
     def __init__(self, server: viser.ViserServer, instructor: Instructor, content: str,
-                 causes_id: str) -> None:
+                 causes_id: str, own_causes: bool = True) -> None:
+        """``own_causes=False``: with a token the instructor's rows are shown elsewhere (a
+        part of the caller's with a picker of its own): here every browser gets the rest."""
         self._shared = instructor.shared
         self._causes_id = causes_id
         self.handle = server.gui.add_html(self._public(content))
-        self._causes = None if self._shared else InstructorHtml(instructor)
+        self._causes = None if self._shared or not own_causes else InstructorHtml(instructor)
         self._last = content
         self._last_causes = "" if self._shared else split_instructor(content, causes_id)[1]
         if self._causes is not None:
@@ -243,7 +245,7 @@ class RoleHtml:
     def show(self, content: str) -> None:
         if content != self._last:
             self._last = content
-            if self._causes is None:
+            if self._shared:
                 self.handle.content = content
                 return
             public, self._last_causes = split_instructor(content, self._causes_id)
