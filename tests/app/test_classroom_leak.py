@@ -349,3 +349,18 @@ def test_a_trainee_s_scene_shows_no_pulled_cable(pages: tuple[Page, Page]) -> No
     assert colours == {PLUGGED} and all("pulled" not in t for t in labels), (colours, labels)
     colours, labels = _drawn(_cable_nodes(instructor, 2))
     assert PULLED in colours and "pulled" in labels[-1], (colours, labels)
+
+
+def test_the_instructor_s_scene_shows_the_jammed_load(pages: tuple[Page, Page]) -> None:
+    """The shared axis leaves the jam out with a token (the red carriage, "load jammed" in
+    its caption); the instructor's page draws them over it, its own scene nodes."""
+    from app.ui.drive.axis_scene import CARRIAGE_JAMMED
+
+    trainee, instructor = pages
+    for page, shown in ((instructor, True), (trainee, False)):
+        nodes = [m for m in page.received() if str(m.get("name", "")).startswith("/drive_axis/")]
+        red = any(tuple((m.get("props") or {}).get("color") or ()) == CARRIAGE_JAMMED
+                  for m in nodes)
+        caption = any("load jammed" in str((m.get("props") or {}).get("text", ""))
+                      for m in nodes)
+        assert (red, caption) == (shown, shown), page

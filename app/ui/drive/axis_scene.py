@@ -50,6 +50,8 @@ SCREW: RGB = (150, 152, 160)
 BED: RGB = (188, 190, 196)
 CARRIAGE: RGB = (31, 79, 143)
 CARRIAGE_JAMMED: RGB = (170, 40, 40)
+CARRIAGE_SIZE = (0.7, 1.0, 0.8)
+LEGEND_ANCHOR, LEGEND_SCALE = "top-left", 0.75
 SWITCH_OFF: RGB = (90, 92, 98)
 SWITCH_LIT: dict[str, RGB] = {"neg": (235, 25, 25), "pos": (235, 25, 25),
                               "home": (255, 196, 0)}
@@ -137,8 +139,9 @@ class AxisScene:
     def __init__(self, server: viser.ViserServer, drive_id: str, z: float,
                  length: float, causes: bool = True) -> None:
         self._server = server
-        # The scene is the same for every browser: with trainees (causes=False) it shows no
-        # injected cause, neither the caption's "load jammed" nor the red carriage.
+        # The shared scene: with trainees (causes=False) it shows no injected cause, neither
+        # the caption's "load jammed" nor the red carriage; an instructor's page draws them
+        # over it (axis_jam.py).
         self.causes = causes
         self._root = f"/{drive_id}_axis"
         self.z = z
@@ -207,11 +210,12 @@ class AxisScene:
         scene.add_box(f"{root}/bed", color=BED, dimensions=(screw_len, 1.1, 0.22),
                       position=at(coupling_x + screw_len / 2, 0.15, mz - 0.62))
         self._carriage = scene.add_box(f"{root}/carriage", color=CARRIAGE,
-                                       dimensions=(0.7, 1.0, 0.8), position=at(TRAVEL_X0, 0.0,
-                                                                               mz))
+                                       dimensions=CARRIAGE_SIZE, position=at(TRAVEL_X0, 0.0,
+                                                                             mz))
         self._carriage_label = self._label("carriage_label", "", TRAVEL_X0, FRONT,
                                            mz + CARRIAGE_LABEL_Z, "bottom-center", 0.8)
-        self._legend = self._label("legend", "", TRAVEL_X0, FRONT, LEGEND_Z, "top-left", 0.75)
+        self._legend = self._label("legend", "", TRAVEL_X0, FRONT, LEGEND_Z, LEGEND_ANCHOR,
+                                   LEGEND_SCALE)
 
     def _build_switches(self, travel: Travel, axis: Mapping[str, Any]) -> None:
         scene, at = self._server.scene, self._at
@@ -288,6 +292,17 @@ class AxisScene:
     def labels(self) -> list[viser.LabelHandle]:
         """Every label of the axis (tests: that none covers another)."""
         return list(self._labels)
+
+    @property
+    def root(self) -> str:
+        return self._root
+
+    def carriage_at(self) -> tuple[float, float, float]:
+        """Where the carriage is drawn now (scene coordinates)."""
+        return tuple(self._carriage.position)  # type: ignore[return-value]
+
+    def legend_at(self) -> tuple[float, float, float]:
+        return tuple(self._legend.position)  # type: ignore[return-value]
 
     def carriage_x(self) -> float:
         """Scene x of the carriage now (tests)."""

@@ -13,6 +13,7 @@ thread (``plots.DriveSampler``).
 
 from __future__ import annotations
 
+import logging
 from collections.abc import Iterable, Mapping
 from typing import Any
 
@@ -20,6 +21,7 @@ import viser
 
 from app.runtime import Frame, Runtime
 from app.ui.commands import CommandSender
+from app.ui.drive.axis_jam import AxisJam
 from app.ui.drive.axis_scene import AXIS_HEIGHT, AXIS_SPACING, AXIS_TOP, AxisScene
 from app.ui.drive.canopen_panel import CanOpenMaster, CanOpenMonitor
 from app.ui.drive.drive_panel import DrivePanel
@@ -29,6 +31,8 @@ from app.ui.drive.style import DRIVE_CSS
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user
 from devices.events import Event
+
+logger = logging.getLogger(__name__)
 
 
 def axes_height(drives: int) -> float:
@@ -87,10 +91,13 @@ class DriveView:
             with side.add_tab("CANopen", viser.Icon.NETWORK):
                 gui.add_html(DRIVE_CSS)
                 self.canopen = CanOpenMonitor(server)
-        causes = instructor_for(server).shared  # no injected cause in a classroom's scene
+        instructor = instructor_for(server)
+        # No injected cause in a classroom's shared scene; the instructor's own draws the jam.
         self.scenes = {d: AxisScene(server, d, top_z - AXIS_TOP - i * AXIS_SPACING, length,
-                                    causes)
+                                    instructor.shared)
                        for i, d in enumerate(self.drive_ids if axis_ids is None else axis_ids)}
+        self._jams = instructor.scene_part(
+            lambda client: {d: AxisJam(client, scene) for d, scene in self.scenes.items()})
 
         if self._picker is not None:
             picker = self._picker
@@ -139,6 +146,12 @@ class DriveView:
         devices = frame.snapshot.get("devices") or {}
         for drive_id, scene in self.scenes.items():
             scene.update(drive_id, devices.get(drive_id) or {}, frame.t_us)
+        for jams in self._jams.each():
+            try:
+                for drive_id, jam in jams.items():
+                    jam.show(devices.get(drive_id) or {})
+            except Exception:  # a page that just left: forgotten by its disconnect
+                logger.debug("instructor's jammed load not drawn", exc_info=True)
         snap = dict(devices.get(self.selected) or {})
         self.state.update(self.selected, snap, frame.t_us)
         self.words.update(self.selected, snap)
