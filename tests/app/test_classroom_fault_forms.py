@@ -86,19 +86,19 @@ def _apply(page: Page, picker: str, action: str, params: dict[str, Any]) -> None
 
 
 def _in(page: Page, folder: str, label: str) -> str:
-    """The uuid of the widget ``label`` in the page's newest folder titled ``folder``."""
-    uuid = next(
-        m["uuid"]
-        for m in reversed(page.received())
-        if m.get("type") == "GuiFolderMessage" and (m.get("props") or {}).get("label") == folder
-    )
-    return str(
-        next(
-            m["uuid"]
-            for m in page.received()
-            if m.get("container_uuid") == uuid and (m.get("props") or {}).get("label") == label
-        )
-    )
+    """The uuid of the widget ``label`` in the page's newest folder titled ``folder``, once
+    the page has it (an instructor's copies are still arriving while a loaded machine sends
+    the first ones)."""
+
+    def found() -> str | None:
+        got = page.received()
+        uuid = next((m["uuid"] for m in reversed(got) if m.get("type") == "GuiFolderMessage"
+                     and (m.get("props") or {}).get("label") == folder), None)
+        return next((str(m["uuid"]) for m in got if uuid is not None
+                     and m.get("container_uuid") == uuid
+                     and (m.get("props") or {}).get("label") == label), None)
+
+    return str(_wait(found))
 
 
 def _read(live: ServedRig, fn: Any) -> Any:
