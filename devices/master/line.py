@@ -248,16 +248,27 @@ class LineMixin:
         if first:
             self._log(None, "lost_frames", count=burst)
 
-    def _spoiled(self) -> bool:
-        """This cycle's frame through the damaged cables, out to the last slave it reaches
-        (the one before a slave that is off or whose IN link is down: not reachable, as
-        :meth:`step` has it) and back: True when it comes back spoiled, lost to the master as
-        in :meth:`_lose_frame`."""
-        last = -1
-        for p, ok in enumerate(self._line_reach):
-            if not (ok and self._slaves[p].reachable()):
+    def frame_path(self) -> int:
+        """How many positions the master's frames pass through, from position 0: each one
+        physically reached (every cable up to it plugged at both ends, every slave before it
+        powered) and powered. A powered ESC passes frames on whatever its application does: a
+        slave that does not answer (a drive whose c9 did not select EtherCAT at power-up, seed
+        004 ch. 2) is on the path, and the frames go on to the slaves behind it. The line as
+        last applied (a step)."""
+        n = 0
+        for reached, powered in zip(self._line_reach, self._line_powered, strict=True):
+            if not (reached and powered):
                 break
-            last = p
+            n += 1
+        return n
+
+    def _spoiled(self) -> bool:
+        """This cycle's frame through the damaged cables, out to the last slave on its
+        physical path (:meth:`frame_path`; answering or not) and back: True when it comes back
+        spoiled, lost to the master as in :meth:`_lose_frame`. Until session 16 the frame
+        turned back at the first slave that did not answer: a silent drive at position 0
+        spared every damaged cable behind it."""
+        last = self.frame_path() - 1
         if last < 0 or not run_frame([link.esc for link in self.links], last, self.damaged,
                                      self.rng):
             return False

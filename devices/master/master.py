@@ -289,8 +289,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         lost = cycle and not external and self.to_lose > 0 and port_up
         if lost:
             self._lose_frame()
-        elif self.damaged and cycle and not external and first:  # healthy: one dict's truth
-            lost = self._spoiled()
+        elif self.damaged and cycle and not external and port_up:  # healthy: one dict's truth
+            lost = self._spoiled()  # the frame's physical path, answered or not
         exchange = cycle and not lost and not external
         target = self.target
         # The target of a DC slave (SAFEOP while DC holds): _target_of_dc, inlined.
