@@ -204,7 +204,8 @@ class SlaveStateChange(SlaveEvent):
 @dataclass(frozen=True)
 class CommError(SlaveEvent):
     """A communication error the master saw on a slave: ``reason`` is ``lost_frames``,
-    ``link_lost`` (the slave is no longer on the line), ``identity`` (0x1018 is not the
+    ``link_lost`` (the slave is no longer on the line), ``not_found`` (expected, it has not
+    answered since the master started), ``identity`` (0x1018 is not the
     description's, or could not be read) or ``init_command`` (an init command's SDO was refused)."""
 
     reason: str = ""

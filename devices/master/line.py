@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from devices.events import Event
 
 CRC_REPORT_US = 1_000_000  # a damaged cable's lost frames: one log line a second at most
+LOST, MISSING = "lost", "missing"  # what _unreached found
 
 
 class LineMixin:
@@ -61,6 +62,7 @@ class LineMixin:
     _line_plugs: list[tuple[bool, bool]]
     _line_reach: list[bool]
     _watched: list[AlState | None] | None
+    link_up: bool
 
     if TYPE_CHECKING:
         def _log(self, link: SlaveLink | None, message: str, **params: object) -> None: ...
@@ -310,16 +312,37 @@ class LineMixin:
         link.injected_cause = ""
         if link.diagnosis.startswith("no answer"):
             link.diagnosis = ""
+        if link.missing:  # reported not found: it comes now (not a recovery: never lost)
+            self._log(link, "found_late", state=slave.al_state.label)
+        link.missing = False
         if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
             self._log(link, "found", state=slave.al_state.label)
             if slave.al_state is not AlState.INIT and not self.external:
                 self._request(link, AlState.INIT)
         return link.lost_once
 
-    def _unreached(self, link: SlaveLink) -> bool:
-        """The frames do not reach ``link``'s slave this step (off the healthy path); True
-        when the master loses it now."""
-        return self._lose(link)
+    def _unreached(self, link: SlaveLink) -> str:
+        """``link``'s slave does not answer this step: LOST when the master loses it now,
+        MISSING when it reports it not found now, else ""."""
+        if link.present:
+            return LOST if self._lose(link) else ""
+        if link.lost_once or link.missing or not self.link_up:
+            return ""
+        self._report_missing(link)
+        return MISSING
+
+    def _report_missing(self, link: SlaveLink) -> None:
+        """A configured slave that has not answered since the master started, reported once
+        its port has link (its frames go out: seed 003 waits for link, then sends): as a real
+        master's start-up reports the slaves it expected and did not find. What it reads, not
+        why (the cause stays the line's)."""
+        link.missing = True
+        first = self._first_silent(link.position)
+        link.diagnosis = self._silent_finding(first)
+        self._event(CommError(self.now_us, self.device_id, position=link.position,
+                              address=link.slave.station_address, reason="not_found",
+                              count=1))
+        self._log(link, "missing", first=first)
 
     def _lose(self, link: SlaveLink) -> bool:
         """The slave no longer answers: the master logs and diagnoses what it sees (from which
@@ -344,29 +367,34 @@ class LineMixin:
         finding = self._port_finding(first)
         return f"no answer from position {first} on" + (f" ({finding})" if finding else "")
 
-    def _line_news(self, lost_now: list[int], recovered: list[int]) -> None:
-        """The end of a step in which slaves were lost or found, or the ports' links moved:
-        the master's lines, then every lost slave's diagnosis as the line reads now. A slave
+    def _line_news(self, lost_now: list[int], recovered: list[int],
+                   missing_now: list[int] | None = None) -> None:
+        """The end of a step in which slaves were lost, found or reported not found, or the
+        ports' links moved: the master's lines, then every lost or missing slave's diagnosis
+        as the line reads now. A slave
         lost in an earlier step keeps no stale finding when the silent run grows towards the
         master or shrinks back, or when the link where the frames stop comes up or goes down
         (tests/devices/master/test_master_observed.py, test_master_port_link.py)."""
         self._links_moved = False
         if lost_now:
             self._report_lost(lost_now)
+        if missing_now:
+            self._report_lost(missing_now, "missing_line")
         if recovered:
             self._event(NetworkRecovery(self.now_us, self.device_id,
                                         positions=tuple(recovered)))
             self._log(None, "recovery", positions=", ".join(map(str, recovered)))
         for link in self.links:
-            if link.lost_once and not link.present:
+            if (link.lost_once or link.missing) and not link.present:
                 link.diagnosis = self._silent_finding(self._first_silent(link.position))
 
-    def _report_lost(self, positions: list[int]) -> None:
-        """The master's own line for the slaves lost this step: which, from where nothing
-        answers, its AL status read's working counter (one per slave that answers, the
-        description's slave count expected) and the link it reads where the frames stop."""
+    def _report_lost(self, positions: list[int], message: str = "lost_line") -> None:
+        """The master's own line for the slaves lost (or ``missing_line``: not found) this
+        step: which, from where nothing answers, its AL status read's working counter (one
+        per slave that answers, the description's slave count expected) and the link it reads
+        where the frames stop."""
         first = self._first_silent(positions[0])
         finding = self._port_finding(first)
-        self._log(None, "lost_line", positions=", ".join(map(str, positions)), first=first,
+        self._log(None, message, positions=", ".join(map(str, positions)), first=first,
                   wkc=sum(link.present for link in self.links), expected=len(self.links),
                   finding=f"; {finding}" if finding else "")

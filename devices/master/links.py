@@ -101,6 +101,9 @@ class SlaveLink:
     seen: AlState | None = None  # the state last reported in a SlaveStateChange
     reached_op: bool = False  # ECAT_Resync fired for this slave since it was (re)found
     lost_once: bool = False  # absent after having been present: its return is a recovery
+    # Reported not found: it never answered since the master started (its first frames with
+    # link on the port), as the description expects it (docs/ethercat-master.md).
+    missing: bool = False
     diagnosis: str = ""  # the master's own finding (identity mismatch, init command failed)
     # Why it is lost, as the simulator knows it ("cable 2 pulled"): the instructor's view
     # only (the snapshot's ``injected``), never the diagnosis nor the log.

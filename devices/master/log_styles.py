@@ -36,6 +36,10 @@ TWINCAT: dict[str, str] = {
     "lost_line": "slave(s) at position(s) {positions} lost: no answer from position {first} "
                  "on (working counter {wkc}, {expected} expected){finding}.",
     "found": "found on the line again in '{state}'.",
+    "missing": "slave not found: no answer from position {first} on.",
+    "missing_line": "slave(s) at position(s) {positions} not found: no answer from position "
+                    "{first} on (working counter {wkc}, {expected} expected){finding}.",
+    "found_late": "found on the line in '{state}'.",
     "identity": "identity check failed: vendor 0x{vendor:08X}, product 0x{product:08X}, "
                 "revision 0x{revision:08X} read and vendor 0x{want_vendor:08X}, product "
                 "0x{want_product:08X}, revision 0x{want_revision:08X} expected.",

@@ -38,7 +38,7 @@ from devices.master.actions import MASTER_ACTIONS
 from devices.master.dc import START_DELAY_US, DcState, DcUnit
 from devices.master.esc_errors import EscErrors
 from devices.master.hooks import Callback, Hooks
-from devices.master.line import LineMixin
+from devices.master.line import LOST, LineMixin
 from devices.master.links import RANK, Slave, SlaveLink, next_state
 from devices.master.log_styles import Entry, arrange, is_late, render, same_group
 from devices.master.network import Mapping as NetworkMapping
@@ -303,11 +303,13 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         served = 0
         recovered = []
         lost_now = []
+        missing_now = []
         for link, p, slave, reachable, exchange_frame, take_emergencies, uses_dc, esm_view \
                 in rows:
             if not (first if p == 0 else reach[p] and reachable()):
-                if self._unreached(link):
-                    lost_now.append(p)
+                found = self._unreached(link)
+                if found:
+                    (lost_now if found == LOST else missing_now).append(p)
                 quiet = False
                 continue
             if not link.present:
@@ -345,8 +347,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             skipped.serve += served
         if exchange and port_up:  # with link a frame goes out each cycle, answered or not
             self.frames += 1
-        if lost_now or recovered or self._links_moved:
-            self._line_news(lost_now, recovered)
+        if lost_now or recovered or missing_now or self._links_moved:
+            self._line_news(lost_now, recovered, missing_now)
         if quiet:
             # Each state read after its own frame and mailbox (no slave's frame moves
             # another slave), none served: the list _watch_states would make is ``watched``.

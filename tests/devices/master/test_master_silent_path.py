@@ -1,12 +1,16 @@
 """A powered slave that does not answer (a drive whose c9 did not select EtherCAT at power-up,
 seed 004 ch. 2) passes the frames on (its ESC forwards them whatever its application does):
 the frames' physical path, not the chain of answers, decides which cables they cross
-(docs/ethercat-master.md "Damaged cable")."""
+(docs/ethercat-master.md "Damaged cable"), and the master reports a configured slave that
+never answered at start-up (seed 003: the master interprets the ENI, opens its port, waits for
+link, then sends frames; "What the master knows")."""
 
 from __future__ import annotations
 
 from line_bench import US, master_view
 from test_master_port_link import _drive_first
+
+DRIVE = "'Drive 1 (SelemaDriveECAT)' (1001)"
 
 
 def test_a_damaged_cable_behind_a_silent_first_slave_spoils_frames() -> None:
@@ -22,3 +26,64 @@ def test_a_damaged_cable_behind_a_silent_first_slave_spoils_frames() -> None:
     esc = [s["esc_errors"] for s in master_view(rig)["slaves"]]
     assert esc[1]["invalid"][0] > 0  # the FastCAT's IN port: the first to see it spoiled
     assert esc[0]["forwarded"][1] > 0  # the drive's ESC forwards it back, marked
+
+
+def test_a_slave_never_found_is_logged_and_diagnosed() -> None:
+    rig = _drive_first(c9=3)
+    rig.run_until(2 * US)
+    view = master_view(rig)
+    assert [s["present"] for s in view["slaves"]] == [False, True]
+    assert [s["diagnosis"] for s in view["slaves"]] == ["no answer from position 0 on", ""]
+    texts = [row["text"] for row in rig.devices["master"].log]
+    assert f"{DRIVE}: slave not found: no answer from position 0 on." in texts
+    assert ("'Device 1 (EtherCAT)': slave(s) at position(s) 0 not found: no answer from "
+            "position 0 on (working counter 1, 2 expected).") in texts
+    assert sum("not found" in t for t in texts) == 2  # once, not every cycle
+
+
+def test_a_never_found_slave_is_a_communication_error_once() -> None:
+    rig = _drive_first(c9=3)
+    master = rig.devices["master"]
+    seen = []
+    master.on_notify(seen.append)
+    rig.run_until(2 * US)
+    found = [e.to_record() for e in seen if e.to_record()["event"] == "comm_error"]
+    assert [(r["position"], r["reason"]) for r in found] == [(0, "not_found")]
+
+
+def test_no_slave_is_reported_missing_while_the_port_has_no_link() -> None:
+    """Cable 0 out from the start: no frames go out, the master waits for link (seed 003)
+    and reports nothing missing; with link, the silent drive is reported."""
+    rig = _drive_first(c9=3)
+    rig.apply("master", "pull_cable", {"cable": 0})
+    rig.run_until(1 * US)
+    master = rig.devices["master"]
+    assert not any("not found" in row["text"] for row in master.log)
+    rig.apply("master", "plug_cable", {"cable": 0})
+    rig.run_until(3 * US)
+    assert sum("not found" in row["text"] for row in master.log) == 2
+
+
+def test_a_slave_found_after_being_reported_missing_is_logged_found() -> None:
+    """The drive, reported not found, set to c9 = 11, saved and power-cycled: it answers, the
+    master logs it found and its diagnosis clears; it is in no network recovery (it was never
+    lost; the FastCAT behind it was, while the drive was off)."""
+    rig = _drive_first(c9=3)
+    master = rig.devices["master"]
+    seen = []
+    master.on_notify(seen.append)
+    rig.run_until(4 * US)
+    rig.apply("drive_ec", "write_parameter", {"parameter": "c9", "value": 11})
+    rig.apply("drive_ec", "save", {})
+    rig.run_until(8 * US)
+    rig.apply("drive_ec", "power", {"on": False})
+    rig.run_until(9 * US)
+    rig.apply("drive_ec", "power", {"on": True})
+    rig.run_until(14 * US)
+    view = master_view(rig)
+    assert [s["present"] for s in view["slaves"]] == [True, True]
+    assert view["slaves"][0]["diagnosis"] == ""
+    texts = [row["text"] for row in master.log]
+    assert f"{DRIVE}: found on the line in 'INIT'." in texts
+    recoveries = [e.to_record() for e in seen if e.to_record()["event"] == "network_recovery"]
+    assert [r["positions"] for r in recoveries] == [[1]]  # the FastCAT, lost with the drive off
