@@ -12,8 +12,10 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
   model sees the master's cycle, not the report bursts), statistics to ``external_stats``;
 - back to B go the AL status / code when they change, the SM3 image when it changes (packed
   when a frame is handed to the model, at most every ``INPUTS_PERIOD_US``), emergencies as
-  CoE mailbox messages, and ``link`` when a slave drops off the line (cable pulled, powered
-  off: from that position on nothing answers), and each slave's ESC error counters
+  CoE mailbox messages, ``link`` when a slave drops off the line (cable pulled, powered
+  off: from that position on nothing answers), ``silent`` when a slave on the frames' path
+  stops or starts answering (its ESC passes the frames on: the drive with c9 != 11), and
+  each slave's ESC error counters
   0x0300-0x0313 as the model counts them (``esc_errors``, when they changed, looked at every
   ``ESC_ERRORS_PERIOD_US``); a master's write there comes back as ``esc_errors_write`` and
   clears the model's (``external_esc_write``), answered with its number;
@@ -210,6 +212,7 @@ class WireBridge:
         self._master: Any = None
         self._run: int | None = None  # the rig's loads when attached (B's "run")
         self._link_down: int | None = None
+        self._silent: frozenset[int] = frozenset()  # B's silent slaves (it starts with none)
         self._esc_errors_due_us = 0
         self._esc_seq = 0  # the last esc_counts batch or esc_errors_write the model took
         self._seed: int | None = None  # of the crossings B draws (frame_seed), per master
@@ -381,12 +384,7 @@ class WireBridge:
         step_wall = self._wall_of_step(now_us)
         for s in self._slaves:
             self._serve(s, now_us, step_wall)
-        down = next((s.position for s in self._slaves if not s.face.reachable(s.model)), None)
-        if down != self._link_down:
-            self._send(msg.LINK, 0, True)
-            if down is not None:
-                self._send(msg.LINK, down, False)
-            self._link_down = down
+        self._relink()
         damage = (dict(getattr(self._master, "damaged", {})), self._seed, self._run)
         if damage != self._damage and damage[1] is not None:
             self._damage = damage
@@ -395,6 +393,27 @@ class WireBridge:
             self._esc_errors_due_us = now_us + ESC_ERRORS_PERIOD_US
             for s in self._slaves:
                 self._sync_esc_errors(s)
+
+    def _relink(self) -> None:
+        """Where the frames stop (``link``) and which slaves on their way do not answer
+        (``silent``), as the built-in master's line has it: a powered ESC passes frames on
+        whatever its application does (``frame_path``), so a silent slave does not cut off
+        the slaves behind it."""
+        path = getattr(self._master, "frame_path", None)
+        reach = path() if path is not None else next(
+            (s.position for s in self._slaves if not s.face.reachable(s.model)),
+            len(self._slaves))  # a master without the line's physics: the answers decide
+        down = reach if reach < len(self._slaves) else None
+        if down != self._link_down:
+            self._send(msg.LINK, 0, True)
+            if down is not None:
+                self._send(msg.LINK, down, False)
+            self._link_down = down
+        silent = frozenset(s.position for s in self._slaves[:reach]
+                           if not s.face.reachable(s.model))
+        for position in sorted(silent ^ self._silent):
+            self._send(msg.SILENT, position, position in silent)
+        self._silent = silent
 
     def _sync_esc_errors(self, s: _Slave, counted: bool = False) -> None:
         """The model's counters to B when they changed, or when a batch or a write of B's was

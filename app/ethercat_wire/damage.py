@@ -114,14 +114,15 @@ class Damage:
         self.spoiled = 0
         return True
 
-    def spoils(self, visible: list[Esc]) -> bool:
-        """This frame through the damaged cables, out to the last visible slave and back (as
-        the built-in master's: run_frame); True: it comes back spoiled, not to be answered."""
-        if not run_frame([esc.counters.counting for esc in visible], len(visible) - 1,
+    def spoils(self, path: list[Esc]) -> bool:
+        """This frame through the damaged cables, out to the last slave on its path (answering
+        or not: Line.path) and back (as the built-in master's: run_frame); True: it comes back
+        spoiled, not to be answered."""
+        if not run_frame([esc.counters.counting for esc in path], len(path) - 1,
                          self.shares, self.rng):
             return False
         self.spoiled += 1
-        for esc in visible:  # counted on a spoiled frame only: a master reads them at once
+        for esc in path:  # counted on a spoiled frame only: a master reads them at once
             esc.show_error_counters()
         return True
 

@@ -353,14 +353,22 @@ class Line:
     """The slaves of one wire in line order; `process(frame)` answers a frame in place.
 
     `link_ok[pos]` False means the cable into `pos` is pulled or the slave is off: from there
-    on the slaves vanish and the frame comes back from the last visible one, untouched by the
-    rest. With no slave visible the frame is dropped (the master sees its link down).
+    on the slaves vanish and the frame comes back from the last one on its path (``path``),
+    untouched by the rest. With no slave on the path the frame is dropped (the master sees its
+    link down). `silent[pos]` True means the slave is powered and on the path but does not
+    answer (a drive whose c9 did not select EtherCAT at power-up, seed 004 ch. 2): its ESC
+    passes the frame on, whatever its application does, and takes no datagram (no working
+    counter, no auto-increment position, no register read or written), as the built-in
+    master's line has it (devices/master/line.py ``frame_path``). ``visible``: the slaves on
+    the path that answer. A damaged cable spoils frames along the path, silent slaves included.
     """
 
     def __init__(self, escs: list[Esc], outbox: list[tuple]) -> None:
         self.escs = escs
         self.outbox = outbox
         self.link_ok = [True] * len(escs)
+        self.silent = [False] * len(escs)
+        self.path: list[Esc] = []
         self.visible: list[Esc] = []
         self.frames = 0
         self.pd_frames = 0  # frames carrying LRD/LWR/LRW
@@ -376,6 +384,12 @@ class Line:
             self.link_ok[position:] = [True] * (len(self.escs) - position)
         else:
             self.link_ok[position] = False
+        self._relink()
+
+    def set_silent(self, position: int, silent: bool) -> None:
+        """The slave at `position` stops (True) or starts (False) answering; its ESC passes
+        frames on either way."""
+        self.silent[position] = silent
         self._relink()
 
     @property
@@ -397,17 +411,20 @@ class Line:
 
     def _relink(self) -> None:
         n = next((i for i, ok in enumerate(self.link_ok) if not ok), len(self.escs))
-        self.visible = self.escs[:n]
+        self.path = self.escs[:n]
+        self.visible = [esc for esc in self.path if not self.silent[esc.position]]
         for i, esc in enumerate(self.escs):
+            # Hops and port links are physical: a silent ESC on the path delays the frame and
+            # keeps port 1 of the slave before it open (DL status, DC receive times).
             esc.index = i
             esc.downstream = max(0, n - 1 - i)
             esc.set_last(i == n - 1)
 
     def process(self, frame: bytearray) -> bool:
         """Run every datagram of `frame` past the visible slaves; False: drop the frame."""
-        if not self.visible:
+        if not self.path:
             return False
-        if self.damage.shares and self.damage.spoils(self.visible):
+        if self.damage.shares and self.damage.spoils(self.path):
             return False  # lost, as the built-in master loses it
         self.frames += 1
         pd = False
@@ -502,6 +519,8 @@ class Line:
         """The every-cycle drift datagram, kept cheap: the others only note the time they got
         (their 0x092C difference is worked out if a master ever reads it)."""
         off, n = dg.offset, dg.length
+        if not self.visible:  # only silent slaves on the path: nobody takes the time
+            return 0
         local = self.visible[0].clock.local_ns()
         for i, esc in enumerate(self.visible):
             if is_reader(i, esc):

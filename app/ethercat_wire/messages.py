@@ -35,6 +35,9 @@ AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0
 MAILBOX_REPLY = "mailbox_reply"  # ("mailbox_reply", pos, data): queued for SM1, in order
 INPUTS = "inputs"  # ("inputs", pos, data): SM3 image
 LINK = "link"  # ("link", pos, up): from pos on, slaves vanish from the wire
+# ("silent", pos, on): the slave at pos is powered but does not answer (on) or answers again;
+# its ESC passes frames on either way
+SILENT = "silent"
 ALIAS = "alias"  # ("alias", pos, value | None): a restart; None: the stored SII alias
 # ("esc_errors", pos, data, seq): 0x0300-0x0313 as the model counts them, the esc_counts
 # batches and esc_errors_write up to seq included
@@ -47,7 +50,7 @@ STOP = "stop"  # ("stop",)
 
 B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR, ESC_ERRORS_WRITE,
           ESC_COUNTS)
-A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, ALIAS, ESC_ERRORS, DAMAGE, STOP)
+A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, SILENT, ALIAS, ESC_ERRORS, DAMAGE, STOP)
 
 CYCLE_REPORT_S = 0.010  # "cycle" at most this often
 STATS_REPORT_S = 0.100  # "stats" this often

@@ -116,6 +116,8 @@ def apply_message(line: Line, msg: tuple) -> bool:
         esc.set_inputs(msg[2])
     elif tag == messages.LINK:
         line.set_link(msg[1], bool(msg[2]))
+    elif tag == messages.SILENT:
+        line.set_silent(msg[1], bool(msg[2]))
     elif tag == messages.ALIAS:
         esc.set_alias(msg[2])
     elif tag == messages.ESC_ERRORS:

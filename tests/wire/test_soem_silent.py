@@ -1,0 +1,28 @@
+"""SOEM on a line whose first slave is a drive that does not answer (c9 = 3 at power-up, seed
+004 ch. 2): its ESC passes the frames on, so the master finds the FastCAT behind it, as the
+built-in master does (docs/ethercat-wire.md "Silent slaves"). Until session 16 the wire cut
+the line at the silent drive and SOEM found no slave. Skipped as test_soem_line.py is."""
+
+from __future__ import annotations
+
+from test_soem_line import Master, favoured, powered_runtime
+from test_wire_silent import SILENT_DRIVE_FIRST
+from wire_line import veth_pair
+
+from app.ethercat_wire.bridge import start_wire
+from app.rig_config import build_rig, parse_rig_spec
+
+
+def test_soem_finds_the_slave_behind_a_silent_drive():
+    with veth_pair("q") as (master_if, slave_if), favoured():
+        runtime = powered_runtime(build_rig(parse_rig_spec(SILENT_DRIVE_FIRST)))
+        bridge = start_wire(runtime, slave_if)
+        master = Master(master_if)
+        try:
+            n, found = master("init")
+            assert n == 1
+            assert found[0][0] == "FastCAT"
+        finally:
+            master.close()
+            bridge.stop()
+            runtime.stop()
