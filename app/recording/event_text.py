@@ -105,10 +105,13 @@ def log_path(event: Event) -> str:
     return device_path(event.device, "events")
 
 
-def lane_change(event: Event, record: dict[str, Any]) -> tuple[str, str] | None:
-    """(lane path, new value) when the event moves a state lane (a state machine, an LED)."""
+def lane_change(event: Event, record: dict[str, Any],
+                main: str = "") -> tuple[str, str] | None:
+    """(lane path, new value) when the event moves a state lane (a state machine, an LED).
+    ``main``: the lane of the device's main machine (signals.main_machine: "ds402" for a
+    drive), where its events without ``machine`` go, so they meet its samples."""
     if event.kind == "state":
-        return state_lane(event.device, record.get("machine", "")), str(record["to"])
+        return state_lane(event.device, record.get("machine") or main), str(record["to"])
     if event.kind == "led":
         return device_path(event.device, "led", record["led"]), str(record["pattern"])
     return None

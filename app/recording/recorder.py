@@ -25,7 +25,7 @@ import rerun as rr
 
 from app.recording import event_text
 from app.recording.blueprint import TIMELINE, lane_style, rig_blueprint, series_style
-from app.recording.signals import SeriesInfo, Signal, rig_signals, state_values
+from app.recording.signals import SeriesInfo, Signal, main_machine, rig_signals, state_values
 from devices.events import Event
 from devices.leds import LedPattern, is_lit
 
@@ -105,6 +105,8 @@ class RigRecorder:
         self._texts: dict[str, _Column] = {}
         self._lanes: dict[str, _Column] = {}
         self._lane_now: dict[str, str] = {}  # last value sent or buffered per lane
+        # Each device's main-machine lane as its snapshots show it (signals.main_machine).
+        self._main: dict[str, str] = {}
         self._styled: dict[str, SeriesInfo] = {}  # entity -> the style it was given
         self._buffered = 0
         self._next_sample_us: int | None = None  # None: sample at the first chance
@@ -155,6 +157,8 @@ class RigRecorder:
             if self.load_count is not None:
                 self._load = self.load_count()
             self._last_t_us = t_us
+            if snapshot is not None:
+                self._learn_machines(snapshot)
             for event in events:
                 self._event(event)
             if snapshot is not None:
@@ -272,9 +276,16 @@ class RigRecorder:
         column.values.append(event_text.text(event, record, self.al_status))
         column.levels.append(event_text.level(event, record))
         self._buffered += 1
-        lane = event_text.lane_change(event, record)
+        lane = event_text.lane_change(event, record, self._main.get(event.device, ""))
         if lane is not None:
             self._lane(lane[0], event.t_us + self._offset_us, lane[1], exact=True)
+
+    def _learn_machines(self, snapshot: Mapping[str, Any]) -> None:
+        for device_id, snap in (snapshot.get("devices") or {}).items():
+            if device_id not in self._main and isinstance(snap, Mapping):
+                machine = main_machine(snap)
+                if machine is not None:
+                    self._main[device_id] = machine
 
     def _lane(self, path: str, t_us: int, value: str, exact: bool = False) -> None:
         """A lane keeps changes only. Events (``exact``) carry the time of the change; samples

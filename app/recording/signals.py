@@ -129,6 +129,14 @@ def led_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[
                      _led_info(device_id, led), pattern)
 
 
+def main_machine(snap: Mapping[str, Any]) -> str | None:
+    """The lane (``StateChanged.machine``) that a device's main-machine events belong to: the
+    one of the first STATE_KEYS key its snapshot holds (a servo drive's is CiA 402, "ds402",
+    docs/architecture.md); None when the snapshot shows none."""
+    return next((machine for key, machine in STATE_KEYS.items()
+                 if isinstance(snap.get(key), str)), None)
+
+
 def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str, str]]:
     """(lane path, value) of every state machine and LED pattern the snapshot shows."""
     for key, machine in STATE_KEYS.items():
