@@ -49,7 +49,9 @@ EXPECTED: dict[tuple[str, str], str | None] = {
     ("dc_sync_lost", "not_synchronized"): "master",
     ("dc_sync_lost", "resynchronized"): "master",
     ("drive_jammed_load", "following_error"): "drive",  # alarm 16 on the Drive tab
+    ("module_lost_in_op", "op"): None,  # the whole line in OP, the FastCAT's State tab
     ("module_lost_in_op", "recovered"): None,
+    ("too_many_analog", "max_analog_alarm"): None,  # one coupler, no tabs: the whole rail
     ("trscat_expansion_mismatch", "line_in_op"): None,
     ("trscat_expansion_mismatch", "safeop_refused"): "trscat",  # PREOP, ERROR blinking
     ("trscat_expansion_mismatch", "fixed"): "trscat",
@@ -100,3 +102,12 @@ def test_the_checkpoint_is_focused_on_the_device_of_its_caption(
     assert expected is None or expected in named(caption), (expected, caption)
     assert focus == expected, (f"{stem} checkpoint {name}: focus {focus!r}, the caption is "
                                f"about {expected!r}: {caption}")
+
+
+@pytest.mark.parametrize(("stem", "name", "caption"), [c[:3] for c in ALL],
+                         ids=[f"{a}-{b}" for a, b, _, _ in ALL])
+def test_every_checkpoint_picture_has_a_caption(stem: str, name: str, caption: str) -> None:
+    """The examples are the sales demos: each picture says in words what it shows (README "For
+    sales and support demos"). too_many_analog had no caption: its picture was the rail and a
+    red alarm, with nothing on screen a non-specialist could follow."""
+    assert caption.strip(), f"{stem} checkpoint {name}: no caption before it"

@@ -178,7 +178,7 @@ def test_a_load_clears_the_caption(dashboard: Dashboard) -> None:
     from devices.events import Caption
 
     runtime = dashboard.runtime
-    quiet_start = load_scenario(EXAMPLES_DIR / "module_lost_in_op.toml")  # first caption 6 s
+    quiet_start = load_scenario(EXAMPLES_DIR / "ax2_homing.toml")  # first caption 4.5 s
     assert not [s for s in quiet_start.steps if s.kind == "caption" and s.t_us == 0]
     runtime.journal([Caption(0, "scenario", text="old run: the cable is pulled")])
     runtime.submit(lambda: None).result(timeout=TIMEOUT_S)  # journalled, not yet taken
