@@ -338,7 +338,23 @@ def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: on[{reaction.number - 1}]: {exc}") \
                 from None
+        if reaction.slave:
+            _check_line_slave(scenario, reaction, rig)
     return layouts
+
+
+def _check_line_slave(scenario: Scenario, reaction: Reaction, rig: Rig) -> None:
+    """``slave`` must be on the master's line, or the reaction never fires (a drive is there
+    as its CoE side, ``<drive>-ecat``, the id the rig file's line and the events' ``slave``
+    give it; its own id, which its events carry, is not)."""
+    line = [str(link.slave.device_id) for link in rig.devices["master"].links]
+    if reaction.slave in line:
+        return
+    side = f"{reaction.slave}-ecat"
+    hint = (f"; the EtherCAT side of {reaction.slave} is {side!r}" if side in line else "")
+    raise ScenarioError(f"{scenario.source}: on[{reaction.number - 1}].slave: "
+                        f"{reaction.slave!r} is not a slave of the EtherCAT line (its slaves: "
+                        f"{', '.join(line)}{hint})")
 
 
 def _module_layouts(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:

@@ -48,6 +48,15 @@ def test_bad_reactions(text: str, message: str) -> None:
 @pytest.mark.parametrize(("change", "message"), [
     (("action = \"write_object\"", "action = \"fly\""), "on\\[0\\]"),
     (("slave = \"fastcat\"", "slave = \"nosuch\""), "no device 'nosuch'"),
+    # A device of the rig that is no slave of the line: the reaction would never fire. The
+    # drive on the line is its CoE side, as the rig file's line and the events' `slave` name
+    # it; `slave = "drive_ec"` (the id its own events carry) was taken and never fired.
+    (("slave = \"fastcat\"", "slave = \"drive_ec\""),
+     "on\\[0\\].slave: 'drive_ec' is not a slave of the EtherCAT line \\(its slaves: fastcat, "
+     "trscat, cpx, drive_ec-ecat; the EtherCAT side of drive_ec is 'drive_ec-ecat'\\)"),
+    (("slave = \"fastcat\"", "slave = \"drive\""),
+     "on\\[0\\].slave: 'drive' is not a slave of the EtherCAT line \\(its slaves: fastcat, "
+     "trscat, cpx, drive_ec-ecat\\)$"),
 ])
 def test_reactions_are_checked_against_the_rig(change: tuple[str, str], message: str) -> None:
     scenario = parse_scenario(GOOD.replace(*change), "r.toml")
