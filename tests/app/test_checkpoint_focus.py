@@ -28,6 +28,7 @@ NAMES = {
     "trscat": r"\bTRS-CAT\b",
     "cpx": r"\bCPX-E\b",
     "drive_ec": r"\bdrive_ec\b",
+    "drive_co": r"\bdrive_co\b",
     "drive": r"\bdrive\b(?!_)|\bmotor\b",
 }
 # (scenario, checkpoint) -> the device the picture must be on; None: the whole line (no focus
@@ -39,7 +40,13 @@ EXPECTED: dict[tuple[str, str], str | None] = {
     ("cable_pulled", "line_in_op"): "master",
     ("cable_pulled", "cable_pulled"): "cpx",  # cut off behind cable 2
     ("cable_pulled", "recovered"): "master",  # "the master finds both slaves again"
+    # "drive_co's motor overheats ...": its Drive tab (CiA 402 Fault, alarm 2); off the line,
+    # its axis is in the whole line's view (docs/scenarios.md, focus on a drive).
+    ("canopen_drive_alarm_reset", "overtemperature"): "drive_co",
+    ("canopen_drive_alarm_reset", "reset"): "drive_co",
     ("cnf_scan", "op"): None,  # the coupler's own scan: the whole rail in view
+    ("cpx_output_supply_low", "supplied"): "cpx",
+    ("cpx_output_supply_low", "undervoltage"): "cpx",  # PL blinking, SF, the Slave tab
     ("config_mismatch", "mismatch"): None,
     ("cpx_short_circuit", "output_on"): "cpx",
     ("cpx_short_circuit", "short_circuit"): "cpx",  # the module's red LED, SF, 0x10F3

@@ -1,7 +1,7 @@
 """docs/architecture.md "Event schema" says all a CI job needs to parse the event lines: every
 kind with every field and the device families that emit it, every ``machine`` value with its
-families, and the shape of an alarm's ``code`` per family. The example scenarios' events (all
-twelve: no smaller set emits every kind, field and machine; ~5 s) must stay inside it."""
+families, and the shape of an alarm's ``code`` per family. The example scenarios' events
+(all of them: no smaller set emits every kind, field and machine; ~5 s) must stay inside it."""
 
 from __future__ import annotations
 
