@@ -90,6 +90,18 @@ def test_cnf_scan_lights_reds_in_order_then_yellows(capsys, tmp_path) -> None:
     assert {r.get("machine") for r in short} == {"cnf_button"}
 
 
+def test_cnf_scan_scanning_picture_shows_the_scan_under_way(capsys, tmp_path) -> None:
+    """The `scanning` checkpoint's picture illustrates its caption ("scanned again, one by
+    one"): some modules probed (their red LEDs on), not all. At 11.2 s it showed "scan 0/7"
+    and every module LED dark: the bus reset (1 s, docs/fastcat-coupler.md) was still on."""
+    records = run("cnf_scan", capsys, tmp_path)
+    at = next(r["t"] for r in records if r["event"] == "checkpoint"
+              and r["name"] == "scanning")
+    lit = {r["led"] for r in records if r["event"] == "led" and r["led"].endswith(".red")
+           and r["pattern"] == "on" and 10.5 < r["t"] <= at}
+    assert 2 <= len(lit) < 7, (at, sorted(lit))
+
+
 def test_config_mismatch_at_power_up(capsys, tmp_path) -> None:
     records = run("config_mismatch", capsys, tmp_path)
     after_power = [r for r in records if r["t"] >= 14.0]
