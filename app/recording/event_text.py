@@ -59,6 +59,23 @@ def _log(r: dict[str, Any]) -> str:
     return f"[port {r['port']}] {r['text']}" if r.get("port") else str(r["text"])
 
 
+def _slave(r: dict[str, Any]) -> str:
+    """How the master names a slave in its events: its place on the line and its address."""
+    return f"slave {r['position']} ({r['address']})"
+
+
+def _slave_state(r: dict[str, Any]) -> str:
+    move = f"{r['from']} -> {r['to']}" if r["from"] else str(r["to"])
+    code = f", AL status code {r['code']}" if int(r["code"], 16) else ""
+    return f"{_slave(r)}: {move}{code}"
+
+
+def _resync(r: dict[str, Any]) -> str:
+    if r["position"] < 0:
+        return "ECAT_Resync: the whole network"
+    return f"ECAT_Resync: {_slave(r)} {r['slave']}"
+
+
 FORMATS: dict[str, Callable[[dict[str, Any]], str]] = {
     "state": _state,
     "emergency": _emergency,
@@ -70,17 +87,28 @@ FORMATS: dict[str, Callable[[dict[str, Any]], str]] = {
     "checkpoint": lambda r: f"checkpoint: {r['name']}",
     "read": lambda r: f"read {r['address']} = {r['value']}"
                       + (f" ({r['hex']})" if r.get("hex") else ""),
+    "focus": lambda r: f"focus: {r['target']}",
+    # The EtherCAT master's events (seed 003), about a slave by position and address.
+    "slave_state": _slave_state,
+    "comm_error": lambda r: f"{_slave(r)}: communication error {r['reason']} "
+                            f"(count {r['count']})",
+    "coe_emergency": lambda r: f"{_slave(r)}: CoE {_emergency(r)}",
+    "resync": _resync,
+    "network_recovery": lambda r: "network recovery: slaves "
+                                  + ", ".join(str(p) for p in r["positions"]),
 }
 
 
 def level(event: Event, record: dict[str, Any]) -> str:
     if event.kind == "alarm":
         return ERROR if record["active"] else INFO
-    if event.kind == "emergency":
+    if event.kind in ("emergency", "coe_emergency"):
         # Error code 0x0000 is the "error reset / no error" emergency (DS301): good news.
         return INFO if int(record["code"], 16) == 0 else WARN
-    if event.kind == "al_status":
+    if event.kind in ("al_status", "slave_state"):
         return INFO if int(record["code"], 16) == 0 else WARN
+    if event.kind == "comm_error":
+        return WARN
     return INFO
 
 
