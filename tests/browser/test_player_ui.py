@@ -17,6 +17,8 @@ from devices.events import Caption
 pytestmark = pytest.mark.browser
 
 SCENARIO = "Module 2 stops answering in OP"
+OP_CAPTION = ("The line powers up and reaches OP: the FastCAT's RUN LED on, its modules' "
+              "yellow LEDs blinking.")
 CAPTION = "Module 2 (DI16) is pulled off the rail while the line is in OP."
 
 
@@ -53,7 +55,8 @@ def test_pick_play_caption_pause_step_restart(live: LiveDashboard, page) -> None
     live.runtime.submit(lambda: None).result(timeout=10)
     assert live.runtime.rig.clock.now_us == held
     captions = [e for e in live.runtime.events_since(0)[1] if isinstance(e, Caption)]
-    assert [(c.t_us, c.text) for c in captions][:1] == [(6_000_000, CAPTION)]
+    assert [(c.t_us, c.text) for c in captions] == [(500_000, OP_CAPTION),
+                                                    (6_000_000, CAPTION)]
 
     # Step: to the next step's instant, paused there.
     before = player.view()
