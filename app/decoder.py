@@ -11,6 +11,12 @@ Accepted input (case and ``0x`` prefixes do not matter):
 - an emergency as the master logs it: ``FF00 81 02 00 00 04 00`` (code, register, data), the
   TwinCAT line ``CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00')`` or the raw 8-byte CAN frame
   ``00 FF 81 02 00 00 04 00`` (code little endian); an 8-byte SDO abort frame ``80 ...``;
+- the master's log lines in each of its styles (seed 000 §7.1-§7.4: TwinCAT, Sirio, Pegaso with
+  its data high byte first, AITracePrint with the AL status code in decimal), read by
+  :mod:`app.decoder_paste`;
+- a 0x10F3 diagnosis message as bytes (ETG.1020, seed 002 Tab. 15, 16 bytes or more), a
+  32-bit value as its four bytes low first (``02 00 00 E1``: the Diag Code as Tab. 16 prints
+  it), a Modbus exception response ``83 02`` (or with the unit id, ``05 83 02``);
 - one number: an AL status code (``0x8204``, ``0x0052``), an EMCY / 0x603F code (``8130``), an
   SDO abort code (``0x06020000``), a FastCAT 0x5400 word (``0x04000002``), an ETG.1020 Diag
   Code (``0xE8007500``), a CPX-E Text-ID (``0x3702``), a FastCAT alarm code (``0x04``);
@@ -23,13 +29,16 @@ Accepted input (case and ``0x`` prefixes do not matter):
 from __future__ import annotations
 
 import re
+import struct
 from dataclasses import dataclass, replace
 
+from app.decoder_paste import PasteError, canonical
+from app.modbus.pdu import EXCEPTION_FLAG, EXCEPTION_NAMES, ILLEGAL_DATA_ADDRESS
 from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
-from devices.cpx.messages import parse_emergency
+from devices.cpx.messages import CHANNEL_INPUT, CHANNEL_OUTPUT, DiagMessage, parse_emergency
 from devices.device import CommandError
-from devices.ethercat import AL_STATUS_CODES
+from devices.ethercat import AL_STATUS_CODES, MANUFACTURER_AREA, describe_al_status_code
 from devices.events import fmt_hex
 from devices.fastcat import alarms as fastcat
 from devices.od import ABORT_TEXT, AbortCode
@@ -44,6 +53,8 @@ TRSCAT = "TRS-CAT"
 CPX = "CPX-E-EC"
 CANOPEN = "CANopen (DS 301)"
 SDO = "SDO abort"
+DIAG = "Diagnosis message (0x10F3)"
+MODBUS = "Modbus exception"
 
 MAX_FASTCAT_MODULE = fastcat.MAX_MODULES  # seed 000 §2: at most 16 modules on a coupler
 
@@ -85,12 +96,14 @@ def decode(text: str) -> list[Meaning]:
     raw = text.strip()
     if not raw:
         raise DecodeError("nothing to decode: paste a code, an emergency or a name")
-    logged = re.search(r"Hex:\s*([0-9A-Fa-f ,]+)", raw)  # the TwinCAT emergency line
-    if logged:
-        raw = logged.group(1)
-    quoted = re.search(r"Code\s*'(0x[0-9A-Fa-f]+)'", raw)  # "AL Status Code '0x8204'"
-    if quoted:
-        raw = quoted.group(1)
+    try:
+        raw = canonical(raw).strip()
+    except PasteError as exc:
+        raise DecodeError(str(exc)) from None
+    exception = re.fullmatch(r"(?:modbus\s*)?exception\s*(?:code\s*)?(?:0x)?([0-9a-f]{1,2})",
+                             raw, re.IGNORECASE)
+    if exception:
+        return [_modbus_exception(None, int(exception.group(1), 16))]
     alarm = re.fullmatch(r"(?:drive\s*)?alarm\s*(\d{1,3})", raw, re.IGNORECASE)
     if alarm:
         return _drive_alarm_number(int(alarm.group(1)))
@@ -128,7 +141,15 @@ def _hex(token: str) -> int | None:
 
 # ---- frames ------------------------------------------------------------------------------
 def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
-    if len(values) == 8 and all(w <= 2 for w in widths):
+    as_bytes = all(w <= 2 for w in widths)
+    if as_bytes and len(values) in (2, 3) and values[-2] > EXCEPTION_FLAG:
+        # seed 004 ch. 2 "Eccezioni": function code + 0x80, exception code (unit id first)
+        return [_modbus_exception(values[-2] & ~EXCEPTION_FLAG, values[-1])]
+    if as_bytes and len(values) == 4:  # a 32-bit value as its bytes on the wire, low first
+        return _number(int.from_bytes(bytes(values), "little"), 8)
+    if as_bytes and len(values) >= DIAG_HEADER_BYTES:
+        return _diag_message(bytes(values))
+    if len(values) == 8 and as_bytes:
         frame = bytes(values)
         if frame[0] == 0x80:  # DS 301 "abort transfer" command specifier
             index = int.from_bytes(frame[1:3], "little")
@@ -138,11 +159,65 @@ def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
                 Meaning(SDO, f"SDO abort frame on {where}",
                         f"abort code {fmt_hex(code, 8)} is not in DS 301", "DS 301")]
         return emergency(int.from_bytes(frame[:2], "little"), frame[2], frame[3:])
-    if widths[0] >= 3 and len(widths) >= 2 and all(w <= 2 for w in widths[1:]) \
-            and all(v <= 0xFF for v in values[1:]) and values[0] <= 0xFFFF:
+    # The register may come in four digits, as the Sirio display prints it (0081, §7.2).
+    if widths[0] >= 3 and len(widths) >= 2 and widths[1] <= 4 \
+            and all(w <= 2 for w in widths[2:]) and all(v <= 0xFF for v in values[1:]) \
+            and values[0] <= 0xFFFF:
         return emergency(values[0], values[1], bytes(values[2:]))
     raise DecodeError("bytes not understood: an emergency is 'CODE REG B0 B1 B2 B3 B4' "
-                      "(e.g. FF00 81 02 00 00 04 00) or the 8 bytes of a CAN frame")
+                      "(e.g. FF00 81 02 00 00 04 00) or the 8 bytes of a CAN frame; a 0x10F3 "
+                      "message 16 bytes or more, a Modbus exception '83 02'")
+
+
+def _modbus_exception(function: int | None, code: int) -> Meaning:
+    """Seed 004 ch. 2 "Eccezioni": the drive answers 02 only and drops any other bad request."""
+    name = EXCEPTION_NAMES.get(code)
+    if name is None:
+        raise DecodeError(f"Modbus exception {code:02X} is not a Modbus exception code "
+                          f"({', '.join(f'{c:02X}' for c in EXCEPTION_NAMES)})")
+    if code == ILLEGAL_DATA_ADDRESS:
+        text = ("the address names nothing on the drive (no parameter or register there): "
+                "the only exception the drive answers")
+    else:
+        text = ("the drive never sends it: it answers 02 only and drops any other faulty "
+                "request without a reply; another server or a gateway sent this")
+    title = ("Modbus exception response" if function is None else
+             f"Modbus exception response to function {fmt_hex(function, 2)} "
+             f"({fmt_hex(function | EXCEPTION_FLAG, 2)})")
+    return Meaning(MODBUS, title, f"Exception {code:02X} {name}: {text}.",
+                   "seed 004 ch. 2 Eccezioni")
+
+
+DIAG_HEADER_BYTES = struct.calcsize("<IHHQ")  # ETG.1020: Diag Code, flags, Text-ID, time stamp
+
+
+def _diag_message(raw: bytes) -> list[Meaning]:
+    """A 0x10F3 message (seed 002 Tab. 15/16, seed 001 §9.3.7): its header, then what its Diag
+    Code means in the device tables."""
+    try:
+        message = DiagMessage.decode(raw)
+    except (struct.error, ValueError, KeyError):
+        raise DecodeError(f"{len(raw)} bytes but no 0x10F3 diagnosis message: Diag Code (4), "
+                          "flags (2), Text-ID (2), time stamp (8), then per parameter its "
+                          "flags (2) and value (seed 002 Tab. 15/16)") from None
+    marker = message.diag_code >> 24
+    values = [value for _dtype, value in message.params]
+    if marker == cpx.DIAG_CODE_CPX and len(values) == 2:
+        module, channel = values
+        side = {CHANNEL_OUTPUT: "output", CHANNEL_INPUT: "input"}.get(channel & 0xC0)
+        where = f" on output {channel & 0x3F}" if side == "output" else (
+            f" on input {channel & 0x3F}" if side == "input" else "")
+        params = f"CPX module {module}, channel {fmt_hex(channel, 2)}{where}"
+        family = CPX
+    else:
+        params = ", ".join(fmt_hex(v, 2) for v in values) or "none"
+        family = TRSCAT if marker == DIAG_CODE_MANUFACTURER >> 24 else DIAG
+    head = Meaning(family, f"0x10F3 diagnosis message, Diag Code {fmt_hex(message.diag_code, 8)}",
+                   f"Type {int(message.dtype)} ({message.dtype.name.lower()} message), Text-ID "
+                   f"{fmt_hex(message.text_id, 4)}, time stamp {message.timestamp_ns} ns "
+                   f"({message.timestamp_ns / 1e9:.3f} s); parameters: {params}.",
+                   "ETG.1020, seed 002 Tab. 15/16")
+    return [head, *_diag_code(message.diag_code), *_cpx_text_id(message.text_id)]
 
 
 def _sentence(text: str) -> str:
@@ -180,8 +255,9 @@ def _fastcat_emergency(register: int, data: bytes) -> list[Meaning]:
         return [_fastcat_alarm(fastcat.MODULE_CODES[module_code], module, title)]
     if not module_code and not coupler_code:
         return [Meaning(FASTCAT, title, "No alarm code in the data bytes.", "seed 000 §7")]
-    return [Meaning(FASTCAT, title, f"Codes {fmt_hex(module_code, 2)} / "
-                    f"{fmt_hex(coupler_code, 2)} are not in the seed's tables.", "seed 000 §7")]
+    return [Meaning(FASTCAT, title, f"Coupler code (byte 3) {fmt_hex(coupler_code, 2)} / "
+                    f"module code (byte 2) {fmt_hex(module_code, 2)} on module {module}: not "
+                    "in the seed's tables (§7.5, §7.6).", "seed 000 §7")]
 
 
 def _fastcat_alarm(row: fastcat.AlarmCode, module: int | None, title: str) -> Meaning:
@@ -290,6 +366,11 @@ def al_status(code: int) -> list[Meaning]:
         return [Meaning(ETHERCAT, f"AL status code {fmt_hex(code, 4)}",
                         _sentence(AL_STATUS_CODES[code]), "seed 000 §7.7")]
     found = fastcat.decode_al_status(code)
+    if found is None and code == MANUFACTURER_AREA:
+        return [Meaning(ETHERCAT, f"AL status code {fmt_hex(code, 4)}",
+                        f"{describe_al_status_code(code)}: the manufacturer area starts here; a "
+                        "FastCAT writes 0x8000 + module number x 0x100 + coupler code.",
+                        "seed 000 §7.7")]
     if found is None:
         return []
     title = f"AL status code {fmt_hex(code, 4)} (manufacturer area)"

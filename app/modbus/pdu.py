@@ -43,6 +43,15 @@ FC_READ_HOLDING_REGISTERS = 0x03
 FC_WRITE_SINGLE_REGISTER = 0x06
 FC_WRITE_MULTIPLE_REGISTERS = 0x10
 ILLEGAL_DATA_ADDRESS = 0x02  # the only exception code the drive implements (ch.2 "Eccezioni")
+EXCEPTION_FLAG = 0x80  # ch.2 "Eccezioni": an exception response sets the function code's MSB
+# The Modbus Application Protocol's exception codes, for the Codes tab (app/decoder.py): the
+# drive sends 02 only, the others come from other servers (pymodbus itself, a gateway).
+EXCEPTION_NAMES: dict[int, str] = {
+    0x01: "Illegal Function", ILLEGAL_DATA_ADDRESS: "Illegal Data Address",
+    0x03: "Illegal Data Value", 0x04: "Server Device Failure", 0x05: "Acknowledge",
+    0x06: "Server Device Busy", 0x08: "Memory Parity Error",
+    0x0A: "Gateway Path Unavailable", 0x0B: "Gateway Target Device Failed to Respond",
+}
 BROADCAST_UNIT = 0  # ch.2 "Composizione del frame": 0 = broadcast, 1..90 drives
 MAX_READ_QUANTITY = 125  # ch.2 "Codice 03": quantity of registers 1 to 125 (0x7D)
 
@@ -98,7 +107,7 @@ class Exception02:
 
     @property
     def pdu(self) -> bytes:
-        return bytes((self.function_code | 0x80, ILLEGAL_DATA_ADDRESS))
+        return bytes((self.function_code | EXCEPTION_FLAG, ILLEGAL_DATA_ADDRESS))
 
 
 @dataclass(frozen=True)

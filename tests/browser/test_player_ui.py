@@ -83,6 +83,12 @@ def test_decoder_tab(live: LiveDashboard, page) -> None:
     wait_until(lambda: "MISSING_NODE_ANSWER" in result.inner_text(), what="the meaning")
     assert "module 2" in result.inner_text()
 
+    # §7.3 as printed, pasted into the box (which drops the line breaks): data high byte first
+    text_input(page, "Code").fill("ERR CODE\t[0xFF00]ERR REG\tByte 2 [0x81] Byte 0"
+                                  "ERR DATA\t[0x00 00 0B 00 02] basso")
+    page.get_by_role("button", name="Decode").click()
+    wait_until(lambda: "TARATURA on module 2" in result.inner_text(), what="the Pegaso line")
+
     # §7.7: module 2 stops answering in OP; its emergency shows up under "Reported".
     live.advance(4.0)
     live.command("fastcat/2", "unplug")

@@ -51,7 +51,8 @@ def result_html(query: str, meanings: Iterable[Meaning] | None, error: str = "")
     elif meanings is None:
         body = ('<span class="fr-muted">Paste an emergency (FF00 81 02 00 00 04 00), an AL '
                 "status code (0x8204), an EMCY or 0x603F code (8130), an SDO abort code "
-                "(0x06020000) or an alarm name, or pick a code the rig reported.</span>")
+                "(0x06020000), an alarm name, a line of the master's log, a 0x10F3 message or "
+                "a Modbus exception (83 02), or pick a code the rig reported.</span>")
     else:
         # Each reading under the table it comes from: one number can mean several things
         # ("16": AL status 0x0016 and drive alarm 16), and the table says which device

@@ -1,0 +1,118 @@
+"""A log line or display pasted into the Codes tab, reduced to the code it carries.
+
+The master's logger writes in the four styles of seed 000 §7.1-§7.4
+(devices/master/log_styles.py) and the seeds print their examples that way, so a trainee
+pastes any of them:
+
+- TwinCAT (§7.1, §7.7): ``CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00').`` (the seed's §7.1
+  line quotes the bytes: ``'02 00 00 04'00'``), ``... with code 0x8204. Try to go back ...``,
+  ``AL Status Code '0x8204'``;
+- Sirio (§7.2): ``Err. Code FF00`` / ``Err. Reg. 0081`` / ``0x low 02 00 00 04 00 high``
+  (data byte 0 first, the register in four digits);
+- Pegaso (§7.3): ``ERR CODE [0xFF00]`` / ``ERR REG Byte 3 [0x81] Byte 0`` /
+  ``ERR DATA alto [0x00 04 00 00 02] basso`` (data *high byte first*);
+- AITracePrint (§7.4): ``emcyCode = 0xFF00 emcyReg = 0x81 data=0x0200000400`` (byte 0 first,
+  as the master renders it) and ``EcatManagerSlaveStateCallback: 11 2 33540:Unknown`` (the AL
+  status code in decimal).
+
+A display is three lines; a text box drops the line breaks of a paste, so every pattern is
+searched in the whole text. :func:`canonical` returns what :func:`app.decoder.decode` reads
+(``FF00 81 02 00 00 04 00``, ``0x8204``), or the text unchanged when no pattern matches.
+"""
+
+from __future__ import annotations
+
+import re
+
+
+class PasteError(ValueError):
+    """A recognised line that does not carry the code (the decoder reports the message)."""
+
+
+_HEX = r"[0-9A-Fa-f]"
+_TWINCAT_EMCY = re.compile(r"Hex:\s*([^)]*)\)")
+_AL_QUOTED = re.compile(rf"Code\s*'(0x{_HEX}+)'")  # "AL Status Code '0x8204'"
+_AL_WITH_CODE = re.compile(rf"with code\s+(0x{_HEX}+)")  # "abnormal state change ... with code"
+_SIRIO_CODE = re.compile(rf"Err\.\s*Code\s+({_HEX}{{1,4}})\b")
+_SIRIO_REG = re.compile(rf"Err\.\s*Reg\.\s+({_HEX}{{1,4}})\b")
+_SIRIO_DATA = re.compile(r"0x\s*low\s+([0-9A-Fa-f\s]*?)\s*high")
+_PEGASO_CODE = re.compile(rf"ERR\s*CODE\s*\[0x({_HEX}+)\]")
+_PEGASO_REG = re.compile(rf"ERR\s*REG\b[^\[]*\[0x({_HEX}+)\]")
+_PEGASO_DATA = re.compile(r"ERR\s*DATA\s*(?:alto\s*)?\[0x([0-9A-Fa-f\s]*)\]")
+_TRACE_CODE = re.compile(rf"emcyCode\s*=\s*0x({_HEX}+)")
+_TRACE_REG = re.compile(rf"emcyReg\s*=\s*0x({_HEX}+)")
+_TRACE_DATA = re.compile(rf"data\s*=\s*0x({_HEX}*)")
+_TRACE_STATE = re.compile(r"EcatManagerSlaveStateCallback:\s*\d+\s+\d+\s+(\d+)\s*:")
+_TRACE_CHANGE = re.compile(r"SlaveStateChange\s+slave")
+_TAB_15_DASH = re.compile(rf"(?<={_HEX})\s*-\s*(?={_HEX})")
+
+
+def canonical(text: str) -> str:
+    """``text`` as :func:`app.decoder.decode` reads it; PasteError for a line without code."""
+    for parse in (_twincat, _sirio, _pegaso, _aitraceprint):
+        found = parse(text)
+        if found is not None:
+            return found
+    if re.fullmatch(rf"[\s{_HEX[1:-1]}-]+", text) and "-" in text:
+        # seed 002 Tab. 15 prints the message with dashes inside ("02 - 37", "00 00-00")
+        return _TAB_15_DASH.sub(" ", text)
+    return text
+
+
+def _emergency(code: int, register: int, data: bytes) -> str:
+    return f"{code:04X} {register:02X} {data.hex(' ').upper()}".strip()
+
+
+def _twincat(text: str) -> str | None:
+    logged = _TWINCAT_EMCY.search(text)
+    if logged:
+        return logged.group(1).replace("'", " ")
+    quoted = _AL_QUOTED.search(text) or _AL_WITH_CODE.search(text)
+    return quoted.group(1) if quoted else None
+
+
+def _register(raw: str, where: str) -> int:
+    value = int(raw, 16)
+    if value > 0xFF:
+        raise PasteError(f"{where} {raw}: the error register (0x1001) is one byte")
+    return value
+
+
+def _sirio(text: str) -> str | None:
+    code, reg, data = (p.search(text) for p in (_SIRIO_CODE, _SIRIO_REG, _SIRIO_DATA))
+    if data is None:
+        return None
+    if code is None or reg is None:
+        raise PasteError("Sirio display (seed 000 §7.2): the data row alone has no error code; "
+                         "paste the Err. Code and Err. Reg. rows too")
+    raw = bytes.fromhex(data.group(1))
+    return _emergency(int(code.group(1), 16), _register(reg.group(1), "Err. Reg."), raw)
+
+
+def _pegaso(text: str) -> str | None:
+    code, reg, data = (p.search(text) for p in (_PEGASO_CODE, _PEGASO_REG, _PEGASO_DATA))
+    if data is None:
+        return None
+    if code is None or reg is None:
+        raise PasteError("Pegaso display (seed 000 §7.3): the ERR DATA row alone has no error "
+                         "code; paste the ERR CODE and ERR REG rows too")
+    high_first = bytes.fromhex(data.group(1))
+    return _emergency(int(code.group(1), 16), _register(reg.group(1), "ERR REG"),
+                      high_first[::-1])
+
+
+def _aitraceprint(text: str) -> str | None:
+    state = _TRACE_STATE.search(text)
+    if state:
+        return f"0x{int(state.group(1)):04X}"  # the AL status code, printed in decimal
+    code, reg, data = (p.search(text) for p in (_TRACE_CODE, _TRACE_REG, _TRACE_DATA))
+    if code and reg and data:
+        digits = data.group(1)
+        if len(digits) % 2:
+            raise PasteError(f"data=0x{digits}: the emergency data are whole bytes")
+        return _emergency(int(code.group(1), 16), _register(reg.group(1), "emcyReg"),
+                          bytes.fromhex(digits))
+    if _TRACE_CHANGE.search(text):
+        raise PasteError("SlaveStateChange carries no code: the AL status code is on the "
+                         "EcatManagerSlaveStateCallback line just before it (seed 000 §7.4)")
+    return None

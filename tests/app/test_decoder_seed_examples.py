@@ -1,0 +1,200 @@
+"""The seeds' own worked examples, pasted into the Codes tab as a trainee copies them.
+
+The seeds print emergencies, log lines and diagnosis messages byte for byte: the FastCAT
+emergency in the TwinCAT, Sirio, Pegaso and AITracePrint displays (seed 000 §7.1-§7.4) and in
+the §7.7 log, the CPX-E-EC's 0x10F3 message (seed 002 Tab. 15/16), the drive's Modbus exception
+(seed 004 ch. 2 "Eccezioni"). The master renders its log in the same four styles
+(devices/master/log_styles.py), so whatever its log shows must decode too, byte order and all.
+Before, only the TwinCAT line as FieldRig prints it decoded: the seed's own §7.1 line (its
+quotes round '02 00 00 04') lost its data bytes, and every Sirio, Pegaso and AITracePrint line,
+the §7.7 "abnormal state change ... with code 0x8204" line, the Tab. 15 message and "83 02"
+were refused.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+
+import pytest
+import viser
+
+from app.decoder import CPX, ETHERCAT, FASTCAT, MODBUS, TRSCAT, DecodeError, Meaning, decode
+from app.screenshots import free_port
+from app.ui.panels.decoder import DecoderPanel
+from devices.master.log_styles import STYLES, Entry, render
+from devices.trscat.diagnostics import FAULTS, app_message
+
+COUPLER = bytes.fromhex("0200000400")  # §7.2 / §7.3 first example: coupler error 04, node 2
+MODULE = bytes.fromhex("02000B0000")  # second example: module 2 reports 0B (not calibrated)
+COUPLER_WORDS = ["0x04 MISSING_NODE_ANSWER", "module 2"]
+MODULE_WORDS = ["0x0B TARATURA", "module 2"]
+
+
+def fastcat(text: str) -> Meaning:
+    found = [m for m in decode(text) if m.family == FASTCAT]
+    assert len(found) == 1, decode(text)
+    return found[0]
+
+
+def says(m: Meaning, words: list[str]) -> bool:
+    return all(w in f"{m.title} {m.text}" for w in words)
+
+
+# ---- seed 000 §7.1-§7.4, §7.7: the lines as the seed prints them ------------------------------
+SIRIO_COUPLER = ("Emergency\tReset\tByte 0 basso\tByte 3 alto\n"
+                 "Err. Code\tFF00\tAdditional Code\t\n"
+                 "Err. Reg.\t0081\t0x low 02 00 00 04 00 high\t")
+SIRIO_MODULE = ("Emergency\tReset\tByte 0\tByte 2\n"
+                "Err. Code\tFF00\tAdditional Code\t\n"
+                "Err. Reg.\t0081\t0x low 02 00 0B 00 00 high\t")
+PEGASO_COUPLER = "ERR CODE\t[0xFF00]\nERR REG\tByte 3 [0x81] Byte 0\n" \
+                 "ERR DATA\talto [0x00 04 00 00 02] basso"
+PEGASO_MODULE = "ERR CODE\t[0xFF00]\nERR REG\tByte 2 [0x81] Byte 0\n" \
+                "ERR DATA\t[0x00 00 0B 00 02] basso"
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    # §7.1, as printed: the data bytes in quotes ('02 00 00 04'00')
+    ("(65535)\t05/07/2019 11.48.41 438 ms\t'Box 1 (FastCat)' (1001): CoE - Emergency "
+     "(Hex: ff00, 81, '02 00 00 04'00').", COUPLER_WORDS),
+    # §7.2 Sirio, with and without the line breaks (a text box drops them on paste)
+    (SIRIO_COUPLER, COUPLER_WORDS),
+    (SIRIO_COUPLER.replace("\n", ""), COUPLER_WORDS),
+    (SIRIO_MODULE, MODULE_WORDS),
+    # §7.3 Pegaso: the data high byte first
+    (PEGASO_COUPLER, COUPLER_WORDS),
+    (PEGASO_COUPLER.replace("\n", ""), COUPLER_WORDS),
+    (PEGASO_MODULE, MODULE_WORDS),
+    # §7.4 AITracePrint: 33540 is the AL status code 0x8304 in decimal, module 3 "did not
+    # answer" (coupler code 0x04, the reading of the State tab)
+    ("380808 - 00000001 - ** ECAT: EcatManagerSlaveStateCallback: 11 2 33540:Unknown",
+     ["0x8304", "module 3", "0x04 MISSING_NODE_ANSWER"]),
+    # §7.7 TwinCAT log, the abnormal state change and the failed transition
+    ("(65535)\t12/11/2019 14.51.30 280 ms\t'Box 1 (FastCAT)' (1001): abnormal state change "
+     "(from 'OP' to 'PREOP') with code 0x8204. Try to go back to 'OP'...",
+     ["0x8204", "module 2", "0x04 MISSING_NODE_ANSWER"]),
+    ("'Box 1 (FastCAT)' (1001): 'PREOP to SAFEOP' failed! Error: 'check device state for "
+     "SAFEOP'. AL Status '0x0012' read and '0x0004' expected. AL Status Code '0x8204'",
+     ["0x8204", "module 2"]),
+])
+def test_the_seed_000_lines(text: str, words: list[str]) -> None:
+    m = fastcat(text)
+    assert says(m, words), m
+
+
+def test_the_74_emergency_line_names_its_bytes_in_the_printed_order() -> None:
+    """§7.4 prints data=0x0300002400 for "module 3 reports 04": byte 0 (the module) first, as
+    the master's aitraceprint style renders it; byte 3 = 0x24 is in neither table, and the
+    decoder says so for module 3 instead of inventing a code."""
+    m = fastcat("380856 - 00000001 - ECAT_EVENT Emergency slave = 11 emcyCode = 0xFF00 "
+                "emcyReg = 0x81 data=0x0300002400")
+    assert says(m, ["module 3", "0x24"]) and "not in the seed's tables" in m.text, m
+
+
+# ---- whatever the master's log shows, in every style ------------------------------------------
+def emergency(data: bytes) -> Entry:
+    return Entry(0, "emergency", {"code": 0xFF00, "register": 0x81, "data": data},
+                 slave="Box 1 (FastCAT)", address=1001, position=1)
+
+
+@pytest.mark.parametrize("style", STYLES)
+@pytest.mark.parametrize(("data", "words"), [(COUPLER, COUPLER_WORDS), (MODULE, MODULE_WORDS)])
+def test_every_log_style_decodes(style: str, data: bytes, words: list[str]) -> None:
+    text = render(style, emergency(data))
+    assert says(fastcat(text), words)
+    assert says(fastcat(text.replace("\n", " ")), words)
+
+
+@pytest.mark.parametrize("style", STYLES)
+def test_every_style_of_the_abnormal_state_change_decodes(style: str) -> None:
+    entry = Entry(0, "abnormal", {"from_state": "OP", "to_state": "PREOP", "code": 0x8204,
+                                  "target": "OP"}, slave="Box 1 (FastCAT)", address=1001,
+                  position=1)
+    text = render(style, entry)
+    assert says(fastcat(text.replace("\n", " ")), ["module 2", "MISSING_NODE_ANSWER"]), text
+
+
+# ---- seed 002 Tab. 15 / 16: the 0x10F3 diagnosis message ---------------------------------------
+TAB_15 = "02 00 00 E1\t02 02\t02 - 37\t1F C5 9D 61 31 00 00-00\t05 00\t02\t05 00\t80"
+
+
+@pytest.mark.parametrize("text", [TAB_15, TAB_15.replace("-", " "), TAB_15 + " 00"])
+def test_the_tab_15_message(text: str) -> None:
+    found = [m for m in decode(text) if m.family == CPX]
+    joined = " ".join(f"{m.title} {m.text}" for m in found)
+    for words in ("0xE1000002", "CPX error number 2", "Short circuit", "error message",
+                  "Text-ID 0x3702", "module 2", "0x80"):
+        assert words in joined, found
+
+
+def test_the_tab_15_diag_code_as_printed() -> None:
+    """Tab. 16 prints the Diag Code as its bytes, low first: 02 00 00 E1 = 0xE1000002."""
+    found = [m for m in decode("02 00 00 E1") if m.family == CPX]
+    assert found and "0xE1000002" in found[0].title and "Short circuit" in found[0].text
+
+
+def test_a_trscat_message_as_its_tab_shows_the_bytes() -> None:
+    """Seed 001 §9.3.7: the TRS-CAT's message (its snapshot's "bytes") decodes to the fault."""
+    fault = FAULTS["FIELD_SUPPLY"]  # 0x3220, +24 V field supply, on slot 3
+    raw = app_message(fault, 3, 1_500_000_000).encode().hex(" ").upper()
+    found = [m for m in decode(raw) if m.family == TRSCAT]
+    assert found and any(m.text.startswith(fault.text) for m in found), decode(raw)
+
+
+# ---- seed 004 ch. 2 "Eccezioni": the drive's Modbus exception ----------------------------------
+@pytest.mark.parametrize("text", ["83 02", "0x83 0x02", "05 83 02"])
+def test_the_drives_exception_02(text: str) -> None:
+    (m,) = [m for m in decode(text) if m.family == MODBUS]
+    assert "02 Illegal Data Address" in m.text and "0x03" in m.title, m
+
+
+def test_an_exception_the_drive_never_sends() -> None:
+    (m,) = [m for m in decode("86 01") if m.family == MODBUS]
+    assert "01 Illegal Function" in m.text and "never" in m.text, m
+
+
+# ---- malformed input: one clear message -------------------------------------------------------
+@pytest.mark.parametrize(("text", "hint"), [
+    ("Err. Reg.\t0081\t0x low 02 00 00 04 00 high", "Err. Code"),
+    ("ERR DATA\talto [0x00 04 00 00 02] basso", "ERR CODE"),
+    ("380808 - 00000001 - ECAT_EVENT SlaveStateChange slave = 11 from 8 to 2",
+     "EcatManagerSlaveStateCallback"),
+    ("83 0F", "exception"),
+])
+def test_a_line_without_its_code_says_what_is_missing(text: str, hint: str) -> None:
+    with pytest.raises(DecodeError, match=hint):
+        decode(text)
+
+
+# ---- the Codes tab itself, through its callback -----------------------------------------------
+class _Runtime:
+    def events_since(self, seq: int) -> tuple[int, list[object]]:
+        return seq, []
+
+
+@pytest.fixture
+def panel() -> Iterator[DecoderPanel]:
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        yield DecoderPanel(server, _Runtime())  # type: ignore[arg-type]
+    finally:
+        server.stop()
+
+
+def test_the_codes_tab_decodes_a_pasted_pegaso_display(panel: DecoderPanel) -> None:
+    panel.show(PEGASO_COUPLER.replace("\n", ""))  # what a click on Decode runs
+    html = str(panel._result.content)
+    assert "MISSING_NODE_ANSWER" in html and "module 2" in html, html
+
+
+def test_the_sirio_register_typed_as_the_display_shows_it() -> None:
+    """§7.2 prints the error register in four digits (Err. Reg. 0081)."""
+    assert says(fastcat("FF00 0081 02 00 00 04 00"), COUPLER_WORDS)
+    with pytest.raises(DecodeError):
+        decode("FF00 0181 02 00 00 04 00")  # no register is two bytes
+
+
+def test_the_start_of_the_manufacturer_area() -> None:
+    """§7.7 ends its table with 0x8000 "Inizio dell'area manufacturer"."""
+    found = [m for m in decode("0x8000") if m.family == ETHERCAT]
+    assert found and "manufacturer" in found[0].text.lower(), decode("0x8000")
