@@ -18,7 +18,19 @@ from collections.abc import Iterator
 import pytest
 import viser
 
-from app.decoder import CPX, ETHERCAT, FASTCAT, MODBUS, TRSCAT, DecodeError, Meaning, decode
+from app.decoder import (
+    CANOPEN,
+    CPX,
+    ETHERCAT,
+    FASTCAT,
+    MODBUS,
+    SDO,
+    SERVO,
+    TRSCAT,
+    DecodeError,
+    Meaning,
+    decode,
+)
 from app.screenshots import free_port
 from app.ui.panels.decoder import DecoderPanel
 from devices.master.log_styles import STYLES, Entry, render
@@ -198,3 +210,21 @@ def test_the_start_of_the_manufacturer_area() -> None:
     """§7.7 ends its table with 0x8000 "Inizio dell'area manufacturer"."""
     found = [m for m in decode("0x8000") if m.family == ETHERCAT]
     assert found and "manufacturer" in found[0].text.lower(), decode("0x8000")
+
+
+# ---- FieldRig's own lines: the event log and the CAN monitor ----------------------------------
+@pytest.mark.parametrize(("text", "fam", "words"), [
+    ("Emergency sent (code 0xFF00, register 0x81, data 02 00 00 04 00)", FASTCAT,
+     COUPLER_WORDS),
+    ("alarm 0x0B TARATURA module 2 raised", FASTCAT, ["0x0B TARATURA"]),
+    ("alarm 16 FOLLOWING_ERROR raised", SERVO, ["FOLLOWING_ERROR", "0x8611"]),
+    ("alarm 0xA000 CONFIG_ERROR raised", TRSCAT, ["Configuration error"]),
+    ("alarm 0x3702 SHORT_CIRCUIT module 2 raised", CPX, ["Short circuit"]),
+    ("node 2: code 0x8611, register 0x21, data 10 00 00 00 00", SERVO, ["Alarm 16"]),
+    ("node 2: error reset, register 0x00, data 00 00 00 00 00", CANOPEN, ["Error reset"]),
+    ("node 2 ->: abort 0x6041:00 0x06090011 (Sub-index does not exist)", SDO,
+     ["0x06090011 on object 0x6041:00", "Sub-index does not exist"]),
+])
+def test_fieldrigs_own_lines(text: str, fam: str, words: list[str]) -> None:
+    found = [m for m in decode(text) if m.family == fam]
+    assert found and says(found[0], words), decode(text)
