@@ -58,24 +58,11 @@ MODBUS = "Modbus exception"
 
 MAX_FASTCAT_MODULE = fastcat.MAX_MODULES  # seed 000 §2: at most 16 modules on a coupler
 
-# DS 301 error register 0x1001 bit names (seed 004 ch. 4), keyed by devices.canopen.emcy's bits.
-_REGISTER_NAMES = {
-    ds301.REG_GENERIC: "generic error", ds301.REG_CURRENT: "current",
-    ds301.REG_VOLTAGE: "voltage", ds301.REG_TEMPERATURE: "temperature",
-    ds301.REG_COMMUNICATION: "communication", ds301.REG_PROFILE: "device profile",
-    ds301.REG_MANUFACTURER: "manufacturer specific",
-}
-_CANOPEN_CODES = {  # the DS 301 codes the CANopen node itself sends (devices/canopen/emcy.py)
-    ds301.ERROR_RESET: "Error reset: no error is active any more",
-    ds301.LIFE_GUARD_ERROR: "Life guard or heartbeat error: the master stopped guarding the "
-                            "node (no guard request within life time factor x guard time)",
-    ds301.PDO_LENGTH_ERROR: "PDO not processed: its length does not match the mapping",
-}
+# The drive's CANopen node's own codes and the 0x1001 bits, in the model's words.
+_REGISTER_NAMES = ds301.REGISTER_BIT_NAMES
+_CANOPEN_CODES = ds301.EMCY_TEXT
 _SERVO_FIELDBUSES = ("modbus", "profinet")  # their tables differ in alarms 30-35
-_SERVO_EFFECT = {  # seed 004 ch. 3 "Azione", in the words of docs/servo-drive.md §Alarms
-    servo.Effect.RELEASE: "the axis is released at once (torque off)",
-    servo.Effect.STOP: "the axis stops on the emergency ramp, then torque goes off",
-}
+_SERVO_EFFECT = servo.EFFECT_TEXT  # seed 004 ch. 3 "Azione", in the model's words
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,21 @@ REG_COMMUNICATION = 0x10
 REG_PROFILE = 0x20
 REG_MANUFACTURER = 0x80
 
+# Error register 0x1001 bit names (DS 301, seed 004 ch. 4; seed 002 Tab. 22 names the same bits).
+REGISTER_BIT_NAMES: dict[int, str] = {
+    REG_GENERIC: "generic error", REG_CURRENT: "current", REG_VOLTAGE: "voltage",
+    REG_TEMPERATURE: "temperature", REG_COMMUNICATION: "communication",
+    REG_PROFILE: "device profile", REG_MANUFACTURER: "manufacturer specific",
+}
+
+# The DS 301 codes the node itself sends, in words (the Codes tab reads them, app/decoder.py).
+EMCY_TEXT: dict[int, str] = {
+    ERROR_RESET: "Error reset: no error is active any more",
+    LIFE_GUARD_ERROR: "Life guard or heartbeat error: the master stopped guarding the node (no "
+                      "guard request within life time factor x guard time)",
+    PDO_LENGTH_ERROR: "PDO not processed: its length does not match the mapping",
+}
+
 # (first code, last code, error register bit): the DS 301 classes of the ch. 4 tables. Codes of
 # other classes (50xx device hardware, 6xxx software, 70xx modules) set the generic bit only.
 REGISTER_BIT_BY_CODE: tuple[tuple[int, int, int], ...] = (

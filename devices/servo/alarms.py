@@ -21,6 +21,13 @@ class Effect(enum.Enum):
     STOP = "none printed: stop on the emergency ramp, then torque off"
 
 
+# The effect in a trainee's words (the Codes tab, app/decoder.py; docs/servo-drive.md §Alarms).
+EFFECT_TEXT: dict[Effect, str] = {
+    Effect.RELEASE: "the axis is released at once (torque off)",
+    Effect.STOP: "the axis stops on the emergency ramp, then torque goes off",
+}
+
+
 @dataclass(frozen=True)
 class AlarmSpec:
     code: int
