@@ -91,6 +91,9 @@ def decode(text: str) -> list[Meaning]:
                              raw, re.IGNORECASE)
     if exception:
         return [_modbus_exception(None, int(exception.group(1), 16))]
+    named = re.search(r"\balarm\s+((?:0x)?[0-9A-Fa-f]+)\s+([A-Z][A-Z0-9_]+)\b", raw)
+    if named:  # "alarm 0x3708 UNDERVOLTAGE": the Event log's line, a Reported alarm
+        return _alarm_line(named.group(1), named.group(2))
     alarm = re.fullmatch(r"(?:drive\s*)?alarm\s*(\d{1,3})", raw, re.IGNORECASE)
     if alarm:
         return _drive_alarm_number(int(alarm.group(1)))
@@ -457,6 +460,15 @@ def _drive_alarm_number(number: int) -> list[Meaning]:
     if not found:
         raise DecodeError(f"the drive has no alarm {number} (seed 004 ch. 3, ch. 5)")
     return found
+
+
+def _alarm_line(code: str, name: str) -> list[Meaning]:
+    """An alarm event's code and name: the name finds the rows, the code (as the device's
+    family writes it: "5", "0x04", "0xA000", "0x3708") keeps its own device's. UNDERVOLTAGE is
+    drive alarm 5 and CPX error 8 (Text-ID 0x3708)."""
+    found = _name(name)
+    mine = re.compile(rf"(?<!\w){re.escape(code)}(?!\w)", re.IGNORECASE)
+    return [m for m in found if mine.search(m.title)] or found
 
 
 def _name(text: str) -> list[Meaning]:

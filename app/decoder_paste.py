@@ -16,9 +16,10 @@ pastes any of them:
   status code in decimal).
 
 and FieldRig's own lines: the event log's ``Emergency sent (code 0xFF00, register 0x81, data
-02 00 00 04 00)`` and ``alarm 0x04 MISSING_NODE_ANSWER module 2 raised``, the CAN monitor's
-``code 0x8611, register 0x21, data 10 00 00 00 00`` / ``error reset, ...`` and
-``abort 0x6041:00 0x06090011 (...)`` (devices/canopen/decode.py).
+02 00 00 04 00)``, the CAN monitor's ``code 0x8611, register 0x21, data 10 00 00 00 00`` /
+``error reset, ...`` and ``abort 0x6041:00 0x06090011 (...)`` (devices/canopen/decode.py).
+The event log's ``alarm 0x04 MISSING_NODE_ANSWER module 2 raised`` :func:`app.decoder.decode`
+reads itself (code and name together).
 
 A display is three lines; a text box drops the line breaks of a paste, so every pattern is
 searched in the whole text. :func:`canonical` returns what :func:`app.decoder.decode` reads
@@ -51,7 +52,6 @@ _TRACE_STATE = re.compile(r"EcatManagerSlaveStateCallback:\s*\d+\s+\d+\s+(\d+)\s
 _TRACE_CHANGE = re.compile(r"SlaveStateChange\s+slave")
 _FIELDRIG_EMCY = re.compile(rf"(?:code\s+0x({_HEX}{{1,4}})|error reset),\s*register\s+"
                             rf"0x({_HEX}{{1,2}}),\s*data\s*((?:{_HEX}{{2}}\s*)*)")
-_FIELDRIG_ALARM = re.compile(r"\balarm\s+(?:0x)?[0-9A-Fa-f]+\s+([A-Z][A-Z0-9_]+)\b")
 _FIELDRIG_ABORT = re.compile(rf"\babort\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+0x({_HEX}{{8}})")
 _TAB_15_DASH = re.compile(rf"(?<={_HEX})\s*-\s*(?={_HEX})")
 
@@ -133,10 +133,9 @@ def _fieldrig(text: str) -> str | None:
         code = int(emcy.group(1), 16) if emcy.group(1) else 0  # "error reset" is 0x0000
         return _emergency(code, int(emcy.group(2), 16), bytes.fromhex(emcy.group(3)))
     abort = _FIELDRIG_ABORT.search(text)
-    if abort:  # the DS 301 abort frame, so that the reading names the object
-        index, sub, code = (int(g, 16) for g in abort.groups())
-        frame = bytes((0x80,)) + index.to_bytes(2, "little") + bytes((sub,)) \
-            + code.to_bytes(4, "little")
-        return frame.hex(" ")
-    alarm = _FIELDRIG_ALARM.search(text)
-    return alarm.group(1) if alarm else None  # the symbol names the row in its table
+    if abort is None:
+        return None
+    index, sub, code = (int(g, 16) for g in abort.groups())
+    frame = bytes((0x80,)) + index.to_bytes(2, "little") + bytes((sub,)) \
+        + code.to_bytes(4, "little")
+    return frame.hex(" ")  # the DS 301 abort frame, so that the reading names the object

@@ -32,7 +32,8 @@ from app.decoder import (
     decode,
 )
 from app.screenshots import free_port
-from app.ui.panels.decoder import DecoderPanel
+from app.ui.panels.decoder import DecoderPanel, reported_code
+from devices.events import AlarmChanged
 from devices.master.log_styles import STYLES, Entry, render
 from devices.trscat.diagnostics import FAULTS, app_message
 
@@ -228,3 +229,25 @@ def test_the_start_of_the_manufacturer_area() -> None:
 def test_fieldrigs_own_lines(text: str, fam: str, words: list[str]) -> None:
     found = [m for m in decode(text) if m.family == fam]
     assert found and says(found[0], words), decode(text)
+
+
+# ---- a reported alarm reads in its own device's table -----------------------------------------
+@pytest.mark.parametrize(("event", "fam", "words"), [
+    (AlarmChanged(0, "cpx", code="0x3708", name="UNDERVOLTAGE", module=2), CPX,
+     "CPX error number 8"),
+    (AlarmChanged(0, "drive", code="5", name="UNDERVOLTAGE"), SERVO, "Drive alarm 5"),
+    (AlarmChanged(0, "fastcat", code="0x0B", name="TARATURA", module=2), FASTCAT,
+     "0x0B TARATURA"),
+])
+def test_a_picked_alarm_reads_only_in_its_table(event: AlarmChanged, fam: str,
+                                                 words: str) -> None:
+    """UNDERVOLTAGE is drive alarm 5 and CPX error 8: picking the CPX-E-EC's alarm under
+    Reported showed "Servo drive: DC power bus voltage below the minimum" first. The alarm's
+    code (as the event log prints it) says which table it is from."""
+    found = reported_code(event)
+    assert found is not None
+    meanings = decode(found[1])
+    assert [m.family for m in meanings] == [fam], meanings
+    assert words in meanings[0].title + " " + meanings[0].text
+    line = f"alarm {event.code} {event.name} raised"  # the Event log's line
+    assert [m.family for m in decode(line)] == [fam]

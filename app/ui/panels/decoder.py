@@ -41,7 +41,9 @@ def reported_code(event: Event) -> tuple[str, str] | None:
         text = f"0x{event.code:04X}"
         return f"{at} AL status code {text}", text
     if isinstance(event, AlarmChanged) and event.active:
-        return f"{at} alarm {event.code} {event.name}", event.name or event.code
+        # code and name: the name alone may be in two tables (UNDERVOLTAGE: drive, CPX-E)
+        text = f"alarm {event.code} {event.name}" if event.name else event.code
+        return f"{at} alarm {event.code} {event.name}", text
     return None
 
 
