@@ -87,6 +87,8 @@ def decode(text: str) -> list[Meaning]:
         raw = canonical(raw).strip()
     except PasteError as exc:
         raise DecodeError(str(exc)) from None
+    if not raw:  # a log line emptied of its bytes: "(Hex: )"
+        raise DecodeError("nothing to decode in that line: it holds no code or bytes")
     exception = re.fullmatch(r"(?:modbus\s*)?exception\s*(?:code\s*)?(?:0x)?([0-9a-f]{1,2})",
                              raw, re.IGNORECASE)
     if exception:
@@ -153,6 +155,9 @@ def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
     if widths[0] >= 3 and len(widths) >= 2 and widths[1] <= 4 \
             and all(w <= 2 for w in widths[2:]) and all(v <= 0xFF for v in values[1:]) \
             and values[0] <= 0xFFFF:
+        if len(values) > 7:
+            raise DecodeError(f"{len(values) - 2} data bytes: an emergency has five data bytes "
+                              "after its code and register (FF00 81 02 00 00 04 00)")
         return emergency(values[0], values[1], bytes(values[2:]))
     raise DecodeError("bytes not understood: an emergency is 'CODE REG B0 B1 B2 B3 B4' "
                       "(e.g. FF00 81 02 00 00 04 00) or the 8 bytes of a CAN frame; a 0x10F3 "

@@ -90,7 +90,7 @@ def _register(raw: str, where: str) -> int:
 def _sirio(text: str) -> str | None:
     code, reg, data = (p.search(text) for p in (_SIRIO_CODE, _SIRIO_REG, _SIRIO_DATA))
     if data is None:
-        return None
+        return f"0x{code.group(1)}" if code else None  # the Err. Code row alone
     if code is None or reg is None:
         raise PasteError("Sirio display (seed 000 §7.2): the data row alone has no error code; "
                          "paste the Err. Code and Err. Reg. rows too")
@@ -101,7 +101,7 @@ def _sirio(text: str) -> str | None:
 def _pegaso(text: str) -> str | None:
     code, reg, data = (p.search(text) for p in (_PEGASO_CODE, _PEGASO_REG, _PEGASO_DATA))
     if data is None:
-        return None
+        return f"0x{code.group(1)}" if code else None  # the ERR CODE row alone
     if code is None or reg is None:
         raise PasteError("Pegaso display (seed 000 §7.3): the ERR DATA row alone has no error "
                          "code; paste the ERR CODE and ERR REG rows too")

@@ -251,3 +251,19 @@ def test_a_picked_alarm_reads_only_in_its_table(event: AlarmChanged, fam: str,
     assert words in meanings[0].title + " " + meanings[0].text
     line = f"alarm {event.code} {event.name} raised"  # the Event log's line
     assert [m.family for m in decode(line)] == [fam]
+
+
+@pytest.mark.parametrize(("text", "hint"), [
+    ("'Box 1 (FastCAT)' (1001): CoE - Emergency (Hex: ).", "nothing to decode"),
+    ("FF00 81 02 00 00 04 00 00 00", "five data bytes"),
+])
+def test_an_empty_or_overlong_emergency_is_refused(text: str, hint: str) -> None:
+    """An emptied TwinCAT line crashed the decoder (IndexError); seven data bytes read as an
+    emergency, which has five (seed 000 §7, seed 004 ch. 4)."""
+    with pytest.raises(DecodeError, match=hint):
+        decode(text)
+
+
+@pytest.mark.parametrize("text", ["Err. Code\tFF00\tAdditional Code", "ERR CODE\t[0xFF00]"])
+def test_the_code_row_of_a_display_alone_reads_as_the_code(text: str) -> None:
+    assert decode(text) == decode("0xFF00")
