@@ -321,11 +321,13 @@ def _canopen_emcy(code: int) -> list[Meaning]:
 
 
 def _emcy_class(code: int) -> Meaning:
-    """No table has the code: say at least which DS 301 class it belongs to."""
-    bits = ds301.register_bits(code) & ~ds301.REG_GENERIC
-    name = _REGISTER_NAMES.get(bits, "generic")
+    """No table has the code: say at least which DS 301 class it belongs to (its high byte)
+    and which 0x1001 bits the drive's CANopen node would set with it."""
+    name = ds301.error_class(code) or "not in the DS 301 table"
+    bits = [n for bit, n in _REGISTER_NAMES.items() if ds301.register_bits(code) & bit]
     return Meaning(CANOPEN, f"EMCY code {fmt_hex(code, 4)}",
-                   f"Not in any device table here; its DS 301 class is '{name}'.",
+                   f"Not in any device table here; DS 301 class '{name}' (the high byte); "
+                   f"error register bits with it: {', '.join(bits) or 'none'}.",
                    "DS 301, seed 004 ch. 4")
 
 

@@ -58,6 +58,28 @@ REGISTER_BIT_BY_CODE: tuple[tuple[int, int, int], ...] = (
 )
 
 
+# Seed 004 ch. 4 "Emergency Message": "The high byte distinguishes the error categories" (10xx
+# generic, 2XXX current, 3XXX voltage, 4XXX temperature, 50xx device hardware, 6XXX device
+# software, 70xx additional modules, 8xxx monitoring, 90xx external error, F0xx additional
+# functions, FFxx device specific). Keyed by the top nibble: the drive's own codes (0x5220,
+# 0x5500, 0x7120, ...) are DSP 402's finer codes of the same categories. Fxxx splits on the
+# whole high byte.
+ERROR_CLASSES: dict[int, str] = {
+    0x0: "Error reset / no error", 0x1: "Generic error", 0x2: "Current", 0x3: "Voltage",
+    0x4: "Temperature", 0x5: "Device hardware", 0x6: "Device software",
+    0x7: "Additional modules", 0x8: "Monitoring", 0x9: "External error",
+    0xF: "Additional functions",
+}
+DEVICE_SPECIFIC_HIGH_BYTE = 0xFF
+
+
+def error_class(code: int) -> str:
+    """The category of an error code (its high byte), "" for one the seed's table lacks."""
+    if code >> 8 == DEVICE_SPECIFIC_HIGH_BYTE:
+        return "Device specific"
+    return ERROR_CLASSES.get(code >> 12 & 0xF, "")
+
+
 def register_bits(code: int) -> int:
     """Error register bits of one active error code (generic always)."""
     if code == ERROR_RESET:

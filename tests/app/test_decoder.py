@@ -224,13 +224,14 @@ def test_canopen_node_codes(code: int) -> None:
     assert family(decode(fmt_bytes(frame)), CANOPEN)
 
 
-@pytest.mark.parametrize(("code", "name"), [(0x2999, "current"), (0x3999, "voltage"),
+@pytest.mark.parametrize(("code", "bits"), [(0x2999, "current"), (0x3999, "voltage"),
                                             (0x4999, "temperature"), (0x8199, "communication"),
                                             (0x8999, "device profile"),
                                             (0xFF99, "manufacturer specific"),
-                                            (0x5555, "generic")])
-def test_an_unknown_emcy_code_gets_its_ds301_class(code: int, name: str) -> None:
-    assert f"class is '{name}'" in one(decode(f"0x{code:04X}"), CANOPEN).text
+                                            (0x5555, "generic error")])
+def test_an_unknown_emcy_code_gets_its_register_bits(code: int, bits: str) -> None:
+    """The class by the high byte: tests/app/test_decoder_tables.py."""
+    assert bits in one(decode(f"0x{code:04X}"), CANOPEN).text.split("error register bits")[1]
 
 
 def test_register_bits() -> None:

@@ -36,3 +36,19 @@ def test_a_drive_alarms_effect_in_the_models_words(effect: servo.Effect) -> None
     spec = next(s for s in servo.DRIVE_ALARMS.values() if s.effect is effect)
     found = [m for m in decode(f"alarm {spec.code}") if m.family == SERVO]
     assert found and servo.EFFECT_TEXT[effect] in found[0].text, found
+
+
+@pytest.mark.parametrize(("code", "name"), [
+    (0x1099, "Generic error"), (0x2999, "Current"), (0x3999, "Voltage"),
+    (0x4999, "Temperature"), (0x5555, "Device hardware"), (0x6999, "Device software"),
+    (0x7099, "Additional modules"), (0x8F99, "Monitoring"), (0x8999, "Monitoring"),
+    (0x90FF, "External error"), (0xF001, "Additional functions"), (0xFF99, "Device specific"),
+])
+def test_an_unknown_emcy_code_gets_the_class_of_the_seeds_table(code: int, name: str) -> None:
+    """Seed 004 ch. 4 "Emergency Message": the high byte gives the error category (10xx
+    generic, 2xxx current, ..., 8xxx monitoring, 90xx external, F0xx additional functions,
+    FFxx device specific). The decoder used to name the error register bit instead: 0x90FF
+    read "class 'generic'", 0x8999 "class 'device profile'"."""
+    (m,) = [m for m in decode(f"0x{code:04X}") if m.family == CANOPEN]
+    assert f"class '{name}'" in m.text, m
+    assert emcy.error_class(code) == name
