@@ -259,7 +259,8 @@ def _fastcat_alarm(row: fastcat.AlarmCode, module: int | None, title: str) -> Me
     """``module``: byte 0 of the emergency data (0 = the coupler); None when not known."""
     where = "" if module is None else (f" on module {module}" if module
                                        else " on the coupler itself (module 0)")
-    reset = ("cleared by Reset fault (0x5200:1) once the cause is gone" if row.resettable
+    reset = ("cleared by Reset fault (0x5200:1) or a resync of the EtherCAT line once the "
+             "cause is gone" if row.resettable
              else "not resettable: the coupler needs a resync")
     section = "§7.5" if row.table == fastcat.COUPLER else "§7.6"
     return Meaning(FASTCAT, title,

@@ -267,3 +267,10 @@ def test_an_empty_or_overlong_emergency_is_refused(text: str, hint: str) -> None
 @pytest.mark.parametrize("text", ["Err. Code\tFF00\tAdditional Code", "ERR CODE\t[0xFF00]"])
 def test_the_code_row_of_a_display_alone_reads_as_the_code(text: str) -> None:
     assert decode(text) == decode("0xFF00")
+
+
+def test_a_resettable_fastcat_alarm_names_both_resets() -> None:
+    """§7: "Il reset degli emergency resettabili avviene alzando il bit di Reset Fault ...
+    oppure comandando un resync della linea ethercat": the Codes tab named Reset fault only."""
+    text = fastcat("FF00 81 02 00 00 04 00").text
+    assert "Reset fault (0x5200:1)" in text and "resync" in text, text
