@@ -93,9 +93,11 @@ def decode(text: str) -> list[Meaning]:
                              raw, re.IGNORECASE)
     if exception:
         return [_modbus_exception(None, int(exception.group(1), 16))]
-    named = re.search(r"\balarm\s+((?:0x)?[0-9A-Fa-f]+)\s+([A-Z][A-Z0-9_]+)\b", raw)
-    if named:  # "alarm 0x3708 UNDERVOLTAGE": the Event log's line, a Reported alarm
-        return _alarm_line(named.group(1), named.group(2))
+    named = re.search(r"\balarm\s+((?:0x)?[0-9A-Fa-f]+)\s+([A-Z][A-Z0-9_]+)\b"
+                      r"(?:\s+module\s+(\d+))?", raw)
+    if named:  # "alarm 0x0B TARATURA module 2": the Event log's line, a Reported alarm
+        module = int(named.group(3)) if named.group(3) else None
+        return _alarm_line(named.group(1), named.group(2), module)
     alarm = re.fullmatch(r"(?:drive\s*)?alarm\s*(\d{1,3})", raw, re.IGNORECASE)
     if alarm:
         return _drive_alarm_number(int(alarm.group(1)))
@@ -470,23 +472,23 @@ def _drive_alarm_number(number: int) -> list[Meaning]:
     return found
 
 
-def _alarm_line(code: str, name: str) -> list[Meaning]:
+def _alarm_line(code: str, name: str, module: int | None = None) -> list[Meaning]:
     """An alarm event's code and name: the name finds the rows, the code (as the device's
     family writes it: "5", "0x04", "0xA000", "0x3708") keeps its own device's. UNDERVOLTAGE is
-    drive alarm 5 and CPX error 8 (Text-ID 0x3708)."""
-    found = _name(name)
+    drive alarm 5 and CPX error 8 (Text-ID 0x3708). ``module``: the event's module (slot)."""
+    found = _name(name, module)
     mine = re.compile(rf"(?<!\w){re.escape(code)}(?!\w)", re.IGNORECASE)
     return [m for m in found if mine.search(m.title)] or found
 
 
-def _name(text: str) -> list[Meaning]:
+def _name(text: str, module: int | None = None) -> list[Meaning]:
     found: list[Meaning] = []
     try:
         row = fastcat.parse_fault(text)
     except CommandError:
         row = None
     if row is not None:
-        found.append(_fastcat_alarm(row, None, f"FastCAT {row.label}"))
+        found.append(_fastcat_alarm(row, module, f"FastCAT {row.label}"))
     wanted = text.strip().upper()
     found.extend(_drive_alarm(s) for s in _drive_specs() if s.name == wanted)
     fault = FAULTS.get(wanted)

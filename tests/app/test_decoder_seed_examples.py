@@ -274,3 +274,15 @@ def test_a_resettable_fastcat_alarm_names_both_resets() -> None:
     oppure comandando un resync della linea ethercat": the Codes tab named Reset fault only."""
     text = fastcat("FF00 81 02 00 00 04 00").text
     assert "Reset fault (0x5200:1)" in text and "resync" in text, text
+
+
+def test_a_picked_module_alarm_keeps_its_module() -> None:
+    """The event log prints "alarm 0x0B TARATURA module 2 raised"; the Reported pick of that
+    alarm decoded the bare row, without the module the alarm is about."""
+    event = AlarmChanged(0, "fastcat", code="0x0B", name="TARATURA", module=2)
+    found = reported_code(event)
+    assert found is not None and "module 2" in found[1]
+    (m,) = decode(found[1])
+    assert "TARATURA on module 2" in m.text, m
+    (m,) = decode("alarm 0x0B TARATURA module 2 raised")
+    assert "TARATURA on module 2" in m.text, m

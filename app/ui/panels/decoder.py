@@ -41,8 +41,11 @@ def reported_code(event: Event) -> tuple[str, str] | None:
         text = f"0x{event.code:04X}"
         return f"{at} AL status code {text}", text
     if isinstance(event, AlarmChanged) and event.active:
-        # code and name: the name alone may be in two tables (UNDERVOLTAGE: drive, CPX-E)
-        text = f"alarm {event.code} {event.name}" if event.name else event.code
+        # code and name, as the Event log prints them: the name alone may be in two tables
+        # (UNDERVOLTAGE: drive, CPX-E), and the module says where a FastCAT alarm is. The
+        # label leaves the module to the reading: with it the label overflowed the box.
+        where = f" module {event.module}" if event.module else ""
+        text = f"alarm {event.code} {event.name}{where}" if event.name else event.code
         return f"{at} alarm {event.code} {event.name}", text
     return None
 
