@@ -38,7 +38,13 @@ from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
 from devices.cpx.messages import CHANNEL_INPUT, CHANNEL_OUTPUT, DiagMessage, parse_emergency
 from devices.device import CommandError
-from devices.ethercat import AL_STATUS_CODES, MANUFACTURER_AREA, describe_al_status_code
+from devices.ethercat import (
+    AL_STATUS_CODES,
+    AL_STATUS_ERROR_FLAG,
+    MANUFACTURER_AREA,
+    AlState,
+    describe_al_status_code,
+)
 from devices.events import fmt_hex
 from devices.fastcat import alarms as fastcat
 from devices.od import ABORT_TEXT, AbortCode
@@ -80,6 +86,36 @@ class DecodeError(ValueError):
 # ---- entry point -------------------------------------------------------------------------
 def decode(text: str) -> list[Meaning]:
     """Every reading of ``text``; DecodeError when it is not something to look up at all."""
+    return _decode(text) + _al_status_registers(text)
+
+
+_AL_STATUS_PAIR = re.compile(r"AL Status\s*'0x([0-9A-Fa-f]{1,4})'\s*read and\s*"
+                             r"'0x([0-9A-Fa-f]{1,4})'\s*expected")
+
+
+def _register_value(value: int) -> str:
+    try:
+        state = AlState(value & ~AL_STATUS_ERROR_FLAG & 0x0F).name
+    except ValueError:
+        state = "no ESM state"
+    flag = " with the error flag" if value & AL_STATUS_ERROR_FLAG else ""
+    return f"{fmt_hex(value, 4)} = {state}{flag}"
+
+
+def _al_status_registers(text: str) -> list[Meaning]:
+    """§7.7's failed transition also names two AL status *register* values (0x0130): the
+    state read and the state expected; bit 4 is the error flag."""
+    pair = _AL_STATUS_PAIR.search(text)
+    if pair is None:
+        return []
+    read, expected = (int(g, 16) for g in pair.groups())
+    return [Meaning(ETHERCAT, "AL status register (0x0130) read and expected",
+                    f"Read {_register_value(read)}, expected {_register_value(expected)}: the "
+                    "slave did not reach the state; the AL status code says why.",
+                    "seed 000 §7.7")]
+
+
+def _decode(text: str) -> list[Meaning]:
     raw = text.strip()
     if not raw:
         raise DecodeError("nothing to decode: paste a code, an emergency or a name")

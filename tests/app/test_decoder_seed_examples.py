@@ -286,3 +286,16 @@ def test_a_picked_module_alarm_keeps_its_module() -> None:
     assert "TARATURA on module 2" in m.text, m
     (m,) = decode("alarm 0x0B TARATURA module 2 raised")
     assert "TARATURA on module 2" in m.text, m
+
+
+def test_the_failed_transition_line_reads_its_al_status_register_values() -> None:
+    """§7.7: "AL Status '0x0012' read and '0x0004' expected" are AL status *register* values
+    (0x0130: the state, bit 4 the error flag), not AL status codes: 0x0012 is PREOP with the
+    error flag, 0x0004 SAFEOP. The Codes tab read only the code of the line."""
+    found = decode("'Box 1 (FastCAT)' (1001): 'PREOP to SAFEOP' failed! Error: 'check device "
+                   "state for SAFEOP'. AL Status '0x0012' read and '0x0004' expected. AL "
+                   "Status Code '0x8204'")
+    assert says(found[0], ["0x8204", "module 2"])
+    (register,) = [m for m in found if "0x0130" in m.title]
+    assert "0x0012 = PREOP with the error flag" in register.text, register
+    assert "0x0004 = SAFEOP" in register.text, register
