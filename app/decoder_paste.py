@@ -50,6 +50,8 @@ _TRACE_REG = re.compile(rf"emcyReg\s*=\s*0x({_HEX}+)")
 _TRACE_DATA = re.compile(rf"data\s*=\s*0x({_HEX}*)")
 _TRACE_STATE = re.compile(r"EcatManagerSlaveStateCallback:\s*\d+\s+\d+\s+(\d+)\s*:")
 _TRACE_CHANGE = re.compile(r"SlaveStateChange\s+slave")
+_TRACE_ERROR_CONTROL = re.compile(r"ErrorControl\b.*errorLocCode")
+_TRACE_PLC_ALARM = re.compile(r"!!!\s*Alarm\s+\d+:\d+")
 _FIELDRIG_EMCY = re.compile(rf"(?:code\s+0x({_HEX}{{1,4}})|error reset),\s*register\s+"
                             rf"0x({_HEX}{{1,2}}),\s*data\s*((?:{_HEX}{{2}}\s*)*)")
 _FIELDRIG_ABORT = re.compile(rf"\babort\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+0x({_HEX}{{8}})")
@@ -121,6 +123,12 @@ def _aitraceprint(text: str) -> str | None:
             raise PasteError(f"data=0x{digits}: the emergency data are whole bytes")
         return _emergency(int(code.group(1), 16), _register(reg.group(1), "emcyReg"),
                           bytes.fromhex(digits))
+    if _TRACE_ERROR_CONTROL.search(text):
+        raise PasteError("ErrorControl's errorLocCode is the PLC's: seed 000 §7.4 prints it "
+                         "without explaining it, and the rig's master does not log it")
+    if _TRACE_PLC_ALARM.search(text):
+        raise PasteError("'Alarm 77:4' is a PLC alarm of the §7.4 trace (mask 00000100), not a "
+                         "device code: the emergency and state lines next to it carry those")
     if _TRACE_CHANGE.search(text):
         raise PasteError("SlaveStateChange carries no code: the AL status code is on the "
                          "EcatManagerSlaveStateCallback line just before it (seed 000 §7.4)")

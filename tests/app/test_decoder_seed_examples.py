@@ -173,6 +173,10 @@ def test_an_exception_the_drive_never_sends() -> None:
     ("380808 - 00000001 - ECAT_EVENT SlaveStateChange slave = 11 from 8 to 2",
      "EcatManagerSlaveStateCallback"),
     ("83 0F", "exception"),
+    # §7.4's other lines: the PLC's own, which the seed does not explain
+    ("380808 - 00000001 - !! ECAT_EVENT ErrorControl slave = 11 errorLocCode = 10071",
+     "errorLocCode is the PLC.s"),
+    ("213064 - 00000100 - !!! Alarm 77:4 Date:22/1 Time:9:48:40", "PLC alarm"),
 ])
 def test_a_line_without_its_code_says_what_is_missing(text: str, hint: str) -> None:
     with pytest.raises(DecodeError, match=hint):
