@@ -229,6 +229,11 @@ def test_the_start_of_the_manufacturer_area() -> None:
     ("node 2: error reset, register 0x00, data 00 00 00 00 00", CANOPEN, ["Error reset"]),
     ("node 2 ->: abort 0x6041:00 0x06090011 (Sub-index does not exist)", SDO,
      ["0x06090011 on object 0x6041:00", "Sub-index does not exist"]),
+    # the master's log (devices/master/log_styles.py "identity_read", "init_command")
+    ("'Box 4 (drive_ec)' (1004): identity check failed: SDO upload 0x1018:01 aborted with "
+     "0x06020000.", SDO, ["0x06020000 on object 0x1018:01", "Object does not exist"]),
+    ("'Box 4 (drive_ec)' (1004): init command 'set mode' (PS) failed: SDO download "
+     "0x6060:00 aborted with 0x06090030.", SDO, ["0x06090030 on object 0x6060:00"]),
 ])
 def test_fieldrigs_own_lines(text: str, fam: str, words: list[str]) -> None:
     found = [m for m in decode(text) if m.family == fam]
