@@ -30,37 +30,35 @@ from __future__ import annotations
 
 import re
 import struct
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
+from app.decoder_meaning import (
+    CANOPEN,
+    CPX,
+    DIAG,
+    ETHERCAT,
+    FASTCAT,
+    MODBUS,
+    SDO,
+    SERVO,
+    TRSCAT,
+    DecodeError,
+    Meaning,
+    al_status_registers,
+    modbus_exception,
+)
 from app.decoder_paste import PasteError, canonical
-from app.modbus.pdu import EXCEPTION_FLAG, EXCEPTION_NAMES, ILLEGAL_DATA_ADDRESS
+from app.modbus.pdu import EXCEPTION_FLAG
 from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
 from devices.cpx.messages import CHANNEL_INPUT, CHANNEL_OUTPUT, DiagMessage, parse_emergency
 from devices.device import CommandError
-from devices.ethercat import (
-    AL_STATUS_CODES,
-    AL_STATUS_ERROR_FLAG,
-    MANUFACTURER_AREA,
-    AlState,
-    describe_al_status_code,
-)
+from devices.ethercat import AL_STATUS_CODES, MANUFACTURER_AREA, describe_al_status_code
 from devices.events import fmt_hex
 from devices.fastcat import alarms as fastcat
 from devices.od import ABORT_TEXT, AbortCode
 from devices.servo import alarms as servo
 from devices.trscat.diagnostics import DIAG_CODE_MANUFACTURER, FAULTS
-
-# Families: which device (or protocol layer) a reading belongs to.
-ETHERCAT = "EtherCAT AL status"
-FASTCAT = "FastCAT"
-SERVO = "Servo drive"
-TRSCAT = "TRS-CAT"
-CPX = "CPX-E-EC"
-CANOPEN = "CANopen (DS 301)"
-SDO = "SDO abort"
-DIAG = "Diagnosis message (0x10F3)"
-MODBUS = "Modbus exception"
 
 MAX_FASTCAT_MODULE = fastcat.MAX_MODULES  # seed 000 §2: at most 16 modules on a coupler
 
@@ -71,48 +69,10 @@ _SERVO_FIELDBUSES = ("modbus", "profinet")  # their tables differ in alarms 30-3
 _SERVO_EFFECT = servo.EFFECT_TEXT  # seed 004 ch. 3 "Azione", in the model's words
 
 
-@dataclass(frozen=True)
-class Meaning:
-    family: str  # which device or protocol layer reads the code this way
-    title: str  # what the code is, with its value: "AL status code 0x8204"
-    text: str  # the plain-language meaning
-    source: str  # the seed section (or standard) the table comes from
-
-
-class DecodeError(ValueError):
-    """The text is not a code, a frame or a name the tables know."""
-
-
 # ---- entry point -------------------------------------------------------------------------
 def decode(text: str) -> list[Meaning]:
     """Every reading of ``text``; DecodeError when it is not something to look up at all."""
-    return _decode(text) + _al_status_registers(text)
-
-
-_AL_STATUS_PAIR = re.compile(r"AL Status\s*'0x([0-9A-Fa-f]{1,4})'\s*read and\s*"
-                             r"'0x([0-9A-Fa-f]{1,4})'\s*expected")
-
-
-def _register_value(value: int) -> str:
-    try:
-        state = AlState(value & ~AL_STATUS_ERROR_FLAG & 0x0F).name
-    except ValueError:
-        state = "no ESM state"
-    flag = " with the error flag" if value & AL_STATUS_ERROR_FLAG else ""
-    return f"{fmt_hex(value, 4)} = {state}{flag}"
-
-
-def _al_status_registers(text: str) -> list[Meaning]:
-    """§7.7's failed transition also names two AL status *register* values (0x0130): the
-    state read and the state expected; bit 4 is the error flag."""
-    pair = _AL_STATUS_PAIR.search(text)
-    if pair is None:
-        return []
-    read, expected = (int(g, 16) for g in pair.groups())
-    return [Meaning(ETHERCAT, "AL status register (0x0130) read and expected",
-                    f"Read {_register_value(read)}, expected {_register_value(expected)}: the "
-                    "slave did not reach the state; the AL status code says why.",
-                    "seed 000 §7.7")]
+    return _decode(text) + al_status_registers(text)
 
 
 def _decode(text: str) -> list[Meaning]:
@@ -128,7 +88,7 @@ def _decode(text: str) -> list[Meaning]:
     exception = re.fullmatch(r"(?:modbus\s*)?exception\s*(?:code\s*)?(?:0x)?([0-9a-f]{1,2})",
                              raw, re.IGNORECASE)
     if exception:
-        return [_modbus_exception(None, int(exception.group(1), 16))]
+        return [modbus_exception(None, int(exception.group(1), 16))]
     named = re.search(r"\balarm\s+((?:0x)?[0-9A-Fa-f]+)\s+([A-Z][A-Z0-9_]+)\b"
                       r"(?:\s+module\s+(\d+))?", raw)
     if named:  # "alarm 0x0B TARATURA module 2": the Event log's line, a Reported alarm
@@ -174,7 +134,7 @@ def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
     as_bytes = all(w <= 2 for w in widths)
     if as_bytes and len(values) in (2, 3) and values[-2] > EXCEPTION_FLAG:
         # seed 004 ch. 2 "Eccezioni": function code + 0x80, exception code (unit id first)
-        return [_modbus_exception(values[-2] & ~EXCEPTION_FLAG, values[-1])]
+        return [modbus_exception(values[-2] & ~EXCEPTION_FLAG, values[-1])]
     if as_bytes and len(values) == 4:  # a 32-bit value as its bytes on the wire, low first
         return _number(int.from_bytes(bytes(values), "little"), 8)
     if as_bytes and len(values) >= DIAG_HEADER_BYTES:
@@ -200,25 +160,6 @@ def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
     raise DecodeError("bytes not understood: an emergency is 'CODE REG B0 B1 B2 B3 B4' "
                       "(e.g. FF00 81 02 00 00 04 00) or the 8 bytes of a CAN frame; a 0x10F3 "
                       "message 16 bytes or more, a Modbus exception '83 02'")
-
-
-def _modbus_exception(function: int | None, code: int) -> Meaning:
-    """Seed 004 ch. 2 "Eccezioni": the drive answers 02 only and drops any other bad request."""
-    name = EXCEPTION_NAMES.get(code)
-    if name is None:
-        raise DecodeError(f"Modbus exception {code:02X} is not a Modbus exception code "
-                          f"({', '.join(f'{c:02X}' for c in EXCEPTION_NAMES)})")
-    if code == ILLEGAL_DATA_ADDRESS:
-        text = ("the address names nothing on the drive (no parameter or register there): "
-                "the only exception the drive answers")
-    else:
-        text = ("the drive never sends it: it answers 02 only and drops any other faulty "
-                "request without a reply; another server or a gateway sent this")
-    title = ("Modbus exception response" if function is None else
-             f"Modbus exception response to function {fmt_hex(function, 2)} "
-             f"({fmt_hex(function | EXCEPTION_FLAG, 2)})")
-    return Meaning(MODBUS, title, f"Exception {code:02X} {name}: {text}.",
-                   "seed 004 ch. 2 Eccezioni")
 
 
 DIAG_HEADER_BYTES = struct.calcsize("<IHHQ")  # ETG.1020: Diag Code, flags, Text-ID, time stamp
@@ -536,3 +477,22 @@ def _name(text: str, module: int | None = None) -> list[Meaning]:
     if not found:
         raise DecodeError(f"{text!r} is no code and no alarm name the tables know")
     return found
+
+
+__all__ = [
+    "CANOPEN",
+    "CPX",
+    "DIAG",
+    "ETHERCAT",
+    "FASTCAT",
+    "MODBUS",
+    "SDO",
+    "SERVO",
+    "TRSCAT",
+    "DecodeError",
+    "Meaning",
+    "al_status",
+    "decode",
+    "emergency",
+    "register_text",
+]
