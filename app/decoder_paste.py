@@ -18,7 +18,8 @@ pastes any of them:
 and FieldRig's own lines: the event log's ``Emergency sent (code 0xFF00, register 0x81, data
 02 00 00 04 00)``, the CAN monitor's ``code 0x8611, register 0x21, data 10 00 00 00 00`` /
 ``error reset, ...`` and ``abort 0x6041:00 0x06090011 (...)`` (devices/canopen/decode.py), the
-master's ``SDO upload 0x1018:01 aborted with 0x06020000``.
+master's ``SDO upload 0x1018:01 aborted with 0x06020000``, the CPX-E-EC's 0x10F3 line
+``error [CPX 0xE1000002] CPX error 2: ...`` (its Diag Code).
 The event log's ``alarm 0x04 MISSING_NODE_ANSWER module 2 raised`` :func:`app.decoder.decode`
 reads itself (code and name together).
 
@@ -56,6 +57,7 @@ _TRACE_PLC_ALARM = re.compile(r"!!!\s*Alarm\s+\d+:\d+")
 _FIELDRIG_EMCY = re.compile(rf"(?:code\s+0x({_HEX}{{1,4}})|error reset),\s*register\s+"
                             rf"0x({_HEX}{{1,2}}),\s*data\s*((?:{_HEX}{{2}}\s*)*)")
 _FIELDRIG_ABORT = re.compile(rf"\babort\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+0x({_HEX}{{8}})")
+_DIAG_MESSAGE_TEXT = re.compile(rf"\[(?:CPX|DS401|ETG)\s+0x({_HEX}{{8}})\]")
 _MASTER_ABORT = re.compile(rf"SDO\s+(?:upload|download)\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+"
                            rf"aborted with\s+0x({_HEX}{{8}})")
 _TAB_15_DASH = re.compile(rf"(?<={_HEX})\s*-\s*(?={_HEX})")
@@ -139,6 +141,9 @@ def _aitraceprint(text: str) -> str | None:
 
 
 def _fieldrig(text: str) -> str | None:
+    message = _DIAG_MESSAGE_TEXT.search(text)  # "error [CPX 0xE1000002] CPX error 2: ..."
+    if message:
+        return f"0x{message.group(1)}"
     emcy = _FIELDRIG_EMCY.search(text)
     if emcy:
         code = int(emcy.group(1), 16) if emcy.group(1) else 0  # "error reset" is 0x0000

@@ -229,6 +229,12 @@ def test_the_start_of_the_manufacturer_area() -> None:
     ("node 2: error reset, register 0x00, data 00 00 00 00 00", CANOPEN, ["Error reset"]),
     ("node 2 ->: abort 0x6041:00 0x06090011 (Sub-index does not exist)", SDO,
      ["0x06090011 on object 0x6041:00", "Sub-index does not exist"]),
+    # the CPX-E-EC's own log line of a 0x10F3 message (DiagMessage.text)
+    ("0x10F3: error [CPX 0xE1000002] CPX error 2: Short circuit/overload (2, 0x80)", CPX,
+     ["0xE1000002", "Short circuit"]),
+    # the FastCAT's refused reset (devices/fastcat/faults.py)
+    ("Reset fault refused: alarm 0x04 MISSING_NODE_ANSWER module 2, cause still present",
+     FASTCAT, COUPLER_WORDS),
     # the master's log (devices/master/log_styles.py "identity_read", "init_command")
     ("'Box 4 (drive_ec)' (1004): identity check failed: SDO upload 0x1018:01 aborted with "
      "0x06020000.", SDO, ["0x06020000 on object 0x1018:01", "Object does not exist"]),
