@@ -132,7 +132,7 @@ def _hex(token: str) -> int | None:
 # ---- frames ------------------------------------------------------------------------------
 def _frame(values: list[int], widths: list[int]) -> list[Meaning]:
     as_bytes = all(w <= 2 for w in widths)
-    if as_bytes and len(values) in (2, 3) and values[-2] > EXCEPTION_FLAG:
+    if as_bytes and len(values) in (2, 3) and values[-2] > EXCEPTION_FLAG and values[-1]:
         # seed 004 ch. 2 "Eccezioni": function code + 0x80, exception code (unit id first)
         return [modbus_exception(values[-2] & ~EXCEPTION_FLAG, values[-1])]
     if as_bytes and len(values) == 4:  # a 32-bit value as its bytes on the wire, low first

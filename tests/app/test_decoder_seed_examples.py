@@ -161,6 +161,12 @@ def test_the_drives_exception_02(text: str) -> None:
     assert "02 Illegal Data Address" in m.text and "0x03" in m.title, m
 
 
+def test_two_bytes_with_no_exception_code_are_no_modbus_exception() -> None:
+    """An emergency code typed as its two bytes (FF 00) read as 'Modbus exception 00'."""
+    with pytest.raises(DecodeError, match="bytes not understood"):
+        decode("FF 00")
+
+
 def test_an_exception_the_drive_never_sends() -> None:
     (m,) = [m for m in decode("86 01") if m.family == MODBUS]
     assert "01 Illegal Function" in m.text and "never" in m.text, m
