@@ -98,6 +98,8 @@ def _decode(text: str) -> list[Meaning]:
     if alarm:
         return _drive_alarm_number(int(alarm.group(1)))
     tokens = [t for t in re.split(r"[\s,;]+", raw) if t]
+    if not tokens:  # separators only: ",", "(Hex: ; )"
+        raise DecodeError("nothing to decode in that line: it holds no code or bytes")
     numbers = [_hex(t) for t in tokens]
     if any(n is None for n in numbers):
         if len(tokens) == 1 or ":" in raw:

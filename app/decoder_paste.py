@@ -55,7 +55,7 @@ _TRACE_CHANGE = re.compile(r"SlaveStateChange\s+slave")
 _TRACE_ERROR_CONTROL = re.compile(r"ErrorControl\b.*errorLocCode")
 _TRACE_PLC_ALARM = re.compile(r"!!!\s*Alarm\s+\d+:\d+")
 _FIELDRIG_EMCY = re.compile(rf"(?:code\s+0x({_HEX}{{1,4}})|error reset),\s*register\s+"
-                            rf"0x({_HEX}{{1,2}}),\s*data\s*((?:{_HEX}{{2}}\s*)*)")
+                            rf"0x({_HEX}{{1,2}}),\s*data\s*([0-9A-Fa-f \t]*)")
 _FIELDRIG_ABORT = re.compile(rf"\babort\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+0x({_HEX}{{8}})")
 _DIAG_MESSAGE_TEXT = re.compile(rf"\[(?:CPX|DS401|ETG)\s+0x({_HEX}{{8}})\]")
 _MASTER_ABORT = re.compile(rf"SDO\s+(?:upload|download)\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+"
@@ -73,6 +73,13 @@ def canonical(text: str) -> str:
         # seed 002 Tab. 15 prints the message with dashes inside ("02 - 37", "00 00-00")
         return _TAB_15_DASH.sub(" ", text)
     return text
+
+
+def _whole_bytes(digits: str, where: str) -> bytes:
+    """Hex bytes as a display prints them ("02 00 0B", "0200000400"); PasteError otherwise."""
+    if any(len(group) % 2 for group in digits.split()):
+        raise PasteError(f"{where}: the emergency data are whole bytes, two hex digits each")
+    return bytes.fromhex(digits)
 
 
 def _emergency(code: int, register: int, data: bytes) -> str:
@@ -101,7 +108,7 @@ def _sirio(text: str) -> str | None:
     if code is None or reg is None:
         raise PasteError("Sirio display (seed 000 §7.2): the data row alone has no error code; "
                          "paste the Err. Code and Err. Reg. rows too")
-    raw = bytes.fromhex(data.group(1))
+    raw = _whole_bytes(data.group(1), "Sirio data row")
     return _emergency(int(code.group(1), 16), _register(reg.group(1), "Err. Reg."), raw)
 
 
@@ -112,7 +119,7 @@ def _pegaso(text: str) -> str | None:
     if code is None or reg is None:
         raise PasteError("Pegaso display (seed 000 §7.3): the ERR DATA row alone has no error "
                          "code; paste the ERR CODE and ERR REG rows too")
-    high_first = bytes.fromhex(data.group(1))
+    high_first = _whole_bytes(data.group(1), "Pegaso ERR DATA")
     return _emergency(int(code.group(1), 16), _register(reg.group(1), "ERR REG"),
                       high_first[::-1])
 
@@ -123,11 +130,8 @@ def _aitraceprint(text: str) -> str | None:
         return f"0x{int(state.group(1)):04X}"  # the AL status code, printed in decimal
     code, reg, data = (p.search(text) for p in (_TRACE_CODE, _TRACE_REG, _TRACE_DATA))
     if code and reg and data:
-        digits = data.group(1)
-        if len(digits) % 2:
-            raise PasteError(f"data=0x{digits}: the emergency data are whole bytes")
         return _emergency(int(code.group(1), 16), _register(reg.group(1), "emcyReg"),
-                          bytes.fromhex(digits))
+                          _whole_bytes(data.group(1), f"data=0x{data.group(1)}"))
     if _TRACE_ERROR_CONTROL.search(text):
         raise PasteError("ErrorControl's errorLocCode is the PLC's: seed 000 §7.4 prints it "
                          "without explaining it, and the rig's master does not log it")
@@ -147,7 +151,8 @@ def _fieldrig(text: str) -> str | None:
     emcy = _FIELDRIG_EMCY.search(text)
     if emcy:
         code = int(emcy.group(1), 16) if emcy.group(1) else 0  # "error reset" is 0x0000
-        return _emergency(code, int(emcy.group(2), 16), bytes.fromhex(emcy.group(3)))
+        return _emergency(code, int(emcy.group(2), 16),
+                          _whole_bytes(emcy.group(3), "emergency data"))
     abort = _FIELDRIG_ABORT.search(text) or _MASTER_ABORT.search(text)
     if abort is None:
         return None

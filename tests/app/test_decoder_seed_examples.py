@@ -276,6 +276,8 @@ def test_a_picked_alarm_reads_only_in_its_table(event: AlarmChanged, fam: str,
 
 @pytest.mark.parametrize(("text", "hint"), [
     ("'Box 1 (FastCAT)' (1001): CoE - Emergency (Hex: ).", "nothing to decode"),
+    (",", "nothing to decode"),  # separators only: an IndexError before
+    ("Hex: ; )", "nothing to decode"),
     ("FF00 81 02 00 00 04 00 00 00", "five data bytes"),
 ])
 def test_an_empty_or_overlong_emergency_is_refused(text: str, hint: str) -> None:
@@ -320,3 +322,13 @@ def test_the_failed_transition_line_reads_its_al_status_register_values() -> Non
     (register,) = [m for m in found if "0x0130" in m.title]
     assert "0x0012 = PREOP with the error flag" in register.text, register
     assert "0x0004 = SAFEOP" in register.text, register
+
+
+@pytest.mark.parametrize("text", [
+    "Err. Code FF00 Err. Reg. 0081 0x low 0 2 00 high",
+    "ERR CODE [0xFF00] ERR REG [0x81] ERR DATA [0x0 04 00 00 02] basso",
+    "code 0xFF00, register 0x81, data 0",
+])
+def test_a_display_with_half_a_byte_gets_a_message_not_a_crash(text: str) -> None:
+    with pytest.raises(DecodeError, match="whole bytes"):
+        decode(text)
