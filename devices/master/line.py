@@ -29,6 +29,7 @@ if TYPE_CHECKING:
     from devices.events import Event
 
 CRC_REPORT_US = 1_000_000  # a damaged cable's lost frames: one log line a second at most
+SILENT_CAUSE = "powered and reached by the frames: it does not answer"  # the line has none
 LOST, MISSING = "lost", "missing"  # what _unreached found
 
 
@@ -188,7 +189,8 @@ class LineMixin:
                         link.esc.lose_link(OUT)
         # A lost slave's injected cause follows the line while it stays lost (the instructor
         # may take one cause away and put another): else the Causes row kept the first one.
-        # One the frames reach again keeps its cause: the next step finds it.
+        # One the frames reach again keeps its cause: the next step finds it, or finds it
+        # silent (_line_news).
         for p, link in enumerate(self.links):
             if link.injected_cause and not (self._line_reach[p] and powered[p]):
                 link.injected_cause = self._injected_cause(p)
@@ -212,7 +214,11 @@ class LineMixin:
                 return f"no link on the OUT port of the slave at position {p}"
         if not self._powered(position):
             return "powered off"
-        return "no link on its IN port"
+        if not plugs[position][0]:
+            return "no link on its IN port"
+        # On the line and powered: its ESC passes the frames on, its application does not
+        # answer (a drive whose c9 did not select EtherCAT at power-up, seed 004 ch. 2).
+        return SILENT_CAUSE
 
     def _first_silent(self, position: int) -> int:
         """The first position of the run of slaves that no longer answer, ``position`` among
@@ -337,6 +343,7 @@ class LineMixin:
         master's start-up reports the slaves it expected and did not find. What it reads, not
         why (the cause stays the line's)."""
         link.missing = True
+        link.injected_cause = self._injected_cause(link.position)  # the instructor's, as lost
         first = self._first_silent(link.position)
         link.diagnosis = self._silent_finding(first)
         self._event(CommError(self.now_us, self.device_id, position=link.position,
@@ -387,6 +394,9 @@ class LineMixin:
         for link in self.links:
             if (link.lost_once or link.missing) and not link.present:
                 link.diagnosis = self._silent_finding(self._first_silent(link.position))
+                # Read after the slaves stepped: one the frames reach that still does not
+                # answer is silent, not "powered off" as it was when switched on again.
+                link.injected_cause = self._injected_cause(link.position)
 
     def _report_lost(self, positions: list[int], message: str = "lost_line") -> None:
         """The master's own line for the slaves lost (or ``missing_line``: not found) this

@@ -87,3 +87,44 @@ def test_a_slave_found_after_being_reported_missing_is_logged_found() -> None:
     assert f"{DRIVE}: found on the line in 'INIT'." in texts
     recoveries = [e.to_record() for e in seen if e.to_record()["event"] == "network_recovery"]
     assert [r["positions"] for r in recoveries] == [[1]]  # the FastCAT, lost with the drive off
+
+
+SILENT = "powered and reached by the frames: it does not answer"
+
+
+def test_a_slave_powered_again_and_silent_loses_its_stale_power_off_cause() -> None:
+    """The drive switched off (cause "powered off"), then on with c9 = 3 latched: the frames
+    reach it and it stays silent. Its cause in the instructor's view followed the line only
+    while the line did not reach it, so it kept "powered off" with the drive on (and a slave
+    lost while reached read "no link on its IN port", its IN port plugged)."""
+    rig = _drive_first()
+    rig.run_until(4 * US)
+    rig.apply("drive_ec", "write_parameter", {"parameter": "c9", "value": 3})
+    rig.apply("drive_ec", "save", {})
+    rig.run_until(8 * US)
+    rig.apply("master", "power_slave", {"position": 0, "on": False})
+    rig.run_until(9 * US)
+    assert master_view(rig)["injected"]["lost"][0] == {"position": 0, "cause": "powered off"}
+    rig.apply("master", "power_slave", {"position": 0, "on": True})
+    rig.run_until(12 * US)
+    view = master_view(rig)
+    assert [s["present"] for s in view["slaves"]] == [False, True]
+    assert view["injected"]["lost"] == [{"position": 0, "cause": SILENT}]
+
+
+def test_a_slave_never_found_has_its_cause_in_the_instructor_s_view() -> None:
+    """A slave reported not found gets the instructor's cause as a lost one does: the silent
+    drive's, and the FastCAT's cable pulled before the master had link (before, none: the
+    Causes row had nothing for a slave missing from the start)."""
+    rig = _drive_first(c9=3)
+    rig.run_until(2 * US)
+    assert master_view(rig)["injected"]["lost"] == [{"position": 0, "cause": SILENT}]
+    rig = _drive_first()
+    rig.apply("master", "pull_cable", {"cable": 1})
+    rig.run_until(2 * US)
+    view = master_view(rig)
+    assert [s["present"] for s in view["slaves"]] == [True, False]
+    assert view["injected"]["lost"] == [{"position": 1, "cause": "cable 1 pulled"}]
+    rig.apply("master", "plug_cable", {"cable": 1})
+    rig.run_until(4 * US)
+    assert master_view(rig)["injected"]["lost"] == []
