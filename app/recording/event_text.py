@@ -113,9 +113,9 @@ def level(event: Event, record: dict[str, Any]) -> str:
 
 
 def text(event: Event, record: dict[str, Any], al_status: AlStatusReader | None = None) -> str:
-    """``al_status``: the rig's reading of AL status codes (:func:`al_status_reader`), read
-    when the event is recorded (a FastCAT module alarm's text takes its module code from
-    0x5400 at that moment); without it, the ETG text."""
+    """``al_status``: the rig's reading of AL status codes (:func:`al_status_reader`: a
+    FastCAT's 0x80XX names the module and the coupler code, seed 000 §7.7; a module alarm sets
+    no AL status code); without it, the ETG text."""
     if al_status is not None and event.kind == "al_status":
         return _al_status(record, event.device, al_status)
     fmt = FORMATS.get(event.kind)
