@@ -39,6 +39,7 @@ from app.ui.panels.object_dictionary import ObjectDictionaryPanel
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.state import StatePanel
 from app.ui.panels.widgets import short_label_css
+from app.ui.rail_power import RailPowers
 from app.ui.rail_scene import BODY_D, BODY_H, RailScene, rail_length
 from app.ui.runs import RunSplitter
 from app.ui.style import CSS
@@ -164,7 +165,11 @@ class Dashboard:
                                          "and no servo drive: this dashboard shows those only.")
         # In the line only the first coupler has a rail (row 1); the others are line bodies.
         railed = self.fastcat_ids[:1] if self._line_wanted else self.fastcat_ids
-        self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING) for i, d in enumerate(railed)]
+        # A module's supply is a hidden cause: with a token the shared rail draws every
+        # module powered and each instructor connection the ones switched off over it.
+        self._scenes = [RailScene(server, d, z=-i * RAIL_SPACING, causes=self.instructor.shared)
+                        for i, d in enumerate(railed)]
+        self._rail_powers = RailPowers(self.instructor, self._scenes)
         for scene in self._scenes:
             scene.build_coupler()
         frame_slots = [len(self._device_snap(runtime.frame.snapshot, d).get("rail") or [])
@@ -425,6 +430,7 @@ class Dashboard:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
                     for scene, snap in zip(self._scenes, snaps, strict=True):
                         scene.update(snap, frame.t_us)
+                    self._rail_powers.update(snaps)
                     if panels is not None:
                         main = snaps[0]
                         master = self._device_snap(frame.snapshot, self.master_id)

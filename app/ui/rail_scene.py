@@ -105,6 +105,15 @@ def module_led_legend(leds: Mapping[str, str]) -> str:
     return "module LEDs (red above, yellow below): " + ("; ".join(parts) or "all off")
 
 
+def shown_entry(entry: Mapping[str, Any], causes: bool) -> Mapping[str, Any]:
+    """A slot as the shared scene draws it: with trainees (``causes=False``) a module's supply
+    is a hidden cause (only the instructor switches it off, docs/classroom.md), so the module
+    is drawn powered and a trainee reads what the real module shows, its LEDs dark."""
+    if causes or entry.get("powered", True):
+        return entry
+    return {**entry, "powered": True}
+
+
 def slot_shape(entry: Mapping[str, Any]) -> tuple[Any, ...]:
     """What a slot looks like apart from its LEDs; a change rebuilds the slot's nodes."""
     return (entry.get("type"), entry.get("plugged", True), entry.get("powered", True),
@@ -125,9 +134,15 @@ class _SlotView:
 class RailScene:
     """Scene nodes of one FastCAT under ``/<device_id>``; server-level, shared by all clients."""
 
-    def __init__(self, server: viser.ViserServer, device_id: str, z: float = 0.0) -> None:
+    def __init__(self, server: viser.ViserServer, device_id: str, z: float = 0.0,
+                 causes: bool = True) -> None:
+        """``causes=False``: a rig with trainees, whose shared scene shows no module switched
+        off (:func:`shown_entry`); each instructor connection draws those over it
+        (app/ui/rail_power.py)."""
         self._server = server
         self._root = f"/{device_id}"
+        self._causes = causes
+        self.builds: dict[int, int] = {}  # how often each slot was (re)built: shadows redraw
         self._z = z  # several couplers stack their rails downwards
         self._slots: dict[int, _SlotView] = {}
         self._coupler_leds: dict[str, tuple[viser.BoxHandle, str]] = {}
@@ -207,12 +222,8 @@ class RailScene:
             label("type", "empty", 1.2, 0.75)
             return view
         plugged = bool(entry.get("plugged", True))
-        powered = bool(entry.get("powered", True))
         pulled = 0.0 if plugged else -0.6  # an unplugged module hangs in front of its slot
-        view.nodes.append(scene.add_box(
-            f"{base}/body", color=BODY if powered else BODY_UNPOWERED,
-            dimensions=(MODULE_W * 0.92, BODY_D, BODY_H), position=at(x, pulled, 0.0),
-            opacity=None if plugged else 0.35))
+        view.nodes.append(self.add_body(scene, entry))
         label("type", str(module_type), 1.2, 0.75)
         for name, colour, z in MODULE_LEDS:
             key = f"{slot}.{name}"
@@ -221,10 +232,27 @@ class RailScene:
             view.nodes.append(box)
             view.leds[key] = (box, colour)
             self._colors.pop(key, None)
-        note = _slot_note(entry)
+        note = slot_note(entry)
         if note:
-            label("note", note, -1.0, 0.7)
+            view.nodes.append(self.add_note(scene, slot, note))
         return view
+
+    def add_body(self, scene: Any, entry: Mapping[str, Any]) -> viser.BoxHandle:
+        """A module's body in ``scene`` (the server's, or an instructor connection's under the
+        same name); greyed without supply, hanging in front of its slot when unplugged."""
+        slot, plugged = int(entry["slot"]), bool(entry.get("plugged", True))
+        powered = bool(entry.get("powered", True))
+        return scene.add_box(
+            f"{self._root}/slot{slot:02d}/body", color=BODY if powered else BODY_UNPOWERED,
+            dimensions=(MODULE_W * 0.92, BODY_D, BODY_H),
+            position=self._at(slot_x(slot), 0.0 if plugged else -0.6, 0.0),
+            opacity=None if plugged else 0.35)
+
+    def add_note(self, scene: Any, slot: int, note: str) -> viser.LabelHandle:
+        """The note under a module ("power off", "seen DI16") in ``scene``."""
+        return scene.add_label(f"{self._root}/slot{slot:02d}/note", note,
+                               position=self._at(slot_x(slot), FRONT_Y - 0.06, -1.0),
+                               anchor="center-center", font_screen_scale=0.7)
 
     # ---- per frame ----------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any], t_us: int) -> bool:
@@ -238,12 +266,13 @@ class RailScene:
                 self._slots.pop(gone).remove()
             self.slot_count = len(rail)
         for entry in rail:
-            slot = int(entry["slot"])
+            slot, entry = int(entry["slot"]), shown_entry(entry, self._causes)
             view = self._slots.get(slot)
             if view is None or view.shape != slot_shape(entry):
                 if view is not None:
                     view.remove()
                 self._slots[slot] = self._build_slot(entry)
+                self.builds[slot] = self.builds.get(slot, 0) + 1
         leds = snap.get("leds") or {}
         for name, (box, colour) in self._coupler_leds.items():
             pattern = leds.get(name, "off")
@@ -289,7 +318,7 @@ class RailScene:
         return {slot: view.shape[0] for slot, view in self._slots.items()}
 
 
-def _slot_note(entry: Mapping[str, Any]) -> str:
+def slot_note(entry: Mapping[str, Any]) -> str:
     if not entry.get("plugged", True):
         return "unplugged"
     if not entry.get("powered", True):

@@ -129,8 +129,8 @@ def _wait(predicate: Any, timeout: float = 20.0) -> Any:
 @pytest.fixture(scope="module")
 def pages() -> Iterator[tuple[Page, Page]]:
     """A trainee's and the instructor's page after the instructor picked and injected a module
-    fault (0x0B on module 4) from its page, a coupler code, pulled the line's cable 2 and
-    jammed the Modbus drive's load."""
+    fault (0x0B on module 4) from its page, a coupler code, pulled the line's cable 2,
+    jammed the Modbus drive's load and switched module 3's supply off."""
     rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
     served = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
     trainee, instructor = Page(served.port), Page(served.port)
@@ -207,6 +207,10 @@ def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
     _command(served, drive, "clear_alarm", {"code": "16"})
     served.runtime.advance(100_000).result(timeout=30)
     _wait(lambda: "alarm 16 FOLLOWING_ERROR" in text(instructor))
+    # The Rail and power folder's Module powered box: module 3 without supply.
+    _command(served, "fastcat/3", "module_power", {"on": False})
+    served.runtime.advance(100_000).result(timeout=30)
+    _wait(lambda: "its supply is off" in text(instructor))
     time.sleep(1.0)  # what the trainee would get has had the time to arrive
 
 
@@ -361,3 +365,21 @@ def test_the_instructor_s_scene_shows_the_jammed_load(pages: tuple[Page, Page]) 
         caption = any("load jammed" in str((m.get("props") or {}).get("text", ""))
                       for m in nodes)
         assert (red, caption) == (shown, shown), page
+
+
+def test_a_trainee_s_rail_shows_no_module_switched_off(pages: tuple[Page, Page]) -> None:
+    """The 3D rail greyed module 3 and wrote "power off" under it on every page, while the
+    Causes row that says "its supply is off" and the Module powered box are the
+    instructor's: a trainee sees what the real module shows, its LEDs dark. The instructor's
+    page draws the module as it is, its own scene nodes over the shared ones."""
+    from app.ui.rail_scene import BODY_UNPOWERED
+
+    trainee, instructor = pages
+    for page, shown in ((instructor, True), (trainee, False)):
+        nodes = [m for m in page.received()
+                 if str(m.get("name", "")).startswith("/fastcat/slot03/")]
+        assert nodes, page  # the page did get the slot
+        grey = any(tuple((m.get("props") or {}).get("color") or ()) == BODY_UNPOWERED
+                   for m in nodes if m["name"].endswith("/body"))
+        note = any("power off" in str((m.get("props") or {}).get("text", "")) for m in nodes)
+        assert (grey, note) == (shown, shown), page
