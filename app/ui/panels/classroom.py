@@ -193,7 +193,13 @@ class ClassroomPanel:
         return at
 
     def name_cause(self, cause_id: str, client: viser.ClientHandle | None = None) -> bool:
-        """A trainee's answer; the right cause gets its repair (True)."""
+        """A trainee's answer; the right cause gets its repair (True). With a token the
+        instructor's page has the form too but its answer is refused: it knows the hidden
+        fault, and a first answer from it would repair the fault and lock the trainees out."""
+        if not self.access.open and client is not None \
+                and self.access.role(client.client_id) is Role.INSTRUCTOR:
+            raise PermissionError("the trainees name the cause; the instructor ends the "
+                                  "exercise with End and score")
         with self._lock:
             exercise = self.exercise
             if exercise is None or exercise.phase is Phase.FINISHED:
