@@ -60,6 +60,29 @@ _MODE_SW: tuple[tuple[frozenset[int], dict[int, str]], ...] = (
     (ELECTRONIC_AXIS, {6: "Axis_started"}),
     (SAVE_LOAD, {5: "Save_done", 6: "Load_done"}),
 )
+# What "1" means for each R05 bit, in English from the quick reference's column ("1: asse in
+# coppia", "1: rampa di stop in corso", ...): the Drive tab's tooltips.
+STATUS_BIT_MEANING: dict[str, str] = {
+    "Ten_st": "in torque", "Ien_st": "motion enabled", "Stp_st": "stop ramp running",
+    "Alm_st": "in alarm", "Ltc_st": "position latched", "sp_rdy": "ready for a set-point",
+    "EOJ": "End of Job", "Following_error": "following error", "Zero_velocity": "zero speed",
+    "Homing_ok": "homing OK", "Homing_error": "homing error", "Ip_st": "interpolator active",
+    "Axis_started": "electronic axis started", "Save_done": "save done",
+    "Load_done": "load done",
+}
+STATUS_ERROR_NAMES = frozenset({"Alm_st", "Following_error", "Homing_error"})
+# 0x6041 bits 12 / 13 in words, per mode family, as cia402_status sets them: DSP 402 for pp,
+# pv and ip, ch. 4 for homing ("bit 12 ... completata con successo", "bit 13 ... homing
+# interrotto"); -127 and -2 are manufacturer modes that report zero speed and axis started
+# there as R05 does (docs/servo-drive.md "Status words").
+_MODE_SW_6041: tuple[tuple[frozenset[int], dict[int, str]], ...] = (
+    (POSITIONER, {12: "set-point acknowledge", 13: "following error"}),
+    (VELOCITY, {12: "speed = 0"}),
+    (HOMING, {12: "homing attained", 13: "homing error"}),
+    (INTERPOLATOR, {12: "ip mode active"}),
+    (ELECTRONIC_AXIS, {12: "axis started"}),
+)
+_MODE_SW_6041_ERRORS = frozenset({13})  # following error (pp), homing error (hm)
 
 
 def _names(common: dict[int, str], table: tuple[tuple[frozenset[int], dict[int, str]], ...],
@@ -77,6 +100,18 @@ def control_bit_names(mode: int) -> dict[int, str]:
 
 def status_bit_names(mode: int) -> dict[int, str]:
     return _names(_COMMON_SW, _MODE_SW, mode)
+
+
+def statusword_mode_names(mode: int) -> dict[int, str]:
+    """0x6041 bits 12 / 13 in words for ``mode`` (none in save / load)."""
+    return _names({}, _MODE_SW_6041, mode)
+
+
+def statusword_error_bits(mode: int) -> frozenset[int]:
+    """The 0x6041 bits that report trouble in ``mode``: fault, warning, internal limit,
+    and bit 13 where the mode gives it a meaning (following error, homing error)."""
+    return ds402.STATUSWORD_ERROR_BITS | (_MODE_SW_6041_ERRORS
+                                          & set(statusword_mode_names(mode)))
 
 
 def controlword_from_register(r00: int, mode: int) -> int:

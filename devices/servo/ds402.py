@@ -171,6 +171,15 @@ STATUSWORD_BITS: dict[int, str] = {
     12: "mode specific 12", 13: "mode specific 13", 14: "latched position update",
     15: "target velocity forced to zero",
 }
+# The same bits in short words (a narrow grid cell; the names above are its tooltip).
+STATUSWORD_SHORT: dict[int, str] = {
+    0: "ready to switch on", 1: "switched on", 2: "operation enabled", 3: "fault",
+    4: "voltage enabled", 5: "quick stop", 6: "switch on disabled", 7: "warning",
+    8: "latch input", 9: "remote", 10: "target reached", 11: "limit active",
+    12: "mode specific", 13: "mode specific", 14: "latched position",
+    15: "velocity forced 0",
+}
+STATUSWORD_ERROR_BITS = frozenset({3, 7, 11})  # fault, warning, internal limit active
 
 
 def state_of(statusword: int) -> State:

@@ -4,7 +4,8 @@ What a commissioning engineer reads off a servo drive (seed 004; docs/servo-driv
 402 state and the 7-segment display, the mode, position / velocity / following error, the
 alarm with its description and effect, the hardware consents TEN / IEN, the CN2 outputs and
 the axis switches; then the register-mode status word R05 (ch. 1 quick reference, names per
-mode) and the CiA 402 statusword 0x6041 (ch. 4) bit by bit. Pure functions of the snapshot, and
+mode) and the CiA 402 statusword 0x6041 (ch. 4) bit by bit, in the model's words (the bit
+tables are devices/servo/control.py's and ds402.py's). Pure functions of the snapshot, and
 small panels that rewrite their HTML only when it changes.
 """
 
@@ -26,34 +27,6 @@ from devices.servo.registers import MODE_NAMES
 FIELDBUS_NAMES = {"modbus": "Modbus RTU", "canopen": "CANopen", "ethercat": "EtherCAT",
                   "profinet": "Profinet"}
 
-# R05 bits in words (ch. 1 "Status Word"); the names are the quick reference's.
-R05_MEANING = {
-    "Ten_st": "in torque", "Ien_st": "motion enabled", "Stp_st": "stop ramp running",
-    "Alm_st": "in alarm", "Ltc_st": "position latched", "sp_rdy": "ready for a set-point",
-    "EOJ": "End of Job", "Following_error": "following error", "Zero_velocity": "zero speed",
-    "Homing_ok": "homing OK", "Homing_error": "homing error", "Ip_st": "interpolator active",
-    "Axis_started": "electronic axis started", "Save_done": "save done",
-    "Load_done": "load done",
-}
-R05_ALERT = frozenset({"Alm_st", "Following_error", "Homing_error"})
-
-# 0x6041 in short words for the grid (the full DSP 402 names are the cells' tooltips).
-SW_SHORT = {
-    0: "ready to switch on", 1: "switched on", 2: "operation enabled", 3: "fault",
-    4: "voltage enabled", 5: "quick stop", 6: "switch on disabled", 7: "warning",
-    8: "latch input", 9: "remote", 10: "target reached", 11: "limit active",
-    12: "mode specific", 13: "mode specific", 14: "latched position",
-    15: "velocity forced 0",
-}
-# Bits 12 / 13 depend on the mode (DSP 402; docs/servo-drive.md, status word table).
-SW_MODE_SPECIFIC: dict[int, dict[int, str]] = {
-    1: {12: "set-point acknowledge", 13: "following error"},
-    -1: {12: "set-point acknowledge", 13: "following error"},
-    3: {12: "speed = 0"},
-    6: {12: "homing attained", 13: "homing error"},
-    7: {12: "ip mode active"},
-}
-SW_ALERT = frozenset({3, 7, 11})
 LOG_ROWS = 12
 
 
@@ -165,24 +138,25 @@ def bit_grid(caption: str, value: int, names: Mapping[int, tuple[str, str]],
 
 
 def r05_names(mode: int) -> dict[int, tuple[str, str]]:
-    return {bit: (name, f"{name}: {R05_MEANING.get(name, name)}")
+    return {bit: (name, f"{name}: {control.STATUS_BIT_MEANING.get(name, name)}")
             for bit, name in control.status_bit_names(mode).items()}
 
 
 def r05_alert(mode: int) -> set[int]:
-    return {bit for bit, name in control.status_bit_names(mode).items() if name in R05_ALERT}
+    return {bit for bit, name in control.status_bit_names(mode).items()
+            if name in control.STATUS_ERROR_NAMES}
 
 
 def statusword_names(mode: int) -> dict[int, tuple[str, str]]:
-    names = {bit: (SW_SHORT[bit], ds402.STATUSWORD_BITS[bit]) for bit in SW_SHORT}
-    for bit, text in SW_MODE_SPECIFIC.get(mode, {}).items():
+    names = {bit: (short, ds402.STATUSWORD_BITS[bit])
+             for bit, short in ds402.STATUSWORD_SHORT.items()}
+    for bit, text in control.statusword_mode_names(mode).items():
         names[bit] = (text, f"{ds402.STATUSWORD_BITS[bit]}: {text}")
     return names
 
 
 def statusword_alert(mode: int) -> set[int]:
-    extra = {13} if 13 in SW_MODE_SPECIFIC.get(mode, {}) else set()
-    return set(SW_ALERT) | extra
+    return set(control.statusword_error_bits(mode))
 
 
 def set_bits(value: int, names: Mapping[int, str]) -> str:
