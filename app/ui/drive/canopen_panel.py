@@ -21,9 +21,10 @@ import viser
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive import canopen_master as cm
+from app.ui.drive.bus_state import nmt_badge
 from app.ui.drive.drive_state import FIELDBUS_NAMES
 from app.ui.panels.widgets import Mirror
-from app.ui.style import badge, esc, kv_table
+from app.ui.style import esc, kv_table
 from devices.device import CommandError
 from devices.od import SdoAbort
 
@@ -31,11 +32,6 @@ FRAME_ROWS = 60
 KIND_CLASS = {"EMCY": "fr-emcy"}
 
 NodeId = Callable[[], str | None]  # the selected drive's CANopen node (device id), if any
-
-
-def nmt_badge(state: str) -> str:
-    tone = {"Operational": "ok", "Pre-operational": "warn", "Stopped": "bad"}.get(state, "muted")
-    return badge(state, tone)
 
 
 SDO_SERVICES = {"download": "Download (write)", "upload": "Upload (read)"}

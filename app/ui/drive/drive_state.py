@@ -17,6 +17,7 @@ from typing import Any
 
 import viser
 
+from app.ui.drive.bus_state import fieldbus_rows
 from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
@@ -84,7 +85,10 @@ def _on(flag: Any, on: str = "on", off: str = "off") -> str:
     return on if flag else off
 
 
-def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
+def state_rows(snap: Mapping[str, Any], node: Mapping[str, Any] | None = None,
+               slave: Mapping[str, Any] | None = None) -> list[tuple[str, str]]:
+    """The state table; ``node`` / ``slave``: the snapshots of the drive's CANopen node and
+    EtherCAT slave, if it has them (their NMT / ESM state rows, :mod:`bus_state`)."""
     outputs = snap.get("outputs") or {}
     limits = snap.get("limits") or {}
     velocity = float(snap.get("velocity", 0.0))
@@ -101,6 +105,7 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
     return [
         ("CiA 402 state", state_badge(snap) + ' <span class="fr-muted">display</span> '
          f'<b>{esc(snap.get("display", "") or "(dark)")}</b>'),
+        *fieldbus_rows(snap, node, slave),
         ("Mode", esc(mode_text(snap.get("mode")))),
         ("Position", position),
         ("Velocity", esc(f"{velocity:.0f} u/s · following error {fe:.1f}")),
@@ -264,9 +269,11 @@ class DriveStatePanel:
         self._table = RoleHtml(server, instructor_for(server),
                                kv_table([("CiA 402 state", "-")], "fr-drive"), "fr-drive-causes")
 
-    def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int) -> None:
+    def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int,
+               node: Mapping[str, Any] | None = None,
+               slave: Mapping[str, Any] | None = None) -> None:
         self._title.show(title(drive_id, snap, t_us))
-        self._table.show(kv_table(state_rows(snap), "fr-drive"))
+        self._table.show(kv_table(state_rows(snap, node, slave), "fr-drive"))
 
 
 class StatusWordsPanel:

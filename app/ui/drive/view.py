@@ -52,6 +52,12 @@ def companion(snapshot: Mapping[str, Any], drive_id: str, kind: str | None = Non
     return None, {}
 
 
+def bus_companions(snapshot: Mapping[str, Any], drive_id: str) -> tuple[str | None, str | None]:
+    """The device ids of ``drive_id``'s CANopen node and EtherCAT slave (None: it has none)."""
+    return (companion(snapshot, drive_id, kind="canopen")[0],
+            companion(snapshot, drive_id, kind="servo_ecat")[0])
+
+
 class DriveView:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  described: Mapping[str, Mapping[str, Any]], drive_ids: list[str],
@@ -66,7 +72,8 @@ class DriveView:
         self.drive_ids = list(drive_ids)
         self.selected = self.drive_ids[0]
         snapshot = runtime.frame.snapshot
-        self._nodes = {d: companion(snapshot, d, kind="canopen")[0] for d in self.drive_ids}
+        self._buses = {d: bus_companions(snapshot, d) for d in self.drive_ids}
+        self._nodes = {d: node for d, (node, _) in self._buses.items()}
         gui = server.gui
         self._picker = None
         if len(self.drive_ids) > 1:
@@ -153,7 +160,8 @@ class DriveView:
             except Exception:  # a page that just left: forgotten by its disconnect
                 logger.debug("instructor's jammed load not drawn", exc_info=True)
         snap = dict(devices.get(self.selected) or {})
-        self.state.update(self.selected, snap, frame.t_us)
+        node, slave = (devices.get(i) if i else None for i in self._buses[self.selected])
+        self.state.update(self.selected, snap, frame.t_us, node, slave)
         self.words.update(self.selected, snap)
         self.controls.update(snap, devices)
         if self.canopen is not None:

@@ -36,15 +36,21 @@ def bits(values: Sequence[Any]) -> str:
     return " ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
 
 
-def esm_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
+def esm_badge(snap: Mapping[str, Any]) -> str:
+    """A slave's ESM state (snapshot ``esm``), red with an AL status code, and the state the
+    master requested when it is another."""
     code = int(snap.get("al_status_code", 0))
     esm, requested = snap.get("esm", "-"), snap.get("requested")
     tone = "bad" if code else ("ok" if esm == "OP" else "warn")
-    state = badge(str(esm), tone) + (f" (requested {esc(requested)})"
-                                     if requested and requested != esm else "")
+    return badge(str(esm), tone) + (f" (requested {esc(requested)})"
+                                    if requested and requested != esm else "")
+
+
+def esm_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
+    code = int(snap.get("al_status_code", 0))
     status = int(snap.get("al_status", 0))
     text = snap.get("al_status_text") or describe_al_status_code(code)
-    return [("ESM state", state),
+    return [("ESM state", esm_badge(snap)),
             ("AL status", esc(f"0x{status:04X} {al_status_text(status)}")),
             ("AL status code", esc(f"0x{code:04X} {text}")),
             ("Station address", esc(snap.get("station_address", "-")))]
