@@ -117,6 +117,11 @@ class Scenario:
     steps: tuple[Step, ...]
     end_us: int
     reactions: tuple[Reaction, ...] = ()
+    label: str = ""  # the picker's short name ([scenario] label); "" = the name
+
+    def __post_init__(self) -> None:
+        if not self.label:
+            object.__setattr__(self, "label", self.name)
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -161,11 +166,15 @@ def parse_scenario(text: str, source: str = "<scenario>",
     head = data.get("scenario", {})
     if not isinstance(head, Mapping):
         raise fail("scenario", "must be a table")
-    bad = sorted(set(head) - {"name", "description", "rig", "duration_s"})
+    bad = sorted(set(head) - {"name", "label", "description", "rig", "duration_s"})
     if bad:
-        raise fail(f"scenario.{bad[0]}", "unknown key (known: name, description, rig, "
+        raise fail(f"scenario.{bad[0]}", "unknown key (known: name, label, description, rig, "
                                          "duration_s)")
     name = _typed(head, "name", str, Path(source).stem, fail, "scenario.name")
+    label = _typed(head, "label", str, name, fail, "scenario.label")
+    if not label.strip():
+        raise fail("scenario.label", "must not be empty (leave it out: the picker shows the "
+                                     "name)")
     description = _typed(head, "description", str, "", fail, "scenario.description")
     rig = _typed(head, "rig", str, None, fail, "scenario.rig")
     if rig is not None and base_dir is not None and not Path(rig).is_absolute():
@@ -185,7 +194,7 @@ def parse_scenario(text: str, source: str = "<scenario>",
     if not isinstance(raw_on, list):
         raise fail("on", "must be an array of tables: write [[on]]")
     reactions = tuple(_reaction(i, raw, fail) for i, raw in enumerate(raw_on))
-    return Scenario(source, name, description, rig, ordered, end, reactions)
+    return Scenario(source, name, description, rig, ordered, end, reactions, label)
 
 
 MAX_SECONDS = 10 * 24 * 3600.0  # ten simulated days: far beyond any scenario

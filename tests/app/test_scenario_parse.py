@@ -45,6 +45,9 @@ seconds = 3.5
     ("[[step]]\ncaption = \"\"\n", "must not be empty"),
     ("[[step]]\ncaption = \"x\"\ntarget = \"fastcat\"\n", "unknown key for a caption step"),
     ("[scenario]\nspeed = 2\n", "scenario.speed"),
+    ("[scenario]\nlabel = \"  \"\n[[step]]\nat = 1\ncaption = \"x\"\n",
+     "scenario.label: must not be empty"),
+    ("[scenario]\nlabel = 3\n[[step]]\nat = 1\ncaption = \"x\"\n", "scenario.label"),
     ("[scenario]\nduration_s = 1\n[[step]]\nat = 5\ncaption = \"x\"\n", "before the last step"),
     ("step = 3\n", "array of tables"),
     ("[[step]\n", "not valid TOML"),
@@ -254,3 +257,10 @@ def test_rig_and_exercise_files_get_the_hint_too() -> None:
         parse_rig_spec("[rig]\ntype = DI16\n", "r.toml")
     with pytest.raises(ScenarioError, match=r'text values need quotes: fault = "x"$'):
         split_exercise("[exercise]\nfault = x\n", "e.toml")
+
+
+def test_the_label_is_the_pickers_short_name_and_defaults_to_the_name() -> None:
+    """``label``: what the Scenario picker's closed box shows of a long name."""
+    text = "[scenario]\nname = \"A long title\"\n{}[[step]]\nat = 1\ncaption = \"x\"\n"
+    assert parse_scenario(text.format("label = \"Short\"\n")).label == "Short"
+    assert parse_scenario(text.format("")).label == "A long title"

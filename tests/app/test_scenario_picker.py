@@ -69,7 +69,7 @@ def test_scenarios_for_another_rig_are_marked_and_listed_last(
     for label, entry in zip(options[1 + len(here):], other, strict=True):
         stem = _rig_of(entry.path).stem
         assert label == f"[rig {stem}] {entry.label}"
-    assert "[rig nine_analog] Too many analog modules" in options
+    assert "[rig nine_analog] Max 8 analog" in options  # too_many_analog.toml's label
     # The empty status tells how to play the marked ones.
     status = str(panel._status.content)
     assert "[rig NAME]" in status
@@ -83,13 +83,13 @@ def test_the_line_scenarios_play_on_the_default_rig(panel: ScenarioPlayerPanel,
     """The default rig is the EtherCAT line: its scenarios are listed plainly, Play takes them."""
     scenario = load_scenario(Path("static/scenarios") / f"{stem}.toml")
     assert panel.player.mismatch(scenario) is None
-    assert scenario.name in panel._pick.options
+    assert scenario.label in panel._pick.options
 
 
 def test_play_on_another_rig_is_refused_short_fix_first(
         panel: ScenarioPlayerPanel, caplog: pytest.LogCaptureFixture) -> None:
     client = _Client()
-    panel._pick.value = next(o for o in panel._pick.options if "Too many analog" in o)
+    panel._pick.value = next(o for o in panel._pick.options if "Max 8 analog" in o)
     with caplog.at_level(logging.WARNING):
         panel._run(client, PLAY)  # type: ignore[arg-type]
     [(title, body, color)] = client.notes
@@ -106,10 +106,10 @@ def test_the_picked_scenario_is_whole_in_the_hint(panel: ScenarioPlayerPanel) ->
     """The box cuts a long name; its hint gives the name, the file and the first sentence."""
     assert panel._pick.hint is None  # nothing picked yet
     entry = next(e for e in library() if e.path.name == "cpx_short_circuit.toml")
-    label = next(o for o in panel._pick.options if o.endswith(entry.scenario.name))
-    panel._pick.value = label
-    assert panel._pick.hint == (f"{label} (cpx_short_circuit.toml): Seed 002 §2.5: an output "
-                                "of the CPX-E-8DO (module 2) is shorted while it is on.")
+    panel._pick.value = entry.label  # "CPX-E-EC: short circuit", the file's label
+    assert panel._pick.hint == (f"{entry.scenario.name} (cpx_short_circuit.toml): Seed 002 "
+                                "§2.5: an output of the CPX-E-8DO (module 2) is shorted while "
+                                "it is on.")
 
 
 def test_the_picked_scenario_is_named_whole_in_the_status(panel: ScenarioPlayerPanel) -> None:
@@ -130,3 +130,26 @@ def test_the_picked_scenario_is_named_whole_in_the_status(panel: ScenarioPlayerP
     assert "Picked: <b>Too many analog modules</b> (too_many_analog.toml)" in status, status
     assert "written for static/rigs/nine_analog.toml: serve it with python -m app --rig " \
         "static/rigs/nine_analog.toml" in status, status
+
+
+# The closed box holds about 170 px of text at 1280x720, some 30 characters of its font
+# (tests/browser/test_picker_text.py measures each option in Chromium).
+LABEL_CHARS = 30
+
+
+def test_every_shipped_scenario_fits_the_closed_box(panel: ScenarioPlayerPanel) -> None:
+    """A long name has a short ``label`` in its file (the box cut "CANopen drive: motor
+    overtemperatu"); the mark of another rig counts too."""
+    long = [o for o in panel._pick.options if len(o) > LABEL_CHARS]
+    assert long == []
+
+
+def test_a_label_keeps_the_whole_name_in_the_hint_and_the_status(
+        panel: ScenarioPlayerPanel) -> None:
+    entry = next(e for e in library() if e.path.name == "canopen_drive_alarm_reset.toml")
+    name = "CANopen drive: motor overtemperature, EMCY and fault reset"
+    assert entry.scenario.name == name and entry.label == entry.scenario.label != name
+    panel._pick.value = entry.label
+    assert str(panel._pick.hint).startswith(f"{name} (canopen_drive_alarm_reset.toml): ")
+    panel.update(panel._runtime.frame)
+    assert f"Picked: <b>{name}</b>" in str(panel._status.content)

@@ -16,7 +16,7 @@ from devices.events import Caption
 
 pytestmark = pytest.mark.browser
 
-SCENARIO = "Module 2 stops answering in OP"
+SCENARIO = "Module 2 lost in OP"  # the picker shows the file's label
 OP_CAPTION = ("The line powers up and reaches OP: the FastCAT's RUN LED on, its modules' "
               "yellow LEDs blinking.")
 CAPTION = "Module 2 (DI16) is pulled off the rail while the line is in OP."

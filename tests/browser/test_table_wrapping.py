@@ -257,3 +257,17 @@ def test_reported_codes_list_starts_on_the_newest_code(live: LiveDashboard,
     result = page.locator("#fr-decoded")
     wait_until(lambda: "MISSING_NODE_ANSWER" in result.inner_text(),
                what="the newest code decoded")
+
+
+def test_every_scenario_shows_whole_in_the_picker(live: LiveDashboard, page: Any) -> None:
+    """The closed Scenario box read "CANopen drive: motor overtemperatu": a long name has a
+    short ``label`` in its file ([scenario] label, docs/scenarios.md), the whole name is the
+    box's hint and the status block's "Picked:" line. Every option fits with a tenth to spare
+    (a font a little wider than Chromium's here still shows it whole)."""
+    open_dashboard(page, live)
+    page.get_by_role("tab", name="Scenario", exact=True).click()
+    options = list(live.dashboard.scenario_player._pick.options)
+    assert len(options) > 10  # every shipped scenario, and "(choose a scenario)"
+    wait_until(lambda: page.evaluate(FIT_JS, ["Scenario", options]) is not None,
+               what="the Scenario box")
+    assert cut_options(page, "Scenario", options, 0.9) == []

@@ -43,17 +43,21 @@ PLAYER_FOLDER = "Scenario player"  # the folder's title (screenshots scroll to i
 
 @dataclass(frozen=True)
 class Entry:
-    label: str  # what the picker shows: the scenario's name
+    label: str  # what the picker shows: the scenario's label (its name unless the file
+    # gives a shorter one: the closed box holds ~30 characters)
     path: Path
     scenario: Scenario  # as the picker read it (Play reads the file again)
     other_rig: Path | None = None  # the rig file it is written for, when not the served one
 
 
 def entry_detail(entry: Entry) -> str:
-    """``name (file.toml): the description's first sentence`` for the picker's hint."""
+    """``name (file.toml): the description's first sentence`` for the picker's hint: the
+    whole name, also where the box shows a label."""
     text = " ".join(entry.scenario.description.split())
     first = text.split(". ", 1)[0].rstrip(".")
-    return f"{entry.label} ({entry.path.name})" + (f": {first}." if first else "")
+    mark = f"[rig {entry.other_rig.stem}] " if entry.other_rig is not None else ""
+    return (f"{mark}{entry.scenario.name} ({entry.path.name})"
+            + (f": {first}." if first else ""))
 
 
 def scenario_files(directory: Path) -> list[Path]:
@@ -64,7 +68,7 @@ def scenario_files(directory: Path) -> list[Path]:
 
 def library(*directories: Path) -> list[Entry]:
     """The scenarios of ``directories`` (default: the shipped ones), folder by folder, by name.
-    Two that share a name are told apart by the file stem, and an own one that also shares
+    Two that share a label are told apart by the file stem, and an own one that also shares
     the stem of a shipped one by its folder too; a file that does not load is left out with a
     warning, not shown broken."""
     found: list[tuple[Scenario, Path]] = []
@@ -78,16 +82,16 @@ def library(*directories: Path) -> list[Entry]:
                 found.append((load_scenario(path), path))
             except ScenarioError as exc:
                 logger.warning("scenario left out of the picker: %s", exc)
-    names = [s.name for s, _ in found]
-    stems = [(s.name, p.stem) for s, p in found]
+    labels = [s.label for s, _ in found]
+    stems = [(s.label, p.stem) for s, p in found]
 
     def label(scenario: Scenario, path: Path) -> str:
-        if names.count(scenario.name) == 1:
-            return scenario.name
-        if stems.count((scenario.name, path.stem)) == 1 \
+        if labels.count(scenario.label) == 1:
+            return scenario.label
+        if stems.count((scenario.label, path.stem)) == 1 \
                 or path.parent.resolve() == SCENARIO_DIR.resolve():
-            return f"{scenario.name} ({path.stem})"
-        return f"{scenario.name} ({path.parent.name}/{path.stem})"
+            return f"{scenario.label} ({path.stem})"
+        return f"{scenario.label} ({path.parent.name}/{path.stem})"
 
     return [Entry(label(s, p), p, s) for s, p in found]
 
@@ -321,7 +325,7 @@ class ScenarioPlayerPanel:
         label = next((e.label for e in self._entries.values()
                       if e.path.resolve() == path.resolve()), None)
         if label is None:
-            label = scenario.name if scenario.name not in self._entries else f"{path}"
+            label = scenario.label if scenario.label not in self._entries else f"{path}"
             self._entries[label] = Entry(label, path, scenario)
             self._pick.options = (CHOOSE, *self._entries)
         if self._pick.value != label:
