@@ -35,6 +35,9 @@ NAMES = {
 # step before it), where every device of the line is in view and the left panel stays on the
 # FastCAT's State tab.
 EXPECTED: dict[tuple[str, str], str | None] = {
+    # "Encoder 1 of the AX2 (FastCAT module 7) is homed: 0x6660 bit 12 ...": the module
+    # (focus "fastcat:7"), its red LED dark; it showed the zero-cycle command's caption.
+    ("ax2_homing", "homed"): "fastcat",
     # "The line powers up: the master sees link, then brings ... to OP": the Line tab's
     # slave table shows every slave's state.
     ("cable_pulled", "line_in_op"): "master",

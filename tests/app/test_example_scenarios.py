@@ -144,6 +144,13 @@ def test_ax2_homing_sets_home_offset_and_done_bit(capsys, tmp_path) -> None:
     # homed at the first zero mark after 5.2 s, then counting on at 2048 pulses/rev, 60 rpm
     assert position["address"] == "0x6560:1" and 1000 <= position["value"] < 1000 + 2048 * 1.3
     assert not [r for r in records if r["event"] == "emergency"]
+    # The picture at "homed" is of the module, under a caption saying what it shows: the
+    # homing done bit of §6.27 (it showed the zero-cycle command's caption over the line).
+    before = records[:records.index({"t": 6.5, "device": "scenario", "event": "checkpoint",
+                                     "name": "homed"})]
+    caption = [r["text"] for r in before if r["event"] == "caption"][-1]
+    assert "homed" in caption and "0x6660" in caption and "bit 12" in caption, caption
+    assert [r["target"] for r in before if r["event"] == "focus"][-1:] == ["fastcat:7"]
 
 
 def test_ax2_zero_mark_missing_alarm_after_one_and_a_half_turns(capsys, tmp_path) -> None:
