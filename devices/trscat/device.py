@@ -296,7 +296,9 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
             "box_name": self.box_name, "station_address": self.station_address,
             "leds": self.leds.snapshot(),
             "links": {"in": self.link_in, "out": self.link_out},
-            "field_supply_v": self.field_v, "field_ok": self.field_ok(),
+            # the base's terminals as a meter reads them: 0 V while 0x3220 is injected there
+            # (the supply failing, docs/trscat.md), not the value last set
+            "field_supply_v": self._slot_field_v(0), "field_ok": self.field_ok(),
             "trs_bus": {"state": self.bus.value, "latched": self.bus is TrsBus.SHUTDOWN,
                         "current_a": round(self.bus_current_a(), 3),
                         "communication_ok": self.od_bus_ok(2), "voltage_ok": self.od_bus_ok(3),

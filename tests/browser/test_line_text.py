@@ -496,6 +496,26 @@ def test_cpx_u_out_undervoltage_lights_the_output_modules_red_led() -> None:
     assert module_note(modules[1]) == "U_OUT\nlow"
 
 
+@pytest.mark.parametrize(("device", "fault", "during", "after"), [
+    ("trscat", "0x3220", "Field supply0.0 V alarm", "Field supply24.0 V ok"),
+])
+def test_an_injected_supply_fault_reads_on_the_trainee_s_slave_tab(
+        device: str, fault: str, during: str, after: str) -> None:
+    """The walkthrough: with 0x3220 injected on the TRS-CAT's base the trainee's Slave tab
+    read "Field supply 24.0 V" beside the alarm badge and the +24V LED off (seed 001 §8.4).
+    An injected supply fault is the supply failing: the tab gives what a meter on the
+    terminals reads (docs/trscat.md, docs/cpx-e-ec.md choice 27), and the set value again
+    once it is cleared."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    rig.run_until(3_000_000)
+    rig.apply(device, "inject_fault", {"fault": fault})
+    rig.run_until(3_100_000)
+    assert during in _shown(slave_html(device, rig.snapshot()["devices"][device]), trainee=True)
+    rig.apply(device, "clear_fault", {"fault": fault})
+    rig.run_until(3_200_000)
+    assert after in _shown(slave_html(device, rig.snapshot()["devices"][device]), trainee=True)
+
+
 def test_u8_diag_status_and_units_that_do_not_wrap_alone() -> None:
     """The review: "0xF100 diag status 0x0007" printed a U8 (seed 001 §9.3.4) with 4 hex
     digits, and "cycle 1000 µs" wrapped with "µs" alone on the next line."""
