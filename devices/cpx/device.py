@@ -40,6 +40,9 @@ from devices.od import ObjectDictionary
 SUPPLY_NOMINAL_V = 24.0  # Tab. 29: U_EL/SEN 24 V DC +- 25 %
 SUPPLY_MIN_V = 18.0  # ... below this: undervoltage (FieldRig uses the same band for U_OUT)
 BROWNOUT_V = 10.0  # FieldRig: the electronics stop below this
+# FieldRig: an injected undervoltage is its supply sagged to this, below Tab. 29's 18 V and
+# above BROWNOUT_V, so the bus module keeps running to report it (docs/cpx-e-ec.md choice 27)
+INJECTED_SAG_V = 17.0
 BRIDGING_US = 20_000  # Tab. 29: mains buffering time 20 ms
 ACTIVITY_WINDOW_US = 50_000  # LA IN / LA OUT flicker while frames passed this recently
 SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per good one
@@ -313,7 +316,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
 
     def _follow_supply(self) -> None:
         """U_EL/SEN: the electronics ride through dips shorter than 20 ms (Tab. 29)."""
-        alive = self.el_sen_v >= BROWNOUT_V
+        alive = self.u_el_sen_v >= BROWNOUT_V
         if alive:
             self.low_since_us = None
             self._set_powered(True)
@@ -387,13 +390,26 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         elif mode is DiagMode.IO_DIAGNOSIS:
             self.bus.in_values = [self.diagnosis.interface_word(self.bus.out_values[0])]
 
+    def _at_terminals(self, set_v: float, fault: str) -> float:
+        """What a meter at [XD] reads: the set value, or the sag while its undervoltage is
+        injected (the fault only pulls the supply down)."""
+        return min(set_v, INJECTED_SAG_V) if self.has_fault(fault) else set_v
+
+    @property
+    def u_out_v(self) -> float:
+        return self._at_terminals(self.out_v, "undervoltage_out")
+
+    @property
+    def u_el_sen_v(self) -> float:
+        return self._at_terminals(self.el_sen_v, "undervoltage_el_sen")
+
     @property
     def u_out_ok(self) -> bool:
-        return self.out_v >= SUPPLY_MIN_V and not self.has_fault("undervoltage_out")
+        return self.u_out_v >= SUPPLY_MIN_V
 
     @property
     def u_el_sen_ok(self) -> bool:
-        return self.el_sen_v >= SUPPLY_MIN_V and not self.has_fault("undervoltage_el_sen")
+        return self.u_el_sen_v >= SUPPLY_MIN_V
 
     def monitors(self) -> Monitors | None:
         """0x2400's monitoring switches (Tab. 27); None without a dictionary (unpowered)."""
@@ -545,7 +561,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             "explicit_device_id": self.explicit_device_id, "id_loaded": self.id_loaded,
             "leds": self.leds.channel_patterns(), "led_states": self.leds.snapshot(),
             "switches": self.switches.snapshot(),
-            "supply": {"el_sen_v": self.el_sen_v, "out_v": self.out_v,
+            "supply": {"el_sen_v": self.u_el_sen_v, "out_v": self.u_out_v,
                        "el_sen_ok": self.u_el_sen_ok, "out_ok": self.u_out_ok},
             "ports": {"in": self.link_in, "out": self.link_out, "traffic": self.traffic()},
             "application": self.application_runs, "boot_failed": self.boot_failed,

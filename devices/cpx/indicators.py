@@ -80,8 +80,8 @@ def wanted_leds(dev: CpxEEc) -> dict[str, LedState]:
         "Error": ERROR_TABLE[error_shows(dev)],
         "LA IN": LINK_TABLE[link_shows(dev.link_in, traffic)],
         "LA OUT": LINK_TABLE[link_shows(dev.link_out, traffic and dev.link_out)],
-        "PS": SUPPLY_TABLE[supply_shows(dev.el_sen_v, dev.u_el_sen_ok)],
-        "PL": SUPPLY_TABLE[supply_shows(dev.out_v, dev.u_out_ok)],
+        "PS": SUPPLY_TABLE[supply_shows(dev.u_el_sen_v, dev.u_el_sen_ok)],
+        "PL": SUPPLY_TABLE[supply_shows(dev.u_out_v, dev.u_out_ok)],
         "SF": SF_BY_CLASS[dev.diagnosis.error_class if runs else 0],
         "M": M_TABLE[runs and any(m.forced for m in dev.modules)],
     }

@@ -498,6 +498,8 @@ def test_cpx_u_out_undervoltage_lights_the_output_modules_red_led() -> None:
 
 @pytest.mark.parametrize(("device", "fault", "during", "after"), [
     ("trscat", "0x3220", "Field supply0.0 V alarm", "Field supply24.0 V ok"),
+    ("cpx", "undervoltage_out", "U_OUT 17.0 V", "U_OUT 24.0 V"),
+    ("cpx", "undervoltage_el_sen", "U_EL/SEN 17.0 V", "U_EL/SEN 24.0 V"),
 ])
 def test_an_injected_supply_fault_reads_on_the_trainee_s_slave_tab(
         device: str, fault: str, during: str, after: str) -> None:
