@@ -27,11 +27,21 @@ MAX_MODULES = 16  # seed 000 §2
 MEMORY = ":memory:"
 
 
+def one_line(text: str) -> str:
+    """``text`` with every character that is not printable escaped as Python writes it
+    (``\\n``, ``\\x85``, ``\\u2028``). A quoted TOML key may hold any of them, and the
+    messages name keys: a line break would split the CLI's one ``fieldrig: error:`` line, an
+    ESC would reach the terminal."""
+    if text.isprintable():
+        return text
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 class RigConfigError(ValueError):
     def __init__(self, source: str, key: str, reason: str) -> None:
         self.source, self.key, self.reason = source, key, reason
         where = f"{source}: {key}" if key else source
-        super().__init__(f"{where}: {reason}")
+        super().__init__(one_line(f"{where}: {reason}"))
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from app.rig import Rig
-from app.rig_config import RigConfigError, not_toml, not_utf8
+from app.rig_config import RigConfigError, not_toml, not_utf8, one_line
 from app.targets import parse_target
 from devices.device import UNKNOWN_MODULE, CommandError
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
@@ -49,7 +49,8 @@ _REACTION_KEYS_SHOWN = ("event", "slave", "to", "once", "target", "action")
 
 
 class ScenarioError(ValueError):
-    pass
+    def __init__(self, message: str) -> None:
+        super().__init__(one_line(message))  # a key may hold a line break: one line
 
 
 def step_label(number: int) -> str:
