@@ -200,7 +200,8 @@ def _escape(exc: BaseException) -> tuple[str, str, str]:
 # ---- the properties --------------------------------------------------------------------------
 def _one_line(exc: BaseException) -> None:
     message = str(exc)
-    assert message and "\n" not in message and "Traceback" not in message, repr(message)
+    # splitlines, not "\n": NEL, U+2028 and the other line ends split the CLI's line too
+    assert len(message.splitlines()) == 1 and "Traceback" not in message, repr(message)
 
 
 def _rig(text: str) -> None:
