@@ -79,6 +79,21 @@ class Page:
                 return str(m["uuid"])
         raise KeyError(option)
 
+    def own(self, other: Page, label: str | None, option: str) -> str:
+        """The uuid of this page's own widget (one ``other`` never got: shared widgets have
+        the same uuid on every page) offering ``option`` and labelled ``label``, waiting for
+        it to arrive: per-client widgets are built on viser's thread after the promote, and on
+        a loaded machine the newest widget by that label can still be the shared one."""
+        def find() -> str | None:
+            shared = {m.get("uuid") for m in other.received() if "props" in m}
+            for m in reversed(self.received()):
+                props = m.get("props") or {}
+                if m.get("uuid") not in shared and (label is None or props.get("label") == label) \
+                        and option in (props.get("options") or ()):
+                    return str(m["uuid"])
+            return None
+        return str(_wait(find))
+
     def updates(self, uuid: str) -> list[Any]:
         """The values the server later set on one widget of this page."""
         return [m["updates"]["value"] for m in self.received()
@@ -191,15 +206,14 @@ def _play(served: ServedRig, trainee: Page, instructor: Page) -> None:
     _wait(lambda: "load jammed" in text(instructor))
     # The FastCAT's Module I/O and the drive's Other drive actions: the instructor picks a
     # module to fail and a fault action in each (the shared forms offered them to everyone).
-    instructor.set(instructor.last("Module", "4 AI8D"), "4 AI8D")
+    instructor.set(instructor.own(trainee, "Module", "4 AI8D"), "4 AI8D")
     time.sleep(0.3)
-    instructor.set(_wait(lambda: _try(instructor.last, None, "module_failure")),
-                   "module_failure")
-    instructor.set(instructor.last(None, "inject_alarm"), "inject_alarm")
+    instructor.set(instructor.own(trainee, None, "module_failure"), "module_failure")
+    instructor.set(instructor.own(trainee, None, "inject_alarm"), "inject_alarm")
     # The Line tab: the instructor picks the slave and the module to injure.
-    instructor.set(instructor.last("Device", "cpx"), "cpx")
+    instructor.set(instructor.own(trainee, "Device", "cpx"), "cpx")
     time.sleep(0.3)
-    instructor.set(instructor.last("Target", "cpx/2"), "cpx/2")
+    instructor.set(instructor.own(trainee, "Target", "cpx/2"), "cpx/2")
     # An alarm cause put on the drive the Drive tab shows and taken away again (the
     # exercise's repair of a right answer does the same).
     drive = served.dashboard.drives.selected  # type: ignore[union-attr]
