@@ -27,7 +27,7 @@ def served() -> Iterator[tuple[ServedRig, Page, Page]]:
     first, second = Page(served.port), Page(served.port)
     try:
         _wait(lambda: len(served.server.get_clients()) == 2)
-        time.sleep(0.5)  # both pages built
+        _settle(first, second)  # both pages built, their first camera sent
         yield served, first, second
     finally:
         first.close()
@@ -48,7 +48,21 @@ def click(page: Page, node: str) -> None:
         "screen_pos": (0.5, 0.5), "modifier": None, "owner": ""}))
 
 
+def _settle(first: Page, second: Page, quiet_s: float = 1.5, timeout_s: float = 30.0) -> None:
+    """Until neither page got a camera move for ``quiet_s``: a page's connection-time camera
+    can arrive late on a loaded machine (a CI run once counted one in a click's window)."""
+    deadline = time.monotonic() + timeout_s
+    last, since = (cameras(first), cameras(second)), time.monotonic()
+    while time.monotonic() - since < quiet_s:
+        assert time.monotonic() < deadline, "the pages' cameras never settled"
+        time.sleep(0.1)
+        now = cameras(first), cameras(second)
+        if now != last:
+            last, since = now, time.monotonic()
+
+
 def _moves_after(served: ServedRig, first: Page, second: Page, act: Any) -> tuple[int, int]:
+    _settle(first, second)
     before = cameras(first), cameras(second)
     act()
     time.sleep(CLICK_SETTLE_S + 0.7)
