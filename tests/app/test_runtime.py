@@ -146,12 +146,15 @@ def test_call_runs_between_two_steps_in_the_callers_thread() -> None:
         threads: set[str] = set()
         deadline = time.monotonic() + 10
         # Calls back to back: the simulation must still get its steps (the lock is not fair;
-        # call() lets a waiting simulation thread go first).
-        while rt.call(lambda: counter.steps) < 200:
+        # call() lets a waiting simulation thread go first). Counted from the first call, and
+        # at least 20 calls: at speed 50 the 200 steps take 4 ms, which a loaded machine can
+        # spend before this thread's first call (a CI run saw no call at all).
+        start = rt.call(lambda: counter.steps)
+        while rt.call(lambda: counter.steps) < start + 200 or len(seen) < 20:
             assert time.monotonic() < deadline, "the simulation starved"
             seen.append(rt.call(lambda: busy.inside))
             threads.add(rt.call(lambda: threading.current_thread().name))
-        assert len(seen) > 0 and not any(seen)
+        assert not any(seen)
         assert threads == {threading.current_thread().name}
         seq0, _ = rt.events_since(0)
         for word in ("x", "y"):
