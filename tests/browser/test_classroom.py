@@ -124,7 +124,10 @@ def test_trainee_injection_refused_instructor_allowed_download(
                                 ("Drive power", "Jog")),
                 "Line": (("Cable plug", "Cable damage", "Spoiled %", "Frames to lose",
                           "DC fault", "Fault action"),
-                         ("Target state", "ESC counters of"))}
+                         ("Target state", "ESC counters of")),
+                # The scenario player's controls: every trainee's press was refused and cost
+                # 2 points in an exercise; its status block (the captions) stays everyone's.
+                "Scenario": (("Scenario", "Speed"), ())}
         # A folder whose every row is the instructor's goes as a whole (no empty title); a
         # folder that keeps a trainee's row stays.
         # The fault actions of Module I/O and Other drive actions, and the slaves' fault
@@ -134,7 +137,8 @@ def test_trainee_injection_refused_instructor_allowed_download(
                    "Servo drive": (("Alarms and load", "Drive faults"),
                                    ("Motion", "Other drive actions")),
                    "Line": (("Cables and power", "Frames and DC", "Slave faults"),
-                            ("Master", "Slave actions", "trscat"))}
+                            ("Master", "Slave actions", "trscat")),
+                   "Scenario": ((), ("Scenario player",))}
         for tab, (hidden, shown) in tabs.items():
             for page in pages:  # a tab's widgets are in the page once it was opened
                 for each in page.get_by_role("tab", name=tab, exact=True).all():
@@ -150,6 +154,11 @@ def test_trainee_injection_refused_instructor_allowed_download(
                 assert _folder_display(trainee, title) == "missing", title
             for title in shown_folders:
                 assert _folder_display(trainee, title) not in ("none", "missing"), title
+        for button in ("Play", "Pause", "Step", "Restart"):
+            assert _button_display(instructor, button) != "none", button
+            assert trainee.get_by_role("button", name=button, exact=True,
+                                       include_hidden=True).count() == 0, button
+        assert "No scenario loaded" in trainee.locator("#fr-player").inner_text()
         assert _button_display(instructor, "Lose frames") != "none"
         assert trainee.get_by_role("button", name="Lose frames", include_hidden=True).count() == 0
         assert _button_display(trainee, "Resync") != "none"

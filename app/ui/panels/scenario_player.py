@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import logging
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,7 @@ from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.runtime import Frame, Runtime
 from app.scenario import EXAMPLES_DIR, Scenario, ScenarioError, check_against, load_scenario
 from app.ui.commands import CommandSender, notify
+from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import DetailHint, from_user
 from app.ui.style import esc
 
@@ -168,12 +170,12 @@ def speed_label(speed: float) -> str:
     return f"{speed:g}x"
 
 
-def status_html(view: PlayerView, frame: Frame, hint: str = "", picked: str = "") -> str:
+def status_html(view: PlayerView, frame: Frame, text: str) -> str:
+    """The status block: ``text`` (:func:`status_text`, :func:`trainee_text`) in its marker."""
     marker = (f'id="{STATUS_ID}" data-frame="{frame.seq}" data-t-us="{frame.t_us}" '
               f'data-applied="{view.applied}" data-generation="{view.generation}" '
               f'data-status="{view.status.name.lower()}"')
-    return (f'<div {marker} style="font-size:0.85em">{status_text(view, frame.t_us, hint, picked)}'
-            "</div>")
+    return f'<div {marker} style="font-size:0.85em">{text}</div>'
 
 
 def status_text(view: PlayerView, t_us: int, hint: str = "", picked: str = "") -> str:
@@ -187,26 +189,95 @@ def status_text(view: PlayerView, t_us: int, hint: str = "", picked: str = "") -
                 + '<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
                 "restarts factory-fresh and the scenario drives it."
                 + (f" {esc(hint)}" if hint else "") + "</span>")
-    total = len(scenario.steps)
-    # The time is one unit: the panel's width broke "t = 7.0 s of 16 s" after "7.0 s".
-    lines = [f"<b>{esc(scenario.name)}</b> &middot; {esc(view.status.value)} &middot; "
-             f'<span style="white-space:nowrap">t = {t_us / 1e6:.1f} s of '
-             f"{scenario.end_us / 1e6:g} s</span>",
-             f"step {view.applied} of {total}"
-             + (f" &middot; next {esc(describe_step(view.next_step))}"
-                if view.next_step is not None else "")]
+    lines = [_headline(view, scenario, scenario.name, t_us),
+             f"step {view.applied} of {len(scenario.steps)}" + _next(view)]
     if view.caption:
-        lines.append(f'<span style="font-style:italic">&raquo; {esc(view.caption)}</span>')
-    if view.checkpoint:
-        lines.append(f'<span class="fr-muted">checkpoint {esc(view.checkpoint)}</span>')
-    lines.extend(f'<span style="color:#a11616">{esc(f)}</span>' for f in view.failures)
+        lines.append(_caption(view))
+    lines.extend(_author_lines(view))
     if picked:
         lines.append(picked)
     return "<br>".join(lines)
 
 
+def trainee_text(view: PlayerView, t_us: int, title: str | None) -> str:
+    """What the status block says on a rig with a token, where every browser gets it: no
+    picker to point to, and while an exercise runs (``title``, "Exercise 2") neither the
+    scenario's name nor its steps, checkpoints and failures, which an exercise file's author
+    writes for the instructor ("CPX short", "next cpx short_circuit"); the captions are the
+    narration, everyone's."""
+    scenario = view.scenario
+    if scenario is None:
+        return '<span class="fr-muted">No scenario loaded.</span>'
+    if title is None:
+        return status_text(view, t_us)
+    lines = [_headline(view, scenario, title, t_us),
+             f"step {view.applied} of {len(scenario.steps)}"]
+    if view.caption:
+        lines.append(_caption(view))
+    return "<br>".join(lines)
+
+
+def instructor_text(view: PlayerView, title: str | None, loaded: str, hint: str,
+                    picked: str) -> str:
+    """What an instructor's page gets under its own controls, beyond :func:`trainee_text`:
+    how to play one, the real scenario while the trainees read ``title``, its own pick."""
+    scenario = view.scenario
+    lines = []
+    if scenario is None:
+        lines.append('<span class="fr-muted">Pick a scenario and press Play: the rig '
+                     "restarts factory-fresh and the scenario drives it."
+                     + (f" {esc(hint)}" if hint else "") + "</span>")
+    elif title is not None:
+        lines.append(f"Trainees read <b>{esc(title)}</b>; loaded: <b>{esc(scenario.name)}</b>"
+                     + (f" ({esc(loaded)})" if loaded else "") + _next(view))
+        lines.extend(_author_lines(view))
+    if picked:
+        lines.append(picked)
+    return f'<div style="font-size:0.85em">{"<br>".join(lines)}</div>' if lines else ""
+
+
+def _headline(view: PlayerView, scenario: Scenario, title: str, t_us: int) -> str:
+    # The time is one unit: the panel's width broke "t = 7.0 s of 16 s" after "7.0 s".
+    return (f"<b>{esc(title)}</b> &middot; {esc(view.status.value)} &middot; "
+            f'<span style="white-space:nowrap">t = {t_us / 1e6:.1f} s of '
+            f"{scenario.end_us / 1e6:g} s</span>")
+
+
+def _next(view: PlayerView) -> str:
+    if view.next_step is None:
+        return ""
+    return f" &middot; next {esc(describe_step(view.next_step))}"
+
+
+def _caption(view: PlayerView) -> str:
+    return f'<span style="font-style:italic">&raquo; {esc(view.caption)}</span>'
+
+
+def _author_lines(view: PlayerView) -> list[str]:
+    lines = []
+    if view.checkpoint:
+        lines.append(f'<span class="fr-muted">checkpoint {esc(view.checkpoint)}</span>')
+    lines.extend(f'<span style="color:#a11616">{esc(f)}</span>' for f in view.failures)
+    return lines
+
+
+@dataclass
+class _Controls:
+    """The player's controls one connection got (or every browser, on an open rig)."""
+
+    pick: Any
+    buttons: Any
+    speed: Any
+    own: Any = None  # the instructor's own status lines (with a token): None when shared
+
+
 class ScenarioPlayerPanel:
-    """Build inside the container it belongs to (a tab or the control panel)."""
+    """Build inside the container it belongs to (a tab or the control panel).
+
+    Play, Pause, Step, Restart, Speed and the picker are the instructor's: with a token they
+    are built per instructor connection (app/ui/panels/per_client.py), so a trainee is not
+    offered controls whose every press is refused (and cost points in an exercise); the
+    status block with the caption stays everyone's (docs/classroom.md)."""
 
     def __init__(self, server: viser.ViserServer, runtime: Runtime,
                  directory: Path = SCENARIO_DIR, default_rig: Path = DEFAULT_RIG,
@@ -221,43 +292,64 @@ class ScenarioPlayerPanel:
         self._loaded: Path | None = None
         self._exercise_file: Path | None = None  # the loaded file, when an exercise file
         self._busy = threading.Lock()  # one playback command at a time, in click order
+        # The title trainees see instead of the loaded scenario's while an exercise runs
+        # (None: the real one); the Classroom folder sets it (app/ui/panels/classroom.py).
+        self.trainee_title: Callable[[], str | None] = lambda: None
+        instructor = instructor_for(server)
+        self._shared = instructor.shared
         gui = server.gui
         with gui.add_folder(PLAYER_FOLDER):
-            self._pick = gui.add_dropdown("Scenario", (CHOOSE, *self._entries),
-                                          initial_value=CHOOSE)
-            # The box cuts a long name ("CPX-E-EC: short circuit at a digital outp"): the
-            # picked one's whole name, file and first sentence are its hint.
-            self._pick_hint = DetailHint(self._pick, self._details)
-            self._buttons = gui.add_button_group("Playback", (PLAY, PAUSE, STEP, RESTART))
-            initial = min(SPEEDS, key=lambda s: abs(s - runtime.speed))
-            self._speed = gui.add_dropdown("Speed", tuple(speed_label(s) for s in SPEEDS),
-                                           initial_value=speed_label(initial))
-            self._status = gui.add_html(status_html(self.player.view(), runtime.frame,
-                                                    self.hint))
+            self._controls = instructor.part(self._build_controls)
+            view = self.player.view()
+            self._status = gui.add_html(status_html(
+                view, runtime.frame, status_text(view, runtime.frame.t_us, self.hint)
+                if self._shared else trainee_text(view, runtime.frame.t_us, None)))
         self._last = ""
         self._said: tuple[Any, ...] = ()
-        self._buttons.on_click(self._on_button)
-        self._speed.on_update(self._on_speed)
+
+    def _build_controls(self, gui: Any) -> _Controls:
+        loaded = self._loaded_label()
+        pick = gui.add_dropdown("Scenario", (CHOOSE, *self._entries),
+                                initial_value=loaded or CHOOSE)
+        # The box cuts a long name ("CPX-E-EC: short circuit at a digital outp"): the
+        # picked one's whole name, file and first sentence are its hint.
+        DetailHint(pick, self._details)
+        buttons = gui.add_button_group("Playback", (PLAY, PAUSE, STEP, RESTART))
+        speed = gui.add_dropdown("Speed", tuple(speed_label(s) for s in SPEEDS),
+                                 initial_value=speed_label(self._nearest_speed()))
+        controls = _Controls(pick, buttons, speed,
+                             None if self._shared else gui.add_html(""))
+        buttons.on_click(lambda event: self._on_button(event, controls))
+        speed.on_update(lambda event: self._on_speed(event, controls))
+        return controls
+
+    def _nearest_speed(self) -> float:
+        return min(SPEEDS, key=lambda s: abs(s - self._runtime.speed))
 
     # ---- callbacks (viser's threads) -------------------------------------------------------
-    def _on_button(self, event: viser.GuiEvent) -> None:
+    def _on_button(self, event: viser.GuiEvent, controls: _Controls) -> None:
         if not from_user(event) or not self._may_control(event):
             return
         choice = str(event.target.value)
         with self._busy:
-            self._run(event.client, choice)
+            self._run(event.client, choice, str(controls.pick.value))
 
-    def _run(self, client: viser.ClientHandle | None, choice: str) -> None:
+    def _run(self, client: viser.ClientHandle | None, choice: str,
+             picked: str | None = None) -> None:
+        """``picked``: the label the pressing page's picker shows (None: the shared picker's on
+        an open rig, else the loaded scenario)."""
+        if picked is None and self._shared:
+            picked = str(self._pick.value)
         try:
             if choice == PLAY:
-                self._play()
+                self._play(picked)
             elif choice == PAUSE:
                 self.player.pause()
             elif choice == STEP:
-                self._ensure_loaded()
+                self._ensure_loaded(picked)
                 self.player.step()
             elif choice == RESTART:  # the picked file, read again (docs/scenarios.md)
-                path = self._picked_path()
+                path = self._picked_path(picked)
                 scenario = load_scenario(path)
                 self.player.restart(scenario)
                 self._note_loaded(scenario, path)
@@ -269,34 +361,39 @@ class ScenarioPlayerPanel:
 
     def _may_control(self, event: viser.GuiEvent) -> bool:
         """Scenario control is the instructor's (app/classroom/roles.py): checked, logged and
-        notified by the runtime's CommandSender."""
+        notified by the runtime's CommandSender, whatever a page sends."""
         return CommandSender(self._runtime).allow(event.client, Operation.SCENARIO,
                                                   "scenario player")
 
-    def _on_speed(self, event: viser.GuiEvent) -> None:
+    def _on_speed(self, event: viser.GuiEvent, controls: _Controls) -> None:
         if not from_user(event) or not self._may_control(event):
             return
+        label = str(controls.speed.value)
         try:
-            self.player.set_speed(float(str(self._speed.value).rstrip("x")))
+            self.player.set_speed(float(label.rstrip("x")))
         except ValueError as exc:
             notify(event.client, "Speed refused", str(exc), error=True)
+            return
+        for other in self._controls.each():  # every instructor's box says the rig's speed
+            if other.speed.value != label:
+                other.speed.value = label
 
-    def _play(self) -> None:
-        self._ensure_loaded(restart_finished=True)
+    def _play(self, picked: str | None = None) -> None:
+        self._ensure_loaded(picked, restart_finished=True)
         self.player.play()
 
-    def _picked_path(self) -> Path:
+    def _picked_path(self, picked: str | None = None) -> Path:
         """The picked scenario's file, else the loaded one's."""
-        entry = self._entries.get(str(self._pick.value))
+        entry = self._entries.get(picked or "")
         if entry is not None:
             return entry.path
         if self._loaded is None:
             raise ScenarioError("pick a scenario first")
         return self._loaded
 
-    def _ensure_loaded(self, restart_finished: bool = False) -> None:
+    def _ensure_loaded(self, picked: str | None = None, restart_finished: bool = False) -> None:
         """Load the picked scenario when it is not the one loaded (or when asked to)."""
-        path = self._picked_path()
+        path = self._picked_path(picked)
         finished = self.player.view().status is Status.FINISHED
         if restart_finished and path == self._exercise_file:
             return  # Play goes on: the rig runs on after an exercise file (Player.play)
@@ -320,24 +417,47 @@ class ScenarioPlayerPanel:
     def _details(self) -> dict[str, str]:
         return {label: entry_detail(entry) for label, entry in self._entries.items()}
 
+    def _loaded_label(self) -> str | None:
+        loaded = self._loaded
+        if loaded is None:
+            return None
+        return next((e.label for e in self._entries.values()
+                     if e.path.resolve() == loaded.resolve()), None)
+
     def _show_picked(self, scenario: Scenario, path: Path) -> None:
-        """The picker names the loaded scenario, also one loaded from elsewhere (the CLI)."""
-        label = next((e.label for e in self._entries.values()
-                      if e.path.resolve() == path.resolve()), None)
+        """Every picker names the loaded scenario, also one loaded from elsewhere (the CLI,
+        an exercise file: in the instructor's pickers only, with a token)."""
+        label = self._loaded_label()
+        added = label is None
         if label is None:
             label = scenario.label if scenario.label not in self._entries else f"{path}"
             self._entries[label] = Entry(label, path, scenario)
-            self._pick.options = (CHOOSE, *self._entries)
-        if self._pick.value != label:
-            self._pick.value = label
+        for controls in self._controls.each():
+            if added:
+                controls.pick.options = (CHOOSE, *self._entries)
+            if controls.pick.value != label:
+                controls.pick.value = label
 
-    def _picked(self) -> str:
+    def _picked(self, controls: _Controls) -> str:
         """:func:`picked_text` of the picked entry, "" when none or when it is the loaded one."""
-        entry = self._entries.get(str(self._pick.value))
+        entry = self._entries.get(str(controls.pick.value))
         loaded = self._loaded
         if entry is None or (loaded is not None and entry.path.resolve() == loaded.resolve()):
             return ""
         return picked_text(entry)
+
+    def shown_title(self) -> str:
+        """The loaded scenario's name as every browser gets it ("" before any): the trainee
+        title while an exercise runs (the event log's new-run row)."""
+        scenario = self.player.view().scenario
+        if scenario is None:
+            return ""
+        return self.trainee_title() or scenario.name
+
+    @property
+    def _pick(self) -> Any:
+        """The shared picker of an open rig (tests)."""
+        return self._controls.each()[0].pick
 
     # ---- the dashboard's update thread -----------------------------------------------------
     def update(self, frame: Frame) -> None:
@@ -347,16 +467,28 @@ class ScenarioPlayerPanel:
         in an idle rig). A running rig's block is rewritten when what it says changes (text,
         step, generation, status), with the frame of that change. A paused rig's block names
         every frame written, as the screenshot tooling needs: it steps a paused rig and waits
-        until ``data-frame`` reaches the runtime's frame (app/screenshots.py ``sync``)."""
+        until ``data-frame`` reaches the runtime's frame (app/screenshots.py ``sync``).
+
+        With a token the block is what a trainee may read (:func:`trainee_text`) and each
+        instructor's copy of the controls gets the rest under them (:func:`instructor_text`)."""
         view = self.player.view()
-        picked = self._picked()
-        said = (view.applied, view.generation, view.status,
-                status_text(view, frame.t_us, self.hint, picked))
+        copies = self._controls.each()
+        if self._shared:
+            picked = self._picked(copies[0]) if copies else ""
+            text = status_text(view, frame.t_us, self.hint, picked)
+        else:
+            title = self.trainee_title() if view.scenario is not None else None
+            text = trainee_text(view, frame.t_us, title)
+            loaded = self._loaded.name if self._loaded is not None else ""
+            for controls in copies:
+                own = instructor_text(view, title, loaded, self.hint, self._picked(controls))
+                if controls.own.content != own:
+                    controls.own.content = own
+        said = (view.applied, view.generation, view.status, text)
         if said == self._said and not self._runtime.paused:
             return
         self._said = said
-        content = status_html(view, frame, self.hint, picked)
+        content = status_html(view, frame, text)
         if content != self._last:
             self._status.content = content
             self._last = content
-
