@@ -408,9 +408,9 @@ class Dashboard:
                 logger.exception("dashboard update failed")
 
     def _scenario_title(self) -> str:
-        """The loaded scenario's name, "" before any (the event log's new-run row)."""
-        scenario = self.scenario_player.player.view().scenario
-        return scenario.name if scenario is not None else ""
+        """The loaded scenario's name, "" before any (the event log's new-run row, which every
+        browser gets: a neutral title while an exercise runs on a rig with a token)."""
+        return self.scenario_player.shown_title()
 
     @staticmethod
     def _device_snap(snapshot: Mapping[str, Any], device_id: str | None) -> dict[str, Any]:

@@ -104,12 +104,42 @@ def test_a_trainee_is_offered_no_player_control(
     _wait(lambda: PLAIN in status(trainee))  # a plain scenario's title is no secret
 
 
+def test_an_exercise_file_s_title_is_the_instructor_s(
+        served: tuple[ServedRig, Page, Page, Path]) -> None:
+    one, trainee, instructor, path = served
+    one.classroom.start_from_file(path)
+    one.runtime.advance(1_500_000).result(timeout=60)
+    _wait(lambda: one.classroom.exercise is not None)
+    _wait(lambda: "Exercise 1" in _try(status, trainee) or "")
+    _wait(lambda: "watch the coupler" in status(trainee))  # the narration is everyone's
+    _wait(lambda: f"loaded: <b>{TITLE}</b> (lost_node.toml)" in text(instructor))
+    time.sleep(0.5)
+    got = text(trainee)
+    assert TITLE not in got and DESCRIPTION not in got
+    assert "scenario &#x27;Exercise 1&#x27; started" in got  # the event log's new-run row
+    one.classroom.finish(as_instructor=True)
+    _wait(lambda: TITLE in status(trainee))  # scored: the answer is out
+
+
+def test_an_exercise_from_the_folder_hides_the_loaded_title(
+        served: tuple[ServedRig, Page, Page, Path]) -> None:
+    one, trainee, _instructor, _path = served
+    one.dashboard.scenario_player.load(load_scenario(PLAIN_FILE))
+    _wait(lambda: PLAIN in _try(status, trainee) or "")
+    one.classroom.start_exercise("fastcat:inject:coupler:0x04")
+    _wait(lambda: "Exercise 1" in status(trainee))
+    assert PLAIN not in status(trainee)
+    one.classroom.finish(as_instructor=True)
+    _wait(lambda: PLAIN in status(trainee))
+
+
 def test_an_open_rig_keeps_the_shared_controls() -> None:
     rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
     one = serve_rig(rig, Access(None), port=free_port(), paused=True)
     page = Page(one.port)
     try:
         _wait(lambda: {"Playback", "Speed", "Scenario"} <= _labels(page))
+        one.classroom.start_exercise("fastcat:inject:coupler:0x04")
         one.dashboard.scenario_player.load(load_scenario(PLAIN_FILE))
         _wait(lambda: PLAIN in _try(status, page) or "")
     finally:

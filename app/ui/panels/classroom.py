@@ -113,6 +113,9 @@ class ClassroomPanel:
         self._recorder = recorder
         self._download_name = download_name
         self._player = player
+        self._file_pending = False  # an exercise file plays, its hidden fault not in yet
+        if player is not None:
+            player.trainee_title = self.trainee_title
         self._files = {p.stem: p for p in exercise_files}
         self.catalog: Catalog = catalog(runtime.rig.describe(), runtime.frame.snapshot)
         self._faults = {f.label: f for f in self.catalog.faults}
@@ -170,27 +173,48 @@ class ClassroomPanel:
         with self._lock:
             if self.exercise is not None and self.exercise.phase is not Phase.FINISHED:
                 raise ValueError("an exercise is running: end it first")
-        # The rig runs on after the file's last step: paused there, the hidden fault would
-        # never develop (the clock stands at the injection time).
-        self._player.load(scenario, path, fresh=fresh, run_on=True)
+        # Before the load: its new-run row and first status already read the trainee title.
+        self._file_pending = True
+        try:
+            # The rig runs on after the file's last step: paused there, the hidden fault would
+            # never develop (the clock stands at the injection time).
+            self._player.load(scenario, path, fresh=fresh, run_on=True)
+        except BaseException:
+            self._file_pending = False
+            raise
         generation = self._player.player.view().generation
         at = start_us(scenario, spec)
         self._player.player.play()
 
         def inject_when_due() -> None:
-            while not self._stop.wait(0.05):
-                if self._player.player.view().generation != generation:
-                    return  # another scenario was loaded meanwhile
-                if self._runtime.frame.t_us >= at:
-                    try:
-                        self.start_exercise(spec.fault, spec.module)
-                    except (ValueError, KeyError, CommandError) as exc:
-                        logger.warning("exercise file %s: %s", path, exc)
-                    return
+            try:
+                while not self._stop.wait(0.05):
+                    if self._player.player.view().generation != generation:
+                        return  # another scenario was loaded meanwhile
+                    if self._runtime.frame.t_us >= at:
+                        try:
+                            self.start_exercise(spec.fault, spec.module)
+                        except (ValueError, KeyError, CommandError) as exc:
+                            logger.warning("exercise file %s: %s", path, exc)
+                        return
+            finally:
+                self._file_pending = False
 
         threading.Thread(target=inject_when_due, name="fieldrig-exercise", daemon=True).start()
         self._log(f"exercise file {path.name} started by connection {self._id(client)}")
         return at
+
+    def trainee_title(self) -> str | None:
+        """The Scenario tab's title for every browser while an exercise runs (or an exercise
+        file plays towards its hidden fault) on a rig with a token: "Exercise N", as the
+        exercise format has no trainee-facing title and a scenario's own ("CPX short")
+        can name the fault. None: the scenario's own title (no exercise, or an open rig,
+        where everyone is the instructor)."""
+        exercise = self.exercise
+        running = exercise is not None and exercise.phase is not Phase.FINISHED
+        if self.access.open or not (running or self._file_pending):
+            return None
+        return f"Exercise {len(self.history) + 1}"
 
     def name_cause(self, cause_id: str, client: viser.ClientHandle | None = None) -> bool:
         """A trainee's answer; the right cause gets its repair (True). With a token the
