@@ -13,6 +13,7 @@
     [exercise]
     fault = "fastcat:inject:coupler:0x04"   # a hidden fault id (app/classroom/faults.py)
     module = 3                              # module codes (§7.6): the module number, required
+    # channel = 3                           # an output short (cpx short_circuit): its channel
     at_s = 5.0                              # inject at this simulated time (default: the end)
 
 The ``[exercise]`` table is cut out and the rest is read as a scenario
@@ -39,7 +40,7 @@ from devices.device import CommandError
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
 _ANY_HEADER = re.compile(r"^\s*\[")
-_KEYS = {"fault", "module", "at_s"}
+_KEYS = {"fault", "module", "channel", "at_s"}
 
 
 @dataclass(frozen=True)
@@ -47,6 +48,7 @@ class ExerciseSpec:
     fault: str
     module: int | None = None
     at_s: float | None = None  # None: when the scenario ends
+    channel: int | None = None  # the module's channel (a CPX-E-EC output short, KZA)
 
 
 def split_exercise(text: str, source: str = "<exercise>") -> tuple[str, Mapping[str, Any] | None]:
@@ -91,11 +93,17 @@ def parse_spec(table: Mapping[str, Any], source: str = "<exercise>") -> Exercise
     if module is not None and (isinstance(module, bool) or not isinstance(module, int)
                                or module < 1):
         raise fail("module", "a module number from 1")
+    channel = table.get("channel")
+    if channel is not None:
+        if isinstance(channel, bool) or not isinstance(channel, int) or channel < 0:
+            raise fail("channel", "a channel number from 0, as the device counts them")
+        if module is None:
+            raise fail("channel", "give its module too: module = N")
     at_s = table.get("at_s")
     if at_s is not None and (isinstance(at_s, bool) or not isinstance(at_s, (int, float))
                              or at_s < 0):
         raise fail("at_s", "simulated seconds, 0 or more")
-    return ExerciseSpec(fault, module, None if at_s is None else float(at_s))
+    return ExerciseSpec(fault, module, None if at_s is None else float(at_s), channel)
 
 
 def load_exercise(path: str | Path) -> tuple[Scenario, ExerciseSpec]:
@@ -131,11 +139,18 @@ def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
     layouts = check_against(scenario, rig)
     source = scenario.source
     try:
-        fault = faults.fault(spec.fault).at(spec.module)
+        base = faults.fault(spec.fault)
     except (KeyError, ValueError) as exc:
         raise ScenarioError(f"{source}: [exercise] fault: {exc.args[0] if exc.args else exc}"
                             f" on this rig ({known_ids(spec.fault, faults)}; "
                             "docs/classroom.md)") from None
+    if spec.channel is not None and not base.channel:
+        raise ScenarioError(f"{source}: exercise.channel: {spec.fault!r} takes no channel "
+                            "(only a channel fault does: cpx short_circuit on an output)")
+    fault = base.at(spec.module, spec.channel)
+    # where the fault goes, so that a refusal of the module's type names the key to change
+    where = " ".join(f"{key} {value}" for key, value in
+                     (("module", spec.module), ("channel", spec.channel)) if value is not None)
     for command in fault.inject:
         try:
             args = rig.check(command.target, command.action, dict(command.args))
@@ -146,8 +161,10 @@ def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
                                 layouts.setdefault(device_id, device.module_layout()))
         except CommandError as exc:
             hint = "; give its module: module = N" if fault.module and spec.module is None \
-                else ""
-            raise ScenarioError(f"{source}: [exercise] fault {spec.fault!r}: {exc}{hint}") \
+                else "; give it: channel = N" if fault.channel and spec.channel is None \
+                and spec.module is not None else ""
+            on = f" on {where}" if where else ""
+            raise ScenarioError(f"{source}: [exercise] fault {spec.fault!r}{on}: {exc}{hint}") \
                 from None
     return fault
 

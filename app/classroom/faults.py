@@ -49,18 +49,26 @@ class HiddenFault:
     repair: tuple[Command, ...]
     gone: Mapping[str, Any] = field(default_factory=dict)
     module: bool = False  # the instructor picks a module (target device/N)
+    channel: bool = False  # a channel of that module may be named (a CPX-E-EC output short)
 
-    def at(self, module: int | None) -> HiddenFault:
-        """This fault on module ``module`` (module codes); itself otherwise."""
+    def at(self, module: int | None, channel: int | None = None) -> HiddenFault:
+        """This fault on module ``module`` (module codes), and on its channel ``channel``
+        when given (the fault's commands carry it); itself otherwise."""
         if not self.module or module is None:
             return self
+        if channel is not None and not self.channel:
+            raise ValueError(f"{self.id} takes no channel")
         target = f"{self.device}/{module}"
+        extra = {} if channel is None else {"channel": channel}
 
         def moved(commands: tuple[Command, ...]) -> tuple[Command, ...]:
-            return tuple(Command(target, c.action, c.args) for c in commands)
+            return tuple(Command(target, c.action, {**c.args, **extra}) for c in commands)
 
-        return HiddenFault(f"{self.id}@{module}", f"{self.label} (module {module})", self.device,
-                           self.cause, moved(self.inject), moved(self.repair), self.gone, True)
+        place, where = (f"{module}", f"module {module}") if channel is None else \
+            (f"{module}.{channel}", f"module {module}, channel {channel}")
+        return HiddenFault(f"{self.id}@{place}", f"{self.label} ({where})", self.device,
+                           self.cause, moved(self.inject), moved(self.repair), self.gone, True,
+                           self.channel)
 
 
 # Faults that are not a code injection: (device kind, id suffix, label, cause code key,
@@ -141,7 +149,7 @@ def _cpx(device: str) -> Iterator[tuple[Cause, HiddenFault | None]]:
                                 device, cause.id,
                                 (Command(device, "inject_fault", {"fault": spec.name}),),
                                 (Command(device, "clear_fault", {"fault": spec.name}),),
-                                module=spec.target is Target.MODULE)
+                                module=spec.target is Target.MODULE, channel=spec.channel)
         yield cause, fault
 
 
@@ -158,11 +166,14 @@ class Catalog:
         return next((c for c in self.causes if c.id == cause_id), None)
 
     def fault(self, fault_id: str) -> HiddenFault:
-        base, _, module = fault_id.partition("@")
+        base, _, place = fault_id.partition("@")  # @module or @module.channel
         found = next((f for f in self.faults if f.id == base), None)
         if found is None:
             raise KeyError(f"no hidden fault {fault_id!r}")
-        return found.at(int(module)) if module else found
+        if not place:
+            return found
+        module, _, channel = place.partition(".")
+        return found.at(int(module), int(channel) if channel else None)
 
 
 def catalog(described: Mapping[str, Mapping[str, Any]],

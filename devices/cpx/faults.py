@@ -28,14 +28,16 @@ class FaultSpec:
     target: Target
     seed: str
     doc: str
+    channel: bool = False  # a channel= says which channel (optional for short_circuit)
 
 
 FAULTS: dict[str, FaultSpec] = {f.name: f for f in (
     FaultSpec("short_circuit", Target.MODULE, "§2.5.3 Tab. 21-23",
               "Output short circuit (channel=, KZA; seen while the output is on) or, without "
-              "channel, the module's sensor supply (KZS)"),
+              "channel, the module's sensor supply (KZS)", channel=True),
     FaultSpec("wire_break", Target.CHANNEL, "§2.5.3 Tab. 21-23",
-              "Broken wire on a channel (analog 4-20 mA inputs, current outputs, the 1CI)"),
+              "Broken wire on a channel (analog 4-20 mA inputs, current outputs, the 1CI)",
+              channel=True),
     FaultSpec("undervoltage_out", Target.DEVICE, "§2.5.3 Tab. 21 0x3320",
               "U_OUT below tolerance: output modules report undervoltage, outputs off"),
     FaultSpec("undervoltage_el_sen", Target.DEVICE, "§2.5.3 Tab. 21 0x3120, Tab. 29",

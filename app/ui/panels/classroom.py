@@ -141,13 +141,14 @@ class ClassroomPanel:
 
     # ---- the exercise (also called by tests and exercise files) ---------------------------
     def start_exercise(self, fault_id: str, module: int | None = None,
-                       client: viser.ClientHandle | None = None) -> Exercise | None:
+                       client: viser.ClientHandle | None = None,
+                       channel: int | None = None) -> Exercise | None:
         if not self._sender.allow(client, Operation.EXERCISE, "start an exercise"):
             return None
         with self._lock:
             if self.exercise is not None and self.exercise.phase is not Phase.FINISHED:
                 raise ValueError("an exercise is running: end it first")
-            fault = self.catalog.fault(fault_id).at(module)
+            fault = self.catalog.fault(fault_id).at(module, channel)
             for command in fault.inject:
                 self._apply(command.target, command.action, dict(command.args))
             self.exercise = Exercise(fault, time.monotonic())
@@ -193,7 +194,7 @@ class ClassroomPanel:
                         return  # another scenario was loaded meanwhile
                     if self._runtime.frame.t_us >= at:
                         try:
-                            self.start_exercise(spec.fault, spec.module)
+                            self.start_exercise(spec.fault, spec.module, channel=spec.channel)
                         except (ValueError, KeyError, CommandError) as exc:
                             logger.warning("exercise file %s: %s", path, exc)
                         return
