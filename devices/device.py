@@ -163,6 +163,13 @@ class DeviceModel:
                                f"'{self.device_id}/N'")
         return spec.check_args(args)
 
+    def target_actions(self, module: int | None = None) -> list[str]:
+        """The actions target ``device`` (``module`` None) or ``device/N`` takes, by the action
+        table's ``module``; a model whose modules have types narrows a module's list by what
+        its type takes (as check_command and the handlers would refuse the rest)."""
+        wanted = ("none", "optional") if module is None else ("required", "optional")
+        return [name for name, spec in self.ACTIONS.items() if spec.module in wanted]
+
     def part_of(self) -> str:
         """What this model is a side of, for a list of targets (``the CANopen node of
         drive``); empty for a device of its own."""

@@ -320,7 +320,8 @@ class Dashboard:
         line = LineView(self.server, self._sender, self.runtime.frame, self.master_id,
                         {d: rail_length(n) for d, n in slots.items()}, actions, side,
                         self._control_tab, VIEW_ASPECT,
-                        {d: str(info.get("kind", "")) for d, info in described.items()})
+                        {d: str(info.get("kind", "")) for d, info in described.items()},
+                        runtime=self.runtime)
         if self._panels is not None:
             line.on_select = self._panels.objects.select
         return line

@@ -80,6 +80,21 @@ _KIND_CHECKS: dict[str, Callable[[ModuleType, int, int | None], None]] = {
 }
 
 
+def fits(mtype: ModuleType, module: int, action: str) -> bool:
+    """Whether a module of type ``mtype`` takes ``action`` with some channel (or none: the
+    sensor supply's short), as :func:`check_kind` would let it through."""
+    check = _KIND_CHECKS.get(action)
+    if check is None:
+        return True
+    for channel in (None, 0):
+        try:
+            check(mtype, module, channel)
+        except CommandError:
+            continue
+        return True
+    return False
+
+
 def check_kind(mtype: ModuleType, module: int, action: str, args: Mapping[str, Any]) -> None:
     """Refuse what module ``module`` of type ``mtype`` cannot take whatever its state: an
     action its type has nothing for, a channel it does not have (Tab. 21-23)."""
@@ -132,3 +147,11 @@ class ModuleChecks:
     def changes_modules(self, action: str, args: Mapping[str, Any],
                         module: int | None) -> tuple[int, ...]:
         return (module,) if action == "replace_module" and module is not None else ()
+
+    def target_actions(self, module: int | None = None) -> list[str]:
+        """As the device's, a module's narrowed by its type (:func:`fits`)."""
+        names: list[str] = super().target_actions(module)  # type: ignore[misc]
+        if module is None:
+            return names
+        mtype = next((m.mtype for m in self.modules if m.number == module), None)
+        return [] if mtype is None else [n for n in names if fits(mtype, module, n)]

@@ -49,6 +49,14 @@ def channel_index(kind: ModuleKind, action: str, channel: int) -> int:
     return channel - 1
 
 
+def _has_channels(kind: ModuleKind, action: str) -> bool:
+    try:
+        channel_index(kind, action, 1)
+    except CommandError:
+        return False
+    return True
+
+
 def check_output(kind: ModuleKind, index: int, value: int) -> None:
     low, high = OUTPUT_RANGE[kind.shape]
     if not low <= value <= high:
@@ -158,3 +166,13 @@ class ModuleChecks:
     def changes_modules(self, action: str, args: Mapping[str, Any],
                         module: int | None) -> tuple[int, ...]:
         return (module,) if action in ("plug", "unplug") and module is not None else ()
+
+    def target_actions(self, module: int | None = None) -> list[str]:
+        """As the device's; the channel actions narrowed by what the slot holds (slot 0, the
+        target ``trscat``, the integrated I/O): no set_input on a TRS-AN-E."""
+        names: list[str] = super().target_actions(module)  # type: ignore[misc]
+        slot = module or 0
+        io = self.rail[slot] if 0 <= slot < len(self.rail) else None
+        if io is None:
+            return []
+        return [n for n in names if n not in _CHANNELS or _has_channels(io.kind, n)]

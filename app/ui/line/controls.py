@@ -10,7 +10,8 @@ from its own action table, so an action added to a model appears here unchanged:
 restart, ...) and, in a folder "trscat faults", what can make a fault (``roles.makes_faults``:
 inject_fault, link, field_supply, drop_frames, unplug / plug, ...; short_circuit, wire_break,
 supply, cable, ...), which a trainee's page does not show. The model refuses what does not
-apply to the target. The FastCAT keeps its own tab. Every command goes through
+apply to the target, and each form lists only what its Target takes, as the model says
+(app/ui/line/target_actions.py). The FastCAT keeps its own tab. Every command goes through
 ``CommandSender``.
 """
 
@@ -23,8 +24,10 @@ from typing import Any
 import viser
 
 from app.classroom.roles import makes_faults
+from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
+from app.ui.line.target_actions import TargetActions, Watch
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user, set_options
@@ -114,7 +117,7 @@ class LineControls:
     def __init__(self, server: viser.ViserServer, sender: CommandSender, master_id: str,
                  order: Sequence[str], actions: Mapping[str, Mapping[str, Action]],
                  devices: Mapping[str, Mapping[str, Any]], own_tabs: Sequence[str],
-                 kinds: Mapping[str, str]) -> None:
+                 kinds: Mapping[str, str], runtime: Runtime) -> None:
         """``devices``: the first snapshot of each device (its parts); ``own_tabs``: devices
         with their own controls (the FastCAT), left out of "Slave actions"; ``kinds``: each
         device's kind (which of its actions can make a fault)."""
@@ -156,6 +159,8 @@ class LineControls:
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         self.fault_forms: dict[str, ActionForm] = {}
         self.targets: dict[str, Any] = {}  # each slave's Target dropdown (tests)
+        self._target_actions = TargetActions(runtime, sender)
+        self._watches: list[Watch] = []  # the shared Targets' (an instructor's: _Injure)
         # Each device's latest snapshot: a form starts from the present values (Param.current).
         self._snapshots: dict[str, Mapping[str, Any]] = dict(devices)
         faulty = [d for d in order if d not in own_tabs]
@@ -181,6 +186,9 @@ class LineControls:
                         self.instructor_only += self.fault_forms[device].handles
                     else:
                         fault_tables[device] = faults
+                    shared = [form, *([self.fault_forms[device]]
+                                      if device in self.fault_forms else [])]
+                    self._watches.append(self._target_actions.watch(device, target, shared))
                 self.forms[device] = (folder, form)
         # With a token the fault forms are the instructor's whole, with a Device and a Target
         # picker of their own: picking the slave to injure in the shared ones moved every
@@ -268,11 +276,11 @@ class LineControls:
 
     def _injure_form(self, gui: Any, sender: CommandSender,
                      tables: Mapping[str, Mapping[str, Action]],
-                     devices: Mapping[str, Mapping[str, Any]]) -> dict[str, ActionForm]:
+                     devices: Mapping[str, Mapping[str, Any]]) -> list[Watch]:
         """One instructor connection's "Slave faults": its Device picker, and per slave a
-        Target picker and the fault form acting on it."""
+        Target picker and the fault form acting on it (each a Watch: what its Target takes)."""
         folders: dict[str, Any] = {}
-        forms: dict[str, ActionForm] = {}
+        watches: list[Watch] = []
         with gui.add_folder("Slave faults", expand_by_default=False):
             picker = gui.add_dropdown("Device", tuple(tables) or ("-",))
             for device, faults in tables.items():
@@ -280,15 +288,16 @@ class LineControls:
                 with folders[device]:
                     target = gui.add_dropdown("Target", tuple(targets(
                         device, self._snapshots.get(device) or devices.get(device) or {})))
-                    forms[device] = ActionForm(gui, faults, self._applier(sender, target),
-                                               label="Fault action")
+                    form = ActionForm(gui, faults, self._applier(sender, target),
+                                      label="Fault action")
+                    watches.append(self._target_actions.watch(device, target, [form]))
 
         @picker.on_update
         def _(event: viser.GuiEvent) -> None:
             for name, folder in folders.items():
                 folder.visible = name == picker.value
 
-        return forms
+        return watches
 
     def _current(self, device: str) -> Any:
         return lambda: self._snapshots.get(device)
@@ -318,6 +327,8 @@ class LineControls:
                devices: Mapping[str, Mapping[str, Any]] | None = None) -> None:
         if devices is not None:
             self._snapshots = dict(devices)  # replaced whole: read from callback threads
+        own = [w for watches in (self._injure.each() if self._injure else []) for w in watches]
+        self._target_actions.update([*self._watches, *own], devices)
         self._master_state = master
         cables, slaves = cable_options(master, self._order), slave_options(master, self._order)
         for form in self._cables.each():

@@ -20,7 +20,7 @@ from typing import Any
 
 import viser
 
-from app.runtime import Frame
+from app.runtime import Frame, Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.line.controls import LineControls
 from app.ui.line.master_panel import MasterPanel
@@ -86,9 +86,10 @@ class LineView:
                  master_id: str, rail_lengths: Mapping[str, float],
                  actions: Mapping[str, Mapping[str, Any]], side: Any,
                  control_tab: Callable[[str, Any], Any], aspect: float,
-                 kinds: Mapping[str, str] | None = None) -> None:
+                 kinds: Mapping[str, str] | None = None, *,
+                 runtime: Runtime) -> None:
         """``kinds``: each device's kind, which sorts its actions into operation and faults
-        (app.classroom.roles)."""
+        (app.classroom.roles); ``runtime``: the models asked which actions a target takes."""
         self._server = server
         self._sender = sender
         self.master_id = master_id
@@ -111,7 +112,7 @@ class LineView:
         with control_tab("Line", viser.Icon.TOPOLOGY_STAR_3):
             self.controls = LineControls(server, sender, master_id, order, actions,
                                          frame.snapshot.get("devices") or {},
-                                         list(rail_lengths), kinds or {})
+                                         list(rail_lengths), kinds or {}, runtime)
         self.focused: str | None = None
         self.home: Box = self.scene.bounds()  # what "Show the whole line" frames (dashboard)
 

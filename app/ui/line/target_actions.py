@@ -1,0 +1,84 @@
+"""The Line tab's slave forms offer only what their Target takes.
+
+The model says it (``DeviceModel.target_actions``: the action table's ``module`` and, on a
+module, its type), asked in the simulation thread as Module I/O asks a FastCAT rail module
+(``available_actions``, app/ui/panels/modules.py); the answer is parked and the forms are
+restricted in the dashboard thread's next update. Before, ``cpx/2`` listed set_dil, set_rotary
+and the device's cable, power and supply, which the device refused once applied.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from app.runtime import Runtime
+from app.targets import parse_target
+from app.ui.commands import CommandSender
+from app.ui.panels.action_form import ActionForm
+
+
+@dataclass
+class Watch:
+    """A Target picker and the forms acting on what it picks."""
+
+    device: str
+    target: Any
+    forms: tuple[ActionForm, ...]
+    parked: list[str] | None = field(default=None)  # set by the simulation thread
+
+
+def parts_key(snap: Mapping[str, Any]) -> tuple[Any, ...]:
+    """What decides a device's target lists: its modules' / slots' types (a replaced CPX-E
+    module, a plugged TRS-CAT expansion)."""
+    return tuple((p.get("module", p.get("slot")), p.get("type", p.get("kind")))
+                 for key in ("modules", "slots") for p in snap.get(key) or [])
+
+
+class TargetActions:
+    def __init__(self, runtime: Runtime, sender: CommandSender) -> None:
+        self._runtime, self._sender = runtime, sender
+        self._lock = threading.Lock()
+        self._keys: dict[str, tuple[Any, ...]] = {}
+
+    def watch(self, device: str, target: Any, forms: Iterable[ActionForm]) -> Watch:
+        """Restrict ``forms`` to what ``target``'s pick takes, now and at each pick."""
+        watch = Watch(device, target, tuple(forms))
+        target.on_update(lambda _event: self.read(watch))
+        self.read(watch)
+        return watch
+
+    def read(self, watch: Watch) -> None:
+        picked = str(watch.target.value)
+        runtime = self._runtime
+
+        def ask() -> list[str]:
+            device_id, module = parse_target(picked)
+            return list(runtime.rig.device(device_id).target_actions(module))
+
+        def park(names: list[str]) -> None:
+            if str(watch.target.value) == picked:  # else a newer pick's answer is coming
+                with self._lock:
+                    watch.parked = names
+
+        self._sender.submit(None, "target actions", ask, done=park)
+
+    def update(self, watches: Iterable[Watch],
+               devices: Mapping[str, Mapping[str, Any]] | None) -> None:
+        """Per frame: the parked lists shown; asked again when a device's parts changed."""
+        changed = set()
+        for device, snap in (devices or {}).items():
+            key = parts_key(snap)
+            if self._keys.setdefault(device, key) != key:
+                self._keys[device] = key
+                changed.add(device)
+        for watch in watches:
+            if watch.device in changed:
+                self.read(watch)
+            with self._lock:
+                names, watch.parked = watch.parked, None
+            if names is not None:
+                for form in watch.forms:
+                    form.restrict(names)

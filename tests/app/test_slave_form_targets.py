@@ -1,0 +1,60 @@
+"""The Line tab's slave forms list only what their Target takes (docs/classroom.md, "What a
+trainee does not see"). The model says which actions a target takes (``target_actions``: the
+action table's ``module`` and, on a module, its type), as a FastCAT rail module says it for
+Module I/O (``available_actions``). Before, the CPX-E-EC's form on ``cpx/2`` offered set_dil,
+set_rotary and the device-level cable / power / supply, which the device then refused."""
+
+from __future__ import annotations
+
+from served_dashboard import drawn, served_default_rig
+
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+
+DEVICE_ONLY = {"power", "supply", "cable", "set_rotary", "set_dil", "restart"}
+
+
+def test_the_cpx_says_what_each_target_takes() -> None:
+    cpx = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None).device("cpx")
+    device = set(cpx.target_actions(None))
+    assert DEVICE_ONLY | {"inject_fault", "clear_fault"} <= device
+    assert not device & {"set_input", "short_circuit", "force", "replace_module"}
+    # the default rig: 1 = 16DI, 2 = 8DO, 3 = 4AI-U-I, 4 = 4AO-U-I
+    do8 = set(cpx.target_actions(2))
+    assert {"force", "short_circuit", "inject_fault", "replace_module"} <= do8
+    assert not do8 & (DEVICE_ONLY | {"set_input", "set_analog", "set_count_rate",
+                                     "wire_break"})
+    di16 = set(cpx.target_actions(1))
+    assert {"set_input", "short_circuit", "force"} <= di16 and "set_analog" not in di16
+    ai = set(cpx.target_actions(3))
+    assert {"set_analog", "wire_break"} <= ai and not ai & {"set_input", "force"}
+    assert cpx.target_actions(9) == []
+
+
+def test_the_trscat_says_what_each_target_takes() -> None:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    trscat = rig.device("trscat")
+    device = set(trscat.target_actions(None))
+    assert {"power", "link", "set_input", "set_output", "inject_fault"} <= device
+    assert not device & {"plug", "unplug", "set_analog_input"}
+    analog = set(trscat.target_actions(2))  # the default rig's TRS-AN-E
+    assert {"set_analog_input", "unplug", "inject_fault"} <= analog
+    assert not analog & {"power", "link", "set_input", "set_load"}
+
+
+def test_the_forms_offer_what_the_picked_target_takes() -> None:
+    with served_default_rig(1.0) as live:
+        controls = live.dashboard.line.controls  # type: ignore[union-attr]
+        operate, faults = controls.all_forms()["cpx"]
+        controls.targets["cpx"].value = "cpx/2"
+        drawn(live)
+        drawn(live)
+        assert not set(operate.options()) & DEVICE_ONLY, operate.options()
+        assert "force" in operate.options()
+        assert not set(faults.options()) & {"cable", "power", "supply"}, faults.options()
+        assert {"short_circuit", "inject_fault"} <= set(faults.options())
+        controls.targets["cpx"].value = "cpx"
+        drawn(live)
+        drawn(live)
+        assert {"set_dil", "set_rotary", "restart"} <= set(operate.options())
+        assert {"cable", "power", "supply"} <= set(faults.options())
+        assert "short_circuit" not in faults.options()
