@@ -116,6 +116,17 @@ def notify(client: viser.ClientHandle | None, title: str, body: str, *,
                      exc_info=True)
 
 
+def _confirmed(client: viser.ClientHandle | None, label: str, args: Mapping[str, Any],
+               done: Done | None) -> Done:
+    """``done``, after a blue note on ``client``'s page: what was applied, with what."""
+    def then(result: Any) -> None:
+        given = ", ".join(f"{k}={v}" for k, v in args.items()) or "no parameters"
+        notify(client, f"{label} applied", given)
+        if done is not None:
+            done(result)
+    return then
+
+
 def _client_id(client: viser.ClientHandle | None) -> int | None:
     return None if client is None else int(client.client_id)
 
@@ -133,8 +144,11 @@ class CommandSender:
         return self._gate.access.role(_client_id(client))
 
     def send(self, client: viser.ClientHandle | None, target: str, action: str,
-             args: dict[str, Any] | None = None, *, done: Done | None = None) -> None:
-        """Queue ``action`` on ``target``; errors go to ``client``, results to ``done``."""
+             args: dict[str, Any] | None = None, *, done: Done | None = None,
+             confirm: bool = False) -> None:
+        """Queue ``action`` on ``target``; errors go to ``client``, results to ``done``;
+        ``confirm``: a short notification to ``client`` (its page only) once it is applied
+        (the fault forms: an instructor's Apply said nothing unless refused)."""
         label = f"{target}: {action}"
         given = dict(args or {})
         role = self.role(client)
@@ -146,6 +160,8 @@ class CommandSender:
                 return
         self._gate.emit(Sent(_client_id(client), role, target, action, given))
         future = self._runtime.command(target, action, given)
+        if confirm:
+            done = _confirmed(client, label, given, done)
         future.add_done_callback(lambda f: self._report(client, label, f, done))
 
     def submit(self, client: viser.ClientHandle | None, label: str, fn: Callable[[], Any], *,

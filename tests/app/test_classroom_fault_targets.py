@@ -4,10 +4,12 @@ and an Apply in a fault form is confirmed on the instructor's page only (docs/cl
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
-from test_classroom_fault_forms import _in
+from test_classroom_fault_forms import _apply, _in, _read
 from test_classroom_leak import TOKEN, Page, _wait
 
 from app.classroom.roles import Access, Role
@@ -49,6 +51,11 @@ def _options(page: Page, uuid: str) -> tuple[str, ...]:
     return shown
 
 
+def _notes(page: Page) -> list[tuple[str, str, Any]]:
+    return [(m["props"]["title"], m["props"]["body"], m["props"]["color"])
+            for m in page.received() if m.get("type") == "NotificationShowMessage"]
+
+
 def test_the_slave_faults_form_on_a_module_lists_its_actions_only(
         served: tuple[ServedRig, Page, Page]) -> None:
     _live, _trainee, instructor = served
@@ -63,3 +70,37 @@ def test_the_slave_faults_form_on_a_module_lists_its_actions_only(
     _wait(lambda: "cable" in _options(instructor, action))
     assert "short_circuit" not in _options(instructor, action)
 
+
+def test_an_apply_in_a_fault_form_is_confirmed_on_the_instructors_page_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, trainee, instructor = served
+    instructor.set(_in(instructor, "Slave faults", "Device"), "cpx")
+    instructor.set(_in(instructor, "cpx", "Target"), "cpx/3")
+    action = _in(instructor, "cpx", "Fault action")
+    # the form's list for cpx/3 first: it moves the pick, which the form's rows follow
+    _wait(lambda: "cable" not in _options(instructor, action))
+    before = len(_notes(instructor))
+    _apply(instructor, action, "inject_fault", {"fault": "module_failure"})
+    _wait(lambda: _read(live, lambda rig: rig.device("cpx").modules[2].failed))
+    _wait(lambda: len(_notes(instructor)) > before)
+    [(title, body, color)] = _notes(instructor)[before:]
+    assert color == "blue" and "cpx/3" in title and "inject_fault" in title, (title, body)
+    assert "module_failure" in body, body
+    time.sleep(0.3)
+    assert _notes(trainee) == []
+
+
+@pytest.mark.parametrize(("folder", "action", "params", "title"), [
+    ("Module faults", "module_failure", {"active": True}, "fastcat/1: module_failure"),
+    ("Drive faults", "inject_alarm", {"code": "16"}, ": inject_alarm"),
+])
+def test_the_module_and_drive_fault_forms_confirm_too(
+        served: tuple[ServedRig, Page, Page], folder: str, action: str,
+        params: dict[str, Any], title: str) -> None:
+    _live, trainee, instructor = served
+    before = len(_notes(instructor))
+    _apply(instructor, _in(instructor, folder, "Fault action"), action, params)
+    _wait(lambda: len(_notes(instructor)) > before)
+    [(said, _body, color)] = _notes(instructor)[before:]
+    assert color == "blue" and title in said, said
+    assert _notes(trainee) == []

@@ -23,7 +23,7 @@ class _Sender:
         self.sent: list[tuple[str, str, dict[str, Any]]] = []
 
     def send(self, client: Any, target: str, action: str, args: dict[str, Any], *,
-             done: Callable[[Any], Any] | None = None) -> None:
+             done: Callable[[Any], Any] | None = None, confirm: bool = False) -> None:
         self.sent.append((target, action, args))
         if done is not None:
             done(self.value)

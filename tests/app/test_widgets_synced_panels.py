@@ -91,7 +91,7 @@ class Sender:
         self.labels: list[str] = []
 
     def send(self, client: Any, target: str, action: str, args: dict[str, Any] | None = None,
-             *, done: Callable[[Any], None] | None = None) -> None:
+             *, done: Callable[[Any], None] | None = None, confirm: bool = False) -> None:
         self.work.append(lambda: self.sent.append((target, action, dict(args or {}))))
 
     def submit(self, client: Any, label: str, fn: Callable[[], Any], *,
@@ -251,8 +251,8 @@ class _AnsweringSender(Sender):
         self.answer = answer
 
     def send(self, client: Any, target: str, action: str, args: dict[str, Any] | None = None,
-             *, done: Callable[[Any], None] | None = None) -> None:
-        super().send(client, target, action, args, done=done)
+             *, done: Callable[[Any], None] | None = None, confirm: bool = False) -> None:
+        super().send(client, target, action, args, done=done, confirm=confirm)
         if done is not None:
             self.work.append(lambda: done(self.answer))
 

@@ -375,9 +375,9 @@ class DrivePanel:
                                 hint="the drive this form acts on")
 
     def _send_to(self, own: Any, client: viser.ClientHandle | None, action: str,
-                 args: dict[str, Any]) -> None:
+                 args: dict[str, Any], confirm: bool = False) -> None:
         target = self._target() if own is None else str(own.value)
-        self._sender.send(client, target, action, args)
+        self._sender.send(client, target, action, args, confirm=confirm)
 
     def _alarm_form(self, gui: Any) -> _AlarmForm:
         with gui.add_folder("Alarms and load"):
@@ -401,7 +401,7 @@ class DrivePanel:
         with gui.add_folder("Drive faults", expand_by_default=False):
             own = self._own_drive(gui)
             return ActionForm(gui, faults, lambda c, name, args: self._send_to(
-                own, c, name, args), label="Fault action")
+                own, c, name, args, confirm=True), label="Fault action")
 
     # ---- view -----------------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any],

@@ -181,7 +181,8 @@ class LineControls:
                     form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
                                       apply, current=self._current(device))
                     if instructor.shared:  # an open rig: under the shared Target, as before
-                        part = instructor.part(self._fault_folder(device, faults, apply))
+                        part = instructor.part(self._fault_folder(
+                            device, faults, self._applier(sender, target, confirm=True)))
                         self.fault_forms[device] = part.each()[0]
                         self.instructor_only += self.fault_forms[device].handles
                     else:
@@ -288,7 +289,7 @@ class LineControls:
                 with folders[device]:
                     target = gui.add_dropdown("Target", tuple(targets(
                         device, self._snapshots.get(device) or devices.get(device) or {})))
-                    form = ActionForm(gui, faults, self._applier(sender, target),
+                    form = ActionForm(gui, faults, self._applier(sender, target, confirm=True),
                                       label="Fault action")
                     watches.append(self._target_actions.watch(device, target, [form]))
 
@@ -303,9 +304,10 @@ class LineControls:
         return lambda: self._snapshots.get(device)
 
     @staticmethod
-    def _applier(sender: CommandSender, target: Any) -> Any:
+    def _applier(sender: CommandSender, target: Any, confirm: bool = False) -> Any:
+        """``confirm``: a fault form's, whose Apply is confirmed on the clicking page."""
         def apply(client: viser.ClientHandle | None, name: str, args: dict[str, Any]) -> None:
-            sender.send(client, str(target.value), name, args)
+            sender.send(client, str(target.value), name, args, confirm=confirm)
         return apply
 
     def all_forms(self) -> dict[str, list[ActionForm]]:

@@ -75,7 +75,7 @@ class ModuleFaults:
     ) -> None:
         slot = option_slot(str(copy.module.value))
         if slot is not None:
-            self._sender.send(client, f"{self._id}/{slot}", action, args)
+            self._sender.send(client, f"{self._id}/{slot}", action, args, confirm=True)
 
     def _read(self, copy: _Copy) -> None:
         """Ask the model which actions the picked module takes (its type decides)."""
