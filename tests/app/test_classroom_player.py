@@ -46,6 +46,7 @@ fault = "fastcat:inject:coupler:0x04"
 at_s = 1.0
 """
 PLAIN = "Module 2 stops answering in OP"
+PLAIN_LABEL = "Module 2 lost in OP"  # the picker shows a scenario by its label
 PLAIN_FILE = EXAMPLES_DIR / "module_lost_in_op.toml"
 
 
@@ -94,7 +95,7 @@ def test_a_trainee_is_offered_no_player_control(
     assert PLAYER_FOLDER in text(trainee)  # the folder and its status block stay everyone's
     assert "No scenario loaded" in status(trainee)
     # The instructor's own copy plays: picked and Play pressed from its page, no refusal.
-    instructor.set(instructor.last("Scenario", PLAIN), PLAIN)
+    instructor.set(instructor.last("Scenario", PLAIN_LABEL), PLAIN_LABEL)
     time.sleep(0.3)
     instructor.set(instructor.last("Playback", "Play"), "Play")
     player = one.dashboard.scenario_player.player

@@ -39,7 +39,13 @@ from app.scenario import load_scenario
 from app.screenshots import free_port
 from app.ui.dashboard import Dashboard
 from app.ui.drive.plots import SEND_PERIOD_S, SIGNALS
-from app.ui.panels.scenario_player import STATUS_ID, ScenarioPlayerPanel, library, status_html
+from app.ui.panels.scenario_player import (
+    STATUS_ID,
+    ScenarioPlayerPanel,
+    library,
+    status_html,
+    status_text,
+)
 
 FRAME_US = 33_000  # one dashboard frame of simulated time (the runtime publishes at 30 Hz)
 IDLE_FRAMES = 90  # three seconds
@@ -240,7 +246,12 @@ def test_paused_marker_names_every_frame(player: Any) -> None:
     for frame in shown:
         panel.update(frame)
     view = panel.player.view()
-    assert sent == [status_html(view, f, panel.hint) for f in shown]
+    assert sent == [_html(view, f, panel.hint) for f in shown]
+
+
+def _html(view: PlayerView, frame: Frame, hint: str = "") -> str:
+    """What an open rig's status block shows (its text is the shared status_text)."""
+    return status_html(view, frame, status_text(view, frame.t_us, hint))
 
 
 def _view(**changes: Any) -> PlayerView:
@@ -264,7 +275,7 @@ def test_running_marker_follows_what_it_says(player: Any, change: dict[str, Any]
     panel.update(second)  # same tenth of a second, same words: nothing
     panel.player.view = lambda: after  # type: ignore[method-assign]
     panel.update(third)
-    assert sent == [status_html(before, first), status_html(after, third)]
+    assert sent == [_html(before, first), _html(after, third)]
 
 
 def test_running_marker_follows_the_shown_time(player: Any) -> None:
@@ -276,4 +287,4 @@ def test_running_marker_follows_the_shown_time(player: Any) -> None:
     shown = [Frame(1, 1_000_000, {}), Frame(2, 1_020_000, {}), Frame(3, 1_060_000, {})]
     for frame in shown:
         panel.update(frame)
-    assert sent == [status_html(view, shown[0]), status_html(view, shown[2])]
+    assert sent == [_html(view, shown[0]), _html(view, shown[2])]
