@@ -14,25 +14,14 @@ from collections.abc import Iterator
 from typing import Any
 
 import pytest
-from test_classroom_leak import TOKEN, Page, _try, _wait
+from test_classroom_leak import Page, _try, _wait, open_class
 
-from app.classroom.roles import Access, Role
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.screenshots import free_port
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 
 
 @pytest.fixture(scope="module")
 def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
-    trainee, instructor = Page(live.port), Page(live.port)
-    try:
-        clients = _wait(lambda: len(live.server.get_clients()) == 2 and live.server.get_clients())
-        first, second = sorted(clients)
-        assert live.classroom.access.present(second, TOKEN)
-        live.classroom._promoted(clients[second])
-        assert live.classroom.access.role(first) is Role.TRAINEE
+    with open_class() as (live, trainee, instructor):
         for target, action, args in (
             ("fastcat", "power", {"on": True}),
             ("master", "set_target", {"state": "OP"}),
@@ -41,10 +30,6 @@ def served() -> Iterator[tuple[ServedRig, Page, Page]]:
         live.runtime.advance(3_000_000).result(timeout=30)
         _wait(lambda: _try(instructor.last, "Module", "4 AI8D"))
         yield live, trainee, instructor
-    finally:
-        trainee.close()
-        instructor.close()
-        live.stop()
 
 
 def _apply(page: Page, picker: str, action: str, params: dict[str, Any]) -> None:

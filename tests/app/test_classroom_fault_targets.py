@@ -10,33 +10,18 @@ from typing import Any
 
 import pytest
 from test_classroom_fault_forms import _apply, _in, _read
-from test_classroom_leak import TOKEN, Page, _wait
+from test_classroom_leak import Page, _wait, open_class
 
-from app.classroom.roles import Access, Role
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.screenshots import free_port
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 
 
 @pytest.fixture(scope="module")
 def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
-    trainee, instructor = Page(live.port), Page(live.port)
-    try:
-        clients = _wait(lambda: len(live.server.get_clients()) == 2 and live.server.get_clients())
-        first, second = sorted(clients)
-        assert live.classroom.access.present(second, TOKEN)
-        live.classroom._promoted(clients[second])
-        assert live.classroom.access.role(first) is Role.TRAINEE
+    with open_class() as (live, trainee, instructor):
         live.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
         live.runtime.advance(1_000_000).result(timeout=30)
         _in(instructor, "Slave faults", "Device")
         yield live, trainee, instructor
-    finally:
-        trainee.close()
-        instructor.close()
-        live.stop()
 
 
 def _options(page: Page, uuid: str) -> tuple[str, ...]:

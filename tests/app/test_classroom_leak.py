@@ -10,6 +10,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import msgspec
@@ -139,6 +140,26 @@ def _wait(predicate: Any, timeout: float = 20.0) -> Any:
         assert time.monotonic() < deadline, "timed out"
         time.sleep(0.05)
     return value
+
+
+@contextmanager
+def open_class() -> Iterator[tuple[ServedRig, Page, Page]]:
+    """The default rig served paused with the token, a trainee's page and the instructor's
+    (the second page, promoted as if it had shown the token); all closed on exit."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    trainee, instructor = Page(live.port), Page(live.port)
+    try:
+        clients = _wait(lambda: len(live.server.get_clients()) == 2 and live.server.get_clients())
+        first, second = sorted(clients)
+        assert live.classroom.access.present(second, TOKEN)
+        live.classroom._promoted(clients[second])
+        assert live.classroom.access.role(first) is Role.TRAINEE
+        yield live, trainee, instructor
+    finally:
+        trainee.close()
+        instructor.close()
+        live.stop()
 
 
 @pytest.fixture(scope="module")
