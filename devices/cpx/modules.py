@@ -259,12 +259,12 @@ class CpxModule:
             if ch < len(self.commanded) and supply_ok and self.short_bites(ch) and \
                     monitors.sco:
                 out.append(ModuleFault(n, "short_circuit_outputs", ch, output=True))
-        out.extend(self._wire_breaks())
+        out.extend(self._wire_breaks(supply_ok))
         if self.mtype.has_outputs and not supply_ok and monitors.v_out:
             out.append(ModuleFault(n, "undervoltage_out"))
         return out
 
-    def _wire_breaks(self) -> list[ModuleFault]:
+    def _wire_breaks(self, supply_ok: bool) -> list[ModuleFault]:
         n, out = self.number, []
         if self.is_counter:
             return [ModuleFault(n, "wire_break", 0)] if 0 in self.wire_broken else []
@@ -277,9 +277,16 @@ class CpxModule:
                 reading = 0.0 if ch in self.wire_broken else self.analog_in[ch]
                 if reading < WIRE_BREAK_BELOW_MA:
                     out.append(ModuleFault(n, "wire_break", ch))
-            elif ch in self.wire_broken:  # an open current loop
+            elif ch in self.wire_broken and supply_ok:
+                # an open current loop; without U_OUT no current flows in the loop, open or
+                # not, and U_OUT low is all the module sees (docs/cpx-e-ec.md choice 38)
                 out.append(ModuleFault(n, "wire_break", ch, output=True))
         return out
+
+    def loop_needs_load_supply(self) -> bool:
+        """Whether the loops a broken wire opens are driven from U_OUT: the current outputs'
+        (an analog output module); the inputs' and the 1CI's are fed from U_EL/SEN."""
+        return not self.is_counter and bool(self.mtype.analog_ranges) and not self.mtype.inputs
 
     def wire_watched(self, channel: int) -> bool:
         """Whether a broken wire on ``channel`` shows: the 1CI's encoder input, a 4-20 mA

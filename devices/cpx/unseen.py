@@ -20,7 +20,8 @@ UNSEEN_REASONS: dict[str, str] = {
     "output_off": "a digital output switched off draws no current into its short",
     "current_range": "an analog output in a current range limits its current: no short",
     "no_load_supply": "U_OUT (the load supply) is out of tolerance: an output without it is "
-                      "not energised and draws no current into its short (choice 38)",
+                      "not energised, so no current flows into its short or through its "
+                      "open loop (choice 38)",
     "signal_range": "a broken wire shows only on a 4-20 mA input, a current output, the 1CI",
     "no_application": "the application controller does not run (unpowered, bootloader, AC "
                       "failure, booting error): nothing is diagnosed",
@@ -52,8 +53,11 @@ def _physics(module: CpxModule, cause: str, channel: int | None,
             return "current_range" if module.mtype.analog_ranges else "output_off"
         if not load_supply:
             return "no_load_supply"
-    if cause == "wire_break" and channel is not None and not module.wire_watched(channel):
-        return "signal_range"
+    if cause == "wire_break" and channel is not None:
+        if not module.wire_watched(channel):
+            return "signal_range"
+        if module.loop_needs_load_supply() and not load_supply:
+            return "no_load_supply"  # a current output's open loop, as in CpxModule.faults
     return None
 
 

@@ -69,6 +69,18 @@ def test_a_short_without_u_out_draws_no_current() -> None:
             ("short_circuit_outputs", 2)]
 
 
+def test_an_open_current_output_without_u_out_is_not_seen() -> None:
+    """No load supply, no loop current: the open-load check of a current output finds
+    nothing, only U_OUT low (docs/cpx-e-ec.md choice 38)."""
+    m = module("4AO-U-I", ranges="4-20mA")
+    m.wire_broken.add(1)
+    m.drive_outputs([1000] * 4, supply_ok=False)
+    assert [f.cause for f in m.faults(Monitors(), supply_ok=False)] == ["undervoltage_out"]
+    m.drive_outputs([1000] * 4, supply_ok=True)
+    assert [(f.cause, f.channel) for f in m.faults(Monitors(), supply_ok=True)] == [
+        ("wire_break", 1)]
+
+
 def test_counter_counts_resets_and_latches() -> None:
     """CPX-E-1CI: control bit 0 sets the counter to 0, bit 1 latches it (FieldRig layout)."""
     m = module("1CI")

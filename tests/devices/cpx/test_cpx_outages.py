@@ -128,3 +128,51 @@ def test_recovery_restarts_and_diagnoses_what_is_still_there() -> None:
     assert diagnosed(bench, 2) == []
     assert alarms(bench, since) == [("0x3702", True, 1)]
     assert messages(bench) == [(DiagType.ERROR, SHORT, 1)]
+
+
+WIRE = CPX_TEXT_ID_BASE + 3  # 0x3703, Tab. 21 0x2330 "Load dump (обрыв провода)"
+
+
+def open_current_loop() -> Bench:
+    """4AI-U-I (4-20 mA) + 4AO-U-I (4-20 mA) in OP: the output's channel 2 loop open and the
+    input's channel 1 wire broken, both diagnosed with U_OUT in tolerance."""
+    bench = Bench([("4AI-U-I", {"ranges": "4-20mA"}), ("4AO-U-I", {"ranges": "4-20mA"})],
+                  history_flags=0x0001, **STI).to_op()
+    bench.apply("write_object", index=0x7002, sub=3, value=1000)
+    bench.apply("wire_break", module=2, channel=2, on=True)
+    bench.apply("wire_break", module=1, channel=1, on=True)
+    bench.run(0.01)
+    assert diagnosed(bench, 1) == [("wire_break", 1)]
+    assert diagnosed(bench, 2) == [("wire_break", 2)]
+    return bench
+
+
+def test_without_u_out_an_open_current_output_is_not_diagnosed() -> None:
+    """Choice 38: a current output without its load supply drives no current, so its
+    open-load check has nothing to find; the module reports U_OUT low only (0x3320). The
+    4-20 mA input's loop is fed by U_EL/SEN: its wire break stays diagnosed."""
+    bench = open_current_loop()
+    since, stored = len(bench.events), bench.cpx.history.count
+    bench.apply("supply", out=0.0)
+    bench.run(0.01)
+    assert diagnosed(bench, 2) == [("undervoltage_out", None)]
+    assert unseen(bench, 2) == [{"cause": "wire_break", "channels": [2],
+                                 "reason": "no_load_supply"}]
+    assert diagnosed(bench, 1) == [("wire_break", 1)]
+    assert alarms(bench, since) == [("0x3703", False, 2), ("0x3708", True, 2)]
+    assert messages(bench, stored) == [(DiagType.INFO, NO_ERROR, 2),
+                                       (DiagType.ERROR, UNDERVOLTAGE, 2)]
+    assert [r["code"] for r in bench.records("emergency", since)] == ["0x3320"]
+
+
+def test_the_open_current_output_is_diagnosed_again_when_u_out_returns() -> None:
+    bench = open_current_loop()
+    bench.apply("supply", out=0.0)
+    bench.run(0.01)
+    since = len(bench.events)
+    bench.apply("supply", out=24.0)
+    bench.run(0.01)
+    assert diagnosed(bench, 2) == [("wire_break", 2)]
+    assert unseen(bench, 2) == []
+    assert alarms(bench, since) == [("0x3708", False, 2), ("0x3703", True, 2)]
+    assert [r["code"] for r in bench.records("emergency", since)] == ["0x2330"]
