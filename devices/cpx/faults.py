@@ -126,9 +126,13 @@ def fault_spec(name: str) -> FaultSpec:
 
 def check_target(spec: FaultSpec, module: int | None, channel: int | None,
                  sm: int | None) -> None:
-    """The fault's target as the seed's diagnosis would name it; CommandError if not."""
-    if spec.target is Target.DEVICE and module is not None:
+    """The fault's target as the seed's diagnosis would name it; CommandError if not, also
+    for an argument the fault has no use for (refused, not ignored)."""
+    if spec.target in (Target.DEVICE, Target.SYNC_MANAGER) and module is not None:
         raise CommandError(f"{spec.name} is a fault of the bus module: target the device")
+    if channel is not None and not spec.channel:
+        with_channel = " and ".join(f.name for f in FAULTS.values() if f.channel)
+        raise CommandError(f"{spec.name} takes no channel (only {with_channel} name one)")
     if spec.target is Target.CHANNEL and (module is None or channel is None):
         raise CommandError(f"{spec.name} needs a module and a channel: target 'cpx/N' with "
                            f"channel=")

@@ -33,6 +33,11 @@ AL_STATUS_MANUFACTURER = 0x8000  # §7.7: "0x80XX ... allarme manufacturer"
 # code); §7: resettable alarms are reset by the Reset Fault bit "mappato nei dati scambiati
 # con il coupler", which needs process data running. So a module alarm (§7.6) keeps the ESM.
 ESM_ALARM_TABLES = frozenset({COUPLER})
+# §7.5: byte 0 holds "l'eventuale indice del nodo al quale si riferisce l'errore". These
+# coupler codes are about no node: no module at all, the master's flash, the rotary address
+# (§6.19 prints 0x5400 = 0x12000000, byte 0 = 0), the coupler's own EtherCAT cable. The
+# coupler raises them with byte 0 = 0 (faults.py), and an injection may not name a module.
+NO_NODE_COUPLER_CODES = frozenset({0x10, 0x11, 0x12, 0x13})
 
 
 @dataclass(frozen=True)
@@ -46,6 +51,11 @@ class AlarmCode:
     @property
     def resettable(self) -> bool:
         return is_resettable(self.table, self.code)
+
+    @property
+    def names_module(self) -> bool:
+        """Whether byte 0 (the module number) means anything for this code (§7.5, §7.6)."""
+        return self.table == MODULE or self.code not in NO_NODE_COUPLER_CODES
 
     @property
     def label(self) -> str:

@@ -99,11 +99,15 @@ class RailMixin:
             args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
         kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
         # Here, not in the command itself: a scenario's check before the run calls this only.
-        if action in _FAULT_ACTIONS and module is None:
+        if action in _FAULT_ACTIONS:
             row = parse_fault(kwargs["fault"])
-            if row.table == MODULE:
+            if module is None and row.table == MODULE:
                 raise CommandError(f"{row.symbol} is a module alarm (§7.6): target "
                                    f"'{self.device_id}/N'")
+            if module is not None and not row.names_module:
+                # a module here is no byte 0 the coupler could send: refused, not sent
+                raise CommandError(f"{row.symbol} is an alarm of the coupler itself (§7.5: "
+                                   f"byte 0 names no module): target '{self.device_id}'")
         return kwargs
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:

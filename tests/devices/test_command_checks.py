@@ -17,6 +17,7 @@ import pytest
 
 from devices.cpx.device import CpxEEc
 from devices.device import CommandError, DeviceModel
+from devices.fastcat.coupler import FastCat
 from devices.flash import MemoryFlash
 from devices.master import EtherCatMaster
 from devices.servo.drive import DriveConfig, ServoDrive
@@ -25,6 +26,10 @@ from devices.trscat.device import TrsCat
 
 def cpx() -> CpxEEc:
     return CpxEEc("cpx", random.Random(1), ["CPX-E-16DI", "CPX-E-8DO", "CPX-E-4AI-U-I"])
+
+
+def fastcat() -> FastCat:
+    return FastCat("fastcat", random.Random(1), [("DB16", {}), ("DI16", {}), ("DO16", {})])
 
 
 def trscat() -> TrsCat:
@@ -39,7 +44,7 @@ def master() -> EtherCatMaster:
     return EtherCatMaster("master", random.Random(1), slaves=[cpx(), trscat()])
 
 
-DEVICES = {"cpx": cpx, "trscat": trscat, "servo": servo, "master": master}
+DEVICES = {"cpx": cpx, "fastcat": fastcat, "trscat": trscat, "servo": servo, "master": master}
 
 # (device, module, action, args, what the refusal says)
 BAD: list[tuple[str, int | None, str, dict[str, Any], str]] = [
@@ -59,6 +64,32 @@ BAD: list[tuple[str, int | None, str, dict[str, Any], str]] = [
      "sm_invalid_size needs sm= 0 ... 3"),
     ("cpx", None, "clear_fault", {"fault": "watchdog", "sm": 2},
      "watchdog takes no sync manager"),
+    # An argument the fault has no use for is refused, not ignored (session 17): a channel
+    # on a fault of the bus module, of a whole module or of a sync manager, a module on a
+    # sync manager's fault.
+    ("cpx", None, "inject_fault", {"fault": "watchdog", "channel": 2},
+     "watchdog takes no channel (only short_circuit and wire_break name one)"),
+    ("cpx", 1, "inject_fault", {"fault": "module_failure", "channel": 0},
+     "module_failure takes no channel"),
+    ("cpx", None, "clear_fault", {"fault": "module_ident_mismatch", "channel": 1},
+     "module_ident_mismatch takes no channel"),
+    ("cpx", None, "inject_fault", {"fault": "sm_invalid_size", "sm": 2, "channel": 1},
+     "sm_invalid_size takes no channel"),
+    ("cpx", 2, "inject_fault", {"fault": "sm_invalid_size", "sm": 2},
+     "sm_invalid_size is a fault of the bus module: target the device"),
+    # Seed 000 §7.5: byte 0 is "l'eventuale indice del nodo"; these codes name none.
+    ("fastcat", 2, "inject_fault", {"fault": "LINK_LOSS"},
+     "LINK_LOSS is an alarm of the coupler itself (§7.5: byte 0 names no module): "
+     "target 'fastcat'"),
+    ("fastcat", 3, "clear_fault", {"fault": "coupler:0x12"},
+     "ADDRESS_MASTER_NOT_OK is an alarm of the coupler itself"),
+    ("fastcat", 1, "inject_fault", {"fault": "NO_MOD"}, "NO_MOD is an alarm of the coupler"),
+    ("fastcat", 1, "inject_fault", {"fault": "SAVE_FLASH"},
+     "SAVE_FLASH is an alarm of the coupler"),
+    ("fastcat", None, "inject_fault", {"fault": "TARATURA", "channel": 1},
+     "action 'inject_fault' takes no argument channel"),
+    ("servo", None, "inject_alarm", {"code": "16", "channel": 1},
+     "action 'inject_alarm' takes no argument channel"),
     ("trscat", 1, "inject_fault", {"fault": "CONFIG_ERROR"},
      "CONFIG_ERROR is a fault of the TRS-CAT itself: target 'trscat'"),
     ("trscat", 2, "clear_fault", {"fault": "0xA000"},
@@ -87,6 +118,11 @@ GOOD: list[tuple[str, int | None, str, dict[str, Any]]] = [
     ("cpx", None, "inject_fault", {"fault": "module_ident_mismatch"}),  # the bus module
     ("cpx", 3, "inject_fault", {"fault": "wire_break", "channel": 1}),
     ("cpx", None, "inject_fault", {"fault": "sm_invalid_size", "sm": 2}),
+    ("cpx", 2, "inject_fault", {"fault": "short_circuit", "channel": 1}),
+    ("cpx", 1, "inject_fault", {"fault": "short_circuit"}),  # the sensor supply
+    ("fastcat", 2, "inject_fault", {"fault": "MISSING_NODE_ANSWER"}),
+    ("fastcat", None, "inject_fault", {"fault": "LINK_LOSS"}),
+    ("fastcat", 2, "inject_fault", {"fault": "TARATURA"}),
     ("trscat", None, "inject_fault", {"fault": "CONFIG_ERROR"}),
     ("trscat", 2, "inject_fault", {"fault": "AN_PLUS_12V"}),
     ("trscat", None, "inject_fault", {"fault": "FIELD_SUPPLY"}),

@@ -205,26 +205,29 @@ def test_module_objects_are_added_per_module_number() -> None:
 # ---- alarms -------------------------------------------------------------------------------------
 @pytest.mark.parametrize("row", list(COUPLER_CODES.values()), ids=lambda r: r.symbol)
 def test_inject_every_coupler_code(row: AlarmCode) -> None:
-    """§7 / §7.5: emergency FF00 / 81, byte 3 = code, byte 0 = module, mirrored in 0x5400
-    and 0x5100:1; in OP: OP -> PREOP with 0x80XX (§7.7)."""
+    """§7 / §7.5: emergency FF00 / 81, byte 3 = code, byte 0 = module (0 for a code about no
+    node), mirrored in 0x5400 and 0x5100:1; in OP: OP -> PREOP with 0x80XX (§7.7)."""
     bench = Bench()
     bench.to_state(AlState.OP)
     mark = bench.mark()
-    bench.apply("inject_fault", module=2, fault=row.symbol)
+    module = 2 if row.names_module else None
+    n = module or 0
+    bench.apply("inject_fault", module=module, fault=row.symbol)
     bench.step()
     rec = bench.records(since=mark)
     emergency = [r for r in rec if r["event"] == "emergency"]
     assert emergency == [{"t": emergency[0]["t"], "device": "fastcat", "event": "emergency",
                           "code": "0xFF00", "register": "0x81",
-                          "data": f"02 00 00 {row.code:02X} 00"}]
-    assert bench.read(0x5400, 0) == row.code << 24 | 2
+                          "data": f"{n:02X} 00 00 {row.code:02X} 00"}]
+    assert bench.read(0x5400, 0) == row.code << 24 | n
     assert bench.read(0x5100, 1) is True
-    assert [r["code"] for r in rec if r["event"] == "al_status"] == [f"0x82{row.code:02X}"]
+    assert [r["code"] for r in rec if r["event"] == "al_status"] == [
+        f"0x80{row.code:02X}" if module is None else f"0x82{row.code:02X}"]
     assert bench.fc.al_state is AlState.PREOP and bench.fc.al_status == 0x12
     alarm = bench.fc.snapshot()["alarm"]
     assert (alarm["table"], alarm["code"], alarm["name"], alarm["module"]) == \
-        ("coupler", row.code, row.symbol, 2)
-    bench.apply("clear_fault", module=2, fault=row.symbol)
+        ("coupler", row.code, row.symbol, n)
+    bench.apply("clear_fault", module=module, fault=row.symbol)
     bench.step()
     assert bench.fc.alarm is not None  # latched until reset
     bench.reset_fault()
