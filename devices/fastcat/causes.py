@@ -32,16 +32,18 @@ def first_difference(a: Sequence[Any], b: Sequence[Any]) -> int | None:
 
 
 def cause_facts(fc: FastCat) -> list[dict[str, Any]]:
-    """Every cause present now (report order), what it is on the rail, and whether an
-    instructor injected it. Tbus low with no module scanned raises nothing but is a fact."""
+    """Every cause present now (report order), what it is on the rail, whether an
+    instructor injected it and whether it is the latched alarm's (§7: the first one is
+    signalled, a later one waits for a reset). Tbus low with no module scanned raises
+    nothing but is a fact."""
     out = []
     for alarm in dict.fromkeys(fc._present_causes()):
         out.append({"table": alarm.table, "code": alarm.code, "name": alarm.info.symbol,
                     "module": alarm.module, "injected": alarm in fc.injected,
-                    "text": _fact(fc, alarm)})
+                    "latched": alarm == fc.alarm, "text": _fact(fc, alarm)})
     if fc.tbus_low and not any((c["table"], c["code"]) == LOW_VOLTAGE for c in out):
         out.append({"table": None, "code": None, "name": "", "module": 0, "injected": False,
-                    "text": "Tbus supply low"})
+                    "latched": False, "text": "Tbus supply low"})
     return out
 
 

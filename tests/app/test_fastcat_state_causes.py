@@ -104,3 +104,19 @@ def test_an_injected_cause_stays_out_of_causes() -> None:
     rows = rig.rows()
     assert "MISSING_NODE_ANSWER on module 2" in rows["Injected"]
     assert "none" in rows["Causes"]
+
+
+def test_a_cause_waiting_behind_the_latched_alarm_says_it_is_not_signalled() -> None:
+    """§7 "il primo allarme ricevuto": a module pulled while a module alarm is latched sends
+    nothing. The instructor's Causes row said "slot 3 empty" as it does for the signalled
+    0x04, beside an Alarm row naming another alarm and the ESM in OP."""
+    rig = Coupler()
+    rig.apply("inject_fault", module=2, fault="TARATURA")
+    rig.apply("unplug", module=3)
+    causes = rig.rows()["Causes"]
+    assert "slot 3 empty" in causes
+    assert "not signalled: 0x0B TARATURA latched first (§7)" in causes
+    rig.apply("clear_fault", module=2, fault="TARATURA")
+    rig.reset_fault()
+    causes = rig.rows()["Causes"]
+    assert "slot 3 empty" in causes and "not signalled" not in causes

@@ -93,3 +93,21 @@ def test_a_modules_refusal_names_it_with_its_article() -> None:
         bench.fc.rail_module(2).apply("nope", {})
     with pytest.raises(CommandError, match=r"^a DB16 module has no action 'nope'"):
         bench.fc.rail_module(1).apply("nope", {})
+
+
+def test_a_cause_behind_the_latched_alarm_is_marked_not_latched() -> None:
+    """§7: only the first alarm is signalled. The facts say which cause is the latched
+    alarm's, so a view can tell a pulled module that waits behind a module alarm from the
+    one that is signalled (before, both read the same)."""
+    bench = _stored_bench()
+    bench.apply("inject_fault", module=1, fault="TARATURA")
+    bench.step()
+    bench.apply("unplug", module=3)
+    bench.step()
+    causes = bench.fc.snapshot()["causes"]
+    assert [(c["code"], c["module"], c["latched"]) for c in causes] == [
+        (0x0B, 1, True), (0x04, 3, False)]
+    bench.apply("clear_fault", module=1, fault="TARATURA")
+    bench.reset_fault()
+    causes = bench.fc.snapshot()["causes"]
+    assert [(c["code"], c["module"], c["latched"]) for c in causes] == [(0x04, 3, True)]

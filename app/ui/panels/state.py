@@ -97,8 +97,14 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
 
 def causes_text(snap: Mapping[str, Any]) -> str:
     """The rail's physical causes as the model words them (snapshot ``causes``, made by
-    devices/fastcat/causes.py): an injected cause is the Injected row's."""
-    causes = [str(c.get("text", "")) for c in snap.get("causes") or [] if not c.get("injected")]
+    devices/fastcat/causes.py): an injected cause is the Injected row's. A cause that is not
+    the latched alarm's while one is latched says so: §7 signals the first alarm only."""
+    alarm = snap.get("alarm")
+    waits = "" if not alarm else \
+        f" (not signalled: 0x{int(alarm['code']):02X} {alarm['name']} latched first (§7))"
+    causes = [str(c.get("text", "")) + ("" if c.get("latched") or c.get("code") is None
+                                        else waits)
+              for c in snap.get("causes") or [] if not c.get("injected")]
     return esc("; ".join(causes)) if causes else '<span class="fr-muted">none</span>'
 
 
