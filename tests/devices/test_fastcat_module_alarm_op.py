@@ -119,3 +119,40 @@ def test_the_master_keeps_the_line_in_op_and_logs_only_the_emergency() -> None:
                      "02 00 0b 00 00')."]  # lower case, as TwinCAT
     assert bench.records("slave_state", since) == []
     assert bench.fc.al_state is AlState.OP
+
+
+def test_a_coupler_cause_behind_a_module_alarm_waits_and_everything_says_so() -> None:
+    """§7: "Il coupler segnalerà il primo allarme ricevuto ... Non si potranno mai verificare
+    contemporaneamente errori segnalati dal coupler e dai moduli". A module pulled while a
+    module alarm is latched (the §7.7 example's cause) is not signalled: ESM, AL status code,
+    LEDs, 0x5400 and the emergencies all keep telling the first alarm, and the master logs
+    nothing new. Once the module alarm is reset, the coupler alarm is the next one: its
+    emergency, 0x8304 and the drop to PREOP come at once (docs/fastcat-coupler.md
+    "A coupler cause behind a module alarm")."""
+    bench = Bench(["DO16", "AI8D", "DI16"], master=True)
+    bench.run_until(lambda: bench.fc.al_state is AlState.OP)
+    bench.run(0.5)
+    bench.apply("inject_fault", module=2, fault="TARATURA")
+    bench.run(1.0)
+    since = bench.mark()
+    bench.apply("unplug", module=3)
+    bench.run(3.0)
+    assert bench.emergencies(since) == [] and bench.records("alarm", since) == []
+    assert bench.records("al_status", since) == [] and bench.records("state", since) == []
+    assert [r["text"] for r in bench.records("log", since)] == []
+    assert bench.fc.al_state is AlState.OP
+    assert (bench.fc.al_status, bench.fc.al_status_code) == (0x08, 0)
+    assert bench.read(0x5400, 0) == 0x000B0002 and bench.read(*FAULT_ACTIVE) is True
+    leds = bench.fc.snapshot()["leds"]
+    assert (leds["RUN"], leds["ERR"]) == ("on", "off")
+    assert [leds[f"{n}.red"] for n in (1, 2)] == ["on", "on"] and "3.red" not in leds
+    bench.apply("clear_fault", module=2, fault="TARATURA")
+    since = bench.mark()
+    bench.reset_fault()
+    bench.run(0.5)
+    assert [(r["code"], r["active"], r["module"]) for r in bench.records("alarm", since)] == \
+        [("0x0B", False, 2), ("0x04", True, 3)]
+    assert bench.emergencies(since) == ["03 00 00 04 00"]  # §7.4's data, as byte 3 = 0x04
+    assert [r["code"] for r in bench.records("al_status", since)] == ["0x8304"]
+    assert bench.fc.al_state is AlState.PREOP and bench.read(0x5400, 0) == 0x04000003
+    assert [r["to"] for r in bench.records("slave_state", since)] == ["PREOP"]
