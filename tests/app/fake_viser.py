@@ -5,6 +5,8 @@ loop, plain callbacks later in a thread pool (``pool``: run them when the test s
 assigning ``.value`` sends a message only when the value differs and calls the callbacks with
 ``client=None``; the messages of one turn of the event loop for one widget coalesce (viser's
 outgoing buffer keeps the last update per widget and property until its next window).
+A page's GUI messages all pass viser's websocket server, which hands each to every handler
+registered for its type, in order, on the event loop (:class:`Pages`: ``message()``).
 Shared by tests/app/test_widgets_synced.py and test_widgets_synced_panels.py.
 """
 
@@ -15,6 +17,24 @@ import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
+
+
+class Pages:
+    """viser's websocket server (``ViserServer._websock_server``) as far as handlers go."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+        self._loop = loop
+        self.handlers: dict[type, list[Callable[[Any, Any], Any]]] = {}
+
+    def register_handler(self, message_cls: type, callback: Callable[[Any, Any], Any]) -> None:
+        self.handlers.setdefault(message_cls, []).append(callback)
+
+    def message(self, client_id: Any, message: Any) -> None:
+        """A page's message reaches the server: every handler of its type, in order."""
+        for fn in list(self.handlers.get(type(message), [])):
+            out = fn(client_id, message)
+            if inspect.iscoroutine(out):
+                self._loop.run_until_complete(out)
 
 
 @dataclass

@@ -15,7 +15,8 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
-from fake_viser import Handle
+from fake_viser import Handle, Pages
+from viser._messages import GuiUpdateMessage
 
 from app.ui.panels import widgets
 from app.ui.panels.widgets import FRESH_AFTER, Synced
@@ -24,6 +25,7 @@ from app.ui.panels.widgets import FRESH_AFTER, Synced
 class Server:
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self._loop = loop
+        self._websock_server = Pages(loop)  # viser 1.1.1's name for it
 
     def get_event_loop(self) -> asyncio.AbstractEventLoop:
         return self._loop
@@ -183,6 +185,75 @@ def test_a_burst_from_two_pages_ends_on_the_model(loop) -> None:
     frames(loop, synced, runtime)
     assert handle.value == runtime.value
     assert handle.sent[-1] == runtime.value
+
+
+Box = tuple[Handle, Runtime, Synced]
+
+
+def two_boxes(loop: asyncio.AbstractEventLoop) -> tuple[Server, list[Box]]:
+    """Hold CNF and Reset fault: two Synced boxes of one server (one page's one sender)."""
+    server = Server(loop)
+    boxes = []
+    for _ in range(2):
+        handle = Handle(loop, False)
+        runtime = Runtime(False)
+        synced = Synced(server, handle, runtime, runtime.command)  # type: ignore[arg-type]
+        synced.follow(runtime.value)
+        turn(loop, handle)
+        handle.sent.clear()
+        boxes.append((handle, runtime, synced))
+    return server, boxes
+
+
+def page_message(server: Server, client: str, value: Any) -> None:
+    """What viser's websocket server does with any GUI message of a page, after the widget's
+    own handler: the other handlers registered for its type."""
+    server._websock_server.message(client, GuiUpdateMessage("some-widget", {"value": value}))
+
+
+def all_frames(loop: asyncio.AbstractEventLoop, boxes: list[Box], n: int = FRESH_AFTER) -> None:
+    for _ in range(n):
+        for _handle, runtime, synced in boxes:
+            synced.follow(runtime.value)
+        turn(loop)
+        for handle, _runtime, _synced in boxes:
+            handle.window()
+
+
+def test_a_click_the_page_never_sent_goes_back_at_its_next_message(loop) -> None:
+    """viser's page sends every change through one sender throttled to 50 ms, the latest of
+    ANY widget (docs/dashboard.md "Fast clicks"): Hold CNF clicked, then Reset fault within
+    the window, and the server never hears of the Hold CNF click while the page shows the box
+    checked (a CI run of tests/browser/test_ui_abuse.py: the box checked, CNF released). The
+    page's next message is the sign: the Hold CNF box sends the model's value to every page."""
+    server, boxes = two_boxes(loop)
+    (hold, hold_model, _), (reset, reset_model, _) = boxes
+    # page A: Hold CNF checked (dropped by the page's sender), Reset fault checked (sent)
+    reset.user("page A", True)
+    page_message(server, "page A", True)
+    reset_model.drain()
+    turn(loop)
+    all_frames(loop, boxes)
+    assert hold_model.value is False and hold_model.commands == []
+    assert hold.sent == [False]  # page A's box back to the model
+    assert reset.sent[-1] is True and reset_model.value is True
+    all_frames(loop, boxes, n=3)
+    assert hold.sent == [False]  # once: nothing more while no page sends anything
+
+
+def test_a_pages_message_does_not_undo_a_change_on_its_way(loop) -> None:
+    """A box whose own change is queued keeps showing it when a page's message comes in;
+    the model's value goes out once the change has been through the runtime."""
+    server, boxes = two_boxes(loop)
+    (hold, hold_model, _), _reset = boxes
+    hold.user("page A", True)
+    page_message(server, "page A", True)
+    all_frames(loop, boxes, n=3)  # the command is still queued: the model is False
+    assert hold.value is True and hold.sent == []
+    hold_model.drain()
+    turn(loop)
+    all_frames(loop, boxes)
+    assert hold.value is True and hold.sent[-1] is True and False not in hold.sent
 
 
 @pytest.mark.parametrize(("value", "other"), [(True, False), (False, True), (3, 4), (2.5, 3.5),

@@ -17,7 +17,7 @@ from types import SimpleNamespace
 from typing import Any
 
 import pytest
-from fake_viser import Handle
+from fake_viser import Handle, Pages
 
 from app.classroom.roles import Role
 from app.ui.drive.drive_panel import DrivePanel, mode_option
@@ -77,6 +77,7 @@ class Server:
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self._loop = loop
         self.gui = Gui(loop)
+        self._websock_server = Pages(loop)  # viser 1.1.1's name for it
 
     def get_event_loop(self) -> asyncio.AbstractEventLoop:
         return self._loop

@@ -270,6 +270,36 @@ def test_two_browsers_issuing_conflicting_commands(live: LiveDashboard, browser)
             page.context.close()
 
 
+# In one turn of the page's script, so no 50 ms timer of its sender fires in between: Reset
+# fault goes out at once, then Hold CNF and two more Reset fault clicks wait for the window,
+# where the last Reset fault click replaces them all (the server already holds its value).
+DROPPED_JS = """
+() => {
+  const box = (label) => document.getElementById([...document.querySelectorAll('label')]
+    .find((l) => l.textContent.trim() === label).htmlFor);
+  for (const label of ['Reset fault', 'Hold CNF', 'Reset fault', 'Reset fault']) {
+    box(label).click();
+  }
+}
+"""
+
+
+def test_a_click_dropped_by_the_pages_sender_goes_back(live: LiveDashboard, page) -> None:
+    """viser's page sends the latest change of ANY control per 50 ms window: the Hold CNF
+    click never reaches the server, and its box must not stay checked over a released
+    button (the two-browser test above once ended that way in CI)."""
+    open_dashboard(page, live)
+    live.advance(BOOT_S)
+    sent: list[Sent] = []
+    gate_for(live.runtime).observe(sent.append)
+    page.evaluate(DROPPED_JS)
+    wait_until(lambda: reset_bit(live) == 1, what="the Reset fault click at 0x5200:1")
+    live.settle()
+    views_agree(live, page)  # the box unchecked again, as the button is
+    assert not live.snapshot()["cnf"]["pressed"]
+    assert [s.action for s in sent if s.target == "fastcat"] == ["set_reset_fault"]
+
+
 def test_a_browser_closed_in_the_middle_of_a_cnf_hold(live: LiveDashboard, browser) -> None:
     first = browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
     open_dashboard(first, live)

@@ -10,8 +10,13 @@ of input widget show device state:
 - :class:`Synced`, a widget that *is* a device value (Power, Hold CNF, Reset fault, ...). A
   change made in a page becomes one command carrying the value that change set. Once the
   command, or its refusal, has been through the runtime, the widget sends the model's value
-  to every page, even when the server's copy already equals it. Whatever the clicks, every
-  page ends up showing the model.
+  to every page, even when the server's copy already equals it. A page's change may also
+  never reach the server: the page sends every GUI message through one sender throttled to
+  50 ms that keeps the latest message of *any* widget (viser 1.1.1
+  client/src/WebsocketUtils.ts), so a click followed within the window by a click elsewhere
+  is dropped while its box stays clicked. The message that replaced it does arrive: on every
+  GUI message of a page, each Synced widget sends the model's value again at the next frame.
+  Whatever the clicks, every page ends up showing the model.
 - :class:`Mirror`, a form field pre-filled from the device and applied by a separate button
   (the drive's c7): it follows the device only when the device's value changes, so what a
   user types in it is not overwritten by the next frame.
@@ -23,10 +28,18 @@ the callbacks ignore those (:func:`from_user`), so the view never echoes a comma
 from __future__ import annotations
 
 import logging
+import threading
+import weakref
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, ClassVar
 
 import viser
+from viser._messages import (
+    GuiButtonHoldMessage,
+    GuiFormDirtyMessage,
+    GuiFormSubmitMessage,
+    GuiUpdateMessage,
+)
 
 from app.ui.commands import CommandSender
 
@@ -40,6 +53,10 @@ UserChange = Callable[[viser.ClientHandle | None, Any], None]
 FRESH_AFTER = 2
 
 _NOTHING = object()
+
+# What a page sends through its one throttled sender (viser 1.1.1 client: Generated.tsx,
+# Button.tsx, Form.tsx): any of them may have replaced a change the server never heard.
+PAGE_SENDS = (GuiUpdateMessage, GuiButtonHoldMessage, GuiFormSubmitMessage, GuiFormDirtyMessage)
 
 
 def widget_uuid(handle: Any) -> str:
@@ -141,6 +158,7 @@ class Synced:
         self._busy = False
         self._followed: Any = _NOTHING  # follow()'s thread only
         on_user_change(handle, self._changed)
+        _PageMessages.of(server).add(self)
 
     def follow(self, value: Any) -> None:
         """The model's value, from any thread (the dashboard's frame update)."""
@@ -160,6 +178,14 @@ class Synced:
             # it refused), and the frames published after it show what the model made of it.
             self._sender.submit(None, "dashboard view", _nothing,
                                 done=lambda _result: self._call(self._settled))
+
+    def _recheck(self) -> None:
+        """A page sent a GUI message: a change of this widget it made just before may have
+        been dropped by its sender. Send the model's value at the next frame, unless a change
+        of this widget is on its way or settling (that ends with the same re-send)."""
+        if self._pending == 0 and self._fresh_wait == 0:
+            self._fresh_wait = 1  # the dropped change never reached the model: any frame
+            self._busy = True
 
     def _settled(self) -> None:
         self._pending -= 1
@@ -196,6 +222,42 @@ class Synced:
 
 def _nothing() -> None:
     return None
+
+
+class _PageMessages:
+    """The Synced widgets of one server, told of every GUI message a page sends.
+
+    viser 1.1.1 has no public hook for "a page sent something": its websocket server
+    (``ViserServer._websock_server``) hands each incoming message to every handler registered
+    for its type, in order, on the event loop; the GUI's own handler (registered when the
+    server was built) has run the widget's callbacks by the time this one runs."""
+
+    _of: ClassVar[weakref.WeakKeyDictionary[Any, _PageMessages]] = weakref.WeakKeyDictionary()
+    _of_lock: ClassVar[threading.Lock] = threading.Lock()
+
+    def __init__(self, server: viser.ViserServer) -> None:
+        self._lock = threading.Lock()  # widgets are built in other threads than the loop
+        self._synced: weakref.WeakSet[Synced] = weakref.WeakSet()
+        for message_cls in PAGE_SENDS:
+            server._websock_server.register_handler(message_cls, self._heard)
+
+    @classmethod
+    def of(cls, server: viser.ViserServer) -> _PageMessages:
+        with cls._of_lock:
+            found = cls._of.get(server)
+            if found is None:
+                found = cls._of[server] = cls(server)
+            return found
+
+    def add(self, synced: Synced) -> None:
+        with self._lock:
+            self._synced.add(synced)
+
+    async def _heard(self, _client_id: int, _message: Any) -> None:
+        with self._lock:
+            widgets = list(self._synced)
+        for synced in widgets:
+            synced._recheck()
 
 
 class Mirror:
