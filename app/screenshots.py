@@ -138,6 +138,15 @@ class ServedRig:
     def command(self, target: str, action: str, args: dict[str, Any] | None = None) -> Any:
         return self.runtime.command(target, action, args).result(timeout=WALL_TIMEOUT_S)
 
+    def settle(self) -> None:
+        """Wait until a frame published after now has been drawn. The frame a step publishes
+        is drawn a moment after the step returns, and the step's events are journalled after
+        it: a frame published later is one the dashboard draws with every event before it."""
+        seq = self.runtime.frame.seq
+        wait_until(lambda: self.runtime.frame.seq > seq, "a new frame")
+        seq = self.runtime.frame.seq
+        wait_until(lambda: self.dashboard.rendered_seq >= seq, "the dashboard update")
+
     def stop(self) -> None:
         self.dashboard.stop()
         self.runtime.stop()

@@ -65,12 +65,17 @@ class RigSession:
 
     def command(self, target: str, action: str, **args: Any) -> Any:
         """A device action (``"fastcat"``, ``"fastcat/2"``, ...); returns its result, raises
-        its CommandError / SdoAbort."""
-        return self.served.command(target, action, args)
+        its CommandError / SdoAbort. The dashboard shows its effect when it returns."""
+        try:
+            return self.served.command(target, action, args)
+        finally:
+            self.served.settle()
 
     def advance(self, seconds: float) -> None:
-        """Step the rig by exactly ``seconds`` of simulated time."""
+        """Step the rig by exactly ``seconds`` of simulated time; the dashboard shows the rig
+        as it stands then (its views and logs may be read at once)."""
         self.served.advance(seconds)
+        self.served.settle()
 
     def snapshot(self, device: str | None = None) -> dict[str, Any]:
         """The rig's snapshot, or one device's, as of the last step."""

@@ -61,13 +61,6 @@ class LiveDashboard(ServedRig):
         self.runtime.advance(round(seconds * 1_000_000)).result(timeout=WALL_TIMEOUT_S * 3)
         self.settle()
 
-    def settle(self) -> None:
-        """Wait until a frame published after now has been written to the dashboard."""
-        seq = self.runtime.frame.seq
-        wait_until(lambda: self.runtime.frame.seq > seq, what="a new frame")
-        seq = self.runtime.frame.seq
-        wait_until(lambda: self.dashboard.rendered_seq >= seq, what="the dashboard update")
-
     def wait_for_state(self, predicate: Callable[[dict[str, Any]], Any],
                        what: str = "device state") -> None:
         """Wait for a browser command to reach the model (the simulation is paused)."""
