@@ -31,8 +31,8 @@ import time
 from collections.abc import Callable, Sequence
 from typing import Any, TypeVar
 
-from pymodbus.exceptions import ModbusIOException
-from pymodbus.framer import FramerSocket, FramerType
+from pymodbus.exceptions import ModbusIOException, NotImplementedException
+from pymodbus.framer import FramerRTU, FramerSocket, FramerType
 from pymodbus.pdu import DecodePDU, ModbusPDU
 from pymodbus.server import ModbusTcpServer
 from pymodbus.server.requesthandler import ServerRequestHandler
@@ -133,6 +133,11 @@ class _DriveRequestHandler(ServerRequestHandler):
                 size = self._mbap_size(frame)
                 if size is None:
                     break  # a partial frame: wait for the rest
+            else:
+                size = self._rtu_size(frame)
+                if size == 0:
+                    break  # a partial frame: wait for the rest
+            if size is not None:
                 frame = frame[:size]  # pymodbus sees exactly one frame
             try:
                 step = TransactionManager.callback_data(self, frame, addr)
@@ -142,8 +147,8 @@ class _DriveRequestHandler(ServerRequestHandler):
             used += step
             if isinstance(request, _RawPdu):
                 self._answer(self, request, addr)
-            if not step or (request is None and not self._mbap):
-                break
+            if not step or (request is None and size is None):
+                break  # pymodbus waits for more, or took what it could not frame
         return len(data) if self._broken else used  # a lost stream is dropped at once
 
     def _mbap_size(self, data: bytes) -> int | None:
@@ -165,6 +170,24 @@ class _DriveRequestHandler(ServerRequestHandler):
                 self._hang_up()
             return None
         return 6 + length if len(data) >= 6 + length else None
+
+    def _rtu_size(self, data: bytes) -> int | None:
+        """The size of the RTU frame at the start of ``data`` as pymodbus's RTU framer sizes
+        it (its function-code table), 0 while its byte count has not come; None when that
+        table cannot size it (pymodbus then hunts through the buffer for a frame).
+
+        pymodbus's ``FramerRTU.decode`` takes the whole buffer with the first frame: a
+        request read together with the frame before it was lost. A master waits the
+        turnaround delay after a broadcast (seed 004 ch.2, "Master"), but TCP keeps no
+        pause: a server that reads its socket late finds both frames in one read."""
+        try:
+            pdu_class = self.framer.decoder.lookupPduClass(data)
+            if pdu_class is None:
+                return None
+            size = pdu_class.calculateRtuFrameSize(data)
+        except (IndexError, NotImplementedException):
+            return None
+        return size if size == 0 or size >= FramerRTU.MIN_SIZE else None
 
     def _hang_up(self) -> None:
         """End our side once every reply before the broken header is on its way."""

@@ -99,3 +99,12 @@ def test_a_frame_in_pieces_without_a_silence_is_one_frame(port: int) -> None:
         for i in range(0, len(READ_D3), 2):
             sock.sendall(READ_D3[i:i + 2])
         assert receive(sock, REPLY_S) == D3_IS_50
+
+
+def test_a_request_read_with_a_frame_of_bad_crc_before_it_is_answered(port: int) -> None:
+    """ch.2: a frame with a wrong CRC is discarded without a reply; the request the same read
+    brought behind it is a frame of its own (pymodbus's RTU framer dropped the whole read)."""
+    bad = rtu(5, "06 0003 000A")[:-1] + b"\x00"
+    with connect(port) as sock:
+        sock.sendall(bad + READ_D3)
+        assert receive(sock, REPLY_S) == D3_IS_50
