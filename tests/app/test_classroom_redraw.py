@@ -160,3 +160,42 @@ def test_the_line_master_panel_s_causes_reach_a_copy_built_during_an_update(
         assert "2: cable 2 pulled" in copy.content
     finally:
         page.close()
+
+
+@pytest.mark.filterwarnings("error::UserWarning")
+def test_a_page_that_left_gets_no_update_before_its_disconnect_callback() -> None:
+    """viser marks a leaving page's widgets removed (no message: the connection is closed)
+    before it runs the disconnect callbacks, and those run late on a loaded machine. Until
+    Instructor._gone forgot the page, the frame update went on updating its copies: the Module
+    faults form, restricted to the actions of the module read meanwhile, removed its parameter
+    widgets a second time ("Attempted to remove an already removed GuiCheckboxHandle",
+    action_form.py, seen in CI after test_a_late_instructor_plug_type_starts_at_the_preset)
+    and built new ones on the closed connection."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    served.dashboard.stop()  # the frame updates are this test's own calls from here on
+    try:
+        served.dashboard.tick()
+        assert served.dashboard._panels is not None
+        faults = served.dashboard._panels.modules._faults
+        assert faults is not None
+        page = Page(served.port)
+        cid, client = next(iter(_wait(lambda: served.server.get_clients()).items()))
+        assert served.classroom.access.present(cid, TOKEN)
+        instructor = served.dashboard.instructor
+        instructor.promote(client)
+        (copy,) = faults._part.each()
+        form = copy.form
+        assert form is not None and form.values(), "a fault action with parameters"
+        _wait(lambda: copy.available is not None)  # module 1's actions, read at the build
+        faults.update(False)
+        with instructor._lock:  # Instructor._gone waits: the disconnect callback is late
+            page.close()
+            _wait(lambda: not served.server.get_clients())
+            _wait(lambda: form.choice._impl.removed)  # viser let the page's widgets go
+            faults._park(copy, [])  # the picked module's actions, read meanwhile: none
+            faults.update(False)  # a frame update in that window
+            assert form.options() != ("(none)",)  # the gone page's form left alone
+        _wait(lambda: not faults._part.each())
+    finally:
+        served.stop()

@@ -53,6 +53,7 @@ class Part(Generic[T]):
     def __init__(self, server: viser.ViserServer, build: Callable[[Any], T],
                  shared: bool) -> None:
         self._build = build
+        self._server = server
         self._lock = threading.Lock()
         self._built: dict[int | None, T] = {}
         if shared:
@@ -79,9 +80,20 @@ class Part(Generic[T]):
             self._built.pop(client_id, None)
 
     def each(self) -> list[T]:
-        """Every copy built so far (update them all)."""
+        """Every copy built so far whose page is still there (update them all).
+
+        viser lets a leaving page go first (it leaves ``get_clients()``), then marks its
+        widgets removed, then runs the disconnect callbacks (``Instructor._gone`` forgets the
+        copy), which come late on a loaded machine. A copy updated in between was rebuilt on
+        removed widgets: "Attempted to remove an already removed GuiCheckboxHandle", or a
+        RuntimeError assigning a removed dropdown's options, which ended that frame's
+        update (tests/app/test_classroom_redraw.py)."""
         with self._lock:
-            return list(self._built.values())
+            built = list(self._built.items())
+        if all(client_id is None for client_id, _copy in built):
+            return [copy for _client_id, copy in built]
+        present = self._server.get_clients()
+        return [copy for client_id, copy in built if client_id is None or client_id in present]
 
 
 class ScenePart(Part[T]):
@@ -89,8 +101,10 @@ class ScenePart(Part[T]):
     own (``client.scene``), which shadow the shared nodes of the same names on that page only
     (viser 1.1.1). Never built on an open rig, whose shared scene shows everything."""
 
-    def __init__(self, build: Callable[[viser.ClientHandle], T]) -> None:
+    def __init__(self, server: viser.ViserServer,
+                 build: Callable[[viser.ClientHandle], T]) -> None:
         self._build_scene = build
+        self._server = server
         self._lock = threading.Lock()
         self._built: dict[int | None, T] = {}
 
@@ -126,7 +140,7 @@ class Instructor:
     def scene_part(self, build: Callable[[viser.ClientHandle], T]) -> Part[T]:
         """Register ``build(client)`` for each instructor connection's own scene nodes
         (:class:`ScenePart`); nothing is built on an open rig."""
-        part: Part[T] = ScenePart(build)
+        part: Part[T] = ScenePart(self.server, build)
         if not self.shared:
             self._parts.append(part)
         return part
