@@ -65,6 +65,38 @@ BROKEN_STREAM_LINGER_S = 2.0
 # transmission mode). Far above a TCP segment's jitter, far below the ~1 s a master waits
 # before it retransmits ("Master": response timeout 1 s, turnaround 100-200 ms).
 RTU_SILENCE_S = 0.1
+# Bytes read this soon after the loop came out of a stall may have come at any time during it.
+STALL_READ_SLACK_S = 0.02
+
+
+class LoopStalls:
+    """When the server's one event loop was last blocked in a rig call (``call`` path).
+
+    A connection's bytes are stamped when the loop reads them; while a rig call of another
+    connection blocks the loop, bytes that came meanwhile wait in the socket, and the gap
+    read afterwards is the stall's, not the line's. Consecutive calls (a pipelined client's
+    frames) make one stall."""
+
+    def __init__(self) -> None:
+        self.start_s = self.end_s = -1.0
+        self._depth = 0
+
+    def begin(self) -> None:
+        now = time.monotonic()
+        if not self._depth and now - self.end_s > STALL_READ_SLACK_S:
+            self.start_s = now  # else the stall just before goes on
+        self._depth += 1
+
+    def end(self) -> None:
+        self._depth -= 1
+        self.end_s = time.monotonic()
+
+    def arrival(self, last_s: float, now_s: float) -> float:
+        """The earliest time bytes read at ``now_s`` can have come, the previous ones having
+        come at ``last_s``: at the stall's start when read right after it, else now."""
+        if self.end_s >= last_s and now_s - self.end_s <= STALL_READ_SLACK_S:
+            return max(last_s, self.start_s)
+        return now_s
 
 
 class _RawPdu(ModbusPDU):
@@ -101,6 +133,7 @@ class _DriveRequestHandler(ServerRequestHandler):
         self.in_flight = 0  # requests taken, not yet answered (or silenced)
         self._broken = False  # a broken MBAP header came: nothing more is served
         self._last_data_s = 0.0  # RTU: when the last bytes came (time.monotonic)
+        self._stalls: LoopStalls = server.stalls
 
     def begin(self) -> None:
         self.in_flight += 1
@@ -112,7 +145,7 @@ class _DriveRequestHandler(ServerRequestHandler):
 
     def datagram_received(self, data: bytes, addr: tuple | None) -> None:
         if not self._mbap:
-            now = time.monotonic()
+            now = self._stalls.arrival(self._last_data_s, time.monotonic())
             if self.recv_buffer and now - self._last_data_s > RTU_SILENCE_S:
                 # ch.2: a frame cut by a silence is incomplete and discarded; pymodbus would
                 # glue it to the next frame and lose that one too (a master's retransmission)
@@ -207,12 +240,14 @@ class _DriveRequestHandler(ServerRequestHandler):
 
 class _DriveTcpServer(ModbusTcpServer):
     def __init__(self, address: tuple[str, int], framer: FramerType,
-                 answer: Callable[[_DriveRequestHandler, _RawPdu, tuple | None], None]) -> None:
+                 answer: Callable[[_DriveRequestHandler, _RawPdu, tuple | None], None],
+                 stalls: LoopStalls) -> None:
         # No datastore: no request ever reaches one. broadcast_enable stays off so that unit
         # id 0 reaches our line handler, which applies broadcasts itself.
         super().__init__([], framer=framer, address=address)
         self.decoder = _RawDecoder()
         self.answer = answer
+        self.stalls = stalls
 
     def callback_new_connection(self) -> _DriveRequestHandler:
         return _DriveRequestHandler(self)
@@ -236,10 +271,12 @@ class DriveModbusServer:
         self._thread: threading.Thread | None = None
         self._loop: asyncio.AbstractEventLoop | None = None
         self._stop_event: asyncio.Event | None = None
+        self._stalls = LoopStalls()
 
     # ---- asyncio API ---------------------------------------------------------------------
     async def start(self) -> None:
-        server = _DriveTcpServer((self.host, self.port), FRAMERS[self.framer], self._answer)
+        server = _DriveTcpServer((self.host, self.port), FRAMERS[self.framer], self._answer,
+                                 self._stalls)
         await server.serve_forever(background=True)  # raises RuntimeError if it cannot listen
         self._server = server
         sockets = getattr(server.transport, "sockets", None) or []
@@ -303,8 +340,8 @@ class DriveModbusServer:
             return
         # Answered right here, in frame order; only a reply held back by a save waits (ch.2).
         try:
-            outcome = self._call(lambda: serve_line(self._drives, request.dev_id,
-                                                    request.frame))
+            outcome = self._blocking(lambda: serve_line(self._drives, request.dev_id,
+                                                        request.frame))
         except Exception:  # a model fault must not take the line down: the drive stays silent
             logger.exception("Modbus request %s to unit %d failed", request.frame.hex(" "),
                              request.dev_id)
@@ -367,5 +404,15 @@ class DriveModbusServer:
 
     async def _in_sim(self, fn: Callable[[], Any]) -> Any:
         if self._call is not None:
-            return self._call(fn)
+            return self._blocking(fn)
         return await asyncio.wrap_future(self._submit(fn))
+
+    def _blocking(self, fn: Callable[[], T]) -> T:
+        """``fn`` through ``call``, which blocks the loop: the stall is kept for the RTU
+        silence of the other connections (LoopStalls)."""
+        assert self._call is not None
+        self._stalls.begin()
+        try:
+            return self._call(fn)
+        finally:
+            self._stalls.end()

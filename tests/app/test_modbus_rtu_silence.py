@@ -11,9 +11,11 @@ buffer stands for the silence (docs/modbus.md "Node numbers and the line").
 
 from __future__ import annotations
 
+import contextlib
 import socket
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from typing import Any
 
 import pytest
 from pymodbus.framer import FramerRTU
@@ -108,3 +110,61 @@ def test_a_request_read_with_a_frame_of_bad_crc_before_it_is_answered(port: int)
     with connect(port) as sock:
         sock.sendall(bad + READ_D3)
         assert receive(sock, REPLY_S) == D3_IS_50
+
+
+STALL_S = 3 * RTU_SILENCE_S  # one connection's request held up this long in the rig
+
+
+@contextlib.contextmanager
+def stalled_line() -> Iterator[int]:
+    """The ``call`` path (``python -m app``), its first rig call held up for STALL_S, as a
+    busy rig holds it: the server's one event loop is blocked meanwhile."""
+    drives = [FakeDrive.default(node_id=5)]
+    stalled: list[bool] = []
+    with SimThread(drives) as sim:
+        def call(fn: Callable[[], Any]) -> Any:
+            if not stalled:
+                stalled.append(True)
+                time.sleep(STALL_S)
+            return sim.call(fn)
+
+        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer="rtu",
+                                   call=call)
+        server.start_in_thread()
+        try:
+            yield server.port
+        finally:
+            server.stop_in_thread()
+
+
+def test_a_stall_on_one_connection_does_not_cut_another_connection_s_frame() -> None:
+    """While connection A's rig call blocks the loop past the silence, connection B's bytes
+    wait unread in the socket. B's frame came in two pieces 30 ms apart, no silence on B's
+    line; measured when the loop read the second piece, the gap was the stall's, and B's
+    first piece was dropped as a cut frame (no reply)."""
+    with stalled_line() as port, connect(port) as a, connect(port) as b:
+        b.sendall(READ_D3[:3])
+        time.sleep(0.05)  # read by the loop before A's request comes
+        a.sendall(READ_D3)
+        time.sleep(0.03)  # the loop is now blocked in A's call
+        b.sendall(READ_D3[3:])
+        assert receive(a, REPLY_S) == D3_IS_50
+        assert receive(b, REPLY_S) == D3_IS_50
+
+
+def test_a_silence_after_a_stall_still_cuts_the_frame() -> None:
+    """B's line silent from before the stall to well after it: the piece is dropped, the
+    rest alone is garbage (no reply), the retransmission is answered. Only bytes read right
+    after the stall count from its start."""
+    write = rtu(5, "06 0003 000A")
+    with stalled_line() as port, connect(port) as a, connect(port) as b:
+        b.sendall(write[:3])
+        time.sleep(0.05)
+        a.sendall(READ_D3)
+        assert receive(a, REPLY_S) == D3_IS_50  # the stall is over
+        time.sleep(PAUSE_S)
+        b.sendall(write[3:])
+        assert receive(b, QUIET_S) == b""
+        time.sleep(PAUSE_S)
+        b.sendall(READ_D3)
+        assert receive(b, REPLY_S) == D3_IS_50
