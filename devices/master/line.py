@@ -21,6 +21,7 @@ from devices.ethercat import AlState
 from devices.events import CommError, NetworkRecovery
 from devices.master.esc_errors import IN, OUT, run_frame
 from devices.master.links import Slave, SlaveLink
+from devices.master.log_styles import silent_run
 from devices.master.still import StillCounts
 
 if TYPE_CHECKING:
@@ -228,6 +229,25 @@ class LineMixin:
             first -= 1
         return first
 
+    def _last_silent(self, position: int) -> int:
+        """The last position of that run: the slaves behind ``position`` that do not answer
+        this step (read live: later positions' ``present`` is not this step's yet while the
+        step's loop runs). A silent slave's ESC passes the frames on, so one behind the run
+        may answer."""
+        last, reach, links = position, self._line_reach, self.links
+        while last + 1 < len(links):
+            q = last + 1
+            if reach[q] and (q or self._line_powered[0]) and links[q].slave.reachable():
+                break
+            last = q
+        return last
+
+    def _silent_words(self, position: int) -> tuple[int, str]:
+        """The run of silent slaves ``position`` is in: its first position and the words
+        the master's lines and diagnoses use for it."""
+        first = self._first_silent(position)
+        return first, silent_run(first, self._last_silent(position), len(self.links))
+
     def _port_finding(self, first: int) -> str:
         """What the master reads of the link where its frames stop: its own port's link for
         position 0, else the DL status (0x0110) of the last slave that answers, port 1 (OUT);
@@ -344,12 +364,11 @@ class LineMixin:
         why (the cause stays the line's)."""
         link.missing = True
         link.injected_cause = self._injected_cause(link.position)  # the instructor's, as lost
-        first = self._first_silent(link.position)
-        link.diagnosis = self._silent_finding(first)
+        link.diagnosis, silent = self._silent_finding(link.position)
         self._event(CommError(self.now_us, self.device_id, position=link.position,
                               address=link.slave.station_address, reason="not_found",
                               count=1))
-        self._log(link, "missing", first=first)
+        self._log(link, "missing", silent=silent)
 
     def _lose(self, link: SlaveLink) -> bool:
         """The slave no longer answers: the master logs and diagnoses what it sees (from which
@@ -360,19 +379,20 @@ class LineMixin:
         link.present, link.believed, link.pending = False, None, None
         link.lost_once, link.reached_op, link.seen = True, False, None
         link.injected_cause = self._injected_cause(link.position)
-        first = self._first_silent(link.position)
-        link.diagnosis = self._silent_finding(first)
+        link.diagnosis, silent = self._silent_finding(link.position)
         self.network_op, self._watched = False, None
         self._event(CommError(self.now_us, self.device_id, position=link.position,
                               address=link.slave.station_address, reason="link_lost",
                               count=1))
-        self._log(link, "lost", first=first)
+        self._log(link, "lost", silent=silent)
         return True
 
-    def _silent_finding(self, first: int) -> str:
-        """A lost slave's diagnosis: where nothing answers from, and the link read there."""
+    def _silent_finding(self, position: int) -> tuple[str, str]:
+        """A lost or missing slave's diagnosis (which slaves do not answer, and the link read
+        where the frames stop answering) and the first part alone, for its log line."""
+        first, silent = self._silent_words(position)
         finding = self._port_finding(first)
-        return f"no answer from position {first} on" + (f" ({finding})" if finding else "")
+        return silent + (f" ({finding})" if finding else ""), silent
 
     def _line_news(self, lost_now: list[int], recovered: list[int],
                    missing_now: list[int] | None = None) -> None:
@@ -393,7 +413,7 @@ class LineMixin:
             self._log(None, "recovery", positions=", ".join(map(str, recovered)))
         for link in self.links:
             if (link.lost_once or link.missing) and not link.present:
-                link.diagnosis = self._silent_finding(self._first_silent(link.position))
+                link.diagnosis = self._silent_finding(link.position)[0]
                 # Read after the slaves stepped: one the frames reach that still does not
                 # answer is silent, not "powered off" as it was when switched on again.
                 link.injected_cause = self._injected_cause(link.position)
@@ -403,8 +423,8 @@ class LineMixin:
         step: which, from where nothing answers, its AL status read's working counter (one
         per slave that answers, the description's slave count expected) and the link it reads
         where the frames stop."""
-        first = self._first_silent(positions[0])
+        first, silent = self._silent_words(positions[0])
         finding = self._port_finding(first)
-        self._log(None, message, positions=", ".join(map(str, positions)), first=first,
+        self._log(None, message, positions=", ".join(map(str, positions)), silent=silent,
                   wkc=sum(link.present for link in self.links), expected=len(self.links),
                   finding=f"; {finding}" if finding else "")

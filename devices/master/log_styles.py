@@ -32,13 +32,13 @@ TWINCAT: dict[str, str] = {
               "{to_state}'. AL Status '0x{al_status:04X}' read and '0x{expected:04X}' "
               "expected. AL Status Code '0x{code:04X}'",
     "aborted": "state change aborted (requested '{target}', back to '{state}').",
-    "lost": "slave lost: no answer from position {first} on.",
-    "lost_line": "slave(s) at position(s) {positions} lost: no answer from position {first} "
-                 "on (working counter {wkc}, {expected} expected){finding}.",
+    "lost": "slave lost: {silent}.",
+    "lost_line": "slave(s) at position(s) {positions} lost: {silent} (working counter {wkc}, "
+                 "{expected} expected){finding}.",
     "found": "found on the line again in '{state}'.",
-    "missing": "slave not found: no answer from position {first} on.",
-    "missing_line": "slave(s) at position(s) {positions} not found: no answer from position "
-                    "{first} on (working counter {wkc}, {expected} expected){finding}.",
+    "missing": "slave not found: {silent}.",
+    "missing_line": "slave(s) at position(s) {positions} not found: {silent} (working counter "
+                    "{wkc}, {expected} expected){finding}.",
     "found_late": "found on the line in '{state}'.",
     "identity": "identity check failed: vendor 0x{vendor:08X}, product 0x{product:08X}, "
                 "revision 0x{revision:08X} read and vendor 0x{want_vendor:08X}, product "
@@ -52,6 +52,21 @@ TWINCAT: dict[str, str] = {
           "window {window} ns).",
     "recovery": "network recovery: slave(s) at position(s) {positions} back on the line.",
 }
+
+# Which slaves do not answer, as the master reads it (``silent_run``): up to the end of the
+# line, or a run the frames cross (a silent slave's ESC passes them on) with an answer behind.
+SILENT_TO_END = "no answer from position {first} on"
+SILENT_ONE = "no answer from position {first}, position {after} answers"
+SILENT_RUN = "no answer from positions {first} to {last}, position {after} answers"
+
+
+def silent_run(first: int, last: int, count: int) -> str:
+    """The words for slaves ``first``..``last`` silent on a line of ``count`` slaves."""
+    if last >= count - 1:
+        return SILENT_TO_END.format(first=first)
+    template = SILENT_ONE if first == last else SILENT_RUN
+    return template.format(first=first, last=last, after=last + 1)
+
 
 # Messages a style prints after a slave's other lines of the same instant. The §7.4 trace
 # (seed 000 lines 592-599, oldest first) has slave 11's state-change pair at 380808 and its

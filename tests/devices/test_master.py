@@ -230,7 +230,7 @@ def test_log_history_is_bounded() -> None:
     bench = op_bench()
     assert bench.master is not None
     for _ in range(LOG_LENGTH + 10):
-        bench.master._log(bench.master.links[0], "lost", first=0)
+        bench.master._log(bench.master.links[0], "lost", silent="no answer from position 0 on")
     assert len(bench.master.log) == LOG_LENGTH
 
 

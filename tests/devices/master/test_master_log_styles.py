@@ -86,7 +86,7 @@ def test_set_log_style_re_renders_the_log() -> None:
 
 
 def test_non_emergency_lines_keep_the_twincat_text_on_emergency_displays() -> None:
-    entry = Entry(0, "lost", {"first": 2}, slave="Box 3 (CPX-E-EC)",
+    entry = Entry(0, "lost", {"silent": "no answer from position 2 on"}, slave="Box 3 (CPX-E-EC)",
                   address=1003, position=2)
     assert render("sirio", entry) == render("pegaso", entry) == render("twincat", entry)
     assert render("aitraceprint", entry) == "0 - 00000001 - ECAT: " + render("twincat", entry)

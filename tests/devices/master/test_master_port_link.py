@@ -69,4 +69,5 @@ def test_a_slave_silent_behind_a_port_with_link_is_diagnosed_without_a_link_find
     view = _view(rig, 8 * US + SAVE_US)
     assert view["link"] is True
     assert [s["present"] for s in view["slaves"]] == [False, True]
-    assert [s["diagnosis"] for s in view["slaves"]] == ["no answer from position 0 on", ""]
+    assert [s["diagnosis"] for s in view["slaves"]] == [
+        "no answer from position 0, position 1 answers", ""]

@@ -10,6 +10,8 @@ from __future__ import annotations
 from line_bench import US, master_view
 from test_master_port_link import _drive_first
 
+from app.rig_config import build_rig, parse_rig_spec
+
 DRIVE = "'Drive 1 (SelemaDriveECAT)' (1001)"
 
 
@@ -29,15 +31,19 @@ def test_a_damaged_cable_behind_a_silent_first_slave_spoils_frames() -> None:
 
 
 def test_a_slave_never_found_is_logged_and_diagnosed() -> None:
+    """The FastCAT behind the silent drive answers: the master reads no answer from position
+    0 only, not "from position 0 on" (before, the run of silent slaves was taken to the end
+    of the line whatever answered behind it)."""
     rig = _drive_first(c9=3)
     rig.run_until(2 * US)
     view = master_view(rig)
     assert [s["present"] for s in view["slaves"]] == [False, True]
-    assert [s["diagnosis"] for s in view["slaves"]] == ["no answer from position 0 on", ""]
+    assert [s["diagnosis"] for s in view["slaves"]] == [
+        "no answer from position 0, position 1 answers", ""]
     texts = [row["text"] for row in rig.devices["master"].log]
-    assert f"{DRIVE}: slave not found: no answer from position 0 on." in texts
+    assert f"{DRIVE}: slave not found: no answer from position 0, position 1 answers." in texts
     assert ("'Device 1 (EtherCAT)': slave(s) at position(s) 0 not found: no answer from "
-            "position 0 on (working counter 1, 2 expected).") in texts
+            "position 0, position 1 answers (working counter 1, 2 expected).") in texts
     assert sum("not found" in t for t in texts) == 2  # once, not every cycle
 
 
@@ -128,3 +134,22 @@ def test_a_slave_never_found_has_its_cause_in_the_instructor_s_view() -> None:
     rig.apply("master", "plug_cable", {"cable": 1})
     rig.run_until(4 * US)
     assert master_view(rig)["injected"]["lost"] == []
+
+
+def test_a_run_of_silent_slaves_before_one_that_answers_is_named_as_a_run() -> None:
+    """Two drives on Modbus (c9 = 3) ahead of a FastCAT: both pass the frames on, the FastCAT
+    answers. The master reads no answer from positions 0 to 1 and an answer at 2."""
+    text = ('[rig]\nname = "two silent"\nseed = 1\nstep_ms = 1\n[master]\n'
+            'line = ["d1-ecat", "d2-ecat", "fastcat"]\n'
+            + "".join(f'[[servo]]\nid = "{d}"\nfieldbus = "ethercat"\nnode_id = {n}\n'
+                      'parameters = { c9 = 3 }\n' for n, d in ((3, "d1"), (4, "d2")))
+            + '[[fastcat]]\nid = "fastcat"\nmodules = ["DI16"]\n')
+    rig = build_rig(parse_rig_spec(text))
+    rig.run_until(2 * US)
+    view = master_view(rig)
+    assert [s["present"] for s in view["slaves"]] == [False, False, True]
+    finding = "no answer from positions 0 to 1, position 2 answers"
+    assert [s["diagnosis"] for s in view["slaves"]] == [finding, finding, ""]
+    texts = [row["text"] for row in rig.devices["master"].log]
+    assert ("'Device 1 (EtherCAT)': slave(s) at position(s) 0, 1 not found: "
+            f"{finding} (working counter 1, 3 expected).") in texts
