@@ -12,6 +12,25 @@ from devices.master.log_styles import STYLES
 if TYPE_CHECKING:
     from devices.master.dc import DcUnit
 
+# The snapshot's ``phase`` (a stable key: recordings, tests) and the words a trainee reads
+# on the master's screen and in the Line tab. Seed 003 names none of these phases; it says
+# the master "waits to see the link on that port", then with link "starts sending packets"
+# and sends the init commands. Not one slave answering those packets is what the master
+# reads (working counter 0), so the words say that, not "no answer" (whose?).
+PHASE_TEXT: dict[str, str] = {
+    "waiting_link": "waiting link",
+    "no_answer": "no slave answers",
+    "init_commands": "init commands",
+    "starting": "starting",
+    "running": "running",
+}
+
+
+def phase_text(phase: str) -> str:
+    """The words for a ``phase`` of the snapshot (an unknown one as it is, underscores as
+    spaces)."""
+    return PHASE_TEXT.get(phase, phase.replace("_", " "))
+
 
 class ViewMixin:
     """The view part of :class:`~devices.master.master.EtherCatMaster`."""

@@ -117,6 +117,15 @@ def al_codes_and_power(snap: Snapshot) -> None:
     master["slaves"][-1].update(state=None, present=False, al_status_code=0)
 
 
+def no_slave_answers(snap: Snapshot) -> None:
+    """Seed 003: link detected, the master sends its frames, and not one slave answers (every
+    drive on another fieldbus, say): the phase the master's screen names."""
+    master = devices(snap)["master"]
+    master["phase"] = "no_answer"
+    for slave in master["slaves"]:
+        slave.update(present=False, state=None, al_status=0, al_status_code=0)
+
+
 def blinking(snap: Snapshot) -> None:
     """LED words on four lines (every pattern a still cannot show, Run / Error orange)."""
     trs = devices(snap)["trscat"]["leds"]
@@ -173,6 +182,7 @@ STATES: dict[str, Callable[[Snapshot], None]] = {
     **{f"every_cable_pulled_at_{e}": plugs_out(e) for e in ("in", "out", "both")},
     "every_cable_pulled_everywhere": plugs_out("both", master_too=True),
     "al_codes_and_power": al_codes_and_power,
+    "no_slave_answers": no_slave_answers,
     "blinking": blinking,
     "faults": expansion_and_module_faults,
     "every_module_faulted": every_module_faulted,
@@ -259,7 +269,7 @@ def within(box: Box, outer: Box, tol: float) -> bool:
 
 
 @pytest.mark.parametrize("state", [s for s in STATES if s.startswith("dc_")] + [
-    "cable_0_pulled", "al_codes_and_power"])
+    "cable_0_pulled", "al_codes_and_power", "no_slave_answers"])
 def test_master_screen_holds_phase_and_dc_state(line: Line, state: str) -> None:
     """The phase and the DC state (seed 003) stay on the master's screen."""
     show(line, state)
@@ -267,6 +277,17 @@ def test_master_screen_holds_phase_and_dc_state(line: Line, state: str) -> None:
     for key in ("phase", "dc"):
         box = boxes[f"/line/master/{key}"]
         assert within(box, screen, tolerance(line)), box
+
+
+@pytest.mark.parametrize(("state", "text"), [
+    ("cable_0_pulled", "waiting link"), ("no_slave_answers", "no slave answers"),
+    ("al_codes_and_power", "init commands"), ("running", "running")])
+def test_master_screen_names_the_phase_as_the_panel_does(line: Line, state: str,
+                                                         text: str) -> None:
+    """Seed 003 names no phase "no answer": with link "it starts sending packets", and none
+    answers. The screen said "no answer" (whose?); it says what the master reads."""
+    show(line, state)
+    assert str(nodes(line)["/line/master/phase"].text) == text
 
 
 @pytest.mark.parametrize("state", ["running", "every_cable_pulled", "faults"])

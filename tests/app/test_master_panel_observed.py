@@ -50,3 +50,11 @@ def test_the_instructor_s_slave_list_marks_the_slaves_off() -> None:
     """The Cables and power folder (instructor only) still says which slave is off."""
     master = _faulted_master()
     assert slave_options(master, ORDER)[1] == "1 trscat (off)"
+
+
+def test_the_phase_without_an_answering_slave_is_named_as_the_master_reads_it() -> None:
+    """Seed 003: with link the master "starts sending packets"; the phase in which not one
+    slave answers them read "no answer" in the panel, which a trainee can take for the
+    master's own silence."""
+    text = status_table({"phase": "no_answer", "link": True, "target": "OP"})
+    assert ">no slave answers<" in text and ">no answer<" not in text

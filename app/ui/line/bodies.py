@@ -23,6 +23,7 @@ import viser
 
 from app.ui.line.painter import FRONT_Y, Painter
 from app.ui.rail_scene import BODY_D, BODY_H, PATTERN_WORDS, RGB
+from devices.master.view import phase_text
 
 BODY: RGB = (214, 219, 228)
 BODY_OFF: RGB = (150, 152, 158)
@@ -219,7 +220,7 @@ class MasterBody(Body):
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
         phase = str(snap.get("phase", "running" if snap.get("slaves") else "-"))
-        self.paint.set_text("phase", phase.replace("_", " "))
+        self.paint.set_text("phase", phase_text(phase))
         dc = snap.get("dc") or {}
         self.paint.set_text("dc", wrap(f"DC {dc.get('state', '-')}", DC_LINE))
         link = snap.get("link", True)

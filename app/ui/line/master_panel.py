@@ -29,6 +29,7 @@ from app.ui.repeats import Run, collapse_repeats, repeat_suffix
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import describe_al_status_code
 from devices.events import US_PER_S
+from devices.master.view import phase_text
 
 LOG_ROWS = 40
 NBSP = "\u00a0"  # between a number and its unit: a narrow cell wraps them together
@@ -183,9 +184,10 @@ def status_table(master: Mapping[str, Any]) -> str:
     """Phase, target and the master port's link: what changes only when the line does. The
     Injected and Causes rows (only when there is one: the healthy line's panel stays as it
     was) are the instructor's (:data:`app.ui.style.CAUSE_ROWS`)."""
-    phase = str(master.get("phase", "-")).replace("_", " ")
+    phase = str(master.get("phase", "-"))
     mode = " (external master)" if master.get("external") else ""
-    rows = [("Phase", badge(phase, "ok" if phase == "running" else "warn") + esc(mode)),
+    rows = [("Phase", badge(phase_text(phase), "ok" if phase == "running" else "warn")
+             + esc(mode)),
             ("Target", esc(master.get("target", "-"))),
             ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad"))]
     for key, text in (("Injected", injected_text(master)), ("Causes", causes_text(master))):
