@@ -15,7 +15,9 @@ Stepped after its drive and before the master, like the CANopen node.
   the SM watchdog time in OP: back to SAFEOP with 0x001B and alarm 34 (sync timeout).
 - A drive alarm of its controller (7, 30-32: esm.CONTROLLER_ALARMS) takes the process data
   away: SAFEOP / OP -> PREOP with 0x002B, SAFEOP refused until the alarm is reset; the
-  mailbox goes on. Any other drive alarm is the CiA 402 Fault only (ETG.6010): OP stays.
+  mailbox goes on. Alarm 35 (the EtherCAT EEPROM, esm.EEPROM_ALARM) is a booting error:
+  INIT + error with 0x0051, PREOP refused until the alarm is reset (ERR flickering, ETG.1300).
+  Any other drive alarm is the CiA 402 Fault only (ETG.6010): OP stays.
 - Mailbox: SDO upload / download / info over the dictionary of devices/coe/objects.py;
   emergencies with the 0x603F codes (8-byte frames).
 
@@ -39,11 +41,14 @@ from devices.coe.assignment import Assignment, assigned_pdos, default_pdos, mapp
 from devices.coe.csp import Csp
 from devices.coe.emergency import EmergencyMailbox
 from devices.coe.esm import (
+    EEPROM_ALARM,
+    EEPROM_ERROR,
     INVALID_INPUT_MAPPING,
     INVALID_OUTPUT_MAPPING,
     NO_VALID_INPUTS_AND_OUTPUTS,
     NO_VALID_OUTPUTS,
     RANK,
+    REFUSAL_KIND,
     SM_WATCHDOG,
     TRANSITION_CHECKS,
     ErrorKind,
@@ -169,7 +174,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         else:
             code = self._run_checks(current, target)
             if code is not None:
-                esm.refuse(code, now)
+                esm.refuse(code, now, REFUSAL_KIND.get(code))
             else:
                 self._enter(target)
         self._refresh()
@@ -287,6 +292,10 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
             return None
         return NO_VALID_INPUTS_AND_OUTPUTS
 
+    def check_eeprom(self) -> int | None:
+        """No PREOP while the EtherCAT EEPROM alarm is latched (a booting error)."""
+        return EEPROM_ERROR if EEPROM_ALARM in self.drive.alarms.latched else None
+
     def check_outputs(self) -> int | None:
         """SAFEOP -> OP: the master must be sending process data (SM2) already."""
         if not self.rx_assigned:
@@ -339,6 +348,24 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.esm.fall(AlState.PREOP, NO_VALID_INPUTS_AND_OUTPUTS, ErrorKind.LOCAL, self.now_us)
         self.inputs, self._inputs_due = None, False
 
+    def _booting_due(self) -> bool:
+        """Alarm 35 latched and the slave not yet in INIT with its booting error."""
+        return EEPROM_ALARM in self.drive.alarms.latched and not (
+            self.esm.state is AlState.INIT and self.esm.error is ErrorKind.BOOTING)
+
+    def _booting_error(self) -> None:
+        """Alarm 35: the slave is in INIT + error, 0x0051, as after an EEPROM that did not
+        load (ETG.1300 booting error). After the emergency watch of the same step: its
+        0x5530 is in 0x1003, the mailbox stops on the way to INIT (devices/esm.py)."""
+        state = self.esm.state
+        if state is not AlState.INIT:
+            self.drive.log(f"EtherCAT: alarm {EEPROM_ALARM}: EEPROM error (0x{EEPROM_ERROR:04X}): "
+                           f"{state.label} -> INIT")
+        if state is AlState.OP:
+            self._leave_op()
+        self.esm.fall(AlState.INIT, EEPROM_ERROR, ErrorKind.BOOTING, self.now_us)
+        self.inputs, self._inputs_due = None, False
+
     # ---- time ---------------------------------------------------------------------------------
     def step(self, now_us: int) -> None:
         # DeviceModel.step, _follow_power's and _check_watchdog's first tests and _refresh's
@@ -363,6 +390,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
                     self.emit(EmergencySent(now_us, self.drive.device_id,
                                             code=int.from_bytes(frame[:2], "little"),
                                             register=frame[2], data=frame[3:]))
+            if drive.alarms.latched and self._booting_due():
+                self._booting_error()
         # _refresh() when its inputs may differ from the last ones (its own first test)
         last, esm, old, on_line = self.last_frame_us, self.esm, self._led_inputs, self.on_line
         if old is None or old.activity is not (last is not None
@@ -414,6 +443,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
             seen = drive.alarms.latched if drive.powered else []
             if seen != self.emergencies.known and esm.at_least(AlState.PREOP):
                 return now  # the next step watches the alarms (emergencies)
+            if seen and self._booting_due():
+                return now  # the next step takes the slave to INIT (alarm 35)
         if end is None:
             return now + QUIET_FOREVER_STEPS * step_us
         return now + max(0, (end - now) // step_us) * step_us

@@ -30,6 +30,7 @@ SM_WATCHDOG = 0x001B  # OP: no process data for the SM watchdog time
 INVALID_INPUT_MAPPING = 0x0024  # PREOP -> SAFEOP: a TxPDO assignment that cannot work
 INVALID_OUTPUT_MAPPING = 0x0025  # PREOP -> SAFEOP: an RxPDO assignment that cannot work
 NO_VALID_INPUTS_AND_OUTPUTS = 0x002B  # ETG.1000.6: O, S -> PREOP + error; P -> S refused
+EEPROM_ERROR = 0x0051  # ETG.1000.6 "EEPROM Error": any -> INIT + error; I -> P refused
 
 # Ch. 5 "Codici allarmi specifici": the drive alarms that take the process data away. 7
 # "Processore DSP in fault" is the controller that makes them (statusword, positions, the
@@ -39,12 +40,17 @@ NO_VALID_INPUTS_AND_OUTPUTS = 0x002B  # ETG.1000.6: O, S -> PREOP + error; P -> 
 # allarmi"), so the slave leaves SAFEOP / OP for PREOP with 0x002B and stays there until the
 # alarm is reset (docs/ethercat-coe.md "Drive alarms and the EtherCAT side").
 CONTROLLER_ALARMS: frozenset[int] = frozenset({7, 30, 31, 32})
+# Ch. 5: 35 "Errore caricamento eeprom ethercat". ETG.1300 has one ERR row for it, flickering
+# "booting error: INIT reached, error indicator bit set": the slave is in INIT + error with
+# 0x0051 and refuses PREOP while the alarm is latched (docs/ethercat-coe.md §LEDs).
+EEPROM_ALARM = 35
 
 # Ch. 5 "Transizioni": what the slave verifies before it acknowledges a step up, in order (the
-# names are methods of the slave returning None or the refusing AL status code). I -> P has
-# nothing the drive can refuse: the master only sets up the mailbox sync managers.
+# names are methods of the slave returning None or the refusing AL status code). I -> P: the
+# master only sets up the mailbox sync managers; refused only while the EtherCAT EEPROM
+# alarm (35) is latched.
 TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
-    (AlState.INIT, AlState.PREOP): (),
+    (AlState.INIT, AlState.PREOP): ("check_eeprom",),
     (AlState.PREOP, AlState.SAFEOP): ("check_controller", "check_output_mapping",
                                       "check_input_mapping"),
     (AlState.SAFEOP, AlState.OP): ("check_controller", "check_outputs"),
@@ -60,6 +66,11 @@ class ErrorKind(enum.Enum):
     REFUSED = "refused"  # a requested transition refused (invalid configuration)
     LOCAL = "local"  # the slave left its state on its own
     WATCHDOG = "watchdog"  # ... because the process data stopped (SM watchdog)
+    BOOTING = "booting"  # in INIT with an EEPROM that did not load (alarm 35)
+
+
+# A refusal whose code is not an invalid configuration keeps its own ERR row (ETG.1300).
+REFUSAL_KIND: dict[int, ErrorKind] = {EEPROM_ERROR: ErrorKind.BOOTING}
 
 
 def controller_alarm(latched: list[int]) -> int | None:

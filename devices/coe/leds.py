@@ -22,22 +22,22 @@ from devices.trscat.indicators import RUN_BY_STATE, link_led
 __all__ = ["ERROR", "LINK", "STATUS", "LedInputs", "alarm_led", "wanted_patterns"]
 
 # ETG.1300 ERR: blinking = invalid configuration, single flash = local error (the slave left
-# its state on its own), double flash = process data watchdog timeout.
+# its state on its own), double flash = process data watchdog timeout, flickering = booting
+# error (INIT reached with the error indicator set: alarm 35, the EtherCAT EEPROM).
 ERROR_BY_KIND: dict[ErrorKind, LedPattern] = {
     ErrorKind.NONE: LedPattern.OFF,
     ErrorKind.REFUSED: LedPattern.BLINKING,
     ErrorKind.LOCAL: LedPattern.SINGLE_FLASH,
     ErrorKind.WATCHDOG: LedPattern.DOUBLE_FLASH,
+    ErrorKind.BOOTING: LedPattern.FLICKERING,
 }
 # The drive alarms (ch. 5 "Codici allarmi specifici") that are an ETG.1300 ERR cause by
 # themselves: on = application controller failure (CONTROLLER_ALARMS: 7 "Processore DSP in
-# fault", 30-32 the drive's internal communication; on in any ESM state, PREOP included),
-# flickering = booting error (35 "Errore caricamento eeprom ethercat"). 33 / 34 come with
-# their ESM error (refused SAFEOP, SM watchdog). Every other alarm leaves EtherCAT in working
-# order: off.
-ERROR_BY_ALARM: dict[int, LedPattern] = {
-    **dict.fromkeys(sorted(CONTROLLER_ALARMS), LedPattern.ON), 35: LedPattern.FLICKERING,
-}
+# fault", 30-32 the drive's internal communication; on in any ESM state, PREOP included).
+# 33 / 34 / 35 come with their ESM error (refused SAFEOP, SM watchdog, INIT + EEPROM error:
+# the flickering is the ESM's, so it cannot show next to a lit Status). Every other alarm
+# leaves EtherCAT in working order: off.
+ERROR_BY_ALARM: dict[int, LedPattern] = dict.fromkeys(sorted(CONTROLLER_ALARMS), LedPattern.ON)
 # ETG.1300 ERR rows, most severe first (as the CPX-E-EC's Tab. 12, docs/cpx-e-ec.md choice 29)
 _SEVERITY = (LedPattern.ON, LedPattern.FLICKERING, LedPattern.BLINKING,
              LedPattern.DOUBLE_FLASH, LedPattern.SINGLE_FLASH, LedPattern.OFF)

@@ -26,7 +26,9 @@ ERROR_CODES = {
 REGISTER = {0x2: 0x03, 0x3: 0x05, 0x4: 0x09, 0x8: 0x21}
 
 
-@pytest.mark.parametrize(("alarm", "code"), ERROR_CODES.items())
+# 35 (EtherCAT EEPROM) takes the slave to INIT, whose mailbox stops: its 0x5530 stays in
+# 0x1003 (test_coe_booting_error.py).
+@pytest.mark.parametrize(("alarm", "code"), [(a, c) for a, c in ERROR_CODES.items() if a != 35])
 def test_alarm_sent_as_emergency_with_its_0x603f_code(alarm: int, code: int) -> None:
     bench = make_bench()
     bench.go(P)

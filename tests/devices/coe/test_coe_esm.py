@@ -160,8 +160,9 @@ def test_error_led_blinks_on_a_refusal() -> None:
 # Ch. 5: Error "La frequenza di lampeggio è funzione della tipologia di allarme ... ETG-1300":
 # ETG.1300 ERR by the alarm's kind. On = application controller failure (7 DSP in fault,
 # 30-32 the drive's internal communication), flickering = booting error (35 EtherCAT EEPROM
-# load); an alarm of the motor or the axis leaves EtherCAT in working order: off (it is on
-# the display and in 0x603F, ch. 5 "Codici allarmi specifici"). docs/ethercat-coe.md §LEDs.
+# load, in INIT: test_coe_booting_error.py); an alarm of the motor or the axis leaves
+# EtherCAT in working order: off (it is on the display and in 0x603F, ch. 5 "Codici allarmi
+# specifici"). docs/ethercat-coe.md §LEDs.
 @pytest.mark.parametrize(("code", "pattern"), [
     (2, "off"), (3, "off"), (16, "off"), (7, "on"), (30, "on"), (31, "on"), (32, "on"),
     (35, "flickering")])
@@ -251,7 +252,7 @@ def test_safeop_refused_while_a_controller_alarm_is_latched_then_reset_over_coe(
     assert bench.slave.leds.snapshot()["Error"] == "off"
 
 
-@pytest.mark.parametrize("code", [1, 2, 5, 9, 16, 20, 26, 35])
+@pytest.mark.parametrize("code", [1, 2, 5, 9, 16, 20, 26])
 def test_a_drive_alarm_leaves_the_esm_in_op(code: int) -> None:
     """ETG.6010: a fault of the drive is the CiA 402 Fault, 0x603F and the emergency; the ESM
     stays in OP so the master can read and reset it through the process data."""
