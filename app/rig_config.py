@@ -481,7 +481,8 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = None) -> Rig:
             # A string seed: adding a drive to the line leaves every other device's draws.
             devices[ecat_id] = slaves[ecat_id] = DriveEcatSlave(
                 ecat_id, drive, random.Random(f"{spec.seed}/{ecat_id}"),
-                box_name=f"Drive {position} (SelemaDriveECAT)", station_address=1000 + position)
+                box_name=f"Drive {position} (SelemaDriveECAT)", station_address=1000 + position,
+                out_link=position < len(spec.line))
     if slaves:
         from app.network.files import load_description, load_mapping, uses_dc
 

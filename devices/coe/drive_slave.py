@@ -90,16 +90,19 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
 
     def __init__(self, device_id: str, drive: ServoDrive, rng: random.Random | None = None,
-                 box_name: str = BOX_NAME, station_address: int = 1001) -> None:
+                 box_name: str = BOX_NAME, station_address: int = 1001,
+                 out_link: bool = False) -> None:
         super().__init__(device_id=device_id, rng=rng or random.Random(0))
         self.drive = drive
         self.box_name = box_name
         self.station_address = station_address
         self.serial = self.rng.getrandbits(32)
         self.link = True
-        # The IN link: the line's cable (line_in, the master's set_link) and the operator's
-        # own plug (plugs: IN, OUT; the master folds them into its line model).
+        # Each port's link: the line's cable there (line_in / line_out, the master's set_link;
+        # OUT: a next slave cabled and powered, none when last on the line) and the
+        # operator's own plug (plugs: IN, OUT; the master folds them into its line model).
         self.line_in, self.plugs = True, (True, True)
+        self.line_out = self.link_out = out_link
         self.on_line = False
         self.emergencies = EmergencyMailbox()
         self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
@@ -143,10 +146,13 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         return self.on_line and self.link
 
     def set_link(self, connected: bool, port: str = "in") -> None:
-        """The cable on the IN port; the OUT port is not modelled (last on the line)."""
+        """A cable on port IN (from the master's side) or OUT (to the next slave)."""
         if port == "in":
             self.line_in = connected
             self.link = connected and self.plugs[0]
+        else:
+            self.line_out = connected
+            self.link_out = connected and self.plugs[1]
 
     def set_power(self, on: bool) -> None:
         """The drive's own supply: its EtherCAT side follows it."""
@@ -397,7 +403,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         if old is None or old.activity is not (last is not None
                                                and now_us - last <= ACTIVITY_WINDOW_US) \
                 or old.state is not esm.state or old.on_line is not on_line \
-                or old.link is not self.link or old.error is not esm.error \
+                or old.link is not self.link or old.link_out is not self.link_out \
+                or old.error is not esm.error \
                 or old.drive_alarm is not (alarm_led(drive.alarms.latched)
                                            if on_line else OFF_LED):
             self._refresh()
@@ -425,7 +432,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         activity = last is not None and now + step_us - last <= ACTIVITY_WINDOW_US
         if old.activity is not activity or old.state is not state \
                 or old.on_line is not on_line or old.link is not self.link \
-                or old.error is not esm.error \
+                or old.link_out is not self.link_out or old.error is not esm.error \
                 or old.drive_alarm is not (alarm_led(drive.alarms.latched)
                                            if on_line else OFF_LED):
             return now
@@ -505,9 +512,11 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         old = self._led_inputs
         if old is not None and old.activity is activity and old.state is esm.state \
                 and old.on_line is on_line and old.link is self.link \
+                and old.link_out is self.link_out \
                 and old.error is esm.error and old.drive_alarm is drive_alarm:
             return  # the same inputs (field by field: building LedInputs costs more)
-        inputs = LedInputs(on_line=on_line, link=self.link, activity=activity,
+        inputs = LedInputs(on_line=on_line, link=self.link, link_out=self.link_out,
+                           activity=activity,
                            state=esm.state, error=esm.error, drive_alarm=drive_alarm)
         if inputs != self._led_inputs:
             self._led_inputs = inputs
@@ -526,7 +535,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         esm, inputs = self.esm, self.read_inputs()
         return {
             "kind": self.KIND, "id": self.device_id, "drive": self.drive.device_id,
-            "on_line": self.on_line, "link": self.link, "box_name": self.box_name,
+            "on_line": self.on_line, "link": self.link, "link_out": self.link_out,
+            "box_name": self.box_name,
             "station_address": self.station_address,
             "esm": esm.state.label if self.on_line else OFF, "requested": esm.requested.label,
             "al_status": esm.register, "al_status_code": esm.code,

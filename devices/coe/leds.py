@@ -1,6 +1,7 @@
 """The drive's EtherCAT LEDs (seed 004 ch. 5 "Connessioni e Leds Drive EtherCAT").
 
-"L/A verde: Link Active rete ethernet"; "Status verde: segnalazione dello stato ethercat. Se
+"L/A verde: Link Active rete ethernet" (one per RJ45, IN and OUT); "Status verde: segnalazione
+dello stato ethercat. Se
 sempre acceso ethercat è in operational mode ... ETG-1300"; "Error rosso: segnalazione
 warning/allarmi in ethercat. La frequenza di lampeggio è funzione della tipologia di allarme
 ... ETG-1300". Status is the ETG.1300 RUN indicator and L/A its link/activity indicator (the
@@ -16,10 +17,11 @@ from dataclasses import dataclass
 from devices.coe.esm import CONTROLLER_ALARMS, ErrorKind
 from devices.ethercat import AlState
 from devices.leds import LedPattern
-from devices.servo.leds import ERROR, LINK, STATUS
+from devices.servo.leds import ERROR, LINK_IN, LINK_OUT, STATUS
 from devices.trscat.indicators import RUN_BY_STATE, link_led
 
-__all__ = ["ERROR", "LINK", "STATUS", "LedInputs", "alarm_led", "wanted_patterns"]
+__all__ = ["ERROR", "LINK_IN", "LINK_OUT", "STATUS", "LedInputs", "alarm_led",
+           "wanted_patterns"]
 
 # ETG.1300 ERR: blinking = invalid configuration, single flash = local error (the slave left
 # its state on its own), double flash = process data watchdog timeout, flickering = booting
@@ -55,7 +57,8 @@ def alarm_led(latched: list[int]) -> LedPattern:
 @dataclass(frozen=True)
 class LedInputs:
     on_line: bool  # powered, c9 = EtherCAT at power-up
-    link: bool
+    link: bool  # the IN port
+    link_out: bool  # the OUT port: a next slave cabled and powered
     activity: bool
     state: AlState
     error: ErrorKind
@@ -64,7 +67,8 @@ class LedInputs:
 
 def wanted_patterns(s: LedInputs) -> dict[str, LedPattern]:
     if not s.on_line:
-        return dict.fromkeys((LINK, STATUS, ERROR), LedPattern.OFF)
+        return dict.fromkeys((LINK_IN, STATUS, LINK_OUT, ERROR), LedPattern.OFF)
     error = min(ERROR_BY_KIND[s.error], s.drive_alarm, key=_RANK.__getitem__)
-    return {LINK: link_led(True, s.link, s.activity), STATUS: RUN_BY_STATE[s.state],
-            ERROR: error}
+    # The frames that come in pass on through OUT while it has link (ETG.1300 L/A per port).
+    return {LINK_IN: link_led(True, s.link, s.activity), STATUS: RUN_BY_STATE[s.state],
+            LINK_OUT: link_led(True, s.link_out, s.activity and s.link_out), ERROR: error}

@@ -1,19 +1,24 @@
 """The drive's network LEDs (seed 004 ch. 5 "Connessioni e Leds Drive EtherCAT").
 
 "L/A verde: Link Active rete ethernet"; "Status verde: segnalazione dello stato ethercat";
-"Error rosso: segnalazione warning/allarmi in ethercat". They are on the drive's front, so the
-drive owns them and shows them in its snapshot (``leds``) whatever its fieldbus; only its
-EtherCAT slave (devices/coe/drive_slave.py) drives them: on Modbus or CANopen they stay dark.
+"Error rosso: segnalazione warning/allarmi in ethercat". The front view, "L/A Status L/A Error"
+over "Ingresso RJ45 Uscita RJ45": an L/A per port, Status by the IN port, Error by the OUT
+port. Both L/A are printed "L/A"; the model names them by their port ("L/A IN", "L/A OUT", as
+the TRS-CAT's "LINK-ACT IN" / "LINK-ACT OUT"). They are on the drive's front, so the drive
+owns them and shows them in its snapshot (``leds``, in the front's order) whatever its
+fieldbus; only its EtherCAT slave (devices/coe/drive_slave.py) drives them: on Modbus or
+CANopen they stay dark.
 """
 
 from __future__ import annotations
 
 from devices.leds import LedBank, LedPattern
 
-LINK = "L/A"
+LINK_IN = "L/A IN"
 STATUS = "Status"
+LINK_OUT = "L/A OUT"
 ERROR = "Error"
-NETWORK_LEDS = (LINK, STATUS, ERROR)
+NETWORK_LEDS = (LINK_IN, STATUS, LINK_OUT, ERROR)
 
 
 def network_leds(device_id: str) -> LedBank:

@@ -113,7 +113,8 @@ def states(axis: Mapping[str, float]) -> Iterator[dict[str, Any]]:
                      limits={"neg": True, "home": True, "pos": True})
 
 
-NETWORK = {"leds": {"L/A": "flickering", "Status": "single_flash", "Error": "double_flash"}}
+NETWORK = {"leds": {"L/A IN": "flickering", "Status": "single_flash", "L/A OUT": "flickering",
+                    "Error": "double_flash"}}
 
 
 def all_boxes(scene: AxisScene, snap: Mapping[str, Any], px: float) -> list[Box]:
@@ -145,6 +146,19 @@ def test_no_label_covers_another(axes: Axes, axis: dict[str, float]) -> None:
         for snap in states(axis):
             boxes = all_boxes(fresh, snap, px)
             assert overlaps(boxes, TOUCH_PX / px) == [], (drive_id, legend_text(snap))
+
+
+def test_the_drive_shows_an_l_a_led_per_port(axes: Axes) -> None:
+    """Seed 004 ch. 5, the front: "L/A Status L/A Error" over "Ingresso RJ45 Uscita RJ45".
+    The drive drew one L/A: the OUT port's link (a next slave cabled) was not shown."""
+    scene = next(iter(axes.scenes.values()))
+    fresh = AxisScene(axes.server, "probe_ports", scene.z, scene.length)
+    snap = {**drive_snap(AXES[0], 0.0), "leds": {"L/A IN": "flickering", "Status": "on",
+                                                  "L/A OUT": "off", "Error": "off"}}
+    fresh.update("drive_ec", snap, 0)
+    texts = [str(label.text) for label in fresh.labels()]
+    assert [t for t in texts if t.startswith(("L/A", "Status", "Error"))] == [
+        "L/A IN flickering", "Status on", "L/A OUT off", "Error off"]
 
 
 def test_labels_stay_in_their_axis_band(axes: Axes) -> None:

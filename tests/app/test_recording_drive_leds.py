@@ -1,10 +1,10 @@
 """Every servo drive's network LEDs are in a recording, one entity per LED (docs/recording.md).
 
-The dashboard draws L/A, Status and Error on every drive (seed 004 ch. 5 "Connessioni e Leds
-Drive EtherCAT"; `app/ui/drive/axis_scene.py`): driven by the CoE slave on EtherCAT, dark on
-Modbus and CANopen. Their LedChanged events carry the drive's id, so the lane (events) and the
-lit / dark samples (snapshot) must meet under ``rig/<drive>/led/<led>``, and nothing of them
-under the CoE slave's own id.
+The dashboard draws L/A IN, Status, L/A OUT and Error on every drive (seed 004 ch. 5
+"Connessioni e Leds Drive EtherCAT"; `app/ui/drive/axis_scene.py`): driven by the CoE slave on
+EtherCAT, dark on Modbus and CANopen. Their LedChanged events carry the drive's id, so the
+lane (events) and the lit / dark samples (snapshot) must meet under ``rig/<drive>/led/<led>``,
+and nothing of them under the CoE slave's own id.
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from devices.leds import LedPattern, is_lit
 
 S = 1_000_000
 DRIVES = ("drive", "drive_co", "drive_ec")
-LEDS = ("L/A", "Status", "Error")
+LEDS = ("L/A IN", "Status", "L/A OUT", "Error")
 
 
 @pytest.fixture(scope="module")

@@ -2,12 +2,12 @@
 
 Same conventions as the rail (``app.ui.rail_scene``): z up, the front faces -y, the camera on
 -y. Left to right: the drive with its 7-segment display (seed 004: "Fr" when disabled, dashes
-while saving, the alarm code in alarm) and its network LEDs (ch. 5: L/A, Status, Error; lit
-only on EtherCAT), the motor with a nib on its coupling that turns with the shaft, the screw,
-and the carriage at ``axis.carriage`` between the negative limit switch, the home switch and
-the positive limit switch at the positions the rig file sets. A switch lights while the
-carriage (or a forced input) actuates it. Nodes are built once; per frame only positions,
-colours and texts that changed are sent.
+while saving, the alarm code in alarm) and its network LEDs (ch. 5: L/A IN, Status, L/A OUT,
+Error; lit only on EtherCAT), the motor with a nib on its coupling that turns with the
+shaft, the screw, and the carriage at ``axis.carriage`` between the negative limit switch,
+the home switch and the positive limit switch at the positions the rig file sets. A switch
+lights while the carriage (or a forced input) actuates it. Nodes are built once; per frame
+only positions, colours and texts that changed are sent.
 
 Labels keep one size on screen whatever the zoom (viser "screen" labels), so the layout keeps
 them apart by placing, not by measuring: the caption (position, velocity, actuated switches)
@@ -27,6 +27,7 @@ from typing import Any
 import viser
 
 from app.ui.rail_scene import LED_OFF, LED_SIZE, PATTERN_WORDS, led_color
+from devices.servo.leds import ERROR, LINK_IN, LINK_OUT, STATUS
 
 RGB = tuple[int, int, int]
 
@@ -36,6 +37,7 @@ AXIS_HEIGHT = AXIS_TOP - AXIS_BOTTOM
 AXIS_SPACING = AXIS_HEIGHT + 0.5  # several drives stack downwards
 DRIVE_W, DRIVE_H, DRIVE_D = 1.7, 2.9, 1.6
 DRIVE_X = DRIVE_W / 2 + 0.05
+DISPLAY_Z = 1.08  # the 7-segment display's centre: above the four network LEDs
 MOTOR_X0, MOTOR_W = 2.1, 1.0
 TRAVEL_X0 = MOTOR_X0 + MOTOR_W + 0.35  # scene x of the first user unit shown
 TRAVEL_MARGIN = 0.04  # share of the switch span shown beyond each limit switch
@@ -77,10 +79,14 @@ SEGMENT_PLACES: dict[str, tuple[float, float, bool]] = {
     "f": (-SEG_W / 2, SEG_H / 4, False), "b": (SEG_W / 2, SEG_H / 4, False),
     "e": (-SEG_W / 2, -SEG_H / 4, False), "c": (SEG_W / 2, -SEG_H / 4, False),
 }
-# The drive's network LEDs (ch. 5 "Connessioni e Leds Drive EtherCAT"): name, colour, z.
-# 0.4 apart: their labels (one line each) do not overlap at the default camera.
+# The drive's network LEDs (ch. 5 "Connessioni e Leds Drive EtherCAT"): name, colour, z, in
+# the front's order "L/A Status L/A Error" (IN port: L/A, Status; OUT port: L/A, Error).
+# 0.35 apart: their labels (one line each) do not overlap at the default camera, and the
+# lowest (its label runs past the drive) stays above the motor's label.
+LED_LABEL_SCALE = 0.6  # four rows between the display and the motor's label
 NETWORK_LEDS: tuple[tuple[str, str, float], ...] = (
-    ("L/A", "green", 0.4), ("Status", "green", 0.0), ("Error", "red", -0.4))
+    (LINK_IN, "green", 0.6), (STATUS, "green", 0.25), (LINK_OUT, "green", -0.1),
+    (ERROR, "red", -0.45))
 # The axis switches (seed 004 ch. 2, CN2 inputs: pin 8 Negative limit switch, pin 9 Positive
 # limit switch, pin 14 Home switch): key, the axis field with its position, the label.
 SWITCHES: tuple[tuple[str, str, str], ...] = (
@@ -173,7 +179,7 @@ class AxisScene:
                       position=at(DRIVE_X, 0.0, AXIS_TOP - DRIVE_H / 2))
         self._name = self._label("drive_name", "", DRIVE_X, front, 1.62, "center-center", 0.8)
         scene.add_box(f"{root}/display", color=DISPLAY_BG, dimensions=(1.0, 0.05, 0.66),
-                      position=at(DRIVE_X, front, 1.0))
+                      position=at(DRIVE_X, front, DISPLAY_Z))
         for digit in range(DIGITS):
             cx = DRIVE_X + (digit - (DIGITS - 1) / 2) * 0.4
             boxes = {}
@@ -182,14 +188,14 @@ class AxisScene:
                     (SEG_T, 0.03, SEG_H / 2 - SEG_T)
                 boxes[seg] = scene.add_box(f"{root}/seg{digit}{seg}", color=SEGMENT_OFF,
                                            dimensions=dims, position=at(cx + dx, front - 0.03,
-                                                                        1.0 + dz))
+                                                                        DISPLAY_Z + dz))
             self._segments.append(boxes)
         for name, colour, z in NETWORK_LEDS:
-            key = name.replace("/", "")
+            key = name.replace("/", "").replace(" ", "_")
             box = scene.add_box(f"{root}/led_{key}", color=LED_OFF, dimensions=LED_SIZE,
                                 position=at(0.4, front, z))
             label = self._label(f"led_{key}_label", f"{name} off", 0.7, front, z,
-                                "center-left", 0.7)
+                                "center-left", LED_LABEL_SCALE)
             self._leds[name] = (box, label, colour)
         # Motor, coupling, screw and bed.
         mz = 0.0

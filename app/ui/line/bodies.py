@@ -34,7 +34,10 @@ STILL_PATTERNS = ("off", "on")
 MASTER_W = 2.6  # as wide as the FastCAT coupler: the longest DC state fits its screen
 SCREEN_SHARE = 0.88  # of the master's width
 DC_LINE = 13  # characters per line of the DC state ("SYNCHRONIZING")
-ESM_Z = -0.75  # the drive's ESM state: under its LEDs, above the cable coming in
+ESM_Z = -0.9  # the drive's ESM state: under its LEDs, above the cable coming in
+# A slave's LED rows from the top down: the drive's four (seed 004 ch. 5: an L/A per port,
+# Status, Error) between the "EtherCAT" label and the ESM state.
+LED_TOP_Z, LED_STEP_Z = 0.85, 0.42
 
 
 def wrap(text: str, width: int) -> str:
@@ -181,7 +184,7 @@ class SlaveBody(Body):
         self.paint.label("bus", "EtherCAT", self.at(self.width / 2, 1.3),
                          anchor="center-center", scale=0.62)
         for i, name in enumerate(self._led_names):
-            z = 0.75 - i * 0.42
+            z = LED_TOP_Z - i * LED_STEP_Z
             self.paint.led(name, self.at(0.3, z))
             self.paint.label(f"name_{i}", name, self.at(0.52, z), scale=0.65)
         # Two lines ("ESM" over the state): "ESM SAFEOP" on one is wider than the body.

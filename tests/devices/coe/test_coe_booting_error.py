@@ -31,7 +31,8 @@ def test_alarm_35_is_a_booting_error_in_init(start: AlState) -> None:
     bench.run(1)
     slave = bench.slave
     assert (slave.al_state, slave.al_status, slave.al_status_code) == (INIT, 0x11, EEPROM_ERROR)
-    assert slave.leds.snapshot() == {"L/A": "flickering", "Status": "off", "Error": "flickering"}
+    assert slave.leds.snapshot() == {"L/A IN": "flickering", "Status": "off", "L/A OUT": "off",
+                                     "Error": "flickering"}
     assert bench.kinds("al_status")[-1]["code"] == "0x0051"
 
 

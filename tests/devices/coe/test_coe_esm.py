@@ -204,7 +204,8 @@ def test_a_controller_alarm_drops_the_slave_to_preop_with_0x002b(
     slave = bench.slave
     assert (slave.al_state, slave.al_status, slave.al_status_code) == (PREOP, 0x12, 0x002B)
     assert slave.read_inputs() is None
-    assert slave.leds.snapshot() == {"L/A": "flickering", "Status": "blinking", "Error": "on"}
+    assert slave.leds.snapshot() == {"L/A IN": "flickering", "Status": "blinking",
+                                     "L/A OUT": "off", "Error": "on"}
     assert bench.read(0x603F) == error_code  # the mailbox still answers
     assert [frame[:2] for frame in bench.emergencies] == [error_code.to_bytes(2, "little")]
     assert bench.kinds("al_status")[-1]["code"] == "0x002B"
@@ -294,7 +295,7 @@ def test_silent_unless_c9_was_ethercat_at_power_up() -> None:
     assert not bench.slave.reachable()
     bench.go(PREOP)
     assert bench.slave.al_state is INIT
-    assert bench.slave.leds.snapshot()["L/A"] == "off"
+    assert bench.slave.leds.snapshot()["L/A IN"] == "off"
     bench.drive.apply("write_parameter", {"parameter": "c9", "value": 11})
     bench.run(1)
     assert not bench.slave.reachable()  # latched at power-up only

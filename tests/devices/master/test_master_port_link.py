@@ -71,3 +71,25 @@ def test_a_slave_silent_behind_a_port_with_link_is_diagnosed_without_a_link_find
     assert [s["present"] for s in view["slaves"]] == [False, True]
     assert [s["diagnosis"] for s in view["slaves"]] == [
         "no answer from position 0, position 1 answers", ""]
+
+
+def _drive_leds(rig: Rig) -> dict[str, str]:
+    return rig.snapshot()["devices"]["drive_ec"]["leds"]
+
+
+def test_the_out_port_lights_with_a_next_slave_cabled_and_powered() -> None:
+    """Seed 004 ch. 5: one L/A per RJ45. The drive's OUT port has link while the next slave
+    is cabled and powered, and flickers with the frames it passes on."""
+    rig = _drive_first()  # master -> drive -> FastCAT
+    rig.run_until(4 * US)
+    assert _drive_leds(rig)["L/A OUT"] == "flickering"  # the frames pass on to the FastCAT
+    rig.apply("master", "pull_cable", {"cable": 1})
+    rig.run_until(4 * US + 10_000)
+    assert (_drive_leds(rig)["L/A IN"], _drive_leds(rig)["L/A OUT"]) == ("flickering", "off")
+    assert rig.snapshot()["devices"]["drive_ec-ecat"]["link_out"] is False
+    rig.apply("master", "plug_cable", {"cable": 1})
+    rig.run_until(4 * US + 20_000)
+    assert _drive_leds(rig)["L/A OUT"] == "flickering"
+    rig.apply("master", "power_slave", {"position": 1, "on": False})  # no link partner
+    rig.run_until(4 * US + 30_000)
+    assert _drive_leds(rig)["L/A OUT"] == "off"
