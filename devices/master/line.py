@@ -237,7 +237,7 @@ class LineMixin:
         last, reach, links = position, self._line_reach, self.links
         while last + 1 < len(links):
             q = last + 1
-            if reach[q] and (q or self._line_powered[0]) and links[q].slave.reachable():
+            if reach[q] and links[q].slave.reachable():  # as the step's loop asks (q > 0)
                 break
             last = q
         return last
