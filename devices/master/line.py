@@ -419,12 +419,20 @@ class LineMixin:
                 link.injected_cause = self._injected_cause(link.position)
 
     def _report_lost(self, positions: list[int], message: str = "lost_line") -> None:
-        """The master's own line for the slaves lost (or ``missing_line``: not found) this
-        step: which, from where nothing answers, its AL status read's working counter (one
-        per slave that answers, the description's slave count expected) and the link it reads
-        where the frames stop."""
-        first, silent = self._silent_words(positions[0])
-        finding = self._port_finding(first)
-        self._log(None, message, positions=", ".join(map(str, positions)), silent=silent,
-                  wkc=sum(link.present for link in self.links), expected=len(self.links),
-                  finding=f"; {finding}" if finding else "")
+        """The master's own lines for the slaves lost (or ``missing_line``: not found) this
+        step, one per run of silent slaves (an answering slave between two runs): which, from
+        where nothing answers, its AL status read's working counter (one per slave that
+        answers, the description's slave count expected) and the link it reads where the
+        frames stop."""
+        runs: list[list[int]] = []
+        for p in positions:  # ascending: the step's loop order
+            if runs and self._first_silent(p) <= runs[-1][-1]:
+                runs[-1].append(p)
+            else:
+                runs.append([p])
+        wkc, expected = sum(link.present for link in self.links), len(self.links)
+        for run in runs:
+            first, silent = self._silent_words(run[0])
+            finding = self._port_finding(first)
+            self._log(None, message, positions=", ".join(map(str, run)), silent=silent,
+                      wkc=wkc, expected=expected, finding=f"; {finding}" if finding else "")

@@ -153,3 +153,26 @@ def test_a_run_of_silent_slaves_before_one_that_answers_is_named_as_a_run() -> N
     texts = [row["text"] for row in rig.devices["master"].log]
     assert ("'Device 1 (EtherCAT)': slave(s) at position(s) 0, 1 not found: "
             f"{finding} (working counter 1, 3 expected).") in texts
+
+
+def test_two_silent_runs_get_a_summary_line_each() -> None:
+    """Silent drives at 0 and 2 around an answering FastCAT: the master's summary named both
+    positions with the first run's words ("no answer from position 0, position 1 answers"),
+    wrong for position 2, behind which nothing answers."""
+    text = ('[rig]\nname = "two runs"\nseed = 1\nstep_ms = 1\n[master]\n'
+            'line = ["d1-ecat", "fastcat", "d2-ecat"]\n'
+            + "".join(f'[[servo]]\nid = "{d}"\nfieldbus = "ethercat"\nnode_id = {n}\n'
+                      'parameters = { c9 = 3 }\n' for n, d in ((3, "d1"), (4, "d2")))
+            + '[[fastcat]]\nid = "fastcat"\nmodules = ["DI16"]\n')
+    rig = build_rig(parse_rig_spec(text))
+    rig.run_until(2 * US)
+    view = master_view(rig)
+    assert [s["diagnosis"] for s in view["slaves"]] == [
+        "no answer from position 0, position 1 answers", "", "no answer from position 2 on"]
+    summary = [row["text"] for row in rig.devices["master"].log
+               if row["text"].startswith("'Device 1 (EtherCAT)': slave(s)")]
+    assert summary == [
+        "'Device 1 (EtherCAT)': slave(s) at position(s) 0 not found: no answer from position 0, "
+        "position 1 answers (working counter 1, 3 expected).",
+        "'Device 1 (EtherCAT)': slave(s) at position(s) 2 not found: no answer from position 2 "
+        "on (working counter 1, 3 expected)."]
