@@ -38,14 +38,16 @@ class FakeServer:
 
 
 class FakeRuntime:
-    """Counts the dictionary reads; each answered at once with ``rows``."""
+    """Counts the dictionary reads; each answered at once with ``rows``, the dictionary of
+    ``device`` (the one the panel shows)."""
 
-    def __init__(self, rows: list[OdRow] | None = None) -> None:
+    def __init__(self, rows: list[OdRow] | None = None, device: str = "fastcat") -> None:
         self.rows = rows or []
+        self.device = device
         self.reads = 0
 
     def submit(self, fn: Callable[[], Any]) -> Future[Any]:
         self.reads += 1
         done: Future[Any] = Future()
-        done.set_result(self.rows)
+        done.set_result({self.device: self.rows})
         return done

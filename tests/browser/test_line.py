@@ -151,8 +151,10 @@ def test_line_trscat_expansion_mismatch(line: LiveDashboard, page: Any) -> None:
     assert view is not None
     view.slave.select("cpx")  # so that the click below has something to change
     page.mouse.click(505, 400)  # the TRS-CAT's body in the 3D view
-    wait_until(lambda: view.focused == "trscat" and view.slave.selected == "trscat",
-               what="the click to pick the TRS-CAT")
+    # The click is the clicking page's own pick (docs/dashboard.md "Several browsers")
+    wait_until(lambda: view.focused == "trscat" and any(
+        view.slave.selected_for(c) == "trscat" for c in line.server.get_clients()),
+        what="the click to pick the TRS-CAT")
     toast = page.locator(".mantine-Notification-root", has_text="trscat selected")
     toast.first.wait_for()  # the clicking browser is told where its panels are
     toast.first.locator("button").click()
@@ -203,7 +205,7 @@ def test_line_cpx_short_circuit(line: LiveDashboard, page: Any) -> None:
     assert view.scene.text("cpx", "m2_note") == "short 3"
     open_dashboard(page, line)
     view.add_events([Focus(line.runtime.frame.t_us, "scenario", target="cpx:2")])
-    assert view.slave.selected == "cpx" and view.controls.picker.value == "cpx"
+    assert view.slave.selected == "cpx" and view.controls.selected == "cpx"
     open_tabs(page, "Slave")
     page.locator("#fr-slave-diag").wait_for()
     assert "Short circuit" in page.locator("#fr-slave-diag").inner_text()
@@ -288,5 +290,5 @@ def test_scenario_focus_steps_pick_the_device(dashboard_for: Any) -> None:
     live.settle()
     assert player.view().failures == ()
     wait_until(lambda: view.focused == "cpx", what="the last focus step (cpx:2)")
-    assert view.slave.selected == "cpx" and view.controls.picker.value == "cpx"
+    assert view.slave.selected == "cpx" and view.controls.selected == "cpx"
     assert objects.device_id == "cpx"

@@ -29,6 +29,7 @@ from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
 from app.ui.line.target_actions import TargetActions, Watch
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_pick import ClientPick, send_all, send_to
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user, set_options
 from devices.device import Action
@@ -166,13 +167,15 @@ class LineControls:
         faulty = [d for d in order if d not in own_tabs]
         fault_tables: dict[str, Mapping[str, Action]] = {}
         with gui.add_folder("Slave actions"):
-            self.picker = gui.add_dropdown("Device", tuple(faulty) or ("-",))
+            # Each page's own (client_pick): one page's pick of the slave to operate, or its
+            # click in the 3D view, moved every page's form.
+            self.pick = ClientPick(server, gui.add_dropdown("Device", tuple(faulty) or ("-",)))
             for device in faulty:
                 shown = {n: a for n, a in (actions.get(device) or {}).items()
                          if n not in HIDDEN}
                 kind = kinds.get(device, "")
                 faults = {n: a for n, a in shown.items() if makes_faults(kind, n)}
-                folder = gui.add_folder(device, visible=device == self.picker.value)
+                folder = gui.add_folder(device, visible=device == self.pick.default)
                 with folder:
                     target = gui.add_dropdown("Target", tuple(targets(device,
                                                                       devices.get(device) or {})))
@@ -207,9 +210,7 @@ class LineControls:
             if from_user(event):
                 send(event.client, master_id, "set_target", {"state": self.target.value})
 
-        @self.picker.on_update
-        def _(event: viser.GuiEvent) -> None:
-            self.select(self.picker.value)
+        self.pick.on_pick(lambda client, device: self._show(device, client))
 
     def _cable_form(self, gui: Any) -> _Cables:
         send, master_id, order = self._send, self._master_id, self._order
@@ -316,14 +317,33 @@ class LineControls:
         return {d: [form, *([self.fault_forms[d]] if d in self.fault_forms else [])]
                 for d, (_folder, form) in self.forms.items()}
 
-    def select(self, device: str) -> None:
-        """Show the forms of ``device`` (a click on it in the 3D view, or the picker)."""
+    @property
+    def selected(self) -> str:
+        """The slave a new page starts at (the last pick for every page)."""
+        return self.pick.default
+
+    def selected_for(self, client_id: int | None) -> str:
+        return self.pick.value_for(client_id)
+
+    def select(self, device: str, client: viser.ClientHandle | None = None) -> None:
+        """Show the forms of ``device`` on ``client``'s page (a click on it in the 3D view),
+        on every page when None (a scenario's focus)."""
         if device not in self.forms:
             return
-        if self.picker.value != device:
-            self.picker.value = device
+        if client is None:  # every page, also one that picked another on its own
+            self.pick.set_all(device)
+        elif self.pick.value_for(client.client_id) != device:
+            self.pick.set_for(client, device)
+        self._show(device, client)
+
+    def _show(self, device: str, client: viser.ClientHandle | None) -> None:
+        """The picked slave's folder, the others' hidden: on ``client``'s page, or on every
+        page (a page's own visibility goes to it alone, as its pick does)."""
         for name, (folder, _form) in self.forms.items():
-            folder.visible = name == device
+            if client is None:
+                send_all(folder, "visible", name == device)
+            else:
+                send_to(client, folder._impl.uuid, "visible", name == device)
 
     def update(self, master: Mapping[str, Any],
                devices: Mapping[str, Mapping[str, Any]] | None = None) -> None:

@@ -5,7 +5,7 @@ side; the FastCAT has its own State tab. A click on a slave in the 3D view picks
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -13,9 +13,9 @@ import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
 from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_parts
-from app.ui.panels.per_client import RoleHtml, instructor_for, split_instructor
+from app.ui.panels.client_pick import ClientHtml, ClientPick
+from app.ui.panels.per_client import instructor_for, split_instructor
 from app.ui.panels.state import al_status_text, injected_text
-from app.ui.panels.widgets import Mirror
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
 from devices.ethercat import describe_al_status_code
@@ -278,21 +278,25 @@ NO_CAUSE = '<p class="fr-muted">no injected cause</p>'
 
 
 class SlavePanel:
+    """The Slave tab. Each page shows the slave it picked (its picker, its click in the 3D
+    view): the picker and the tab's HTML are server-level widgets whose value and content go
+    to each page for its own pick (app/ui/panels/client_pick.py). Before, one page's pick
+    moved every page's tab (docs/dashboard.md "Several browsers")."""
+
     def __init__(self, server: viser.ViserServer, order: Sequence[str]) -> None:
         self._options = tuple(order) or ("-",)
-        self.picker = server.gui.add_dropdown("Slave", self._options)
-        self._mirror = Mirror(self.picker)
+        self.pick = ClientPick(server, server.gui.add_dropdown("Slave", self._options))
         # The Injected rows and undiagnosed module faults: the instructor's only. With a token
-        # they are a folder per instructor connection with a Slave picker of its own: on the
-        # shared picker the instructor's pick of the slave whose causes to read went to every
-        # trainee's page (docs/classroom.md). Its picker follows the shared one's picks (a
-        # click in the 3D view), and picks on its own without moving anyone's.
+        # they are a folder per instructor connection with a Slave picker of its own: its pick
+        # of the slave whose causes to read moves no page's Slave tab (docs/classroom.md). It
+        # follows its own page's picks (the Slave picker, a click in the 3D view).
         instructor = instructor_for(server)
-        self._html = RoleHtml(server, instructor, "", "fr-slave-causes", own_causes=False)
+        self._shared = instructor.shared
+        self._html = ClientHtml(server, server.gui.add_html(""))
         self._causes = None if instructor.shared else instructor.part(self._causes_form)
         self._devices: Mapping[str, Any] = {}
-        if self._causes is not None:
-            self.picker.on_update(lambda _event: self._follow())
+        self.on_pick: Callable[[viser.ClientHandle, str], None] | None = None  # LineView
+        self.pick.on_pick(self._picked)
 
     def _causes_form(self, gui: Any) -> _Causes:
         with gui.add_folder("Slave causes"):
@@ -302,11 +306,21 @@ class SlavePanel:
         form.picker.on_update(lambda _event: self._show(form))
         return form
 
-    def _follow(self) -> None:
-        assert self._causes is not None
-        for form in self._causes.each():
-            if form.picker.value != self.selected:
-                form.picker.value = self.selected
+    def _picked(self, client: viser.ClientHandle, device: str) -> None:
+        self._follow(client.client_id, device)
+        self._refresh()  # at once: a paused rig sends no frame
+        if self.on_pick is not None:
+            self.on_pick(client, device)
+
+    def _follow(self, client_id: int | None, device: str) -> None:
+        """The instructor's causes folder of ``client_id`` (every one's when None) follows."""
+        if self._causes is None:
+            return
+        forms = self._causes.each() if client_id is None else \
+            [f for f in (self._causes.of(client_id),) if f is not None]
+        for form in forms:
+            if form.picker.value != device:
+                form.picker.value = device
 
     def _show(self, form: _Causes) -> None:
         device = str(form.picker.value)
@@ -317,19 +331,50 @@ class SlavePanel:
 
     @property
     def selected(self) -> str:
-        return str(self.picker.value)
+        """Where a new page starts: the last pick for every page (a scenario's focus)."""
+        return self.pick.default
 
-    def select(self, device: str) -> None:
-        if device in self.picker.options and self.picker.value != device:
-            self.picker.value = device
+    def selected_for(self, client_id: int | None) -> str:
+        """The slave ``client_id``'s page shows."""
+        return self.pick.value_for(client_id)
+
+    def select(self, device: str, client: viser.ClientHandle | None = None) -> None:
+        """``client``'s page picks ``device`` (its click), every page when None."""
+        if device not in self.pick.options:
+            return
+        if client is None:  # every page, also one that picked another on its own
+            self.pick.set_all(device)
+            self._follow(None, device)
+        elif self.selected_for(client.client_id) != device:
+            self.pick.set_for(client, device)
+            self._follow(client.client_id, device)
+        self._refresh()
+
+    def _public(self, device: str) -> str:
+        html = slave_html(device, as_drawn(self._devices, device))
+        return html if self._shared else split_instructor(html, "fr-slave-causes")[0]
+
+    def _refresh(self) -> None:
+        """Each page the HTML of its own pick (the dashboard thread, or a pick's)."""
+        shown: dict[str, str] = {}
+
+        def content_for(client_id: int) -> str:
+            device = self.selected_for(client_id)
+            if device not in shown:
+                shown[device] = self._public(device)
+            return shown[device]
+
+        self._html.show(content_for)
 
     def update(self, devices: Mapping[str, Any]) -> None:
         self._devices = devices
-        self._html.show(slave_html(self.selected, as_drawn(devices, self.selected)))
+        self._refresh()
         if self._causes is not None:
             for form in self._causes.each():
                 self._show(form)
 
     @property
     def content(self) -> str:
-        return self._html.content
+        """The HTML of the slave a new page starts at, the instructor's rows included
+        (tests)."""
+        return slave_html(self.selected, as_drawn(self._devices, self.selected))

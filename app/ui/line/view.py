@@ -2,9 +2,10 @@
 Slave tabs, the Line controls, and focus (a click on a device, or a scenario ``Focus`` event:
 its panels pick it and the camera moves toward it).
 
-Focus picks the device in the Slave tab, the Slave actions form and the Objects tab (shared
-pickers: every page shows the pick), and tells the clicking browser where to look; a
-scenario's focus step also opens the device's tab (the dashboard does, app/ui/tab_switch.py).
+Focus picks the device in the Slave tab, the Slave actions form and the Objects tab of the
+page that clicked (each page keeps its own pick, app/ui/panels/client_pick.py), and tells that
+browser where to look; a scenario's focus picks it on every page and also opens the device's
+tab (the dashboard does, app/ui/tab_switch.py).
 A click (and "Show the whole line") moves the camera of the browser that clicked only: each
 operator of a rig looks where they want (docs/dashboard.md "Several browsers"). A scenario's
 focus moves every browser's, and the caption with it: a demo follows the narration.
@@ -94,7 +95,8 @@ class LineView:
         self._sender = sender
         self.master_id = master_id
         self._aspect = aspect
-        self.on_select: Callable[[str], None] | None = None  # the Objects tab follows
+        # The Objects tab follows: (device, the clicking page, or None: every page)
+        self.on_select: Callable[[str, viser.ClientHandle | None], None] | None = None
         # The dashboard's caption label follows the camera: (x, z) of its bottom centre.
         self.on_caption_moved: Callable[[tuple[float, float]], None] | None = None
         self.scene = LineScene(server, frame.snapshot, master_id, rail_lengths, self.focus,
@@ -120,10 +122,7 @@ class LineView:
         def _(event: viser.GuiEvent) -> None:
             self.show_all(event.client)
 
-        @self.slave.picker.on_update
-        def _(event: viser.GuiEvent) -> None:
-            if event.client is not None:
-                self.focus(event.client, self.slave.selected, move=False)
+        self.slave.on_pick = lambda client, device: self.focus(client, device, move=False)
 
     # ---- geometry ---------------------------------------------------------------------------
     def bounds(self) -> Box:
@@ -155,16 +154,17 @@ class LineView:
     # ---- focus ----------------------------------------------------------------------------
     def focus(self, client: viser.ClientHandle | None, device: str, move: bool = True) -> None:
         """Pick ``device`` in the panels and move the camera toward it: ``client``'s (a
-        click), every browser's when None (a scenario's focus step)."""
+        click: its page's panels only), every browser's when None (a scenario's focus
+        step)."""
         if device not in self.scene.bodies:
             logger.info("focus on %r: not a device of the line", device)
             return
         self.focused = device
         if device != self.master_id:
-            self.slave.select(device)
-            self.controls.select(device)
+            self.slave.select(device, client)
+            self.controls.select(device, client)
             if self.on_select is not None:
-                self.on_select(device)
+                self.on_select(device, client)
             where = "tabs Slave and Objects (left), Line (right)"
         else:
             where = "tab Line (left and right)"

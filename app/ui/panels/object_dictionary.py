@@ -1,8 +1,9 @@
 """The object-dictionary view: any device's objects with live values (FastCAT seed 000 §6,
 TRS-CAT seed 001 §9.3, CPX-E-EC seed 002 Tab. 27, the drive's CoE side seed 004 ch. 5).
 
-With several devices a "Device" dropdown picks one (a click on a slave in the 3D view picks it
-too, ``select``); every device with an ``od`` attribute and read / write actions qualifies.
+With several devices a "Device" dropdown picks one, each page its own (a click on a slave in
+the 3D view picks it too, ``select``); every device with an ``od`` attribute and read / write
+actions qualifies.
 
 The table is read in the simulation thread (``runtime.submit``) from the model's ``od`` — on
 "Refresh" and every few seconds — and rendered here, filtered by a text box. Writes go through
@@ -25,6 +26,7 @@ import viser
 
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
+from app.ui.panels.client_pick import ClientHtml, ClientPick
 from app.ui.style import esc
 from devices.device import CommandError
 from devices.events import fmt_bytes
@@ -162,28 +164,29 @@ def parse_value(text: str) -> int | str:
 
 
 class ObjectDictionaryPanel:
+    """With several devices, each page reads the dictionary it picked (its Device picker,
+    its click in the 3D view: app/ui/panels/client_pick.py); one read in the simulation
+    thread takes every dictionary some page shows."""
+
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  device_id: str, device_ids: Sequence[str] = ()) -> None:
         self._server = server
         self._runtime = runtime
         self._sender = sender
-        self._device_id = device_id
         self._lock = threading.Lock()
-        self._rows: list[OdRow] | None = None
+        self._rows: dict[str, list[OdRow]] = {}  # per device, the last read
         self._dirty = False
         self._pending = False
         self._next_refresh = 0.0
         self._last = ""
         gui = server.gui
         self._home = device_id  # the FastCAT: its dictionary waits for the first scan
-        self._empty = NO_OD
-        self._picker = None
+        self._default = device_id
+        self._pick: ClientPick | None = None
         if len(device_ids) > 1:
-            self._picker = gui.add_dropdown("Device", tuple(device_ids), initial_value=device_id)
-
-            @self._picker.on_update
-            def _(event: viser.GuiEvent) -> None:
-                self.select(str(self._picker.value) if self._picker else device_id)
+            self._pick = ClientPick(server, gui.add_dropdown(
+                "Device", tuple(device_ids), initial_value=device_id))
+            self._pick.on_pick(lambda client, device: self._picked())
 
         self._filter = gui.add_text("Filter", "", hint="index (5400, 0x2104) or name")
         refresh = gui.add_button("Refresh", icon=viser.Icon.REFRESH)
@@ -191,6 +194,7 @@ class ObjectDictionaryPanel:
         self._value = gui.add_text("Value", "1", hint="decimal, 0x.. hex, true/false")
         buttons = gui.add_button_group("Access", ("Read", "Write"))
         self._table = gui.add_html(render([], ""))
+        self._tables = ClientHtml(server, self._table) if self._pick is not None else None
 
         @self._filter.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -207,24 +211,39 @@ class ObjectDictionaryPanel:
 
     @property
     def device_id(self) -> str:
-        return self._device_id
+        """The device a new page starts at (the last pick for every page)."""
+        return self._default
 
-    def select(self, device_id: str) -> None:
-        """Show ``device_id``'s dictionary (a click on it in the 3D view, or the picker)."""
-        if self._picker is not None and device_id in self._picker.options:
-            if self._picker.value != device_id:
-                self._picker.value = device_id
-        elif self._picker is not None:
+    def device_for(self, client: Any) -> str:
+        """The device ``client``'s page shows."""
+        return self._device_of(getattr(client, "client_id", None))
+
+    def _device_of(self, client_id: int | None) -> str:
+        return self._default if self._pick is None else self._pick.value_for(client_id)
+
+    def select(self, device_id: str, client: viser.ClientHandle | None = None) -> None:
+        """Show ``device_id``'s dictionary on ``client``'s page (a click on it in the 3D
+        view), on every page when None (a scenario's focus)."""
+        if self._pick is None or device_id not in self._pick.options:
             return
+        if client is None:
+            self._default = device_id
+            self._pick.set_all(device_id)
+        elif self._pick.value_for(client.client_id) != device_id:
+            self._pick.set_for(client, device_id)
+        else:
+            return
+        self._picked()
+
+    def _picked(self) -> None:
+        """A page shows another dictionary: read it now."""
         with self._lock:
-            if device_id == self._device_id:
-                return
-            self._device_id = device_id
-            self._rows, self._dirty = None, True
-            self._empty = NO_OD if device_id == self._home else NO_OD_OTHER
-        self._table.content = render([], "", "reading the dictionary ...")
-        self._last = ""
+            self._dirty = True
+        self._next_refresh = 0.0
         self.request(None)
+
+    def _empty(self, device_id: str) -> str:
+        return NO_OD if device_id == self._home else NO_OD_OTHER
 
     def _access(self, client: viser.ClientHandle | None, verb: str) -> None:
         try:
@@ -233,13 +252,13 @@ class ObjectDictionaryPanel:
             notify(client, "Object address", str(exc), error=True)
             return
         address = f"0x{index:04X}:{sub}"
+        device_id = self.device_for(client)
         if verb == "Read":
-            device_id = self._device_id
             self._sender.send(client, device_id, "read_object", {"index": index, "sub": sub},
                               done=lambda v: self._read(client, device_id, index, sub, v))
             return
         value = parse_value(self._value.value)
-        self._sender.send(client, self._device_id, "write_object",
+        self._sender.send(client, device_id, "write_object",
                           {"index": index, "sub": sub, "value": value},
                           done=lambda _r: (notify(client, f"{address} written",
                                                   f"value = {value!r}"),
@@ -256,7 +275,7 @@ class ObjectDictionaryPanel:
         """The object's type, from the rows read (or from the model when they are not there
         yet: the entry's type never changes); "" when unknown."""
         with self._lock:
-            rows = self._rows if device_id == self._device_id else None
+            rows = self._rows.get(device_id)
         for row in rows or ():
             if (row.index, row.sub) == (index, sub):
                 return row.dtype
@@ -265,27 +284,42 @@ class ObjectDictionaryPanel:
         except (CommandError, SdoAbort, AttributeError):  # no such device / object / od
             return ""
 
+    def _shown(self) -> list[str]:
+        """The dictionaries some page shows, the new pages' first."""
+        shown = [self._default]
+        if self._pick is not None:
+            for client_id in self._server.get_clients():
+                device = self._device_of(client_id)
+                if device not in shown:
+                    shown.append(device)
+        return shown
+
     def request(self, client: viser.ClientHandle | None) -> None:
-        """Read the dictionary in the simulation thread; the table updates on the next tick."""
+        """Read the dictionaries in the simulation thread; the table updates on the next
+        tick."""
         with self._lock:
             if self._pending:
                 return
             self._pending = True
-        device_id = self._device_id
-        future = self._runtime.submit(lambda: read_rows(self._runtime.rig.device(device_id)))
-        future.add_done_callback(lambda f: self._received(client, f, device_id))
+        devices = self._shown()
 
-    def _received(self, client: viser.ClientHandle | None, future: Future[list[OdRow]],
-                  device_id: str) -> None:
+        def read() -> dict[str, list[OdRow]]:
+            return {d: read_rows(self._runtime.rig.device(d)) for d in devices}
+
+        future = self._runtime.submit(read)
+        future.add_done_callback(lambda f: self._received(client, f, devices))
+
+    def _received(self, client: viser.ClientHandle | None,
+                  future: Future[dict[str, list[OdRow]]], devices: list[str]) -> None:
         exc = future.exception()
         with self._lock:
             self._pending = False
-            if exc is None and device_id == self._device_id:
+            if exc is None:
                 self._rows, self._dirty = future.result(), True
-            elif exc is None:  # the picker moved meanwhile: read the new device
-                self._next_refresh = 0.0
+                if set(self._shown()) - set(devices):  # a page picked another meanwhile
+                    self._next_refresh = 0.0
         if exc is not None:
-            logger.warning("reading the object dictionary of %s failed: %s", self._device_id, exc)
+            logger.warning("reading the object dictionary of %s failed: %s", devices, exc)
             notify(client, "Object dictionary", f"could not read it: {exc}", error=True)
 
     def tick(self, now: float | None = None) -> None:
@@ -298,19 +332,33 @@ class ObjectDictionaryPanel:
             self._next_refresh = now + REFRESH_S
             self.request(None)
         with self._lock:
-            if not self._dirty or self._rows is None:
+            if not self._dirty or not self._rows:
                 return
-            rows, self._dirty = self._rows, False
-        content = render(rows, self._filter.value, self._empty)
-        if content != self._last:
-            self._table.content = content
-            self._last = content
+            rows, self._dirty = dict(self._rows), False
+        needle = self._filter.value
+        rendered: dict[str, str] = {}
+
+        def content_for(client_id: int | None) -> str:
+            device = self._device_of(client_id)
+            if device not in rendered:
+                rendered[device] = render(rows[device], needle, self._empty(device)) \
+                    if device in rows else render([], "", "reading the dictionary ...")
+            return rendered[device]
+
+        if self._tables is not None:
+            self._tables.show(content_for)
+        else:
+            content = content_for(None)
+            if content != self._last:
+                self._table.content = content
+                self._last = content
 
     def rows(self) -> list[OdRow]:
-        """The rows last read (tests)."""
+        """The rows last read of the device a new page starts at (tests)."""
         with self._lock:
-            return list(self._rows or [])
+            return list(self._rows.get(self._default) or [])
 
     def row_count(self) -> int:
         with self._lock:
-            return len(self._rows or [])
+            return len(self._rows.get(self._default) or [])
+

@@ -79,6 +79,11 @@ class Part(Generic[T]):
         with self._lock:
             self._built.pop(client_id, None)
 
+    def of(self, client_id: int) -> T | None:
+        """The copy built for ``client_id`` (None: not built, or an open rig's)."""
+        with self._lock:
+            return self._built.get(client_id)
+
     def each(self) -> list[T]:
         """Every copy built so far whose page is still there (update them all).
 

@@ -1,0 +1,124 @@
+"""Per-browser picks: a server-level dropdown whose value is each page's own, and a
+server-level HTML element whose content each page gets for its own pick.
+
+viser 1.1.1 sends a server-level widget's change by one browser to every other browser (the
+handle's ``sync_cb``) and keeps one value for all, so one trainee's pick of a slave or drive
+moved every other page's picker and the panels showing the pick (docs/classroom.md). A pick
+here keeps the widget server-level (one uuid, one place in the layout, built once) but stops
+that echo and keeps each connection's value itself; what the server sets for one page goes to
+that page's connection only. The server's default (a scenario's focus, a test) goes to every
+page and is where a new page starts.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import viser
+from viser._messages import GuiUpdateMessage  # viser 1.1.1, pinned
+
+logger = logging.getLogger(__name__)
+
+# The server-side value between picks: no option equals it, so every pick a page sends is a
+# change and reaches the callbacks (viser calls them on a change only), whichever page made
+# the same pick before.
+_NOTHING = "\x00"
+
+
+def send_to(client: viser.ClientHandle, uuid: str, prop: str, value: Any) -> None:
+    """Set ``prop`` of the widget ``uuid`` on ``client``'s page only."""
+    try:
+        client.gui._websock_interface.queue_message(GuiUpdateMessage(uuid, {prop: value}))
+    except Exception:  # a page that just left
+        logger.debug("update for client %s not sent", client.client_id, exc_info=True)
+
+
+def send_all(handle: Any, prop: str, value: Any) -> None:
+    """Set ``prop`` of a server-level widget on every page, whatever the server last set: a
+    page may show another value of its own (viser skips an assignment of the same value)."""
+    setattr(handle._impl.props, prop, value)
+    handle._queue_update(prop, value)
+
+
+class ClientPick:
+    """A server-level dropdown whose value is each connection's own."""
+
+    def __init__(self, server: viser.ViserServer, handle: Any) -> None:
+        self.handle = handle
+        self._lock = threading.Lock()
+        self._default = str(handle.value)
+        self._own: dict[int, str] = {}
+        handle._impl.sync_cb = None  # a page's pick goes to no other page
+        handle._impl.value = _NOTHING
+        handle.on_update(self._picked)
+        server.on_client_disconnect(self._gone)
+
+    async def _picked(self, event: viser.GuiEvent) -> None:
+        # A coroutine: viser awaits it right after storing the page's value, before the next
+        # message can overwrite it; the callbacks of on_pick run afterwards in its threads.
+        impl = self.handle._impl
+        value, impl.value = str(impl.value), _NOTHING
+        if value in self.handle.options:
+            with self._lock:
+                self._own[event.client_id] = value
+
+    def _gone(self, client: viser.ClientHandle) -> None:
+        with self._lock:
+            self._own.pop(client.client_id, None)
+
+    def on_pick(self, fn: Callable[[viser.ClientHandle, str], None]) -> None:
+        """``fn(client, value)`` after each pick a page makes itself."""
+        self.handle.on_update(lambda event: fn(event.client, self.value_for(event.client_id)))
+
+    @property
+    def options(self) -> tuple[str, ...]:
+        return tuple(self.handle.options)
+
+    @property
+    def default(self) -> str:
+        """Where a new page starts: the server's last :meth:`set_all`."""
+        return self._default
+
+    def value_for(self, client_id: int | None) -> str:
+        with self._lock:
+            return self._own.get(client_id, self._default) if client_id is not None \
+                else self._default
+
+    def set_for(self, client: viser.ClientHandle, value: str) -> None:
+        """``client``'s page picks ``value`` (its click in the 3D view)."""
+        with self._lock:
+            self._own[client.client_id] = value
+        send_to(client, self.handle._impl.uuid, "value", value)
+
+    def set_all(self, value: str) -> None:
+        """Every page, and every page to come, picks ``value``."""
+        with self._lock:
+            self._default = value
+            self._own.clear()
+        self.handle._queue_update("value", value)
+
+
+class ClientHtml:
+    """A server-level HTML element whose content each connection gets for itself: what it
+    sent last is kept per connection, so a frame sends a page only what changed for it."""
+
+    def __init__(self, server: viser.ViserServer, handle: Any) -> None:
+        self._server = server
+        self.handle = handle
+        self._lock = threading.Lock()  # the dashboard thread and a pick's callback
+        self._sent: dict[int, str] = {}
+
+    def show(self, content_for: Callable[[int], str]) -> None:
+        """``content_for(client_id)``: that page's content (the dashboard thread)."""
+        clients = self._server.get_clients()
+        with self._lock:
+            for gone in set(self._sent) - set(clients):
+                del self._sent[gone]
+            for client_id, client in clients.items():
+                content = content_for(client_id)
+                if self._sent.get(client_id) != content:
+                    self._sent[client_id] = content
+                    send_to(client, self.handle._impl.uuid, "content", content)

@@ -1,0 +1,134 @@
+"""A page's pick of a slave or a drive (its picker, or a click on a device in the 3D view) is
+that page's own: the other pages keep their picker and the panels showing their pick
+(docs/dashboard.md "Several browsers", docs/classroom.md). Before, one trainee's pick moved
+every other trainee's Slave tab and Drive tab. Two websocket connections stand in for the
+browsers (tests/app/test_classroom_leak.py)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from app.classroom.roles import Access
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.line.view import CLICK_SETTLE_S
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from tests.app.test_camera_per_browser import click
+from tests.app.test_classroom_leak import Page, _wait
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[ServedRig, Page, Page]]:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
+    first, second = Page(served.port), Page(served.port)
+    try:
+        _wait(lambda: len(served.server.get_clients()) == 2)
+        yield served, first, second
+    finally:
+        first.close()
+        second.close()
+        served.stop()
+
+
+def _ids(served: ServedRig) -> tuple[int, int]:
+    first, second = sorted(served.server.get_clients())
+    return first, second
+
+
+def contents(page: Page) -> list[str]:
+    """Every HTML content the server set on this page after creating it."""
+    return [str(m["updates"]["content"]) for m in page.received()
+            if m.get("type") == "GuiUpdateMessage" and "content" in (m.get("updates") or {})]
+
+
+def _titled(page: Page, device: str) -> bool:
+    """The page got a panel titled with ``device`` (the Slave and Drive tabs' title line)."""
+    return any(f" · {device}</p>" in c or f"<b>{device}</b>" in c for c in contents(page))
+
+
+def _widget(page: Page, label: str, option: str) -> str:
+    """The uuid of a server-level widget, once the page got it."""
+    def find() -> str | None:
+        try:
+            return page.widget(label, option)
+        except KeyError:
+            return None
+    return str(_wait(find))
+
+
+def _devices(page: Page) -> list[str]:
+    """The uuids of the Device pickers (Slave actions, Objects) offering the EtherCAT drive."""
+    found = [str(m["uuid"]) for m in page.received()
+             if (m.get("props") or {}).get("label") == "Device"
+             and "drive_ec-ecat" in ((m.get("props") or {}).get("options") or ())]
+    assert len(found) == 2, found
+    return found
+
+
+def _settle(served: ServedRig) -> None:
+    time.sleep(CLICK_SETTLE_S + 0.5)
+    served.dashboard.tick()
+    served.server.flush()
+    time.sleep(0.5)
+
+
+def test_a_slave_picked_on_one_page_is_not_picked_on_the_other(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    line = live.dashboard.line
+    assert line is not None and line.slave.selected == "trscat"
+    picker = _widget(first, "Slave", "cpx")
+    assert _widget(second, "Slave", "cpx") == picker  # one server-level widget
+    first.set(picker, "cpx")
+    _wait(lambda: _titled(first, "cpx"))
+    _settle(live)
+    assert "cpx" not in second.updates(picker)
+    assert not _titled(second, "cpx")
+    assert _titled(second, "trscat")  # its own pick's panel, still updated
+    assert line.slave.selected_for(_ids(live)[0]) == "cpx"
+    assert line.slave.selected_for(_ids(live)[1]) == "trscat"
+
+
+def test_a_click_in_the_3d_view_picks_on_the_clicking_page_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    line = live.dashboard.line
+    assert line is not None
+    picker = first.widget("Slave", "cpx")
+    node = line.scene.bodies["drive_ec-ecat"].clickables[0].name
+    click(second, node)
+    _wait(lambda: line.focused == "drive_ec-ecat")
+    _settle(live)
+    assert "drive_ec-ecat" in second.updates(picker)
+    assert "drive_ec-ecat" not in first.updates(picker)
+    assert _titled(second, "drive_ec-ecat") and not _titled(first, "drive_ec-ecat")
+    # The Line tab's Slave actions and the Objects tab's Device: the same, each its own
+    for device in _devices(first):
+        assert "drive_ec-ecat" in second.updates(device)
+        assert "drive_ec-ecat" not in first.updates(device)
+    objects = live.dashboard.objects
+    assert objects is not None
+    one, two = _ids(live)
+    assert line.slave.selected_for(two) == line.controls.selected_for(two) == "drive_ec-ecat"
+    assert objects.device_for(live.server.get_clients()[two]) == "drive_ec-ecat"
+    assert objects.device_for(live.server.get_clients()[one]) == "cpx"  # its Slave pick
+    assert line.slave.selected_for(_ids(live)[0]) == "cpx"  # the first page's own pick
+
+
+def test_a_scenario_focus_still_picks_on_every_page(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """A demo follows the narration: a focus step is every page's pick."""
+    live, first, second = served
+    line = live.dashboard.line
+    assert line is not None
+    picker = first.widget("Slave", "cpx")
+    before = len(first.updates(picker)), len(second.updates(picker))
+    line.focus(None, "trscat", move=False)
+    _settle(live)
+    assert first.updates(picker)[before[0]:] == ["trscat"]
+    assert second.updates(picker)[before[1]:] == ["trscat"]
+    assert all(line.slave.selected_for(c) == "trscat" for c in _ids(live))
