@@ -83,7 +83,7 @@ def test_the_panel_s_hints_follow_the_drive_s_map() -> None:
     loop = asyncio.new_event_loop()
     try:
         server, sender = Server(loop), Sender()
-        panel = DrivePanel(server, None, sender, lambda: "drive", {})  # type: ignore[arg-type]
+        panel = DrivePanel(server, None, sender, lambda _client: "drive", {})  # type: ignore[arg-type]
         register, parameter = server.gui.handles["Register"], server.gui.handles["Parameter"]
         register.value = "R05 status_word"
         parameter.value = "d1 speed loop proportional gain KP"

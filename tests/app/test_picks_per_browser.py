@@ -2,12 +2,13 @@
 that page's own: the other pages keep their picker and the panels showing their pick
 (docs/dashboard.md "Several browsers", docs/classroom.md). Before, one trainee's pick moved
 every other trainee's Slave tab and Drive tab. Two websocket connections stand in for the
-browsers (tests/app/test_classroom_leak.py)."""
+browsers (tests/app/test_classroom_leak.py), on an open rig and on one with a token."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Iterator
+from typing import Any
 
 import pytest
 
@@ -17,7 +18,8 @@ from app.screenshots import free_port
 from app.ui.line.view import CLICK_SETTLE_S
 from app.ui.panels.classroom_rig import ServedRig, serve_rig
 from tests.app.test_camera_per_browser import click
-from tests.app.test_classroom_leak import Page, _wait
+from tests.app.test_classroom_fault_forms import _in
+from tests.app.test_classroom_leak import Page, _wait, open_class
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +52,7 @@ def _titled(page: Page, device: str) -> bool:
     return any(f" · {device}</p>" in c or f"<b>{device}</b>" in c for c in contents(page))
 
 
-def _widget(page: Page, label: str, option: str) -> str:
+def _widget(page: Page, label: str, option: str | None) -> str:
     """The uuid of a server-level widget, once the page got it."""
     def find() -> str | None:
         try:
@@ -132,3 +134,58 @@ def test_a_scenario_focus_still_picks_on_every_page(
     assert first.updates(picker)[before[0]:] == ["trscat"]
     assert second.updates(picker)[before[1]:] == ["trscat"]
     assert all(line.slave.selected_for(c) == "trscat" for c in _ids(live))
+
+
+def _read(live: ServedRig, fn: Any) -> Any:
+    return live.runtime.submit(lambda: fn(live.rig)).result(timeout=10)
+
+
+def test_a_drive_picked_on_one_page_is_the_drive_of_that_page_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """The Servo drive picker chooses what the Drive and CANopen tabs show and what the drive
+    controls command: on the picking page."""
+    live, first, second = served
+    drives = live.dashboard.drives
+    assert drives is not None and drives.selected == "drive"
+    picker = _widget(first, "Servo drive", "drive_co")
+    first.set(picker, "drive_co")
+    _wait(lambda: _titled(first, "drive_co"))
+    _settle(live)
+    assert "drive_co" not in second.updates(picker)
+    assert not _titled(second, "drive_co")
+    one, two = _ids(live)
+    assert drives.selected_for(one) == "drive_co" and drives.selected_for(two) == "drive"
+    # The first page's Drive power box commands its drive, and shows it switched off there
+    power = _widget(first, "Drive power", None)
+    first.set(power, False)
+    _wait(lambda: not _read(live, lambda rig: rig.device("drive_co").snapshot()["powered"]))
+    live.runtime.advance(100_000).result(timeout=30)
+    _settle(live)
+    assert _read(live, lambda rig: rig.device("drive").snapshot()["powered"])
+    assert False not in second.updates(power)
+    _read(live, lambda rig: rig.apply("drive_co", "power", {"on": True}))
+
+
+def test_in_a_classroom_a_trainee_s_pick_moves_nothing_on_the_instructor_s_page() -> None:
+    """With a token: the trainee picks a slave and a drive; the instructor's page keeps its
+    own, and its Slave causes folder follows its own page's pick only."""
+    with open_class() as (live, trainee, instructor):
+        line, drives = live.dashboard.line, live.dashboard.drives
+        assert line is not None and drives is not None
+        slave = _widget(trainee, "Slave", "cpx")
+        drive = _widget(trainee, "Servo drive", "drive_co")
+        causes = _in(instructor, "Slave causes", "Slave")
+        trainee.set(slave, "cpx")
+        trainee.set(drive, "drive_co")
+        _wait(lambda: _titled(trainee, "cpx") and _titled(trainee, "drive_co"))
+        _settle(live)
+        assert "cpx" not in instructor.updates(slave) + instructor.updates(causes)
+        assert "drive_co" not in instructor.updates(drive)
+        assert not _titled(instructor, "cpx") and not _titled(instructor, "drive_co")
+        instructor.set(slave, "drive_ec-ecat")
+        _wait(lambda: "drive_ec-ecat" in instructor.updates(causes))
+        _settle(live)
+        assert "drive_ec-ecat" not in trainee.updates(slave)
+        trainee_id, instructor_id = _ids(live)
+        assert line.slave.selected_for(trainee_id) == "cpx"
+        assert drives.selected_for(instructor_id) == "drive"

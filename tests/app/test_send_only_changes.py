@@ -9,7 +9,8 @@ server's own send path, patched to record), frame by frame:
   the same value (the master's header went "1 · ... · running" then "target OP" every frame);
 - idle, the 3D scene only carries LED colours (the flickering LINK / L/A LEDs, ETG.1300);
 - the Drive tab's state table is not resent while only the simulated time moves (its title,
-  with the time, is its own handle);
+  with the time, is its own handle); with several drives each page gets the tab of the drive
+  it picked, so a connected page's own messages are recorded too;
 - the master panel: its status table (phase, target, link) and its slave table are not resent
   while the time, the frame counter and the DC deviation move (each in its own handle, tested
   block by block in test_send_only_changes_panels.py); the drive plots' unchanged x range is
@@ -46,6 +47,7 @@ from app.ui.panels.scenario_player import (
     status_html,
     status_text,
 )
+from tests.app.test_classroom_leak import Page, _wait
 
 FRAME_US = 33_000  # one dashboard frame of simulated time (the runtime publishes at 30 Hz)
 IDLE_FRAMES = 90  # three seconds
@@ -93,7 +95,8 @@ def idle() -> Iterator[tuple[Dashboard, Tape]]:
     """The default rig booted to OP behind a dashboard; then IDLE_FRAMES frames recorded."""
     runtime = Runtime(build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None))
     runtime.set_paused(True)  # frames only when the test advances (the drive's time too)
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    port = free_port()
+    server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
     dashboard = Dashboard(server, runtime)  # ticked by the test, not by its own thread
     runtime.start()
     tape = Tape()
@@ -103,7 +106,17 @@ def idle() -> Iterator[tuple[Dashboard, Tape]]:
         tape.record(message)
         queue(message)
     server._websock_server.queue_message = recorded  # type: ignore[method-assign]
+    # A page: what goes to it alone (the Drive tab of the drive it picked) is recorded too
+    page = Page(port)
     try:
+        _wait(lambda: server.get_clients())
+        [client] = server.get_clients().values()
+        to_page = client.gui._websock_interface.queue_message
+
+        def recorded_for_page(message: Any) -> None:
+            tape.record(message)
+            to_page(message)
+        client.gui._websock_interface.queue_message = recorded_for_page  # type: ignore
         while not in_op(runtime.frame.snapshot):
             assert runtime.rig.clock.now_us < BOOT_LIMIT_US, "the default rig did not reach OP"
             runtime.advance(500_000).result(timeout=TIMEOUT_S)
@@ -120,6 +133,7 @@ def idle() -> Iterator[tuple[Dashboard, Tape]]:
         tape.recording = False
         yield dashboard, tape
     finally:
+        page.close()
         runtime.stop()
         server.stop()
 

@@ -151,7 +151,7 @@ DRIVE_WIDGETS = [
 
 def drive_rig(loop: asyncio.AbstractEventLoop) -> tuple[Server, Sender, DrivePanel, list[str]]:
     server, sender, selected = Server(loop), Sender(), ["drive1"]
-    panel = DrivePanel(server, None, sender, lambda: selected[0], {})  # type: ignore[arg-type]
+    panel = DrivePanel(server, None, sender, lambda _client: selected[0], {})  # type: ignore[arg-type]
     frames(loop, server, lambda: panel.update(DRIVE))
     return server, sender, panel, selected
 
@@ -268,7 +268,7 @@ def test_jog_tells_the_clicking_page_why_the_drive_does_not_move(
     """Jog on a drive without torque only switched Mode to 3: no motion, no word. The model's
     answer (devices/servo/actions.py cmd_jog) now reaches the page that clicked."""
     server, sender = Server(loop), _AnsweringSender(answer)
-    panel = DrivePanel(server, None, sender, lambda: "drive1", {})  # type: ignore[arg-type]
+    panel = DrivePanel(server, None, sender, lambda _client: "drive1", {})  # type: ignore[arg-type]
     frames(loop, server, lambda: panel.update(DRIVE))
     client = _Client()
     server.gui.handles["Jog"].user(client, "Jog +", click=True)  # type: ignore[arg-type]
@@ -297,7 +297,7 @@ def test_a_refused_alarm_reset_tells_the_clicking_page_why(loop, role: Role, bod
     (cmd_alarm_reset) now reaches the page that clicked, and names the injected cause only
     to the instructor (docs/classroom.md)."""
     server, sender = Server(loop), _RoleSender("alarm 16 persists: the cause persists", role)
-    panel = DrivePanel(server, None, sender, lambda: "drive1", {})  # type: ignore[arg-type]
+    panel = DrivePanel(server, None, sender, lambda _client: "drive1", {})  # type: ignore[arg-type]
     snap = {**DRIVE, "injected": [{"code": 16, "name": "FOLLOWING_ERROR"}]}
     frames(loop, server, lambda: panel.update(snap))
     client = _Client()

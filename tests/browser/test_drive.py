@@ -384,7 +384,8 @@ node_id = 2
 
 def test_rig_with_two_drives_and_no_coupler(dashboard_for, tmp_path) -> None:
     """Drives without a FastCAT get the drive tabs alone; the picker chooses the drive the
-    panels show, every drive keeps its axis, and the plots restart with the new drive."""
+    panels show, every drive keeps its axis, and the plots show the new drive's samples at
+    once: every drive is sampled all along, each page showing its own pick's charts."""
     rig_file = tmp_path / "two.toml"
     rig_file.write_text(TWO_DRIVES)
     live = dashboard_for(rig_file)
@@ -394,10 +395,11 @@ def test_rig_with_two_drives_and_no_coupler(dashboard_for, tmp_path) -> None:
     live.advance(0.5)
     assert len(drives.sampler.columns()[0]) > 0
     live.command("y", "enable", {"on": True})
+    before = len(drives.sampler.columns()[0])
     drives.select("y")
-    assert len(drives.sampler.columns()[0]) == 0
+    assert len(drives.sampler.columns()[0]) > 0  # y's own samples, from the start
     live.advance(0.2)
-    assert drives.selected == "y" and len(drives.sampler.columns()[0]) > 0
+    assert drives.selected == "y" and len(drives.sampler.columns()[0]) > before
     assert live.snapshot("y")["display"] == "En" and live.snapshot("x")["display"] == "Fr"
     assert drives.scenes["y"].segment_colors()[0]["a"] == SEGMENT_ON  # E
     assert drives.scenes["x"].segment_colors()[0]["a"] == SEGMENT_ON  # F

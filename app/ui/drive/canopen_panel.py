@@ -23,6 +23,8 @@ from app.ui.commands import CommandSender, notify
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.bus_state import nmt_badge
 from app.ui.drive.drive_state import FIELDBUS_NAMES
+from app.ui.panels.client_input import ClientMirror
+from app.ui.panels.client_pick import PickedHtml
 from app.ui.panels.widgets import Mirror
 from app.ui.style import esc, kv_table
 from devices.device import CommandError
@@ -31,7 +33,8 @@ from devices.od import SdoAbort
 FRAME_ROWS = 60
 KIND_CLASS = {"EMCY": "fr-emcy"}
 
-NodeId = Callable[[], str | None]  # the selected drive's CANopen node (device id), if any
+# The CANopen node (device id), if any, of the drive a page shows (None: a new page's)
+NodeId = Callable[[viser.ClientHandle | None], str | None]
 
 
 SDO_SERVICES = {"download": "Download (write)", "upload": "Upload (read)"}
@@ -178,7 +181,9 @@ class CanOpenMaster:
     """The master's controls (in the control panel): NMT, 0x6040 over SDO, heartbeat, SDO."""
 
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
-                 node_id: NodeId) -> None:
+                 node_id: NodeId, per_page: bool = False) -> None:
+        """``per_page``: each page commands the node of the drive it picked, and its
+        Heartbeat box is filled from that node."""
         self._runtime = runtime
         self._sender = sender
         self._node_id = node_id
@@ -195,7 +200,8 @@ class CanOpenMaster:
             self._heartbeat = gui.add_number("Heartbeat (ms)", 0, min=0, max=65535, step=1,
                                              hint="the node's 0x1017 (producer heartbeat "
                                                   "time); type a new period, then Set")
-            self._heartbeat_mirror = Mirror(self._heartbeat)
+            self._heartbeat_mirror: Mirror | ClientMirror = \
+                ClientMirror(server, self._heartbeat) if per_page else Mirror(self._heartbeat)
             set_hb = gui.add_button("Set heartbeat", hint="SDO download 0x1017:0")
             self._object = gui.add_text("SDO object", "0x6041:0")
             self._value = gui.add_text("SDO value", "0")
@@ -218,7 +224,7 @@ class CanOpenMaster:
 
         @set_hb.on_click
         def _(event: viser.GuiEvent) -> None:
-            ms = int(self._heartbeat.value)
+            ms = int(self._typed(event))
             index, sub = cm.HEARTBEAT
             self._send(event.client, "0x1017",
                        lambda node: cm.sdo_download(node, index, sub, ms, 2))
@@ -237,32 +243,51 @@ class CanOpenMaster:
             else:
                 self._send(event.client, "SDO download",
                            lambda node: cm.sdo_download(node, index, sub, value,
-                                                        self._object_size(index, sub)))
+                                                        self._object_size(event.client,
+                                                                          index, sub)))
 
     @property
     def heartbeat_box(self) -> Any:
         return self._heartbeat
 
-    def update(self, node: Mapping[str, Any]) -> None:
-        """The selected node's snapshot (dashboard thread): the box follows 0x1017 when it
-        changes (this master's SDO, another master's, a reset), and keeps what a user typed
-        until then."""
-        if "heartbeat_ms" in node:
-            self._heartbeat_mirror.follow(int(node["heartbeat_ms"]))
+    def _typed(self, event: viser.GuiEvent) -> Any:
+        """What the clicking page's Heartbeat box holds."""
+        mirror = self._heartbeat_mirror
+        return mirror.value_for(event.client_id) if isinstance(mirror, ClientMirror) \
+            else self._heartbeat.value
 
-    def forget(self) -> None:
-        """Another drive picked: take its 0x1017 at the next frame."""
-        self._heartbeat_mirror.forget()
+    def update(self, node_of: Callable[[int | None], Mapping[str, Any]]) -> None:
+        """``node_of(client_id)``: the snapshot of that page's node (None: a new page's;
+        dashboard thread): the box follows 0x1017 when it changes (this master's SDO,
+        another master's, a reset), and keeps what a user typed until then."""
+        def heartbeat(client_id: int | None) -> int | None:
+            node = node_of(client_id)
+            return int(node["heartbeat_ms"]) if "heartbeat_ms" in node else None
+
+        mirror = self._heartbeat_mirror
+        if isinstance(mirror, ClientMirror):
+            mirror.follow_each(heartbeat)
+        elif (value := heartbeat(None)) is not None:
+            mirror.follow(value)
+
+    def forget(self, client_id: int | None = None) -> None:
+        """Another drive picked (on ``client_id``'s page, or every page's): take its 0x1017
+        at the next frame."""
+        mirror = self._heartbeat_mirror
+        if isinstance(mirror, ClientMirror):
+            mirror.forget(client_id)
+        else:
+            mirror.forget()
 
     # ---- sending (simulation thread) --------------------------------------------------------
-    def _device(self) -> Any:
-        device_id = self._node_id()
+    def _device(self, client: viser.ClientHandle | None) -> Any:
+        device_id = self._node_id(client)
         return self._runtime.rig.devices.get(device_id) if device_id else None
 
-    def _object_size(self, index: int, sub: int) -> int:
+    def _object_size(self, client: viser.ClientHandle | None, index: int, sub: int) -> int:
         """Bytes of an object (simulation thread); 4 for one the node does not have, so that
         the node answers with its abort."""
-        node = self._device()
+        node = self._device(client)
         try:
             size = node.dictionary.entry(index, sub).bit_length // 8
         except (AttributeError, SdoAbort):
@@ -272,7 +297,7 @@ class CanOpenMaster:
     def _send(self, client: viser.ClientHandle | None, label: str,
               build: Callable[[int], cm.Frame]) -> None:
         def run() -> None:
-            node = self._device()
+            node = self._device(client)
             if node is None or not getattr(node, "active", False):
                 raise CommandError("the drive's CANopen node is silent (c9 is not CANopen, "
                                    "or the drive is off)")
@@ -284,24 +309,23 @@ class CanOpenMaster:
 
 
 class CanOpenMonitor:
-    """The CANopen tab (left panel): status, the frame log, the PDO mapping."""
+    """The CANopen tab (left panel): status, the frame log, the PDO mapping; ``per_page``:
+    each page shows the node of the drive it picked."""
 
-    def __init__(self, server: viser.ViserServer) -> None:
+    def __init__(self, server: viser.ViserServer, per_page: bool = False) -> None:
         gui = server.gui
-        self._status = gui.add_html(status_html("", {}, {}))
+        self._status = PickedHtml(server, status_html("", {}, {}), per_page)
         gui.add_markdown("**Frame log** (newest first)")
-        self._frames = gui.add_html(frames_html([]))
+        self._frames = PickedHtml(server, frames_html([]), per_page)
         gui.add_markdown("**PDO mapping**")
-        self._pdos = gui.add_html(pdo_html({}))
-        self._last: dict[str, str] = {}
+        self._pdos = PickedHtml(server, pdo_html({}), per_page)
 
-    def update(self, node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any]) -> None:
-        self._show("status", self._status, status_html(node_id, node, drive))
-        self._show("frames", self._frames, frames_html(node.get("frames") or [],
-                                                       heartbeats=node.get("heartbeats") or []))
-        self._show("pdos", self._pdos, pdo_html(node))
-
-    def _show(self, key: str, handle: Any, content: str) -> None:
-        if self._last.get(key) != content:
-            handle.content = content
-            self._last[key] = content
+    def update(self, pick_of: Callable[[int | None], str],
+               node_of: Callable[[str], tuple[str, Mapping[str, Any], Mapping[str, Any]]],
+               ) -> None:
+        """``pick_of``: a page's drive; ``node_of(drive)``: (node id, node, drive)."""
+        self._status.show(lambda d: status_html(*node_of(d)), pick_of)
+        self._frames.show(lambda d: frames_html(node_of(d)[1].get("frames") or [],
+                                                heartbeats=node_of(d)[1].get("heartbeats")
+                                                or []), pick_of)
+        self._pdos.show(lambda d: pdo_html(node_of(d)[1]), pick_of)

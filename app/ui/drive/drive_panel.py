@@ -21,6 +21,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive.drive_state import FIELDBUS_NAMES, injected_names
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import DetailHint, Mirror, Synced, set_options, short_label_css
 from app.ui.style import esc
@@ -31,7 +32,9 @@ from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, registe
 from devices.servo.parameters import FIELDBUS_BY_C9, PARAMETER_BY_NAME, PARAMETERS
 from devices.servo.registers import MODE_NAMES, REGISTERS, R
 
-Target = Callable[[], str]
+# The drive a page's controls command (None: no page, a new page's)
+Target = Callable[[viser.ClientHandle | None], str]
+Pick = Callable[[int | None], str]  # the drive a page shows, by its client id
 
 MODE_OPTIONS = tuple(f"{mode} {name}" for mode, name in MODE_NAMES.items())
 REGISTER_OPTIONS = tuple(f"R{n:02d} {spec.name}" for n, spec in sorted(REGISTERS.items()))
@@ -139,7 +142,7 @@ class _AlarmForm:
 
     alarm: Any
     ops: Any
-    jam: Synced
+    jam: Synced | ClientSynced
     hint: DetailHint
     drive: Any = None
     fieldbus: list[str] = field(default_factory=lambda: ["modbus"])  # its drive's, as shown
@@ -149,10 +152,13 @@ class DrivePanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
                  target: Target, actions: Mapping[str, Action],
                  drive_ids: Sequence[str] = ()) -> None:
-        """``drive_ids``: the drives the shared Servo drive picker offers (several: with a
-        token the instructor's forms get a Drive picker of their own)."""
+        """``drive_ids``: the drives the Servo drive picker offers. Several: each page commands
+        and shows the drive it picked (``target(client)``, app/ui/panels/client_input.py),
+        and with a token the instructor's forms get a Drive picker of their own."""
         self._runtime = runtime
         self._drive_ids = tuple(drive_ids)
+        self._per_page = len(self._drive_ids) > 1
+        self._devices: Mapping[str, Any] = {}  # the last frame's (update)
         self._sender = sender
         self._target = target
         self._fieldbus = "modbus"
@@ -232,7 +238,8 @@ class DrivePanel:
         # The boxes and the mode are drive values: every page ends up showing the selected
         # drive's (Synced). c9 and c7 are a form applied by "Write c9 and c7": what a user
         # types there must survive the next frame (Mirror).
-        self._synced = {name: Synced(server, handle, sender, command) for name, handle, command in (
+        synced = self._synced_type()
+        self._synced = {name: synced(server, handle, sender, command) for name, handle, command in (
             ("powered", self._power, lambda c, on: self._apply(c, "power", {"on": bool(on)})),
             ("ten", self._ten, lambda c, on: self._apply(c, "set_input",
                                                          {"name": "ten", "value": bool(on)})),
@@ -240,7 +247,9 @@ class DrivePanel:
                                                          {"name": "ien", "value": bool(on)})),
             ("mode", self._mode, lambda c, option: self._apply(
                 c, "set_mode", {"mode": leading_int(option)})))}
-        self._mirrors = {"c9": Mirror(self._c9), "c7": Mirror(self._c7)}
+        self._mirrors: dict[str, Mirror | ClientMirror] = {
+            name: ClientMirror(server, handle) if self._per_page else Mirror(handle)
+            for name, handle in (("c9", self._c9), ("c7", self._c7))}
 
         on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
         reset.on_click(lambda e: self._alarm_reset(e))
@@ -255,12 +264,16 @@ class DrivePanel:
 
     # ---- commands -----------------------------------------------------------------------
     def _do(self, event: viser.GuiEvent, action: str, **args: Any) -> None:
-        self._sender.send(event.client, self._target(), action, args)
+        self._sender.send(event.client, self._target(event.client), action, args)
+
+    def _synced_type(self) -> Any:
+        """Synced, or ClientSynced when each page shows its own drive."""
+        return ClientSynced if self._per_page else Synced
 
     def _jog(self, event: viser.GuiEvent, direction: int) -> None:
         """Jog; when the model answers why the axis will not move (a drive without torque
         only switches to mode 3), the clicking page is told, naming the drive."""
-        target, client = self._target(), event.client
+        target, client = self._target(event.client), event.client
 
         def answered(why: Any) -> None:
             if why:
@@ -271,25 +284,27 @@ class DrivePanel:
     def _alarm_reset(self, event: viser.GuiEvent) -> None:
         """Alarm reset; when the drive stays in Fault the clicking page is told why (the model's
         answer), and an instructor also which injected cause holds it."""
-        target, client = self._target(), event.client
+        target, client = self._target(event.client), event.client
         instructor = self._sender.role(client) is Role.INSTRUCTOR
+        injected = list((self._devices.get(target) or {}).get("injected") or []) \
+            if self._per_page else self._injected
 
         def answered(why: Any) -> None:
             if why:
-                text = reset_refusal_text(str(why), self._injected if instructor else [])
+                text = reset_refusal_text(str(why), injected if instructor else [])
                 notify(client, f"{target}: alarm reset refused", text, error=True)
 
         self._sender.send(client, target, "alarm_reset", {}, done=answered)
 
     def _apply(self, client: viser.ClientHandle | None, action: str,
                args: dict[str, Any]) -> None:
-        self._sender.send(client, self._target(), action, args)
+        self._sender.send(client, self._target(client), action, args)
 
     def _sequence(self, event: viser.GuiEvent, label: str,
                   steps: Callable[[Callable[..., Any]], Any],
                   done: Callable[[Any], None] | None = None) -> None:
         """Run ``steps(apply)`` in the simulation thread: no other command in between."""
-        target = self._target()
+        target = self._target(event.client)
         rig = self._runtime.rig
 
         def run() -> Any:
@@ -337,26 +352,33 @@ class DrivePanel:
         n = register_of(option)
         if button == "Write register":
             value = int(self._register_value.value)
-            self._sender.send(event.client, self._target(), "write_register",
+            self._sender.send(event.client, self._target(event.client), "write_register",
                               {"register": n, "value": value},
                               done=lambda _r: self._park(f"{option} = {value} written"))
         else:
-            self._sender.send(event.client, self._target(), "read_register", {"register": n},
+            self._sender.send(event.client, self._target(event.client), "read_register",
+                              {"register": n},
                               done=lambda r: self._park(f"{option} = {r}"))
 
     def _parameter_access(self, event: viser.GuiEvent, button: str) -> None:
         name = self._parameter.value.split(" ", 1)[0]
         if button == "Write param.":
             value = int(self._parameter_value.value)
-            self._sender.send(event.client, self._target(), "write_parameter",
+            self._sender.send(event.client, self._target(event.client), "write_parameter",
                               {"parameter": name, "value": value},
                               done=lambda _r: self._park(f"{name} = {value} written"))
         else:
-            self._sender.send(event.client, self._target(), "read_parameter",
+            self._sender.send(event.client, self._target(event.client), "read_parameter",
                               {"parameter": name}, done=lambda r: self._park(f"{name} = {r}"))
 
+    def _typed(self, name: str, event: viser.GuiEvent) -> Any:
+        """What the clicking page's c9 or c7 box holds."""
+        mirror = self._mirrors[name]
+        return mirror.value_for(event.client_id) if isinstance(mirror, ClientMirror) \
+            else mirror.handle.value
+
     def _write_fieldbus(self, event: viser.GuiEvent) -> None:
-        c9, c7 = leading_int(self._c9.value), int(self._c7.value)
+        c9, c7 = leading_int(self._typed("c9", event)), int(self._typed("c7", event))
 
         def steps(apply: Callable[..., Any]) -> None:
             apply("write_parameter", parameter="c9", value=c9)
@@ -371,12 +393,12 @@ class DrivePanel:
         alarm went to every trainee's page (docs/classroom.md). None: the shared one."""
         if instructor_for(self._server).shared or len(self._drive_ids) < 2:
             return None
-        return gui.add_dropdown("Drive", self._drive_ids, initial_value=self._target(),
+        return gui.add_dropdown("Drive", self._drive_ids, initial_value=self._target(None),
                                 hint="the drive this form acts on")
 
     def _send_to(self, own: Any, client: viser.ClientHandle | None, action: str,
                  args: dict[str, Any], confirm: bool = False) -> None:
-        target = self._target() if own is None else str(own.value)
+        target = self._target(client) if own is None else str(own.value)
         self._sender.send(client, target, action, args, confirm=confirm)
 
     def _alarm_form(self, gui: Any) -> _AlarmForm:
@@ -389,7 +411,9 @@ class DrivePanel:
                                    "following error, alarm 16")
         if not instructor_for(self._server).shared:  # per client: the narrower label
             gui.add_html(short_label_css([alarm]))
-        form = _AlarmForm(alarm, ops, Synced(self._server, jam, self._sender, lambda c, on: (
+        # The shared form (an open rig) shows each page its own drive's jam
+        jammed = Synced if own is not None else self._synced_type()
+        form = _AlarmForm(alarm, ops, jammed(self._server, jam, self._sender, lambda c, on: (
             self._send_to(own, c, "jam_load", {"active": bool(on)}))),
             DetailHint(alarm, lambda: alarm_details(fieldbus[0])), own, fieldbus)
         on_button(ops, lambda e, b: self._send_to(
@@ -405,9 +429,12 @@ class DrivePanel:
 
     # ---- view -----------------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any],
-               devices: Mapping[str, Any] | None = None) -> None:
-        """``snap``: the selected drive's snapshot; ``devices``: every device's (an
-        instructor's form with its own Drive picker shows its drive's)."""
+               devices: Mapping[str, Any] | None = None, pick_of: Pick | None = None) -> None:
+        """``snap``: the snapshot of the drive a new page shows; ``devices``: every device's
+        (an instructor's form with its own Drive picker shows its drive's); ``pick_of``:
+        the drive each page shows (several drives)."""
+        devices = devices or {}
+        self._devices = devices
         self._injected = list(snap.get("injected") or [])
         fieldbus = self._fieldbus = str(snap.get("fieldbus", self._fieldbus))
         address_map = str(snap.get("modbus_map", self._modbus_map))
@@ -415,26 +442,33 @@ class DrivePanel:
             self._modbus_map = address_map
             self._register_hint.refresh()
             self._parameter_hint.refresh()
+
+        def page(client_id: int | None) -> Mapping[str, Any]:
+            """The snapshot of the drive ``client_id``'s page shows."""
+            if pick_of is None or client_id is None:
+                return snap
+            return devices.get(pick_of(client_id)) or {}
+
         for name in ("powered", "ten", "ien"):
-            self._synced[name].follow(bool(snap.get(name)))
+            self._follow(self._synced[name], lambda s, n=name: bool(s.get(n)), page)
         for form in self._alarms.each():
-            own = snap if form.drive is None else (devices or {}).get(str(form.drive.value))
+            own = snap if form.drive is None else devices.get(str(form.drive.value))
             own = own or {}
             bus = str(own.get("fieldbus", form.fieldbus[0]))
             if bus != form.fieldbus[0]:  # Profinet numbers 30..33 differently (ch. 6)
                 form.fieldbus[0] = bus
                 set_options(form.alarm, list(alarm_options(bus)))
                 form.hint.refresh()
-            form.jam.follow(bool(own.get("jammed")))
-        option = mode_option(snap.get("mode"))
-        if option is not None:
-            self._synced["mode"].follow(option)
-        bus = next((o for o in FIELDBUS_OPTIONS
-                    if FIELDBUS_BY_C9.get(leading_int(o)) == fieldbus), None)
-        if bus is not None:  # what the drive latched at power-up
-            self._mirrors["c9"].follow(bus)
-        if snap.get("node_id") is not None:
-            self._mirrors["c7"].follow(int(snap["node_id"]))
+            if form.drive is None:
+                self._follow(form.jam, lambda s: bool(s.get("jammed")), page)
+            else:
+                form.jam.follow(bool(own.get("jammed")))
+        self._follow(self._synced["mode"], lambda s: mode_option(s.get("mode")), page)
+        self._mirror("c9", lambda s: next(
+            (o for o in FIELDBUS_OPTIONS
+             if FIELDBUS_BY_C9.get(leading_int(o)) == s.get("fieldbus", fieldbus)), None), page)
+        self._mirror("c7", lambda s: int(s["node_id"]) if s.get("node_id") is not None
+                     else None, page)
         with self._result_lock:
             result = self._result
         if result != self._shown_result:
@@ -442,9 +476,32 @@ class DrivePanel:
                                          f"<code>{esc(result)}</code></p>")
             self._shown_result = result
 
-    def forget(self) -> None:
-        """Another drive was selected: take its c9 and c7 into the form. (A Synced widget at
-        rest already shows the last value it followed, so it needs nothing: the next frame's
-        value, the new drive's, is shown when it differs.)"""
+    @staticmethod
+    def _follow(synced: Synced | ClientSynced, value: Callable[[Mapping[str, Any]], Any],
+                page: Callable[[int | None], Mapping[str, Any]]) -> None:
+        """The model's value (None: the drive has none) into a Synced widget: each page its
+        drive's."""
+        if isinstance(synced, ClientSynced):
+            synced.follow_each(lambda client_id: value(page(client_id)))
+        elif (shown := value(page(None))) is not None:
+            synced.follow(shown)
+
+    def _mirror(self, name: str, value: Callable[[Mapping[str, Any]], Any],
+                page: Callable[[int | None], Mapping[str, Any]]) -> None:
+        """c9 / c7 (what the drive latched at power-up) into its form field."""
+        mirror = self._mirrors[name]
+        if isinstance(mirror, ClientMirror):
+            mirror.follow_each(lambda client_id: value(page(client_id)))
+        elif (shown := value(page(None))) is not None:
+            mirror.follow(shown)
+
+    def forget(self, client_id: int | None = None) -> None:
+        """Another drive was selected (on ``client_id``'s page, every page's when None): take
+        its c9 and c7 into the form. (A Synced widget at rest already shows the last value it
+        followed, so it needs nothing: the next frame's value, the new drive's, is shown when
+        it differs.)"""
         for mirror in self._mirrors.values():
-            mirror.forget()
+            if isinstance(mirror, ClientMirror):
+                mirror.forget(client_id)
+            else:
+                mirror.forget()

@@ -12,13 +12,14 @@ small panels that rewrite their HTML only when it changes.
 from __future__ import annotations
 
 import collections
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import viser
 
 from app.ui.drive.bus_state import fieldbus_rows
-from app.ui.panels.per_client import RoleHtml, instructor_for
+from app.ui.panels.client_pick import PickedHtml
+from app.ui.panels.per_client import InstructorHtml, instructor_for, split_instructor
 from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
@@ -244,48 +245,60 @@ class DriveLog:
         self._rows.clear()
 
 
-class _Html:
-    """One HTML handle that is rewritten only when its content changes."""
+Pick = Callable[[int | None], str]  # the drive a page shows (None: a new page's)
+DriveData = Callable[[str], tuple[Mapping[str, Any], Mapping[str, Any] | None,
+                                  Mapping[str, Any] | None]]  # drive, its node, its slave
 
-    def __init__(self, server: viser.ViserServer, content: str) -> None:
-        self.handle = server.gui.add_html(content)
-        self._last = content
 
-    def show(self, content: str) -> None:
-        if content != self._last:
-            self.handle.content = content
-            self._last = content
+def _memo(fn: Callable[[str], str]) -> Callable[[str], str]:
+    """``fn`` computed once per drive in one frame, however many pages show it."""
+    made: dict[str, str] = {}
+
+    def get(drive_id: str) -> str:
+        if drive_id not in made:
+            made[drive_id] = fn(drive_id)
+        return made[drive_id]
+
+    return get
 
 
 class DriveStatePanel:
     """Title and state table (above the plots), as two handles: the title carries the
     simulated time and changes ten times a second, the table only when a value in it does, so
     the table is not resent with every tenth (issue 7, as ``app.ui.panels.state``). Two bare
-    <div>s lay out as the one they replace (the title's margin collapses through its div)."""
+    <div>s lay out as the one they replace (the title's margin collapses through its div).
+    ``per_page``: each page shows the drive it picked (several drives)."""
 
-    def __init__(self, server: viser.ViserServer) -> None:
-        self._title = _Html(server, "")
-        # The Causes and Injected rows: the instructor's connections only (RoleHtml).
-        self._table = RoleHtml(server, instructor_for(server),
-                               kv_table([("CiA 402 state", "-")], "fr-drive"), "fr-drive-causes")
+    def __init__(self, server: viser.ViserServer, per_page: bool = False) -> None:
+        instructor = instructor_for(server)
+        self._shared = instructor.shared
+        self._title = PickedHtml(server, "", per_page)
+        self._table = PickedHtml(server, kv_table([("CiA 402 state", "-")], "fr-drive"),
+                                 per_page)
+        # The Causes and Injected rows: the instructor's connections only, each its page's
+        # drive's (as RoleHtml does for one element).
+        self._causes = None if self._shared else InstructorHtml(instructor)
 
-    def update(self, drive_id: str, snap: Mapping[str, Any], t_us: int,
-               node: Mapping[str, Any] | None = None,
-               slave: Mapping[str, Any] | None = None) -> None:
-        self._title.show(title(drive_id, snap, t_us))
-        self._table.show(kv_table(state_rows(snap, node, slave), "fr-drive"))
+    def update(self, pick_of: Pick, data_of: DriveData, t_us: int) -> None:
+        table = _memo(lambda d: kv_table(state_rows(*data_of(d)), "fr-drive"))
+        self._title.show(lambda d: title(d, data_of(d)[0], t_us), pick_of)
+        self._table.show(lambda d: table(d) if self._shared
+                         else split_instructor(table(d), "fr-drive-causes")[0], pick_of)
+        if self._causes is not None:
+            self._causes.show_each(lambda client_id: split_instructor(
+                table(pick_of(client_id)), "fr-drive-causes")[1])
 
 
 class StatusWordsPanel:
     """Both status words bit by bit, the control words, and the drive's log (below the
     plots)."""
 
-    def __init__(self, server: viser.ViserServer) -> None:
-        self._words = _Html(server, "")
+    def __init__(self, server: viser.ViserServer, per_page: bool = False) -> None:
+        self._words = PickedHtml(server, "", per_page)
         server.gui.add_markdown("**Drive log**")
-        self._log_html = _Html(server, DriveLog().html(""))
+        self._log_html = PickedHtml(server, DriveLog().html(""), per_page)
         self.log = DriveLog(causes=instructor_for(server).shared)
 
-    def update(self, drive_id: str, snap: Mapping[str, Any]) -> None:
-        self._words.show(words_html(snap))
-        self._log_html.show(self.log.html(drive_id))
+    def update(self, pick_of: Pick, data_of: DriveData) -> None:
+        self._words.show(lambda d: words_html(data_of(d)[0]), pick_of)
+        self._log_html.show(self.log.html, pick_of)

@@ -144,7 +144,9 @@ class DriveSampler:
 class DrivePlots:
     """Three small uPlot charts sharing the time axis (simulated seconds)."""
 
-    def __init__(self, server: viser.ViserServer, sampler: DriveSampler) -> None:
+    def __init__(self, server: viser.ViserServer, sampler: DriveSampler,
+                 visible: bool = True) -> None:
+        """``visible``: shown on a new page (each drive's charts, the picked drive's shown)."""
         self._sampler = sampler
         self._sent_version = -1
         self._sent_at = 0.0
@@ -167,8 +169,12 @@ class DrivePlots:
                 legend={"show": False}, cursor={"show": False},
                 scales={"x": {"time": False}},
                 axes=({"show": i == last, "size": TIME_AXIS_HEIGHT}, {"size": VALUE_AXIS_WIDTH}),
-                padding=(8, 12, 6, 0))
+                padding=(8, 12, 6, 0), visible=visible)
             for i, (_key, label, colour) in enumerate(SIGNALS)]
+
+    @property
+    def charts(self) -> list[Any]:
+        return list(self._charts)
 
     def update(self, now: float, t_us: int, force: bool = False) -> bool:
         """Send new samples when there are some and the last send is SEND_PERIOD_S old

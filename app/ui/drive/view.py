@@ -28,8 +28,8 @@ from app.ui.drive.drive_panel import DrivePanel
 from app.ui.drive.drive_state import DriveStatePanel, StatusWordsPanel
 from app.ui.drive.plots import DrivePlots, DriveSampler
 from app.ui.drive.style import DRIVE_CSS
+from app.ui.panels.client_pick import ClientPick, send_all, send_to
 from app.ui.panels.per_client import instructor_for
-from app.ui.panels.widgets import from_user
 from devices.events import Event
 
 logger = logging.getLogger(__name__)
@@ -70,34 +70,44 @@ class DriveView:
         self._server = server
         self._runtime = runtime
         self.drive_ids = list(drive_ids)
-        self.selected = self.drive_ids[0]
+        self._default = self.drive_ids[0]
         snapshot = runtime.frame.snapshot
         self._buses = {d: bus_companions(snapshot, d) for d in self.drive_ids}
         self._nodes = {d: node for d, (node, _) in self._buses.items()}
         gui = server.gui
-        self._picker = None
+        # Each page's own pick (app/ui/panels/client_pick.py): what the drive tabs show and
+        # the controls command. Before, one page's pick switched every page's drive.
+        self._pick: ClientPick | None = None
         if len(self.drive_ids) > 1:
-            self._picker = gui.add_dropdown("Servo drive", tuple(self.drive_ids))
+            self._pick = ClientPick(server, gui.add_dropdown("Servo drive",
+                                                             tuple(self.drive_ids)))
+        per_page = self._pick is not None
         gui.add_html(DRIVE_CSS)  # in each tab: an inactive tab's content is not mounted
-        self.controls = DrivePanel(server, runtime, sender, lambda: self.selected,
+        self.controls = DrivePanel(server, runtime, sender, self._drive_of_client,
                                    described[self.selected]["actions"], self.drive_ids)
         self.master: CanOpenMaster | None = None
         if any(self._nodes.values()):
-            self.master = CanOpenMaster(server, runtime, sender,
-                                        lambda: self._nodes.get(self.selected))
-        self.sampler = DriveSampler(self._selected_snapshot, loads=lambda: runtime.rig.loads)
-        runtime.add_step_listener(self.sampler.on_step,
-                                  quiet_until=self.sampler.quiet_until)
+            self.master = CanOpenMaster(
+                server, runtime, sender,
+                lambda client: self._nodes.get(self._drive_of_client(client)), per_page)
+        # Every drive sampled all along, so a page that picks one sees its last 20 s at once
+        self.samplers = {d: DriveSampler(lambda d=d: self._snapshot_of(d),
+                                         loads=lambda: runtime.rig.loads)
+                         for d in self.drive_ids}
+        for sampler in self.samplers.values():
+            runtime.add_step_listener(sampler.on_step, quiet_until=sampler.quiet_until)
         with side.add_tab("Drive", viser.Icon.ENGINE):
             gui.add_html(DRIVE_CSS)
-            self.state = DriveStatePanel(server)
-            self.plots = DrivePlots(server, self.sampler)
-            self.words = StatusWordsPanel(server)
+            self.state = DriveStatePanel(server, per_page)
+            # Each drive's charts, the page's drive's shown (per page: _show_plots)
+            self._plots = {d: DrivePlots(server, self.samplers[d], d == self._default)
+                           for d in self.drive_ids}
+            self.words = StatusWordsPanel(server, per_page)
         self.canopen: CanOpenMonitor | None = None
         if self.master is not None:
             with side.add_tab("CANopen", viser.Icon.NETWORK):
                 gui.add_html(DRIVE_CSS)
-                self.canopen = CanOpenMonitor(server)
+                self.canopen = CanOpenMonitor(server, per_page)
         instructor = instructor_for(server)
         # No injected cause in a classroom's shared scene; the instructor's own draws the jam.
         self.scenes = {d: AxisScene(server, d, top_z - AXIS_TOP - i * AXIS_SPACING, length,
@@ -106,37 +116,71 @@ class DriveView:
         self._jams = instructor.scene_part(
             lambda client: {d: AxisJam(client, scene) for d, scene in self.scenes.items()})
 
-        if self._picker is not None:
-            picker = self._picker
-
-            @picker.on_update
-            def _(event: viser.GuiEvent) -> None:
-                if from_user(event) and picker.value in self.drive_ids:
-                    self.select(picker.value)
+        if self._pick is not None:
+            self._pick.on_pick(self._picked)
 
     # ---- selection ----------------------------------------------------------------------
+    @property
+    def selected(self) -> str:
+        """The drive a new page shows (the last pick for every page); the plots'."""
+        return self._default
+
+    def selected_for(self, client_id: int | None) -> str:
+        """The drive ``client_id``'s page shows."""
+        return self._pick.value_for(client_id) if self._pick is not None else self._default
+
+    def _drive_of_client(self, client: viser.ClientHandle | None) -> str:
+        return self.selected_for(client.client_id if client is not None else None)
+
+    @property
+    def sampler(self) -> DriveSampler:
+        """The samples of the drive a new page shows."""
+        return self.samplers[self._default]
+
+    @property
+    def plots(self) -> DrivePlots:
+        """The charts of the drive a new page shows."""
+        return self._plots[self._default]
+
+    def _show_plots(self, drive_id: str, client: viser.ClientHandle | None) -> None:
+        """``drive_id``'s charts on ``client``'s page (every page's when None), no other's."""
+        for each, plots in self._plots.items():
+            for chart in plots.charts:
+                if client is None:
+                    send_all(chart, "visible", each == drive_id)
+                else:
+                    send_to(client, chart._impl.uuid, "visible", each == drive_id)
+
+    def _picked(self, client: viser.ClientHandle, drive_id: str) -> None:
+        """A page picked a drive: its charts, and its forms take that drive's values."""
+        self._show_plots(drive_id, client)
+        self.controls.forget(client.client_id)
+        if self.master is not None:
+            self.master.forget(client.client_id)
+
     def select(self, drive_id: str) -> None:
-        self.selected = drive_id
-        self.sampler.reset()
+        """Every page, and every page to come, shows ``drive_id``."""
+        self._default = drive_id
+        if self._pick is not None:  # also the pages that picked another on their own
+            self._pick.set_all(drive_id)
+            self._show_plots(drive_id, None)
         self.controls.forget()
         if self.master is not None:
             self.master.forget()
 
     def focus(self, drive_id: str) -> None:
         """A scenario's focus step on a drive: the panels and the picker show it."""
-        if drive_id == self.selected:
-            return
-        self.select(drive_id)
-        if self._picker is not None:
-            self._picker.value = drive_id
+        if drive_id in self.drive_ids:
+            self.select(drive_id)
 
-    def _selected_snapshot(self) -> Mapping[str, Any] | None:
-        """Simulation thread (the sampler): the selected drive's snapshot, taken now."""
-        device = self._runtime.rig.devices.get(self.selected)
+    def _snapshot_of(self, drive_id: str) -> Mapping[str, Any] | None:
+        """Simulation thread (a sampler): the drive's snapshot, taken now."""
+        device = self._runtime.rig.devices.get(drive_id)
         return device.snapshot() if device is not None else None
 
     def stop(self) -> None:
-        self.sampler.active = False
+        for sampler in self.samplers.values():
+            sampler.active = False
 
     # ---- per frame (dashboard thread) ---------------------------------------------------
     def add_events(self, events: Iterable[Event]) -> None:
@@ -147,7 +191,8 @@ class DriveView:
         """A scenario load: no drive's rows of the previous run stay in the Drive log, nor
         its samples in the plots (a paused rig takes no step that would clear them)."""
         self.words.log.clear()
-        self.sampler.new_run()
+        for sampler in self.samplers.values():
+            sampler.new_run()
 
     def update(self, frame: Frame) -> None:
         devices = frame.snapshot.get("devices") or {}
@@ -160,15 +205,24 @@ class DriveView:
             except Exception:  # a page that just left: forgotten by its disconnect
                 logger.debug("instructor's jammed load not drawn", exc_info=True)
         snap = dict(devices.get(self.selected) or {})
-        node, slave = (devices.get(i) if i else None for i in self._buses[self.selected])
-        self.state.update(self.selected, snap, frame.t_us, node, slave)
-        self.words.update(self.selected, snap)
-        self.controls.update(snap, devices)
+
+        def data_of(drive_id: str) -> tuple[Mapping[str, Any], Any, Any]:
+            node, slave = (devices.get(i) if i else None for i in self._buses[drive_id])
+            return devices.get(drive_id) or {}, node, slave
+
+        def node_of(drive_id: str) -> tuple[str, Mapping[str, Any], Mapping[str, Any]]:
+            node_id = self._nodes.get(drive_id) or ""
+            return node_id, devices.get(node_id) or {}, devices.get(drive_id) or {}
+
+        self.state.update(self.selected_for, data_of, frame.t_us)
+        self.words.update(self.selected_for, data_of)
+        self.controls.update(snap, devices, self.selected_for if self._pick else None)
         if self.canopen is not None:
-            node_id = self._nodes.get(self.selected) or ""
-            self.canopen.update(node_id, devices.get(node_id) or {}, snap)
+            self.canopen.update(self.selected_for, node_of)
         if self.master is not None:
-            self.master.update(devices.get(self._nodes.get(self.selected) or "") or {})
+            self.master.update(lambda client_id: node_of(self.selected_for(client_id))[1])
 
     def tick(self, now: float, t_us: int) -> None:
-        self.plots.update(now, t_us)
+        shown = {self._default, *(self.selected_for(c) for c in self._server.get_clients())}
+        for drive_id in shown:  # a drive picked later gets its samples at its first tick
+            self._plots[drive_id].update(now, t_us)

@@ -122,3 +122,31 @@ class ClientHtml:
                 if self._sent.get(client_id) != content:
                     self._sent[client_id] = content
                     send_to(client, self.handle._impl.uuid, "content", content)
+
+
+class PickedHtml:
+    """A server-level HTML element showing each page the content of its pick (``per_page``),
+    or one content for all (the pick is everyone's: a rig with one drive)."""
+
+    def __init__(self, server: viser.ViserServer, content: str, per_page: bool) -> None:
+        self.handle = server.gui.add_html(content)
+        self._pages = ClientHtml(server, self.handle) if per_page else None
+        self._last = content
+
+    def show(self, content_of: Callable[[str], str],
+             pick_of: Callable[[int | None], str]) -> None:
+        """``content_of(pick)``, for each page's ``pick_of(client_id)`` (None: a new page's)."""
+        if self._pages is None:
+            content = content_of(pick_of(None))
+            if content != self._last:
+                self.handle.content = self._last = content
+            return
+        made: dict[str, str] = {}
+
+        def content_for(client_id: int) -> str:
+            pick = pick_of(client_id)
+            if pick not in made:
+                made[pick] = content_of(pick)
+            return made[pick]
+
+        self._pages.show(content_for)

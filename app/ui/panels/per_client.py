@@ -84,6 +84,11 @@ class Part(Generic[T]):
         with self._lock:
             return self._built.get(client_id)
 
+    def items(self) -> list[tuple[int | None, T]]:
+        """Every copy built so far with its connection's id (None: an open rig's one)."""
+        with self._lock:
+            return list(self._built.items())
+
     def each(self) -> list[T]:
         """Every copy built so far whose page is still there (update them all).
 
@@ -211,6 +216,15 @@ class InstructorHtml:
     def __init__(self, instructor: Instructor) -> None:
         self._content = ""
         self._part = instructor.part(lambda gui: gui.add_html(self._content))
+
+    def show_each(self, content_for: Callable[[int | None], str]) -> None:
+        """Each instructor connection's copy the content of its own page's pick (the drive
+        it shows); one built later starts from the last content of a new page's pick."""
+        self._content = content_for(None)
+        for client_id, handle in self._part.items():
+            content = content_for(client_id)
+            if handle.content != content:
+                handle.content = content
 
     def show(self, content: str) -> None:
         # Every copy, even for content shown before: one built meanwhile (promote) started
