@@ -1,0 +1,56 @@
+"""Two browsers on one rig: what one picks in the Slave tab and the Servo drive picker stays
+on its page; the other page keeps reading its own slave and drive (docs/dashboard.md "Several
+browsers"). Before, the second page's Slave and Drive tabs switched with the first's pick."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from helpers import VIEWPORT, LiveDashboard, choose, open_dashboard, wait_until
+
+BOOT_S = 4.0
+
+
+def _open(page: Any, name: str) -> None:
+    tabs = page.get_by_role("tab", name=name, exact=True)
+    wait_until(lambda: tabs.count() >= 1, what=f"the tab {name!r}")
+    for tab in tabs.all():
+        tab.click()
+
+
+def _title(page: Any, css: str) -> str:
+    return str(page.locator(css).first.inner_text())
+
+
+def test_a_pick_on_one_page_leaves_the_other_page_s_tabs(live: LiveDashboard,
+                                                         browser: Any) -> None:
+    live.advance(BOOT_S)
+    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
+             for _ in range(2)]
+    try:
+        for page in pages:
+            open_dashboard(page, live)
+            _open(page, "Slave")
+            page.locator("#fr-slave-state").wait_for()
+        first, second = pages
+        slave_title = ".fr-title:has-text('trscat'), .fr-title:has-text('cpx')"
+        wait_until(lambda: "trscat" in _title(second, slave_title), what="trscat on page 2")
+        choose(first, "Slave", "cpx")
+        wait_until(lambda: "cpx" in _title(first, slave_title), what="cpx on page 1")
+        _open(first, "Servo drive")
+        _open(second, "Servo drive")
+        for page in pages:
+            _open(page, "Drive")
+        choose(first, "Servo drive", "drive_co")
+        drive_title = ".fr-title:has-text('node')"
+        wait_until(lambda: "drive_co" in _title(first, drive_title), what="drive_co, page 1")
+        live.advance(0.2)  # frames for both pages
+        wait_until(lambda: "t = " in _title(second, drive_title), what="page 2's drive tab")
+        assert _title(second, drive_title).startswith("drive ·")
+        assert second.get_by_label("Servo drive", exact=True).input_value() == "drive"
+        _open(second, "Slave")
+        assert "trscat" in _title(second, slave_title)
+        assert second.get_by_label("Slave", exact=True).input_value() == "trscat"
+    finally:
+        for page in pages:
+            page.context.close()
