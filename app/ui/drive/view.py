@@ -5,9 +5,10 @@
   when the drives have CANopen nodes, a "CANopen" tab (status, bus monitor, PDO mapping);
 - control panel: the drive's controls (``drive_panel``) and the small CANopen master.
 
-The panels show one drive at a time (a "Servo drive" picker appears when the rig has several);
-every drive gets its axis. The dashboard thread calls :meth:`DriveView.update` with each new
-frame and :meth:`DriveView.tick` about 30 times a second; the plots sample in the simulation
+The panels show one drive at a time, each page the one it picked (a "Servo drive" picker
+appears when the rig has several: app/ui/panels/client_pick.py); every drive gets its axis.
+The dashboard thread calls :meth:`DriveView.update` with each new frame and
+:meth:`DriveView.tick` about 30 times a second; the plots sample every drive in the simulation
 thread (``plots.DriveSampler``).
 """
 

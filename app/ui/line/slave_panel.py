@@ -1,6 +1,7 @@
 """The slave panel (left panel, tab "Slave"): the picked slave's state, its LEDs in words
 (name, colour, pattern) and its I/O, for the TRS-CAT, the CPX-E-EC and the drive's EtherCAT
-side; the FastCAT has its own State tab. A click on a slave in the 3D view picks it here.
+side; the FastCAT has its own State tab. A click on a slave in the 3D view picks it here, on
+the clicking page.
 """
 
 from __future__ import annotations
