@@ -20,7 +20,7 @@ import viser
 from viser._messages import GuiUpdateMessage  # viser 1.1.1, pinned
 
 from app.ui.commands import CommandSender
-from app.ui.panels.client_pick import send_to
+from app.ui.panels.client_pick import page_ready, send_to
 
 logger = logging.getLogger(__name__)
 
@@ -92,6 +92,8 @@ class ClientMirror(ClientInput):
             for gone in set(self._seen) - set(clients) - {None}:
                 del self._seen[gone]
             for client_id, client in clients.items():
+                if not page_ready(self._server, client):
+                    continue  # a later frame sends it
                 value = value_for(client_id)
                 if value is not None and value != self._seen.get(client_id, _NOTHING):
                     self._seen[client_id] = value
@@ -146,8 +148,9 @@ class ClientSynced(ClientInput):
         for gone in set(self._model) - set(clients):
             del self._model[gone]
         for client_id, value in values.items():
-            if value is None or self._pending.get(client_id):
-                continue
+            if value is None or self._pending.get(client_id) \
+                    or not page_ready(self._server, clients[client_id]):
+                continue  # a later frame sends it
             if self._model.get(client_id, _NOTHING) != value:
                 self._model[client_id] = value
                 self.set_for(clients[client_id], value)

@@ -28,6 +28,24 @@ logger = logging.getLogger(__name__)
 _NOTHING = "\x00"
 
 
+_BACKLOG = "_fieldrig_backlog"
+
+
+def page_ready(server: viser.ViserServer, client: viser.ClientHandle) -> bool:
+    """True once ``client``'s page has been sent every server-level element that existed when
+    it was first asked about. Its own messages and the server's replay of those elements go
+    out by two producers in no set order, and the page drops an update of an element it does
+    not have yet (viser 1.1.1 client, MessageHandler.tsx): a page's first content sent too
+    early was lost for good, its cache saying it was sent (seen: an instructor's page got its
+    own messages before the replay)."""
+    buffer = server._websock_server._broadcast_buffer
+    backlog = getattr(client, _BACKLOG, None)
+    if backlog is None:
+        backlog = buffer.message_counter - 1
+        setattr(client, _BACKLOG, backlog)
+    return bool(buffer.generator_cursors.get(client.client_id, -1) >= backlog)
+
+
 def send_to(client: viser.ClientHandle, uuid: str, prop: str, value: Any) -> None:
     """Set ``prop`` of the widget ``uuid`` on ``client``'s page only."""
     try:
@@ -118,6 +136,8 @@ class ClientHtml:
             for gone in set(self._sent) - set(clients):
                 del self._sent[gone]
             for client_id, client in clients.items():
+                if not page_ready(self._server, client):
+                    continue  # a later frame sends it
                 content = content_for(client_id)
                 if self._sent.get(client_id) != content:
                     self._sent[client_id] = content
