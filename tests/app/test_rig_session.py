@@ -7,20 +7,27 @@ machine the event log was read before its last rows were there.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 from app.testing import rig_session
 
 
 def test_the_dashboard_has_drawn_each_step_and_command_when_they_return() -> None:
     with rig_session() as rig:
         dashboard, runtime = rig.served.dashboard, rig.served.runtime
-        rig.command("fastcat", "power", on=True)
-        assert dashboard.rendered_seq >= runtime.frame.seq
+        # A paused runtime keeps publishing frames (30 Hz): the frame published by the time
+        # the assertion reads it may be newer than the one drawn, so each call is checked
+        # against the frame before it: one published after its step has been drawn.
+        def drawn_after(call: Callable[[], object]) -> None:
+            before = runtime.frame.seq
+            call()
+            assert dashboard.rendered_seq > before
+
+        drawn_after(lambda: rig.command("fastcat", "power", on=True))
         for _ in range(6):
-            rig.advance(0.5)
-            assert dashboard.rendered_seq >= runtime.frame.seq
-        rig.command("fastcat/2", "unplug")
-        rig.advance(0.1)
-        assert dashboard.rendered_seq >= runtime.frame.seq
+            drawn_after(lambda: rig.advance(0.5))
+        drawn_after(lambda: rig.command("fastcat/2", "unplug"))
+        drawn_after(lambda: rig.advance(0.1))
         panels = dashboard._panels
         assert panels is not None
         # Seed 000 §7: module 2 gone in OP, the coupler's emergency; the step's event is in
