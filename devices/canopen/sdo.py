@@ -46,12 +46,12 @@ from devices.od import AbortCode, DataType, OdEntry, SdoAbort, encode
 
 SDO_RX_BASE = 0x600  # client -> server (request)
 SDO_TX_BASE = 0x580  # server -> client (response)
-_CCS_DOWNLOAD, _CCS_UPLOAD = 0x20, 0x40
+CCS_DOWNLOAD, CCS_UPLOAD = 0x20, 0x40
 _CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT, _CCS_ABORT = 0x00, 0x60, 0x80
 _CCS_BLOCK_UPLOAD, _BLOCK_SUBCOMMAND = 0xA0, 0x03  # cs (bits 0-1) 0: the initiate request
 _SCS_UPLOAD_SEGMENT, _SCS_DOWNLOAD_SEGMENT, _SCS_UPLOAD, _SCS_DOWNLOAD, _SCS_ABORT = (
     0x00, 0x20, 0x40, 0x60, 0x80)
-_EXPEDITED, _SIZE_GIVEN, _LAST_SEGMENT = 0x02, 0x01, 0x01
+EXPEDITED, SIZE_GIVEN, _LAST_SEGMENT = 0x02, 0x01, 0x01
 _UP, _DOWN = "upload", "download"
 _SIGNED = frozenset({DataType.INTEGER8, DataType.INTEGER16, DataType.INTEGER32})
 _WIDTH = {DataType.BOOLEAN: 1, DataType.INTEGER8: 1, DataType.UNSIGNED8: 1,
@@ -123,9 +123,9 @@ class SdoChannel:
             self.server._subindex = request[3]
         elif self.server._index is None:
             self.server._index, self.server._subindex = 0, 0
-        if ccs == _CCS_DOWNLOAD:
-            self._size_given = bool(command & _SIZE_GIVEN) or not command & _EXPEDITED
-            if not command & _EXPEDITED and not self._initiate_segmented(request):
+        if ccs == CCS_DOWNLOAD:
+            self._size_given = bool(command & SIZE_GIVEN) or not command & EXPEDITED
+            if not command & EXPEDITED and not self._initiate_segmented(request):
                 return
         if ccs == _CCS_BLOCK_UPLOAD and not self._may_switch_protocol(request):
             return
@@ -167,9 +167,9 @@ class SdoChannel:
         if scs == _SCS_ABORT:
             self._transfer = None
         elif scs == _SCS_UPLOAD:
-            self._transfer = None if response[0] & _EXPEDITED else _UP
+            self._transfer = None if response[0] & EXPEDITED else _UP
         elif scs == _SCS_DOWNLOAD:
-            self._transfer = None if request[0] & _EXPEDITED else _DOWN
+            self._transfer = None if request[0] & EXPEDITED else _DOWN
         elif (scs == _SCS_UPLOAD_SEGMENT and response[0] & _LAST_SEGMENT) or \
                 (scs == _SCS_DOWNLOAD_SEGMENT and request[0] & _LAST_SEGMENT):
             self._transfer = None  # the server's "no more data" / the client's last segment

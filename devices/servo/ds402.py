@@ -137,6 +137,18 @@ def decode(controlword: int) -> Command | None:
     return Command.SWITCH_ON
 
 
+# The controlword a master writes for each command (DSP 402; seed 004 ch. 4 enable sequence
+# 0x0006, 0x0007, 0x000F, "release" 0x0002; bit 7's rising edge resets a fault).
+COMMAND_WORDS: dict[Command, int] = {
+    Command.SHUTDOWN: 0x0006,
+    Command.SWITCH_ON: 0x0007,
+    Command.ENABLE_OPERATION: 0x000F,
+    Command.DISABLE_VOLTAGE: 0x0000,
+    Command.QUICK_STOP: 0x0002,
+    Command.FAULT_RESET: 0x0080,
+}
+
+
 # ---- statusword 0x6041 -------------------------------------------------------------------
 # Bits 0-3, 5, 6 of each state (DSP 402 statusword table; "x" bits as 0). Bit 4 "voltage
 # enabled" is added for the states with the power stage ready.

@@ -22,6 +22,9 @@ SAVE_COMMAND_VALUE = 0x0011
 # c9 values that select a fieldbus (ch. 2, 4, 5, 6).
 FIELDBUS_BY_C9: dict[int, str] = {3: "modbus", 5: "canopen", 11: "ethercat", 13: "profinet"}
 C9_BY_FIELDBUS: dict[str, int] = {name: code for code, name in FIELDBUS_BY_C9.items()}
+# How the dashboard names each fieldbus (the Drive tab's title, the c9 choices).
+FIELDBUS_NAMES: dict[str, str] = {"modbus": "Modbus RTU", "canopen": "CANopen",
+                                  "ethercat": "EtherCAT", "profinet": "Profinet"}
 
 # The highest node number c7 may take, by c9: a Modbus line assigns 1..90 to the slaves and
 # reserves 91..255 (ch. 2 "Configurazione della rete", "Composizione del frame"); any other

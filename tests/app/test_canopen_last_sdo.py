@@ -14,8 +14,8 @@ from typing import Any
 import pytest
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.ui.drive import canopen_master as cm
 from app.ui.drive.canopen_panel import status_rows
+from devices.canopen import master_frames as mf
 
 NODE = "drive_co-can"  # the default rig's drive on CANopen
 
@@ -28,7 +28,7 @@ def rig() -> Any:
     return rig
 
 
-def last_sdo(rig: Any, frame: cm.Frame) -> str:
+def last_sdo(rig: Any, frame: mf.Frame) -> str:
     node = rig.devices[NODE]
     node.receive(frame.can_id, frame.data)
     for _ in range(20):  # the answer leaves within a few ms at 500 kbit/s
@@ -41,19 +41,19 @@ def last_sdo(rig: Any, frame: cm.Frame) -> str:
 
 def test_download_reads_as_a_sentence(rig: Any) -> None:
     node_id = int(rig.devices[NODE].node_id)
-    text = last_sdo(rig, cm.sdo_download(node_id, 0x1017, 0, 500, 2))
+    text = last_sdo(rig, mf.sdo_download(node_id, 0x1017, 0, 500, 2))
     assert text == f"Download (write) 0x1017:00 = F4 01 to node {node_id}: done.", text
     assert "->:" not in text
 
 
 def test_upload_names_the_value_read(rig: Any) -> None:
     node_id = int(rig.devices[NODE].node_id)
-    text = last_sdo(rig, cm.sdo_upload(node_id, 0x1017, 0))
+    text = last_sdo(rig, mf.sdo_upload(node_id, 0x1017, 0))
     assert text == f"Upload (read) 0x1017:00 from node {node_id}: value 00 00.", text
 
 
 def test_an_abort_says_why(rig: Any) -> None:
     node_id = int(rig.devices[NODE].node_id)
-    text = last_sdo(rig, cm.sdo_download(node_id, 0x1000, 0, 1, 4))  # device type: read only
+    text = last_sdo(rig, mf.sdo_download(node_id, 0x1000, 0, 1, 4))  # device type: read only
     assert text.startswith(f"Download (write) 0x1000:00 = 01 00 00 00 to node {node_id}: "
                            "aborted by the node, 0x06010002"), text

@@ -16,6 +16,7 @@ from served_dashboard import drawn, served_default_rig
 from app.screenshots import ServedRig
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.canopen_panel import CanOpenMaster
+from devices.canopen import master_frames as mf
 
 DRIVE, NODE = "drive_co", "drive_co-can"  # the default rig's drive on CANopen
 
@@ -45,7 +46,7 @@ def test_heartbeat_box_follows_an_sdo_download(served: ServedRig) -> None:
     master = master_of(served)
     drawn(served)
     node = served.runtime.rig.devices[NODE]
-    frame = cm.sdo_download(int(node.node_id), *cm.HEARTBEAT, 250, 2)
+    frame = mf.sdo_download(int(node.node_id), *cm.HEARTBEAT, 250, 2)
     served.runtime.submit(lambda: node.receive(frame.can_id, frame.data)).result(10)
     drawn(served)
     assert node.snapshot()["heartbeat_ms"] == 250

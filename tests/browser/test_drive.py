@@ -43,6 +43,7 @@ from app.ui.drive.drive_state import (
 )
 from app.ui.drive.plots import SAMPLE_US
 from app.ui.drive.view import companion
+from devices.canopen import master_frames as mf
 from devices.events import AlarmChanged, EmergencySent, LogLine, StateChanged
 from devices.servo.alarms import alarm_table
 
@@ -267,19 +268,19 @@ def test_drive_log_words() -> None:
 def test_master_frames_byte_for_byte() -> None:
     """DS 301: NMT (command, node) on COB-ID 0; expedited SDO download with the size
     indicated (0x2B = 2 bytes, 0x2F = 1, 0x23 = 4), upload 0x40; index little-endian."""
-    assert cm.nmt(0x01, 1) == cm.Frame(0x000, bytes([0x01, 0x01]))
-    assert cm.sdo_download(1, 0x6040, 0, 0x0F, 2) == cm.Frame(
+    assert mf.nmt(0x01, 1) == mf.Frame(0x000, bytes([0x01, 0x01]))
+    assert mf.sdo_download(1, 0x6040, 0, 0x0F, 2) == mf.Frame(
         0x601, bytes([0x2B, 0x40, 0x60, 0x00, 0x0F, 0x00, 0x00, 0x00]))
-    assert cm.sdo_download(3, 0x6060, 0, -1, 1).data == bytes([0x2F, 0x60, 0x60, 0, 0xFF, 0,
+    assert mf.sdo_download(3, 0x6060, 0, -1, 1).data == bytes([0x2F, 0x60, 0x60, 0, 0xFF, 0,
                                                                0, 0])
-    assert cm.sdo_download(1, 0x607A, 0, 6000, 4).data[:8] == bytes([0x23, 0x7A, 0x60, 0, 0x70,
+    assert mf.sdo_download(1, 0x607A, 0, 6000, 4).data[:8] == bytes([0x23, 0x7A, 0x60, 0, 0x70,
                                                                      0x17, 0, 0])
-    assert cm.sdo_upload(1, 0x1018, 1) == cm.Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0,
+    assert mf.sdo_upload(1, 0x1018, 1) == mf.Frame(0x601, bytes([0x40, 0x18, 0x10, 1, 0, 0, 0,
                                                                  0]))
     assert cm.parse_object("0x6041:0") == (0x6041, 0) and cm.parse_object("1018:4") == (0x1018,
                                                                                       4)
     with pytest.raises(ValueError):
-        cm.sdo_download(1, 0x6040, 0, 1, 5)
+        mf.sdo_download(1, 0x6040, 0, 1, 5)
     with pytest.raises(ValueError):
         cm.parse_object("zz")
 

@@ -16,6 +16,7 @@ import pytest
 from helpers import LiveDashboard, choose, open_dashboard, wait_until
 
 from app.ui.drive import canopen_master as cm
+from devices.canopen import master_frames as mf
 
 pytestmark = pytest.mark.browser
 
@@ -72,12 +73,12 @@ def test_canopen_time_column_keeps_its_numbers_whole(live: LiveDashboard, page: 
     live.advance(BOOT_S)
     node_id = "drive_co-can"
     node = live.rig.devices[node_id]
-    heartbeat = cm.sdo_download(int(node.node_id), *cm.HEARTBEAT, 500, 2)
+    heartbeat = mf.sdo_download(int(node.node_id), *cm.HEARTBEAT, 500, 2)
     live.runtime.submit(lambda: node.receive(heartbeat.can_id, heartbeat.data)).result(10)
     live.advance(3.0)  # past 10 s: times of six characters ("10.250")
     # Repeated heartbeats are no rows (one heartbeat line above the log): an SDO upload
     # after 10 s puts rows with such times in the log.
-    read = cm.sdo_upload(int(node.node_id), *cm.HEARTBEAT)
+    read = mf.sdo_upload(int(node.node_id), *cm.HEARTBEAT)
     live.runtime.submit(lambda: node.receive(read.can_id, read.data)).result(10)
     live.advance(0.1)
     page.get_by_role("tab", name="Servo drive").click()

@@ -5,10 +5,10 @@ the drive up from the browser.
 Everything shown comes from the CANopen node's snapshot (devices/canopen/node.py,
 docs/canopen.md): ``nmt``, ``heartbeat_ms``, guarding, ``error_register``, ``rpdo`` /
 ``tpdo`` with their mappings, ``last_sdo`` / ``last_pdo`` and the last decoded frames. The
-master's frames (``canopen_master``) go to the node in the simulation thread, as if they came
-off the bus; the node answers on its line at the n1 bit rate, and both directions appear in the
-log. They do not leave the process: a master on ``--can-interface udp_multicast`` does not see
-them (docs/dashboard.md).
+master's frames (devices/canopen/master_frames.py) go to the node in the simulation thread, as
+if they came off the bus; the node answers on its line at the n1 bit rate, and both directions
+appear in the log. They do not leave the process: a master on ``--can-interface
+udp_multicast`` does not see them (docs/dashboard.md).
 """
 
 from __future__ import annotations
@@ -22,13 +22,14 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.bus_state import nmt_badge
-from app.ui.drive.drive_state import FIELDBUS_NAMES
 from app.ui.panels.client_input import ClientMirror
 from app.ui.panels.client_pick import PickedHtml
 from app.ui.panels.widgets import Mirror
 from app.ui.style import esc, kv_table
+from devices.canopen import master_frames as mf
 from devices.device import CommandError
 from devices.od import SdoAbort
+from devices.servo.parameters import FIELDBUS_NAMES
 
 FRAME_ROWS = 60
 KIND_CLASS = {"EMCY": "fr-emcy"}
@@ -211,13 +212,13 @@ class CanOpenMaster:
         def _(event: viser.GuiEvent) -> None:
             command = cm.NMT_COMMANDS.get(self._nmt.value)
             if command is not None:
-                self._send(event.client, "NMT", lambda node: cm.nmt(command, node))
+                self._send(event.client, "NMT", lambda node: mf.nmt(command, node))
 
         def controlword(event: viser.GuiEvent, value: str) -> None:
             cw = cm.CONTROLWORD_COMMANDS[value]
             index, sub = cm.CONTROLWORD
             self._send(event.client, f"0x6040 = 0x{cw:04X}",
-                       lambda node: cm.sdo_download(node, index, sub, cw, 2))
+                       lambda node: mf.sdo_download(node, index, sub, cw, 2))
 
         cw_a.on_click(lambda event: controlword(event, cw_a.value))
         cw_b.on_click(lambda event: controlword(event, cw_b.value))
@@ -227,7 +228,7 @@ class CanOpenMaster:
             ms = int(self._typed(event))
             index, sub = cm.HEARTBEAT
             self._send(event.client, "0x1017",
-                       lambda node: cm.sdo_download(node, index, sub, ms, 2))
+                       lambda node: mf.sdo_download(node, index, sub, ms, 2))
 
         @sdo.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -239,10 +240,10 @@ class CanOpenMaster:
                 return
             if sdo.value == "Upload":
                 self._send(event.client, "SDO upload",
-                           lambda node: cm.sdo_upload(node, index, sub))
+                           lambda node: mf.sdo_upload(node, index, sub))
             else:
                 self._send(event.client, "SDO download",
-                           lambda node: cm.sdo_download(node, index, sub, value,
+                           lambda node: mf.sdo_download(node, index, sub, value,
                                                         self._object_size(event.client,
                                                                           index, sub)))
 
@@ -295,7 +296,7 @@ class CanOpenMaster:
         return size if 1 <= size <= 4 else 4
 
     def _send(self, client: viser.ClientHandle | None, label: str,
-              build: Callable[[int], cm.Frame]) -> None:
+              build: Callable[[int], mf.Frame]) -> None:
         def run() -> None:
             node = self._device(client)
             if node is None or not getattr(node, "active", False):

@@ -19,7 +19,7 @@ import viser
 from app.classroom.roles import Role, makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
-from app.ui.drive.drive_state import FIELDBUS_NAMES, injected_names
+from app.ui.drive.drive_state import injected_names
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.per_client import instructor_for
@@ -29,7 +29,12 @@ from devices.device import Action
 from devices.servo import control
 from devices.servo.alarms import alarm_table
 from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, register_address
-from devices.servo.parameters import FIELDBUS_BY_C9, PARAMETER_BY_NAME, PARAMETERS
+from devices.servo.parameters import (
+    FIELDBUS_BY_C9,
+    FIELDBUS_NAMES,
+    PARAMETER_BY_NAME,
+    PARAMETERS,
+)
 from devices.servo.registers import MODE_NAMES, REGISTERS, R
 
 # The drive a page's controls command (None: no page, a new page's)

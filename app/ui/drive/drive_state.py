@@ -24,10 +24,8 @@ from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
 from devices.servo.actions import names_a_cause
+from devices.servo.parameters import FIELDBUS_NAMES
 from devices.servo.registers import MODE_NAMES
-
-FIELDBUS_NAMES = {"modbus": "Modbus RTU", "canopen": "CANopen", "ethercat": "EtherCAT",
-                  "profinet": "Profinet"}
 
 LOG_ROWS = 12
 
