@@ -24,7 +24,18 @@ class AlState(enum.IntEnum):
         return self.name
 
 
+AL_STATE_MASK = 0x0F  # AL status bits 0..3: the state
 AL_STATUS_ERROR_FLAG = 0x10  # AL status bit 4: "error indication" (0x12 = PREOP + error)
+
+
+def al_status_name(value: int) -> str:
+    """An AL status register (0x0130) in words: ``PREOP + error`` for 0x12."""
+    state_bits = value & AL_STATE_MASK
+    try:
+        name = AlState(state_bits).name
+    except ValueError:
+        name = f"state 0x{state_bits:X}"
+    return f"{name} + error" if value & AL_STATUS_ERROR_FLAG else name
 
 # Transitions a master may request (ETG.1000.6 ESM); a request outside this set answers
 # AL status code 0x0011 "Invalid requested state change".

@@ -31,6 +31,7 @@ NOISE_PER_MS = 0.05
 
 # 0x7600 operating parameters (§6.30). §6.30 prints "Bit 1 (0x1)": the mask 0x0001 is what a
 # PLC programmer writes, so bit 0 it is (docs). Two inversions of one encoder cancel (XOR).
+COMMAND_INDEX = 0x7600  # module N's at 0x7600 + 0x10 * (N - 1) (module_od.object_index)
 CMD_INVERT_BOTH = 0x0001
 CMD_ZERO_CYCLE = (0x1000, 0x2000)  # bit 12 / 13: zero cycle encoder 1 / 2
 CMD_INVERT = (0x4000, 0x8000)  # bit 14 / 15: invert encoder 1 / 2
@@ -317,7 +318,7 @@ class Ax2:
         add_object(od, 0x4003, n, 2, lambda ch: int(self.inputs[ch].disabled), put_disabled)
         add_object(od, 0x6500, n, 2, lambda ch: self.inputs[ch].position, put_position)
         add_object(od, 0x6600, n, 1, lambda _ch: self.status)
-        add_object(od, 0x7600, n, 1, lambda _ch: self.command, put_command)
+        add_object(od, COMMAND_INDEX, n, 1, lambda _ch: self.command, put_command)
 
     @staticmethod
     def tx_entries(n: int) -> list[tuple[int, int, int]]:
@@ -325,7 +326,7 @@ class Ax2:
 
     @staticmethod
     def rx_entries(n: int) -> list[tuple[int, int, int]]:
-        return pdo_entries(0x7600, n, 1)
+        return pdo_entries(COMMAND_INDEX, n, 1)
 
     def snapshot(self) -> list[dict[str, Any]]:
         status = self.status

@@ -20,9 +20,10 @@ from app.ui.panels.object_dictionary import (
     parse_value,
     render,
 )
-from app.ui.panels.state import al_code_text, al_status_text, state_rows
+from app.ui.panels.state import al_code_text, state_rows
 from app.ui.rail_scene import LED_OFF, LIT, led_color, module_led_legend, slot_ranges
 from devices.device import CommandError
+from devices.ethercat import al_status_name
 from devices.events import AlarmChanged, Caption, EmergencySent, LedChanged, StateChanged
 from devices.fastcat.alarms import CODE_TABLES, COUPLER_CODES, MODULE_CODES
 from devices.leds import PATTERN_TIMING_MS, LedPattern
@@ -70,7 +71,7 @@ def test_al_status_code_text(code: int, text: str) -> None:
     (0x14, "SAFEOP + error"),
 ])
 def test_al_status_register_text(value: int, text: str) -> None:
-    assert al_status_text(value) == text
+    assert al_status_name(value) == text
 
 
 def test_state_rows_show_fault_emergency_word_and_alarm() -> None:

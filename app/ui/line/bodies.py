@@ -23,6 +23,7 @@ import viser
 
 from app.ui.line.painter import FRONT_Y, Painter
 from app.ui.rail_scene import BODY_D, BODY_H, PATTERN_WORDS, RGB
+from devices.ethercat import AL_STATUS_ERROR_FLAG
 from devices.master.view import phase_text
 
 BODY: RGB = (214, 219, 228)
@@ -77,7 +78,7 @@ def state_tone(entry: Mapping[str, Any], target: str | None = None) -> str:
     master's target state (a slave the master parked in SAFEOP is not ok)."""
     if not entry or entry.get("present") is False or entry.get("state") is None:
         return "gone"
-    if int(entry.get("al_status", 0)) & 0x10 or entry.get("al_status_code"):
+    if int(entry.get("al_status", 0)) & AL_STATUS_ERROR_FLAG or entry.get("al_status_code"):
         return "bad"
     wanted = target or entry.get("requested") or entry.get("state")
     return "ok" if entry.get("state") == wanted else "busy"

@@ -23,11 +23,10 @@ import viser
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
 from app.ui.panels.per_client import RoleHtml, instructor_for
-from app.ui.panels.state import al_status_text
 from app.ui.panels.widgets import Synced
 from app.ui.repeats import Run, collapse_repeats, repeat_suffix
 from app.ui.style import badge, esc, kv_table
-from devices.ethercat import describe_al_status_code
+from devices.ethercat import AL_STATUS_ERROR_FLAG, al_status_name, describe_al_status_code
 from devices.events import US_PER_S
 from devices.master.view import phase_text
 
@@ -42,7 +41,7 @@ def state_badge(slave: Mapping[str, Any], target: str | None = None) -> str:
     if state is None or slave.get("present") is False:
         return badge("not seen", "bad")
     requested = slave.get("requested")
-    error = int(slave.get("al_status", 0)) & 0x10 or slave.get("al_status_code")
+    error = int(slave.get("al_status", 0)) & AL_STATUS_ERROR_FLAG or slave.get("al_status_code")
     tone = "bad" if error else ("ok" if state == (target or requested or state) else "warn")
     text = state if requested in (None, state) else f"{state} -> {requested}"
     return badge(text, tone)
@@ -57,7 +56,7 @@ def al_cell(slave: Mapping[str, Any]) -> str:
     code_html = esc(f"0x{code:04X} {text}")
     if code:
         code_html = f'<span class="fr-line-bad">{code_html}</span>'
-    return f"0x{status:04X} {esc(al_status_text(status))}<br>{code_html}"
+    return f"0x{status:04X} {esc(al_status_name(status))}<br>{code_html}"
 
 
 def seen_cell(slave: Mapping[str, Any]) -> str:

@@ -16,10 +16,11 @@ from app.ui.line.bodies import as_drawn, led_colour
 from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_parts
 from app.ui.panels.client_pick import ClientHtml, ClientPick
 from app.ui.panels.per_client import instructor_for, split_instructor
-from app.ui.panels.state import al_status_text, injected_text
+from app.ui.panels.state import injected_text
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
-from devices.ethercat import describe_al_status_code
+from devices.cpx.esm import AL_STATUS_ID_LOADED
+from devices.ethercat import al_status_name, describe_al_status_code
 
 MESSAGES = 6  # newest 0x10F3 messages shown
 
@@ -52,7 +53,7 @@ def esm_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
     status = int(snap.get("al_status", 0))
     text = snap.get("al_status_text") or describe_al_status_code(code)
     return [("ESM state", esm_badge(snap)),
-            ("AL status", esc(f"0x{status:04X} {al_status_text(status)}")),
+            ("AL status", esc(f"0x{status:04X} {al_status_name(status)}")),
             ("AL status code", esc(f"0x{code:04X} {text}")),
             ("Station address", esc(snap.get("station_address", "-")))]
 
@@ -192,7 +193,7 @@ def id_text(snap: Mapping[str, Any]) -> str:
     text = esc(f"0x{ident:03X}" if ident else "0x000 (none: stored address)")
     if not snap.get("id_loaded"):
         return text
-    status = int(snap.get("al_status", 0)) | 0x20
+    status = int(snap.get("al_status", 0)) | AL_STATUS_ID_LOADED
     return (text + " " + badge("ID loaded", "ok") +
             esc(f" wire: 0x0130 = 0x{status:04X}, 0x0134 = 0x{ident:04X}"))
 

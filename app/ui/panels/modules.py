@@ -26,17 +26,12 @@ from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import Synced, set_options
 from app.ui.style import esc
 from devices.device import Action
+from devices.fastcat.encoder import CMD_ZERO_CYCLE, COMMAND_INDEX
+from devices.fastcat.module_od import object_index
 
-ENCODER_COMMAND_BASE = 0x7600  # §6.30, per module: + 0x10 * (N - 1)
-ZERO_CYCLE_BITS = (0x1000, 0x2000)  # §6.30: bit 12 encoder 1, bit 13 encoder 2
 # Module actions with their own widgets here; the rest go to the generated form.
 DEDICATED = frozenset({"unplug", "plug", "swap", "module_power", "set_shaft_speed"})
 KIND = "fastcat"  # the coupler's kind in app.classroom.roles
-
-
-def module_index(base: int, slot: int) -> int:
-    """Seed 000 §6: per-module objects at base + 0x10 * (N - 1)."""
-    return base + 0x10 * (slot - 1)
 
 
 def plug_preset(entry: Mapping[str, Any] | None, catalog: Sequence[str]) -> str | None:
@@ -237,7 +232,7 @@ class ModulePanel:
         slot = self._slot()
         if slot is None:
             return
-        index, bit = module_index(ENCODER_COMMAND_BASE, slot), ZERO_CYCLE_BITS[k]
+        index, bit = object_index(COMMAND_INDEX, slot), CMD_ZERO_CYCLE[k]
         rig = self._runtime.rig
 
         def read_modify_write() -> int:
@@ -306,7 +301,7 @@ class ModulePanel:
         if entry.get("encoders") is not None:
             command = int(entry.get("command", 0))  # 0x7600 as the module holds it
             for k, synced in enumerate(self._zero_syncs):
-                synced.follow(bool(command & ZERO_CYCLE_BITS[k]))
+                synced.follow(bool(command & CMD_ZERO_CYCLE[k]))
             html = encoder_text(entry)
             if self._encoder_state.content != html:
                 self._encoder_state.content = html

@@ -19,18 +19,8 @@ import viser
 
 from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
-from devices.ethercat import AlState
+from devices.ethercat import al_status_name
 from devices.fastcat.alarms import al_status_meaning
-
-
-def al_status_text(value: int) -> str:
-    """AL status register: state in bits 0..3, error indication in bit 4 (0x12 = PREOP+err)."""
-    state_bits = value & 0x0F
-    try:
-        name = AlState(state_bits).name
-    except ValueError:
-        name = f"state 0x{state_bits:X}"
-    return f"{name} + error" if value & 0x10 else name
 
 
 def al_code_text(code: int) -> str:
@@ -84,7 +74,7 @@ def state_rows(snap: Mapping[str, Any]) -> list[tuple[str, str]]:
         ("ESM state", esm_html),
         ("Fault active", badge("TRUE", "bad") if fault else badge("FALSE", "ok")),
         ("0x5400", esc(f"0x{word:08X}")),
-        ("AL status", esc(f"0x{al_status:04X} {al_status_text(al_status)}")),
+        ("AL status", esc(f"0x{al_status:04X} {al_status_name(al_status)}")),
         ("AL status code", esc(f"0x{al_code:04X} {al_code_text(al_code)}")),
         ("Alarm", alarm_text(snap.get("alarm"))),
         ("CNF", esc(phase)),
