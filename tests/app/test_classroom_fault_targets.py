@@ -89,3 +89,22 @@ def test_the_module_and_drive_fault_forms_confirm_too(
     [(said, _body, color)] = _notes(instructor)[before:]
     assert color == "blue" and title in said, said
     assert _notes(trainee) == []
+
+
+def test_the_instructors_target_list_follows_a_plugged_expansion(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """An expansion plugged after the instructor's form was built is offered in its own
+    Target list (the pick stays); before, the list was the snapshot of its building."""
+    live, _trainee, instructor = served
+    instructor.set(_in(instructor, "Slave faults", "Device"), "trscat")
+    target = _in(instructor, "trscat", "Target")
+    assert _options(instructor, target) == ("trscat", "trscat/1", "trscat/2")
+    instructor.set(target, "trscat/2")
+    live.runtime.command("trscat/3", "plug", {"type": "TRS-IO-E"}).result(timeout=10)
+    live.runtime.advance(100_000).result(timeout=30)
+    _wait(lambda: "trscat/3" in _options(instructor, target))
+    assert _options(instructor, target) == ("trscat", "trscat/1", "trscat/2", "trscat/3")
+    # The page picked trscat/2 itself; nothing the server sent since moved it.
+    moved = [(m.get("updates") or {})["value"] for m in instructor.received()
+             if m.get("uuid") == target and "value" in (m.get("updates") or {})]
+    assert set(moved) <= {"trscat/2"}, moved

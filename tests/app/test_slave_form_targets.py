@@ -6,9 +6,12 @@ set_rotary and the device-level cable / power / supply, which the device then re
 
 from __future__ import annotations
 
+from typing import Any
+
 from served_dashboard import drawn, served_default_rig
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.ui.line.target_actions import TargetActions, Watch
 
 DEVICE_ONLY = {"power", "supply", "cable", "set_rotary", "set_dil", "restart"}
 
@@ -58,3 +61,43 @@ def test_the_forms_offer_what_the_picked_target_takes() -> None:
         assert {"set_dil", "set_rotary", "restart"} <= set(operate.options())
         assert {"cable", "power", "supply"} <= set(faults.options())
         assert "short_circuit" not in faults.options()
+
+
+def test_the_target_lists_follow_the_rig() -> None:
+    """An expansion plugged after the first snapshot is offered as a Target, and the pick
+    stays. Before, the lists were the first snapshot's for good."""
+    with served_default_rig(1.0) as live:
+        controls = live.dashboard.line.controls  # type: ignore[union-attr]
+        target = controls.targets["trscat"]
+        assert tuple(target.options) == ("trscat", "trscat/1", "trscat/2")
+        target.value = "trscat/2"
+        live.runtime.command("trscat/3", "plug", {"type": "TRS-IO-E"}).result(timeout=10)
+        drawn(live)
+        assert tuple(target.options) == ("trscat", "trscat/1", "trscat/2", "trscat/3")
+        assert target.value == "trscat/2"
+
+
+class _Dropdown:
+    def __init__(self, options: tuple[str, ...], value: str) -> None:
+        self.options, self.value = options, value
+
+
+class _Sender:
+    def __init__(self) -> None:
+        self.asked: list[str] = []
+
+    def submit(self, _client: Any, what: str, _fn: Any, done: Any = None) -> None:
+        self.asked.append(what)
+
+
+def test_a_target_gone_from_the_rig_falls_back_to_the_device() -> None:
+    sender = _Sender()
+    actions = TargetActions(None, sender)  # type: ignore[arg-type]
+    dropdown = _Dropdown(("cpx", "cpx/1", "cpx/2"), "cpx/2")
+    watch = Watch("cpx", dropdown, ())
+    first = {"cpx": {"modules": [{"module": 1, "type": "A"}, {"module": 2, "type": "B"}]}}
+    actions.update([watch], first)
+    assert dropdown.options == ("cpx", "cpx/1", "cpx/2") and sender.asked == []
+    actions.update([watch], {"cpx": {"modules": [{"module": 1, "type": "A"}]}})
+    assert dropdown.options == ("cpx", "cpx/1") and dropdown.value == "cpx"
+    assert sender.asked == ["target actions"]  # the new pick's actions, asked again

@@ -18,7 +18,7 @@ import pytest
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.ui.line.bodies import blink_words, header_text, state_tone
 from app.ui.line.cables import Cable, cable_label, label_point, pulled_route, pulled_text, route
-from app.ui.line.controls import cable_options, slave_options, targets
+from app.ui.line.controls import cable_options, slave_options
 from app.ui.line.io_bodies import (
     LED_WORDS,
     REASON_WORDS,
@@ -39,6 +39,7 @@ from app.ui.line.master_panel import (
 )
 from app.ui.line.scene import Box, line_order, slave_entries
 from app.ui.line.slave_panel import alarm_text, bits, slave_html
+from app.ui.line.target_actions import targets
 from app.ui.line.view import camera_for, focus_target
 from app.ui.panels.per_client import split_instructor
 from devices.cpx.leds import MODULE_LED_CAUSES, module_error_led

@@ -27,7 +27,7 @@ from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
-from app.ui.line.target_actions import TargetActions, Watch
+from app.ui.line.target_actions import TargetActions, Watch, targets
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_pick import ClientPick, send_all, send_to
 from app.ui.panels.per_client import instructor_for
@@ -71,14 +71,6 @@ def slave_options(master: Mapping[str, Any], order: Sequence[str]) -> list[str]:
     return out
 
 
-def targets(device: str, snap: Mapping[str, Any]) -> list[str]:
-    """The device and its parts a command can address: TRS-CAT expansions (slots 1..),
-    CPX-E-EC modules (1..)."""
-    parts = [int(s.get("slot", 0)) for s in snap.get("slots") or []][1:]
-    parts += [int(m.get("module", 0)) for m in snap.get("modules") or []]
-    return [device, *(f"{device}/{n}" for n in parts)]
-
-
 def leading_int(text: str) -> int:
     return int(str(text).split(" ", 1)[0])
 
@@ -119,7 +111,8 @@ class LineControls:
                  order: Sequence[str], actions: Mapping[str, Mapping[str, Action]],
                  devices: Mapping[str, Mapping[str, Any]], own_tabs: Sequence[str],
                  kinds: Mapping[str, str], runtime: Runtime) -> None:
-        """``devices``: the first snapshot of each device (its parts); ``own_tabs``: devices
+        """``devices``: the first snapshot of each device (the Target lists' first entries;
+        :meth:`update` keeps them with the rig); ``own_tabs``: devices
         with their own controls (the FastCAT), left out of "Slave actions"; ``kinds``: each
         device's kind (which of its actions can make a fault)."""
         gui = server.gui

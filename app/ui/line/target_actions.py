@@ -5,6 +5,10 @@ module, its type), asked in the simulation thread as Module I/O asks a FastCAT r
 (``available_actions``, app/ui/panels/modules.py); the answer is parked and the forms are
 restricted in the dashboard thread's next update. Before, ``cpx/2`` listed set_dil, set_rotary
 and the device's cable, power and supply, which the device refused once applied.
+
+The Target lists follow the rig the same way: a TRS-CAT expansion plugged (or taken off) after
+the dashboard started is offered (or dropped) at the next frame, the pick kept while it
+exists. Before, every list was the first snapshot's for good.
 """
 
 from __future__ import annotations
@@ -18,6 +22,15 @@ from app.runtime import Runtime
 from app.targets import parse_target
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.widgets import set_options
+
+
+def targets(device: str, snap: Mapping[str, Any]) -> list[str]:
+    """The device and its parts a command can address: TRS-CAT expansions (slots 1..),
+    CPX-E-EC modules (1..)."""
+    parts = [int(s.get("slot", 0)) for s in snap.get("slots") or []][1:]
+    parts += [int(m.get("module", 0)) for m in snap.get("modules") or []]
+    return [device, *(f"{device}/{n}" for n in parts)]
 
 
 @dataclass
@@ -67,14 +80,21 @@ class TargetActions:
 
     def update(self, watches: Iterable[Watch],
                devices: Mapping[str, Mapping[str, Any]] | None) -> None:
-        """Per frame: the parked lists shown; asked again when a device's parts changed."""
+        """Per frame: each Target list as the rig has it now, the parked lists shown; asked
+        again when a device's parts changed."""
+        devices = devices or {}
         changed = set()
-        for device, snap in (devices or {}).items():
+        for device, snap in devices.items():
             key = parts_key(snap)
             if self._keys.setdefault(device, key) != key:
                 self._keys[device] = key
                 changed.add(device)
         for watch in watches:
+            # Every frame, not only on a change of parts: a list built before the first
+            # update (an instructor's, from an older snapshot) catches up too. A vanished pick
+            # falls back to the device, whose on_update asks for its actions.
+            if watch.device in devices:
+                set_options(watch.target, targets(watch.device, devices[watch.device]))
             if watch.device in changed:
                 self.read(watch)
             with self._lock:
