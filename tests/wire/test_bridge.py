@@ -21,7 +21,9 @@ from wire_line import LINE, line_spec
 
 from app.ethercat_wire import faces
 from app.ethercat_wire import messages as msg
-from app.ethercat_wire.bridge import WireBridge, _FrameClock, check_interface
+from app.ethercat_wire.bridge import WireBridge
+from app.ethercat_wire.frame_clock import FrameClock
+from app.ethercat_wire.launch import check_interface
 from app.player import reset_in_place
 from app.rig_config import RigConfigError, build_rig, parse_rig_spec
 from app.runtime import Runtime
@@ -199,7 +201,7 @@ def test_frames_go_to_the_models_one_master_cycle_apart():
     burst (a burst leaves SYNC0 cycles without a frame, which the TRS-CAT counts as missed SM
     events, seed 001 §9.1.1), going on while the reports say the master cycles, none once they
     stop and the owed are out."""
-    clock = _FrameClock()
+    clock = FrameClock()
     clock.report(3, 0.012, now_us=100_000, wall=0.0)
     handed = [t for t in range(100_000, 120_000, 1_000) for _ in range(clock.due(t, 0.001))]
     assert handed == [100_000, 104_000, 108_000, 112_000, 116_000]
@@ -239,7 +241,7 @@ def test_a_dead_wire_process_hands_the_line_back(wire):
 def test_b_s_cycle_measurement_is_taken_only_when_the_next_agrees():
     """The window the master started in reads long (25 ms at a 4 ms cycle): B's first
     measurement, and any far from the present period, counts only once the next agrees."""
-    clock = _FrameClock()
+    clock = FrameClock()
     clock.report(3, 0.012, now_us=0, wall=0.0)  # the rough estimate from A's reports
     clock.master_cycle(25_000.0)
     assert clock.period_us == 4_000 and not clock.measured
@@ -255,7 +257,7 @@ def test_b_s_cycle_measurement_is_taken_only_when_the_next_agrees():
 
 def test_a_pause_between_two_long_measurements_keeps_the_period():
     """Two windows cut by a pause (no frames between them) must not agree on a long cycle."""
-    clock = _FrameClock()
+    clock = FrameClock()
     clock.master_cycle(4_000.0)
     clock.master_cycle(4_000.0)
     clock.master_cycle(20_000.0)
