@@ -10,9 +10,10 @@ seed 000 §7.1 as a CoE mailbox message, and ``stop``.
 
 from __future__ import annotations
 
+import contextlib
 import struct
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -69,6 +70,22 @@ class FakeB:
         raise AssertionError(f"no such message; seen: {self.seen[-10:]}")
 
 
+@contextlib.contextmanager
+def bridged(rig: Any) -> Iterator[tuple[Runtime, WireBridge, FakeB]]:
+    """``rig`` run by a Runtime, its line behind a bridge whose process B is a :class:`FakeB`;
+    both stopped on exit."""
+    runtime = Runtime(rig)
+    runtime.start()
+    b = FakeB()
+    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
+    bridge.start(timeout_s=WAIT_S)
+    try:
+        yield runtime, bridge, b
+    finally:
+        bridge.stop()
+        runtime.stop()
+
+
 def sdo_upload(index: int, sub: int, counter: int = 1) -> bytes:
     body = struct.pack("<HBHB", 2 << 12, 0x40, index, sub) + bytes(4)
     return struct.pack("<HHBB", len(body), 0, 0, 3 | counter << 4) + body
@@ -76,14 +93,8 @@ def sdo_upload(index: int, sub: int, counter: int = 1) -> bytes:
 
 @pytest.fixture
 def wire():
-    runtime = Runtime(line_rig("OP"))
-    runtime.start()
-    b = FakeB()
-    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
-    bridge.start(timeout_s=WAIT_S)
-    yield runtime, bridge, b
-    bridge.stop()
-    runtime.stop()
+    with bridged(line_rig("OP")) as wired:
+        yield wired
 
 
 def sim(runtime: Runtime, fn: Callable[[], Any]) -> Any:

@@ -9,18 +9,16 @@ from __future__ import annotations
 import struct
 
 import pytest
-from test_bridge import WAIT_S, FakeB, sim
+from test_bridge import bridged, sim
 from test_esc import one
 from test_faces import line_rig
 
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire import registers as R
 from app.ethercat_wire import sii
-from app.ethercat_wire.bridge import WireBridge
 from app.ethercat_wire.datagrams import Cmd
 from app.ethercat_wire.faces import face_for
 from app.ethercat_wire.wire_process import apply_message, build_line
-from app.runtime import Runtime
 
 CPX = 2  # line position (wire_line.LINE)
 ID = 0x123
@@ -45,14 +43,8 @@ def test_station_alias_is_the_explicit_device_id_in_force():
 
 @pytest.fixture
 def wire():
-    runtime = Runtime(line_rig("PREOP", cpx_rotary=ID))
-    runtime.start()
-    b = FakeB()
-    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
-    bridge.start(timeout_s=WAIT_S)
-    yield runtime, bridge, b
-    bridge.stop()
-    runtime.stop()
+    with bridged(line_rig("PREOP", cpx_rotary=ID)) as wired:
+        yield wired
 
 
 def test_id_request_through_the_bridge(wire):

@@ -13,7 +13,7 @@ import random
 import socket
 
 import pytest
-from test_bridge import WAIT_S, FakeB, master_view, sim, wait_for
+from test_bridge import WAIT_S, bridged, master_view, sim, wait_for
 from test_esc import description, make_line, one
 from test_esc_wire_process import answer, drain
 from test_faces import line_rig
@@ -22,12 +22,10 @@ from wire_line import veth_pair
 from app.ethercat_wire import datagrams as D
 from app.ethercat_wire import messages, wire_process
 from app.ethercat_wire import registers as R
-from app.ethercat_wire.bridge import WireBridge
 from app.ethercat_wire.datagrams import Cmd, Request
 from app.ethercat_wire.esc import Line
 from app.ethercat_wire.wire_process import Stats, apply_message
 from app.player import reset_in_place
-from app.runtime import Runtime
 from devices.master.esc_errors import EscErrors, frame_seed, run_frame
 
 IN, OUT = 0, 1
@@ -203,14 +201,8 @@ def test_the_seed_is_drawn_from_a_copy_of_the_masters_generator():
 # ---- process A: the model's damage reaches B, B's counts reach the model ------------------
 @pytest.fixture
 def wire():
-    runtime = Runtime(line_rig("OP"))
-    runtime.start()
-    b = FakeB()
-    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
-    bridge.start(timeout_s=WAIT_S)
-    yield runtime, bridge, b
-    bridge.stop()
-    runtime.stop()
+    with bridged(line_rig("OP")) as wired:
+        yield wired
 
 
 def test_the_models_damage_reaches_b_and_b_s_counts_reach_the_model(wire):

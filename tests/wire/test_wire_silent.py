@@ -9,17 +9,15 @@ from __future__ import annotations
 import struct
 
 import pytest
-from test_bridge import WAIT_S, FakeB, sim
+from test_bridge import WAIT_S, bridged, sim
 from test_esc import make_line, one
 from test_wire_damage import damage, frame
 
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire import registers as R
-from app.ethercat_wire.bridge import WireBridge
 from app.ethercat_wire.datagrams import Cmd
 from app.ethercat_wire.wire_process import apply_message
 from app.rig_config import build_rig, parse_rig_spec
-from app.runtime import Runtime
 
 SILENT_DRIVE_FIRST = """
 [rig]
@@ -80,14 +78,8 @@ def test_a_damaged_cable_behind_a_silent_slave_spoils_the_frames():
 def silent_first():
     rig = build_rig(parse_rig_spec(SILENT_DRIVE_FIRST))
     rig.run_until(4_000_000)  # the FastCAT in OP behind the silent drive (built-in master)
-    runtime = Runtime(rig)
-    runtime.start()
-    b = FakeB()
-    bridge = WireBridge(runtime, "veth-test", spawn=b.spawn)
-    bridge.start(timeout_s=WAIT_S)
-    yield runtime, bridge, b
-    bridge.stop()
-    runtime.stop()
+    with bridged(rig) as wired:
+        yield wired
 
 
 def test_the_bridge_keeps_the_slaves_behind_a_silent_one_on_the_wire(silent_first):
