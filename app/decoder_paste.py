@@ -31,6 +31,7 @@ searched in the whole text. :func:`canonical` returns what :func:`app.decoder.de
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 
 class PasteError(ValueError):
@@ -41,12 +42,6 @@ _HEX = r"[0-9A-Fa-f]"
 _TWINCAT_EMCY = re.compile(r"Hex:\s*([^)]*)\)")
 _AL_QUOTED = re.compile(rf"Code\s*'(0x{_HEX}+)'")  # "AL Status Code '0x8204'"
 _AL_WITH_CODE = re.compile(rf"with code\s+(0x{_HEX}+)")  # "abnormal state change ... with code"
-_SIRIO_CODE = re.compile(rf"Err\.\s*Code\s+({_HEX}{{1,4}})\b")
-_SIRIO_REG = re.compile(rf"Err\.\s*Reg\.\s+({_HEX}{{1,4}})\b")
-_SIRIO_DATA = re.compile(r"0x\s*low\s+([0-9A-Fa-f\s]*?)\s*high")
-_PEGASO_CODE = re.compile(rf"ERR\s*CODE\s*\[0x({_HEX}+)\]")
-_PEGASO_REG = re.compile(rf"ERR\s*REG\b[^\[]*\[0x({_HEX}+)\]")
-_PEGASO_DATA = re.compile(r"ERR\s*DATA\s*(?:alto\s*)?\[0x([0-9A-Fa-f\s]*)\]")
 _TRACE_CODE = re.compile(rf"emcyCode\s*=\s*0x({_HEX}+)")
 _TRACE_REG = re.compile(rf"emcyReg\s*=\s*0x({_HEX}+)")
 _TRACE_DATA = re.compile(rf"data\s*=\s*0x({_HEX}*)")
@@ -61,6 +56,36 @@ _DIAG_MESSAGE_TEXT = re.compile(rf"\[(?:CPX|DS401|ETG)\s+0x({_HEX}{{8}})\]")
 _MASTER_ABORT = re.compile(rf"SDO\s+(?:upload|download)\s+0x({_HEX}{{4}}):({_HEX}{{2}})\s+"
                            rf"aborted with\s+0x({_HEX}{{8}})")
 _TAB_15_DASH = re.compile(rf"(?<={_HEX})\s*-\s*(?={_HEX})")
+
+
+@dataclass(frozen=True)
+class _Display:
+    """A display style's three rows (error code, error register, data) and the words of its
+    PasteErrors: Sirio (§7.2) and Pegaso (§7.3) read the same way but for the data's order."""
+
+    code: re.Pattern[str]
+    register: re.Pattern[str]
+    data: re.Pattern[str]
+    register_name: str
+    data_name: str
+    data_alone: str  # the PasteError for a data row without the code and register rows
+    high_first: bool = False  # the data row prints byte 4 first
+
+
+_SIRIO = _Display(
+    re.compile(rf"Err\.\s*Code\s+({_HEX}{{1,4}})\b"),
+    re.compile(rf"Err\.\s*Reg\.\s+({_HEX}{{1,4}})\b"),
+    re.compile(r"0x\s*low\s+([0-9A-Fa-f\s]*?)\s*high"),
+    "Err. Reg.", "Sirio data row",
+    "Sirio display (seed 000 §7.2): the data row alone has no error code; paste the Err. Code "
+    "and Err. Reg. rows too")
+_PEGASO = _Display(
+    re.compile(rf"ERR\s*CODE\s*\[0x({_HEX}+)\]"),
+    re.compile(rf"ERR\s*REG\b[^\[]*\[0x({_HEX}+)\]"),
+    re.compile(r"ERR\s*DATA\s*(?:alto\s*)?\[0x([0-9A-Fa-f\s]*)\]"),
+    "ERR REG", "Pegaso ERR DATA",
+    "Pegaso display (seed 000 §7.3): the ERR DATA row alone has no error code; paste the "
+    "ERR CODE and ERR REG rows too", high_first=True)
 
 
 def canonical(text: str) -> str:
@@ -101,27 +126,23 @@ def _register(raw: str, where: str) -> int:
     return value
 
 
-def _sirio(text: str) -> str | None:
-    code, reg, data = (p.search(text) for p in (_SIRIO_CODE, _SIRIO_REG, _SIRIO_DATA))
+def _display(text: str, style: _Display) -> str | None:
+    code, reg, data = (p.search(text) for p in (style.code, style.register, style.data))
     if data is None:
-        return f"0x{code.group(1)}" if code else None  # the Err. Code row alone
+        return f"0x{code.group(1)}" if code else None  # the code row alone
     if code is None or reg is None:
-        raise PasteError("Sirio display (seed 000 §7.2): the data row alone has no error code; "
-                         "paste the Err. Code and Err. Reg. rows too")
-    raw = _whole_bytes(data.group(1), "Sirio data row")
-    return _emergency(int(code.group(1), 16), _register(reg.group(1), "Err. Reg."), raw)
+        raise PasteError(style.data_alone)
+    raw = _whole_bytes(data.group(1), style.data_name)
+    return _emergency(int(code.group(1), 16), _register(reg.group(1), style.register_name),
+                      raw[::-1] if style.high_first else raw)
+
+
+def _sirio(text: str) -> str | None:
+    return _display(text, _SIRIO)
 
 
 def _pegaso(text: str) -> str | None:
-    code, reg, data = (p.search(text) for p in (_PEGASO_CODE, _PEGASO_REG, _PEGASO_DATA))
-    if data is None:
-        return f"0x{code.group(1)}" if code else None  # the ERR CODE row alone
-    if code is None or reg is None:
-        raise PasteError("Pegaso display (seed 000 §7.3): the ERR DATA row alone has no error "
-                         "code; paste the ERR CODE and ERR REG rows too")
-    high_first = _whole_bytes(data.group(1), "Pegaso ERR DATA")
-    return _emergency(int(code.group(1), 16), _register(reg.group(1), "ERR REG"),
-                      high_first[::-1])
+    return _display(text, _PEGASO)
 
 
 def _aitraceprint(text: str) -> str | None:
