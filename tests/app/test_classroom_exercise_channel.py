@@ -8,6 +8,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from test_classroom_exercise_file import run_until_started
 
 from app.classroom.exercise_file import ExerciseSpec, check_exercise, load_exercise, parse_spec
 from app.classroom.faults import Catalog, HiddenFault, catalog, fault_gone, other_faults
@@ -122,8 +123,6 @@ def test_scoring_matches_the_channel(rig: Rig) -> None:
 
 def test_play_file_and_start_shorts_that_channel(tmp_path: Path, rig: Rig) -> None:
     """The served path: the injection thread gets the file's channel, not only its module."""
-    import time
-
     from app.classroom.roles import Access
     from app.ui.panels.classroom_rig import serve_rig
 
@@ -133,11 +132,7 @@ def test_play_file_and_start_shorts_that_channel(tmp_path: Path, rig: Rig) -> No
     try:
         classroom = served.classroom
         classroom.start_from_file(path)
-        served.runtime.advance(1_000_000).result(timeout=60)
-        deadline = time.monotonic() + 10
-        while classroom.exercise is None:
-            assert time.monotonic() < deadline, "the exercise did not start"
-            time.sleep(0.05)
+        run_until_started(served, 1_000_000)
         assert classroom.exercise.fault.id == f"{SHORT}@2.3"
         snap = served.runtime.submit(served.runtime.rig.snapshot).result(timeout=10)
         assert {"fault": "short_circuit", "module": 2, "channel": 3, "sm": None} in \

@@ -67,6 +67,16 @@ def test_inline_table_is_refused(tmp_path: Path) -> None:
         load_exercise(path)
 
 
+def run_until_started(served: ServedRig, run_us: int) -> None:
+    """After Play file and start: ``run_us`` of simulated time, then wait for the classroom's
+    thread to start the exercise (its hidden fault injected)."""
+    served.runtime.advance(run_us).result(timeout=60)
+    deadline = time.monotonic() + 10
+    while served.classroom.exercise is None:
+        assert time.monotonic() < deadline, "the exercise did not start"
+        time.sleep(0.05)
+
+
 @pytest.fixture
 def served(tmp_path: Path) -> Iterator[ServedRig]:
     path = tmp_path / "lost_node.toml"
@@ -81,11 +91,7 @@ def test_file_plays_then_injects(served: ServedRig, tmp_path: Path) -> None:
     classroom = served.classroom
     at = classroom.start_from_file(tmp_path / "lost_node.toml")
     assert at == 3_000_000 and classroom.exercise is None
-    served.runtime.advance(3_500_000).result(timeout=60)
-    deadline = time.monotonic() + 10
-    while classroom.exercise is None:
-        assert time.monotonic() < deadline, "the exercise did not start"
-        time.sleep(0.05)
+    run_until_started(served, 3_500_000)
     assert classroom.exercise.fault.id == "fastcat:inject:coupler:0x04"
     snap = served.runtime.submit(served.runtime.rig.snapshot).result(timeout=10)
     assert snap["devices"]["fastcat"]["injected"]
@@ -190,11 +196,7 @@ def test_the_scenario_tab_after_an_exercise_file(served: ServedRig, tmp_path: Pa
     classroom = served.classroom
     panel = classroom._player
     classroom.start_from_file(path)
-    served.runtime.advance(4_500_000).result(timeout=60)
-    deadline = time.monotonic() + 10
-    while classroom.exercise is None:
-        assert time.monotonic() < deadline, "the exercise did not start"
-        time.sleep(0.05)
+    run_until_started(served, 4_500_000)
     generation = panel.player.view().generation
     panel.player.pause()
     client = _Client()

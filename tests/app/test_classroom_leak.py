@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from pathlib import Path
 from typing import Any
 
 import msgspec
@@ -143,11 +144,13 @@ def _wait(predicate: Any, timeout: float = 20.0) -> Any:
 
 
 @contextmanager
-def open_class() -> Iterator[tuple[ServedRig, Page, Page]]:
-    """The default rig served paused with the token, a trainee's page and the instructor's
-    (the second page, promoted as if it had shown the token); all closed on exit."""
+def open_class(exercise_files: Sequence[Path] = ()) -> Iterator[tuple[ServedRig, Page, Page]]:
+    """The default rig served paused with the token (and ``exercise_files``), a trainee's page
+    and the instructor's (the second page, promoted as if it had shown the token); all closed
+    on exit."""
     rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True,
+                     exercise_files=exercise_files)
     trainee, instructor = Page(live.port), Page(live.port)
     try:
         clients = _wait(lambda: len(live.server.get_clients()) == 2 and live.server.get_clients())

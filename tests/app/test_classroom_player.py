@@ -13,9 +13,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
-from test_classroom_leak import TOKEN, Page, _try, _wait, text
+from test_classroom_leak import Page, _try, _wait, open_class, text
 
-from app.classroom.roles import Access, Role
+from app.classroom.roles import Access
 from app.player import Status
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.scenario import EXAMPLES_DIR, load_scenario
@@ -54,21 +54,9 @@ PLAIN_FILE = EXAMPLES_DIR / "module_lost_in_op.toml"
 def served(tmp_path: Path) -> Iterator[tuple[ServedRig, Page, Page, Path]]:
     path = tmp_path / "lost_node.toml"
     path.write_text(FILE)
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    one = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True, exercise_files=[path])
-    trainee, instructor = Page(one.port), Page(one.port)
-    try:
-        clients = _wait(lambda: len(one.server.get_clients()) == 2 and one.server.get_clients())
-        first, second = sorted(clients)
-        assert one.classroom.access.present(second, TOKEN)
-        one.classroom._promoted(clients[second])
-        assert one.classroom.access.role(first) is Role.TRAINEE
+    with open_class(exercise_files=[path]) as (one, trainee, instructor):
         _wait(lambda: "Hidden fault" in text(instructor))
         yield one, trainee, instructor, path
-    finally:
-        trainee.close()
-        instructor.close()
-        one.stop()
 
 
 def _labels(page: Page) -> set[str]:

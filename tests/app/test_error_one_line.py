@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -22,21 +23,18 @@ BREAKS = ("\\n", "\\r", "\\u0085", "\\u2028", "\\u2029", "\\u000b", "\\u001c", "
 
 
 @pytest.mark.parametrize("escape", BREAKS)
-def test_a_scenario_key_with_a_line_break_is_named_on_one_line(escape: str) -> None:
-    with pytest.raises(ScenarioError) as caught:
-        parse_scenario(f'[scenario]\n"a{escape}b" = 0\n', "f.toml")
+@pytest.mark.parametrize(("error", "text", "parse", "prefix"), [
+    (ScenarioError, '[scenario]\n"a{}b" = 0\n', parse_scenario, "f.toml: scenario.a\\"),
+    (RigConfigError, '"a{}b" = 1\n', parse_rig_spec, "f.toml: a\\"),
+], ids=["scenario", "rig"])
+def test_a_key_with_a_line_break_is_named_on_one_line(
+        escape: str, error: type[Exception], text: str, parse: Callable[[str, str], object],
+        prefix: str) -> None:
+    with pytest.raises(error) as caught:
+        parse(text.format(escape), "f.toml")
     message = str(caught.value)
     assert len(message.splitlines()) == 1 and message.isprintable(), repr(message)
-    assert message.startswith("f.toml: scenario.a\\") and "b: unknown key" in message
-
-
-@pytest.mark.parametrize("escape", BREAKS)
-def test_a_rig_key_with_a_line_break_is_named_on_one_line(escape: str) -> None:
-    with pytest.raises(RigConfigError) as caught:
-        parse_rig_spec(f'"a{escape}b" = 1\n', "f.toml")
-    message = str(caught.value)
-    assert len(message.splitlines()) == 1 and message.isprintable(), repr(message)
-    assert message.startswith("f.toml: a\\") and "b: unknown key" in message
+    assert message.startswith(prefix) and "b: unknown key" in message
 
 
 def test_the_cli_prints_one_line(tmp_path: Path) -> None:
