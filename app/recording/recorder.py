@@ -4,18 +4,21 @@ Everything is on the timeline ``sim_time`` (a duration: simulated time since the
 never on the wall clock, so a recording of a scenario is the same however fast it ran.
 
 Recording must not slow the simulation (issue 6). Nothing is sent per simulation step: the
-recorder buffers rows in memory and sends each entity's rows as one column batch
-(``send_columns``, ~40 us per call whatever its length) every ``flush_period_us`` of simulated
-time or ``max_buffered_rows`` rows. Snapshots are sampled every ``sample_period_us`` of
-simulated time, not every 1 ms step; events are recorded with their own time stamps, so a
-state or LED change is exact even between samples. See docs/recording.md.
+recorder buffers rows in memory and sends an entity's rows as one column batch (``send_columns``,
+~40 us per call whatever its length) when they fill a chunk (``chunk_rows``), everything every
+``flush_period_us`` of simulated time, and the fullest entities whenever ``max_buffered_rows``
+rows wait in all. Each batch is a chunk of the file, and rerun keeps ~1 KB per chunk in memory
+until the footer is written (issue 7): few, long chunks. Snapshots are sampled every
+``sample_period_us`` of simulated time, not every 1 ms step; events are recorded with their
+own time stamps, so a state or LED change is exact even between samples. See
+docs/recording.md.
 """
 
 from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -36,8 +39,11 @@ if TYPE_CHECKING:
 logger = logging.getLogger(__name__)
 
 DEFAULT_SAMPLE_PERIOD_US = 10_000  # 100 Hz: 5 samples per half period of a flickering LED
-DEFAULT_FLUSH_PERIOD_US = 5_000_000  # each send costs ~2 KB of chunk header per entity
-DEFAULT_MAX_BUFFERED_ROWS = 20_000
+# Each send is one chunk: ~2 KB of header in the file, and ~1 KB of rerun's memory until the
+# file's footer is written at close (its manifest of every chunk: docs/recording.md).
+DEFAULT_FLUSH_PERIOD_US = 300_000_000  # what quiet entities risk losing to a SIGKILL
+DEFAULT_CHUNK_ROWS = 4_096  # an entity sampled at every 10 ms fills one in ~41 s
+DEFAULT_MAX_BUFFERED_ROWS = 20_000  # ~2.5 MB of rows at most in the buffers
 
 
 @dataclass
@@ -89,14 +95,17 @@ class RigRecorder:
                  recording_id: str | None = None, *,
                  sample_period_us: int = DEFAULT_SAMPLE_PERIOD_US,
                  flush_period_us: int = DEFAULT_FLUSH_PERIOD_US,
+                 chunk_rows: int = DEFAULT_CHUNK_ROWS,
                  max_buffered_rows: int = DEFAULT_MAX_BUFFERED_ROWS,
                  blueprint: bool = True) -> None:
-        if sample_period_us <= 0 or flush_period_us <= 0 or max_buffered_rows <= 0:
-            raise ValueError("sample period, flush period and buffer size must be positive")
+        if min(sample_period_us, flush_period_us, chunk_rows, max_buffered_rows) <= 0:
+            raise ValueError("sample period, flush period, chunk and buffer sizes must be "
+                             "positive")
         self.path = Path(path)
         self.path.parent.mkdir(parents=True, exist_ok=True)
         self.sample_period_us = sample_period_us
         self.flush_period_us = flush_period_us
+        self.chunk_rows = chunk_rows
         self.max_buffered_rows = max_buffered_rows
         self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self._rec.set_sinks(rr.FileSink(str(self.path)))
@@ -108,7 +117,10 @@ class RigRecorder:
         # Each device's main-machine lane as its snapshots show it (signals.main_machine).
         self._main: dict[str, str] = {}
         self._styled: dict[str, SeriesInfo] = {}  # entity -> the style it was given
-        self._buffered = 0
+        self._buffered = 0  # rows waiting in all buffers (at least: a hold adds one more)
+        # No entity can hold chunk_rows rows, nor all of them max_buffered_rows, before
+        # _buffered reaches this: below it, a flush check costs one comparison.
+        self._check_at = min(chunk_rows, max_buffered_rows)
         self._next_sample_us: int | None = None  # None: sample at the first chance
         self._last_flush_us = 0
         self._send_blueprint = blueprint
@@ -190,10 +202,11 @@ class RigRecorder:
             return True
 
     def _flush_due(self, t_us: int) -> None:
-        if (t_us - self._last_flush_us >= self.flush_period_us
-                or self._buffered >= self.max_buffered_rows):
+        if t_us - self._last_flush_us >= self.flush_period_us:
             self._send_buffers()
             self._last_flush_us = t_us
+        elif self._buffered >= self._check_at:
+            self._send_full()
 
     def _loaded(self) -> bool:
         """Whether a scenario load happened since the last observation.
@@ -211,6 +224,11 @@ class RigRecorder:
                 return
             self._send_buffers(hold=True)
         self._rec.flush(timeout_sec=timeout_s)
+
+    def buffered_rows(self) -> int:
+        """Rows waiting in the buffers, not yet sent to the file."""
+        with self._lock:
+            return sum(len(c.times) for _send, _path, c in self._columns())
 
     def recording_bytes(self) -> bytes:
         """The recording so far, as a file the viewer opens (for a download button)."""
@@ -361,23 +379,52 @@ class RigRecorder:
         self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
                                columns=rr.Scalars.columns(scalars=values))
 
+    def _send_texts(self, path: str, column: _Column, hold: bool = False) -> None:
+        if column.times:
+            times, texts, levels = column.take()
+            self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
+                                   columns=rr.TextLog.columns(text=texts, level=levels))
+
+    def _send_lane(self, path: str, column: _Column, hold: bool = False) -> None:
+        if column.times:
+            times, states, _ = column.take()
+            self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
+                                   columns=rr.StateChange.columns(state=states))
+
+    def _columns(self) -> Iterator[tuple[Callable[[str, _Column, bool], None], str, _Column]]:
+        """Every buffer, with the method that sends it."""
+        for send, columns in ((self._send_scalars, self._scalars),
+                              (self._send_texts, self._texts), (self._send_lane, self._lanes)):
+            for path, column in columns.items():
+                yield send, path, column
+
     def _send_buffers(self, hold: bool = False) -> None:
         """Send every buffered row, one ``send_columns`` per entity that has rows. ``hold``
         also sends each signal's pending unchanged sample (at an explicit flush and at the
         end); periodic flushes leave it pending so a quiet signal costs nothing."""
-        for path, column in self._scalars.items():
-            self._send_scalars(path, column, hold)
-        for path, column in self._texts.items():
-            if column.times:
-                times, texts, levels = column.take()
-                self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
-                                       columns=rr.TextLog.columns(text=texts, level=levels))
-        for path, column in self._lanes.items():
-            if column.times:
-                times, states, _ = column.take()
-                self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
-                                       columns=rr.StateChange.columns(state=states))
+        for send, path, column in self._columns():
+            send(path, column, hold)
         self._buffered = 0
+        self._check_at = min(self.chunk_rows, self.max_buffered_rows)
+
+    def _send_full(self) -> None:
+        """Send each entity that holds a chunk's worth of rows, as one chunk; then, if all of
+        them together still hold ``max_buffered_rows``, the fullest ones until half that is
+        left. The others wait for the period: a quiet entity is one chunk per period, not one
+        per flush of a busy one."""
+        columns = sorted(self._columns(), key=lambda e: len(e[2].times), reverse=True)
+        buffered = sum(len(c.times) for _send, _path, c in columns)
+        keep = self.max_buffered_rows // 2 if buffered >= self.max_buffered_rows else buffered
+        fullest = 0  # rows of the fullest entity left
+        for send, path, column in columns:
+            rows = len(column.times)
+            if rows < self.chunk_rows and buffered <= keep:
+                fullest = rows
+                break
+            send(path, column, False)
+            buffered -= rows
+        self._buffered = buffered
+        self._check_at = min(buffered + self.chunk_rows - fullest, self.max_buffered_rows)
 
 
 def attach_to_runtime(runtime: Runtime, recorder: RigRecorder, repeat: bool = True) -> None:

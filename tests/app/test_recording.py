@@ -359,6 +359,7 @@ def test_download_mid_run_then_close(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("kwargs", [{"sample_period_us": 0}, {"flush_period_us": -1},
+                                    {"chunk_rows": 0},
                                     {"max_buffered_rows": 0}])
 def test_bad_settings_are_refused(tmp_path: Path, kwargs: dict[str, int]) -> None:
     with pytest.raises(ValueError, match="positive"):
