@@ -24,7 +24,11 @@ def fmt_bytes(data: bytes) -> str:
     return " ".join(f"{b:02X}" for b in data)
 
 
-@dataclass(frozen=True)
+# Slots: the runtime journals the last 20,000 events (app/runtime.py JOURNAL_LENGTH), and a
+# __dict__ per event was most of that memory (issue 7 soak; docs/hardening.md). A slotted
+# dataclass is a new class, so its methods cannot use a bare super() (Python < 3.14): the
+# slave events call SlaveEvent.fields explicitly.
+@dataclass(frozen=True, slots=True)
 class Event:
     t_us: int
     device: str
@@ -38,7 +42,7 @@ class Event:
                 **self.fields()}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class StateChanged(Event):
     """A state machine moved (EtherCAT ESM, CiA 402, NMT, DC, ...)."""
 
@@ -54,7 +58,7 @@ class StateChanged(Event):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class EmergencySent(Event):
     """A CoE / CANopen emergency: error code, error register, manufacturer bytes."""
 
@@ -68,7 +72,7 @@ class EmergencySent(Event):
                 "data": fmt_bytes(self.data)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class AlStatusChanged(Event):
     """The AL status code register (0x134) took a new value."""
 
@@ -79,7 +83,7 @@ class AlStatusChanged(Event):
         return {"code": fmt_hex(self.code, 4)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class LedChanged(Event):
     """An LED changed pattern (ETG.1300 names, see devices.leds.LedPattern)."""
 
@@ -95,7 +99,7 @@ class LedChanged(Event):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class AlarmChanged(Event):
     """A device alarm was raised or cleared (code as the device's manual numbers it)."""
 
@@ -112,7 +116,7 @@ class AlarmChanged(Event):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class LogLine(Event):
     """A line of a logger (the EtherCAT master's, in TwinCAT style, or a device's own)."""
 
@@ -127,7 +131,7 @@ class LogLine(Event):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Caption(Event):
     text: str = ""
     kind: ClassVar[str] = "caption"
@@ -136,7 +140,7 @@ class Caption(Event):
         return {"text": self.text}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Checkpoint(Event):
     name: str = ""
     kind: ClassVar[str] = "checkpoint"
@@ -145,7 +149,7 @@ class Checkpoint(Event):
         return {"name": self.name}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Focus(Event):
     """A scenario points the audience at a device (``"trscat"``) or one of its modules
     (``"fastcat:2"``): the dashboard moves the camera there."""
@@ -157,7 +161,7 @@ class Focus(Event):
         return {"target": self.target}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class ValueRead(Event):
     """Answer of a scenario ``read`` step (an object or register read)."""
 
@@ -175,7 +179,7 @@ class ValueRead(Event):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class SlaveEvent(Event):
     """Base of the EtherCAT master's events about one slave (seed 003 "events"): the slave's
     position on the line (from 0) and its physical (station) address."""
@@ -187,7 +191,7 @@ class SlaveEvent(Event):
         return {"position": self.position, "address": self.address}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class SlaveStateChange(SlaveEvent):
     """The master saw a slave's ESM state change (requested or not)."""
 
@@ -197,11 +201,11 @@ class SlaveStateChange(SlaveEvent):
     kind: ClassVar[str] = "slave_state"
 
     def fields(self) -> dict[str, Any]:
-        return {**super().fields(), "from": self.from_state, "to": self.to_state,
+        return {**SlaveEvent.fields(self), "from": self.from_state, "to": self.to_state,
                 "code": fmt_hex(self.code, 4)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class CommError(SlaveEvent):
     """A communication error the master saw on a slave: ``reason`` is ``lost_frames``,
     ``link_lost`` (the slave is no longer on the line), ``not_found`` (expected, it has not
@@ -213,10 +217,10 @@ class CommError(SlaveEvent):
     kind: ClassVar[str] = "comm_error"
 
     def fields(self) -> dict[str, Any]:
-        return {**super().fields(), "reason": self.reason, "count": self.count}
+        return {**SlaveEvent.fields(self), "reason": self.reason, "count": self.count}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class CoeEmergency(SlaveEvent):
     """A CoE emergency the master read from a slave's mailbox."""
 
@@ -226,11 +230,11 @@ class CoeEmergency(SlaveEvent):
     kind: ClassVar[str] = "coe_emergency"
 
     def fields(self) -> dict[str, Any]:
-        return {**super().fields(), "code": fmt_hex(self.code, 4),
+        return {**SlaveEvent.fields(self), "code": fmt_hex(self.code, 4),
                 "register": fmt_hex(self.register, 2), "data": fmt_bytes(self.data)}
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Resync(Event):
     """Seed 003 ECAT_Resync: a slave (``position`` >= 0) or the whole network
     (``position`` -1) reached OP for the first time since start-up or a recovery."""
@@ -247,7 +251,7 @@ class Resync(Event):
         return out
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class NetworkRecovery(Event):
     """Seed 003 "network recovery": the master restarts communication with slaves it had
     lost (a re-plugged cable, a slave powered again); ``positions`` are the recovered ones."""
