@@ -10,7 +10,7 @@ answer alone, "the cause persists", never the injected cause.
 from __future__ import annotations
 
 from app.ui.drive.axis_scene import legend_parts, legend_text
-from app.ui.drive.drive_panel import reset_refusal_text
+from app.ui.drive.drive_commands import reset_refusal_text
 from app.ui.drive.drive_state import DriveLog, state_rows
 from app.ui.style import INSTRUCTOR_CLASS, kv_table
 from devices.events import AlarmChanged, LogLine

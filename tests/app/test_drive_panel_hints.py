@@ -12,13 +12,13 @@ from typing import Any
 
 from test_widgets_synced_panels import DRIVE, Sender, Server, frames
 
-from app.ui.drive.drive_panel import (
+from app.ui.drive.drive_options import (
     PARAMETER_OPTIONS,
     REGISTER_OPTIONS,
-    DrivePanel,
     parameter_details,
     register_details,
 )
+from app.ui.drive.drive_panel import DrivePanel
 from app.ui.panels.widgets import DetailHint
 from devices.servo.modbus_map import NORMAL, SIEMENS
 

@@ -20,7 +20,8 @@ import pytest
 from fake_viser import Handle, Pages
 
 from app.classroom.roles import Role
-from app.ui.drive.drive_panel import DrivePanel, mode_option
+from app.ui.drive.drive_options import mode_option
+from app.ui.drive.drive_panel import DrivePanel
 from app.ui.line.master_panel import LOG_STYLES, MasterPanel
 from app.ui.panels.modules import ModulePanel
 from app.ui.panels.widgets import FRESH_AFTER

@@ -26,7 +26,7 @@ from helpers import (
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.axis_scene import SEGMENT_OFF, SEGMENT_ON, Travel, display_segments, legend_text
 from app.ui.drive.canopen_panel import frames_html, pdo_html, status_html
-from app.ui.drive.drive_panel import (
+from app.ui.drive.drive_options import (
     FIELDBUS_OPTIONS,
     alarm_details,
     alarm_options,

@@ -10,7 +10,7 @@ import pytest
 from helpers import LiveDashboard, open_dashboard, wait_until
 
 from app.ui.dashboard import fault_options
-from app.ui.drive.drive_panel import alarm_options
+from app.ui.drive.drive_options import alarm_options
 
 pytestmark = pytest.mark.browser
 

@@ -177,7 +177,7 @@ def test_fault_and_alarm_choices_show_whole_in_their_boxes(live: LiveDashboard,
     label, 547 px in a 152 px box): the labels are the code and the manual's name, and the
     description goes to the box's hint. The drive's Alarm list is built the same way."""
     from app.ui.dashboard import fault_options
-    from app.ui.drive.drive_panel import alarm_options
+    from app.ui.drive.drive_options import alarm_options
     from app.ui.panels.control import FaultOption
 
     open_dashboard(page, live)

@@ -1,0 +1,175 @@
+"""The commands the Servo drive tab sends (a mixin of
+:class:`~app.ui.drive.drive_panel.DrivePanel`).
+
+Every control is a drive action (devices/servo/actions.py), queued through ``CommandSender``;
+a sequence that must not be split (the positioner's Move, velocity with a new target) runs as
+one function in the simulation thread. A read's or write's answer is parked here and shown by
+the panel's ``update``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from typing import TYPE_CHECKING, Any
+
+import viser
+
+from app.classroom.roles import Role
+from app.ui.commands import notify
+from app.ui.drive.drive_options import leading_int, register_of
+from app.ui.drive.drive_state import injected_names
+from app.ui.panels.client_input import ClientMirror
+from devices.servo import control
+from devices.servo.registers import R
+
+if TYPE_CHECKING:
+    from app.ui.drive.drive_panel import DrivePanel
+
+START_BITS = control.BIT5 | control.BIT6 | control.BIT7  # R00 bits 5..7: mode specific
+JOG = {"Jog -": -1, "Jog 0": 0, "Jog +": 1}
+
+
+def reset_refusal_text(why: str, injected: list[Mapping[str, Any]]) -> str:
+    """A refused Alarm reset in words: the model's reason (what the drive shows, "the cause
+    persists"), and for the instructor (``injected`` given only to them) which injected cause
+    holds it; a trainee is never told a cause was injected (docs/classroom.md)."""
+    names = injected_names(injected)
+    if not names:
+        return why
+    return f"{why} · injected: {names} (Clear alarm removes it, then reset)"
+
+
+def on_button(group: Any, fn: Callable[[viser.GuiEvent, str], None]) -> None:
+    """Call ``fn(event, button)`` for each click on a button group, with the button clicked.
+
+    A coroutine, so it runs on viser's event loop as the click arrives, while the group's value
+    is still this click's button (a plain callback runs later in a thread pool and can read the
+    next click's: Enable, Disable commanded as Disable, Disable). ``fn`` must not block."""
+    async def clicked(event: viser.GuiEvent) -> None:
+        fn(event, str(event.target.value))
+
+    group.on_click(clicked)
+
+
+class DriveCommands:
+    """What each control of the tab sends to the page's drive."""
+
+    def _do(self: DrivePanel, event: viser.GuiEvent, action: str, **args: Any) -> None:
+        self._sender.send(event.client, self._target(event.client), action, args)
+
+    def _jog(self: DrivePanel, event: viser.GuiEvent, direction: int) -> None:
+        """Jog; when the model answers why the axis will not move (a drive without torque
+        only switches to mode 3), the clicking page is told, naming the drive."""
+        target, client = self._target(event.client), event.client
+
+        def answered(why: Any) -> None:
+            if why:
+                notify(client, f"{target}: jog", f"{target}: {why}")
+
+        self._sender.send(client, target, "jog", {"direction": direction}, done=answered)
+
+    def _alarm_reset(self: DrivePanel, event: viser.GuiEvent) -> None:
+        """Alarm reset; when the drive stays in Fault the clicking page is told why (the model's
+        answer), and an instructor also which injected cause holds it."""
+        target, client = self._target(event.client), event.client
+        instructor = self._sender.role(client) is Role.INSTRUCTOR
+        injected = list((self._devices.get(target) or {}).get("injected") or []) \
+            if self._per_page else self._injected
+
+        def answered(why: Any) -> None:
+            if why:
+                text = reset_refusal_text(str(why), injected if instructor else [])
+                notify(client, f"{target}: alarm reset refused", text, error=True)
+
+        self._sender.send(client, target, "alarm_reset", {}, done=answered)
+
+    def _apply(self: DrivePanel, client: viser.ClientHandle | None, action: str,
+               args: dict[str, Any]) -> None:
+        self._sender.send(client, self._target(client), action, args)
+
+    def _sequence(self: DrivePanel, event: viser.GuiEvent, label: str,
+                  steps: Callable[[Callable[..., Any]], Any],
+                  done: Callable[[Any], None] | None = None) -> None:
+        """Run ``steps(apply)`` in the simulation thread: no other command in between."""
+        target = self._target(event.client)
+        rig = self._runtime.rig
+
+        def run() -> Any:
+            return steps(lambda action, **args: rig.apply(target, action, args))
+
+        self._sender.submit(event.client, f"{target}: {label}", run, done=done)
+
+    def _positioner(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
+        if button == "Start":
+            self._do(event, "start")
+            return
+        if button == "Stop":
+            self._do(event, "stop")
+            return
+        position, relative = int(self._position.value), bool(self._relative.value)
+
+        def steps(apply: Callable[..., Any]) -> None:
+            # As the seed's Modbus example does before 0x23: the start bits low first, so
+            # that the start is a rising edge in both views whatever the last mode left.
+            if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 1:
+                apply("set_mode", mode=1)
+            r00 = int(apply("read_register", register=R.CONTROL_WORD))
+            if r00 & (START_BITS | control.STP_CMD):
+                apply("control_register", value=r00 & ~(START_BITS | control.STP_CMD))
+            apply("move", position=position, relative=relative)
+
+        self._sequence(event, "move", steps)
+
+    def _run_velocity(self: DrivePanel, event: viser.GuiEvent) -> None:
+        velocity = int(self._velocity.value)
+
+        def steps(apply: Callable[..., Any]) -> None:
+            if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 3:
+                apply("set_mode", mode=3)
+            apply("write_register", register=R.TARGET_VELOCITY, value=velocity)
+
+        self._sequence(event, "velocity", steps)
+
+    def _park(self: DrivePanel, text: str) -> None:
+        with self._result_lock:
+            self._result = text
+
+    def _register_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
+        option = self._register.value
+        n = register_of(option)
+        if button == "Write register":
+            value = int(self._register_value.value)
+            self._sender.send(event.client, self._target(event.client), "write_register",
+                              {"register": n, "value": value},
+                              done=lambda _r: self._park(f"{option} = {value} written"))
+        else:
+            self._sender.send(event.client, self._target(event.client), "read_register",
+                              {"register": n},
+                              done=lambda r: self._park(f"{option} = {r}"))
+
+    def _parameter_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
+        name = self._parameter.value.split(" ", 1)[0]
+        if button == "Write param.":
+            value = int(self._parameter_value.value)
+            self._sender.send(event.client, self._target(event.client), "write_parameter",
+                              {"parameter": name, "value": value},
+                              done=lambda _r: self._park(f"{name} = {value} written"))
+        else:
+            self._sender.send(event.client, self._target(event.client), "read_parameter",
+                              {"parameter": name}, done=lambda r: self._park(f"{name} = {r}"))
+
+    def _typed(self: DrivePanel, name: str, event: viser.GuiEvent) -> Any:
+        """What the clicking page's c9 or c7 box holds."""
+        mirror = self._mirrors[name]
+        return mirror.value_for(event.client_id) if isinstance(mirror, ClientMirror) \
+            else mirror.handle.value
+
+    def _write_fieldbus(self: DrivePanel, event: viser.GuiEvent) -> None:
+        c9, c7 = leading_int(self._typed("c9", event)), int(self._typed("c7", event))
+
+        def steps(apply: Callable[..., Any]) -> None:
+            apply("write_parameter", parameter="c9", value=c9)
+            apply("write_parameter", parameter="c7", value=c7)
+
+        self._sequence(event, "c9 / c7", steps, done=lambda _r: self._park(
+            f"c9 = {c9}, c7 = {c7} written: save, then power the drive off and on"))

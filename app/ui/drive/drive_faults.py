@@ -1,0 +1,100 @@
+"""The instructor's fault part of the Servo drive tab (a mixin of
+:class:`~app.ui.drive.drive_panel.DrivePanel`): the alarm rows (inject / clear an alarm, jam
+the load) and, with a token, the form of the other actions that make a fault
+(``roles.makes_faults``). With a token both are built per instructor connection, so a trainee's
+page never gets them (app/ui/panels/per_client.py; docs/classroom.md).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import viser
+
+from app.ui.drive.drive_commands import on_button
+from app.ui.drive.drive_options import alarm_details, alarm_options, leading_int
+from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_input import ClientSynced
+from app.ui.panels.per_client import instructor_for
+from app.ui.panels.widgets import DetailHint, Synced, set_options, short_label_css
+from devices.device import Action
+
+if TYPE_CHECKING:
+    from app.ui.drive.drive_panel import DrivePanel
+
+DRIVE_KIND = "servo"  # the drives' kind in app.classroom.roles
+
+
+@dataclass
+class AlarmForm:
+    """The instructor's alarm rows of one connection (or the shared ones); ``drive``: its own
+    Drive picker (a token and several drives), None when the rows act on the shared one."""
+
+    alarm: Any
+    ops: Any
+    jam: Synced | ClientSynced
+    hint: DetailHint
+    drive: Any = None
+    fieldbus: list[str] = field(default_factory=lambda: ["modbus"])  # its drive's, as shown
+
+
+class DriveFaults:
+    def _own_drive(self: DrivePanel, gui: Any) -> Any:
+        """With a token and several drives, an instructor's form gets a Drive picker of its
+        own: on the shared Servo drive picker the instructor's pick of the drive to jam or
+        alarm went to every trainee's page (docs/classroom.md). None: the shared one."""
+        if instructor_for(self._server).shared or len(self._drive_ids) < 2:
+            return None
+        return gui.add_dropdown("Drive", self._drive_ids, initial_value=self._target(None),
+                                hint="the drive this form acts on")
+
+    def _send_to(self: DrivePanel, own: Any, client: viser.ClientHandle | None, action: str,
+                 args: dict[str, Any], confirm: bool = False) -> None:
+        target = self._target(client) if own is None else str(own.value)
+        self._sender.send(client, target, action, args, confirm=confirm)
+
+    def _alarm_form(self: DrivePanel, gui: Any) -> AlarmForm:
+        with gui.add_folder("Alarms and load"):
+            own = self._own_drive(gui)
+            fieldbus = [self._fieldbus]
+            alarm = gui.add_dropdown("Alarm", alarm_options(fieldbus[0]))
+            ops = gui.add_button_group("Alarm cause", ("Inject alarm", "Clear alarm"))
+            jam = gui.add_checkbox("Load jammed", False, hint="the load cannot move: "
+                                   "following error, alarm 16")
+        if not instructor_for(self._server).shared:  # per client: the narrower label
+            gui.add_html(short_label_css([alarm]))
+        # The shared form (an open rig) shows each page its own drive's jam
+        jammed = Synced if own is not None else self._synced_type()
+        form = AlarmForm(alarm, ops, jammed(self._server, jam, self._sender, lambda c, on: (
+            self._send_to(own, c, "jam_load", {"active": bool(on)}))),
+            DetailHint(alarm, lambda: alarm_details(fieldbus[0])), own, fieldbus)
+        on_button(ops, lambda e, b: self._send_to(
+            own, e.client, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
+            {"code": str(leading_int(alarm.value))}))
+        return form
+
+    def _fault_form(self: DrivePanel, gui: Any, faults: Mapping[str, Action]) -> ActionForm:
+        with gui.add_folder("Drive faults", expand_by_default=False):
+            own = self._own_drive(gui)
+            return ActionForm(gui, faults, lambda c, name, args: self._send_to(
+                own, c, name, args, confirm=True), label="Fault action")
+
+    def _follow_alarm_forms(self: DrivePanel, snap: Mapping[str, Any],
+                            devices: Mapping[str, Any],
+                            page: Callable[[int | None], Mapping[str, Any]]) -> None:
+        """Each alarm form's list, hint and Load jammed box follow its drive: the shared
+        drive's (each page its own) or, with its own Drive picker, the picked one's."""
+        for form in self._alarms.each():
+            own = snap if form.drive is None else devices.get(str(form.drive.value))
+            own = own or {}
+            bus = str(own.get("fieldbus", form.fieldbus[0]))
+            if bus != form.fieldbus[0]:  # Profinet numbers 30..33 differently (ch. 6)
+                form.fieldbus[0] = bus
+                set_options(form.alarm, list(alarm_options(bus)))
+                form.hint.refresh()
+            if form.drive is None:
+                self._follow(form.jam, lambda s: bool(s.get("jammed")), page)
+            else:
+                form.jam.follow(bool(own.get("jammed")))

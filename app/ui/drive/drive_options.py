@@ -1,0 +1,86 @@
+"""The Servo drive tab's option tables and their hints: modes, registers, parameters, fieldbuses
+and alarms as the dropdowns list them, and each option's whole label, range, access and Modbus
+address (seed 004 ch. 1, ch. 2; ch. 3, ch. 5, ch. 6 for the alarms)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from devices.servo.alarms import alarm_table
+from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, register_address
+from devices.servo.parameters import FIELDBUS_BY_C9, FIELDBUS_NAMES, PARAMETERS
+from devices.servo.registers import MODE_NAMES, REGISTERS
+
+MODE_OPTIONS = tuple(f"{mode} {name}" for mode, name in MODE_NAMES.items())
+REGISTER_OPTIONS = tuple(f"R{n:02d} {spec.name}" for n, spec in sorted(REGISTERS.items()))
+PARAMETER_OPTIONS = tuple(f"{spec.name} {spec.meaning}" for spec in PARAMETERS.values())
+FIELDBUS_OPTIONS = tuple(f"{code} {FIELDBUS_NAMES[name]}"
+                         for code, name in FIELDBUS_BY_C9.items())
+
+
+def alarm_details(fieldbus: str) -> dict[str, str]:
+    """``"16 FOLLOWING_ERROR"`` -> ``"16 FOLLOWING_ERROR: maximum position ..."`` for every
+    alarm of the drive with this fieldbus (ch. 3, ch. 5; ch. 6 for Profinet), in code order:
+    the list shows the labels, the box's hint the description (:class:`DetailHint`)."""
+    alarms = sorted(alarm_table(fieldbus).values(), key=lambda a: a.code)
+    return {f"{a.code} {a.name}": f"{a.code} {a.name}: {a.description}" for a in alarms}
+
+
+def modbus_words(address: int, address_map: str) -> str:
+    """A Modbus address as the manual writes it under the map: hex in the normal one (ch. 1),
+    decimal and hex with the map named in the Siemens one (ch. 2: "40001 + 1 = 40002 =
+    0x9C42")."""
+    if address_map == SIEMENS:
+        return f"Modbus {address} = 0x{address:04X} (e3 = 9, Siemens map)"
+    return f"Modbus 0x{address:04X}"
+
+
+def register_details(address_map: str = NORMAL) -> dict[str, str]:
+    """``"R24 master_encoder_increments"`` -> its range, access and Modbus address under the
+    drive's map (ch. 1 "Registri", ch. 2 "Estensione della mappatura"): the box holds about
+    25 characters, so the hint carries the label whole."""
+    out = {}
+    for n, spec in sorted(REGISTERS.items()):
+        access = ("read only" if not spec.writable
+                  else "kept by Save to flash" if spec.saveable else "not saved")
+        where = modbus_words(register_address(n, address_map), address_map)
+        out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {spec.low}..{spec.high}, "
+                                        f"{access}; {where}")
+    return out
+
+
+def parameter_details(address_map: str = NORMAL) -> dict[str, str]:
+    """``"c9 operating mode / fieldbus"`` -> its range, default and Modbus address under the
+    drive's map (ch. 1 "Parametri", ch. 2), and whether it acts only at the next power-up."""
+    out = {}
+    for spec in PARAMETERS.values():
+        unit = " %" if spec.unit == "%" else ""
+        when = "; read at power-up" if spec.power_up else ""
+        access = "" if spec.writable else ", read only"
+        where = modbus_words(parameter_address(spec.address, address_map), address_map)
+        out[f"{spec.name} {spec.meaning}"] = (
+            f"{spec.name} {spec.meaning}: {spec.low}..{spec.high}{unit}, default "
+            f"{spec.default}{access}{when}; {where}")
+    return out
+
+
+def alarm_options(fieldbus: str) -> tuple[str, ...]:
+    return tuple(alarm_details(fieldbus))
+
+
+def leading_int(option: str) -> int:
+    """The number an option starts with: ``"-127 analog reference"`` -> -127."""
+    return int(option.split(" ", 1)[0])
+
+
+def register_of(option: str) -> int:
+    return int(option.split(" ", 1)[0][1:])
+
+
+def register_option(n: int) -> str:
+    return next(o for o in REGISTER_OPTIONS if register_of(o) == n)
+
+
+def mode_option(mode: Any) -> str | None:
+    return next((o for o in MODE_OPTIONS if leading_int(o) == mode), None)
+
