@@ -134,29 +134,28 @@ class DriveCommands:
         with self._result_lock:
             self._result = text
 
+    def _read_or_write(self: DrivePanel, event: viser.GuiEvent, write: bool, kind: str,
+                       key: int | str, label: str, typed: Any) -> None:
+        """Read or write one register or parameter (``kind``) of the clicking page's drive;
+        the answer is parked for the line under the boxes, named by ``label``."""
+        target = self._target(event.client)
+        if write:
+            value = int(typed.value)
+            self._sender.send(event.client, target, f"write_{kind}", {kind: key, "value": value},
+                              done=lambda _r: self._park(f"{label} = {value} written"))
+        else:
+            self._sender.send(event.client, target, f"read_{kind}", {kind: key},
+                              done=lambda r: self._park(f"{label} = {r}"))
+
     def _register_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
         option = self._register.value
-        n = register_of(option)
-        if button == "Write register":
-            value = int(self._register_value.value)
-            self._sender.send(event.client, self._target(event.client), "write_register",
-                              {"register": n, "value": value},
-                              done=lambda _r: self._park(f"{option} = {value} written"))
-        else:
-            self._sender.send(event.client, self._target(event.client), "read_register",
-                              {"register": n},
-                              done=lambda r: self._park(f"{option} = {r}"))
+        self._read_or_write(event, button == "Write register", "register", register_of(option),
+                            option, self._register_value)
 
     def _parameter_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
         name = self._parameter.value.split(" ", 1)[0]
-        if button == "Write param.":
-            value = int(self._parameter_value.value)
-            self._sender.send(event.client, self._target(event.client), "write_parameter",
-                              {"parameter": name, "value": value},
-                              done=lambda _r: self._park(f"{name} = {value} written"))
-        else:
-            self._sender.send(event.client, self._target(event.client), "read_parameter",
-                              {"parameter": name}, done=lambda r: self._park(f"{name} = {r}"))
+        self._read_or_write(event, button == "Write param.", "parameter", name, name,
+                            self._parameter_value)
 
     def _typed(self: DrivePanel, name: str, event: viser.GuiEvent) -> Any:
         """What the clicking page's c9 or c7 box holds."""
