@@ -130,13 +130,30 @@ def prepare_out(out: Path) -> list[Path]:
     return removed
 
 
+def _umask() -> int:
+    """The process's umask, read where Linux shows it: setting it to read it back would
+    change it for a moment under the threads still running (viser's, the recorder's)."""
+    try:
+        for line in Path("/proc/self/status").read_text(encoding="ascii").splitlines():
+            if line.startswith("Umask:"):
+                return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def write_events(out: Path, text: str) -> Path:
     """``out/events.jsonl``, the last file of a run, whole or not at all: written to a
     temporary file in ``out`` and renamed over (atomic on POSIX), so a reader never sees half
     a file and a folder without it is a run that did not finish (docs/scenarios.md "Output
-    folder"). The temporary file goes if the write fails or is interrupted."""
+    folder"). The temporary file goes if the write fails or is interrupted. Its mode is
+    what open() gives the pictures beside it (0666 less the umask), not mkstemp's 0600: a CI
+    job's artifact store or web server, another user, reads the folder."""
     fd, tmp = tempfile.mkstemp(prefix=f".{EVENTS_FILE}.", dir=out)
     try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "w", encoding="utf-8") as fh:
             fh.write(text)
         os.replace(tmp, out / EVENTS_FILE)

@@ -8,6 +8,8 @@ files stay).
 
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 import pytest
@@ -158,3 +160,18 @@ def test_out_help_says_it_removes_files(capsys: pytest.CaptureFixture[str]) -> N
         main(["scenario", "run", "--help"])
     help_text = " ".join(capsys.readouterr().out.split())
     assert "removes" in help_text and "events.jsonl" in help_text and "NN-name.png" in help_text
+
+
+@pytest.mark.parametrize("umask", [0o022, 0o077])
+def test_events_jsonl_has_the_mode_of_the_run_s_other_files(
+        scenario: Path, tmp_path: Path, umask: int) -> None:
+    """A CI job hands --out to another user (an artifact store, a web server): events.jsonl
+    was 0600 (its temporary file's mode, renamed over) beside 0644 pictures under umask 022.
+    It is made as open() makes a file: 0666 less the umask."""
+    out = tmp_path / "out"
+    old = os.umask(umask)
+    try:
+        assert main(["scenario", "run", str(scenario), "--out", str(out), "--quiet"]) == 0
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((out / "events.jsonl").stat().st_mode) == 0o666 & ~umask
