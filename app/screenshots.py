@@ -25,7 +25,7 @@ import socket
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -38,6 +38,7 @@ from app.rig import Rig
 from app.runtime import Runtime
 from app.scenario import Scenario, Step, check_against
 from app.ui.dashboard import Dashboard
+from app.ui.glyphs import glyph_order
 from app.ui.panels.scenario_player import PLAYER_FOLDER, STATUS_ID
 from app.ui.tab_switch import SNIPPET_ID
 from devices.events import Event
@@ -112,11 +113,13 @@ class ServedRig:
 
     @classmethod
     def start(cls, rig: Rig, quiet: bool = False,
-              before_start: Callable[[Runtime], object] | None = None) -> ServedRig:
+              before_start: Callable[[Runtime], object] | None = None,
+              texts: Iterable[str] = ()) -> ServedRig:
         """``quiet``: nothing of viser's on the output (``scenario run --quiet``).
         ``before_start(runtime)``: attach listeners that must see every event: the first work
         the dashboard queues already journals the events a rig emits when built (its devices
-        powered by the rig file)."""
+        powered by the rig file). ``texts``: what labels will show besides the dashboard's
+        own (a scenario's captions), for the glyph order of app/ui/glyphs.py."""
         runtime = Runtime(rig)
         runtime.set_paused(True)
         if before_start is not None:
@@ -126,7 +129,8 @@ class ServedRig:
             server = viser.ViserServer(host="127.0.0.1", port=port, verbose=False)
         # Every frame drawn, browser or not: advance() waits on rendered_seq before a page
         # is open, and tests read the views.
-        dashboard = Dashboard(server, runtime, draw_unwatched=True)
+        dashboard = Dashboard(server, runtime, draw_unwatched=True,
+                              glyphs=glyph_order(texts))
         runtime.start()
         dashboard.start()
         return cls(runtime, server, dashboard, f"http://127.0.0.1:{port}", quiet)
@@ -319,8 +323,9 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
     out.mkdir(parents=True, exist_ok=True)
     images: list[Path] = []
     rig.scenario = scenario.name  # a --record recording is named after it from its start
+    captions = [step.text for step in scenario.steps if step.kind == "caption"]
     with _browser_failures(), \
-            served_run(rig, record=record, quiet=quiet) as (served, events), \
+            served_run(rig, record=record, quiet=quiet, texts=captions) as (served, events), \
             Chromium(chromium) as browser:
         page = browser.open(served, show_player=True)
         failures = play(served, scenario, rig,
@@ -330,8 +335,8 @@ def run_with_screenshots(scenario: Scenario, rig: Rig, out_dir: str | Path, *,
 
 
 @contextlib.contextmanager
-def served_run(rig: Rig, *, record: str | None = None,
-               quiet: bool = False) -> Iterator[tuple[ServedRig, list[Event]]]:
+def served_run(rig: Rig, *, record: str | None = None, quiet: bool = False,
+               texts: Iterable[str] = ()) -> Iterator[tuple[ServedRig, list[Event]]]:
     """``rig`` served paused, with the list its events go to (and ``record``: a recording of
     it); stopped (and the recording closed) at the end."""
     events: list[Event] = []
@@ -349,7 +354,7 @@ def served_run(rig: Rig, *, record: str | None = None,
             attach_to_runtime(runtime, recorder)
 
     try:
-        served = ServedRig.start(rig, quiet=quiet, before_start=attach)
+        served = ServedRig.start(rig, quiet=quiet, before_start=attach, texts=texts)
         try:
             yield served, events
         finally:

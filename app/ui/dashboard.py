@@ -31,6 +31,7 @@ import viser.theme
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.drive.view import DriveView, axes_height
+from app.ui.glyphs import warm_glyphs
 from app.ui.line.view import LineView, focus_target
 from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
@@ -114,9 +115,14 @@ def _kind_ids(described: Mapping[str, Mapping[str, Any]], kind: str) -> list[str
 
 class Dashboard:
     def __init__(self, server: viser.ViserServer, runtime: Runtime,
-                 draw_unwatched: bool = False, scenarios: Path | None = None) -> None:
+                 draw_unwatched: bool = False, scenarios: Path | None = None,
+                 glyphs: str = "") -> None:
         self.server = server
         self.runtime = runtime
+        # Before any other label: the atlas order that makes two screenshot runs' text
+        # pixels the same (app/ui/glyphs.py); a served dashboard does without.
+        if glyphs:
+            warm_glyphs(server.scene, glyphs)
         # False: no view is computed while no browser is connected (the thread only takes
         # events). True for a driver that waits on rendered_seq before any page is open (the
         # screenshot tool steps a paused rig and waits for each frame to be drawn).
