@@ -52,6 +52,10 @@ LAUNCH_ARGS = (
     "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
     # Crashpad kept its database in ~/.config/chromium/Crash Reports even when nothing crashed
     "--disable-crash-reporter",
+    # The same bytes every run (tests/browser/test_screenshot_bytes.py): a tile re-rastered
+    # over part of an earlier frame's kept that frame's anti-aliasing on rounded corners and
+    # icons, and the GPU (SwiftShader) canvas of a plot could reach the capture a frame late.
+    "--disable-partial-raster", "--disable-gpu-rasterization", "--disable-accelerated-2d-canvas",
 )
 VIEWPORT = {"width": 1280, "height": 720}
 WALL_TIMEOUT_S = 60.0
