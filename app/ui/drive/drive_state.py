@@ -37,14 +37,23 @@ def mode_text(mode: Any) -> str:
         return str(mode)
 
 
-def fieldbus_text(snap: Mapping[str, Any]) -> str:
+def fieldbus_text(snap: Mapping[str, Any], slave: Mapping[str, Any] | None = None) -> str:
+    """How a master reaches the drive: its node (c7) on Modbus or CANopen; on EtherCAT the
+    station address its slave on the line has, since the master addresses it by its place on
+    the line and c7 is not used (seed 004 ch. 5 "Parametrizzazione EtherCAT per drive")."""
     bus = str(snap.get("fieldbus", "?"))
-    return f"{FIELDBUS_NAMES.get(bus, bus)} node {snap.get('node_id', '?')}"
+    name = FIELDBUS_NAMES.get(bus, bus)
+    if bus == "ethercat":
+        address = (slave or {}).get("station_address")
+        return f"{name} station address {address}" if address else f"{name} (c7 not used)"
+    return f"{name} node {snap.get('node_id', '?')}"
 
 
-def title(drive_id: str, snap: Mapping[str, Any], t_us: int) -> str:
-    """``drive · Modbus RTU node 1 · t = 12.3 s`` (tenths: stable in a paused rig)."""
-    return (f'<p class="fr-title"><b>{esc(drive_id)}</b> · {esc(fieldbus_text(snap))} · '
+def title(drive_id: str, snap: Mapping[str, Any], t_us: int,
+          slave: Mapping[str, Any] | None = None) -> str:
+    """``drive · Modbus RTU node 1 · t = 12.3 s`` (tenths: stable in a paused rig);
+    ``slave``: the snapshot of the drive's CoE slave, when it is on the EtherCAT line."""
+    return (f'<p class="fr-title"><b>{esc(drive_id)}</b> · {esc(fieldbus_text(snap, slave))} · '
             f'<span class="fr-muted">t = {t_us // 100_000 / 10:.1f} s</span></p>')
 
 
@@ -279,7 +288,7 @@ class DriveStatePanel:
 
     def update(self, pick_of: Pick, data_of: DriveData, t_us: int) -> None:
         table = _memo(lambda d: kv_table(state_rows(*data_of(d)), "fr-drive"))
-        self._title.show(lambda d: title(d, data_of(d)[0], t_us), pick_of)
+        self._title.show(lambda d: title(d, data_of(d)[0], t_us, data_of(d)[2]), pick_of)
         self._table.show(lambda d: table(d) if self._shared
                          else split_instructor(table(d), "fr-drive-causes")[0], pick_of)
         if self._causes is not None:
