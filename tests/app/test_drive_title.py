@@ -34,5 +34,5 @@ def test_modbus_and_canopen_drives_name_their_c7_node(tmp_path: Path) -> None:
 
 def test_the_ethercat_drive_names_its_station_address_not_c7(tmp_path: Path) -> None:
     text = _titles(tmp_path)["drive_ec"]
-    assert "EtherCAT station address 1004" in text
+    assert "EtherCAT station 1004 ·" in text
     assert "node" not in text

@@ -45,7 +45,7 @@ def fieldbus_text(snap: Mapping[str, Any], slave: Mapping[str, Any] | None = Non
     name = FIELDBUS_NAMES.get(bus, bus)
     if bus == "ethercat":
         address = (slave or {}).get("station_address")
-        return f"{name} station address {address}" if address else f"{name} (c7 not used)"
+        return f"{name} station {address}" if address else f"{name} (c7 not used)"
     return f"{name} node {snap.get('node_id', '?')}"
 
 
