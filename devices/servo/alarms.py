@@ -135,6 +135,16 @@ def alarm_table(fieldbus: str) -> dict[int, AlarmSpec]:
     return table
 
 
+def alarm_in_emergency(code: int, data: bytes, fieldbus: str = "canopen") -> AlarmSpec | None:
+    """The drive alarm an emergency of the drive reports, or None (an error reset, the node's
+    own life guard or PDO error): the first manufacturer byte is the alarm number
+    (devices/coe/emergency.py) and the error code that alarm's 0x603F code (ch. 5)."""
+    spec = alarm_table(fieldbus).get(data[0]) if data else None
+    if spec is None or spec.error_code_or_generic != code:
+        return None
+    return spec
+
+
 def lookup(fieldbus: str, key: int | str) -> AlarmSpec:
     """An alarm by code (16, "16") or name ("FOLLOWING_ERROR"), or KeyError with the choices."""
     table = alarm_table(fieldbus)

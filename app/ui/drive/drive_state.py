@@ -24,6 +24,7 @@ from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
 from devices.servo.actions import names_a_cause
+from devices.servo.alarms import alarm_in_emergency
 from devices.servo.parameters import FIELDBUS_NAMES
 from devices.servo.registers import MODE_NAMES
 
@@ -207,8 +208,10 @@ def event_text(event: Event) -> tuple[str, bool] | None:
         return f"alarm {event.code} {event.name} {verb}", event.active
     if isinstance(event, EmergencySent):
         record = event.to_record()
-        return f"EMCY {record['code']} register {record['register']} data {record['data']}", \
-            True
+        text = f"EMCY {record['code']} register {record['register']} data {record['data']}"
+        # The alarm byte is hex there (16 reads "10"); the drive numbers alarms in decimal.
+        alarm = alarm_in_emergency(event.code, event.data)
+        return (f"{text}: alarm {alarm.code} {alarm.name}" if alarm else text), True
     if isinstance(event, LogLine):
         return event.text, "fail" in event.text.lower()
     return None
