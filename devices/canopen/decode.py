@@ -29,6 +29,8 @@ class Context:
 
     sync_id: int = 0x80
     pdo_text: Callable[[int, bytes], str | None] = lambda can_id, data: None
+    # (COB-ID, error code, vendor bytes) -> what the sender means by them (a drive alarm)
+    emcy_text: Callable[[int, int, bytes], str | None] = lambda can_id, code, vendor: None
 
 
 def _mux(data: bytes) -> str:
@@ -158,8 +160,9 @@ def describe(can_id: int, data: bytes, rtr: bool, ctx: Context) -> tuple[str, st
         code = int.from_bytes(data[0:2], "little")
         vendor = " ".join(f"{b:02X}" for b in data[3:8])
         what = "error reset" if code == 0 else f"code 0x{code:04X}"
+        meaning = ctx.emcy_text(can_id, code, data[3:8])
         return "EMCY", f"node {can_id - EMCY_BASE}: {what}, register 0x{data[2]:02X}, " \
-                       f"data {vendor}"
+                       f"data {vendor}" + (f": {meaning}" if meaning else "")
     if SDO_RX_BASE < can_id <= SDO_RX_BASE + 127 and len(data) >= 4:
         return "SDO", f"-> node {can_id - SDO_RX_BASE}: {sdo_request(data)}"
     if SDO_TX_BASE < can_id <= SDO_TX_BASE + 127 and len(data) >= 4:

@@ -48,6 +48,7 @@ from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
 from devices.device import Action, CommandError, DeviceModel, Param
 from devices.events import EmergencySent, StateChanged
 from devices.od import AbortCode, SdoAbort
+from devices.servo.alarms import alarm_in_emergency
 from devices.servo.drive import ServoDrive
 
 logger = logging.getLogger(__name__)
@@ -541,7 +542,16 @@ class CanOpenNode(ProcessData, DeviceModel):
     def _log(self, frame: CanFrame) -> None:
         pdos = (*self.rpdos, *self.tpdos)
         self.monitor.record(frame, Context(sync_id=self.sync_cob_id & 0x7FF,
-                                           pdo_text=lambda i, d: pdo_text(pdos, i, d)))
+                                           pdo_text=lambda i, d: pdo_text(pdos, i, d),
+                                           emcy_text=self._emcy_text))
+
+    def _emcy_text(self, can_id: int, code: int, vendor: bytes) -> str | None:
+        """This node's EMCY carries a drive alarm, its number a hex byte: "alarm 16 ..." in
+        the drive's decimal numbering (ch. 3). Another node's bytes are its own to mean."""
+        if can_id != self.emcy_cob_id & 0x7FF:
+            return None
+        alarm = alarm_in_emergency(code, vendor, self.drive.fieldbus)
+        return f"alarm {alarm.code} {alarm.name}" if alarm else None
 
     def snapshot(self) -> dict[str, Any]:
         return {

@@ -9,6 +9,7 @@ alarms in decimal (ch. 3, ch. 5 "Codice Allarme ECO"), so the log line says whic
 
 from __future__ import annotations
 
+from app.decoder import decode
 from app.ui.drive.drive_state import DriveLog, event_text
 from devices.events import EmergencySent
 
@@ -37,3 +38,10 @@ def test_an_emergency_of_no_drive_alarm_keeps_its_bytes_alone() -> None:
     assert (event_text(reset) or ("",))[0] == "EMCY 0x0000 register 0x00 data 00 00 00 00 00"
     guard = EmergencySent(1_000, "drive_co", code=0x8130, register=0x11, data=bytes(5))
     assert "alarm" not in (event_text(guard) or ("",))[0]
+
+
+def test_the_codes_tab_still_reads_a_pasted_line() -> None:
+    for line in ("EMCY 0x8611 register 0x21 data 10 00 00 00 00: alarm 16 FOLLOWING_ERROR",
+                 "node 2: code 0x8611, register 0x21, data 10 00 00 00 00: "
+                 "alarm 16 FOLLOWING_ERROR"):
+        assert any("16 FOLLOWING_ERROR" in m.title + m.text for m in decode(line)), line

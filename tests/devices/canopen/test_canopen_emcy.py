@@ -101,3 +101,19 @@ def test_alarm_at_power_up_is_sent_after_boot_up() -> None:
     bench.run(60)
     frames = [(f.can_id, hexs(f.data)) for f in bench.take()]
     assert frames[-2:] == [(0x701, "00"), (0x081, "00 55 01 09 00 00 00 00")]
+
+
+def test_the_bus_monitor_names_the_alarm_of_its_own_emcy() -> None:
+    """The CANopen tab's frame log: the vendor byte is hex ("10" for alarm 16), the drive
+    numbers its alarms in decimal (ch. 3), so the meaning names the alarm. Another node's
+    EMCY on the bus is not this drive's to read."""
+    bench = make_bench()
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": "16"})
+    bench.run(5)
+    bench.send(0x083, em.payload(0x8611, 0x21, bytes((16,))))  # node 3's, same bytes
+    bench.run(5)
+    texts = [f["text"] for f in bench.node.snapshot()["frames"] if f["kind"] == "EMCY"]
+    assert texts == ["node 1: code 0x8611, register 0x21, data 10 00 00 00 00: "
+                     "alarm 16 FOLLOWING_ERROR",
+                     "node 3: code 0x8611, register 0x21, data 10 00 00 00 00"]
