@@ -36,6 +36,7 @@ HALT_HINT_ANY = "halted (R00 bit 2 or 0x6040 bit 8)"  # c9 names no fieldbus: bo
 
 POSITIONER = frozenset({1, -1})
 VELOCITY = frozenset({3, -127})
+SPEED_SET_POINT = frozenset({3})  # R13 target_velocity; -127 follows the analog input
 HOMING = frozenset({6})
 INTERPOLATOR = frozenset({7})
 ELECTRONIC_AXIS = frozenset({-2})

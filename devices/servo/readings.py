@@ -258,4 +258,8 @@ class DriveReadings:
             "current": {"o1": round(self.meter.instant), "o2": round(self.meter.rms),
                         "o3": round(self.meter.overload)},
             "leds": self.network_leds.snapshot(),
+            # the speed mode 3 runs to: R13, or R30 with Select high (ch. 2 "Select"); only
+            # in mode 3, the one mode whose set-point is a register
+            **({"speed_set_point": self.mode_logic.target_user(self)}
+               if self.mode in control.SPEED_SET_POINT else {}),
         }

@@ -102,8 +102,16 @@ def state_rows(snap: Mapping[str, Any], node: Mapping[str, Any] | None = None,
     limits = snap.get("limits") or {}
     velocity = float(snap.get("velocity", 0.0))
     fe = float(snap.get("following_error", 0.0))
-    position = (f"<b>{esc(snap.get('position_counts', 0))}</b> "
-                f"<span class=\"fr-muted\">target {esc(snap.get('target', 0))}</span>")
+    # Only the mode in force has a target: R09 in the positioner, the speed set-point in speed
+    # control (the model's, ch. 2 "Select"); R09 stays at the last move's in any other mode.
+    mode = snap.get("mode")
+    position = f"<b>{esc(snap.get('position_counts', 0))}</b>"
+    if mode in control.POSITIONER:
+        position += f" <span class=\"fr-muted\">target {esc(snap.get('target', 0))}</span>"
+    speed = esc(f"{velocity:.0f} u/s · following error {fe:.1f}")
+    if "speed_set_point" in snap:
+        target = float(snap["speed_set_point"])
+        speed += f' <span class="fr-muted">target {target:.0f} u/s</span>'
     if snap.get("homed"):
         position += " " + badge("homed", "ok")
     consents = f"TEN {_on(snap.get('ten'))} · IEN {_on(snap.get('ien'))}"
@@ -117,7 +125,7 @@ def state_rows(snap: Mapping[str, Any], node: Mapping[str, Any] | None = None,
         *fieldbus_rows(snap, node, slave),
         ("Mode", esc(mode_text(snap.get("mode")))),
         ("Position", position),
-        ("Velocity", esc(f"{velocity:.0f} u/s · following error {fe:.1f}")),
+        ("Velocity", speed),
         ("Alarm", alarm_html(snap)),
         # The instructor's (style.CAUSE_ROWS): without it an injected alarm's refused reset
         # read "persists" with no word of why (docs/classroom.md hides it from trainees).
