@@ -21,6 +21,7 @@ from viser._messages import GuiUpdateMessage  # viser 1.1.1, pinned
 
 from app.ui.commands import CommandSender
 from app.ui.panels.client_pick import page_ready, send_to
+from app.ui.panels.widgets import PAGE_SENDS
 
 logger = logging.getLogger(__name__)
 
@@ -113,7 +114,9 @@ class ClientSynced(ClientInput):
     """:class:`app.ui.panels.widgets.Synced` per page: each page shows the model's value of
     its own pick (``follow_each``), a page's change commands ``command(client, value)`` and
     stays shown on that page until the command has been through the runtime, then the
-    model's value goes back to it (a refused or no-op command included)."""
+    model's value goes back to it (a refused or no-op command included). As with Synced, any
+    GUI message of a page may have replaced a change of this widget its throttled sender
+    dropped: that page gets the model's value again at the next frame."""
 
     def __init__(self, server: viser.ViserServer, handle: Any, sender: CommandSender,
                  command: ClientChange) -> None:
@@ -123,6 +126,13 @@ class ClientSynced(ClientInput):
         self._command = command
         self._pending: dict[int, int] = {}  # event loop only
         self._model: dict[int, Any] = {}  # what each page was last told: event loop only
+        for message_cls in PAGE_SENDS:
+            server._websock_server.register_handler(message_cls, self._heard)
+
+    def _heard(self, client_id: int, _message: Any) -> None:
+        """viser's event loop: ``client_id``'s page may show a click the server never heard
+        (widgets.Synced._recheck); a change of its own on its way is left to settle."""
+        self._model.pop(client_id, None)
 
     def changed(self, client_id: int, value: Any) -> None:
         self._pending[client_id] = self._pending.get(client_id, 0) + 1
