@@ -80,30 +80,33 @@ class Part(Generic[T]):
             self._built.pop(client_id, None)
 
     def of(self, client_id: int) -> T | None:
-        """The copy built for ``client_id`` (None: not built, or an open rig's)."""
-        with self._lock:
-            return self._built.get(client_id)
+        """The copy built for ``client_id`` while its page is there (None: not built, gone,
+        or an open rig's)."""
+        return dict(self.items()).get(client_id)
 
     def items(self) -> list[tuple[int | None, T]]:
-        """Every copy built so far with its connection's id (None: an open rig's one)."""
-        with self._lock:
-            return list(self._built.items())
-
-    def each(self) -> list[T]:
-        """Every copy built so far whose page is still there (update them all).
+        """Every copy built so far whose page is still there, with its connection's id (None:
+        an open rig's one).
 
         viser lets a leaving page go first (it leaves ``get_clients()``), then marks its
         widgets removed, then runs the disconnect callbacks (``Instructor._gone`` forgets the
         copy), which come late on a loaded machine. A copy updated in between was rebuilt on
         removed widgets: "Attempted to remove an already removed GuiCheckboxHandle", or a
-        RuntimeError assigning a removed dropdown's options, which ended that frame's
-        update (tests/app/test_classroom_redraw.py)."""
+        RuntimeError assigning a removed dropdown's options or HTML content, which ended that
+        frame's update (tests/app/test_classroom_redraw.py,
+        tests/app/test_instructor_html_gone.py)."""
         with self._lock:
             built = list(self._built.items())
         if all(client_id is None for client_id, _copy in built):
-            return [copy for _client_id, copy in built]
+            return built
         present = self._server.get_clients()
-        return [copy for client_id, copy in built if client_id is None or client_id in present]
+        return [(client_id, copy) for client_id, copy in built
+                if client_id is None or client_id in present]
+
+    def each(self) -> list[T]:
+        """Every copy built so far whose page is still there (update them all): see
+        :meth:`items`."""
+        return [copy for _client_id, copy in self.items()]
 
 
 class ScenePart(Part[T]):
