@@ -116,3 +116,18 @@ def test_a_pages_message_does_not_undo_its_change_on_its_way(
     loop.run_until_complete(asyncio.sleep(0))
     _frame(loop, synced, model=True)
     assert sent == [(1, True)]
+
+
+def test_a_page_that_leaves_while_a_frame_is_on_its_way_is_not_kept(
+        loop: asyncio.AbstractEventLoop, sent: list[tuple[int, Any]]) -> None:
+    """A frame's values are read on the dashboard thread and shown later on the event loop;
+    a page that left in between (its disconnect callback run) was written back into the
+    per-page values by that frame and stayed there for good: a classroom's browsers come
+    and go all day."""
+    server, _runtime, synced = _power(loop)
+    _frame(loop, synced)
+    synced.follow_each(lambda _client_id: True)  # read while page 2 is still there
+    gone = server.clients.pop(2)  # viser lets the page go, then runs the callbacks
+    synced._gone(gone)  # type: ignore[arg-type]
+    loop.run_until_complete(asyncio.sleep(0))
+    assert 2 not in synced._values and (1, True) in sent

@@ -68,6 +68,12 @@ class ClientInput:
     def set_for(self, client: viser.ClientHandle, value: Any) -> None:
         with self._lock:
             self._values[client.client_id] = value
+        if client.client_id not in self._server.get_clients():
+            # A frame read before the page left: viser drops it from get_clients() before
+            # the disconnect callback (_gone), which may have run already; kept, it stayed.
+            with self._lock:
+                self._values.pop(client.client_id, None)
+            return
         send_to(client, self.handle._impl.uuid, "value", value)
 
 
