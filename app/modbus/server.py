@@ -145,13 +145,16 @@ class _DriveRequestHandler(ServerRequestHandler):
 
     def datagram_received(self, data: bytes, addr: tuple | None) -> None:
         if not self._mbap:
-            now = self._stalls.arrival(self._last_data_s, time.monotonic())
-            if self.recv_buffer and now - self._last_data_s > RTU_SILENCE_S:
+            read_s = time.monotonic()
+            came_s = self._stalls.arrival(self._last_data_s, read_s)
+            if self.recv_buffer and came_s - self._last_data_s > RTU_SILENCE_S:
                 # ch.2: a frame cut by a silence is incomplete and discarded; pymodbus would
                 # glue it to the next frame and lose that one too (a master's retransmission)
                 logger.debug("incomplete RTU frame %s discarded", self.recv_buffer.hex(" "))
                 self.recv_buffer = b""
-            self._last_data_s = now
+            # The latest these bytes can have come: the next gap is a silence only if it is
+            # one whenever in a stall they came (the earliest, came_s, made the gap before).
+            self._last_data_s = read_s
         super().datagram_received(data, addr)
 
     def callback_data(self, data: bytes, addr: tuple | None = None) -> int:
