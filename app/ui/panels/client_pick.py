@@ -66,6 +66,7 @@ class ClientPick:
 
     def __init__(self, server: viser.ViserServer, handle: Any) -> None:
         self.handle = handle
+        self._server = server
         self._lock = threading.Lock()
         self._default = str(handle.value)
         self._own: dict[int, str] = {}
@@ -80,12 +81,25 @@ class ClientPick:
         impl = self.handle._impl
         value, impl.value = str(impl.value), _NOTHING
         if value in self.handle.options:
-            with self._lock:
-                self._own[event.client_id] = value
+            self._keep(event.client_id, value)
 
     def _gone(self, client: viser.ClientHandle) -> None:
         with self._lock:
             self._own.pop(client.client_id, None)
+
+    def _keep(self, client_id: int, value: str) -> bool:
+        """Keep ``value`` as the page's pick, unless the page has left: viser drops it from
+        get_clients() before the disconnect callback (_gone), which may have run already; a
+        pick kept after it stayed for the server's life (ClientInput.set_for likewise)."""
+        if client_id not in self._server.get_clients():
+            return False
+        with self._lock:
+            self._own[client_id] = value
+        if client_id not in self._server.get_clients():  # left meanwhile: _gone may be past
+            with self._lock:
+                self._own.pop(client_id, None)
+            return False
+        return True
 
     def on_pick(self, fn: Callable[[viser.ClientHandle, str], None]) -> None:
         """``fn(client, value)`` after each pick a page makes itself."""
@@ -107,9 +121,8 @@ class ClientPick:
 
     def set_for(self, client: viser.ClientHandle, value: str) -> None:
         """``client``'s page picks ``value`` (its click in the 3D view)."""
-        with self._lock:
-            self._own[client.client_id] = value
-        send_to(client, self.handle._impl.uuid, "value", value)
+        if self._keep(client.client_id, value):
+            send_to(client, self.handle._impl.uuid, "value", value)
 
     def set_all(self, value: str) -> None:
         """Every page, and every page to come, picks ``value``."""
