@@ -23,6 +23,7 @@ import viser
 
 from app.runtime import Frame, Runtime
 from app.ui.commands import CommandSender, notify
+from app.ui.line.camera import send_pose
 from app.ui.line.controls import LineControls
 from app.ui.line.master_panel import MasterPanel
 from app.ui.line.scene import Box, LineScene
@@ -219,9 +220,7 @@ class LineView:
         for each in clients:
             try:
                 position, look_at = camera_for(box, self._client_aspect(each), lift=lift)
-                with each.atomic():  # position first: it drags look_at along (viser)
-                    each.camera.position = position
-                    each.camera.look_at = look_at
+                send_pose(each, position, look_at)  # not viser's setters: they may not send
             except Exception:  # a browser that just left
                 logger.debug("camera move for client %s failed", each.client_id,
                              exc_info=True)
