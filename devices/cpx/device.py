@@ -25,7 +25,7 @@ from devices.cpx.history import DiagHistory
 from devices.cpx.indicators import wanted_leds
 from devices.cpx.leds import LedBank
 from devices.cpx.module_checks import ModuleChecks
-from devices.cpx.modules import CpxModule, ModuleFault, Monitors
+from devices.cpx.modules import CpxModule, ModuleFault, Monitors, held_off
 from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
 from devices.cpx.stillness import StillStepping
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
@@ -546,7 +546,9 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
                      runs: bool) -> dict[str, Any]:
         pairs = [(e.fault.cause, e.fault.channel) for e in self.diagnosis.active
                  if e.fault.module == module.number]
-        return {**module.snapshot(), "diagnosed": self.diagnosis.of_module(module.number),
+        diagnosed = self.diagnosis.of_module(module.number)
+        return {**module.snapshot(), "diagnosed": diagnosed,
+                "held_off": held_off(module.held_off(), diagnosed),
                 "error_led": self.diagnosis.error_led(module.number),
                 "undiagnosed": undiagnosed(module, pairs, monitors, runs, self.u_out_ok)}
 

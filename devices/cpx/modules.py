@@ -215,6 +215,15 @@ class CpxModule:
             self.energised[i] = not off
             self.driven[i] = 0 if off else value
 
+    def held_off(self) -> list[int]:
+        """The outputs told to drive (a value other than 0) that the module keeps switched
+        off: a short circuit, U_OUT missing or a module failure. The output image still holds
+        the PLC's value there (docs/cpx-e-ec.md choice 40)."""
+        if self.is_counter:  # the 1CI's outputs are control bits, always taken
+            return []
+        return [i for i, value in enumerate(self.commanded)
+                if value and not self.energised[i]]
+
     def short_bites(self, channel: int) -> bool:
         """A short circuit draws current only from a driven output in a voltage range."""
         if self.mtype.analog_ranges:
@@ -320,6 +329,21 @@ class CpxModule:
         if self.is_counter:
             out["count_rate_hz"] = self.count_rate_hz
         return out
+
+
+def held_off(channels: Sequence[int], diagnosed: Sequence[Mapping[str, object]],
+             ) -> list[dict[str, object]]:
+    """A module snapshot's "held_off": each output :meth:`CpxModule.held_off` names, with the
+    worst cause the bus module diagnoses for it (``diagnosed``: ``Diagnosis.of_module``, worst
+    first): the channel's own (a short), else the module's (U_OUT low, module failure). No
+    cause when none is diagnosed (Monitor SCO off in 0x2400:3): the channel is off all the
+    same, but the device does not say why, and no page may name an injected cause."""
+    out: list[dict[str, object]] = []
+    for channel in channels:
+        causes = [d["cause"] for d in diagnosed if d.get("channel") == channel] + \
+            [d["cause"] for d in diagnosed if d.get("channel") is None]
+        out.append({"channel": channel, "cause": causes[0]} if causes else {"channel": channel})
+    return out
 
 
 def _range_code(name: str) -> int:
