@@ -13,7 +13,14 @@ from typing import Any
 import viser
 
 from app.ui.line.bodies import as_drawn, led_colour
-from app.ui.line.io_bodies import CPX_COLOURS, TRS_LEDS, ident_text, module_fault_parts
+from app.ui.line.io_bodies import (
+    CPX_COLOURS,
+    LED_WORDS,
+    TRS_LEDS,
+    channel_list,
+    ident_text,
+    module_fault_parts,
+)
 from app.ui.panels.client_pick import ClientHtml, ClientPick
 from app.ui.panels.per_client import instructor_for, split_instructor
 from app.ui.panels.state import injected_text
@@ -212,6 +219,24 @@ def fault_cell(module: Mapping[str, Any]) -> str:
     return esc(seen) + f'<span class="{INSTRUCTOR_CLASS}" data-where="{where}">{esc(tail)}</span>'
 
 
+def held_off_note(module: Mapping[str, Any]) -> str:
+    """Under a module's output image (HTML): the outputs the module holds off against it, by
+    the cause the bus module diagnoses ("held off: 3 (short)"), as the module snapshot's
+    "held_off" says; none named when none is diagnosed. The image keeps the PLC's value: read
+    alone, 00010000 after a short on output 3 said "output 3 on" (docs/cpx-e-ec.md choice 40).
+    """
+    by_cause: dict[str, list[int]] = {}
+    for entry in module.get("held_off") or []:
+        cause = entry.get("cause")
+        words = LED_WORDS.get(str(cause), str(cause)) if cause is not None else ""
+        by_cause.setdefault(words, []).append(int(entry.get("channel", 0)))
+    notes = [f"{channel_list(channels)} ({words})" if words else channel_list(channels)
+             for words, channels in by_cause.items()]
+    if not notes:
+        return ""
+    return f'<br><span class="fr-line-bad">{esc("held off: " + "; ".join(notes))}</span>'
+
+
 def cpx_html(snap: Mapping[str, Any]) -> str:
     states = snap.get("led_states") or {}
     switches = snap.get("switches") or {}
@@ -231,11 +256,11 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
     modules = "".join(
         f"<tr><td>{esc(m.get('module'))}</td><td>{esc(m.get('short', m.get('type')))}</td>"
         f"<td>{esc(bits(m.get('inputs') or []))}</td>"
-        f"<td>{esc(bits(m.get('outputs') or []))}</td>"
+        f"<td>{esc(bits(m.get('outputs') or []))}{held_off_note(m)}</td>"
         f"<td class=\"fr-line-bad\">{fault_cell(m)}</td></tr>"
         for m in snap.get("modules") or [])
     io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>#</th><th>Module</th>'
-          "<th>Inputs</th><th>Outputs</th><th>Fault</th></tr></thead>"
+          "<th>Inputs</th><th>Outputs (PLC image)</th><th>Fault</th></tr></thead>"
           f"<tbody>{modules}</tbody></table>")
     history = (snap.get("history") or {}).get("messages") or []
     return kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(history)
