@@ -104,6 +104,17 @@ def test_slave_io_tables_keep_their_bit_groups_whole(live: LiveDashboard,
     table = page.locator("#fr-slave-io")
     wait_until(lambda: "16DI" in table.inner_text(), what="the CPX-E-EC module table")
     assert split_words(page, "#fr-slave-io td") == []
+    # The held-off note under the 8DO's output image (docs/cpx-e-ec.md choice 40) too.
+    live.command("cpx", "write_object", {"index": 0x7002, "sub": 4, "value": 1})
+    live.command("cpx/2", "short_circuit", {"channel": 3, "on": True})
+    live.advance(0.1)
+    try:
+        wait_until(lambda: "held off: 3 (short)" in table.inner_text(), what="the note")
+        assert split_words(page, "#fr-slave-io td") == []
+    finally:
+        live.command("cpx/2", "short_circuit", {"channel": 3, "on": False})
+        live.command("cpx", "write_object", {"index": 0x7002, "sub": 4, "value": 0})
+        live.advance(0.1)
 
 
 # The Server cells whose text the column clips (overflow hidden: wider content than cell).
