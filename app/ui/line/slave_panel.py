@@ -259,8 +259,11 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         f"<td>{esc(bits(m.get('outputs') or []))}{held_off_note(m)}</td>"
         f"<td class=\"fr-line-bad\">{fault_cell(m)}</td></tr>"
         for m in snap.get("modules") or [])
+    # "PLC out": the image the PLC wrote (RxPDO), held-off channels noted under it; a longer
+    # header wrapped over three lines and pushed the module rows out of a 1280x720 view.
     io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>#</th><th>Module</th>'
-          "<th>Inputs</th><th>Outputs (PLC image)</th><th>Fault</th></tr></thead>"
+          '<th>Inputs</th><th title="the outputs as the PLC wrote them (RxPDO)">PLC out</th>'
+          "<th>Fault</th></tr></thead>"
           f"<tbody>{modules}</tbody></table>")
     history = (snap.get("history") or {}).get("messages") or []
     return kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(history)
