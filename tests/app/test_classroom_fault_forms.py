@@ -70,17 +70,28 @@ def _apply(page: Page, picker: str, action: str, params: dict[str, Any]) -> None
     page.set(apply, True)
 
 
-def _in(page: Page, folder: str, label: str) -> str:
-    """The uuid of the widget ``label`` in the page's newest folder titled ``folder``, once
-    the page has it (an instructor's copies are still arriving while a loaded machine sends
-    the first ones)."""
+def _in(page: Page, *path: str) -> str:
+    """The uuid of the widget ``path[-1]`` in the folder ``path[-2]``, that folder in
+    ``path[-3]`` and so on (each the page's newest folder so titled in the one before), once
+    the page has it. The instructor's own folders come on its connection's own messages, the
+    server-level ones (the Slave tab's "cpx" form, with a Target too) on the replay of the
+    shared elements: two producers in no set order, so the newest "cpx" may be the shared
+    one. A folder whose title a shared folder also has is named with its parent's
+    ("Slave faults", "cpx")."""
+    *folders, label = path
+    assert folders, "name the widget's folder"
 
     def found() -> str | None:
         got = page.received()
-        uuid = next((m["uuid"] for m in reversed(got) if m.get("type") == "GuiFolderMessage"
-                     and (m.get("props") or {}).get("label") == folder), None)
-        return next((str(m["uuid"]) for m in got if uuid is not None
-                     and m.get("container_uuid") == uuid
+        parent: str | None = None
+        for depth, title in enumerate(folders):
+            parent = next((str(m["uuid"]) for m in reversed(got)
+                           if m.get("type") == "GuiFolderMessage"
+                           and (m.get("props") or {}).get("label") == title
+                           and (depth == 0 or m.get("container_uuid") == parent)), None)
+            if parent is None:
+                return None
+        return next((str(m["uuid"]) for m in got if m.get("container_uuid") == parent
                      and (m.get("props") or {}).get("label") == label), None)
 
     return str(_wait(found))
@@ -122,11 +133,11 @@ def test_the_instructor_injures_the_slave_and_module_picked_in_its_own_form(
 ) -> None:
     live, _trainee, instructor = served
     instructor.set(_in(instructor, "Slave faults", "Device"), "cpx")
-    instructor.set(_in(instructor, "cpx", "Target"), "cpx/3")
+    instructor.set(_in(instructor, "Slave faults", "cpx", "Target"), "cpx/3")
     time.sleep(0.3)
     _apply(
         instructor,
-        _in(instructor, "cpx", "Fault action"),
+        _in(instructor, "Slave faults", "cpx", "Fault action"),
         "inject_fault",
         {"fault": "module_failure"},
     )

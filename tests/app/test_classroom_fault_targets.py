@@ -45,13 +45,13 @@ def test_the_slave_faults_form_on_a_module_lists_its_actions_only(
         served: tuple[ServedRig, Page, Page]) -> None:
     _live, _trainee, instructor = served
     instructor.set(_in(instructor, "Slave faults", "Device"), "cpx")
-    action = _in(instructor, "cpx", "Fault action")
-    instructor.set(_in(instructor, "cpx", "Target"), "cpx/2")
+    action = _in(instructor, "Slave faults", "cpx", "Fault action")
+    instructor.set(_in(instructor, "Slave faults", "cpx", "Target"), "cpx/2")
     _wait(lambda: "cable" not in _options(instructor, action))
     shown = set(_options(instructor, action))
     assert not shown & {"cable", "power", "supply"}, shown
     assert {"short_circuit", "inject_fault"} <= shown
-    instructor.set(_in(instructor, "cpx", "Target"), "cpx")
+    instructor.set(_in(instructor, "Slave faults", "cpx", "Target"), "cpx")
     _wait(lambda: "cable" in _options(instructor, action))
     assert "short_circuit" not in _options(instructor, action)
 
@@ -60,8 +60,8 @@ def test_an_apply_in_a_fault_form_is_confirmed_on_the_instructors_page_only(
         served: tuple[ServedRig, Page, Page]) -> None:
     live, trainee, instructor = served
     instructor.set(_in(instructor, "Slave faults", "Device"), "cpx")
-    instructor.set(_in(instructor, "cpx", "Target"), "cpx/3")
-    action = _in(instructor, "cpx", "Fault action")
+    instructor.set(_in(instructor, "Slave faults", "cpx", "Target"), "cpx/3")
+    action = _in(instructor, "Slave faults", "cpx", "Fault action")
     # the form's list for cpx/3 first: it moves the pick, which the form's rows follow
     _wait(lambda: "cable" not in _options(instructor, action))
     before = len(_notes(instructor))
@@ -97,7 +97,7 @@ def test_the_instructors_target_list_follows_a_plugged_expansion(
     Target list (the pick stays); before, the list was the snapshot of its building."""
     live, _trainee, instructor = served
     instructor.set(_in(instructor, "Slave faults", "Device"), "trscat")
-    target = _in(instructor, "trscat", "Target")
+    target = _in(instructor, "Slave faults", "trscat", "Target")
     assert _options(instructor, target) == ("trscat", "trscat/1", "trscat/2")
     instructor.set(target, "trscat/2")
     live.runtime.command("trscat/3", "plug", {"type": "TRS-IO-E"}).result(timeout=10)
