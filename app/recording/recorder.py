@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import logging
 import threading
+from array import array
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -48,14 +49,22 @@ DEFAULT_MAX_BUFFERED_ROWS = 20_000  # ~2.5 MB of rows at most in the buffers
 
 @dataclass
 class _Column:
-    """Rows of one entity waiting to be sent: times (us) and one value per row."""
+    """Rows of one entity waiting to be sent: times (us) and one value per row.
 
-    times: list[int] = field(default_factory=list)
-    values: list[Any] = field(default_factory=list)
+    Rows wait minutes (a chunk or a period), up to ``max_buffered_rows`` of them: times, and a
+    scalar entity's values (``width`` per row, flat), are machine numbers, 8 bytes each; as
+    Python ints and tuples of floats a row was ~100 bytes (issue 7 soak, docs/recording.md)."""
+
+    times: array[int] = field(default_factory=lambda: array("q"))
+    values: Any = field(default_factory=list)  # texts, lane states; array("d") for scalars
     levels: list[str] = field(default_factory=list)  # text logs only
     width: int = 0  # scalars only: series per row
     last: Any = None  # scalars only: the last row kept
     held_us: int | None = None  # scalars only: time of the last sample equal to ``last``
+
+    @classmethod
+    def scalars(cls, width: int) -> _Column:
+        return cls(values=array("d"), width=width)
 
     def add_sample(self, t_us: int, row: tuple[float, ...]) -> bool:
         """Keep a sample only when it differs from the last one kept; before it, keep the
@@ -66,7 +75,7 @@ class _Column:
             return False
         self.hold()
         self.times.append(t_us)
-        self.values.append(row)
+        self.values.extend(row)
         self.last = row
         return True
 
@@ -74,13 +83,14 @@ class _Column:
         """Keep the pending equal sample (at a change, a flush, the end)."""
         if self.held_us is not None:
             self.times.append(self.held_us)
-            self.values.append(self.last)
+            self.values.extend(self.last)
             self.held_us = None
 
-    def take(self) -> tuple[np.ndarray, list[Any], list[str]]:
-        times = np.array(self.times, dtype="timedelta64[us]")
+    def take(self) -> tuple[np.ndarray, Any, list[str]]:
+        times = np.array(self.times, dtype=np.int64).astype("timedelta64[us]")
         out = times, self.values, self.levels
-        self.times, self.values, self.levels = [], [], []
+        self.times, self.levels = array("q"), []
+        self.values = array("d") if isinstance(self.values, array) else []
         return out
 
 
@@ -354,7 +364,7 @@ class RigRecorder:
     def _scalar(self, t_us: int, signal: Signal) -> _Column:
         column = self._scalars.get(signal.path)
         if column is None:
-            column = self._scalars[signal.path] = _Column(width=len(signal.values))
+            column = self._scalars[signal.path] = _Column.scalars(len(signal.values))
         elif column.width != len(signal.values):
             # The module behind this entity changed (another type plugged): the rows sent
             # so far keep their width; a new column starts with the new one.
@@ -375,7 +385,7 @@ class RigRecorder:
         if not column.times:
             return
         times, rows, _ = column.take()
-        values = np.array(rows, dtype=np.float64).reshape(len(rows), column.width)
+        values = np.frombuffer(rows, dtype=np.float64).reshape(len(times), column.width)
         self._rec.send_columns(path, indexes=[rr.TimeColumn(TIMELINE, duration=times)],
                                columns=rr.Scalars.columns(scalars=values))
 
