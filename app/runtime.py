@@ -14,6 +14,7 @@ and the bounded event journal; both are published by the simulation thread.
 from __future__ import annotations
 
 import collections
+import itertools
 import logging
 import queue
 import threading
@@ -74,8 +75,9 @@ class Runtime:
         self._rig_lock = threading.RLock()
         self._sim_waiting = False  # the simulation thread wants the rig lock: call() waits
         self._caller: int | None = None  # the thread inside call(), if any
-        self._journal: collections.deque[tuple[int, Event]] = collections.deque(
-            maxlen=JOURNAL_LENGTH)
+        # The last events; their sequence numbers are consecutive and end at _event_seq, so
+        # none is stored (a (seq, event) tuple and its int were ~90 bytes an event: issue 7).
+        self._journal: collections.deque[Event] = collections.deque(maxlen=JOURNAL_LENGTH)
         self._event_seq = 0
         self._frame = Frame(0, rig.clock.now_us, rig.snapshot())
         self._frame_revision = rig.revision  # the rig's revision when the frame was taken
@@ -196,11 +198,9 @@ class Runtime:
     def events_since(self, seq: int) -> tuple[int, list[Event]]:
         """Events journalled after ``seq`` and the sequence number to ask from next time."""
         with self._lock:
-            newer: list[Event] = []
-            for s, e in reversed(self._journal):  # cost grows with the new events only
-                if s <= seq:
-                    break
-                newer.append(e)
+            new = min(max(self._event_seq - seq, 0), len(self._journal))
+            # From the right end: the cost grows with the new events only.
+            newer = list(itertools.islice(reversed(self._journal), new))
             newer.reverse()
             return self._event_seq, newer
 
@@ -318,9 +318,8 @@ class Runtime:
         if not events:
             return
         with self._lock:
-            for event in events:
-                self._event_seq += 1
-                self._journal.append((self._event_seq, event))
+            self._journal.extend(events)
+            self._event_seq += len(events)
         for fn in self._listeners:
             try:
                 fn(events)
