@@ -29,7 +29,7 @@ from app.ui.drive.drive_panel import DrivePanel
 from app.ui.drive.drive_state import DriveStatePanel, StatusWordsPanel
 from app.ui.drive.plots import DrivePlots, DriveSampler
 from app.ui.drive.style import DRIVE_CSS
-from app.ui.panels.client_pick import ClientPick, send_all, send_to
+from app.ui.panels.client_pick import ClientPick, send_on
 from app.ui.panels.per_client import instructor_for
 from devices.events import Event
 
@@ -147,10 +147,7 @@ class DriveView:
         """``drive_id``'s charts on ``client``'s page (every page's when None), no other's."""
         for each, plots in self._plots.items():
             for chart in plots.charts:
-                if client is None:
-                    send_all(chart, "visible", each == drive_id)
-                else:
-                    send_to(client, chart._impl.uuid, "visible", each == drive_id)
+                send_on(client, chart, "visible", each == drive_id)
 
     def _picked(self, client: viser.ClientHandle, drive_id: str) -> None:
         """A page picked a drive: its charts, and its forms take that drive's values."""

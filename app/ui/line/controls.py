@@ -29,7 +29,7 @@ from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
 from app.ui.line.target_actions import TargetActions, Watch, targets
 from app.ui.panels.action_form import ActionForm
-from app.ui.panels.client_pick import ClientPick, send_all, send_to
+from app.ui.panels.client_pick import ClientPick, send_on
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user, set_options
 from devices.device import Action
@@ -323,20 +323,14 @@ class LineControls:
         on every page when None (a scenario's focus)."""
         if device not in self.forms:
             return
-        if client is None:  # every page, also one that picked another on its own
-            self.pick.set_all(device)
-        elif self.pick.value_for(client.client_id) != device:
-            self.pick.set_for(client, device)
+        self.pick.pick(device, client)
         self._show(device, client)
 
     def _show(self, device: str, client: viser.ClientHandle | None) -> None:
         """The picked slave's folder, the others' hidden: on ``client``'s page, or on every
         page (a page's own visibility goes to it alone, as its pick does)."""
         for name, (folder, _form) in self.forms.items():
-            if client is None:
-                send_all(folder, "visible", name == device)
-            else:
-                send_to(client, folder._impl.uuid, "visible", name == device)
+            send_on(client, folder, "visible", name == device)
 
     def update(self, master: Mapping[str, Any],
                devices: Mapping[str, Mapping[str, Any]] | None = None) -> None:

@@ -372,12 +372,8 @@ class SlavePanel:
         """``client``'s page picks ``device`` (its click), every page when None."""
         if device not in self.pick.options:
             return
-        if client is None:  # every page, also one that picked another on its own
-            self.pick.set_all(device)
-            self._follow(None, device)
-        elif self.selected_for(client.client_id) != device:
-            self.pick.set_for(client, device)
-            self._follow(client.client_id, device)
+        if self.pick.pick(device, client):
+            self._follow(client.client_id if client is not None else None, device)
         self._refresh()
 
     def _public(self, device: str) -> str:

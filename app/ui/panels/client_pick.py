@@ -54,6 +54,14 @@ def send_to(client: viser.ClientHandle, uuid: str, prop: str, value: Any) -> Non
         logger.debug("update for client %s not sent", client.client_id, exc_info=True)
 
 
+def send_on(client: viser.ClientHandle | None, handle: Any, prop: str, value: Any) -> None:
+    """Set ``prop`` of a server-level widget on ``client``'s page, on every page when None."""
+    if client is None:
+        send_all(handle, prop, value)
+    else:
+        send_to(client, handle._impl.uuid, prop, value)
+
+
 def send_all(handle: Any, prop: str, value: Any) -> None:
     """Set ``prop`` of a server-level widget on every page, whatever the server last set: a
     page may show another value of its own (viser skips an assignment of the same value)."""
@@ -123,6 +131,17 @@ class ClientPick:
         """``client``'s page picks ``value`` (its click in the 3D view)."""
         if self._keep(client.client_id, value):
             send_to(client, self.handle._impl.uuid, "value", value)
+
+    def pick(self, value: str, client: viser.ClientHandle | None) -> bool:
+        """``client``'s page picks ``value`` (its click), every page when None (a scenario's
+        focus); False when that page already had it (nothing to do)."""
+        if client is None:  # every page, also one that picked another on its own
+            self.set_all(value)
+        elif self.value_for(client.client_id) != value:
+            self.set_for(client, value)
+        else:
+            return False
+        return True
 
     def set_all(self, value: str) -> None:
         """Every page, and every page to come, picks ``value``."""

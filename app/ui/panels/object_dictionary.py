@@ -228,12 +228,8 @@ class ObjectDictionaryPanel:
             return
         if client is None:
             self._default = device_id
-            self._pick.set_all(device_id)
-        elif self._pick.value_for(client.client_id) != device_id:
-            self._pick.set_for(client, device_id)
-        else:
-            return
-        self._picked()
+        if self._pick.pick(device_id, client):
+            self._picked()
 
     def _picked(self) -> None:
         """A page shows another dictionary: read it now."""
