@@ -19,7 +19,8 @@ Accepted input (case and ``0x`` prefixes do not matter):
   it), a Modbus exception response ``83 02`` (or with the unit id, ``05 83 02``);
 - one number: an AL status code (``0x8204``, ``0x0052``), an EMCY / 0x603F code (``8130``), an
   SDO abort code (``0x06020000``), a FastCAT 0x5400 word (``0x04000002``), an ETG.1020 Diag
-  Code (``0xE8007500``), a CPX-E Text-ID (``0x3702``), a FastCAT alarm code (``0x04``);
+  Code (``0xE8007500``), the drive's 0x1003:1 (``0x00108611``: alarm 16, code 0x8611), a
+  CPX-E Text-ID (``0x3702``), a FastCAT alarm code (``0x04``);
 - a name: ``MISSING_NODE_ANSWER``, ``CO_E_TARATURA``, ``coupler:0x04``, ``FOLLOWING_ERROR``,
   or a drive alarm number ``alarm 16`` (the drive's display shows it in decimal). A bare
   number of 1-3 decimal digits (``16``) reads as hex in the code tables and as the drive
@@ -320,9 +321,10 @@ def _number(value: int, digits: int) -> list[Meaning]:
         found.extend(_abort(value))
         found.extend(_fastcat_word(value))
         found.extend(_diag_code(value))
+        found.extend(_error_field(value))
         if not found:
             raise DecodeError(f"{fmt_hex(value, 8)} is in none of the tables (SDO abort codes, "
-                              "0x5400, ETG.1020 Diag Codes)")
+                              "0x5400, ETG.1020 Diag Codes, the drive's 0x1003)")
         return found
     found.extend(al_status(value))
     found.extend(_servo_emcy(value, b""))
@@ -383,6 +385,17 @@ def _fastcat_word(word: int) -> list[Meaning]:
         return []
     found = _fastcat_alarm(row, module, f"FastCAT 0x5400 = {fmt_hex(word, 8)}")
     return [replace(found, source="seed 000 §6.23, " + found.source)]
+
+
+def _error_field(value: int) -> list[Meaning]:
+    """The drive's 0x1003:1: its alarm number in bits 16-31, that alarm's 0x603F code in 0-15
+    (docs/canopen.md); a word whose code is not its alarm's is no entry the drive writes."""
+    if value > 0xFFFF_FFFF:
+        return []
+    code, number = ds301.ErrorHistory.fields(value)
+    return [Meaning(SERVO, f"Drive 0x1003:1 (pre-defined error field) = {fmt_hex(value, 8)}",
+                    servo.error_field_text(value, {s.code: s}) + ".", "seed 004 ch. 4, ch. 5")
+            for s in _drive_specs() if s.code == number and s.error_code_or_generic == code]
 
 
 def _diag_code(value: int) -> list[Meaning]:

@@ -154,6 +154,9 @@ class OdEntry:
     # the value the entry holds changes nothing (a model that skips still steps need not be
     # told of it; devices/fastcat/objects.py).
     plain_store: bool = False
+    # The value in words where the number alone misleads (0x1003:1 packs an alarm number in
+    # hex into its upper word): the Objects tab shows this text instead of the bare number.
+    explain: Callable[[Any], str] | None = None
 
     def check_value(self, value: Any) -> Any:
         if self.dtype is DataType.OCTET_STRING:

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from devices.canopen.pdo import MAX_ENTRIES, Pdo
 from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
+from devices.servo.alarms import error_field_text
 
 if TYPE_CHECKING:
     from devices.canopen.node import CanOpenNode
@@ -68,7 +69,9 @@ def build_comm_objects(node: CanOpenNode) -> ObjectDictionary:
     add(0x1001, 0, "Error register", D.UNSIGNED8, RO, lambda: node.error_register)
     add(0x1003, 0, "Number of errors", D.UNSIGNED8, RW, lambda: node.history.count,
         node.clear_history)
-    add(0x1003, 1, "Standard error field", D.UNSIGNED32, RO, lambda: node.history.latest)
+    od.add(OdEntry(0x1003, 1, "Standard error field", D.UNSIGNED32, RO,
+                   default=node.history.latest, getter=lambda: node.history.latest,
+                   explain=lambda v: error_field_text(v, node.drive.alarm_table)))
     add(0x1005, 0, "COB-ID SYNC", D.UNSIGNED32, RW, lambda: node.sync_cob_id,
         lambda v: setattr(node, "sync_cob_id", _check_sync(v)))
     add(0x1006, 0, "Communication cycle period", D.UNSIGNED32, RW,

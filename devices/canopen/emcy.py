@@ -109,6 +109,12 @@ class ErrorHistory:
         self.latest = (info & 0xFFFF) << 16 | code
         self.count = 1
 
+    @staticmethod
+    def fields(entry: int) -> tuple[int, int]:
+        """(error code, additional info) of an entry ``record`` wrote: the drive puts its alarm
+        number in the info, so 0x00108611 is alarm 16 (0x10), code 0x8611."""
+        return entry & 0xFFFF, entry >> 16 & 0xFFFF
+
     def clear(self) -> None:
         self.latest = self.count = 0
 

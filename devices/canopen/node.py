@@ -48,7 +48,7 @@ from devices.canopen.sdo import SDO_RX_BASE, SdoChannel
 from devices.device import Action, CommandError, DeviceModel, Param
 from devices.events import EmergencySent, StateChanged
 from devices.od import AbortCode, SdoAbort
-from devices.servo.alarms import alarm_in_emergency
+from devices.servo.alarms import alarm_in_emergency, error_field_text
 from devices.servo.drive import ServoDrive
 
 logger = logging.getLogger(__name__)
@@ -563,7 +563,8 @@ class CanOpenNode(ProcessData, DeviceModel):
             "life_time_factor": self.guard.life_time_factor,
             "life_guard_error": self.life_guard_error,
             "error_register": self.error_register if self.active else 0,
-            "error_history": [f"0x{self.history.latest:08X}"] if self.history.count else [],
+            "error_history": ([error_field_text(self.history.latest, self.drive.alarm_table)]
+                              if self.history.count else []),
             "sync_cob_id": f"0x{self.sync_cob_id:08X}", "emcy_cob_id": f"0x{self.emcy_cob_id:08X}",
             "rpdo": [p.describe() for p in self.rpdos],
             "tpdo": [p.describe() for p in self.tpdos],

@@ -38,6 +38,7 @@ from devices.coe.csp import CSP_SUPPORTED
 from devices.coe.emergency import error_register
 from devices.ethercat import AlState
 from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
+from devices.servo.alarms import error_field_text
 from devices.servo.od_map import SUPPORTED_DRIVE_MODES
 
 if TYPE_CHECKING:
@@ -81,7 +82,9 @@ def build_slave_objects(slave: DriveEcatSlave) -> ObjectDictionary:
     add(0x1001, 0, "Error register", D.UNSIGNED8, RO, lambda: error_register(drive))
     add(0x1003, 0, "Number of errors", D.UNSIGNED8, RW, lambda: emcy.history.count,
         _clear_history(slave))
-    add(0x1003, 1, "Standard error field", D.UNSIGNED32, RO, lambda: emcy.history.latest)
+    od.add(OdEntry(0x1003, 1, "Standard error field", D.UNSIGNED32, RO,
+                   default=emcy.history.latest, getter=lambda: emcy.history.latest,
+                   explain=lambda v: error_field_text(v, drive.alarm_table)))
     const(0x1008, 0, "Manufacturer device name", D.VISIBLE_STRING, DEVICE_NAME)
     const(0x1009, 0, "Manufacturer hardware version", D.VISIBLE_STRING, HARDWARE_VERSION)
     const(0x100A, 0, "Manufacturer software version", D.VISIBLE_STRING, SOFTWARE_VERSION)

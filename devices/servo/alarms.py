@@ -11,7 +11,10 @@ goes off (docs/servo-drive.md §Alarms).
 from __future__ import annotations
 
 import enum
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+
+from devices.canopen.emcy import ErrorHistory
 
 GENERIC_ERROR_CODE = 0x1000  # DS402 "generic error", for the codes ch. 5 prints "-" or omits
 
@@ -143,6 +146,21 @@ def alarm_in_emergency(code: int, data: bytes, fieldbus: str = "canopen") -> Ala
     if spec is None or spec.error_code_or_generic != code:
         return None
     return spec
+
+
+def error_field_text(entry: int, table: Mapping[int, AlarmSpec]) -> str:
+    """0x1003:1 in words: "0x00108611 = alarm 16 FOLLOWING_ERROR, code 0x8611". The alarm
+    number sits in the upper word in hex while the display and the manuals count alarms in
+    decimal, so the bare word reads as "alarm 10" to a trainee (docs/canopen.md)."""
+    word = f"0x{entry:08X}"
+    if entry == 0:
+        return f"{word} = empty"
+    code, number = ErrorHistory.fields(entry)
+    if number == 0:  # the node's own codes (life guard, PDO length) carry no alarm
+        return f"{word} = code 0x{code:04X}, no drive alarm (the node's own emergency)"
+    spec = table.get(number)
+    name = spec.name if spec is not None else "(not in the drive's table)"
+    return f"{word} = alarm {number} {name}, code 0x{code:04X}"
 
 
 def lookup(fieldbus: str, key: int | str) -> AlarmSpec:

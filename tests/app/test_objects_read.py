@@ -58,3 +58,38 @@ def test_read_fills_the_value_box_and_shows_hex(
     assert panel._value.value == box
     [(title, body)] = notes
     assert title.endswith("read") and body == f"value = {shown}"
+
+
+class _Rig:
+    """One device whose dictionary holds 0x1003:1 with the drive's words for it."""
+
+    def __init__(self, entry: Any) -> None:
+        self.od = self
+        self._entry = entry
+
+    def device(self, device_id: str) -> Any:
+        return self
+
+    def entry(self, index: int, sub: int) -> Any:
+        return self._entry
+
+
+def test_read_of_0x1003_names_the_alarm(monkeypatch: pytest.MonkeyPatch) -> None:
+    """0x1003:1 = 0x00108611 is alarm 16 (bits 16-31), code 0x8611: the notice says so, as
+    the table does (docs/canopen.md); the Value box keeps the number for a Write."""
+    from devices.od import Access, DataType, OdEntry
+    from devices.servo.alarms import alarm_table, error_field_text
+    notes: list[tuple[str, str]] = []
+    monkeypatch.setattr(object_dictionary, "notify",
+                        lambda client, title, body, error=False: notes.append((title, body)))
+    runtime = FakeRuntime([], "drive_ec")
+    runtime.rig = _Rig(OdEntry(  # type: ignore[attr-defined]
+        0x1003, 1, "Standard error field", DataType.UNSIGNED32, Access.RO,
+        explain=lambda v: error_field_text(v, alarm_table("ethercat"))))
+    panel = ObjectDictionaryPanel(FakeServer(), runtime, _Sender(0x0010_8611),  # type: ignore[arg-type]
+                                  "drive_ec")
+    panel._address.value = "0x1003:1"
+    panel._access(object(), "Read")  # type: ignore[arg-type]
+    assert panel._value.value == "0x00108611"
+    assert notes == [("0x1003:1 read",
+                      "value = 0x00108611 = alarm 16 FOLLOWING_ERROR, code 0x8611")]

@@ -17,7 +17,7 @@ import logging
 import re
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any
@@ -30,7 +30,7 @@ from app.ui.panels.client_pick import ClientHtml, ClientPick
 from app.ui.style import esc
 from devices.device import CommandError
 from devices.events import fmt_bytes
-from devices.od import SdoAbort
+from devices.od import OdEntry, SdoAbort
 
 logger = logging.getLogger(__name__)
 
@@ -49,6 +49,7 @@ class OdRow:
     dtype: str
     access: str
     value: Any
+    said: str = ""  # the model's words for the value (OdEntry.explain), shown instead of it
 
     @property
     def address(self) -> str:
@@ -67,7 +68,8 @@ def read_rows(device: Any) -> list[OdRow]:
             value = od.peek(e.index, e.sub)
         except Exception as exc:  # a getter failing must not hide the rest of the table
             value = f"<{type(exc).__name__}>"
-        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, e.access.value, value))
+        said = e.explain(value) if e.explain is not None and not isinstance(value, str) else ""
+        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, e.access.value, value, said))
     return rows
 
 
@@ -128,7 +130,7 @@ def render(rows: Sequence[OdRow], needle: str, empty: str = NO_OD) -> str:
     shown = [r for r in rows if matches(r, needle.strip())]
     body = "".join(
         f"<tr><td>{esc(r.address)}</td><td>{esc(r.name)}</td><td>{esc(r.dtype)}</td>"
-        f"<td>{esc(r.access)}</td><td>{esc(format_value(r.value, r.dtype))}</td></tr>"
+        f"<td>{esc(r.access)}</td><td>{esc(r.said or format_value(r.value, r.dtype))}</td></tr>"
         for r in shown[:MAX_SHOWN])
     more = ""
     if len(shown) > MAX_SHOWN:
@@ -265,7 +267,15 @@ class ObjectDictionaryPanel:
         """A Read's answer: into the Value box (a Write starts from it) and the notice."""
         dtype = self._dtype(device_id, index, sub)
         self._value.value = read_box(value, dtype)
-        notify(client, f"0x{index:04X}:{sub} read", f"value = {read_text(value, dtype)}")
+        explain = self._explain(device_id, index, sub)
+        said = explain(value) if explain is not None else read_text(value, dtype)
+        notify(client, f"0x{index:04X}:{sub} read", f"value = {said}")
+
+    def _entry(self, device_id: str, index: int, sub: int) -> OdEntry | None:
+        try:
+            return self._runtime.rig.device(device_id).od.entry(index, sub)
+        except (CommandError, SdoAbort, AttributeError):  # no such device / object / od
+            return None
 
     def _dtype(self, device_id: str, index: int, sub: int) -> str:
         """The object's type, from the rows read (or from the model when they are not there
@@ -275,10 +285,13 @@ class ObjectDictionaryPanel:
         for row in rows or ():
             if (row.index, row.sub) == (index, sub):
                 return row.dtype
-        try:
-            return str(self._runtime.rig.device(device_id).od.entry(index, sub).dtype.short)
-        except (CommandError, SdoAbort, AttributeError):  # no such device / object / od
-            return ""
+        entry = self._entry(device_id, index, sub)
+        return str(entry.dtype.short) if entry is not None else ""
+
+    def _explain(self, device_id: str, index: int, sub: int) -> Callable[[Any], str] | None:
+        """The model's words for the object's values (a pure function of the value)."""
+        entry = self._entry(device_id, index, sub)
+        return entry.explain if entry is not None else None
 
     def _shown(self) -> list[str]:
         """The dictionaries some page shows, the new pages' first."""

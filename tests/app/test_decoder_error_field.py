@@ -1,0 +1,21 @@
+"""The Codes tab reads a 32-bit 0x1003 entry of the drive: the 0x603F code in bits 0-15, the
+alarm number in bits 16-31 (docs/canopen.md, seed 004 ch. 4 "Emergency Message")."""
+
+from __future__ import annotations
+
+from app.decoder import decode
+from app.decoder_meaning import DecodeError
+
+
+def test_codes_tab_reads_the_0x1003_word() -> None:
+    found = [m for m in decode("0x00108611") if "0x1003" in m.title]
+    assert [m.text for m in found] == ["0x00108611 = alarm 16 FOLLOWING_ERROR, code 0x8611."]
+
+
+def test_a_word_whose_code_is_not_the_alarms_is_no_1003_entry() -> None:
+    """Alarm 16 sends 0x8611, never 0x5530: that word is something else (or nothing)."""
+    try:
+        found = decode("0x00105530")
+    except DecodeError:  # in no table at all
+        found = []
+    assert not [m for m in found if "0x1003" in m.title]
