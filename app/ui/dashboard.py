@@ -88,7 +88,8 @@ def fault_options() -> list[FaultOption]:
     """The fault dropdown's rows, straight from the coupler's tables (seed 000 §7.5, §7.6)."""
     from devices.fastcat.alarms import CODE_TABLES
 
-    return [FaultOption(row.table, row.code, row.symbol, row.description)
+    return [FaultOption(row.table, row.code, row.symbol, row.description,
+                        on_coupler=row.on_coupler, on_module=row.names_module)
             for table in CODE_TABLES.values() for row in table.values()]
 
 

@@ -58,6 +58,12 @@ class AlarmCode:
         return self.table == MODULE or self.code not in NO_NODE_COUPLER_CODES
 
     @property
+    def on_coupler(self) -> bool:
+        """Whether the coupler itself (no module, byte 0 = 0) is a target: §7.6's module codes
+        are "segnalati dai moduli", byte 0 = the module; §7.5's all are the coupler's."""
+        return self.table == COUPLER
+
+    @property
     def label(self) -> str:
         """``coupler:0x04`` — the unambiguous way to write a code."""
         return f"{self.table}:{fmt_hex(self.code, 2)}"

@@ -101,7 +101,7 @@ class RailMixin:
         # Here, not in the command itself: a scenario's check before the run calls this only.
         if action in _FAULT_ACTIONS:
             row = parse_fault(kwargs["fault"])
-            if module is None and row.table == MODULE:
+            if module is None and not row.on_coupler:
                 raise CommandError(f"{row.symbol} is a module alarm (§7.6): target "
                                    f"'{self.device_id}/N'")
             if module is not None and not row.names_module:

@@ -31,6 +31,7 @@ CNF_HOLD_S = 3.0  # seed 000 §2: "almeno tre secondi"
 CNF_PRESS_S = 3.5  # the button's press: comfortably past the threshold
 CNF_SHORT_S = 1.0  # a press that must do nothing (training)
 COUPLER_TARGET = "coupler (no module)"
+NO_MODULE_TARGET = "(no module on the rail)"  # a module code before any module is there
 # Seed 000 §6.17 / §7: writing 0x5200:1 commands the reset, "alzando il bit" (raising it); the
 # coupler keeps the bit at 1 until it is written 0. The box mirrors the bit, so it stays ticked
 # after a reset, which trainees read as a stuck reset: the hint and, while the bit is 1, a
@@ -52,6 +53,10 @@ class FaultOption:
     code: int
     name: str
     description: str
+    # The targets the code takes, the device's own answer (AlarmCode.on_coupler /
+    # names_module): §7.5's 0x10-0x13 name no node, §7.6's codes always name a module.
+    on_coupler: bool = True
+    on_module: bool = True
 
     @property
     def label(self) -> str:
@@ -111,6 +116,7 @@ class ControlPanel:
         self._server = server
         self._id = device_id
         self._faults = {t: [f for f in faults if f.table == t] for t in TABLE_LABELS}
+        self._modules: list[str] = []  # fault_targets of the last snapshot
         gui = server.gui
 
         with gui.add_folder("Power and CNF"):
@@ -188,6 +194,11 @@ class ControlPanel:
         def _(event: viser.GuiEvent) -> None:
             set_options(form.fault, list(self._fault_labels(self._table_key(form.table))))
             hint.refresh()
+            self._offer_targets(form)
+
+        @form.fault.on_update
+        def _(event: viser.GuiEvent) -> None:
+            self._offer_targets(form)
 
         @form.actions.on_click
         async def _(event: viser.GuiEvent) -> None:
@@ -275,6 +286,15 @@ class ControlPanel:
         for link, tbus in self._boxes.each():
             link.follow(plugged)
             tbus.follow(bool(snap.get("tbus_low", False)))
-        targets = [COUPLER_TARGET, *fault_targets(snap.get("rail") or [])]
+        self._modules = fault_targets(snap.get("rail") or [])
         for form in self._forms.each():
-            set_options(form.target, targets)
+            self._offer_targets(form)
+
+    def _offer_targets(self, form: _FaultForm) -> None:
+        """Only the targets the picked code takes: a module pick for a code about no node
+        was refused by the coupler once applied (§7.5)."""
+        fault = self._selected_fault(form)
+        on_coupler = fault.on_coupler if fault is not None else True
+        on_module = fault.on_module if fault is not None else True
+        set_options(form.target, [*([COUPLER_TARGET] if on_coupler else []),
+                                  *(self._modules if on_module else [])] or [NO_MODULE_TARGET])
