@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 
 from devices.device import Action, CommandError, Param
 from devices.servo import control, ds402
-from devices.servo.alarms import RESET_HINT, RESET_HINT_ANY, lookup
+from devices.servo.alarms import lookup, reset_hint
 from devices.servo.io import INPUT_NAMES
 from devices.servo.parameters import parameter_by_name_or_address
 from devices.servo.registers import LAST_REGISTER, MODE_NAMES, R
@@ -165,7 +165,7 @@ class DriveActions:
     def cmd_clear_alarm(self: ServoDrive, code: str) -> None:
         number = self._alarm(code)
         self.alarms.remove_cause(number)
-        hint = RESET_HINT.get(self.fieldbus, RESET_HINT_ANY)
+        hint = reset_hint(self.fieldbus, self.alarm_table[number])
         self.log(CAUSE_REMOVED_LOG.format(number=number, hint=hint))
 
     def cmd_jam_load(self: ServoDrive, active: bool) -> None:

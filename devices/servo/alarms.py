@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import enum
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from devices.canopen.emcy import ErrorHistory
 
@@ -93,6 +93,8 @@ _FIELDBUS_ALARMS: tuple[AlarmSpec, ...] = (
     AlarmSpec(35, "ECAT_EEPROM", "EtherCAT EEPROM load error at start-up", N, 0x5530),
 )
 
+ECAT_EEPROM = 35
+
 # Ch. 6 (Profinet): 30-33 not resettable, 34 resettable with control word 0x08.
 _PROFINET_ALARMS: tuple[AlarmSpec, ...] = (
     AlarmSpec(30, "INTERNAL_COMM_TIMEOUT", "drive internal communication timeout", N, None,
@@ -123,6 +125,15 @@ RESET_HINT: dict[str, str] = {
     "profinet": "Control Word = 0x08 (R00 bit 3)",
 }
 RESET_HINT_ANY = "R00 bit 3 or 0x6040 bit 7"  # c9 names no fieldbus: both views are there
+# An alarm no reset bit clears: Profinet 30-33 ("Resettabile" NO, ch. 6) and, on EtherCAT, 35.
+POWER_CYCLE_HINT = "a power cycle: switch the drive off and on"
+
+
+def reset_hint(fieldbus: str, spec: AlarmSpec) -> str:
+    """How the alarm is reset on this fieldbus, in the drive log's words."""
+    if not spec.resettable:
+        return POWER_CYCLE_HINT
+    return RESET_HINT.get(fieldbus, RESET_HINT_ANY)
 
 _TABLES: dict[str, dict[int, AlarmSpec]] = {}
 
@@ -134,7 +145,13 @@ def alarm_table(fieldbus: str) -> dict[int, AlarmSpec]:
     table = _TABLES.get(fieldbus)
     if table is None:
         bus = _PROFINET_ALARMS if fieldbus == "profinet" else _FIELDBUS_ALARMS
-        table = _TABLES[fieldbus] = {**DRIVE_ALARMS, **{a.code: a for a in bus}}
+        table = {**DRIVE_ALARMS, **{a.code: a for a in bus}}
+        if fieldbus == "ethercat":
+            # 35 takes the CoE slave to INIT + 0x0051 (docs/ethercat-coe.md): no mailbox, no
+            # process data, so the ch. 5 reset ("scrittura 0x80 su oggetto 0x6040") cannot
+            # reach the drive, and the EEPROM loads at start-up only: a power cycle clears it.
+            table[ECAT_EEPROM] = replace(table[ECAT_EEPROM], resettable=False)
+        _TABLES[fieldbus] = table
     return table
 
 

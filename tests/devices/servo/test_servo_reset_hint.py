@@ -47,3 +47,19 @@ def test_a_profinet_master_resets_with_0x08_in_the_control_word_as_the_hint_says
     for value in (0x08, 0x00):
         sim.w(0, value)
     assert sim.drive.read_register(46) == 0
+
+
+@pytest.mark.parametrize(("fieldbus", "code"), [("ethercat", 35), ("profinet", 30),
+                                                 ("profinet", 33)])
+def test_an_alarm_no_reset_bit_clears_names_the_power_cycle(fieldbus: str, code: int) -> None:
+    """EtherCAT 35 (the slave sits in INIT: no mailbox, no process data, so no 0x6040 write
+    reaches the drive, docs/ethercat-coe.md) and Profinet 30-33 ("Resettabile" NO, ch. 6):
+    the hint names the only way out, a power cycle, not a reset bit."""
+    sim = make_sim(DriveConfig(fieldbus=fieldbus))
+    sim.drive.apply("inject_alarm", {"code": code})
+    sim.run(300)
+    sim.drive.apply("clear_alarm", {"code": code})
+    sim.run(1)
+    texts = [e["text"] for e in sim.kinds("log") if "removed" in e.get("text", "")]
+    assert texts == [f"cause of alarm {code} removed (reset with a power cycle: switch the "
+                     "drive off and on)"], texts
