@@ -31,7 +31,11 @@ ACTIONS: dict[str, Action] = {a.name: a for a in (
         Param("slot", str, choices=tuple(SLOTS)),)),
     Action("set_outputs", "the outputs image the master sends every cycle, hex bytes", (
         Param("data", str, doc="e.g. '1F 00 E8 03 00 00' (controlword, set-point)"),)),
-    Action("link", "plug or pull the EtherCAT input cable", (Param("connected", bool),)),
+    # Ch. 5 "Connessioni e Leds Drive EtherCAT": an RJ45 IN and an RJ45 OUT, each with its
+    # L/A. The port defaults to IN, the only one the action used to pull.
+    Action("link", "plug or pull the EtherCAT cable at IN or OUT (L/A IN / L/A OUT)", (
+        Param("connected", bool),
+        Param("port", str, False, "in", choices=("in", "out")))),
 )}
 
 
@@ -76,9 +80,13 @@ class SlaveActions:
             raise CommandError(f"outputs must be hex bytes, got {data!r}") from None
         self.write_outputs(raw)
 
-    def cmd_link(self: DriveEcatSlave, connected: bool) -> None:
-        self.plugs = (connected, True)  # the operator's own plug at IN (the only port)
-        self.link = self.line_in and connected
+    def cmd_link(self: DriveEcatSlave, connected: bool, port: str = "in") -> None:
+        """The operator's own plug at a port; the master folds ``plugs`` into its line
+        model, so an OUT pull cuts the line behind the drive (docs/ethercat-master.md)."""
+        inp, out = self.plugs
+        self.plugs = (connected, out) if port == "in" else (inp, connected)
+        self.link = self.line_in and self.plugs[0]
+        self.link_out = self.line_out and self.plugs[1]
         self._refresh()
 
     def slot(self: DriveEcatSlave) -> str | None:
