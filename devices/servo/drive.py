@@ -13,7 +13,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from devices.device import CommandError, DeviceModel
-from devices.events import LogLine
+from devices.events import AlarmChanged, LogLine
 from devices.flash import FlashStore
 from devices.servo import control, ds402
 from devices.servo.actions import DriveActions
@@ -151,6 +151,12 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
             self.log("power off during a flash save: the flash keeps its previous content")
         self.mode_logic.halted(self)
         self._set_state(State.NOT_READY_TO_SWITCH_ON, 0)
+        # The display and R46 go dark with the drive: every latched alarm ends here in the event
+        # log (an injected cause is raised again by the self test at power-up), or a log read
+        # later would show it raised for good.
+        for code in self.alarms.latched:
+            self.emit(AlarmChanged(self.now_us, self.device_id, code=str(code),
+                                   name=self.alarm_table[code].name, active=False))
         self.powered = False
         self.saving_until = None
         self.log("power off")
