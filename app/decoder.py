@@ -453,8 +453,18 @@ def _drive_specs() -> list[servo.AlarmSpec]:
 def _drive_alarm(spec: servo.AlarmSpec) -> Meaning:
     return Meaning(SERVO, f"Drive alarm {spec.code} {spec.name}",
                    f"{spec.description.capitalize()}; {_SERVO_EFFECT[spec.effect]}; 0x603F code "
-                   f"{fmt_hex(spec.error_code_or_generic, 4)}"
-                   f"{'' if spec.resettable else '; not resettable'}.", "seed 004 ch. 3, ch. 5")
+                   f"{fmt_hex(spec.error_code_or_generic, 4)}{_reset_note(spec)}.",
+                   "seed 004 ch. 3, ch. 5")
+
+
+def _reset_note(spec: servo.AlarmSpec) -> str:
+    if not spec.resettable:
+        return "; not resettable"
+    ethercat = servo.alarm_table("ethercat").get(spec.code)
+    if ethercat is not None and ethercat.name == spec.name and not ethercat.resettable:
+        # 0x6040 cannot reach a slave in INIT (docs/ethercat-coe.md "Resetting 35")
+        return "; over EtherCAT only a power cycle resets it (the slave stays in INIT)"
+    return ""
 
 
 def _drive_alarm_number(number: int) -> list[Meaning]:

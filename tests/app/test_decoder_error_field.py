@@ -19,3 +19,11 @@ def test_a_word_whose_code_is_not_the_alarms_is_no_1003_entry() -> None:
     except DecodeError:  # in no table at all
         found = []
     assert not [m for m in found if "0x1003" in m.title]
+
+
+def test_alarm_35_says_ethercat_resets_it_by_a_power_cycle_only() -> None:
+    """Over EtherCAT 35 leaves the slave in INIT, where 0x6040 cannot reach it
+    (docs/ethercat-coe.md "Resetting 35"): the Codes tab must not read as if a reset bit did."""
+    texts = [m.text for m in decode("alarm 35")]
+    assert texts and all("EtherCAT" in t and "power cycle" in t for t in texts), texts
+    assert not any("EtherCAT" in m.text for m in decode("alarm 16"))
