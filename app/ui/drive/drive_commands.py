@@ -106,7 +106,8 @@ class DriveCommands:
         if button == "Stop":
             self._do(event, "stop")
             return
-        position, relative = int(self._position.value), bool(self._relative.value)
+        position = int(self._field("position", self._position, event))
+        relative = bool(self._field("relative", self._relative, event))
 
         def steps(apply: Callable[..., Any]) -> None:
             # As the seed's Modbus example does before 0x23: the start bits low first, so
@@ -121,7 +122,7 @@ class DriveCommands:
         self._sequence(event, "move", steps)
 
     def _run_velocity(self: DrivePanel, event: viser.GuiEvent) -> None:
-        velocity = int(self._velocity.value)
+        velocity = int(self._field("velocity", self._velocity, event))
 
         def steps(apply: Callable[..., Any]) -> None:
             if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 3:
@@ -130,32 +131,44 @@ class DriveCommands:
 
         self._sequence(event, "velocity", steps)
 
-    def _park(self: DrivePanel, text: str) -> None:
+    def _field(self: DrivePanel, name: str, handle: Any, event: viser.GuiEvent) -> Any:
+        """What the clicking page's form field ``name`` holds (its own with several drives,
+        app/ui/panels/client_form.py)."""
+        form = self._forms.get(name)
+        return handle.value if form is None else form.value_of(event.client)
+
+    def _park(self: DrivePanel, client: viser.ClientHandle | None, text: str) -> None:
+        """The answer for the line under the boxes: the asking page's with several drives."""
+        client_id = getattr(client, "client_id", None)
         with self._result_lock:
-            self._result = text
+            if not self._per_page:
+                self._result = text
+            elif client_id in self._server.get_clients():  # not one that left meanwhile
+                self._page_results[client_id] = text
 
     def _read_or_write(self: DrivePanel, event: viser.GuiEvent, write: bool, kind: str,
                        key: int | str, label: str, typed: Any) -> None:
-        """Read or write one register or parameter (``kind``) of the clicking page's drive;
-        the answer is parked for the line under the boxes, named by ``label``."""
-        target = self._target(event.client)
+        """Read or write one register or parameter (``kind``) of the clicking page's drive
+        (``typed``: the value its box holds); the answer is parked for the line under the
+        boxes, named by ``label``."""
+        target, client = self._target(event.client), event.client
         if write:
-            value = int(typed.value)
-            self._sender.send(event.client, target, f"write_{kind}", {kind: key, "value": value},
-                              done=lambda _r: self._park(f"{label} = {value} written"))
+            value = int(typed)
+            self._sender.send(client, target, f"write_{kind}", {kind: key, "value": value},
+                              done=lambda _r: self._park(client, f"{label} = {value} written"))
         else:
-            self._sender.send(event.client, target, f"read_{kind}", {kind: key},
-                              done=lambda r: self._park(f"{label} = {r}"))
+            self._sender.send(client, target, f"read_{kind}", {kind: key},
+                              done=lambda r: self._park(client, f"{label} = {r}"))
 
     def _register_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
-        option = self._register.value
+        option = str(self._field("register", self._register, event))
         self._read_or_write(event, button == "Write register", "register", register_of(option),
-                            option, self._register_value)
+                            option, self._field("register value", self._register_value, event))
 
     def _parameter_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
-        name = self._parameter.value.split(" ", 1)[0]
+        name = str(self._field("parameter", self._parameter, event)).split(" ", 1)[0]
         self._read_or_write(event, button == "Write param.", "parameter", name, name,
-                            self._parameter_value)
+                            self._field("parameter value", self._parameter_value, event))
 
     def _typed(self: DrivePanel, name: str, event: viser.GuiEvent) -> Any:
         """What the clicking page's c9 or c7 box holds."""
@@ -171,4 +184,5 @@ class DriveCommands:
             apply("write_parameter", parameter="c7", value=c7)
 
         self._sequence(event, "c9 / c7", steps, done=lambda _r: self._park(
+            event.client,
             f"c9 = {c9}, c7 = {c7} written: save, then power the drive off and on"))

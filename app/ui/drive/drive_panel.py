@@ -10,6 +10,7 @@ with the coupler's controls.
 
 from __future__ import annotations
 
+import functools
 import threading
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
@@ -33,7 +34,9 @@ from app.ui.drive.drive_options import (
     register_option,
 )
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_form import ClientForm, ClientProp
 from app.ui.panels.client_input import ClientMirror, ClientSynced
+from app.ui.panels.client_pick import ClientHtml
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import DetailHint, Mirror, Synced
 from app.ui.style import esc
@@ -45,6 +48,16 @@ from devices.servo.registers import R
 # The drive a page's controls command (None: no page, a new page's)
 Target = Callable[[viser.ClientHandle | None], str]
 Pick = Callable[[int | None], str]  # the drive a page shows, by its client id
+
+NO_RESULT = '<p class="fr-muted">-</p>'
+# The hints of each map, built once: with several drives each page's are looked up each frame
+_REGISTER_HINTS = functools.cache(register_details)
+_PARAMETER_HINTS = functools.cache(parameter_details)
+
+
+def result_html(text: str) -> str:
+    """The line under the register and parameter boxes: the last read's or write's answer."""
+    return f'<p id="fr-drive-result" class="fr-note"><code>{esc(text)}</code></p>'
 
 
 class DrivePanel(DriveCommands, DriveFaults):
@@ -64,6 +77,7 @@ class DrivePanel(DriveCommands, DriveFaults):
         self._modbus_map = NORMAL  # the drive's (snapshot modbus_map): the address hints
         self._result_lock = threading.Lock()
         self._result = ""  # parked by a read's future (simulation thread), shown by update()
+        self._page_results: dict[int, str] = {}  # the same, each page's (several drives)
         self._shown_result: str | None = None
         self._injected: list[Mapping[str, Any]] = []  # the last frame's (snapshot injected)
         gui = server.gui
@@ -104,15 +118,15 @@ class DrivePanel(DriveCommands, DriveFaults):
                                                   min=-0x8000_0000, max=0xFFFF_FFFF)
             reg_ops = gui.add_button_group("Register access", ("Read register",
                                                                "Write register"))
-            self._register_hint = DetailHint(self._register,
-                                             lambda: register_details(self._modbus_map))
+            self._register_hint = None if self._per_page else DetailHint(
+                self._register, lambda: _REGISTER_HINTS(self._modbus_map))
             self._parameter = gui.add_dropdown("Parameter", PARAMETER_OPTIONS)
-            self._parameter_hint = DetailHint(self._parameter,
-                                              lambda: parameter_details(self._modbus_map))
+            self._parameter_hint = None if self._per_page else DetailHint(
+                self._parameter, lambda: _PARAMETER_HINTS(self._modbus_map))
             self._parameter_value = gui.add_number("Parameter value", 0, step=1, min=0,
                                                    max=0xFFFF)
             par_ops = gui.add_button_group("Parameter access", ("Read param.", "Write param."))
-            self._result_html = gui.add_html('<p class="fr-muted">-</p>')
+            self._result_html = gui.add_html(NO_RESULT)
         with gui.add_folder("Fieldbus and flash", expand_by_default=False):
             self._c9 = gui.add_dropdown("Fieldbus (c9)", FIELDBUS_OPTIONS)
             c7 = PARAMETER_BY_NAME["c7"]
@@ -149,6 +163,23 @@ class DrivePanel(DriveCommands, DriveFaults):
         self._mirrors: dict[str, Mirror | ClientMirror] = {
             name: ClientMirror(server, handle) if self._per_page else Mirror(handle)
             for name, handle in (("c9", self._c9), ("c7", self._c7))}
+        # With several drives the form fields, their hints and the answer line are each
+        # page's too: a trainee's register number and read result stayed off the others'.
+        self._forms: dict[str, ClientForm] = {}
+        self._results: ClientHtml | None = None
+        self._hints: tuple[ClientProp, ClientProp] | None = None
+        if self._per_page:
+            self._forms = {name: ClientForm(server, handle) for name, handle in (
+                ("position", self._position), ("relative", self._relative),
+                ("velocity", self._velocity), ("register", self._register),
+                ("register value", self._register_value), ("parameter", self._parameter),
+                ("parameter value", self._parameter_value))}
+            self._results = ClientHtml(server, self._result_html)
+            self._hints = (ClientProp(server, self._register, "hint"),
+                           ClientProp(server, self._parameter, "hint"))
+            # A new page's, until its own reach it
+            self._register.hint = _REGISTER_HINTS(NORMAL).get(str(self._register.value))
+            self._parameter.hint = _PARAMETER_HINTS(NORMAL).get(str(self._parameter.value))
 
         on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
         reset.on_click(lambda e: self._alarm_reset(e))
@@ -178,8 +209,9 @@ class DrivePanel(DriveCommands, DriveFaults):
         address_map = str(snap.get("modbus_map", self._modbus_map))
         if address_map != self._modbus_map:  # e3 = 9 moves every address (ch. 2)
             self._modbus_map = address_map
-            self._register_hint.refresh()
-            self._parameter_hint.refresh()
+            for hint in (self._register_hint, self._parameter_hint):
+                if hint is not None:
+                    hint.refresh()
 
         def page(client_id: int | None) -> Mapping[str, Any]:
             """The snapshot of the drive ``client_id``'s page shows."""
@@ -196,12 +228,36 @@ class DrivePanel(DriveCommands, DriveFaults):
              if FIELDBUS_BY_C9.get(leading_int(o)) == s.get("fieldbus", fieldbus)), None), page)
         self._mirror("c7", lambda s: int(s["node_id"]) if s.get("node_id") is not None
                      else None, page)
+        if self._per_page:
+            self._show_pages(page)
+            return
         with self._result_lock:
             result = self._result
         if result != self._shown_result:
-            self._result_html.content = ('<p id="fr-drive-result" class="fr-note">'
-                                         f"<code>{esc(result)}</code></p>")
+            self._result_html.content = result_html(result)
             self._shown_result = result
+
+    def _show_pages(self, page: Callable[[int | None], Mapping[str, Any]]) -> None:
+        """Each page's hints (its register and parameter under its drive's map, ch. 2) and
+        its last answer."""
+        def address_map(client_id: int) -> str:
+            return str(page(client_id).get("modbus_map", NORMAL))
+
+        forms = self._forms
+        if self._hints is not None:
+            registers, parameters = self._hints
+            registers.show(lambda c: _REGISTER_HINTS(address_map(c)).get(
+                str(forms["register"].value_for(c))))
+            parameters.show(lambda c: _PARAMETER_HINTS(address_map(c)).get(
+                str(forms["parameter"].value_for(c))))
+        clients = self._server.get_clients()
+        with self._result_lock:
+            for gone in set(self._page_results) - set(clients):
+                del self._page_results[gone]
+            results = dict(self._page_results)
+        if self._results is not None:
+            self._results.show(lambda c: result_html(results[c]) if c in results
+                               else NO_RESULT)
 
     @staticmethod
     def _follow(synced: Synced | ClientSynced, value: Callable[[Mapping[str, Any]], Any],

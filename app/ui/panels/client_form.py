@@ -1,0 +1,73 @@
+"""Form fields each page fills for itself (a register number, an object's address, a filter),
+and a widget property each page gets for its own content (a box's hint).
+
+A :class:`~app.ui.panels.client_input.ClientInput` keeps each page's value, but a page that
+has typed nothing read viser's value, which is the last value any page sent: page B's Read
+took the register page A had picked. A :class:`ClientForm` puts the field's initial value
+back after each page's change, so a page that has not changed it reads the initial value, as
+its browser shows it (docs/dashboard.md "Several browsers").
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import viser
+
+from app.ui.panels.client_input import ClientInput
+from app.ui.panels.client_pick import page_ready, send_to
+
+FormChange = Callable[[viser.ClientHandle, Any], None]
+
+
+class ClientForm(ClientInput):
+    """A server-level form field whose value is each page's own; ``on_change(client,
+    value)``: after each change a page makes (viser's event loop: it must not block)."""
+
+    def __init__(self, server: viser.ViserServer, handle: Any,
+                 on_change: FormChange | None = None) -> None:
+        super().__init__(server, handle)
+        self.initial = handle._impl.value
+        self._on_change = on_change
+
+    def changed(self, client_id: int, value: Any) -> None:
+        # viser kept the page's value as the widget's: every other page would read it
+        self.handle._impl.value = self.initial
+        client = self._server.get_clients().get(client_id)
+        if self._on_change is not None and client is not None:
+            self._on_change(client, value)
+
+    def value_of(self, client: Any) -> Any:
+        """What ``client``'s page holds (the initial value for no page: a test, a scenario)."""
+        return self.value_for(getattr(client, "client_id", None))
+
+
+_NOTHING = object()
+
+
+class ClientProp:
+    """One property of a server-level widget (``"hint"``) that each page gets for itself;
+    what each page was sent is kept, so a frame sends a page only what changed for it."""
+
+    def __init__(self, server: viser.ViserServer, handle: Any, prop: str) -> None:
+        self._server = server
+        self._handle = handle
+        self._prop = prop
+        self._lock = threading.Lock()
+        self._sent: dict[int, Any] = {}
+
+    def show(self, value_for: Callable[[int], Any]) -> None:
+        """``value_for(client_id)``: that page's value (the dashboard thread)."""
+        clients = self._server.get_clients()
+        with self._lock:
+            for gone in set(self._sent) - set(clients):
+                del self._sent[gone]
+            for client_id, client in clients.items():
+                if not page_ready(self._server, client):
+                    continue  # a later frame sends it
+                value = value_for(client_id)
+                if self._sent.get(client_id, _NOTHING) != value:
+                    self._sent[client_id] = value
+                    send_to(client, self._handle._impl.uuid, self._prop, value)

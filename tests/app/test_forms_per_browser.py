@@ -1,0 +1,93 @@
+"""What a page types in a form and the answer it reads are that page's own (docs/dashboard.md
+"Several browsers", docs/classroom.md): the drive's Target position, Register and Parameter
+boxes and the line under them, the Objects tab's Filter, Object and Value boxes, the Codes
+tab's Code box, Reported pick and result. Before, a trainee typing a register number changed
+every classmate's box, and one page's read result appeared on every page. Two websocket
+connections stand in for the browsers (tests/app/test_picks_per_browser.py)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from app.classroom.roles import Access
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.drive.drive_options import register_option
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from devices.servo.registers import R
+from tests.app.test_classroom_leak import Page, _wait
+from tests.app.test_picks_per_browser import _widget, contents
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[ServedRig, Page, Page]]:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
+    first, second = Page(served.port), Page(served.port)
+    try:
+        _wait(lambda: len(served.server.get_clients()) == 2)
+        yield served, first, second
+    finally:
+        first.close()
+        second.close()
+        served.stop()
+
+
+def _frames(live: ServedRig, n: int = 3) -> None:
+    """A few dashboard frames (the test's own: the served one runs too), then the wire."""
+    for _ in range(n):
+        live.dashboard.tick()
+        time.sleep(0.1)
+    live.server.flush()
+    time.sleep(0.3)
+
+
+def _has(page: Page, text: str) -> bool:
+    return any(text in c for c in contents(page))
+
+
+def _drive_read(page: Page, register: str) -> None:
+    page.set(_widget(page, "Register", register), register)
+    time.sleep(0.1)  # the page's sender: one message each 50 ms window
+    page.set(_widget(page, "Register access", "Read register"), "Read register")
+
+
+def test_a_register_read_on_one_page_shows_on_that_page_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    box = _widget(first, "Register", "R02 feed_constant")
+    _drive_read(first, "R02 feed_constant")
+    _wait(lambda: _has(first, "R02 feed_constant = "))
+    _frames(live)
+    assert "R02 feed_constant" not in second.updates(box)  # B's box was not changed
+    assert not _has(second, "fr-drive-result")  # nor its result line
+    # B has picked no register: its Read reads the one its box shows, not the one A picked
+    initial = register_option(R.PROFILE_VELOCITY)
+    second.set(_widget(second, "Register access", "Read register"), "Read register")
+    _wait(lambda: _has(second, f"{initial} = "))
+    _frames(live)
+    assert not _has(second, "R02 feed_constant = ") and not _has(first, f"{initial} = ")
+    _drive_read(second, "R05 status_word")
+    _wait(lambda: _has(second, "R05 status_word = "))
+    _frames(live)
+    assert not _has(first, "R05 status_word = ")
+    assert not _has(second, "R02 feed_constant = ")
+
+
+def test_the_register_hint_follows_the_page_s_own_register(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    box = _widget(first, "Register", "R09 target_position")
+    first.set(box, "R09 target_position")
+    _wait(lambda: any("R09 target_position: " in str(h) for h in _hints(first, box)))
+    _frames(live)
+    assert not any("R09 target_position: " in str(h) for h in _hints(second, box))
+
+
+def _hints(page: Page, uuid: str) -> list[object]:
+    return [m["updates"]["hint"] for m in page.received()
+            if m.get("type") == "GuiUpdateMessage" and m.get("uuid") == uuid
+            and "hint" in (m.get("updates") or {})]
