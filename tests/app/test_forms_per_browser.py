@@ -91,3 +91,44 @@ def _hints(page: Page, uuid: str) -> list[object]:
     return [m["updates"]["hint"] for m in page.received()
             if m.get("type") == "GuiUpdateMessage" and m.get("uuid") == uuid
             and "hint" in (m.get("updates") or {})]
+
+
+def _objects_on_cpx(live: ServedRig) -> None:
+    """Every page's Objects tab on the CPX-E-EC: its dictionary is there without a scan (the
+    rig is paused; the FastCAT builds its own after the first scan)."""
+    objects = live.dashboard.objects
+    assert objects is not None
+    objects.select("cpx")
+
+
+def test_an_object_read_fills_the_reading_page_s_value_box_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    _objects_on_cpx(live)
+    address, value = _widget(first, "Object", None), _widget(first, "Value", None)
+    first.set(address, "0x1018:1")
+    time.sleep(0.1)
+    first.set(_widget(first, "Access", "Read"), "Read")
+    _wait(lambda: first.updates(value))
+    _frames(live)
+    assert second.updates(value) == [] and "0x1018:1" not in second.updates(address)
+    # B's Read reads the object B typed, into B's box only
+    second.set(address, "0x1000:0")
+    time.sleep(0.1)
+    second.set(_widget(second, "Access", "Read"), "Read")
+    _wait(lambda: second.updates(value))
+    _frames(live)
+    assert second.updates(value) == ["0x04561389"]  # 72749961, the CPX-E-EC's 0x1000
+    assert first.updates(value) == ["0x0000001D"]  # the vendor id A read (29)
+
+
+def test_a_filter_typed_on_one_page_filters_that_page_s_table_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    _objects_on_cpx(live)
+    first.set(_widget(first, "Filter", None), "1018")
+    _wait(lambda: any("fr-od" in c and "0x1018:1" in c and "0x1000:0" not in c
+                      for c in contents(first)))
+    _frames(live)
+    tables = [c for c in contents(second) if "fr-od" in c]
+    assert tables and "0x1000:0" in tables[-1]  # B's table: unfiltered

@@ -26,6 +26,7 @@ import viser
 
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
+from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_pick import ClientHtml, ClientPick
 from app.ui.style import esc
 from devices.device import CommandError
@@ -197,11 +198,18 @@ class ObjectDictionaryPanel:
         buttons = gui.add_button_group("Access", ("Read", "Write"))
         self._table = gui.add_html(render([], ""))
         self._tables = ClientHtml(server, self._table) if self._pick is not None else None
+        # Each page picks its dictionary, so each page filters, types and reads its own:
+        # shared, a trainee's typed object index and read value showed on every page.
+        self._forms: dict[str, ClientForm] = {}
+        if self._pick is not None:
+            self._forms = {
+                "filter": ClientForm(server, self._filter, lambda _c, _v: self._refilter()),
+                "object": ClientForm(server, self._address),
+                "value": ClientForm(server, self._value)}
 
         @self._filter.on_update
         def _(event: viser.GuiEvent) -> None:
-            with self._lock:
-                self._dirty = True
+            self._refilter()
 
         @refresh.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -210,6 +218,15 @@ class ObjectDictionaryPanel:
         @buttons.on_click
         def _(event: viser.GuiEvent) -> None:
             self._access(event.client, buttons.value)
+
+    def _refilter(self) -> None:
+        with self._lock:
+            self._dirty = True
+
+    def _typed(self, name: str, handle: Any, client_id: int | None) -> str:
+        """What ``client_id``'s page holds in a box (with one dictionary, the shared box)."""
+        form = self._forms.get(name)
+        return str(handle.value if form is None else form.value_for(client_id))
 
     @property
     def device_id(self) -> str:
@@ -244,8 +261,9 @@ class ObjectDictionaryPanel:
         return NO_OD if device_id == self._home else NO_OD_OTHER
 
     def _access(self, client: viser.ClientHandle | None, verb: str) -> None:
+        client_id = getattr(client, "client_id", None)
         try:
-            index, sub = parse_address(self._address.value)
+            index, sub = parse_address(self._typed("object", self._address, client_id))
         except CommandError as exc:
             notify(client, "Object address", str(exc), error=True)
             return
@@ -255,7 +273,7 @@ class ObjectDictionaryPanel:
             self._sender.send(client, device_id, "read_object", {"index": index, "sub": sub},
                               done=lambda v: self._read(client, device_id, index, sub, v))
             return
-        value = parse_value(self._value.value)
+        value = parse_value(self._typed("value", self._value, client_id))
         self._sender.send(client, device_id, "write_object",
                           {"index": index, "sub": sub, "value": value},
                           done=lambda _r: (notify(client, f"{address} written",
@@ -264,9 +282,14 @@ class ObjectDictionaryPanel:
 
     def _read(self, client: viser.ClientHandle | None, device_id: str, index: int, sub: int,
               value: Any) -> None:
-        """A Read's answer: into the Value box (a Write starts from it) and the notice."""
+        """A Read's answer: into the reading page's Value box (a Write starts from it) and
+        the notice."""
         dtype = self._dtype(device_id, index, sub)
-        self._value.value = read_box(value, dtype)
+        form = self._forms.get("value")
+        if form is None:
+            self._value.value = read_box(value, dtype)
+        elif client is not None:
+            form.set_for(client, read_box(value, dtype))
         explain = self._explain(device_id, index, sub)
         said = explain(value) if explain is not None else read_text(value, dtype)
         notify(client, f"0x{index:04X}:{sub} read", f"value = {said}")
@@ -344,15 +367,15 @@ class ObjectDictionaryPanel:
             if not self._dirty or not self._rows:
                 return
             rows, self._dirty = dict(self._rows), False
-        needle = self._filter.value
-        rendered: dict[str, str] = {}
+        rendered: dict[tuple[str, str], str] = {}
 
         def content_for(client_id: int | None) -> str:
             device = self._device_of(client_id)
-            if device not in rendered:
-                rendered[device] = render(rows[device], needle, self._empty(device)) \
+            needle = self._typed("filter", self._filter, client_id)
+            if (device, needle) not in rendered:
+                rendered[device, needle] = render(rows[device], needle, self._empty(device)) \
                     if device in rows else render([], "", "reading the dictionary ...")
-            return rendered[device]
+            return rendered[device, needle]
 
         if self._tables is not None:
             self._tables.show(content_for)
