@@ -17,6 +17,7 @@ from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.screenshots import free_port
 from app.ui.drive.drive_options import register_option
 from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from devices.events import AlStatusChanged
 from devices.servo.registers import R
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _widget, contents
@@ -132,3 +133,62 @@ def test_a_filter_typed_on_one_page_filters_that_page_s_table_only(
     _frames(live)
     tables = [c for c in contents(second) if "fr-od" in c]
     assert tables and "0x1000:0" in tables[-1]  # B's table: unfiltered
+
+
+def _decoded(page: Page, code: str) -> bool:
+    """The page got the Codes tab's answer for ``code`` (its head line is the query)."""
+    return any("fr-decoded" in c and f'fr-muted">{code}' in c for c in contents(page))
+
+
+def test_a_code_decoded_on_one_page_shows_on_that_page_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    code = _widget(first, "Code", None)
+    first.set(code, "0x001B")
+    _wait(lambda: _decoded(first, "0x001B"))
+    _frames(live)
+    assert not _decoded(second, "0x001B") and "0x001B" not in second.updates(code)
+    second.set(code, "0x0011")
+    _wait(lambda: _decoded(second, "0x0011"))
+    _frames(live)
+    assert not _decoded(first, "0x0011")
+
+
+def _report(live: ServedRig, t_s: int, code: int) -> str:
+    """The rig reports an AL status code; its label in the Reported list."""
+    live.runtime.journal([AlStatusChanged(t_s * 1_000_000, "trscat", code=code)])
+    return f"{t_s}.0 s trscat AL status code 0x{code:04X}"
+
+
+def test_a_reported_code_picked_on_one_page_is_picked_there_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """Two new pages follow the newest code until they pick or type; a page's pick decodes
+    on that page; a page holding its own query keeps it when a new code comes, the other
+    page follows the newest."""
+    live = served[0]
+    first, second = Page(live.port), Page(live.port)
+    try:
+        _wait(lambda: len(live.server.get_clients()) == 4)
+        _reported_on_two_pages(live, first, second)
+    finally:
+        first.close()
+        second.close()
+
+
+def _reported_on_two_pages(live: ServedRig, first: Page, second: Page) -> None:
+    older, newer = _report(live, 1, 0x001D), _report(live, 2, 0x0016)
+    picker, code = _widget(first, "Reported", None), _widget(first, "Code", None)
+    _wait(lambda: _decoded(first, newer) and _decoded(second, newer))
+    first.set(picker, older)
+    _wait(lambda: _decoded(first, older) and "0x001D" in first.updates(code))
+    _frames(live)
+    assert older not in second.updates(picker) and not _decoded(second, older)
+    assert second.updates(code)[-1] == "0x0016"
+    time.sleep(0.1)
+    first.set(code, "0x001A")  # A's own query
+    _wait(lambda: _decoded(first, "0x001A"))
+    newest = _report(live, 3, 0x0014)
+    _wait(lambda: _decoded(second, newest))
+    _frames(live)
+    assert not _decoded(first, newest) and newest not in first.updates(picker)
+    assert first.updates(code)[-1] == "0x001D"  # the box holds what A typed since

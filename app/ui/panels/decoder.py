@@ -4,14 +4,19 @@ The meaning comes from :func:`app.decoder.decode` (the devices' own tables). The
 dropdown lists the latest emergencies, AL status codes and alarms of the runtime's journal,
 newest first: picking one decodes it, so a code seen in the log is one click away. A newly
 reported code is picked and decoded at once, unless the Code box holds a query the user typed
-(the list then opens on it, where it used to open on a "(pick a reported code)" row). The
-answer is server-level, like the rest of the dashboard: every browser sees the last decoded
-code.
+(the list then opens on it, where it used to open on a "(pick a reported code)" row).
+
+The Code box, the Reported pick and the answer are each page's own (docs/dashboard.md "Several
+browsers"): shared, one trainee's pasted code or pick replaced what every classmate was
+reading. A page that has typed or picked nothing follows the rig's newest code, as a new page
+does; the list of reported codes is the rig's, the same on every page.
 """
 
 from __future__ import annotations
 
 import collections
+import dataclasses
+import threading
 from collections.abc import Iterable
 from typing import Any
 
@@ -19,7 +24,8 @@ import viser
 
 from app.decoder import DecodeError, Meaning, decode
 from app.runtime import Runtime
-from app.ui.panels.widgets import from_user
+from app.ui.panels.client_input import ClientMirror
+from app.ui.panels.client_pick import ClientHtml
 from app.ui.runs import LastLoad, RunSplitter
 from app.ui.style import esc
 from devices.events import AlarmChanged, AlStatusChanged, EmergencySent, Event, fmt_bytes
@@ -75,6 +81,30 @@ def result_html(query: str, meanings: Iterable[Meaning] | None, error: str = "")
     return f'<div id="{RESULT_ID}" style="font-size:0.82em">{head}{body}</div>'
 
 
+@dataclasses.dataclass
+class PageView:
+    """What one page's Codes tab shows: ``code`` the Code box (None: what the page typed
+    stays), ``pick`` the Reported pick, ``result`` the answer's HTML; ``typed``: the Code box
+    holds the page's own query, which a newly reported code leaves on display."""
+
+    code: str | None
+    pick: str
+    result: str
+    typed: bool = False
+
+
+class _Field(ClientMirror):
+    """A Codes tab widget each page fills for itself; ``on_change(client_id, value)`` after
+    each change a page makes (viser's event loop)."""
+
+    def __init__(self, server: viser.ViserServer, handle: Any, on_change: Any) -> None:
+        super().__init__(server, handle)
+        self._on_change = on_change
+
+    def changed(self, client_id: int, value: Any) -> None:
+        self._on_change(client_id, value)
+
+
 class DecoderPanel:
     """``side``: the dashboard's left panel (the decoder gets a tab there); None puts it in a
     folder of the current container instead. ``last_load``: the scenario player's
@@ -95,73 +125,131 @@ class DecoderPanel:
             self._button = gui.add_button("Decode", icon=viser.Icon.SEARCH)
             self._picker = gui.add_dropdown("Reported", (NONE,), initial_value=NONE)
             self._result = gui.add_html(result_html("", None))
-        self._input.on_update(self._on_input)
-        self._button.on_click(lambda event: self.show(str(self._input.value)))
-        self._picker.on_update(self._on_pick)
-        self._typed = False  # the Code box holds the user's own query: new codes leave it
+        self._lock = threading.Lock()  # viser's event loop (a page's change), update()
+        self._default = PageView("", NONE, result_html("", None))  # a new page's
+        self._views: dict[int, PageView] = {}  # the pages that typed or picked since
+        self._codes = _Field(server, self._input, self._on_input)
+        self._picks = _Field(server, self._picker, self._on_pick)
+        self._results = ClientHtml(server, self._result)
+        self._button.on_click(self._on_decode)
 
-    def show(self, text: str, head: str = "") -> list[Meaning]:
-        """Decode ``text`` into the result block (what a click does); returns the readings.
-        ``head``: the line above them (a reported code's whole label), else the query."""
+    @staticmethod
+    def _decoded(text: str, head: str = "") -> tuple[str, list[Meaning]]:
+        """The result block for ``text``, and its readings. ``head``: the line above them (a
+        reported code's whole label), else the query."""
         query = text.strip()
         if not query:
-            self._result.content = result_html("", None)
-            return []
+            return result_html("", None), []
         try:
             meanings = decode(query)
         except DecodeError as exc:
-            self._result.content = result_html(query, None, str(exc))
-            return []
-        self._result.content = result_html(head or query, meanings)
+            return result_html(query, None, str(exc)), []
+        return result_html(head or query, meanings), meanings
+
+    def show(self, text: str, head: str = "") -> list[Meaning]:
+        """Decode ``text`` for every page following the rig's newest code (a page's own click
+        decodes for that page); returns the readings."""
+        html, meanings = self._decoded(text, head)
+        with self._lock:
+            self._default = dataclasses.replace(self._default, result=html)
         return meanings
 
-    def _on_input(self, event: viser.GuiEvent) -> None:
-        if from_user(event):
-            self._typed = True
-            self.show(str(self._input.value))
+    def result_for(self, client_id: int | None) -> str:
+        """The answer ``client_id``'s page shows (None: a new page's)."""
+        with self._lock:
+            return self._view(client_id).result
 
-    def _on_pick(self, event: viser.GuiEvent) -> None:
-        if from_user(event):
-            self._show_reported(str(self._picker.value))
+    def _view(self, client_id: int | None) -> PageView:
+        return self._views.get(client_id, self._default) if client_id is not None \
+            else self._default
 
-    def _show_reported(self, label: str) -> None:
-        text = dict(self._reported).get(label)
-        if text is not None:
-            self._typed = False
-            self._input.value = text
-            self.show(text, label)
+    def _on_input(self, client_id: int, value: Any) -> None:
+        html, _ = self._decoded(str(value))
+        with self._lock:
+            self._views[client_id] = dataclasses.replace(
+                self._view(client_id), code=None, result=html, typed=True)
+
+    def _on_pick(self, client_id: int, label: Any) -> None:
+        with self._lock:
+            text = dict(self._reported).get(str(label))
+        if text is None:  # the list's placeholder, or a code a restart took away
+            return
+        html, _ = self._decoded(text, str(label))
+        with self._lock:
+            self._views[client_id] = PageView(text, str(label), html)
+        self._codes.forget(client_id)  # the code goes into the box, whatever it held
+
+    def _on_decode(self, event: viser.GuiEvent) -> None:
+        """Decode: what the clicking page's Code box holds, for that page."""
+        client_id = event.client_id
+        html, _ = self._decoded(str(self._codes.value_for(client_id)))
+        with self._lock:
+            self._views[client_id] = dataclasses.replace(self._view(client_id), result=html)
 
     # ---- the dashboard's update thread -----------------------------------------------------
     def update(self) -> None:
-        """Take the codes of the events journalled since the last call."""
+        """Take the codes of the events journalled since the last call; show each page its
+        view."""
         self._seq, events = self._runtime.events_since(self._seq)
         split = self._runs.split(self._seq, events)
         restarted = split is not None
         if split is not None:  # a scenario load: only the new run's codes
-            self._reported.clear()
             events = split[1]
         fresh: list[tuple[str, str]] = []
         for event in events:
             found = reported_code(event)
             if found is not None:
                 fresh.append(found)
-        if not fresh:
+        if fresh:
+            self._report(fresh, restarted)
+        elif restarted:
+            with self._lock:
+                self._reported.clear()
+                self._default.pick = NONE
+                for view in self._views.values():
+                    view.pick = NONE
+            self._options((NONE,))
+        self._show()
+
+    def _report(self, fresh: list[tuple[str, str]], restarted: bool) -> None:
+        """Newly reported codes: listed newest first; the newest is picked and decoded on
+        every page but one whose Code box holds its own query (it keeps its pick)."""
+        with self._lock:
             if restarted:
-                self._picker.options = (NONE,)
-                self._picker.value = NONE
-            return
-        for label, text in fresh:
-            # One option per label, the newest: viser's dropdown (a Mantine Select) throws on
-            # a duplicate option once shown, and React then blanks the whole page for good
-            # (a replayed scenario reported "6.0 s fastcat emergency ..." a second time).
-            for old in [r for r in self._reported if r[0] == label]:
-                self._reported.remove(old)
-            self._reported.append((label, text))
-        labels = [label for label, _ in reversed(self._reported)]
-        current = str(self._picker.value)
-        self._picker.options = tuple(labels)
-        if self._typed:  # the user's query stays on display
-            self._picker.value = current if current in labels else labels[0]
-        else:
-            self._picker.value = labels[0]
-            self._show_reported(labels[0])
+                self._reported.clear()
+            for label, text in fresh:
+                # One option per label, the newest: viser's dropdown (a Mantine Select)
+                # throws on a duplicate option once shown, and React then blanks the whole
+                # page for good (a replayed scenario reported "6.0 s fastcat emergency ..."
+                # a second time).
+                for old in [r for r in self._reported if r[0] == label]:
+                    self._reported.remove(old)
+                self._reported.append((label, text))
+            labels = [label for label, _ in reversed(self._reported)]
+            newest, text = labels[0], self._reported[-1][1]
+        html, _ = self._decoded(text, newest)
+        with self._lock:
+            self._default = PageView(text, newest, html)
+            for client_id, view in list(self._views.items()):
+                if not view.typed:  # follows the newest code again
+                    del self._views[client_id]
+                elif view.pick not in labels:
+                    view.pick = newest
+        self._options(tuple(labels))
+
+    def _options(self, labels: tuple[str, ...]) -> None:
+        """The list, on every page. The server's value goes first: viser sends every page
+        the first option when its value is not among the new ones, over each page's own."""
+        self._picker._impl.value = self._default.pick
+        self._picker.options = labels
+
+    def _show(self) -> None:
+        with self._lock:
+            default, views = dataclasses.replace(self._default), dict(self._views)
+
+        def view(client_id: int | None) -> PageView:
+            return views.get(client_id, default) if client_id is not None else default
+
+        self._codes.follow_each(lambda c: view(c).code)
+        self._picks.follow_each(lambda c: view(c).pick)
+        self._results.show(lambda c: view(c).result)
