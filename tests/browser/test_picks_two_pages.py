@@ -54,3 +54,40 @@ def test_a_pick_on_one_page_leaves_the_other_page_s_tabs(live: LiveDashboard,
     finally:
         for page in pages:
             page.context.close()
+
+
+def _result(page: Any) -> str:
+    """The line under the drive's register and parameter boxes ("" before any answer)."""
+    found = page.locator("#fr-drive-result")
+    return str(found.first.inner_text()) if found.count() else ""
+
+
+def test_a_register_read_on_one_page_stays_on_that_page(live: LiveDashboard,
+                                                        browser: Any) -> None:
+    """The drive's Register box and the answer line under it are each page's own: page A's
+    pick and read leave page B's box and line; B's read shows on B only."""
+    live.advance(BOOT_S)
+    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
+             for _ in range(2)]
+    try:
+        for page in pages:
+            open_dashboard(page, live)
+            _open(page, "Servo drive")
+            page.get_by_text("Registers and parameters").click()
+        first, second = pages
+        initial = second.get_by_label("Register", exact=True).input_value()
+        choose(first, "Register", "R02 feed_constant")
+        first.get_by_role("button", name="Read register").click()
+        wait_until(lambda: "R02 feed_constant = " in _result(first), what="page 1's answer")
+        live.advance(0.2)  # frames for both pages
+        assert second.get_by_label("Register", exact=True).input_value() == initial
+        assert _result(second) == ""
+        choose(second, "Register", "R05 status_word")
+        second.get_by_role("button", name="Read register").click()
+        wait_until(lambda: "R05 status_word = " in _result(second), what="page 2's answer")
+        live.advance(0.2)
+        assert "R02 feed_constant = " in _result(first)
+        assert first.get_by_label("Register", exact=True).input_value() == "R02 feed_constant"
+    finally:
+        for page in pages:
+            page.context.close()
