@@ -10,15 +10,14 @@ import random
 from collections.abc import Iterator
 
 import pytest
+from modbus_line import BOOT_US, serve
 from pymodbus.client import AsyncModbusTcpClient
 from pymodbus.framer import FramerType
 from sim_helpers import SimThread
 
-from app.modbus.server import DriveModbusServer
 from devices.flash import MemoryFlash
 from devices.servo.drive import DriveConfig, ServoDrive
 
-BOOT_US = 100_000  # past the drive's power-on self test
 EOJ, ALM_ST, LTC_ST = 0x40, 0x08, 0x10
 
 
@@ -41,18 +40,13 @@ class Master:
         return int.from_bytes((high << 16 | low).to_bytes(4, "big"), "big", signed=True)
 
 
-@pytest.fixture(params=["socket", "rtu"])
+@pytest.fixture(params=["socket+call", "rtu+call"], ids=["socket", "rtu"])
 def line(request: pytest.FixtureRequest) -> Iterator[tuple[ServoDrive, SimThread, int, str]]:
     drive = ServoDrive("drive", random.Random(1), DriveConfig(node_id=1), MemoryFlash())
-    with SimThread([drive]) as sim:
-        server = DriveModbusServer([drive], sim.submit, host="127.0.0.1", port=0,
-                                   framer=request.param, call=sim.call)
-        server.start_in_thread()
-        try:
-            sim.wait_for(lambda: sim.now_us >= BOOT_US, 2 * BOOT_US)
-            yield drive, sim, server.port, request.param
-        finally:
-            server.stop_in_thread()
+    with serve([drive], request.param) as served:
+        sim = served.sim
+        sim.wait_for(lambda: sim.now_us >= BOOT_US, 2 * BOOT_US)
+        yield drive, sim, served.port, served.framer
 
 
 def session(line, script) -> None:

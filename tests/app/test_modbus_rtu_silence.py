@@ -18,51 +18,29 @@ from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
-from pymodbus.framer import FramerRTU
+from modbus_line import REPLY_S, h, modbus_server, receive, rtu_adu, serve
 from sim_helpers import FakeDrive, SimThread
 
-from app.modbus.server import RTU_SILENCE_S, DriveModbusServer
+from app.modbus.server import RTU_SILENCE_S
 
-h = bytes.fromhex
 PAUSE_S = 3 * RTU_SILENCE_S  # a master's pause: well past the silence
 QUIET_S = 0.3  # how long a test waits to call "no reply" silence
-REPLY_S = 3.0
 
 
 def rtu(unit: int, pdu: str) -> bytes:
-    body = bytes((unit,)) + h(pdu)
-    return body + FramerRTU.compute_CRC(body).to_bytes(2, "big")
+    return rtu_adu(unit, h(pdu))
 
 
 READ_D3 = rtu(5, "03 0003 0001")
 D3_IS_50 = rtu(5, "03 02 0032")
 
 
-@pytest.fixture(params=["submit", "call"])
+@pytest.fixture(params=["rtu", "rtu+call"], ids=["submit", "call"])
 def port(request: pytest.FixtureRequest) -> Iterator[int]:
     """An RTU-over-TCP line with a drive at node 5, served as ``python -m app`` does (``call``)
     or through the simulation thread's queue (``submit``)."""
-    drives = [FakeDrive.default(node_id=5)]
-    with SimThread(drives) as sim:
-        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer="rtu",
-                                   call=sim.call if request.param == "call" else None)
-        server.start_in_thread()
-        try:
-            yield server.port
-        finally:
-            server.stop_in_thread()
-
-
-def receive(sock: socket.socket, wait: float) -> bytes:
-    data = b""
-    sock.settimeout(wait)
-    try:
-        while chunk := sock.recv(512):
-            data += chunk
-            sock.settimeout(0.05)  # a reply is one write: stop once the line is quiet
-    except TimeoutError:
-        pass
-    return data
+    with serve([FakeDrive.default(node_id=5)], request.param) as line:
+        yield line.port
 
 
 def connect(port: int) -> socket.socket:
@@ -128,13 +106,8 @@ def stalled_line() -> Iterator[int]:
                 time.sleep(STALL_S)
             return sim.call(fn)
 
-        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer="rtu",
-                                   call=call)
-        server.start_in_thread()
-        try:
+        with modbus_server(drives, sim, "rtu", call) as server:
             yield server.port
-        finally:
-            server.stop_in_thread()
 
 
 def test_a_stall_on_one_connection_does_not_cut_another_connection_s_frame() -> None:

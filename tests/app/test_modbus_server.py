@@ -4,142 +4,31 @@ Every test runs per framing: MBAP ("socket") and RTU framing over TCP ("rtu", th
 speaks RTU). Requests go through pymodbus's AsyncModbusTcpClient, raw sockets (for the seed's
 bytes, byte for byte) and Debian's mbpoll (Modbus TCP only: it speaks RTU on serial ports
 only). The drives are stepped by tests/app/sim_helpers.SimThread, 1 ms of simulated time per
-loop; the server reaches them only through ``submit``.
+loop; the server reaches them only through ``submit`` (``call`` in "socket+call"). The line
+itself is tests/app/modbus_line.py, shared with the other Modbus tests.
 """
 
 from __future__ import annotations
 
 import asyncio
-import random
 import re
-import selectors
 import socket
 import subprocess
-import time
 from collections.abc import Iterator
-from contextlib import contextmanager
-from dataclasses import dataclass, field
 
 import pytest
+from modbus_line import BOOT_US, REPLY_S, SILENCE_S, Line, h, receive, serve, servo
 from pymodbus.client import AsyncModbusTcpClient
 from pymodbus.exceptions import ModbusIOException
-from pymodbus.framer import FramerRTU, FramerType
-from sim_helpers import FakeDrive, SimThread
+from sim_helpers import FakeDrive
 
 from app.modbus.server import DriveModbusServer
-from devices.flash import MemoryFlash
-from devices.servo.drive import DriveConfig, ServoDrive
-
-h = bytes.fromhex
-SILENCE_S = 0.3  # how long a test waits to call "no reply" silence
-REPLY_S = 3.0
 
 
-# ---- the line under test ---------------------------------------------------------------------
-@dataclass
-class Line:
-    server: DriveModbusServer
-    sim: SimThread
-    drives: list
-    framer: str
-    trace: list[tuple[bool, bytes]] = field(default_factory=list)
-
-    def adu(self, unit: int, pdu: bytes, tid: int = 1) -> bytes:
-        """The frame as it travels: RTU ``node + PDU + CRC`` or MBAP ``header + PDU``."""
-        if self.framer == "rtu":
-            body = bytes((unit,)) + pdu
-            return body + FramerRTU.compute_CRC(body).to_bytes(2, "big")
-        return tid.to_bytes(2, "big") + b"\0\0" + (len(pdu) + 1).to_bytes(2, "big") \
-            + bytes((unit,)) + pdu
-
-    def seed(self, rtu: str) -> bytes:
-        """A seed example, printed as an RTU ADU with its CRC, in this line's framing."""
-        adu = h(rtu)
-        if self.framer == "rtu":
-            return adu
-        return self.adu(adu[0], adu[1:-2])
-
-    def exchange(self, frame: bytes, wait: float = REPLY_S) -> bytes:
-        """Send raw bytes on a fresh connection; return what came back within ``wait``."""
-        with socket.create_connection(("127.0.0.1", self.server.port), timeout=wait) as sock:
-            sock.sendall(frame)
-            return _receive(sock, wait)
-
-    def exchange_all(self, frames: list[bytes], wait: float = SILENCE_S,
-                     expect: list[bytes] | None = None) -> list[bytes]:
-        """Send each frame on its own connection, all at once; what came back on each within
-        ``wait``, or once each connection got as many bytes as ``expect`` has for it."""
-        socks = [socket.create_connection(("127.0.0.1", self.server.port), timeout=wait)
-                 for _ in frames]
-        got = [b""] * len(frames)
-        with selectors.DefaultSelector() as sel:
-            for i, (sock, frame) in enumerate(zip(socks, frames, strict=True)):
-                sock.sendall(frame)
-                sock.setblocking(False)
-                sel.register(sock, selectors.EVENT_READ, i)
-            deadline = time.monotonic() + wait
-            while (left := deadline - time.monotonic()) > 0:
-                if expect is not None and all(
-                        len(g) >= len(e) for g, e in zip(got, expect, strict=True)):
-                    break
-                for key, _ in sel.select(left):
-                    chunk = key.fileobj.recv(512)  # type: ignore[union-attr]
-                    got[key.data] += chunk
-                    if not chunk:
-                        sel.unregister(key.fileobj)
-        for sock in socks:
-            sock.close()
-        return got
-
-    def client(self, timeout: float = REPLY_S) -> AsyncModbusTcpClient:
-        def trace(sending: bool, data: bytes) -> bytes:
-            self.trace.append((sending, bytes(data)))
-            return data
-
-        return AsyncModbusTcpClient("127.0.0.1", port=self.server.port,
-                                    framer=FramerType(self.framer), timeout=timeout,
-                                    retries=0, trace_packet=trace)
-
-
-def _receive(sock: socket.socket, wait: float) -> bytes:
-    data = b""
-    sock.settimeout(wait)
-    try:
-        while chunk := sock.recv(512):
-            data += chunk
-            sock.settimeout(0.05)  # a reply is one write: stop once the line is quiet
-    except TimeoutError:
-        pass
-    return data
-
-
-@contextmanager
-def serve(drives: list, framer: str, paused: bool = False) -> Iterator[Line]:
-    """The line on ``framer``; "socket+call" is MBAP framing served through ``call`` (answered
-    in the server's loop between two steps, as ``python -m app`` does) instead of ``submit``."""
-    framer, _, hand_over = framer.partition("+")
-    with SimThread(drives, paused=paused) as sim:
-        server = DriveModbusServer(drives, sim.submit, host="127.0.0.1", port=0, framer=framer,
-                                   call=sim.call if hand_over == "call" else None)
-        server.start_in_thread()
-        try:
-            yield Line(server, sim, drives, framer)
-        finally:
-            server.stop_in_thread()
-
-
+# ---- the line under test (tests/app/modbus_line.py) ------------------------------------------
 @pytest.fixture(params=["socket", "rtu", "socket+call"])
 def framer(request: pytest.FixtureRequest) -> str:
     return request.param
-
-
-def servo(node: int) -> ServoDrive:
-    """A drive as the default rig has it: on Modbus, TEN and IEN wired to 24 V."""
-    return ServoDrive(f"servo{node}", random.Random(node), DriveConfig(node_id=node),
-                      MemoryFlash())
-
-
-BOOT_US = 100_000  # past the drive's power-on self test
 
 
 @pytest.fixture
@@ -305,10 +194,10 @@ def test_save_first_method_answers_at_the_end(framer: str) -> None:
         start = line.adu(1, h("10 8000 0002 04 0000 0020"))
         with socket.create_connection(("127.0.0.1", line.server.port), timeout=5) as sock:
             sock.sendall(start)
-            assert _receive(sock, SILENCE_S) == b""  # saving: the reply is held back
+            assert receive(sock, SILENCE_S) == b""  # saving: the reply is held back
             assert line.sim.call(lambda: drive.saves) == 1
             line.sim.advance(drive.save_us)
-            assert _receive(sock, REPLY_S) == line.adu(1, h("10 8000 0002"))
+            assert receive(sock, REPLY_S) == line.adu(1, h("10 8000 0002"))
 
 
 def test_port_in_use_fails_to_start(fake_line: Line) -> None:
