@@ -7,7 +7,6 @@ browsers; what each receives is viser's wire messages."""
 
 from __future__ import annotations
 
-import threading
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
@@ -16,9 +15,8 @@ from typing import Any
 
 import msgspec
 import pytest
-import viser
-import zstandard
-from websockets.sync.client import connect
+from viser_page import Page
+from viser_page import wait as _wait
 
 from app.classroom.roles import Access, Role
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
@@ -26,89 +24,6 @@ from app.screenshots import free_port
 from app.ui.panels.classroom_rig import ServedRig, serve_rig
 
 TOKEN = "s3cret"
-
-
-class Page:
-    """A browser as viser's server sees it: a websocket; keeps every message it receives."""
-
-    def __init__(self, port: int) -> None:
-        self._ws = connect(f"ws://127.0.0.1:{port}",
-                           subprotocols=[f"viser-v{viser.__version__}"])  # type: ignore[list-item]
-        self.messages: list[dict[str, Any]] = []
-        self._lock = threading.Lock()
-        threading.Thread(target=self._read, daemon=True).start()
-        # viser counts a connection as a client from its first camera message.
-        self._ws.send(msgspec.msgpack.encode({
-            "type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0),
-            "position": (0.0, -5.0, 1.0), "fov": 0.9, "near": 0.01, "far": 100.0,
-            "image_height": 720, "image_width": 1280, "look_at": (0.0, 0.0, 0.0),
-            "up_direction": (0.0, 0.0, 1.0)}))
-
-    def _read(self) -> None:
-        unzip = zstandard.ZstdDecompressor()
-        try:
-            while True:
-                frame = self._ws.recv()
-                assert isinstance(frame, bytes)
-                size = int.from_bytes(frame[:8], "little")
-                packed = int.from_bytes(frame[8:16], "little")
-                inner = unzip.decompress(frame[16:16 + packed], max_output_size=size)
-                with self._lock:
-                    self.messages += msgspec.msgpack.decode(inner)["messages"]
-        except Exception:  # closed
-            return
-
-    def received(self) -> list[dict[str, Any]]:
-        with self._lock:
-            return list(self.messages)
-
-    def widget(self, label: str, option: str | None = None) -> str:
-        """The uuid of a widget this page got, by label (and one of its options)."""
-        for m in self.received():
-            props = m.get("props") or {}
-            if props.get("label") == label and (option is None
-                                                or option in (props.get("options") or ())):
-                return str(m["uuid"])
-        raise KeyError(label)
-
-    def last(self, label: str | None, option: str) -> str:
-        """The uuid of the newest widget offering ``option`` (and labelled ``label``): an
-        instructor's own copy comes after the shared widget of the same label."""
-        for m in reversed(self.received()):
-            props = m.get("props") or {}
-            if (label is None or props.get("label") == label) \
-                    and option in (props.get("options") or ()):
-                return str(m["uuid"])
-        raise KeyError(option)
-
-    def own(self, other: Page, label: str | None, option: str) -> str:
-        """The uuid of this page's own widget (one ``other`` never got: shared widgets have
-        the same uuid on every page) offering ``option`` and labelled ``label``, waiting for
-        it to arrive: per-client widgets are built on viser's thread after the promote, and on
-        a loaded machine the newest widget by that label can still be the shared one."""
-        def find() -> str | None:
-            shared = {m.get("uuid") for m in other.received() if "props" in m}
-            for m in reversed(self.received()):
-                props = m.get("props") or {}
-                if m.get("uuid") not in shared and (label is None or props.get("label") == label) \
-                        and option in (props.get("options") or ()):
-                    return str(m["uuid"])
-            return None
-        return str(_wait(find))
-
-    def updates(self, uuid: str) -> list[Any]:
-        """The values the server later set on one widget of this page."""
-        return [m["updates"]["value"] for m in self.received()
-                if m.get("type") == "GuiUpdateMessage" and m.get("uuid") == uuid
-                and "value" in (m.get("updates") or {})]
-
-    def set(self, uuid: str, value: Any) -> None:
-        """What the browser sends when its user changes a widget (or clicks a button)."""
-        self._ws.send(msgspec.msgpack.encode(
-            {"type": "GuiUpdateMessage", "uuid": uuid, "updates": {"value": value}}))
-
-    def close(self) -> None:
-        self._ws.close()
 
 
 def values(page: Page) -> list[Any]:
@@ -135,14 +50,6 @@ def text(page: Page) -> str:
     return msgspec.json.encode(page.received()).decode()
 
 
-def _wait(predicate: Any, timeout: float = 20.0) -> Any:
-    deadline = time.monotonic() + timeout
-    while not (value := predicate()):
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.05)
-    return value
-
-
 @contextmanager
 def open_class(exercise_files: Sequence[Path] = ()) -> Iterator[tuple[ServedRig, Page, Page]]:
     """The default rig served paused with the token (and ``exercise_files``), a trainee's page
@@ -163,6 +70,9 @@ def open_class(exercise_files: Sequence[Path] = ()) -> Iterator[tuple[ServedRig,
         trainee.close()
         instructor.close()
         live.stop()
+    # A reader thread that died after the test's last read fails the test here, not silently.
+    trainee.check()
+    instructor.check()
 
 
 @pytest.fixture(scope="module")
@@ -180,6 +90,8 @@ def pages() -> Iterator[tuple[Page, Page]]:
         trainee.close()
         instructor.close()
         served.stop()
+    trainee.check()
+    instructor.check()
 
 
 def _command(served: ServedRig, target: str, action: str, args: dict[str, Any]) -> None:
