@@ -18,6 +18,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from own_loop import complete
+
 
 class Pages:
     """viser's websocket server (``ViserServer._websock_server``) as far as handlers go."""
@@ -34,7 +36,7 @@ class Pages:
         for fn in list(self.handlers.get(type(message), [])):
             out = fn(client_id, message)
             if inspect.iscoroutine(out):
-                self._loop.run_until_complete(out)
+                complete(self._loop, out)
 
 
 @dataclass
@@ -102,6 +104,6 @@ class Handle:
         self._value = value
         for fn in self.callbacks:
             if inspect.iscoroutinefunction(fn):
-                self._loop.run_until_complete(fn(Event(client, self)))
+                complete(self._loop, fn(Event(client, self)))
             else:
                 self.pool.append(lambda fn=fn, client=client: fn(Event(client, self)))

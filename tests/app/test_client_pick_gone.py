@@ -5,9 +5,10 @@ the page, and stayed for the server's life: a classroom's browsers come and go a
 
 from __future__ import annotations
 
-import asyncio
 from types import SimpleNamespace
 from typing import Any
+
+from own_loop import run
 
 from app.ui.panels.client_pick import ClientPick
 
@@ -48,12 +49,12 @@ def test_a_dropdown_message_of_a_page_that_left_is_not_kept() -> None:
     for fn in server.gone:
         fn(client)
     pick.handle._impl.value = "b"  # viser stored the page's message before calling back
-    asyncio.run(updates[0](SimpleNamespace(client_id=2, client=client)))
+    run(updates[0](SimpleNamespace(client_id=2, client=client)))
     assert 2 not in pick._own
 
 
 def test_a_page_still_there_keeps_its_pick() -> None:
     server, pick, updates = _pick()
     pick.handle._impl.value = "b"
-    asyncio.run(updates[0](SimpleNamespace(client_id=1, client=server.clients[1])))
+    run(updates[0](SimpleNamespace(client_id=1, client=server.clients[1])))
     assert pick.value_for(1) == "b" and pick.value_for(2) == "a"

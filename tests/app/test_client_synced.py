@@ -17,6 +17,7 @@ from typing import Any
 
 import pytest
 from fake_viser import Pages
+from own_loop import complete
 from viser._messages import GuiUpdateMessage
 
 from app.ui.panels import client_input
@@ -86,7 +87,7 @@ def _power(loop: asyncio.AbstractEventLoop) -> tuple[_Server, _Runtime, ClientSy
 def _frame(loop: asyncio.AbstractEventLoop, synced: ClientSynced, model: bool = False) -> None:
     """A dashboard frame: ``model`` is page 1's drive's value, page 2's drive stays off."""
     synced.follow_each(lambda client_id: model if client_id == 1 else False)
-    loop.run_until_complete(asyncio.sleep(0))
+    complete(loop, asyncio.sleep(0))
 
 
 def test_a_click_the_page_never_sent_goes_back_at_its_next_message(
@@ -113,7 +114,7 @@ def test_a_pages_message_does_not_undo_its_change_on_its_way(
     _frame(loop, synced)
     assert sent == [] and runtime.commands == [(1, True)]  # the click stays shown
     runtime.drain()
-    loop.run_until_complete(asyncio.sleep(0))
+    complete(loop, asyncio.sleep(0))
     _frame(loop, synced, model=True)
     assert sent == [(1, True)]
 
@@ -129,5 +130,5 @@ def test_a_page_that_leaves_while_a_frame_is_on_its_way_is_not_kept(
     synced.follow_each(lambda _client_id: True)  # read while page 2 is still there
     gone = server.clients.pop(2)  # viser lets the page go, then runs the callbacks
     synced._gone(gone)  # type: ignore[arg-type]
-    loop.run_until_complete(asyncio.sleep(0))
+    complete(loop, asyncio.sleep(0))
     assert 2 not in synced._values and (1, True) in sent

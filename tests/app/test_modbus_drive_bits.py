@@ -5,12 +5,12 @@ digitali"), on the real drive model through pymodbus's client, both framings.
 
 from __future__ import annotations
 
-import asyncio
 import random
 from collections.abc import Iterator
 
 import pytest
 from modbus_line import BOOT_US, serve
+from own_loop import run
 from pymodbus.client import AsyncModbusTcpClient
 from pymodbus.framer import FramerType
 from sim_helpers import SimThread
@@ -61,7 +61,7 @@ def session(line, script) -> None:
         finally:
             client.close()
 
-    asyncio.run(go())
+    run(go())
 
 
 def set_input(sim: SimThread, drive: ServoDrive, name: str, value: bool) -> None:

@@ -7,11 +7,11 @@ piece came well within the silence is dropped as cut."""
 
 from __future__ import annotations
 
-import asyncio
 from types import SimpleNamespace
 from typing import Any
 
 import pytest
+from own_loop import run
 from pymodbus.framer import FramerRTU
 
 from app.modbus import server as modbus_server
@@ -44,5 +44,5 @@ def test_a_piece_read_after_a_short_stall_does_not_start_a_silence(
         now[0] = 0.140  # 50 ms after that read: no silence on this line
         handler.datagram_received(frame[5:], None)
 
-    asyncio.run(line())
+    run(line())
     assert [r.frame for r in answered] == [frame[1:-2]]

@@ -18,6 +18,7 @@ from collections.abc import Iterator
 
 import pytest
 from modbus_line import BOOT_US, REPLY_S, SILENCE_S, Line, h, receive, serve, servo
+from own_loop import run
 from pymodbus.client import AsyncModbusTcpClient
 from pymodbus.exceptions import ModbusIOException
 from sim_helpers import FakeDrive
@@ -50,10 +51,6 @@ def fake_line(framer: str) -> Iterator[Line]:
     drives = [FakeDrive.default(node_id=1), FakeDrive.default(node_id=5)]
     with serve(drives, framer) as line:
         yield line
-
-
-def run(coro):
-    return asyncio.run(coro)
 
 
 # ---- framing: the PDU layer's outcomes on the wire -------------------------------------------

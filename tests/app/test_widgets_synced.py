@@ -16,6 +16,7 @@ from typing import Any
 
 import pytest
 from fake_viser import Handle, Pages
+from own_loop import complete
 from viser._messages import GuiUpdateMessage
 
 from app.ui.panels import widgets
@@ -73,7 +74,7 @@ def loop() -> Iterator[asyncio.AbstractEventLoop]:
 
 def turn(loop: asyncio.AbstractEventLoop, handle: Handle | None = None) -> None:
     """Run what the other threads handed the event loop, then viser's next window."""
-    loop.run_until_complete(asyncio.sleep(0))
+    complete(loop, asyncio.sleep(0))
     if handle is not None:
         handle.window()
 

@@ -18,6 +18,7 @@ from typing import Any
 
 import pytest
 from fake_viser import Handle, Pages
+from own_loop import complete
 
 from app.classroom.roles import Role
 from app.ui.drive.drive_options import mode_option
@@ -125,7 +126,7 @@ def turn(loop: asyncio.AbstractEventLoop, server: Server) -> None:
     pool, server.gui.pool[:] = list(server.gui.pool), []
     for fn in pool:
         fn()
-    loop.run_until_complete(asyncio.sleep(0))
+    complete(loop, asyncio.sleep(0))
     server.gui.windows()
 
 
