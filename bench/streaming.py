@@ -3,8 +3,10 @@
 The server is the default rig live at real-time speed behind the dashboard as shipped, in a
 process of its own. The clients are Python websocket clients speaking viser's protocol (the
 ``viser-v<version>`` subprotocol; each binary frame is one window of messages: two 8-byte
-lengths, zstd-compressed msgpack, raw buffers). They stand in for browsers: they receive what
-a browser receives, byte for byte, but render nothing, so 10 and 50 of them cost the machine
+lengths, zstd-compressed msgpack, raw buffers). They stand in for browsers: each sends the
+camera message a browser's viewer sends first (viser counts a page from then on, and the
+dashboard draws only while a page is counted: ``bench/_viser_page.py``), then receives what a
+browser receives, byte for byte, but renders nothing, so 10 and 50 of them cost the machine
 far less than 10 or 50 Chromium pages would.
 
 - **bytes/s and messages/s to one client** for an idle rig (LEDs blinking: RUN of the FastCAT
@@ -35,6 +37,7 @@ from typing import Any
 
 from app.ui.drive.plots import WINDOW_S
 from bench._browser import ServerProcess, serve_dashboard
+from bench._viser_page import say_hello
 
 PROBE = re.compile(rb"probe (\d+) (\d+\.\d+)")
 CLIENT_COUNTS = (1, 10, 50)
@@ -108,6 +111,7 @@ async def _client(port: int, warmup_s: float, seconds: float, tally: Tally) -> N
                                   subprotocols=[f"viser-v{viser.__version__}"],
                                   max_size=None, compression=None) as ws:
         await ws.recv()
+        await say_hello(ws)
         start_at = time.monotonic() + warmup_s
         end_at = start_at + seconds
         while (now := time.monotonic()) < end_at:
