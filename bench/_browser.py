@@ -51,11 +51,13 @@ def chromium() -> Iterator[Any]:
 class ServerProcess:
     """``python -m MODULE serve ARGS...`` on a free port (the port is the first argument)."""
 
-    def __init__(self, module: str, *args: str, what: str = "server") -> None:
+    def __init__(self, module: str, *args: str, what: str = "server",
+                 cwd: Path = ROOT) -> None:
+        """``cwd``: the checkout whose code serves (another worktree, to compare trees)."""
         self.port = free_port()
         self.proc = subprocess.Popen([sys.executable, "-m", module, "serve", str(self.port),
                                       *args], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                     text=True, cwd=ROOT)
+                                     text=True, cwd=cwd)
         assert self.proc.stdout is not None
         for line in self.proc.stdout:  # viser prints its banner first
             if line.strip() == READY:

@@ -17,11 +17,14 @@ far less than 10 or 50 Chromium pages would.
 - **update latency** with 1, 10 and 50 clients: the server writes, after each dashboard
   update, the publication instant of the frame it showed into one extra markdown ("probe");
   the clients take the receive instant minus that (both are CLOCK_MONOTONIC of one machine):
-  from the frame's publication by the runtime to its arrival at each client; p50 and p95.
+  from the frame's publication by the runtime to its arrival at each client; p50 and p95;
+- **clicking** (``bench/_stream_clicks.py``): bytes/s and messages/s to a watching page and to
+  the clicking page, idle and while one page clicks a control 5 times a second, with 1 and
+  10 pages watching; ``--trees`` runs other checkouts' servers side by side in the same run.
 
 No target is set for these in issue 7 beyond "send only what changed" (docs/performance.md).
 
-    python -m bench streaming [--quick]
+    python -m bench streaming [--quick] [--clicking-only] [--trees DIR,DIR]
 """
 
 from __future__ import annotations
@@ -33,9 +36,11 @@ import statistics
 import sys
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from app.ui.drive.plots import WINDOW_S
+from bench import _stream_clicks
 from bench._browser import ServerProcess, serve_dashboard
 from bench._viser_page import say_hello
 
@@ -144,7 +149,10 @@ def percentile(values: list[float], q: float) -> float:
     return ordered[min(len(ordered) - 1, round(q * (len(ordered) - 1)))] if ordered else 0.0
 
 
-def report(quick: bool) -> list[str]:
+def report(quick: bool, clicking_only: bool = False, trees: list[Path] | None = None
+           ) -> list[str]:
+    if clicking_only:
+        return ["Streaming while a page clicks", *_stream_clicks.report(quick, trees or [])]
     warmup, seconds = (1.0, 3.0) if quick else (2.0, 10.0)
     # The server's rig runs at real time from its start, so simulated time = wall time.
     steady = warmup if quick else WINDOW_S + warmup
@@ -173,6 +181,7 @@ def report(quick: bool) -> list[str]:
                        f"{received:.0f} kB/s to all)")
     finally:
         server.close()
+    out += _stream_clicks.report(quick, trees or [])
     out.append("  no target in issue 7: send only what changed (docs/performance.md)")
     return out
 
@@ -185,8 +194,12 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="python -m bench streaming",
                                 description=(__doc__ or "").split("\n")[0])
     p.add_argument("--quick", action="store_true", help="short runs, up to 10 clients")
+    p.add_argument("--clicking-only", action="store_true", help="only the clicking case")
+    p.add_argument("--trees", default="",
+                   help="comma-separated checkouts whose servers the clicking case also runs")
     args = p.parse_args(argv)
-    print("\n".join(report(args.quick)), flush=True)
+    trees = [Path(t).resolve() for t in args.trees.split(",") if t]
+    print("\n".join(report(args.quick, args.clicking_only, trees)), flush=True)
     return 0
 
 

@@ -5,6 +5,7 @@ client that only listened measured an idle rig streaming nothing."""
 
 from __future__ import annotations
 
+from bench._stream_clicks import measure
 from bench.streaming import listen, start_server
 
 
@@ -15,3 +16,15 @@ def test_a_client_receives_the_idle_rigs_blinking_leds() -> None:
     finally:
         server.close()
     assert tally.frames > 5 and tally.messages > 20  # LED colours: ~150 a second
+
+
+def test_the_clicking_case_counts_the_clicks_and_both_pages() -> None:
+    server = start_server(motion=False, probe=False)
+    try:
+        result = measure(server.port, "this", 1, 1.5, 0.5)
+    finally:
+        server.close()
+    assert result.clicks >= 5
+    (idle, clicking), = result.watcher
+    assert idle.messages > 20 and clicking.messages > 20
+    assert result.clicker[0].messages > 20
