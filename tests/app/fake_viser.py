@@ -16,6 +16,7 @@ import asyncio
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
+from types import SimpleNamespace
 from typing import Any
 
 from own_loop import complete
@@ -46,12 +47,14 @@ class Event:
 
 
 class Handle:
-    """Any server-level viser GUI handle; ``sent`` holds the values sent to every page."""
+    """Any server-level viser GUI handle; ``sent`` holds the values sent to every page (what
+    goes to one page only is app.ui.panels.client_pick.send_to's: tests record that)."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop, value: Any, label: str = "",
                  options: tuple[str, ...] = (), pool: list[Callable[[], Any]] | None = None
                  ) -> None:
         self._loop = loop
+        self._impl = SimpleNamespace(uuid=f"{label or 'widget'}-{id(self):x}")  # viser's id
         self.pool = pool if pool is not None else []  # plain callbacks not run yet
         self.label = label
         self._value = value

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable, Iterator
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -27,9 +28,22 @@ class Server:
     def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
         self._loop = loop
         self._websock_server = Pages(loop)  # viser 1.1.1's name for it
+        self.clients = {c: SimpleNamespace(client_id=c) for c in ("page A", "page B")}
 
     def get_event_loop(self) -> asyncio.AbstractEventLoop:
         return self._loop
+
+    def get_clients(self) -> dict[str, Any]:
+        return dict(self.clients)
+
+
+@pytest.fixture
+def to_page(monkeypatch: pytest.MonkeyPatch) -> list[tuple[str, str, Any]]:
+    """What goes to one page only: (page, widget id, value)."""
+    out: list[tuple[str, str, Any]] = []
+    monkeypatch.setattr(widgets, "send_to", lambda client, uuid, prop, value: out.append(
+        (client.client_id, uuid, value)))
+    return out
 
 
 class Runtime:
@@ -191,11 +205,12 @@ def test_a_burst_from_two_pages_ends_on_the_model(loop) -> None:
 Box = tuple[Handle, Runtime, Synced]
 
 
-def two_boxes(loop: asyncio.AbstractEventLoop) -> tuple[Server, list[Box]]:
-    """Hold CNF and Reset fault: two Synced boxes of one server (one page's one sender)."""
+def two_boxes(loop: asyncio.AbstractEventLoop, n: int = 2) -> tuple[Server, list[Box]]:
+    """Hold CNF and Reset fault (and ``n`` - 2 more): Synced boxes of one server (one page's
+    one sender)."""
     server = Server(loop)
     boxes = []
-    for _ in range(2):
+    for _ in range(n):
         handle = Handle(loop, False)
         runtime = Runtime(False)
         synced = Synced(server, handle, runtime, runtime.command)  # type: ignore[arg-type]
@@ -221,12 +236,12 @@ def all_frames(loop: asyncio.AbstractEventLoop, boxes: list[Box], n: int = FRESH
             handle.window()
 
 
-def test_a_click_the_page_never_sent_goes_back_at_its_next_message(loop) -> None:
+def test_a_click_the_page_never_sent_goes_back_at_its_next_message(loop, to_page) -> None:
     """viser's page sends every change through one sender throttled to 50 ms, the latest of
     ANY widget (docs/dashboard.md "Fast clicks"): Hold CNF clicked, then Reset fault within
     the window, and the server never hears of the Hold CNF click while the page shows the box
     checked (a CI run of tests/browser/test_ui_abuse.py: the box checked, CNF released). The
-    page's next message is the sign: the Hold CNF box sends the model's value to every page."""
+    page's next message is the sign: the Hold CNF box sends the model's value to that page."""
     server, boxes = two_boxes(loop)
     (hold, hold_model, _), (reset, reset_model, _) = boxes
     # page A: Hold CNF checked (dropped by the page's sender), Reset fault checked (sent)
@@ -236,10 +251,38 @@ def test_a_click_the_page_never_sent_goes_back_at_its_next_message(loop) -> None
     turn(loop)
     all_frames(loop, boxes)
     assert hold_model.value is False and hold_model.commands == []
-    assert hold.sent == [False]  # page A's box back to the model
+    assert to_page == [("page A", widgets.widget_uuid(hold), False)]  # back to the model
     assert reset.sent[-1] is True and reset_model.value is True
     all_frames(loop, boxes, n=3)
-    assert hold.sent == [False]  # once: nothing more while no page sends anything
+    assert len(to_page) == 1  # once: nothing more while no page sends anything
+
+
+def test_a_click_sends_the_watching_pages_only_the_clicked_boxs_value(loop, to_page) -> None:
+    """Benchmark 3's clicking case (docs/performance.md): page A clicks Reset fault five
+    times among five boxes. Only page A's sender can have dropped a click of page A, so the
+    other boxes' values go to page A, once per click each, and to no other page: page B gets
+    the clicked box's value after each click (it settled), nothing from the four others."""
+    server, boxes = two_boxes(loop, n=5)
+    reset, reset_model, _ = boxes[1]
+    for value in (True, False, True, False, True):
+        reset.user("page A", value)
+        page_message(server, "page A", value)
+        reset_model.drain()
+        turn(loop)
+        all_frames(loop, boxes)
+    others = [handle for k, (handle, _m, _s) in enumerate(boxes) if k != 1]
+    assert [h.sent for h in others] == [[], [], [], []]  # nothing to every page
+    assert reset.sent == [True, False, True, False, True]  # the clicked box, settled
+    assert {page for page, _uuid, _value in to_page} == {"page A"}
+    assert len(to_page) == 4 * 5 and {v for _p, _u, v in to_page} == {False}
+
+
+def test_a_page_that_left_is_sent_nothing(loop, to_page) -> None:
+    server, boxes = two_boxes(loop)
+    page_message(server, "page A", True)
+    del server.clients["page A"]  # gone before the next frame
+    all_frames(loop, boxes)
+    assert to_page == [] and [h.sent for h, _m, _s in boxes] == [[], []]
 
 
 def test_a_pages_message_does_not_undo_a_change_on_its_way(loop) -> None:

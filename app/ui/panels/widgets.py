@@ -15,7 +15,8 @@ of input widget show device state:
   50 ms that keeps the latest message of *any* widget (viser 1.1.1
   client/src/WebsocketUtils.ts), so a click followed within the window by a click elsewhere
   is dropped while its box stays clicked. The message that replaced it does arrive: on every
-  GUI message of a page, each Synced widget sends the model's value again at the next frame.
+  GUI message of a page, each Synced widget sends the model's value again at the next frame,
+  to that page only (no other page's sender can have dropped that page's click).
   Whatever the clicks, every page ends up showing the model.
 - :class:`Mirror`, a form field pre-filled from the device and applied by a separate button
   (the drive's c7): it follows the device only when the device's value changes, so what a
@@ -42,6 +43,7 @@ from viser._messages import (
 )
 
 from app.ui.commands import CommandSender
+from app.ui.panels.client_pick import send_to
 
 logger = logging.getLogger(__name__)
 
@@ -157,6 +159,8 @@ class Synced:
         # Written on the event loop, read by follow(): a change or a re-send is under way.
         self._busy = False
         self._followed: Any = _NOTHING  # follow()'s thread only
+        self._server = server
+        self._lost: set[int] = set()  # pages that may show a change they never sent: loop only
         on_user_change(handle, self._changed)
         _PageMessages.of(server).add(self)
 
@@ -179,12 +183,13 @@ class Synced:
             self._sender.submit(None, "dashboard view", _nothing,
                                 done=lambda _result: self._call(self._settled))
 
-    def _recheck(self) -> None:
-        """A page sent a GUI message: a change of this widget it made just before may have
-        been dropped by its sender. Send the model's value at the next frame, unless a change
-        of this widget is on its way or settling (that ends with the same re-send)."""
+    def _recheck(self, client_id: int) -> None:
+        """``client_id``'s page sent a GUI message: a change of this widget it made just
+        before may have been dropped by its sender. Send that page the model's value at the
+        next frame (the dropped change never reached the model: any frame will do), unless a
+        change of this widget is on its way or settling (that ends with a re-send to all)."""
         if self._pending == 0 and self._fresh_wait == 0:
-            self._fresh_wait = 1  # the dropped change never reached the model: any frame
+            self._lost.add(client_id)
             self._busy = True
 
     def _settled(self) -> None:
@@ -199,8 +204,13 @@ class Synced:
             self._fresh_wait -= 1
             if self._fresh_wait == 0:
                 self._resend(value)
+                self._lost.clear()  # every page had it
         elif self.handle.value != value:
             self.handle.value = value
+            self._lost.clear()
+        elif self._lost:
+            self._resend_to(self._lost, value)
+            self._lost.clear()
         self._busy = self._pending > 0 or self._fresh_wait > 0
 
     def _resend(self, value: Any) -> None:
@@ -212,6 +222,14 @@ class Synced:
         if self.handle.value == value:
             self.handle.value = _aside(value)
         self.handle.value = value
+
+    def _resend_to(self, client_ids: set[int], value: Any) -> None:
+        """Send ``value`` to these pages only; the server's copy already holds it."""
+        clients = self._server.get_clients()
+        for client_id in client_ids:
+            client = clients.get(client_id)
+            if client is not None:  # a page that left is sent nothing
+                send_to(client, widget_uuid(self.handle), "value", value)
 
     def _call(self, fn: Callable[..., None], *args: Any) -> None:
         try:
@@ -253,11 +271,11 @@ class _PageMessages:
         with self._lock:
             self._synced.add(synced)
 
-    async def _heard(self, _client_id: int, _message: Any) -> None:
+    async def _heard(self, client_id: int, _message: Any) -> None:
         with self._lock:
             widgets = list(self._synced)
         for synced in widgets:
-            synced._recheck()
+            synced._recheck(client_id)
 
 
 class Mirror:
