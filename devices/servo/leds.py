@@ -8,6 +8,11 @@ the TRS-CAT's "LINK-ACT IN" / "LINK-ACT OUT"). They are on the drive's front, so
 owns them and shows them in its snapshot (``leds``, in the front's order) whatever its
 fieldbus; only its EtherCAT slave (devices/coe/drive_slave.py) drives them: on Modbus or
 CANopen they stay dark.
+
+Which of them a drive has on each fieldbus (:data:`BUS_LEDS`): the seed prints them only in
+ch. 5, by the EtherCAT drive's two RJ45; ch. 2 (Modbus RTU), ch. 4 (CANopen) and ch. 6
+(Profinet) print no network LED. So the views draw them on a drive whose c9 selected EtherCAT
+at power-up and none otherwise (docs/dashboard.md "The 3D axis").
 """
 
 from __future__ import annotations
@@ -19,6 +24,9 @@ STATUS = "Status"
 LINK_OUT = "L/A OUT"
 ERROR = "Error"
 NETWORK_LEDS = (LINK_IN, STATUS, LINK_OUT, ERROR)
+# The network LEDs a drive has on each fieldbus (its snapshot's ``fieldbus``); a fieldbus not
+# listed has none.
+BUS_LEDS: dict[str, tuple[str, ...]] = {"ethercat": NETWORK_LEDS}
 
 
 def network_leds(device_id: str) -> LedBank:

@@ -113,7 +113,10 @@ def states(axis: Mapping[str, float]) -> Iterator[dict[str, Any]]:
                      limits={"neg": True, "home": True, "pos": True})
 
 
-NETWORK = {"leds": {"L/A IN": "flickering", "Status": "single_flash", "L/A OUT": "flickering",
+# The LEDs at their longest words, on an EtherCAT drive: the only one that draws them
+# (tests/app/test_axis_bus_leds.py).
+NETWORK = {"fieldbus": "ethercat",
+           "leds": {"L/A IN": "flickering", "Status": "single_flash", "L/A OUT": "flickering",
                     "Error": "double_flash"}}
 
 
@@ -153,8 +156,8 @@ def test_the_drive_shows_an_l_a_led_per_port(axes: Axes) -> None:
     The drive drew one L/A: the OUT port's link (a next slave cabled) was not shown."""
     scene = next(iter(axes.scenes.values()))
     fresh = AxisScene(axes.server, "probe_ports", scene.z, scene.length)
-    snap = {**drive_snap(AXES[0], 0.0), "leds": {"L/A IN": "flickering", "Status": "on",
-                                                  "L/A OUT": "off", "Error": "off"}}
+    snap = {**drive_snap(AXES[0], 0.0), "fieldbus": "ethercat",
+            "leds": {"L/A IN": "flickering", "Status": "on", "L/A OUT": "off", "Error": "off"}}
     fresh.update("drive_ec", snap, 0)
     texts = [str(label.text) for label in fresh.labels()]
     assert [t for t in texts if t.startswith(("L/A", "Status", "Error"))] == [

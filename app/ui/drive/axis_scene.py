@@ -3,11 +3,11 @@
 Same conventions as the rail (``app.ui.rail_scene``): z up, the front faces -y, the camera on
 -y. Left to right: the drive with its 7-segment display (seed 004: "Fr" when disabled, dashes
 while saving, the alarm code in alarm) and its network LEDs (ch. 5: L/A IN, Status, L/A OUT,
-Error; lit only on EtherCAT), the motor with a nib on its coupling that turns with the
-shaft, the screw, and the carriage at ``axis.carriage`` between the negative limit switch,
-the home switch and the positive limit switch at the positions the rig file sets. A switch
-lights while the carriage (or a forced input) actuates it. Nodes are built once; per frame
-only positions, colours and texts that changed are sent.
+Error; drawn only on EtherCAT: ``BUS_LEDS``), the motor with a nib on its coupling that
+turns with the shaft, the screw, and the carriage at ``axis.carriage`` between the negative
+limit switch, the home switch and the positive limit switch at the positions the rig file
+sets. A switch lights while the carriage (or a forced input) actuates it. Nodes are built
+once; per frame only positions, colours, texts and visibilities that changed are sent.
 
 Labels keep one size on screen whatever the zoom (viser "screen" labels), so the layout keeps
 them apart by placing, not by measuring: the caption (position, velocity, actuated switches)
@@ -27,7 +27,7 @@ from typing import Any
 import viser
 
 from app.ui.rail_scene import LED_OFF, LED_SIZE, PATTERN_WORDS, led_color
-from devices.servo.leds import ERROR, LINK_IN, LINK_OUT, STATUS
+from devices.servo.leds import BUS_LEDS, ERROR, LINK_IN, LINK_OUT, STATUS
 
 RGB = tuple[int, int, int]
 
@@ -284,11 +284,22 @@ class AxisScene:
                 colour = SEGMENT_ON if seg in lit[digit] else SEGMENT_OFF
                 self._send(f"seg{digit}{seg}", box, "color", colour)
         leds = snap.get("leds") or {}
+        # Only the LEDs the drive's fieldbus has (seed 004 prints them for EtherCAT alone):
+        # four dark LEDs on a Modbus drive read as a dead network.
+        has = BUS_LEDS.get(str(snap.get("fieldbus", "")), ())
         for name, (box, label, colour) in self._leds.items():
+            self._send(f"led_{name}_visible", box, "visible", name in has)
+            self._send(f"led_{name}_label_visible", label, "visible", name in has)
+            if name not in has:
+                continue
             pattern = str(leds.get(name, "off"))
             self._send(f"led_{name}", box, "color", led_color(colour, pattern, t_us))
             self._send(f"led_{name}_text", label, "text",
                        f"{name} {PATTERN_WORDS.get(pattern, pattern)}")
+
+    def network_leds_shown(self) -> list[str]:
+        """The network LEDs drawn now, top down (tests)."""
+        return [name for name in self._leds if self._sent.get(f"led_{name}_visible")]
 
     def segment_colors(self) -> list[dict[str, RGB]]:
         """The colour each display segment shows now (tests)."""
