@@ -39,6 +39,11 @@ BODY: RGB = (228, 230, 234)
 BODY_UNPOWERED: RGB = (150, 152, 158)
 COUPLER_BODY: RGB = (206, 214, 226)
 RAIL: RGB = (168, 170, 176)
+# The back plate behind each housing: the shade a housing's side face takes under the scene's
+# light (BODY at ~0.79, a front face at ~0.93), so a seam looked at straight on reads as one
+# looked at from the side.
+SEAM: RGB = (192, 194, 198)
+BACK_D = 0.1  # the plate's depth, flush with the housings' back
 CNF_IDLE: RGB = (40, 70, 140)
 CNF_PRESSED: RGB = (80, 160, 255)
 SWITCH: RGB = (40, 40, 44)
@@ -167,6 +172,7 @@ class RailScene:
         front = FRONT_Y - 0.06
         scene.add_box(f"{root}/body", color=COUPLER_BODY,
                       dimensions=(COUPLER_W * 0.96, BODY_D, BODY_H), position=at(cx, 0.0, 0.0))
+        self._add_back(f"{root}/back", cx, COUPLER_W)
         scene.add_label(f"{root}/name", "FastCAT", position=at(cx, front, 1.7),
                         anchor="center-center", font_screen_scale=1.15)
         for name, colour, z in COUPLER_LEDS:
@@ -224,6 +230,8 @@ class RailScene:
         plugged = bool(entry.get("plugged", True))
         pulled = 0.0 if plugged else -0.6  # an unplugged module hangs in front of its slot
         view.nodes.append(self.add_body(scene, entry))
+        if plugged:  # a pulled module's slot stays see-through, as an empty one
+            view.nodes.append(self._add_back(f"{base}/back", x, MODULE_W))
         label("type", str(module_type), 1.2, 0.75)
         for name, colour, z in MODULE_LEDS:
             key = f"{slot}.{name}"
@@ -236,6 +244,15 @@ class RailScene:
         if note:
             view.nodes.append(self.add_note(scene, slot, note))
         return view
+
+    def _add_back(self, name: str, x: float, width: float) -> viser.BoxHandle:
+        """A plate the full width of a slot behind its housing: the housings are narrower
+        than their slots, and where the camera looked straight along a seam (the middle of a
+        long rail) it showed the background over and under the DIN rail, a broken line
+        unlike the other seams (tests/app/test_rail_seams.py)."""
+        return self._server.scene.add_box(
+            name, color=SEAM, dimensions=(width, BACK_D, BODY_H),
+            position=self._at(x, BODY_D / 2 - BACK_D / 2, 0.0))
 
     def add_body(self, scene: Any, entry: Mapping[str, Any]) -> viser.BoxHandle:
         """A module's body in ``scene`` (the server's, or an instructor connection's under the
