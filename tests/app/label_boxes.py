@@ -52,9 +52,18 @@ class Box:
                 and min(self.z1, other.z1) - max(self.z0, other.z0) > tol)
 
 
+def em_px(label: viser.LabelHandle, px_per_unit: float) -> float:
+    """A label's em in screen pixels: fixed for a "screen" label, its scene height times the
+    zoom for a "scene" label (font_scene_height is its em in scene units: viser's
+    label/LabelRenderer.tsx baseFontSize)."""
+    if label.font_size_mode == "scene":
+        return float(label.font_scene_height) * px_per_unit
+    return EM_PX * float(label.font_screen_scale)
+
+
 def label_box(label: viser.LabelHandle, px_per_unit: float) -> Box:
     """viser's layoutLabel, from the label's text, anchor and scale."""
-    em = EM_PX * float(label.font_screen_scale) / px_per_unit
+    em = em_px(label, px_per_unit) / px_per_unit
     lines = str(label.text).split("\n")
     line_h = LINE_EM * em
     pad = PADDING * line_h

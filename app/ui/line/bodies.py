@@ -33,8 +33,13 @@ STATE_BAR: dict[str, RGB] = {"ok": (20, 170, 60), "busy": (230, 160, 0),
                              "bad": (220, 30, 30), "gone": (130, 130, 136)}
 STILL_PATTERNS = ("off", "on")
 MASTER_W = 2.6  # as wide as the FastCAT coupler: the longest DC state fits its screen
-SCREEN_SHARE = 0.88  # of the master's width
+SCREEN_SHARE = 0.92  # of the master's width
 DC_LINE = 13  # characters per line of the DC state ("SYNCHRONIZING")
+# The screen's texts are printed on it (scene labels): the widest line, "SYNCHRONIZING" (about
+# 9.3 em), fills the screen, and a focus on the master (~57 px a unit at 1280 x 720) shows
+# them at ~14 px an em. Screen labels had to fit the screen at the whole line's camera, the
+# widest view: ~7 px an em in dc_sync_lost's focused pictures, too small to read.
+SCREEN_EM = 0.24
 ESM_Z = -0.9  # the drive's ESM state: under its LEDs, above the cable coming in
 # A slave's LED rows from the top down: the drive's four (seed 004 ch. 5: an L/A per port,
 # Status, Error) between the "EtherCAT" label and the ESM state.
@@ -215,10 +220,10 @@ class MasterBody(Body):
                                 (self.cx, FRONT_Y + 0.02, self.z0 + 0.45), SCREEN)
         self.clickables.append(screen)
         self.paint.label("phase", "", self.at(self.width / 2, 0.8), anchor="center-center",
-                         scale=0.62)
+                         scene_height=SCREEN_EM)
         # One or two lines from the top down ("DC NOT_" / "SYNCHRONIZED"), inside the screen.
         self.paint.label("dc", "", self.at(self.width / 2, 0.5), anchor="top-center",
-                         scale=0.62)
+                         scene_height=SCREEN_EM)
         self.paint.led("link", self.at(0.3, -0.9))
         self.paint.label("link_name", "link", self.at(0.52, -0.9), scale=0.65)
 
