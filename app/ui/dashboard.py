@@ -55,7 +55,8 @@ RIGHT_WIDTH = 320  # viser's control_width="medium"
 LEFT_WIDTH = 400
 MIN_FRAMED_SLOTS = 8  # the camera frames at least this many slots: a short rail stays put
 # The 3D view between the docked panels of a 1280x720 window is about 580 x 670 px.
-VIEW_ASPECT = (1280 - LEFT_WIDTH - RIGHT_WIDTH) / 670
+VIEW_HEIGHT_PX = 670
+VIEW_ASPECT = (1280 - LEFT_WIDTH - RIGHT_WIDTH) / VIEW_HEIGHT_PX
 CAMERA_MARGIN = 0.4
 CAMERA_RISE = 0.12  # camera height over the rail centre, per unit of distance
 RAIL_SPACING = BODY_H + 2.0  # vertical distance between the rails of several couplers
@@ -328,7 +329,7 @@ class Dashboard:
                         {d: rail_length(n) for d, n in slots.items()}, actions, side,
                         self._control_tab, VIEW_ASPECT,
                         {d: str(info.get("kind", "")) for d, info in described.items()},
-                        runtime=self.runtime)
+                        runtime=self.runtime, view_height_px=VIEW_HEIGHT_PX)
         if self._panels is not None:
             line.on_select = self._panels.objects.select
         return line

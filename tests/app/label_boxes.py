@@ -19,22 +19,14 @@ from typing import Any
 import numpy as np
 import viser
 
+from app.ui.label_fit import EM_PX, LINE_EM, PADDING, char_em
+
 VIEW_HEIGHT_PX = 670  # the 3D view between the docked panels of 1280 x 720 (app/ui/dashboard.py)
-EM_PX = 12.0  # viser: a screen label's em at font_screen_scale 1
-LINE_EM = 1.117  # Arial / Liberation Sans ascent + descent (0.905 + 0.212 em)
-PADDING = 0.2  # viser: background padding, a share of the line height
 TOUCH_PX = 1.0  # backgrounds may touch; more than this is an overlap
-# Advance widths in em, rounded up from Arial's: narrow glyphs, wide ones, capitals, the rest.
-NARROW = " .,:;·|'!ijlftrI/-()[]"
-WIDE = "mwMW@%"
-
-
-def char_em(ch: str) -> float:
-    if ch in NARROW:
-        return 0.34
-    if ch in WIDE:
-        return 0.95
-    return 0.78 if ch.isupper() else 0.56
+# The metrics (EM_PX, LINE_EM, PADDING, char_em) are app/ui/label_fit.py's, which a focused
+# view uses to hide the labels its border would cut: one estimate for both.
+__all__ = ["EM_PX", "LINE_EM", "PADDING", "TOUCH_PX", "VIEW_HEIGHT_PX", "Box", "char_em",
+           "em_px", "label_box", "overlaps", "px_per_unit"]
 
 
 @dataclass(frozen=True)

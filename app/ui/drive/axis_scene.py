@@ -156,6 +156,7 @@ class AxisScene:
         self._sent: dict[str, Any] = {}  # last value sent per node property
         self._segments: list[dict[str, viser.BoxHandle]] = []
         self._leds: dict[str, tuple[viser.BoxHandle, viser.LabelHandle, str]] = {}
+        self._leds_for: tuple[str, ...] | None = None  # the LEDs built, by fieldbus
         self._switches: dict[str, tuple[viser.BoxHandle, viser.LabelHandle]] = {}
         self._labels: list[viser.LabelHandle] = []
         self._build_static()
@@ -190,13 +191,6 @@ class AxisScene:
                                            dimensions=dims, position=at(cx + dx, front - 0.03,
                                                                         DISPLAY_Z + dz))
             self._segments.append(boxes)
-        for name, colour, z in NETWORK_LEDS:
-            key = name.replace("/", "").replace(" ", "_")
-            box = scene.add_box(f"{root}/led_{key}", color=LED_OFF, dimensions=LED_SIZE,
-                                position=at(0.4, front, z))
-            label = self._label(f"led_{key}_label", f"{name} off", 0.7, front, z,
-                                "center-left", LED_LABEL_SCALE)
-            self._leds[name] = (box, label, colour)
         # Motor, coupling, screw and bed.
         mz = 0.0
         scene.add_box(f"{root}/motor", color=MOTOR, dimensions=(MOTOR_W, 1.0, 1.0),
@@ -222,6 +216,29 @@ class AxisScene:
                                            mz + CARRIAGE_LABEL_Z, "bottom-center", 0.8)
         self._legend = self._label("legend", "", TRAVEL_X0, FRONT, LEGEND_Z, LEGEND_ANCHOR,
                                    LEGEND_SCALE)
+
+    def _build_leds(self, names: tuple[str, ...]) -> None:
+        """The network LEDs ``names`` (those of the drive's fieldbus), the others removed:
+        built anew when the fieldbus changes, rather than hidden, so that nothing else that
+        shows or hides labels (a focused view, app/ui/line/focus_labels.py) brings them back."""
+        for box, label, _colour in self._leds.values():
+            box.remove()
+            label.remove()
+        self._leds = {}
+        self._sent = {k: v for k, v in self._sent.items() if not k.startswith("led_")}
+        front = -DRIVE_D / 2 - 0.04
+        for name, colour, z in NETWORK_LEDS:
+            if name not in names:
+                continue
+            key = name.replace("/", "").replace(" ", "_")
+            box = self._server.scene.add_box(f"{self._root}/led_{key}", color=LED_OFF,
+                                             dimensions=LED_SIZE,
+                                             position=self._at(0.4, front, z))
+            label = self._server.scene.add_label(
+                f"{self._root}/led_{key}_label", f"{name} off",
+                position=self._at(0.7, front, z), anchor="center-left",
+                font_screen_scale=LED_LABEL_SCALE)
+            self._leds[name] = (box, label, colour)
 
     def _build_switches(self, travel: Travel, axis: Mapping[str, Any]) -> None:
         scene, at = self._server.scene, self._at
@@ -287,11 +304,10 @@ class AxisScene:
         # Only the LEDs the drive's fieldbus has (seed 004 prints them for EtherCAT alone):
         # four dark LEDs on a Modbus drive read as a dead network.
         has = BUS_LEDS.get(str(snap.get("fieldbus", "")), ())
+        if self._leds_for != has:
+            self._build_leds(has)
+            self._leds_for = has
         for name, (box, label, colour) in self._leds.items():
-            self._send(f"led_{name}_visible", box, "visible", name in has)
-            self._send(f"led_{name}_label_visible", label, "visible", name in has)
-            if name not in has:
-                continue
             pattern = str(leds.get(name, "off"))
             self._send(f"led_{name}", box, "color", led_color(colour, pattern, t_us))
             self._send(f"led_{name}_text", label, "text",
@@ -299,7 +315,7 @@ class AxisScene:
 
     def network_leds_shown(self) -> list[str]:
         """The network LEDs drawn now, top down (tests)."""
-        return [name for name in self._leds if self._sent.get(f"led_{name}_visible")]
+        return list(self._leds)
 
     def segment_colors(self) -> list[dict[str, RGB]]:
         """The colour each display segment shows now (tests)."""
@@ -308,7 +324,7 @@ class AxisScene:
 
     def labels(self) -> list[viser.LabelHandle]:
         """Every label of the axis (tests: that none covers another)."""
-        return list(self._labels)
+        return [*self._labels, *(label for _box, label, _c in self._leds.values())]
 
     @property
     def root(self) -> str:

@@ -25,6 +25,7 @@ from app.runtime import Frame, Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.line.camera import send_pose
 from app.ui.line.controls import LineControls
+from app.ui.line.focus_labels import FocusLabels
 from app.ui.line.master_panel import MasterPanel
 from app.ui.line.scene import Box, LineScene
 from app.ui.line.slave_panel import SlavePanel
@@ -89,9 +90,11 @@ class LineView:
                  actions: Mapping[str, Mapping[str, Any]], side: Any,
                  control_tab: Callable[[str, Any], Any], aspect: float,
                  kinds: Mapping[str, str] | None = None, *,
-                 runtime: Runtime) -> None:
+                 runtime: Runtime, view_height_px: float = 670.0) -> None:
         """``kinds``: each device's kind, which sorts its actions into operation and faults
-        (app.classroom.roles); ``runtime``: the models asked which actions a target takes."""
+        (app.classroom.roles); ``runtime``: the models asked which actions a target takes;
+        ``aspect`` and ``view_height_px``: the 3D view of the layout screenshots are taken
+        at, which a scenario's focus fits the labels to (app/ui/line/focus_labels.py)."""
         self._server = server
         self._sender = sender
         self.master_id = master_id
@@ -102,6 +105,8 @@ class LineView:
         self.on_caption_moved: Callable[[tuple[float, float]], None] | None = None
         self.scene = LineScene(server, frame.snapshot, master_id, rail_lengths, self.focus,
                                self._cable_clicked)
+        self.labels = FocusLabels(server, aspect * view_height_px, view_height_px,
+                                  math.radians(CAMERA_FOV_DEG))
         order = self.scene.order
         gui = server.gui
         with side.add_tab("Line", viser.Icon.TOPOLOGY_STAR_3):
@@ -174,7 +179,10 @@ class LineView:
             target, caption = self.focus_view(box)
             if client is None:
                 self.move_camera(target, caption=caption)
+                # Every browser shares this view: the labels its edges would cut go.
+                self.labels.focus(*camera_for(target, self._aspect))
             else:
+                self.labels.release()  # this page leaves the view the others share
                 # The caption stays where the scenario put it: it is every page's.
                 timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target, 0.0, None),
                                         {"client": client})
@@ -203,6 +211,7 @@ class LineView:
 
     def show_all(self, client: viser.ClientHandle | None = None) -> None:
         """The whole line in ``client``'s view (its button), every browser's when None."""
+        self.labels.release()
         if client is not None:
             self.move_camera(self.home, CAPTION_LIFT, client=client)
         else:
@@ -254,3 +263,4 @@ class LineView:
         self.master.update(master, frame.t_us)
         self.slave.update(devices)
         self.controls.update(master, devices)
+        self.labels.refresh()  # after the rails and axes too: the dashboard updates them first
