@@ -11,9 +11,8 @@ different PNG bytes (0 to 20 such pixels a picture, always on label text).
 
 The fix: the first labels of the scene (invisible: viser registers a label's text whatever
 its visibility) hold every glyph the dashboard's labels use, in a fixed order, one per bucket
-the dashboard's label sizes fall in, and one for the bucket of every "scene" label. Every
-later glyph is then found in the atlas, never packed after it, whatever the page drew
-meanwhile (docs/scenarios.md "Screenshots for CI").
+the dashboard's label sizes fall in. Every later glyph is then found in the atlas, never
+packed after it, whatever the page drew meanwhile (docs/scenarios.md "Screenshots for CI").
 """
 
 from __future__ import annotations
@@ -30,10 +29,6 @@ MIN_BUCKET_PX, MAX_BUCKET_PX = 8, 256
 # One warm label per bucket the dashboard's label scales (0.58 .. 1.15) take at the 1.0
 # device pixel ratio of the screenshots (tests/app/test_label_glyphs.py checks the scales).
 WARM_SCALES = (0.5, 1.0)  # buckets 8 and 16
-# A "scene" label (its size in scene units: the master's screen) has no pixel size; viser
-# draws every one from this bucket, warmed by one more label.
-SCENE_BUCKET_PX = 64
-WARM_COUNT = len(WARM_SCALES) + 1
 
 # What labels show: ASCII, Latin-1 (Italian captions, ° µ · « »), and the typography the
 # dashboard's texts use. A glyph outside is packed after these, as before.
@@ -59,8 +54,6 @@ def glyph_order(extra: Iterable[str] = ()) -> str:
 
 def warm_glyphs(scene: viser.SceneApi, glyphs: str) -> list[viser.LabelHandle]:
     """The invisible labels holding ``glyphs``; they must be the scene's first labels."""
-    return [*(scene.add_label(f"/glyphs/bucket{bucket_px(scale)}", glyphs, visible=False,
-                              font_screen_scale=scale)
-              for scale in WARM_SCALES),
-            scene.add_label(f"/glyphs/bucket{SCENE_BUCKET_PX}", glyphs, visible=False,
-                            font_size_mode="scene")]
+    return [scene.add_label(f"/glyphs/bucket{bucket_px(scale)}", glyphs, visible=False,
+                            font_screen_scale=scale)
+            for scale in WARM_SCALES]

@@ -17,30 +17,27 @@ import viser
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.screenshots import ServedRig
-from app.ui.glyphs import BASE_GLYPHS, SCENE_BUCKET_PX, WARM_COUNT, bucket_px, glyph_order
+from app.ui.glyphs import BASE_GLYPHS, WARM_SCALES, bucket_px, glyph_order
 
 RIGS = sorted(DEFAULT_RIG.parent.glob("*.toml"))
 
 
 @pytest.fixture
-def labels(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[tuple[str, str, int]]]:
-    """(name, text, the atlas bucket it is drawn from) of every label added, in order."""
-    added: list[tuple[str, str, int]] = []
+def labels(monkeypatch: pytest.MonkeyPatch) -> Iterator[list[tuple[str, str, float]]]:
+    """(name, text, font_screen_scale) of every label added, in order."""
+    added: list[tuple[str, str, float]] = []
     real = viser.SceneApi.add_label
 
     def add_label(self: viser.SceneApi, name: str, text: str, **kwargs: Any) -> Any:
-        # viser's fontPxBucket: a scene label has no pixel size, one bucket for all
-        scene = kwargs.get("font_size_mode", "screen") == "scene"
-        bucket = SCENE_BUCKET_PX if scene else bucket_px(kwargs.get("font_screen_scale", 1.0))
-        added.append((name, text, bucket))
+        added.append((name, text, kwargs.get("font_screen_scale", 1.0)))
         return real(self, name, text, **kwargs)
 
     monkeypatch.setattr(viser.SceneApi, "add_label", add_label)
     yield added
 
 
-def dashboard_labels(rig_file: Path, added: list[tuple[str, str, int]],
-                     texts: tuple[str, ...] = ()) -> list[tuple[str, str, int]]:
+def dashboard_labels(rig_file: Path, added: list[tuple[str, str, float]],
+                     texts: tuple[str, ...] = ()) -> list[tuple[str, str, float]]:
     served = ServedRig.start(build_rig(load_rig_spec(rig_file)), quiet=True, texts=texts)
     try:
         served.advance(0.5)  # the first frame's texts too
@@ -51,19 +48,17 @@ def dashboard_labels(rig_file: Path, added: list[tuple[str, str, int]],
 
 @pytest.mark.parametrize("rig_file", RIGS, ids=[p.stem for p in RIGS])
 def test_warm_labels_come_first_and_cover_every_label(
-        rig_file: Path, labels: list[tuple[str, str, int]]) -> None:
-    """Every atlas a label is drawn from, the screen labels' and the scene labels' (the
-    master's screen, app/ui/line/bodies.py), is warmed first, each by one label."""
+        rig_file: Path, labels: list[tuple[str, str, float]]) -> None:
     added = dashboard_labels(rig_file, labels)
-    warm = added[:WARM_COUNT]
-    assert [name.startswith("/glyphs/") for name, _t, _b in warm] == [True] * WARM_COUNT
-    assert {text for _n, text, _b in warm} == {BASE_GLYPHS}
-    warm_buckets = {bucket for _n, _t, bucket in warm}
-    assert len(warm_buckets) == WARM_COUNT  # one label per atlas, none twice
-    rest = added[WARM_COUNT:]
+    warm = added[:len(WARM_SCALES)]
+    assert [name.startswith("/glyphs/") for name, _t, _s in warm] == [True] * len(WARM_SCALES)
+    assert {text for _n, text, _s in warm} == {BASE_GLYPHS}
+    warm_buckets = {bucket_px(scale) for scale in WARM_SCALES}
+    assert len(warm_buckets) == len(WARM_SCALES)  # one label per atlas, none twice
+    rest = added[len(WARM_SCALES):]
     assert rest, "the dashboard made no label"
-    for name, text, bucket in rest:
-        assert bucket in warm_buckets, f"{name} (bucket {bucket} px): a bucket not warmed"
+    for name, text, scale in rest:
+        assert bucket_px(scale) in warm_buckets, f"{name} (scale {scale}): a bucket not warmed"
         outside = sorted({c for c in text if not c.isspace()} - set(BASE_GLYPHS))
         assert not outside, f"{name} {text!r}: characters not warmed: {outside}"
 

@@ -2,8 +2,10 @@
 
 dc_sync_lost.toml's three pictures focus the master, whose screen carries its start-up phase
 and the DC state (seed 003: COMPENSATING, NOT_SYNCHRONIZED ...), the story of the scenario.
-The texts were screen labels sized to fit the screen at the whole line's camera (the widest
-view): about 7 px an em in the focused picture, under the 12 px of the caption above it.
+The texts are screen labels (one size on screen) sized to fit the screen at the whole line's
+camera, the widest view: about 7 px an em in the focused picture, under the 12 px of the
+caption above it. A scenario's focus, which every browser shares, now sizes them for its
+zoom (app/ui/line/bodies.py MasterBody.zoom).
 """
 
 from __future__ import annotations
@@ -13,13 +15,15 @@ from types import SimpleNamespace
 
 import pytest
 import viser
-from label_boxes import EM_PX, VIEW_HEIGHT_PX, em_px, label_box, px_per_unit
+from label_boxes import EM_PX, VIEW_HEIGHT_PX, Box, em_px, label_box, px_per_unit
 from test_caption import VIEW_WIDTH_PX, project
 
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.runtime import Runtime
 from app.screenshots import free_port
 from app.ui.dashboard import CAPTION_SCALE, Dashboard
+from app.ui.glyphs import WARM_SCALES, bucket_px
+from app.ui.line.bodies import SCREEN_SCALE
 from app.ui.line.view import LineView
 
 BOOT_STEPS = 5000  # the master in COMPENSATING (dc_sync_lost's first picture, at 4 s)
@@ -39,31 +43,64 @@ def board() -> Iterator[Dashboard]:
         server.stop()
 
 
-def focused_camera(line: LineView, fov: float) -> SimpleNamespace:
-    position, look_at = line.focus_camera("master", VIEW_WIDTH_PX / VIEW_HEIGHT_PX)
-    return SimpleNamespace(position=position, look_at=look_at, up=(0.0, 0.0, 1.0), fov=fov)
+def focused(board: Dashboard, device: str = "master") -> tuple[LineView, SimpleNamespace]:
+    """A scenario's focus on ``device`` and the camera it gives the layout's 3D view."""
+    line = board.line
+    assert line is not None
+    line.focus(None, device)
+    board.tick()
+    position, look_at = line.focus_camera(device, VIEW_WIDTH_PX / VIEW_HEIGHT_PX)
+    fov = board.server.initial_camera.fov
+    return line, SimpleNamespace(position=position, look_at=look_at, up=(0.0, 0.0, 1.0),
+                                 fov=fov)
+
+
+def screen_labels(line: LineView) -> dict[str, viser.LabelHandle]:
+    labels = line.scene.bodies["master"].paint.labels
+    return {key: labels[key] for key in ("phase", "dc")}
 
 
 @pytest.mark.parametrize("key", ["phase", "dc"])
 def test_screen_text_is_caption_size_in_a_focus_on_the_master(board: Dashboard,
                                                               key: str) -> None:
-    line = board.line
-    assert line is not None
-    label = line.scene.bodies["master"].paint.labels[key]
+    line, camera = focused(board)
+    label = screen_labels(line)[key]
     assert str(label.text)  # "running", "DC COMPENSATING"
-    camera = focused_camera(line, board.server.initial_camera.fov)
     px = px_per_unit(camera, label.position)
     assert em_px(label, px) >= EM_PX * CAPTION_SCALE, (key, em_px(label, px))
 
 
-def test_screen_text_stays_in_the_focused_view(board: Dashboard) -> None:
-    line = board.line
-    assert line is not None
-    camera = focused_camera(line, board.server.initial_camera.fov)
-    for label in line.scene.bodies["master"].paint.labels.values():
+@pytest.mark.parametrize("device", ["master", "fastcat", "trscat", "cpx"])
+def test_screen_text_stays_on_the_screen_in_a_focus(board: Dashboard, device: str) -> None:
+    """Grown for the zoom, "DC" / "COMPENSATING" and the phase still fit the screen, in a
+    focus on the master and in the less zoomed ones that show it too."""
+    line, camera = focused(board, device)
+    handle = board.server.scene._handle_from_node_name["/line/master/screen"]
+    (x, _, z), (w, _, h) = handle.position, handle.dimensions
+    screen = Box("screen", x - w / 2, x + w / 2, z - h / 2, z + h / 2)
+    for label in screen_labels(line).values():
         box = label_box(label, px_per_unit(camera, label.position))
-        y = float(label.position[1])
-        left, top = project(camera, (box.x0, y, box.z1))
-        right, bottom = project(camera, (box.x1, y, box.z0))
-        assert left >= 0 and right <= VIEW_WIDTH_PX, (label.text, left, right)
-        assert top >= 0 and bottom <= VIEW_HEIGHT_PX, (label.text, top, bottom)
+        tol = 1.0 / px_per_unit(camera, label.position)
+        assert screen.x0 - tol <= box.x0 and box.x1 <= screen.x1 + tol, (device, box)
+        assert screen.z0 - tol <= box.z0 and box.z1 <= screen.z1 + tol, (device, box)
+        if device == "master":
+            y = float(label.position[1])
+            left, top = project(camera, (box.x0, y, box.z1))
+            right, bottom = project(camera, (box.x1, y, box.z0))
+            assert left >= 0 and right <= VIEW_WIDTH_PX and top >= 0 and bottom <= VIEW_HEIGHT_PX
+
+
+def test_the_whole_line_gives_the_texts_their_size_back(board: Dashboard) -> None:
+    line, _camera = focused(board)
+    line.show_all()
+    assert {float(lb.font_screen_scale) for lb in screen_labels(line).values()} == {
+        SCREEN_SCALE}
+
+
+def test_a_zoomed_text_is_drawn_from_a_warmed_glyph_atlas(board: Dashboard) -> None:
+    """A scale in another atlas would pack its glyphs in whatever order the page meets them:
+    two runs of a scenario would not give the same PNG bytes (app/ui/glyphs.py)."""
+    line, _camera = focused(board)
+    warm = {bucket_px(s) for s in WARM_SCALES}
+    for label in screen_labels(line).values():
+        assert bucket_px(float(label.font_screen_scale)) in warm, label.font_screen_scale

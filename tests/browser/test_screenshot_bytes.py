@@ -60,9 +60,6 @@ def picture(out: Path, history: History, to_s: float) -> bytes:
             served.server.scene.add_label(f"/every_glyph{i}", every_glyph_in_lines(),
                                           position=middle, anchor="center-center",
                                           font_screen_scale=scale)
-        served.server.scene.add_label("/every_glyph_scene", every_glyph_in_lines(),
-                                      position=middle, anchor="center-center",
-                                      font_size_mode="scene", font_scene_height=0.3)
         served.advance(0.1)
         page.screenshot(out)
         page.close()
@@ -84,9 +81,6 @@ def other_glyphs_first(served: ServedRig, page: DashboardPage) -> None:
     probes = [served.server.scene.add_label(f"/probe{i}", BASE_GLYPHS[::-1],
                                             font_screen_scale=scale)
               for i, scale in enumerate(WARM_SCALES)]
-    # ... and in the atlas of the scene labels (the master's screen)
-    probes.append(served.server.scene.add_label("/probe_scene", BASE_GLYPHS[::-1],
-                                                font_size_mode="scene"))
     served.advance(0.1)
     page.sync()
     for probe in probes:

@@ -21,6 +21,7 @@ from typing import Any
 
 import viser
 
+from app.ui.label_fit import EM_PX
 from app.ui.line.painter import FRONT_Y, Painter
 from app.ui.rail_scene import BODY_D, BODY_H, PATTERN_WORDS, RGB
 from devices.ethercat import AL_STATUS_ERROR_FLAG
@@ -32,14 +33,21 @@ SCREEN: RGB = (30, 40, 60)
 STATE_BAR: dict[str, RGB] = {"ok": (20, 170, 60), "busy": (230, 160, 0),
                              "bad": (220, 30, 30), "gone": (130, 130, 136)}
 STILL_PATTERNS = ("off", "on")
+SCREEN_Z = 0.45  # the screen's centre over the master's
 MASTER_W = 2.6  # as wide as the FastCAT coupler: the longest DC state fits its screen
 SCREEN_SHARE = 0.92  # of the master's width
 DC_LINE = 13  # characters per line of the DC state ("SYNCHRONIZING")
-# The screen's texts are printed on it (scene labels): the widest line, "SYNCHRONIZING" (about
-# 9.3 em), fills the screen, and a focus on the master (~57 px a unit at 1280 x 720) shows
-# them at ~14 px an em. Screen labels had to fit the screen at the whole line's camera, the
-# widest view: ~7 px an em in dc_sync_lost's focused pictures, too small to read.
+# The screen's texts (screen labels: one size on screen) at the whole line's camera, the
+# widest view, where they must fit the screen.
+SCREEN_SCALE = 0.62
+# In a scenario's focused view they grow with the zoom up to this share of a scene unit an em
+# (the widest line, "SYNCHRONIZING", about 9.3 em, then fills the screen): ~14 px an em in a
+# focus on the master at 1280 x 720. At 0.62 everywhere they were ~7 px in dc_sync_lost's
+# three focused pictures, too small to read.
 SCREEN_EM = 0.24
+# The largest scale drawn from the 16 px glyph atlas, which app/ui/glyphs.py warms (a larger
+# one would pack its glyphs in a new atlas in whatever order the page meets them).
+MAX_SCREEN_SCALE = 1.3
 ESM_Z = -0.9  # the drive's ESM state: under its LEDs, above the cable coming in
 # A slave's LED rows from the top down: the drive's four (seed 004 ch. 5: an L/A per port,
 # Status, Error) between the "EtherCAT" label and the ESM state.
@@ -60,6 +68,13 @@ def wrap(text: str, width: int) -> str:
         else:
             line += piece
     return "\n".join([*lines, line.rstrip()])
+
+
+def screen_scale(px_per_unit: float) -> float:
+    """The scale of the master's screen texts where the screen shows at ``px_per_unit``:
+    SCREEN_EM scene units an em, never below the whole line's size nor above the warmed
+    atlas."""
+    return round(min(MAX_SCREEN_SCALE, max(SCREEN_SCALE, SCREEN_EM * px_per_unit / EM_PX)), 2)
 
 
 def led_colour(name: str) -> str:
@@ -217,15 +232,28 @@ class MasterBody(Body):
     def build(self) -> None:
         super().build()
         screen = self.paint.box("screen", (self.width * SCREEN_SHARE, 0.1, 1.5),
-                                (self.cx, FRONT_Y + 0.02, self.z0 + 0.45), SCREEN)
+                                (self.cx, FRONT_Y + 0.02, self.z0 + SCREEN_Z), SCREEN)
         self.clickables.append(screen)
         self.paint.label("phase", "", self.at(self.width / 2, 0.8), anchor="center-center",
-                         scene_height=SCREEN_EM)
+                         scale=SCREEN_SCALE)
         # One or two lines from the top down ("DC NOT_" / "SYNCHRONIZED"), inside the screen.
         self.paint.label("dc", "", self.at(self.width / 2, 0.5), anchor="top-center",
-                         scene_height=SCREEN_EM)
+                         scale=SCREEN_SCALE)
         self.paint.led("link", self.at(0.3, -0.9))
         self.paint.label("link_name", "link", self.at(0.52, -0.9), scale=0.65)
+
+    @property
+    def screen_centre(self) -> tuple[float, float, float]:
+        return self.at(self.width / 2, SCREEN_Z)
+
+    def zoom(self, px_per_unit: float | None) -> None:
+        """The screen's texts for a view showing the screen at ``px_per_unit`` (a scenario's
+        focus, which every browser shares), or for any view (None: the whole line's size)."""
+        scale = SCREEN_SCALE if px_per_unit is None else screen_scale(px_per_unit)
+        for key in ("phase", "dc"):
+            label = self.paint.labels[key]
+            if label.font_screen_scale != scale:
+                label.font_screen_scale = scale
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
         phase = str(snap.get("phase", "running" if snap.get("slaves") else "-"))

@@ -42,11 +42,15 @@ class FocusLabels:
         # A click's release runs in viser's thread, the frame's refresh in the dashboard's.
         self._lock = threading.Lock()
 
-    def focus(self, position: tuple[float, float, float],
-              look_at: tuple[float, float, float]) -> None:
-        """Every browser looks from ``position`` at ``look_at``: hide what that view cuts."""
+    def view(self, position: tuple[float, float, float],
+             look_at: tuple[float, float, float]) -> View:
+        """The layout's view from ``position`` looking at ``look_at``."""
+        return View(position, look_at, self.fov, *self._size)
+
+    def focus(self, view: View) -> None:
+        """Every browser shares ``view``: hide what it cuts."""
         with self._lock:
-            self._view = View(position, look_at, self.fov, *self._size)
+            self._view = view
             self._fits = {}
         self.refresh()
 

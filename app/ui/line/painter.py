@@ -38,15 +38,10 @@ class Painter:
                                   position=at, **kw)
 
     def label(self, key: str, text: str, at: tuple[float, float, float], *,
-              anchor: str = "center-left", scale: float = 0.7,
-              scene_height: float | None = None) -> viser.LabelHandle:
-        """A screen label of ``scale`` (one size on screen), or with ``scene_height`` a text
-        printed on a part: its em that many scene units, growing with the zoom."""
-        mode = "screen" if scene_height is None else "scene"
+              anchor: str = "center-left", scale: float = 0.7) -> viser.LabelHandle:
         handle = self.scene.add_label(f"{self.root}/{key}", text, position=at,
                                       anchor=anchor,  # type: ignore[arg-type]
-                                      font_size_mode=mode, font_screen_scale=scale,
-                                      font_scene_height=scene_height or 0.075)
+                                      font_screen_scale=scale)
         self.labels[key] = handle
         self._texts[key] = text
         return handle

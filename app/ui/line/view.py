@@ -23,6 +23,7 @@ import viser
 
 from app.runtime import Frame, Runtime
 from app.ui.commands import CommandSender, notify
+from app.ui.label_fit import View
 from app.ui.line.camera import send_pose
 from app.ui.line.controls import LineControls
 from app.ui.line.focus_labels import FocusLabels
@@ -179,16 +180,26 @@ class LineView:
             target, caption = self.focus_view(box)
             if client is None:
                 self.move_camera(target, caption=caption)
-                # Every browser shares this view: the labels its edges would cut go.
-                self.labels.focus(*camera_for(target, self._aspect))
+                self._share_view(self.labels.view(*camera_for(target, self._aspect)))
             else:
-                self.labels.release()  # this page leaves the view the others share
+                self._share_view(None)  # this page leaves the view the others share
                 # The caption stays where the scenario put it: it is every page's.
                 timer = threading.Timer(CLICK_SETTLE_S, self.move_camera, (target, 0.0, None),
                                         {"client": client})
                 timer.daemon = True
                 timer.start()
         notify(client, f"{device} selected", f"its panels: {where}")
+
+    def _share_view(self, view: View | None) -> None:
+        """Every browser shares ``view`` (a scenario's focus; None: no longer): the master's
+        screen texts grow with its zoom, and the labels its edges would cut go."""
+        master = self.scene.master
+        if view is None:
+            master.zoom(None)
+            self.labels.release()
+            return
+        master.zoom(view.project(master.screen_centre)[2] or None)
+        self.labels.focus(view)
 
     def focus_camera(self, device: str, aspect: float,
                      ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -211,7 +222,7 @@ class LineView:
 
     def show_all(self, client: viser.ClientHandle | None = None) -> None:
         """The whole line in ``client``'s view (its button), every browser's when None."""
-        self.labels.release()
+        self._share_view(None)
         if client is not None:
             self.move_camera(self.home, CAPTION_LIFT, client=client)
         else:
