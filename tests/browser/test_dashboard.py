@@ -128,14 +128,15 @@ def test_two_browsers_see_the_same_rig(live: LiveDashboard, browser) -> None:
         live.advance(BOOT_S)
         _expect_state(first, "ESM state", "OP")
 
-        # A module alarm (§7.6) needs a module: the coupler refuses it for the coupler.
-        choose(second, "Table", "module codes")
-        choose(second, "Fault", "0x0B TARATURA")
-        choose(second, "Target", "coupler")
-        second.get_by_role("button", name="Inject").click()
-        wait_for_text(second, "is a module alarm")
+        # A write to a read-only object is refused (SDO abort 0x06010002) for whoever clicked.
+        # (The FastCAT's fault form no longer offers a target its code refuses, §7.5 / §7.6.)
+        second.get_by_role("tab", name="Objects").click()
+        text_input(second, "Object").fill("0x5400:0")
+        text_input(second, "Value").fill("1")
+        second.get_by_role("button", name="Write").click()
+        wait_for_text(second, "Attempt to write a read only object")
         first.wait_for_timeout(500)
-        assert first.get_by_text("is a module alarm").count() == 0
+        assert first.get_by_text("Attempt to write a read only object").count() == 0
         assert not live.snapshot()["fault_active"]
     finally:
         for p in pages:
