@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import viser
@@ -62,6 +62,12 @@ def send_on(client: viser.ClientHandle | None, handle: Any, prop: str, value: An
         send_to(client, handle._impl.uuid, prop, value)
 
 
+def same_head(old: str, new: str) -> bool:
+    """Two options naming the same thing: the same first word (a rail slot's number in
+    "3 DO16" and "3 (empty)")."""
+    return old.split(" ", 1)[0] == new.split(" ", 1)[0]
+
+
 def send_all(handle: Any, prop: str, value: Any) -> None:
     """Set ``prop`` of a server-level widget on every page, whatever the server last set: a
     page may show another value of its own (viser skips an assignment of the same value)."""
@@ -78,6 +84,9 @@ class ClientPick:
         self._lock = threading.Lock()
         self._default = str(handle.value)
         self._own: dict[int, str] = {}
+        # Pages whose own pick a broadcast of the default overwrote: the broadcast's message
+        # id, after which the page gets its own pick again (set_options, resend).
+        self._overwritten: dict[int, int] = {}
         handle._impl.sync_cb = None  # a page's pick goes to no other page
         handle._impl.value = _NOTHING
         handle.on_update(self._picked)
@@ -94,6 +103,7 @@ class ClientPick:
     def _gone(self, client: viser.ClientHandle) -> None:
         with self._lock:
             self._own.pop(client.client_id, None)
+            self._overwritten.pop(client.client_id, None)
 
     def _keep(self, client_id: int, value: str) -> bool:
         """Keep ``value`` as the page's pick, unless the page has left: viser drops it from
@@ -103,6 +113,7 @@ class ClientPick:
             return False
         with self._lock:
             self._own[client_id] = value
+            self._overwritten.pop(client_id, None)  # this value goes to the page last
         if client_id not in self._server.get_clients():  # left meanwhile: _gone may be past
             with self._lock:
                 self._own.pop(client_id, None)
@@ -148,7 +159,61 @@ class ClientPick:
         with self._lock:
             self._default = value
             self._own.clear()
+            self._overwritten.clear()
         self.handle._queue_update("value", value)
+
+    def set_options(self, options: Sequence[str],
+                    same: Callable[[str, str], bool] = same_head) -> None:
+        """Offer ``options`` on every page. Each page's pick, and a new page's, moves to the
+        option naming the same thing (``same(old, new)``), else to the first option. A new
+        page's goes to every page (where pages to come start, viser's replay), so a page with
+        a pick of its own gets it back once that message has reached it (:meth:`resend`):
+        the server's messages to all pages and to one page go out by separate producers in
+        no set order (page_ready)."""
+        options = tuple(options)
+        if not options or options == self.options:
+            return
+
+        def moved(value: str) -> str:
+            return value if value in options else \
+                next((o for o in options if same(value, o)), options[0])
+
+        clients = self._server.get_clients()
+        send_all(self.handle, "options", options)
+        with self._lock:
+            before = self._default
+            self._default = moved(before)
+            own = {c: moved(v) for c, v in self._own.items() if c in clients}
+            changed = {c: v for c, v in own.items() if v != self._own[c]}
+            self._own = own
+        if self._default != before:
+            self.handle._queue_update("value", self._default)
+            sent = self._server._websock_server._broadcast_buffer.message_counter - 1
+            with self._lock:
+                for client_id, value in own.items():
+                    if value != self._default:
+                        self._overwritten[client_id] = sent
+            return
+        for client_id, value in changed.items():
+            send_to(clients[client_id], self.handle._impl.uuid, "value", value)
+
+    def resend(self) -> None:
+        """Each page whose own pick a :meth:`set_options` overwrote gets it again once that
+        broadcast has reached it (call it each frame)."""
+        if not self._overwritten:
+            return
+        clients = self._server.get_clients()
+        cursors = self._server._websock_server._broadcast_buffer.generator_cursors
+        due: list[tuple[viser.ClientHandle, str]] = []
+        with self._lock:
+            for client_id, sent in list(self._overwritten.items()):
+                if client_id not in clients or client_id not in self._own:
+                    del self._overwritten[client_id]
+                elif cursors.get(client_id, -1) >= sent:
+                    del self._overwritten[client_id]
+                    due.append((clients[client_id], self._own[client_id]))
+        for client, value in due:
+            send_to(client, self.handle._impl.uuid, "value", value)
 
 
 class ClientHtml:
