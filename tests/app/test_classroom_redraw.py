@@ -113,9 +113,8 @@ def test_a_late_instructor_plug_type_starts_at_the_preset() -> None:
         served.dashboard.tick()
         assert served.dashboard._panels is not None
         modules = served.dashboard._panels.modules
-        assert "3 (empty)" in modules._module.options
-        modules._module.value = "3 (empty)"
-        modules._selection_changed()  # the pick, as its on_update does
+        assert "3 (empty)" in modules.pick.options
+        modules.pick.set_all("3 (empty)")  # where the instructor's own picker starts
         page = Page(served.port)
         cid, client = next(iter(_wait(lambda: served.server.get_clients()).items()))
         assert served.classroom.access.present(cid, TOKEN)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from types import SimpleNamespace
 from typing import Any
 
 import viser
@@ -50,7 +51,9 @@ def test_no_view_is_computed_without_a_browser_and_nothing_is_lost() -> None:
                  "the dashboard took the events")
         time.sleep(0.2)  # ... and had every chance to draw a view
         assert queued == []
-        clients[1] = object()  # a browser connects: the connect callback wakes the thread
+        # A browser connects (the connect callback wakes the thread); it takes attributes
+        # as a ClientHandle does (page_ready marks it).
+        clients[1] = SimpleNamespace(client_id=1)
         dashboard._wake.set()
         wait_for(lambda: any("alarm 0x04" in str(getattr(m, "updates", "")) for m in queued),
                  "the log shows the alarm raised while no browser was there")

@@ -1,4 +1,4 @@
-"""The drive, module and master panels' device-value widgets are Synced (issue 7, the checkbox
+"""The drive and master panels' device-value widgets are Synced (issue 7, the checkbox
 mirror bug): a change commands the value it set, to the device selected when it reached the
 server; a refused or lost change goes back to the model's value on every page; a selection
 change shows the newly selected device's value.
@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable, Iterator
-from types import SimpleNamespace
 from typing import Any
 
 import pytest
@@ -24,7 +23,6 @@ from app.classroom.roles import Role
 from app.ui.drive.drive_options import mode_option
 from app.ui.drive.drive_panel import DrivePanel
 from app.ui.line.master_panel import LOG_STYLES, MasterPanel
-from app.ui.panels.modules import ModulePanel
 from app.ui.panels.widgets import FRESH_AFTER
 
 
@@ -310,59 +308,8 @@ def test_a_refused_alarm_reset_tells_the_clicking_page_why(loop, role: Role, bod
     assert client.notices == [("drive1: alarm reset refused", body)]
 
 
-# ---- rail modules (seed 000 §2, §6.30) ----------------------------------------------------
-def rail(powered: tuple[bool, bool], command: tuple[int, int]) -> dict[str, Any]:
-    return {"rail": [{"slot": k + 1, "type": "AX2", "powered": powered[k],
-                      "command": command[k], "encoders": [{}, {}]} for k in range(2)]}
-
-
-def module_rig(loop: asyncio.AbstractEventLoop) -> tuple[Server, Sender, ModulePanel]:
-    server, sender = Server(loop), Sender()
-    runtime = SimpleNamespace(rig=None)  # read only by the work Sender does not run
-    panel = ModulePanel(server, runtime, sender, "fastcat", {}, ["AX2"])  # type: ignore[arg-type]
-    return server, sender, panel
-
-
-def test_module_selection_shows_the_selected_modules_values(loop) -> None:
-    """§2 / §6.30: slot 1 powered with no zero-cycle bit, slot 2 unpowered with bit 13 set;
-    selecting slot 2 shows its values, a click on Module powered goes to slot 2."""
-    server, sender, panel = module_rig(loop)
-    snap = rail((True, False), (0, 0x2000))
-    frames(loop, server, lambda: panel.update(snap))
-    module, powered = server.gui.handles["Module"], server.gui.handles["Module powered"]
-    zero = [server.gui.handles[f"Zero-cycle command enc {k}"] for k in (1, 2)]
-    assert option_slot_value(module) == "1" and powered.value is True
-    assert [z.value for z in zero] == [False, False]
-    module.user("page A", next(o for o in module.options if o.startswith("2")))
-    frames(loop, server, lambda: panel.update(snap))
-    assert powered.value is False and [z.value for z in zero] == [False, True]
-    powered.user("page A", True)
-    sender.drain()
-    assert sender.sent == [("fastcat/2", "module_power", {"on": True})]
-
-
-def option_slot_value(handle: Handle) -> str:
-    return str(handle.value).split(" ", 1)[0]
-
-
-@pytest.mark.parametrize("k", [0, 1])
-def test_a_zero_cycle_click_commands_the_selected_module_and_goes_back_if_refused(
-        loop, k: int) -> None:
-    """§6.30: bit 12 / 13 of 0x7600 + 0x10 * (N - 1), written by the change's own value; a
-    write the module did not take puts the box back on every page."""
-    server, sender, panel = module_rig(loop)
-    snap = rail((True, True), (0, 0))
-    frames(loop, server, lambda: panel.update(snap))
-    module = server.gui.handles["Module"]
-    module.user("page A", next(o for o in module.options if o.startswith("2")))
-    frames(loop, server, lambda: panel.update(snap))  # the selection has been shown
-    box = server.gui.handles[f"Zero-cycle command enc {k + 1}"]
-    box.user("page A", True)
-    sender.drain()
-    assert [w for w in sender.labels if "zero-cycle" in w] == ["0x7610 zero-cycle command"]
-    turn(loop, server)
-    frames(loop, server, lambda: panel.update(snap))
-    assert box.value is False and box.sent[-1] is False
+# The rail modules' boxes are each page's own (ClientSynced, the Module picker a ClientPick):
+# tests/app/test_module_picks_per_browser.py drives them through two pages of a served rig.
 
 
 # ---- the master's log style (seed 003, seed 000 §7.2-§7.4) --------------------------------
@@ -383,37 +330,3 @@ def test_the_log_style_is_the_masters(loop, style: str) -> None:
     dropdown.sent.clear()
     frames(loop, server, lambda: panel.update(master, 0))  # another page's choice won
     assert dropdown.value == LOG_STYLES[0] and dropdown.sent == [LOG_STYLES[0]]
-
-
-def test_rail_clicks_are_commanded_in_click_order(loop) -> None:
-    """§2 (modules plugged and unplugged by hand): Unplug then Plug is commanded in that order,
-    each click with its own button."""
-    server, sender, panel = module_rig(loop)
-    frames(loop, server, lambda: panel.update(rail((True, True), (0, 0))))
-    for button in ("Unplug", "Plug"):
-        server.gui.handles["Rail"].user("page A", button, click=True)
-    turn(loop, server)
-    sender.drain()
-    assert sender.sent == [("fastcat/1", "unplug", {}), ("fastcat/1", "plug", {"type": "AX2"})]
-
-
-def test_an_empty_slot_presets_plug_type_to_the_module_that_belongs_there(loop) -> None:
-    """§2: the module pulled from slot 2 is the one to put back: selecting the empty slot sets
-    Plug type to the type the model expects there (flash, else the last scan); a type the user
-    picks afterwards is left alone while the selection stays. Before, it stayed on the first
-    catalog type."""
-    server, sender = Server(loop), Sender()
-    runtime = SimpleNamespace(rig=None)
-    panel = ModulePanel(server, runtime, sender, "fastcat", {},  # type: ignore[arg-type]
-                        ["DB16", "DI16", "AX2"])
-    snap = {"rail": [{"slot": 1, "type": "DB16"},
-                     {"slot": 2, "type": None, "expected": "DI16", "expected_from": "flash"}]}
-    frames(loop, server, lambda: panel.update(snap))
-    module, plug = server.gui.handles["Module"], server.gui.handles["Plug type"]
-    assert plug.value == "DB16"
-    module.user("page A", next(o for o in module.options if o.startswith("2")))
-    frames(loop, server, lambda: panel.update(snap))
-    assert plug.value == "DI16"
-    plug.user("page A", "AX2")
-    frames(loop, server, lambda: panel.update(snap))
-    assert plug.value == "AX2"

@@ -5,6 +5,11 @@ unplugged and swapped; the coupler notices at the next scan or, in OP, at once) 
 the FastCAT's module actions on the target ``<device>/<slot>``. AX2 modules get an encoder
 section: shaft speed per encoder and the zero-cycle command bits of 0x7600 (§6.30, bits 12 /
 13), written with ``write_object`` like a PLC would write its output.
+
+The Module picker is each page's own (a ClientPick), and so is what follows its pick: the
+encoder section and its boxes, the open rig's Rail rows (Plug type preset, Swap with, Module
+powered) and the module Module I/O and the buttons act on, the clicking page's
+(docs/dashboard.md "Several browsers"). The Module I/O form itself is one for every page.
 """
 
 from __future__ import annotations
@@ -20,8 +25,11 @@ from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_input import ClientSynced
+from app.ui.panels.client_pick import ClientHtml, ClientPick, page_ready
 from app.ui.panels.control import module_options, option_slot
 from app.ui.panels.module_faults import ModuleFaults
+from app.ui.panels.page_prop import PageProp
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import Synced, set_options
 from app.ui.style import esc
@@ -56,14 +64,21 @@ def encoder_text(entry: Mapping[str, Any]) -> str:
 
 @dataclass(frozen=True)
 class _RailForm:
-    """The instructor's rail rows of one connection (or the shared ones); ``module``: its own
-    Module picker (with a token), None when the rows act on the shared one (an open rig)."""
+    """The rail rows of one instructor connection, or the shared ones of an open rig.
+    ``module``: the connection's own Module picker (with a token); None for the shared rows,
+    which act on each page's pick of the Module picker, with a Plug type and a Swap with of
+    each page's own (ClientPick) and a Module powered box per page (ClientSynced)."""
 
     ops: Any
     plug_type: Any
     swap_with: Any
-    powered: Synced
+    powered: Synced | ClientSynced
     module: Any = None
+
+
+def _value(widget: Any, client_id: int | None) -> str:
+    """What ``widget`` holds on ``client_id``'s page (a ClientPick: the page's own)."""
+    return widget.value_for(client_id) if isinstance(widget, ClientPick) else str(widget.value)
 
 
 def _speed_params(action: Action | None) -> tuple[str, str] | None:
@@ -81,6 +96,7 @@ class ModulePanel:
                  catalog: Sequence[str]) -> None:
         self._runtime = runtime
         self._sender = sender
+        self._server = server
         self._id = device_id
         self._rail: list[Mapping[str, Any]] = []
         self._catalog = tuple(catalog)
@@ -89,18 +105,22 @@ class ModulePanel:
         gui = server.gui
 
         with gui.add_folder("Modules"):
-            self._module = gui.add_dropdown("Module", ("1",), hint="slot number and type")
+            # Each page's own (client_pick): one trainee's pick of module 3 moved every other
+            # page's picker and what its Rail buttons and Module I/O acted on.
+            self.pick = ClientPick(server, gui.add_dropdown("Module", ("1",),
+                                                            hint="slot number and type"))
             # Plugging, swapping and a module's supply are the instructor's (the box follows
             # the module): built per instructor connection with a token, so a trainee's
             # browser never gets them (app/ui/panels/per_client.py; docs/classroom.md).
-            self._server = server
             self._rails = instructor_for(server).part(self._rail_form)
         shared = self._rails.each()[0] if instructor_for(server).shared else None
-        self.instructor_only = (shared.ops, shared.plug_type, shared.swap_with,
+        self._shared_rail = shared
+        self.instructor_only = (shared.ops, shared.plug_type.handle, shared.swap_with.handle,
                                 shared.powered.handle) if shared else ()
+        self._preset_pages: set[int] = set()  # the pages whose Plug type got their preset
 
-        with gui.add_folder("Encoder (AX2)", visible=False) as self._encoder_folder:
-            self._encoder_state = gui.add_html("")
+        with gui.add_folder("Encoder (AX2)", visible=False) as encoder_folder:
+            self._encoder_state = ClientHtml(server, gui.add_html(""))
             self._encoder = gui.add_dropdown("Encoder", ("1", "2"))
             self._rpm = gui.add_number("Shaft speed (rpm)", 60.0, step=1.0)
             set_speed = gui.add_button("Set shaft speed", disabled=self._speed is None)
@@ -108,6 +128,7 @@ class ModulePanel:
                                            hint=f"0x7600 bit {12 + k}; the rising edge starts "
                                                 "the zero cycle")
                           for k in range(2)]
+        self._encoder_shown = PageProp(server, encoder_folder, "visible")
 
         instructor = instructor_for(server)
         with gui.add_folder("Module I/O", expand_by_default=False):
@@ -120,22 +141,26 @@ class ModulePanel:
                                     self._apply_form)
             self._faults = ModuleFaults(instructor, runtime, sender, device_id, faults,
                                         lambda: self._rail) if faults else None
-        self._available: list[str] | None = None  # the selected module's actions, when read
-        self._available_lock = threading.Lock()
+        # What each picked slot's module takes, read from the model for the rail as it is
+        # (``_rail_key``): the form offers what the pages' picks take together.
+        self._actions_lock = threading.Lock()
+        self._actions_of: dict[int, list[str]] = {}
+        self._asked: set[int] = set()
+        self._rail_key = 0
+        self._offered: list[str] | None = None
 
-        # The boxes are values of the selected module: every page ends up showing the model's
-        # (Synced). A change commands the module selected when it reaches the server.
-        self._zero_syncs = [Synced(server, box, sender,
-                                   lambda client, on, k=k: self._zero_cycle(client, k, bool(on)))
+        # The boxes are values of each page's module: every page ends up showing the model's
+        # (ClientSynced). A change commands the module its page picked.
+        self._zero_syncs = [ClientSynced(server, box, sender,
+                                         lambda client, on, k=k: self._zero_cycle(
+                                             client, k, bool(on)))
                             for k, box in enumerate(self._zero)]
 
-        @self._module.on_update
-        def _(event: viser.GuiEvent) -> None:
-            self._selection_changed()
+        self.pick.on_pick(lambda client, _option: self._page_picked(client))
 
         @set_speed.on_click
         def _(event: viser.GuiEvent) -> None:
-            target = self._target()
+            target = self._target(self.pick.value_for(event.client_id))
             if target is None or self._speed is None:
                 return
             which, rpm = self._speed
@@ -150,75 +175,85 @@ class ModulePanel:
         # to every trainee's page (docs/classroom.md).
         options = tuple(module_options(self._rail)) or ("1",)
         with gui.add_folder("Rail and power"):
-            # Starts at the shared pick (public anyway): what the instructor looked at.
+            # Starts where a new page's Module picker does (public anyway).
+            start = self.pick.default
             own = gui.add_dropdown("Module", options, hint="the module the rail rows act on",
-                                   initial_value=self._module.value
-                                   if self._module.value in options else None)
+                                   initial_value=start if start in options else None)
             return self._rail_rows(gui, own)
 
     def _rail_rows(self, gui: Any, own: Any) -> _RailForm:
-        def target() -> str | None:
-            return self._target(None if own is None else own.value)
+        def target(client_id: int | None) -> str | None:
+            return self._target(self.pick.value_for(client_id) if own is None else own.value)
 
-        form = _RailForm(gui.add_button_group("Rail", ("Unplug", "Plug", "Swap")),
-                         # A copy built after the pick (a late instructor) starts at the
-                         # preset too, not at the catalog's first type.
-                         gui.add_dropdown("Plug type", self._catalog,
-                                          initial_value=plug_preset(
-                                              self._entry(None if own is None else own.value),
-                                              self._catalog)),
-                         gui.add_dropdown("Swap with", tuple(module_options(self._rail))
-                                          or ("1",)),
-                         Synced(self._server, gui.add_checkbox("Module powered", True),
-                                self._sender, lambda client, on: self._module_power(
-                                    client, on, target())),
-                         own)
-        if own is not None:
+        ops = gui.add_button_group("Rail", ("Unplug", "Plug", "Swap"))
+        # A copy built after the pick (a late instructor) starts at the preset too, not at
+        # the catalog's first type.
+        plug_type = gui.add_dropdown("Plug type", self._catalog, initial_value=None
+                                     if own is None else plug_preset(self._entry(own.value),
+                                                                     self._catalog))
+        swap_with = gui.add_dropdown("Swap with", tuple(module_options(self._rail)) or ("1",))
+        powered = gui.add_checkbox("Module powered", True)
+        if own is None:  # the shared rows: each page's own pick
+            form = _RailForm(ops, ClientPick(self._server, plug_type),
+                             ClientPick(self._server, swap_with),
+                             ClientSynced(self._server, powered, self._sender,
+                                          lambda client, on: self._module_power(
+                                              client, on, target(_id(client)))))
+        else:
+            form = _RailForm(ops, plug_type, swap_with,
+                             Synced(self._server, powered, self._sender,
+                                    lambda client, on: self._module_power(
+                                        client, on, target(None))), own)
             own.on_update(lambda _event: self._preset(form))
 
         @form.ops.on_click
         async def _(event: viser.GuiEvent) -> None:
             # On viser's loop: the group's value is still the button of this click.
             button = event.target.value
-            target_now = target()
+            target_now = target(event.client_id)
             if target_now is None:
                 return
             if button == "Unplug":
                 self._sender.send(event.client, target_now, "unplug")
             elif button == "Plug":
                 self._sender.send(event.client, target_now, "plug",
-                                  {"type": form.plug_type.value})
+                                  {"type": _value(form.plug_type, event.client_id)})
             else:
-                other = option_slot(form.swap_with.value)
+                other = option_slot(_value(form.swap_with, event.client_id))
                 self._sender.send(event.client, target_now, "swap", {"other": other})
 
         return form
 
     # ---- helpers ------------------------------------------------------------------------
-    def _slot(self, option: Any = None) -> int | None:
-        """The slot of ``option`` (an instructor's own pick), else of the shared picker's."""
-        return option_slot(str(self._module.value if option is None else option))
-
-    def _target(self, option: Any = None) -> str | None:
-        slot = self._slot(option)
+    def _target(self, option: Any) -> str | None:
+        slot = option_slot(str(option))
         return None if slot is None else f"{self._id}/{slot}"
 
-    def _entry(self, option: Any = None) -> Mapping[str, Any] | None:
-        slot = self._slot(option)
+    def _entry(self, option: Any) -> Mapping[str, Any] | None:
+        slot = option_slot(str(option))
         return next((e for e in self._rail if e.get("slot") == slot), None)
 
-    def _form_entry(self, form: _RailForm) -> Mapping[str, Any] | None:
-        return self._entry(None if form.module is None else form.module.value)
+    def _entry_for(self, client_id: int | None) -> Mapping[str, Any] | None:
+        """The rail entry of ``client_id``'s pick (None: a new page's)."""
+        return self._entry(self.pick.value_for(client_id))
 
     def _preset(self, form: _RailForm) -> None:
-        """Offer the Plug type the model expects in the form's module (an empty slot)."""
-        preset = plug_preset(self._form_entry(form), self._catalog)
+        """Offer the Plug type the model expects in an own picker's module (an empty slot)."""
+        preset = plug_preset(self._entry(form.module.value), self._catalog)
         if preset is not None:
             form.plug_type.value = preset
 
+    def _preset_page(self, client: viser.ClientHandle) -> None:
+        """The shared rows' Plug type on ``client``'s page: the type its empty slot expects."""
+        if self._shared_rail is None:
+            return
+        preset = plug_preset(self._entry_for(client.client_id), self._catalog)
+        if preset is not None:
+            self._shared_rail.plug_type.set_for(client, preset)
+
     def _apply_form(self, client: viser.ClientHandle | None, action: str,
                     args: dict[str, Any]) -> None:
-        target = self._target()
+        target = self._target(self.pick.value_for(_id(client)))
         if target is not None:
             self._sender.send(client, target, action, args)
 
@@ -229,7 +264,7 @@ class ModulePanel:
 
     def _zero_cycle(self, client: viser.ClientHandle | None, k: int, on: bool) -> None:
         """Set or clear one zero-cycle bit of 0x7600, keeping the other bits (invert flags)."""
-        slot = self._slot()
+        slot = option_slot(self.pick.value_for(_id(client)))
         if slot is None:
             return
         index, bit = object_index(COMMAND_INDEX, slot), CMD_ZERO_CYCLE[k]
@@ -243,29 +278,66 @@ class ModulePanel:
 
         self._sender.submit(client, f"0x{index:04X} zero-cycle command", read_modify_write)
 
-    def _selection_changed(self) -> None:
-        """Show the encoder section only for an AX2; ask the model which module actions the
-        selected module takes (its type decides) for the generated form."""
-        entry = self._entry()
-        self._encoder_folder.visible = bool(entry and entry.get("encoders") is not None)
-        # Offered on a selection or rail change only: a type picked afterwards stays.
-        for form in self._rails.each():
-            if form.module is None:  # an own picker's rows follow their own pick
-                self._preset(form)
-        slot = self._slot()
-        if slot is None or not (entry and entry.get("type")):
-            self._set_available([])
-            return
+    def _page_picked(self, client: viser.ClientHandle) -> None:
+        """A page picked a module: its Plug type preset, its encoder section, the actions."""
+        self._preset_page(client)
+        self._show_pages()
+        self._ask_actions()
+
+    def _show_pages(self) -> None:
+        """The encoder section on the pages whose pick is an AX2, with its encoders."""
+        def encoders(client_id: int) -> bool:
+            entry = self._entry_for(client_id)
+            return bool(entry and entry.get("encoders") is not None)
+
+        self._encoder_shown.show(encoders)
+        self._encoder_state.show(lambda client_id: encoder_text(self._entry_for(client_id) or {})
+                                 if encoders(client_id) else "")
+
+    def _picked_slots(self) -> set[int]:
+        picks = {self.pick.value_for(c) for c in self._server.get_clients()}
+        return {s for s in (option_slot(p) for p in picks | {self.pick.default})
+                if s is not None}
+
+    def _ask_actions(self) -> None:
+        """Ask the model which actions the picked modules take (their types decide), for
+        the slots not asked about on this rail yet."""
+        with self._actions_lock:
+            key = self._rail_key
+            slots = self._picked_slots() - self._asked
+            self._asked |= slots
         device = self._id
+        for slot in slots:
+            entry = self._entry(slot)
+            if not (entry and entry.get("type")):
+                self._park(key, slot, [])
+                continue
 
-        def read() -> list[str]:
-            return list(self._runtime.rig.device(device).rail_module(slot).available_actions())
+            def read(slot: int = slot) -> list[str]:
+                module = self._runtime.rig.device(device).rail_module(slot)
+                return list(module.available_actions())
 
-        self._sender.submit(None, "module actions", read, done=self._set_available)
+            self._sender.submit(None, "module actions", read,
+                                done=lambda names, slot=slot: self._park(key, slot, names))
 
-    def _set_available(self, names: list[str]) -> None:
-        with self._available_lock:
-            self._available = names
+    def _park(self, key: int, slot: int, names: list[str]) -> None:
+        with self._actions_lock:
+            if key == self._rail_key:  # else an answer about the rail as it was
+                self._actions_of[slot] = names
+
+    def _offer(self) -> None:
+        """Module I/O offers what the pages' picked modules take, once all are known: the
+        form is one for every page (the model refuses an action another page's module
+        takes and this page's does not)."""
+        self._ask_actions()
+        with self._actions_lock:
+            slots = self._picked_slots()
+            if not slots <= set(self._actions_of):
+                return
+            names = sorted({n for s in slots for n in self._actions_of[s]})
+        if names != self._offered:
+            self._offered = names
+            self._form.restrict(names)
 
     # ---- per frame ----------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any]) -> None:
@@ -278,30 +350,57 @@ class ModulePanel:
             self._faults.update(changed)
         if changed:
             options = module_options(rail)
-            set_options(self._module, options)
+            self.pick.set_options(options)
+            with self._actions_lock:
+                self._rail_key += 1
+                self._actions_of.clear()
+                self._asked.clear()
+            self._preset_pages.clear()  # offered on a rail change: a type picked later stays
             for form in self._rails.each():
+                if form.module is None:
+                    form.swap_with.set_options(options)
+                    continue
                 set_options(form.swap_with, options)
-                if form.module is not None:
-                    set_options(form.module, options)
-                    self._preset(form)
-            self._selection_changed()
-        with self._available_lock:
-            available, self._available = self._available, None
-        if available is not None:
-            self._form.restrict(available)
+                set_options(form.module, options)
+                self._preset(form)
+        self.pick.resend()
+        self._offer()
+        self._show_pages()
+        shared = self._shared_rail
+        if shared is not None:
+            shared.swap_with.resend()
+            self._preset_new_pages(shared)
+
+            def powered(client_id: int) -> bool | None:
+                entry = self._entry_for(client_id)
+                return None if entry is None else bool(entry.get("powered", True))
+
+            shared.powered.follow_each(powered)
         # The picked module's values: after a selection change the next frame shows the new
         # module's (a Synced at rest shows what it last followed, so only a difference is sent).
         for form in self._rails.each():
-            own = self._form_entry(form)
-            if own is not None:
+            if form.module is not None and (own := self._entry(form.module.value)) is not None:
                 form.powered.follow(bool(own.get("powered", True)))
-        entry = self._entry()
-        if entry is None:
-            return
-        if entry.get("encoders") is not None:
-            command = int(entry.get("command", 0))  # 0x7600 as the module holds it
-            for k, synced in enumerate(self._zero_syncs):
-                synced.follow(bool(command & CMD_ZERO_CYCLE[k]))
-            html = encoder_text(entry)
-            if self._encoder_state.content != html:
-                self._encoder_state.content = html
+        for k, synced in enumerate(self._zero_syncs):
+            synced.follow_each(lambda client_id, k=k: self._zero_bit(client_id, k))
+
+    def _zero_bit(self, client_id: int, k: int) -> bool | None:
+        """Zero-cycle bit ``k`` of 0x7600 as the page's AX2 holds it (None: no AX2)."""
+        entry = self._entry_for(client_id)
+        if entry is None or entry.get("encoders") is None:
+            return None
+        return bool(int(entry.get("command", 0)) & CMD_ZERO_CYCLE[k])
+
+    def _preset_new_pages(self, shared: _RailForm) -> None:
+        """A page new to the shared rows (or every page after a rail change) gets the Plug
+        type its pick's empty slot expects, once it has the box (page_ready)."""
+        for client_id, client in self._server.get_clients().items():
+            if client_id in self._preset_pages or not page_ready(self._server, client):
+                continue
+            self._preset_pages.add(client_id)
+            self._preset_page(client)
+        self._preset_pages &= set(self._server.get_clients())
+
+
+def _id(client: viser.ClientHandle | None) -> int | None:
+    return None if client is None else client.client_id

@@ -1,0 +1,47 @@
+"""A server-level element's property that each page gets for its own pick (a folder's
+``visible``: the FastCAT's encoder section shows on the page that picked an AX2), as
+:class:`app.ui.panels.client_pick.ClientHtml` does for an HTML element's content.
+
+The server's own value of the property is never set after the element is built: a message to
+every page and one to a single page go out by separate producers in no set order, so a later
+broadcast could land after a page's own value. Every page gets its own, once it has the
+element (``page_ready``).
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import viser
+
+from app.ui.panels.client_pick import page_ready, send_to
+
+
+class PageProp:
+    def __init__(self, server: viser.ViserServer, handle: Any, prop: str) -> None:
+        self._server = server
+        self._uuid = handle._impl.uuid
+        self._prop = prop
+        self._lock = threading.Lock()  # the dashboard thread and a pick's callback
+        self._sent: dict[int, Any] = {}
+
+    def show(self, value_for: Callable[[int], Any]) -> None:
+        """``value_for(client_id)``: that page's value; sent when it changed for the page."""
+        clients = self._server.get_clients()
+        with self._lock:
+            for gone in set(self._sent) - set(clients):
+                del self._sent[gone]
+            for client_id, client in clients.items():
+                if not page_ready(self._server, client):
+                    continue  # a later frame sends it
+                value = value_for(client_id)
+                if client_id not in self._sent or self._sent[client_id] != value:
+                    self._sent[client_id] = value
+                    send_to(client, self._uuid, self._prop, value)
+
+    def sent_to(self) -> set[int]:
+        """The pages that got a value (the others are new or not ready yet)."""
+        with self._lock:
+            return set(self._sent)

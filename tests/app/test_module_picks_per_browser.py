@@ -1,0 +1,172 @@
+"""The FastCAT tab's Module picker is each page's own, and so is what depends on its pick: the
+Plug type preset, the encoder section, and the module the Rail buttons and Module I/O act on
+(docs/dashboard.md "Several browsers"). Before, one trainee picking module 3 moved every
+other page's Module picker and what its Unplug acted on: a classmate unplugged the wrong
+module. Two websocket connections stand in for the browsers (tests/app/test_picks_per_browser.py)
+on an open rig, where the Rail rows are everyone's."""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from app.classroom.roles import Access
+from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from devices.fastcat.encoder import CMD_ZERO_CYCLE, COMMAND_INDEX
+from devices.fastcat.module_od import object_index
+from tests.app.test_classroom_leak import Page, _wait
+from tests.app.test_picks_per_browser import _ids, _settle, _widget
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[ServedRig, Page, Page]]:
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
+    served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
+    served.runtime.advance(3_000_000).result(timeout=30)
+    served.runtime.command("fastcat/3", "unplug", {}).result(timeout=10)
+    served.runtime.advance(100_000).result(timeout=30)
+    served.dashboard.tick()
+    first, second = Page(served.port), Page(served.port)
+    try:
+        _wait(lambda: len(served.server.get_clients()) == 2)
+        yield served, first, second
+    finally:
+        first.close()
+        second.close()
+        served.stop()
+
+
+def _rail(live: ServedRig) -> list[dict[str, Any]]:
+    return list(live.runtime.submit(
+        lambda: live.rig.device("fastcat").snapshot()["rail"]).result(timeout=10))
+
+
+def _visible(page: Page, uuid: str) -> list[Any]:
+    return [m["updates"]["visible"] for m in page.received()
+            if m.get("type") == "GuiUpdateMessage" and m.get("uuid") == uuid
+            and "visible" in (m.get("updates") or {})]
+
+
+def _folder(page: Page, label: str) -> str:
+    return str(_wait(lambda: next((m["uuid"] for m in page.received()
+                                   if (m.get("props") or {}).get("label") == label), None)))
+
+
+def test_a_module_picked_on_one_page_is_not_the_other_page_s(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    picker = _widget(first, "Module", "3 (empty)")
+    assert _widget(second, "Module", "3 (empty)") == picker  # one server-level widget
+    plug_type = _widget(first, "Plug type", "DO16")
+    first.set(picker, "3 (empty)")
+    _wait(lambda: "DO16" in first.updates(plug_type))  # seed 000 §2: what belongs there
+    _settle(live)
+    assert "3 (empty)" not in second.updates(picker)
+    assert "DO16" not in second.updates(plug_type)
+    modules = live.dashboard._panels.modules  # type: ignore[union-attr]
+    one, two = _ids(live)
+    assert modules.pick.value_for(one) == "3 (empty)"
+    assert modules.pick.value_for(two) == "1 DB16"
+
+
+def test_the_other_page_s_unplug_acts_on_its_own_pick(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    picker = _widget(first, "Module", "3 (empty)")
+    first.set(picker, "3 (empty)")
+    _settle(live)
+    rail = _widget(second, "Rail", None)
+    second.set(rail, "Unplug")  # a button group's click
+    _wait(lambda: _rail(live)[0]["type"] is None)
+    assert [e["type"] for e in _rail(live)[1:3]] == ["DI16", None]
+    # The second page's pick follows its slot's new label; the first page keeps its own.
+    live.runtime.advance(100_000).result(timeout=30)
+    _settle(live)
+    modules = live.dashboard._panels.modules  # type: ignore[union-attr]
+    one, two = _ids(live)
+    assert modules.pick.value_for(two) == "1 (empty)"
+    assert modules.pick.value_for(one) == "3 (empty)"
+    assert "3 (empty)" not in second.updates(picker)
+    live.runtime.command("fastcat/1", "plug", {"type": "DB16"}).result(timeout=10)
+    live.runtime.advance(100_000).result(timeout=30)
+
+
+def test_the_encoder_section_shows_on_the_page_that_picked_the_ax2(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    picker = _widget(first, "Module", "7 AX2")
+    folder = _folder(first, "Encoder (AX2)")
+    first.set(picker, "7 AX2")
+    _wait(lambda: True in _visible(first, folder))
+    _settle(live)
+    assert True not in _visible(second, folder)
+    first.set(picker, "2 DI16")
+    _wait(lambda: _visible(first, folder)[-1] is False)
+
+
+def _read(live: ServedRig, index: int) -> int:
+    return int(live.runtime.submit(lambda: live.rig.apply(
+        "fastcat", "read_object", {"index": index, "sub": 0})).result(timeout=10))
+
+
+def test_module_powered_shows_and_commands_each_page_s_module(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """§2: a module's supply. The box shows the page's own module's and its click commands
+    that module; the other page keeps its module's."""
+    live, first, second = served
+    live.runtime.command("fastcat/6", "module_power", {"on": False}).result(timeout=10)
+    live.runtime.advance(100_000).result(timeout=30)
+    picker = _widget(first, "Module", "6 AI8TC")
+    box = _widget(first, "Module powered", None)
+    second.set(picker, "2 DI16")
+    first.set(picker, "6 AI8TC")
+    _wait(lambda: False in first.updates(box))
+    _settle(live)
+    assert False not in second.updates(box)
+    first.set(box, True)
+    _wait(lambda: _rail(live)[5]["powered"])
+    assert all(e.get("powered", True) for e in _rail(live))
+
+
+def test_a_zero_cycle_click_commands_the_page_s_ax2(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """§6.30: bit 12 of 0x7600 + 0x10 * (N - 1), of the module the clicking page picked."""
+    live, first, second = served
+    picker = _widget(first, "Module", "7 AX2")
+    first.set(picker, "7 AX2")
+    second.set(picker, "2 DI16")
+    _settle(live)
+    index = object_index(COMMAND_INDEX, 7)
+    box = _widget(first, "Zero-cycle command enc 1", None)
+    first.set(box, True)
+    _wait(lambda: _read(live, index) & CMD_ZERO_CYCLE[0])
+    live.runtime.advance(100_000).result(timeout=30)
+    _settle(live)
+    assert first.updates(box)[-1] is True  # the model's bit, on the page that set it
+    assert True not in second.updates(box)  # its DI16 has no such bit
+    first.set(box, False)
+    _wait(lambda: not _read(live, index) & CMD_ZERO_CYCLE[0])
+
+
+def test_unplug_then_plug_are_commanded_in_click_order_with_the_page_s_type(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """§2: modules plugged and unplugged by hand; Plug puts in the type the page chose."""
+    live, first, second = served
+    picker = _widget(second, "Module", "2 DI16")
+    second.set(picker, "2 DI16")
+    first.set(picker, "4 AI8D")
+    plug_type = _widget(second, "Plug type", "DI16")
+    second.set(plug_type, "DI16")
+    first.set(plug_type, "AO4")
+    _settle(live)
+    rail = _widget(second, "Rail", None)
+    second.set(rail, "Unplug")
+    second.set(rail, "Plug")
+    live.runtime.advance(100_000).result(timeout=30)
+    _settle(live)
+    assert [e["type"] for e in _rail(live)[1:4]] == ["DI16", None, "AI8D"]
