@@ -170,3 +170,27 @@ def test_unplug_then_plug_are_commanded_in_click_order_with_the_page_s_type(
     live.runtime.advance(100_000).result(timeout=30)
     _settle(live)
     assert [e["type"] for e in _rail(live)[1:4]] == ["DI16", None, "AI8D"]
+
+
+def test_a_slave_target_picked_on_one_page_is_not_the_other_page_s(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """The Line tab's Slave actions Target (a CPX-E-EC module): page A's pick of cpx/2 moves
+    nothing on page B, and B's Apply acts on B's own pick, cpx/1 (a 16DI: set_input)."""
+    live, first, second = served
+    controls = live.dashboard.line.controls  # type: ignore[union-attr]
+    target = _widget(first, "Target", "cpx/2")
+    second.set(target, "cpx/1")
+    first.set(target, "cpx/2")
+    _settle(live)
+    _settle(live)  # the actions both picks take, read and offered
+    assert "cpx/2" not in second.updates(target)
+    assert "cpx/1" not in first.updates(target)
+    _folder, form = controls.forms["cpx"]
+    assert "set_input" in form.options()
+    form.choice.value = "set_input"  # the form's fields are one for every page
+    form.rebuild()
+    form.handle("channel").value = 5
+    form.handle("on").value = True
+    second.set(form.handles[2]._impl.uuid, True)  # B presses Apply
+    _wait(lambda: live.runtime.submit(
+        lambda: live.rig.device("cpx").modules[0].field_inputs[5]).result(timeout=10))

@@ -19,7 +19,7 @@ from app.ui.panels.action_form import ActionForm
 
 def _form(live: ServedRig, target: str, action: str) -> ActionForm:
     controls = live.dashboard.line.controls  # type: ignore[union-attr]
-    controls.targets["cpx"].value = target
+    controls.targets["cpx"].set_all(target)
     form = controls.fault_forms["cpx"]
     other = next(n for n in form.options() if n != action)
     for name in (other, action):  # as a page picks it

@@ -49,14 +49,14 @@ def test_the_forms_offer_what_the_picked_target_takes() -> None:
     with served_default_rig(1.0) as live:
         controls = live.dashboard.line.controls  # type: ignore[union-attr]
         operate, faults = controls.all_forms()["cpx"]
-        controls.targets["cpx"].value = "cpx/2"
+        controls.targets["cpx"].set_all("cpx/2")
         drawn(live)
         drawn(live)
         assert not set(operate.options()) & DEVICE_ONLY, operate.options()
         assert "force" in operate.options()
         assert not set(faults.options()) & {"cable", "power", "supply"}, faults.options()
         assert {"short_circuit", "inject_fault"} <= set(faults.options())
-        controls.targets["cpx"].value = "cpx"
+        controls.targets["cpx"].set_all("cpx")
         drawn(live)
         drawn(live)
         assert {"set_dil", "set_rotary", "restart"} <= set(operate.options())
@@ -71,7 +71,7 @@ def test_the_target_lists_follow_the_rig() -> None:
         controls = live.dashboard.line.controls  # type: ignore[union-attr]
         target = controls.targets["trscat"]
         assert tuple(target.options) == ("trscat", "trscat/1", "trscat/2")
-        target.value = "trscat/2"
+        target.set_all("trscat/2")
         live.runtime.command("trscat/3", "plug", {"type": "TRS-IO-E"}).result(timeout=10)
         # Frames until the list moves (drawn() allows a loaded machine too few for the
         # dashboard thread: it is not the list under test then).
@@ -80,7 +80,7 @@ def test_the_target_lists_follow_the_rig() -> None:
             live.advance(0.05)
             time.sleep(0.05)
         assert tuple(target.options) == ("trscat", "trscat/1", "trscat/2", "trscat/3")
-        assert target.value == "trscat/2"
+        assert target.default == "trscat/2"
 
 
 class _Dropdown:
@@ -100,7 +100,7 @@ def test_a_target_gone_from_the_rig_falls_back_to_the_device() -> None:
     sender = _Sender()
     actions = TargetActions(None, sender)  # type: ignore[arg-type]
     dropdown = _Dropdown(("cpx", "cpx/1", "cpx/2"), "cpx/2")
-    watch = Watch("cpx", dropdown, ())
+    watch = Watch("cpx", dropdown, (), asked={"cpx/2"})  # as watch() asked it
     first = {"cpx": {"modules": [{"module": 1, "type": "A"}, {"module": 2, "type": "B"}]}}
     actions.update([watch], first)
     assert dropdown.options == ("cpx", "cpx/1", "cpx/2") and sender.asked == []

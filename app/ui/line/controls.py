@@ -11,7 +11,9 @@ restart, ...) and, in a folder "trscat faults", what can make a fault (``roles.m
 inject_fault, link, field_supply, drop_frames, unplug / plug, ...; short_circuit, wire_break,
 supply, cable, ...), which a trainee's page does not show. The model refuses what does not
 apply to the target, and each form lists only what its Target takes, as the model says
-(app/ui/line/target_actions.py). The FastCAT keeps its own tab. Every command goes through
+(app/ui/line/target_actions.py). The Device and each Target are each page's own
+(ClientPick): a form acts on the clicking page's Target, and lists what the pages' Targets
+take together (the form is one for every page). The FastCAT keeps its own tab. Every command goes through
 ``CommandSender``.
 """
 
@@ -27,7 +29,7 @@ from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
-from app.ui.line.target_actions import TargetActions, Watch, targets
+from app.ui.line.target_actions import TargetActions, Watch, picked, targets
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_pick import ClientPick, send_on
 from app.ui.panels.per_client import instructor_for
@@ -152,7 +154,7 @@ class LineControls:
             if cables and frames else []
         self.forms: dict[str, tuple[Any, ActionForm]] = {}
         self.fault_forms: dict[str, ActionForm] = {}
-        self.targets: dict[str, Any] = {}  # each slave's Target dropdown (tests)
+        self.targets: dict[str, ClientPick] = {}  # each slave's Target picker (tests)
         self._target_actions = TargetActions(runtime, sender)
         self._watches: list[Watch] = []  # the shared Targets' (an instructor's: _Injure)
         # Each device's latest snapshot: a form starts from the present values (Param.current).
@@ -170,8 +172,10 @@ class LineControls:
                 faults = {n: a for n, a in shown.items() if makes_faults(kind, n)}
                 folder = gui.add_folder(device, visible=device == self.pick.default)
                 with folder:
-                    target = gui.add_dropdown("Target", tuple(targets(device,
-                                                                      devices.get(device) or {})))
+                    # Each page's own, as the Device: one page's pick of a module moved what
+                    # every page's forms acted on.
+                    target = ClientPick(server, gui.add_dropdown(
+                        "Target", tuple(targets(device, devices.get(device) or {}))))
                     self.targets[device] = target
                     apply = self._applier(sender, target)
                     form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
@@ -185,7 +189,8 @@ class LineControls:
                         fault_tables[device] = faults
                     shared = [form, *([self.fault_forms[device]]
                                       if device in self.fault_forms else [])]
-                    self._watches.append(self._target_actions.watch(device, target, shared))
+                    self._watches.append(self._target_actions.watch(
+                        device, target, shared, self._picks(server, target)))
                 self.forms[device] = (folder, form)
         # With a token the fault forms are the instructor's whole, with a Device and a Target
         # picker of their own: picking the slave to injure in the shared ones moved every
@@ -298,10 +303,17 @@ class LineControls:
         return lambda: self._snapshots.get(device)
 
     @staticmethod
+    def _picks(server: viser.ViserServer, target: ClientPick) -> Any:
+        """Every page's pick of ``target``, and a new page's."""
+        return lambda: {target.value_for(c) for c in server.get_clients()} | {target.default}
+
+    @staticmethod
     def _applier(sender: CommandSender, target: Any, confirm: bool = False) -> Any:
-        """``confirm``: a fault form's, whose Apply is confirmed on the clicking page."""
+        """``confirm``: a fault form's, whose Apply is confirmed on the clicking page; the
+        target is the clicking page's pick."""
         def apply(client: viser.ClientHandle | None, name: str, args: dict[str, Any]) -> None:
-            sender.send(client, str(target.value), name, args, confirm=confirm)
+            where = picked(target, None if client is None else client.client_id)
+            sender.send(client, where, name, args, confirm=confirm)
         return apply
 
     def all_forms(self) -> dict[str, list[ActionForm]]:

@@ -14,7 +14,7 @@ exists. Before, every list was the first snapshot's for good.
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,6 +22,7 @@ from app.runtime import Runtime
 from app.targets import parse_target
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_pick import ClientPick
 from app.ui.panels.widgets import set_options
 
 
@@ -33,14 +34,30 @@ def targets(device: str, snap: Mapping[str, Any]) -> list[str]:
     return [device, *(f"{device}/{n}" for n in parts)]
 
 
+def picked(target: Any, client_id: int | None) -> str:
+    """The Target ``client_id``'s page picked (a ClientPick: its own; a plain dropdown, an
+    instructor's own copy: its value)."""
+    return target.value_for(client_id) if isinstance(target, ClientPick) else str(target.value)
+
+
 @dataclass
 class Watch:
-    """A Target picker and the forms acting on what it picks."""
+    """A Target picker and the forms acting on what it picks. ``picks``: every Target the
+    pages have picked (a ClientPick: each page's own, and a new page's); the forms are one for
+    all of them and offer what those take together (the model refuses the rest)."""
 
     device: str
     target: Any
     forms: tuple[ActionForm, ...]
-    parked: list[str] | None = field(default=None)  # set by the simulation thread
+    picks: Callable[[], set[str]] | None = None
+    # Each Target's actions, for the device's parts as they are (``key``): simulation thread
+    known: dict[str, list[str]] = field(default_factory=dict)
+    asked: set[str] = field(default_factory=set)
+    key: int = 0
+    offered: list[str] | None = None
+
+    def picked(self) -> set[str]:
+        return self.picks() if self.picks is not None else {str(self.target.value)}
 
 
 def parts_key(snap: Mapping[str, Any]) -> tuple[Any, ...]:
@@ -56,32 +73,41 @@ class TargetActions:
         self._lock = threading.Lock()
         self._keys: dict[str, tuple[Any, ...]] = {}
 
-    def watch(self, device: str, target: Any, forms: Iterable[ActionForm]) -> Watch:
-        """Restrict ``forms`` to what ``target``'s pick takes, now and at each pick."""
-        watch = Watch(device, target, tuple(forms))
-        target.on_update(lambda _event: self.read(watch))
+    def watch(self, device: str, target: Any, forms: Iterable[ActionForm],
+              picks: Callable[[], set[str]] | None = None) -> Watch:
+        """Restrict ``forms`` to what ``target``'s picks take, now and at each pick."""
+        watch = Watch(device, target, tuple(forms), picks)
+        if isinstance(target, ClientPick):
+            target.on_pick(lambda _client, _picked: self.read(watch))
+        else:
+            target.on_update(lambda _event: self.read(watch))
         self.read(watch)
         return watch
 
     def read(self, watch: Watch) -> None:
-        picked = str(watch.target.value)
+        """Ask the model about the picked Targets not asked about yet for these parts."""
+        with self._lock:
+            key = watch.key
+            new = watch.picked() - watch.asked
+            watch.asked |= new
         runtime = self._runtime
+        for picked in sorted(new):
 
-        def ask() -> list[str]:
-            device_id, module = parse_target(picked)
-            return list(runtime.rig.device(device_id).target_actions(module))
+            def ask(picked: str = picked) -> list[str]:
+                device_id, module = parse_target(picked)
+                return list(runtime.rig.device(device_id).target_actions(module))
 
-        def park(names: list[str]) -> None:
-            if str(watch.target.value) == picked:  # else a newer pick's answer is coming
+            def park(names: list[str], picked: str = picked) -> None:
                 with self._lock:
-                    watch.parked = names
+                    if watch.key == key:  # else an answer about parts that changed since
+                        watch.known[picked] = names
 
-        self._sender.submit(None, "target actions", ask, done=park)
+            self._sender.submit(None, "target actions", ask, done=park)
 
     def update(self, watches: Iterable[Watch],
                devices: Mapping[str, Mapping[str, Any]] | None) -> None:
-        """Per frame: each Target list as the rig has it now, the parked lists shown; asked
-        again when a device's parts changed."""
+        """Per frame: each Target list as the rig has it now, the forms offering what the
+        picks take once known; asked again when a device's parts changed."""
         devices = devices or {}
         changed = set()
         for device, snap in devices.items():
@@ -92,13 +118,27 @@ class TargetActions:
         for watch in watches:
             # Every frame, not only on a change of parts: a list built before the first
             # update (an instructor's, from an older snapshot) catches up too. A vanished pick
-            # falls back to the device, whose on_update asks for its actions.
+            # falls back to the device.
             if watch.device in devices:
-                set_options(watch.target, targets(watch.device, devices[watch.device]))
+                options = targets(watch.device, devices[watch.device])
+                if isinstance(watch.target, ClientPick):
+                    watch.target.set_options(options)
+                    watch.target.resend()
+                else:
+                    set_options(watch.target, options)
             if watch.device in changed:
-                self.read(watch)
+                with self._lock:
+                    watch.key += 1
+                    watch.known.clear()
+                    watch.asked.clear()
+            self.read(watch)  # a pick no page made (one moved by new options) too
             with self._lock:
-                names, watch.parked = watch.parked, None
-            if names is not None:
-                for form in watch.forms:
-                    form.restrict(names)
+                picks = watch.picked()
+                if not picks <= set(watch.known):
+                    continue
+                names = sorted({n for p in picks for n in watch.known[p]})
+                if names == watch.offered:
+                    continue
+                watch.offered = names
+            for form in watch.forms:
+                form.restrict(names)
