@@ -91,3 +91,35 @@ def test_a_register_read_on_one_page_stays_on_that_page(live: LiveDashboard,
     finally:
         for page in pages:
             page.context.close()
+
+
+def _picked(page: Any, label: str) -> str:
+    return str(page.get_by_label(label, exact=True).first.input_value())
+
+
+def test_a_module_pick_and_its_unplug_stay_on_their_page(live: LiveDashboard,
+                                                         browser: Any) -> None:
+    """The FastCAT tab's Module: page 1 picks module 3, page 2 keeps module 1 and its Unplug
+    pulls module 1 (seed 000 §2). Before, page 2's picker showed module 3 and its Unplug
+    pulled the module page 1 had picked."""
+    live.advance(BOOT_S)
+    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
+             for _ in range(2)]
+    try:
+        for page in pages:
+            open_dashboard(page, live)
+        first, second = pages
+        wait_until(lambda: _picked(second, "Module") == "1 DB16", what="module 1 on page 2")
+        choose(first, "Module", "3 DO16")
+        wait_until(lambda: _picked(first, "Module") == "3 DO16", what="module 3 on page 1")
+        live.advance(0.2)  # frames for both pages
+        assert _picked(second, "Module") == "1 DB16"
+        second.get_by_role("button", name="Unplug").click()
+        live.wait_for_state(lambda s: s["rail"][0]["type"] is None, "module 1 off the rail")
+        assert live.snapshot()["rail"][2]["type"] == "DO16"
+        live.advance(0.2)
+        wait_until(lambda: _picked(second, "Module") == "1 (empty)", what="its new label")
+        assert _picked(first, "Module") == "3 DO16"
+    finally:
+        for page in pages:
+            page.context.close()
