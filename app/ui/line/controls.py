@@ -13,8 +13,8 @@ supply, cable, ...), which a trainee's page does not show. The model refuses wha
 apply to the target, and each form lists only what its Target takes, as the model says
 (app/ui/line/target_actions.py). The Device and each Target are each page's own
 (ClientPick): a form acts on the clicking page's Target, and lists what the pages' Targets
-take together (the form is one for every page). The FastCAT keeps its own tab. Every command goes through
-``CommandSender``.
+take together (the form is one for every page). The FastCAT keeps its own tab. Every command
+goes through ``CommandSender``.
 """
 
 from __future__ import annotations
