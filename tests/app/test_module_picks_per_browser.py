@@ -194,3 +194,37 @@ def test_a_slave_target_picked_on_one_page_is_not_the_other_page_s(
     second.set(form.handles[2]._impl.uuid, True)  # B presses Apply
     _wait(lambda: live.runtime.submit(
         lambda: live.rig.device("cpx").modules[0].field_inputs[5]).result(timeout=10))
+
+
+def _injected(live: ServedRig) -> list[dict[str, Any]]:
+    return list(live.runtime.submit(
+        lambda: live.rig.device("fastcat").snapshot()["injected"]).result(timeout=10))
+
+
+def test_the_fault_pickers_are_each_page_s_and_inject_sends_the_page_s_fault(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """An open rig's Faults form (seed 000 §7.5 / §7.6): page A's Table, Fault and Target
+    move nothing on page B, whose Inject sends B's own pick (coupler code 0x01, no module)."""
+    live, first, second = served
+    control = live.dashboard._panels.control  # type: ignore[union-attr]
+    table = _widget(first, "Table", "module codes (§7.6)")
+    fault = _widget(first, "Fault", "0x02 IOFAULT")
+    target = _widget(first, "Target", "coupler (no module)")
+    ai8d = next(o for o in control._target.options if o.endswith("AI8D"))
+    first.set(table, "module codes (§7.6)")
+    _settle(live)
+    first.set(fault, "0x02 IOFAULT")
+    first.set(target, ai8d)
+    _settle(live)
+    for uuid, picked in ((table, "module codes (§7.6)"), (fault, "0x02 IOFAULT"),
+                         (target, ai8d)):
+        assert picked not in second.updates(uuid)
+    one, two = _ids(live)
+    assert control._fault.value_for(one) == "0x02 IOFAULT"
+    assert control._fault.value_for(two) == "0x01 MODULE_CHANGED"
+    injection = _widget(second, "Injection", None)
+    second.set(injection, "Inject")
+    _wait(lambda: _injected(live))
+    assert _injected(live) == [{"fault": "MODULE_CHANGED", "code": 1, "module": None}]
+    second.set(injection, "Clear")
+    _wait(lambda: not _injected(live))

@@ -198,10 +198,14 @@ def test_fault_and_alarm_choices_show_whole_in_their_boxes(live: LiveDashboard,
     choose(page, "Fault", "0x12 ADDRESS_MASTER_NOT_OK")
     panels = live.dashboard._panels
     assert panels is not None
-    fault = panels.control._fault
-    wait_until(lambda: fault.value == "0x12 ADDRESS_MASTER_NOT_OK", what="the pick")
-    assert fault.hint is not None and fault.hint.startswith(
-        "0x12 ADDRESS_MASTER_NOT_OK: The address set with the rotary switch does not match")
+    control = panels.control
+    (client_id,) = live.dashboard.server.get_clients()
+    # Each page's own pick, and the hint its page was sent (an open rig's Fault: ClientPick)
+    wait_until(lambda: control._fault.value_for(client_id) == "0x12 ADDRESS_MASTER_NOT_OK",
+               what="the pick")
+    wait_until(lambda: str(control._fault_hints.sent(client_id)).startswith(
+        "0x12 ADDRESS_MASTER_NOT_OK: The address set with the rotary switch does not match"),
+        what="the page's hint")
     page.get_by_role("tab", name="Servo drive").click()
     alarms = sorted({o for bus in ("modbus", "canopen", "ethercat", "profinet")
                      for o in alarm_options(bus)})

@@ -17,6 +17,8 @@ from typing import Any
 import viser
 
 from app.ui.commands import CommandSender
+from app.ui.panels.client_pick import ClientPick
+from app.ui.panels.page_prop import PageProp
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import (
     DetailHint,
@@ -102,6 +104,11 @@ def fault_targets(rail: Sequence[Mapping[str, Any]]) -> list[str]:
     return [f"{n} {t}" for n, t in numbered]
 
 
+def _picked(widget: Any, client_id: int | None) -> str:
+    """What ``widget`` holds on ``client_id``'s page (a ClientPick: the page's own)."""
+    return widget.value_for(client_id) if isinstance(widget, ClientPick) else str(widget.value)
+
+
 def option_slot(option: str) -> int | None:
     head = option.split(" ", 1)[0]
     return int(head) if head.isdigit() else None
@@ -151,11 +158,12 @@ class ControlPanel:
         self._target = shared.target if shared else None
         self._link = boxes[0].handle if boxes else None
         self._tbus_low = boxes[1].handle if boxes else None
-        self.instructor_only = (shared.table, shared.fault, shared.target, shared.actions,
-                                self._link, self._tbus_low) if shared and boxes else ()
+        self.instructor_only = (shared.table.handle, shared.fault.handle, shared.target.handle,
+                                shared.actions, self._link, self._tbus_low) \
+            if shared and boxes else ()
         # Boxes whose longest option needs the room of a narrower label column (the dashboard's
         # widgets.short_label_css; a style row in the folder would be a row of its own).
-        self.short_labels = (shared.fault,) if shared else ()
+        self.short_labels = (shared.fault.handle,) if shared else ()
 
         if master_id is not None:
             self._master_controls(gui, master_id)
@@ -181,18 +189,19 @@ class ControlPanel:
             self._send(event.client, self._id, "hold_cnf", {"seconds": CNF_SHORT_S})
 
     def _fault_form(self, gui: Any) -> _FaultForm:
+        if self._instructor.shared:
+            return self._page_fault_form(gui)
         form = _FaultForm(gui.add_dropdown("Table", tuple(TABLE_LABELS.values())),
                           gui.add_dropdown("Fault", self._fault_labels("coupler")),
                           gui.add_dropdown("Target", (COUPLER_TARGET,)),
                           gui.add_button_group("Injection", ("Inject", "Clear")))
-        if not self._instructor.shared:  # the Fault box's narrower label (short_label_css)
-            gui.add_html(short_label_css([form.fault]))
+        gui.add_html(short_label_css([form.fault]))  # the Fault box's narrower label
         hint = DetailHint(form.fault, lambda: {
-            f.label: f.detail for f in self._faults[self._table_key(form.table)]})
+            f.label: f.detail for f in self._faults[self._table_key(form.table.value)]})
 
         @form.table.on_update
         def _(event: viser.GuiEvent) -> None:
-            set_options(form.fault, list(self._fault_labels(self._table_key(form.table))))
+            set_options(form.fault, list(self._fault_labels(self._table_key(form.table.value))))
             hint.refresh()
             self._offer_targets(form)
 
@@ -200,18 +209,58 @@ class ControlPanel:
         def _(event: viser.GuiEvent) -> None:
             self._offer_targets(form)
 
+        self._on_inject(form)
+        return form
+
+    def _page_fault_form(self, gui: Any) -> _FaultForm:
+        """An open rig's one form, its pickers each page's own (ClientPick): one operator's
+        pick of the fault or module to inject moved every other page's, and what its Inject
+        and Clear then sent. The Fault box offers each page the codes of its own Table, with
+        the picked code's description as its hint (PageProp)."""
+        every = tuple(dict.fromkeys(label for table in TABLE_LABELS
+                                    for label in self._fault_labels(table)))
+        form = _FaultForm(
+            ClientPick(self._server, gui.add_dropdown("Table", tuple(TABLE_LABELS.values()))),
+            ClientPick(self._server, gui.add_dropdown(
+                "Fault", every, initial_value=self._fault_labels("coupler")[0])),
+            ClientPick(self._server, gui.add_dropdown("Target", (COUPLER_TARGET,))),
+            gui.add_button_group("Injection", ("Inject", "Clear")))
+        self._fault_options = PageProp(self._server, form.fault.handle, "options")
+        self._fault_hints = PageProp(self._server, form.fault.handle, "hint")
+
+        def table_picked(client: viser.ClientHandle, label: str) -> None:
+            form.fault.set_for(client, self._fault_labels(self._table_key(label))[0])
+            self._show_faults(form)
+
+        form.table.on_pick(table_picked)
+        form.fault.on_pick(lambda _client, _label: self._show_faults(form))
+        self._on_inject(form)
+        return form
+
+    def _show_faults(self, form: _FaultForm) -> None:
+        """Each page its Table's codes and its Fault's description (an open rig's form)."""
+        def labels(client_id: int) -> tuple[str, ...]:
+            return self._fault_labels(self._table_key(form.table.value_for(client_id)))
+
+        def hint(client_id: int) -> str | None:
+            fault = self._selected_fault(form, client_id)
+            return None if fault is None else fault.detail
+
+        self._fault_options.show(labels)
+        self._fault_hints.show(hint)
+
+    def _on_inject(self, form: _FaultForm) -> None:
         @form.actions.on_click
         async def _(event: viser.GuiEvent) -> None:
             # On viser's loop: the group's value is still the button of this click.
             verb = "inject_fault" if event.target.value == "Inject" else "clear_fault"
-            fault = self._selected_fault(form)
+            fault = self._selected_fault(form, event.client_id)
             if fault is None:
                 return
-            module = option_slot(form.target.value)  # byte 0 of the emergency (§7)
+            # byte 0 of the emergency (§7): the clicking page's Target
+            module = option_slot(_picked(form.target, event.client_id))
             target = self._id if module is None else f"{self._id}/{module}"
             self._send(event.client, target, verb, {"fault": fault.ref})
-
-        return form
 
     def _cause_boxes(self, gui: Any) -> tuple[Synced, Synced]:
         device = self._id
@@ -239,18 +288,20 @@ class ControlPanel:
             client, master_id, "set_target", {"state": state}))
 
     @staticmethod
-    def _table_key(table: Any) -> str:
+    def _table_key(table: str) -> str:
         for key, label in TABLE_LABELS.items():
-            if label == table.value:
+            if label == table:
                 return key
         return "coupler"
 
     def _fault_labels(self, table: str) -> tuple[str, ...]:
         return tuple(f.label for f in self._faults[table]) or ("(no codes)",)
 
-    def _selected_fault(self, form: _FaultForm) -> FaultOption | None:
-        for fault in self._faults[self._table_key(form.table)]:
-            if fault.label == form.fault.value:
+    def _selected_fault(self, form: _FaultForm, client_id: int | None) -> FaultOption | None:
+        """The fault ``client_id``'s page picked (an open rig's pickers are each page's)."""
+        picked = _picked(form.fault, client_id)
+        for fault in self._faults[self._table_key(_picked(form.table, client_id))]:
+            if fault.label == picked:
                 return fault
         return None
 
@@ -288,12 +339,17 @@ class ControlPanel:
             tbus.follow(bool(snap.get("tbus_low", False)))
         self._modules = fault_targets(snap.get("rail") or [])
         for form in self._forms.each():
-            self._offer_targets(form)
+            if isinstance(form.target, ClientPick):  # an open rig's: each page's pick
+                form.target.set_options([COUPLER_TARGET, *self._modules])
+                form.target.resend()
+                self._show_faults(form)
+            else:
+                self._offer_targets(form)
 
     def _offer_targets(self, form: _FaultForm) -> None:
         """Only the targets the picked code takes: a module pick for a code about no node
         was refused by the coupler once applied (§7.5)."""
-        fault = self._selected_fault(form)
+        fault = self._selected_fault(form, None)
         on_coupler = fault.on_coupler if fault is not None else True
         on_module = fault.on_module if fault is not None else True
         set_options(form.target, [*([COUPLER_TARGET] if on_coupler else []),

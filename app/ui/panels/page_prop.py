@@ -41,7 +41,7 @@ class PageProp:
                     self._sent[client_id] = value
                     send_to(client, self._uuid, self._prop, value)
 
-    def sent_to(self) -> set[int]:
-        """The pages that got a value (the others are new or not ready yet)."""
+    def sent(self, client_id: int) -> Any:
+        """What ``client_id``'s page was sent last (None: nothing yet)."""
         with self._lock:
-            return set(self._sent)
+            return self._sent.get(client_id)
