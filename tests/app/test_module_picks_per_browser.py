@@ -228,3 +228,33 @@ def test_the_fault_pickers_are_each_page_s_and_inject_sends_the_page_s_fault(
     assert _injected(live) == [{"fault": "MODULE_CHANGED", "code": 1, "module": None}]
     second.set(injection, "Clear")
     _wait(lambda: not _injected(live))
+
+
+def _cables(live: ServedRig) -> list[bool]:
+    return [bool(c["master_pulled"]) for c in live.runtime.submit(
+        lambda: live.rig.device("master").snapshot()["cables"]).result(timeout=10)]
+
+
+def test_the_master_s_cable_picker_is_each_page_s_and_pull_pulls_the_page_s_cable(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """An open rig's Line tab, Cables and power (seed 003): page A's pick of cable 2 moves
+    nothing on page B, whose Pull pulls B's own pick, cable 3; the pick keeps its cable when
+    the list marks it pulled."""
+    live, first, second = served
+    cable = _widget(first, "Cable", "2 trscat -> cpx")
+    second.set(cable, "3 cpx -> drive_ec-ecat")
+    first.set(cable, "2 trscat -> cpx")
+    _settle(live)
+    assert "2 trscat -> cpx" not in second.updates(cable)
+    assert "3 cpx -> drive_ec-ecat" not in first.updates(cable)
+    second.set(_widget(second, "Cable plug", None), "Pull")
+    _wait(lambda: _cables(live)[3])
+    assert _cables(live) == [False, False, False, True]
+    live.runtime.advance(100_000).result(timeout=30)
+    _settle(live)
+    controls = live.dashboard.line.controls  # type: ignore[union-attr]
+    one, two = _ids(live)
+    assert controls.cable.value_for(two) == "3 cpx -> drive_ec-ecat (pulled)"
+    assert controls.cable.value_for(one) == "2 trscat -> cpx"
+    second.set(_widget(second, "Cable plug", None), "Plug")
+    _wait(lambda: not any(_cables(live)))

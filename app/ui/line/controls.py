@@ -90,8 +90,8 @@ class _Cables:
 
     @property
     def handles(self) -> list[Any]:
-        return [self.cable, self.plug, self.damage, self.damage_ops, self.slave_power,
-                self.power]
+        return [_handle(self.cable), self.plug, self.damage, self.damage_ops,
+                _handle(self.slave_power), self.power]
 
 
 @dataclass(frozen=True)
@@ -105,7 +105,12 @@ class _Frames:
 
     @property
     def handles(self) -> list[Any]:
-        return [self.frames, self.lose, self.dc_fault, self.dc_ops]
+        return [self.frames, self.lose, _handle(self.dc_fault), self.dc_ops]
+
+
+def _handle(widget: Any) -> Any:
+    """The viser handle of a picker (a ClientPick's, an open rig's)."""
+    return widget.handle if isinstance(widget, ClientPick) else widget
 
 
 class LineControls:
@@ -132,6 +137,7 @@ class LineControls:
         self._send, self._master_id = send, master_id
         self._master_state: Mapping[str, Any] = {}
         instructor = instructor_for(server)
+        self._server, self._shared = server, instructor.shared
         self._cables = instructor.part(self._cable_form)
         self._frames = instructor.part(self._frames_form)
         with gui.add_folder("Master", expand_by_default=False):
@@ -210,39 +216,47 @@ class LineControls:
 
         self.pick.on_pick(lambda client, device: self._show(device, client))
 
+    def _own(self, handle: Any) -> Any:
+        """An open rig's picker is each page's own (ClientPick): one operator's pick of the
+        cable to pull or the slave to switch off moved every other page's, and what its
+        buttons then sent. An instructor's copy is its connection's anyway."""
+        return ClientPick(self._server, handle) if self._shared else handle
+
     def _cable_form(self, gui: Any) -> _Cables:
         send, master_id, order = self._send, self._master_id, self._order
         with gui.add_folder("Cables and power"):
             form = _Cables(
-                gui.add_dropdown("Cable", tuple(cable_options(self._master_state, order))
-                                 or ("-",)),
+                self._own(gui.add_dropdown("Cable", tuple(cable_options(
+                    self._master_state, order)) or ("-",))),
                 gui.add_button_group("Cable plug", ("Pull", "Plug")),
                 gui.add_number("Spoiled %", 10, min=1, max=100, step=1,
                                hint="share of the frames the cable spoils"),
                 gui.add_button_group("Cable damage", ("Damage", "Repair")),
-                gui.add_dropdown("Slave to power", tuple(slave_options(self._master_state,
-                                                                       order)) or ("-",)),
+                self._own(gui.add_dropdown("Slave to power", tuple(slave_options(
+                    self._master_state, order)) or ("-",))),
                 gui.add_button_group("Slave power", ("Power off", "Power on")))
 
+        # On viser's loop (coroutines): a group's value is still the button of this click.
         @form.plug.on_click
-        def _(event: viser.GuiEvent) -> None:
-            verb = "pull_cable" if form.plug.value == "Pull" else "plug_cable"
-            send(event.client, master_id, verb, {"cable": leading_int(form.cable.value)})
+        async def _(event: viser.GuiEvent) -> None:
+            verb = "pull_cable" if event.target.value == "Pull" else "plug_cable"
+            send(event.client, master_id, verb,
+                 {"cable": leading_int(picked(form.cable, event.client_id))})
 
         @form.damage_ops.on_click
-        def _(event: viser.GuiEvent) -> None:
-            cable = leading_int(form.cable.value)
-            if form.damage_ops.value == "Damage":
+        async def _(event: viser.GuiEvent) -> None:
+            cable = leading_int(picked(form.cable, event.client_id))
+            if event.target.value == "Damage":
                 send(event.client, master_id, "damage_cable",
                      {"cable": cable, "percent": int(form.damage.value)})
             else:
                 send(event.client, master_id, "repair_cable", {"cable": cable})
 
         @form.power.on_click
-        def _(event: viser.GuiEvent) -> None:
+        async def _(event: viser.GuiEvent) -> None:
             send(event.client, master_id, "power_slave",
-                 {"position": leading_int(form.slave_power.value),
-                  "on": form.power.value == "Power on"})
+                 {"position": leading_int(picked(form.slave_power, event.client_id)),
+                  "on": event.target.value == "Power on"})
 
         return form
 
@@ -250,7 +264,8 @@ class LineControls:
         send, master_id = self._send, self._master_id
         with gui.add_folder("Frames and DC"):
             form = _Frames(gui.add_number("Frames to lose", 10, min=1, max=100000, step=1),
-                           gui.add_button("Lose frames"), gui.add_dropdown("DC fault", DC_FAULTS),
+                           gui.add_button("Lose frames"),
+                           self._own(gui.add_dropdown("DC fault", DC_FAULTS)),
                            gui.add_button_group("DC", ("Inject", "Clear")))
 
         @form.lose.on_click
@@ -258,9 +273,10 @@ class LineControls:
             send(event.client, master_id, "lose_frames", {"count": int(form.frames.value)})
 
         @form.dc_ops.on_click
-        def _(event: viser.GuiEvent) -> None:
-            if form.dc_ops.value == "Inject":
-                send(event.client, master_id, "dc_fault", {"kind": form.dc_fault.value})
+        async def _(event: viser.GuiEvent) -> None:
+            if event.target.value == "Inject":
+                send(event.client, master_id, "dc_fault",
+                     {"kind": picked(form.dc_fault, event.client_id)})
             else:
                 send(event.client, master_id, "clear_dc_fault", {})
 
@@ -353,8 +369,12 @@ class LineControls:
         self._master_state = master
         cables, slaves = cable_options(master, self._order), slave_options(master, self._order)
         for form in self._cables.each():
-            set_options(form.cable, cables)
-            set_options(form.slave_power, slaves)
+            for widget, options in ((form.cable, cables), (form.slave_power, slaves)):
+                if isinstance(widget, ClientPick):  # each page's pick keeps its cable / slave
+                    widget.set_options(options)
+                    widget.resend()
+                else:
+                    set_options(widget, options)
         # Everyone's list: the "(off)" marks are the injected supply, which a real master
         # cannot read (a slave off looks like its cable pulled): with a token only on the
         # instructor's own Slave to power list (docs/classroom.md).
