@@ -1,6 +1,8 @@
-"""A server-level element's property that each page gets for its own pick (a folder's
-``visible``: the FastCAT's encoder section shows on the page that picked an AX2), as
-:class:`app.ui.panels.client_pick.ClientHtml` does for an HTML element's content.
+"""A server-level element's property that each page gets for its own pick, as
+:class:`app.ui.panels.client_pick.ClientHtml` does for an HTML element's content: a folder's
+``visible`` (the FastCAT's encoder section shows on the page that picked an AX2), a
+dropdown's ``options`` and ``hint`` (an open rig's Fault box: the codes of the page's own
+Table, the description of its own pick).
 
 The server's own value of the property is never set after the element is built: a message to
 every page and one to a single page go out by separate producers in no set order, so a later
