@@ -2,32 +2,39 @@
 byte 0 holds "l'eventuale indice del nodo"; 0x10-0x13 are about no node, and the coupler
 refuses them on a module; §7.6: a module code needs a module). Before, every code offered the
 coupler and every module, and the device refused 0x10-0x13 on a module once applied. The
-choice is the device's (``AlarmCode.names_module`` / ``on_coupler``), not a table here."""
+choice is the device's (``AlarmCode.names_module`` / ``on_coupler``), not a table here.
+
+Here the instructor's form (a classroom with a token: each instructor connection's own
+widgets, ``ControlPanel._offer_targets``); an open rig's form, whose pickers are each page's
+own, is tests/app/test_fastcat_fault_targets_per_page.py."""
 
 from __future__ import annotations
 
 from collections.abc import Iterator
 
 import pytest
-from served_dashboard import drawn, served_default_rig
 
-from app.screenshots import ServedRig
+from app.ui.panels.classroom_rig import ServedRig
 from app.ui.panels.control import COUPLER_TARGET, TABLE_LABELS
 from devices.fastcat.alarms import COUPLER_CODES, MODULE_CODES, NO_NODE_COUPLER_CODES
+from tests.app.test_classroom_leak import open_class
 
 
 @pytest.fixture(scope="module")
 def served() -> Iterator[ServedRig]:
-    with served_default_rig(8.0) as live:
+    with open_class() as (live, _trainee, _instructor):
+        live.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
+        live.runtime.advance(3_000_000).result(timeout=30)
         yield live
 
 
 def _targets_for(served: ServedRig, table: str, label: str) -> tuple[str, ...]:
     control = served.dashboard._panels.control  # type: ignore[union-attr]
-    [form] = control._forms.each()
+    [form] = control._forms.each()  # the instructor's
     form.table.value = TABLE_LABELS[table]
     form.fault.value = label
-    drawn(served)
+    served.runtime.advance(10_000).result(timeout=10)  # a frame: the form offers anew
+    served.dashboard.tick()
     return tuple(form.target.options)
 
 

@@ -104,6 +104,15 @@ def fault_targets(rail: Sequence[Mapping[str, Any]]) -> list[str]:
     return [f"{n} {t}" for n, t in numbered]
 
 
+def taken_targets(fault: FaultOption | None, modules: Sequence[str]) -> list[str]:
+    """The Target box's options for ``fault``: what the code takes, the device's own answer
+    (seed 000 §7.5: 0x10-0x13 name no node, the coupler only; §7.6: the modules only)."""
+    on_coupler = fault.on_coupler if fault is not None else True
+    on_module = fault.on_module if fault is not None else True
+    return [*([COUPLER_TARGET] if on_coupler else []),
+            *(modules if on_module else [])] or [NO_MODULE_TARGET]
+
+
 def _picked(widget: Any, client_id: int | None) -> str:
     """What ``widget`` holds on ``client_id``'s page (a ClientPick: the page's own)."""
     return widget.value_for(client_id) if isinstance(widget, ClientPick) else str(widget.value)
@@ -216,7 +225,8 @@ class ControlPanel:
         """An open rig's one form, its pickers each page's own (ClientPick): one operator's
         pick of the fault or module to inject moved every other page's, and what its Inject
         and Clear then sent. The Fault box offers each page the codes of its own Table, with
-        the picked code's description as its hint (PageProp)."""
+        the picked code's description as its hint, and the Target the targets its own code
+        takes (PageProp)."""
         every = tuple(dict.fromkeys(label for table in TABLE_LABELS
                                     for label in self._fault_labels(table)))
         form = _FaultForm(
@@ -227,6 +237,7 @@ class ControlPanel:
             gui.add_button_group("Injection", ("Inject", "Clear")))
         self._fault_options = PageProp(self._server, form.fault.handle, "options")
         self._fault_hints = PageProp(self._server, form.fault.handle, "hint")
+        self._target_options = PageProp(self._server, form.target.handle, "options")
 
         def table_picked(client: viser.ClientHandle, label: str) -> None:
             form.fault.set_for(client, self._fault_labels(self._table_key(label))[0])
@@ -238,7 +249,8 @@ class ControlPanel:
         return form
 
     def _show_faults(self, form: _FaultForm) -> None:
-        """Each page its Table's codes and its Fault's description (an open rig's form)."""
+        """Each page its Table's codes, its Fault's description and the targets its code
+        takes (an open rig's form)."""
         def labels(client_id: int) -> tuple[str, ...]:
             return self._fault_labels(self._table_key(form.table.value_for(client_id)))
 
@@ -248,6 +260,25 @@ class ControlPanel:
 
         self._fault_options.show(labels)
         self._fault_hints.show(hint)
+        self._show_targets(form)
+
+    def _show_targets(self, form: _FaultForm) -> None:
+        """Each page the targets its own code takes (§7.5 / §7.6); a page whose Target its
+        code does not take moves to the first one it does, as the plain form's would."""
+        modules = list(self._modules)
+        offered: dict[int, tuple[str, ...]] = {}
+
+        def targets(client_id: int) -> tuple[str, ...]:
+            if client_id not in offered:
+                offered[client_id] = tuple(taken_targets(
+                    self._selected_fault(form, client_id), modules))
+            return offered[client_id]
+
+        self._target_options.show(targets)
+        for client_id, client in self._server.get_clients().items():
+            allowed = targets(client_id)
+            if form.target.value_for(client_id) not in allowed:
+                form.target.set_for(client, allowed[0])
 
     def _on_inject(self, form: _FaultForm) -> None:
         @form.actions.on_click
@@ -340,17 +371,24 @@ class ControlPanel:
         self._modules = fault_targets(snap.get("rail") or [])
         for form in self._forms.each():
             if isinstance(form.target, ClientPick):  # an open rig's: each page's pick
-                form.target.set_options([COUPLER_TARGET, *self._modules])
-                form.target.resend()
-                self._show_faults(form)
+                self._offer_every_target(form)
             else:
                 self._offer_targets(form)
+
+    def _offer_every_target(self, form: _FaultForm) -> None:
+        """An open rig's Target: the server's options are what any code takes (a page's pick
+        must be one of them), each page is offered what its own code takes (_show_targets)."""
+        every = list(dict.fromkeys(target for faults in self._faults.values()
+                                   for fault in faults
+                                   for target in taken_targets(fault, self._modules)))
+        before = form.target.options
+        form.target.set_options(every)
+        if form.target.options != before:  # went to every page, over each page's own
+            self._target_options.overwritten()
+        form.target.resend()
+        self._show_faults(form)
 
     def _offer_targets(self, form: _FaultForm) -> None:
         """Only the targets the picked code takes: a module pick for a code about no node
         was refused by the coupler once applied (§7.5)."""
-        fault = self._selected_fault(form, None)
-        on_coupler = fault.on_coupler if fault is not None else True
-        on_module = fault.on_module if fault is not None else True
-        set_options(form.target, [*([COUPLER_TARGET] if on_coupler else []),
-                                  *(self._modules if on_module else [])] or [NO_MODULE_TARGET])
+        set_options(form.target, taken_targets(self._selected_fault(form, None), self._modules))
