@@ -3,9 +3,9 @@ and a widget property each page gets for its own content (a box's hint).
 
 A :class:`~app.ui.panels.client_input.ClientInput` keeps each page's value, but a page that
 has typed nothing read viser's value, which is the last value any page sent: page B's Read
-took the register page A had picked. A :class:`ClientForm` puts the field's initial value
-back after each page's change, so a page that has not changed it reads the initial value, as
-its browser shows it (docs/dashboard.md "Several browsers").
+took the register page A had picked. A :class:`ClientForm` gives such a page the field's
+initial value, as its browser shows it, and puts that value back as viser's after each
+page's change, which is what a new page is sent (docs/dashboard.md "Several browsers").
 """
 
 from __future__ import annotations
@@ -38,6 +38,15 @@ class ClientForm(ClientInput):
         client = self._server.get_clients().get(client_id)
         if self._on_change is not None and client is not None:
             self._on_change(client, value)
+
+    def value_for(self, client_id: int | None) -> Any:
+        """What ``client_id``'s page holds, the initial value for a page that has typed
+        nothing. Never viser's value: viser stores a page's value as the widget's before
+        :meth:`changed` puts the initial one back, and a read in between (viser's thread
+        pool, the dashboard thread) took the other page's for this one."""
+        with self._lock:
+            return self._values.get(client_id, self.initial) if client_id is not None \
+                else self.initial
 
     def value_of(self, client: Any) -> Any:
         """What ``client``'s page holds (the initial value for no page: a test, a scenario)."""
