@@ -6,7 +6,10 @@ assigning ``.value`` sends a message only when the value differs and calls the c
 ``client=None``; the messages of one turn of the event loop for one widget coalesce (viser's
 outgoing buffer keeps the last update per widget and property until its next window).
 A page's GUI messages all pass viser's websocket server, which hands each to every handler
-registered for its type, in order, on the event loop (:class:`Pages`: ``message()``).
+registered for its type, in order, on the event loop (:class:`Pages`: ``message()``); a
+handle given ``pages`` hands them a page's change after its own callbacks, as viser's
+handler runs first. A :class:`FakePage` keeps what the server sent that page alone
+(``client_pick.send_to``) and its notices.
 Shared by tests/app/test_widgets_synced.py and test_widgets_synced_panels.py.
 """
 
@@ -14,12 +17,13 @@ from __future__ import annotations
 
 import asyncio
 import inspect
+import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import SimpleNamespace
 from typing import Any
 
 from own_loop import complete
+from viser._messages import GuiUpdateMessage
 
 
 class Pages:
@@ -45,16 +49,62 @@ class Event:
     client: Any
     target: Any
 
+    @property
+    def client_id(self) -> Any:
+        return getattr(self.client, "client_id", self.client)
+
+
+class FakePage:
+    """A connected page (viser's ClientHandle as far as the panels go)."""
+
+    def __init__(self, client_id: int) -> None:
+        self.client_id = client_id
+        self.gui = self  # send_to: client.gui._websock_interface.queue_message
+        self._websock_interface = self
+        self.messages: list[GuiUpdateMessage] = []
+        self.notices: list[tuple[str, str]] = []
+
+    def queue_message(self, message: GuiUpdateMessage) -> None:
+        self.messages.append(message)
+
+    def add_notification(self, title: str, body: str, **_: Any) -> None:
+        self.notices.append((title, body))
+
+    def sent(self, uuid: str, prop: str) -> list[Any]:
+        """What the server set on this page alone, for ``prop`` of widget ``uuid``."""
+        return [m.updates[prop] for m in self.messages
+                if m.uuid == uuid and prop in m.updates]
+
+
+class _Impl:
+    """The handle's ``_impl`` (viser 1.1.1): the value without sending it, the uuid, the
+    echo to the other pages."""
+
+    _uuids = itertools.count()
+
+    def __init__(self, handle: Handle) -> None:
+        self._handle = handle
+        self.uuid = f"{handle.label or 'widget'}-{next(self._uuids)}"
+        self.sync_cb: Any = object()
+
+    @property
+    def value(self) -> Any:
+        return self._handle._value
+
+    @value.setter
+    def value(self, value: Any) -> None:
+        self._handle._value = value
+
 
 class Handle:
     """Any server-level viser GUI handle; ``sent`` holds the values sent to every page (what
     goes to one page only is app.ui.panels.client_pick.send_to's: tests record that)."""
 
     def __init__(self, loop: asyncio.AbstractEventLoop, value: Any, label: str = "",
-                 options: tuple[str, ...] = (), pool: list[Callable[[], Any]] | None = None
-                 ) -> None:
+                 options: tuple[str, ...] = (), pool: list[Callable[[], Any]] | None = None,
+                 pages: Pages | None = None) -> None:
         self._loop = loop
-        self._impl = SimpleNamespace(uuid=f"{label or 'widget'}-{id(self):x}")  # viser's id
+        self._pages = pages
         self.pool = pool if pool is not None else []  # plain callbacks not run yet
         self.label = label
         self._value = value
@@ -66,6 +116,7 @@ class Handle:
         self.disabled = False
         self.content = ""
         self.hint: str | None = None
+        self._impl = _Impl(self)
 
     def __enter__(self) -> Handle:
         return self
@@ -103,6 +154,7 @@ class Handle:
         """A page's change (or a button group's click, which always counts), as viser's
         message handler applies it: coroutine callbacks at once, plain ones later in a pool."""
         if value == self._value and not click:
+            self._handed(client, value)
             return
         self._value = value
         for fn in self.callbacks:
@@ -110,3 +162,10 @@ class Handle:
                 complete(self._loop, fn(Event(client, self)))
             else:
                 self.pool.append(lambda fn=fn, client=client: fn(Event(client, self)))
+        self._handed(client, value)
+
+    def _handed(self, client: Any, value: Any) -> None:
+        """The other handlers of the page's message, after viser's."""
+        if self._pages is not None:
+            self._pages.message(Event(client, self).client_id,
+                                GuiUpdateMessage(self._impl.uuid, {"value": value}))

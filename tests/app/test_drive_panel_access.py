@@ -1,7 +1,7 @@
 """The drive's Register access and Parameter access buttons (seed 004 ch. 1 "Registri",
-"Parametri"): each click reads or writes the picked register or parameter of the page's drive,
-and the answer is the line under the boxes. Both buttons go through one helper; this pins what
-each sends and shows."""
+"Parametri"): each click reads or writes the register or parameter the page picked, of the
+page's drive, and the answer is the line under the boxes, on that page. Both buttons go
+through one helper; this pins what each sends and shows."""
 
 from __future__ import annotations
 
@@ -31,17 +31,19 @@ def test_register_and_parameter_access_send_and_show(
         command: tuple[str, dict[str, Any]], answer: Any, shown: str) -> None:
     loop = asyncio.new_event_loop()
     try:
-        server, sender = Server(loop), _AnsweringSender(answer)
+        server, sender = Server(loop, pages=2), _AnsweringSender(answer)
         panel = DrivePanel(server, None, sender, lambda _client: "drive2", {})  # type: ignore[arg-type]
-        handles = server.gui.handles
-        handles[box].value = pick
+        handles, page, other = server.gui.handles, server.clients[1], server.clients[2]
+        handles[box].user(page, pick)
         if typed is not None:
-            handles[f"{box} value"].value = typed
-        handles[group].user("page A", button, click=True)
+            handles[f"{box} value"].user(page, typed)
+        handles[group].user(page, button, click=True)
         turn(loop, server)
         sender.drain()
         assert sender.sent == [("drive2", *command)]
         frames(loop, server, lambda: panel.update(DRIVE), n=1)
-        assert f"<code>{shown}</code>" in str(panel._result_html.content)
+        line = panel._result_html._impl.uuid
+        assert any(f"<code>{shown}</code>" in c for c in page.sent(line, "content"))
+        assert not any("<code>" in c for c in other.sent(line, "content"))  # the asking page's
     finally:
         loop.close()

@@ -82,17 +82,24 @@ def test_the_siemens_map_s_addresses_as_the_seed_s_examples() -> None:
 def test_the_panel_s_hints_follow_the_drive_s_map() -> None:
     loop = asyncio.new_event_loop()
     try:
-        server, sender = Server(loop), Sender()
+        server, sender = Server(loop, pages=1), Sender()
         panel = DrivePanel(server, None, sender, lambda _client: "drive", {})  # type: ignore[arg-type]
         register, parameter = server.gui.handles["Register"], server.gui.handles["Parameter"]
-        register.value = "R05 status_word"
-        parameter.value = "d1 speed loop proportional gain KP"
+        page, d1 = server.clients[1], "d1 speed loop proportional gain KP"
+        register.user(page, "R05 status_word")
+        parameter.user(page, d1)
+
+        def hints() -> tuple[str, str]:
+            """The page's own hints, the last sent."""
+            return (page.sent(register._impl.uuid, "hint")[-1],
+                    page.sent(parameter._impl.uuid, "hint")[-1])
+
         frames(loop, server, lambda: panel.update({**DRIVE, "modbus_map": SIEMENS}))
-        assert register.hint == register_details(SIEMENS)["R05 status_word"]
-        assert parameter.hint == parameter_details(SIEMENS)[parameter.value]
-        assert "0xAC46" in register.hint and "0x9C42" in parameter.hint
+        assert hints() == (register_details(SIEMENS)["R05 status_word"],
+                           parameter_details(SIEMENS)[d1])
+        assert "0xAC46" in hints()[0] and "0x9C42" in hints()[1]
         frames(loop, server, lambda: panel.update({**DRIVE, "modbus_map": NORMAL}))
-        assert register.hint == "R05 status_word: 0..255, read only; Modbus 0x8005"
-        assert parameter.hint.endswith("; Modbus 0x0001")
+        assert hints()[0] == "R05 status_word: 0..255, read only; Modbus 0x8005"
+        assert hints()[1].endswith("; Modbus 0x0001")
     finally:
         loop.close()

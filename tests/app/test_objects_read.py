@@ -48,14 +48,16 @@ def test_read_fills_the_value_box_and_shows_hex(
     monkeypatch.setattr(object_dictionary, "notify",
                         lambda client, title, body, error=False: notes.append((title, body)))
     sender = _Sender(value)
-    panel = ObjectDictionaryPanel(FakeServer(), FakeRuntime(ROWS), sender,  # type: ignore[arg-type]
+    server = FakeServer()
+    panel = ObjectDictionaryPanel(server, FakeRuntime(ROWS), sender,  # type: ignore[arg-type]
                                   "fastcat")
     panel.request(None)  # the table's rows: the types come from them
-    panel._address.value = address
-    panel._value.value = "1"  # what was typed before
-    panel._access(object(), "Read")  # type: ignore[arg-type]
+    page = server.connect(1)
+    server.message(1, panel._address, address)
+    server.message(1, panel._value, "1")  # what was typed before
+    panel._access(page, "Read")  # type: ignore[arg-type]
     assert sender.sent[0][1] == "read_object"
-    assert panel._value.value == box
+    assert page.sent(panel._value._impl.uuid, "value") == [box]  # the reading page's box
     [(title, body)] = notes
     assert title.endswith("read") and body == f"value = {shown}"
 
@@ -86,10 +88,12 @@ def test_read_of_0x1003_names_the_alarm(monkeypatch: pytest.MonkeyPatch) -> None
     runtime.rig = _Rig(OdEntry(  # type: ignore[attr-defined]
         0x1003, 1, "Standard error field", DataType.UNSIGNED32, Access.RO,
         explain=lambda v: error_field_text(v, alarm_table("ethercat"))))
-    panel = ObjectDictionaryPanel(FakeServer(), runtime, _Sender(0x0010_8611),  # type: ignore[arg-type]
+    server = FakeServer()
+    panel = ObjectDictionaryPanel(server, runtime, _Sender(0x0010_8611),  # type: ignore[arg-type]
                                   "drive_ec")
-    panel._address.value = "0x1003:1"
-    panel._access(object(), "Read")  # type: ignore[arg-type]
-    assert panel._value.value == "0x00108611"
+    page = server.connect(1)
+    server.message(1, panel._address, "0x1003:1")
+    panel._access(page, "Read")  # type: ignore[arg-type]
+    assert page.sent(panel._value._impl.uuid, "value") == ["0x00108611"]
     assert notes == [("0x1003:1 read",
                       "value = 0x00108611 = alarm 16 FOLLOWING_ERROR, code 0x8611")]

@@ -18,7 +18,7 @@ def test_no_read_without_a_browser_then_one_at_the_first() -> None:
     for k in range(5):
         panel.tick(now=100.0 + k * REFRESH_S)
     assert runtime.reads == 0
-    server.clients[1] = object()
+    server.connect(1)
     panel.tick(now=100.0 + 5 * REFRESH_S)
     assert runtime.reads == 1
     panel.tick(now=100.0 + 5.5 * REFRESH_S)

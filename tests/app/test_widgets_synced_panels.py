@@ -13,10 +13,11 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import Callable, Iterator
+from types import SimpleNamespace
 from typing import Any
 
 import pytest
-from fake_viser import Handle, Pages
+from fake_viser import FakePage, Handle, Pages
 from own_loop import complete
 
 from app.classroom.roles import Role
@@ -27,13 +28,14 @@ from app.ui.panels.widgets import FRESH_AFTER
 
 
 class Gui:
-    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+    def __init__(self, loop: asyncio.AbstractEventLoop, pages: Pages | None = None) -> None:
         self._loop = loop
+        self._pages = pages
         self.handles: dict[str, Handle] = {}
         self.pool: list[Callable[[], Any]] = []  # viser's thread pool: plain callbacks
 
     def _add(self, label: str, value: Any, options: tuple[str, ...] = ()) -> Handle:
-        handle = Handle(self._loop, value, label, options, self.pool)
+        handle = Handle(self._loop, value, label, options, self.pool, self._pages)
         self.handles.setdefault(label, handle)
         return handle
 
@@ -61,7 +63,7 @@ class Gui:
         return self._add(f"folder {label}", None)
 
     def add_html(self, content: str, **_: Any) -> Handle:
-        handle = Handle(self._loop, None, "html")
+        handle = Handle(self._loop, None, "html", pages=self._pages)
         handle.content = content
         return handle
 
@@ -74,13 +76,25 @@ class Gui:
 
 
 class Server:
-    def __init__(self, loop: asyncio.AbstractEventLoop) -> None:
+    """viser's server with ``pages`` connected (FakePage), each already sent the replay of
+    the shared elements (client_pick.page_ready)."""
+
+    def __init__(self, loop: asyncio.AbstractEventLoop, pages: int = 0) -> None:
         self._loop = loop
-        self.gui = Gui(loop)
         self._websock_server = Pages(loop)  # viser 1.1.1's name for it
+        self.gui = Gui(loop, self._websock_server)
+        self.clients = {k: FakePage(k) for k in range(1, pages + 1)}
+        self._websock_server._broadcast_buffer = SimpleNamespace(  # type: ignore[attr-defined]
+            message_counter=1, generator_cursors=dict.fromkeys(self.clients, 5))
 
     def get_event_loop(self) -> asyncio.AbstractEventLoop:
         return self._loop
+
+    def get_clients(self) -> dict[int, FakePage]:
+        return dict(self.clients)
+
+    def on_client_disconnect(self, fn: Callable[[Any], None]) -> None:
+        return None
 
 
 class Sender:

@@ -106,8 +106,8 @@ class DriveCommands:
         if button == "Stop":
             self._do(event, "stop")
             return
-        position = int(self._field("position", self._position, event))
-        relative = bool(self._field("relative", self._relative, event))
+        position = int(self._field("position", event))
+        relative = bool(self._field("relative", event))
 
         def steps(apply: Callable[..., Any]) -> None:
             # As the seed's Modbus example does before 0x23: the start bits low first, so
@@ -122,7 +122,7 @@ class DriveCommands:
         self._sequence(event, "move", steps)
 
     def _run_velocity(self: DrivePanel, event: viser.GuiEvent) -> None:
-        velocity = int(self._field("velocity", self._velocity, event))
+        velocity = int(self._field("velocity", event))
 
         def steps(apply: Callable[..., Any]) -> None:
             if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 3:
@@ -131,19 +131,15 @@ class DriveCommands:
 
         self._sequence(event, "velocity", steps)
 
-    def _field(self: DrivePanel, name: str, handle: Any, event: viser.GuiEvent) -> Any:
-        """What the clicking page's form field ``name`` holds (its own with several drives,
-        app/ui/panels/client_form.py)."""
-        form = self._forms.get(name)
-        return handle.value if form is None else form.value_of(event.client)
+    def _field(self: DrivePanel, name: str, event: viser.GuiEvent) -> Any:
+        """What the clicking page's form field ``name`` holds (app/ui/panels/client_form.py)."""
+        return self._forms[name].value_of(event.client)
 
     def _park(self: DrivePanel, client: viser.ClientHandle | None, text: str) -> None:
-        """The answer for the line under the boxes: the asking page's with several drives."""
+        """The answer for the line under the boxes: the asking page's only."""
         client_id = getattr(client, "client_id", None)
         with self._result_lock:
-            if not self._per_page:
-                self._result = text
-            elif client_id in self._server.get_clients():  # not one that left meanwhile
+            if client_id in self._server.get_clients():  # not one that left meanwhile
                 self._page_results[client_id] = text
 
     def _read_or_write(self: DrivePanel, event: viser.GuiEvent, write: bool, kind: str,
@@ -161,14 +157,14 @@ class DriveCommands:
                               done=lambda r: self._park(client, f"{label} = {r}"))
 
     def _register_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
-        option = str(self._field("register", self._register, event))
+        option = str(self._field("register", event))
         self._read_or_write(event, button == "Write register", "register", register_of(option),
-                            option, self._field("register value", self._register_value, event))
+                            option, self._field("register value", event))
 
     def _parameter_access(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
-        name = str(self._field("parameter", self._parameter, event)).split(" ", 1)[0]
+        name = str(self._field("parameter", event)).split(" ", 1)[0]
         self._read_or_write(event, button == "Write param.", "parameter", name, name,
-                            self._field("parameter value", self._parameter_value, event))
+                            self._field("parameter value", event))
 
     def _typed(self: DrivePanel, name: str, event: viser.GuiEvent) -> Any:
         """What the clicking page's c9 or c7 box holds."""

@@ -38,7 +38,7 @@ from app.ui.panels.client_form import ClientForm, ClientProp
 from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.client_pick import ClientHtml
 from app.ui.panels.per_client import instructor_for
-from app.ui.panels.widgets import DetailHint, Mirror, Synced
+from app.ui.panels.widgets import Mirror, Synced
 from app.ui.style import esc
 from devices.device import Action
 from devices.servo.modbus_map import NORMAL
@@ -50,7 +50,7 @@ Target = Callable[[viser.ClientHandle | None], str]
 Pick = Callable[[int | None], str]  # the drive a page shows, by its client id
 
 NO_RESULT = '<p class="fr-muted">-</p>'
-# The hints of each map, built once: with several drives each page's are looked up each frame
+# The hints of each map, built once: each page's are looked up each frame
 _REGISTER_HINTS = functools.cache(register_details)
 _PARAMETER_HINTS = functools.cache(parameter_details)
 
@@ -74,11 +74,9 @@ class DrivePanel(DriveCommands, DriveFaults):
         self._sender = sender
         self._target = target
         self._fieldbus = "modbus"
-        self._modbus_map = NORMAL  # the drive's (snapshot modbus_map): the address hints
         self._result_lock = threading.Lock()
-        self._result = ""  # parked by a read's future (simulation thread), shown by update()
-        self._page_results: dict[int, str] = {}  # the same, each page's (several drives)
-        self._shown_result: str | None = None
+        # Each page's answer, parked by a read's future (simulation thread), shown by update()
+        self._page_results: dict[int, str] = {}
         self._injected: list[Mapping[str, Any]] = []  # the last frame's (snapshot injected)
         gui = server.gui
 
@@ -118,11 +116,7 @@ class DrivePanel(DriveCommands, DriveFaults):
                                                   min=-0x8000_0000, max=0xFFFF_FFFF)
             reg_ops = gui.add_button_group("Register access", ("Read register",
                                                                "Write register"))
-            self._register_hint = None if self._per_page else DetailHint(
-                self._register, lambda: _REGISTER_HINTS(self._modbus_map))
             self._parameter = gui.add_dropdown("Parameter", PARAMETER_OPTIONS)
-            self._parameter_hint = None if self._per_page else DetailHint(
-                self._parameter, lambda: _PARAMETER_HINTS(self._modbus_map))
             self._parameter_value = gui.add_number("Parameter value", 0, step=1, min=0,
                                                    max=0xFFFF)
             par_ops = gui.add_button_group("Parameter access", ("Read param.", "Write param."))
@@ -163,23 +157,20 @@ class DrivePanel(DriveCommands, DriveFaults):
         self._mirrors: dict[str, Mirror | ClientMirror] = {
             name: ClientMirror(server, handle) if self._per_page else Mirror(handle)
             for name, handle in (("c9", self._c9), ("c7", self._c7))}
-        # With several drives the form fields, their hints and the answer line are each
-        # page's too: a trainee's register number and read result stayed off the others'.
-        self._forms: dict[str, ClientForm] = {}
-        self._results: ClientHtml | None = None
-        self._hints: tuple[ClientProp, ClientProp] | None = None
-        if self._per_page:
-            self._forms = {name: ClientForm(server, handle) for name, handle in (
-                ("position", self._position), ("relative", self._relative),
-                ("velocity", self._velocity), ("register", self._register),
-                ("register value", self._register_value), ("parameter", self._parameter),
-                ("parameter value", self._parameter_value))}
-            self._results = ClientHtml(server, self._result_html)
-            self._hints = (ClientProp(server, self._register, "hint"),
-                           ClientProp(server, self._parameter, "hint"))
-            # A new page's, until its own reach it
-            self._register.hint = _REGISTER_HINTS(NORMAL).get(str(self._register.value))
-            self._parameter.hint = _PARAMETER_HINTS(NORMAL).get(str(self._parameter.value))
+        # The form fields, their hints and the answer line are each page's, on every rig: a
+        # trainee's register number and read result stayed off the others' (a rig with one
+        # drive too, where there is no picker).
+        self._forms = {name: ClientForm(server, handle) for name, handle in (
+            ("position", self._position), ("relative", self._relative),
+            ("velocity", self._velocity), ("register", self._register),
+            ("register value", self._register_value), ("parameter", self._parameter),
+            ("parameter value", self._parameter_value))}
+        self._results = ClientHtml(server, self._result_html)
+        self._hints = (ClientProp(server, self._register, "hint"),
+                       ClientProp(server, self._parameter, "hint"))
+        # A new page's, until its own reach it
+        self._register.hint = _REGISTER_HINTS(NORMAL).get(str(self._register.value))
+        self._parameter.hint = _PARAMETER_HINTS(NORMAL).get(str(self._parameter.value))
 
         on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
         reset.on_click(lambda e: self._alarm_reset(e))
@@ -206,12 +197,6 @@ class DrivePanel(DriveCommands, DriveFaults):
         self._devices = devices
         self._injected = list(snap.get("injected") or [])
         fieldbus = self._fieldbus = str(snap.get("fieldbus", self._fieldbus))
-        address_map = str(snap.get("modbus_map", self._modbus_map))
-        if address_map != self._modbus_map:  # e3 = 9 moves every address (ch. 2)
-            self._modbus_map = address_map
-            for hint in (self._register_hint, self._parameter_hint):
-                if hint is not None:
-                    hint.refresh()
 
         def page(client_id: int | None) -> Mapping[str, Any]:
             """The snapshot of the drive ``client_id``'s page shows."""
@@ -228,14 +213,7 @@ class DrivePanel(DriveCommands, DriveFaults):
              if FIELDBUS_BY_C9.get(leading_int(o)) == s.get("fieldbus", fieldbus)), None), page)
         self._mirror("c7", lambda s: int(s["node_id"]) if s.get("node_id") is not None
                      else None, page)
-        if self._per_page:
-            self._show_pages(page)
-            return
-        with self._result_lock:
-            result = self._result
-        if result != self._shown_result:
-            self._result_html.content = result_html(result)
-            self._shown_result = result
+        self._show_pages(page)
 
     def _show_pages(self, page: Callable[[int | None], Mapping[str, Any]]) -> None:
         """Each page's hints (its register and parameter under its drive's map, ch. 2) and
@@ -244,20 +222,17 @@ class DrivePanel(DriveCommands, DriveFaults):
             return str(page(client_id).get("modbus_map", NORMAL))
 
         forms = self._forms
-        if self._hints is not None:
-            registers, parameters = self._hints
-            registers.show(lambda c: _REGISTER_HINTS(address_map(c)).get(
-                str(forms["register"].value_for(c))))
-            parameters.show(lambda c: _PARAMETER_HINTS(address_map(c)).get(
-                str(forms["parameter"].value_for(c))))
+        registers, parameters = self._hints
+        registers.show(lambda c: _REGISTER_HINTS(address_map(c)).get(
+            str(forms["register"].value_for(c))))
+        parameters.show(lambda c: _PARAMETER_HINTS(address_map(c)).get(
+            str(forms["parameter"].value_for(c))))
         clients = self._server.get_clients()
         with self._result_lock:
             for gone in set(self._page_results) - set(clients):
                 del self._page_results[gone]
             results = dict(self._page_results)
-        if self._results is not None:
-            self._results.show(lambda c: result_html(results[c]) if c in results
-                               else NO_RESULT)
+        self._results.show(lambda c: result_html(results[c]) if c in results else NO_RESULT)
 
     @staticmethod
     def _follow(synced: Synced | ClientSynced, value: Callable[[Mapping[str, Any]], Any],

@@ -181,7 +181,6 @@ class ObjectDictionaryPanel:
         self._dirty = False
         self._pending = False
         self._next_refresh = 0.0
-        self._last = ""
         gui = server.gui
         self._home = device_id  # the FastCAT: its dictionary waits for the first scan
         self._default = device_id
@@ -197,19 +196,13 @@ class ObjectDictionaryPanel:
         self._value = gui.add_text("Value", "1", hint="decimal, 0x.. hex, true/false")
         buttons = gui.add_button_group("Access", ("Read", "Write"))
         self._table = gui.add_html(render([], ""))
-        self._tables = ClientHtml(server, self._table) if self._pick is not None else None
-        # Each page picks its dictionary, so each page filters, types and reads its own:
-        # shared, a trainee's typed object index and read value showed on every page.
-        self._forms: dict[str, ClientForm] = {}
-        if self._pick is not None:
-            self._forms = {
-                "filter": ClientForm(server, self._filter, lambda _c, _v: self._refilter()),
-                "object": ClientForm(server, self._address),
-                "value": ClientForm(server, self._value)}
-
-        @self._filter.on_update
-        def _(event: viser.GuiEvent) -> None:
-            self._refilter()
+        self._tables = ClientHtml(server, self._table)
+        # Each page filters, types and reads its own, on every rig: shared, a trainee's typed
+        # object index and read value showed on every page (one dictionary too, no picker).
+        self._forms = {
+            "filter": ClientForm(server, self._filter, lambda _c, _v: self._refilter()),
+            "object": ClientForm(server, self._address),
+            "value": ClientForm(server, self._value)}
 
         @refresh.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -223,10 +216,9 @@ class ObjectDictionaryPanel:
         with self._lock:
             self._dirty = True
 
-    def _typed(self, name: str, handle: Any, client_id: int | None) -> str:
-        """What ``client_id``'s page holds in a box (with one dictionary, the shared box)."""
-        form = self._forms.get(name)
-        return str(handle.value if form is None else form.value_for(client_id))
+    def _typed(self, name: str, client_id: int | None) -> str:
+        """What ``client_id``'s page holds in a box."""
+        return str(self._forms[name].value_for(client_id))
 
     @property
     def device_id(self) -> str:
@@ -263,7 +255,7 @@ class ObjectDictionaryPanel:
     def _access(self, client: viser.ClientHandle | None, verb: str) -> None:
         client_id = getattr(client, "client_id", None)
         try:
-            index, sub = parse_address(self._typed("object", self._address, client_id))
+            index, sub = parse_address(self._typed("object", client_id))
         except CommandError as exc:
             notify(client, "Object address", str(exc), error=True)
             return
@@ -273,7 +265,7 @@ class ObjectDictionaryPanel:
             self._sender.send(client, device_id, "read_object", {"index": index, "sub": sub},
                               done=lambda v: self._read(client, device_id, index, sub, v))
             return
-        value = parse_value(self._typed("value", self._value, client_id))
+        value = parse_value(self._typed("value", client_id))
         self._sender.send(client, device_id, "write_object",
                           {"index": index, "sub": sub, "value": value},
                           done=lambda _r: (notify(client, f"{address} written",
@@ -285,11 +277,8 @@ class ObjectDictionaryPanel:
         """A Read's answer: into the reading page's Value box (a Write starts from it) and
         the notice."""
         dtype = self._dtype(device_id, index, sub)
-        form = self._forms.get("value")
-        if form is None:
-            self._value.value = read_box(value, dtype)
-        elif client is not None:
-            form.set_for(client, read_box(value, dtype))
+        if client is not None:
+            self._forms["value"].set_for(client, read_box(value, dtype))
         explain = self._explain(device_id, index, sub)
         said = explain(value) if explain is not None else read_text(value, dtype)
         notify(client, f"0x{index:04X}:{sub} read", f"value = {said}")
@@ -371,19 +360,13 @@ class ObjectDictionaryPanel:
 
         def content_for(client_id: int | None) -> str:
             device = self._device_of(client_id)
-            needle = self._typed("filter", self._filter, client_id)
+            needle = self._typed("filter", client_id)
             if (device, needle) not in rendered:
                 rendered[device, needle] = render(rows[device], needle, self._empty(device)) \
                     if device in rows else render([], "", "reading the dictionary ...")
             return rendered[device, needle]
 
-        if self._tables is not None:
-            self._tables.show(content_for)
-        else:
-            content = content_for(None)
-            if content != self._last:
-                self._table.content = content
-                self._last = content
+        self._tables.show(content_for)
 
     def rows(self) -> list[OdRow]:
         """The rows last read of the device a new page starts at (tests)."""

@@ -1,0 +1,98 @@
+"""On a rig with one drive and one dictionary (no picker), what a page types and reads is its
+own as well (docs/dashboard.md "Several browsers", docs/classroom.md): the drive's Register
+box and the answer line under it, the CANopen master's NMT command, SDO object and SDO value
+boxes, the Drive action form, the Objects tab's boxes. Before, they were each page's own only
+where a picker made them so (several drives, several dictionaries); on a one-drive rig a
+trainee typing a register number changed every classmate's box and one page's read result
+showed on every page. Two websocket connections stand in for the browsers
+(tests/app/test_forms_per_browser.py)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from app.classroom.roles import Access
+from app.rig_config import build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.drive.drive_options import register_option
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from devices.servo.registers import R
+from tests.app.test_classroom_leak import Page, _wait
+from tests.app.test_forms_per_browser import _drive_read, _frames, _has
+from tests.app.test_picks_per_browser import _widget
+
+ONE_DRIVE = """
+[rig]
+name = "one drive on CANopen"
+seed = 1
+step_ms = 1
+
+[[servo]]
+id = "drive"
+fieldbus = "canopen"
+node_id = 2
+
+[[fastcat]]
+id = "fastcat"
+modules = ["DI16", "DO16"]
+"""
+
+
+@pytest.fixture(scope="module")
+def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ServedRig, Page, Page]]:
+    path = Path(tmp_path_factory.mktemp("rig")) / "one_drive.toml"
+    path.write_text(ONE_DRIVE)
+    rig = build_rig(load_rig_spec(path), state_dir=None)
+    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
+    served.runtime.advance(3_000_000).result(10)  # the node's boot-up, the first scan
+    first, second = Page(served.port), Page(served.port)
+    try:
+        _wait(lambda: len(served.server.get_clients()) == 2)
+        yield served, first, second
+    finally:
+        first.close()
+        second.close()
+        served.stop()
+
+
+def test_the_rig_has_one_drive_and_its_canopen_master(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    drives = served[0].dashboard.drives
+    assert drives is not None and drives.drive_ids == ["drive"] and drives.master is not None
+    objects = served[0].dashboard.objects
+    assert objects is not None and objects.device_id == "fastcat"
+
+
+def test_an_object_read_on_one_page_fills_that_page_s_boxes_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    objects = live.dashboard.objects
+    assert objects is not None and objects.device_id == "fastcat"
+    address, value = _widget(first, "Object", None), _widget(first, "Value", None)
+    first.set(address, "0x1000:0")
+    time.sleep(0.1)
+    first.set(_widget(first, "Access", "Read"), "Read")
+    _wait(lambda: first.updates(value))
+    _frames(live)
+    assert second.updates(value) == [] and second.updates(address) == []
+
+
+def test_a_register_read_on_one_page_shows_on_that_page_only(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    box = _widget(first, "Register", "R02 feed_constant")
+    _drive_read(first, "R02 feed_constant")
+    _wait(lambda: _has(first, "R02 feed_constant = "))
+    _frames(live)
+    assert "R02 feed_constant" not in second.updates(box)  # B's box was not changed
+    assert not _has(second, "R02 feed_constant = ")  # nor its answer line
+    # B has picked no register: its Read reads the one its box shows, not the one A picked
+    initial = register_option(R.PROFILE_VELOCITY)
+    second.set(_widget(second, "Register access", "Read register"), "Read register")
+    _wait(lambda: _has(second, f"{initial} = "))
+    _frames(live)
+    assert not _has(second, "R02 feed_constant = ") and not _has(first, f"{initial} = ")
