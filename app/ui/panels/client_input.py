@@ -87,6 +87,25 @@ class ClientMirror(ClientInput):
         super().__init__(server, handle)
         self._seen: dict[int | None, Any] = {}
         self._seen_lock = threading.Lock()  # the dashboard thread and a pick's callback
+        self._initial = handle._impl.value
+
+    def _new_page(self) -> Any:
+        """A new page's value: the model's, the last :meth:`follow_each` took for None."""
+        with self._seen_lock:
+            return self._seen.get(None, self._initial)
+
+    def changed(self, client_id: int, value: Any) -> None:
+        # viser kept the page's value as the widget's, which a new page is sent
+        self.handle._impl.value = self._new_page()
+
+    def value_for(self, client_id: int | None) -> Any:
+        """What ``client_id``'s page holds (the model's value for a page not filled yet);
+        never viser's value, which a page's message sets before :meth:`changed` puts the
+        model's back (app/ui/panels/client_form.py likewise)."""
+        with self._lock:
+            if client_id in self._values:
+                return self._values[client_id]
+        return self._new_page()
 
     def follow_each(self, value_for: Callable[[int | None], Any]) -> None:
         """``value_for(client_id)``; None: a new page's, kept as the server's value without
