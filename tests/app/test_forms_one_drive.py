@@ -12,6 +12,7 @@ from __future__ import annotations
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -96,3 +97,48 @@ def test_a_register_read_on_one_page_shows_on_that_page_only(
     _wait(lambda: _has(second, f"{initial} = "))
     _frames(live)
     assert not _has(second, "R02 feed_constant = ") and not _has(first, f"{initial} = ")
+
+
+def _sent_frames(live: ServedRig) -> int:
+    drives = live.dashboard.drives
+    assert drives is not None and drives.master is not None
+    return drives.master.sent
+
+
+def _node(live: ServedRig, key: str) -> Any:
+    """The node's ``key`` once the frames sent so far have been through it (the paused rig
+    stepped 50 ms)."""
+    live.runtime.advance(50_000).result(10)
+    node = live.rig.devices["drive-can"]
+    return live.runtime.submit(lambda: node.snapshot()[key]).result(10)
+
+
+def test_the_sdo_boxes_and_the_nmt_command_are_each_page_s_own(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    live, first, second = served
+    obj, value = _widget(first, "SDO object", None), _widget(first, "SDO value", None)
+    nmt = _widget(first, "NMT command", None)
+    first.set(obj, "0x1017:0")
+    time.sleep(0.1)  # the page's sender: one message each 50 ms window
+    first.set(value, "300")
+    time.sleep(0.1)
+    first.set(nmt, "Stop (0x02)")
+    time.sleep(0.1)
+    sent = _sent_frames(live)
+    # B downloads what its own boxes show (0x6041:0 = 0, read only): not A's 0x1017 = 300
+    second.set(_widget(second, "SDO", "Download"), "Download")
+    _wait(lambda: _sent_frames(live) > sent)
+    _frames(live)
+    assert _node(live, "heartbeat_ms") == 0
+    assert second.updates(obj) == [] and second.updates(value) == []
+    assert second.updates(nmt) == []
+    # A's Download writes A's 0x1017 = 300
+    first.set(_widget(first, "SDO", "Download"), "Download")
+    _wait(lambda: _node(live, "heartbeat_ms") == 300)
+    # B's Send NMT sends B's command (Start, the initial): the node stays operational...
+    nmt_button = _widget(second, "Send NMT", None)
+    second.set(nmt_button, True)
+    _wait(lambda: _sent_frames(live) > sent + 2)
+    assert _node(live, "nmt") != "Stopped"
+    first.set(nmt_button, True)  # ... A's stops it
+    _wait(lambda: _node(live, "nmt") == "Stopped")

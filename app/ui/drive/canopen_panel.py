@@ -22,9 +22,10 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.bus_state import nmt_badge
+from app.ui.drive.drive_commands import on_button
+from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_input import ClientMirror
 from app.ui.panels.client_pick import PickedHtml
-from app.ui.panels.widgets import Mirror
 from app.ui.style import esc, kv_table
 from devices.canopen import master_frames as mf
 from devices.device import CommandError
@@ -179,12 +180,12 @@ def pdo_html(node: Mapping[str, Any]) -> str:
 
 
 class CanOpenMaster:
-    """The master's controls (in the control panel): NMT, 0x6040 over SDO, heartbeat, SDO."""
+    """The master's controls (in the control panel): NMT, 0x6040 over SDO, heartbeat, SDO.
+    Its boxes are each page's own (docs/dashboard.md "Several browsers"): a button sends
+    what the clicking page's boxes hold, to the node of the drive that page shows."""
 
     def __init__(self, server: viser.ViserServer, runtime: Runtime, sender: CommandSender,
-                 node_id: NodeId, per_page: bool = False) -> None:
-        """``per_page``: each page commands the node of the drive it picked, and its
-        Heartbeat box is filled from that node."""
+                 node_id: NodeId) -> None:
         self._runtime = runtime
         self._sender = sender
         self._node_id = node_id
@@ -201,16 +202,19 @@ class CanOpenMaster:
             self._heartbeat = gui.add_number("Heartbeat (ms)", 0, min=0, max=65535, step=1,
                                              hint="the node's 0x1017 (producer heartbeat "
                                                   "time); type a new period, then Set")
-            self._heartbeat_mirror: Mirror | ClientMirror = \
-                ClientMirror(server, self._heartbeat) if per_page else Mirror(self._heartbeat)
+            self._heartbeat_mirror = ClientMirror(server, self._heartbeat)
             set_hb = gui.add_button("Set heartbeat", hint="SDO download 0x1017:0")
             self._object = gui.add_text("SDO object", "0x6041:0")
             self._value = gui.add_text("SDO value", "0")
             sdo = gui.add_button_group("SDO", ("Upload", "Download"))
+        # Shared, one trainee's typed object and value were every page's, and its Download
+        # another page's click (one drive too: there is no picker to make them per page).
+        self._forms = {name: ClientForm(server, handle) for name, handle in (
+            ("nmt", self._nmt), ("object", self._object), ("value", self._value))}
 
         @send_nmt.on_click
         def _(event: viser.GuiEvent) -> None:
-            command = cm.NMT_COMMANDS.get(self._nmt.value)
+            command = cm.NMT_COMMANDS.get(str(self._forms["nmt"].value_of(event.client)))
             if command is not None:
                 self._send(event.client, "NMT", lambda node: mf.nmt(command, node))
 
@@ -220,65 +224,56 @@ class CanOpenMaster:
             self._send(event.client, f"0x6040 = 0x{cw:04X}",
                        lambda node: mf.sdo_download(node, index, sub, cw, 2))
 
-        cw_a.on_click(lambda event: controlword(event, cw_a.value))
-        cw_b.on_click(lambda event: controlword(event, cw_b.value))
+        # The clicked button as the click arrives (on_button): read later in viser's thread
+        # pool, the group's value could be another page's next click.
+        on_button(cw_a, controlword)
+        on_button(cw_b, controlword)
 
         @set_hb.on_click
         def _(event: viser.GuiEvent) -> None:
-            ms = int(self._typed(event))
+            ms = int(self._heartbeat_mirror.value_for(event.client_id))
             index, sub = cm.HEARTBEAT
             self._send(event.client, "0x1017",
                        lambda node: mf.sdo_download(node, index, sub, ms, 2))
 
-        @sdo.on_click
-        def _(event: viser.GuiEvent) -> None:
-            try:
-                index, sub = cm.parse_object(self._object.value)
-                value = cm.parse_int(self._value.value) if sdo.value == "Download" else 0
-            except ValueError as exc:
-                notify(event.client, "SDO", f"bad input: {exc}", error=True)
-                return
-            if sdo.value == "Upload":
-                self._send(event.client, "SDO upload",
-                           lambda node: mf.sdo_upload(node, index, sub))
-            else:
-                self._send(event.client, "SDO download",
-                           lambda node: mf.sdo_download(node, index, sub, value,
-                                                        self._object_size(event.client,
-                                                                          index, sub)))
+        on_button(sdo, self._sdo)
+
+    def _sdo(self, event: viser.GuiEvent, button: str) -> None:
+        """Upload or Download the clicking page's SDO object (and value)."""
+        client = event.client
+        try:
+            index, sub = cm.parse_object(str(self._forms["object"].value_of(client)))
+            value = cm.parse_int(str(self._forms["value"].value_of(client))) \
+                if button == "Download" else 0
+        except ValueError as exc:
+            notify(client, "SDO", f"bad input: {exc}", error=True)
+            return
+        if button == "Upload":
+            self._send(client, "SDO upload", lambda node: mf.sdo_upload(node, index, sub))
+        else:
+            self._send(client, "SDO download",
+                       lambda node: mf.sdo_download(node, index, sub, value,
+                                                    self._object_size(client, index, sub)))
 
     @property
     def heartbeat_box(self) -> Any:
         return self._heartbeat
 
-    def _typed(self, event: viser.GuiEvent) -> Any:
-        """What the clicking page's Heartbeat box holds."""
-        mirror = self._heartbeat_mirror
-        return mirror.value_for(event.client_id) if isinstance(mirror, ClientMirror) \
-            else self._heartbeat.value
-
     def update(self, node_of: Callable[[int | None], Mapping[str, Any]]) -> None:
         """``node_of(client_id)``: the snapshot of that page's node (None: a new page's;
-        dashboard thread): the box follows 0x1017 when it changes (this master's SDO,
-        another master's, a reset), and keeps what a user typed until then."""
+        dashboard thread): each page's box follows its node's 0x1017 when it changes (this
+        master's SDO, another master's, a reset), and keeps what that page typed until
+        then."""
         def heartbeat(client_id: int | None) -> int | None:
             node = node_of(client_id)
             return int(node["heartbeat_ms"]) if "heartbeat_ms" in node else None
 
-        mirror = self._heartbeat_mirror
-        if isinstance(mirror, ClientMirror):
-            mirror.follow_each(heartbeat)
-        elif (value := heartbeat(None)) is not None:
-            mirror.follow(value)
+        self._heartbeat_mirror.follow_each(heartbeat)
 
     def forget(self, client_id: int | None = None) -> None:
         """Another drive picked (on ``client_id``'s page, or every page's): take its 0x1017
         at the next frame."""
-        mirror = self._heartbeat_mirror
-        if isinstance(mirror, ClientMirror):
-            mirror.forget(client_id)
-        else:
-            mirror.forget()
+        self._heartbeat_mirror.forget(client_id)
 
     # ---- sending (simulation thread) --------------------------------------------------------
     def _device(self, client: viser.ClientHandle | None) -> Any:

@@ -90,7 +90,7 @@ class DriveView:
         if any(self._nodes.values()):
             self.master = CanOpenMaster(
                 server, runtime, sender,
-                lambda client: self._nodes.get(self._drive_of_client(client)), per_page)
+                lambda client: self._nodes.get(self._drive_of_client(client)))
         # Every drive sampled all along, so a page that picks one sees its last 20 s at once
         self.samplers = {d: DriveSampler(lambda d=d: self._snapshot_of(d),
                                          loads=lambda: runtime.rig.loads)
