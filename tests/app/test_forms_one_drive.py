@@ -142,3 +142,58 @@ def test_the_sdo_boxes_and_the_nmt_command_are_each_page_s_own(
     assert _node(live, "nmt") != "Stopped"
     first.set(nmt_button, True)  # ... A's stops it
     _wait(lambda: _node(live, "nmt") == "Stopped")
+
+
+def _last(page: Page, label: str) -> str:
+    """The uuid of the newest widget labelled ``label`` the page got."""
+    def find() -> str | None:
+        for m in reversed(page.received()):
+            if (m.get("props") or {}).get("label") == label:
+                return str(m["uuid"])
+        return None
+    return str(_wait(find))
+
+
+def _after(page: Page, uuid: str, label: str) -> str:
+    """The uuid of the first widget labelled ``label`` the page got after widget ``uuid``."""
+    messages = page.received()
+    start = next(k for k, m in enumerate(messages) if m.get("uuid") == uuid)
+    return next(str(m["uuid"]) for m in messages[start:]
+                if (m.get("props") or {}).get("label") == label)
+
+
+def test_the_drive_action_form_is_each_page_s_own(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """A picks write_register and fills it; B's picker and boxes are unchanged, B's Apply
+    applies B's own pick (the first action, alarm_reset), A's Apply A's."""
+    live, first, second = served
+    drives = live.dashboard.drives
+    assert drives is not None
+    form = drives.controls._form
+    applied: list[tuple[int, str, dict[str, Any]]] = []
+    apply = form._apply
+
+    def recorded(client: Any, name: str, args: dict[str, Any]) -> None:
+        applied.append((client.client_id, name, dict(args)))
+        apply(client, name, args)
+
+    form._apply = recorded  # type: ignore[method-assign]
+    first_id, second_id = sorted(live.server.get_clients())
+    choice = _widget(first, "Drive action", "write_register")
+    first.set(choice, "write_register")
+    time.sleep(0.3)  # the old form rebuilt its parameters for the pick
+    register, value = _last(first, "register"), _last(first, "value")
+    first.set(register, 13)
+    time.sleep(0.1)
+    first.set(value, 777)
+    time.sleep(0.1)
+    _frames(live)
+    assert second.updates(choice) == [] and second.updates(register) == []
+    assert second.updates(value) == []
+    button = _after(second, choice, "Apply")
+    second.set(button, True)
+    _wait(lambda: applied)
+    assert applied == [(second_id, form.options()[0], {})]
+    first.set(button, True)
+    _wait(lambda: len(applied) == 2)
+    assert applied[1] == (first_id, "write_register", {"register": 13, "value": 777})

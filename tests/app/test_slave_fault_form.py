@@ -90,11 +90,10 @@ def _sent_by(form: ActionForm, action: str, **values: Any) -> list[dict[str, Any
     return sent
 
 
-def test_the_trscat_and_drive_forms_send_their_parameters_as_before() -> None:
-    """Required parameters and optional ones with a default stay number boxes, always sent."""
+def test_the_trscat_form_sends_its_parameters_as_before() -> None:
+    """Required parameters and optional ones with a default stay number boxes, always sent
+    (the drive's per-page form: tests/app/test_client_action_form.py)."""
     with served_default_rig(1.0) as live:
         controls = live.dashboard.line.controls  # type: ignore[union-attr]
         trscat = controls.fault_forms["trscat"]
         assert _sent_by(trscat, "field_supply", volts=12.5) == [{"volts": 12.5}]
-        drive = live.dashboard._drives.controls._form  # type: ignore[union-attr]
-        assert _sent_by(drive, "read_object", index=0x6041) == [{"index": 0x6041, "sub": 0}]

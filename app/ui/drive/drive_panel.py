@@ -33,7 +33,7 @@ from app.ui.drive.drive_options import (
     register_details,
     register_option,
 )
-from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_action_form import ClientActionForm
 from app.ui.panels.client_form import ClientForm, ClientProp
 from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.client_pick import ClientHtml
@@ -134,11 +134,13 @@ class DrivePanel(DriveCommands, DriveFaults):
             # With a token the actions that make a fault (roles.makes_faults: inject / clear
             # an alarm, jam the load, power off) are a form per instructor connection: in the
             # shared form a trainee's page got them, and the instructor's pick of one
-            # (docs/classroom.md). An open rig keeps the one form.
+            # (docs/classroom.md). An open rig keeps them in the one form. Its pick and
+            # boxes are each page's: shared, a page's pick switched every page's form.
             faults = {} if instructor.shared else {
                 n: a for n, a in actions.items() if makes_faults(DRIVE_KIND, n)}
-            self._form = ActionForm(gui, {n: a for n, a in actions.items() if n not in faults},
-                                    self._apply, label="Drive action")
+            self._form = ClientActionForm(
+                server, {n: a for n, a in actions.items() if n not in faults}, self._apply,
+                label="Drive action")
             if faults:
                 instructor.part(lambda gui: self._fault_form(gui, faults))
 

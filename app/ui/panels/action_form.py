@@ -44,7 +44,7 @@ def blank_allowed(p: Param) -> bool:
     return not p.required and p.default is None and not p.choices and p.type is not bool
 
 
-def _widget(gui: viser.GuiApi, p: Param, now: Any = _MISSING) -> Any:
+def param_widget(gui: viser.GuiApi, p: Param, now: Any = _MISSING) -> Any:
     """``now``: the value the device has now (Param.current); else the default."""
     if now is not _MISSING:
         with contextlib.suppress(CommandError):  # one the form cannot hold: the default
@@ -66,8 +66,8 @@ def _widget(gui: viser.GuiApi, p: Param, now: Any = _MISSING) -> Any:
     return gui.add_text(p.name, "" if p.default is None else str(p.default), hint=hint)
 
 
-def _value(p: Param, handle: Any) -> Any:
-    value = handle.value
+def param_value(p: Param, value: Any) -> Any:
+    """What a parameter's widget holds (``value``), as the action takes it."""
     if p.choices:
         for choice in p.choices:
             if str(choice) == value:
@@ -162,7 +162,8 @@ class ActionForm:
             self._choice.hint = action.doc or None
             snapshot = self._current() if self._current is not None else None
             with self._params:
-                self._widgets = [(p, _widget(self._gui, p, current_value(snapshot, p.current)))
+                self._widgets = [(p, param_widget(self._gui, p,
+                                                current_value(snapshot, p.current)))
                                  for p in action.params]
             self._params.visible = bool(self._widgets)
 
@@ -172,15 +173,26 @@ class ActionForm:
             return
         with self._lock:
             widgets = list(self._widgets)
-        try:
-            args = {p.name: _value(p, h) for p, h in widgets
-                    if not (blank_allowed(p) and not str(h.value).strip())}
-        except (TypeError, ValueError) as exc:
-            notify(client, name, f"bad parameter: {exc}", error=True)
-            return
-        try:
-            self._actions[name].check_args(args)
-        except CommandError as exc:
-            notify(client, f"{name} refused", str(exc), error=True)
-            return
-        self._apply(client, name, args)
+        args = checked_args(client, name, self._actions[name],
+                            [(p, h.value) for p, h in widgets])
+        if args is not None:
+            self._apply(client, name, args)
+
+
+def checked_args(client: viser.ClientHandle | None, name: str, action: Action,
+                 typed: Sequence[tuple[Param, Any]]) -> dict[str, Any] | None:
+    """The arguments of ``action`` (``name``) from what its widgets hold (``typed``: each
+    parameter's value), or None after telling ``client``'s page why not (a bad number, a
+    check the action table makes)."""
+    try:
+        args = {p.name: param_value(p, value) for p, value in typed
+                if not (blank_allowed(p) and not str(value).strip())}
+    except (TypeError, ValueError) as exc:
+        notify(client, name, f"bad parameter: {exc}", error=True)
+        return None
+    try:
+        action.check_args(args)
+    except CommandError as exc:
+        notify(client, f"{name} refused", str(exc), error=True)
+        return None
+    return args
