@@ -197,3 +197,18 @@ def test_the_drive_action_form_is_each_page_s_own(
     first.set(button, True)
     _wait(lambda: len(applied) == 2)
     assert applied[1] == (first_id, "write_register", {"register": 13, "value": 777})
+
+
+def test_the_fieldbus_boxes_are_each_page_s_own(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """c9 and c7 are filled from the drive (what it latched at power-up) and typed before
+    "Write c9 and c7": what A types is A's."""
+    live, first, second = served
+    node = _widget(first, "Node (c7)", None)
+    first.set(node, 42)
+    time.sleep(0.1)
+    _frames(live)
+    assert 42 not in second.updates(node)
+    drives = live.dashboard.drives
+    assert drives is not None
+    assert drives.controls._mirrors["c7"].handle.value == 2  # what a new page is sent

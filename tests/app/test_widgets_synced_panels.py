@@ -225,12 +225,18 @@ def _other(handle: Handle, value: Any) -> Any:
 
 
 def test_c9_and_c7_stay_forms(loop) -> None:
-    """c9 and c7 are applied by their button: a frame does not overwrite what a user typed."""
-    server, _sender, panel, _ = drive_rig(loop)
-    c7 = server.gui.handles["Node (c7)"]
-    c7.user("page A", 42)
+    """c9 and c7 are applied by their button: a frame does not overwrite what a user typed,
+    and what one page typed is its own (the other page and a new one keep the drive's)."""
+    server, sender = Server(loop, pages=2), Sender()
+    panel = DrivePanel(server, None, sender, lambda _client: "drive1", {})  # type: ignore[arg-type]
     frames(loop, server, lambda: panel.update(DRIVE))
-    assert c7.value == 42
+    c7, page, other = server.gui.handles["Node (c7)"], server.clients[1], server.clients[2]
+    assert page.sent(c7._impl.uuid, "value") == other.sent(c7._impl.uuid, "value") == [1]
+    c7.user(page, 42)
+    frames(loop, server, lambda: panel.update(DRIVE))
+    mirror = panel._mirrors["c7"]
+    assert (mirror.value_for(1), mirror.value_for(2), c7.value) == (42, 1, 1)
+    assert page.sent(c7._impl.uuid, "value") == [1]  # the frames left what it typed
 
 
 @pytest.mark.parametrize(("label", "clicks", "commands"), [

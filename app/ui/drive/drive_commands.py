@@ -18,7 +18,6 @@ from app.classroom.roles import Role
 from app.ui.commands import notify
 from app.ui.drive.drive_options import leading_int, register_of
 from app.ui.drive.drive_state import injected_names
-from app.ui.panels.client_input import ClientMirror
 from devices.servo import control
 from devices.servo.registers import R
 
@@ -168,9 +167,7 @@ class DriveCommands:
 
     def _typed(self: DrivePanel, name: str, event: viser.GuiEvent) -> Any:
         """What the clicking page's c9 or c7 box holds."""
-        mirror = self._mirrors[name]
-        return mirror.value_for(event.client_id) if isinstance(mirror, ClientMirror) \
-            else mirror.handle.value
+        return self._mirrors[name].value_for(event.client_id)
 
     def _write_fieldbus(self: DrivePanel, event: viser.GuiEvent) -> None:
         c9, c7 = leading_int(self._typed("c9", event)), int(self._typed("c7", event))

@@ -38,7 +38,7 @@ from app.ui.panels.client_form import ClientForm, ClientProp
 from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.client_pick import ClientHtml
 from app.ui.panels.per_client import instructor_for
-from app.ui.panels.widgets import Mirror, Synced
+from app.ui.panels.widgets import Synced
 from app.ui.style import esc
 from devices.device import Action
 from devices.servo.modbus_map import NORMAL
@@ -146,7 +146,8 @@ class DrivePanel(DriveCommands, DriveFaults):
 
         # The boxes and the mode are drive values: every page ends up showing the selected
         # drive's (Synced). c9 and c7 are a form applied by "Write c9 and c7": what a user
-        # types there must survive the next frame (Mirror).
+        # types there must survive the next frame, and stay off the other pages
+        # (ClientMirror).
         synced = self._synced_type()
         self._synced = {name: synced(server, handle, sender, command) for name, handle, command in (
             ("powered", self._power, lambda c, on: self._apply(c, "power", {"on": bool(on)})),
@@ -156,9 +157,8 @@ class DrivePanel(DriveCommands, DriveFaults):
                                                          {"name": "ien", "value": bool(on)})),
             ("mode", self._mode, lambda c, option: self._apply(
                 c, "set_mode", {"mode": leading_int(option)})))}
-        self._mirrors: dict[str, Mirror | ClientMirror] = {
-            name: ClientMirror(server, handle) if self._per_page else Mirror(handle)
-            for name, handle in (("c9", self._c9), ("c7", self._c7))}
+        self._mirrors = {name: ClientMirror(server, handle)  # each page's, one drive too
+                         for name, handle in (("c9", self._c9), ("c7", self._c7))}
         # The form fields, their hints and the answer line are each page's, on every rig: a
         # trainee's register number and read result stayed off the others' (a rig with one
         # drive too, where there is no picker).
@@ -248,12 +248,8 @@ class DrivePanel(DriveCommands, DriveFaults):
 
     def _mirror(self, name: str, value: Callable[[Mapping[str, Any]], Any],
                 page: Callable[[int | None], Mapping[str, Any]]) -> None:
-        """c9 / c7 (what the drive latched at power-up) into its form field."""
-        mirror = self._mirrors[name]
-        if isinstance(mirror, ClientMirror):
-            mirror.follow_each(lambda client_id: value(page(client_id)))
-        elif (shown := value(page(None))) is not None:
-            mirror.follow(shown)
+        """c9 / c7 (what the drive latched at power-up) into each page's form field."""
+        self._mirrors[name].follow_each(lambda client_id: value(page(client_id)))
 
     def forget(self, client_id: int | None = None) -> None:
         """Another drive was selected (on ``client_id``'s page, every page's when None): take
@@ -261,7 +257,4 @@ class DrivePanel(DriveCommands, DriveFaults):
         followed, so it needs nothing: the next frame's value, the new drive's, is shown when
         it differs.)"""
         for mirror in self._mirrors.values():
-            if isinstance(mirror, ClientMirror):
-                mirror.forget(client_id)
-            else:
-                mirror.forget()
+            mirror.forget(client_id)
