@@ -123,3 +123,41 @@ def test_a_module_pick_and_its_unplug_stay_on_their_page(live: LiveDashboard,
     finally:
         for page in pages:
             page.context.close()
+
+
+def _shown(page: Any, label: str) -> int:
+    """How many boxes labelled ``label`` the page shows (a hidden folder's are not)."""
+    boxes = page.get_by_label(label, exact=True)
+    return sum(1 for box in boxes.all() if box.is_visible())
+
+
+def test_a_drive_action_picked_on_one_page_shows_its_parameters_there_only(
+        live: LiveDashboard, browser: Any) -> None:
+    """The Drive action form is each page's own: every action's parameters are built once,
+    each in a folder hidden but on the pages that picked it. Page A's write_register shows
+    A its register and value boxes; page B keeps its own pick and no such box."""
+    live.advance(BOOT_S)
+    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
+             for _ in range(2)]
+    try:
+        for page in pages:
+            open_dashboard(page, live)
+            _open(page, "Servo drive")
+            page.get_by_text("Other drive actions").click()
+        first, second = pages
+        initial = second.get_by_label("Drive action", exact=True).input_value()
+        assert initial != "write_register" and _shown(second, "register") == 0
+        choose(first, "Drive action", "write_register")
+        wait_until(lambda: _shown(first, "register") == 1 and _shown(first, "value") == 1,
+                   what="page 1's write_register boxes")
+        live.advance(0.2)  # frames for both pages
+        assert second.get_by_label("Drive action", exact=True).input_value() == initial
+        assert _shown(second, "register") == 0 and _shown(second, "value") == 0
+        choose(second, "Drive action", "read_register")
+        wait_until(lambda: _shown(second, "register") == 1, what="page 2's read_register box")
+        assert _shown(second, "value") == 0
+        assert first.get_by_label("Drive action", exact=True).input_value() == "write_register"
+        assert _shown(first, "register") == 1 and _shown(first, "value") == 1
+    finally:
+        for page in pages:
+            page.context.close()
