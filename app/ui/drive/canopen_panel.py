@@ -22,10 +22,10 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.drive import canopen_master as cm
 from app.ui.drive.bus_state import nmt_badge
-from app.ui.drive.drive_commands import on_button
 from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_input import ClientMirror
 from app.ui.panels.client_pick import PickedHtml
+from app.ui.panels.widgets import on_button
 from app.ui.style import esc, kv_table
 from devices.canopen import master_frames as mf
 from devices.device import CommandError

@@ -38,18 +38,6 @@ def reset_refusal_text(why: str, injected: list[Mapping[str, Any]]) -> str:
     return f"{why} · injected: {names} (Clear alarm removes it, then reset)"
 
 
-def on_button(group: Any, fn: Callable[[viser.GuiEvent, str], None]) -> None:
-    """Call ``fn(event, button)`` for each click on a button group, with the button clicked.
-
-    A coroutine, so it runs on viser's event loop as the click arrives, while the group's value
-    is still this click's button (a plain callback runs later in a thread pool and can read the
-    next click's: Enable, Disable commanded as Disable, Disable). ``fn`` must not block."""
-    async def clicked(event: viser.GuiEvent) -> None:
-        fn(event, str(event.target.value))
-
-    group.on_click(clicked)
-
-
 class DriveCommands:
     """What each control of the tab sends to the page's drive."""
 

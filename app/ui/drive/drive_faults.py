@@ -13,12 +13,11 @@ from typing import TYPE_CHECKING, Any
 
 import viser
 
-from app.ui.drive.drive_commands import on_button
 from app.ui.drive.drive_options import alarm_details, alarm_options, leading_int
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_input import ClientSynced
 from app.ui.panels.per_client import instructor_for
-from app.ui.panels.widgets import DetailHint, Synced, set_options, short_label_css
+from app.ui.panels.widgets import DetailHint, Synced, on_button, set_options, short_label_css
 from devices.device import Action
 
 if TYPE_CHECKING:

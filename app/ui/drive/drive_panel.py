@@ -20,7 +20,7 @@ import viser
 from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
-from app.ui.drive.drive_commands import JOG, DriveCommands, on_button
+from app.ui.drive.drive_commands import JOG, DriveCommands
 from app.ui.drive.drive_faults import DRIVE_KIND, DriveFaults
 from app.ui.drive.drive_options import (
     FIELDBUS_OPTIONS,
@@ -38,7 +38,7 @@ from app.ui.panels.client_form import ClientForm, ClientProp
 from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.client_pick import ClientHtml
 from app.ui.panels.per_client import instructor_for
-from app.ui.panels.widgets import Synced
+from app.ui.panels.widgets import Synced, on_button
 from app.ui.style import esc
 from devices.device import Action
 from devices.servo.modbus_map import NORMAL

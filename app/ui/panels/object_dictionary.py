@@ -28,6 +28,7 @@ from app.runtime import Runtime
 from app.ui.commands import CommandSender, notify
 from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_pick import ClientHtml, ClientPick
+from app.ui.panels.widgets import on_button
 from app.ui.style import esc
 from devices.device import CommandError
 from devices.events import fmt_bytes
@@ -208,9 +209,9 @@ class ObjectDictionaryPanel:
         def _(event: viser.GuiEvent) -> None:
             self.request(event.client)
 
-        @buttons.on_click
-        def _(event: viser.GuiEvent) -> None:
-            self._access(event.client, buttons.value)
+        # The clicked button as the click arrives: read in viser's thread pool, the group's
+        # value could be another page's next click (A's Write done as a Read).
+        on_button(buttons, lambda event, button: self._access(event.client, button))
 
     def _refilter(self) -> None:
         with self._lock:

@@ -61,6 +61,18 @@ _NOTHING = object()
 PAGE_SENDS = (GuiUpdateMessage, GuiButtonHoldMessage, GuiFormSubmitMessage, GuiFormDirtyMessage)
 
 
+def on_button(group: Any, fn: Callable[[viser.GuiEvent, str], None]) -> None:
+    """Call ``fn(event, button)`` for each click on a button group, with the button clicked.
+
+    A coroutine, so it runs on viser's event loop as the click arrives, while the group's value
+    is still this click's button (a plain callback runs later in a thread pool and can read the
+    next click's: Enable, Disable commanded as Disable, Disable). ``fn`` must not block."""
+    async def clicked(event: viser.GuiEvent) -> None:
+        fn(event, str(event.target.value))
+
+    group.on_click(clicked)
+
+
 def widget_uuid(handle: Any) -> str:
     """The id viser's client gives a server-level widget in the page. viser 1.1.1 (pinned in
     pyproject.toml) keeps it on the handle's private ``_impl``; the classroom's trainee CSS
