@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import rerun as rr
 
-from app.recording import event_text
+from app.recording import allocators, event_text
 from app.recording.blueprint import TIMELINE, lane_style, rig_blueprint, series_style
 from app.recording.signals import SeriesInfo, Signal, main_machine, rig_signals, state_values
 from devices.events import Event
@@ -215,6 +215,10 @@ class RigRecorder:
         if t_us - self._last_flush_us >= self.flush_period_us:
             self._send_buffers()
             self._last_flush_us = t_us
+            # A period's rows went out at once: without this, the allocators keep that peak
+            # (glibc's part; rerun's and pyarrow's: allocators.configure). Issue 7, the soak.
+            # Also after a full chunk's send (_send_full): at most one trim per sending.
+            allocators.release_freed()
         elif self._buffered >= self._check_at:
             self._send_full()
 
@@ -426,6 +430,7 @@ class RigRecorder:
         buffered = sum(len(c.times) for _send, _path, c in columns)
         keep = self.max_buffered_rows // 2 if buffered >= self.max_buffered_rows else buffered
         fullest = 0  # rows of the fullest entity left
+        sent = False
         for send, path, column in columns:
             rows = len(column.times)
             if rows < self.chunk_rows and buffered <= keep:
@@ -433,6 +438,9 @@ class RigRecorder:
                 break
             send(path, column, False)
             buffered -= rows
+            sent = True
+        if sent:  # what the sends freed: see _flush_due
+            allocators.release_freed()
         self._buffered = buffered
         self._check_at = min(buffered + self.chunk_rows - fullest, self.max_buffered_rows)
 
