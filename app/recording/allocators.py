@@ -5,11 +5,15 @@ side (mimalloc, linked into ``rerun_bindings``), pyarrow's default pool (its own
 where rerun's Python side builds the Arrow columns) and glibc's malloc (numpy copies, the
 buffers' arrays; per-thread arenas). Each periodic flush of a long session sends minutes of
 buffered rows at once, and each allocator kept its peak: the soak's RSS rose ~3 MB at the
-first 300 s flush and ~2 MB at the next (docs/hardening.md "Soak"). So, before rerun or
-pyarrow is imported (:func:`configure`): rerun's mimalloc purges freed pages at once, and the
-Arrow columns come from the system allocator; after each periodic flush
-(:func:`release_freed`) glibc gives its free pages back (``malloc_trim``). Measured on the
-soak driver: docs/recording.md "Memory given back".
+first 300 s flush and ~2 MB at the next (docs/hardening.md "Soak"). So: before rerun is
+imported (:func:`configure`), rerun's mimalloc is told to purge freed pages at once; when a
+recorder is made (:func:`use_system_pool`), the Arrow columns come from the system
+allocator; after each periodic flush (:func:`release_freed`) glibc gives its free pages back
+(``malloc_trim``). Measured on the soak driver: docs/recording.md "Memory given back".
+
+pyarrow's default pool is the whole process's: a library user's own Arrow work shares it. So
+it is switched only once a recorder exists, never by an import, and a pool the user chose
+(``ARROW_DEFAULT_MEMORY_POOL``) is kept, as a user's ``MIMALLOC_PURGE_DELAY`` is.
 """
 
 from __future__ import annotations
@@ -24,18 +28,25 @@ from collections.abc import Callable
 # 0 = return freed pages to the OS at once instead of after 10 ms of later allocator calls,
 # which a thread that sends every few simulated minutes never makes in time.
 MIMALLOC_PURGE_DELAY = ("MIMALLOC_PURGE_DELAY", "0")
+ARROW_POOL_ENV = "ARROW_DEFAULT_MEMORY_POOL"  # pyarrow's own choice of its default pool
 
 
 def configure() -> None:
-    """Set the allocators up for a long recording; call before ``import rerun``. A value the
-    user put in the environment is kept."""
+    """Tell rerun's mimalloc to give freed pages back at once; call before ``import rerun``
+    (it reads the environment only when it loads). A value the user put there is kept."""
     name, value = MIMALLOC_PURGE_DELAY
     if "rerun_bindings" not in sys.modules:  # loaded already: too late, and harmless
         os.environ.setdefault(name, value)
+
+
+def use_system_pool() -> None:
+    """pyarrow's default pool becomes the system allocator, unless the user picked one
+    (``ARROW_DEFAULT_MEMORY_POOL``). Called by each recorder made: rerun builds its columns
+    with that pool, and the system pool frees into glibc, which release_freed() trims."""
+    if os.environ.get(ARROW_POOL_ENV):
+        return
     import pyarrow as pa
 
-    # rerun builds its columns with pyarrow's default pool; the system pool frees into
-    # glibc, which release_freed() trims. Only the recorder uses pyarrow in this process.
     pa.set_memory_pool(pa.system_memory_pool())
 
 

@@ -117,6 +117,7 @@ class RigRecorder:
         self.flush_period_us = flush_period_us
         self.chunk_rows = chunk_rows
         self.max_buffered_rows = max_buffered_rows
+        allocators.use_system_pool()  # the sends' columns: see allocators.py
         self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
         self._rec.set_sinks(rr.FileSink(str(self.path)))
         self._lock = threading.Lock()

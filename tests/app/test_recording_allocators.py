@@ -9,6 +9,7 @@ per sample or per chunk.
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -28,16 +29,53 @@ def moving(i: int) -> dict[str, Any]:
         "following_error": i / 7, "ds402_state": "OPERATION_ENABLED"}}}
 
 
-def test_importing_the_recorder_sets_the_allocators_up_before_rerun_loads() -> None:
+def _fresh(code: str, **env_set: str) -> list[str]:
+    """``code``'s printed words, run in a fresh interpreter without MIMALLOC_ / ARROW_ pool
+    settings but ``env_set``."""
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith("MIMALLOC_") and k != "ARROW_DEFAULT_MEMORY_POOL"}
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         env={**env, **env_set}, cwd=Path(__file__).resolve().parents[2],
+                         timeout=120, check=True)
+    return out.stdout.split()
+
+
+def test_importing_the_recorder_sets_mimalloc_up_before_rerun_loads() -> None:
     code = ("import os, sys\n"
             "import app.recording\n"
-            "import pyarrow as pa\n"
             "assert 'rerun_bindings' in sys.modules\n"
-            "print(os.environ.get('MIMALLOC_PURGE_DELAY'), pa.default_memory_pool().backend_name)")
-    env = {k: v for k, v in __import__("os").environ.items() if not k.startswith("MIMALLOC_")}
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env,
-                         cwd=Path(__file__).resolve().parents[2], timeout=120, check=True)
-    assert out.stdout.split() == ["0", "system"]
+            "print(os.environ.get('MIMALLOC_PURGE_DELAY'))")
+    assert _fresh(code) == ["0"]
+
+
+def test_pyarrows_pool_is_switched_by_a_recorder_not_by_an_import(tmp_path: Path) -> None:
+    """pyarrow's default pool is process-wide: a library user's own Arrow work uses it too, so
+    importing the package (a type hint, a served rig without a recording) leaves it alone."""
+    code = ("import pyarrow as pa\n"
+            "before = pa.default_memory_pool().backend_name\n"
+            "from app.recording import RigRecorder\n"
+            "imported = pa.default_memory_pool().backend_name\n"
+            f"RigRecorder({str(tmp_path / 'a.rrd')!r}, blueprint=False).close()\n"
+            "print(before == imported, pa.default_memory_pool().backend_name)")
+    assert _fresh(code) == ["True", "system"]
+
+
+def test_a_users_arrow_pool_setting_is_kept(tmp_path: Path) -> None:
+    code = ("import pyarrow as pa\n"
+            "from app.recording import RigRecorder\n"
+            f"RigRecorder({str(tmp_path / 'a.rrd')!r}, blueprint=False).close()\n"
+            "print(pa.default_memory_pool().backend_name)")
+    assert _fresh(code, ARROW_DEFAULT_MEMORY_POOL="jemalloc") == ["jemalloc"]
+
+
+def test_a_served_rig_without_a_recording_loads_no_rerun() -> None:
+    """Serving without ``--record`` (``--no-record``, the tests' rigs) sets no allocator up:
+    rerun is not even loaded."""
+    code = ("import os, sys\n"
+            "import app.ui.panels.classroom_rig\n"
+            "import app.ui.panels.classroom\n"
+            "print('rerun' in sys.modules, os.environ.get('MIMALLOC_PURGE_DELAY'))")
+    assert _fresh(code) == ["False", "None"]
 
 
 def test_a_users_mimalloc_setting_is_kept() -> None:

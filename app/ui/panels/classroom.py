@@ -22,7 +22,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import viser
 
@@ -30,7 +30,6 @@ from app.classroom.exercise import Exercise, Phase
 from app.classroom.exercise_file import check_exercise, load_exercise, start_us
 from app.classroom.faults import Catalog, catalog
 from app.classroom.roles import Operation, Role
-from app.recording import RigRecorder
 from app.rig_config import RigConfigError
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, Sent, notify
@@ -41,6 +40,9 @@ from app.ui.panels.widgets import instructor_folders, widget_uuid
 from app.ui.style import INSTRUCTOR_CLASS
 from devices.device import CommandError
 from devices.events import LogLine
+
+if TYPE_CHECKING:  # rerun loads with a recorder only (app/recording/allocators.py)
+    from app.recording import RigRecorder
 
 logger = logging.getLogger(__name__)
 

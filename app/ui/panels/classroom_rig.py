@@ -12,16 +12,19 @@ import socket
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import viser
 
 from app.classroom.roles import Access
-from app.recording import RigRecorder, attach_to_runtime
 from app.rig import Rig
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, install_gate
 from app.ui.dashboard import Dashboard
 from app.ui.panels.classroom import ClassroomPanel
+
+if TYPE_CHECKING:  # rerun loads with a recorder only (app/recording/allocators.py)
+    from app.recording import RigRecorder
 
 logger = logging.getLogger(__name__)
 WILDCARD_HOSTS = frozenset({"0.0.0.0", "::", ""})
@@ -78,6 +81,9 @@ def serve_rig(rig: Rig, access: Access, *, host: str = "127.0.0.1", port: int = 
     runtime.set_paused(paused)
     recorder = None
     if record is not None:
+        # Here: importing app.recording sets rerun's allocator up for the process
+        from app.recording import RigRecorder, attach_to_runtime
+
         recorder = RigRecorder(record)
         attach_to_runtime(runtime, recorder)
     install_gate(runtime, access)
