@@ -34,9 +34,10 @@ from app.ui.drive.drive_options import (
     register_option,
 )
 from app.ui.panels.client_action_form import ClientActionForm
-from app.ui.panels.client_form import ClientForm, ClientProp
+from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_input import ClientMirror, ClientSynced
 from app.ui.panels.client_pick import ClientHtml
+from app.ui.panels.page_prop import PageProp
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import Synced, on_button
 from app.ui.style import esc
@@ -168,8 +169,8 @@ class DrivePanel(DriveCommands, DriveFaults):
             ("register value", self._register_value), ("parameter", self._parameter),
             ("parameter value", self._parameter_value))}
         self._results = ClientHtml(server, self._result_html)
-        self._hints = (ClientProp(server, self._register, "hint"),
-                       ClientProp(server, self._parameter, "hint"))
+        self._hints = (PageProp(server, self._register, "hint"),
+                       PageProp(server, self._parameter, "hint"))
         # A new page's, until its own reach it
         self._register.hint = _REGISTER_HINTS(NORMAL).get(str(self._register.value))
         self._parameter.hint = _PARAMETER_HINTS(NORMAL).get(str(self._parameter.value))

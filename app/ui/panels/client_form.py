@@ -1,5 +1,6 @@
-"""Form fields each page fills for itself (a register number, an object's address, a filter),
-and a widget property each page gets for its own content (a box's hint).
+"""Form fields each page fills for itself (a register number, an object's address, a filter).
+A widget property each page gets for its own content (a box's hint) is a
+:class:`app.ui.panels.page_prop.PageProp`.
 
 A :class:`~app.ui.panels.client_input.ClientInput` keeps each page's value, but a page that
 has typed nothing read viser's value, which is the last value any page sent: page B's Read
@@ -10,14 +11,12 @@ page's change, which is what a new page is sent (docs/dashboard.md "Several brow
 
 from __future__ import annotations
 
-import threading
 from collections.abc import Callable
 from typing import Any
 
 import viser
 
 from app.ui.panels.client_input import ClientInput
-from app.ui.panels.client_pick import page_ready, send_to
 
 FormChange = Callable[[viser.ClientHandle, Any], None]
 
@@ -52,31 +51,3 @@ class ClientForm(ClientInput):
         """What ``client``'s page holds (the initial value for no page: a test, a scenario)."""
         return self.value_for(getattr(client, "client_id", None))
 
-
-_NOTHING = object()
-
-
-class ClientProp:
-    """One property of a server-level widget (``"hint"``) that each page gets for itself;
-    what each page was sent is kept, so a frame sends a page only what changed for it."""
-
-    def __init__(self, server: viser.ViserServer, handle: Any, prop: str) -> None:
-        self._server = server
-        self._handle = handle
-        self._prop = prop
-        self._lock = threading.Lock()
-        self._sent: dict[int, Any] = {}
-
-    def show(self, value_for: Callable[[int], Any]) -> None:
-        """``value_for(client_id)``: that page's value (the dashboard thread)."""
-        clients = self._server.get_clients()
-        with self._lock:
-            for gone in set(self._sent) - set(clients):
-                del self._sent[gone]
-            for client_id, client in clients.items():
-                if not page_ready(self._server, client):
-                    continue  # a later frame sends it
-                value = value_for(client_id)
-                if self._sent.get(client_id, _NOTHING) != value:
-                    self._sent[client_id] = value
-                    send_to(client, self._handle._impl.uuid, self._prop, value)
