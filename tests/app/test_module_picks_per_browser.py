@@ -153,6 +153,36 @@ def test_a_zero_cycle_click_commands_the_page_s_ax2(
     _wait(lambda: not _read(live, index) & CMD_ZERO_CYCLE[0])
 
 
+def _rpm(live: ServedRig, slot: int) -> list[float]:
+    return [float(e["rpm"]) for e in _rail(live)[slot - 1]["encoders"]]
+
+
+def test_set_shaft_speed_sends_the_clicking_page_s_encoder_and_speed(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """The encoder section is each page's (its folder, text and zero-cycle boxes), and so are
+    its Encoder and Shaft speed boxes: what one page typed there was every page's, and a
+    classmate's Set shaft speed turned the shaft at it."""
+    live, first, second = served
+    picker = _widget(first, "Module", "7 AX2")
+    first.set(picker, "7 AX2")
+    second.set(picker, "7 AX2")
+    encoder, speed = _widget(first, "Encoder", "2"), _widget(first, "Shaft speed (rpm)", None)
+    first.set(encoder, "2")
+    first.set(speed, 120.0)
+    _settle(live)
+    assert "2" not in second.updates(encoder)
+    assert 120.0 not in second.updates(speed)
+    button = _widget(second, "Set shaft speed", None)
+    second.set(button, True)  # its own boxes: encoder 1 at 60 rpm
+    _wait(lambda: _rpm(live, 7)[0] == 60.0)
+    first.set(button, True)
+    _wait(lambda: _rpm(live, 7)[1] == 120.0)
+    assert _rpm(live, 7) == [60.0, 120.0]
+    for which in (1, 2):  # the shafts stand still again for the other tests
+        live.runtime.command("fastcat/7", "set_shaft_speed",
+                             {"encoder": which, "rpm": 0.0}).result(timeout=10)
+
+
 def test_unplug_then_plug_are_commanded_in_click_order_with_the_page_s_type(
         served: tuple[ServedRig, Page, Page]) -> None:
     """§2: modules plugged and unplugged by hand; Plug puts in the type the page chose."""

@@ -7,9 +7,10 @@ section: shaft speed per encoder and the zero-cycle command bits of 0x7600 (§6.
 13), written with ``write_object`` like a PLC would write its output.
 
 The Module picker is each page's own (a ClientPick), and so is what follows its pick: the
-encoder section and its boxes, the open rig's Rail rows (Plug type preset, Swap with, Module
-powered) and the module Module I/O and the buttons act on, the clicking page's
-(docs/dashboard.md "Several browsers"). The Module I/O form itself is one for every page.
+encoder section and its boxes (Encoder and Shaft speed: ClientForms), the open rig's Rail
+rows (Plug type preset, Swap with, Module powered) and the module Module I/O and the buttons
+act on, the clicking page's (docs/dashboard.md "Several browsers"). The Module I/O form
+itself is one for every page.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_input import ClientSynced
 from app.ui.panels.client_pick import ClientHtml, ClientPick, page_ready
 from app.ui.panels.control import module_options, option_slot
@@ -121,8 +123,10 @@ class ModulePanel:
 
         with gui.add_folder("Encoder (AX2)", visible=False) as encoder_folder:
             self._encoder_state = ClientHtml(server, gui.add_html(""))
-            self._encoder = gui.add_dropdown("Encoder", ("1", "2"))
-            self._rpm = gui.add_number("Shaft speed (rpm)", 60.0, step=1.0)
+            # Each page's own boxes, as the section is: typed on one page, they were every
+            # page's, and a classmate's Set shaft speed sent them.
+            self._encoder = ClientForm(server, gui.add_dropdown("Encoder", ("1", "2")))
+            self._rpm = ClientForm(server, gui.add_number("Shaft speed (rpm)", 60.0, step=1.0))
             set_speed = gui.add_button("Set shaft speed", disabled=self._speed is None)
             self._zero = [gui.add_checkbox(f"Zero-cycle command enc {k + 1}", False,
                                            hint=f"0x7600 bit {12 + k}; the rising edge starts "
@@ -165,7 +169,8 @@ class ModulePanel:
                 return
             which, rpm = self._speed
             self._sender.send(event.client, target, "set_shaft_speed",
-                              {which: int(self._encoder.value), rpm: float(self._rpm.value)})
+                              {which: int(self._encoder.value_of(event.client)),
+                               rpm: float(self._rpm.value_of(event.client))})
 
     def _rail_form(self, gui: Any) -> _RailForm:
         if instructor_for(self._server).shared:
