@@ -192,3 +192,23 @@ def _reported_on_two_pages(live: ServedRig, first: Page, second: Page) -> None:
     _frames(live)
     assert not _decoded(first, newest) and newest not in first.updates(picker)
     assert first.updates(code)[-1] == "0x001D"  # the box holds what A typed since
+
+
+def test_a_page_that_left_leaves_no_codes_tab_view_behind(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """Each page's Code box, pick and answer are kept while it is there: a classroom's pages
+    come and go for hours, and every one that typed a code stayed in memory for good."""
+    live = served[0]
+    before = set(live.server.get_clients())
+    page = Page(live.port)
+    try:
+        _wait(lambda: len(live.server.get_clients()) == len(before) + 1)
+        (mine,) = set(live.server.get_clients()) - before
+        page.set(_widget(page, "Code", None), "0x0011")
+        _wait(lambda: _decoded(page, "0x0011"))
+        assert mine in live.dashboard.decoder._views
+    finally:
+        page.close()
+    _wait(lambda: mine not in live.server.get_clients())
+    _frames(live)
+    assert mine not in live.dashboard.decoder._views

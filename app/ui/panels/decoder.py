@@ -113,6 +113,7 @@ class DecoderPanel:
     def __init__(self, server: viser.ViserServer, runtime: Runtime, side: Any = None,
                  last_load: LastLoad | None = None) -> None:
         self._runtime = runtime
+        self._server = server
         self._seq = 0
         self._runs = RunSplitter(last_load or (lambda: (0, 0)))
         self._reported: collections.deque[tuple[str, str]] = collections.deque(
@@ -244,7 +245,12 @@ class DecoderPanel:
         self._picker.options = labels
 
     def _show(self) -> None:
+        clients = self._server.get_clients()
         with self._lock:
+            # A page that left: its view goes (a change of its may come after viser's
+            # disconnect callback, so not there)
+            for gone in set(self._views) - set(clients):
+                del self._views[gone]
             default, views = dataclasses.replace(self._default), dict(self._views)
 
         def view(client_id: int | None) -> PageView:
