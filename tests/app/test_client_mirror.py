@@ -16,6 +16,7 @@ from viser._messages import GuiUpdateMessage
 
 from app.ui.panels import client_input
 from app.ui.panels.client_input import ClientMirror
+from app.ui.panels.decoder import _Field
 
 
 @pytest.fixture
@@ -37,3 +38,20 @@ def test_a_typed_value_is_the_typing_page_s_only(
     server._websock_server.message(1, GuiUpdateMessage("hb", {"value": 700}))
     assert mirror.value_for(1) == 700 and mirror.value_for(2) == 250
     assert handle._impl.value == 250  # what a new page is sent: the model's
+
+
+def test_the_codes_tab_fields_keep_a_typed_code_off_new_pages(
+        loop: asyncio.AbstractEventLoop, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The Codes tab's Code box and Reported pick (decoder._Field, a ClientMirror telling the
+    panel of each change): a code one page typed was what every page opening next was sent."""
+    monkeypatch.setattr(client_input, "page_ready", lambda server, client: False)
+    server = _Server(loop)
+    handle = SimpleNamespace(_impl=SimpleNamespace(uuid="code", value="", sync_cb=1))
+    heard: list[tuple[int, str]] = []
+    field = _Field(server, handle,  # type: ignore[arg-type]
+                   lambda client_id, value: heard.append((client_id, value)))
+    field.follow_each(lambda client_id: "0x0016")  # the rig's newest code, for new pages
+    handle._impl.value = "0x001B"  # viser stored page 1's message
+    server._websock_server.message(1, GuiUpdateMessage("code", {"value": "0x001B"}))
+    assert heard == [(1, "0x001B")]
+    assert handle._impl.value == "0x0016"  # what a new page is sent: the rig's newest

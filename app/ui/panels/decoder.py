@@ -102,6 +102,7 @@ class _Field(ClientMirror):
         self._on_change = on_change
 
     def changed(self, client_id: int, value: Any) -> None:
+        super().changed(client_id, value)  # viser's value back to a new page's
         self._on_change(client_id, value)
 
 
