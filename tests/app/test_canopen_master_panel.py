@@ -2,8 +2,8 @@
 
 The UI audit: the box read 1000 (the widget's initial value) while the drive's producer
 heartbeat time 0x1017 was 0, so "Set heartbeat" seemed to have been done already. The box is
-a form field pre-filled from the model (a Mirror, docs/dashboard.md): it takes 0x1017 when it
-changes, by this master's SDO or any other, and keeps what a user types until then.
+a form field pre-filled from the model (a ClientMirror, docs/dashboard.md): it takes 0x1017
+when it changes, by this master's SDO or any other, and keeps what a user types until then.
 """
 
 from __future__ import annotations

@@ -79,7 +79,7 @@ class ClientInput:
 
 
 class ClientMirror(ClientInput):
-    """:class:`app.ui.panels.widgets.Mirror` per page: a form field filled from the model of
+    """A form field filled from the model (app/ui/panels/widgets.py) per page: from the model of
     each page's pick, when that value changes for the page (its drive's changed, or it
     picked another drive); what the page types stays until then."""
 

@@ -18,9 +18,10 @@ of input widget show device state:
   GUI message of a page, each Synced widget sends the model's value again at the next frame,
   to that page only (no other page's sender can have dropped that page's click).
   Whatever the clicks, every page ends up showing the model.
-- :class:`Mirror`, a form field pre-filled from the device and applied by a separate button
-  (the drive's c7): it follows the device only when the device's value changes, so what a
-  user types in it is not overwritten by the next frame.
+- a form field pre-filled from the device and applied by a separate button (the drive's c7)
+  follows the device only when the device's value changes, so what a user types in it is
+  not overwritten by the next frame: each page's own, a
+  :class:`app.ui.panels.client_input.ClientMirror`.
 
 Writing ``.value`` from the server fires the widget's callbacks with ``event.client is None``;
 the callbacks ignore those (:func:`from_user`), so the view never echoes a command back.
@@ -288,24 +289,6 @@ class _PageMessages:
             widgets = list(self._synced)
         for synced in widgets:
             synced._recheck(client_id)
-
-
-class Mirror:
-    """Follow a device value into a form field on change only (see the module docstring)."""
-
-    def __init__(self, handle: Any) -> None:
-        self.handle = handle
-        self._seen: Any = object()
-
-    def follow(self, value: Any) -> None:
-        if value != self._seen:
-            self._seen = value
-            if self.handle.value != value:
-                self.handle.value = value
-
-    def forget(self) -> None:
-        """Take the next value even if it equals the last one (after a selection change)."""
-        self._seen = object()
 
 
 def set_options(dropdown: Any, options: list[str], keep_prefix: str | None = None) -> None:
