@@ -4,6 +4,8 @@ browsers"). Before, the second page's Slave and Drive tabs switched with the fir
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from helpers import VIEWPORT, LiveDashboard, choose, open_dashboard, wait_until
@@ -18,19 +20,31 @@ def _open(page: Any, name: str) -> None:
         tab.click()
 
 
-def _title(page: Any, css: str) -> str:
-    return str(page.locator(css).first.inner_text())
-
-
-def test_a_pick_on_one_page_leaves_the_other_page_s_tabs(live: LiveDashboard,
-                                                         browser: Any) -> None:
+@contextmanager
+def _two_pages(live: LiveDashboard, browser: Any, *tabs: str) -> Iterator[list[Any]]:
+    """Two browsers on the booted rig, each with ``tabs`` opened in turn."""
     live.advance(BOOT_S)
     pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
              for _ in range(2)]
     try:
         for page in pages:
             open_dashboard(page, live)
-            _open(page, "Slave")
+            for tab in tabs:
+                _open(page, tab)
+        yield pages
+    finally:
+        for page in pages:
+            page.context.close()
+
+
+def _title(page: Any, css: str) -> str:
+    return str(page.locator(css).first.inner_text())
+
+
+def test_a_pick_on_one_page_leaves_the_other_page_s_tabs(live: LiveDashboard,
+                                                         browser: Any) -> None:
+    with _two_pages(live, browser, "Slave") as pages:
+        for page in pages:
             page.locator("#fr-slave-state").wait_for()
         first, second = pages
         slave_title = ".fr-title:has-text('trscat'), .fr-title:has-text('cpx')"
@@ -51,9 +65,6 @@ def test_a_pick_on_one_page_leaves_the_other_page_s_tabs(live: LiveDashboard,
         _open(second, "Slave")
         assert "trscat" in _title(second, slave_title)
         assert second.get_by_label("Slave", exact=True).input_value() == "trscat"
-    finally:
-        for page in pages:
-            page.context.close()
 
 
 def _result(page: Any) -> str:
@@ -66,13 +77,8 @@ def test_a_register_read_on_one_page_stays_on_that_page(live: LiveDashboard,
                                                         browser: Any) -> None:
     """The drive's Register box and the answer line under it are each page's own: page A's
     pick and read leave page B's box and line; B's read shows on B only."""
-    live.advance(BOOT_S)
-    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
-             for _ in range(2)]
-    try:
+    with _two_pages(live, browser, "Servo drive") as pages:
         for page in pages:
-            open_dashboard(page, live)
-            _open(page, "Servo drive")
             page.get_by_text("Registers and parameters").click()
         first, second = pages
         initial = second.get_by_label("Register", exact=True).input_value()
@@ -88,9 +94,6 @@ def test_a_register_read_on_one_page_stays_on_that_page(live: LiveDashboard,
         live.advance(0.2)
         assert "R02 feed_constant = " in _result(first)
         assert first.get_by_label("Register", exact=True).input_value() == "R02 feed_constant"
-    finally:
-        for page in pages:
-            page.context.close()
 
 
 def _picked(page: Any, label: str) -> str:
@@ -102,12 +105,7 @@ def test_a_module_pick_and_its_unplug_stay_on_their_page(live: LiveDashboard,
     """The FastCAT tab's Module: page 1 picks module 3, page 2 keeps module 1 and its Unplug
     pulls module 1 (seed 000 §2). Before, page 2's picker showed module 3 and its Unplug
     pulled the module page 1 had picked."""
-    live.advance(BOOT_S)
-    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
-             for _ in range(2)]
-    try:
-        for page in pages:
-            open_dashboard(page, live)
+    with _two_pages(live, browser) as pages:
         first, second = pages
         wait_until(lambda: _picked(second, "Module") == "1 DB16", what="module 1 on page 2")
         choose(first, "Module", "3 DO16")
@@ -120,9 +118,6 @@ def test_a_module_pick_and_its_unplug_stay_on_their_page(live: LiveDashboard,
         live.advance(0.2)
         wait_until(lambda: _picked(second, "Module") == "1 (empty)", what="its new label")
         assert _picked(first, "Module") == "3 DO16"
-    finally:
-        for page in pages:
-            page.context.close()
 
 
 def _shown(page: Any, label: str) -> int:
@@ -136,13 +131,8 @@ def test_a_drive_action_picked_on_one_page_shows_its_parameters_there_only(
     """The Drive action form is each page's own: every action's parameters are built once,
     each in a folder hidden but on the pages that picked it. Page A's write_register shows
     A its register and value boxes; page B keeps its own pick and no such box."""
-    live.advance(BOOT_S)
-    pages = [browser.new_context(viewport=VIEWPORT, device_scale_factor=1).new_page()
-             for _ in range(2)]
-    try:
+    with _two_pages(live, browser, "Servo drive") as pages:
         for page in pages:
-            open_dashboard(page, live)
-            _open(page, "Servo drive")
             page.get_by_text("Other drive actions").click()
         first, second = pages
         initial = second.get_by_label("Drive action", exact=True).input_value()
@@ -158,6 +148,3 @@ def test_a_drive_action_picked_on_one_page_shows_its_parameters_there_only(
         assert _shown(second, "value") == 0
         assert first.get_by_label("Drive action", exact=True).input_value() == "write_register"
         assert _shown(first, "register") == 1 and _shown(first, "value") == 1
-    finally:
-        for page in pages:
-            page.context.close()
