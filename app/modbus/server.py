@@ -65,8 +65,6 @@ BROKEN_STREAM_LINGER_S = 2.0
 # transmission mode). Far above a TCP segment's jitter, far below the ~1 s a master waits
 # before it retransmits ("Master": response timeout 1 s, turnaround 100-200 ms).
 RTU_SILENCE_S = 0.1
-# Bytes read this soon after the loop came out of a stall may have come at any time during it.
-STALL_READ_SLACK_S = 0.02
 
 
 class LoopStalls:
@@ -74,27 +72,42 @@ class LoopStalls:
 
     A connection's bytes are stamped when the loop reads them; while a rig call of another
     connection blocks the loop, bytes that came meanwhile wait in the socket, and the gap
-    read afterwards is the stall's, not the line's. Consecutive calls (a pipelined client's
-    frames) make one stall."""
+    read afterwards is the stall's, not the line's. Bytes read before the loop polls the
+    sockets again after the stall (its first pass) may have come at any time during it, how
+    late in wall time that pass runs (a loaded machine); bytes read after that poll came
+    after it. Consecutive calls (a pipelined client's frames) make one stall."""
 
     def __init__(self) -> None:
         self.start_s = self.end_s = -1.0
         self._depth = 0
+        self._ends = 0  # which end() the open first pass follows
+        self._first_pass = False  # the loop has not polled the sockets since the last stall
 
     def begin(self) -> None:
-        now = time.monotonic()
-        if not self._depth and now - self.end_s > STALL_READ_SLACK_S:
-            self.start_s = now  # else the stall just before goes on
+        if not self._depth and not self._first_pass:
+            self.start_s = time.monotonic()  # else the stall just before goes on
         self._depth += 1
 
     def end(self) -> None:
         self._depth -= 1
         self.end_s = time.monotonic()
+        self._ends += 1
+        self._first_pass = True
+        # asyncio runs what call_soon queues in the loop's next pass, before the I/O that
+        # pass's poll found: the first callback runs before the reads of the sockets that
+        # filled during the stall, the one it queues after them.
+        ends, loop = self._ends, asyncio.get_running_loop()
+        loop.call_soon(loop.call_soon, self._polled, ends)
+
+    def _polled(self, ends: int) -> None:
+        if ends == self._ends:  # a later stall keeps its own first pass open
+            self._first_pass = False
 
     def arrival(self, last_s: float, now_s: float) -> float:
         """The earliest time bytes read at ``now_s`` can have come, the previous ones having
-        come at ``last_s``: at the stall's start when read right after it, else now."""
-        if self.end_s >= last_s and now_s - self.end_s <= STALL_READ_SLACK_S:
+        come at ``last_s``: at the stall's start when read in the loop's first pass after
+        it, else now."""
+        if self._first_pass and self.end_s >= last_s:
             return max(last_s, self.start_s)
         return now_s
 

@@ -91,6 +91,7 @@ def test_a_request_read_with_a_frame_of_bad_crc_before_it_is_answered(port: int)
 
 
 STALL_S = 3 * RTU_SILENCE_S  # one connection's request held up this long in the rig
+PREMISE_TRIES = 5  # tries at a gap within the silence on a loaded machine
 
 
 @contextlib.contextmanager
@@ -114,15 +115,27 @@ def test_a_stall_on_one_connection_does_not_cut_another_connection_s_frame() -> 
     """While connection A's rig call blocks the loop past the silence, connection B's bytes
     wait unread in the socket. B's frame came in two pieces 30 ms apart, no silence on B's
     line; measured when the loop read the second piece, the gap was the stall's, and B's
-    first piece was dropped as a cut frame (no reply)."""
-    with stalled_line() as port, connect(port) as a, connect(port) as b:
-        b.sendall(READ_D3[:3])
-        time.sleep(0.05)  # read by the loop before A's request comes
-        a.sendall(READ_D3)
-        time.sleep(0.03)  # the loop is now blocked in A's call
-        b.sendall(READ_D3[3:])
-        assert receive(a, REPLY_S) == D3_IS_50
-        assert receive(b, REPLY_S) == D3_IS_50
+    first piece was dropped as cut (no reply).
+
+    The test's own sleeps are wall time: on a loaded machine one of 50 ms lasted 280 ms, and
+    B's pieces then came farther apart than the silence, which the server rightly cuts. Such
+    a try proves nothing either way and is made again; the reply is checked on every try
+    whose pieces came within the silence."""
+    for _ in range(PREMISE_TRIES):
+        with stalled_line() as port, connect(port) as a, connect(port) as b:
+            b.sendall(READ_D3[:3])
+            first_s = time.monotonic()
+            time.sleep(0.05)  # read by the loop before A's request comes
+            a.sendall(READ_D3)
+            time.sleep(0.03)  # the loop is now blocked in A's call
+            gap_s = time.monotonic() - first_s
+            b.sendall(READ_D3[3:])
+            assert receive(a, REPLY_S) == D3_IS_50
+            answer = receive(b, REPLY_S)
+        if gap_s < RTU_SILENCE_S:
+            assert answer == D3_IS_50
+            return
+    pytest.fail(f"B's pieces came {gap_s * 1000:.0f} ms apart or more on every try")
 
 
 def test_a_silence_after_a_stall_still_cuts_the_frame() -> None:
