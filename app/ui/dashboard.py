@@ -127,7 +127,9 @@ class Dashboard:
             warm_glyphs(server.scene, glyphs)
         # False: no view is computed while no browser is connected (the thread only takes
         # events). True for a driver that waits on rendered_seq before any page is open (the
-        # screenshot tool steps a paused rig and waits for each frame to be drawn).
+        # screenshot tool steps a paused rig and waits for each frame to be drawn); such a
+        # driver's pages must not hang on wall time, so the drive plots then go with every
+        # drawn frame instead of every SEND_PERIOD_S (app/ui/drive/plots.py).
         self.draw_unwatched = draw_unwatched
         described = runtime.rig.describe()
         self.fastcat_ids = _kind_ids(described, "fastcat")
@@ -454,10 +456,16 @@ class Dashboard:
                 if panels is not None:
                     panels.objects.tick()
                 if self._drives is not None:
-                    self._drives.tick(time.monotonic(), frame.t_us)
+                    self._drives.tick(time.monotonic(), frame.t_us, force=self.draw_unwatched)
                 self.scenario_player.update(frame)  # scenario player, code decoder
                 self.decoder.update()
             self._frame_seq = frame.seq
+
+    def held(self) -> AbstractContextManager[Any]:
+        """No view update while in it: a driver that steps the rig draws each step whole,
+        its frame with the events the step journals after publishing it (a scenario's focus
+        step: the screenshot tool, app/screenshots.py ``play``)."""
+        return self._lock
 
     def _redraw(self) -> None:
         """New instructor widgets start from their defaults: the next tick writes them."""

@@ -220,7 +220,8 @@ class DriveView:
         if self.master is not None:
             self.master.update(lambda client_id: node_of(self.selected_for(client_id))[1])
 
-    def tick(self, now: float, t_us: int) -> None:
+    def tick(self, now: float, t_us: int, force: bool = False) -> None:
+        """``force``: send new samples now, however soon after the last send."""
         shown = {self._default, *(self.selected_for(c) for c in self._server.get_clients())}
         for drive_id in shown:  # a drive picked later gets its samples at its first tick
-            self._plots[drive_id].update(now, t_us)
+            self._plots[drive_id].update(now, t_us, force)
