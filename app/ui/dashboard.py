@@ -33,6 +33,7 @@ from app.ui.commands import CommandSender
 from app.ui.drive.view import DriveView, axes_height
 from app.ui.glyphs import warm_glyphs
 from app.ui.line.view import LineView, focus_target
+from app.ui.panels.client_pick import resend_overwritten
 from app.ui.panels.control import ControlPanel, FaultOption
 from app.ui.panels.event_log import EventLogPanel
 from app.ui.panels.modules import ModulePanel
@@ -459,6 +460,7 @@ class Dashboard:
                     self._drives.tick(time.monotonic(), frame.t_us, force=self.draw_unwatched)
                 self.scenario_player.update(frame)  # scenario player, code decoder
                 self.decoder.update()
+                resend_overwritten(self.server)  # frame or not: a paused rig sends none
             self._frame_seq = frame.seq
 
     def held(self) -> AbstractContextManager[Any]:

@@ -99,3 +99,19 @@ def test_a_pick_made_meanwhile_is_not_overwritten(monkeypatch: Any) -> None:
     server._websock_server._broadcast_buffer.generator_cursors[1] = 41
     pick.resend()
     assert sent == [] and pick.value_for(1) == "2 DI16"
+
+
+def test_every_pick_of_a_server_resends_at_a_tick_without_a_frame(monkeypatch: Any) -> None:
+    """On a paused rig no frame may come after the broadcast reached the page: the
+    dashboard's every tick resends (resend_overwritten), not only a panel's update."""
+    server, _handle, pick, sent = _setup(monkeypatch)
+    other = ClientPick(server, _Handle(server))  # type: ignore[arg-type]
+    pick.set_for(server.clients[1], "3 DO16")
+    other.set_for(server.clients[2], "2 DI16")
+    sent.clear()
+    pick.set_options(("1 (empty)", "2 DI16", "3 DO16"))
+    client_pick.resend_overwritten(server)  # type: ignore[arg-type]
+    assert sent == []
+    server._websock_server._broadcast_buffer.generator_cursors[1] = 41
+    client_pick.resend_overwritten(server)  # type: ignore[arg-type]
+    assert sent == [(1, "3 DO16")]

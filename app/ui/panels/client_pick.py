@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import threading
+import weakref
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -29,6 +30,7 @@ _NOTHING = "\x00"
 
 
 _BACKLOG = "_fieldrig_backlog"
+_PICKS = "_fieldrig_picks"  # the server's ClientPicks, for resend_overwritten
 
 
 def page_ready(server: viser.ViserServer, client: viser.ClientHandle) -> bool:
@@ -91,6 +93,11 @@ class ClientPick:
         handle._impl.value = _NOTHING
         handle.on_update(self._picked)
         server.on_client_disconnect(self._gone)
+        picks = getattr(server, _PICKS, None)
+        if picks is None:
+            picks = weakref.WeakSet()
+            setattr(server, _PICKS, picks)
+        picks.add(self)
 
     async def _picked(self, event: viser.GuiEvent) -> None:
         # A coroutine: viser awaits it right after storing the page's value, before the next
@@ -214,6 +221,16 @@ class ClientPick:
                     due.append((clients[client_id], self._own[client_id]))
         for client, value in due:
             send_to(client, self.handle._impl.uuid, "value", value)
+
+
+def resend_overwritten(server: viser.ViserServer) -> None:
+    """:meth:`ClientPick.resend` of every pick of ``server``: the dashboard calls it at every
+    tick, frame or not. Called by the picks' panels only with a new frame, a page whose own
+    pick a broadcast reached after the last frame of a paused rig kept the broadcast's (the
+    FastCAT Module picker after an Unplug on another page, tests/browser/
+    test_picks_two_pages.py)."""
+    for pick in list(getattr(server, _PICKS, ())):
+        pick.resend()
 
 
 class ClientHtml:
