@@ -14,34 +14,27 @@ from typing import Any
 
 import pytest
 
-from app.classroom.roles import Access
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.screenshots import free_port
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 from app.ui.panels.control import COUPLER_TARGET, TABLE_LABELS, fault_targets
 from devices.fastcat.alarms import COUPLER_CODES, MODULE_CODES
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _ids, _settle, _widget
+from tests.app.two_pages import two_pages
 
 NO_NODE = f"0x10 {COUPLER_CODES[0x10].symbol}"  # §7.5: about no node
 MODULE_CODE = f"0x02 {MODULE_CODES[0x02].symbol}"  # §7.6
 
 
-@pytest.fixture(scope="module")
-def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
+def _powered(served: ServedRig) -> None:
     served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
     served.runtime.advance(3_000_000).result(timeout=30)
     served.dashboard.tick()
-    first, second = Page(served.port), Page(served.port)
-    try:
-        _wait(lambda: len(served.server.get_clients()) == 2)
-        yield served, first, second
-    finally:
-        first.close()
-        second.close()
-        served.stop()
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[ServedRig, Page, Page]]:
+    with two_pages(prepare=_powered) as pages:
+        yield pages
 
 
 def _modules(live: ServedRig) -> tuple[str, ...]:

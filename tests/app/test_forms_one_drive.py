@@ -16,15 +16,13 @@ from typing import Any
 
 import pytest
 
-from app.classroom.roles import Access
-from app.rig_config import build_rig, load_rig_spec
-from app.screenshots import free_port
 from app.ui.drive.drive_options import register_option
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 from devices.servo.registers import R
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_forms_per_browser import _drive_read, _frames, _has
 from tests.app.test_picks_per_browser import _widget
+from tests.app.two_pages import two_pages
 
 ONE_DRIVE = """
 [rig]
@@ -47,17 +45,9 @@ modules = ["DI16", "DO16"]
 def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ServedRig, Page, Page]]:
     path = Path(tmp_path_factory.mktemp("rig")) / "one_drive.toml"
     path.write_text(ONE_DRIVE)
-    rig = build_rig(load_rig_spec(path), state_dir=None)
-    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
-    served.runtime.advance(3_000_000).result(10)  # the node's boot-up, the first scan
-    first, second = Page(served.port), Page(served.port)
-    try:
-        _wait(lambda: len(served.server.get_clients()) == 2)
-        yield served, first, second
-    finally:
-        first.close()
-        second.close()
-        served.stop()
+    # the node's boot-up, the first scan
+    with two_pages(path, lambda s: s.runtime.advance(3_000_000).result(10)) as pages:
+        yield pages
 
 
 def test_the_rig_has_one_drive_and_its_canopen_master(

@@ -12,29 +12,19 @@ from collections.abc import Iterator
 
 import pytest
 
-from app.classroom.roles import Access
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.screenshots import free_port
 from app.ui.drive.drive_options import register_option
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 from devices.events import AlStatusChanged
 from devices.servo.registers import R
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _widget, contents
+from tests.app.two_pages import two_pages
 
 
 @pytest.fixture(scope="module")
 def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
-    first, second = Page(served.port), Page(served.port)
-    try:
-        _wait(lambda: len(served.server.get_clients()) == 2)
-        yield served, first, second
-    finally:
-        first.close()
-        second.close()
-        served.stop()
+    with two_pages() as pages:
+        yield pages
 
 
 def _frames(live: ServedRig, n: int = 3) -> None:

@@ -12,33 +12,26 @@ from typing import Any
 
 import pytest
 
-from app.classroom.roles import Access
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.screenshots import free_port
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 from devices.fastcat.encoder import CMD_ZERO_CYCLE, COMMAND_INDEX
 from devices.fastcat.module_od import object_index
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _ids, _settle, _widget
+from tests.app.two_pages import two_pages
 
 
-@pytest.fixture(scope="module")
-def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
+def _powered_module_3_pulled(served: ServedRig) -> None:
     served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
     served.runtime.advance(3_000_000).result(timeout=30)
     served.runtime.command("fastcat/3", "unplug", {}).result(timeout=10)
     served.runtime.advance(100_000).result(timeout=30)
     served.dashboard.tick()
-    first, second = Page(served.port), Page(served.port)
-    try:
-        _wait(lambda: len(served.server.get_clients()) == 2)
-        yield served, first, second
-    finally:
-        first.close()
-        second.close()
-        served.stop()
+
+
+@pytest.fixture(scope="module")
+def served() -> Iterator[tuple[ServedRig, Page, Page]]:
+    with two_pages(prepare=_powered_module_3_pulled) as pages:
+        yield pages
 
 
 def _rail(live: ServedRig) -> list[dict[str, Any]]:

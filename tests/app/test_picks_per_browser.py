@@ -12,28 +12,18 @@ from typing import Any
 
 import pytest
 
-from app.classroom.roles import Access
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.screenshots import free_port
 from app.ui.line.view import CLICK_SETTLE_S
-from app.ui.panels.classroom_rig import ServedRig, serve_rig
+from app.ui.panels.classroom_rig import ServedRig
 from tests.app.test_camera_per_browser import click
 from tests.app.test_classroom_fault_forms import _in
 from tests.app.test_classroom_leak import Page, _wait, open_class
+from tests.app.two_pages import two_pages
 
 
 @pytest.fixture(scope="module")
 def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    served = serve_rig(rig, Access(None), port=free_port(), paused=True)  # an open rig
-    first, second = Page(served.port), Page(served.port)
-    try:
-        _wait(lambda: len(served.server.get_clients()) == 2)
-        yield served, first, second
-    finally:
-        first.close()
-        second.close()
-        served.stop()
+    with two_pages() as pages:
+        yield pages
 
 
 def _ids(served: ServedRig) -> tuple[int, int]:
