@@ -372,7 +372,6 @@ class LineControls:
             for widget, options in ((form.cable, cables), (form.slave_power, slaves)):
                 if isinstance(widget, ClientPick):  # each page's pick keeps its cable / slave
                     widget.set_options(options)
-                    widget.resend()
                 else:
                     set_options(widget, options)
         # Everyone's list: the "(off)" marks are the injected supply, which a real master

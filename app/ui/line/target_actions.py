@@ -123,7 +123,6 @@ class TargetActions:
                 options = targets(watch.device, devices[watch.device])
                 if isinstance(watch.target, ClientPick):
                     watch.target.set_options(options)
-                    watch.target.resend()
                 else:
                     set_options(watch.target, options)
             if watch.device in changed:

@@ -206,7 +206,7 @@ class ClientPick:
 
     def resend(self) -> None:
         """Each page whose own pick a :meth:`set_options` overwrote gets it again once that
-        broadcast has reached it (call it each frame)."""
+        broadcast has reached it (the dashboard calls it at every tick: resend_overwritten)."""
         if not self._overwritten:
             return
         clients = self._server.get_clients()

@@ -385,7 +385,6 @@ class ControlPanel:
         form.target.set_options(every)
         if form.target.options != before:  # went to every page, over each page's own
             self._target_options.overwritten()
-        form.target.resend()
         self._show_faults(form)
 
     def _offer_targets(self, form: _FaultForm) -> None:

@@ -368,12 +368,10 @@ class ModulePanel:
                 set_options(form.swap_with, options)
                 set_options(form.module, options)
                 self._preset(form)
-        self.pick.resend()
         self._offer()
         self._show_pages()
         shared = self._shared_rail
         if shared is not None:
-            shared.swap_with.resend()
             self._preset_new_pages(shared)
 
             def powered(client_id: int) -> bool | None:
