@@ -71,8 +71,15 @@ def read_rows(device: Any) -> list[OdRow]:
         except Exception as exc:  # a getter failing must not hide the rest of the table
             value = f"<{type(exc).__name__}>"
         said = e.explain(value) if e.explain is not None and not isinstance(value, str) else ""
-        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, e.access.value, value, said))
+        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, access_text(e), value, said))
     return rows
+
+
+def access_text(entry: OdEntry) -> str:
+    """The access column: ro / rw / wo, with "P" for a PDO-mappable entry, as seed 002
+    Tab. 27 prints "RO P" / "RW P" (0x10F3:4, 0x60xx, 0x70xx) and a configuration tool's
+    flags column shows it: without it a trainee could not tell what may go into a PDO."""
+    return f"{entry.access.value} P" if entry.pdo_mappable else entry.access.value
 
 
 def format_value(value: Any, dtype: str) -> str:
