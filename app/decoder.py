@@ -257,7 +257,7 @@ def _servo_emcy(code: int, vendor: bytes) -> list[Meaning]:
         specs = [s for s in specs if s.code == vendor[0]]
     return [Meaning(SERVO, f"Drive error code {fmt_hex(code, 4)} (0x603F)",
                     f"Alarm {s.code} {s.name}: {s.description}; {_SERVO_EFFECT[s.effect]}"
-                    f"{'' if s.resettable else '; not resettable'}.", "seed 004 ch. 3, ch. 5")
+                    f"{_reset_note(s)}.", "seed 004 ch. 3, ch. 5")
             for s in specs]
 
 

@@ -27,3 +27,13 @@ def test_alarm_35_says_ethercat_resets_it_by_a_power_cycle_only() -> None:
     texts = [m.text for m in decode("alarm 35")]
     assert texts and all("EtherCAT" in t and "power cycle" in t for t in texts), texts
     assert not any("EtherCAT" in m.text for m in decode("alarm 16"))
+
+
+def test_the_0x603f_code_of_alarm_35_says_so_too() -> None:
+    """A master sees 35 as its 0x603F code 0x5530 or its emergency (seed 004 ch. 5 "Codici
+    allarmi specifici"), not as the number: typed into the Codes tab, both must say what
+    "alarm 35" says, not read as if 0x80 on 0x6040 could clear it."""
+    for typed in ("0x5530", "30 55 01 23 00 00 00 00"):
+        texts = [m.text for m in decode(typed) if m.family == "Servo drive"]
+        assert texts and all("power cycle" in t for t in texts), (typed, texts)
+    assert not any("power cycle" in m.text for m in decode("0x8611"))
