@@ -239,6 +239,10 @@ class Interpolator(Mode):
         if wanted and not self.active:
             self.active, self.elapsed = True, 0.0
             self.previous = self.next = d.trajectory.position
+            # The set-point starts where the axis stands: ch. 4 has the master send its first
+            # one after the activation (the loop's "write Sync" comes first), so one left
+            # from before (0x60C1:1's power-on 0, a previous run) would throw the axis there.
+            d.ip_set_point = round((d.trajectory.position - d.theta_zero) * d.feed)
         elif not wanted and self.active:
             self.active = False
             d.trajectory.stop(d.limits())

@@ -400,6 +400,55 @@ def test_seed_interpolator_example_sync_and_rpdo_loop(node_id: int) -> None:
     assert feedback[-1][1] & 0x106F == 0x1027  # operation enabled, bit 12: ip active
 
 
+
+def test_seed_complete_example_interpolator_starts_where_homing_left_the_axis() -> None:
+    """Ch. 4 "Esempio completo di asse gestito con interpolatore": homing (method 34, offset
+    -1000: the axis then reads 1000), 0x000F, mode 7 ("L'asse rimane fermo in coppia fino
+    all'attivazione dell'interpolatore"), 0x001F, then the loop "write Sync; write PDO 1,
+    set-point, ControlWord" with no set-point written before it. The set-point "viene
+    acquisito dal drive a seguito del Sync successivo": until one is, the axis holds where it
+    stands, it does not run to a set-point nobody sent since (0x60C1:1's power-on 0)."""
+    bench = make_bench()
+    for index, sub, value, size in (
+            (0x6092, 1, 6000, 4), (0x60C2, 1, 1, 1), (0x6098, 0, 34, 1),
+            (0x607C, 0, -1000, 4), (0x6099, 2, 1000, 4),
+            (0x1400, 2, 1, 1), (0x1600, 0, 0, 1), (0x1600, 1, 0x60C10120, 4),
+            (0x1600, 2, 0x60400010, 4), (0x1600, 0, 2, 1)):
+        bench.ok(index, sub, value, size)
+    bench.nmt(NmtCommand.START)
+
+    def cycles(ms: int, set_point: int | None = None) -> list[int]:
+        positions = []
+        for _ in range(ms):
+            bench.send(0x080)  # "write Sync"
+            if set_point is not None:  # "write PDO 1, set-point, ControlWord"
+                bench.send(0x201, struct.pack("<iH", set_point, 0x001F))
+            bench.run(1)
+            positions.append(bench.drive.position_user)
+        return positions
+
+    for cw in CANOPEN_ENABLE:
+        bench.ok(0x6040, 0, cw, 2)
+    bench.ok(0x6060, 0, 6, 1)
+    bench.ok(0x6040, 0, 0x001F, 2)
+    for _ in range(200):
+        cycles(50)
+        if bench.drive.od.read(0x6041, 0) & 0x3000:
+            break
+    assert bench.drive.od.read(0x6041, 0) & 0x3000 == 0x1000  # homing attained
+    bench.ok(0x6040, 0, 0x000F, 2)
+    bench.ok(0x6060, 0, 7, 1)
+    cycles(20)
+    home = bench.drive.position_user
+    assert abs(home - 1000) <= 2
+    bench.ok(0x6040, 0, 0x001F, 2)  # "Attivazione interpolatore"
+    held = cycles(20)  # Syncs, no PDO yet
+    assert max(abs(p - home) for p in held) <= 2, (home, min(held), max(held))
+    moving = cycles(300, set_point=home + 600)
+    assert abs(moving[-1] - (home + 600)) <= 2
+    assert bench.drive.alarms.latched == []
+
+
 def test_remote_request_for_a_tpdo() -> None:
     """A remote frame on TPDO1's COB-ID (bit 30 clear) gets the current data in Operational
     (type 255, asynchronous: nothing recorded at a SYNC)."""
