@@ -190,9 +190,12 @@ class Trajectory:
         self._set([])
 
     def move_to(self, target: float, lim: Limits) -> None:
-        self.target = target
+        there = self.velocity == 0.0 and abs(target - self.position) <= EPS_REV
+        # With no speed allowed (R12 = 0) the plan only stops: the target is never reached,
+        # so it is not kept, or the landing below and in advance() would jump onto it.
+        self.target = target if lim.vmax > 0.0 or there else None
         self._set(plan_move(self.position, self.velocity, target, lim))
-        if self.idle and self.velocity == 0.0:
+        if self.idle and self.velocity == 0.0 and self.target is not None:
             self.position = target
 
     def run_at(self, velocity: float, lim: Limits) -> None:

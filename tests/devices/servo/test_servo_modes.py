@@ -118,6 +118,24 @@ def test_profiles_reach_the_target_with_the_same_ramp_time(profile: int) -> None
     assert sim.drive.position_user == 30000
 
 
+def test_profile_velocity_0_does_not_move_the_axis() -> None:
+    """R12 profile_velocity = 0 (its printed range starts at 0, ch. 1): no speed allowed, so
+    a start leaves the axis where it stands, without End of Job; with R12 back it moves."""
+    sim = make_sim()
+    _positioner(sim, target=30000)
+    sim.w(12, 0)
+    sim.w(0, 0x23)
+    sim.run(500)
+    assert sim.drive.position_user == 0 and sim.drive.read_register(8) == 0
+    assert not sim.r05 & EOJ and not sim.drive.outputs()["end_of_job"]
+    assert sim.drive.alarms.latched == []
+    sim.w(12, 20000)
+    sim.w(0, 0x23)
+    sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    sim.run(20)
+    assert sim.drive.position_user == 30000
+
+
 def test_near_to_target_output() -> None:
     """Out 3 "Near to target": low at the start, high within target_window (R61)."""
     sim = make_sim()

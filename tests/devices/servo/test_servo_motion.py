@@ -96,6 +96,20 @@ def test_zero_speed_or_acceleration_never_divides_by_zero() -> None:
     assert traj.position == 5.0
 
 
+@pytest.mark.parametrize("v0", [0.0, 2.0])
+def test_a_move_with_no_speed_allowed_never_reaches_its_target(v0: float) -> None:
+    """vmax 0 (R12 profile_velocity = 0, in range 0..0x7FFFFFFF, ch. 1): the demand stops and
+    stays; it does not jump to the target, and the move never counts as arrived."""
+    traj = Trajectory(1.0)
+    traj.velocity = v0
+    traj.move_to(5.0, Limits(0.0, 10.0, 10.0))
+    for _ in range(2000):
+        traj.advance(1e-3)
+    assert traj.idle and traj.velocity == 0.0
+    assert traj.position == pytest.approx(1.0 + v0 * v0 / 20.0)  # only the stop ramp
+    assert not traj.at_target
+
+
 def test_plant_follows_with_the_position_lag_and_coasts_when_released() -> None:
     plant = Plant(AxisGeometry(-100, 100, 0, 0.25))
     for k in range(1, 1001):  # 1 s of a demand at 1 rev/s, lag 2 ms
