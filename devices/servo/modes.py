@@ -36,10 +36,13 @@ class Positioner(Mode):
         self.last_target: int | None = None
         self.eoj = False
         self.sp_ack = False
+        #: the target of the last start: Near to target measures from it until the next start
+        #: (ch. 2 "Target": lowered at the start only; a stop or torque off does not)
+        self.started_target: int | None = None
 
     def enter(self, d: ServoDrive) -> None:
         super().enter(d)
-        self.move_target = self.pending = None
+        self.move_target = self.pending = self.started_target = None
         self.last_target = d.position_user
 
     def torque_on(self, d: ServoDrive) -> None:
@@ -75,7 +78,8 @@ class Positioner(Mode):
             self.go(d, value)
 
     def go(self, d: ServoDrive, target: int) -> None:
-        self.move_target, self.eoj = target, False
+        self.move_target = self.started_target = target
+        self.eoj = False
         d.trajectory.move_to(d.user_to_rev(target), d.limits())
 
     def step(self, d: ServoDrive, dt: float) -> None:
@@ -97,8 +101,8 @@ class Positioner(Mode):
         return self.eoj
 
     def near_target(self, d: ServoDrive) -> bool:
-        window = d.reg(R.TARGET_WINDOW)
-        return self.move_target is not None and abs(self.move_target - d.position_user) < window
+        window, target = d.reg(R.TARGET_WINDOW), self.started_target
+        return target is not None and abs(target - d.position_user) < window
 
     def target_reached(self, d: ServoDrive) -> bool:
         return super().target_reached(d) and (self.move_target is None or self.eoj)

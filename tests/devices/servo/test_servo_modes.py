@@ -148,6 +148,30 @@ def test_near_to_target_output() -> None:
     assert not sim.drive.outputs()["end_of_job"]
 
 
+@pytest.mark.parametrize("after", [0x00, 0x07, 0x01])  # torque off, Stp_cmd, Ien_cmd off
+def test_near_to_target_is_lowered_only_by_a_start(after: int) -> None:
+    """"Allo start del posizionamento quest'uscita viene abbassata" (ch. 2, Target): nothing
+    else lowers it. The axis standing at its target keeps the output high when torque goes
+    off, a stop is commanded or motion is disabled, and when torque comes back; the next start
+    lowers it."""
+    sim = make_sim()
+    sim.w(61, 1000)
+    _positioner(sim, target=30000)
+    sim.w(0, 0x23)
+    sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    sim.run(20)
+    assert sim.drive.outputs()["near_target"]
+    sim.w(0, after)
+    sim.run(50)
+    assert sim.drive.outputs()["near_target"]
+    sim.w(0, 0x03)
+    sim.run(50)
+    assert sim.drive.outputs()["near_target"]
+    sim.w(9, 60000)
+    sim.w(0, 0x23)
+    assert not sim.drive.outputs()["near_target"]
+
+
 def test_velocity_canopen_example() -> None:
     """Ch. 4 "Modo controllo di velocità": feed 60, 200 ms from 0 to 1000 rpm."""
     sim = make_sim()
