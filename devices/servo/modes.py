@@ -123,6 +123,10 @@ class PulsePositioner(Positioner):
         self.pending = None
         self.go(d, self.last_target)
 
+    def near_target(self, d: ServoDrive) -> bool:
+        # ch. 2: the Target output serves mode 1 (and the SAP positioner), not mode -1
+        return False
+
 
 class SpeedMonitor:
     """Velocity window (R14/R15, 0x606D/E) and threshold (R16/R17, 0x606F/0x6070) timers.

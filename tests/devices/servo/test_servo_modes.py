@@ -424,6 +424,25 @@ def test_pulse_positioner_each_pulse_is_a_new_start() -> None:
     assert sim.drive.position_user == 3000  # 250 pulses * 6000 * 2 / 1000
 
 
+def test_pulse_positioner_does_not_drive_near_to_target() -> None:
+    """"L'uscita Target viene utilizzata con il posizionatore punto a punto (modes_of_operation
+    = 1) e anche in modo posizionatore SAP" (ch. 2): mode -1 is neither, so pin 15 stays low
+    there while End of Job works "del tutto simile al posizionatore"."""
+    sim = make_sim()
+    sim.w(61, 1000)
+    sim.w(1, -1)
+    sim.w(0, 0x03)
+    sim.drive.apply("pulses", {"count": 4096})
+    seen = False
+    while not sim.r05 & EOJ:
+        seen |= sim.drive.outputs()["near_target"]
+        sim.run(5)
+        assert sim.t_us < 20_000_000
+    sim.run(20)
+    assert sim.drive.position_user == 6000 and sim.drive.outputs()["end_of_job"]
+    assert not seen and not sim.drive.outputs()["near_target"]
+
+
 def test_electronic_axis_follows_the_master_when_started() -> None:
     """Mode -2: locked to the master with the Start input high and the start bit (ch. 2)."""
     sim = make_sim()
