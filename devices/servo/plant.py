@@ -5,7 +5,7 @@ limit switch (active at and beyond their positions), a home switch active from i
 upwards (a "positive" home switch in DSP 402 homing terms) and one encoder marker per motor
 turn; mechanical end stops sit ``end_margin`` turns beyond the limit switches. In torque the
 motor follows the demand with a first-order lag (the position loop, time constant ``lag``);
-released it coasts down. A jammed load does not move at all.
+released it coasts down. It never turns faster than d3's Vmax. A jammed load does not move.
 """
 
 from __future__ import annotations
@@ -66,8 +66,10 @@ class Plant:
         torque goes off (DSP 402; the demand at rest is not enough, the motor lags it)."""
         return -STOPPED_REV_S < self.omega < STOPPED_REV_S
 
-    def step(self, dt: float, demand: float | None, lag: float) -> None:
-        """Advance dt seconds following ``demand`` (None: no torque, the motor coasts)."""
+    def step(self, dt: float, demand: float | None, lag: float,
+             vmax: float = math.inf) -> None:
+        """Advance dt seconds following ``demand`` (None: no torque, the motor coasts) at no
+        more than ``vmax`` rev/s (d3, the motor's maximum speed)."""
         before = self.theta
         if self.jammed:
             self.omega = 0.0
@@ -88,6 +90,13 @@ class Plant:
             new = demand - rate * lag + (before - previous + rate * lag) * decay
             if abs(demand - new) < SETTLED_REV:
                 new = demand
+            # the speed loop saturates at Vmax: a demand that runs away (electronic axis,
+            # interpolator) leaves the motor behind, and the following error grows
+            reach = vmax * dt
+            if new - before > reach:
+                new = before + reach
+            elif before - new > reach:
+                new = before - reach
         self._last_demand = demand
         low, high = self._end_stops
         self.blocked = blocked = not low <= new <= high

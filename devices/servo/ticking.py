@@ -152,8 +152,10 @@ class DriveTick:
             else:
                 trajectory.advance(dt)
             demand = trajectory.position
+            # motor_vmax_rev's expression: d3 % of the rated speed, rev/s
+            vmax = self.config.max_speed_rpm * self.params[3] / 100.0 / 60.0
             if plant.jammed:
-                plant.step(dt, demand, lag)
+                plant.step(dt, demand, lag, vmax)
             else:  # Plant.step following a demand, inline: the same expressions in order
                 before_theta, previous = plant.theta, plant._last_demand
                 if previous is None:
@@ -163,6 +165,11 @@ class DriveTick:
                 new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
                 if abs(demand - new) < _SETTLED_REV:
                     new = demand
+                reach = vmax * dt
+                if new - before_theta > reach:
+                    new = before_theta + reach
+                elif before_theta - new > reach:
+                    new = before_theta - reach
                 plant._last_demand = demand
                 low, high = plant._end_stops
                 plant.blocked = not low <= new <= high

@@ -461,6 +461,26 @@ def test_electronic_axis_follows_the_master_when_started() -> None:
     assert not sim.drive.outputs()["end_of_job"]  # always low in mode -2
 
 
+def test_the_motor_never_turns_faster_than_vmax_in_the_electronic_axis() -> None:
+    """d3 "Velocità massima del motore, Vmax %" (ch. 1) is the motor's limit, whatever the
+    mode: a master too fast for the gear ratio (1000 rpm x 2 with Vmax = 50 % of 3000 rpm)
+    leaves the motor at 1500 rpm, the following error grows and alarm 16 releases the axis
+    ("superato per un tempo superiore al timeout", ch. 3)."""
+    sim = make_sim()
+    assert sim.drive.motor_vmax_rev * 60 == pytest.approx(1500)
+    sim.w(25, 2)
+    sim.w(1, -2)
+    sim.w(0, 0x43)
+    sim.drive.apply("master_encoder", {"rpm": 1000.0})
+    sim.drive.apply("set_input", {"name": "start", "value": True})
+    top = 0
+    while sim.drive.read_register(46) != 16:
+        sim.run(1)
+        top = max(top, sim.drive.read_register(73))
+        assert sim.t_us < 2_000_000, "no following-error alarm"
+    assert top <= 1500
+
+
 def test_save_load_mode_loads_from_flash() -> None:
     """Mode -50: bit 5 saves, bit 6 0 -> 1 loads registers and parameters (R05 bit 6)."""
     sim = make_sim()

@@ -70,7 +70,8 @@ class PlainStepDrive(PlainDrive):
         still.alarms, still.changes = self.alarms, self.alarms.changes
 
 
-def plain_plant_step(self: Plant, dt: float, demand: float | None, lag: float) -> None:
+def plain_plant_step(self: Plant, dt: float, demand: float | None, lag: float,
+                     vmax: float = math.inf) -> None:
     before = self.theta
     if self.jammed:
         self.omega = 0.0
@@ -88,6 +89,10 @@ def plain_plant_step(self: Plant, dt: float, demand: float | None, lag: float) -
         new = demand - rate * lag + (self.theta - previous + rate * lag) * decay
         if abs(demand - new) < SETTLED_REV:
             new = demand
+        if new - before > vmax * dt:  # the speed loop saturates at Vmax (d3)
+            new = before + vmax * dt
+        elif before - new > vmax * dt:
+            new = before - vmax * dt
     self._last_demand = demand
     low, high = self._end_stops
     self.blocked = not low <= new <= high

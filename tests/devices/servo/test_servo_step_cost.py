@@ -103,7 +103,7 @@ class PlainDrive(ServoDrive):
                 self.trajectory.stop(self.limits() if halting else self.quick_stop_limits())
             self._was_allowed = allowed
         self.trajectory.advance(dt)
-        self.plant.step(dt, self.trajectory.position, lag)
+        self.plant.step(dt, self.trajectory.position, lag, self.motor_vmax_rev)
         standstill = self.trajectory.idle and self.trajectory.velocity == 0.0 \
             and self.plant.standstill
         if standstill and self.state is State.QUICK_STOP_ACTIVE:
