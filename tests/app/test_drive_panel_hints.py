@@ -20,7 +20,9 @@ from app.ui.drive.drive_options import (
 )
 from app.ui.drive.drive_panel import DrivePanel
 from app.ui.panels.widgets import DetailHint
+from devices.servo.flashsave import SAVED_REGISTERS
 from devices.servo.modbus_map import NORMAL, SIEMENS
+from devices.servo.registers import REGISTERS
 
 
 class Dropdown:
@@ -55,6 +57,18 @@ def test_hints_say_range_access_and_address_as_the_quick_reference() -> None:
         "d1 speed loop proportional gain KP: 1..99 %, default 20; Modbus 0x0001")
     c9 = next(label for label in parameters if label.startswith("c9 "))
     assert "default 3; read at power-up; Modbus 0x0016" in parameters[c9]
+
+
+def test_the_save_hint_is_what_a_save_keeps() -> None:
+    """R00 is printed "Si" (ch. 1) but a save does not keep it (docs/servo-drive.md §Flash):
+    its hint must not promise that; every hint saying "kept" names a register the image holds
+    (devices/servo/flashsave.py)."""
+    registers = register_details()
+    assert "kept by Save to flash" not in registers["R00 control_word"]
+    assert registers["R00 control_word"].endswith("not saved; Modbus 0x8000")
+    kept = {label for label, hint in registers.items() if "kept by Save to flash" in hint}
+    assert kept == {f"R{n:02d} {REGISTERS[n].name}" for n in SAVED_REGISTERS
+                    if REGISTERS[n].writable}
 
 
 def test_the_hint_follows_the_pick() -> None:

@@ -7,6 +7,7 @@ from __future__ import annotations
 from typing import Any
 
 from devices.servo.alarms import alarm_table
+from devices.servo.flashsave import SAVED_REGISTERS
 from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, register_address
 from devices.servo.parameters import FIELDBUS_BY_C9, FIELDBUS_NAMES, PARAMETERS
 from devices.servo.registers import MODE_NAMES, REGISTERS
@@ -41,8 +42,9 @@ def register_details(address_map: str = NORMAL) -> dict[str, str]:
     25 characters, so the hint carries the label whole."""
     out = {}
     for n, spec in sorted(REGISTERS.items()):
+        # what a save keeps, not the "Si" column: R00 is printed "Si" and is not kept
         access = ("read only" if not spec.writable
-                  else "kept by Save to flash" if spec.saveable else "not saved")
+                  else "kept by Save to flash" if n in SAVED_REGISTERS else "not saved")
         where = modbus_words(register_address(n, address_map), address_map)
         out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {spec.low}..{spec.high}, "
                                         f"{access}; {where}")
