@@ -226,7 +226,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             esm.refuse(REFUSAL_AL_STATUS[COUPLER, 0x14], now)  # §7.7 0x0070
         elif target is AlState.OP and self.address_check and self._address_mismatch():
             self.address_fault = True  # §6.19: checked on the transition to OP
-            self._evaluate_alarms()
+            self._evaluate_alarms()  # 0x12 latched: the ESM fell to PREOP (§7.7 0x8012)
+            if esm.state is AlState.SAFEOP:  # 0x12 waits behind a module alarm: no refusal
+                esm.accept(target, now)
         else:
             esm.accept(target, now)
         self._refresh()

@@ -156,3 +156,31 @@ def test_a_coupler_cause_behind_a_module_alarm_waits_and_everything_says_so() ->
     assert [r["code"] for r in bench.records("al_status", since)] == ["0x8304"]
     assert bench.fc.al_state is AlState.PREOP and bench.read(0x5400, 0) == 0x04000003
     assert [r["to"] for r in bench.records("slave_state", since)] == ["PREOP"]
+
+
+def test_an_address_check_behind_a_module_alarm_waits_and_op_is_reached() -> None:
+    """§6.19: the address check runs "quando il modulo viene portato nello stato di
+    operativo". With a module alarm latched, its 0x12 is a coupler cause behind it, which
+    waits like the others (docs "A coupler cause behind a module alarm": no emergency, the
+    module alarm's 0x5400, no transition refused). The OP request used to be left unanswered:
+    SAFEOP, no error flag, no code, OP requested. Once the module alarm is reset, 0x12 is
+    latched with its emergency (0x5400 = 0x12000000) and the drop to PREOP with 0x8012."""
+    bench = Bench(["DO16", "AI8D"], rotary_switch=3, master_address=2)
+    bench.to_state(AlState.PREOP)
+    bench.write(0x5301, 0, 1)
+    bench.apply("inject_fault", module=2, fault="TARATURA")
+    bench.step()
+    bench.fc.request_state(AlState.SAFEOP)
+    since = bench.mark()
+    bench.fc.request_state(AlState.OP)
+    bench.run(0.1)
+    assert bench.fc.al_state is AlState.OP
+    assert (bench.fc.al_status, bench.fc.al_status_code) == (0x08, 0)
+    assert bench.emergencies(since) == [] and bench.read(0x5400, 0) == 0x000B0002
+    bench.apply("clear_fault", module=2, fault="TARATURA")
+    since = bench.mark()
+    bench.reset_fault()
+    bench.step()
+    assert bench.emergencies(since) == ["00 00 00 12 00"]
+    assert bench.read(0x5400, 0) == 0x12000000
+    assert (bench.fc.al_state, bench.fc.al_status_code) == (AlState.PREOP, 0x8012)
