@@ -167,7 +167,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             self._start_scan(cnf=False)
         else:
             self.scan = None
-            self.cnf.release(self.now_us)
+            if self.cnf.release(self.now_us) is not None:  # a dead coupler reads no button
+                self.emit(StateChanged(self.now_us, self.device_id, from_state="pressed",
+                                       to_state="released", machine=CNF_BUTTON))
             self.esm.drop_to_init(self.now_us)
             self._clear_alarm()
             self.od = None

@@ -234,6 +234,28 @@ def test_cnf_while_unpowered_does_nothing() -> None:
     assert bench.records(since=mark) == [] and bench.flash.writes == 0
 
 
+def test_power_off_while_held_releases_the_button_with_its_event() -> None:
+    """A dead coupler does not read its button: the hold is void and the snapshot says
+    released. The event log said so too little: a ``pressed`` never followed by ``released``
+    (the recording and the Event log showed CNF held for good). No procedure runs, however
+    long it was held, and nothing is stored."""
+    bench = Bench()
+    bench.settle()
+    mark = bench.mark()
+    bench.apply("press_cnf")
+    bench.run(3.5)
+    bench.apply("power", on=False)
+    bench.run(0.1)
+    buttons = [(r["from"], r["to"]) for r in bench.records("state", mark)
+               if r.get("machine") == "cnf_button"]
+    assert buttons == [("released", "pressed"), ("pressed", "released")]
+    assert bench.fc.snapshot()["cnf"]["pressed"] is False
+    assert [r for r in bench.records("state", mark) if r.get("machine") == "cnf"] == []
+    after = bench.mark()
+    bench.apply("release_cnf")  # the Hold CNF box unticked afterwards: nothing more
+    assert bench.records(since=after) == [] and bench.flash.writes == 0
+
+
 def test_return_to_init_rescans_and_preop_waits_for_it() -> None:
     """§3: a scan on every return to INIT; INIT -> PREOP completes when it is done."""
     bench = Bench()
