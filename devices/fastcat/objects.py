@@ -29,6 +29,7 @@ RXPDO_BASE = 0x1600  # §5: 0x1600 + (n - 1), outputs, SM2
 TXPDO_BASE = 0x1A00  # §5: 0x1A00 + (n - 1), inputs, SM3
 COUPLER_RXPDO = 0x16FF  # §5: always present, the Reset fault bit
 COUPLER_TXPDO = 0x1AFF  # §5: always present, the Fault active bit
+COUPLER_PDO_GAP = (0x0000, 0, 7)  # §6.16 / §6.17 "2:8 Reserved (7)"
 RXPDO_ASSIGN = 0x1C12
 TXPDO_ASSIGN = 0x1C13
 MAX_MODULES = 16  # §2
@@ -122,8 +123,10 @@ def _mapping(od: ObjectDictionary, index: int, name: str,
 def _pdos(od: ObjectDictionary, modules: Sequence[IoModule]) -> None:
     rx_assigned = [COUPLER_RXPDO]
     tx_assigned = [COUPLER_TXPDO]
-    _mapping(od, COUPLER_RXPDO, COUPLER_PDO_NAMES[0], [(0x5200, 1, 1)])
-    _mapping(od, COUPLER_TXPDO, COUPLER_PDO_NAMES[1], [(0x5100, 1, 1)])
+    # §6.16 / §6.17 print the bit, then "2:8 Reserved (7)": the coupler's PDOs are one byte
+    # (a 7-bit gap, ETG.1000.6 index 0), so the modules' entries start byte-aligned.
+    _mapping(od, COUPLER_RXPDO, COUPLER_PDO_NAMES[0], [(0x5200, 1, 1), COUPLER_PDO_GAP])
+    _mapping(od, COUPLER_TXPDO, COUPLER_PDO_NAMES[1], [(0x5100, 1, 1), COUPLER_PDO_GAP])
     for n, module in enumerate(modules, start=1):
         rx, tx = module.rx_entries(n), module.tx_entries(n)
         rx_name, tx_name = MODULE_PDO_NAMES[module.mtype.group]

@@ -155,7 +155,10 @@ def test_pdo_layout_is_generated_and_read_only() -> None:
             assert od.read(base + n - 1, 0) == len(entries)
             got = [od.read(base + n - 1, s) for s in range(1, len(entries) + 1)]
             assert got == [i << 16 | s << 8 | b for i, s, b in entries]
-    assert bench.read(0x16FF, 1) == 0x5200_0101 and bench.read(0x1AFF, 1) == 0x5100_0101
+    # §6.16 / §6.17: "1 Fault active / Reset fault BOOL (1)", "2:8 Reserved (7)": the bit and
+    # seven reserved bits, one byte, so the modules' data start byte-aligned (a 7-bit gap)
+    assert [bench.read(0x16FF, s) for s in range(3)] == [2, 0x5200_0101, 0x0000_0007]
+    assert [bench.read(0x1AFF, s) for s in range(3)] == [2, 0x5100_0101, 0x0000_0007]
     assert [bench.read(0x1C12, s) for s in range(bench.read(0x1C12, 0) + 1)][1:] == \
         [0x16FF, 0x1600]  # only the DB16 has outputs
     assert [bench.read(0x1C13, s) for s in range(1, bench.read(0x1C13, 0) + 1)] == \

@@ -141,9 +141,10 @@ def test_sdo_read_of_0x1018_on_every_slave(wire):
 
 
 def test_outputs_reach_the_model(wire):
-    """Seed 000 §6.28: DO16 (module 2) channel 1 = SM2 bit 1 (after 0x16FF's bit 0)."""
+    """Seed 000 §6.28: DO16 (module 2) channel 1 = SM2 bit 8 (after 0x16FF's byte: the Reset
+    fault bit 0 and §6.17's seven reserved bits)."""
     runtime, _bridge, b = wire
-    b.send(msg.OUTPUTS, 0, (1 << 1).to_bytes(3, "little"))
+    b.send(msg.OUTPUTS, 0, (1 << 8).to_bytes(3, "little"))
     wait_for(lambda: runtime.frame.snapshot["devices"]["fastcat"]["rail"][1]["do"][0])
 
 

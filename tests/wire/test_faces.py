@@ -105,11 +105,12 @@ def test_cpx_image_follows_the_addressing_rules(rig):
 
 
 def test_fastcat_do16_output_written_by_the_master_drives_the_terminal():
-    """Seed 000 §6.28: module 2 (DO16) channel 3 = bit 1 + 2 of SM2 after 0x16FF's bit."""
+    """Seed 000 §6.28: module 2 (DO16) channel 3 = bit 8 + 2 of SM2, after 0x16FF's byte
+    (the Reset fault bit and §6.17's seven reserved bits)."""
     rig = line_rig()
     model = rig.devices["fastcat"]
     face = faces.face_for(model)
-    data = (1 << (1 + 2)).to_bytes(3, "little")
+    data = (1 << (8 + 2)).to_bytes(3, "little")
     face.apply_outputs(model, data)
     rig.run_until(rig.clock.now_us + 10_000)
     do16 = rig.snapshot()["devices"]["fastcat"]["rail"][1]
@@ -121,14 +122,15 @@ def test_fastcat_do16_output_written_by_the_master_drives_the_terminal():
 
 
 def test_fastcat_input_reaches_the_image():
-    """Seed 000 §6.24: DI16 (module 1) channel 5 -> 0x6000:5 -> bit 1 + 4 of SM3."""
+    """Seed 000 §6.24: DI16 (module 1) channel 5 -> 0x6000:5 -> bit 8 + 4 of SM3, after
+    0x1AFF's byte (Fault active and §6.16's seven reserved bits)."""
     rig = line_rig()
     model = rig.devices["fastcat"]
     before = int.from_bytes(faces.inputs(model), "little")
     rig.apply("fastcat/1", "set_input", {"channel": 5, "value": True})
     rig.run_until(rig.clock.now_us + 10_000)
     after = int.from_bytes(faces.inputs(model), "little")
-    assert before ^ after == 1 << (1 + 4)
+    assert before ^ after == 1 << (8 + 4)
 
 
 def test_drive_outputs_reach_the_drive():

@@ -344,12 +344,12 @@ def test_cycles_at_4_ms_without_wkc_errors_and_data_both_ways(session, full):
     n = FULL_CYCLES if full else CI_CYCLES
     model_call(runtime, lambda: runtime.rig.apply("fastcat/1", "set_input",
                                                   {"channel": 5, "value": True}))
-    do16_ch3 = (1 << (1 + 2)).to_bytes(3, "little")  # after 0x16FF's reset-fault bit
+    do16_ch3 = (1 << (8 + 2)).to_bytes(3, "little")  # after 0x16FF's byte (§6.17)
     c = master("cycles", n, PERIOD_S, {0: do16_ch3}, timeout=n * 0.02 + 60)
     check_cycles(c, n, 3 * 4, full)
     do = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["fastcat"]["rail"][1])
     assert do["type"] == "DO16" and do["do"] == [ch == 2 for ch in range(16)]
-    assert int.from_bytes(c.inputs[0], "little") & 1 << (1 + 4)  # DI16 channel 5 (§6.24)
+    assert int.from_bytes(c.inputs[0], "little") & 1 << (8 + 4)  # DI16 channel 5 (§6.24)
     snap = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
     assert snap["external"] and snap["stats"]["frames"] > 0
 

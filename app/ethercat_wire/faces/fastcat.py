@@ -3,9 +3,9 @@
 The coupler generates its mapping from the modules of the last scan (§5): 0x16FF / 0x1AFF
 (Reset fault / Fault active) always, then 0x1600 + (n - 1) / 0x1A00 + (n - 1) for module n,
 listed in 0x1C12 / 0x1C13 in that order. The images are those mappings bit for bit
-(:mod:`app.ethercat_wire.faces.image`): 0x16FF's single bit is bit 0 of SM2, module 1's
-outputs follow from bit 1. Until a scan has built the dictionary (power-up, every return to
-INIT, §3) there is no mapping and no image.
+(:mod:`app.ethercat_wire.faces.image`): 0x16FF's Reset fault is bit 0 of SM2, then a 7-bit
+gap (§6.17 "2:8 Reserved (7)"), so module 1's outputs start at byte 1. Until a scan has
+built the dictionary (power-up, every return to INIT, §3) there is no mapping and no image.
 """
 
 from __future__ import annotations
