@@ -81,6 +81,23 @@ def test_mismatch_refuses_safeop_with_0x0070_and_raises_0x14() -> None:
     assert bench.read(0x5400, 0) == 0x1400_0002
 
 
+def test_behind_a_module_alarm_0x14_waits_but_safeop_is_still_refused_with_0x0070() -> None:
+    """A module alarm latched first: 0x14 is a coupler cause behind it and waits (no
+    emergency, 0x5400 the module alarm's, §7 "il primo allarme"), but the SAFEOP request is
+    refused with 0x0070 all the same: ETG.5001's answer to a rail the master did not
+    configure, whose process image is not the one it expects (docs "0xF030")."""
+    bench = preop()
+    bench.apply("inject_fault", module=2, fault="TARATURA")
+    bench.step()
+    mark = bench.mark()
+    configure(bench, [DB16, AI8C, AI8C])  # slot 2 holds an AI8D
+    to_safeop(bench)
+    assert bench.fc.al_state is AlState.PREOP
+    assert (bench.fc.al_status, bench.fc.al_status_code) == (0x12, 0x0070)
+    assert bench.emergencies(mark) == [] and bench.read(0x5400, 0) == 0x000B_0002
+    assert bench.fc.snapshot()["leds"]["ERR"] == "blinking"
+
+
 @pytest.mark.parametrize(("idents", "count", "slot"), [
     ([DB16, 0, AI8C], None, None),  # 0: the master leaves slot 2 unchecked
     ([0, 0, 0], None, None),
