@@ -56,6 +56,10 @@ class Access(enum.Enum):
     RW = "rw"
     WO = "wo"
     CONST = "const"
+    # Read in every state, written in PRE-OP only, as seed 001 §9.3.2 prints 0xF030 ("R-WPS",
+    # "RO e WRITE in PRE-OP"). The dictionary does not know the ESM state: the entry's setter
+    # refuses a write elsewhere; this says so to the Objects tab and to SDO information.
+    RW_PREOP = "r-wps"
 
     @property
     def readable(self) -> bool:
@@ -63,7 +67,7 @@ class Access(enum.Enum):
 
     @property
     def writable(self) -> bool:
-        return self in (Access.RW, Access.WO)
+        return self in (Access.RW, Access.WO, Access.RW_PREOP)
 
 
 class AbortCode(enum.IntEnum):

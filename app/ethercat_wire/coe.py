@@ -64,6 +64,7 @@ LIST_LENGTHS, LIST_ALL, LIST_RX, LIST_TX, LIST_BACKUP, LIST_SETTINGS = range(6)
 OBJECT_VAR, OBJECT_ARRAY, OBJECT_RECORD = 0x07, 0x08, 0x09
 # Object access word of an entry description (ETG.1000.6 Table 59)
 READ_ALL, WRITE_ALL, RXPDO_MAPPABLE, TXPDO_MAPPABLE = 0x0007, 0x0038, 0x0040, 0x0080
+WRITE_PREOP = 0x0008
 VALUE_INFO_BASIC = 0x07  # the value-info bits a description answers (no unit/default/min/max)
 
 
@@ -76,8 +77,9 @@ def coe_header(service: int) -> bytes:
 
 
 def access_word(entry: OdEntry) -> int:
-    word = (READ_ALL if entry.access.readable else 0) | (WRITE_ALL if entry.access.writable
-                                                          else 0)
+    access = entry.access
+    write = WRITE_PREOP if access is Access.RW_PREOP else WRITE_ALL if access.writable else 0
+    word = (READ_ALL if access.readable else 0) | write
     if entry.pdo_mappable:
         word |= RXPDO_MAPPABLE if entry.access is Access.RW else TXPDO_MAPPABLE
     return word

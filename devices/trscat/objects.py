@@ -4,7 +4,8 @@ Every value lives in the model; entries read it through getters and write it thr
 so the dictionary can be rebuilt at any time (at the end of the power-up detection and when
 0xF030 changes the PDO assignment, §9.3.2). Types and access are the seed's tables; objects the
 seed mentions without a table (identity, 0x1001, 0xF000) are the DS301 / ETG.5001 ones with
-FieldRig values (docs/trscat.md). "R-WPS" (0xF030) is read always, written in PRE-OP only.
+FieldRig values (docs/trscat.md). "R-WPS" (0xF030, ``Access.RW_PREOP``) is read always,
+written in PRE-OP only (its setter refuses the other states).
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ REVISION = 0x0001_0000  # revision 01.00
 
 U8, U16, U32, BOOL = (DataType.UNSIGNED8, DataType.UNSIGNED16, DataType.UNSIGNED32,
                       DataType.BOOLEAN)
-RO, RW = Access.RO, Access.RW
+RO, RW, RW_PREOP = Access.RO, Access.RW, Access.RW_PREOP
 
 
 class TrsObjects(Protocol):
@@ -148,12 +149,12 @@ def _modular_device(od: ObjectDictionary, dev: TrsObjects) -> None:
     _ro(od, 0xF000, 1, "Index distance", U16, 0x0010)
     _ro(od, 0xF000, 2, "Maximum number of modules", U16, MAX_SLOTS)
     # §9.3.2 0xF030 / 0xF050: sub 0 = slots occupied (1..8), sub 1 = integrated, 2..8 = exp.
-    od.add(OdEntry(0xF030, 0, "Subindex0", U8, RW, 1, low=1, high=MAX_SLOTS,
+    od.add(OdEntry(0xF030, 0, "Subindex0", U8, RW_PREOP, 1, low=1, high=MAX_SLOTS,
                    getter=lambda: dev.f030[0], setter=lambda v: dev.od_write_f030(0, v)))
     _ro(od, 0xF050, 0, "Subindex0", U8, 1, getter=lambda: dev.f050[0])
     for sub in range(1, MAX_SLOTS + 1):
         name = "Id oggetto integrato" if sub == 1 else f"Id oggetto espansione {sub - 1}"
-        od.add(OdEntry(0xF030, sub, name, U32, RW, 0, getter=lambda s=sub: dev.f030[s],
+        od.add(OdEntry(0xF030, sub, name, U32, RW_PREOP, 0, getter=lambda s=sub: dev.f030[s],
                        setter=lambda v, s=sub: dev.od_write_f030(s, v)))
         _ro(od, 0xF050, sub, name, U32, 0, getter=lambda s=sub: dev.f050[s])
     # §9.3.4 0xF100, mapped in 0x1AFF.

@@ -253,6 +253,21 @@ def test_identity_read_over_the_mailbox(rig, device):
     assert int.from_bytes(reply[12:16], "little") == face.od(model).peek(0x1018, 2)
 
 
+@pytest.mark.parametrize(("index", "sub", "access"), [
+    (0xF030, 0, 0x000F), (0xF030, 1, 0x000F), (0xF030, 8, 0x000F),  # "R-WPS"
+    (0xF050, 1, 0x0007), (0xF700, 1, 0x003F)])
+def test_trscat_entry_access_as_its_tables_print_it(rig, index, sub, access):
+    """Seed 001 §9.3.2: 0xF030 is "R-WPS" ("RO e WRITE in PRE-OP"): an entry description
+    says read in every state, write in PRE-OP only (ETG.1000.6 Table 59 bits 0..2, 3), as
+    the device refuses a write in SAFE-OP / OP; 0xF050 RO, 0xF700 RW (§9.3.5)."""
+    model = rig.devices["trscat"]
+    srv = CoeServer(face_for(model), model)
+    request = f"00 80 05 00 00 00 {index & 0xFF:02x} {index >> 8:02x} {sub:02x} 07"
+    (reply,) = srv.handle(mbx(request))
+    assert reply[6:10].hex(" ") == "00 80 06 00"
+    assert int.from_bytes(reply[20:22], "little") == access
+
+
 def test_fastcat_module_2_stops_answering(rig):
     """Seed 000 §7.1: 'CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00)'."""
     model = rig.devices["fastcat"]

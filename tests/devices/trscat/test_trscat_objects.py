@@ -11,17 +11,16 @@ from devices.od import Access, DataType
 
 U8, U16, U32, BOOL, I16 = (DataType.UNSIGNED8, DataType.UNSIGNED16, DataType.UNSIGNED32,
                            DataType.BOOLEAN, DataType.INTEGER16)
-RO, RW = Access.RO, Access.RW
+RO, RW, RWPS = Access.RO, Access.RW, Access.RW_PREOP
 
-# (index, sub, type, access, PDO mappable): the seed's tables. 0xF030 prints "R-WPS" (RW in
-# PRE-OP only, checked in test_trscat_esm.py). Message subs 6..25 are OCTET_STRINGs in
-# ETG.1020, VISIBLE_STRING here (devices/od.py has no OCTET_STRING).
+# (index, sub, type, access, PDO mappable): the seed's tables. 0xF030 prints "R-WPS": read
+# always, written in PRE-OP only (the refusal elsewhere: test_trscat_esm.py).
 SEED_TABLE = [
     *[(i, 1, U16, RW, False) for i in (0x1C32, 0x1C33)],  # §9.3.1
     *[(i, s, U32, RO, False) for i in (0x1C32, 0x1C33) for s in (2, 5, 6, 9, 11)],
     *[(i, 4, U16, RO, False) for i in (0x1C32, 0x1C33)],
     *[(i, 32, BOOL, RO, False) for i in (0x1C32, 0x1C33)],
-    (0xF030, 0, U8, RW, False), *[(0xF030, s, U32, RW, False) for s in range(1, 9)],  # §9.3.2
+    (0xF030, 0, U8, RWPS, False), *[(0xF030, s, U32, RWPS, False) for s in range(1, 9)],  # §9.3.2
     (0xF050, 0, U8, RO, False), *[(0xF050, s, U32, RO, False) for s in range(1, 9)],
     (0xF100, 0, U8, RO, False), (0xF100, 1, U8, RO, True),  # §9.3.4
     *[(0xF100, s, BOOL, RO, True) for s in (2, 3, 4)],
