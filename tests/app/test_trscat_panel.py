@@ -10,6 +10,7 @@ SAFEOP, docs/trscat.md) and which the sync unit's state.
 
 from __future__ import annotations
 
+import random
 import re
 from typing import Any
 
@@ -18,6 +19,7 @@ import pytest
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.ui.line.io_bodies import expansion_note
 from app.ui.line.slave_panel import slave_html
+from devices.trscat.device import TrsCat
 
 BOOT_STEPS = 8000  # 8 s of 1 ms steps: every slave in OP
 
@@ -164,3 +166,21 @@ def test_a_latched_bus_shutdown_says_what_to_do() -> None:
         rig.step()
     state = rows(slave_html("trscat", rig.devices["trscat"].snapshot()))
     assert state["TRS bus"] == "running" and state["Outputs"] == "normal"
+
+
+def test_analog_and_word_channels_read_as_numbers() -> None:
+    """The I/O table wrote a TRS-AN-E's four INT16 inputs at 0, 1, 0, 0 counts as "0100",
+    the way it writes four digital lines, and its two outputs at 0 as "00": a trainee read
+    analog channels as switched lines. Only the bidirectional lines (§3) are bits; analog
+    and data words (docs/trscat.md, the kind table) are one number per channel."""
+    trs = TrsCat("trscat", random.Random(1), ["TRS-IO-E", "TRS-AN-E", "TRS-XX-E"])
+    trs.apply("set_input", {"channel": 2, "on": True})
+    trs.apply("set_analog_input", {"channel": 2, "volts": 0.0003}, module=2)  # 1 count
+    for t_us in range(1_000, 600_000, 1_000):
+        trs.step(t_us)
+    assert trs.snapshot()["slots"][2]["inputs"] == [0, 1, 0, 0]
+    slots = io_rows(slave_html("trscat", trs.snapshot()))
+    assert slots[0] == "0 TRS-CAT integrated IO-B 01000000 00000000 00000000 00000000", slots
+    assert slots[1].startswith("1 TRS-IO-E IO-E 00000000 00000000 "), slots
+    assert slots[2] == "2 TRS-AN-E AN-E 0 1 0 0 0 0", slots
+    assert slots[3] == "3 TRS-XX-E XX-E 0 0", slots

@@ -45,6 +45,16 @@ def bits(values: Sequence[Any]) -> str:
     return " ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values)
 
 
+def slot_values(slot: Mapping[str, Any], key: str) -> str:
+    """A TRS-CAT slot's ``inputs`` / ``outputs``: bits for the bidirectional lines (a slot
+    snapshot with ``lines``, seed 001 §3), one number per channel for analog and data words,
+    whose 0 / 1 values ``bits`` would write as lines ("0100" for four AN-E inputs)."""
+    values = slot.get(key) or []
+    if "lines" in slot:
+        return bits(values)
+    return " ".join(str(v) for v in values) or "-"
+
+
 def esm_badge(snap: Mapping[str, Any]) -> str:
     """A slave's ESM state (snapshot ``esm``), red with an AL status code, and the state the
     master requested when it is another."""
@@ -170,8 +180,8 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
     slots = "".join(
         f"<tr><td>{esc(s.get('slot'))}</td><td>{slot_type(s)}</td>"
         f"<td>{esc(ident_text(s.get('ident', 0)))}</td>"
-        f"<td>{esc(bits(s.get('inputs') or []))}</td>"
-        f"<td>{esc(bits(s.get('outputs') or []))}</td></tr>" for s in snap.get("slots") or [])
+        f"<td>{esc(slot_values(s, 'inputs'))}</td>"
+        f"<td>{esc(slot_values(s, 'outputs'))}</td></tr>" for s in snap.get("slots") or [])
     io = ('<table class="fr-log" id="fr-slave-io"><thead><tr><th>Slot</th><th>Type</th>'
           "<th>Ident</th><th>Inputs</th><th>Outputs</th></tr></thead>"
           f"<tbody>{slots}</tbody></table>")
