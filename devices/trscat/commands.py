@@ -140,7 +140,7 @@ class CommandsMixin:
         # a step finds is check_module's.
         if action in FAULT_ACTIONS:
             check_fault_target(self.device_id, kwargs["fault"], module)
-        elif action == "plug" and module is not None:
+        elif action in ("plug", "unplug") and module is not None:
             plug_position(module)
         return kwargs
 

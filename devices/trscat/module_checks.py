@@ -94,7 +94,9 @@ def no_expansion(device_id: str, slot: int, layout: Mapping[int, Any], last: int
 
 
 def plug_position(module: int) -> None:
-    if module > MAX_EXPANSIONS:
+    """Where an expansion can be plugged or unplugged: slot 0 is the integrated module, part
+    of the base (§9.3.2 "quello integrato direttamente in TRS-CAT"), not a position."""
+    if not 1 <= module <= MAX_EXPANSIONS:
         raise CommandError(f"a TRS-CAT has expansion positions 1..{MAX_EXPANSIONS} (§5)")
 
 

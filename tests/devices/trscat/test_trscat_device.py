@@ -126,6 +126,27 @@ def test_plug_under_power_is_seen_at_the_next_power_up() -> None:
     assert bench.trs.f050[0] == 2
 
 
+@pytest.mark.parametrize(("action", "args"), [
+    ("unplug", {}), ("plug", {"type": "TRS-IO-E"})])
+@pytest.mark.parametrize("module", [0, -1])
+def test_the_integrated_module_is_no_expansion_position(action: str, args: dict,
+                                                        module: int) -> None:
+    """§5 / §9.3.2: slot 0 is the module "integrato direttamente in TRS-CAT", part of the
+    base; expansions sit at positions 1..7. The model's own check let ``unplug`` at module 0
+    take the integrated I/O off the rail (and -1 the last expansion), and the next step
+    crashed on the missing base; a plug there was refused with "unplug it first". (The app's
+    targets never name module 0: app/targets.py refuses "trscat/0".) Both are refused by
+    check_command, and the rail is as it was."""
+    bench = Bench(["IO-E"])
+    before = [io.kind.name if io else None for io in bench.trs.rail]
+    with pytest.raises(CommandError, match=r"positions 1\.\.7"):
+        bench.trs.check_command(action, args, module)
+    with pytest.raises(CommandError, match=r"positions 1\.\.7"):
+        bench.apply(action, module=module, **args)
+    assert [io.kind.name if io else None for io in bench.trs.rail] == before
+    bench.run(0.01)
+
+
 def test_write_object_takes_toml_booleans() -> None:
     bench = Bench()
     bench.to_state(AlState.OP)
