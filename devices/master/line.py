@@ -71,6 +71,7 @@ class LineMixin:
         def _event(self, event: Event) -> None: ...
         def _request(self, link: SlaveLink, target: AlState) -> None: ...
         def _position(self, value: int, what: str) -> int: ...
+        def _watch(self, link: SlaveLink, resync: bool = True) -> None: ...
 
     def cmd_pull_cable(self, cable: int) -> None:
         self.cables[self._position(cable, "cable")] = False
@@ -344,6 +345,10 @@ class LineMixin:
         if link.lost_once:  # seed 003 network recovery: communication restarts from INIT
             self._log(link, "found", state=slave.al_state.label)
             if slave.al_state is not AlState.INIT and not self.external:
+                # The state read (and its AL status code: 0x001B after a watchdog) is the
+                # seed's status change before the restart takes the slave to INIT; its OP,
+                # if found there, is not the first OP of the restart (no ECAT_Resync).
+                self._watch(link, resync=False)
                 self._request(link, AlState.INIT)
         return link.lost_once
 

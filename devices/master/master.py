@@ -315,7 +315,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             if not link.present:
                 if self._find(link):
                     recovered.append(p)
-                self._watch(link)  # the state it is found in
+                self._watch(link)  # its state now (_find told a recovered one's found state)
                 quiet = False
             if not exchange:
                 continue
@@ -384,7 +384,10 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             self._event(Resync(self.now_us, self.device_id, position=-1))
         self._watched = states
 
-    def _watch(self, link: SlaveLink) -> None:
+    def _watch(self, link: SlaveLink, resync: bool = True) -> None:
+        """A new state of ``link``'s slave is a ``slave_state`` event; its first OP since it
+        was found, a Resync unless ``resync`` is False (the state a recovered slave is found
+        in, before its restart from INIT)."""
         slave, now = link.slave, self.now_us
         state = slave.al_state
         if state is not link.seen:
@@ -402,7 +405,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                 # own START_TIME comes no sooner; a slave that re-joins while DC stays
                 # COMPENSATING has only this one (seed 003 WAITING_START_TIME).
                 link.start_time_us = now + START_DELAY_US
-        if state is AlState.OP and not link.reached_op:
+        if resync and state is AlState.OP and not link.reached_op:
             link.reached_op = True
             self._event(Resync(now, self.device_id, position=link.position,
                                address=slave.station_address, slave=slave.device_id))

@@ -296,3 +296,35 @@ def test_a_refused_init_command_stops_the_transition(tmp_path: Path) -> None:
     assert [r["reason"] for r in records(events, "comm_error")] == ["init_command"]
     assert any("SDO download 0x1018:01 aborted with 0x06010002" in r["text"]
                for r in records(events, "log", "master"))
+
+
+@pytest.mark.parametrize(("out_us", "found_in", "code"), [(US, "SAFEOP", "0x001B"),
+                                                          (30_000, "OP", "0x0000")])
+def test_a_slave_found_again_reports_the_state_it_is_found_in(out_us: int, found_in: str,
+                                                              code: str) -> None:
+    """Seed 003: "the status change of slaves" is an event. A slave found again after a loss
+    is read in the state it is in (SAFEOP with the SM watchdog's 0x001B after a second cut
+    off, still OP after 30 ms), as its "found on the line again in '...'" line says; then the
+    recovery takes it to INIT. The event reported INIT only: the state and the AL status code
+    the master read never reached ECAT_Notify. ECAT_Resync comes once, when the restarted
+    slave reaches OP, not at the OP it was found in."""
+    rig = line_in_op()
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.run_until(IN_OP_US + out_us)
+    rig.apply("master", "plug_cable", {"cable": 2})
+    events = rig.run_until(IN_OP_US + out_us + 3 * US)
+    for name in ("cpx", "drive_ec-ecat"):
+        p = POSITIONS[name]
+        mine = [r for r in (e.to_record() for e in events) if r["device"] == "master"
+                and r.get("position") == p and r["event"] in ("slave_state", "resync")]
+        assert [(r["event"], r.get("from"), r.get("to"), r.get("code")) for r in mine] == [
+            ("slave_state", "", found_in, code),
+            ("slave_state", found_in, "INIT", "0x0000"),
+            ("slave_state", "INIT", "PREOP", "0x0000"),
+            ("slave_state", "PREOP", "SAFEOP", "0x0000"),
+            ("slave_state", "SAFEOP", "OP", "0x0000"),
+            ("resync", None, None, None)], name
+        found = [r["text"] for r in records(events, "log", "master")
+                 if f"(100{p + 1}): found on the line again" in r["text"]]
+        assert found == [f"'{rig.devices[name].box_name}' (100{p + 1}): found on the line "
+                         f"again in '{found_in}'."]
