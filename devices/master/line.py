@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 from devices.ethercat import AlState
 from devices.events import CommError, NetworkRecovery
 from devices.master.esc_errors import IN, OUT, run_frame
-from devices.master.links import Slave, SlaveLink
+from devices.master.links import RANK, Slave, SlaveLink
 from devices.master.log_styles import silent_run
 from devices.master.still import StillCounts
 
@@ -381,6 +381,10 @@ class LineMixin:
         is kept as the injected cause, the instructor's."""
         if not link.present:
             return False
+        believed = link.believed
+        if believed is not None and RANK.get(believed, 0) >= RANK[AlState.SAFEOP] and \
+                not self.external:  # a wire master counts its own (external_stats)
+            link.counters.wkc_errors += 1  # its process data stopped answering, as in a drop
         link.present, link.believed, link.pending = False, None, None
         link.lost_once, link.reached_op, link.seen = True, False, None
         link.injected_cause = self._injected_cause(link.position)

@@ -328,3 +328,20 @@ def test_a_slave_found_again_reports_the_state_it_is_found_in(out_us: int, found
                  if f"(100{p + 1}): found on the line again" in r["text"]]
         assert found == [f"'{rig.devices[name].box_name}' (100{p + 1}): found on the line "
                          f"again in '{found_in}'."]
+
+
+def test_a_slave_lost_with_process_data_counts_a_wkc_error() -> None:
+    """The structure's ``wkc_errors`` counts a slave in SAFEOP / OP that stopped answering
+    process data (docs/ethercat-master.md): one lost behind a pulled cable in OP did (the
+    cyclic frame's working counter falls short of it), and counted nothing. One lost before
+    SAFEOP had no process data to miss."""
+    rig = line_in_op()
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.run_until(IN_OP_US + US // 2)
+    assert [s["counters"]["wkc_errors"] for s in master_view(rig)["slaves"]] == [0, 0, 1, 1]
+    rig = build_rig(load_rig_spec(LINE_RIG))
+    rig.run_until(50_000)  # the CPX-E-EC and the drive in PREOP
+    assert [s["state"] for s in master_view(rig)["slaves"]][2:] == ["PREOP", "PREOP"]
+    rig.apply("master", "pull_cable", {"cable": 2})
+    rig.run_until(100_000)
+    assert [s["counters"]["wkc_errors"] for s in master_view(rig)["slaves"]] == [0, 0, 0, 0]
