@@ -260,22 +260,22 @@ class LineMixin:
             f"no link on port 1 (OUT) of position {first - 1}"
 
     def _lose_frame(self) -> None:
-        """One cycle's frame lost: counted per slave; one event per slave per burst."""
-        first = not self._bursting
-        burst = self.to_lose
+        """One cycle's frame lost (``lose_frames``): counted per slave and reported as the
+        master sees it, as a damaged cable's (:meth:`_lose_spoiled`): the first at once, then
+        at most once a second, the rest when a frame comes back (:meth:`_end_burst`). Until
+        session 19 the first lost frame reported the whole burst ("20 frame(s) lost."), which
+        no master knows then."""
         self.to_lose -= 1
-        self.lost_frames += 1
-        self._bursting = self.to_lose > 0
-        for link in self.links:
-            if link.present:
-                link.counters.lost_frames += 1
-                if first:
-                    self._event(CommError(self.now_us, self.device_id,
-                                          position=link.position,
-                                          address=link.slave.station_address,
-                                          reason="lost_frames", count=burst))
-        if first:
-            self._log(None, "lost_frames", count=burst)
+        self._bursting = True
+        self._lose_spoiled()
+
+    def _end_burst(self) -> None:
+        """A frame came back after a ``lose_frames`` burst: the frames lost since the last
+        report are reported now (while a cable stays damaged its own reports go on)."""
+        self._bursting = False
+        count, self.crc_unreported, self.crc_report_us = self.crc_unreported, 0, 0
+        if count:
+            self._report_spoiled(count)
 
     def frame_path(self) -> int:
         """How many positions the master's frames pass through, from position 0: each one
@@ -305,10 +305,10 @@ class LineMixin:
         return True
 
     def _lose_spoiled(self, count: int = 1) -> None:
-        """``count`` frames a damaged cable spoiled (a wire master's come in batches): counted
-        as lost frames, per slave. It goes on as long as the cable stays damaged, so the event
-        and the log line come at the first one and then at most once a second, with the frames
-        lost since the last one."""
+        """``count`` frames lost (a damaged cable's, a wire master's in batches, one of a
+        ``lose_frames`` burst): counted as lost frames, per slave. The loss may go on, so the
+        event and the log line come at the first one and then at most once a second, with the
+        frames lost since the last one."""
         self.lost_frames += count
         self.crc_unreported += count
         for link in self.links:

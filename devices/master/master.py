@@ -129,7 +129,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         self.lost_frames = 0
         self.to_lose = 0
         self.damaged: dict[int, float] = {}  # cable -> share of its crossings spoiled
-        self.crc_unreported = 0  # frames a damaged cable lost since the last log line
+        self.crc_unreported = 0  # frames lost (damaged cable, lose_frames) since the last line
         self.crc_report_us = 0  # no log line of those before
         self.next_cycle_us = 0
         self.network_op = False
@@ -291,6 +291,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             self._lose_frame()
         elif self.damaged and cycle and not external and port_up:  # healthy: one dict's truth
             lost = self._spoiled()  # the frame's physical path, answered or not
+        elif self._bursting and cycle and not external and port_up:  # a frame back: report
+            self._end_burst()
         exchange = cycle and not lost and not external
         target = self.target
         # The target of a DC slave (SAFEOP while DC holds): _target_of_dc, inlined.

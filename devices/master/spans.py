@@ -33,8 +33,8 @@ class SpanMixin:
 
     def quiet_until(self: EtherCatMaster, step_us: int) -> int:
         now = self.now_us
-        if not self.SKIP_STILL or self.external or self.to_lose or self.damaged \
-                or self.hooks.queued:
+        if not self.SKIP_STILL or self.external or self.to_lose or self._bursting \
+                or self.damaged or self.hooks.queued:
             return now
         watched = self._watched
         if watched is None or self.cycle_us > step_us or self.next_cycle_us > now + step_us:

@@ -90,8 +90,10 @@ def test_trscat_outputs_fallback() -> None:
     name = "trscat_outputs_fallback"
     hooks = [r["text"] for r in pick(name, "log", "scenario")]
     assert hooks == [f"on[{i}] resync: trscat write_object" for i in range(3)]
-    assert pick(name, "comm_error", "master", reason="lost_frames", position=1)[0]["count"] \
-        == 20
+    # The master reports what it saw: the first lost frame at once, the rest when frames
+    # come back (docs/ethercat-master.md "Line faults").
+    assert [r["count"] for r in pick(name, "comm_error", "master", reason="lost_frames",
+                                     position=1)] == [1, 19]
     fall = pick(name, "al_status", "trscat", code="0x001A")[0]["t"]
     assert 5.0 < fall < at(name, "outputs_fallback")
     assert pick(name, "state", "trscat", to="SAFEOP")[-1]["from"] == "OP"

@@ -132,7 +132,9 @@ def test_slave_powered_off_and_on() -> None:
 
 def test_lost_frames_are_counted_and_the_slaves_watchdogs_react() -> None:
     """Seed 003 communication error; the TRS-CAT misses 3 SM events (0x10F1:2) and falls to
-    SAFEOP with a sync error (seed 001 §9.3.7)."""
+    SAFEOP with a sync error (seed 001 §9.3.7). The master reports what it has seen: the first
+    lost frame at once, the rest when its frames come back (as a damaged cable's). It said
+    "20 frame(s) lost." at the first one, which no master can know then."""
     rig = line_in_op()
     rig.apply("master", "lose_frames", {"count": 20})
     events = rig.run_until(IN_OP_US + US // 2)
@@ -140,8 +142,13 @@ def test_lost_frames_are_counted_and_the_slaves_watchdogs_react() -> None:
     assert view["stats"]["lost_frames"] == 20
     assert [s["counters"]["lost_frames"] for s in view["slaves"]] == [20] * 4
     errors = records(events, "comm_error")
-    assert [(r["position"], r["reason"], r["count"]) for r in errors] == [
-        (p, "lost_frames", 20) for p in range(4)]
+    first = errors[0]["t"]
+    assert [(round(r["t"] - first, 6), r["position"], r["reason"], r["count"])
+            for r in errors] == [(0, p, "lost_frames", 1) for p in range(4)] + [
+                (0.02, p, "lost_frames", 19) for p in range(4)]
+    lines = [r["text"] for r in records(events, "log", "master") if "lost." in r["text"]]
+    assert lines == ["'Device 1 (EtherCAT)': 1 frame(s) lost.",
+                     "'Device 1 (EtherCAT)': 19 frame(s) lost."]
     trs = view["slaves"][1]
     assert (trs["state"], trs["al_status_code"]) == ("SAFEOP", 0x001A)
     assert trs["al_status_text"] == "Synchronization error"
@@ -345,3 +352,16 @@ def test_a_slave_lost_with_process_data_counts_a_wkc_error() -> None:
     rig.apply("master", "pull_cable", {"cable": 2})
     rig.run_until(100_000)
     assert [s["counters"]["wkc_errors"] for s in master_view(rig)["slaves"]] == [0, 0, 0, 0]
+
+
+def test_a_long_burst_of_lost_frames_is_reported_as_it_goes() -> None:
+    """1500 frames lost: the master reports the first at once, then at most once a second
+    the frames lost since (1000), and the rest (499) with the first frame that comes back;
+    one event per answering slave each time, the counters at 1500."""
+    rig = line_in_op()
+    rig.apply("master", "lose_frames", {"count": 1500})
+    events = rig.run_until(IN_OP_US + 2 * US)
+    counts = [r["count"] for r in records(events, "comm_error") if r["position"] == 0
+              and r["reason"] == "lost_frames"]
+    assert counts == [1, 1000, 499]
+    assert master_view(rig)["stats"]["lost_frames"] == 1500
