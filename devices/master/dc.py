@@ -157,8 +157,15 @@ class DcUnit:
             self.deviation_ns, self.start_time_us, self.outside, self.inside = 0, None, 0, 0
         return before, target
 
+    def measured(self) -> bool:
+        """Whether the master measures a deviation: not in IDLE, where its clock is
+        "completely independent from the slaves" (seed 003)."""
+        return self.state is not DcState.IDLE
+
     def snapshot(self) -> dict[str, object]:
-        """What the master's DC management shows: its state, the deviation it measured and
-        the window; the injected fault is the simulator's (the master's ``injected``)."""
+        """What the master's DC management shows: its state, the deviation it measured (None
+        in IDLE: nothing is measured, and 0 would read as in sync) and the window; the
+        injected fault is the simulator's (the master's ``injected``)."""
         return {"state": self.state.value,
-                "deviation_ns": self.deviation_ns, "window_ns": self.window_ns}
+                "deviation_ns": self.deviation_ns if self.measured() else None,
+                "window_ns": self.window_ns}

@@ -50,6 +50,8 @@ TWINCAT: dict[str, str] = {
     "lost_frames": "{count} frame(s) lost.",
     "dc": "distributed clocks: {from_state} -> {to_state} (deviation {deviation} ns, sync "
           "window {window} ns).",
+    # From or into IDLE: the master's clock is independent, no deviation is measured (seed 003).
+    "dc_unmeasured": "distributed clocks: {from_state} -> {to_state} (sync window {window} ns).",
     "recovery": "network recovery: slave(s) at position(s) {positions} back on the line.",
 }
 

@@ -430,14 +430,21 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
             ready = any(synced) and all(
                 in_sync or link.stalled for in_sync, link in zip(synced, dc_links, strict=True))
         trigger = dc.trigger(self.now_us, self.link_up, len(dc_links), ready)
-        moved = dc.move(trigger, self.now_us) if trigger is not None else None
+        if trigger is None:
+            return
+        deviation = dc.deviation_ns  # this cycle's, before a new SYNCHRONIZING resets it
+        moved = dc.move(trigger, self.now_us)
         if moved is None:
             return
         before, after = moved
         self._event(StateChanged(self.now_us, self.device_id, from_state=before.value,
                                  to_state=after.value, machine=DC_MACHINE))
-        self._log(None, "dc", from_state=before.value, to_state=after.value,
-                  deviation=dc.deviation_ns, window=dc.window_ns)
+        if DcState.IDLE in moved:  # nothing measured yet, or nothing left to measure
+            self._log(None, "dc_unmeasured", from_state=before.value, to_state=after.value,
+                      window=dc.window_ns)
+        else:
+            self._log(None, "dc", from_state=before.value, to_state=after.value,
+                      deviation=deviation, window=dc.window_ns)
         # Seed 003: the slaves do I/O from START_TIME on (COMPENSATING: "typically all slaves
         # are in OP state"); before it and out of sync the DC slaves stay in SAFEOP.
         self.dc_hold = after is not DcState.COMPENSATING

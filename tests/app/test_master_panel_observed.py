@@ -58,3 +58,13 @@ def test_the_phase_without_an_answering_slave_is_named_as_the_master_reads_it() 
     master's own silence."""
     text = status_table({"phase": "no_answer", "link": True, "target": "OP"})
     assert ">no slave answers<" in text and ">no answer<" not in text
+
+
+def test_dc_idle_shows_no_deviation() -> None:
+    """Seed 003 IDLE: the master clock is independent of the slaves; the master measures no
+    deviation (``deviation_ns`` None) and the panel says so, not "0 ns" (in sync)."""
+    text = live_table({"dc": {"state": "IDLE", "deviation_ns": None, "window_ns": 1000}})
+    assert "deviation not measured / window 1000\u00a0ns" in text
+    assert "None" not in text and "0\u00a0ns /" not in text
+    text = live_table({"dc": {"state": "COMPENSATING", "deviation_ns": -12, "window_ns": 1000}})
+    assert "deviation -12\u00a0ns / window 1000\u00a0ns" in text

@@ -140,8 +140,10 @@ def dc_text(dc: Mapping[str, Any]) -> str:
     state = str(dc.get("state", "-"))
     out = badge(state, DC_TONE.get(state, "warn"))
     if "deviation_ns" in dc:
-        out += esc(f" deviation {dc['deviation_ns']}{NBSP}ns / window "
-                   f"{dc.get('window_ns', '?')}{NBSP}ns")
+        # None: not measured (IDLE, the master's clock independent of the slaves, seed 003).
+        deviation = dc["deviation_ns"]
+        measured = "not measured" if deviation is None else f"{deviation}{NBSP}ns"
+        out += esc(f" deviation {measured} / window {dc.get('window_ns', '?')}{NBSP}ns")
     return out
 
 
