@@ -5,48 +5,26 @@ boxes, the Drive action form, the Objects tab's boxes. Before, they were each pa
 where a picker made them so (several drives, several dictionaries); on a one-drive rig a
 trainee typing a register number changed every classmate's box and one page's read result
 showed on every page. Two websocket connections stand in for the browsers
-(tests/app/test_forms_per_browser.py)."""
+(tests/app/test_forms_per_browser.py, whose register test runs on this rig as well)."""
 
 from __future__ import annotations
 
 import time
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
 
-from app.ui.drive.drive_options import register_option
 from app.ui.panels.classroom_rig import ServedRig
-from devices.servo.registers import R
 from tests.app.test_classroom_leak import Page, _wait
-from tests.app.test_forms_per_browser import _drive_read, _frames, _has
+from tests.app.test_forms_per_browser import _frames
 from tests.app.test_picks_per_browser import _widget
-from tests.app.two_pages import two_pages
-
-ONE_DRIVE = """
-[rig]
-name = "one drive on CANopen"
-seed = 1
-step_ms = 1
-
-[[servo]]
-id = "drive"
-fieldbus = "canopen"
-node_id = 2
-
-[[fastcat]]
-id = "fastcat"
-modules = ["DI16", "DO16"]
-"""
+from tests.app.two_pages import one_drive_pages
 
 
 @pytest.fixture(scope="module")
 def served(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[ServedRig, Page, Page]]:
-    path = Path(tmp_path_factory.mktemp("rig")) / "one_drive.toml"
-    path.write_text(ONE_DRIVE)
-    # the node's boot-up, the first scan
-    with two_pages(path, lambda s: s.runtime.advance(3_000_000).result(10)) as pages:
+    with one_drive_pages(tmp_path_factory.mktemp("rig")) as pages:
         yield pages
 
 
@@ -70,23 +48,6 @@ def test_an_object_read_on_one_page_fills_that_page_s_boxes_only(
     _wait(lambda: first.updates(value))
     _frames(live)
     assert second.updates(value) == [] and second.updates(address) == []
-
-
-def test_a_register_read_on_one_page_shows_on_that_page_only(
-        served: tuple[ServedRig, Page, Page]) -> None:
-    live, first, second = served
-    box = _widget(first, "Register", "R02 feed_constant")
-    _drive_read(first, "R02 feed_constant")
-    _wait(lambda: _has(first, "R02 feed_constant = "))
-    _frames(live)
-    assert "R02 feed_constant" not in second.updates(box)  # B's box was not changed
-    assert not _has(second, "R02 feed_constant = ")  # nor its answer line
-    # B has picked no register: its Read reads the one its box shows, not the one A picked
-    initial = register_option(R.PROFILE_VELOCITY)
-    second.set(_widget(second, "Register access", "Read register"), "Read register")
-    _wait(lambda: _has(second, f"{initial} = "))
-    _frames(live)
-    assert not _has(second, "R02 feed_constant = ") and not _has(first, f"{initial} = ")
 
 
 def _sent_frames(live: ServedRig) -> int:

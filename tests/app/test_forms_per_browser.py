@@ -18,12 +18,20 @@ from devices.events import AlStatusChanged
 from devices.servo.registers import R
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _widget, contents
-from tests.app.two_pages import two_pages
+from tests.app.two_pages import one_drive_pages, two_pages
 
 
 @pytest.fixture(scope="module")
 def served() -> Iterator[tuple[ServedRig, Page, Page]]:
     with two_pages() as pages:
+        yield pages
+
+
+@pytest.fixture(scope="module")
+def one_drive(tmp_path_factory: pytest.TempPathFactory
+              ) -> Iterator[tuple[ServedRig, Page, Page]]:
+    """One drive, one dictionary: no picker makes a page's Register box its own there."""
+    with one_drive_pages(tmp_path_factory.mktemp("rig")) as pages:
         yield pages
 
 
@@ -46,9 +54,10 @@ def _drive_read(page: Page, register: str) -> None:
     page.set(_widget(page, "Register access", "Read register"), "Read register")
 
 
+@pytest.mark.parametrize("rig", ["served", "one_drive"])
 def test_a_register_read_on_one_page_shows_on_that_page_only(
-        served: tuple[ServedRig, Page, Page]) -> None:
-    live, first, second = served
+        rig: str, request: pytest.FixtureRequest) -> None:
+    live, first, second = request.getfixturevalue(rig)
     box = _widget(first, "Register", "R02 feed_constant")
     _drive_read(first, "R02 feed_constant")
     _wait(lambda: _has(first, "R02 feed_constant = "))

@@ -1,5 +1,6 @@
 """An open rig served paused with two websocket pages on it, the stand-ins for two browsers of
-the per-page tests (docs/dashboard.md "Several browsers")."""
+the per-page tests (docs/dashboard.md "Several browsers"); the default rig, or one of one drive
+and one dictionary, where no picker makes a page's forms its own."""
 
 from __future__ import annotations
 
@@ -34,3 +35,30 @@ def two_pages(path: Path = DEFAULT_RIG,
             second.close()
     finally:
         served.stop()
+
+
+ONE_DRIVE = """
+[rig]
+name = "one drive on CANopen"
+seed = 1
+step_ms = 1
+
+[[servo]]
+id = "drive"
+fieldbus = "canopen"
+node_id = 2
+
+[[fastcat]]
+id = "fastcat"
+modules = ["DI16", "DO16"]
+"""
+
+
+@contextmanager
+def one_drive_pages(folder: Path) -> Iterator[tuple[ServedRig, Page, Page]]:
+    """Two pages on ONE_DRIVE (written into ``folder``), after the CANopen node's boot-up and
+    the first scan."""
+    path = folder / "one_drive.toml"
+    path.write_text(ONE_DRIVE)
+    with two_pages(path, lambda s: s.runtime.advance(3_000_000).result(10)) as pages:
+        yield pages
