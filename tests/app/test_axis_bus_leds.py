@@ -13,8 +13,8 @@ from typing import Any
 
 import pytest
 import viser
+from served_dashboard import local_server
 
-from app.screenshots import free_port
 from app.ui.drive.axis_scene import AxisScene
 from devices.servo.leds import BUS_LEDS, NETWORK_LEDS
 
@@ -24,11 +24,8 @@ AXIS = {"neg_limit": -60000.0, "pos_limit": 660000.0, "home_switch": -3000.0,
 
 @pytest.fixture(scope="module")
 def server() -> Iterator[viser.ViserServer]:
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
+    with local_server() as server:
         yield server
-    finally:
-        server.stop()
 
 
 def snap(fieldbus: str) -> dict[str, Any]:

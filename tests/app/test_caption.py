@@ -19,10 +19,8 @@ import numpy as np
 import pytest
 import viser
 from label_boxes import TOUCH_PX, VIEW_HEIGHT_PX, label_box, px_per_unit
+from served_dashboard import ticked_dashboard
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.runtime import Runtime
-from app.screenshots import free_port
 from app.ui.dashboard import LEFT_WIDTH, RIGHT_WIDTH, Dashboard
 from devices.events import Caption
 
@@ -54,15 +52,8 @@ def project(camera: object, point: tuple[float, float, float]) -> tuple[float, f
 
 @pytest.fixture(scope="module")
 def dashboard() -> Iterator[Dashboard]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    runtime = Runtime(rig)
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
-        board = Dashboard(server, runtime)
-        board.tick()
-        yield board
-    finally:
-        server.stop()
+    with ticked_dashboard() as dashboard:
+        yield dashboard
 
 
 def on_screen(camera: Any, label: Any) -> tuple[Any, tuple[float, float, float, float]]:

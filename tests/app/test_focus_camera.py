@@ -19,15 +19,13 @@ from typing import Any
 import numpy as np
 import pytest
 import viser
+from served_dashboard import ticked_dashboard
 from viser._messages import (  # viser 1.1.1, pinned
     SetCameraLookAtMessage,
     SetCameraPositionMessage,
     SetCameraUpDirectionMessage,
 )
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.runtime import Runtime
-from app.screenshots import free_port
 from app.ui.dashboard import Dashboard
 
 CANVAS = (552, 672)  # the 3D view of the 1280 x 720 screenshot page, as its camera reports it
@@ -35,14 +33,8 @@ CANVAS = (552, 672)  # the 3D view of the 1280 x 720 screenshot page, as its cam
 
 @pytest.fixture(scope="module")
 def dashboard() -> Iterator[Dashboard]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
-        board = Dashboard(server, Runtime(rig))
-        board.tick()
-        yield board
-    finally:
-        server.stop()
+    with ticked_dashboard() as dashboard:
+        yield dashboard
 
 
 class Page:

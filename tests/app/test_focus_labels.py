@@ -14,10 +14,8 @@ from collections.abc import Iterator
 
 import pytest
 import viser
+from served_dashboard import ticked_dashboard
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.runtime import Runtime
-from app.screenshots import free_port
 from app.ui.dashboard import VIEW_ASPECT, VIEW_HEIGHT_PX, Dashboard
 from app.ui.label_fit import View, handle_rect, inside
 from app.ui.line.view import CAMERA_FOV_DEG, LineView
@@ -28,16 +26,8 @@ DEVICES = ["master", "fastcat", "trscat", "cpx", "drive_ec-ecat"]
 
 @pytest.fixture(scope="module")
 def board() -> Iterator[Dashboard]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    for _ in range(BOOT_STEPS):
-        rig.step()
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
-        dashboard = Dashboard(server, Runtime(rig))
-        dashboard.tick()
+    with ticked_dashboard(BOOT_STEPS) as dashboard:
         yield dashboard
-    finally:
-        server.stop()
 
 
 def line_of(board: Dashboard) -> LineView:

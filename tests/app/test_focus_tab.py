@@ -7,11 +7,8 @@ import html
 from collections.abc import Iterator
 
 import pytest
-import viser
+from served_dashboard import ticked_dashboard
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.runtime import Runtime
-from app.screenshots import free_port
 from app.ui.dashboard import Dashboard
 from app.ui.tab_switch import snippet
 from devices.events import Focus
@@ -19,14 +16,8 @@ from devices.events import Focus
 
 @pytest.fixture(scope="module")
 def dashboard() -> Iterator[Dashboard]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
-        board = Dashboard(server, Runtime(rig))
-        board.tick()
-        yield board
-    finally:
-        server.stop()
+    with ticked_dashboard() as dashboard:
+        yield dashboard
 
 
 @pytest.mark.parametrize(("device", "tab"), [

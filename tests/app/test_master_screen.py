@@ -16,11 +16,9 @@ from types import SimpleNamespace
 import pytest
 import viser
 from label_boxes import EM_PX, VIEW_HEIGHT_PX, Box, em_px, label_box, px_per_unit
+from served_dashboard import ticked_dashboard
 from test_caption import VIEW_WIDTH_PX, project
 
-from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
-from app.runtime import Runtime
-from app.screenshots import free_port
 from app.ui.dashboard import CAPTION_SCALE, Dashboard
 from app.ui.glyphs import WARM_SCALES, bucket_px
 from app.ui.line.bodies import SCREEN_SCALE
@@ -31,16 +29,8 @@ BOOT_STEPS = 5000  # the master in COMPENSATING (dc_sync_lost's first picture, a
 
 @pytest.fixture(scope="module")
 def board() -> Iterator[Dashboard]:
-    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
-    for _ in range(BOOT_STEPS):
-        rig.step()
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
-        dashboard = Dashboard(server, Runtime(rig))
-        dashboard.tick()
+    with ticked_dashboard(BOOT_STEPS) as dashboard:
         yield dashboard
-    finally:
-        server.stop()
 
 
 def focused(board: Dashboard, device: str = "master") -> tuple[LineView, SimpleNamespace]:

@@ -15,8 +15,8 @@ from typing import Any
 
 import pytest
 import viser
+from served_dashboard import local_server
 
-from app.screenshots import free_port
 from app.ui.rail_scene import BODY_H, FRONT_Y, RailScene
 
 MODULES = ["DI16", "AI8D", "AI8C", "AI4D", "AO4", "AI8TC", "AB4P4", "AI4C", "AI4P", "AO4H"]
@@ -24,11 +24,8 @@ MODULES = ["DI16", "AI8D", "AI8C", "AI4D", "AO4", "AI8TC", "AB4P4", "AI4C", "AI4
 
 @pytest.fixture()
 def server() -> Iterator[viser.ViserServer]:
-    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
-    try:
+    with local_server() as server:
         yield server
-    finally:
-        server.stop()
 
 
 def rail(types: list[str | None], unplugged: tuple[int, ...] = ()) -> dict[str, Any]:
