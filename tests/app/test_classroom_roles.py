@@ -4,11 +4,11 @@ the rig or controls a scenario, whatever it sends; the refusal is logged and not
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Iterator
 from typing import Any
 
 import pytest
+from viser_page import wait as _wait
 
 from app.classroom.roles import (
     INSTRUCTOR_ONLY,
@@ -123,14 +123,6 @@ def runtime() -> Iterator[Runtime]:
     rt.start()
     yield rt
     rt.stop()
-
-
-def _wait(predicate: Any, timeout: float = 5.0) -> Any:
-    deadline = time.monotonic() + timeout
-    while not (value := predicate()):
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.01)
-    return value
 
 
 def test_trainee_injection_is_refused_logged_and_notified(
