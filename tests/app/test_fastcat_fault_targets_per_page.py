@@ -19,21 +19,15 @@ from app.ui.panels.control import COUPLER_TARGET, TABLE_LABELS, fault_targets
 from devices.fastcat.alarms import COUPLER_CODES, MODULE_CODES
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _ids, _settle, _widget
-from tests.app.two_pages import two_pages
+from tests.app.two_pages import powered, two_pages
 
 NO_NODE = f"0x10 {COUPLER_CODES[0x10].symbol}"  # §7.5: about no node
 MODULE_CODE = f"0x02 {MODULE_CODES[0x02].symbol}"  # §7.6
 
 
-def _powered(served: ServedRig) -> None:
-    served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
-    served.runtime.advance(3_000_000).result(timeout=30)
-    served.dashboard.tick()
-
-
 @pytest.fixture(scope="module")
 def served() -> Iterator[tuple[ServedRig, Page, Page]]:
-    with two_pages(prepare=_powered) as pages:
+    with two_pages(prepare=powered) as pages:
         yield pages
 
 

@@ -17,12 +17,11 @@ from devices.fastcat.encoder import CMD_ZERO_CYCLE, COMMAND_INDEX
 from devices.fastcat.module_od import object_index
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _ids, _settle, _widget
-from tests.app.two_pages import two_pages
+from tests.app.two_pages import powered, two_pages
 
 
 def _powered_module_3_pulled(served: ServedRig) -> None:
-    served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
-    served.runtime.advance(3_000_000).result(timeout=30)
+    powered(served)
     served.runtime.command("fastcat/3", "unplug", {}).result(timeout=10)
     served.runtime.advance(100_000).result(timeout=30)
     served.dashboard.tick()
@@ -102,6 +101,14 @@ def test_the_encoder_section_shows_on_the_page_that_picked_the_ax2(
     _wait(lambda: _visible(first, folder)[-1] is False)
 
 
+def _pick(first: Page, second: Page, firsts: str, seconds: str) -> None:
+    """``first`` picks module ``firsts``, then ``second`` ``seconds`` (one server-level
+    picker, its value each page's own)."""
+    picker = _widget(first, "Module", firsts)
+    first.set(picker, firsts)
+    second.set(picker, seconds)
+
+
 def _read(live: ServedRig, index: int) -> int:
     return int(live.runtime.submit(lambda: live.rig.apply(
         "fastcat", "read_object", {"index": index, "sub": 0})).result(timeout=10))
@@ -114,10 +121,8 @@ def test_module_powered_shows_and_commands_each_page_s_module(
     live, first, second = served
     live.runtime.command("fastcat/6", "module_power", {"on": False}).result(timeout=10)
     live.runtime.advance(100_000).result(timeout=30)
-    picker = _widget(first, "Module", "6 AI8TC")
     box = _widget(first, "Module powered", None)
-    second.set(picker, "2 DI16")
-    first.set(picker, "6 AI8TC")
+    _pick(second, first, "2 DI16", "6 AI8TC")
     _wait(lambda: False in first.updates(box))
     _settle(live)
     assert False not in second.updates(box)
@@ -130,9 +135,7 @@ def test_a_zero_cycle_click_commands_the_page_s_ax2(
         served: tuple[ServedRig, Page, Page]) -> None:
     """§6.30: bit 12 of 0x7600 + 0x10 * (N - 1), of the module the clicking page picked."""
     live, first, second = served
-    picker = _widget(first, "Module", "7 AX2")
-    first.set(picker, "7 AX2")
-    second.set(picker, "2 DI16")
+    _pick(first, second, "7 AX2", "2 DI16")
     _settle(live)
     index = object_index(COMMAND_INDEX, 7)
     box = _widget(first, "Zero-cycle command enc 1", None)
@@ -156,9 +159,7 @@ def test_set_shaft_speed_sends_the_clicking_page_s_encoder_and_speed(
     its Encoder and Shaft speed boxes: what one page typed there was every page's, and a
     classmate's Set shaft speed turned the shaft at it."""
     live, first, second = served
-    picker = _widget(first, "Module", "7 AX2")
-    first.set(picker, "7 AX2")
-    second.set(picker, "7 AX2")
+    _pick(first, second, "7 AX2", "7 AX2")
     encoder, speed = _widget(first, "Encoder", "2"), _widget(first, "Shaft speed (rpm)", None)
     first.set(encoder, "2")
     first.set(speed, 120.0)
@@ -180,9 +181,7 @@ def test_unplug_then_plug_are_commanded_in_click_order_with_the_page_s_type(
         served: tuple[ServedRig, Page, Page]) -> None:
     """§2: modules plugged and unplugged by hand; Plug puts in the type the page chose."""
     live, first, second = served
-    picker = _widget(second, "Module", "2 DI16")
-    second.set(picker, "2 DI16")
-    first.set(picker, "4 AI8D")
+    _pick(second, first, "2 DI16", "4 AI8D")
     plug_type = _widget(second, "Plug type", "DI16")
     second.set(plug_type, "DI16")
     first.set(plug_type, "AO4")

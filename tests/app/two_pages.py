@@ -37,6 +37,13 @@ def two_pages(path: Path = DEFAULT_RIG,
         served.stop()
 
 
+def powered(served: ServedRig) -> None:
+    """A ``prepare``: the FastCAT powered and the line 3 s on (scanned, in OP), drawn."""
+    served.runtime.command("fastcat", "power", {"on": True}).result(timeout=10)
+    served.runtime.advance(3_000_000).result(timeout=30)
+    served.dashboard.tick()
+
+
 ONE_DRIVE = """
 [rig]
 name = "one drive on CANopen"
