@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from bench._browser import ROOT, ServerProcess
-from bench._viser_page import decode, encode, say_hello
+from bench._viser_page import decode, encode, page
 
 WATCHERS = (1, 10)
 RATE = 5.0  # clicks per second: a person clicking briskly
@@ -55,17 +55,12 @@ def _uuid_of(backlog: list[dict[str, Any]], label: str) -> str:
 async def _page(port: int, spans: list[Span], clicks: tuple[float, float] | None,
                 label: str, rate: float, sent: list[int]) -> None:
     """One page: counts into ``spans``; with ``clicks`` (from, to), clicks ``label`` then."""
-    import viser
-    import websockets
     import zstandard
     from viser._messages import GuiUpdateMessage
 
     unzip = zstandard.ZstdDecompressor()
-    async with websockets.connect(f"ws://127.0.0.1:{port}",
-                                  subprotocols=[f"viser-v{viser.__version__}"],
-                                  max_size=None, compression=None) as ws:
-        backlog = decode(await ws.recv(), unzip)
-        await say_hello(ws)
+    async with page(port) as (ws, first):
+        backlog = decode(first, unzip)
 
         async def click() -> None:
             assert clicks is not None

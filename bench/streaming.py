@@ -42,7 +42,7 @@ from typing import Any
 from app.ui.drive.plots import WINDOW_S
 from bench import _stream_clicks
 from bench._browser import ServerProcess, serve_dashboard
-from bench._viser_page import say_hello
+from bench._viser_page import page, window
 
 PROBE = re.compile(rb"probe (\d+) (\d+\.\d+)")
 CLIENT_COUNTS = (1, 10, 50)
@@ -107,16 +107,10 @@ async def _client(port: int, warmup_s: float, seconds: float, tally: Tally) -> N
     """Count from ``warmup_s`` after the first window (the backlog of a new connection: the
     whole GUI and scene) for ``seconds``."""
     import msgspec
-    import viser
-    import websockets
     import zstandard
 
     unzip = zstandard.ZstdDecompressor()
-    async with websockets.connect(f"ws://127.0.0.1:{port}",
-                                  subprotocols=[f"viser-v{viser.__version__}"],
-                                  max_size=None, compression=None) as ws:
-        await ws.recv()
-        await say_hello(ws)
+    async with page(port) as (ws, _backlog):
         start_at = time.monotonic() + warmup_s
         end_at = start_at + seconds
         while (now := time.monotonic()) < end_at:
@@ -127,8 +121,7 @@ async def _client(port: int, warmup_s: float, seconds: float, tally: Tally) -> N
             received = time.monotonic()
             if received < start_at or not isinstance(raw, bytes):
                 continue
-            size, packed = int.from_bytes(raw[:8], "little"), int.from_bytes(raw[8:16], "little")
-            inner = unzip.decompress(raw[16:16 + packed], max_output_size=size)
+            inner = window(raw, unzip)
             tally.frames += 1
             tally.bytes += len(raw)
             tally.messages += len(msgspec.msgpack.decode(inner)["messages"])
