@@ -17,7 +17,7 @@ import pytest
 
 from app.ui.panels.classroom_rig import ServedRig
 from tests.app.test_classroom_leak import Page, _wait
-from tests.app.test_forms_per_browser import _frames
+from tests.app.test_forms_per_browser import _frames, object_read
 from tests.app.test_picks_per_browser import _widget
 from tests.app.two_pages import one_drive_pages
 
@@ -41,12 +41,7 @@ def test_an_object_read_on_one_page_fills_that_page_s_boxes_only(
     live, first, second = served
     objects = live.dashboard.objects
     assert objects is not None and objects.device_id == "fastcat"
-    address, value = _widget(first, "Object", None), _widget(first, "Value", None)
-    first.set(address, "0x1000:0")
-    time.sleep(0.1)
-    first.set(_widget(first, "Access", "Read"), "Read")
-    _wait(lambda: first.updates(value))
-    _frames(live)
+    value, address = object_read(live, first, "0x1000:0"), _widget(first, "Object", None)
     assert second.updates(value) == [] and second.updates(address) == []
 
 

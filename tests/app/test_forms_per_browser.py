@@ -101,23 +101,26 @@ def _objects_on_cpx(live: ServedRig) -> None:
     objects.select("cpx")
 
 
+def object_read(live: ServedRig, page: Page, address: str) -> str:
+    """``page`` types ``address`` in the Objects tab's Object box and reads it: the Value box's
+    uuid, once the page got a value and a few frames went out after it."""
+    value = _widget(page, "Value", None)
+    page.set(_widget(page, "Object", None), address)
+    time.sleep(0.1)  # the page's sender: one message each 50 ms window
+    page.set(_widget(page, "Access", "Read"), "Read")
+    _wait(lambda: page.updates(value))
+    _frames(live)
+    return value
+
+
 def test_an_object_read_fills_the_reading_page_s_value_box_only(
         served: tuple[ServedRig, Page, Page]) -> None:
     live, first, second = served
     _objects_on_cpx(live)
-    address, value = _widget(first, "Object", None), _widget(first, "Value", None)
-    first.set(address, "0x1018:1")
-    time.sleep(0.1)
-    first.set(_widget(first, "Access", "Read"), "Read")
-    _wait(lambda: first.updates(value))
-    _frames(live)
+    value = object_read(live, first, "0x1018:1")
+    address = _widget(first, "Object", None)
     assert second.updates(value) == [] and "0x1018:1" not in second.updates(address)
-    # B's Read reads the object B typed, into B's box only
-    second.set(address, "0x1000:0")
-    time.sleep(0.1)
-    second.set(_widget(second, "Access", "Read"), "Read")
-    _wait(lambda: second.updates(value))
-    _frames(live)
+    object_read(live, second, "0x1000:0")  # B's Read reads the object B typed, into B's box
     assert second.updates(value) == ["0x04561389"]  # 72749961, the CPX-E-EC's 0x1000
     assert first.updates(value) == ["0x0000001D"]  # the vendor id A read (29)
 
