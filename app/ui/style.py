@@ -50,8 +50,11 @@ def esc(value: object) -> str:
 
 
 # The views rebuild their HTML 30 times a second from mostly the same texts (labels, states,
-# codes): each text is escaped once, not ~300 times per update (docs/performance.md).
-@functools.lru_cache(maxsize=8192)
+# codes, the logs' visible rows): each is escaped once, not at every update. One update of the
+# default rig escapes at most ~730 distinct texts, and 1,024 entries already hit as often as an
+# unbounded cache; what more entries keep is one-off texts (new log rows' time stamps, ~42 per
+# soak cycle), 8,192 of them ~2.7 MB (docs/performance.md "Session 19").
+@functools.lru_cache(maxsize=2048)
 def _escaped(text: str) -> str:
     return html.escape(text, quote=True)
 
