@@ -33,6 +33,12 @@ def served() -> Iterator[tuple[ServedRig, Page, Page]]:
         yield pages
 
 
+def _picked(live: ServedRig, pick: Any) -> tuple[str, str]:
+    """What each page picked in one per-page picker (its ``value_for``): first's, second's."""
+    one, two = _ids(live)
+    return pick.value_for(one), pick.value_for(two)
+
+
 def _rail(live: ServedRig) -> list[dict[str, Any]]:
     return list(live.runtime.submit(
         lambda: live.rig.device("fastcat").snapshot()["rail"]).result(timeout=10))
@@ -61,9 +67,7 @@ def test_a_module_picked_on_one_page_is_not_the_other_page_s(
     assert "3 (empty)" not in second.updates(picker)
     assert "DO16" not in second.updates(plug_type)
     modules = live.dashboard._panels.modules  # type: ignore[union-attr]
-    one, two = _ids(live)
-    assert modules.pick.value_for(one) == "3 (empty)"
-    assert modules.pick.value_for(two) == "1 DB16"
+    assert _picked(live, modules.pick) == ("3 (empty)", "1 DB16")
 
 
 def test_the_other_page_s_unplug_acts_on_its_own_pick(
@@ -80,9 +84,7 @@ def test_the_other_page_s_unplug_acts_on_its_own_pick(
     live.runtime.advance(100_000).result(timeout=30)
     _settle(live)
     modules = live.dashboard._panels.modules  # type: ignore[union-attr]
-    one, two = _ids(live)
-    assert modules.pick.value_for(two) == "1 (empty)"
-    assert modules.pick.value_for(one) == "3 (empty)"
+    assert _picked(live, modules.pick) == ("3 (empty)", "1 (empty)")
     assert "3 (empty)" not in second.updates(picker)
     live.runtime.command("fastcat/1", "plug", {"type": "DB16"}).result(timeout=10)
     live.runtime.advance(100_000).result(timeout=30)
@@ -241,9 +243,7 @@ def test_the_fault_pickers_are_each_page_s_and_inject_sends_the_page_s_fault(
     for uuid, picked in ((table, "module codes (§7.6)"), (fault, "0x02 IOFAULT"),
                          (target, ai8d)):
         assert picked not in second.updates(uuid)
-    one, two = _ids(live)
-    assert control._fault.value_for(one) == "0x02 IOFAULT"
-    assert control._fault.value_for(two) == "0x01 MODULE_CHANGED"
+    assert _picked(live, control._fault) == ("0x02 IOFAULT", "0x01 MODULE_CHANGED")
     injection = _widget(second, "Injection", None)
     second.set(injection, "Inject")
     _wait(lambda: _injected(live))
@@ -275,8 +275,6 @@ def test_the_master_s_cable_picker_is_each_page_s_and_pull_pulls_the_page_s_cabl
     live.runtime.advance(100_000).result(timeout=30)
     _settle(live)
     controls = live.dashboard.line.controls  # type: ignore[union-attr]
-    one, two = _ids(live)
-    assert controls.cable.value_for(two) == "3 cpx -> drive_ec-ecat (pulled)"
-    assert controls.cable.value_for(one) == "2 trscat -> cpx"
+    assert _picked(live, controls.cable) == ("2 trscat -> cpx", "3 cpx -> drive_ec-ecat (pulled)")
     second.set(_widget(second, "Cable plug", None), "Plug")
     _wait(lambda: not any(_cables(live)))
