@@ -29,6 +29,7 @@ from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
 from app.ui.line.cables import pulled_text
+from app.ui.line.rotary_entry import form_actions, model_args
 from app.ui.line.target_actions import TargetActions, Watch, picked, targets
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_pick import ClientPick, send_on
@@ -172,9 +173,10 @@ class LineControls:
             # click in the 3D view, moved every page's form.
             self.pick = ClientPick(server, gui.add_dropdown("Device", tuple(faulty) or ("-",)))
             for device in faulty:
-                shown = {n: a for n, a in (actions.get(device) or {}).items()
-                         if n not in HIDDEN}
                 kind = kinds.get(device, "")
+                # The CPX-E-EC's rotary value typed in hex, as seed 002 Tab. 5 writes it.
+                shown = form_actions(kind, {n: a for n, a in (actions.get(device) or {}).items()
+                                            if n not in HIDDEN})
                 faults = {n: a for n, a in shown.items() if makes_faults(kind, n)}
                 folder = gui.add_folder(device, visible=device == self.pick.default)
                 with folder:
@@ -183,7 +185,7 @@ class LineControls:
                     target = ClientPick(server, gui.add_dropdown(
                         "Target", tuple(targets(device, devices.get(device) or {}))))
                     self.targets[device] = target
-                    apply = self._applier(sender, target)
+                    apply = self._applier(sender, target, kind=kind)
                     form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
                                       apply, current=self._current(device))
                     if instructor.shared:  # an open rig: under the shared Target, as before
@@ -324,12 +326,14 @@ class LineControls:
         return lambda: {target.value_for(c) for c in server.get_clients()} | {target.default}
 
     @staticmethod
-    def _applier(sender: CommandSender, target: Any, confirm: bool = False) -> Any:
+    def _applier(sender: CommandSender, target: Any, confirm: bool = False,
+                 kind: str = "") -> Any:
         """``confirm``: a fault form's, whose Apply is confirmed on the clicking page; the
-        target is the clicking page's pick."""
+        target is the clicking page's pick; ``kind``: the device's, whose form may take a
+        value as its manual writes it (rotary_entry)."""
         def apply(client: viser.ClientHandle | None, name: str, args: dict[str, Any]) -> None:
             where = picked(target, None if client is None else client.client_id)
-            sender.send(client, where, name, args, confirm=confirm)
+            sender.send(client, where, name, model_args(kind, name, args), confirm=confirm)
         return apply
 
     def all_forms(self) -> dict[str, list[ActionForm]]:
