@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from devices.events import Event, EventQueue
+from devices.od import IEC_NAMES, TypeNames
 
 
 class CommandError(ValueError):
@@ -113,6 +114,9 @@ class DeviceModel:
     # True: quiet steps leave this model's snapshot as it was (it shows no counter they move),
     # so a snapshot taken before them still stands (app.rig.Rig.snapshot's ``since``).
     QUIET_SNAPSHOT: ClassVar[bool] = False
+    # The data types of the model's ``od`` in its manual's words (the Objects tab): seed 000's
+    # IEC names unless the manual prints others (the CPX-E-EC's U8 / BYTE[23], seed 002).
+    TYPE_NAMES: ClassVar[TypeNames] = IEC_NAMES
 
     def step(self, now_us: int) -> None:
         """Advance to simulated time ``now_us`` (never backwards)."""

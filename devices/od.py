@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import enum
 import struct
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -38,6 +38,29 @@ _SHORT = {
     DataType.UNSIGNED32: "UDINT", DataType.VISIBLE_STRING: "STRING",
     DataType.OCTET_STRING: "ARRAY OF BYTE",
 }
+
+
+@dataclass(frozen=True)
+class TypeNames:
+    """How one device's manual names the data types of its object table (the Objects tab's
+    Type column): ``names`` covers every DataType, so a table never mixes two manuals' words.
+    """
+
+    names: Mapping[DataType, str]
+    # An OCTET_STRING of a fixed size (a non-empty default: the size ``bit_length`` and the
+    # SDO information service give it), as ``"BYTE[{size}]"``: seed 002 prints "BYTE[23]"
+    # for the 0x10F3 messages. None: ``names`` for any size.
+    sized_octets: str | None = None
+
+    def of(self, entry: OdEntry) -> str:
+        if entry.dtype is DataType.OCTET_STRING and self.sized_octets and entry.default:
+            return self.sized_octets.format(size=len(bytes(entry.default)))
+        return self.names[entry.dtype]
+
+
+# Seed 000's words (§6: USINT, UINT, UDINT, BOOL ...), the IEC 61131 names: a device model
+# whose manual prints others has a table of its own (DeviceModel.TYPE_NAMES).
+IEC_NAMES = TypeNames(_SHORT)
 
 # (struct format, min, max) of the numeric types.
 _NUMERIC: dict[DataType, tuple[str, int, int]] = {

@@ -64,7 +64,7 @@ from devices.esm import AlStatusView
 from devices.ethercat import AlState, describe_al_status_code
 from devices.events import EmergencySent
 from devices.leds import LedPattern
-from devices.od import OdEntry, SdoAbort
+from devices.od import IEC_NAMES, OdEntry, SdoAbort, TypeNames
 from devices.servo.drive import ServoDrive
 
 logger = logging.getLogger(__name__)
@@ -88,6 +88,9 @@ OFF_LED = LedPattern.OFF
 class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
     KIND = "servo_ecat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+    # Seed 004 §5.5's TwinCAT Process Data list prints the IEC names (604100 Status Word UINT,
+    # 606400 Position Actual Value DINT), seed 000's words (docs/ethercat-coe.md).
+    TYPE_NAMES: ClassVar[TypeNames] = IEC_NAMES
 
     def __init__(self, device_id: str, drive: ServoDrive, rng: random.Random | None = None,
                  box_name: str = BOX_NAME, station_address: int = 1001,

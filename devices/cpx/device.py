@@ -26,7 +26,7 @@ from devices.cpx.indicators import wanted_leds
 from devices.cpx.leds import LedBank
 from devices.cpx.module_checks import ModuleChecks
 from devices.cpx.modules import CpxModule, ModuleFault, Monitors, held_off
-from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, build_od
+from devices.cpx.objects import SYNC_ERROR_COUNTER_LIMIT, TYPE_NAMES, build_od
 from devices.cpx.stillness import StillStepping
 from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
@@ -35,7 +35,7 @@ from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState, sync_error_reached
 from devices.events import LogLine
-from devices.od import ObjectDictionary
+from devices.od import ObjectDictionary, TypeNames
 
 SUPPLY_NOMINAL_V = 24.0  # Tab. 29: U_EL/SEN 24 V DC +- 25 %
 SUPPLY_MIN_V = 18.0  # ... below this: undervoltage (FieldRig uses the same band for U_OUT)
@@ -56,6 +56,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
     KIND = "cpx_e_ec"
     QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+    TYPE_NAMES: ClassVar[TypeNames] = TYPE_NAMES  # seed 002 Tab. 27's U8, U32, BYTE[23] ...
 
     def __init__(self, device_id: str, rng: random.Random,
                  modules: Sequence[str | tuple[str, Mapping[str, Any]]] = (),

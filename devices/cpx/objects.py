@@ -17,7 +17,15 @@ from devices.cpx.catalog import ModuleType
 from devices.cpx.history import FIRST_SUB, INDEX, MAX_MESSAGES, DiagHistory
 from devices.cpx.messages import MESSAGE_BYTES
 from devices.cpx.modules import ANALOG_RANGES, CpxModule
-from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
+from devices.od import (
+    AbortCode,
+    Access,
+    DataType,
+    ObjectDictionary,
+    OdEntry,
+    SdoAbort,
+    TypeNames,
+)
 from devices.pdo_assign import PdoAssignment
 
 DEVICE_TYPE = 0x0456_1389  # Tab. 27 (0x1389 = 5001, MDP)
@@ -35,6 +43,15 @@ DIAG_PDO = 0x1A40
 NEW_MESSAGE_MAPPING = 0x10F3_0401  # Tab. 27 prints "0x10F3:00,1": read as 0x10F3:04, 1 bit
 BUILD_HASH = "f1e1d2a9"  # 0x5001, FieldRig
 FAILSAFE_MODES = (0, 1, 2)  # 0x2400:7: reset outputs / hold last state / failsafe values
+
+# Tab. 14 / Tab. 27's data types: U8, U16, U32, BOOL, STRING, "BYTE[23]" for a 0x10F3 message
+# and "ARRAY OF BYTE" for a byte array of no fixed size (0x22xx:7). The seed prints no signed
+# type; the analog channels (INTEGER16) follow its U8 / U16 pattern (docs/cpx-e-ec.md 42).
+TYPE_NAMES = TypeNames({
+    DataType.BOOLEAN: "BOOL", DataType.INTEGER8: "I8", DataType.INTEGER16: "I16",
+    DataType.INTEGER32: "I32", DataType.UNSIGNED8: "U8", DataType.UNSIGNED16: "U16",
+    DataType.UNSIGNED32: "U32", DataType.VISIBLE_STRING: "STRING",
+    DataType.OCTET_STRING: "ARRAY OF BYTE"}, sized_octets="BYTE[{size}]")
 
 
 class CpxObjects(Protocol):

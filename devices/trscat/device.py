@@ -19,7 +19,7 @@ from devices.device import Action, DeviceModel
 from devices.esm import AlStatusView, CoeMailbox
 from devices.ethercat import AlState
 from devices.leds import LedBank
-from devices.od import AbortCode, ObjectDictionary, SdoAbort
+from devices.od import AbortCode, ObjectDictionary, SdoAbort, TypeNames
 from devices.sync_managers import SmSetup
 from devices.trscat.alarms import OUTPUTS_STOPPED_BY, AlarmsMixin, FaultKey, TrsBus
 from devices.trscat.catalog import (
@@ -38,7 +38,7 @@ from devices.trscat.esm import Esm
 from devices.trscat.indicators import LedInputs
 from devices.trscat.io import SlotIo
 from devices.trscat.module_checks import ModuleChecks
-from devices.trscat.objects import build_od, refuse_in_state
+from devices.trscat.objects import TYPE_NAMES, build_od, refuse_in_state
 from devices.trscat.pdo import outputs_index
 from devices.trscat.sm_checks import SmChecksMixin, SmKey
 from devices.trscat.spans import SpansMixin
@@ -55,6 +55,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
     KIND = "trscat"
     QUIET_SNAPSHOT = True  # tests/hardening/test_revision.py
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
+    TYPE_NAMES: ClassVar[TypeNames] = TYPE_NAMES  # seed 001 §9.3's U8, U16, U32, Bool
 
     def __init__(self, device_id: str, rng: random.Random, expansions: Sequence[str] = (),
                  sync_mode: str = "dc", configured: Sequence[str] | None = None,

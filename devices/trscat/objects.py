@@ -13,7 +13,15 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
-from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
+from devices.od import (
+    AbortCode,
+    Access,
+    DataType,
+    ObjectDictionary,
+    OdEntry,
+    SdoAbort,
+    TypeNames,
+)
 from devices.trscat.catalog import MAX_SLOTS, ModuleKind
 from devices.trscat.diagnostics import (
     FIRST_MESSAGE_SUB,
@@ -42,6 +50,15 @@ REVISION = 0x0001_0000  # revision 01.00
 U8, U16, U32, BOOL = (DataType.UNSIGNED8, DataType.UNSIGNED16, DataType.UNSIGNED32,
                       DataType.BOOLEAN)
 RO, RW, RW_PREOP = Access.RO, Access.RW, Access.RW_PREOP
+
+# §9.3's Tipo column: U8, U16, U32, Bool. The seed prints no signed, string or byte-array type;
+# FieldRig names those in the same pattern (I16 the TRS-AN-E channels, STRING the identity,
+# ARRAY OF BYTE the 0x10F3 messages of no fixed size: docs/trscat.md "Objects tab").
+TYPE_NAMES = TypeNames({
+    DataType.BOOLEAN: "Bool", DataType.INTEGER8: "I8", DataType.INTEGER16: "I16",
+    DataType.INTEGER32: "I32", DataType.UNSIGNED8: "U8", DataType.UNSIGNED16: "U16",
+    DataType.UNSIGNED32: "U32", DataType.VISIBLE_STRING: "STRING",
+    DataType.OCTET_STRING: "ARRAY OF BYTE"})
 
 
 class TrsObjects(Protocol):

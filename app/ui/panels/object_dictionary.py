@@ -32,7 +32,7 @@ from app.ui.panels.widgets import on_button
 from app.ui.style import esc
 from devices.device import CommandError
 from devices.events import fmt_bytes
-from devices.od import OdEntry, SdoAbort
+from devices.od import IEC_NAMES, OdEntry, SdoAbort
 
 logger = logging.getLogger(__name__)
 
@@ -52,6 +52,13 @@ class OdRow:
     access: str
     value: Any
     said: str = ""  # the model's words for the value (OdEntry.explain), shown instead of it
+    # The type as the device's manual prints it (DeviceModel.TYPE_NAMES: "U32" for the
+    # CPX-E-EC); ``dtype`` stays seed 000's name, which the value's formatting keys on.
+    type_name: str = ""
+
+    @property
+    def shown_type(self) -> str:
+        return self.type_name or self.dtype
 
     @property
     def address(self) -> str:
@@ -65,13 +72,15 @@ def read_rows(device: Any) -> list[OdRow]:
     rows: list[OdRow] = []
     if od is None:
         return rows
+    names = getattr(device, "TYPE_NAMES", IEC_NAMES)
     for e in od:
         try:
             value = od.peek(e.index, e.sub)
         except Exception as exc:  # a getter failing must not hide the rest of the table
             value = f"<{type(exc).__name__}>"
         said = e.explain(value) if e.explain is not None and not isinstance(value, str) else ""
-        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, access_text(e), value, said))
+        rows.append(OdRow(e.index, e.sub, e.name, e.dtype.short, access_text(e), value, said,
+                          names.of(e)))
     return rows
 
 
@@ -138,7 +147,7 @@ def matches(row: OdRow, needle: str) -> bool:
 def render(rows: Sequence[OdRow], needle: str, empty: str = NO_OD) -> str:
     shown = [r for r in rows if matches(r, needle.strip())]
     body = "".join(
-        f"<tr><td>{esc(r.address)}</td><td>{esc(r.name)}</td><td>{esc(r.dtype)}</td>"
+        f"<tr><td>{esc(r.address)}</td><td>{esc(r.name)}</td><td>{esc(r.shown_type)}</td>"
         f"<td>{esc(r.access)}</td><td>{esc(r.said or format_value(r.value, r.dtype))}</td></tr>"
         for r in shown[:MAX_SHOWN])
     more = ""
