@@ -26,6 +26,7 @@ from app.ui.panels.per_client import instructor_for, split_instructor
 from app.ui.panels.state import injected_text
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
+from devices.cpx.codes import STATUS_BITS
 from devices.cpx.esm import AL_STATUS_ID_LOADED
 from devices.ethercat import al_status_name, describe_al_status_code
 
@@ -247,6 +248,13 @@ def held_off_note(module: Mapping[str, Any]) -> str:
     return f'<br><span class="fr-line-bad">{esc("held off: " + "; ".join(notes))}</span>'
 
 
+def status_register_text(value: int) -> str:
+    """0x1002 in seed 002 Tab. 23's words: "0x24 Error at input, Short circuit/overload"
+    (bits 0-3 the module type, 4-7 the error type, bit 0 first)."""
+    words = [STATUS_BITS[bit] for bit in sorted(STATUS_BITS) if value >> bit & 1]
+    return f"0x{value:02X} {', '.join(words) or 'no error'}"
+
+
 def cpx_html(snap: Mapping[str, Any]) -> str:
     states = snap.get("led_states") or {}
     switches = snap.get("switches") or {}
@@ -259,7 +267,9 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         ("Explicit Device ID", id_text(snap)),
         ("Supply", esc(f"U_EL/SEN {supply.get('el_sen_v', '-')} V, "
                        f"U_OUT {supply.get('out_v', '-')} V")),
-        ("Error register", esc(f"0x{int(diagnosis.get('error_register', 0)):02X}")),
+        ("Error register 0x1001", esc(f"0x{int(diagnosis.get('error_register', 0)):02X}")),
+        # Tab. 20 byte 3: what module type and error the diagnosis is about, next to 0x1001.
+        ("Status bits 0x1002", esc(status_register_text(int(diagnosis.get("status_bits", 0))))),
         ("Injected", injected_text(snap.get("injected") or []))]
     names = [(n, str((states.get(n) or {}).get("colour", c)),
               str((states.get(n) or {}).get("pattern", "off"))) for n, c in CPX_COLOURS.items()]
