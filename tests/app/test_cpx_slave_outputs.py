@@ -73,3 +73,14 @@ def test_u_out_too_low_marks_every_driven_output(rig: Any) -> None:
     for _ in range(500):
         rig.step()
     assert outputs_cell(rig, "2") == "01010000 held off: 1,3 (U_OUT low)"
+
+
+def test_analog_channels_read_as_numbers_even_at_zero(rig: Any) -> None:
+    """The table wrote every module through ``bits``: the 4AI-U-I's four inputs and the
+    4AO-U-I's four outputs at 0 read "0000", the way four digital lines read, so a trainee
+    took the analog modules for switched channels. An analog module (one with measuring
+    ranges, seed 002 §2.4) shows one number per channel, whatever the values."""
+    head, rows = io_table(slave_html("cpx", rig.devices["cpx"].snapshot()))
+    assert rows["3"][head.index("Inputs")] == "0 0 0 0"
+    assert rows["4"][head.index("PLC out")] == "0 0 0 0"
+    assert rows["1"][head.index("Inputs")] == "00000000 00000000"

@@ -26,6 +26,7 @@ from app.ui.panels.per_client import instructor_for, split_instructor
 from app.ui.panels.state import injected_text
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
+from devices.cpx.catalog import IO_MODULES, ModuleKind
 from devices.cpx.codes import STATUS_BITS
 from devices.cpx.esm import AL_STATUS_ID_LOADED
 from devices.ethercat import al_status_name, describe_al_status_code
@@ -54,6 +55,17 @@ def slot_values(slot: Mapping[str, Any], key: str) -> str:
     if "lines" in slot:
         return bits(values)
     return " ".join(str(v) for v in values) or "-"
+
+
+def cpx_values(module: Mapping[str, Any], key: str) -> str:
+    """A CPX-E-EC module's ``inputs`` / ``outputs``: bits for a digital module, one number per
+    channel for the others (analog words, the counter's values, seed 002 Tab. 9), which
+    ``bits`` would write as lines at 0 and 1 ("0000" for a 4AI-U-I at rest)."""
+    values = module.get(key) or []
+    mtype = IO_MODULES.get(str(module.get("type")))
+    if mtype is None or mtype.kind is ModuleKind.DIGITAL:
+        return bits(values)
+    return " ".join(f"{v:g}" if isinstance(v, float) else str(v) for v in values) or "-"
 
 
 def esm_badge(snap: Mapping[str, Any]) -> str:
@@ -275,8 +287,8 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
               str((states.get(n) or {}).get("pattern", "off"))) for n, c in CPX_COLOURS.items()]
     modules = "".join(
         f"<tr><td>{esc(m.get('module'))}</td><td>{esc(m.get('short', m.get('type')))}</td>"
-        f"<td>{esc(bits(m.get('inputs') or []))}</td>"
-        f"<td>{esc(bits(m.get('outputs') or []))}{held_off_note(m)}</td>"
+        f"<td>{esc(cpx_values(m, 'inputs'))}</td>"
+        f"<td>{esc(cpx_values(m, 'outputs'))}{held_off_note(m)}</td>"
         f"<td class=\"fr-line-bad\">{fault_cell(m)}</td></tr>"
         for m in snap.get("modules") or [])
     # "PLC out": the image the PLC wrote (RxPDO), held-off channels noted under it; a longer
