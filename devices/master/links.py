@@ -95,6 +95,9 @@ class SlaveLink:
     believed: AlState | None = None  # the state the master last confirmed
     pending: AlState | None = None  # a requested transition not checked yet
     pending_from: AlState = AlState.INIT
+    # RANK of the lower of pending_from and pending: a slave read below it without the error
+    # flag has left on its own while the request was under way (startup._left_pending).
+    pending_floor: int = 0
     requested: AlState | None = None
     requested_at_us: int = 0
     next_try_us: int = 0

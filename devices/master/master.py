@@ -337,6 +337,11 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                     idle = waited < self.check_delay_us or (
                         state is not pending and waited < self.state_timeout_us
                         and not slave.al_status & AL_STATUS_ERROR_FLAG)
+                    # ... unless the slave left on its own (startup._left_pending); the
+                    # floor is 0 for INIT -> PREOP, the long wait of a FastCAT's scan
+                    if idle and link.pending_floor and RANK.get(state, 0) < link.pending_floor \
+                            and not slave.al_status & AL_STATUS_ERROR_FLAG:
+                        idle = False
                 if idle:
                     served += 1
                     if quiet and state is not watched[p]:  # type: ignore[index]

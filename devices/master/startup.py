@@ -67,7 +67,7 @@ class StartupMixin:
                                      address=slave.station_address, code=code,
                                      register=register, data=data))
             self._log(link, "emergency", code=code, register=register, data=data)
-        if link.pending is not None:
+        if link.pending is not None and not self._left_pending(link):
             self._check(link)
             return
         state, target = slave.al_state, self._target_of(link)
@@ -174,7 +174,9 @@ class StartupMixin:
         if link.dc and target in (AlState.PREOP, AlState.SAFEOP) and \
                 RANK.get(link.slave.al_state, 0) < RANK[target]:
             self._write_dc(link)
-        link.pending, link.pending_from = target, link.slave.al_state
+        current = link.slave.al_state
+        link.pending, link.pending_from = target, current
+        link.pending_floor = min(RANK.get(current, 0), RANK[target])
         link.requested, link.requested_at_us = target, self.now_us
         link.slave.request_state(target)
 
@@ -185,6 +187,21 @@ class StartupMixin:
         if configure is not None:
             configure(activation=DC_SYNC0_ON, sync0_cycle_ns=self.cycle_us * 1000,
                       start_time_ns=self.now_us * 1000 + DC_START_DELAY_NS)
+
+    def _left_pending(self, link: SlaveLink) -> bool:
+        """The slave is below both the state it was asked from and the one requested, and
+        refused nothing (no error flag): no transition goes that way, it left on its own (the
+        FastCAT's CNF drops it to INIT, seed 000 §2). The request is dropped and _serve reads
+        an abnormal state change from the state last read (seed 003: "the status change of
+        slaves"), and asks for the way back at once, instead of waiting out the state timeout
+        for a state the slave is no longer heading to. True: the request was dropped."""
+        slave = link.slave
+        if RANK.get(slave.al_state, 0) >= link.pending_floor \
+                or slave.al_status & AL_STATUS_ERROR_FLAG:
+            return False
+        link.pending = None
+        link.believed = link.seen if link.seen is not None else link.pending_from
+        return True
 
     def _check(self, link: SlaveLink) -> None:
         slave, now = link.slave, self.now_us

@@ -13,7 +13,8 @@ the parts that would change nothing (docs/ethercat-master.md "Still steps"):
   do nothing (the test is inlined in ``EtherCatMaster.step``, the hot path); nor would it for a
   slave with no emergency whose request is still under way (``_check``: before the check delay,
   or not yet in the requested state, without the AL status error flag and before the state
-  timeout, as while the FastCAT scans its internal bus at power-on). Such a slave leaves the
+  timeout, as while the FastCAT scans its internal bus at power-on), unless it is below both
+  states of the request (``startup._left_pending``: it left on its own). Such a slave leaves the
   cycle quiet if its state is the watched one;
 - watching the slaves' states (``_watch_states``) when every slave is present or absent and in
   the state it was the last time they were watched, and nothing reset what the watch keeps
