@@ -18,6 +18,9 @@ class PdoEntry:
     sub: int
     bits: int
     name: str
+    # ETG.2000 DataType name (SII: its code); "" for a gap or for a device whose configurator
+    # types entries unsigned by bit length (the FastCAT, seed 000 §4)
+    data_type: str = ""
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ from app.ethercat_wire.description import Pdo, SlaveDescription
 
 DEFAULT_OUT = Path("static/esi")
 BOOT_LIMIT_US = 20_000_000  # a FastCAT scans its modules for seconds after power-up
-# ETG data type names by bit length (entries of the PDOs; the description has no sign)
+# ETG data type names by bit length, for an entry the description gives no type of its own
 DATA_TYPES = {1: "BOOL", 8: "USINT", 16: "UINT", 32: "UDINT", 64: "ULINT"}
 SM_NAMES = {sii.SM_TYPE_MBX_OUT: "MBoxOut", sii.SM_TYPE_MBX_IN: "MBoxIn",
             sii.SM_TYPE_OUTPUTS: "Outputs", sii.SM_TYPE_INPUTS: "Inputs"}
@@ -64,7 +64,7 @@ def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int | None, fixed: bool) ->
         _text(entry, "BitLen", str(e.bits))
         if e.index:
             _text(entry, "Name", e.name)
-            _text(entry, "DataType", DATA_TYPES.get(e.bits, f"BIT{e.bits}"))
+            _text(entry, "DataType", e.data_type or DATA_TYPES.get(e.bits, f"BIT{e.bits}"))
 
 
 def _sm_number(desc: SlaveDescription, kind: int, default: int) -> int:

@@ -54,8 +54,15 @@ def sm_type(sm: SyncManager) -> int:
     return SM_TYPE_OUTPUTS if writes else SM_TYPE_INPUTS
 
 
-def data_type(bits: int) -> int:
-    """ETG data type code for an entry of `bits` bits (unsigned: the description has no sign)."""
+# ETG.1000.6 data type codes of the ETG.2000 names a description gives
+DATA_TYPE_CODES = {"BOOL": 0x01, "SINT": 0x02, "INT": 0x03, "DINT": 0x04, "USINT": 0x05,
+                   "UINT": 0x06, "UDINT": 0x07, "ULINT": 0x1B}
+
+
+def data_type(bits: int, name: str = "") -> int:
+    """ETG data type code of an entry: its type's (``name``), else unsigned by its length."""
+    if name in DATA_TYPE_CODES:
+        return DATA_TYPE_CODES[name]
     return {1: 0x01, 8: 0x05, 16: 0x06, 32: 0x07, 64: 0x1B}.get(bits, 0x30 + bits - 1
                                                                    if bits < 8 else 0x00)
 
@@ -94,7 +101,7 @@ def _pdo_category(pdos: tuple[Pdo, ...], sm_index: int, strings: _Strings) -> by
                            strings.index(pdo.name), 0)
         for e in pdo.entries:
             out += struct.pack("<HBBBBH", e.index, e.sub, strings.index(e.name),
-                               data_type(e.bits) if e.index else 0, e.bits, 0)
+                               data_type(e.bits, e.data_type) if e.index else 0, e.bits, 0)
     return bytes(out)
 
 

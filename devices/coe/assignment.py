@@ -68,6 +68,25 @@ def pdo_name(index: int) -> str:
     return f"{kind} {(index & 0xFF) + 1}"
 
 
+# The mapped objects' names in the drive's .xml: those ch. 5's TwinCAT screens print (PDO
+# Content of 0x1A02: "Status Word", "Position Actual Value"; the tree's Velocity Mode module:
+# "Control Word", "Target Velocity", "Actual Velocity"), the others as ch. 5 "PDO" lists them.
+# The dictionary keeps its DS402 names (SDO Information shows those).
+ESI_ENTRY_NAMES: dict[tuple[int, int], str] = {
+    (0x6040, 0): "Control Word", (0x6041, 0): "Status Word",
+    (0x60C1, 1): "Set-Point Position", (0x6060, 0): "Modes of Operation",
+    (0x6061, 0): "Modes of Operation Display", (0x607A, 0): "Target Position",
+    (0x6064, 0): "Position Actual Value", (0x60FF, 0): "Target Velocity",
+    (0x606C, 0): "Actual Velocity",
+}
+
+
+def pdo_entry_name(index: int, sub: int, name: str) -> str:
+    """The .xml name of mapped object ``index:sub`` (``name``: its dictionary name, kept for an
+    object ch. 5 maps in no default PDO)."""
+    return ESI_ENTRY_NAMES.get((index, sub), name)
+
+
 def default_pdos(receive: bool) -> list[Pdo]:
     """The four PDOs of one direction with the ch. 5 contents (no COB-IDs on EtherCAT)."""
     maps = DEFAULT_RPDO_MAPS if receive else DEFAULT_TPDO_MAPS

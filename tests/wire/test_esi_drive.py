@@ -8,11 +8,12 @@ TwinCAT Process Data screen names 0x1A02 "TxPDO 3" and 0x1600 "RxPDO 1".
 
 from __future__ import annotations
 
+import struct
 import xml.etree.ElementTree as ET
 
 import pytest
 
-from app.ethercat_wire import esi
+from app.ethercat_wire import esi, sii
 from app.rig_config import build_rig, parse_rig_spec
 
 DRIVE_ONLY = """
@@ -103,3 +104,51 @@ def test_each_module_assigns_its_slots_pdos(root, device, ident, rx, tx, label):
             for p in (*device.findall("RxPdo"), *device.findall("TxPdo"))}
     for pdo in (*module.findall("RxPdo"), *module.findall("TxPdo")):
         assert [ET.tostring(e) for e in pdo.findall("Entry")] == same[pdo.findtext("Index")]
+
+
+def entry_rows(pdo: ET.Element) -> list[tuple[str | None, str | None, str | None]]:
+    return [(e.findtext("Index"), e.findtext("Name"), e.findtext("DataType"))
+            for e in pdo.findall("Entry")]
+
+
+def test_default_tx_pdo_entries_named_and_typed_as_the_process_data_screen(device):
+    """Ch. 5 "Cambio configurazione PDO con Twincat", PDO Content (0x1A02): "604100 Status Word
+    UINT", "606400 Position Actual Value DINT": the .xml's names and types, signed included."""
+    (pdo,) = [p for p in device.findall("TxPdo") if p.findtext("Index") == "#x1A02"]
+    assert entry_rows(pdo) == [("#x6041", "Status Word", "UINT"),
+                               ("#x6064", "Position Actual Value", "DINT")]
+
+
+def test_velocity_module_entries_named_as_the_twincat_tree(root):
+    """Ch. 5 "Dispositivi I/O" tree: Module 1 (Velocity Mode) > Velocity Inputs: Status Word,
+    Actual Velocity; Velocity Outputs: Control Word, Target Velocity (0x606C / 0x60FF are
+    INTEGER32: DINT)."""
+    (module,) = [m for m in root.findall("Descriptions/Modules/Module")
+                 if m.find("Type").get("ModuleIdent") == "#x00000003"]
+    assert entry_rows(module.find("TxPdo")) == [("#x6041", "Status Word", "UINT"),
+                                                ("#x606C", "Actual Velocity", "DINT")]
+    assert entry_rows(module.find("RxPdo")) == [("#x6040", "Control Word", "UINT"),
+                                                ("#x60FF", "Target Velocity", "DINT")]
+
+
+def test_other_entries_named_as_the_ch5_pdo_list(device):
+    """Ch. 5 "PDO": Set-Point Position (0x60C1:1), Modes of Operation (0x6060), Target Position
+    (0x607A), Modes of Operation Display (0x6061); 0x6060 / 0x6061 are INTEGER8: SINT."""
+    rows = {p.findtext("Index"): entry_rows(p)
+            for p in (*device.findall("RxPdo"), *device.findall("TxPdo"))}
+    assert rows["#x1600"][1] == ("#x60C1", "Set-Point Position", "DINT")
+    assert rows["#x1601"][1] == ("#x6060", "Modes of Operation", "SINT")
+    assert rows["#x1602"][1] == ("#x607A", "Target Position", "DINT")
+    assert rows["#x1A01"][1] == ("#x6061", "Modes of Operation Display", "SINT")
+
+
+def test_sii_pdo_entries_carry_the_same_names_and_types():
+    """The SII TXPDO category of the drive: 0x6064 with ETG data type 0x0004 (DINT) and the
+    .xml's entry name, as a master that reads the SII (no CoE mapping) shows it."""
+    (desc,) = esi.rig_descriptions(build_rig(parse_rig_spec(DRIVE_ONLY)))
+    image = sii.build(desc)
+    data = sii.categories(image)[sii.CAT_TXPDO][0]
+    names = sii.strings(image)
+    entries = [struct.unpack_from("<HBBBBH", data, 8 + 8 * n) for n in range(data[2])]
+    assert [(i, names[name - 1], dtype) for i, _, name, dtype, _, _ in entries] == [
+        (0x6041, "Status Word", 0x06), (0x6064, "Position Actual Value", 0x04)]

@@ -233,6 +233,18 @@ class Face:
         otherwise in its PDOs."""
         return entry.name
 
+    def pdo_entry_type(self, entry: PdoEntry) -> str:
+        """A mapped entry's ESI DataType (SII: its code): its object's type, read with the
+        mapping; "" types it unsigned by its bit length."""
+        return entry.data_type
+
+    def named_pdo(self, pdo: Pdo) -> Pdo:
+        """A PDO as the SII / ESI show it: the face's names, types and Mandatory flag."""
+        return replace(pdo, name=self.pdo_name(pdo), mandatory=self.pdo_mandatory(pdo),
+                       entries=tuple(replace(e, name=self.pdo_entry_name(e),
+                                             data_type=self.pdo_entry_type(e))
+                                     for e in pdo.entries))
+
     def pdo_mandatory(self, pdo: Pdo) -> bool:
         """Whether the ESI marks the PDO Mandatory (a configurator cannot unassign it)."""
         return False
@@ -243,9 +255,7 @@ class Face:
         slot_name, modules = self.slot(model)
 
         def named(pdos: tuple[Pdo, ...]) -> tuple[Pdo, ...]:
-            return tuple(replace(p, name=self.pdo_name(p), mandatory=self.pdo_mandatory(p),
-                                 entries=tuple(replace(e, name=self.pdo_entry_name(e))
-                                               for e in p.entries)) for p in pdos)
+            return tuple(self.named_pdo(p) for p in pdos)
 
         return SlaveDescription(
             device_id=model.device_id, name=self.name, vendor_id=vendor, product_code=product,
@@ -254,7 +264,8 @@ class Face:
             coe_details=self.coe_details,
             sync_managers=sync_managers(image.byte_size(rx), image.byte_size(tx)),
             rx_pdos=named(rx), tx_pdos=named(tx), dc_supported=self.dc_supported,
-            pdos_fixed=self.mapping_fixed, spare_rx_pdos=named(self.spare_pdos(model, True)),
+            pdos_fixed=self.mapping_fixed,
+            spare_rx_pdos=named(self.spare_pdos(model, True)),
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
             slot_modules=modules, station_alias=self.station_alias(model))
 

@@ -14,7 +14,7 @@ import logging
 from dataclasses import replace
 from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo, SlotModule
+from app.ethercat_wire.description import Pdo, PdoEntry, SlotModule
 from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import (
     COE_PDO_ASSIGN,
@@ -59,6 +59,9 @@ class DriveFace(Face):
     def pdo_name(self, pdo: Pdo) -> str:
         return assignment.pdo_name(pdo.index)
 
+    def pdo_entry_name(self, entry: PdoEntry) -> str:
+        return assignment.pdo_entry_name(entry.index, entry.sub, entry.name)
+
     def object_name(self, index: int, sub0_name: str) -> str:
         """The drive's dictionary is the CANopen one (ch. 5: "l'unica differenza ... 0x603F"),
         whose records name sub 0 as a count: the object's name is the EDS's."""
@@ -72,8 +75,10 @@ class DriveFace(Face):
         modules = []
         for s in assignment.XML_SLOTS:
             label = s.module.removesuffix(" Mode")
-            rx = replace(image.read_pdo(od.peek, od.entry, s.rx), name=f"{label} Outputs")
-            tx = replace(image.read_pdo(od.peek, od.entry, s.tx), name=f"{label} Inputs")
+            rx = replace(self.named_pdo(image.read_pdo(od.peek, od.entry, s.rx)),
+                         name=f"{label} Outputs")
+            tx = replace(self.named_pdo(image.read_pdo(od.peek, od.entry, s.tx)),
+                         name=f"{label} Inputs")
             modules.append(SlotModule(s.mode, s.module, s.description, (rx,), (tx,),
                                       default=s.name == assignment.DEFAULT_SLOT))
         return SLOT_NAME, tuple(modules)

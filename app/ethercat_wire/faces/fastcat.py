@@ -30,6 +30,10 @@ class FastCatFace(Face):
         """§4's screen: 0x6420:1 is "Analog inp 1" in the PDO, "Analog input 1" in §6.25."""
         return module_od.pdo_entry_name(entry.index, entry.sub, entry.name)
 
+    def pdo_entry_type(self, entry: PdoEntry) -> str:
+        """Unsigned by bit length: §4's screen types 0x6420:1, an INT 16 of §6.25, "UINT"."""
+        return ""
+
     def pdo_mandatory(self, pdo: Pdo) -> bool:
         """§4's screen ticks Mandatory for 0x1AFF; §5 has 0x16FF / 0x1AFF always present."""
         return pdo.index in (objects.COUPLER_RXPDO, objects.COUPLER_TXPDO)

@@ -33,12 +33,19 @@ def assigned(peek: Peek, assign_index: int) -> list[int]:
 
 
 def read_pdo(peek: Peek, lookup: Lookup, pdo_index: int) -> Pdo:
-    """One PDO as its mapping object says, with the mapped objects' names (gaps unnamed)."""
+    """One PDO as its mapping object says, with the mapped objects' names and types (gaps
+    unnamed, untyped)."""
     entries = []
     for sub in range(1, int(peek(pdo_index, 0)) + 1):
         index, e_sub, bits = split_entry(int(peek(pdo_index, sub)))
-        name = lookup(index, e_sub).name if index else ""
-        entries.append(PdoEntry(index, e_sub, bits, name))
+        if not index:
+            entries.append(PdoEntry(0, e_sub, bits, ""))
+            continue
+        obj = lookup(index, e_sub)
+        # The object's own type (signed where it is), as an ESI names it; a mapping shorter
+        # than the type has no ETG name of its own and is typed by its length
+        data_type = obj.dtype.short if bits == obj.bit_length else ""
+        entries.append(PdoEntry(index, e_sub, bits, obj.name, data_type))
     return Pdo(pdo_index, str(lookup(pdo_index, 0).name), tuple(entries))
 
 
