@@ -71,6 +71,9 @@ class SlaveDescription:
     rx_pdos: tuple[Pdo, ...]
     tx_pdos: tuple[Pdo, ...]
     dc_supported: bool
+    # The slave runs DC-synchronous unless the master says otherwise: the ESI lists that OpMode
+    # first, the one a configurator selects by default (the TRS-CAT, seed 001 §9.1.1)
+    dc_default: bool = False
     fmmu_count: int = 3
     # Configured station alias (SII word 4, loaded into 0x0012): the CPX-E-EC's Explicit
     # Device ID in force (seed 002 Tab. 5), None at its switch 0 (the stored alias, 0 in a

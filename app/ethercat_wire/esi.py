@@ -104,8 +104,10 @@ def device_element(desc: SlaveDescription) -> ET.Element:
                                    for name, bit in COE_FLAGS})
     if desc.dc_supported:
         dc = ET.SubElement(dev, "Dc")
-        for name, desc_text, assign in (("FreeRun", "FreeRun/SM-Synchron", 0),
-                                        ("DC", "DC-Synchron", 0x0300)):
+        modes = [("FreeRun", "FreeRun/SM-Synchron", 0), ("DC", "DC-Synchron", 0x0300)]
+        if desc.dc_default:  # the first OpMode is the one a configurator selects
+            modes.reverse()
+        for name, desc_text, assign in modes:
             mode = ET.SubElement(dc, "OpMode")
             _text(mode, "Name", name)
             _text(mode, "Desc", desc_text)

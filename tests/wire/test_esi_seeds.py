@@ -57,6 +57,15 @@ def test_trscat_sync_managers_and_fmmus_as_section_9(line):
     assert [f.text for f in dev.findall("Fmmu")] == ["Outputs", "Inputs", "MBoxState"]
 
 
+def test_trscat_lists_dc_sync_first_its_default_mode(line):
+    """§9.1.1: "I modi di sincronizzazione supportati sono il DC-SYNC e il FREE-RUN" and DC-SYNC
+    "è quella di default", register 0x0980 = 0x0300. A configurator takes the first OpMode of
+    the ESI as the slave's default."""
+    modes = [(m.findtext("Name"), m.findtext("AssignActivate"))
+             for m in device(line["TRS-CAT"]).findall("Dc/OpMode")]
+    assert modes == [("DC", "#x0300"), ("FreeRun", "#x0000")]
+
+
 @pytest.mark.parametrize("name", ["CPX-E-EC", "SelemaDriveECAT"])
 def test_free_run_first_where_the_seed_names_no_default(line, name):
     """Seed 002 §2.1.4 says only that DC is supported; seed 004 ch. 5 recommends SM-Synchron,

@@ -108,6 +108,7 @@ class Face:
     group: ClassVar[str]
     order_code: ClassVar[str]
     dc_supported: ClassVar[bool] = False
+    dc_default: ClassVar[bool] = False  # DC-Synchron the slave's default mode (ESI order)
     coe_details: ClassVar[int] = COE_SDO | COE_SDO_INFO
     identity_defaults: ClassVar[tuple[int, int, int]]  # vendor, product, revision (no OD yet)
 
@@ -264,7 +265,7 @@ class Face:
             coe_details=self.coe_details,
             sync_managers=sync_managers(image.byte_size(rx), image.byte_size(tx)),
             rx_pdos=named(rx), tx_pdos=named(tx), dc_supported=self.dc_supported,
-            pdos_fixed=self.mapping_fixed,
+            dc_default=self.dc_default, pdos_fixed=self.mapping_fixed,
             spare_rx_pdos=named(self.spare_pdos(model, True)),
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
             slot_modules=modules, station_alias=self.station_alias(model))

@@ -28,6 +28,7 @@ class TrsCatFace(Face):
     group = "TRS-CAT"
     order_code = "TRS-CAT"
     dc_supported = True  # §9.1.1 DC-SYNC on SYNC0
+    dc_default = True  # §9.1.1: DC-SYNC "è quella di default" (0x0980 = 0x0300)
     # §9 / §9.3: "SDO information service con accesso completo e la possibilità di segmentare
     # i frame": complete access announced (SOEM's config_map then reads the mapping with it;
     # docs/ethercat-wire.md "SDO complete access").
