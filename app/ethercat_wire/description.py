@@ -87,3 +87,4 @@ class SlaveDescription:
     spare_tx_pdos: tuple[Pdo, ...] = ()
     slot_name: str = ""  # the one slot of a non-modular slave with slot_modules
     slot_modules: tuple[SlotModule, ...] = ()
+    vendor_name: str = ""  # ESI Vendor Name, where the seed gives one

@@ -157,7 +157,8 @@ def document(desc: SlaveDescription, vendor_name: str | None = None) -> ET.Eleme
         "xsi:noNamespaceSchemaLocation": "EtherCATInfo.xsd", "Version": "1.6"})
     vendor = ET.SubElement(root, "Vendor")
     _text(vendor, "Id", hexid(desc.vendor_id))
-    _text(vendor, "Name", vendor_name or f"{desc.name} (FieldRig virtual slave)")
+    _text(vendor, "Name",
+          vendor_name or desc.vendor_name or f"{desc.name} (FieldRig virtual slave)")
     descriptions = ET.SubElement(root, "Descriptions")
     group = ET.SubElement(ET.SubElement(descriptions, "Groups"), "Group")
     _text(group, "Type", desc.group)

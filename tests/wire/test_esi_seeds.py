@@ -100,3 +100,15 @@ def test_fastcat_entries_unsigned_by_length_as_its_section_4_screen(line):
     types = {e.findtext("DataType") for e in device(line["FastCAT"]).iter("Entry")
              if e.findtext("Index") != "#x0000"}
     assert types <= {"BOOL", "USINT", "UINT", "UDINT"} and "UINT" in types
+
+
+@pytest.mark.parametrize(("name", "vendor"), [
+    ("SelemaDriveECAT", "Selema"),  # seed 004 ch. 5: TwinCAT's catalogue "Selema > Selema Device"
+    ("CPX-E-EC", "Festo"),  # seed 002, Festo's manual (title page, www.festo.com)
+    ("FastCAT", "FastCAT (FieldRig virtual slave)"),  # seed 000 names no vendor
+    ("TRS-CAT", "TRS-CAT (FieldRig virtual slave)"),  # seed 001: only "TPA_TRSCAT.xml"
+])
+def test_vendor_name_the_configurator_files_the_device_under(line, name, vendor):
+    root = ET.fromstring(ET.tostring(esi.document(line[name]).getroot()))
+    assert root.findtext("Vendor/Name") == vendor
+

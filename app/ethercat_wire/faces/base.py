@@ -107,6 +107,7 @@ class Face:
     name: ClassVar[str]  # SII string 1 / ESI device name
     group: ClassVar[str]
     order_code: ClassVar[str]
+    vendor_name: ClassVar[str] = ""  # ESI Vendor Name (the configurator's catalogue folder)
     dc_supported: ClassVar[bool] = False
     dc_default: ClassVar[bool] = False  # DC-Synchron the slave's default mode (ESI order)
     coe_details: ClassVar[int] = COE_SDO | COE_SDO_INFO
@@ -268,7 +269,8 @@ class Face:
             dc_default=self.dc_default, pdos_fixed=self.mapping_fixed,
             spare_rx_pdos=named(self.spare_pdos(model, True)),
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
-            slot_modules=modules, station_alias=self.station_alias(model))
+            slot_modules=modules, station_alias=self.station_alias(model),
+            vendor_name=self.vendor_name)
 
     def ready(self, model: Any) -> bool:
         """Whether the model has its dictionary (a description now is the one a master gets)."""

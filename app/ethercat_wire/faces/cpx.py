@@ -33,6 +33,7 @@ class CpxFace(Face):
     kind = "cpx_e_ec"
     name = objects.DEVICE_NAME  # Tab. 27 "CPX-E-EC"
     group = "CPX-E"
+    vendor_name = "Festo"  # seed 002 is Festo's manual (title page; www.festo.com for the ESI)
     order_code = "CPX-E-EC"
     dc_supported = True  # §2.1.4 Distributed Clocks
     # 0x1C13 is written in PREOP (0x1A40, seed 002 l. 539-541): SII GENERAL / ESI PdoAssign.

@@ -37,6 +37,7 @@ class DriveFace(Face):
     kind = "servo_ecat"
     name = "SelemaDriveECAT"  # ch. 5: TwinCAT shows 'Drive 5 (SelemaDriveECAT)'
     group = "Selema Device"  # ch. 5 TwinCAT device tree: Selema > Selema Device
+    vendor_name = "Selema"  # ch. 5: the catalogue's vendor folder above "Selema Device"
     order_code = "SelemaDriveECAT"
     dc_supported = True  # ch. 5 "Distributed Clock"
     coe_details = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN | COE_PDO_CONFIG  # ch. 5 dynamic PDOs
