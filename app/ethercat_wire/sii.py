@@ -67,6 +67,10 @@ def data_type(bits: int, name: str = "") -> int:
                                                                    if bits < 8 else 0x00)
 
 
+_DASHES = str.maketrans({"\u2010": "-", "\u2011": "-", "\u2012": "-", "\u2013": "-",
+                         "\u2014": "-", "\u2212": "-"})
+
+
 class _Strings:
     def __init__(self) -> None:
         self.items: list[str] = []
@@ -83,7 +87,8 @@ class _Strings:
     def encode(self) -> bytes:
         out = bytearray([len(self.items)])
         for s in self.items:
-            raw = s.encode("latin-1", "replace")[:255]
+            # Latin-1 has no typographic dashes (Tab. 27's "Module xx – TxPDO"): a hyphen
+            raw = s.translate(_DASHES).encode("latin-1", "replace")[:255]
             out += bytes([len(raw)]) + raw
         return bytes(out)
 

@@ -112,3 +112,9 @@ def test_vendor_name_the_configurator_files_the_device_under(line, name, vendor)
     root = ET.fromstring(ET.tostring(esi.document(line[name]).getroot()))
     assert root.findtext("Vendor/Name") == vendor
 
+
+def test_sii_strings_keep_the_names_readable(line):
+    """Tab. 27's PDO names have an en dash ("Module xx – TxPDO"), which Latin-1 lacks: the SII
+    stores an ASCII hyphen, not a '?'."""
+    names = sii.strings(sii.build(line["CPX-E-EC"]))
+    assert "Module 0 - TxPDO" in names and not [s for s in names if "?" in s]
