@@ -452,9 +452,15 @@ def _drive_specs() -> list[servo.AlarmSpec]:
 
 def _drive_alarm(spec: servo.AlarmSpec) -> Meaning:
     return Meaning(SERVO, f"Drive alarm {spec.code} {spec.name}",
-                   f"{spec.description.capitalize()}; {_SERVO_EFFECT[spec.effect]}; 0x603F code "
+                   f"{_first_capital(spec.description)}; {_SERVO_EFFECT[spec.effect]}; 0x603F code "
                    f"{fmt_hex(spec.error_code_or_generic, 4)}{_reset_note(spec)}.",
                    "seed 004 ch. 3, ch. 5")
+
+
+def _first_capital(text: str) -> str:
+    """str.capitalize() lowercases the rest: the seed's IGBT, DSP, LS1 and PDO would not
+    survive it."""
+    return text[:1].upper() + text[1:]
 
 
 def _reset_note(spec: servo.AlarmSpec) -> str:
