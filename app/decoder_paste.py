@@ -39,7 +39,8 @@ class PasteError(ValueError):
 
 
 _HEX = r"[0-9A-Fa-f]"
-_TWINCAT_EMCY = re.compile(r"Hex:\s*([^)]*)\)")
+# The ')' may be missing: a trainee selecting up to the last byte leaves it (and "'." ) behind.
+_TWINCAT_EMCY = re.compile(r"Hex:\s*([^)]*)")
 _AL_QUOTED = re.compile(rf"Code\s*'(0x{_HEX}+)'")  # "AL Status Code '0x8204'"
 _AL_WITH_CODE = re.compile(rf"with code\s+(0x{_HEX}+)")  # "abnormal state change ... with code"
 _TRACE_CODE = re.compile(rf"emcyCode\s*=\s*0x({_HEX}+)")
@@ -114,7 +115,7 @@ def _emergency(code: int, register: int, data: bytes) -> str:
 def _twincat(text: str) -> str | None:
     logged = _TWINCAT_EMCY.search(text)
     if logged:
-        return logged.group(1).replace("'", " ")
+        return logged.group(1).replace("'", " ").rstrip(" .")
     quoted = _AL_QUOTED.search(text) or _AL_WITH_CODE.search(text)
     return quoted.group(1) if quoted else None
 
