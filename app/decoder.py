@@ -213,7 +213,7 @@ def emergency(code: int, register: int, data: bytes) -> list[Meaning]:
     if code == fastcat.EMERGENCY_CODE and len(data) >= 4:
         found.extend(_fastcat_emergency(register, data))
     found.extend(_servo_emcy(code, data[:1]))
-    found.extend(_trscat_emcy(code, data[:1]))
+    found.extend(_trscat_emcy(code, data[:1], register))
     found.extend(_cpx_emcy(code, register, data))
     found.extend(_canopen_emcy(code))
     if not found:
@@ -261,19 +261,22 @@ def _servo_emcy(code: int, vendor: bytes) -> list[Meaning]:
             for s in specs]
 
 
-def _trscat_emcy(code: int, vendor: bytes) -> list[Meaning]:
+def _trscat_emcy(code: int, vendor: bytes, register: int | None = None) -> list[Meaning]:
+    """``register``: the emergency's 0x1001 byte, which tells 0x7100's two causes apart
+    (overcurrent sets the current bit, undervoltage the voltage bit); None for a bare code."""
     slot = f" (slot {vendor[0]})" if vendor and vendor[0] else ""
+    faults = [f for f in FAULTS.values() if f.code == code]
+    faults = [f for f in faults if f.register == register] or faults
     out = []
-    for fault in FAULTS.values():
-        if fault.code == code:
-            effect = []
-            if fault.bus_shutdown:
-                effect.append("the TRS bus shuts down until the logic supply is switched off")
-            if fault.deadlock:
-                effect.append("the ESM falls back to PRE-OP and stays there")
-            tail = f"; {'; '.join(effect)}" if effect else ""
-            out.append(Meaning(TRSCAT, f"TRS-CAT application error {fmt_hex(code, 4)}",
-                               f"{fault.text}{slot}{tail}.", "seed 001 §9.3.7"))
+    for fault in faults:
+        effect = []
+        if fault.bus_shutdown:
+            effect.append("the TRS bus shuts down until the logic supply is switched off")
+        if fault.deadlock:
+            effect.append("the ESM falls back to PRE-OP and stays there")
+        tail = f"; {'; '.join(effect)}" if effect else ""
+        out.append(Meaning(TRSCAT, f"TRS-CAT application error {fmt_hex(code, 4)}",
+                           f"{fault.text}{slot}{tail}.", "seed 001 §9.3.7"))
     return out
 
 
