@@ -49,6 +49,7 @@ from app.decoder_meaning import (
     modbus_exception,
 )
 from app.decoder_paste import PasteError, canonical
+from app.decoder_states import MASTER, state_readings
 from app.modbus.pdu import EXCEPTION_FLAG
 from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
@@ -80,6 +81,9 @@ def _decode(text: str) -> list[Meaning]:
     raw = text.strip()
     if not raw:
         raise DecodeError("nothing to decode: paste a code, an emergency or a name")
+    states = state_readings(raw)  # before canonical(): "node 2: boot-up" is no FieldRig line
+    if states:
+        return states
     try:
         raw = canonical(raw).strip()
     except PasteError as exc:
@@ -519,6 +523,7 @@ __all__ = [
     "DIAG",
     "ETHERCAT",
     "FASTCAT",
+    "MASTER",
     "MODBUS",
     "SDO",
     "SERVO",

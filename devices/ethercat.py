@@ -37,6 +37,16 @@ def al_status_name(value: int) -> str:
         name = f"state 0x{state_bits:X}"
     return f"{name} + error" if value & AL_STATUS_ERROR_FLAG else name
 
+# The states in seed 003's words ("Each slave will step through the following states"); BOOT
+# is not in seed 003: ETG.1000.6 keeps it for a firmware update (seed 000 §7.7 0x0013).
+AL_STATE_TEXT: dict[AlState, str] = {
+    AlState.INIT: "initialization phase",
+    AlState.PREOP: "pre operational, no data-exchange occur between master and slaves",
+    AlState.BOOT: "bootstrap, for a firmware update only (ETG.1000.6, not in seed 003)",
+    AlState.SAFEOP: "safe operational, only input data from slaves to the master are exchanged",
+    AlState.OP: "operational, full data-exchange can happen",
+}
+
 # Transitions a master may request (ETG.1000.6 ESM); a request outside this set answers
 # AL status code 0x0011 "Invalid requested state change".
 ALLOWED_TRANSITIONS: frozenset[tuple[AlState, AlState]] = frozenset({

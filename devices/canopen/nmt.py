@@ -42,6 +42,22 @@ STATE_CODE: dict[NmtState, int] = {
 }
 
 
+# Each state in seed 004 ch. 4's words ("Stati e Cambiamento di stato"); the Codes tab reads
+# them with the state byte above (app/decoder_states.py).
+STATE_TEXT: dict[NmtState, str] = {
+    NmtState.INITIALISATION: "after power-on or a reset (Reset-Application, Reset-Communication, "
+                             "Initializing); the node then sends its boot-up message (0x00) "
+                             "and goes to Pre-operational",
+    NmtState.PRE_OPERATIONAL: "the configuration state: SDO, emergency, SYNC / time and NMT "
+                              "messages, no process data (PDO); Start-Remote-node makes it "
+                              "Operational",
+    NmtState.OPERATIONAL: "process data (PDO) are exchanged as well",
+    NmtState.STOPPED: "the node sends and receives nothing but NMT and node guarding / "
+                      "heartbeat",
+}
+GUARDING_TOGGLE = 0x80  # the top bit of the state byte: toggles with node guarding, 0 heartbeat
+
+
 class NmtCommand(enum.IntEnum):
     START = 0x01  # Start remote node
     STOP = 0x02  # Stop remote node

@@ -47,6 +47,21 @@ class DcState(enum.Enum):
     NOT_SYNCHRONIZED = "NOT_SYNCHRONIZED"
 
 
+# Each phase in seed 003's words (the Codes tab reads them, app/decoder_states.py).
+DC_STATE_TEXT: dict[DcState, str] = {
+    DcState.IDLE: "the master clock is completely independent from the slaves",
+    DcState.SYNCHRONIZING: "the master is making preliminary measurements to synchronize with "
+                           "the slaves",
+    DcState.WAITING_START_TIME: "the master has synced with the slaves and waits for the "
+                                "START_TIME, the first time the slaves implement I/O",
+    DcState.COMPENSATING: "the master clock is synchronous with the slaves' and START_TIME has "
+                          "passed: the master is constantly tracking the clocks of the network, "
+                          "typically all slaves are in OP",
+    DcState.NOT_SYNCHRONIZED: "the master fails to follow the network clock: all the slaves "
+                              "involved go to the SAFE_OP state",
+}
+
+
 class DcTrigger(enum.Enum):
     LINK_UP = "link_up"  # link seen and the line has DC slaves
     LINK_DOWN = "link_down"  # no link, or no DC slave on the line any more

@@ -1,0 +1,116 @@
+"""State names for the Codes tab: the EtherCAT states and the master's distributed-clock phases
+(seed 003), the CANopen NMT states and their heartbeat / guarding byte (seed 004 ch. 4).
+
+The words are the devices' tables (``devices.ethercat.AL_STATE_TEXT``,
+``devices.master.dc.DC_STATE_TEXT``, ``devices.canopen.nmt.STATE_TEXT``); this module only
+finds the state in what a trainee pastes: a name as the State tab, the seed or the log writes
+it (``SAFE_OP``, ``Pre-Op``, ``NOT_SYNCHRONIZED``, ``Arrestato``), the master's DC log line
+(``distributed clocks: COMPENSATING -> NOT_SYNCHRONIZED ...``), the CAN monitor's heartbeat
+line (``node 2: Pre-operational (toggle 1)``) or a state byte (``heartbeat 7F``,
+``guarding 85``).
+"""
+
+from __future__ import annotations
+
+import re
+
+from app.decoder_meaning import CANOPEN, ETHERCAT, DecodeError, Meaning
+from devices.canopen.nmt import GUARDING_TOGGLE, STATE_CODE, STATE_TEXT, NmtState
+from devices.ethercat import AL_STATE_TEXT, AL_STATUS_ERROR_FLAG, AlState
+from devices.events import fmt_hex
+from devices.master.dc import DC_STATE_TEXT, DcState
+
+MASTER = "EtherCAT master"
+
+
+def _key(name: str) -> str:
+    """``Pre-Op``, ``PRE_OP``, ``pre op`` -> ``PREOP``: the seeds and the logs spell a state
+    with and without separators."""
+    return re.sub(r"[\s_\-]+", "", name).upper()
+
+
+_ESM_NAMES: dict[str, AlState] = {
+    **{_key(s.name): s for s in AlState},
+    "PREOPERATIONAL": AlState.PREOP, "SAFEOPERATIONAL": AlState.SAFEOP,
+    "OPERATIONAL": AlState.OP, "BOOTSTRAP": AlState.BOOT,
+}
+_DC_NAMES: dict[str, DcState] = {_key(s.value): s for s in DcState}
+_NMT_NAMES: dict[str, NmtState] = {
+    **{_key(s.label): s for s in NmtState},
+    "INITIALIZATION": NmtState.INITIALISATION, "INITIALIZING": NmtState.INITIALISATION,
+    "BOOTUP": NmtState.INITIALISATION, "ARRESTATO": NmtState.STOPPED,  # ch. 4's Italian word
+}
+_NMT_BY_CODE: dict[int, NmtState] = {code: state for state, code in STATE_CODE.items()}
+
+_DC_LINE = re.compile(r"distributed clocks:\s*(\w+)\s*->\s*(\w+)", re.IGNORECASE)
+_MONITOR_LINE = re.compile(r"\bnode\s+\d+:\s*([A-Za-z\-]+)(?:\s*\(toggle\s*([01])\))?",
+                           re.IGNORECASE)
+_STATE_BYTE = re.compile(r"(heartbeat|(?:node\s*)?guarding)\s*(?:state\s*)?(?:0x)?"
+                         r"([0-9A-Fa-f]{1,2})h?", re.IGNORECASE)
+
+
+def state_readings(text: str) -> list[Meaning]:
+    """Every state reading of ``text``; [] when it names no state (then it is no state
+    query), DecodeError for a state byte the seed does not list."""
+    raw = text.strip()
+    line = _DC_LINE.search(raw)
+    if line:
+        found = []
+        for name, end in zip(line.groups(), ("from", "to"), strict=True):
+            state = _DC_NAMES.get(_key(name))
+            if state is not None:
+                found.append(_dc(state, f" ({end})"))
+        return found
+    byte = _STATE_BYTE.fullmatch(raw)
+    if byte:
+        return [_state_byte(int(byte.group(2), 16), guarding="guard" in byte.group(1).lower())]
+    monitor = _MONITOR_LINE.search(raw)
+    if monitor and _key(monitor.group(1)) in _NMT_NAMES:
+        toggle = monitor.group(2)
+        return [_nmt(_NMT_NAMES[_key(monitor.group(1))],
+                     None if toggle is None else int(toggle))]
+    key = _key(raw)
+    found = []
+    if key in _ESM_NAMES:
+        found.append(_esm(_ESM_NAMES[key]))
+    if key in _DC_NAMES:
+        found.append(_dc(_DC_NAMES[key]))
+    if key in _NMT_NAMES:
+        found.append(_nmt(_NMT_NAMES[key]))
+    return found
+
+
+def _esm(state: AlState) -> Meaning:
+    return Meaning(ETHERCAT, f"EtherCAT state {state.name}",
+                   f"{AL_STATE_TEXT[state][:1].upper()}{AL_STATE_TEXT[state][1:]}. AL status "
+                   f"register (0x0130) state bits {fmt_hex(int(state), 2)}; with the error "
+                   f"flag (bit 4) {fmt_hex(int(state) | AL_STATUS_ERROR_FLAG, 2)}.",
+                   "ETG.1000.6" if state is AlState.BOOT else "seed 003")
+
+
+def _dc(state: DcState, end: str = "") -> Meaning:
+    text = DC_STATE_TEXT[state]
+    return Meaning(MASTER, f"DC phase {state.value}{end}",
+                   f"Distributed clocks: {text}.", "seed 003")
+
+
+def _nmt(state: NmtState, toggle: int | None = None) -> Meaning:
+    code = STATE_CODE[state]
+    what = "boot-up message" if state is NmtState.INITIALISATION else "heartbeat / guarding"
+    bit = "" if toggle is None else f"; toggle bit {toggle} (node guarding)"
+    return Meaning(CANOPEN, f"NMT state {state.label}",
+                   f"{STATE_TEXT[state][:1].upper()}{STATE_TEXT[state][1:]}. State byte "
+                   f"{fmt_hex(code, 2)} in the {what}{bit}.", "seed 004 ch. 4")
+
+
+def _state_byte(value: int, guarding: bool) -> Meaning:
+    """Ch. 4: the state in bits 0-6; bit 7 toggles with node guarding, stays 0 with
+    heartbeat. The boot-up message (0x00) comes on the heartbeat's CAN-ID, never toggled."""
+    toggle = value & GUARDING_TOGGLE
+    state = _NMT_BY_CODE.get(value & ~GUARDING_TOGGLE)
+    if state is None or (toggle and not guarding) or (toggle and state is
+                                                      NmtState.INITIALISATION):
+        listed = ", ".join(fmt_hex(c, 2) for c in sorted(_NMT_BY_CODE))
+        raise DecodeError(f"state byte {fmt_hex(value, 2)} is no NMT state: seed 004 ch. 4 lists "
+                          f"{listed} (bit 7 toggles with node guarding only)")
+    return _nmt(state, (1 if toggle else 0) if guarding else None)
