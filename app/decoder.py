@@ -470,14 +470,33 @@ def _first_capital(text: str) -> str:
     return text[:1].upper() + text[1:]
 
 
+_BUS_NAMES = {"modbus": "Modbus", "canopen": "CANopen", "ethercat": "EtherCAT",
+              "profinet": "Profinet"}
+
+
 def _reset_note(spec: servo.AlarmSpec) -> str:
-    if not spec.resettable:
-        return "; not resettable"
-    ethercat = servo.alarm_table("ethercat").get(spec.code)
-    if ethercat is not None and ethercat.name == spec.name and not ethercat.resettable:
+    """How each fieldbus resets the alarm (seed 004 ch. 2 R00 bit 3, ch. 4 / ch. 5 0x80 on
+    0x6040, ch. 6 Control Word 0x08 and "Resettabile" NO), from the drive's tables."""
+    by_hint: dict[str, list[str]] = {}
+    never: list[str] = []
+    for bus, label in _BUS_NAMES.items():
+        row = servo.alarm_table(bus).get(spec.code)
+        if row is None or row.name != spec.name:
+            continue
+        if row.resettable:
+            by_hint.setdefault(servo.RESET_HINT[bus], []).append(label)
+        else:
+            never.append(label)
+    parts = []
+    if by_hint:
+        ways = " or ".join(f"{hint} on {', '.join(buses)}" for hint, buses in by_hint.items())
+        parts.append(f"reset, once the cause is gone, with {ways}")
+    if never:
         # 0x6040 cannot reach a slave in INIT (docs/ethercat-coe.md "Resetting 35")
-        return "; over EtherCAT only a power cycle resets it (the slave stays in INIT)"
-    return ""
+        why = " (the slave stays in INIT)" if never == ["EtherCAT"] else ""
+        parts.append(f"not resettable on {', '.join(never)}: only a power cycle clears it"
+                     f"{why}")
+    return "; " + "; ".join(parts)
 
 
 def _drive_alarm_number(number: int) -> list[Meaning]:
