@@ -13,6 +13,7 @@ line (``node 2: Pre-operational (toggle 1)``) or a state byte (``heartbeat 7F``,
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 from app.decoder_meaning import CANOPEN, ETHERCAT, DecodeError, Meaning
 from devices.canopen.nmt import GUARDING_TOGGLE, STATE_CODE, STATE_TEXT, NmtState
@@ -42,6 +43,8 @@ _NMT_NAMES: dict[str, NmtState] = {
 }
 _NMT_BY_CODE: dict[int, NmtState] = {code: state for state, code in STATE_CODE.items()}
 
+# Seed 000 §7.4: the states as their AL status values in decimal (8 OP, 2 PREOP).
+_TRACE_CHANGE = re.compile(r"SlaveStateChange\s+slave\s*=\s*(\d+)\s+from\s+(\d+)\s+to\s+(\d+)")
 _DC_LINE = re.compile(r"distributed clocks:\s*(\w+)\s*->\s*(\w+)", re.IGNORECASE)
 _MONITOR_LINE = re.compile(r"\bnode\s+\d+:\s*([A-Za-z\-]+)(?:\s*\(toggle\s*([01])\))?",
                            re.IGNORECASE)
@@ -53,6 +56,10 @@ def state_readings(text: str) -> list[Meaning]:
     """Every state reading of ``text``; [] when it names no state (then it is no state
     query), DecodeError for a state byte the seed does not list."""
     raw = text.strip()
+    change = _TRACE_CHANGE.search(raw)
+    # Pasted with its callback line, the AL status code on that line is the reading.
+    if change and "EcatManagerSlaveStateCallback" not in raw:
+        return _trace_change(int(change.group(1)), int(change.group(2)), int(change.group(3)))
     line = _DC_LINE.search(raw)
     if line:
         found = []
@@ -77,6 +84,21 @@ def state_readings(text: str) -> list[Meaning]:
         found.append(_dc(_DC_NAMES[key]))
     if key in _NMT_NAMES:
         found.append(_nmt(_NMT_NAMES[key]))
+    return found
+
+
+def _trace_change(slave: int, old: int, new: int) -> list[Meaning]:
+    try:
+        states = [AlState(old), AlState(new)]
+    except ValueError:
+        names = ", ".join(f"{int(s)} {s.name}" for s in AlState)
+        raise DecodeError(f"SlaveStateChange from {old} to {new}: the states are AL status "
+                          f"values ({names}; seed 000 §7.4)") from None
+    found = [replace(_esm(state), title=f"EtherCAT state {state.name} ({end}, slave {slave})")
+             for state, end in zip(states, ("from", "to"), strict=True)]
+    where = (" The AL status code of the change is on the EcatManagerSlaveStateCallback line "
+             "just before it (seed 000 §7.4).")
+    found[1] = replace(found[1], text=found[1].text + where, source="seed 000 §7.4, seed 003")
     return found
 
 

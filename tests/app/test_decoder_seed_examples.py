@@ -176,8 +176,6 @@ def test_an_exception_the_drive_never_sends() -> None:
 @pytest.mark.parametrize(("text", "hint"), [
     ("Err. Reg.\t0081\t0x low 02 00 00 04 00 high", "Err. Code"),
     ("ERR DATA\talto [0x00 04 00 00 02] basso", "ERR CODE"),
-    ("380808 - 00000001 - ECAT_EVENT SlaveStateChange slave = 11 from 8 to 2",
-     "EcatManagerSlaveStateCallback"),
     ("83 0F", "exception"),
     # §7.4's other lines: the PLC's own, which the seed does not explain
     ("380808 - 00000001 - !! ECAT_EVENT ErrorControl slave = 11 errorLocCode = 10071",

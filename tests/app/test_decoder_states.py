@@ -91,3 +91,19 @@ def test_a_heartbeat_byte_the_seed_does_not_list(query: str) -> None:
     """A heartbeat's top bit is 0 (ch. 4), and 0x33 is no state: one clear message."""
     with pytest.raises(DecodeError, match="0x00, 0x04, 0x05, 0x7F"):
         decode(query)
+
+
+def test_the_trace_state_change_reads_its_states() -> None:
+    """Seed 000 §7.4: "ECAT_EVENT SlaveStateChange slave = 11 from 8 to 2", the states as
+    their AL status values (8 OP, 2 PREOP). The tab refused the line ("carries no code");
+    it now reads both states and still says where the AL status code is."""
+    line = "380808 - 00000001 - ECAT_EVENT SlaveStateChange slave = 11 from 8 to 2"
+    found = decode(line)
+    assert [m.title for m in found] == ["EtherCAT state OP (from, slave 11)",
+                                        "EtherCAT state PREOP (to, slave 11)"], found
+    assert "EcatManagerSlaveStateCallback" in found[1].text
+
+
+def test_a_trace_state_change_to_no_state_is_one_message() -> None:
+    with pytest.raises(DecodeError, match="from 8 to 7"):
+        decode("ECAT_EVENT SlaveStateChange slave = 11 from 8 to 7")
