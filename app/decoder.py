@@ -102,6 +102,16 @@ def _decode(text: str) -> list[Meaning]:
     alarm = re.fullmatch(r"(?:drive\s*)?alarm\s*(\d{1,3})", raw, re.IGNORECASE)
     if alarm:
         return _drive_alarm_number(int(alarm.group(1)))
+    alarm = re.fullmatch(r"alarm\s*0x([0-9a-f]{1,4})", raw, re.IGNORECASE)
+    if alarm:  # the Event log's code without its name: the tables' code, or the drive's alarm
+        value = int(alarm.group(1), 16)
+        found = [m for m in _number(value, len(alarm.group(1)))
+                 if not m.text.startswith("Not in any device table")]
+        found += [_drive_alarm(spec) for spec in _drive_specs() if spec.code == value]
+        if not found:
+            raise DecodeError(f"no table has an alarm {fmt_hex(value, 2)}, and the drive has "
+                              f"no alarm {value} (its display counts in decimal)")
+        return found
     tokens = [t for t in re.split(r"[\s,;]+", raw) if t]
     if not tokens:  # separators only: ",", "(Hex: ; )"
         raise DecodeError("nothing to decode in that line: it holds no code or bytes")

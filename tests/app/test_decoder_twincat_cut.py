@@ -19,3 +19,14 @@ def test_a_twincat_emergency_copied_without_its_bracket(query: str) -> None:
     assert m.title == "CPX-E emergency code 0x2330"
     assert "Module 4, Wire break" in m.text and "byte 7 = 1" in m.text
     assert "Error register 0x83" in m.text
+
+
+def test_an_alarm_number_in_hex_without_its_name() -> None:
+    """The event log writes a FastCAT alarm 'alarm 0x10 NO_MOD module 0'; a trainee typing
+    'alarm 0x10' got "give hex bytes". It reads the FastCAT codes 0x10 and drive alarm 16
+    (0x10: the drive's display counts in decimal, seed 004 ch. 5)."""
+    titles = [m.title for m in decode("alarm 0x10")]
+    assert "FastCAT coupler:0x10" in titles and "FastCAT module:0x10" in titles, titles
+    assert "Drive alarm 16 FOLLOWING_ERROR" in titles, titles
+    assert [m.title for m in decode("alarm 0x3702")] == [
+        "CPX-E Text-ID 0x3702: CPX error number 2"]
