@@ -34,20 +34,32 @@ def served() -> Iterator[tuple[ServedRig, Page, Page]]:
 
 def _apply(page: Page, picker: str, action: str, params: dict[str, Any]) -> None:
     """Pick ``action`` in the form whose picker is ``picker`` (a uuid), fill its parameters
-    (built anew when the pick changes: the rows after it) and click Apply."""
+    and click Apply. An instructor's own form (an ActionForm) builds its one Parameters
+    folder's rows anew when the pick changes (the rows after it); a shared one (a
+    ClientActionForm, each page's own) has a folder per action, shown to the page that
+    picked it."""
     shown = [
         m.get("value") for m in page.received() if m.get("uuid") == picker and "props" in m
     ] + page.updates(picker)
-    before = 0 if shown[-1] == action else len(page.received())
+    mark = len(page.received())
+    before = 0 if shown[-1] == action else mark
     page.set(picker, action)
     picked = next(m for m in page.received() if m.get("uuid") == picker)
     container = picked["container_uuid"]
-    folder = next(
+    folders = [
         m["uuid"]
         for m in page.received()
         if m.get("container_uuid") == container
         and (m.get("props") or {}).get("label") == "Parameters"
-    )
+    ]
+    if len(folders) > 1:  # each page's own form: the folder its pick shows on this page
+        folder = _wait(lambda: next((
+            m["uuid"] for m in page.received()[mark:]
+            if m.get("uuid") in folders and (m.get("updates") or {}).get("visible") is True),
+            None))
+        before = 0
+    else:
+        folder = folders[0]
     for label, value in params.items():
         param = _wait(
             lambda label=label: next(

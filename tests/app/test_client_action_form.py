@@ -71,3 +71,23 @@ def test_a_bad_value_is_told_to_the_clicking_page_only(
     actions.submit(page)
     assert applied == [] and page.notices and page.notices[0][0] == "write_register refused"
     assert other.notices == []
+
+
+def test_each_page_is_offered_its_own_actions(
+        form: tuple[Server, ClientActionForm, Applied]) -> None:
+    """restrict_each: page 1 is offered read_object alone and its pick moves there; page 2
+    nothing ("(none)", Apply disabled), and its Apply sends nothing."""
+    server, actions, applied = form
+    page, other = server.clients[1], server.clients[2]
+    offered = {1: ["read_object", "not_an_action"], 2: []}
+    actions.restrict_each(lambda client_id: offered.get(client_id))  # type: ignore[arg-type]
+    uuid = actions.choice._impl.uuid
+    assert page.sent(uuid, "options") == [("read_object",)]
+    assert page.sent(uuid, "value") == ["read_object"]  # moved to what it is offered
+    assert page.sent(_folder(actions, "read_object"), "visible") == [True]
+    assert other.sent(uuid, "options") == [("(none)",)]
+    assert other.sent(actions.button._impl.uuid, "disabled") == [True]
+    assert actions.options(None) == tuple(sorted(ACTIONS))  # a new page: not known yet
+    actions.submit(other)
+    actions.submit(page)
+    assert applied == [(1, "read_object", {"index": 0, "sub": 0})]

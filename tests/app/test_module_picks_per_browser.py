@@ -15,6 +15,7 @@ import pytest
 from app.ui.panels.classroom_rig import ServedRig
 from devices.fastcat.encoder import CMD_ZERO_CYCLE, COMMAND_INDEX
 from devices.fastcat.module_od import object_index
+from tests.app.form_page import fill, press
 from tests.app.test_classroom_leak import Page, _wait
 from tests.app.test_picks_per_browser import _ids, _settle, _widget
 from tests.app.two_pages import powered, two_pages
@@ -210,12 +211,10 @@ def test_a_slave_target_picked_on_one_page_is_not_the_other_page_s(
     assert "cpx/2" not in second.updates(target)
     assert "cpx/1" not in first.updates(target)
     _folder, form = controls.forms["cpx"]
-    assert "set_input" in form.options()
-    form.choice.value = "set_input"  # the form's fields are one for every page
-    form.rebuild()
-    form.handle("channel").value = 5
-    form.handle("on").value = True
-    second.set(form.handles[2]._impl.uuid, True)  # B presses Apply
+    _one, two = _ids(live)
+    assert "set_input" in form.options(two)  # B's 16DI takes it
+    fill(second, form, "set_input", channel=5, on=True)  # the form is each page's own too
+    press(second, form)
     _wait(lambda: live.runtime.submit(
         lambda: live.rig.device("cpx").modules[0].field_inputs[5]).result(timeout=10))
 

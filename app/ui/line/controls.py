@@ -12,9 +12,9 @@ inject_fault, link, field_supply, drop_frames, unplug / plug, ...; short_circuit
 supply, cable, ...), which a trainee's page does not show. The model refuses what does not
 apply to the target, and each form lists only what its Target takes, as the model says
 (app/ui/line/target_actions.py). The Device and each Target are each page's own
-(ClientPick): a form acts on the clicking page's Target, and lists what the pages' Targets
-take together (the form is one for every page). The FastCAT keeps its own tab. Every command
-goes through ``CommandSender``.
+(ClientPick), and so are the forms (ClientActionForm): each page lists what its own Target
+takes, picks an action, fills its parameters, and its Apply acts on its own Target with its
+own values. The FastCAT keeps its own tab. Every command goes through ``CommandSender``.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from app.ui.line.cables import pulled_text
 from app.ui.line.rotary_entry import form_actions, model_args
 from app.ui.line.target_actions import TargetActions, Watch, picked, targets
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_action_form import ClientActionForm
 from app.ui.panels.client_pick import ClientPick, send_on
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user, set_options
@@ -159,8 +160,8 @@ class LineControls:
         self.dc_fault = frames.dc_fault if frames else None
         self.instructor_only: list[Any] = [*cables.handles, *frames.handles] \
             if cables and frames else []
-        self.forms: dict[str, tuple[Any, ActionForm]] = {}
-        self.fault_forms: dict[str, ActionForm] = {}
+        self.forms: dict[str, tuple[Any, ClientActionForm]] = {}
+        self.fault_forms: dict[str, ClientActionForm] = {}
         self.targets: dict[str, ClientPick] = {}  # each slave's Target picker (tests)
         self._target_actions = TargetActions(runtime, sender)
         self._watches: list[Watch] = []  # the shared Targets' (an instructor's: _Injure)
@@ -186,11 +187,14 @@ class LineControls:
                         "Target", tuple(targets(device, devices.get(device) or {}))))
                     self.targets[device] = target
                     apply = self._applier(sender, target, kind=kind)
-                    form = ActionForm(gui, {n: a for n, a in shown.items() if n not in faults},
-                                      apply, current=self._current(device))
+                    # Each page's own (client_action_form): one form for every page switched
+                    # every page's pick and sent one page's values with another's Apply.
+                    form = ClientActionForm(
+                        server, {n: a for n, a in shown.items() if n not in faults}, apply,
+                        current=self._current(device))
                     if instructor.shared:  # an open rig: under the shared Target, as before
                         part = instructor.part(self._fault_folder(
-                            device, faults, self._applier(sender, target, confirm=True)))
+                            server, device, faults, self._applier(sender, target, confirm=True)))
                         self.fault_forms[device] = part.each()[0]
                         self.instructor_only += self.fault_forms[device].handles
                     else:
@@ -285,11 +289,13 @@ class LineControls:
         return form
 
     @staticmethod
-    def _fault_folder(device: str, faults: Mapping[str, Action], apply: Any) -> Any:
-        """The slave's fault form, in a closed folder of its own."""
-        def build(gui: Any) -> ActionForm:
+    def _fault_folder(server: viser.ViserServer, device: str, faults: Mapping[str, Action],
+                      apply: Any) -> Any:
+        """An open rig's fault form of the slave, in a closed folder of its own: each page's
+        own, as the operation form."""
+        def build(gui: Any) -> ClientActionForm:
             with gui.add_folder(f"{device} faults", expand_by_default=False):
-                return ActionForm(gui, faults, apply, label="Fault action")
+                return ClientActionForm(server, faults, apply, label="Fault action")
         return build
 
     def _injure_form(self, gui: Any, sender: CommandSender,
@@ -336,7 +342,7 @@ class LineControls:
             sender.send(client, where, name, model_args(kind, name, args), confirm=confirm)
         return apply
 
-    def all_forms(self) -> dict[str, list[ActionForm]]:
+    def all_forms(self) -> dict[str, list[ClientActionForm]]:
         """Every server-level slave form, per device: operation, then faults (open rig;
         with a token the fault forms are the instructor connections') (tests)."""
         return {d: [form, *([self.fault_forms[d]] if d in self.fault_forms else [])]

@@ -9,6 +9,10 @@ and the device's cable, power and supply, which the device refused once applied.
 The Target lists follow the rig the same way: a TRS-CAT expansion plugged (or taken off) after
 the dashboard started is offered (or dropped) at the next frame, the pick kept while it
 exists. Before, every list was the first snapshot's for good.
+
+A shared form (an open rig's, a :class:`~app.ui.panels.client_action_form.ClientActionForm`)
+offers each page what its own Target takes; an instructor's own copy (an ActionForm) what its
+own Target picker takes.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from app.runtime import Runtime
 from app.targets import parse_target
 from app.ui.commands import CommandSender
 from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_action_form import ClientActionForm
 from app.ui.panels.client_pick import ClientPick
 from app.ui.panels.widgets import set_options
 
@@ -43,12 +48,12 @@ def picked(target: Any, client_id: int | None) -> str:
 @dataclass
 class Watch:
     """A Target picker and the forms acting on what it picks. ``picks``: every Target the
-    pages have picked (a ClientPick: each page's own, and a new page's); the forms are one for
-    all of them and offer what those take together (the model refuses the rest)."""
+    pages have picked (a ClientPick: each page's own, and a new page's); a ClientActionForm
+    offers each page what its own Target takes."""
 
     device: str
     target: Any
-    forms: tuple[ActionForm, ...]
+    forms: tuple[ActionForm | ClientActionForm, ...]
     picks: Callable[[], set[str]] | None = None
     # Each Target's actions, for the device's parts as they are (``key``): simulation thread
     known: dict[str, list[str]] = field(default_factory=dict)
@@ -73,7 +78,7 @@ class TargetActions:
         self._lock = threading.Lock()
         self._keys: dict[str, tuple[Any, ...]] = {}
 
-    def watch(self, device: str, target: Any, forms: Iterable[ActionForm],
+    def watch(self, device: str, target: Any, forms: Iterable[ActionForm | ClientActionForm],
               picks: Callable[[], set[str]] | None = None) -> Watch:
         """Restrict ``forms`` to what ``target``'s picks take, now and at each pick."""
         watch = Watch(device, target, tuple(forms), picks)
@@ -131,13 +136,20 @@ class TargetActions:
                     watch.known.clear()
                     watch.asked.clear()
             self.read(watch)  # a pick no page made (one moved by new options) too
-            with self._lock:
-                picks = watch.picked()
-                if not picks <= set(watch.known):
-                    continue
-                names = sorted({n for p in picks for n in watch.known[p]})
-                if names == watch.offered:
-                    continue
-                watch.offered = names
-            for form in watch.forms:
+            self._offer(watch)
+
+    def _offer(self, watch: Watch) -> None:
+        """Each form offers what its Target takes: a page's own form its page's pick's."""
+        with self._lock:
+            known = dict(watch.known)
+        for form in watch.forms:
+            if isinstance(form, ClientActionForm):
+                form.restrict_each(lambda client_id: known.get(picked(watch.target, client_id)))
+        with self._lock:
+            names = known.get(str(getattr(watch.target, "value", "")))
+            if names is None or names == watch.offered:
+                return
+            watch.offered = names
+        for form in watch.forms:
+            if isinstance(form, ActionForm):
                 form.restrict(names)

@@ -3,6 +3,10 @@
 The FastCAT's module actions (set an input, an analog value, an encoder fault, ...) are data
 (:class:`devices.device.Action` / :class:`~devices.device.Param`), so the dashboard lists them
 without knowing device logic, and a module action added to a model appears here unchanged.
+
+An :class:`ActionForm` is one form for whoever sees it: an instructor connection's own copy
+(*Module faults*, *Slave faults*, *Drive faults*). A form several pages share is a
+:class:`app.ui.panels.client_action_form.ClientActionForm`, each page's own.
 """
 
 from __future__ import annotations
@@ -23,17 +27,17 @@ Apply = Callable[[viser.ClientHandle | None, str, dict[str, Any]], None]
 # The target device's latest snapshot, read when a form is built (Param.current).
 Current = Callable[[], Mapping[str, Any] | None]
 
-_MISSING = object()
+MISSING = object()
 
 
 def current_value(snapshot: Mapping[str, Any] | None, key: str) -> Any:
-    """The value at a dotted key of a snapshot ("switches.dil1"), or _MISSING."""
+    """The value at a dotted key of a snapshot ("switches.dil1"), or MISSING."""
     value: Any = snapshot
     for part in key.split(".") if key else ():
         if not isinstance(value, Mapping) or part not in value:
-            return _MISSING
+            return MISSING
         value = value[part]
-    return value if key else _MISSING
+    return value if key else MISSING
 
 
 def blank_allowed(p: Param) -> bool:
@@ -44,9 +48,9 @@ def blank_allowed(p: Param) -> bool:
     return not p.required and p.default is None and not p.choices and p.type is not bool
 
 
-def param_widget(gui: viser.GuiApi, p: Param, now: Any = _MISSING) -> Any:
+def param_widget(gui: viser.GuiApi, p: Param, now: Any = MISSING) -> Any:
     """``now``: the value the device has now (Param.current); else the default."""
-    if now is not _MISSING:
+    if now is not MISSING:
         with contextlib.suppress(CommandError):  # one the form cannot hold: the default
             p = replace(p, default=p.check(now))
     hint = p.doc or None
@@ -124,17 +128,6 @@ class ActionForm:
         """What the parameter widgets hold now, by parameter name."""
         with self._lock:
             return {p.name: handle.value for p, handle in self._widgets}
-
-    def handle(self, name: str) -> Any:
-        """The widget of the picked action's parameter ``name`` (tests)."""
-        with self._lock:
-            return next(h for p, h in self._widgets if p.name == name)
-
-    def rebuild(self) -> None:
-        """Build the picked action's parameters again, from the device's present values."""
-        with self._lock:
-            self._built_for = None
-        self._build()
 
     def restrict(self, names: Sequence[str]) -> None:
         """Offer only these actions (those the selected module accepts)."""

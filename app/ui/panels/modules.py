@@ -9,8 +9,8 @@ section: shaft speed per encoder and the zero-cycle command bits of 0x7600 (§6.
 The Module picker is each page's own (a ClientPick), and so is what follows its pick: the
 encoder section and its boxes (Encoder and Shaft speed: ClientForms), the open rig's Rail
 rows (Plug type preset, Swap with, Module powered) and the module Module I/O and the buttons
-act on, the clicking page's (docs/dashboard.md "Several browsers"). The Module I/O form
-itself is one for every page.
+act on, the clicking page's, and the Module I/O form itself: the actions its module takes, the
+one it picked and its parameters (a ClientActionForm; docs/dashboard.md "Several browsers").
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ import viser
 from app.classroom.roles import makes_faults
 from app.runtime import Runtime
 from app.ui.commands import CommandSender
-from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_action_form import ClientActionForm
 from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_input import ClientSynced
 from app.ui.panels.client_pick import ClientHtml, ClientPick, page_ready
@@ -141,17 +141,18 @@ class ModulePanel:
             # Module picker (module_faults.py); an open rig keeps the one form.
             faults = {} if instructor.shared else {
                 n: a for n, a in extra.items() if makes_faults(KIND, n)}
-            self._form = ActionForm(gui, {n: a for n, a in extra.items() if n not in faults},
-                                    self._apply_form)
+            # Each page's own: one form for every page switched every page's pick and sent
+            # what one page typed with another page's Apply.
+            self._form = ClientActionForm(
+                server, {n: a for n, a in extra.items() if n not in faults}, self._apply_form)
             self._faults = ModuleFaults(instructor, runtime, sender, device_id, faults,
                                         lambda: self._rail) if faults else None
         # What each picked slot's module takes, read from the model for the rail as it is
-        # (``_rail_key``): the form offers what the pages' picks take together.
+        # (``_rail_key``): the form offers each page what its own pick takes.
         self._actions_lock = threading.Lock()
         self._actions_of: dict[int, list[str]] = {}
         self._asked: set[int] = set()
         self._rail_key = 0
-        self._offered: list[str] | None = None
 
         # The boxes are values of each page's module: every page ends up showing the model's
         # (ClientSynced). A change commands the module its page picked.
@@ -331,18 +332,16 @@ class ModulePanel:
                 self._actions_of[slot] = names
 
     def _offer(self) -> None:
-        """Module I/O offers what the pages' picked modules take, once all are known: the
-        form is one for every page (the model refuses an action another page's module
-        takes and this page's does not)."""
+        """Module I/O offers each page what its picked module takes, once known."""
         self._ask_actions()
         with self._actions_lock:
-            slots = self._picked_slots()
-            if not slots <= set(self._actions_of):
-                return
-            names = sorted({n for s in slots for n in self._actions_of[s]})
-        if names != self._offered:
-            self._offered = names
-            self._form.restrict(names)
+            known = dict(self._actions_of)
+
+        def names(client_id: int | None) -> list[str] | None:
+            slot = option_slot(self.pick.value_for(client_id))
+            return [] if slot is None else known.get(slot)
+
+        self._form.restrict_each(names)
 
     # ---- per frame ----------------------------------------------------------------------
     def update(self, snap: Mapping[str, Any]) -> None:
