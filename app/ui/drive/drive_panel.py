@@ -107,9 +107,10 @@ class DrivePanel(DriveCommands, DriveFaults):
         instructor = instructor_for(server)
         self._alarms = instructor.part(self._alarm_form)
         shared = self._alarms.each()[0] if instructor.shared else None
-        self.instructor_only = (shared.alarm, shared.ops, shared.jam.handle) if shared else ()
+        self.instructor_only = (shared.alarm.handle, shared.ops, shared.jam.handle) \
+            if shared else ()
         # The longest names whole (widgets.short_label_css)
-        self.short_labels = (shared.alarm,) if shared else ()
+        self.short_labels = (shared.alarm.handle,) if shared else ()
         with gui.add_folder("Registers and parameters", expand_by_default=False):
             self._register = gui.add_dropdown("Register", REGISTER_OPTIONS,
                                               initial_value=register_option(R.PROFILE_VELOCITY))
