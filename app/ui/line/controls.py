@@ -33,6 +33,7 @@ from app.ui.line.rotary_entry import form_actions, model_args
 from app.ui.line.target_actions import TargetActions, Watch, picked, targets
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_action_form import ClientActionForm
+from app.ui.panels.client_form import ClientForm
 from app.ui.panels.client_pick import ClientPick, send_on
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import from_user, set_options
@@ -92,7 +93,7 @@ class _Cables:
 
     @property
     def handles(self) -> list[Any]:
-        return [_handle(self.cable), self.plug, self.damage, self.damage_ops,
+        return [_handle(self.cable), self.plug, _handle(self.damage), self.damage_ops,
                 _handle(self.slave_power), self.power]
 
 
@@ -107,12 +108,18 @@ class _Frames:
 
     @property
     def handles(self) -> list[Any]:
-        return [self.frames, self.lose, _handle(self.dc_fault), self.dc_ops]
+        return [_handle(self.frames), self.lose, _handle(self.dc_fault), self.dc_ops]
 
 
 def _handle(widget: Any) -> Any:
-    """The viser handle of a picker (a ClientPick's, an open rig's)."""
-    return widget.handle if isinstance(widget, ClientPick) else widget
+    """The viser handle of a picker or a box (an open rig's ClientPick or ClientForm)."""
+    return widget.handle if isinstance(widget, ClientPick | ClientForm) else widget
+
+
+def typed(box: Any, client_id: int | None) -> Any:
+    """What ``client_id``'s page holds in ``box`` (an open rig's ClientForm: its own; an
+    instructor's own copy: its value)."""
+    return box.value_for(client_id) if isinstance(box, ClientForm) else box.value
 
 
 class LineControls:
@@ -145,8 +152,9 @@ class LineControls:
         with gui.add_folder("Master", expand_by_default=False):
             gui.add_button("Resync").on_click(master("resync"))
             # A trainee's diagnosis (TwinCAT's "Clear CRC"): a master's write of 0x0300-0x0313.
-            self.esc_slave = gui.add_dropdown("ESC counters of",
-                                              tuple(slave_options({}, order)) or ("-",))
+            # Each page's own pick, as the instructor's pickers are (ClientPick)
+            self.esc_slave = ClientPick(server, gui.add_dropdown(
+                "ESC counters of", tuple(slave_options({}, order)) or ("-",)))
             clear_esc = gui.add_button("Clear ESC error counters")
             self.target = gui.add_dropdown("Target state", TARGETS, initial_value="OP")
         self._esc_marks = instructor.shared
@@ -154,9 +162,9 @@ class LineControls:
         frames = self._frames.each()[0] if instructor.shared else None
         # Open rig: the server-level widgets, as before (tests, Dashboard.instructor_widgets).
         self.cable = cables.cable if cables else None
-        self.damage = cables.damage if cables else None
+        self.damage = _handle(cables.damage) if cables else None
         self.slave_power = cables.slave_power if cables else None
-        self.frames = frames.frames if frames else None
+        self.frames = _handle(frames.frames) if frames else None
         self.dc_fault = frames.dc_fault if frames else None
         self.instructor_only: list[Any] = [*cables.handles, *frames.handles] \
             if cables and frames else []
@@ -213,7 +221,7 @@ class LineControls:
         @clear_esc.on_click
         def _(event: viser.GuiEvent) -> None:
             send(event.client, master_id, "clear_esc_errors",
-                 {"position": leading_int(self.esc_slave.value)})
+                 {"position": leading_int(self.esc_slave.value_for(event.client_id))})
 
         @self.target.on_update
         def _(event: viser.GuiEvent) -> None:
@@ -228,6 +236,11 @@ class LineControls:
         buttons then sent. An instructor's copy is its connection's anyway."""
         return ClientPick(self._server, handle) if self._shared else handle
 
+    def _own_box(self, handle: Any) -> Any:
+        """An open rig's box is each page's own (ClientForm): one operator's Spoiled % or
+        Frames to lose showed in every page's box and went with another page's click."""
+        return ClientForm(self._server, handle) if self._shared else handle
+
     def _cable_form(self, gui: Any) -> _Cables:
         send, master_id, order = self._send, self._master_id, self._order
         with gui.add_folder("Cables and power"):
@@ -235,8 +248,8 @@ class LineControls:
                 self._own(gui.add_dropdown("Cable", tuple(cable_options(
                     self._master_state, order)) or ("-",))),
                 gui.add_button_group("Cable plug", ("Pull", "Plug")),
-                gui.add_number("Spoiled %", 10, min=1, max=100, step=1,
-                               hint="share of the frames the cable spoils"),
+                self._own_box(gui.add_number("Spoiled %", 10, min=1, max=100, step=1,
+                                             hint="share of the frames the cable spoils")),
                 gui.add_button_group("Cable damage", ("Damage", "Repair")),
                 self._own(gui.add_dropdown("Slave to power", tuple(slave_options(
                     self._master_state, order)) or ("-",))),
@@ -254,7 +267,7 @@ class LineControls:
             cable = leading_int(picked(form.cable, event.client_id))
             if event.target.value == "Damage":
                 send(event.client, master_id, "damage_cable",
-                     {"cable": cable, "percent": int(form.damage.value)})
+                     {"cable": cable, "percent": int(typed(form.damage, event.client_id))})
             else:
                 send(event.client, master_id, "repair_cable", {"cable": cable})
 
@@ -269,14 +282,16 @@ class LineControls:
     def _frames_form(self, gui: Any) -> _Frames:
         send, master_id = self._send, self._master_id
         with gui.add_folder("Frames and DC"):
-            form = _Frames(gui.add_number("Frames to lose", 10, min=1, max=100000, step=1),
+            form = _Frames(self._own_box(gui.add_number("Frames to lose", 10, min=1,
+                                                        max=100000, step=1)),
                            gui.add_button("Lose frames"),
                            self._own(gui.add_dropdown("DC fault", DC_FAULTS)),
                            gui.add_button_group("DC", ("Inject", "Clear")))
 
         @form.lose.on_click
         def _(event: viser.GuiEvent) -> None:
-            send(event.client, master_id, "lose_frames", {"count": int(form.frames.value)})
+            send(event.client, master_id, "lose_frames",
+                 {"count": int(typed(form.frames, event.client_id))})
 
         @form.dc_ops.on_click
         async def _(event: viser.GuiEvent) -> None:
@@ -387,5 +402,5 @@ class LineControls:
         # Everyone's list: the "(off)" marks are the injected supply, which a real master
         # cannot read (a slave off looks like its cable pulled): with a token only on the
         # instructor's own Slave to power list (docs/classroom.md).
-        set_options(self.esc_slave, slave_options(master if self._esc_marks else {},
-                                                  self._order))
+        self.esc_slave.set_options(slave_options(master if self._esc_marks else {},
+                                                 self._order))
