@@ -89,7 +89,7 @@ def test_the_line_scenarios_play_on_the_default_rig(panel: ScenarioPlayerPanel,
 def test_play_on_another_rig_is_refused_short_fix_first(
         panel: ScenarioPlayerPanel, caplog: pytest.LogCaptureFixture) -> None:
     client = _Client()
-    panel._pick.value = next(o for o in panel._pick.options if "Max 8 analog" in o)
+    panel._pick.set_all(next(o for o in panel._pick.options if "Max 8 analog" in o))
     with caplog.at_level(logging.WARNING):
         panel._run(client, PLAY)  # type: ignore[arg-type]
     [(title, body, color)] = client.notes
@@ -102,31 +102,35 @@ def test_play_on_another_rig_is_refused_short_fix_first(
     assert panel.player.view().scenario is None  # nothing loaded
 
 
+def _hint(panel: ScenarioPlayerPanel) -> str | None:
+    """The hint a page gets for its pick (a new page's here: each page's own on an open rig,
+    tests/app/test_scenario_pick_per_page.py)."""
+    return panel._details().get(panel._pick.value_for(None))
+
+
 def test_the_picked_scenario_is_whole_in_the_hint(panel: ScenarioPlayerPanel) -> None:
     """The box cuts a long name; its hint gives the name, the file and the first sentence."""
-    assert panel._pick.hint is None  # nothing picked yet
+    assert panel._pick.handle.hint is None and _hint(panel) is None  # nothing picked yet
     entry = next(e for e in library() if e.path.name == "cpx_short_circuit.toml")
-    panel._pick.value = entry.label  # "CPX-E-EC: short circuit", the file's label
-    assert panel._pick.hint == (f"{entry.scenario.name} (cpx_short_circuit.toml): Seed 002 "
-                                "§2.5: an output of the CPX-E-8DO (module 2) is shorted while "
-                                "it is on.")
+    panel._pick.set_all(entry.label)  # "CPX-E-EC: short circuit", the file's label
+    assert _hint(panel) == (f"{entry.scenario.name} (cpx_short_circuit.toml): Seed 002 "
+                            "§2.5: an output of the CPX-E-8DO (module 2) is shorted while "
+                            "it is on.")
 
 
 def test_the_picked_scenario_is_named_whole_in_the_status(panel: ScenarioPlayerPanel) -> None:
     """The closed box cuts a long name ("[rig ethercat_line] CPX-E-EC: short circ"): the
-    status block under it names the picked scenario whole before Play, and for one marked for
-    another rig the command that serves it, so nobody needs to hover or press Play to read it."""
-    frame = panel._runtime.frame
+    line under the controls (each page's own on an open rig) names the picked scenario whole
+    before Play, and for one marked for another rig the command that serves it, so nobody
+    needs to hover or press Play to read it."""
     entry = next(e for e in library() if e.path.name == "cpx_short_circuit.toml")
-    panel._pick.value = entry.label
-    panel.update(frame)
-    status = str(panel._status.content)
+    panel._pick.set_all(entry.label)
+    status = panel.page_picked(None)
     assert f"Picked: <b>{entry.scenario.name}</b> (cpx_short_circuit.toml)" in status, status
     assert "Serve its rig" not in status
     marked = next(o for o in panel._pick.options if o.startswith("[rig nine_analog]"))
-    panel._pick.value = marked
-    panel.update(frame)
-    status = str(panel._status.content)
+    panel._pick.set_all(marked)
+    status = panel.page_picked(None)
     assert "Picked: <b>Too many analog modules</b> (too_many_analog.toml)" in status, status
     assert "written for static/rigs/nine_analog.toml: serve it with python -m app --rig " \
         "static/rigs/nine_analog.toml" in status, status
@@ -149,7 +153,6 @@ def test_a_label_keeps_the_whole_name_in_the_hint_and_the_status(
     entry = next(e for e in library() if e.path.name == "canopen_drive_alarm_reset.toml")
     name = "CANopen drive: motor overtemperature, EMCY and fault reset"
     assert entry.scenario.name == name and entry.label == entry.scenario.label != name
-    panel._pick.value = entry.label
-    assert str(panel._pick.hint).startswith(f"{name} (canopen_drive_alarm_reset.toml): ")
-    panel.update(panel._runtime.frame)
-    assert f"Picked: <b>{name}</b>" in str(panel._status.content)
+    panel._pick.set_all(entry.label)
+    assert str(_hint(panel)).startswith(f"{name} (canopen_drive_alarm_reset.toml): ")
+    assert f"Picked: <b>{name}</b>" in panel.page_picked(None)

@@ -83,7 +83,7 @@ def test_the_picker_lists_the_own_scenarios_first_then_the_shipped_ones(tmp_path
     assert all(any(o.endswith(label) for o in options) for label in shipped)
     assert len(options) == 3 + len(shipped)
     client = _Client()
-    panel._pick.value = "Sales demo: my flow"
+    panel._pick.set_all("Sales demo: my flow")
     panel._run(client, PLAY)
     assert client.notes == []
     view = panel.player.view()

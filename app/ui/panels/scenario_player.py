@@ -9,6 +9,11 @@ with the step it belongs to. The status block carries ``data-frame`` (the runtim
 dashboard wrote with it), ``data-t-us``, ``data-applied`` and ``data-generation``: headless
 screenshot tooling waits on them to know that the browser has received a given frame
 (app/screenshots.py).
+
+On an open rig the picker is each page's own (a ClientPick), with its hint and the "Picked:"
+line under the controls: Play, Step and Restart load the clicking page's pick. The loaded
+scenario is the rig's, as the player is: a load names it in every page's picker
+(docs/dashboard.md "Several browsers").
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 from app.runtime import Frame, Runtime
 from app.scenario import EXAMPLES_DIR, Scenario, ScenarioError, check_against, load_scenario
 from app.ui.commands import CommandSender, notify
+from app.ui.panels.client_pick import ClientHtml, ClientPick
+from app.ui.panels.page_prop import PageProp
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import DetailHint, from_user
 from app.ui.style import esc
@@ -178,15 +185,14 @@ def status_html(view: PlayerView, frame: Frame, text: str) -> str:
     return f'<div {marker} style="font-size:0.85em">{text}</div>'
 
 
-def status_text(view: PlayerView, t_us: int, hint: str = "", picked: str = "") -> str:
+def status_text(view: PlayerView, t_us: int, hint: str = "") -> str:
     """What the status block says (inside the marker): the scenario, its state and time, the
     step, the caption, the checkpoint and the failures; ``hint`` follows the "no scenario"
-    text (how to play the scenarios marked for another rig); ``picked`` (HTML,
-    :func:`picked_text`) names a picked scenario that is not the loaded one."""
+    text (how to play the scenarios marked for another rig). The block is every page's: a
+    page's picked scenario is named under its own controls (``page_picked``)."""
     scenario = view.scenario
     if scenario is None:
-        return ((f"{picked}<br>" if picked else "")
-                + '<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
+        return ('<span class="fr-muted">No scenario loaded. Pick one and press Play: the rig '
                 "restarts factory-fresh and the scenario drives it."
                 + (f" {esc(hint)}" if hint else "") + "</span>")
     lines = [_headline(view, scenario, scenario.name, t_us),
@@ -194,8 +200,6 @@ def status_text(view: PlayerView, t_us: int, hint: str = "", picked: str = "") -
     if view.caption:
         lines.append(_caption(view))
     lines.extend(_author_lines(view))
-    if picked:
-        lines.append(picked)
     return "<br>".join(lines)
 
 
@@ -261,14 +265,30 @@ def _author_lines(view: PlayerView) -> list[str]:
     return lines
 
 
+@dataclass(frozen=True)
+class _Pages:
+    """What each page of an open rig gets for its own pick: the picker's hint and the
+    "Picked:" line under the controls."""
+
+    hint: PageProp
+    picked: ClientHtml
+
+
 @dataclass
 class _Controls:
-    """The player's controls one connection got (or every browser, on an open rig)."""
+    """The player's controls one connection got (or every browser, on an open rig, whose
+    ``pick`` is a ClientPick and ``pages`` what each page gets for it)."""
 
     pick: Any
     buttons: Any
     speed: Any
     own: Any = None  # the instructor's own status lines (with a token): None when shared
+    pages: _Pages | None = None
+
+
+def _value(pick: Any, client_id: int | None) -> str:
+    """What ``pick`` holds on ``client_id``'s page (an open rig's ClientPick: its own)."""
+    return pick.value_for(client_id) if isinstance(pick, ClientPick) else str(pick.value)
 
 
 class ScenarioPlayerPanel:
@@ -297,6 +317,7 @@ class ScenarioPlayerPanel:
         self.trainee_title: Callable[[], str | None] = lambda: None
         instructor = instructor_for(server)
         self._shared = instructor.shared
+        self._server = server
         gui = server.gui
         with gui.add_folder(PLAYER_FOLDER):
             self._controls = instructor.part(self._build_controls)
@@ -313,12 +334,21 @@ class ScenarioPlayerPanel:
                                 initial_value=loaded or CHOOSE)
         # The box cuts a long name ("CPX-E-EC: short circuit at a digital outp"): the
         # picked one's whole name, file and first sentence are its hint.
-        DetailHint(pick, self._details)
+        if self._shared:
+            # Each page's own: one page's pick went to every page, and another page's Play
+            # loaded it. A new page's hint is the server's; each page's own goes to it.
+            pick.hint = self._details().get(str(pick.value))
+            hint = PageProp(self._server, pick, "hint")
+            pick = ClientPick(self._server, pick)
+        else:
+            DetailHint(pick, self._details)
         buttons = gui.add_button_group("Playback", (PLAY, PAUSE, STEP, RESTART))
         speed = gui.add_dropdown("Speed", tuple(speed_label(s) for s in SPEEDS),
                                  initial_value=speed_label(self._nearest_speed()))
-        controls = _Controls(pick, buttons, speed,
-                             None if self._shared else gui.add_html(""))
+        controls = _Controls(pick, buttons, speed, None if self._shared else gui.add_html(""))
+        if self._shared:
+            controls.pages = _Pages(hint, ClientHtml(self._server, gui.add_html("")))
+            pick.on_pick(lambda _client, _label: self._show_pages(controls))
         buttons.on_click(lambda event: self._on_button(event, controls))
         speed.on_update(lambda event: self._on_speed(event, controls))
         return controls
@@ -332,14 +362,14 @@ class ScenarioPlayerPanel:
             return
         choice = str(event.target.value)
         with self._busy:
-            self._run(event.client, choice, str(controls.pick.value))
+            self._run(event.client, choice, _value(controls.pick, event.client_id))
 
     def _run(self, client: viser.ClientHandle | None, choice: str,
              picked: str | None = None) -> None:
-        """``picked``: the label the pressing page's picker shows (None: the shared picker's on
-        an open rig, else the loaded scenario)."""
+        """``picked``: the label the pressing page's picker shows (None: on an open rig the
+        shared picker's for ``client``'s page, else the loaded scenario)."""
         if picked is None and self._shared:
-            picked = str(self._pick.value)
+            picked = self._pick.value_for(getattr(client, "client_id", None))
         try:
             if choice == PLAY:
                 self._play(picked)
@@ -433,14 +463,20 @@ class ScenarioPlayerPanel:
             label = scenario.label if scenario.label not in self._entries else f"{path}"
             self._entries[label] = Entry(label, path, scenario)
         for controls in self._controls.each():
+            if isinstance(controls.pick, ClientPick):  # every page's, as the player is
+                if added:
+                    controls.pick.set_options((CHOOSE, *self._entries))
+                controls.pick.set_all(label)
+                continue
             if added:
                 controls.pick.options = (CHOOSE, *self._entries)
             if controls.pick.value != label:
                 controls.pick.value = label
 
-    def _picked(self, controls: _Controls) -> str:
-        """:func:`picked_text` of the picked entry, "" when none or when it is the loaded one."""
-        entry = self._entries.get(str(controls.pick.value))
+    def _picked(self, controls: _Controls, client_id: int | None = None) -> str:
+        """:func:`picked_text` of the picked entry (on ``client_id``'s page, an open rig's),
+        "" when none or when it is the loaded one."""
+        entry = self._entries.get(_value(controls.pick, client_id))
         loaded = self._loaded
         if entry is None or (loaded is not None and entry.path.resolve() == loaded.resolve()):
             return ""
@@ -456,8 +492,20 @@ class ScenarioPlayerPanel:
 
     @property
     def _pick(self) -> Any:
-        """The shared picker of an open rig (tests)."""
+        """The shared picker of an open rig, a ClientPick (tests)."""
         return self._controls.each()[0].pick
+
+    def page_picked(self, client_id: int | None) -> str:
+        """The "Picked:" line under an open rig's controls on ``client_id``'s page."""
+        text = self._picked(self._controls.each()[0], client_id)
+        return f'<div style="font-size:0.85em">{text}</div>' if text else ""
+
+    def _show_pages(self, controls: _Controls) -> None:
+        """Each page of an open rig its own pick's hint and "Picked:" line."""
+        if controls.pages is not None:
+            details = self._details()
+            controls.pages.hint.show(lambda c: details.get(controls.pick.value_for(c)))
+            controls.pages.picked.show(self.page_picked)
 
     # ---- the dashboard's update thread -----------------------------------------------------
     def update(self, frame: Frame) -> None:
@@ -474,8 +522,9 @@ class ScenarioPlayerPanel:
         view = self.player.view()
         copies = self._controls.each()
         if self._shared:
-            picked = self._picked(copies[0]) if copies else ""
-            text = status_text(view, frame.t_us, self.hint, picked)
+            for controls in copies:
+                self._show_pages(controls)
+            text = status_text(view, frame.t_us, self.hint)
         else:
             title = self.trainee_title() if view.scenario is not None else None
             text = trainee_text(view, frame.t_us, title)
