@@ -6,7 +6,9 @@ Inject injected it. Two websocket connections stand in for the browsers."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -17,6 +19,7 @@ from app.ui.drive.drive_options import alarm_options
 from app.ui.panels.classroom_rig import ServedRig
 from tests.app.test_action_forms_per_page import last_prop
 from tests.app.test_forms_per_browser import _frames
+from tests.app.test_picks_per_browser import _widget
 from tests.app.two_pages import two_pages
 
 
@@ -55,3 +58,46 @@ def test_the_alarm_pick_and_inject_are_each_page_s_own(
     assert [a.get("code") for a in _alarms(live, drive)] == [16]
     first.set(ops, "Clear alarm")
     wait(lambda: not _alarms(live, drive))
+
+
+TWO_BUSES = """
+[rig]
+name = "a Modbus drive and a Profinet drive"
+seed = 1
+step_ms = 1
+
+[[servo]]
+id = "drive"
+fieldbus = "modbus"
+node_id = 1
+
+[[servo]]
+id = "drive_pn"
+fieldbus = "profinet"
+node_id = 2
+"""
+
+
+def test_each_page_is_offered_its_own_drive_s_alarms(tmp_path: Path) -> None:
+    """Profinet numbers 30..33 differently (seed 004 ch. 6): the page that picked the Profinet
+    drive is offered its table and its pick of 31 moves to the same code there, the other
+    page keeps the Modbus table."""
+    path = tmp_path / "two_buses.toml"
+    path.write_text(TWO_BUSES)
+    with two_pages(path) as (live, first, second):
+        drives = live.dashboard.drives
+        assert drives is not None and drives.drive_ids == ["drive", "drive_pn"]
+        (form,) = drives.controls._alarms.each()
+        alarm = uuid(form.alarm)
+        first.set(alarm, "31 INTERNAL_COMM_1")
+        time.sleep(0.2)
+        first.set(_widget(first, "Servo drive", "drive_pn"), "drive_pn")
+        wait(lambda: "31 PROFINET_INIT_1" in (last_prop(first, alarm, "options") or ()))
+        wait(lambda: first.updates(alarm) and first.updates(alarm)[-1] == "31 PROFINET_INIT_1")
+        _frames(live)
+        assert "31 INTERNAL_COMM_1" in last_prop(second, alarm, "options")
+        assert "31 PROFINET_INIT_1" not in last_prop(second, alarm, "options")
+        first.set(uuid(form.ops), "Inject alarm")
+        wait(lambda: _alarms(live, "drive_pn"))
+        assert [a.get("code") for a in _alarms(live, "drive_pn")] == [31]
+        assert _alarms(live, "drive") == []

@@ -18,7 +18,7 @@ import viser
 from app.ui.drive.drive_options import alarm_details, alarm_options, leading_int
 from app.ui.panels.action_form import ActionForm
 from app.ui.panels.client_input import ClientSynced
-from app.ui.panels.client_pick import ClientPick
+from app.ui.panels.client_pick import ClientPick, page_ready, same_head
 from app.ui.panels.page_prop import PageProp
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import DetailHint, Synced, on_button, set_options, short_label_css
@@ -118,7 +118,8 @@ class DriveFaults:
 
     def _show_alarms(self: DrivePanel, form: AlarmForm) -> None:
         """Each page of an open rig its drive's alarm list and its pick's description; a page
-        whose pick its drive's fieldbus does not have moves to the list's first."""
+        whose pick its drive's fieldbus does not have moves to the same code ("31
+        INTERNAL_COMM_1" -> "31 PROFINET_INIT_1", ch. 6), else to the list's first."""
         pages, pick = form.pages, form.alarm
         if pages is None or not isinstance(pick, ClientPick):
             return
@@ -132,8 +133,10 @@ class DriveFaults:
             pick.value_for(client_id)))
         for client_id, client in self._server.get_clients().items():
             offered = alarm_options(bus(client_id))
-            if pick.value_for(client_id) not in offered:
-                pick.set_for(client, offered[0])
+            now = pick.value_for(client_id)
+            if now not in offered and page_ready(self._server, client):
+                pick.set_for(client, next((o for o in offered if same_head(now, o)),
+                                          offered[0]))
 
     def _fault_form(self: DrivePanel, gui: Any, faults: Mapping[str, Action]) -> ActionForm:
         with gui.add_folder("Drive faults", expand_by_default=False):
