@@ -8,26 +8,36 @@ before a command goes (docs/cpx-e-ec.md choice 41). The model's set_rotary keeps
 
 from __future__ import annotations
 
-from types import SimpleNamespace
+import time
 from typing import Any
 
 import pytest
+from form_page import fill, page_on, press, uuid
 from served_dashboard import drawn, served_default_rig
+from viser_page import Page, wait
 
 from app.screenshots import ServedRig
 from app.ui.line.rotary_entry import rotary_from_text
-from app.ui.panels.action_form import ActionForm
+from app.ui.panels.client_action_form import ClientActionForm
 from devices.device import CommandError
 
 
-def _rotary_form(live: ServedRig) -> ActionForm:
-    """The CPX-E-EC's operating form with set_rotary picked, as a page picks it."""
+def _rotary_form(live: ServedRig, page: Page) -> tuple[ClientActionForm, int]:
+    """The CPX-E-EC's operating form with set_rotary picked by ``page``, and the page's id."""
     form = live.dashboard.line.controls.all_forms()["cpx"][0]  # type: ignore[union-attr]
-    other = next(n for n in form.options() if n != "set_rotary")
+    drawn(live)
+    (page_id,) = live.server.get_clients()
+    other = next(n for n in form.options(page_id) if n != "set_rotary")
     for name in (other, "set_rotary"):
-        form.choice.value = name
-        form.rebuild()
-    return form
+        page.set(uuid(form.choice), name)
+        time.sleep(0.2)
+    wait(lambda: form.picked(page_id) == "set_rotary")
+    time.sleep(0.2)  # the pick's callback (viser's thread pool) fills the boxes
+    return form, page_id
+
+
+def _typed(form: ClientActionForm, page_id: int) -> str:
+    return str(form.field("set_rotary", "value").value_for(page_id))
 
 
 def _rotary(live: ServedRig) -> int:
@@ -56,32 +66,31 @@ def test_a_wrong_entry_says_what_the_switches_take(text: str, said: str) -> None
 
 
 def test_the_form_takes_the_address_as_tab5_writes_it() -> None:
-    with served_default_rig(1.0) as live:
-        form = _rotary_form(live)
-        assert form.values() == {"value": "000"}  # as the Switches row shows it
-        form.handle("value").value = "07B"
-        form.submit(None)
-        drawn(live)
-        assert _rotary(live) == 0x07B
-        form.rebuild()  # the box starts from the switches again, in their digits
-        assert form.values() == {"value": "07B"}
-        form.handle("value").value = "0x0A1"
-        form.submit(None)
-        drawn(live)
-        assert _rotary(live) == 0x0A1
+    with served_default_rig(1.0) as live, page_on(live) as page:
+        form, page_id = _rotary_form(live, page)
+        assert _typed(form, page_id) == "000"  # as the Switches row shows it
+        fill(page, form, "set_rotary", value="07B")
+        press(page, form)
+        wait(lambda: _rotary(live) == 0x07B)
+        form, page_id = _rotary_form(live, page)  # picked again: from the switches' digits
+        assert _typed(form, page_id) == "07B"
+        fill(page, form, "set_rotary", value="0x0A1")
+        press(page, form)
+        wait(lambda: _rotary(live) == 0x0A1)
 
 
 def test_a_wrong_entry_is_refused_on_the_page_and_sends_nothing() -> None:
-    notes: list[tuple[Any, ...]] = []
-    page = SimpleNamespace(client_id=7, add_notification=lambda *a, **kw: notes.append(
-        (*a, kw.get("color"))))
-    with served_default_rig(1.0) as live:
-        form = _rotary_form(live)
-        form.handle("value").value = "1000"
-        form.submit(page)  # type: ignore[arg-type]
+    with served_default_rig(1.0) as live, page_on(live) as page:
+        form, _ = _rotary_form(live, page)
+        fill(page, form, "set_rotary", value="1000")
+        press(page, form)
+
+        def refusal() -> dict[str, Any] | None:
+            return next((m for m in page.received()
+                         if m.get("type") == "NotificationShowMessage"), None)
+        shown = wait(refusal)
         drawn(live)
         assert _rotary(live) == 0  # default.toml's, untouched
-        assert len(notes) == 1
-        title, body, color = notes[0]
-        assert title == "set_rotary refused" and color == "red"
-        assert "0x1000 is above FFF" in body and "000 ... FFF" in body
+        props = shown["props"]
+        assert props["title"] == "set_rotary refused" and props["color"] == "red"
+        assert "0x1000 is above FFF" in props["body"] and "000 ... FFF" in props["body"]
