@@ -59,6 +59,7 @@ from devices.coe.esm import (
 from devices.coe.leds import LedInputs, alarm_led, wanted_patterns
 from devices.coe.mailbox import SdoServices
 from devices.coe.objects import build_coe_dictionary
+from devices.coe.sm_checks import SmChecks
 from devices.device import Action, CommandError, DeviceModel
 from devices.esm import AlStatusView
 from devices.ethercat import AlState, describe_al_status_code
@@ -66,6 +67,7 @@ from devices.events import EmergencySent
 from devices.leds import LedPattern
 from devices.od import IEC_NAMES, OdEntry, SdoAbort, TypeNames
 from devices.servo.drive import ServoDrive
+from devices.sync_managers import SmSetup
 
 logger = logging.getLogger(__name__)
 
@@ -85,7 +87,7 @@ OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
 OFF_LED = LedPattern.OFF
 
 
-class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
+class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceModel):
     KIND = "servo_ecat"
     ACTIONS: ClassVar[Mapping[str, Action]] = ACTIONS
     # Seed 004 §5.5's TwinCAT Process Data list prints the IEC names (604100 Status Word UINT,
@@ -107,6 +109,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, AlStatusView, DeviceModel):
         self.line_in, self.plugs = True, (True, True)
         self.line_out = self.link_out = out_link
         self.on_line = False
+        self.sm_setup: tuple[SmSetup, ...] | None = None  # a master on the wire wrote them
         self.emergencies = EmergencyMailbox()
         self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
         self.csp = Csp(drive)

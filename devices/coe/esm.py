@@ -47,12 +47,14 @@ EEPROM_ALARM = 35
 
 # Ch. 5 "Transizioni": what the slave verifies before it acknowledges a step up, in order (the
 # names are methods of the slave returning None or the refusing AL status code). I -> P: the
-# master only sets up the mailbox sync managers; refused only while the EtherCAT EEPROM
-# alarm (35) is latched.
+# EtherCAT EEPROM (alarm 35), then the mailbox sync managers the master set up (0x0016). P -> S:
+# the PDO mapping (0x0025 / 0x0024), then the sync managers of the process data
+# (0x001D / 0x001E), the ETG sample stack's order (the mapping gives the SM lengths);
+# devices/coe/sm_checks.py.
 TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
-    (AlState.INIT, AlState.PREOP): ("check_eeprom",),
+    (AlState.INIT, AlState.PREOP): ("check_eeprom", "check_mailbox"),
     (AlState.PREOP, AlState.SAFEOP): ("check_controller", "check_output_mapping",
-                                      "check_input_mapping"),
+                                      "check_input_mapping", "check_sync_managers"),
     (AlState.SAFEOP, AlState.OP): ("check_controller", "check_outputs"),
 }
 
