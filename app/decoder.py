@@ -49,6 +49,7 @@ from app.decoder_meaning import (
     modbus_exception,
 )
 from app.decoder_paste import PasteError, canonical
+from app.decoder_registers import object_readings, register_text
 from app.decoder_states import MASTER, state_readings
 from app.modbus.pdu import EXCEPTION_FLAG
 from devices.canopen import emcy as ds301
@@ -84,6 +85,9 @@ def _decode(text: str) -> list[Meaning]:
     states = state_readings(raw)  # before canonical(): "node 2: boot-up" is no FieldRig line
     if states:
         return states
+    objects = object_readings(raw)  # "0x1001:0 = 0x83", as the Objects tab shows the value
+    if objects:
+        return objects
     try:
         raw = canonical(raw).strip()
     except PasteError as exc:
@@ -215,12 +219,6 @@ def _sentence(text: str) -> str:
     return text if text.endswith((".", "!", "?")) else text + "."
 
 
-def register_text(register: int) -> str:
-    """``0x81: generic error, manufacturer specific`` (DS 301 0x1001)."""
-    names = [name for bit, name in _REGISTER_NAMES.items() if register & bit]
-    return f"{fmt_hex(register, 2)}: {', '.join(names) if names else 'no error'}"
-
-
 def emergency(code: int, register: int, data: bytes) -> list[Meaning]:
     """An emergency: error code, error register (0x1001), manufacturer bytes."""
     found: list[Meaning] = []
@@ -232,8 +230,9 @@ def emergency(code: int, register: int, data: bytes) -> list[Meaning]:
     found.extend(_canopen_emcy(code))
     if not found:
         found.append(_emcy_class(code))
-    reg = f" Error register {register_text(register)}."
-    return [replace(m, text=m.text + reg) for m in found]
+    # Each reading's register in its own device's words (seed 002 Tab. 22 for the CPX-E-EC).
+    return [replace(m, text=f"{m.text} Error register {register_text(register, m.family)}.")
+            for m in found]
 
 
 def _fastcat_emergency(register: int, data: bytes) -> list[Meaning]:

@@ -31,11 +31,17 @@ REG_COMMUNICATION = 0x10
 REG_PROFILE = 0x20
 REG_MANUFACTURER = 0x80
 
-# Error register 0x1001 bit names (DS 301, seed 004 ch. 4; seed 002 Tab. 22 names the same bits).
+REG_RESERVED = 0x40
+
+# Error register 0x1001 bit names: DS 301's, as seed 004 ch. 4 prints them for the drive ("Bit
+# Error cause"). The Codes tab reads the drive's register in these words, and a device whose
+# seed names no bits (the TRS-CAT) in DS 301's; the CPX-E-EC has its own (seed 002 Tab. 22,
+# devices/cpx/codes.py), the FastCAT one value (seed 000 §7, devices/fastcat/alarms.py).
 REGISTER_BIT_NAMES: dict[int, str] = {
-    REG_GENERIC: "generic error", REG_CURRENT: "current", REG_VOLTAGE: "voltage",
-    REG_TEMPERATURE: "temperature", REG_COMMUNICATION: "communication",
-    REG_PROFILE: "device profile", REG_MANUFACTURER: "manufacturer specific",
+    REG_GENERIC: "Generic Error", REG_CURRENT: "Current", REG_VOLTAGE: "Voltage",
+    REG_TEMPERATURE: "Temperature", REG_COMMUNICATION: "Communication Error",
+    REG_PROFILE: "Device Profile Specific", REG_RESERVED: "Reserved (always 0)",
+    REG_MANUFACTURER: "Manufacturer Specific",
 }
 
 # The DS 301 codes the node itself sends, in words (the Codes tab reads them, app/decoder.py).

@@ -36,9 +36,16 @@ REG_CURRENT = 0x02  # bit 1: KZS (sensor supply) / KZA (outputs) short circuit, 
 REG_VOLTAGE = 0x04  # bit 2: U_OUT undervoltage, load voltage failure
 REG_COMMUNICATION = 0x10  # bit 4: node guard, heartbeat (other fieldbuses only)
 REG_MANUFACTURER = 0x80  # bit 7: wire break, other error
-ERROR_REGISTER_BITS: dict[int, str] = {
-    0: "Generic Error", 1: "Current", 2: "Voltage", 4: "Communication Error",
-    7: "Manufacturer specific",
+# Each bit's name and explanation as Tab. 22 prints them (the Codes tab reads a CPX-E-EC's
+# 0x1001 in these words); bits 3, 5 and 6 are "-" there.
+ERROR_REGISTER_BITS: dict[int, tuple[str, str]] = {
+    REG_GENERIC: ("Generic Error", "set with every error"),
+    REG_CURRENT: ("Current", "KZS: short circuit/overload of the sensor supply; KZA: short "
+                             "circuit/overload of the outputs"),
+    REG_VOLTAGE: ("Voltage", "undervoltage at the outputs (U_OUT); load voltage failure at an "
+                             "output or input module"),
+    REG_COMMUNICATION: ("Communication Error", "node guard, heartbeat: other fieldbuses only"),
+    REG_MANUFACTURER: ("Manufacturer specific", "wire break, other error"),
 }
 
 # §2.5.3 Tab. 23: status bits (byte 3, object 0x1002; the same 8 bits are the status-bit

@@ -25,6 +25,7 @@ TABLES = (COUPLER, MODULE)
 
 EMERGENCY_CODE = 0xFF00  # §7: "ErrorCode: 0xFF00 (device specific)"
 EMERGENCY_REGISTER = 0x81  # §7: "ErrorRegister: 0x81 (device error)"
+EMERGENCY_REGISTER_TEXT = "device error"  # §7's words for it (the Codes tab reads them)
 EMERGENCY_DATA_LEN = 5  # §7: 5 bytes, the first 4 significant
 LAST_RESETTABLE_COUPLER_CODE = 0x7F  # §7, §7.5: coupler codes above 0x7F need a resync
 AL_STATUS_MANUFACTURER = 0x8000  # §7.7: "0x80XX ... allarme manufacturer"

@@ -84,7 +84,7 @@ def test_fastcat_emergency_names_the_row_and_the_module(row: fastcat.AlarmCode) 
     assert f"{row.table.capitalize()} alarm 0x{row.code:02X} {row.symbol} on module 5" in m.text
     assert row.description in m.text
     assert ("§7.5" if row.table == fastcat.COUPLER else "§7.6") in m.source
-    assert "Error register 0x81: generic error, manufacturer specific" in m.text
+    assert "Error register 0x81 (seed 000 §7): device error" in m.text
 
 
 @pytest.mark.parametrize("row", FASTCAT_ROWS, ids=lambda r: r.label)
@@ -224,18 +224,19 @@ def test_canopen_node_codes(code: int) -> None:
     assert family(decode(fmt_bytes(frame)), CANOPEN)
 
 
-@pytest.mark.parametrize(("code", "bits"), [(0x2999, "current"), (0x3999, "voltage"),
-                                            (0x4999, "temperature"), (0x8199, "communication"),
-                                            (0x8999, "device profile"),
-                                            (0xFF99, "manufacturer specific"),
-                                            (0x5555, "generic error")])
+@pytest.mark.parametrize(("code", "bits"), [(0x2999, "Current"), (0x3999, "Voltage"),
+                                            (0x4999, "Temperature"),
+                                            (0x8199, "Communication Error"),
+                                            (0x8999, "Device Profile Specific"),
+                                            (0xFF99, "Manufacturer Specific"),
+                                            (0x5555, "Generic Error")])
 def test_an_unknown_emcy_code_gets_its_register_bits(code: int, bits: str) -> None:
     """The class by the high byte: tests/app/test_decoder_tables.py."""
     assert bits in one(decode(f"0x{code:04X}"), CANOPEN).text.split("error register bits")[1]
 
 
 def test_register_bits() -> None:
-    assert register_text(0x81) == "0x81: generic error, manufacturer specific"
+    assert register_text(0x81) == "0x81: Generic Error, Manufacturer Specific"  # seed 004 ch. 4
     assert register_text(0x00) == "0x00: no error"
 
 

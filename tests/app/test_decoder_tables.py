@@ -24,7 +24,7 @@ def test_every_code_the_node_sends_has_its_text(code: int) -> None:
 
 def test_the_register_bits_are_named_by_the_model() -> None:
     bits = (emcy.REG_GENERIC, emcy.REG_CURRENT, emcy.REG_VOLTAGE, emcy.REG_TEMPERATURE,
-            emcy.REG_COMMUNICATION, emcy.REG_PROFILE, emcy.REG_MANUFACTURER)
+            emcy.REG_COMMUNICATION, emcy.REG_PROFILE, emcy.REG_RESERVED, emcy.REG_MANUFACTURER)
     assert sorted(emcy.REGISTER_BIT_NAMES) == sorted(bits)
     assert register_text(0x81) == (f"0x81: {emcy.REGISTER_BIT_NAMES[emcy.REG_GENERIC]}, "
                                    f"{emcy.REGISTER_BIT_NAMES[emcy.REG_MANUFACTURER]}")

@@ -1,0 +1,157 @@
+"""Bit registers in each device's own words: the error register 0x1001 (byte 2 of a CoE /
+CANopen emergency) and a 0x1001 value as the Objects tab shows it.
+
+The words are the devices' tables; this module picks the table of the device a reading
+belongs to and finds the object and its value in what is pasted:
+
+- the CPX-E-EC: seed 002 Tab. 22 (``devices.cpx.codes.ERROR_REGISTER_BITS``);
+- the drive (on CANopen and on EtherCAT): seed 004 ch. 4, DS 301's table
+  (``devices.canopen.emcy.REGISTER_BIT_NAMES``);
+- the FastCAT: seed 000 §7 names one value, "0x81 (device error)"
+  (``devices.fastcat.alarms.EMERGENCY_REGISTER_TEXT``), DS 301's words for any other;
+- the TRS-CAT: seed 001 names no bits, so DS 301's.
+
+An object query is ``INDEX:SUB`` then the value, as the Objects tab's row reads (``0x1001:0
+Error Register U8 ro 131``) or typed (``0x1001:0 = 0x83``): the value in decimal unless it
+has ``0x``, as the Objects tab's Value box takes it; without a value every bit is listed.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+from app.decoder_meaning import CANOPEN, CPX, FASTCAT, SERVO, TRSCAT, DecodeError, Meaning
+from devices.canopen import emcy as ds301
+from devices.cpx import codes as cpx
+from devices.cpx.objects import TYPE_NAMES as CPX_TYPES
+from devices.events import fmt_hex
+from devices.fastcat import alarms as fastcat
+from devices.od import IEC_NAMES, DataType
+from devices.trscat.objects import TYPE_NAMES as TRSCAT_TYPES
+
+
+@dataclass(frozen=True)
+class BitWords:
+    """One device's words for the bits of a register: ``names`` by bit mask, ``blank`` what a
+    set bit the table leaves out reads as, ``whole`` values the seed names as a whole."""
+
+    source: str
+    names: Mapping[int, str]
+    note: str = ""  # why these words: "seed 001 names no bits"
+    blank: str = "not in the table"
+    whole: Mapping[int, str] | None = None
+
+    def text(self, value: int) -> str:
+        """``Generic Error, Current`` (``no error`` for 0)."""
+        if self.whole and value in self.whole:
+            return self.whole[value]
+        if not value:
+            return "no error"
+        return ", ".join(self.names.get(1 << bit, f"bit {bit} ({self.blank})")
+                         for bit in range(value.bit_length()) if value >> bit & 1)
+
+    def listing(self) -> str:
+        """Every named bit: ``bit 0 Generic Error; bit 1 Current; ...``."""
+        return "; ".join(f"bit {mask.bit_length() - 1} {name}"
+                         for mask, name in sorted(self.names.items()))
+
+
+_DS301 = ds301.REGISTER_BIT_NAMES
+_DRIVE = BitWords("seed 004 ch. 4", _DS301)
+REGISTER_WORDS: dict[str, BitWords] = {
+    CPX: BitWords("seed 002 Tab. 22",
+                  {mask: f"{name} ({note})" for mask, (name, note)
+                   in cpx.ERROR_REGISTER_BITS.items()}, blank='"-" in Tab. 22'),
+    SERVO: _DRIVE,
+    CANOPEN: _DRIVE,  # the drive's CANopen node's own codes
+    TRSCAT: BitWords("DS 301", _DS301, note="seed 001 names no bits"),
+    FASTCAT: BitWords("seed 000 §7", _DS301,
+                      whole={fastcat.EMERGENCY_REGISTER: fastcat.EMERGENCY_REGISTER_TEXT}),
+}
+_PLAIN = BitWords("DS 301", _DS301)
+
+
+def register_text(register: int, family: str | None = None) -> str:
+    """``0x81: Generic Error, Manufacturer Specific`` (DS 301); with a family, in that
+    device's words and naming them: ``0x81 (seed 000 §7): device error``."""
+    if family is None:
+        return f"{fmt_hex(register, 2)}: {_PLAIN.text(register)}"
+    words = REGISTER_WORDS.get(family, _PLAIN)
+    source = "; ".join(filter(None, (words.source, words.note)))
+    if words.whole and register not in words.whole:  # a value the seed does not name
+        named = ", ".join(fmt_hex(v, 2) for v in words.whole)
+        source = f"DS 301; {words.source} names only {named}"
+    return f"{fmt_hex(register, 2)} ({source}): {words.text(register)}"
+
+
+# ---- an object and its value, as the Objects tab shows it --------------------------------
+@dataclass(frozen=True)
+class _Object:
+    sub: int
+    name: str
+    size: int  # bytes: 1 for a U8, 2 for a U16
+    read: Callable[[int | None, str], list[Meaning]]  # (value or None, title) -> readings
+
+
+def _error_register(value: int | None, title: str) -> list[Meaning]:
+    """The devices with a 0x1001 (the FastCAT has none): each in its own words."""
+    found = []
+    for family in (TRSCAT, CPX, SERVO):
+        words = REGISTER_WORDS[family]
+        source = f"{words.source} ({words.note})" if words.note else words.source
+        text = words.text(value) if value is not None else words.listing()
+        found.append(Meaning(family, title, text + ".", source))
+    return found
+
+
+_OBJECTS: dict[int, _Object] = {
+    0x1001: _Object(0, "Error register", 1, _error_register),
+}
+_ADDRESS = re.compile(r"\s*(?:0x)?([0-9a-f]{4})\s*:\s*(?:0x)?([0-9a-f]{1,2})(?![0-9a-z])(.*)",
+                      re.IGNORECASE | re.DOTALL)
+_NUMBER = re.compile(r"\(?(0x[0-9a-f]+|\d+)\)?", re.IGNORECASE)
+# What else an Objects tab row holds: the access column and every manual's type names.
+_ROW_WORDS = {"ro", "rw", "p", "value"} | {
+    names.names[dtype].lower() for names in (IEC_NAMES, CPX_TYPES, TRSCAT_TYPES)
+    for dtype in (DataType.UNSIGNED8, DataType.UNSIGNED16)}
+
+
+def object_readings(text: str) -> list[Meaning]:
+    """The readings of ``0x1001:0 = 0x83`` and the like; [] when ``text`` is no such object
+    query, DecodeError for one the tab cannot read (another sub, two values, too wide)."""
+    found = _ADDRESS.fullmatch(text)
+    if found is None or int(found.group(1), 16) not in _OBJECTS:
+        return []
+    index, sub = int(found.group(1), 16), int(found.group(2), 16)
+    obj = _OBJECTS[index]
+    address = f"{fmt_hex(index, 4)}:{obj.sub}"
+    if sub != obj.sub:
+        raise DecodeError(f"{fmt_hex(index, 4)}:{sub}: the Codes tab reads {address} "
+                          f"({obj.name}), sub {obj.sub}")
+    value = _value(found.group(3), obj, address)
+    title = f"{address} {obj.name}" + ("" if value is None else
+                                       f" = {fmt_hex(value, 2 * obj.size)}")
+    return obj.read(value, title)
+
+
+def _value(rest: str, obj: _Object, address: str) -> int | None:
+    values = []
+    name_words = set(obj.name.lower().split())
+    for token in re.split(r"[\s=,;]+", rest.strip()):
+        number = _NUMBER.fullmatch(token)
+        if number:
+            digits = number.group(1).lower()
+            values.append(int(digits, 16) if digits.startswith("0x") else int(digits))
+        elif token and token.lower() not in _ROW_WORDS | name_words:
+            raise DecodeError(f"{token!r} after {address}: give its value, decimal or 0x.. "
+                              f"hex, as the Objects tab shows it ({address} = 0x83)")
+    if len(set(values)) > 1:
+        raise DecodeError(f"{address}: two values ({', '.join(map(str, values))}); give one")
+    if not values:
+        return None
+    if values[0] >= 1 << 8 * obj.size:
+        raise DecodeError(f"{address} is {'one byte' if obj.size == 1 else 'two bytes'}: "
+                          f"{fmt_hex(values[0], 2)} does not fit")
+    return values[0]
