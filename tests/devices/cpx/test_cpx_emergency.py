@@ -40,8 +40,9 @@ def test_tab21_codes() -> None:
 
 
 def test_tab22_tab23_bits() -> None:
-    assert ERROR_REGISTER_BITS == {0: "Generic Error", 1: "Current", 2: "Voltage",
-                                   4: "Communication Error", 7: "Manufacturer specific"}
+    names = {mask.bit_length() - 1: name for mask, (name, _) in ERROR_REGISTER_BITS.items()}
+    assert names == {0: "Generic Error", 1: "Current", 2: "Voltage", 4: "Communication Error",
+                     7: "Manufacturer specific"}
     assert [STATUS_BITS[b] for b in range(8)] == [
         "Error at valve terminal", "Error at output", "Error at input",
         "Error at analog or technology module", "Undervoltage", "Short circuit/overload",
