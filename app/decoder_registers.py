@@ -1,5 +1,6 @@
 """Bit registers in each device's own words: the error register 0x1001 (byte 2 of a CoE /
-CANopen emergency) and a 0x1001 value as the Objects tab shows it.
+CANopen emergency), and a 0x1001 or 0x10F3:5 ("Flags" of the diagnosis history) value as the
+Objects tab shows it.
 
 The words are the devices' tables; this module picks the table of the device a reading
 belongs to and finds the object and its value in what is pasted:
@@ -10,6 +11,10 @@ belongs to and finds the object and its value in what is pasted:
 - the FastCAT: seed 000 §7 names one value, "0x81 (device error)"
   (``devices.fastcat.alarms.EMERGENCY_REGISTER_TEXT``), DS 301's words for any other;
 - the TRS-CAT: seed 001 names no bits, so DS 301's.
+
+0x10F3:5: the TRS-CAT's in seed 001 §9.3.7's words (bits 1-3, ``devices.trscat.diagnostics.
+FLAG_TEXT``), the CPX-E-EC's in seed 002 Tab. 18 / 19's (bits 0 and 4,
+``devices.cpx.history.FLAG_TEXT``); the other bits each model keeps are ETG.1020's.
 
 An object query is ``INDEX:SUB`` then the value, as the Objects tab's row reads (``0x1001:0
 Error Register U8 ro 131``) or typed (``0x1001:0 = 0x83``): the value in decimal unless it
@@ -25,10 +30,12 @@ from dataclasses import dataclass
 from app.decoder_meaning import CANOPEN, CPX, FASTCAT, SERVO, TRSCAT, DecodeError, Meaning
 from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
+from devices.cpx import history as cpx_history
 from devices.cpx.objects import TYPE_NAMES as CPX_TYPES
 from devices.events import fmt_hex
 from devices.fastcat import alarms as fastcat
 from devices.od import IEC_NAMES, DataType
+from devices.trscat import diagnostics as trscat_diag
 from devices.trscat.objects import TYPE_NAMES as TRSCAT_TYPES
 
 
@@ -106,8 +113,34 @@ def _error_register(value: int | None, title: str) -> list[Meaning]:
     return found
 
 
+# 0x10F3:5 of each device that has a diagnosis history: (bit = 1, bit = 0) by mask, source.
+_FLAGS: dict[str, tuple[Mapping[int, tuple[str, str]], str]] = {
+    TRSCAT: (trscat_diag.FLAG_TEXT, "seed 001 §9.3.7 (bit 0: ETG.1020)"),
+    CPX: (cpx_history.FLAG_TEXT, "seed 002 Tab. 18, 19 (bits 1-3, 5: ETG.1020)"),
+}
+
+
+def _diag_flags(value: int | None, title: str) -> list[Meaning]:
+    found = []
+    for family, (words, source) in _FLAGS.items():
+        if value is None:
+            text = "; ".join(f"bit {mask.bit_length() - 1}: 1 = {one}, 0 = {zero}"
+                             for mask, (one, zero) in sorted(words.items()))
+        else:
+            known = [f"bit {mask.bit_length() - 1} = {int(bool(value & mask))}: "
+                     f"{one if value & mask else zero}"
+                     for mask, (one, zero) in sorted(words.items())]
+            other = [f"bit {bit} = 1: not a bit of the {family}'s 0x10F3:5"
+                     for bit in range(value.bit_length())
+                     if value >> bit & 1 and 1 << bit not in words]
+            text = "; ".join(known + other)
+        found.append(Meaning(family, title, text + ".", source))
+    return found
+
+
 _OBJECTS: dict[int, _Object] = {
     0x1001: _Object(0, "Error register", 1, _error_register),
+    0x10F3: _Object(5, "Flags", 2, _diag_flags),
 }
 _ADDRESS = re.compile(r"\s*(?:0x)?([0-9a-f]{4})\s*:\s*(?:0x)?([0-9a-f]{1,2})(?![0-9a-z])(.*)",
                       re.IGNORECASE | re.DOTALL)

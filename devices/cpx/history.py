@@ -29,6 +29,23 @@ FLAG_DISABLE_ERROR = 0x0008
 FLAG_ACKNOWLEDGE = 0x0010  # Tab. 18: bit 4
 FLAG_OVERWRITE_DISCARD = 0x0020  # ETG.1020 bit 5, set by the device
 WRITABLE_FLAGS = 0x001F
+# Sub 5 in words, (bit = 1, bit = 0), for the Codes tab: Tab. 19 (bit 0), Tab. 18 (bit 4), the
+# rest ETG.1020's.
+FLAG_TEXT: dict[int, tuple[str, str]] = {
+    FLAG_EMERGENCY: ("Emergency Message activated (Tab. 19): every new message is also sent "
+                     "as an emergency", "Emergency Message deactivated (Tab. 19)"),
+    FLAG_DISABLE_INFO: ("info messages disabled (ETG.1020)", "info messages stored (ETG.1020)"),
+    FLAG_DISABLE_WARNING: ("warning messages disabled (ETG.1020)",
+                           "warning messages stored (ETG.1020)"),
+    FLAG_DISABLE_ERROR: ("error messages disabled (ETG.1020)",
+                         "error messages stored (ETG.1020)"),
+    FLAG_ACKNOWLEDGE: ("Acknowledge mode (Tab. 18): a message is acknowledged before a new one "
+                       "may overwrite it (with 64 unacknowledged messages new ones are lost)",
+                       "Overwrite mode (Tab. 18): once 64 messages are stored, new ones "
+                       "overwrite the oldest"),
+    FLAG_OVERWRITE_DISCARD: ("a message was overwritten or discarded (ETG.1020, set by the "
+                             "bus module)", "no message overwritten or discarded (ETG.1020)"),
+}
 DISABLE_FLAG: dict[DiagType, int] = {DiagType.INFO: FLAG_DISABLE_INFO,
                                      DiagType.WARNING: FLAG_DISABLE_WARNING,
                                      DiagType.ERROR: FLAG_DISABLE_ERROR}

@@ -41,6 +41,18 @@ class DiagType(enum.IntEnum):
         return 1 << (int(self) + 1)
 
 
+# 0x10F3:5 in words, (bit = 1, bit = 0), for the Codes tab: §9.3.7 "Flag messaggi abilitati,
+# default 0x00 tutti abilitati. Bit1 = 1: disabilita messaggi informativi, Bit2 = 1: ... di
+# attenzione, Bit3 = 1: ... di errore"; bit 0 is ETG.1020's, which the model follows.
+FLAG_TEXT: dict[int, tuple[str, str]] = {
+    FLAG_EMERGENCY: ("each new application error also sent as a CoE emergency (ETG.1020; "
+                     "§9.3.7 does not print bit 0)", "no emergency (ETG.1020)"),
+    DiagType.INFO.disable_bit: ("info messages disabled", "info messages enabled"),
+    DiagType.WARNING.disable_bit: ("warning messages disabled", "warning messages enabled"),
+    DiagType.ERROR.disable_bit: ("error messages disabled", "error messages enabled"),
+}
+
+
 class Bus(enum.Enum):
     """The 0xF100 TRS bus status a fault makes FALSE (§9.3.4 subs 2..4)."""
 
