@@ -48,6 +48,7 @@ from app.decoder_meaning import (
     al_status_registers,
     modbus_exception,
 )
+from app.decoder_nmt import nmt_readings
 from app.decoder_paste import PasteError, canonical
 from app.decoder_registers import object_readings, register_text
 from app.decoder_states import MASTER, state_readings
@@ -85,6 +86,9 @@ def _decode(text: str) -> list[Meaning]:
     states = state_readings(raw)  # before canonical(): "node 2: boot-up" is no FieldRig line
     if states:
         return states
+    nmt = nmt_readings(raw)  # "NMT 01 02", the CANopen tab's frame log row
+    if nmt:
+        return nmt
     objects = object_readings(raw)  # "0x1001:0 = 0x83", as the Objects tab shows the value
     if objects:
         return objects

@@ -66,6 +66,23 @@ class NmtCommand(enum.IntEnum):
     RESET_COMMUNICATION = 0x82
 
 
+# What a reset does, in seed 004 ch. 4's words ("Reset-Application", "Reset-Communication");
+# the other commands' effect is the state they lead to (TRANSITIONS, STATE_TEXT). The Codes
+# tab reads them (app/decoder_nmt.py).
+RESET_TEXT: dict[NmtCommand, str] = {
+    NmtCommand.RESET_NODE: "Reset-Application: the manufacturer-specific and device-profile "
+                           "parameters back to their power-on values (the last saved), then "
+                           "Reset-Communication and Initializing: the node sends its boot-up "
+                           "message (0x00) and goes to Pre-operational",
+    NmtCommand.RESET_COMMUNICATION: "Reset-Communication: the communication profile's "
+                                    "parameters back to their power-on values, then "
+                                    "Initializing: the node sends its boot-up message (0x00) "
+                                    "and goes to Pre-operational",
+}
+NODE_ID_ALL = 0  # byte 1 of the command: "il nodo virtuale-ID 0" addresses every node
+MAX_NODE_ID = 127
+
+
 class Service(enum.Enum):
     SDO = "SDO"
     PDO = "PDO"
