@@ -33,6 +33,7 @@ import re
 import struct
 from dataclasses import replace
 
+from app.decoder_events import event_readings
 from app.decoder_meaning import (
     CANOPEN,
     CPX,
@@ -86,6 +87,9 @@ def _decode(text: str) -> list[Meaning]:
     states = state_readings(raw)  # before canonical(): "node 2: boot-up" is no FieldRig line
     if states:
         return states
+    named = event_readings(raw)  # seed 003's "network recovery", "resync events", ...
+    if named:
+        return named
     nmt = nmt_readings(raw)  # "NMT 01 02", the CANopen tab's frame log row
     if nmt:
         return nmt
