@@ -45,7 +45,11 @@ _NMT_BY_CODE: dict[int, NmtState] = {code: state for state, code in STATE_CODE.i
 
 # Seed 000 §7.4: the states as their AL status values in decimal (8 OP, 2 PREOP).
 _TRACE_CHANGE = re.compile(r"SlaveStateChange\s+slave\s*=\s*(\d+)\s+from\s+(\d+)\s+to\s+(\d+)")
-_DC_LINE = re.compile(r"distributed clocks:\s*(\w+)\s*->\s*(\w+)", re.IGNORECASE)
+# The phases may come spelt as words ("not synchronized", "NOT-SYNCHRONIZED"): each ends at
+# the arrow, at the line's "(deviation ...)" or at its end.
+_DC_LINE = re.compile(r"distributed clocks:\s*(\S.*?)\s*->\s*(\S.*?)\s*(?:\(.*|\.)?\s*$",
+                      re.IGNORECASE | re.DOTALL)
+_DC_PREFIX = re.compile(r"distributed clocks:", re.IGNORECASE)
 _MONITOR_LINE = re.compile(r"\bnode\s+\d+:\s*([A-Za-z\-]+)(?:\s*\(toggle\s*([01])\))?",
                            re.IGNORECASE)
 _STATE_BYTE = re.compile(r"(heartbeat|(?:node\s*)?guarding)\s*(?:state\s*)?(?:0x)?"
@@ -62,12 +66,10 @@ def state_readings(text: str) -> list[Meaning]:
         return _trace_change(int(change.group(1)), int(change.group(2)), int(change.group(3)))
     line = _DC_LINE.search(raw)
     if line:
-        found = []
-        for name, end in zip(line.groups(), ("from", "to"), strict=True):
-            state = _DC_NAMES.get(_key(name))
-            if state is not None:
-                found.append(_dc(state, f" ({end})"))
-        return found
+        return _dc_line(line.group(1), line.group(2))
+    if _DC_PREFIX.search(raw):
+        raise DecodeError("a distributed clocks line reads 'distributed clocks: FROM -> TO', "
+                          f"each a DC phase of seed 003 ({_DC_LISTED})")
     byte = _STATE_BYTE.fullmatch(raw)
     if byte:
         return [_state_byte(int(byte.group(2), 16), guarding="guard" in byte.group(1).lower())]
@@ -85,6 +87,23 @@ def state_readings(text: str) -> list[Meaning]:
     if key in _NMT_NAMES:
         found.append(_nmt(_NMT_NAMES[key]))
     return found
+
+
+_DC_LISTED = ", ".join(s.value for s in DcState)
+
+
+def _dc_line(old: str, new: str) -> list[Meaning]:
+    """Both phases of the master's DC line; DecodeError naming each word that is no phase
+    (before, such a line read "no code and no alarm name", its words unnamed)."""
+    ends = (("from", old), ("to", new))
+    states = {end: _DC_NAMES.get(_key(name)) for end, name in ends}
+    unknown = [f"'{name}' ({end})" for end, name in ends if states[end] is None]
+    if unknown:
+        what = " and ".join(unknown) + (" are no DC phases" if len(unknown) > 1
+                                        else " is no DC phase")
+        raise DecodeError(f"distributed clocks: {what} of the master: seed 003 names "
+                          f"{_DC_LISTED}")
+    return [_dc(state, f" ({end})") for end, state in states.items() if state is not None]
 
 
 def _trace_change(slave: int, old: int, new: int) -> list[Meaning]:

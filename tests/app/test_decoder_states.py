@@ -57,6 +57,35 @@ def test_the_masters_dc_log_line_reads_both_phases() -> None:
                                         "DC phase NOT_SYNCHRONIZED (to)"], found
 
 
+@pytest.mark.parametrize("line", [
+    "distributed clocks: COMPENSATING -> NOT-SYNCHRONIZED (deviation 1800 ns).",
+    "distributed clocks: compensating -> not synchronized.",
+])
+def test_a_dc_line_with_the_phases_spelt_otherwise(line: str) -> None:
+    found = [m.title for m in decode(line) if m.family == MASTER]
+    assert found == ["DC phase COMPENSATING (from)", "DC phase NOT_SYNCHRONIZED (to)"], found
+
+
+@pytest.mark.parametrize(("line", "said"), [
+    ("distributed clocks: FOO -> BAR", "'FOO' (from) and 'BAR' (to) are no DC phases"),
+    ("distributed clocks: FOO -> COMPENSATING (sync window 1000 ns).",
+     "'FOO' (from) is no DC phase"),
+    ("distributed clocks: IDLE -> BAR-BAZ", "'BAR-BAZ' (to) is no DC phase"),
+])
+def test_a_dc_line_with_a_word_no_phase_names_it(line: str, said: str) -> None:
+    """Before: "no code and no alarm name the tables know", the line's words unnamed."""
+    with pytest.raises(DecodeError) as caught:
+        decode(line)
+    message = str(caught.value)
+    assert said in message, message
+    assert all(s.value in message for s in DcState), message  # the phases seed 003 names
+
+
+def test_a_dc_line_without_its_arrow() -> None:
+    with pytest.raises(DecodeError, match="FROM -> TO"):
+        decode("distributed clocks: COMPENSATING")
+
+
 @pytest.mark.parametrize(("query", "state"), [
     ("Stopped", NmtState.STOPPED), ("Arrestato", NmtState.STOPPED),
     ("Pre-operational", NmtState.PRE_OPERATIONAL), ("Operational", NmtState.OPERATIONAL),
