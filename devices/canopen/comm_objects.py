@@ -123,7 +123,7 @@ def _pdo_objects(od: ObjectDictionary, node: CanOpenNode, pdo: Pdo) -> None:
         add(comm, 4, "Compatibility entry", D.UNSIGNED8, RW, lambda: pdo.compatibility,
             lambda v: setattr(pdo, "compatibility", v))
         add(comm, 5, "Event timer", D.UNSIGNED16, RW, lambda: pdo.event_timer_ms,
-            lambda v: setattr(pdo, "event_timer_ms", v))
+            lambda v: node.set_event_timer(pdo, v))
     add(mapping, 0, "Number of mapped objects", D.UNSIGNED8, RW, lambda: pdo.count,
         lambda v: node.set_pdo_count(pdo, v))
     for sub in range(1, MAX_ENTRIES + 1):

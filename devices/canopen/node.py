@@ -147,6 +147,10 @@ class CanOpenNode(ProcessData, DeviceModel):
         if pdo.receive:
             self._route_rpdos()
 
+    def set_event_timer(self, pdo: Pdo, value: int) -> None:
+        """0x1800-0x1803:5, written at the instant the request crossed the bus."""
+        pdo.set_event_timer(value, self._t)
+
     # ---- what the comm objects call -------------------------------------------------------
     @property
     def heartbeat_ms(self) -> int:
@@ -286,9 +290,9 @@ class CanOpenNode(ProcessData, DeviceModel):
                             continue
                         if data != pdo.last_data:  # an event: sent at the next step
                             return now
-                        last = pdo.last_sent_us  # set with last_data (_send_pdo)
-                        if pdo.event_timer_ms and last is not None:
-                            due = last + pdo.event_timer_ms * 1000  # the timer sends it
+                        start = pdo.timer_from_us  # set with last_data (_send_pdo)
+                        if pdo.event_timer_ms and start is not None:
+                            due = start + pdo.event_timer_ms * 1000  # the timer sends it
                             if due < end:
                                 end = due
             # The bus-load mark: skip_to moves it exactly only when no step can jump a

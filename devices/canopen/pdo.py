@@ -92,6 +92,9 @@ class Pdo:
     # runtime
     last_sent_us: int | None = None
     last_data: bytes | None = None
+    # the event timer runs from here: the last send, or a later write of sub 5 ("Se viene
+    # scritto un valore maggiore di 0, il timer si attiva", ch. 4 l. 2236)
+    timer_from_us: int | None = None
     syncs: int = 0
     buffered: bytes | None = None  # synchronous RPDO data waiting for the next Sync
     sampled: bytes | None = None  # synchronous TPDO data recorded at the last Sync (for RTR)
@@ -148,6 +151,7 @@ class Pdo:
         """Entering Operational: async TPDOs go out once with their first value."""
         self.last_sent_us = None
         self.last_data = None
+        self.timer_from_us = None
         self.syncs = 0
         self.buffered = None
         self.sampled = None
@@ -158,6 +162,12 @@ class Pdo:
             raise SdoAbort(AbortCode.VALUE_RANGE, self.comm_index, 1)
         self.cob_id = value
         self.restart()
+
+    def set_event_timer(self, value: int, now_us: int) -> None:
+        """Sub 5: the timer starts at the write; it fires one period later."""
+        self.event_timer_ms = value
+        if self.last_sent_us is not None:  # else the first send is an event anyway
+            self.timer_from_us = now_us
 
     def set_type(self, value: int) -> None:
         if value not in VALID_TYPES:

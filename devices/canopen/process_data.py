@@ -102,10 +102,10 @@ class ProcessData:
         data = self._pack(pdo)
         if data is None:
             return False
-        last = pdo.last_sent_us
+        last, start = pdo.last_sent_us, pdo.timer_from_us
         event = data != pdo.last_data
-        timer = bool(pdo.event_timer_ms) and last is not None \
-            and now_us >= last + pdo.event_timer_ms * 1000
+        timer = bool(pdo.event_timer_ms) and start is not None \
+            and now_us >= start + pdo.event_timer_ms * 1000
         inhibited = last is not None and now_us - last <= pdo.inhibit_100us * 100
         if (event or timer) and not inhibited:
             self._send_pdo(pdo, data, now_us)
@@ -125,5 +125,6 @@ class ProcessData:
             return None
 
     def _send_pdo(self: CanOpenNode, pdo: Pdo, data: bytes, t: int) -> None:
-        pdo.last_sent_us, pdo.last_data = t, data
+        pdo.last_sent_us = pdo.timer_from_us = t
+        pdo.last_data = data
         self._send(pdo.can_id, data, t)

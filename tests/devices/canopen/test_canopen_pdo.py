@@ -181,6 +181,22 @@ def test_asynchronous_event_timer() -> None:
     assert {b - a for a, b in itertools.pairwise(times)} == {100_000}
 
 
+def test_event_timer_starts_when_written() -> None:
+    """"Se viene scritto un valore maggiore di 0, il timer si attiva ... Allo scadere del
+    timer viene trasmesso il PDO": a timer written long after the TPDO last went out sends
+    it one period after the write, not at once."""
+    bench = _started()
+    bench.run(5_000)  # statusword steady: TPDO1 went out once, on entering Operational
+    bench.take()
+    bench.ok(0x1800, 5, 100, 2)
+    written = bench.t_us
+    bench.run(350)
+    times = [f.t_us - written for f in _tpdos(bench)]
+    assert len(times) == 3
+    assert 99_000 <= times[0] <= 101_000
+    assert {b - a for a, b in itertools.pairwise(times)} == {100_000}
+
+
 def test_asynchronous_on_change_with_inhibit_time() -> None:
     """Sent on a change of the mapped data, never within the inhibit time (x 100 us) of the
     previous one: "deve essere passato un tempo superiore a InhibitTime"."""
