@@ -70,7 +70,12 @@ class NodeGuard:
         return bit
 
     def request(self, now_us: int) -> bool:
-        """A remote request arrived; True when it ends an expired life time (flag drops)."""
+        """A remote request arrived; True when it ends an expired life time (flag drops).
+
+        Only a request made while guarding is on (0x100C != 0) counts: one made before is
+        no guarding request, and life guarding starts with the first one after."""
+        if not self.active:
+            return False
         self.last_request_us = now_us
         was, self.expired = self.expired, False
         return was

@@ -108,3 +108,26 @@ def test_guarding_off_stops_life_guarding() -> None:
     bench.take()
     bench.run(3_000)
     assert [f for f in bench.take() if f.can_id == 0x081] == []
+
+
+@pytest.mark.parametrize("heartbeat_ms", [0, 1000])
+def test_life_guarding_starts_with_a_request_made_while_guarding_is_on(heartbeat_ms: int) -> None:
+    """"Il servizio di Node Guarding è attivo se l'oggetto 0x100C è diverso da zero": a
+    remote request made while 0x100C = 0 (unanswered, or answered for the heartbeat) is no
+    guarding request. Guard time and life time factor written seconds later start no life
+    time from it: no EMCY 0x8130 before the master guards and stops."""
+    bench = make_bench()
+    bench.ok(0x1017, 0, heartbeat_ms, 2)
+    bench.send(0x701, rtr=True, dlc=1)
+    bench.run(5_000)
+    bench.ok(0x100C, 0, 500, 2)
+    bench.ok(0x100D, 0, 2, 1)
+    bench.take()
+    bench.run(3_000)
+    assert [f for f in bench.take() if f.can_id == 0x081] == []
+    assert bench.read(0x1001) == 0
+    assert _guard_answers(bench, 1) == ["7F"]  # guarding starts now: first toggle 0
+    bench.take()
+    bench.run(1_100)
+    assert [hexs(f.data) for f in bench.take() if f.can_id == 0x081] \
+        == ["30 81 11 00 00 00 00 00"]
