@@ -151,7 +151,8 @@ COMMAND_WORDS: dict[Command, int] = {
 
 # ---- statusword 0x6041 -------------------------------------------------------------------
 # Bits 0-3, 5, 6 of each state (DSP 402 statusword table; "x" bits as 0). Bit 4 "voltage
-# enabled" is added for the states with the power stage ready.
+# enabled" is added from Switched on ("high voltage has been applied"; in Ready to switch on it
+# only "may be": seed 004 ch. 5's TwinCAT screen reads 0x0621 there, bit 4 clear).
 STATE_BITS: dict[State, int] = {
     State.NOT_READY_TO_SWITCH_ON: 0x0000,
     State.SWITCH_ON_DISABLED: 0x0040,
@@ -162,8 +163,8 @@ STATE_BITS: dict[State, int] = {
     State.FAULT_REACTION_ACTIVE: 0x000F,
     State.FAULT: 0x0008,
 }
-VOLTAGE_ENABLED_STATES = frozenset({State.READY_TO_SWITCH_ON, State.SWITCHED_ON,
-                                    State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE})
+VOLTAGE_ENABLED_STATES = frozenset({State.SWITCHED_ON, State.OPERATION_ENABLED,
+                                    State.QUICK_STOP_ACTIVE})
 
 SW_VOLTAGE_ENABLED = 0x0010
 SW_WARNING = 0x0080

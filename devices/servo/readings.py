@@ -181,6 +181,10 @@ class DriveReadings:
         if levels is None:
             levels = self.input_levels()
         mode_flags = self.mode_logic.flags(self) if self.powered else {}
+        # 0x6041 bit 15 names the consents, not the state (ch. 4 "segnale TEN basso ... segnale
+        # IEN basso"; Ien_cmd is R00's motion enable, held by a CiA 402 master): ch. 5's Ready
+        # to switch on reads 0x0621, ch. 6's fresh drive (R00 = 0) 0x8640
+        consents = self.ien_cmd and levels["ten"] and levels["ien"]
         stopping = self.state in (State.QUICK_STOP_ACTIVE, State.FAULT_REACTION_ACTIVE) or (
             self.state is State.OPERATION_ENABLED and not self.motion_allowed
             and not self.trajectory.idle)
@@ -190,7 +194,7 @@ class DriveReadings:
             target_reached=self.powered and self.mode_logic.target_reached(self),
             limit_active=any(levels[name] for name in limits_used(self.reg(R.HOMING_METHOD))),
             save_done=self.save_done, load_done=self.load_done,
-            velocity_forced_zero=not self.motion_enabled, **mode_flags)
+            velocity_forced_zero=not consents, **mode_flags)
 
     @property
     def status_register(self: ServoDrive) -> int:

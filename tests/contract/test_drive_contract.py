@@ -269,9 +269,12 @@ class DriveContract:
     AFTER_MOVE: ClassVar[dict[str, object]] = {
         "state": "Operation enabled", "statusword": 0x0637, "position": TARGET}
     AFTER_ALARM: ClassVar[dict[str, object]] = {
-        "state": "Fault", "statusword": 0x8608, "alarms": [ALARM], "error_code": 0x8611}
-    AFTER_RESET: ClassVar[dict[str, object]] = {  # 0x8640: the fresh drive's (ch. 6 example)
+        "state": "Fault", "statusword": 0x0608, "alarms": [ALARM], "error_code": 0x8611}
+    # Bit 15 follows TEN, IEN and Ien_cmd (ch. 4): the Modbus reset ends with R00 = 0, Ien_cmd
+    # low, 0x8640 as the fresh drive's (ch. 6 example); a CiA 402 master holds Ien_cmd: 0x0640
+    AFTER_RESET: ClassVar[dict[str, object]] = {
         "state": "Switch on disabled", "statusword": 0x8640, "alarms": [], "error_code": 0}
+    CIA402_AFTER_RESET: ClassVar[dict[str, object]] = {**AFTER_RESET, "statusword": 0x0640}
 
     def setup_method(self) -> None:
         self.link = self.LINK()
@@ -351,6 +354,7 @@ class TestCanOpen(DriveContract):
     LINK = CanOpenLink
     IDENTITY = (0x00020192, 0x0000078F)  # 0x1000, 0x1018:1
     ALARM_SEEN_AS = 0x8611  # the EMCY's error code
+    AFTER_RESET = DriveContract.CIA402_AFTER_RESET
 
     def test_emergencies_raise_and_reset(self) -> None:
         self.test_injected_alarm_and_reset()
@@ -362,6 +366,7 @@ class TestCoe(DriveContract):
     LINK = CoeLink
     IDENTITY = (0x00020192, 0x0000078F)
     ALARM_SEEN_AS = 0x8611  # 0x603F
+    AFTER_RESET = DriveContract.CIA402_AFTER_RESET
 
     def test_emergencies_raise_and_reset(self) -> None:
         self.test_injected_alarm_and_reset()

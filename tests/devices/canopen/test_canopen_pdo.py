@@ -101,7 +101,8 @@ def test_synchronous_tpdo_carries_the_values_of_the_sync_that_sends_it() -> None
     bench.take()
     bench.send(0x080)
     bench.run(5)
-    assert [hexs(f.data) for f in _tpdos(bench)] == ["31 86"]  # the state at this SYNC
+    # the state at this SYNC: 0x0621, ready to switch on as ch. 5's TwinCAT screen shows it
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["21 06"]
 
 
 @pytest.mark.parametrize("trans_type", [0, 1, 4])
@@ -134,7 +135,7 @@ def test_remote_request_for_a_synchronous_tpdo_gets_the_values_of_the_last_sync(
     bench.take()
     bench.send(0x181, rtr=True, dlc=2)
     bench.run(2)
-    assert [hexs(f.data) for f in _tpdos(bench)] == ["31 86"]
+    assert [hexs(f.data) for f in _tpdos(bench)] == ["21 06"]  # ready to switch on: 0x0621 (ch. 5)
 
 
 @pytest.mark.parametrize(("index", "trans_type", "result"), [

@@ -191,6 +191,17 @@ def test_position_slot_round_trip() -> None:
     assert position == 6000 and status == bench.drive.statusword
 
 
+def test_ready_to_switch_on_in_mode_7_is_the_twincat_screens_0x0621() -> None:
+    """Ch. 5 "Settaggi SM / DC" (l. 4636-4638): TwinCAT online, the Interpolated slot's drive
+    in Ready to switch on reads "Status Word 0x0621" and "Mode of Operation 0x07 (7)"."""
+    bench = _slot_bench("interpolated")
+    start = bench.drive.position_user
+    for value in (0x0000, 0x0006):
+        bench.outputs("<Hi", value, start, ms=2)
+    assert bench.inputs("<Hi")[0] == 0x0621 == bench.read(0x6041)
+    assert bench.read(0x6061, signed=True) == 7
+
+
 def test_velocity_slot_round_trip() -> None:
     bench = _slot_bench("velocity")
     for value in CIA402_ENABLE:

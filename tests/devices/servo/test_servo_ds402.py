@@ -12,7 +12,7 @@ from collections.abc import Callable
 import pytest
 from servo_helpers import CANOPEN_ENABLE, Sim, make_sim
 
-from devices.servo import ds402
+from devices.servo import control, ds402
 from devices.servo.ds402 import TRANSITIONS, Command, State
 from devices.servo.plant import STOPPED_REV_S
 
@@ -116,6 +116,68 @@ def test_fresh_drive_statusword_is_the_seeds_0x8640() -> None:
     """Ch. 6 Hilscher example: StatusWord = 0x8640 for a drive waiting to be enabled."""
     sim = make_sim()
     assert sim.drive.statusword == 0x8640
+
+
+def test_ready_to_switch_on_reads_the_ch5_twincat_0x0621() -> None:
+    """Ch. 5 "Settaggi SM / DC" (l. 4636-4638): a drive in mode 7 that a CiA 402 master put in
+    Ready to switch on, TEN and IEN at 24 V, shows "Status Word 0x0621": bits 0, 5, 9, 10 and
+    neither bit 4 "voltage enabled" nor bit 15 (docs/servo-drive.md §Status words)."""
+    sim = make_sim()
+    sim.w(1, 7)
+    sim.cw(0x0000, 0x0006)
+    assert sim.drive.state is State.READY_TO_SWITCH_ON
+    assert sim.drive.statusword == 0x0621
+
+
+def _bit15_case(case: str) -> Sim:
+    sim = make_sim()
+    if case.startswith("cia402"):
+        sim.cw(0x0000, 0x0006)  # a CiA 402 master holds Ien_cmd (0x6040 has no bit for it)
+    elif case.startswith("register"):
+        sim.w(0, 0x03)
+    low = case.rpartition(" ")[2]
+    if low in ("ten", "ien"):
+        sim.drive.apply("set_input", {"name": low, "value": False})
+        sim.run(1)
+    elif low == "off":
+        sim.w(0, 0x00)
+    elif low == "ien_cmd":
+        sim.w(0, 0x01)  # Ten_cmd only: in torque, motion enable removed
+    return sim
+
+
+@pytest.mark.parametrize(("case", "forced"), [
+    ("fresh", True),  # R00 = 0 at power-up: Ien_cmd low (ch. 6 Hilscher 0x8640)
+    ("cia402 ready", False), ("cia402 ready ten", True), ("cia402 ready ien", True),
+    ("register enabled", False), ("register enabled ien", True),
+    ("register enabled ten", True), ("register enabled ien_cmd", True),
+    ("register enabled off", True)])
+def test_bit15_follows_ten_ien_and_ien_cmd_not_the_state(case: str, forced: bool) -> None:
+    """Ch. 4 0x6041 bit 15: the target velocity is forced to 0 "quando l'asse viene
+    disabilitato (segnale TEN basso) o quando viene tolta l'abilitazione al movimento
+    (segnale IEN basso)"; Ien_cmd is R00's motion enable (ch. 1). Ready to switch on with
+    both consents does not force it (ch. 5 0x0621)."""
+    sim = _bit15_case(case)
+    assert bool(sim.drive.statusword & ds402.SW_VELOCITY_FORCED_ZERO) is forced
+
+
+def test_bit15_stays_clear_in_fault_with_the_consents_high() -> None:
+    """Bit 15 names the signals, not the state: an alarm with TEN, IEN and Ien_cmd high."""
+    sim = make_sim()
+    sim.cw(*CANOPEN_ENABLE)
+    sim.drive.apply("inject_alarm", {"code": 3})
+    sim.run(50)
+    assert sim.drive.state is State.FAULT
+    assert not sim.drive.statusword & ds402.SW_VELOCITY_FORCED_ZERO
+
+
+@pytest.mark.parametrize("state", list(State))
+def test_voltage_enabled_from_switched_on(state: State) -> None:
+    """Bit 4: DSP 402 "Switched on: high voltage has been applied"; Ready to switch on only
+    "may" have it, and ch. 5's 0x0621 shows it clear there."""
+    sw = control.cia402_status(control.StatusFlags(state=state, mode=1))
+    powered = state in (State.SWITCHED_ON, State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE)
+    assert bool(sw & ds402.SW_VOLTAGE_ENABLED) is powered
 
 
 def test_canopen_enable_sequence_and_release() -> None:

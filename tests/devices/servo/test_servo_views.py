@@ -67,7 +67,11 @@ def _check_agree(sim: Sim) -> None:
     assert bool(r00 & control.TEN_CMD) == (cw & 0x0F == 0x0F)
     assert bool(r00 & control.ALM_RST) == bool(cw & ds402.CW_FAULT_RESET)
     assert bool(r00 & control.STP_CMD) == bool(cw & ds402.CW_HALT)
-    assert bool(r05 & 0x02) == (not sw & ds402.SW_VELOCITY_FORCED_ZERO)
+    # bit 15 follows the consents TEN, IEN and Ien_cmd (ch. 4), Ien_st needs them too (ch. 1)
+    d = sim.drive
+    consents = d.ien_cmd and d.input_level("ten") and d.input_level("ien")
+    assert bool(sw & ds402.SW_VELOCITY_FORCED_ZERO) is not consents
+    assert not (r05 & 0x02 and sw & ds402.SW_VELOCITY_FORCED_ZERO)
 
 
 def test_views_agree_through_a_session() -> None:
