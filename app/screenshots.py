@@ -145,7 +145,9 @@ class ServedRig:
                               glyphs=glyph_order(texts))
         runtime.start()
         dashboard.start()
-        return cls(runtime, server, dashboard, f"http://127.0.0.1:{port}", quiet)
+        # viser binds the next port when ``port`` was taken since free_port() closed it (a
+        # parallel run): the URL is the port bound, or Chromium opens the other dashboard.
+        return cls(runtime, server, dashboard, f"http://127.0.0.1:{server.get_port()}", quiet)
 
     def advance(self, seconds: float) -> None:
         """Step the paused rig by exactly ``seconds`` of simulated time."""
