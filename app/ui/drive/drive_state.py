@@ -24,7 +24,7 @@ from app.ui.style import badge, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
 from devices.servo.actions import names_a_cause
-from devices.servo.alarms import alarm_in_emergency
+from devices.servo.alarms import EFFECT_TEXT, Effect, alarm_in_emergency
 from devices.servo.parameters import FIELDBUS_NAMES
 from devices.servo.registers import MODE_NAMES
 
@@ -71,13 +71,22 @@ def state_badge(snap: Mapping[str, Any]) -> str:
     return html
 
 
+def effect_text(effect: Any) -> str:
+    """The snapshot's effect in a trainee's words, as the Codes tab words it: its value is the
+    model's note on the seed ("none printed: stop on ..."), which read as a second state."""
+    try:
+        return EFFECT_TEXT[Effect(effect)]
+    except ValueError:
+        return str(effect)
+
+
 def alarm_html(snap: Mapping[str, Any]) -> str:
     alarm = snap.get("alarm")
     if not alarm:
         return badge("none", "ok")
     name = f"{alarm.get('code')} {alarm.get('name', '')}"
     html = (f"{badge(name, 'bad')}<br>{esc(alarm.get('description', ''))} "
-            f"<span class=\"fr-muted\">({esc(alarm.get('effect', ''))})</span>")
+            f"<span class=\"fr-muted\">({esc(effect_text(alarm.get('effect', '')))})</span>")
     others = [a for a in snap.get("alarms") or [] if a != alarm.get("code")]
     if others:
         html += f'<br><span class="fr-muted">also latched: {esc(others)}</span>'
