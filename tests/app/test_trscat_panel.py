@@ -184,3 +184,13 @@ def test_analog_and_word_channels_read_as_numbers() -> None:
     assert slots[1].startswith("1 TRS-IO-E IO-E 00000000 00000000 "), slots
     assert slots[2] == "2 TRS-AN-E AN-E 0 1 0 0 0 0", slots
     assert slots[3] == "3 TRS-XX-E XX-E 0 0", slots
+
+
+def test_lit_io_leds_read_as_channel_numbers() -> None:
+    """The LED table's "I/O 1-16" row named the lit channels as a Python list, "on: [1, 3]"
+    (trscat_outputs_fallback's error outputs); a technician reads "on: 1, 3"."""
+    leds = {"I/O 1": "on", "I/O 3": "on"}
+    html = slave_html("trscat", {"kind": "trscat", "leds": leds})
+    table = html.split('id="fr-slave-leds">', 1)[1].split("</table>", 1)[0]
+    assert "<td>I/O 1-16</td><td>yellow</td><td>on: 1, 3</td>" in table
+    assert "[" not in table

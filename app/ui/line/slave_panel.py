@@ -200,7 +200,7 @@ def trscat_html(snap: Mapping[str, Any]) -> str:
           f"<tbody>{slots}</tbody></table>")
     names = [(n, c, str(leds.get(n, "off"))) for n, c in TRS_LEDS]
     lit = [c for c in range(1, 17) if leds.get(f"I/O {c}", "off") != "off"]
-    names.append(("I/O 1-16", "yellow", f"on: {lit}" if lit else "off"))
+    names.append(("I/O 1-16", "yellow", f"on: {', '.join(map(str, lit))}" if lit else "off"))
     diag = (snap.get("diagnosis") or {}).get("messages") or []
     return (kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(diag))
 
