@@ -70,6 +70,7 @@ def test_every_tab_reads_a_coupler_alarms_0x8204_alike(rig: RigSession) -> None:
     row = _fastcat_row(rig)
     assert row["al_status_code"] == 0x8204
     assert row["al_status_text"] == state_text  # the Line tab's slave table
-    assert f"0x8204 {state_text}" in al_cell(row)
+    # <wbr> (a break allowed after an underscore) is no text a trainee reads
+    assert f"0x8204 {state_text}" in al_cell(row).replace("<wbr>", "")
     codes_tab = [m.text for m in decode("0x8204") if m.family == FASTCAT]
     assert codes_tab and "module 2, coupler code 0x04 MISSING_NODE_ANSWER" in codes_tab[0]

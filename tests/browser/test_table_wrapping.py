@@ -68,6 +68,29 @@ def test_master_slave_table_wraps_between_words(live: LiveDashboard, page: Any) 
     assert split_words(page, "#fr-line-slaves td") == []
 
 
+
+@pytest.mark.parametrize("fault", ["sync0_lost", "module_lost"])
+def test_master_slave_table_keeps_al_code_words_whole(live: LiveDashboard, page: Any,
+                                                      fault: str) -> None:
+    """The AL status code column broke "Synchronization" after "Synchronizat"
+    (dc_sync_lost's 0x001A at the TRS-CAT and the CPX-E-EC) and the FastCAT's coupler code
+    names ("MISSING_NODE_ANSWER", module_lost_in_op's 0x8204) inside a letter run: a name may
+    break only after an underscore (<wbr>)."""
+    open_dashboard(page, live)
+    live.advance(BOOT_S)
+    if fault == "sync0_lost":
+        live.command("master", "dc_fault", {"kind": "sync0_lost"})
+        expected = "Synchronization"
+    else:
+        live.command("fastcat/2", "unplug")
+        expected = "MISSING_NODE_ANSWER"
+    live.advance(0.5)
+    for tab in page.get_by_role("tab", name="Line").all():
+        tab.click()
+    table = page.locator("#fr-line-slaves")
+    wait_until(lambda: expected in table.inner_text().replace("\n", ""), what=expected)
+    assert split_words(page, "#fr-line-slaves td") == []
+
 def test_canopen_time_column_keeps_its_numbers_whole(live: LiveDashboard, page: Any) -> None:
     open_dashboard(page, live)
     live.advance(BOOT_S)

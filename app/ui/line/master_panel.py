@@ -53,7 +53,9 @@ def al_cell(slave: Mapping[str, Any]) -> str:
     status = int(slave.get("al_status", 0))
     code = int(slave.get("al_status_code", 0))
     text = slave.get("al_status_text") or describe_al_status_code(code)
-    code_html = esc(f"0x{code:04X} {text}")
+    # A coupler code's name may break after an underscore, never inside a letter run:
+    # "MISSING_NODE_ANSWER" is wider than the column (tests/browser/test_table_wrapping.py).
+    code_html = esc(f"0x{code:04X} {text}").replace("_", "_<wbr>")
     if code:
         code_html = f'<span class="fr-line-bad">{code_html}</span>'
     return f"0x{status:04X} {esc(al_status_name(status))}<br>{code_html}"
@@ -89,11 +91,12 @@ def slaves_table(slaves: Sequence[Mapping[str, Any]], target: str | None = None)
             f"<td>{seen_cell(s)}</td><td>{counters_cell(s)}</td></tr>")
     body = "".join(rows) or '<tr><td colspan="6" class="fr-muted">no slaves</td></tr>'
     # Widths so that the longest word of each column fits at the 400 px left panel (words
-    # wrap whole, tests/browser/test_table_wrapping.py): "(SelemaDriveECAT)" in Name, "Seen"
+    # wrap whole, tests/browser/test_table_wrapping.py): "(SelemaDriveECAT)" in Name,
+    # "Synchronization" in AL status code (0x001A; it broke after "Synchronizat"), "Seen"
     # and its "yes" / "no", "10/2/1/13" in Cnt.
     return ('<table class="fr-log fr-line" id="fr-line-slaves"><colgroup><col style="width:9%">'
-            '<col style="width:31%"><col style="width:21%"><col style="width:7%">'
-            '<col style="width:15%"><col style="width:17%"></colgroup><thead><tr>'
+            '<col style="width:29%"><col style="width:27%"><col style="width:7%">'
+            '<col style="width:11%"><col style="width:17%"></colgroup><thead><tr>'
             "<th>Pos<br>Addr</th><th>Name<br>State</th><th>AL status<br>code</th><th>DC</th>"
             '<th title="the slave answers the frames of the master">Seen</th>'
             '<th title="lost frames / WKC errors / emergencies / state '
