@@ -301,13 +301,24 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
     return kv_table(rows, "fr-slave-state") + led_table(names) + io + messages_table(history)
 
 
+def pdo_list(assigned: Any) -> str:
+    """The PDO indexes of 0x1C12 / 0x1C13 as a technician writes them, "0x1A02, 0x1A03";
+    before, the snapshot's list showed as Python wrote it, "['0x1A02']"."""
+    if assigned is None:
+        return "-"
+    if isinstance(assigned, str):
+        return assigned
+    return ", ".join(str(i) for i in assigned) or "none"
+
+
 def ecat_html(snap: Mapping[str, Any]) -> str:
     leds = snap.get("leds") or {}
     rows = [
         *esm_rows(snap),
         ("Drive", esc(snap.get("drive", "-"))),
         ("Slot", esc(snap.get("slot", "-"))),
-        ("PDO assignment", esc(f"Rx {snap.get('rx_assign')} · Tx {snap.get('tx_assign')}")),
+        ("PDO assignment", esc(f"Rx {pdo_list(snap.get('rx_assign'))} · "
+                               f"Tx {pdo_list(snap.get('tx_assign'))}")),
         ("Outputs", esc(snap.get("outputs") or "-")),
         ("Inputs", esc(snap.get("inputs") or "-")),
         ("Last emergency", esc(snap.get("last_emergency") or "none"))]
