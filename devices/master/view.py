@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING, Any
 
 from devices.device import CommandError
 from devices.ethercat import AlState
-from devices.master.links import SlaveLink
+from devices.master.links import RANK, SlaveLink
 from devices.master.log_styles import STYLES
 
 if TYPE_CHECKING:
@@ -32,6 +32,33 @@ def phase_text(phase: str) -> str:
     return PHASE_TEXT.get(phase, phase.replace("_", " "))
 
 
+def phase_note(lost: int, not_found: int, held: int) -> str:
+    """What "running" (or "starting") leaves out: slaves lost, slaves never found, DC slaves
+    held in SAFEOP below the master's target ("2 slaves lost, 1 DC slave held in SAFEOP").
+    "" when there is none."""
+    def many(n: int, what: str) -> str:
+        return f"{n} {what}" + ("s" if n > 1 else "")
+
+    parts = [many(lost, "slave") + " lost"] if lost else []
+    parts += [many(not_found, "slave") + " not found"] if not_found else []
+    parts += [many(held, "DC slave") + " held in SAFEOP"] if held else []
+    return ", ".join(parts)
+
+
+def phase_note_short(lost: int, not_found: int, held: int) -> str:
+    """:func:`phase_note` for the master's small screen, one line ("2 lost, 1 held"): a slave
+    never found counts as lost there, as the master has no answer from either."""
+    parts = [f"{lost + not_found} lost"] if lost + not_found else []
+    parts += [f"{held} held"] if held else []
+    return ", ".join(parts)
+
+
+def phase_line(phase: str, note: str) -> str:
+    """The phase's words with its note: "running, 2 slaves lost"."""
+    text = phase_text(phase)
+    return f"{text}, {note}" if note else text
+
+
 class ViewMixin:
     """The view part of :class:`~devices.master.master.EtherCatMaster`."""
 
@@ -41,6 +68,7 @@ class ViewMixin:
     link_up: bool
     external: bool
     target: AlState
+    dc_hold: bool
     log_style: str
     dc: DcUnit
     cables: list[bool]
@@ -122,10 +150,29 @@ class ViewMixin:
             return "running"
         return "starting"
 
+    def _phase_counts(self) -> tuple[int, int, int]:
+        """Slaves lost, never found and DC-held, counted when a snapshot is made (the step
+        never reads them: docs/ethercat-master.md "Step cost"). Held: a DC slave the master
+        reads in SAFEOP while DC keeps it there below a higher target (seed 003)."""
+        lost = sum(1 for link in self.links if not link.present and link.lost_once)
+        not_found = sum(1 for link in self.links if not link.present and link.missing)
+        # A wire master (external mode) holds nothing of the built-in master's DC unit.
+        holds = not self.external and self.dc_hold and \
+            RANK.get(self.target, 0) > RANK[AlState.SAFEOP]
+        held = sum(1 for link in self.links if holds and link.present and link.dc
+                   and link.slave.al_state is AlState.SAFEOP)
+        return lost, not_found, held
+
     def snapshot(self) -> dict[str, Any]:
         names = [link.slave.device_id for link in self.links]
+        phase = self.phase
+        # Without link, or with not one answer, the phase says it all.
+        counts = self._phase_counts() if phase not in ("waiting_link", "no_answer") \
+            else (0, 0, 0)
         return {"kind": self.KIND, "id": self.device_id, "target": self.target.label,
-                "external": self.external, "link": self.link_up, "phase": self.phase,
+                "external": self.external, "link": self.link_up, "phase": phase,
+                "phase_note": phase_note(*counts),
+                "phase_note_short": phase_note_short(*counts),
                 "log_style": self.log_style, "log_styles": list(STYLES),
                 "dc": self.dc.snapshot(),
                 "cables": self._cable_views(names),

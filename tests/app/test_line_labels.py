@@ -175,6 +175,17 @@ def dc_state(state: DcState) -> Callable[[Snapshot], None]:
     return apply
 
 
+def lost_and_held(snap: Snapshot) -> None:
+    """"running" with its note at its longest: slaves lost and not found, DC slaves held in
+    SAFEOP (seed 003 NOT_SYNCHRONIZED; docs/ethercat-master.md "Start-up")."""
+    cables_pulled(2)(snap)
+    dc_state(DcState.NOT_SYNCHRONIZED)(snap)
+    devices(snap)["master"].update(phase="running",
+                                   phase_note="1 slave lost, 1 slave not found, 1 DC slave "
+                                              "held in SAFEOP",
+                                   phase_note_short="2 lost, 1 held")
+
+
 STATES: dict[str, Callable[[Snapshot], None]] = {
     "running": lambda snap: None,
     "every_cable_pulled": cables_pulled(0, 1, 2, 3),
@@ -183,6 +194,7 @@ STATES: dict[str, Callable[[Snapshot], None]] = {
     "every_cable_pulled_everywhere": plugs_out("both", master_too=True),
     "al_codes_and_power": al_codes_and_power,
     "no_slave_answers": no_slave_answers,
+    "lost_and_held": lost_and_held,
     "blinking": blinking,
     "faults": expansion_and_module_faults,
     "every_module_faulted": every_module_faulted,
@@ -269,7 +281,7 @@ def within(box: Box, outer: Box, tol: float) -> bool:
 
 
 @pytest.mark.parametrize("state", [s for s in STATES if s.startswith("dc_")] + [
-    "cable_0_pulled", "al_codes_and_power", "no_slave_answers"])
+    "cable_0_pulled", "al_codes_and_power", "no_slave_answers", "lost_and_held"])
 def test_master_screen_holds_phase_and_dc_state(line: Line, state: str) -> None:
     """The phase and the DC state (seed 003) stay on the master's screen."""
     show(line, state)
@@ -281,11 +293,13 @@ def test_master_screen_holds_phase_and_dc_state(line: Line, state: str) -> None:
 
 @pytest.mark.parametrize(("state", "text"), [
     ("cable_0_pulled", "waiting link"), ("no_slave_answers", "no slave answers"),
-    ("al_codes_and_power", "init commands"), ("running", "running")])
+    ("al_codes_and_power", "init commands"), ("running", "running"),
+    ("lost_and_held", "running\n2 lost, 1 held")])
 def test_master_screen_names_the_phase_as_the_panel_does(line: Line, state: str,
                                                          text: str) -> None:
     """Seed 003 names no phase "no answer": with link "it starts sending packets", and none
-    answers. The screen said "no answer" (whose?); it says what the master reads."""
+    answers. The screen said "no answer" (whose?); it says what the master reads. "running"
+    with slaves lost or held in SAFEOP says so under it: it is not "all is well"."""
     show(line, state)
     assert str(nodes(line)["/line/master/phase"].text) == text
 

@@ -68,3 +68,16 @@ def test_dc_idle_shows_no_deviation() -> None:
     assert "None" not in text and "0\u00a0ns /" not in text
     text = live_table({"dc": {"state": "COMPENSATING", "deviation_ns": -12, "window_ns": 1000}})
     assert "deviation -12\u00a0ns / window 1000\u00a0ns" in text
+
+
+def test_running_with_slaves_lost_or_held_is_no_green_running() -> None:
+    """"running" is every slave the master reads at its target; a trainee reads a green
+    "running" as all is well. Slaves lost or DC slaves held in SAFEOP are said with it, in
+    the warning colour (docs/ethercat-master.md "Start-up")."""
+    healthy = status_table({"phase": "running", "phase_note": "", "link": True,
+                            "target": "OP"})
+    assert '<span class="fr-badge fr-ok">running</span>' in healthy
+    noted = status_table({"phase": "running", "link": True, "target": "OP",
+                          "phase_note": "2 slaves lost, 2 DC slaves held in SAFEOP"})
+    assert ('<span class="fr-badge fr-warn">running, 2 slaves lost, 2 DC slaves held in '
+            'SAFEOP</span>') in noted

@@ -10,6 +10,7 @@ zoom (app/ui/line/bodies.py MasterBody.zoom).
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterator
 from types import SimpleNamespace
 
@@ -94,3 +95,29 @@ def test_a_zoomed_text_is_drawn_from_a_warmed_glyph_atlas(board: Dashboard) -> N
     warm = {bucket_px(s) for s in WARM_SCALES}
     for label in screen_labels(line).values():
         assert bucket_px(float(label.font_screen_scale)) in warm, label.font_screen_scale
+
+
+def test_the_phase_note_stays_on_the_screen_and_off_the_dc_state(board: Dashboard) -> None:
+    """dc_sync_lost's pictures focus the master while DC holds the TRS-CAT and the CPX-E-EC in
+    SAFEOP: "running" gets its note under it ("2 held"; the longest a four-slave line gives,
+    "4 lost, 2 held" here) and, grown for the zoom, both lines stay on the screen and off the
+    DC state's lines."""
+    line, camera = focused(board)
+    snap = copy.deepcopy(board.runtime.frame.snapshot)
+    master = snap["devices"]["master"]
+    master.update(phase="running", phase_note_short="4 lost, 2 held")
+    master["dc"]["state"] = "NOT_SYNCHRONIZED"
+    line.scene.update(snap, board.runtime.frame.t_us)
+    labels = screen_labels(line)
+    assert str(labels["phase"].text) == "running\n4 lost, 2 held"
+    handle = board.server.scene._handle_from_node_name["/line/master/screen"]
+    (x, _, z), (w, _, h) = handle.position, handle.dimensions
+    screen = Box("screen", x - w / 2, x + w / 2, z - h / 2, z + h / 2)
+    boxes = {key: label_box(label, px_per_unit(camera, label.position))
+             for key, label in labels.items()}
+    tol = 1.0 / px_per_unit(camera, labels["phase"].position)
+    for box in boxes.values():
+        assert screen.x0 - tol <= box.x0 and box.x1 <= screen.x1 + tol, box
+        assert screen.z0 - tol <= box.z0 and box.z1 <= screen.z1 + tol, box
+    assert boxes["phase"].z0 >= boxes["dc"].z1 - tol, boxes
+    line.scene.update(board.runtime.frame.snapshot, board.runtime.frame.t_us)  # as it was

@@ -257,7 +257,9 @@ class MasterBody(Body):
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
         phase = str(snap.get("phase", "running" if snap.get("slaves") else "-"))
-        self.paint.set_text("phase", phase_text(phase))
+        note = snap.get("phase_note_short")  # "2 lost, 1 held": the panel has it in full
+        self.paint.set_text("phase", f"{phase_text(phase)}\n{note}" if note else
+                            phase_text(phase))
         dc = snap.get("dc") or {}
         self.paint.set_text("dc", wrap(f"DC {dc.get('state', '-')}", DC_LINE))
         link = snap.get("link", True)
@@ -266,12 +268,14 @@ class MasterBody(Body):
 
     def update_master_frame(self, snap: Mapping[str, Any], legend: str = "") -> None:
         """The master's own frame: the bar red out of sync (NOT_SYNCHRONIZED: what the
-        master measures, not the injected DC fault) or on a lost link, amber while starting;
+        master measures, not the injected DC fault) or on a lost link, amber while starting
+        or while slaves are lost or held in SAFEOP (the phase's note);
         the header names the target state; ``legend`` is :meth:`update`'s."""
         dc = snap.get("dc") or {}
         phase = snap.get("phase", "running")
         bad = dc.get("state") == "NOT_SYNCHRONIZED" or not snap.get("link", True)
-        entry = {"state": "running" if phase == "running" else phase,
+        running = phase == "running" and not snap.get("phase_note")
+        entry = {"state": "running" if running else phase,
                  "requested": "running", "al_status_code": 1 if bad else 0}
         # One text per label per frame: the slave header and then "target ..." made the
         # label change twice in every frame, so every browser got it 30 times a second.

@@ -28,7 +28,7 @@ from app.ui.repeats import Run, collapse_repeats, repeat_suffix
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import AL_STATUS_ERROR_FLAG, al_status_name, describe_al_status_code
 from devices.events import US_PER_S
-from devices.master.view import phase_text
+from devices.master.view import phase_line
 
 LOG_ROWS = 40
 NBSP = "\u00a0"  # between a number and its unit: a narrow cell wraps them together
@@ -188,10 +188,11 @@ def status_table(master: Mapping[str, Any]) -> str:
     """Phase, target and the master port's link: what changes only when the line does. The
     Injected and Causes rows (only when there is one: the healthy line's panel stays as it
     was) are the instructor's (:data:`app.ui.style.CAUSE_ROWS`)."""
-    phase = str(master.get("phase", "-"))
+    phase, note = str(master.get("phase", "-")), str(master.get("phase_note") or "")
     mode = " (external master)" if master.get("external") else ""
-    rows = [("Phase", badge(phase_text(phase), "ok" if phase == "running" else "warn")
-             + esc(mode)),
+    # "running" with slaves lost or held is not all well: the warning colour (ethercat-master.md).
+    tone = "ok" if phase == "running" and not note else "warn"
+    rows = [("Phase", badge(phase_line(phase, note), tone) + esc(mode)),
             ("Target", esc(master.get("target", "-"))),
             ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad"))]
     for key, text in (("Injected", injected_text(master)), ("Causes", causes_text(master))):
