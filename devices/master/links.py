@@ -99,6 +99,9 @@ class SlaveLink:
     # flag has left on its own while the request was under way (startup._left_pending).
     pending_floor: int = 0
     requested: AlState | None = None
+    # Where the master was taking the slave when it made that request (its target, SAFEOP
+    # for a DC slave DC holds): the "requested" of the §7.7 "state change aborted" line.
+    goal: AlState | None = None
     requested_at_us: int = 0
     next_try_us: int = 0
     seen: AlState | None = None  # the state last reported in a SlaveStateChange

@@ -75,8 +75,10 @@ class StartupMixin:
             assert link.believed is not None
             if RANK.get(link.believed, 0) >= RANK[AlState.SAFEOP]:
                 link.counters.wkc_errors += 1  # its process data stopped answering
+            # "Try to go back to" where the master takes it: SAFEOP for a DC slave DC holds
+            # there (seed 003), as the request below makes it; the §7.7 line names OP.
             self._log(link, "abnormal", from_state=link.believed.label, to_state=state.label,
-                      code=slave.al_status_code, target=self.target.label)
+                      code=slave.al_status_code, target=target.label)
             link.believed, link.next_try_us = state, now
             # The change is an event now (seed 003: "the status change of slaves"): the
             # request below may bring the slave back within this step, before the step's
@@ -178,6 +180,7 @@ class StartupMixin:
         link.pending, link.pending_from = target, current
         link.pending_floor = min(RANK.get(current, 0), RANK[target])
         link.requested, link.requested_at_us = target, self.now_us
+        link.goal = self._target_of(link)
         link.slave.request_state(target)
 
     def _write_dc(self, link: SlaveLink) -> None:
@@ -218,6 +221,10 @@ class StartupMixin:
             return  # still busy (INIT -> PREOP waits for the internal-bus scan)
         self._log(link, "failed", from_state=link.pending_from.label, to_state=target.label,
                   al_status=slave.al_status, expected=int(target), code=slave.al_status_code)
-        self._log(link, "aborted", target=self.target.label, state=state.label)
+        # The target the request was made for (§7.7: "requested 'OP'" for a PREOP -> SAFEOP
+        # step), not DC's hold since then: a request for OP that DC's fall to NOT_SYNCHRONIZED
+        # overtook was still a request for OP.
+        goal = link.goal if link.goal is not None else self.target
+        self._log(link, "aborted", target=goal.label, state=state.label)
         link.believed, link.pending, link.stalled = state, None, True
         link.next_try_us = now + self.retry_interval_us
