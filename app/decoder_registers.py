@@ -2,7 +2,8 @@
 CANopen emergency), and a 0x1001 or 0x10F3:5 ("Flags" of the diagnosis history) value as the
 Objects tab shows it.
 
-The words are the devices' tables; this module picks the table of the device a reading
+The words are the devices' tables, said by ``devices.bitwords`` as the Slave and Objects
+tabs say them; this module picks the table of the device a reading
 belongs to and finds the object and its value in what is pasted:
 
 - the CPX-E-EC: seed 002 Tab. 22 (``devices.cpx.codes.ERROR_REGISTER_BITS``);
@@ -24,10 +25,11 @@ has ``0x``, as the Objects tab's Value box takes it; without a value every bit i
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 from app.decoder_meaning import CANOPEN, CPX, FASTCAT, SERVO, TRSCAT, DecodeError, Meaning
+from devices.bitwords import BitWords, FlagWords
 from devices.canopen import emcy as ds301
 from devices.cpx import codes as cpx
 from devices.cpx import history as cpx_history
@@ -40,57 +42,39 @@ from devices.trscat.objects import TYPE_NAMES as TRSCAT_TYPES
 
 
 @dataclass(frozen=True)
-class BitWords:
-    """One device's words for the bits of a register: ``names`` by bit mask, ``blank`` what a
-    set bit the table leaves out reads as, ``whole`` values the seed names as a whole."""
+class Sourced:
+    """A device's words for a register (``devices.bitwords``) and where they come from."""
 
     source: str
-    names: Mapping[int, str]
+    words: BitWords
     note: str = ""  # why these words: "seed 001 names no bits"
-    blank: str = "not in the table"
-    whole: Mapping[int, str] | None = None
-
-    def text(self, value: int) -> str:
-        """``Generic Error, Current`` (``no error`` for 0)."""
-        if self.whole and value in self.whole:
-            return self.whole[value]
-        if not value:
-            return "no error"
-        return ", ".join(self.names.get(1 << bit, f"bit {bit} ({self.blank})")
-                         for bit in range(value.bit_length()) if value >> bit & 1)
-
-    def listing(self) -> str:
-        """Every named bit: ``bit 0 Generic Error; bit 1 Current; ...``."""
-        return "; ".join(f"bit {mask.bit_length() - 1} {name}"
-                         for mask, name in sorted(self.names.items()))
 
 
-_DS301 = ds301.REGISTER_BIT_NAMES
-_DRIVE = BitWords("seed 004 ch. 4", _DS301)
-REGISTER_WORDS: dict[str, BitWords] = {
-    CPX: BitWords("seed 002 Tab. 22",
-                  {mask: f"{name} ({note})" for mask, (name, note)
-                   in cpx.ERROR_REGISTER_BITS.items()}, blank='"-" in Tab. 22'),
+_DS301 = ds301.REGISTER_WORDS
+_DRIVE = Sourced("seed 004 ch. 4", _DS301)
+REGISTER_WORDS: dict[str, Sourced] = {
+    CPX: Sourced("seed 002 Tab. 22", cpx.ERROR_REGISTER_WORDS),
     SERVO: _DRIVE,
     CANOPEN: _DRIVE,  # the drive's CANopen node's own codes
-    TRSCAT: BitWords("DS 301", _DS301, note="seed 001 names no bits"),
-    FASTCAT: BitWords("seed 000 §7", _DS301,
-                      whole={fastcat.EMERGENCY_REGISTER: fastcat.EMERGENCY_REGISTER_TEXT}),
+    TRSCAT: Sourced("DS 301", _DS301, note="seed 001 names no bits"),
+    FASTCAT: Sourced("seed 000 §7", replace(_DS301, whole={
+        fastcat.EMERGENCY_REGISTER: fastcat.EMERGENCY_REGISTER_TEXT})),
 }
-_PLAIN = BitWords("DS 301", _DS301)
+_PLAIN = Sourced("DS 301", _DS301)
 
 
 def register_text(register: int, family: str | None = None) -> str:
     """``0x81: Generic Error, Manufacturer Specific`` (DS 301); with a family, in that
     device's words and naming them: ``0x81 (seed 000 §7): device error``."""
     if family is None:
-        return f"{fmt_hex(register, 2)}: {_PLAIN.text(register)}"
-    words = REGISTER_WORDS.get(family, _PLAIN)
-    source = "; ".join(filter(None, (words.source, words.note)))
+        return f"{fmt_hex(register, 2)}: {_PLAIN.words.text(register)}"
+    sourced = REGISTER_WORDS.get(family, _PLAIN)
+    words = sourced.words
+    source = "; ".join(filter(None, (sourced.source, sourced.note)))
     if words.whole and register not in words.whole:  # a value the seed does not name
         named = ", ".join(fmt_hex(v, 2) for v in words.whole)
-        source = f"DS 301; {words.source} names only {named}"
-    return f"{fmt_hex(register, 2)} ({source}): {words.text(register)}"
+        source = f"DS 301; {sourced.source} names only {named}"
+    return f"{fmt_hex(register, 2)} ({source}): {words.text(register, notes=True)}"
 
 
 # ---- an object and its value, as the Objects tab shows it --------------------------------
@@ -106,36 +90,25 @@ def _error_register(value: int | None, title: str) -> list[Meaning]:
     """The devices with a 0x1001 (the FastCAT has none): each in its own words."""
     found = []
     for family in (TRSCAT, CPX, SERVO):
-        words = REGISTER_WORDS[family]
-        source = f"{words.source} ({words.note})" if words.note else words.source
-        text = words.text(value) if value is not None else words.listing()
+        sourced = REGISTER_WORDS[family]
+        source = f"{sourced.source} ({sourced.note})" if sourced.note else sourced.source
+        words = sourced.words
+        text = words.text(value, notes=True) if value is not None else words.listing(True)
         found.append(Meaning(family, title, text + ".", source))
     return found
 
 
-# 0x10F3:5 of each device that has a diagnosis history: (bit = 1, bit = 0) by mask, source.
-_FLAGS: dict[str, tuple[Mapping[int, tuple[str, str]], str]] = {
-    TRSCAT: (trscat_diag.FLAG_TEXT, "seed 001 §9.3.7 (bit 0: ETG.1020)"),
-    CPX: (cpx_history.FLAG_TEXT, "seed 002 Tab. 18, 19 (bits 1-3, 5: ETG.1020)"),
+# 0x10F3:5 of each device that has a diagnosis history, and the source of its words.
+_FLAGS: dict[str, tuple[FlagWords, str]] = {
+    TRSCAT: (trscat_diag.FLAG_WORDS, "seed 001 §9.3.7 (bit 0: ETG.1020)"),
+    CPX: (cpx_history.FLAG_WORDS, "seed 002 Tab. 18, 19 (bits 1-3, 5: ETG.1020)"),
 }
 
 
 def _diag_flags(value: int | None, title: str) -> list[Meaning]:
-    found = []
-    for family, (words, source) in _FLAGS.items():
-        if value is None:
-            text = "; ".join(f"bit {mask.bit_length() - 1}: 1 = {one}, 0 = {zero}"
-                             for mask, (one, zero) in sorted(words.items()))
-        else:
-            known = [f"bit {mask.bit_length() - 1} = {int(bool(value & mask))}: "
-                     f"{one if value & mask else zero}"
-                     for mask, (one, zero) in sorted(words.items())]
-            other = [f"bit {bit} = 1: not a bit of the {family}'s 0x10F3:5"
-                     for bit in range(value.bit_length())
-                     if value >> bit & 1 and 1 << bit not in words]
-            text = "; ".join(known + other)
-        found.append(Meaning(family, title, text + ".", source))
-    return found
+    return [Meaning(family, title,
+                    (words.listing() if value is None else words.text(value)) + ".", source)
+            for family, (words, source) in _FLAGS.items()]
 
 
 _OBJECTS: dict[int, _Object] = {

@@ -18,6 +18,8 @@ import struct
 from collections import deque
 from dataclasses import dataclass, field
 
+from devices.bitwords import BitWords
+
 EMCY_BASE = 0x080
 ERROR_RESET = 0x0000
 LIFE_GUARD_ERROR = 0x8130  # DS 301: life guard error or heartbeat error
@@ -43,6 +45,7 @@ REGISTER_BIT_NAMES: dict[int, str] = {
     REG_PROFILE: "Device Profile Specific", REG_RESERVED: "Reserved (always 0)",
     REG_MANUFACTURER: "Manufacturer Specific",
 }
+REGISTER_WORDS = BitWords(REGISTER_BIT_NAMES)  # the views' reading of a 0x1001 value
 
 # The DS 301 codes the node itself sends, in words (the Codes tab reads them, app/decoder.py).
 EMCY_TEXT: dict[int, str] = {

@@ -11,6 +11,8 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
+from devices.bitwords import BitWords
+
 # §2.5.3 Tab. 21: emergency error code (bytes 1, 0), after DS301 / DS401.
 EMCY_NO_ERROR = 0x0000
 EMCY_GENERAL = 0x1000
@@ -47,6 +49,11 @@ ERROR_REGISTER_BITS: dict[int, tuple[str, str]] = {
     REG_COMMUNICATION: ("Communication Error", "node guard, heartbeat: other fieldbuses only"),
     REG_MANUFACTURER: ("Manufacturer specific", "wire break, other error"),
 }
+# The same table as the views read it (the Slave tab's 0x1001 row, the Objects tab, the Codes
+# tab with the explanations).
+ERROR_REGISTER_WORDS = BitWords(
+    {mask: name for mask, (name, _) in ERROR_REGISTER_BITS.items()},
+    {mask: note for mask, (_, note) in ERROR_REGISTER_BITS.items()}, blank='"-" in Tab. 22')
 
 # §2.5.3 Tab. 23: status bits (byte 3, object 0x1002; the same 8 bits are the status-bit
 # inputs of §2.4.2). Bits 0-3 name the module type, bits 4-7 the error type.

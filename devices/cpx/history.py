@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from devices.bitwords import FlagWords
 from devices.cpx.codes import DiagType
 from devices.cpx.messages import DiagMessage
 from devices.od import AbortCode, SdoAbort
@@ -46,6 +47,7 @@ FLAG_TEXT: dict[int, tuple[str, str]] = {
     FLAG_OVERWRITE_DISCARD: ("a message was overwritten or discarded (ETG.1020, set by the "
                              "bus module)", "no message overwritten or discarded (ETG.1020)"),
 }
+FLAG_WORDS = FlagWords(FLAG_TEXT, "CPX-E-EC")
 DISABLE_FLAG: dict[DiagType, int] = {DiagType.INFO: FLAG_DISABLE_INFO,
                                      DiagType.WARNING: FLAG_DISABLE_WARNING,
                                      DiagType.ERROR: FLAG_DISABLE_ERROR}

@@ -15,6 +15,7 @@ import enum
 import struct
 from dataclasses import dataclass
 
+from devices.bitwords import FlagWords
 from devices.device import CommandError
 
 # ETG.1020 Diag Code, bits 16..31: 0xE800 = a DS301 / DS4xx emergency code in bits 0..15,
@@ -51,6 +52,7 @@ FLAG_TEXT: dict[int, tuple[str, str]] = {
     DiagType.WARNING.disable_bit: ("warning messages disabled", "warning messages enabled"),
     DiagType.ERROR.disable_bit: ("error messages disabled", "error messages enabled"),
 }
+FLAG_WORDS = FlagWords(FLAG_TEXT, "TRS-CAT")
 
 
 class Bus(enum.Enum):

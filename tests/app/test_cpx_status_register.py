@@ -37,3 +37,25 @@ def test_the_row_reads_the_models_register() -> None:
     snap = cpx.snapshot()
     assert snap["diagnosis"]["status_bits"] == 0x22
     assert "0x22 Error at output, Short circuit/overload" in cpx_html(snap)
+
+
+def test_the_0x1001_row_reads_tab_22s_words() -> None:
+    """0x1001 next to 0x1002 in the same way: its set bits in seed 002 Tab. 22's names.
+    Before, the row showed "0x83" only and a trainee had to look the bits up."""
+    html = cpx_html({"diagnosis": {"error_register": 0x83, "status_bits": 0x24}})
+    assert "0x83 Generic Error, Current, Manufacturer specific" in html, html
+    assert "0x00 no error" in cpx_html({"diagnosis": {"error_register": 0, "status_bits": 0}})
+    # a bit Tab. 22 leaves "-" says so rather than borrowing DS 301's name
+    assert "0x09 Generic Error, bit 3 (&quot;-&quot; in Tab. 22)" in \
+        cpx_html({"diagnosis": {"error_register": 0x09, "status_bits": 0}})
+
+
+def test_the_0x1001_row_reads_the_models_register() -> None:
+    """The 8DO short of the test above: Tab. 22 bits 0 (every error) and 1 (KZA)."""
+    cpx = CpxEEc("cpx", random.Random(1), ["CPX-E-8DO"], dil1=True)
+    cpx.apply("power", {"on": True}, None)
+    cpx.apply("short_circuit", {"on": True, "channel": 2}, 1)
+    cpx.apply("force", {"channel": 2, "value": 1}, 1)
+    for t in range(1, 400):
+        cpx.step(t * 1000)
+    assert "0x03 Generic Error, Current" in cpx_html(cpx.snapshot())

@@ -27,7 +27,7 @@ from app.ui.panels.state import injected_text
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
 from devices.cpx.catalog import IO_MODULES, ModuleKind
-from devices.cpx.codes import STATUS_BITS
+from devices.cpx.codes import ERROR_REGISTER_WORDS, STATUS_BITS
 from devices.cpx.esm import AL_STATUS_ID_LOADED
 from devices.ethercat import al_status_name, describe_al_status_code
 
@@ -279,7 +279,9 @@ def cpx_html(snap: Mapping[str, Any]) -> str:
         ("Explicit Device ID", id_text(snap)),
         ("Supply", esc(f"U_EL/SEN {supply.get('el_sen_v', '-')} V, "
                        f"U_OUT {supply.get('out_v', '-')} V")),
-        ("Error register 0x1001", esc(f"0x{int(diagnosis.get('error_register', 0)):02X}")),
+        # Tab. 22's names of the set bits, as 0x1002's row below reads Tab. 23's.
+        ("Error register 0x1001", esc(ERROR_REGISTER_WORDS.value_text(
+            int(diagnosis.get("error_register", 0))))),
         # Tab. 20 byte 3: what module type and error the diagnosis is about, next to 0x1001.
         ("Status bits 0x1002", esc(status_register_text(int(diagnosis.get("status_bits", 0))))),
         ("Injected", injected_text(snap.get("injected") or []))]
