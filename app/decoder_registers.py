@@ -118,6 +118,9 @@ _OBJECTS: dict[int, _Object] = {
 _ADDRESS = re.compile(r"\s*(?:0x)?([0-9a-f]{4})\s*:\s*(?:0x)?([0-9a-f]{1,2})(?![0-9a-z])(.*)",
                       re.IGNORECASE | re.DOTALL)
 _NUMBER = re.compile(r"\(?(0x[0-9a-f]+|\d+)\)?", re.IGNORECASE)
+# The Objects tab writes a value's words after it ("0x03 = Generic Error, Current", the
+# entry's explain): after "=" behind the number they are the tab's reading, not a value.
+_SAID = re.compile(r"\b(0x[0-9a-f]+|\d+)\s*=\s*[a-z].*", re.IGNORECASE | re.DOTALL)
 # What else an Objects tab row holds: the access column and every manual's type names.
 _ROW_WORDS = {"ro", "rw", "p", "value"} | {
     names.names[dtype].lower() for names in (IEC_NAMES, CPX_TYPES, TRSCAT_TYPES)
@@ -145,6 +148,7 @@ def object_readings(text: str) -> list[Meaning]:
 def _value(rest: str, obj: _Object, address: str) -> int | None:
     values = []
     name_words = set(obj.name.lower().split())
+    rest = _SAID.sub(r"\1", rest)
     for token in re.split(r"[\s=,;]+", rest.strip()):
         number = _NUMBER.fullmatch(token)
         if number:

@@ -15,6 +15,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
+from devices.canopen.emcy import REGISTER_WORDS
 from devices.canopen.pdo import MAX_ENTRIES, Pdo
 from devices.od import AbortCode, Access, DataType, ObjectDictionary, OdEntry, SdoAbort
 from devices.servo.alarms import error_field_text
@@ -66,7 +67,9 @@ def build_comm_objects(node: CanOpenNode) -> ObjectDictionary:
             else RO, lambda: value)
 
     const(0x1000, 0, "Device type", D.UNSIGNED32, DEVICE_TYPE)
-    add(0x1001, 0, "Error register", D.UNSIGNED8, RO, lambda: node.error_register)
+    od.add(OdEntry(0x1001, 0, "Error register", D.UNSIGNED8, RO,
+                   default=node.error_register, getter=lambda: node.error_register,
+                   explain=REGISTER_WORDS.said))  # seed 004 ch. 4 prints DS 301's bits
     add(0x1003, 0, "Number of errors", D.UNSIGNED8, RW, lambda: node.history.count,
         node.clear_history)
     od.add(OdEntry(0x1003, 1, "Standard error field", D.UNSIGNED32, RO,

@@ -32,6 +32,7 @@ from devices.canopen.comm_objects import (
     build_profile_extras,
 )
 from devices.canopen.dictionary import CanOpenDictionary
+from devices.canopen.emcy import REGISTER_WORDS
 from devices.canopen.pdo import MAX_ENTRIES, Pdo
 from devices.coe.assignment import PDOS_PER_DIRECTION, Assignment
 from devices.coe.csp import CSP_SUPPORTED
@@ -79,7 +80,9 @@ def build_slave_objects(slave: DriveEcatSlave) -> ObjectDictionary:
 
     drive, csp, emcy = slave.drive, slave.csp, slave.emergencies
     const(0x1000, 0, "Device type", D.UNSIGNED32, DEVICE_TYPE)
-    add(0x1001, 0, "Error register", D.UNSIGNED8, RO, lambda: error_register(drive))
+    od.add(OdEntry(0x1001, 0, "Error register", D.UNSIGNED8, RO,
+                   default=error_register(drive), getter=lambda: error_register(drive),
+                   explain=REGISTER_WORDS.said))  # seed 004 ch. 4 prints DS 301's bits
     add(0x1003, 0, "Number of errors", D.UNSIGNED8, RW, lambda: emcy.history.count,
         _clear_history(slave))
     od.add(OdEntry(0x1003, 1, "Standard error field", D.UNSIGNED32, RO,

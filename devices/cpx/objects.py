@@ -14,7 +14,8 @@ from typing import Any, Protocol
 
 from devices.cpx.assignment import RX_ASSIGN, TX_ASSIGN, address_order
 from devices.cpx.catalog import ModuleType
-from devices.cpx.history import FIRST_SUB, INDEX, MAX_MESSAGES, DiagHistory
+from devices.cpx.codes import ERROR_REGISTER_WORDS
+from devices.cpx.history import FIRST_SUB, FLAG_WORDS, INDEX, MAX_MESSAGES, DiagHistory
 from devices.cpx.messages import MESSAGE_BYTES
 from devices.cpx.modules import ANALOG_RANGES, CpxModule
 from devices.od import (
@@ -98,7 +99,8 @@ def build_od(dev: CpxObjects) -> ObjectDictionary:
 
 def _identity(od: ObjectDictionary, dev: CpxObjects) -> None:
     _ro(od, 0x1000, 0, "Device Type", DataType.UNSIGNED32, DEVICE_TYPE)
-    _ro(od, 0x1001, 0, "Error Register", DataType.UNSIGNED8, 0, getter=dev.od_error_register)
+    _ro(od, 0x1001, 0, "Error Register", DataType.UNSIGNED8, 0, getter=dev.od_error_register,
+        explain=ERROR_REGISTER_WORDS.said)  # Tab. 22's names of the set bits
     # Tab. 20 names index 1002 (Manufacturer Status Register) as the source of byte 3.
     _ro(od, 0x1002, 0, "Manufacturer Status Register", DataType.UNSIGNED32, 0,
         getter=dev.od_status_register)
@@ -126,7 +128,8 @@ def _history(od: ObjectDictionary, dev: CpxObjects) -> None:
     _ro(od, INDEX, 4, "New Message Available", DataType.BOOLEAN, False, pdo_mappable=True,
         getter=lambda: h.new_message)
     od.add(OdEntry(INDEX, 5, "Flags", DataType.UNSIGNED16, Access.RW, 0x0000,
-                   getter=lambda: h.flags, setter=h.write_flags))
+                   getter=lambda: h.flags, setter=h.write_flags,
+                   explain=FLAG_WORDS.said))  # Tab. 18 / 19
     for sub in range(FIRST_SUB, FIRST_SUB + MAX_MESSAGES):
         # BYTE[23] (Tab. 14 / 27): the default gives the entry its 23-byte size (the SDO
         # information service reports it); the value is the stored message's bytes.

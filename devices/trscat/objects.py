@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any, Protocol
 
+from devices.canopen.emcy import REGISTER_WORDS
 from devices.od import (
     AbortCode,
     Access,
@@ -25,6 +26,7 @@ from devices.od import (
 from devices.trscat.catalog import MAX_SLOTS, ModuleKind
 from devices.trscat.diagnostics import (
     FIRST_MESSAGE_SUB,
+    FLAG_WORDS,
     LAST_MESSAGE_SUB,
     MAX_MESSAGES,
     DiagHistory,
@@ -113,7 +115,9 @@ def _ro(od: ObjectDictionary, index: int, sub: int, name: str, dtype: DataType, 
 
 def _identity(od: ObjectDictionary, dev: TrsObjects) -> None:
     _ro(od, 0x1000, 0, "Device type", U32, DEVICE_TYPE)
-    _ro(od, 0x1001, 0, "Error register", U8, 0, getter=dev.od_error_register)
+    # seed 001 names no bits of 0x1001: DS 301's words (docs/trscat.md)
+    _ro(od, 0x1001, 0, "Error register", U8, 0, getter=dev.od_error_register,
+        explain=REGISTER_WORDS.said)
     _ro(od, 0x1008, 0, "Device name", DataType.VISIBLE_STRING, DEVICE_NAME)
     _ro(od, 0x1009, 0, "Hardware version", DataType.VISIBLE_STRING, HW_VERSION)
     _ro(od, 0x100A, 0, "Software version", DataType.VISIBLE_STRING, SW_VERSION)
@@ -137,7 +141,7 @@ def _diagnostics(od: ObjectDictionary, dev: TrsObjects) -> None:
     _ro(od, 0x10F3, 4, "New message available", BOOL, False, pdo_mappable=True,
         getter=lambda: diag.new_available)
     od.add(OdEntry(0x10F3, 5, "Flags", U16, RW, 0, getter=lambda: diag.flags,
-                   setter=diag.set_flags))
+                   setter=diag.set_flags, explain=FLAG_WORDS.said))
     # ETG.1020 messages are OCTET_STRINGs (§9.3.7 prints no type for them); a place never
     # written holds no bytes.
     for sub in range(FIRST_MESSAGE_SUB, LAST_MESSAGE_SUB + 1):
