@@ -51,7 +51,7 @@ from app.decoder_meaning import (
 )
 from app.decoder_nmt import nmt_readings
 from app.decoder_paste import PasteError, canonical
-from app.decoder_registers import object_readings, register_text
+from app.decoder_registers import object_readings, register_text, upload_readings
 from app.decoder_states import MASTER, state_readings
 from app.modbus.pdu import EXCEPTION_FLAG
 from devices.canopen import emcy as ds301
@@ -93,6 +93,9 @@ def _decode(text: str) -> list[Meaning]:
     nmt = nmt_readings(raw)  # "NMT 01 02", the CANopen tab's frame log row
     if nmt:
         return nmt
+    uploads = upload_readings(raw)  # "upload 0x1001:00 = 21", the CANopen tab's frame log
+    if uploads:
+        return uploads
     objects = object_readings(raw)  # "0x1001:0 = 0x83", as the Objects tab shows the value
     if objects:
         return objects

@@ -20,6 +20,10 @@ FLAG_TEXT``), the CPX-E-EC's in seed 002 Tab. 18 / 19's (bits 0 and 4,
 An object query is ``INDEX:SUB`` then the value, as the Objects tab's row reads (``0x1001:0
 Error Register U8 ro 131``) or typed (``0x1001:0 = 0x83``): the value in decimal unless it
 has ``0x``, as the Objects tab's Value box takes it; without a value every bit is listed.
+The tab shows it in hex with its words (``0x83 = Generic Error, ...``): those are skipped.
+
+An SDO upload as the CANopen tab's frame log shows it (``upload 0x1001:00 = 21``) is the
+drive's 0x1001, its bytes in hex: the drive is the one device on CAN.
 """
 
 from __future__ import annotations
@@ -165,3 +169,45 @@ def _value(rest: str, obj: _Object, address: str) -> int | None:
         raise DecodeError(f"{address} is {'one byte' if obj.size == 1 else 'two bytes'}: "
                           f"{fmt_hex(values[0], 2)} does not fit")
     return values[0]
+
+
+# ---- an SDO upload, as the CANopen tab's frame log shows it --------------------------------
+# "node 2 ->: upload 0x1001:00 = 21" (devices/canopen/decode.py), or the tab's Last SDO row
+# "Upload (read) 0x1001:00 from node 2: value 21." (app/ui/drive/canopen_panel.py): the
+# expedited bytes in hex, byte 0 first, unlike the Objects tab's decimal; without a value the
+# master's request.
+_UPLOAD = re.compile(r"\bupload(?:\s*\(read\))?\s+0x([0-9a-f]{4}):([0-9a-f]{2})"
+                     r"(?:\s+from node \d+)?(?:\s*(?:=|:\s*value)\s*((?:[0-9a-f]{2}\s*)+))?"
+                     r"\.?\s*$", re.IGNORECASE)
+# The one device on CAN is the drive (seed 004 ch. 4): its words are the node's.
+_NODE = SERVO
+
+
+def upload_readings(text: str) -> list[Meaning]:
+    """The frame log's SDO upload of an object the Codes tab reads, as the drive's node's
+    value; [] for another line or object, DecodeError for one the node cannot have sent."""
+    found = _UPLOAD.search(text)
+    if found is None or int(found.group(1), 16) not in _OBJECTS:
+        return []
+    index, sub = int(found.group(1), 16), int(found.group(2), 16)
+    obj = _OBJECTS[index]
+    address = f"{fmt_hex(index, 4)}:{obj.sub}"
+    if index != 0x1001:  # the drive's node has no diagnosis history (it aborts the upload)
+        raise DecodeError(f"the drive's CANopen node has no {fmt_hex(index, 4)}, the one "
+                          "device on CAN: it answers an upload with abort 0x06020000")
+    if sub != obj.sub:
+        raise DecodeError(f"{fmt_hex(index, 4)}:{sub:02X}: the Codes tab reads {address} "
+                          f"({obj.name}), sub {obj.sub}")
+    title = f"{address} {obj.name}"
+    sourced = REGISTER_WORDS[_NODE]
+    if found.group(3) is None:
+        return [Meaning(_NODE, title + " (SDO upload request, CANopen node)",
+                        sourced.words.listing() + ".", sourced.source)]
+    data = bytes.fromhex(found.group(3))
+    if len(data) != obj.size:
+        raise DecodeError(f"{address} is one byte; the upload carries {len(data)} "
+                          f"({found.group(3).strip()})")
+    value = int.from_bytes(data, "little")
+    return [Meaning(_NODE, f"{title} = {fmt_hex(value, 2)} (SDO upload, CANopen node)",
+                    sourced.words.text(value) + ".",
+                    f"{sourced.source} (the frame log's bytes in hex)")]
