@@ -22,4 +22,4 @@ def test_alarm_row_words_the_effect_for_a_trainee(effect: Effect) -> None:
 
 def test_an_unknown_effect_is_shown_as_it_came() -> None:
     snap = {"alarm": {"code": 99, "name": "X", "description": "d", "effect": "coast"}}
-    assert "(coast)" in alarm_html(snap)
+    assert "— coast<" in alarm_html(snap)

@@ -232,7 +232,8 @@ def test_alarm_row_shows_description_and_effect() -> None:
     spec = alarm_table("modbus")[16]
     snap = {"powered": True, "ds402_state": "Fault", "alarm": spec.as_dict(), "alarms": [16]}
     row = dict(state_rows(snap))["Alarm"]
-    assert "16 FOLLOWING_ERROR" in row and "axis released immediately" in row
+    # the effect in a trainee's words (docs/dashboard.md, the Drive tab's Alarm row)
+    assert "16 FOLLOWING_ERROR" in row and "— the axis is released at once (torque off)" in row
 
 
 def test_alarm_choices_follow_the_fieldbus() -> None:

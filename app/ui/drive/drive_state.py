@@ -86,7 +86,8 @@ def alarm_html(snap: Mapping[str, Any]) -> str:
         return badge("none", "ok")
     name = f"{alarm.get('code')} {alarm.get('name', '')}"
     html = (f"{badge(name, 'bad')}<br>{esc(alarm.get('description', ''))} "
-            f"<span class=\"fr-muted\">({esc(effect_text(alarm.get('effect', '')))})</span>")
+            # a dash, not brackets: the effect's own words end in "(torque off)"
+            f"<span class=\"fr-muted\">— {esc(effect_text(alarm.get('effect', '')))}</span>")
     others = [a for a in snap.get("alarms") or [] if a != alarm.get("code")]
     if others:
         html += f'<br><span class="fr-muted">also latched: {esc(others)}</span>'
