@@ -11,6 +11,7 @@ from helpers import LiveDashboard, choose, open_dashboard, wait_until
 
 from app.ui.dashboard import fault_options
 from app.ui.drive.drive_options import alarm_options
+from devices.servo.parameters import C9_BY_FIELDBUS
 
 pytestmark = pytest.mark.browser
 
@@ -40,9 +41,16 @@ def test_longest_fault_and_alarm_names_fit_the_closed_box(live: LiveDashboard, p
         choose(page, "Fault", longest)
         _shown_whole(page, "Fault", longest)
     page.get_by_role("tab", name="Servo drive", exact=True).first.click()
+    drive = live.rig.device("drive")  # the page's picked drive (the Modbus one)
     for fieldbus in ("ethercat", "profinet"):
-        longest = _longest(alarm_options(fieldbus))
-        alarm = drives.controls._alarms.each()[0].alarm  # an open rig: the one shared form
-        alarm.options = alarm_options(fieldbus)
-        alarm.value = longest
+        # Each page's Alarm list is its own drive's (an open rig's ClientPick): the drive is
+        # put on ``fieldbus`` as a power-up with that c9 would (ch. 2), and the page picks
+        live.runtime.submit(lambda bus=fieldbus: drive.latched_at_power_up.__setitem__(
+            "c9", C9_BY_FIELDBUS[bus])).result(timeout=10)
+        live.advance(0.2)
+        offered = alarm_options(fieldbus)
+        longest = _longest(offered)
+        wait_until(lambda offered=offered: page.get_by_label(
+            "Alarm", exact=True).first.input_value() in offered, what=f"the {fieldbus} alarms")
+        choose(page, "Alarm", longest)
         _shown_whole(page, "Alarm", longest)
