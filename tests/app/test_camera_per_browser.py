@@ -99,38 +99,3 @@ def test_a_scenario_focus_still_moves_every_browser(
     assert line is not None
     moved = _moves_after(rig, first, second, lambda: line.focus(None, "cpx"))
     assert moved[0] >= 1 and moved[1] >= 1, moved
-
-
-def _joining_page_cameras(served: ServedRig) -> list[tuple[float, ...]]:
-    """The camera positions the server sends a page that connects now."""
-    page = Page(served.port)
-    try:
-        _wait(lambda: len(served.server.get_clients()) == 3)
-        time.sleep(CLICK_SETTLE_S + 1.0)
-        served.server.flush()
-        time.sleep(0.3)
-        return [tuple(m["position"]) for m in page.received()
-                if m.get("type") == "SetCameraPositionMessage"]
-    finally:
-        page.close()
-        _wait(lambda: len(served.server.get_clients()) == 2)
-
-
-def test_a_page_that_joins_during_a_scenario_focus_gets_the_focused_camera(
-        served: tuple[ServedRig, Page, Page]) -> None:
-    """A scenario's focus hides the labels its view would cut and grows the master's screen
-    texts for every browser; a page opened (or reloaded) afterwards got the initial camera
-    on the whole line under that focused label state: labels missing over most of the line
-    and "DC COMPENSATING" wider than the master's screen (baseline line_trscat_outputs)."""
-    rig, _first, _second = served
-    line = rig.dashboard.line
-    assert line is not None
-    line.show_all(None)  # no focus shared (an earlier test's scenario focus ends)
-    home = _joining_page_cameras(rig)
-    focused = line.focus_camera("trscat", line._aspect)[0]
-    assert home and home[-1] != pytest.approx(focused, abs=1e-3), home
-    line.focus(None, "trscat")
-    positions = _joining_page_cameras(rig)
-    assert positions and positions[-1] == pytest.approx(focused, abs=1e-3), positions
-    line.show_all(None)  # the focus ends: a page that joins gets the initial camera again
-    assert _joining_page_cameras(rig)[-1] == pytest.approx(home[-1], abs=1e-3)

@@ -124,12 +124,6 @@ class LineView:
                                          list(rail_lengths), kinds or {}, runtime)
         self.focused: str | None = None
         self.home: Box = self.scene.bounds()  # what "Show the whole line" frames (dashboard)
-        # The view a scenario's focus shares (None: none). The labels follow it for every
-        # page (_share_view), so a page that connects during it is sent it too: with the
-        # initial camera it showed the whole line under the focused labels, most of them
-        # hidden and the master's screen texts wider than its screen.
-        self._shared_box: Box | None = None
-        server.on_client_connect(self._joined)
 
         @whole.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -187,7 +181,6 @@ class LineView:
             if client is None:
                 self.move_camera(target, caption=caption)
                 self._share_view(self.labels.view(*camera_for(target, self._aspect)))
-                self._shared_box = target
             else:
                 self._share_view(None)  # this page leaves the view the others share
                 # The caption stays where the scenario put it: it is every page's.
@@ -202,7 +195,6 @@ class LineView:
         screen texts grow with its zoom, and the labels its edges would cut go."""
         master = self.scene.master
         if view is None:
-            self._shared_box = None
             master.zoom(None)
             self.labels.release()
             return
@@ -235,20 +227,6 @@ class LineView:
             self.move_camera(self.home, CAPTION_LIFT, client=client)
         else:
             self.move_camera(self.home, CAPTION_LIFT, self.home_caption)
-
-    def _joined(self, client: viser.ClientHandle) -> None:
-        """A page that connects while a scenario's focus is shared looks where the others do
-        (after its initial camera, as after a click: CLICK_SETTLE_S)."""
-        if self._shared_box is None:
-            return
-        timer = threading.Timer(CLICK_SETTLE_S, self._send_shared, (client,))
-        timer.daemon = True
-        timer.start()
-
-    def _send_shared(self, client: viser.ClientHandle) -> None:
-        box = self._shared_box  # read again: the focus may have ended meanwhile
-        if box is not None:
-            self.move_camera(box, client=client)
 
     def move_camera(self, box: Box, lift: float = 0.0,
                     caption: tuple[float, float] | None = None,
