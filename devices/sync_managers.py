@@ -46,6 +46,10 @@ class SmFault(enum.Enum):
 
 
 SM_FAULTS: dict[str, SmFault] = {f.value: f for f in SmFault}
+# What a refusal names as invalid (the TRS-CAT's diagnosis message, the drive's log line).
+SM_FAULT_WORDS: dict[SmFault, str] = {
+    SmFault.ADDRESS: "start address", SmFault.SIZE: "length",
+    SmFault.SETTINGS: "settings (enable, buffer type, direction)"}
 
 
 @dataclass(frozen=True)

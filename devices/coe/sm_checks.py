@@ -17,14 +17,12 @@ from typing import TYPE_CHECKING
 
 from devices import sync_managers as smc
 from devices.coe import process_image
-from devices.sync_managers import SmFault, SmSetup
+from devices.sync_managers import SmSetup
 
 if TYPE_CHECKING:
     from devices.coe.esm import Esm
     from devices.servo.drive import ServoDrive
 
-_WHAT = {SmFault.ADDRESS: "start address", SmFault.SIZE: "length",
-         SmFault.SETTINGS: "settings (enable, buffer type, direction)"}
 
 
 class SmChecks:
@@ -62,7 +60,8 @@ class SmChecks:
         sm, fault = found
         code = smc.fault_code(sm, fault)
         if self.esm.code != code:  # one message per refusal episode, not per retry
-            self.drive.log(f"EtherCAT: SM{sm} refused (0x{code:04X}): invalid {_WHAT[fault]}")
+            self.drive.log(f"EtherCAT: SM{sm} refused (0x{code:04X}): "
+                           f"invalid {smc.SM_FAULT_WORDS[fault]}")
         return code
 
     def _pd_bytes(self, sm: int) -> int:

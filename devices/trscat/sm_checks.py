@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 from devices import sync_managers as smc
 from devices.device import CommandError
-from devices.sync_managers import SmFault, SmSetup
+from devices.sync_managers import SmSetup
 from devices.trscat.diagnostics import check_message
 from devices.trscat.pdo import RXPDO_ASSIGN, TXPDO_ASSIGN
 
@@ -25,8 +25,6 @@ if TYPE_CHECKING:
     from devices.trscat.esm import Esm
 
 SmKey = tuple[str, int]  # (fault name, SM number)
-_WHAT = {SmFault.ADDRESS: "start address", SmFault.SIZE: "length",
-         SmFault.SETTINGS: "settings (enable, buffer type, direction)"}
 
 
 class SmChecksMixin:
@@ -65,7 +63,7 @@ class SmChecksMixin:
         sm, fault = found
         code = smc.fault_code(sm, fault)
         if self.esm.code != code:  # one message per episode, not per retry of the master
-            self.report(check_message(code, f"SM{sm}: invalid {_WHAT[fault]}",
+            self.report(check_message(code, f"SM{sm}: invalid {smc.SM_FAULT_WORDS[fault]}",
                                       self.now_us * 1000))
         return code
 
