@@ -24,6 +24,9 @@ EMCY_BASE = 0x080
 ERROR_RESET = 0x0000
 LIFE_GUARD_ERROR = 0x8130  # DS 301: life guard error or heartbeat error
 PDO_LENGTH_ERROR = 0x8210  # DS 301: PDO not processed due to length error
+# Emergencies kept while they cannot leave (Stopped, inhibit time): a real node's EMCY buffer
+# is finite too. The newest are kept; 32 holds every drive alarm (29) and an error reset.
+EMCY_KEPT = 32
 
 REG_GENERIC = 0x01
 REG_CURRENT = 0x02
@@ -130,14 +133,21 @@ class ErrorHistory:
 
 @dataclass
 class EmcyProducer:
-    """Emergencies waiting for the bus, spaced by the inhibit time 0x1015 (x 100 us)."""
+    """Emergencies waiting for the bus, spaced by the inhibit time 0x1015 (x 100 us), and
+    held while the NMT state allows no EMCY (Stopped) until :meth:`release`."""
 
     inhibit_100us: int = 0
     last_sent_us: int | None = None
-    pending: deque[tuple[bytes, int]] = field(default_factory=deque)
+    pending: deque[tuple[bytes, int]] = field(default_factory=lambda: deque(maxlen=EMCY_KEPT))
 
     def queue(self, data: bytes, ready_us: int) -> None:
         self.pending.append((data, ready_us))
+
+    def release(self, t_us: int) -> None:
+        """The node may send EMCY again from ``t_us``: what it held leaves from then on, in
+        the order raised (not back-dated to when each error came)."""
+        self.pending = deque(((data, max(at, t_us)) for data, at in self.pending),
+                             maxlen=EMCY_KEPT)
 
     def due(self, now_us: int) -> tuple[bytes, int] | None:
         """The next emergency and the instant it may leave, if that is by ``now_us``."""
@@ -151,7 +161,3 @@ class EmcyProducer:
         self.pending.popleft()
         self.last_sent_us = at
         return data, at
-
-    def reset(self) -> None:
-        self.pending.clear()
-        self.last_sent_us = None

@@ -271,10 +271,8 @@ class CanOpenNode(ProcessData, DeviceModel):
             if state is not NmtState.INITIALISATION:  # (Initialisation: _quiet says True)
                 if drive.alarms.latched != self._known_alarms:
                     return now
-                emcy = self.emcy
-                if emcy.pending or (emcy.last_sent_us is not None
-                                    and not allows(state, Service.EMCY)):
-                    return now
+                if self.emcy.pending and allows(state, Service.EMCY):
+                    return now  # (held in Stopped, they wait for an NMT frame)
                 beat = self.heartbeat.next_us
                 if beat is not None:
                     end = beat  # the step at or after it sends the heartbeat
@@ -388,10 +386,8 @@ class CanOpenNode(ProcessData, DeviceModel):
             return False
         if self.drive.alarms.latched != self._known_alarms:
             return False
-        emcy = self.emcy
-        if emcy.pending or (emcy.last_sent_us is not None
-                            and not allows(self.state, Service.EMCY)):
-            return False
+        if self.emcy.pending and allows(self.state, Service.EMCY):
+            return False  # held in Stopped, they wait for an NMT frame (receive ends calm)
         # Quiet: and so until the heartbeat or the life guarding falls due, unless a frame
         # comes or goes or a full step runs first (step, receive and _send see to that).
         expiry = self.guard.expiry_at()
@@ -452,9 +448,8 @@ class CanOpenNode(ProcessData, DeviceModel):
             self.life_guard_error = True  # "L'EMCY non viene resettato"
             self._emergency(em.LIFE_GUARD_ERROR, b"", expired)
         self._watch_alarms(now_us)
-        if not allows(self.state, Service.EMCY):  # stopped meanwhile: they never leave
-            self.emcy.reset()
-        while (due := self.emcy.due(now_us)) is not None:
+        # In Stopped they wait: the error event is owed until the node may speak (_set_state)
+        while allows(self.state, Service.EMCY) and (due := self.emcy.due(now_us)) is not None:
             data, at = due
             self._send(self.emcy_cob_id & 0x7FF, data, at)
             self.emit(EmergencySent(at, self.drive.device_id, code=int.from_bytes(data[:2],
@@ -507,6 +502,8 @@ class CanOpenNode(ProcessData, DeviceModel):
         if new is NmtState.OPERATIONAL:
             for pdo in (*self.rpdos, *self.tpdos):
                 pdo.restart()
+        if allows(new, Service.EMCY) and not allows(old, Service.EMCY):
+            self.emcy.release(t)  # what Stopped held leaves now (docs/canopen.md §Emergencies)
 
     def _guard_request(self, t: int) -> None:
         self.guard.request(t)
@@ -519,7 +516,7 @@ class CanOpenNode(ProcessData, DeviceModel):
         if code != em.ERROR_RESET:
             self.history.record(code, info)
         register = self.error_register | (em.register_bits(code) if transient else 0)
-        if allows(self.state, Service.EMCY) and not self.emcy_cob_id & 0x8000_0000:
+        if not self.emcy_cob_id & 0x8000_0000:  # queued in Stopped too: held, see _timers
             self.emcy.queue(em.payload(code, register, vendor), t)
 
     def _watch_alarms(self, now_us: int) -> None:

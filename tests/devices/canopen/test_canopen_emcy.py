@@ -117,3 +117,66 @@ def test_the_bus_monitor_names_the_alarm_of_its_own_emcy() -> None:
     assert texts == ["node 1: code 0x8611, register 0x21, data 10 00 00 00 00: "
                      "alarm 16 FOLLOWING_ERROR",
                      "node 3: code 0x8611, register 0x21, data 10 00 00 00 00"]
+
+
+@pytest.mark.parametrize(("command", "state"), [
+    (NmtCommand.START, "Operational"), (NmtCommand.ENTER_PRE_OPERATIONAL, "Pre-operational"),
+])
+def test_an_emergency_raised_while_stopped_leaves_when_the_node_may_speak(command, state) -> None:
+    """Stopped sends no EMCY ("non può trasmettere ... qualsiasi altro messaggio che il node
+    guarding o l'heartbeat"), but the error event stays owed: the EMCY leaves as soon as the
+    node is in Pre-operational or Operational again (docs/canopen.md §Emergencies)."""
+    bench = make_bench()
+    bench.nmt(NmtCommand.STOP)
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": "16"})
+    bench.run(500)
+    assert _emcys(bench) == []
+    bench.send(0x000, bytes((command, 1)))
+    bench.run(5)
+    changed = [e for e in bench.kinds("state") if e["to"] == state][-1]
+    frames = _emcys(bench)
+    assert [hexs(f.data) for f in frames] == ["11 86 21 10 00 00 00 00"]
+    assert 0 <= frames[0].t_us - round(changed["t"] * 1e6) <= 2_000
+    assert bench.kinds("emergency")[-1]["code"] == "0x8611"
+    bench.run(500)
+    assert _emcys(bench) == []  # once per error event
+
+
+def test_emergencies_of_an_error_come_and_gone_while_stopped_leave_in_order() -> None:
+    """Alarm 2 raised and reset while Stopped (the reset pulse from the drive's own side):
+    after Start the master hears both, the error and the error reset, spaced by 0x1015."""
+    bench = make_bench()
+    bench.ok(0x1015, 0, 100, 2)  # 10 ms
+    bench.nmt(NmtCommand.STOP)
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": "2"})
+    bench.run(20)
+    bench.drive.apply("clear_alarm", {"code": "2"})
+    bench.drive.apply("alarm_reset", {})
+    bench.run(20)
+    assert _emcys(bench) == []
+    assert bench.drive.alarms.latched == []
+    bench.nmt(NmtCommand.START)
+    bench.run(30)
+    frames = _emcys(bench)
+    assert [hexs(f.data)[:5] for f in frames] == ["20 71", "00 00"]
+    assert frames[1].t_us - frames[0].t_us >= 10_000
+
+
+def test_an_emergency_waiting_for_its_inhibit_time_at_stop_is_kept() -> None:
+    """Two alarms at once with 0x1015 = 50 ms, Stop between them: the second, not yet sent,
+    leaves after Start instead of being lost."""
+    bench = make_bench()
+    bench.ok(0x1015, 0, 500, 2)
+    bench.take()
+    bench.drive.apply("inject_alarm", {"code": "2"})
+    bench.drive.apply("inject_alarm", {"code": "6"})
+    bench.run(10)
+    assert len(_emcys(bench)) == 1
+    bench.nmt(NmtCommand.STOP)
+    bench.run(200)
+    assert _emcys(bench) == []
+    bench.nmt(NmtCommand.START)
+    bench.run(5)
+    assert len(_emcys(bench)) == 1
