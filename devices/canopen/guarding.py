@@ -106,7 +106,13 @@ class NodeGuard:
         self.expired = True
         return deadline
 
-    def reset(self) -> None:
-        self.toggle = 0
+    def restart_life_time(self) -> None:
+        """A new 0x100C or 0x100D: life guarding starts over and watches the new life time
+        from the next request (docs/canopen.md §Heartbeat). The toggle goes on: the answers
+        to the requests never stopped."""
         self.last_request_us = None
         self.expired = False
+
+    def reset(self) -> None:
+        self.toggle = 0
+        self.restart_life_time()

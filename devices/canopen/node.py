@@ -163,9 +163,12 @@ class CanOpenNode(ProcessData, DeviceModel):
         self.guard.guard_time_ms = ms
         if not ms:
             self.guard.reset()
+        else:  # a new life time (0x100C x 0x100D): not measured from an older request
+            self.guard.restart_life_time()
 
     def set_life_time_factor(self, factor: int) -> None:
         self.guard.life_time_factor = factor
+        self.guard.restart_life_time()
 
     def clear_history(self, value: int) -> None:
         if value != 0:  # "al sub0 può essere scritto solo col valore 0"

@@ -131,3 +131,60 @@ def test_life_guarding_starts_with_a_request_made_while_guarding_is_on(heartbeat
     bench.run(1_100)
     assert [hexs(f.data) for f in bench.take() if f.can_id == 0x081] \
         == ["30 81 11 00 00 00 00 00"]
+
+
+def _emcys(bench) -> list[str]:
+    return [hexs(f.data) for f in bench.take() if f.can_id == 0x081]
+
+
+def test_a_life_time_factor_written_after_guarding_started_counts_from_the_next_request() -> None:
+    """Guarding on (0x100C = 500 ms, 0x100D = 0: answers, no life guarding), one request, then
+    the master pauses. Writing 0x100D = 2 three seconds later starts life guarding over: the
+    life time 0x100C x 0x100D counts from the master's next request, not from the old one
+    (which would send EMCY 0x8130 at once, 2 s "late" before the factor even existed)."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 500, 2)
+    assert _guard_answers(bench, 1) == ["7F"]
+    bench.run(3_000)
+    bench.take()
+    bench.ok(0x100D, 0, 2, 1)
+    bench.run(3_000)
+    assert _emcys(bench) == []
+    assert bench.read(0x1001) == 0
+    assert _guard_answers(bench, 1) == ["FF"]  # the toggle goes on: guarding never stopped
+    start = bench.node.guard.last_request_us
+    bench.take()
+    bench.run(1_100)
+    frames = [f for f in bench.take() if f.can_id == 0x081]
+    assert [hexs(f.data) for f in frames] == ["30 81 11 00 00 00 00 00"]
+    assert 1_000_000 < frames[0].t_us - start <= 1_002_000
+
+
+@pytest.mark.parametrize(("index", "value", "size", "life_ms"), [
+    (0x100D, 1, 1, 500),  # factor 2 -> 1: 500 ms
+    (0x100D, 4, 1, 2_000),  # factor 2 -> 4: 2 s
+    (0x100C, 300, 2, 600),  # guard time 500 -> 300 ms: 600 ms
+])
+def test_a_new_life_time_applies_from_the_next_request(index, value, size, life_ms) -> None:
+    """Life guarding running (500 ms x 2) and the master guarding every 400 ms: a write of
+    0x100D or 0x100C 700 ms after a request (past the new 500 / 600 ms life time) sends no
+    EMCY; the new life time is watched from the next request on."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 500, 2)
+    bench.ok(0x100D, 0, 2, 1)
+    for _ in range(3):
+        _guard_answers(bench, 1)
+        bench.run(400)
+    _guard_answers(bench, 1)
+    bench.run(700)
+    bench.take()
+    bench.ok(index, 0, value, size)
+    bench.run(300)
+    assert _emcys(bench) == []
+    _guard_answers(bench, 1)
+    start = bench.node.guard.last_request_us
+    bench.take()
+    bench.run(life_ms + 100)
+    frames = [f for f in bench.take() if f.can_id == 0x081]
+    assert [hexs(f.data) for f in frames] == ["30 81 11 00 00 00 00 00"]
+    assert life_ms * 1_000 < frames[0].t_us - start <= life_ms * 1_000 + 2_000
