@@ -46,10 +46,11 @@ RECORD_NAMES: dict[int, str] = {
 }
 
 
-def _check_cob_id(index: int, value: int, allow_invalid: bool) -> int:
-    """An 11-bit COB-ID; bit 31 only where the object may be switched off (0x1014)."""
-    bad = 0x7FFF_F800 if allow_invalid else 0xFFFF_F800
-    if value & bad:
+def _check_cob_id(index: int, value: int) -> int:
+    """An 11-bit COB-ID: bit 29 (29-bit frame) and bits 11-28 are refused, 0x06090030 as CiA
+    301 has it for a frame type the device lacks; bit 31 is left to the caller's meaning
+    (0x1014 valid / not valid, 0x1005 "do not care")."""
+    if value & 0x7FFF_F800:
         raise SdoAbort(AbortCode.VALUE_RANGE, index, 0)
     return value
 
@@ -87,7 +88,7 @@ def build_comm_objects(node: CanOpenNode) -> ObjectDictionary:
     add(0x100D, 0, "Life time factor", D.UNSIGNED8, RW, lambda: node.guard.life_time_factor,
         node.set_life_time_factor)
     add(0x1014, 0, "COB-ID EMCY", D.UNSIGNED32, RW, lambda: node.emcy_cob_id,
-        lambda v: setattr(node, "emcy_cob_id", _check_cob_id(0x1014, v, True)))
+        lambda v: setattr(node, "emcy_cob_id", _check_cob_id(0x1014, v)))
     add(0x1015, 0, "Inhibit time EMCY", D.UNSIGNED16, RW, lambda: node.emcy.inhibit_100us,
         lambda v: setattr(node.emcy, "inhibit_100us", v))
     add(0x1017, 0, "Producer heartbeat time", D.UNSIGNED16, RW, lambda: node.heartbeat_ms,
@@ -100,9 +101,12 @@ def build_comm_objects(node: CanOpenNode) -> ObjectDictionary:
 
 
 def _check_sync(value: int) -> int:
+    """0x1005 as CiA 301 lays it out (the seed's table refers to DS 301, docs/canopen.md
+    §Objects): bit 31 "x", do not care, so accepted and kept as written; bit 30 "gen" refused
+    with 0x06090030, as CiA 301 says for a device that cannot generate SYNC."""
     if value & COB_PRODUCER:  # the drive consumes SYNC, it cannot produce it
         raise SdoAbort(AbortCode.VALUE_RANGE, 0x1005, 0)
-    return _check_cob_id(0x1005, value, False)
+    return _check_cob_id(0x1005, value)
 
 
 def _pdo_objects(od: ObjectDictionary, node: CanOpenNode, pdo: Pdo) -> None:

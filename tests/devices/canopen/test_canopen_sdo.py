@@ -291,3 +291,32 @@ def test_0x6060_takes_the_modes_0x6502_lists(mode: int) -> None:
     else:
         assert answer.startswith("60")
         assert bench.drive.mode == mode
+
+
+@pytest.mark.parametrize("value", [0x8000_0085, 0x0000_0085])
+def test_cob_id_sync_bit_31_is_do_not_care(value: int) -> None:
+    """0x1005 ("Cob-Id Sync rw ... 4B", ch. 4 "Oggetti opzionali", l. 2830, referring to DS
+    301 ch. 9): in CiA 301 bit 31 of COB-ID SYNC is "x", do not care. A write with it set is
+    accepted and read back as written; the node consumes SYNC on bits 0-10 either way."""
+    bench = make_bench()
+    bench.ok(0x1005, 0, value, 4)
+    assert bench.read(0x1005) == value
+    bench.send(0x080)
+    bench.run(3)
+    assert bench.node.syncs == 0  # the old COB-ID is no SYNC any more
+    bench.send(0x085)
+    bench.run(3)
+    assert bench.node.syncs == 1
+
+
+@pytest.mark.parametrize("value", [
+    0x4000_0080,  # bit 30 gen: the drive does not produce SYNC (CiA 301: 0x06090030)
+    0xC000_0080,  # gen with bit 31: still gen
+    0x2000_0080,  # bit 29 frame: no 29-bit CAN-IDs (CiA 301: 0x06090030)
+    0x0000_0880,  # bits 11-28 with an 11-bit CAN-ID
+])
+def test_cob_id_sync_refuses_what_the_drive_cannot_do(value: int) -> None:
+    bench = make_bench()
+    request = bytes((0x23, 0x05, 0x10, 0x00)) + value.to_bytes(4, "little")
+    assert bench.sdo(request.hex(" ").upper()) == "80 05 10 00 30 00 09 06"
+    assert bench.read(0x1005) == 0x80
