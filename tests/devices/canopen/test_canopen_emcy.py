@@ -180,3 +180,17 @@ def test_an_emergency_waiting_for_its_inhibit_time_at_stop_is_kept() -> None:
     bench.nmt(NmtCommand.START)
     bench.run(5)
     assert len(_emcys(bench)) == 1
+
+
+def test_a_life_guard_error_of_the_stopped_node_leaves_after_start() -> None:
+    """Life guarding runs in Stopped (guarding is what Stopped keeps): its EMCY 0x8130 waits
+    for the Start like a drive alarm's."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 100, 2)
+    bench.ok(0x100D, 0, 2, 1)
+    bench.nmt(NmtCommand.STOP)
+    bench.send(0x701, rtr=True, dlc=1)
+    bench.run(500)
+    assert bench.node.life_guard_error and _emcys(bench) == []
+    bench.nmt(NmtCommand.START)
+    assert [hexs(f.data) for f in _emcys(bench)] == ["30 81 11 00 00 00 00 00"]
