@@ -28,6 +28,7 @@ from app.ui.panels.client_pick import PickedHtml
 from app.ui.panels.widgets import on_button
 from app.ui.style import esc, kv_table
 from devices.canopen import master_frames as mf
+from devices.canopen.emcy import REGISTER_WORDS
 from devices.device import CommandError
 from devices.od import SdoAbort
 from devices.servo.parameters import FIELDBUS_NAMES
@@ -85,6 +86,13 @@ def sdo_sentence(exchange: Mapping[str, Any] | None, fallback: str = "") -> str:
     return f"{what}: {_sdo_result(request, response)}."
 
 
+def register_text(value: int) -> str:
+    """0x1001 as the row shows it: "0x21 (Generic Error, Device Profile Specific)", the bits
+    in seed 004 ch. 4's words (the table the Objects, Codes and Slave tabs read). The hex alone
+    left a trainee to recall DS 301's bit order."""
+    return f"0x{value:02X} ({REGISTER_WORDS.text(value)})"
+
+
 def status_rows(node: Mapping[str, Any], drive: Mapping[str, Any]) -> list[tuple[str, str]]:
     heartbeat = int(node.get("heartbeat_ms", 0))
     guard, factor = int(node.get("guard_time_ms", 0)), int(node.get("life_time_factor", 0))
@@ -98,8 +106,8 @@ def status_rows(node: Mapping[str, Any], drive: Mapping[str, Any]) -> list[tuple
         ("CiA 402 state", esc(drive.get("ds402_state", "?"))),
         ("Heartbeat", esc((f"0x1017 = {heartbeat} ms" if heartbeat else "0x1017 = 0 (off)")
                           + f" · guarding {guarding}")),
-        ("Error register", esc(f"0x{int(node.get('error_register', 0)):02X} · 0x1003: "
-                               f"{history}")),
+        ("Error register", esc(f"{register_text(int(node.get('error_register', 0)))} · "
+                               f"0x1003: {history}")),
         ("Bus", esc(f"rx {bus.get('rx', 0)} · tx {bus.get('tx', 0)} · SYNC "
                     f"{bus.get('syncs', 0)} · load {100 * float(bus.get('load', 0.0)):.1f}%")),
         ("Last SDO", esc(sdo_sentence(node.get("last_sdo_exchange"),
