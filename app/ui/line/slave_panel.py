@@ -26,6 +26,7 @@ from app.ui.panels.per_client import instructor_for, split_instructor
 from app.ui.panels.state import injected_text
 from app.ui.rail_scene import PATTERN_WORDS
 from app.ui.style import INSTRUCTOR_CLASS, badge, esc, kv_table
+from devices.canopen.emcy import REGISTER_WORDS as DRIVE_REGISTER_WORDS
 from devices.cpx.catalog import IO_MODULES, ModuleKind
 from devices.cpx.codes import ERROR_REGISTER_WORDS, STATUS_BITS
 from devices.cpx.esm import AL_STATUS_ID_LOADED
@@ -323,6 +324,9 @@ def ecat_html(snap: Mapping[str, Any]) -> str:
                                f"Tx {pdo_list(snap.get('tx_assign'))}")),
         ("Outputs", esc(snap.get("outputs") or "-")),
         ("Inputs", esc(snap.get("inputs") or "-")),
+        # Seed 004 ch. 5: the CoE dictionary is the CANopen one, so ch. 4's bit names.
+        ("Error register 0x1001", esc(DRIVE_REGISTER_WORDS.value_text(
+            int(snap.get("error_register") or 0)))),
         ("Last emergency", esc(snap.get("last_emergency") or "none"))]
     return kv_table(rows, "fr-slave-state") + led_table(
         [(n, led_colour(n), str(p)) for n, p in leds.items()])
