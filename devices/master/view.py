@@ -53,12 +53,6 @@ def phase_note_short(lost: int, not_found: int, held: int) -> str:
     return ", ".join(parts)
 
 
-def phase_line(phase: str, note: str) -> str:
-    """The phase's words with its note: "running, 2 slaves lost"."""
-    text = phase_text(phase)
-    return f"{text}, {note}" if note else text
-
-
 class ViewMixin:
     """The view part of :class:`~devices.master.master.EtherCatMaster`."""
 

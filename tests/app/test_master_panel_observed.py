@@ -79,5 +79,19 @@ def test_running_with_slaves_lost_or_held_is_no_green_running() -> None:
     assert '<span class="fr-badge fr-ok">running</span>' in healthy
     noted = status_table({"phase": "running", "link": True, "target": "OP",
                           "phase_note": "2 slaves lost, 2 DC slaves held in SAFEOP"})
-    assert ('<span class="fr-badge fr-warn">running, 2 slaves lost, 2 DC slaves held in '
-            'SAFEOP</span>') in noted
+    assert ('<span class="fr-badge fr-warn">running</span> <span class="fr-line-warn">2 slaves '
+            'lost, 2 DC slaves held in SAFEOP</span>') in noted
+
+
+def test_the_phase_badge_holds_the_phase_and_the_note_follows_it() -> None:
+    """The badge held the whole sentence, "running, 2 DC slaves held in SAFEOP", and broke
+    over two lines at the 400 px panel: the badge is the phase's word (one line, whatever the
+    note), the note its own text after it (tests/browser/test_table_wrapping.py looks)."""
+    held = status_table({"phase": "running", "link": True, "target": "OP",
+                         "phase_note": "2 DC slaves held in SAFEOP", "external": True})
+    badge = re.search(r'<span class="fr-badge fr-warn">([^<]*)</span>', held)
+    assert badge is not None and badge.group(1) == "running"
+    assert '</span> <span class="fr-line-warn">2 DC slaves held in SAFEOP</span>' \
+           " (external master)" in held
+    starting = status_table({"phase": "init_commands", "phase_note": ""})
+    assert '<span class="fr-badge fr-warn">init commands</span></td>' in starting

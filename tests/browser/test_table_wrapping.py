@@ -91,6 +91,39 @@ def test_master_slave_table_keeps_al_code_words_whole(live: LiveDashboard, page:
     wait_until(lambda: expected in table.inner_text().replace("\n", ""), what=expected)
     assert split_words(page, "#fr-line-slaves td") == []
 
+# The badges under ``sel`` whose text the layout spreads over more than one line.
+BROKEN_BADGES_JS = """
+sel => [...document.querySelectorAll(sel + ' .fr-badge')].filter(badge => {
+  const range = document.createRange();
+  range.selectNodeContents(badge);
+  return new Set([...range.getClientRects()].filter(r => r.width > 0)
+                                            .map(r => Math.round(r.top))).size > 1;
+}).map(badge => badge.innerText)
+"""
+
+
+def test_master_phase_badge_stays_on_one_line(live: LiveDashboard, page: Any) -> None:
+    """The master panel's Phase badge "running, 2 DC slaves held in SAFEOP" broke over two
+    lines at the 400 px panel (the review; "running, 2 slaves lost" with cable_pulled's 2
+    slaves too in a narrower one): the badge holds the phase, the note follows it."""
+    open_dashboard(page, live)
+    live.advance(BOOT_S)
+    for tab in page.get_by_role("tab", name="Line").all():
+        tab.click()
+    status = page.locator("#fr-line-master-status")
+    live.command("master", "pull_cable", {"cable": 2})  # static/scenarios/cable_pulled.toml
+    live.advance(1.0)
+    wait_until(lambda: "2 slaves lost" in status.inner_text(), what="2 slaves lost")
+    assert page.evaluate(BROKEN_BADGES_JS, "#fr-line-master-status") == []
+    live.command("master", "plug_cable", {"cable": 2})
+    live.advance(6.0)
+    live.command("master", "dc_fault", {"kind": "drift"})  # static/scenarios/dc_sync_lost.toml
+    live.advance(3.0)
+    wait_until(lambda: "2 DC slaves held in SAFEOP" in status.inner_text(),
+               what="2 DC slaves held in SAFEOP")
+    assert page.evaluate(BROKEN_BADGES_JS, "#fr-line-master-status") == []
+
+
 def test_canopen_time_column_keeps_its_numbers_whole(live: LiveDashboard, page: Any) -> None:
     open_dashboard(page, live)
     live.advance(BOOT_S)

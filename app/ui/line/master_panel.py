@@ -28,7 +28,7 @@ from app.ui.repeats import Run, collapse_repeats, repeat_suffix
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import AL_STATUS_ERROR_FLAG, al_status_name, describe_al_status_code
 from devices.events import US_PER_S
-from devices.master.view import phase_line
+from devices.master.view import phase_text
 
 LOG_ROWS = 40
 NBSP = "\u00a0"  # between a number and its unit: a narrow cell wraps them together
@@ -184,15 +184,24 @@ def causes_text(master: Mapping[str, Any]) -> str:
     return "<br>".join(esc(f"{c.get('position', '?')}: {c.get('cause', '?')}") for c in lost)
 
 
-def status_table(master: Mapping[str, Any]) -> str:
-    """Phase, target and the master port's link: what changes only when the line does. The
-    Injected and Causes rows (only when there is one: the healthy line's panel stays as it
-    was) are the instructor's (:data:`app.ui.style.CAUSE_ROWS`)."""
+def phase_cell(master: Mapping[str, Any]) -> str:
+    """The phase's word in the badge, then what it leaves out (``phase_note``) as text in the
+    warning colour, as the master's body in the 3D view shows them: "[running] 2 DC slaves
+    held in SAFEOP". The whole sentence in the badge broke it over two lines at the 400 px
+    panel (tests/browser/test_table_wrapping.py); the text after it wraps between words."""
     phase, note = str(master.get("phase", "-")), str(master.get("phase_note") or "")
     mode = " (external master)" if master.get("external") else ""
     # "running" with slaves lost or held is not all well: the warning colour (ethercat-master.md).
     tone = "ok" if phase == "running" and not note else "warn"
-    rows = [("Phase", badge(phase_line(phase, note), tone) + esc(mode)),
+    note_html = f' <span class="fr-line-warn">{esc(note)}</span>' if note else ""
+    return badge(phase_text(phase), tone) + note_html + esc(mode)
+
+
+def status_table(master: Mapping[str, Any]) -> str:
+    """Phase, target and the master port's link: what changes only when the line does. The
+    Injected and Causes rows (only when there is one: the healthy line's panel stays as it
+    was) are the instructor's (:data:`app.ui.style.CAUSE_ROWS`)."""
+    rows = [("Phase", phase_cell(master)),
             ("Target", esc(master.get("target", "-"))),
             ("Link", badge("up", "ok") if master.get("link", True) else badge("down", "bad"))]
     for key, text in (("Injected", injected_text(master)), ("Causes", causes_text(master))):
