@@ -109,6 +109,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         self.line_in, self.plugs = True, (True, True)
         self.line_out = self.link_out = out_link
         self.on_line = False
+        self.esc = False  # powered: the ESC has its ports' links and passes frames, any c9
         self.sm_setup: tuple[SmSetup, ...] | None = None  # a master on the wire wrote them
         self.emergencies = EmergencyMailbox()
         self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
@@ -211,6 +212,15 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
             state = self.esm.state
         self._inputs_due = state in SAFEOP_OR_HIGHER if state in RANK \
             else self.esm.at_least(AlState.SAFEOP)
+
+    def frame_passed(self, now_us: int) -> None:
+        """A frame of the master crossed the ESC of a slave that does not answer (c9 != 11 at
+        the drive's power-up): the ESC forwards it and its L/A show the traffic (ETG.1300 L/A
+        are the ESC's); the application takes nothing from it. The master calls this for a
+        silent slave on the frames' path only (docs/ethercat-coe.md "LEDs of a drive with
+        c9 != 11")."""
+        if self.esc and self.link and not self.on_line:
+            self.last_frame_us = now_us
 
     # ---- process data ----------------------------------------------------------------------
     @property
@@ -505,7 +515,11 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         self._power_seen = seen
         if self.on_line or self.esm.state is not AlState.INIT:
             self.esm.reset(self.now_us)
-        self.on_line = seen is not None and self.drive.fieldbus == ETHERCAT
+        if self.esc is not (seen is not None):
+            # the next refresh draws afresh: the step's same-inputs test leaves ``esc`` out
+            # (it moves with the power only, here)
+            self.esc, self._led_inputs = seen is not None, None
+        self.on_line = self.esc and self.drive.fieldbus == ETHERCAT
         self._reset()
 
     # ---- views --------------------------------------------------------------------------------
@@ -517,12 +531,12 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         drive_alarm = alarm_led(self.drive.alarms.latched) if on_line else OFF_LED
         old = self._led_inputs
         if old is not None and old.activity is activity and old.state is esm.state \
-                and old.on_line is on_line and old.link is self.link \
+                and old.on_line is on_line and old.esc is self.esc and old.link is self.link \
                 and old.link_out is self.link_out \
                 and old.error is esm.error and old.drive_alarm is drive_alarm:
             return  # the same inputs (field by field: building LedInputs costs more)
-        inputs = LedInputs(on_line=on_line, link=self.link, link_out=self.link_out,
-                           activity=activity,
+        inputs = LedInputs(esc=self.esc, on_line=on_line, link=self.link,
+                           link_out=self.link_out, activity=activity,
                            state=esm.state, error=esm.error, drive_alarm=drive_alarm)
         if inputs != self._led_inputs:
             self._led_inputs = inputs

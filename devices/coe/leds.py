@@ -7,7 +7,9 @@ warning/allarmi in ethercat. La frequenza di lampeggio è funzione della tipolog
 ... ETG-1300". Status is the ETG.1300 RUN indicator and L/A its link/activity indicator (the
 tables are the TRS-CAT's, which are ETG.1300's). Error is ETG.1300 ERR: the ESM's errors and
 the drive alarms that are ETG.1300 causes; an alarm of the motor or the axis leaves it dark
-(docs/ethercat-coe.md §LEDs).
+(docs/ethercat-coe.md §LEDs). With c9 != 11 at power-up the ESC, powered with the drive, still
+drives L/A (ETG.1300 puts them on the ESC); Status and Error, the EtherCAT application's, stay
+dark (docs/ethercat-coe.md "LEDs of a drive with c9 != 11").
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ def alarm_led(latched: list[int]) -> LedPattern:
 
 @dataclass(frozen=True)
 class LedInputs:
-    on_line: bool  # powered, c9 = EtherCAT at power-up
+    esc: bool  # the drive powered: its ESC has its ports' links and passes frames, any c9
+    on_line: bool  # powered, c9 = EtherCAT at power-up: the application drives Status, Error
     link: bool  # the IN port
     link_out: bool  # the OUT port: a next slave cabled and powered
     activity: bool
@@ -66,9 +69,13 @@ class LedInputs:
 
 
 def wanted_patterns(s: LedInputs) -> dict[str, LedPattern]:
-    if not s.on_line:
+    if not s.esc:
         return dict.fromkeys((LINK_IN, STATUS, LINK_OUT, ERROR), LedPattern.OFF)
-    error = min(ERROR_BY_KIND[s.error], s.drive_alarm, key=_RANK.__getitem__)
+    if s.on_line:
+        status = RUN_BY_STATE[s.state]
+        error = min(ERROR_BY_KIND[s.error], s.drive_alarm, key=_RANK.__getitem__)
+    else:  # no EtherCAT application runs (c9 != 11): nothing drives RUN or ERR
+        status = error = LedPattern.OFF
     # The frames that come in pass on through OUT while it has link (ETG.1300 L/A per port).
-    return {LINK_IN: link_led(True, s.link, s.activity), STATUS: RUN_BY_STATE[s.state],
+    return {LINK_IN: link_led(True, s.link, s.activity), STATUS: status,
             LINK_OUT: link_led(True, s.link_out, s.activity and s.link_out), ERROR: error}

@@ -291,6 +291,16 @@ class LineMixin:
             n += 1
         return n
 
+    def _pass_silent(self, slave: Slave) -> None:
+        """This cycle's frame crossed ``slave``, powered and on the frames' path, which does not
+        answer: its ESC forwards the frame (:meth:`frame_path`), and a slave whose L/A LEDs
+        follow that traffic is told so (``frame_passed``: the drive with c9 != 11, whose L/A
+        are its ESC's, docs/ethercat-coe.md "LEDs of a drive with c9 != 11"). Silent slaves
+        only: the step's loop comes here from its branch for slaves that do not answer."""
+        passed = getattr(slave, "frame_passed", None)
+        if passed is not None:
+            passed(self.now_us)
+
     def _spoiled(self) -> bool:
         """This cycle's frame through the damaged cables, out to the last slave on its
         physical path (:meth:`frame_path`; answering or not) and back: True when it comes back

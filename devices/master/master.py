@@ -313,6 +313,8 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                 if found:
                     (lost_now if found == LOST else missing_now).append(p)
                 quiet = False
+                if exchange and reach[p] and self._line_powered[p]:
+                    self._pass_silent(slave)
                 continue
             if not link.present:
                 if self._find(link):

@@ -7,7 +7,8 @@ port. Both L/A are printed "L/A"; the model names them by their port ("L/A IN", 
 the TRS-CAT's "LINK-ACT IN" / "LINK-ACT OUT"). They are on the drive's front, so the drive
 owns them and shows them in its snapshot (``leds``, in the front's order) whatever its
 fieldbus; only its EtherCAT slave (devices/coe/drive_slave.py) drives them: on Modbus or
-CANopen they stay dark.
+CANopen they stay dark, but for the L/A of a drive cabled on the EtherCAT line, which are its
+ESC's and show link and traffic whatever c9 (devices/coe/leds.py).
 
 Which of them a drive has on each fieldbus (:data:`BUS_LEDS`): the seed prints them only in
 ch. 5, by the EtherCAT drive's two RJ45; ch. 2 (Modbus RTU), ch. 4 (CANopen) and ch. 6

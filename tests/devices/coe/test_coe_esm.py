@@ -295,7 +295,10 @@ def test_silent_unless_c9_was_ethercat_at_power_up() -> None:
     assert not bench.slave.reachable()
     bench.go(PREOP)
     assert bench.slave.al_state is INIT
-    assert bench.slave.leds.snapshot()["L/A IN"] == "off"
+    # Its ESC is powered: L/A IN shows the link (on: no frame passed it here; ETG.1300 L/A
+    # are the ESC's), Status stays dark (no EtherCAT application; until session 20 all dark)
+    leds = bench.slave.leds.snapshot()
+    assert (leds["L/A IN"], leds["Status"]) == ("on", "off")
     bench.drive.apply("write_parameter", {"parameter": "c9", "value": 11})
     bench.run(1)
     assert not bench.slave.reachable()  # latched at power-up only
