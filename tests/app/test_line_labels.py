@@ -12,7 +12,9 @@ trainee meets at their longest:
   NOT_SYNCHRONIZED are the longest) on the master's screen;
 - the CPX-E modules with the longest names side by side (seed 002 §2.3.2: 4AI-U-I, 4AO-U-I;
   the default rig has them as modules 3 and 4);
-- AL status codes in the headers (seed 000 §7.7) and LEDs blinking in every pattern.
+- AL status codes in the headers (seed 000 §7.7) and LEDs blinking in every pattern;
+- the drive in alarm, its number under its ESM state (seed 004 ch. 5 "Codici allarmi
+  specifici": the display shows it).
 
 What each label shows is the scene's own (texts from the snapshot); these tests only check
 that no label covers another label or an LED, and that the texts which belong inside a part
@@ -186,6 +188,16 @@ def lost_and_held(snap: Snapshot) -> None:
                                    phase_note_short="2 lost, 1 held")
 
 
+def drive_alarm(snap: Snapshot) -> None:
+    """Alarm 34 latched (seed 004 ch. 5: a two-digit number, as the display shows it), the
+    drive's CoE side in SAFEOP after the SM watchdog (the widest ESM word) with its Error LED
+    double flashing (the legend under the body)."""
+    drive = devices(snap)["drive_ec"]
+    drive["alarm"] = {"code": 34, "name": "SYNC_TIMEOUT", "description": "", "effect": ""}
+    drive["leds"].update(Status="single_flash", Error="double_flash")
+    devices(snap)["drive_ec-ecat"]["esm"] = "SAFEOP"
+
+
 STATES: dict[str, Callable[[Snapshot], None]] = {
     "running": lambda snap: None,
     "every_cable_pulled": cables_pulled(0, 1, 2, 3),
@@ -196,6 +208,7 @@ STATES: dict[str, Callable[[Snapshot], None]] = {
     "no_slave_answers": no_slave_answers,
     "lost_and_held": lost_and_held,
     "blinking": blinking,
+    "drive_alarm": drive_alarm,
     "faults": expansion_and_module_faults,
     "every_module_faulted": every_module_faulted,
     **{f"dc_{s.name}": dc_state(s) for s in DcState},
@@ -304,15 +317,17 @@ def test_master_screen_names_the_phase_as_the_panel_does(line: Line, state: str,
     assert str(nodes(line)["/line/master/phase"].text) == text
 
 
-@pytest.mark.parametrize("state", ["running", "every_cable_pulled", "faults"])
+@pytest.mark.parametrize("state", ["running", "every_cable_pulled", "faults", "drive_alarm"])
 def test_plate_and_drive_texts_stay_on_their_part(line: Line, state: str) -> None:
-    """A module's or an expansion's type within its plate; the drive's ESM state within its
-    front: a text wider than its part runs into the next one's."""
+    """A module's or an expansion's type within its plate; the drive's ESM state and alarm
+    within its front: a text wider than its part runs into the next one's."""
     show(line, state)
     boxes, tol = label_boxes(line), tolerance(line)
     pairs = [(f"/line/cpx/m{n}_t", f"/line/cpx/m{n}") for n in range(1, 5)]
     pairs += [(f"/line/trscat/exp{n}_t", f"/line/trscat/exp{n}") for n in (1, 2)]
     pairs += [("/line/drive_ec-ecat/esm", "/line/drive_ec-ecat/body")]
+    if state == "drive_alarm":
+        pairs += [("/line/drive_ec-ecat/alarm", "/line/drive_ec-ecat/body")]
     for label, plate in pairs:
         assert within(boxes[label], part(line, plate), tol), (boxes[label], plate)
 

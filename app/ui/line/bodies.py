@@ -49,6 +49,9 @@ SCREEN_EM = 0.24
 # one would pack its glyphs in a new atlas in whatever order the page meets them).
 MAX_SCREEN_SCALE = 1.3
 ESM_Z = -0.9  # the drive's ESM state: under its LEDs, above the cable coming in
+# The drive's alarm under its ESM state: the number its display shows (seed 004 ch. 5
+# "Gli allarmi vengono visualizzati sia sul display del drive"), between the cable ports.
+ALARM_Z = -1.55
 # A slave's LED rows from the top down: the drive's four (seed 004 ch. 5: an L/A per port,
 # Status, Error) between the "EtherCAT" label and the ESM state.
 LED_TOP_Z, LED_STEP_Z = 0.85, 0.42
@@ -182,12 +185,21 @@ class Body:
 
 def as_drawn(devices: Mapping[str, Any], device: str) -> Mapping[str, Any]:
     """A slave's snapshot as the line shows it: a drive's EtherCAT side carries its drive's
-    network LEDs (the drive owns them, devices/servo/leds.py; the slave only drives them)."""
+    network LEDs (the drive owns them, devices/servo/leds.py; the slave only drives them) and
+    the alarm its display shows (``drive_alarm``, the drive's ``alarm`` or None)."""
     snap = devices.get(device) or {}
     drive = snap.get("drive")
     if drive is None or "leds" in snap:
         return snap
-    return {**snap, "leds": (devices.get(drive) or {}).get("leds") or {}}
+    own = devices.get(drive) or {}
+    return {**snap, "leds": own.get("leds") or {}, "drive_alarm": own.get("alarm")}
+
+
+def alarm_words(alarm: Mapping[str, Any] | None) -> str:
+    """``alarm 34``: the number the drive's display shows in alarm (seed 004 ch. 5, its
+    alarm table's numbers), "" without one. The name stays with the Drive tab and the Codes
+    tab: "alarm 34 SYNC_TIMEOUT" is wider than the drive's body."""
+    return f"alarm {alarm['code']}" if alarm else ""
 
 
 class SlaveBody(Body):
@@ -211,12 +223,20 @@ class SlaveBody(Body):
         # Two lines ("ESM" over the state): "ESM SAFEOP" on one is wider than the body.
         self.paint.label("esm", "", self.at(self.width / 2, ESM_Z), anchor="center-center",
                          scale=0.7)
+        # Hidden without an alarm: an empty label still draws its background, a speck.
+        self.paint.label("alarm", "", self.at(self.width / 2, ALARM_Z),
+                         anchor="center-center", scale=0.7).visible = False
 
     def update(self, snap: Mapping[str, Any], t_us: int) -> str:
         leds = snap.get("leds") or {}
         for name in self._led_names:
             self.paint.set_led(name, led_colour(name), str(leds.get(name, "off")), t_us)
         self.paint.set_text("esm", f"ESM\n{snap.get('esm', '-')}")
+        alarm = alarm_words(snap.get("drive_alarm"))
+        self.paint.set_text("alarm", alarm)
+        label = self.paint.labels["alarm"]
+        if label.visible is not bool(alarm):
+            label.visible = bool(alarm)
         return blink_words((n, str(leds.get(n, "off"))) for n in self._led_names)
 
 
