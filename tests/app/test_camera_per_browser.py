@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import msgspec
@@ -99,3 +100,158 @@ def test_a_scenario_focus_still_moves_every_browser(
     assert line is not None
     moved = _moves_after(rig, first, second, lambda: line.focus(None, "cpx"))
     assert moved[0] >= 1 and moved[1] >= 1, moved
+
+
+# viser's client draws its built-in default camera until it applies the server's initial
+# camera, and its first camera report (the one that makes it a client: on_client_connect)
+# can come before that: the server's initial-camera messages only fill a store, which a
+# React effect applies later (viser/client/src/CameraControls.tsx, InitialCameraSetter;
+# seen 2-7 s after the first report in Chromium here). Applying it overwrites any move the
+# server sent the page before, and the page reports the new pose.
+VIEWER_DEFAULT = ((3.0, 3.0, 3.0), (0.0, 0.0, 0.0))
+
+
+class JoiningPage(Page):
+    """A browser that connects: first reports ``first`` (viser's default pose unless told),
+    then, at :meth:`apply_initial_camera`, the server's initial camera."""
+
+    def __init__(self, port: int, first: tuple[Any, Any] = VIEWER_DEFAULT) -> None:
+        super().__init__(port, *first)
+        self._applied_at = 0  # messages received before the page last applied its initial
+
+    def initial_camera(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """The initial camera the server sent (messages marked ``initial``)."""
+        return self._pose(self.received(), initial=True)
+
+    def apply_initial_camera(self) -> None:
+        messages = self.received()
+        self._applied_at = len(messages)
+        self.report_camera(*self._pose(messages, initial=True))
+
+    def shows(self) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        """The pose the page is at: the server's moves after it applied its initial camera
+        (those before were overwritten), else the initial camera."""
+        position, look_at = self.initial_camera()
+        later = self._pose(self.received()[self._applied_at:], initial=False)
+        return later[0] or position, later[1] or look_at
+
+    @staticmethod
+    def _pose(messages: list[dict[str, Any]], initial: bool,
+              ) -> tuple[tuple[float, ...], tuple[float, ...]]:
+        position: tuple[float, ...] = ()
+        look_at: tuple[float, ...] = ()
+        for m in messages:
+            if m.get("initial", False) != initial:
+                continue
+            if m.get("type") == "SetCameraPositionMessage":
+                position = tuple(m["position"])
+            elif m.get("type") == "SetCameraLookAtMessage":
+                look_at = tuple(m["look_at"])
+        return position, look_at
+
+
+def _moves(page: Page) -> int:
+    """The camera moves (not the initial camera) the server sent ``page``."""
+    return sum(1 for m in page.received()
+               if m.get("type") == "SetCameraPositionMessage" and not m.get("initial"))
+
+
+def _quiet(served: ServedRig) -> None:
+    """Until the server has answered what a page sent (its camera report)."""
+    time.sleep(CLICK_SETTLE_S + 0.7)
+    served.server.flush()
+    time.sleep(0.3)
+
+
+@contextmanager
+def _joining(served: ServedRig, first: tuple[Any, Any] = VIEWER_DEFAULT,
+             ) -> Iterator[JoiningPage]:
+    page = JoiningPage(served.port, first)
+    try:
+        _wait(lambda: len(served.server.get_clients()) == 3)
+        _wait(lambda: page.initial_camera()[0] and page.initial_camera()[1])
+        _quiet(served)
+        yield page
+    finally:
+        page.close()
+        _wait(lambda: len(served.server.get_clients()) == 2)
+
+
+PAGE_ASPECT = 1280 / 720  # the canvas a JoiningPage reports
+
+
+def _flat(pose: tuple[Any, Any]) -> tuple[float, ...]:
+    """(position, look_at) as six numbers, for pytest.approx."""
+    return (*pose[0], *pose[1])
+
+
+def test_a_page_that_joins_during_a_scenario_focus_shows_the_focused_camera(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """A scenario's focus hides the labels its view would cut and grows the master's screen
+    texts for every browser; a page opened (or reloaded) during it showed the whole line
+    under that label state: labels missing over most of the line, "DC COMPENSATING" wider
+    than the master's screen (baseline line_trscat_outputs). A move sent when the page
+    connects is overwritten by the page's own initial camera: it must follow that."""
+    rig, _first, _second = served
+    line = rig.dashboard.line
+    assert line is not None
+    line.focus(None, "trscat")
+    focused = line.focus_camera("trscat", PAGE_ASPECT)
+    with _joining(rig) as page:
+        page.apply_initial_camera()
+        _quiet(rig)
+        assert _flat(page.shows()) == pytest.approx(_flat(focused), abs=1e-6), page.shows()
+        # Once there, the page is its user's: a later return to the initial camera (viser's
+        # "Reset view") is not undone.
+        page.report_camera(*focused)
+        moves = _moves(page)
+        page.apply_initial_camera()
+        _quiet(rig)
+        assert _moves(page) == moves
+    line.show_all(None)
+
+
+def test_a_page_whose_first_report_is_its_initial_camera_gets_the_focus(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """A page that applied the initial camera before its first report (a fast one)."""
+    rig, _first, _second = served
+    line = rig.dashboard.line
+    assert line is not None
+    line.focus(None, "trscat")
+    focused = line.focus_camera("trscat", PAGE_ASPECT)
+    initial = rig.server.initial_camera
+    first = (tuple(initial.position), tuple(initial.look_at))
+    with _joining(rig, first) as page:
+        assert _flat(page.shows()) == pytest.approx(_flat(focused), abs=1e-6), page.shows()
+    line.show_all(None)
+
+
+def test_a_focus_that_starts_while_a_page_joins_reaches_it(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    """The scenario's focus moves every page, the joining one too, before that page applied
+    its initial camera, which then overwrites the move."""
+    rig, _first, _second = served
+    line = rig.dashboard.line
+    assert line is not None
+    line.show_all(None)
+    with _joining(rig) as page:
+        line.focus(None, "trscat")
+        _quiet(rig)
+        page.apply_initial_camera()
+        _quiet(rig)
+        focused = line.focus_camera("trscat", PAGE_ASPECT)
+        assert _flat(page.shows()) == pytest.approx(_flat(focused), abs=1e-6), page.shows()
+    line.show_all(None)
+
+
+def test_a_page_that_joins_with_no_focus_keeps_its_initial_camera(
+        served: tuple[ServedRig, Page, Page]) -> None:
+    rig, _first, _second = served
+    line = rig.dashboard.line
+    assert line is not None
+    line.show_all(None)  # no focus shared (an earlier test's scenario focus ends)
+    with _joining(rig) as page:
+        page.apply_initial_camera()
+        _quiet(rig)
+        assert _moves(page) == 0
+        assert page.shows() == page.initial_camera()

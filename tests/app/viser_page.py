@@ -18,6 +18,8 @@ import zstandard
 from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 
+Vector = tuple[float, float, float]
+
 
 def wait(predicate: Any, timeout: float = 20.0) -> Any:
     """``predicate()``'s first true value, polled; fails after ``timeout`` seconds."""
@@ -31,7 +33,8 @@ def wait(predicate: Any, timeout: float = 20.0) -> Any:
 class Page:
     """A browser as viser's server sees it: a websocket; keeps every message it receives."""
 
-    def __init__(self, port: int) -> None:
+    def __init__(self, port: int, position: Vector = (0.0, -5.0, 1.0),
+                 look_at: Vector = (0.0, 0.0, 0.0)) -> None:
         self._ws = connect(f"ws://127.0.0.1:{port}",
                            subprotocols=[f"viser-v{viser.__version__}"])  # type: ignore[list-item]
         self.messages: list[dict[str, Any]] = []
@@ -40,10 +43,15 @@ class Page:
         self._error: BaseException | None = None
         threading.Thread(target=self._read, daemon=True).start()
         # viser counts a connection as a client from its first camera message.
+        self.report_camera(position, look_at)
+
+    def report_camera(self, position: Vector, look_at: Vector) -> None:
+        """The camera message a browser sends after its camera moved (a 1280 x 720 canvas;
+        the orientation is not read by the dashboard)."""
         self._ws.send(msgspec.msgpack.encode({
             "type": "ViewerCameraMessage", "wxyz": (1.0, 0.0, 0.0, 0.0),
-            "position": (0.0, -5.0, 1.0), "fov": 0.9, "near": 0.01, "far": 100.0,
-            "image_height": 720, "image_width": 1280, "look_at": (0.0, 0.0, 0.0),
+            "position": tuple(map(float, position)), "fov": 0.9, "near": 0.01, "far": 100.0,
+            "image_height": 720, "image_width": 1280, "look_at": tuple(map(float, look_at)),
             "up_direction": (0.0, 0.0, 1.0)}))
 
     def _read(self) -> None:

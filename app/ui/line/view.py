@@ -19,6 +19,7 @@ import threading
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
+import numpy as np
 import viser
 
 from app.runtime import Frame, Runtime
@@ -42,6 +43,8 @@ FOCUS_MIN_W = 9.0  # a focused device fills at most this much scene width
 # A click's pointer-up makes the browser send its own camera back; a move sent at once loses
 # that race (seen: the camera stays), so a move after a click waits this long.
 CLICK_SETTLE_S = 0.3
+# A page reports the initial camera back through its own matrices (seen: off by ~1e-15).
+INITIAL_ATOL = 1e-4
 CAPTION_ROOM = 0.6  # above the line, for a scenario caption
 # The camera looks from above, so the framed box leaves ~45 px free under the axes at 1280 x
 # 720 and only a few above the line: a caption of three lines (app/ui/dashboard.py) did not fit
@@ -124,6 +127,10 @@ class LineView:
                                          list(rail_lengths), kinds or {}, runtime)
         self.focused: str | None = None
         self.home: Box = self.scene.bounds()  # what "Show the whole line" frames (dashboard)
+        # The view a scenario's focus shares (None: none): the labels follow it for every
+        # page (_share_view), so a page that joins during it is sent it too (_joined).
+        self._shared_box: Box | None = None
+        server.on_client_connect(self._joined)
 
         @whole.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -181,6 +188,7 @@ class LineView:
             if client is None:
                 self.move_camera(target, caption=caption)
                 self._share_view(self.labels.view(*camera_for(target, self._aspect)))
+                self._shared_box = target
             else:
                 self._share_view(None)  # this page leaves the view the others share
                 # The caption stays where the scenario put it: it is every page's.
@@ -195,6 +203,7 @@ class LineView:
         screen texts grow with its zoom, and the labels its edges would cut go."""
         master = self.scene.master
         if view is None:
+            self._shared_box = None
             master.zoom(None)
             self.labels.release()
             return
@@ -227,6 +236,32 @@ class LineView:
             self.move_camera(self.home, CAPTION_LIFT, client=client)
         else:
             self.move_camera(self.home, CAPTION_LIFT, self.home_caption)
+
+    async def _joined(self, client: viser.ClientHandle) -> None:
+        """A page that joins while a scenario's focus is shared looks where the others do,
+        from the moment its own initial camera is applied: viser's client applies the
+        server's initial camera after its first camera report (the one that makes it a
+        client) and overwrites any move sent before (tests/app/test_camera_per_browser.py).
+        Async: viser awaits it on its loop before it passes that first report, and every
+        later one, to the camera callbacks, so none is missed (a def runs on the pool)."""
+        waiting = True
+
+        async def reported(camera: viser.CameraHandle) -> None:
+            nonlocal waiting
+            if not waiting or not self._at_initial_camera(camera):
+                return
+            waiting = False  # once: a later "Reset view" is the user's
+            box = self._shared_box
+            if box is not None:
+                self.move_camera(box, client=client)
+
+        client.camera.on_update(reported)
+
+    def _at_initial_camera(self, camera: viser.CameraHandle) -> bool:
+        """The page reports the server's initial camera: it has applied it."""
+        initial = self._server.initial_camera
+        return bool(np.allclose(camera.position, initial.position, atol=INITIAL_ATOL)
+                    and np.allclose(camera.look_at, initial.look_at, atol=INITIAL_ATOL))
 
     def move_camera(self, box: Box, lift: float = 0.0,
                     caption: tuple[float, float] | None = None,
