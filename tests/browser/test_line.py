@@ -12,6 +12,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 from helpers import LiveDashboard, choose, compare_screenshot, open_dashboard, wait_until
 
@@ -61,6 +62,23 @@ def steady(page: Any) -> None:
         return shots[-1] == shots[-2]
 
     wait_until(same_twice, what="a steady 3D view")
+
+
+def wait_for_shared_focus(live: LiveDashboard, device: str) -> None:
+    """Until every page reports the camera of a scenario's focus on ``device``. A page that
+    opens during the focus gets it one round trip after it applied its initial camera
+    (docs/dashboard.md "Focus"), 0.1-1 s on a loaded machine, and that can be after the
+    panels a test waits for are up: its screenshot then showed the whole line."""
+    view = live.dashboard.line
+    assert view is not None
+    look_at = view.focus_camera(device, view._aspect)[1]  # the same for every canvas
+
+    def there() -> bool:
+        clients = live.server.get_clients().values()
+        return bool(clients) and all(np.allclose(c.camera.look_at, look_at, atol=1e-3)
+                                     for c in clients)
+
+    wait_until(there, what=f"the pages' cameras at the focus on {device}")
 
 
 def slaves(live: LiveDashboard) -> list[dict[str, Any]]:
@@ -179,6 +197,7 @@ def test_line_trscat_outputs_fallback(line: LiveDashboard, page: Any) -> None:
     open_dashboard(page, line)
     open_tabs(page, "Slave")
     page.locator("#fr-slave-state").wait_for()
+    wait_for_shared_focus(line, "trscat")  # the page opened during the focus
     compare_screenshot(page, "line_trscat_outputs")
 
 
