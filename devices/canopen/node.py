@@ -421,6 +421,9 @@ class CanOpenNode(ProcessData, DeviceModel):
     def _enter_initialisation(self, t: int, boot_at: int) -> None:
         self._set_state(NmtState.INITIALISATION, t)
         self._reset_communication()
+        # The EMCY producer starts over as at power-up: an alarm still latched is an active
+        # error the node reports again after its boot-up (docs/canopen.md §Emergencies).
+        self._known_alarms = []
         self._boot_at = boot_at
 
     def _boot(self, t_us: int) -> None:

@@ -194,3 +194,37 @@ def test_a_life_guard_error_of_the_stopped_node_leaves_after_start() -> None:
     assert bench.node.life_guard_error and _emcys(bench) == []
     bench.nmt(NmtCommand.START)
     assert [hexs(f.data) for f in _emcys(bench)] == ["30 81 11 00 00 00 00 00"]
+
+
+def test_an_alarm_still_latched_at_reset_communication_is_sent_after_the_boot_up() -> None:
+    """Reset-Communication brings the communication profile back to its power-on values (ch.
+    4 "Stati e Cambiamento di stato"): the node starts over as at power-up, and an alarm that
+    is still latched is an active error it reports again, boot-up first, then its EMCY, once;
+    0x1003 (cleared by the reset) records it again, 0x1001 keeps its bits throughout
+    (docs/canopen.md §Emergencies)."""
+    bench = make_bench()
+    bench.drive.apply("inject_alarm", {"code": "16"})
+    bench.run(5)
+    bench.take()
+    bench.nmt(NmtCommand.RESET_COMMUNICATION)
+    bench.run(50)
+    frames = [(f.can_id, hexs(f.data)) for f in bench.take()]
+    assert frames == [(0x701, "00"), (0x081, "11 86 21 10 00 00 00 00")]
+    assert [e["code"] for e in bench.kinds("emergency")] == ["0x8611", "0x8611"]
+    assert bench.read(0x1001) == 0x21
+    assert (bench.read(0x1003, 0), bench.read(0x1003, 1)) == (1, 0x0010_8611)
+    bench.run(500)
+    assert _emcys(bench) == []  # once per error event
+
+
+def test_an_alarm_held_in_stopped_is_not_lost_by_a_reset_communication() -> None:
+    """The EMCY held in Stopped goes with the rest of the communication state at the reset,
+    but the alarm it told of is still latched: it is sent after the boot-up."""
+    bench = make_bench()
+    bench.nmt(NmtCommand.STOP)
+    bench.drive.apply("inject_alarm", {"code": "2"})
+    bench.run(20)
+    assert _emcys(bench) == []
+    bench.nmt(NmtCommand.RESET_COMMUNICATION)
+    bench.run(50)
+    assert [hexs(f.data)[:5] for f in _emcys(bench)] == ["20 71"]
