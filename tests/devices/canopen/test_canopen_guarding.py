@@ -188,3 +188,32 @@ def test_a_new_life_time_applies_from_the_next_request(index, value, size, life_
     frames = [f for f in bench.take() if f.can_id == 0x081]
     assert [hexs(f.data) for f in frames] == ["30 81 11 00 00 00 00 00"]
     assert life_ms * 1_000 < frames[0].t_us - start <= life_ms * 1_000 + 2_000
+
+
+def test_the_request_that_ends_a_life_guard_error_is_answered_and_rearms_the_flag() -> None:
+    """"Quando il master ricomincia ad inviare Remote Request il drive abbassa il flag e
+    ricomincia a rispondere" (ch. 4 "Servizi di Guard"): the drive never refuses a guard
+    request; "ricomincia a rispondere" because the master had stopped asking. The first
+    request after the expiry is answered at once, the toggle going on, and drops the flag:
+    a new silence of one life time raises it again and sends a second EMCY 0x8130, still
+    with no error reset (docs/canopen.md §Heartbeat)."""
+    bench = make_bench()
+    bench.ok(0x100C, 0, 100, 2)
+    bench.ok(0x100D, 0, 2, 1)
+    assert _guard_answers(bench, 1) == ["7F"]
+    bench.run(300)
+    assert _emcys(bench) == ["30 81 11 00 00 00 00 00"]
+    asked = bench.t_us
+    bench.send(0x701, rtr=True, dlc=1)
+    bench.run(3)
+    answers = [f for f in bench.take() if f.can_id == 0x701]
+    assert [hexs(f.data) for f in answers] == ["FF"]
+    assert answers[0].t_us - asked <= 1_000  # the request's and the answer's frame times
+    bench.run(150)
+    assert _emcys(bench) == []  # the life time runs again from that request
+    bench.run(100)
+    assert _emcys(bench) == ["30 81 11 00 00 00 00 00"]
+    assert _guard_answers(bench, 2) == ["7F", "FF"]
+    bench.run(150)
+    assert _emcys(bench) == []
+    assert bench.read(0x1001) == 0x11
