@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import logging
+import math
 import os
 import signal
 import sys
@@ -37,6 +38,7 @@ from app.out_paths import (
     write_events,
 )
 from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
+from app.runtime import MAX_SPEED
 from app.scenario import (
     EXAMPLES_DIR,
     Scenario,
@@ -50,6 +52,31 @@ if TYPE_CHECKING:
     from app.rig import Rig
 
 
+def _speed(text: str) -> float:
+    """``--speed``: the runtime's range, checked before anything serves (``nan`` killed the
+    simulation thread with a traceback, a speed <= 0 served a rig that never moved, exit 0)."""
+    try:
+        speed = float(text)
+    except ValueError:
+        speed = math.nan
+    if not 0 < speed <= MAX_SPEED:  # also refuses nan and inf
+        raise argparse.ArgumentTypeError(f"{text!r} is not a speed: give a number in "
+                                         f"(0, {MAX_SPEED:g}]")
+    return speed
+
+
+def _run_for(text: str) -> float:
+    """``--run-for``: 0 serves and stops at once (the smoke tests' check of the flags); a
+    negative or ``nan`` time is a typo, not a run."""
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan
+    if not 0 <= seconds < math.inf:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a time: give seconds >= 0")
+    return seconds
+
+
 def _serve_parser() -> argparse.ArgumentParser:
     p = Parser(prog="python -m app",
                description="FieldRig: serve the dashboard of a virtual rig. Subcommands: "
@@ -59,9 +86,10 @@ def _serve_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", default="127.0.0.1",
                    help="address to listen on (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=8080, help="dashboard port (default 8080)")
-    p.add_argument("--speed", type=float, default=1.0,
-                   help="simulated seconds per wall second (default 1.0)")
-    p.add_argument("--run-for", type=float, default=None, metavar="SECONDS",
+    p.add_argument("--speed", type=_speed, default=1.0,
+                   help=f"simulated seconds per wall second, above 0 and up to {MAX_SPEED:g} "
+                        "(default 1.0)")
+    p.add_argument("--run-for", type=_run_for, default=None, metavar="SECONDS",
                    help="stop after this many wall seconds (for smoke tests)")
     p.add_argument("--record", default=None, metavar="PATH",
                    help="record the session to this rerun file (.rrd); default: a file in "

@@ -60,6 +60,9 @@ class Frame:
     snapshot: dict[str, Any]
 
 
+MAX_SPEED = 1000.0  # simulated seconds per wall second: far above what a CPU gives (Runtime.run)
+
+
 class Runtime:
     def __init__(self, rig: Rig, speed: float = 1.0, publish_hz: float = 30.0) -> None:
         self.rig = rig
@@ -109,8 +112,8 @@ class Runtime:
         return self._speed
 
     def set_speed(self, speed: float) -> None:
-        if not 0 < speed <= 1000:
-            raise ValueError(f"speed must be in (0, 1000], got {speed}")
+        if not 0 < speed <= MAX_SPEED:
+            raise ValueError(f"speed must be in (0, {MAX_SPEED:g}], got {speed}")
         self._speed = speed
         self._rebase = True  # the new speed counts from now, not from the start
 

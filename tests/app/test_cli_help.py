@@ -81,3 +81,26 @@ def test_every_serve_flag_is_in_the_readme() -> None:
              if option.startswith("--") and option != "--help"]
     assert "--run-for" in flags
     assert [f for f in flags if f"`{f}" not in readme] == []
+
+
+SPEED_AND_TIME = [
+    (["--speed", "nan"], "--speed: 'nan' is not a speed: give a number in (0, 1000]"),
+    (["--speed", "0"], "--speed: '0' is not a speed: give a number in (0, 1000]"),
+    (["--speed", "-2"], "--speed: '-2' is not a speed"),
+    (["--speed", "inf"], "--speed: 'inf' is not a speed"),
+    (["--speed", "fast"], "--speed: 'fast' is not a speed"),
+    (["--run-for", "nan"], "--run-for: 'nan' is not a time: give seconds >= 0"),
+    (["--run-for", "-1"], "--run-for: '-1' is not a time"),
+]
+
+
+@pytest.mark.parametrize(("argv", "why"), SPEED_AND_TIME,
+                         ids=[" ".join(argv) for argv, _ in SPEED_AND_TIME])
+def test_a_speed_or_time_that_cannot_be_served_is_refused(argv: list[str], why: str,
+                                                          capsys) -> None:
+    """``--speed nan`` served and its simulation thread died in a traceback (exit 0); a
+    speed <= 0 or a negative ``--run-for`` served a rig that never moved or stopped at once,
+    with exit 0: a smoke test passed on nothing. The runtime's own range is (0, 1000]."""
+    err = error_of([*argv, "--port", "0"], capsys)  # the old code stops there, serving nothing
+    assert f"fieldrig: error: argument {why}" in err, err
+    assert "Traceback" not in err
