@@ -227,6 +227,13 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
             at = _typed(raw, "at", float, 0.0, fail, f"{key}.at")
             if at < 0:
                 raise fail(f"{key}.at", "must not be negative")
+            if i and round(at * US) < t_us:
+                # A slip (0.2 for 2.0, a pasted step), not an order to sort: the ``after``
+                # steps below it would count from the earlier time, and the run fail far
+                # from the typo.
+                raise fail(f"{key}.at", f"{at:g} s is before step[{i - 1}] at {t_us / US:g} s "
+                                        "(steps are in time order, top to bottom: 'after' "
+                                        "counts from the step above)")
             t_us = round(at * US)
         else:
             after = _typed(raw, "after", float, 0.0, fail, f"{key}.after")

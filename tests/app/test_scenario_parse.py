@@ -9,13 +9,10 @@ import pytest
 from app.scenario import ScenarioError, parse_scenario
 
 
-def test_steps_at_and_after_are_ordered() -> None:
+def test_steps_at_and_after_are_in_time_order() -> None:
     sc = parse_scenario("""
 [scenario]
 name = "demo"
-[[step]]
-at = 2.0
-checkpoint = "later"
 [[step]]
 at = 1.0
 caption = "first"
@@ -28,6 +25,9 @@ at = 1.5
 target = "fastcat"
 action = "hold_cnf"
 seconds = 3.5
+[[step]]
+at = 2.0
+checkpoint = "later"
 """)
     assert [(s.t_us, s.kind) for s in sc.steps] == [
         (1_000_000, "caption"), (1_500_000, "command"), (1_500_000, "command"),
@@ -35,6 +35,27 @@ seconds = 3.5
     assert sc.steps[1].target == "fastcat/2" and sc.steps[1].action == "unplug"
     assert sc.steps[2].args == {"seconds": 3.5}
     assert sc.end_us == 3_000_000  # one second after the last step by default
+
+
+def test_an_at_before_the_step_above_is_refused() -> None:
+    """``at = 0.2`` under a step at 0.5 s is a slip (0.2 for 2.0, a pasted step): the steps
+    were sorted silently, so the ``after`` steps below it counted from 0.2 s and the run failed
+    at a later step for a reason far from the typo (the FastCAT's "object dictionary is
+    generated at the end of the first internal-bus scan"), exit 1 after the whole run."""
+    text = """
+[[step]]
+at = 0.5
+caption = "first"
+[[step]]
+after = 1.0
+checkpoint = "one"
+[[step]]
+at = 0.2
+checkpoint = "typo"
+"""
+    with pytest.raises(ScenarioError, match=r"^bad.toml: step\[2\].at: 0.2 s is before "
+                                            r"step\[1\] at 1.5 s \(steps are in time order"):
+        parse_scenario(text, "bad.toml")
 
 
 @pytest.mark.parametrize(("text", "message"), [
