@@ -3,8 +3,8 @@
 A step is one of
 - ``caption = "text"`` — narration shown to the audience;
 - ``checkpoint = "name"`` — a named instant (screenshots are taken there);
-- ``focus = "trscat"`` or ``"fastcat:2"`` — the dashboard's camera moves to that device (or
-  module); the device must be in the rig;
+- ``focus = "trscat"`` or ``"fastcat:2"`` — the dashboard's camera moves to that device; the
+  device must be in the rig, and the module one it holds at that step;
 - ``target = "fastcat/2"`` + ``action = "unplug"`` + the action's arguments as further keys.
 
 ``[[on]]`` tables react to the EtherCAT master's events (its ECAT_Notify hook, seed 003):
@@ -330,7 +330,7 @@ def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
             continue
         try:
             if step.kind == "focus":
-                rig.device(step.target.split(":", 1)[0])
+                _check_focus(step.target, rig, layouts)
                 continue
             args = rig.check(step.target, step.action, step.args)
             device_id, module = parse_target(step.target)
@@ -358,6 +358,26 @@ def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
         if reaction.slave:
             _check_line_slave(scenario, reaction, rig)
     return layouts
+
+
+def _check_focus(target: str, rig: Rig, layouts: dict[str, dict[int, Any]]) -> None:
+    """A focus names the device, or one of the modules it holds at that step (the rig as
+    built, changed by the earlier steps): ``fastcat:30`` or ``drive:1`` ran as a focus on the
+    device, a typo nobody was told of."""
+    device_id, _, number = target.partition(":")
+    device = rig.device(device_id)
+    if not number:
+        return
+    layout = layouts.setdefault(device_id, device.module_layout())
+    module = int(number)
+    if module in layout:  # also a position an [[on]] command may change (UNKNOWN_MODULE)
+        return
+    if not layout and not device.module_layout():
+        raise CommandError(f"focus: {device_id} has no modules: focus = \"{device_id}\"")
+    held = ", ".join(f"{n}={getattr(kind, 'name', kind)}" for n, kind in sorted(layout.items())
+                     if n > 0)  # a TRS-CAT's 0 is its integrated I/O, no focus target
+    raise CommandError(f"focus: {device_id} has no module {module} (modules: {held}); "
+                       f"focus = \"{device_id}\" is the device")
 
 
 def _check_line_slave(scenario: Scenario, reaction: Reaction, rig: Rig) -> None:

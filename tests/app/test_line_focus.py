@@ -50,3 +50,28 @@ def test_focus_on_a_device_not_in_the_rig_is_refused_before_the_run() -> None:
 def test_bad_focus_steps(text: str, message: str) -> None:
     with pytest.raises(ScenarioError, match=message):
         parse_scenario(text, "bad.toml")
+
+
+@pytest.mark.parametrize(("focus", "message"), [
+    ("fastcat:30", r"step\[1\] \(at 1 s\): focus: fastcat has no module 30 \(modules: 1=DB16, "
+                   r"3=DO16, .*7=AX2\); focus = \"fastcat\" is the device"),
+    ("cpx:9", r"focus: cpx has no module 9 \(modules: 1=CPX-E-16DI, .*4=CPX-E-4AO-U-I\)"),
+    ("drive:1", r"focus: drive has no modules: focus = \"drive\""),
+    ("master:2", r"focus: master has no modules: focus = \"master\""),
+    ("fastcat:2", r"focus: fastcat has no module 2 \(modules: 1=DB16, 3=DO16"),  # pulled at 0.5
+], ids=["fastcat:30", "cpx:9", "drive:1", "master:2", "fastcat:2 pulled"])
+def test_focus_on_a_module_the_device_does_not_hold_is_refused(focus: str,
+                                                               message: str) -> None:
+    """``focus = "fastcat:30"`` passed the check (the device only was looked up) and ran, exit
+    0: a typo in a module number a scenario author never heard of."""
+    scenario = parse_scenario("[[step]]\nat = 0.5\ntarget = \"fastcat/2\"\naction = \"unplug\"\n"
+                              f"[[step]]\nat = 1\nfocus = \"{focus}\"\n", "f.toml")
+    with pytest.raises(ScenarioError, match=message):
+        check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG)))
+
+
+def test_focus_on_a_module_an_earlier_step_plugs_is_taken() -> None:
+    scenario = parse_scenario("[[step]]\nat = 0.5\ntarget = \"fastcat/9\"\naction = \"plug\"\n"
+                              "type = \"DI16\"\n[[step]]\nat = 1\nfocus = \"fastcat:9\"\n"
+                              "[[step]]\nat = 1\nfocus = \"trscat:2\"\n", "f.toml")
+    check_against(scenario, build_rig(load_rig_spec(DEFAULT_RIG)))
