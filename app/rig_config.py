@@ -8,10 +8,11 @@ executed. See docs/rig-file.md for the format.
 from __future__ import annotations
 
 import datetime as dt
+import os
 import random
 import re
 import tomllib
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -266,6 +267,7 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
         if device_id in seen:
             raise RigConfigError(source, key, f"duplicate or reserved device id {device_id!r}")
         seen.add(device_id)
+    _check_flash_files(source, fastcats, servos)
     modbus_nodes = [(i, s.settings.get("node_id", 1)) for i, s in enumerate(servos)
                     if s.settings.get("fieldbus", "modbus") == "modbus"]
     for j, (i, node) in enumerate(modbus_nodes):
@@ -291,6 +293,25 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
     return RigSpec(source=source, name=name, seed=seed, step_us=round(step_ms * 1000),
                    epoch=epoch, retry_interval_us=round(retry_s * 1e6), fastcats=fastcats,
                    servos=servos, slaves=slaves, line=tuple(line), eni=eni, mapping=mapping)
+
+
+def _check_flash_files(source: str, fastcats: Sequence[FastCatSpec],
+                       servos: Sequence[ServoSpec]) -> None:
+    """A flash file holds one device's image (app/flash_file.py): two devices on one file
+    overwrote each other's saved settings, and both read the image saved last at start-up."""
+    owners: dict[str, str] = {}
+    keyed = [(f"fastcat[{i}]", f.flash) for i, f in enumerate(fastcats)]
+    keyed += [(f"servo[{i}]", s.flash) for i, s in enumerate(servos)]
+    for key, flash in keyed:
+        if flash == MEMORY:
+            continue
+        path = os.path.normpath(flash)
+        if path in owners:
+            raise RigConfigError(source, f"{key}.flash",
+                                 f"{flash!r} is {owners[path]}'s flash file too: two devices "
+                                 "would overwrite each other's saved settings (give each its "
+                                 f'own file, or "{MEMORY}")')
+        owners[path] = key
 
 
 def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:

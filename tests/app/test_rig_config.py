@@ -133,3 +133,26 @@ def test_master_without_mapping_cycles_every_rig_step(step_ms: float) -> None:
     assert master.snapshot()["stats"]["cycle_us"] == spec.step_us
     rig.advance(40)
     assert master.frames == 40
+
+
+@pytest.mark.parametrize(("text", "key", "reason"), [
+    ("[[servo]]\nid = \"a\"\nflash = \"drive.flash\"\n[[servo]]\nid = \"b\"\nnode_id = 2\n"
+     "flash = \"drive.flash\"\n", "servo[1].flash",
+     "'drive.flash' is servo[0]'s flash file too: two devices would overwrite each other's "
+     "saved settings (give each its own file, or \":memory:\")"),
+    ("[[fastcat]]\nmodules = []\nflash = \"flash/x.bin\"\n[[servo]]\nflash = \"./flash//x.bin\"\n",
+     "servo[0].flash", "'./flash//x.bin' is fastcat[0]'s flash file too"),
+])
+def test_two_devices_on_one_flash_file_are_refused(text: str, key: str, reason: str) -> None:
+    """Two drives with ``flash = "drive.flash"`` loaded: a flash file holds one device's
+    image (app/flash_file.py), so each save replaced the other's under --state-dir and at the
+    next start both devices read the image saved last. Paths are compared normalised."""
+    with pytest.raises(RigConfigError) as info:
+        parse_rig_spec(text, "two.toml")
+    assert str(info.value).startswith(f"two.toml: {key}: {reason}")
+
+
+def test_memory_flash_may_be_shared() -> None:
+    spec = parse_rig_spec("[[servo]]\nid = \"a\"\nflash = \":memory:\"\n[[servo]]\nid = \"b\"\n"
+                          "node_id = 2\nflash = \":memory:\"\n", "mem.toml")
+    assert [s.flash for s in spec.servos] == [":memory:", ":memory:"]
