@@ -202,16 +202,27 @@ def rig_descriptions(rig: Any) -> list[SlaveDescription]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = Parser(prog="python -m app ethercat", description="EtherCAT wire tools (issue 8).")
+    parser = Parser(prog="python -m app ethercat",
+                    description="EtherCAT wire tools: ESI files of the rig's line for a "
+                                "configurator (docs/ethercat-wire.md).")
     sub = parser.add_subparsers(dest="verb", required=True)
     export = sub.add_parser("export-esi", help="write ESI XML files for the rig's line")
     export.add_argument("--rig", default=None, help="rig file (default: the default rig)")
-    export.add_argument("--out", default=str(DEFAULT_OUT), help="output folder")
+    export.add_argument("--out", default=str(DEFAULT_OUT),
+                        help=f"output folder (default: {DEFAULT_OUT} in the working directory: "
+                             "in the checkout, the shipped files)")
     args = parser.parse_args(argv)
-    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.out_paths import check_out
+    from app.rig_config import DEFAULT_RIG, RigConfigError, build_rig, load_rig_spec
 
-    rig = build_rig(load_rig_spec(args.rig or DEFAULT_RIG))
-    for path in write(rig_descriptions(rig), Path(args.out)):
+    out = check_out(args.out, names=())  # before any work, as scenario run's --out
+    rig_file = args.rig or DEFAULT_RIG
+    rig = build_rig(load_rig_spec(rig_file))
+    if "master" not in rig.devices:
+        raise RigConfigError(str(rig_file), "", "the rig has no EtherCAT line (no [[fastcat]], "
+                             "[[trscat]], [[cpx]] or drive with fieldbus = \"ethercat\"): no "
+                             "ESI to export")
+    for path in write(rig_descriptions(rig), out):
         print(path)
     return 0
 
