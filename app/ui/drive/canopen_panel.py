@@ -116,7 +116,19 @@ def status_rows(node: Mapping[str, Any], drive: Mapping[str, Any]) -> list[tuple
     ]
 
 
-def status_html(node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any]) -> str:
+def on_canopen(devices: Mapping[str, Any], nodes: Mapping[str, str]) -> list[tuple[str, Any]]:
+    """(drive, node-ID) of each drive whose CANopen node speaks (c9 = CANopen at power-up);
+    ``nodes``: each drive's node device id."""
+    return [(drive, (devices.get(node) or {}).get("node_id")) for drive, node in nodes.items()
+            if node and (devices.get(node) or {}).get("active")]
+
+
+def status_html(node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any],
+                speaking: Sequence[tuple[str, Any]] = ()) -> str:
+    """``speaking``: the drives on CANopen (:func:`on_canopen`), which a silent node's note
+    points at: the tab shows the drive picked in *Servo drive*, on the default rig first the
+    Modbus one, and its note alone sent a trainee to reconfigure it while drive_co was on
+    CANopen all along."""
     rate = int(node.get("bitrate", 0)) // 1000
     head = (f'<p class="fr-title"><b>{esc(node_id)}</b> · node {esc(node.get("node_id"))} · '
             f"{rate} kbit/s (n1)</p>")
@@ -124,9 +136,12 @@ def status_html(node_id: str, node: Mapping[str, Any], drive: Mapping[str, Any])
         bus = str(drive.get("fieldbus", "?"))
         reason = "the drive is powered off" if not drive.get("powered") else \
             f"the drive speaks {FIELDBUS_NAMES.get(bus, bus)} (c9 read at power-up)"
+        others = "".join(f"{other} is on CANopen (node {number}): pick it in Servo drive. "
+                         for other, number in speaking)
+        fix = "Or set" if others else "Set"
         return head + ('<p class="fr-muted fr-note" id="fr-can-off">CANopen is silent: '
-                       f"{esc(reason)}. Set c9 = 5 (CANopen), save to flash and switch the "
-                       "drive off and on.</p>")
+                       f"{esc(reason)}. {esc(others)}{fix} c9 = 5 (CANopen), save to flash and "
+                       "switch the drive off and on.</p>")
     return head + kv_table(status_rows(node, drive), "fr-can")
 
 
@@ -326,9 +341,10 @@ class CanOpenMonitor:
 
     def update(self, pick_of: Callable[[int | None], str],
                node_of: Callable[[str], tuple[str, Mapping[str, Any], Mapping[str, Any]]],
-               ) -> None:
-        """``pick_of``: a page's drive; ``node_of(drive)``: (node id, node, drive)."""
-        self._status.show(lambda d: status_html(*node_of(d)), pick_of)
+               speaking: Sequence[tuple[str, Any]] = ()) -> None:
+        """``pick_of``: a page's drive; ``node_of(drive)``: (node id, node, drive);
+        ``speaking``: the drives on CANopen (:func:`on_canopen`)."""
+        self._status.show(lambda d: status_html(*node_of(d), speaking), pick_of)
         self._frames.show(lambda d: frames_html(node_of(d)[1].get("frames") or [],
                                                 heartbeats=node_of(d)[1].get("heartbeats")
                                                 or []), pick_of)

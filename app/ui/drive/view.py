@@ -24,7 +24,7 @@ from app.runtime import Frame, Runtime
 from app.ui.commands import CommandSender
 from app.ui.drive.axis_jam import AxisJam
 from app.ui.drive.axis_scene import AXIS_HEIGHT, AXIS_SPACING, AXIS_TOP, AxisScene
-from app.ui.drive.canopen_panel import CanOpenMaster, CanOpenMonitor
+from app.ui.drive.canopen_panel import CanOpenMaster, CanOpenMonitor, on_canopen
 from app.ui.drive.drive_panel import DrivePanel
 from app.ui.drive.drive_state import DriveStatePanel, StatusWordsPanel
 from app.ui.drive.plots import DrivePlots, DriveSampler
@@ -216,7 +216,7 @@ class DriveView:
         self.words.update(self.selected_for, data_of)
         self.controls.update(snap, devices, self.selected_for if self._pick else None)
         if self.canopen is not None:
-            self.canopen.update(self.selected_for, node_of)
+            self.canopen.update(self.selected_for, node_of, on_canopen(devices, self._nodes))
         if self.master is not None:
             self.master.update(lambda client_id: node_of(self.selected_for(client_id))[1])
 
