@@ -435,7 +435,12 @@ def _exercise_files(directory: str | None, rig: Rig) -> list[Path]:
     from app.classroom.exercise_file import check_exercise, load_exercise
     from app.classroom.faults import catalog
 
-    files = sorted(Path(directory).glob("*.toml"))
+    folder = Path(directory)
+    if not folder.is_dir():  # the words of --scenarios (own_scenarios): not "no *.toml in"
+        raise RigConfigError("--exercises", "", f"{folder}: no such folder" if not
+                             folder.exists() else f"{folder}: not a folder (give the folder "
+                                                  "that holds the *.toml files)")
+    files = sorted(folder.glob("*.toml"))
     if not files:
         raise RigConfigError("--exercises", "", f"no *.toml in {directory}")
     faults = catalog(rig.describe(), rig.snapshot())

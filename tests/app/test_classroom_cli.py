@@ -176,3 +176,17 @@ def test_an_exercise_error_is_one_line_that_helps(
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.count(str(path)) == 1, err
     assert said in err, err
+
+
+def test_an_exercises_folder_that_is_missing_or_a_file(tmp_path: Path, capsys) -> None:
+    """``--exercises lost_node.toml`` (the file, not its folder) and a folder name with a typo
+    both said "no *.toml in ...", as if the folder were empty; ``--scenarios`` names the
+    mistake (docs/scenarios.md), and so does ``--exercises`` now."""
+    exercise = tmp_path / "lost_node.toml"
+    exercise.write_text(EXERCISE, encoding="utf-8")
+    for given, why in ((tmp_path / "nope", f"{tmp_path / 'nope'}: no such folder"),
+                       (exercise, f"{exercise}: not a folder (give the folder that holds the "
+                                  "*.toml files)")):
+        assert main(["--exercises", str(given), "--state-dir", str(tmp_path / "s"),
+                     "--run-for", "0"]) == 2
+        assert capsys.readouterr().err == f"fieldrig: error: --exercises: {why}\n"
