@@ -178,8 +178,12 @@ def parse_scenario(text: str, source: str = "<scenario>",
                                      "name)")
     description = _typed(head, "description", str, "", fail, "scenario.description")
     rig = _typed(head, "rig", str, None, fail, "scenario.rig")
-    if rig is not None and base_dir is not None and not Path(rig).is_absolute():
-        rig = str((base_dir / rig).resolve())
+    if rig is not None and base_dir is not None:
+        given = rig
+        rig = rig if Path(rig).is_absolute() else str((base_dir / rig).resolve())
+        if not Path(rig).is_file():  # else only the rig's path was named, not this file
+            raise fail("scenario.rig", f"{given!r}: no such rig file ({rig}; a path relative "
+                                       "to the scenario's folder)")
     duration = _typed(head, "duration_s", float, None, fail, "scenario.duration_s")
     raw_steps = data.get("step", [])
     if not isinstance(raw_steps, list):

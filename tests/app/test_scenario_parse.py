@@ -285,3 +285,19 @@ def test_the_label_is_the_pickers_short_name_and_defaults_to_the_name() -> None:
     text = "[scenario]\nname = \"A long title\"\n{}[[step]]\nat = 1\ncaption = \"x\"\n"
     assert parse_scenario(text.format("label = \"Short\"\n")).label == "Short"
     assert parse_scenario(text.format("")).label == "A long title"
+
+
+def test_a_rig_the_scenario_names_that_is_not_there(tmp_path) -> None:
+    """``rig = "nope.toml"`` said only "/abs/nope.toml: cannot read rig file" when the run, the
+    dashboard's ``--scenarios`` check or ``scenario list`` got to it: with a folder of
+    scenarios, nothing said which file named it. The scenario and its key are named now."""
+    from app.scenario import load_scenario
+
+    path = tmp_path / "demo.toml"
+    path.write_text('[scenario]\nname = "d"\nrig = "nope.toml"\n[[step]]\nat = 0\n'
+                    'caption = "x"\n', encoding="utf-8")
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    assert str(info.value) == (f"{path}: scenario.rig: 'nope.toml': no such rig file "
+                               f"({tmp_path / 'nope.toml'}; a path relative to the scenario's "
+                               "folder)")
