@@ -371,11 +371,14 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
             return
         if self._touched:
             self._touched = False
+            self._cruise = None  # what a steady tick recorded may have changed (ticking.py)
             still.restart()
             still.filter_dt = None
-        elif span != still.filter_dt or alarms is not still.alarms \
-                or alarms.changes != still.changes:
-            still.filter_dt = None  # another step length, or the alarm bank changed from outside
+        elif alarms is not still.alarms or alarms.changes != still.changes:
+            self._cruise = None
+            still.filter_dt = None  # the alarm bank changed from outside
+        elif span != still.filter_dt:
+            still.filter_dt = None  # another step length
         # plant.omega first: may_settle's first test, without the call for a moving drive
         before = state_key(self) if span and self.plant.omega == 0.0 and may_settle(self) \
             and still.due() else None

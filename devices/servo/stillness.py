@@ -34,7 +34,7 @@ if TYPE_CHECKING:
 NOT_STATE = frozenset({
     "device_id", "rng", "now_us", "events", "config", "flash", "geometry", "od", "indirect",
     "_t_us", "_touched", "_still", "SKIP_STILL", "_levels_cache", "_quiet_evaluation",
-    "_lag_cache", "meter",
+    "_lag_cache", "_cruise", "meter",
     "regs", "params", "wired", "_levels", "latched_at_power_up",  # in the key, as flat dicts
 })
 FLAT = ("regs", "params", "wired", "_levels", "latched_at_power_up")  # str/int -> int/bool

@@ -23,7 +23,7 @@ floating-point expressions as the plain code, minus what cannot change anything:
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from devices.servo import ds402
 from devices.servo.ds402 import Command, State
@@ -38,6 +38,7 @@ from devices.servo.registers import DISABLED_32, R
 
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
+    from devices.servo.motion import Ramp, Trajectory
 
 SWITCHES = ("neg_limit", "pos_limit", "home")
 S32_MAX = 0x7FFF_FFFF
@@ -66,8 +67,26 @@ class DriveTick:
 
     # (i1, position_lag_s at that i1): the lag is a function of i1 alone (the config is frozen)
     _lag_cache: tuple[int, float] | None = None
+    # A steady jog's tick recorded by the full tick (_cruise_tick): (dt, lag, vmax, feed,
+    # speed threshold, speed window, speed monitor, target, levels cache); None: no record.
+    # ServoDrive.step drops it when anything from outside touched the drive.
+    _cruise: tuple[Any, ...] | None = None
+    # False: every tick runs in full (tests/devices/servo/test_servo_cruise.py compares).
+    FAST_CRUISE: ClassVar[bool] = True
 
     def _tick(self: ServoDrive, dt: float) -> None:
+        cruise = self._cruise
+        if cruise is not None and cruise[0] == dt:
+            trajectory = self.trajectory
+            plan, index = trajectory._plan, trajectory._index
+            if index < len(plan):
+                segment = plan[index]
+                if segment.v0 == segment.v1 and dt < segment.duration - trajectory._elapsed \
+                        and not self.indirect._jobs:
+                    self._cruise_tick(dt, cruise, trajectory, segment)
+                    return
+        self._cruise = None
+        changes = self.alarms.changes
         i1, cached_lag = self.params[_I1], self._lag_cache
         if cached_lag is not None and cached_lag[0] == i1:
             lag = cached_lag[1]
@@ -103,6 +122,7 @@ class DriveTick:
             else:
                 monitor.below_threshold_since_us = None
         theta_before, velocity_before = plant.theta, trajectory.velocity
+        steady = False  # the steady jog's path, which a cruise record repeats (_cruise_tick)
         # ---- the motion (the demand from the mode, the trajectory, the motor) ----
         state = self.state
         if state not in _IN_TORQUE:
@@ -128,6 +148,7 @@ class DriveTick:
                         if target != mode.commanded:
                             mode.step(self, dt)
                         else:  # the speed window timer, as Velocity.step runs it
+                            steady = monitor is mode.monitor and monitor is not None
                             monitor = mode.monitor
                             feed = regs[_FEED_CONSTANT]
                             actual = plant.omega * (feed if feed >= 1 else 1)
@@ -150,11 +171,13 @@ class DriveTick:
                 trajectory.velocity = v0 = segment.v0
                 trajectory.position = trajectory._segment_start + v0 * elapsed
             else:
+                steady = False
                 trajectory.advance(dt)
             demand = trajectory.position
             # motor_vmax_rev's expression: d3 % of the rated speed, rev/s
             vmax = self.config.max_speed_rpm * self.params[3] / 100.0 / 60.0
             if plant.jammed:
+                steady = False
                 plant.step(dt, demand, lag, vmax)
             else:  # Plant.step following a demand, inline: the same expressions in order
                 before_theta, previous = plant.theta, plant._last_demand
@@ -182,6 +205,7 @@ class DriveTick:
             # went off with the motor still turning and the axis coasted.
             if trajectory._index >= len(trajectory._plan) and trajectory.velocity == 0.0 \
                     and -_STOPPED_REV_S < plant.omega < _STOPPED_REV_S:
+                steady = False
                 if self.state is _QUICK_STOP:
                     self._transition(Command.STANDSTILL)
                 elif self.state is _FAULT_REACTION:
@@ -205,41 +229,7 @@ class DriveTick:
             meter.overload = 999.0 if overload > 999.0 else overload
         else:
             self.meter.update(self, accel, dt)
-        theta_after = plant.theta
-        g = self.geometry  # geometry.switches(theta_after), inline
-        switches = (theta_after <= g.neg_limit, theta_after >= g.pos_limit,
-                    theta_after >= g.home_switch)
-        before, cached = self._levels, self._levels_cache
-        if cached is not None and cached[1] == switches and cached[0] == wired:
-            levels = cached[2]  # input_levels(): the last tick's dict, nothing changed
-        else:
-            levels = self.levels_at(switches)
-            self._levels_cache = (dict(wired), switches, levels)
-        if levels["start"] and not before.get("start", False):
-            self.mode_logic.on_start_input(self)
-        self._levels = levels
-        latch, latch_level = self.latch, levels["latch"]
-        if latch_level or latch.level or latch.rose_at_us is not None:  # else a no-op
-            confirmed = latch.update(latch_level, t_us, self.position_user)
-            if confirmed is not None:
-                self.regs[_LATCHED_POSITION] = confirmed
-                self.latched_flag = True
-        mode = self.mode_logic
-        if type(mode).observe is not _NO_OBSERVER:  # the crossings are for homing only
-            mode.observe(self, self._changes(before, levels, theta_before, theta_after))
-        neg_limit, pos_limit = levels["neg_limit"], levels["pos_limit"]
-        # Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing, a
-        # switch the homing method in force (R18 now) uses; else the pin is a digital input
-        # (limits_used). With no limit input active there is nothing to check.
-        if (neg_limit or pos_limit) and self.state is _ENABLED:
-            mode = self.mode_logic
-            if type(mode).busy is _NEVER_BUSY or not mode.busy:
-                used = _limits_used(self.regs[_HOMING_METHOD])
-                velocity = trajectory.velocity
-                if neg_limit and velocity < 0.0 and "neg_limit" in used:
-                    self.raise_alarm(20)
-                elif pos_limit and velocity > 0.0 and "pos_limit" in used:
-                    self.raise_alarm(21)
+        quiet_inputs = self._inputs_tick(wired, theta_before, plant.theta)
         # _check_following_error, inline: alarm 16 when |error| > R03 for longer than R04 ms
         regs = self.regs
         window, feed = regs[_FOLLOWING_ERROR_WINDOW], regs[_FEED_CONSTANT]
@@ -254,6 +244,149 @@ class DriveTick:
         feed = self.regs[_FEED_CONSTANT]  # again: alarm 16 may have changed what it reads
         if abs((plant.theta - self.theta_zero) * (feed if feed >= 1 else 1)) > S32_MAX:
             self.raise_alarm(15)  # the position no longer fits R06 (S32)
+        if steady and quiet_inputs and self.state is _ENABLED and not self._touched \
+                and self.FAST_CRUISE \
+                and self.alarms.changes == changes and self._was_allowed \
+                and not self.indirect._jobs and not self.save_pending \
+                and self.saving_until is None:
+            # The steady jog's tick, nothing from outside since it began (a write, a command,
+            # an alarm, a transition: each sets _touched or moves the alarm bank, and
+            # ServoDrive.step drops the record then): its inputs hold for the next ticks.
+            # The registers as floats: each is a 32-bit int, which CPython converts exactly
+            # when it meets a float (the same bits, the same comparisons), and float-float
+            # arithmetic is the interpreter's fast path.
+            regs = self.regs
+            feed = regs[_FEED_CONSTANT]
+            target = regs[_AUX_IN_1] if wired.get("select", False) else regs[_TARGET_VELOCITY]
+            self._cruise = (dt, lag, vmax, float(feed if feed >= 1 else 1),
+                            float(regs[_VELOCITY_THRESHOLD]), float(regs[_VELOCITY_WINDOW]),
+                            monitor, float(target), self._levels_cache)
+
+    def _cruise_tick(self: ServoDrive, dt: float, cruise: tuple[Any, ...],
+                     trajectory: Trajectory, segment: Ramp) -> None:
+        """The steady jog's tick: a velocity mode cruising at its commanded speed, enabled,
+        the motor free, no input moving. The full tick recorded its inputs in ``_cruise``;
+        with nothing from outside since, they hold, and what is left is its per-millisecond
+        arithmetic: the same expressions in the same order as the full tick's."""
+        _dt, lag, vmax, feed, threshold, window, monitor, target, levels_cache = cruise
+        plant = self.plant
+        # SpeedMonitor.follow_speed, as at the full tick's start
+        if abs(plant.omega * feed) <= threshold:
+            if monitor.below_threshold_since_us is None:
+                monitor.below_threshold_since_us = self._t_us - round(dt * 1e6)
+        else:
+            monitor.below_threshold_since_us = None
+        theta_before, velocity_before = plant.theta, trajectory.velocity
+        # the speed window timer (target == commanded: Velocity.step plans nothing)
+        actual = plant.omega * feed
+        monitor.in_window_ms = monitor.in_window_ms + dt * 1e3 \
+            if abs(target - actual) <= window else 0.0
+        # Trajectory.advance inside the cruise (the caller checked that it is one)
+        trajectory._elapsed = elapsed = trajectory._elapsed + dt
+        trajectory.velocity = v0 = segment.v0
+        trajectory.position = demand = trajectory._segment_start + v0 * elapsed
+        # Plant.step following the demand, the motor free (a jam is a command: no record)
+        before_theta, previous = plant.theta, plant._last_demand
+        if previous is None:
+            previous = demand
+        rate = (demand - previous) / dt if dt > 0.0 else 0.0
+        decay = _exp(-dt / lag) if lag > 0.0 else 0.0
+        new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
+        if abs(demand - new) < _SETTLED_REV:
+            new = demand
+        reach = vmax * dt
+        if new - before_theta > reach:
+            new = before_theta + reach
+        elif before_theta - new > reach:
+            new = before_theta - reach
+        plant._last_demand = demand
+        low, high = plant._end_stops
+        plant.blocked = blocked = not low <= new <= high
+        new = low if low > new else new
+        plant.theta = theta = high if high < new else new
+        plant.omega = (theta - before_theta) / dt if dt > 0.0 else 0.0
+        # (inside a cruise the plan goes on: no standstill ends a quick stop here)
+        accel = (trajectory.velocity - velocity_before) / dt
+        if dt == 0.001 and not blocked:  # CurrentMeter.update inline, as in the full tick
+            meter, config = self.meter, self.config
+            inertia = 1.0 + config.load_inertia
+            torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
+            cap = 3.0 * self.params[5]
+            meter.instant = instant = cap if cap < torque else torque
+            mean_square = meter._mean_square
+            meter._mean_square = mean_square = mean_square + (instant ** 2 - mean_square) \
+                * _K_1MS
+            meter.rms = rms = _sqrt(mean_square)
+            overload = 100.0 * (rms / 100.0) ** 2
+            meter.overload = 999.0 if overload > 999.0 else overload
+        else:
+            self.meter.update(self, accel, dt)
+        g = self.geometry
+        if self._levels_cache is not levels_cache or levels_cache[1] != (
+                theta <= g.neg_limit, theta >= g.pos_limit, theta >= g.home_switch):
+            # a switch moved: the inputs' part of the full tick, and no record from here
+            self._cruise = None
+            self._inputs_tick(self.wired, theta_before, theta)
+        # else the recorded tick's levels: no start edge, the latch idle, no limit input
+        # active, no crossing to observe (a velocity mode)
+        regs = self.regs  # _check_following_error, as in the full tick
+        window, feed = regs[_FOLLOWING_ERROR_WINDOW], regs[_FEED_CONSTANT]
+        if self.state is _ENABLED and window != DISABLED_32 and abs(
+                (trajectory.position - plant.theta) * (feed if feed >= 1 else 1)) > window:
+            self._fe_ms += dt * 1e3
+            if self._fe_ms > regs[_FOLLOWING_ERROR_TIMEOUT]:
+                self._fe_ms = 0.0
+                self.raise_alarm(16)
+        else:
+            self._fe_ms = 0.0
+        feed = self.regs[_FEED_CONSTANT]  # again: alarm 16 may have changed what it reads
+        if abs((plant.theta - self.theta_zero) * (feed if feed >= 1 else 1)) > S32_MAX:
+            self.raise_alarm(15)  # the position no longer fits R06 (S32)
+
+    def _inputs_tick(self: ServoDrive, wired: dict[str, bool], theta_before: float,
+                     theta_after: float) -> bool:
+        """The inputs' part of a tick, after the motion: the levels, the start edge, the
+        latch, homing's crossings, the limit switches' alarms. True when it did nothing and
+        would do nothing again with the same levels (a cruise may be recorded)."""
+        trajectory, idle = self.trajectory, True
+        g = self.geometry  # geometry.switches(theta_after), inline
+        switches = (theta_after <= g.neg_limit, theta_after >= g.pos_limit,
+                    theta_after >= g.home_switch)
+        before, cached = self._levels, self._levels_cache
+        if cached is not None and cached[1] == switches and cached[0] == wired:
+            levels = cached[2]  # input_levels(): the last tick's dict, nothing changed
+        else:
+            levels = self.levels_at(switches)
+            self._levels_cache = (dict(wired), switches, levels)
+        if levels["start"] and not before.get("start", False):
+            idle = False
+            self.mode_logic.on_start_input(self)
+        self._levels = levels
+        latch, latch_level = self.latch, levels["latch"]
+        if latch_level or latch.level or latch.rose_at_us is not None:  # else a no-op
+            idle = False
+            confirmed = latch.update(latch_level, self._t_us, self.position_user)
+            if confirmed is not None:
+                self.regs[_LATCHED_POSITION] = confirmed
+                self.latched_flag = True
+        mode = self.mode_logic
+        if type(mode).observe is not _NO_OBSERVER:  # the crossings are for homing only
+            idle = False
+            mode.observe(self, self._changes(before, levels, theta_before, theta_after))
+        neg_limit, pos_limit = levels["neg_limit"], levels["pos_limit"]
+        # Alarms 20 / 21 (LS1 / LS2): moving into an active limit switch outside homing, a
+        # switch the homing method in force (R18 now) uses; else the pin is a digital input
+        # (limits_used). With no limit input active there is nothing to check.
+        if (neg_limit or pos_limit) and self.state is _ENABLED:
+            mode = self.mode_logic
+            if type(mode).busy is _NEVER_BUSY or not mode.busy:
+                used = _limits_used(self.regs[_HOMING_METHOD])
+                velocity = trajectory.velocity
+                if neg_limit and velocity < 0.0 and "neg_limit" in used:
+                    self.raise_alarm(20)
+                elif pos_limit and velocity > 0.0 and "pos_limit" in used:
+                    self.raise_alarm(21)
+        return idle and self._levels is before and not (neg_limit or pos_limit)
 
     def _changes(self: ServoDrive, before: dict[str, bool], after: dict[str, bool],
                  theta0: float, theta1: float) -> Changes:

@@ -1,0 +1,126 @@
+"""The steady jog's tick (devices/servo/ticking.py ``_cruise_tick``) does what the full tick does.
+
+docs/servo-drive.md §Step cost in motion: a full tick that took the steady jog's path (velocity
+mode at its commanded speed, enabled, motor free, no input moving) records its inputs; the
+next ticks, with nothing from outside in between, run only the arithmetic. A drive with
+``FAST_CRUISE`` off runs every tick in full; a seeded run of commands between stretches of
+jogging (writes of the speed and of the following-error window, the halt bit, TEN / IEN, a
+jam, alarms, power, the limit and home switches crossed at speed, other step lengths) must
+give both the same events every step and the same snapshot and full state after each stretch.
+"""
+
+from __future__ import annotations
+
+import random
+from typing import Any
+
+import pytest
+
+from app.rig import Rig
+from devices.device import CommandError
+from devices.flash import MemoryFlash
+from devices.od import SdoAbort
+from devices.servo.drive import DriveConfig, ServoDrive
+from devices.servo.ds402 import State
+from devices.servo.stillness import state_key
+
+
+class FullDrive(ServoDrive):
+    FAST_CRUISE = False
+
+
+Op = tuple[str, dict[str, Any]]
+RECOVER: list[Op] = [("power", {"on": True}), ("jam_load", {"active": False}),
+                     ("clear_alarm", {"code": "16"}),
+                     *[("set_input", {"name": name, "value": name in ("ten", "ien")})
+                       for name in ("ten", "ien", "home", "neg_limit", "latch", "select")],
+                     ("alarm_reset", {}), ("enable", {"on": True})]
+
+
+def random_ops(rng: random.Random) -> list[Op]:
+    """Mostly a jog (after a recovery), else one command that may land inside a cruise."""
+    speed: Op = ("write_register", {"register": 12,
+                                    "value": rng.choice((600, 3000, 12000, 30000))})
+    if rng.random() < 0.4:
+        return [*RECOVER, speed, ("jog", {"direction": rng.choice((-1, 1))})]
+    return [rng.choice([
+        speed, ("jog", {"direction": rng.choice((-1, 0, 1))}),
+        ("controlword", {"value": rng.choice((0x0F, 0x10F, 0x0B, 0x07))}),
+        ("set_input", {"name": rng.choice(("ten", "ien", "latch", "start", "select", "home")),
+                       "value": rng.random() < 0.5}),
+        ("jam_load", {"active": rng.random() < 0.5}),
+        ("inject_alarm", {"code": "16"}),
+        ("power", {"on": rng.random() < 0.7}),
+        ("write_register", {"register": rng.choice((3, 4)),
+                            "value": rng.choice((1, 50, 20_000, 0xFFFF_FFFF))}),
+        ("write_register", {"register": 13, "value": rng.randint(0, 20_000)}),
+        ("analog_input", {"volts": rng.choice((0.0, 2.5, -5.0))}),
+        ("save", {}),
+    ])]
+
+
+def outcome(rig: Rig, op: Op) -> str:
+    try:
+        return repr(rig.apply("drive", *op))
+    except (CommandError, SdoAbort) as exc:
+        return f"refused: {exc}"
+
+
+@pytest.mark.parametrize("seed", [1, 2, *(pytest.param(s, marks=pytest.mark.full)
+                                          for s in (3, 4, 5))])
+def test_the_cruise_tick_equals_the_full_tick(seed: int) -> None:
+    rng = random.Random(seed)
+    config = DriveConfig(start_position=-57_000.0)  # near the negative limit, home ahead
+    fast = ServoDrive("drive", random.Random(7), config, MemoryFlash())
+    full = FullDrive("drive", random.Random(7), config, MemoryFlash())
+    rigs = [Rig("fast", {"drive": fast}), Rig("full", {"drive": full})]
+    t_us, cruising = 0, 0
+    for _ in range(120):
+        for op in random_ops(rng):
+            assert outcome(rigs[0], op) == outcome(rigs[1], op), op
+        dt = rng.choice((1000, 1000, 1000, 250, 2000))
+        for _ in range(rng.choice((1, 3, 50, 400, 1500))):
+            t_us += dt
+            for drive in (fast, full):
+                drive.step(t_us)
+            assert fast.drain_events() == full.drain_events()
+            cruising += fast._cruise is not None
+        assert fast.snapshot() == full.snapshot()
+        assert state_key(fast) == state_key(full)
+        assert fast.regs == full.regs and fast.params == full.params
+    assert full._cruise is None  # never recorded with the switch off
+    assert cruising > 10_000  # the fast drive did cruise
+
+
+def test_a_jog_cruises_and_a_write_ends_the_record() -> None:
+    """After the ramp a jog's ticks take the cruise; a register write (from outside) makes the
+    next tick a full one, which records again."""
+    drive = ServoDrive("drive", random.Random(7), DriveConfig(start_position=300_000.0),
+                       MemoryFlash())
+    rig = Rig("drive", {"drive": drive})
+    calls: list[float] = []
+    original = drive._cruise_tick
+    drive._cruise_tick = (  # type: ignore[method-assign]
+        lambda dt, *rest: calls.append(dt) or original(dt, *rest))
+    t_us = 0
+
+    def run(ms: int) -> None:
+        nonlocal t_us
+        for _ in range(ms):
+            t_us += 1000
+            drive.step(t_us)
+
+    run(100)
+    rig.apply("drive", "enable", {"on": True})
+    rig.apply("drive", "jog", {"direction": 1})
+    run(1000)
+    assert drive.state is State.OPERATION_ENABLED and drive.plant.omega > 0.0
+    assert drive._cruise is not None and len(calls) > 500
+    before = len(calls)
+    drive.write_register(3, 20_000)  # the following-error window: from outside
+    assert drive._touched
+    run(1)
+    assert len(calls) == before  # a full tick ...
+    assert drive._cruise is not None  # ... which recorded again
+    run(1)
+    assert len(calls) == before + 1
