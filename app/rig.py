@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping
 from dataclasses import dataclass, field
+from operator import attrgetter
 from typing import Any, ClassVar
 
 from app.clock import SimClock
@@ -22,6 +23,7 @@ MIN_SPAN = 2
 # An observer's quiet_until(now_us, step_us): it has nothing to do after the steps up to then.
 ObserverSpan = Callable[[int, int], int]
 FAR_US = 1 << 62  # an observer with nothing due: the devices decide
+_QUEUED = attrgetter("events.items")  # a device's queued events (Rig._collect)
 
 
 @dataclass
@@ -188,8 +190,13 @@ class Rig:
         return {"t": self.clock.now_s, "rig": self.name, "devices": devices}
 
     def _collect(self) -> None:
-        for device in self.devices.values():
-            if device.events.items:  # most steps emit nothing: skip the drain
+        devices = self.devices.values()
+        # Most steps emit nothing: one C-level pass over the queues finds that (the loop's
+        # own bytecode per device cost more than the steps of several idle devices).
+        if not any(map(_QUEUED, devices)):
+            return
+        for device in devices:
+            if device.events.items:  # drain only the devices that emitted
                 self.pending.extend(device.drain_events())
 
     def describe(self) -> dict[str, dict[str, Any]]:
