@@ -39,6 +39,7 @@ from devices.servo.registers import DISABLED_32, R
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
     from devices.servo.motion import Ramp, Trajectory
+    from devices.servo.plant import Plant
 
 SWITCHES = ("neg_limit", "pos_limit", "home")
 S32_MAX = 0x7FFF_FFFF
@@ -258,9 +259,12 @@ class DriveTick:
             regs = self.regs
             feed = regs[_FEED_CONSTANT]
             target = regs[_AUX_IN_1] if wired.get("select", False) else regs[_TARGET_VELOCITY]
+            window = regs[_FOLLOWING_ERROR_WINDOW]
             self._cruise = (dt, lag, vmax, float(feed if feed >= 1 else 1),
                             float(regs[_VELOCITY_THRESHOLD]), float(regs[_VELOCITY_WINDOW]),
-                            monitor, float(target), self._levels_cache)
+                            monitor, float(target), self._levels_cache,
+                            None if window == DISABLED_32 else float(window),
+                            float(regs[_FOLLOWING_ERROR_TIMEOUT]), self.theta_zero)
 
     def _cruise_tick(self: ServoDrive, dt: float, cruise: tuple[Any, ...],
                      trajectory: Trajectory, segment: Ramp) -> None:
@@ -268,7 +272,8 @@ class DriveTick:
         the motor free, no input moving. The full tick recorded its inputs in ``_cruise``;
         with nothing from outside since, they hold, and what is left is its per-millisecond
         arithmetic: the same expressions in the same order as the full tick's."""
-        _dt, lag, vmax, feed, threshold, window, monitor, target, levels_cache = cruise
+        (_dt, lag, vmax, feed, threshold, window, monitor, target, levels_cache, fe_window,
+         fe_timeout, theta_zero) = cruise
         plant = self.plant
         # SpeedMonitor.follow_speed, as at the full tick's start
         if abs(plant.omega * feed) <= threshold:
@@ -322,13 +327,27 @@ class DriveTick:
         else:
             self.meter.update(self, accel, dt)
         g = self.geometry
-        if self._levels_cache is not levels_cache or levels_cache[1] != (
+        if self._levels_cache is levels_cache and levels_cache[1] == (
                 theta <= g.neg_limit, theta >= g.pos_limit, theta >= g.home_switch):
-            # a switch moved: the inputs' part of the full tick, and no record from here
-            self._cruise = None
-            self._inputs_tick(self.wired, theta_before, theta)
-        # else the recorded tick's levels: no start edge, the latch idle, no limit input
-        # active, no crossing to observe (a velocity mode)
+            # The recorded tick's levels: no start edge, the latch idle, no limit input
+            # active, no crossing to observe (a velocity mode). Nothing in this tick could
+            # change the state or a register, so the following-error and R06 checks read
+            # the recorded values (the same numbers as floats).
+            if fe_window is not None and abs((trajectory.position - theta) * feed) > fe_window:
+                self._fe_ms += dt * 1e3
+                if self._fe_ms > fe_timeout:
+                    self._fe_ms = 0.0
+                    self.raise_alarm(16)
+                    self._s32_check(plant)  # alarm 16 may have changed what it reads
+                    return
+            else:
+                self._fe_ms = 0.0
+            if abs((theta - theta_zero) * feed) > S32_MAX:
+                self.raise_alarm(15)
+            return
+        # a switch moved: the inputs' part of the full tick, and no record from here
+        self._cruise = None
+        self._inputs_tick(self.wired, theta_before, theta)
         regs = self.regs  # _check_following_error, as in the full tick
         window, feed = regs[_FOLLOWING_ERROR_WINDOW], regs[_FEED_CONSTANT]
         if self.state is _ENABLED and window != DISABLED_32 and abs(
@@ -339,7 +358,10 @@ class DriveTick:
                 self.raise_alarm(16)
         else:
             self._fe_ms = 0.0
-        feed = self.regs[_FEED_CONSTANT]  # again: alarm 16 may have changed what it reads
+        self._s32_check(plant)  # again: alarm 16 may have changed what it reads
+
+    def _s32_check(self: ServoDrive, plant: Plant) -> None:
+        feed = self.regs[_FEED_CONSTANT]
         if abs((plant.theta - self.theta_zero) * (feed if feed >= 1 else 1)) > S32_MAX:
             self.raise_alarm(15)  # the position no longer fits R06 (S32)
 
