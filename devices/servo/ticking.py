@@ -69,8 +69,9 @@ class DriveTick:
     # (i1, position_lag_s at that i1): the lag is a function of i1 alone (the config is frozen)
     _lag_cache: tuple[int, float] | None = None
     # A steady jog's tick recorded by the full tick (_cruise_tick): (dt, lag, vmax, feed,
-    # speed threshold, speed window, speed monitor, target, levels cache); None: no record.
-    # ServoDrive.step drops it when anything from outside touched the drive.
+    # speed threshold, speed window, speed monitor, target, levels cache, following-error
+    # window or None, its timeout, theta_zero); None: no record. ServoDrive.step drops it
+    # when anything from outside touched the drive or the alarm bank moved.
     _cruise: tuple[Any, ...] | None = None
     # False: every tick runs in full (tests/devices/servo/test_servo_cruise.py compares).
     FAST_CRUISE: ClassVar[bool] = True
