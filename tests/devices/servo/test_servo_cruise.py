@@ -124,3 +124,31 @@ def test_a_jog_cruises_and_a_write_ends_the_record() -> None:
     assert drive._cruise is not None  # ... which recorded again
     run(1)
     assert len(calls) == before + 1
+
+
+def test_the_cruise_raises_the_position_overflow_at_the_full_ticks_step() -> None:
+    """Alarm 15 (R06 no longer fits S32) reached while cruising: the cruise's own check, at
+    the step the full tick raises it (a coarse feed constant and a fast motor bring the axis
+    to 2^31 units in about 82 s)."""
+    config = DriveConfig(feed_constant=0x3FFFF, max_speed_rpm=12_000.0, pos_limit=3e9)
+    fast = ServoDrive("drive", random.Random(7), config, MemoryFlash())
+    full = FullDrive("drive", random.Random(7), config, MemoryFlash())
+    for drive in (fast, full):
+        rig = Rig(drive.__class__.__name__, {"drive": drive})
+        for register in (10, 12, 13):  # acceleration, profile and target velocity
+            rig.apply("drive", "write_register", {"register": register, "value": 50_000_000})
+        rig.apply("drive", "write_register", {"register": 3, "value": 0xFFFF_FFFF})  # no R03
+        rig.apply("drive", "enable", {"on": True})
+        rig.apply("drive", "jog", {"direction": 1})
+    t_us, cruising, raised = 0, 0, None
+    while raised is None and t_us < 90_000_000:
+        t_us += 1000
+        for drive in (fast, full):
+            drive.step(t_us)
+        cruising += fast._cruise is not None
+        events = fast.drain_events()
+        assert events == full.drain_events()
+        if any(getattr(event, "code", None) == "15" for event in events):
+            raised = t_us
+    assert raised is not None and cruising > 80_000  # reached inside a cruise
+    assert fast.snapshot() == full.snapshot()
