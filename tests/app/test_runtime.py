@@ -192,6 +192,36 @@ def test_nap_is_short_while_something_talks_to_the_rig() -> None:
     assert nap_s(now, now - 60.0, now - 0.5, realtime=False) == ACTIVE_NAP_S
 
 
+def test_a_call_keeps_the_simulation_on_short_naps(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A protocol server's request (call) talks to the rig as queued work does: the thread
+    then steps every millisecond, so the next reads see the rig within a step of wall time
+    (on idle 10 ms naps a Modbus poll of a moving axis read it up to 10 ms behind)."""
+    import app.runtime as runtime_module
+
+    naps: list[tuple[float, float]] = []  # (now, last_work) of each nap taken
+
+    def recorded(now: float, last_work: float, next_publish: float, realtime: bool) -> float:
+        naps.append((now, last_work))
+        return nap_s(now, last_work, next_publish, realtime)
+
+    monkeypatch.setattr(runtime_module, "nap_s", recorded)
+    rig = Rig("t", {"c": Counter("c")}, SimClock(step_us=1000))
+    runtime = Runtime(rig)
+    runtime.start()
+    try:
+        time.sleep(ACTIVE_S + 0.3)  # idle: naps of IDLE_NAP_S
+        called = time.monotonic()
+        runtime.call(lambda: rig.clock.now_us)
+        deadline = called + 10
+        while not any(now > called for now, _ in naps):
+            assert time.monotonic() < deadline, "the simulation thread took no nap"
+            time.sleep(0.005)
+        now, last_work = next((n, w) for n, w in naps if n > called)
+        assert now - last_work <= ACTIVE_S  # the call counted as work: short naps follow
+    finally:
+        runtime.stop()
+
+
 def test_idle_runtime_keeps_real_time_and_answers_at_once() -> None:
     """Stepping in idle batches changes neither the simulated time's pace nor how soon queued
     work runs."""
