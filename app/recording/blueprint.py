@@ -50,7 +50,7 @@ def lane_style(path: str) -> rr.StateConfiguration | None:
         colors = [LED_OFF_RGBA if p is LedPattern.OFF else lit if p is LedPattern.ON else faded
                   for p in LedPattern]
         return rr.StateConfiguration(values=values, colors=colors)
-    if len(parts) == 3 and parts[2] == "state":
+    if parts[2:] == ["state"] or parts[2:] == ["state", "esm"]:  # a drive's ESM too
         return rr.StateConfiguration(values=list(ESM_RGBA), colors=list(ESM_RGBA.values()))
     return None
 

@@ -27,6 +27,11 @@ ROOT = "rig"
 # they feed; "" is the device's main state machine (for EtherCAT slaves, the ESM).
 STATE_KEYS: dict[str, str] = {"esm": "", "ds402_state": "ds402"}
 
+# A drive's fieldbus sides, by snapshot kind: the CoE slave (<drive>-ecat) and the CANopen node
+# (<drive>-can) emit under the drive's id with machine "esm" / "nmt" (docs/architecture.md), so
+# their samples feed the same lanes under the drive: snapshot key -> machine.
+SIDE_KEYS: dict[str, dict[str, str]] = {"servo_ecat": {"esm": "esm"}, "canopen": {"nmt": "nmt"}}
+
 # Drive signals recorded from a servo snapshot (issue 6: position, velocity, following error).
 DRIVE_SIGNALS = ("position", "velocity", "following_error")
 
@@ -137,11 +142,28 @@ def main_machine(snap: Mapping[str, Any]) -> str | None:
                  if isinstance(snap.get(key), str)), None)
 
 
+def lane_owner(device_id: str, snap: Mapping[str, Any]) -> str:
+    """The device whose lanes a snapshot feeds: a drive's side's is the drive."""
+    if snap.get("kind") in SIDE_KEYS and isinstance(snap.get("drive"), str):
+        return str(snap["drive"])
+    return device_id
+
+
 def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str, str]]:
     """(lane path, value) of every state machine and LED pattern the snapshot shows."""
-    for key, machine in STATE_KEYS.items():
-        if isinstance(snap.get(key), str):
-            yield state_lane(device_id, machine), snap[key]
+    side = SIDE_KEYS.get(str(snap.get("kind", "")))
+    if side is not None:
+        # A silent CANopen node (drive off, or not on CANopen) shows "Off", a state no event
+        # reports: its lane keeps what the events said (power-off: Initialisation).
+        if snap.get("active", True):
+            owner = lane_owner(device_id, snap)
+            for key, machine in side.items():
+                if isinstance(snap.get(key), str):
+                    yield state_lane(owner, machine), snap[key]
+    else:
+        for key, machine in STATE_KEYS.items():
+            if isinstance(snap.get(key), str):
+                yield state_lane(device_id, machine), snap[key]
     for led, pattern in (snap.get("leds") or {}).items():
         if isinstance(pattern, str):
             yield led_lane(device_id, led), pattern
