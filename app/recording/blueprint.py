@@ -72,7 +72,8 @@ def rig_blueprint(snapshot: Mapping[str, Any], t_us: int = 0) -> rrb.Blueprint:
         by_device[device_id].append(signal)
     left = rrb.Vertical(
         rrb.StateTimelineView(name="Device states", origin=f"/{ROOT}",
-                              contents=[f"/{ROOT}/{d}/state/**" for d in devices]),
+                              contents=[f"/{ROOT}/{d}/{lane}" for d in devices
+                                        for lane in ("state/**", "al_status")]),
         rrb.StateTimelineView(name="LED patterns", origin=f"/{ROOT}",
                               contents=[f"/{ROOT}/{d}/led/**" for d in devices]),
         rrb.TextLogView(name="Events", origin=f"/{ROOT}"),

@@ -19,6 +19,7 @@ from typing import Any, NamedTuple
 
 import rerun as rr
 
+from devices.events import fmt_hex
 from devices.leds import LedPattern, is_lit
 
 ROOT = "rig"
@@ -77,6 +78,11 @@ def state_lane(device_id: str, machine: str) -> str:
     """Entity path of a state machine's lane: ``rig/<device>/state[/<machine>]``."""
     return device_path(device_id, "state", machine) if machine else device_path(device_id,
                                                                                 "state")
+
+
+def al_status_lane(device_id: str) -> str:
+    """The AL status code register's lane (seed 000 §7.7), codes as the events print them."""
+    return device_path(device_id, "al_status")
 
 
 def led_lane(device_id: str, led: str) -> str:
@@ -164,6 +170,9 @@ def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str,
         for key, machine in STATE_KEYS.items():
             if isinstance(snap.get(key), str):
                 yield state_lane(device_id, machine), snap[key]
+    code = snap.get("al_status_code")
+    if isinstance(code, int) and not isinstance(code, bool):  # an EtherCAT slave's 0x0134
+        yield al_status_lane(lane_owner(device_id, snap)), fmt_hex(code, 4)
     for led, pattern in (snap.get("leds") or {}).items():
         if isinstance(pattern, str):
             yield led_lane(device_id, led), pattern
