@@ -103,10 +103,11 @@ def _led_info(device_id: str, led: str) -> SeriesInfo:
 
 
 @functools.lru_cache(maxsize=4096)
-def _series(prefix: str, count: int, view: str, step: bool = False) -> SeriesInfo:
-    """Series ``"di 1"``, ``"di 2"``, ...: channels numbered as printed on the module (the
-    ``channel`` parameter of the FastCAT actions counts from 1)."""
-    return SeriesInfo(tuple(f"{prefix} {ch}" for ch in range(1, count + 1)), view, step)
+def _series(prefix: str, count: int, view: str, step: bool = False,
+            first: int = 1) -> SeriesInfo:
+    """Series ``"di 1"``, ``"di 2"``, ...: channels numbered as the device's actions take them
+    (the FastCAT's and the TRS-CAT's ``channel`` count from 1, the CPX-E-EC's from 0)."""
+    return SeriesInfo(tuple(f"{prefix} {ch}" for ch in range(first, first + count)), view, step)
 
 
 @functools.lru_cache(maxsize=1024)
@@ -209,6 +210,43 @@ def _fastcat(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Sig
                                      f"{device_id} {slot} {mtype} {title}"))
 
 
+# A TRS-CAT slot's process data (slot 0 the integrated I/O, seed 001): key, plot, digital-like.
+# outputs_plc is what the PLC wrote, outputs what the lines drive: they part in the fallback.
+_TRSCAT_IO = (("inputs", "inputs", True), ("outputs", "outputs", True),
+              ("outputs_plc", "outputs (PLC)", True), ("analog_in_v", "analog in (V)", False),
+              ("analog_out_v", "analog out (V)", False))
+
+
+def _trscat(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    for slot in snap.get("slots") or []:
+        number, stype = slot.get("slot"), slot.get("type")
+        for key, title, step in _TRSCAT_IO:
+            values = slot.get(key)
+            if values:
+                yield Signal(device_path(device_id, "io", number, key), _row(values),
+                             _series(key, len(values), f"{device_id} {number} {stype} {title}",
+                                     step))
+
+
+# A CPX-E-EC module's process data (module 0 the bus module, seed 002), channels from 0.
+# outputs is what the PLC wrote, driven what the channel drives (forced, shorted: they part).
+_CPX_IO = (("inputs", "inputs", True), ("outputs", "outputs", True),
+           ("driven", "outputs (driven)", True), ("analog_in", "analog in", False),
+           ("analog_out", "analog out", False))
+
+
+def _cpx(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    bus = snap.get("bus_module")
+    for module in ([bus] if isinstance(bus, Mapping) else []) + list(snap.get("modules") or []):
+        number, mtype = module.get("module"), module.get("short") or module.get("type")
+        for key, title, step in _CPX_IO:
+            values = module.get(key)
+            if values:
+                yield Signal(device_path(device_id, "io", number, key), _row(values),
+                             _series(key, len(values), f"{device_id} {number} {mtype} {title}",
+                                     step, first=0))
+
+
 def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
     for key in DRIVE_SIGNALS:
         if key in snap:
@@ -218,7 +256,8 @@ def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signa
 
 Extractor = Callable[[str, Mapping[str, Any], int], Iterator[Signal]]
 
-EXTRACTORS: dict[str, Extractor] = {"fastcat": _fastcat, "servo": _servo}
+EXTRACTORS: dict[str, Extractor] = {"fastcat": _fastcat, "trscat": _trscat,
+                                     "cpx_e_ec": _cpx, "servo": _servo}
 
 
 def device_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
