@@ -35,6 +35,11 @@ SIDE_KEYS: dict[str, dict[str, str]] = {"servo_ecat": {"esm": "esm"}, "canopen":
 
 # Drive signals recorded from a servo snapshot (issue 6: position, velocity, following error).
 DRIVE_SIGNALS = ("position", "velocity", "following_error")
+# The drive's words, one step plot each: CiA 402 0x6040 / 0x6041 and the register-mode R00 /
+# R05 (seed 004 ch. 2), what a master wrote and what the drive answered.
+DRIVE_WORDS = ("controlword", "statusword", "control_register", "status_register")
+# Its CN2 pins (seed 004: inputs with TEN / IEN, outputs), one series a pin, by name.
+DRIVE_PINS = ("inputs", "outputs")
 
 # LED colours for the plots, by the colour in the LED's name (ETG.1300: RUN green, ERR red;
 # FastCAT module LEDs are "<slot>.red" / "<slot>.yellow").
@@ -111,8 +116,14 @@ def _series(prefix: str, count: int, view: str, step: bool = False,
 
 
 @functools.lru_cache(maxsize=1024)
-def _single(name: str, view: str) -> SeriesInfo:
-    return SeriesInfo((name,), view)
+def _single(name: str, view: str, step: bool = False) -> SeriesInfo:
+    return SeriesInfo((name,), view, step)
+
+
+@functools.lru_cache(maxsize=1024)
+def _named(names: tuple[str, ...], view: str) -> SeriesInfo:
+    """Digital pins, one series each, by the name the snapshot gives them."""
+    return SeriesInfo(names, view, step=True)
 
 
 def _num(value: Any) -> float:
@@ -252,6 +263,15 @@ def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signa
         if key in snap:
             yield Signal(device_path(device_id, "drive", key), (_num(snap[key]),),
                          _single(key, f"{device_id} {key.replace('_', ' ')}"))
+    for key in DRIVE_WORDS:
+        if key in snap:
+            yield Signal(device_path(device_id, "drive", key), (_num(snap[key]),),
+                         _single(key, f"{device_id} {key.replace('_', ' ')}", step=True))
+    for key in DRIVE_PINS:
+        pins = snap.get(key)
+        if isinstance(pins, Mapping) and pins:
+            yield Signal(device_path(device_id, "io", key), _row(pins.values()),
+                         _named(tuple(pins), f"{device_id} {key}"))
 
 
 Extractor = Callable[[str, Mapping[str, Any], int], Iterator[Signal]]

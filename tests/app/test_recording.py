@@ -403,11 +403,13 @@ def test_event_lines(event: Event, text: str, level: str) -> None:
 
 
 def test_drive_signals_get_a_plot_each() -> None:
-    """Position, velocity and following error have different scales: one plot each."""
+    """Position, velocity, following error and each word have different scales: one plot
+    each (the statusword a step plot: test_recording_drive_io.py)."""
     views = {s.view: s.path for _, s in rig_signals(servo_snapshot(1.0, "X"), 0)}
     assert views == {"axis position": "rig/axis/drive/position",
                      "axis velocity": "rig/axis/drive/velocity",
-                     "axis following error": "rig/axis/drive/following_error"}
+                     "axis following error": "rig/axis/drive/following_error",
+                     "axis statusword": "rig/axis/drive/statusword"}
 
 
 # ---- the live runtime ----------------------------------------------------------------------------
