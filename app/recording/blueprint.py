@@ -50,7 +50,8 @@ def lane_style(path: str) -> rr.StateConfiguration | None:
         colors = [LED_OFF_RGBA if p is LedPattern.OFF else lit if p is LedPattern.ON else faded
                   for p in LedPattern]
         return rr.StateConfiguration(values=values, colors=colors)
-    if parts[2:] == ["state"] or parts[2:] == ["state", "esm"]:  # a drive's ESM too
+    # A drive's ESM and the master's view of each slave are ESM lanes too.
+    if parts[2:] in (["state"], ["state", "esm"]) or parts[2:4] == ["state", "slave"]:
         return rr.StateConfiguration(values=list(ESM_RGBA), colors=list(ESM_RGBA.values()))
     return None
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-from app.recording.signals import al_status_lane, device_path, state_lane
+from app.recording.signals import al_status_lane, device_path, slave_lane, state_lane
 from devices.ethercat import describe_al_status_code
 from devices.events import Event
 from devices.master.links import al_status_code_text
@@ -136,7 +136,7 @@ def log_path(event: Event) -> str:
 def lane_change(event: Event, record: dict[str, Any],
                 main: str = "") -> tuple[str, str] | None:
     """(lane path, new value) when the event moves a state lane (a state machine, an LED,
-    the AL status code).
+    the AL status code, the master's view of a slave).
     ``main``: the lane of the device's main machine (signals.main_machine: "ds402" for a
     drive), where its events without ``machine`` go, so they meet its samples."""
     if event.kind == "state":
@@ -145,4 +145,6 @@ def lane_change(event: Event, record: dict[str, Any],
         return device_path(event.device, "led", record["led"]), str(record["pattern"])
     if event.kind == "al_status":
         return al_status_lane(event.device), str(record["code"])
+    if event.kind == "slave_state":
+        return slave_lane(event.device, record["position"]), str(record["to"])
     return None

@@ -90,6 +90,15 @@ def al_status_lane(device_id: str) -> str:
     return device_path(device_id, "al_status")
 
 
+# The master's lane of a slave that does not answer (its snapshot's state is None).
+SLAVE_LOST = "lost"
+
+
+def slave_lane(master_id: str, position: object) -> str:
+    """The master's view of the slave at a line position (its slave_state events, seed 003)."""
+    return device_path(master_id, "state", "slave", position)
+
+
 def led_lane(device_id: str, led: str) -> str:
     return device_path(device_id, "led", led)
 
@@ -185,6 +194,8 @@ def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str,
     code = snap.get("al_status_code")
     if isinstance(code, int) and not isinstance(code, bool):  # an EtherCAT slave's 0x0134
         yield al_status_lane(lane_owner(device_id, snap)), fmt_hex(code, 4)
+    for slave in snap.get("slaves") or []:  # the master's view of each line position
+        yield slave_lane(device_id, slave.get("position")), slave.get("state") or SLAVE_LOST
     for led, pattern in (snap.get("leds") or {}).items():
         if isinstance(pattern, str):
             yield led_lane(device_id, led), pattern
@@ -258,6 +269,42 @@ def _cpx(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]
                                      step, first=0))
 
 
+def _master(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    """Per line position, the master's counters and the ESC error counters (seed 003). Not
+    the frame count nor the DC deviation: they move at every quiet step ("Repeated samples")."""
+    for slave in snap.get("slaves") or []:
+        position = slave.get("position")
+        counters = slave.get("counters")
+        if isinstance(counters, Mapping) and counters:
+            yield Signal(device_path(device_id, "slave", position, "counters"),
+                         _row(counters.values()),
+                         _counter_info(tuple(counters), f"{device_id} slave {position} counters"))
+        esc = slave.get("esc_errors")
+        if isinstance(esc, Mapping) and esc:
+            names, values = _flat(esc)
+            yield Signal(device_path(device_id, "slave", position, "esc_errors"), values,
+                         _counter_info(names, f"{device_id} slave {position} ESC errors"))
+
+
+def _flat(counters: Mapping[str, Any]) -> tuple[tuple[str, ...], tuple[float, ...]]:
+    """ESC counters, per port where the ESC has one (``rx 0``, ``rx 1``, ``epu``)."""
+    names: list[str] = []
+    values: list[float] = []
+    for key, value in counters.items():
+        if isinstance(value, list | tuple):
+            names.extend(f"{key} {port}" for port in range(len(value)))
+            values.extend(_num(v) for v in value)
+        else:
+            names.append(key)
+            values.append(_num(value))
+    return tuple(names), tuple(values)
+
+
+@functools.lru_cache(maxsize=1024)
+def _counter_info(names: tuple[str, ...], view: str) -> SeriesInfo:
+    return SeriesInfo(names, view, step=True)
+
+
 def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
     for key in DRIVE_SIGNALS:
         if key in snap:
@@ -277,7 +324,7 @@ def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signa
 Extractor = Callable[[str, Mapping[str, Any], int], Iterator[Signal]]
 
 EXTRACTORS: dict[str, Extractor] = {"fastcat": _fastcat, "trscat": _trscat,
-                                     "cpx_e_ec": _cpx, "servo": _servo}
+                                     "cpx_e_ec": _cpx, "servo": _servo, "master": _master}
 
 
 def device_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
