@@ -90,8 +90,8 @@ def al_status_lane(device_id: str) -> str:
     return device_path(device_id, "al_status")
 
 
-# The master's lane of a slave that does not answer (its snapshot's state is None).
-SLAVE_LOST = "lost"
+# The master's lane of a slave that does not answer, lost or not found yet (state None).
+SLAVE_LOST = "absent"
 
 
 def slave_lane(master_id: str, position: object) -> str:

@@ -6,7 +6,7 @@ errors, emergencies, state changes) and the ESC error counters 0x0300-0x0313. An
 example scenarios' recordings found its ``slave_state`` events as text lines only and none of
 the counters: a replay of cable_pulled showed the lost frames only as log lines and no plot of
 a damaged cable's ESC errors. Now: ``rig/master/state/slave/<position>`` (events + samples,
-"lost" while the slave does not answer) and ``rig/master/slave/<position>/counters`` /
+"absent" while the slave does not answer) and ``rig/master/slave/<position>/counters`` /
 ``esc_errors`` (samples).
 """
 
@@ -44,7 +44,7 @@ def test_every_slave_state_event_is_on_its_lane(run: Run) -> None:
             if event.position == position:
                 assert (event.t_us, event.to_state) in lane, (event, lane)
     lost = rows(chunks, "rig/master/state/slave/3", "StateChange:state")
-    assert value_at(lost, run.rig.clock.now_us) == "lost"
+    assert value_at(lost, run.rig.clock.now_us) == "absent"
 
 
 def test_counters_follow_the_snapshot(run: Run) -> None:
