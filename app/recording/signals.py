@@ -28,6 +28,20 @@ ROOT = "rig"
 # they feed; "" is the device's main state machine (for EtherCAT slaves, the ESM).
 STATE_KEYS: dict[str, str] = {"esm": "", "ds402_state": "ds402"}
 
+def _nested(key: str, field: str) -> Callable[[Mapping[str, Any]], Any]:
+    return lambda snap: (snap.get(key) or {}).get(field)
+
+
+# Other machines whose state a snapshot keeps in a table of its own, by kind: machine (as the
+# events' StateChanged.machine names it) -> the state as the events print it.
+NESTED_STATES: dict[str, dict[str, Callable[[Mapping[str, Any]], Any]]] = {
+    "trscat": {"trs_bus": _nested("trs_bus", "state"), "sync": _nested("sync", "state")},
+    "fastcat": {"cnf": _nested("cnf", "phase"),
+                "cnf_button": lambda snap: None if not isinstance(snap.get("cnf"), Mapping)
+                else "pressed" if snap["cnf"].get("pressed") else "released"},
+    "master": {"dc": _nested("dc", "state")},
+}
+
 # A drive's fieldbus sides, by snapshot kind: the CoE slave (<drive>-ecat) and the CANopen node
 # (<drive>-can) emit under the drive's id with machine "esm" / "nmt" (docs/architecture.md), so
 # their samples feed the same lanes under the drive: snapshot key -> machine.
@@ -191,6 +205,10 @@ def state_values(device_id: str, snap: Mapping[str, Any]) -> Iterator[tuple[str,
         for key, machine in STATE_KEYS.items():
             if isinstance(snap.get(key), str):
                 yield state_lane(device_id, machine), snap[key]
+        for machine, read in NESTED_STATES.get(str(snap.get("kind", "")), {}).items():
+            value = read(snap)
+            if isinstance(value, str):
+                yield state_lane(device_id, machine), value
     code = snap.get("al_status_code")
     if isinstance(code, int) and not isinstance(code, bool):  # an EtherCAT slave's 0x0134
         yield al_status_lane(lane_owner(device_id, snap)), fmt_hex(code, 4)
