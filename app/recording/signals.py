@@ -143,6 +143,11 @@ def _single(name: str, view: str, step: bool = False) -> SeriesInfo:
     return SeriesInfo((name,), view, step)
 
 
+@functools.lru_cache(maxsize=64)
+def _supply_info(view: str) -> SeriesInfo:
+    return SeriesInfo(("el_sen_v", "out_v"), view)
+
+
 @functools.lru_cache(maxsize=1024)
 def _named(names: tuple[str, ...], view: str) -> SeriesInfo:
     """Digital pins, one series each, by the name the snapshot gives them."""
@@ -258,6 +263,13 @@ _TRSCAT_IO = (("inputs", "inputs", True), ("outputs", "outputs", True),
 
 
 def _trscat(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    if "field_supply_v" in snap:  # seed 001 §10.3: the +24V LED's 18..30 V
+        yield Signal(device_path(device_id, "supply"), (_num(snap["field_supply_v"]),),
+                     _single("field_supply_v", f"{device_id} supply (V)"))
+    bus = snap.get("trs_bus")
+    if isinstance(bus, Mapping) and "current_a" in bus:
+        yield Signal(device_path(device_id, "trs_bus", "current_a"), (_num(bus["current_a"]),),
+                     _single("current_a", f"{device_id} TRS bus current (A)"))
     for slot in snap.get("slots") or []:
         number, stype = slot.get("slot"), slot.get("type")
         for key, title, step in _TRSCAT_IO:
@@ -276,6 +288,11 @@ _CPX_IO = (("inputs", "inputs", True), ("outputs", "outputs", True),
 
 
 def _cpx(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
+    supply = snap.get("supply")
+    if isinstance(supply, Mapping):  # seed 002 Tab. 29: U_EL/SEN and U_OUT, 24 V +- 25 %
+        yield Signal(device_path(device_id, "supply"),
+                     (_num(supply.get("el_sen_v")), _num(supply.get("out_v"))),
+                     _supply_info(f"{device_id} supply (V)"))
     bus = snap.get("bus_module")
     for module in ([bus] if isinstance(bus, Mapping) else []) + list(snap.get("modules") or []):
         number, mtype = module.get("module"), module.get("short") or module.get("type")
