@@ -11,6 +11,9 @@ Fenced blocks are left out (commands and sample output, checked by running them)
   which must import and resolve attribute by attribute;
 - a bare ``test_*.py`` file (somewhere under tests/), a bare ``test_*`` name (a ``def`` in
   tests/) and a bare ``*.py`` file (somewhere in the project's code or tests);
+In a table row whose first cell is a project file (``| `app/rig.py` | `Rig`, `describe()` |``),
+each class-like (``CamelCase``), constant-like (``UPPER_CASE``) or called (``name()``) name of
+the row must occur in that file.
 And in the prose, a section named in quotes after a doc (``docs/hardening.md "Soak"``) or as
 ``"X" below`` / ``"X" above``: a heading holding it, a bold label or a line (list item, table
 cell) starting with it.
@@ -32,6 +35,8 @@ PATH = re.compile(r"(?:\./)?((?:app|devices|bench|tests|static|docs|\.ci)/[\w./*
                   r"(?:::(\w+))?")
 DOTTED = re.compile(r"((?:app|devices|bench)(?:\.\w+)+)(?:\(\))?")
 SECTION_AFTER_DOC = re.compile(r"(?:docs/)?([a-z0-9-]+\.md)[)`]?,? \(?\"([^\"]+)\"")
+FILE_ROW = re.compile(r"^\|\s*`((?:app|devices|bench|tests)/[\w/.-]+\.py)`\s*\|(.*)$")
+CODE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*[a-z][A-Za-z0-9]*|[A-Z][A-Z0-9_]{2,}")
 SECTION_HERE = re.compile(r"\"([^\"]+)\"\)? (?:below|above)")
 PLACEHOLDER = re.compile(r"<|[A-Z]{3,}")
 PROSE_PATH = re.compile(r"(?<![\w/.`-])((?:app|devices|bench|tests|static|docs|\.ci)/[\w/.*<>-]*"
@@ -113,6 +118,21 @@ def _broken_names(doc: Path, files: set[str], test_defs: set[str]) -> list[str]:
     return broken
 
 
+def _broken_rows(doc: Path) -> list[str]:
+    broken = []
+    for n, line in enumerate(_unfenced(doc.read_text(encoding="utf-8")), 1):
+        row = FILE_ROW.match(line)
+        if not row or not (ROOT / row.group(1)).is_file():
+            continue  # a missing file is the names check's
+        source = (ROOT / row.group(1)).read_text(encoding="utf-8")
+        for span in SPAN.findall(row.group(2)):
+            name = span.split("(")[0]
+            called = span.endswith(")") and re.fullmatch(r"\w+", name) is not None
+            if (called or CODE_NAME.fullmatch(name)) and not re.search(rf"\b{name}\b", source):
+                broken.append(f"{doc.name}:{n}: {row.group(1)} `{span}`")
+    return broken
+
+
 def _has_section(section: str, text: str) -> bool:
     wanted = section.lower()
     for line in text.splitlines():
@@ -146,6 +166,10 @@ def test_every_named_file_module_and_test_exists() -> None:
     assert [b for doc in DOCS for b in _broken_names(doc, files, test_defs)] == []
 
 
+def test_a_file_table_names_what_its_file_holds() -> None:
+    assert [b for doc in DOCS for b in _broken_rows(doc)] == []
+
+
 def test_every_section_a_doc_points_to_exists() -> None:
     assert [b for doc in DOCS for b in _broken_sections(doc)] == []
 
@@ -156,11 +180,15 @@ def test_the_checks_see_a_renamed_name(tmp_path: Path) -> None:
     doc.write_text('`devices/master.py` `app.ui.commands.Gone` `test_nothing_named_so` `gone.py`'
                    ' `app/ui/commands.py` `app.ui.commands.CommandSender` plain `prose.words`\n'
                    'as tests/app/gone_test.py says, and tests/app/ too\n'
+                   '| `app/rig.py` | `Rig`, `GoneClass`, `GONE_TABLE`, `gone()`, `rig`, `Rig.x` |\n'
                    'docs/hardening.md "No such section" and docs/hardening.md "Soak"\n')
     files, test_defs = _code_names()
     names = _broken_names(doc, files, test_defs)
     sections = _broken_sections(doc)
+    rows = _broken_rows(doc)
     assert [b.split(": ", 1)[1] for b in names] == [
         "`devices/master.py`", "`app.ui.commands.Gone`", "`test_nothing_named_so`", "`gone.py`",
         "`tests/app/gone_test.py`"]
     assert [b.split(": ", 1)[1] for b in sections] == ['hardening.md "No such section"']
+    assert [b.split(": ", 1)[1] for b in rows] == [
+        "app/rig.py `GoneClass`", "app/rig.py `GONE_TABLE`", "app/rig.py `gone()`"]
