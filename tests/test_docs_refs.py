@@ -11,9 +11,10 @@ Fenced blocks are left out (commands and sample output, checked by running them)
   which must import and resolve attribute by attribute;
 - a bare ``test_*.py`` file (somewhere under tests/), a bare ``test_*`` name (a ``def`` in
   tests/) and a bare ``*.py`` file (somewhere in the project's code or tests);
-In a table row whose first cell is a project file (``| `app/rig.py` | `Rig`, `describe()` |``),
-each class-like (``CamelCase``), constant-like (``UPPER_CASE``) or called (``name()``) name of
-the row must occur in that file.
+A project file followed by a name (``devices/servo/alarms.py`` ``RESET_HINT``, in backticks
+each) names something of that file. In a table row whose first cell is a project file
+(``| `app/rig.py` | `Rig`, `describe()` |``), each class-like (``CamelCase``), constant-like
+(``UPPER_CASE``) or called (``name()``) name of the row must occur in that file.
 And in the prose, a section named in quotes after a doc (``docs/hardening.md "Soak"``) or as
 ``"X" below`` / ``"X" above``: a heading holding it, a bold label or a line (list item, table
 cell) starting with it.
@@ -37,6 +38,7 @@ DOTTED = re.compile(r"((?:app|devices|bench)(?:\.\w+)+)(?:\(\))?")
 SECTION_AFTER_DOC = re.compile(r"(?:docs/)?([a-z0-9-]+\.md)[)`]?,? \(?\"([^\"]+)\"")
 FILE_ROW = re.compile(r"^\|\s*`((?:app|devices|bench|tests)/[\w/.-]+\.py)`\s*\|(.*)$")
 CODE_NAME = re.compile(r"[A-Z][A-Za-z0-9]*[a-z][A-Za-z0-9]*|[A-Z][A-Z0-9_]{2,}")
+FILE_THEN_NAME = re.compile(r"`((?:app|devices|bench|tests)/[\w/.-]+\.py)`,? `(\w+)(?:\(\))?`")
 SECTION_HERE = re.compile(r"\"([^\"]+)\"\)? (?:below|above)")
 PLACEHOLDER = re.compile(r"<|[A-Z]{3,}")
 PROSE_PATH = re.compile(r"(?<![\w/.`-])((?:app|devices|bench|tests|static|docs|\.ci)/[\w/.*<>-]*"
@@ -121,6 +123,10 @@ def _broken_names(doc: Path, files: set[str], test_defs: set[str]) -> list[str]:
 def _broken_rows(doc: Path) -> list[str]:
     broken = []
     for n, line in enumerate(_unfenced(doc.read_text(encoding="utf-8")), 1):
+        for path, name in FILE_THEN_NAME.findall(line):
+            file = ROOT / path
+            if file.is_file() and not re.search(rf"\b{name}\b", file.read_text(encoding="utf-8")):
+                broken.append(f"{doc.name}:{n}: {path} `{name}`")
         row = FILE_ROW.match(line)
         if not row or not (ROOT / row.group(1)).is_file():
             continue  # a missing file is the names check's
@@ -166,7 +172,7 @@ def test_every_named_file_module_and_test_exists() -> None:
     assert [b for doc in DOCS for b in _broken_names(doc, files, test_defs)] == []
 
 
-def test_a_file_table_names_what_its_file_holds() -> None:
+def test_a_file_and_its_table_name_what_the_file_holds() -> None:
     assert [b for doc in DOCS for b in _broken_rows(doc)] == []
 
 
@@ -181,6 +187,7 @@ def test_the_checks_see_a_renamed_name(tmp_path: Path) -> None:
                    ' `app/ui/commands.py` `app.ui.commands.CommandSender` plain `prose.words`\n'
                    'as tests/app/gone_test.py says, and tests/app/ too\n'
                    '| `app/rig.py` | `Rig`, `GoneClass`, `GONE_TABLE`, `gone()`, `rig`, `Rig.x` |\n'
+                   'in `app/rig.py` `describe`, and `app/rig.py` `gone_name`\n'
                    'docs/hardening.md "No such section" and docs/hardening.md "Soak"\n')
     files, test_defs = _code_names()
     names = _broken_names(doc, files, test_defs)
@@ -191,4 +198,5 @@ def test_the_checks_see_a_renamed_name(tmp_path: Path) -> None:
         "`tests/app/gone_test.py`"]
     assert [b.split(": ", 1)[1] for b in sections] == ['hardening.md "No such section"']
     assert [b.split(": ", 1)[1] for b in rows] == [
-        "app/rig.py `GoneClass`", "app/rig.py `GONE_TABLE`", "app/rig.py `gone()`"]
+        "app/rig.py `GoneClass`", "app/rig.py `GONE_TABLE`", "app/rig.py `gone()`",
+        "app/rig.py `gone_name`"]
