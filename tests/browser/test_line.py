@@ -50,20 +50,6 @@ def open_tabs(page: Any, name: str) -> None:
         tab.click()
 
 
-def steady(page: Any) -> None:
-    """Wait until the 3D view paints the same picture twice in a row: right after the page
-    opens, the camera may still be easing into its initial pose (seen: a 1 px shift)."""
-    clip = {"x": 410, "y": 60, "width": 540, "height": 650}
-    shots = [page.screenshot(clip=clip)]
-
-    def same_twice() -> bool:
-        page.wait_for_timeout(250)
-        shots.append(page.screenshot(clip=clip))
-        return shots[-1] == shots[-2]
-
-    wait_until(same_twice, what="a steady 3D view")
-
-
 def wait_for_shared_focus(live: LiveDashboard, device: str) -> None:
     """Until every page reports the camera of a scenario's focus on ``device``. A page that
     opens during the focus gets it one round trip after it applied its initial camera
@@ -104,7 +90,6 @@ def test_line_healthy(line: LiveDashboard, page: Any) -> None:
     table.wait_for()
     for name in ("Box 1 (FastCAT)", "Box 2 (TRS-CAT)", "Box 3 (CPX-E-EC)"):
         assert name in table.inner_text()
-    steady(page)
     compare_screenshot(page, "line_healthy")
 
 
@@ -257,10 +242,7 @@ def test_line_cpx_every_module_faulted(line: LiveDashboard, page: Any) -> None:
     assert all(view.scene.led_colours("cpx")[f"m{n}.error"] == COLOURS["red"]
                for n in range(1, 5))
     open_dashboard(page, line)
-    # The 3D labels come a few frames after the page (viser rasterises their glyphs within a
-    # per-frame budget): taken at once, the picture can miss every label of the line and still
-    # pass the 1 % tolerance (it did once the drive's body got its alarm label).
-    steady(page)
+    # every label of the line in the picture: compare_screenshot waits for a steady page
     compare_screenshot(page, "line_cpx_every_module_faulted")
 
 
