@@ -361,6 +361,8 @@ class Line:
     counter, no auto-increment position, no register read or written), as the built-in
     master's line has it (devices/master/line.py ``frame_path``). ``visible``: the slaves on
     the path that answer. A damaged cable spoils frames along the path, silent slaves included.
+    The frames that crossed a silent slave go to A with the exchanges (:meth:`take_passed`):
+    its L/A LEDs show them (docs/ethercat-coe.md "LEDs of a drive with c9 != 11").
     """
 
     def __init__(self, escs: list[Esc], outbox: list[tuple]) -> None:
@@ -376,6 +378,9 @@ class Line:
         self.damage = Damage()  # the damaged cables, as the model says (damage.py)
         for esc in escs:  # the master's writes numbered with the batches
             esc.counters.numbers = self.damage.numbers
+        self.passing: list[int] = []  # the silent slaves on the path
+        self._passed: dict[int, int] = {}  # frames that crossed them, not yet taken
+        self._passed_at = 0  # ``frames`` when last credited to ``passing``
         self._relink()
 
     def set_link(self, position: int, up: bool) -> None:
@@ -404,15 +409,34 @@ class Line:
             for esc in self.escs:
                 esc.counters.new_run()
                 esc.show_error_counters()
-            self.frames = self.wkc_errors = 0
+            self.frames = self.wkc_errors = self._passed_at = 0
+            self._passed.clear()  # the old run's: crossed the slave models of before the load
 
     def take_esc_counts(self) -> tuple[int, dict[int, bytes]] | None:
         return self.damage.take(self.escs)
 
+    def take_passed(self) -> dict[int, int]:
+        """Frames that crossed each silent slave since the last call: every frame answered
+        since then, counted from ``frames`` here rather than per frame (process() pays
+        nothing for it). A spoiled frame is not answered and does not count (the built-in
+        master's lost frame passes no silent slave either)."""
+        self._credit_passed()
+        passed, self._passed = self._passed, {}
+        return passed
+
+    def _credit_passed(self) -> None:
+        n = self.frames - self._passed_at
+        self._passed_at = self.frames
+        if n > 0:
+            for position in self.passing:
+                self._passed[position] = self._passed.get(position, 0) + n
+
     def _relink(self) -> None:
+        self._credit_passed()  # the frames so far crossed the silent slaves of the old path
         n = next((i for i, ok in enumerate(self.link_ok) if not ok), len(self.escs))
         self.path = self.escs[:n]
         self.visible = [esc for esc in self.path if not self.silent[esc.position]]
+        self.passing = [esc.position for esc in self.path if self.silent[esc.position]]
         for i, esc in enumerate(self.escs):
             # Hops and port links are physical: a silent ESC on the path delays the frame and
             # keeps port 1 of the slave before it open (DL status, DC receive times).

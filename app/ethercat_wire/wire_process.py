@@ -128,10 +128,12 @@ def apply_message(line: Line, msg: tuple) -> bool:
 
 
 def cycle_counts(line: Line) -> dict[int, int]:
-    counts = {}
+    """Per slave, its process-data exchanges since the last call; for a silent slave, the
+    frames that crossed its ESC (it takes no datagram: A tells its model they passed)."""
+    counts = line.take_passed()
     for esc in line.escs:
         if esc.exchanges:
-            counts[esc.position] = esc.exchanges
+            counts[esc.position] = counts.get(esc.position, 0) + esc.exchanges
             esc.exchanges = 0
     return counts
 

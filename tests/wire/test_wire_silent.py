@@ -2,7 +2,7 @@
 ch. 2; docs/ethercat-coe.md "How it runs") on the wire: its ESC passes the frames on, as the
 built-in master's line has it (devices/master/line.py ``frame_path``), so the slaves behind
 it answer and damaged cables behind it spoil frames; it takes no datagram itself
-(docs/ethercat-wire.md "Silent slaves")."""
+(docs/ethercat-wire.md "Silent slaves"). The frames that cross it are counted for it."""
 
 from __future__ import annotations
 
@@ -16,7 +16,7 @@ from test_wire_damage import damage, frame
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire import registers as R
 from app.ethercat_wire.datagrams import Cmd
-from app.ethercat_wire.wire_process import apply_message
+from app.ethercat_wire.wire_process import apply_message, cycle_counts
 from app.rig_config import build_rig, parse_rig_spec
 
 SILENT_DRIVE_FIRST = """
@@ -74,6 +74,29 @@ def test_a_damaged_cable_behind_a_silent_slave_spoils_the_frames():
     assert line.spoiled == 1
 
 
+def test_the_frames_crossing_a_silent_slave_are_counted_for_it():
+    """Its ESC forwards every frame, process data or not (a BRD here), from the moment it is
+    silent; frames lost to a damaged cable before it, or that stop before it, do not cross it."""
+    line, _, _ = make_line(3)
+    line.process(frame())  # before it went silent: it answered this one
+    apply_message(line, (msg.SILENT, 1, True))
+    for _ in range(4):
+        line.process(frame())
+    assert cycle_counts(line) == {1: 4}
+    assert cycle_counts(line) == {}  # taken
+    damage(line, {0: 1.0})  # every frame spoiled on cable 0, before it
+    assert not line.process(frame())
+    damage(line, {})
+    line.process(frame())
+    apply_message(line, (msg.LINK, 1, False))  # its cable pulled: the frames stop before it
+    line.process(frame())
+    assert cycle_counts(line) == {1: 1}
+    apply_message(line, (msg.LINK, 0, True))
+    apply_message(line, (msg.SILENT, 1, False))  # it answers again: its exchanges only
+    line.process(frame())
+    assert cycle_counts(line) == {}
+
+
 @pytest.fixture
 def silent_first():
     rig = build_rig(parse_rig_spec(SILENT_DRIVE_FIRST))
@@ -89,3 +112,4 @@ def test_the_bridge_keeps_the_slaves_behind_a_silent_one_on_the_wire(silent_firs
     assert not [m for m in b.seen if m[0] == msg.LINK and not m[2]]
     runtime.command("master", "pull_cable", {"cable": 1}).result(timeout=WAIT_S)
     b.expect(lambda m: m == (msg.LINK, 1, False))  # the FastCAT's own cable: from 1 on
+
