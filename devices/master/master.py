@@ -232,9 +232,16 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         link.slave.request_state(state)
 
     def external_frame(self, position: int) -> None:
+        """A wire master's frame reached ``position``: an exchange for a slave that answers;
+        a slave that does not, powered, only sees it pass (its ESC forwards it, as in the
+        step's loop: :meth:`_pass_silent`)."""
         link = self.links[self._position(position, "position")]
         if self._connected(position):
-            link.slave.exchange_frame(self.now_us)
+            slave = link.slave
+            if slave.reachable():  # every exchange_frame tests it first: nothing lost
+                slave.exchange_frame(self.now_us)
+            elif self._powered(position):
+                self._pass_silent(slave)
         self.frames += 1
 
     def external_emergency(self, position: int, frame: bytes) -> None:

@@ -1,11 +1,15 @@
 """SOEM on a line whose first slave is a drive that does not answer (c9 = 3 at power-up, seed
 004 ch. 2): its ESC passes the frames on, so the master finds the FastCAT behind it, as the
 built-in master does (docs/ethercat-wire.md "Silent slaves"). Until session 16 the wire cut
-the line at the silent drive and SOEM found no slave. Skipped as test_soem_line.py is."""
+the line at the silent drive and SOEM found no slave. SOEM's frames cross the drive's ESC, so
+its L/A flicker (docs/ethercat-coe.md "LEDs of a drive with c9 != 11"; until session 20 they
+stayed on). Skipped as test_soem_line.py is."""
 
 from __future__ import annotations
 
-from test_soem_line import Master, favoured, powered_runtime
+import time
+
+from test_soem_line import PERIOD_S, Master, favoured, model_call, powered_runtime
 from test_wire_silent import SILENT_DRIVE_FIRST
 from wire_line import veth_pair
 
@@ -22,6 +26,18 @@ def test_soem_finds_the_slave_behind_a_silent_drive():
             n, found = master("init")
             assert n == 1
             assert found[0][0] == "FastCAT"
+            drive = runtime.rig.devices["drive_ec"]
+            master("map", [])
+            time.sleep(0.2)  # no frame for longer than the 50 ms activity window
+            assert model_call(runtime, lambda: drive.snapshot()["leds"]["L/A IN"]) == "on"
+            master.conn.send(("cycles", 500, PERIOD_S, {}))  # 2 s of process data
+            leds, deadline = {}, time.monotonic() + 1.5
+            while time.monotonic() < deadline and leds.get("L/A IN") != "flickering":
+                time.sleep(0.02)
+                leds = model_call(runtime, lambda: drive.snapshot()["leds"])
+            assert master.conn.poll(30) and master.conn.recv()[0] == "ok"
+            assert leds == {"L/A IN": "flickering", "Status": "off", "L/A OUT": "flickering",
+                            "Error": "off"}
         finally:
             master.close()
             bridge.stop()

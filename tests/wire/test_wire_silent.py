@@ -2,11 +2,14 @@
 ch. 2; docs/ethercat-coe.md "How it runs") on the wire: its ESC passes the frames on, as the
 built-in master's line has it (devices/master/line.py ``frame_path``), so the slaves behind
 it answer and damaged cables behind it spoil frames; it takes no datagram itself
-(docs/ethercat-wire.md "Silent slaves"). The frames that cross it are counted for it."""
+(docs/ethercat-wire.md "Silent slaves"). The frames that cross it reach its model, whose L/A
+LEDs (the ESC's, ETG.1300) flicker with them as with the built-in master (docs/ethercat-coe.md
+"LEDs of a drive with c9 != 11")."""
 
 from __future__ import annotations
 
 import struct
+import time
 
 import pytest
 from test_bridge import WAIT_S, bridged, sim
@@ -16,7 +19,7 @@ from test_wire_damage import damage, frame
 from app.ethercat_wire import messages as msg
 from app.ethercat_wire import registers as R
 from app.ethercat_wire.datagrams import Cmd
-from app.ethercat_wire.wire_process import apply_message, cycle_counts
+from app.ethercat_wire.wire_process import apply_message, build_line, cycle_counts
 from app.rig_config import build_rig, parse_rig_spec
 
 SILENT_DRIVE_FIRST = """
@@ -113,3 +116,39 @@ def test_the_bridge_keeps_the_slaves_behind_a_silent_one_on_the_wire(silent_firs
     runtime.command("master", "pull_cable", {"cable": 1}).result(timeout=WAIT_S)
     b.expect(lambda m: m == (msg.LINK, 1, False))  # the FastCAT's own cable: from 1 on
 
+
+def _drive_leds(runtime) -> dict[str, str]:
+    return sim(runtime, lambda: runtime.rig.devices["drive_ec"].snapshot()["leds"])
+
+
+def _until(check, seconds: float = WAIT_S, between=lambda: time.sleep(0.01)) -> bool:
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        if check():
+            return True
+        between()
+    return False
+
+
+def test_the_wire_masters_frames_flicker_a_silent_drives_l_a(silent_first):
+    """The frames cross B's silent ESC, B counts them for it, the bridge hands them to the
+    drive: its L/A flicker as with the built-in master, Status and Error stay dark. Until
+    session 20 the wire's counts reached exchange_frame only, which the drive ignores: its L/A
+    stayed on (link, no traffic)."""
+    runtime, bridge, b = silent_first
+    b.expect(lambda m: m == (msg.SILENT, 0, True))
+    line = build_line(bridge.descriptions, [])
+    apply_message(line, (msg.SILENT, 0, True))
+    # The built-in master's last frames are older than the 50 ms activity window
+    assert _until(lambda: _drive_leds(runtime)["L/A IN"] == "on")
+
+    def master_cycles() -> None:  # 10 frames of a 1 ms cycle, reported as B does
+        for _ in range(10):
+            line.process(frame())
+        b.send(msg.CYCLE, cycle_counts(line))
+        time.sleep(msg.CYCLE_REPORT_S)
+
+    assert _until(lambda: _drive_leds(runtime)["L/A IN"] == "flickering", 2.0, master_cycles)
+    master_cycles()
+    assert _drive_leds(runtime) == {
+        "L/A IN": "flickering", "Status": "off", "L/A OUT": "flickering", "Error": "off"}

@@ -53,3 +53,28 @@ def test_a_silent_drive_switched_off_is_dark_and_passes_nothing() -> None:
     assert set(_drive_leds(rig).values()) == {"off"}
     view = rig.snapshot()["devices"]["master"]
     assert [s["present"] for s in view["slaves"]] == [False, False]
+
+
+def test_a_wire_masters_frames_cross_a_silent_drive_too() -> None:
+    """External mode (docs/ethercat-wire.md): the frames come as ``external_frame`` per
+    position; at a silent drive they pass its ESC (its L/A flicker) and exchange nothing.
+    Until session 20 they went to exchange_frame only, which the drive ignores: L/A on."""
+    rig = _drive_first(c9=3)
+    master, drive = rig.devices["master"], rig.devices["drive_ec-ecat"]
+    rig.run_until(4 * US)
+    master.set_external(True)
+    rig.run_until(4 * US + 100_000)  # the built-in master's frames past the 50 ms window
+    assert (_drive_leds(rig)["L/A IN"], _drive_leds(rig)["L/A OUT"]) == ("on", "on")
+    for t in range(4 * US + 101_000, 4 * US + 111_000, 1_000):
+        rig.run_until(t)
+        master.external_frame(0)
+        master.external_frame(1)
+    rig.run_until(4 * US + 112_000)
+    assert _drive_leds(rig) == {
+        "L/A IN": "flickering", "Status": "off", "L/A OUT": "flickering", "Error": "off"}
+    assert drive.frames == 0 and drive.al_state.name == "INIT"
+    rig.apply("master", "power_slave", {"position": 0, "on": False})
+    rig.run_until(4 * US + 113_000)
+    master.external_frame(0)  # a report on its way when it went off: nothing passes
+    rig.run_until(4 * US + 114_000)
+    assert set(_drive_leds(rig).values()) == {"off"}
