@@ -11,7 +11,9 @@ READY = "ready"  # ("ready", iface)
 AL_CONTROL = "al_control"  # ("al_control", pos, value): raw 0x0120 write
 MAILBOX = "mailbox"  # ("mailbox", pos, data): complete SM0 message, header included
 OUTPUTS = "outputs"  # ("outputs", pos, data): SM2 image after a master write changed it
-CYCLE = "cycle"  # ("cycle", {pos: n_frames}): exchanges per slave, at most every 10 ms
+# ("cycle", {pos: n_frames}): exchanges per slave (a silent slave: the frames that crossed
+# its ESC), at most every 10 ms
+CYCLE = "cycle"
 DC = "dc"  # ("dc", pos, {"activation", "sync0_cycle_ns", "start_time_ns"})
 # ("sm", pos, ((start, length, control, enabled), ...)): SM0.. registers after a master write
 # changed them

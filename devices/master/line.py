@@ -296,7 +296,8 @@ class LineMixin:
         answer: its ESC forwards the frame (:meth:`frame_path`), and a slave whose L/A LEDs
         follow that traffic is told so (``frame_passed``: the drive with c9 != 11, whose L/A
         are its ESC's, docs/ethercat-coe.md "LEDs of a drive with c9 != 11"). Silent slaves
-        only: the step's loop comes here from its branch for slaves that do not answer."""
+        only: the step's loop comes here from its branch for slaves that do not answer, and
+        ``external_frame`` for a wire master's frame at one that does not answer."""
         passed = getattr(slave, "frame_passed", None)
         if passed is not None:
             passed(self.now_us)
