@@ -16,6 +16,7 @@ from app.clock import SimClock
 from app.targets import parse_target
 from devices.device import CommandError, DeviceModel
 from devices.events import Event
+from devices.names import did_you_mean
 from devices.stillness import Backoff
 
 # Fewer quiet steps than this are stepped one by one: asking every device costs about a step.
@@ -58,7 +59,7 @@ class Rig:
         found = self.devices.get(device_id)
         if found is None:
             raise CommandError(f"no device '{device_id}' in rig '{self.name}' (devices: "
-                               f"{self.targets_text()})")
+                               f"{self.targets_text()}){did_you_mean(device_id, self.devices)}")
         return found
 
     def targets_text(self) -> str:

@@ -22,6 +22,7 @@ from app.flash_file import FileFlash
 from app.rig import Rig
 from devices.device import DeviceModel
 from devices.flash import FlashStore, MemoryFlash
+from devices.names import did_you_mean
 
 DEFAULT_RIG = Path(__file__).resolve().parent.parent / "static" / "rigs" / "default.toml"
 MAX_MODULES = 16  # seed 000 §2
@@ -131,7 +132,8 @@ class _Table:
         unknown = sorted(set(self.data) - self.used)
         if unknown:
             raise RigConfigError(self.source, self.key(unknown[0]),
-                                 f"unknown key (known here: {', '.join(sorted(self.used))})")
+                                 f"unknown key (known here: {', '.join(sorted(self.used))})"
+                                 f"{did_you_mean(unknown[0], self.used)}")
 
 
 _REQUIRED = object()
@@ -285,7 +287,8 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
             if device_id not in on_line:
                 raise RigConfigError(source, f"master.line[{j}]",
                                      f"{device_id!r} is not an EtherCAT slave of this rig "
-                                     f"(slaves: {', '.join(on_line) or 'none'})")
+                                     f"(slaves: {', '.join(on_line) or 'none'})"
+                                     f"{did_you_mean(device_id, on_line)}")
         if sorted(line) != sorted(on_line):
             missing = sorted(set(on_line) - set(line)) or sorted(line)
             raise RigConfigError(source, "master.line",
@@ -340,7 +343,8 @@ def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
             raise RigConfigError(source, key, f"must be a module name or a table, got {raw!r}")
         if mtype not in CATALOG:
             raise RigConfigError(source, key, f"unknown module type {mtype!r} "
-                                              f"(known: {', '.join(CATALOG)})")
+                                              f"(known: {', '.join(CATALOG)})"
+                                              f"{did_you_mean(mtype, CATALOG)}")
         modules.append(ModuleSpec(mtype, options))
     spec = FastCatSpec(
         id=device_id,

@@ -31,10 +31,11 @@ from typing import Any
 from app.rig import Rig
 from app.rig_config import RigConfigError, not_toml, not_utf8, one_line
 from app.targets import parse_target
-from devices.device import UNKNOWN_MODULE, CommandError
+from devices.device import UNKNOWN_MODULE, CommandError, UnknownArgument
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
 from devices.master.dc import DcState
 from devices.master.master import DC_MACHINE
+from devices.names import did_you_mean
 from devices.od import SdoAbort
 
 US = 1_000_000
@@ -46,6 +47,8 @@ _STEP_KEYS = {"at", "after", "target", "action", "caption", "checkpoint", "expec
 _STEP_KEYS_SHOWN = ("at", "after", "caption", "checkpoint", "focus", "target", "action",
                     "expect_error")
 _REACTION_KEYS_SHOWN = ("event", "slave", "to", "once", "target", "action")
+_TABLES = ("scenario", "step", "on")
+_HEAD_KEYS = ("name", "label", "description", "rig", "duration_s")
 
 
 class ScenarioError(ValueError):
@@ -66,7 +69,8 @@ def _unknown_key(raw: Mapping[str, Any], known: tuple[str, ...], key: str,
     unknown = sorted(set(raw) - set(known))
     if not unknown:
         return None
-    return fail(f"{key}.{unknown[0]}", f"unknown key (known here: {', '.join(known)})")
+    return fail(f"{key}.{unknown[0]}", f"unknown key (known here: {', '.join(known)})"
+                                       f"{did_you_mean(unknown[0], known)}")
 
 
 @dataclass(frozen=True)
@@ -156,21 +160,21 @@ def parse_scenario(text: str, source: str = "<scenario>",
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise fail("", not_toml(exc, text)) from None
-    unknown = sorted(set(data) - {"scenario", "step", "on"})
+    unknown = sorted(set(data) - set(_TABLES))
     if "exercise" in unknown:  # not a broken scenario: a classroom file (docs/classroom.md)
         raise fail("[exercise]", "an exercise file, played with its hidden fault by the "
                                  "instructor's Play file and start (Classroom folder, python "
                                  "-m app --exercises DIR), not as a scenario")
     if unknown:
         raise fail(unknown[0], "unknown key (a scenario has [scenario], [[step]] and [[on]] "
-                               "tables)")
+                               f"tables){did_you_mean(unknown[0], _TABLES)}")
     head = data.get("scenario", {})
     if not isinstance(head, Mapping):
         raise fail("scenario", "must be a table")
-    bad = sorted(set(head) - {"name", "label", "description", "rig", "duration_s"})
+    bad = sorted(set(head) - set(_HEAD_KEYS))
     if bad:
-        raise fail(f"scenario.{bad[0]}", "unknown key (known: name, label, description, rig, "
-                                         "duration_s)")
+        raise fail(f"scenario.{bad[0]}", f"unknown key (known: {', '.join(_HEAD_KEYS)})"
+                                         f"{did_you_mean(bad[0], _HEAD_KEYS)}")
     name = _typed(head, "name", str, Path(source).stem, fail, "scenario.name")
     label = _typed(head, "label", str, name, fail, "scenario.label")
     if not label.strip():
@@ -255,7 +259,8 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
         if kinds[0] == "focus":
             extra = sorted(set(raw) - {"at", "after", "focus"})
             if extra:
-                raise fail(f"{key}.{extra[0]}", "unknown key for a focus step")
+                raise fail(f"{key}.{extra[0]}", "unknown key for a focus step"
+                                                f"{did_you_mean(extra[0], _STEP_KEYS_SHOWN)}")
             focus = _typed(raw, "focus", str, "", fail, f"{key}.focus")
             where = _focus_target(focus, fail, f"{key}.focus")
             yield Step(i + 1, t_us, "focus", target=where, text=where)
@@ -263,7 +268,8 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
         if kinds[0] in ("caption", "checkpoint"):
             extra = sorted(set(raw) - {"at", "after", kinds[0]})
             if extra:
-                raise fail(f"{key}.{extra[0]}", f"unknown key for a {kinds[0]} step")
+                raise fail(f"{key}.{extra[0]}", f"unknown key for a {kinds[0]} step"
+                                                f"{did_you_mean(extra[0], _STEP_KEYS_SHOWN)}")
             text = _typed(raw, kinds[0], str, "", fail, f"{key}.{kinds[0]}")
             if not text:
                 raise fail(f"{key}.{kinds[0]}", "must not be empty")
@@ -285,7 +291,8 @@ def _reaction(i: int, raw: Any, fail: Callable[[str, str], ScenarioError]) -> Re
     event = _typed(raw, "event", str, "", fail, f"{key}.event")
     if event not in REACTION_EVENTS:
         raise fail(f"{key}.event", f"{event!r} is not a master event "
-                                   f"({', '.join(REACTION_EVENTS)})")
+                                   f"({', '.join(REACTION_EVENTS)})"
+                                   f"{did_you_mean(event, REACTION_EVENTS)}")
     target = _typed(raw, "target", str, None, fail, f"{key}.target")
     action = _typed(raw, "action", str, None, fail, f"{key}.action")
     if target is None or action is None:
@@ -301,7 +308,8 @@ def _reaction(i: int, raw: Any, fail: Callable[[str, str], ScenarioError]) -> Re
             raise fail(f"{key}.slave", "a dc_state event is about the master's distributed "
                                        "clock, not a slave")
         if to and to not in DC_STATE_NAMES:
-            raise fail(f"{key}.to", f"{to!r} is not a DC state ({', '.join(DC_STATE_NAMES)})")
+            raise fail(f"{key}.to", f"{to!r} is not a DC state ({', '.join(DC_STATE_NAMES)})"
+                                    f"{did_you_mean(to, DC_STATE_NAMES)}")
     elif "to" in raw:
         raise fail(f"{key}.to", "only for event = \"dc_state\" (the DC state entered)")
     return Reaction(i + 1, event, slave, target, action, args,
@@ -346,6 +354,10 @@ def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
                 _unknown_after(layout, device, step.action, args, module)
             else:
                 device.check_module(step.action, args, module, layout)
+        except UnknownArgument as exc:  # maybe a slip of a step key (expect_error)
+            raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
+                                f"{step.t_us / US:g} s): {exc.among(_STEP_KEYS_SHOWN)}") \
+                from None
         except CommandError as exc:
             raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
                                 f"{step.t_us / US:g} s): {exc}") from None
@@ -357,6 +369,8 @@ def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
             if reaction.slave:
                 rig.device(reaction.slave)
         except CommandError as exc:
+            if isinstance(exc, UnknownArgument):  # maybe a slip of an [[on]] key (slave)
+                exc = exc.among(_REACTION_KEYS_SHOWN)
             raise ScenarioError(f"{scenario.source}: on[{reaction.number - 1}]: {exc}") \
                 from None
         if reaction.slave:

@@ -13,16 +13,35 @@ knowing device logic. ``apply("press_cnf", {...})`` calls the model's ``cmd_pres
 from __future__ import annotations
 
 import random
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from devices.events import Event, EventQueue
+from devices.names import did_you_mean
 from devices.od import IEC_NAMES, TypeNames
 
 
 class CommandError(ValueError):
     """A command the device cannot take: unknown action, bad argument, value out of range."""
+
+
+class UnknownArgument(CommandError):
+    """Arguments an action does not take. A scenario's table holds keys of its own beside
+    them (a step's ``expect_error``, an ``[[on]]``'s ``slave``), so a slip of one of those
+    lands here: :meth:`among` offers them too."""
+
+    def __init__(self, action: str, names: Sequence[str], takes: Sequence[str],
+                 also: Sequence[str] = ()) -> None:
+        self.action, self.names, self.takes = action, tuple(names), tuple(takes)
+        hints = (did_you_mean(name, (*takes, *also)) for name in self.names)
+        super().__init__(f"action '{action}' takes no argument {', '.join(self.names)} "
+                         f"(it takes: {', '.join(self.takes) or 'nothing'})"
+                         f"{next((h for h in hints if h), '')}")
+
+    def among(self, keys: Sequence[str]) -> UnknownArgument:
+        """The same refusal, its hint also looking at the table's own ``keys``."""
+        return UnknownArgument(self.action, self.names, self.takes, keys)
 
 
 # A module position of a scenario check's layout whose module no check before the run can
@@ -63,7 +82,8 @@ class Param:
             raise CommandError(f"'{self.name}' = {value!r} is above {self.high}")
         if self.choices is not None and value not in self.choices:
             allowed = ", ".join(repr(c) for c in self.choices)
-            raise CommandError(f"'{self.name}' = {value!r} is not one of {allowed}")
+            hint = did_you_mean(value, map(str, self.choices)) if isinstance(value, str) else ""
+            raise CommandError(f"'{self.name}' = {value!r} is not one of {allowed}{hint}")
         if self.parse is not None:
             self.parse(value)
         return value
@@ -87,8 +107,7 @@ class Action:
         known = {p.name: p for p in self.params}
         unknown = sorted(set(args) - set(known))
         if unknown:
-            raise CommandError(f"action '{self.name}' takes no argument {', '.join(unknown)} "
-                               f"(it takes: {', '.join(known) or 'nothing'})")
+            raise UnknownArgument(self.name, unknown, tuple(known))
         out: dict[str, Any] = {}
         for p in self.params:
             if p.name in args:
@@ -158,7 +177,8 @@ class DeviceModel:
         spec = self.ACTIONS.get(action)
         if spec is None:
             raise CommandError(f"{self.KIND} '{self.device_id}' has no action '{action}' "
-                               f"(it has: {', '.join(sorted(self.ACTIONS))})")
+                               f"(it has: {', '.join(sorted(self.ACTIONS))})"
+                               f"{did_you_mean(action, self.ACTIONS)}")
         if module is not None and spec.module == "none":
             raise CommandError(f"action '{action}' takes the device, not a module: "
                                f"write '{self.device_id}'")

@@ -23,7 +23,6 @@ cut works on the text: from the ``[exercise]`` header line to the next table hea
 
 from __future__ import annotations
 
-import difflib
 import re
 import tomllib
 from collections.abc import Mapping
@@ -37,6 +36,7 @@ from app.rig_config import not_toml, not_utf8
 from app.scenario import Scenario, ScenarioError, check_against, parse_scenario
 from app.targets import parse_target
 from devices.device import CommandError
+from devices.names import close_names, did_you_mean
 
 _HEADER = re.compile(r"^\s*\[\s*exercise\s*\]\s*(#.*)?$")
 _ANY_HEADER = re.compile(r"^\s*\[")
@@ -85,7 +85,8 @@ def parse_spec(table: Mapping[str, Any], source: str = "<exercise>") -> Exercise
 
     unknown = sorted(set(table) - _KEYS)
     if unknown:
-        raise fail(unknown[0], f"unknown key (known: {', '.join(sorted(_KEYS))})")
+        raise fail(unknown[0], f"unknown key (known: {', '.join(sorted(_KEYS))})"
+                               f"{did_you_mean(unknown[0], _KEYS)}")
     fault = table.get("fault")
     if not isinstance(fault, str) or not fault:
         raise fail("fault", "a hidden fault id, e.g. \"fastcat:inject:coupler:0x04\"")
@@ -177,7 +178,7 @@ def known_ids(fault_id: str, faults: Catalog) -> str:
     ids = [f.id for f in faults.faults if f.device == device]
     if not ids:
         everything = [f.id for f in faults.faults]
-        closest = difflib.get_close_matches(fault_id, everything, n=5, cutoff=0.5)
+        closest = close_names(fault_id, everything, n=5, cutoff=0.5)
         if closest:
             return f"closest: {', '.join(closest)}"
         return f"devices with hidden faults: {', '.join(sorted({f.device for f in faults.faults}))}"

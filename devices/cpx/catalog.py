@@ -13,6 +13,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
+from devices.names import did_you_mean
 from devices.od import DataType
 
 
@@ -123,4 +124,5 @@ def module_type(name: str) -> ModuleType:
         if wanted in (mtype.name.upper(), mtype.short.upper()):
             return mtype
     known = ", ".join(IO_MODULES)
-    raise KeyError(f"unknown CPX-E module {name!r} (known: {known})")
+    raise KeyError(f"unknown CPX-E module {name!r} (known: {known})"
+                   f"{did_you_mean(name.strip(), IO_MODULES)}")

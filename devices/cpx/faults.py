@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Protocol
 
 from devices.device import CommandError
+from devices.names import did_you_mean
 from devices.sync_managers import SmFault
 
 
@@ -120,7 +121,8 @@ def held(injected: Sequence[Injected], modules: Sequence[ModuleState]) -> list[I
 def fault_spec(name: str) -> FaultSpec:
     spec = FAULTS.get(name.strip().lower())
     if spec is None:
-        raise CommandError(f"unknown fault {name!r} (known: {', '.join(FAULTS)})")
+        raise CommandError(f"unknown fault {name!r} (known: {', '.join(FAULTS)})"
+                           f"{did_you_mean(name.strip(), FAULTS)}")
     return spec
 
 

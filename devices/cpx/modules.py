@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from devices.cpx.catalog import ModuleKind, ModuleType
+from devices.names import did_you_mean
 from devices.od import DataType
 
 
@@ -349,6 +350,7 @@ def held_off(channels: Sequence[int], diagnosed: Sequence[Mapping[str, object]],
 def _range_code(name: str) -> int:
     found = RANGE_BY_NAME.get(name.strip().lower())
     if found is None:
-        known = ", ".join(r.name for r in ANALOG_RANGES.values())
-        raise ValueError(f"unknown signal range {name!r} (known: {known})")
+        names = [r.name for r in ANALOG_RANGES.values()]
+        raise ValueError(f"unknown signal range {name!r} (known: {', '.join(names)})"
+                         f"{did_you_mean(name.strip(), names)}")
     return found.code

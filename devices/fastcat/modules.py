@@ -22,6 +22,7 @@ from devices.fastcat.analog import AnalogInputs, AnalogOutputs
 from devices.fastcat.catalog import ModuleType, a_module
 from devices.fastcat.digital import DigitalIo
 from devices.fastcat.encoder import FAULTS, PPR_DEFAULT, RPM_LIMIT, Ax2, EncoderInput
+from devices.names import did_you_mean
 from devices.od import ObjectDictionary
 
 logger = logging.getLogger(__name__)
@@ -170,7 +171,7 @@ class IoModule:
         for key, value in options.items():
             if key not in _OPTIONS:
                 raise ValueError(f"{name}: unknown module option {key!r} (known: "
-                                 f"{', '.join(sorted(_OPTIONS))})")
+                                 f"{', '.join(sorted(_OPTIONS))}){did_you_mean(key, _OPTIONS)}")
             fits, needs = _OPTIONS[key]
             if not fits(self.mtype):
                 raise ValueError(f"{name}: option {key!r} needs a module with {needs}")
@@ -295,8 +296,9 @@ class IoModule:
     def apply(self, action: str, args: Mapping[str, Any]) -> Any:
         spec = self.ACTIONS.get(action)
         if spec is None:
+            has = self.available_actions()
             raise CommandError(f"{a_module(self.mtype.name)} module has no action '{action}' "
-                               f"(it has: {', '.join(self.available_actions())})")
+                               f"(it has: {', '.join(has)}){did_you_mean(action, has)}")
         kwargs = spec.check_args(args)
         self.check_kind(self.mtype, action, kwargs)
         return getattr(self, f"cmd_{action}")(**kwargs)

@@ -14,6 +14,8 @@ import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 
+from devices.names import did_you_mean
+
 TRANSITIONS = ("IP", "PS", "SO", "SP", "OS", "OP", "PI", "SI", "OI")  # ETG.1000.6 names
 DIRECTIONS = ("input", "output")
 _FORBIDDEN = re.compile(r"<!\s*(DOCTYPE|ENTITY)", re.IGNORECASE)
@@ -133,7 +135,8 @@ def parse_eni(text: str) -> tuple[SlaveDescription, ...]:
             transition = _text(cmd, "Transition", cw)
             if transition not in TRANSITIONS:
                 raise NetworkFileError(f"{cw}/Transition", f"unknown transition "
-                                       f"{transition!r} (known: {', '.join(TRANSITIONS)})")
+                                       f"{transition!r} (known: {', '.join(TRANSITIONS)})"
+                                       f"{did_you_mean(transition, TRANSITIONS)}")
             data_hex = _text(cmd, "Data", cw)
             try:
                 data = bytes.fromhex(data_hex)

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
+from devices.names import did_you_mean
 from devices.servo.errors import AccessError
 from devices.servo.parameters import (
     C9_BY_FIELDBUS,
@@ -48,7 +49,8 @@ class DriveConfig:
     def __post_init__(self) -> None:
         if self.fieldbus not in C9_BY_FIELDBUS:
             raise ValueError(f"fieldbus {self.fieldbus!r} is not one of "
-                             f"{', '.join(C9_BY_FIELDBUS)}")
+                             f"{', '.join(C9_BY_FIELDBUS)}"
+                             f"{did_you_mean(str(self.fieldbus), C9_BY_FIELDBUS)}")
         # The range of the bus the drive powers up on (c9 in ``parameters`` overrides
         # fieldbus): "outside 1..99" for a Modbus node 500 sent the technician past the
         # reserved 91..255 (seed 004 ch. 2).

@@ -12,6 +12,7 @@ import enum
 from collections.abc import Sequence
 from dataclasses import dataclass
 
+from devices.names import did_you_mean
 from devices.od import DataType
 
 
@@ -108,7 +109,7 @@ def expansion_kind(name: str) -> ModuleKind:
         if wanted in (kind.name, kind.short):
             return kind
     raise KeyError(f"unknown TRS expansion {name!r} (known: "
-                   f"{', '.join(EXPANSIONS)}; seed 001 §9.3.2)")
+                   f"{', '.join(EXPANSIONS)}; seed 001 §9.3.2){did_you_mean(name, EXPANSIONS)}")
 
 
 def limit_violation(kinds: Sequence[ModuleKind]) -> str | None:

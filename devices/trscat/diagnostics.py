@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from devices.bitwords import FlagWords
 from devices.device import CommandError
+from devices.names import did_you_mean
 
 # ETG.1020 Diag Code, bits 16..31: 0xE800 = a DS301 / DS4xx emergency code in bits 0..15,
 # 0xE000 = manufacturer specific (FieldRig: the AL status code of an SM / DC check).
@@ -125,7 +126,8 @@ def parse_fault(text: str) -> AppFault:
         found = FAULTS.get(raw.upper())
         if found is None:
             raise CommandError(f"unknown TRS-CAT fault {raw!r} (known: {', '.join(FAULTS)}, or "
-                               f"a code of seed 001 §9.3.7)") from None
+                               f"a code of seed 001 §9.3.7){did_you_mean(raw, FAULTS)}") \
+                from None
         return found
     rows = [f for f in FAULTS.values() if f.code == code]
     if not rows:

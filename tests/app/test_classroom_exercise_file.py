@@ -60,6 +60,12 @@ def test_bad_spec(table: dict[str, object]) -> None:
         parse_spec(table)
 
 
+def test_a_typo_in_an_exercise_key_says_what_was_meant() -> None:
+    with pytest.raises(ScenarioError, match=r"exercise\.modul: unknown key .*; did you mean "
+                                            r"'module'\?$"):
+        parse_spec({"fault": "f", "modul": 2})
+
+
 def test_inline_table_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "x.toml"
     path.write_text('exercise = { fault = "f" }\n[scenario]\nname = "x"\n')

@@ -156,3 +156,34 @@ def test_memory_flash_may_be_shared() -> None:
     spec = parse_rig_spec("[[servo]]\nid = \"a\"\nflash = \":memory:\"\n[[servo]]\nid = \"b\"\n"
                           "node_id = 2\nflash = \":memory:\"\n", "mem.toml")
     assert [s.flash for s in spec.servos] == [":memory:", ":memory:"]
+
+
+@pytest.mark.parametrize(("text", "key", "hint"), [
+    ("[rig]\nnmae = \"x\"\n", "rig.nmae", "did you mean 'name'?"),
+    ("[[fastcat]]\nmodules = [\"DB17\"]\n", "fastcat[0].modules[0]", "did you mean 'DB16'?"),
+    ("[[fastcat]]\nmodules = [\"db16\"]\n", "fastcat[0].modules[0]", "did you mean 'DB16'?"),
+    ("[[servo]]\nnode_di = 3\n", "servo[0].node_di", "did you mean 'node_id'?"),
+    ("[master]\nline = [\"cpx_\"]\n[[cpx]]\n", "master.line[0]", "did you mean 'cpx'?"),
+    ("[[fastcats]]\n", "fastcats", "did you mean 'fastcat'?"),
+])
+def test_an_unknown_name_says_what_was_meant(text: str, key: str, hint: str) -> None:
+    """The reason names the closest allowed name (devices/names.py did_you_mean), the
+    scenarios' and the device commands' hint."""
+    with pytest.raises(RigConfigError) as info:
+        parse_rig_spec(text, "bad.toml")
+    assert info.value.key == key or info.value.key.startswith(key), info.value
+    assert info.value.reason.endswith(hint), info.value.reason
+
+
+@pytest.mark.parametrize(("text", "hint"), [
+    ("[[trscat]]\nexpansions = [\"TRS-IO-F\"]\n", "did you mean 'TRS-IO-E'?"),
+    ("[[cpx]]\nmodules = [\"CPX-E-8D0\"]\n", "did you mean 'CPX-E-8DO'?"),
+    ("[[fastcat]]\nmodules = [{type = \"AI8TC\", thermocuple = \"J\"}]\n",
+     "did you mean 'thermocouple'?"),
+])
+def test_an_unknown_module_name_says_what_was_meant(text: str, hint: str) -> None:
+    from app.rig_config import build_rig
+
+    with pytest.raises(RigConfigError) as info:
+        build_rig(parse_rig_spec(text, "bad.toml"), state_dir=None)
+    assert hint in info.value.reason, info.value.reason

@@ -195,7 +195,7 @@ def test_an_unknown_device_names_what_each_targetable_id_is() -> None:
         "(devices: fastcat, trscat, cpx, drive, drive-can (the CANopen node of drive), "
         "drive_co, drive_co-can (the CANopen node of drive_co), drive_ec, drive_ec-can (the "
         "CANopen node of drive_ec), drive_ec-ecat (the EtherCAT CoE slave of drive_ec), "
-        "master)")
+        "master); did you mean 'drive'?")
 
 
 @pytest.mark.parametrize(("line", "hint"), [
@@ -301,3 +301,45 @@ def test_a_rig_the_scenario_names_that_is_not_there(tmp_path) -> None:
     assert str(info.value) == (f"{path}: scenario.rig: 'nope.toml': no such rig file "
                                f"({tmp_path / 'nope.toml'}; a path relative to the scenario's "
                                "folder)")
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("[[steps]]\nat = 0\ncaption = \"x\"\n", r"steps: unknown key .*; did you mean 'step'\?$"),
+    ("[scenario]\nnmae = \"x\"\n", r"scenario\.nmae: unknown key .*did you mean 'name'\?$"),
+    ("[[step]]\nat = 0.0\ntarget = \"fastcat\"\nacton = \"power\"\n",
+     r"step\[0\]\.acton: unknown key .*; did you mean 'action'\?$"),
+    ("[[step]]\nat = 0\ncaption = \"x\"\ncaptoin = \"y\"\n",
+     r"step\[0\]\.captoin: unknown key for a caption step; did you mean 'caption'\?$"),
+    ("[[on]]\nevent = \"resynch\"\ntarget = \"fastcat\"\naction = \"power\"\n",
+     r"on\[0\]\.event: 'resynch' is not a master event .*; did you mean 'resync'\?$"),
+    ("[[on]]\nevent = \"dc_state\"\nto = \"SYNCHRONIZNG\"\ntarget = \"fastcat\"\n"
+     "action = \"power\"\n", r"on\[0\]\.to: .*; did you mean 'SYNCHRONIZING'\?$"),
+])
+def test_an_unknown_name_in_a_scenario_says_what_was_meant(text: str, message: str) -> None:
+    """A walk-through: a typo was named, but the trainee still had to find the right word in
+    the list; the closest allowed name is offered (devices/names.py did_you_mean)."""
+    with pytest.raises(ScenarioError, match=message):
+        parse_scenario(text, "bad.toml")
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    # a slip of an [[on]] key lands among the command's arguments: the action refuses it
+    ('[[on]]\nevent = "resync"\nslav = "trscat"\ntarget = "master"\n'
+     'action = "set_log_style"\nstyle = "twincat"\n',
+     r"on\[0\]: action 'set_log_style' takes no argument slav .*; did you mean 'slave'\?$"),
+    ('[[step]]\nat = 0\ntarget = "fastcat"\naction = "power"\non = true\n'
+     'expct_error = true\n', r"takes no argument expct_error .*did you mean 'expect_error'\?$"),
+    ('[[step]]\nat = 0\ntarget = "fastcat"\naction = "powr"\non = true\n',
+     r"has no action 'powr' .*; did you mean 'power'\?$"),
+    ('[[on]]\nevent = "resync"\nslave = "trscta"\ntarget = "master"\n'
+     'action = "set_log_style"\nstyle = "twincat"\n',
+     r"on\[0\]: no device 'trscta' .*; did you mean 'trscat'\?$"),
+])
+def test_an_unknown_argument_or_name_checked_against_the_rig_says_what_was_meant(
+        text: str, message: str) -> None:
+    from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
+    from app.scenario import check_against
+
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    with pytest.raises(ScenarioError, match=message):
+        check_against(parse_scenario(text, "bad.toml"), rig)

@@ -159,3 +159,20 @@ def test_check_command_takes_what_apply_takes(device: str, module: int | None, a
                                               args: dict[str, Any]) -> None:
     DEVICES[device]().check_command(action, args, module)
     DEVICES[device]().apply(action, args, module)
+
+
+@pytest.mark.parametrize(("device", "module", "action", "args", "hint"), [
+    ("fastcat", None, "powr", {}, "did you mean 'power'?"),
+    ("master", None, "set_log_style", {"styl": "sirio"}, "did you mean 'style'?"),
+    ("master", None, "set_log_style", {"style": "twincta"}, "did you mean 'twincat'?"),
+    ("cpx", 2, "inject_fault", {"fault": "wire_brake"}, "did you mean 'wire_break'?"),
+    ("trscat", None, "inject_fault", {"fault": "FIELD_SUPLY"}, "did you mean 'FIELD_SUPPLY'?"),
+])
+def test_an_unknown_name_in_a_command_says_what_was_meant(device: str, module: int | None,
+                                                          action: str, args: dict[str, Any],
+                                                          hint: str) -> None:
+    """The hint of devices/names.py, for a scenario's or an exercise's command as for a
+    rig file's key."""
+    with pytest.raises(CommandError) as caught:
+        DEVICES[device]().check_command(action, args, module)
+    assert str(caught.value).endswith(f"; {hint}"), caught.value
