@@ -91,11 +91,13 @@ def _serve_parser() -> argparse.ArgumentParser:
                         "(default 1.0)")
     p.add_argument("--run-for", type=_run_for, default=None, metavar="SECONDS",
                    help="stop after this many wall seconds (for smoke tests)")
-    p.add_argument("--record", default=None, metavar="PATH",
-                   help="record the session to this rerun file (.rrd); default: a file in "
-                        "STATE_DIR/recordings (one per rig)")
-    p.add_argument("--no-record", action="store_true",
-                   help="do not record the session (no Download recording)")
+    # One or the other: given both, --no-record dropped --record's PATH without a word.
+    record = p.add_mutually_exclusive_group()
+    record.add_argument("--record", default=None, metavar="PATH",
+                        help="record the session to this rerun file (.rrd); default: a file "
+                             "in STATE_DIR/recordings (one per rig)")
+    record.add_argument("--no-record", action="store_true",
+                        help="do not record the session (no Download recording)")
     p.add_argument("--rigs", type=int, default=None, metavar="N",
                    help="serve N copies of the rig (one per trainee), on ports PORT..PORT+N-1")
     p.add_argument("--exercises", default=None, metavar="DIR",
@@ -331,7 +333,7 @@ def _serve(args: argparse.Namespace) -> int:
     if args.instructor_token is not None and not args.instructor_token.strip():
         raise RigConfigError("--instructor-token", "", "an empty token")
     access_token = Access.for_host(args.host, args.instructor_token).token
-    if args.record and not args.no_record:  # before any rig starts serving
+    if args.record:  # before any rig starts serving
         for i in range(count):
             check_record(_record_path(args, Path(args.state_dir), "", "", i, count) or "")
     state_dirs = [Path(args.state_dir) / (f"rig{i + 1}" if count > 1 else "")

@@ -104,3 +104,17 @@ def test_a_speed_or_time_that_cannot_be_served_is_refused(argv: list[str], why: 
     err = error_of([*argv, "--port", "0"], capsys)  # the old code stops there, serving nothing
     assert f"fieldrig: error: argument {why}" in err, err
     assert "Traceback" not in err
+
+
+@pytest.mark.parametrize("argv", [
+    ["--record", "x.rrd", "--no-record"],
+    ["--no-record", "--record", "x.rrd"],
+], ids=" ".join)
+def test_record_and_no_record_together_are_refused(argv: list[str], tmp_path: Path,
+                                                   capsys) -> None:
+    """``--record X --no-record`` served without recording and never said that X was
+    dropped: two contradicting options are one error line, exit 2, nothing served."""
+    err = error_of([*argv, "--port", "0", "--state-dir", str(tmp_path)], capsys)
+    last = err.splitlines()[-1]
+    assert last.startswith("fieldrig: error: argument "), err
+    assert "--record" in last and "--no-record" in last and "not allowed with" in last, err
