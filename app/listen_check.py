@@ -28,9 +28,10 @@ def check_listen(host: str, ports: Sequence[tuple[str, int]]) -> None:
     try:
         infos = socket.getaddrinfo(host or None, 0, type=socket.SOCK_STREAM,
                                    flags=socket.AI_PASSIVE)
-    except (socket.gaierror, UnicodeError) as exc:
-        raise ListenError("--host", f"cannot resolve {host}: "
-                                    f"{getattr(exc, 'strerror', None) or exc}") from None
+    except UnicodeError:  # the idna codec: an empty label (bad..host) or one over 63 chars
+        raise ListenError("--host", f"{host!r} is not a host name or address") from None
+    except socket.gaierror as exc:
+        raise ListenError("--host", f"cannot resolve {host}: {exc.strerror or exc}") from None
     addresses = list(dict.fromkeys((family, sockaddr[0]) for family, *_, sockaddr in infos))
     held: list[socket.socket] = []
     try:  # all held at once: two of our own servers on one port are a clash too

@@ -60,6 +60,18 @@ def _refused(tmp_path: Path, capsys: pytest.CaptureFixture[str], *args: str) -> 
     return lines[0]
 
 
+@pytest.mark.parametrize("host", ["bad..host", "a" * 64 + ".example", ".lead"])
+def test_a_host_that_is_no_name_says_so(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                        host: str) -> None:
+    """``--host bad..host`` said ``encoding with 'idna' codec failed (UnicodeError: label
+    empty or too long)``: Python's words, not the user's. One line names the flag and the
+    value."""
+    port = free_ports(2, 24500)
+    line = _refused(tmp_path, capsys, "--host", host, "--port", str(port), "--modbus-port",
+                    str(port + 1))
+    assert line == f"fieldrig: error: --host: {host!r} is not a host name or address"
+
+
 def test_a_busy_port(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     port = free_ports(2, 25000)
     with _listening(port):
