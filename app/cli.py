@@ -466,7 +466,8 @@ def _start_modbus(runtime: Any, args: argparse.Namespace, port: int) -> Any:
     server = DriveModbusServer(drives, runtime.submit, host=args.host, port=port,
                                framer=args.modbus_framer, call=runtime.call)
     server.start_in_thread()
-    print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{port}",
+    runtime.modbus = server.served()
+    print(f"FieldRig: Modbus ({args.modbus_framer}) on {args.host}:{server.port}",
           flush=True)
     return server
 

@@ -24,6 +24,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
+from app.modbus.line import ServedLine
 from app.rig import ObserverSpan, Rig
 from devices.events import Event
 
@@ -95,6 +96,9 @@ class Runtime:
         self._unspanned_listeners = 0  # step listeners that need every step (no quiet spans)
         self._listener_spans: list[ObserverSpan] = []
         self._worked = False  # _drain_work ran something since the loop last looked
+        # The drives' Modbus line as served (framing, port), once its server listens; None
+        # while none does (a scenario run, a rig without drives). The Drive tab reads it.
+        self.modbus: ServedLine | None = None
 
     # ---- control -------------------------------------------------------------------------
     def start(self) -> None:

@@ -38,6 +38,7 @@ from pymodbus.server import ModbusTcpServer
 from pymodbus.server.requesthandler import ServerRequestHandler
 from pymodbus.transaction import TransactionManager
 
+from app.modbus.line import ServedLine
 from app.modbus.pdu import ModbusDrive, Outcome, Reply, Silence, serve_line
 
 logger = logging.getLogger(__name__)
@@ -300,6 +301,10 @@ class DriveModbusServer:
             self.port = sockets[0].getsockname()[1]
         logger.info("Modbus (%s framing) on %s:%d for node(s) %s", self.framer, self.host,
                     self.port, ", ".join(str(d.node_id) for d in self._drives) or "none")
+
+    def served(self) -> ServedLine:
+        """The framing and port it serves on (after start: the port it really listens on)."""
+        return ServedLine(self.framer, self.port)
 
     async def stop(self) -> None:
         for task in list(self._tasks):

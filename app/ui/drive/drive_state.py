@@ -17,6 +17,7 @@ from typing import Any
 
 import viser
 
+from app.modbus.line import ServedLine
 from app.ui.drive.bus_state import fieldbus_rows
 from app.ui.panels.client_pick import PickedHtml
 from app.ui.panels.per_client import InstructorHtml, instructor_for, split_instructor
@@ -38,23 +39,29 @@ def mode_text(mode: Any) -> str:
         return str(mode)
 
 
-def fieldbus_text(snap: Mapping[str, Any], slave: Mapping[str, Any] | None = None) -> str:
+def fieldbus_text(snap: Mapping[str, Any], slave: Mapping[str, Any] | None = None,
+                  modbus: ServedLine | None = None) -> str:
     """How a master reaches the drive: its node (c7) on Modbus or CANopen; on EtherCAT the
     station address its slave on the line has, since the master addresses it by its place on
-    the line and c7 is not used (seed 004 ch. 5 "Parametrizzazione EtherCAT per drive")."""
+    the line and c7 is not used (seed 004 ch. 5 "Parametrizzazione EtherCAT per drive").
+    ``modbus``: the line the rig serves (Runtime.modbus): the drive is an RTU slave, the rig
+    speaks the framing and port said there (docs/modbus.md)."""
     bus = str(snap.get("fieldbus", "?"))
     name = FIELDBUS_NAMES.get(bus, bus)
     if bus == "ethercat":
         address = (slave or {}).get("station_address")
         return f"{name} station {address}" if address else f"{name} (c7 not used)"
-    return f"{name} node {snap.get('node_id', '?')}"
+    node = f"{name} node {snap.get('node_id', '?')}"
+    return f"{node} · {modbus.words()}" if bus == "modbus" and modbus is not None else node
 
 
 def title(drive_id: str, snap: Mapping[str, Any], t_us: int,
-          slave: Mapping[str, Any] | None = None) -> str:
-    """``drive · Modbus RTU node 1 · t = 12.3 s`` (tenths: stable in a paused rig);
-    ``slave``: the snapshot of the drive's CoE slave, when it is on the EtherCAT line."""
-    return (f'<p class="fr-title"><b>{esc(drive_id)}</b> · {esc(fieldbus_text(snap, slave))} · '
+          slave: Mapping[str, Any] | None = None, modbus: ServedLine | None = None) -> str:
+    """``drive · Modbus RTU node 1 · served as Modbus TCP on :5020 · t = 12.3 s`` (tenths:
+    stable in a paused rig); ``slave``: the snapshot of the drive's CoE slave, when it is on
+    the EtherCAT line; ``modbus``: the Modbus line as the rig serves it, if it does."""
+    bus = fieldbus_text(snap, slave, modbus)
+    return (f'<p class="fr-title"><b>{esc(drive_id)}</b> · {esc(bus)} · '
             f'<span class="fr-muted">t = {t_us // 100_000 / 10:.1f} s</span></p>')
 
 
@@ -307,9 +314,11 @@ class DriveStatePanel:
         # drive's (as RoleHtml does for one element).
         self._causes = None if self._shared else InstructorHtml(instructor)
 
-    def update(self, pick_of: Pick, data_of: DriveData, t_us: int) -> None:
+    def update(self, pick_of: Pick, data_of: DriveData, t_us: int,
+               modbus: ServedLine | None = None) -> None:
         table = _memo(lambda d: kv_table(state_rows(*data_of(d)), "fr-drive"))
-        self._title.show(lambda d: title(d, data_of(d)[0], t_us, data_of(d)[2]), pick_of)
+        self._title.show(lambda d: title(d, data_of(d)[0], t_us, data_of(d)[2], modbus),
+                         pick_of)
         self._table.show(lambda d: table(d) if self._shared
                          else split_instructor(table(d), "fr-drive-causes")[0], pick_of)
         if self._causes is not None:

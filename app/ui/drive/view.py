@@ -212,7 +212,7 @@ class DriveView:
             node_id = self._nodes.get(drive_id) or ""
             return node_id, devices.get(node_id) or {}, devices.get(drive_id) or {}
 
-        self.state.update(self.selected_for, data_of, frame.t_us)
+        self.state.update(self.selected_for, data_of, frame.t_us, self._runtime.modbus)
         self.words.update(self.selected_for, data_of)
         self.controls.update(snap, devices, self.selected_for if self._pick else None)
         if self.canopen is not None:
