@@ -50,14 +50,47 @@ def cause_facts(fc: FastCat) -> list[dict[str, Any]]:
 def config_view(fc: FastCat) -> dict[str, Any]:
     """The rail as a scan would find it now (slot, type per module number), and the first
     module number where it differs from flash and from the last scan (only while a last scan
-    stands: powered, booted, no scan running)."""
+    stands: powered, booted, no scan running), with the fact at the rail there
+    (``vs_scan_text``)."""
     now = [(slot, m.mtype.name) for slot, m in enumerate(fc.rail, start=1)
            if m is not None and m.responds()]
     names = [name for _slot, name in now]
     scan_stands = fc.powered and fc.booted and fc.scan is None
-    return {"now": [list(entry) for entry in now],
-            "vs_flash": None if fc.stored is None else first_difference(fc.stored, names),
-            "vs_scan": first_difference(fc.detected, now) if scan_stands else None}
+    vs_scan = first_difference(fc.detected, now) if scan_stands else None
+    out: dict[str, Any] = {
+        "now": [list(entry) for entry in now],
+        "vs_flash": None if fc.stored is None else first_difference(fc.stored, names),
+        "vs_scan": vs_scan}
+    if vs_scan is not None:
+        out["vs_scan_text"] = since_scan(fc, vs_scan, now)
+    return out
+
+
+def since_scan(fc: FastCat, n: int, now: Sequence[tuple[int, str]]) -> str:
+    """What changed at module ``n`` since the last scan, said at the rail: a trainee read
+    "last scan older than the rail: it found DO16 as module 3" and did not see that module 3
+    was switched off. The scan is seed 000's: the coupler scans the Tbus at a CNF press (§2)
+    and whenever it returns to Init (§3), and numbers the modules it finds."""
+    t_us = fc.detected_us if fc.detected_us is not None else 0
+    scan = f"the last scan (at t = {round(t_us / 1000) / 1000:g} s)"
+    found = fc.detected[n - 1] if n <= len(fc.detected) else None
+    here = now[n - 1] if n <= len(now) else None
+    if here is not None and (found is None or here[0] < found[0]):  # a module the scan missed
+        return (f"slot {here[0]} holds {a_module(here[1])} that {scan} did not find (it "
+                f"would be module {n})")
+    if found is None:  # n where neither list has a module: no difference to word
+        return f"{scan} found no module {n}"
+    slot, name = found
+    module = fc.rail[slot - 1] if slot <= len(fc.rail) else None
+    if module is None:
+        return f"slot {slot} empty: {scan} found {a_module(name)} there (module {n})"
+    if module.mtype.name != name:
+        return (f"slot {slot} holds {a_module(module.mtype.name)}: {scan} found "
+                f"{a_module(name)} there (module {n})")
+    if not module.powered:
+        return f"module {n} not powered (its supply is off): {scan} found {a_module(name)} " \
+               f"in slot {slot}"
+    return f"module {n} does not answer: {scan} found {a_module(name)} in slot {slot}"
 
 
 def _fact(fc: FastCat, alarm: Alarm) -> str:

@@ -151,6 +151,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self.scan_found: list[IoModule] = []
         self.booted = False
         self.detected: list[tuple[int, str]] = []  # (rail slot, type) per module number
+        self.detected_us: int | None = None  # when the scan that found ``detected`` read the Tbus
         self.bound: list[IoModule] = []  # the module instance each module number talks to
         self.comm_errors: list[int] = []
         self.od: ObjectDictionary | None = None
@@ -174,6 +175,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             self._clear_alarm()
             self.od = None
             self.detected, self.bound = [], []
+            self.detected_us = None
         self._refresh()
 
     def modules(self) -> list[IoModule]:
@@ -340,6 +342,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
     def _advance_scan(self, scan: BusScan) -> None:
         if not scan.detected_applied and scan.scanned(self.now_us):
             scan.detected_applied = True
+            self.detected_us = self.now_us
             self.detected = [(slot, m.mtype.name) for slot, m in zip(scan.slots,
                                                                      self.scan_found,
                                                                      strict=True)]

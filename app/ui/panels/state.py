@@ -100,7 +100,7 @@ def causes_text(snap: Mapping[str, Any]) -> str:
 
 def config_text(snap: Mapping[str, Any]) -> str:
     """The rail as a scan would find it now against flash (snapshot ``config``), and a note
-    when the last scan is older than the rail: before, flash was compared with the last scan
+    when the rail differs from the last scan: before, flash was compared with the last scan
     only and read "matches flash" with another module on the rail."""
     stored = snap.get("stored_config")
     config = snap.get("config") or {}
@@ -115,13 +115,8 @@ def config_text(snap: Mapping[str, Any]) -> str:
         flash = stored[n - 1] if n <= len(stored) else "none"
         html = (f'{badge("differs from flash", "bad")} <span>module {n}: {esc(here)}, '
                 f"flash {esc(flash)}</span>")
-    if config.get("vs_scan") is not None:
-        n = int(config["vs_scan"])
-        scanned = list(snap.get("detected") or [])
-        found = f"it found {scanned[n - 1]} as module {n}" if n <= len(scanned) \
-            else f"it found no module {n}"
-        html += (f'<br><span class="fr-muted">last scan older than the rail: {esc(found)}'
-                 "</span>")
+    if config.get("vs_scan") is not None:  # worded by the model (devices/fastcat/causes.py)
+        html += f'<br><span class="fr-muted">{esc(config.get("vs_scan_text", ""))}</span>'
     return html
 
 
