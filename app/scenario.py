@@ -354,11 +354,9 @@ def check_against(scenario: Scenario, rig: Rig) -> dict[str, dict[int, Any]]:
                 _unknown_after(layout, device, step.action, args, module)
             else:
                 device.check_module(step.action, args, module, layout)
-        except UnknownArgument as exc:  # maybe a slip of a step key (expect_error)
-            raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
-                                f"{step.t_us / US:g} s): {exc.among(_STEP_KEYS_SHOWN)}") \
-                from None
         except CommandError as exc:
+            if isinstance(exc, UnknownArgument):  # maybe a slip of a step key (expect_error)
+                exc = exc.among(_STEP_KEYS_SHOWN)
             raise ScenarioError(f"{scenario.source}: {step_label(step.number)} (at "
                                 f"{step.t_us / US:g} s): {exc}") from None
     if scenario.reactions and "master" not in rig.devices:
