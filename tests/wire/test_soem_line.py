@@ -24,6 +24,7 @@ import struct
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 from typing import NamedTuple
 
@@ -31,6 +32,7 @@ import pytest
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem (the SOEM master) is not installed")
 
+from soem_bringup import EXPECTED_WKC, SoemLine, Stage  # noqa: E402
 from wire_line import line_spec, veth_pair  # noqa: E402
 
 from app.ethercat_wire.bridge import start_wire  # noqa: E402
@@ -259,17 +261,17 @@ def favoured(pid: int = 0):
 
 
 @pytest.fixture(scope="module")
-def session(veth):
+def session(veth) -> Iterator[SoemLine]:
     with favoured():
         yield from _session(veth)
 
 
-def _session(veth):
+def _session(veth) -> Iterator[SoemLine]:
     master_if, slave_if = veth
     runtime = powered_runtime(build_rig(parse_rig_spec(line_spec("wire line", seed=8))))
     bridge = start_wire(runtime, slave_if)
     master = Master(master_if)
-    yield runtime, bridge, master, []  # [3]: what config_map() reported
+    yield SoemLine(runtime, bridge, master)
     master.close()
     bridge.stop()
     runtime.stop()
@@ -279,42 +281,46 @@ def model_call(runtime: Runtime, fn):
     return runtime.submit(fn).result(timeout=10)
 
 
-# ---- the acceptance, in bring-up order ---------------------------------------------------
-def test_config_init_finds_every_slave_with_name_and_identity(session):
-    _, bridge, master, _ = session
-    n, slaves = master("init")
+# ---- the acceptance ---------------------------------------------------------------------
+# In bring-up order, but each test brings the line to the stage it needs (SoemLine), so each
+# passes alone and in any order; in this order no step runs twice.
+def test_config_init_finds_every_slave_with_name_and_identity(session: SoemLine):
+    n, slaves = session.init()
     assert n == 4
     assert [s[0] for s in slaves] == ["FastCAT", "TRS-CAT", "CPX-E-EC", "SelemaDriveECAT"]
-    idents = [(d.vendor_id, d.product_code, d.revision) for d in bridge.descriptions]
+    idents = [(d.vendor_id, d.product_code, d.revision) for d in session.bridge.descriptions]
     assert [tuple(s[1:]) for s in slaves] == idents
 
 
-def test_sdo_read_0x1018_on_every_slave(session):
-    _, bridge, master, _ = session
+def test_sdo_read_0x1018_on_every_slave(session: SoemLine):
+    bridge, master = session.at_least(Stage.SCANNED).bridge, session.master
     for pos, desc in enumerate(bridge.descriptions):
         assert struct.unpack("<I", master("sdo_read", pos, 0x1018, 1))[0] == desc.vendor_id
         assert struct.unpack("<I", master("sdo_read", pos, 0x1018, 2))[0] == desc.product_code
 
 
-def test_trscat_refuses_safeop_before_its_process_data_sms_are_set_up(session):
+def test_trscat_refuses_safeop_before_its_process_data_sms_are_set_up(session: SoemLine):
     """Seed 001 §9.2 PS (l. 501-502): the TRS-CAT checks the SM channels of the process data.
     SOEM writes SM2 / SM3 only in config_map: asked for SAFE-OP before, the TRS-CAT finds SM2
     disabled while 0x1C12 assigns outputs -> 0x001D (checked before the DC and 0xF030)."""
-    _, _, master, _ = session
+    master = session.scanned().master
+    session.left(Stage.NONE)  # the TRS-CAT in error until acknowledged below
     master("dc", [1])
     state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)
     assert (state & 0x0F, state & 0x10) == (AlState.PREOP, 0x10)
     assert al_status == 0x001D
     state, _ = master("slave_state", 1, AlState.PREOP | 0x10, 3.0)  # acknowledge the error
     assert state & 0x0F == AlState.PREOP
+    session.stage = Stage.SCANNED
 
 
-def test_trscat_objects_read_and_written_whole_by_complete_access(session):
+def test_trscat_objects_read_and_written_whole_by_complete_access(session: SoemLine):
     """Seed 001 §9.3: the TRS-CAT serves complete access (and announces it, so config_map
     below reads its mapping with ecx_readPDOmapCA). SOEM's own requests: 0x1C12 / 0x1C13 whole
     = sub 0 padded to 16 bits + the subs; 0xF030 written whole in PRE-OP (the expansion left
     out), 0x1C12 follows (§9.3.2), then the list put back."""
-    _, _, master, _ = session
+    master = session.scanned().master  # 0xF030 is written in PRE-OP
+    session.left(Stage.NONE)  # until the expansion list is put back
     for index in (0x1C12, 0x1C13):
         n = master("sdo_read", 1, index, 0)[0]
         subs = b"".join(master("sdo_read", 1, index, s) for s in range(1, n + 1))
@@ -325,28 +331,23 @@ def test_trscat_objects_read_and_written_whole_by_complete_access(session):
     assert master("sdo_read", 1, 0x1C12, 0, True) == struct.pack("<BBH", 1, 0, 0x1600)
     master("sdo_write", 1, 0xF030, 0, f030, True)
     assert master("sdo_read", 1, 0xF030, 0, True) == f030
+    session.stage = Stage.SCANNED
 
 
-def test_map_and_bring_the_line_to_op(session):
-    _, bridge, master, _ = session
-    expected, errors = master("map", [i for i, d in enumerate(bridge.descriptions)
-                                      if d.dc_supported])
-    session[3].extend(errors)
-    assert expected == 3 * 4  # every slave has outputs and inputs: LRW +2 +1 each
-    states = master("state", AlState.SAFEOP, 10.0)
-    assert [s & 0x1F for s, _ in states] == [AlState.SAFEOP] * 4, states
-    states = master("state", AlState.OP, 10.0)
-    assert [s & 0x1F for s, _ in states] == [AlState.OP] * 4, states
+def test_map_and_bring_the_line_to_op(session: SoemLine):
+    """config_map (expected WKC 3 per slave), SAFE-OP, OP: the checks are map_to_op's."""
+    session.scanned().map_to_op()
+    assert session.stage == Stage.OP
 
 
-def test_cycles_at_4_ms_without_wkc_errors_and_data_both_ways(session, full):
-    runtime, _, master, _ = session
+def test_cycles_at_4_ms_without_wkc_errors_and_data_both_ways(session: SoemLine, full):
+    runtime, master = session.at_least(Stage.OP).runtime, session.master
     n = FULL_CYCLES if full else CI_CYCLES
     model_call(runtime, lambda: runtime.rig.apply("fastcat/1", "set_input",
                                                   {"channel": 5, "value": True}))
     do16_ch3 = (1 << (8 + 2)).to_bytes(3, "little")  # after 0x16FF's byte (§6.17)
     c = master("cycles", n, PERIOD_S, {0: do16_ch3}, timeout=n * 0.02 + 60)
-    check_cycles(c, n, 3 * 4, full)
+    check_cycles(c, n, EXPECTED_WKC, full)
     do = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["fastcat"]["rail"][1])
     assert do["type"] == "DO16" and do["do"] == [ch == 2 for ch in range(16)]
     assert int.from_bytes(c.inputs[0], "little") & 1 << (8 + 4)  # DI16 channel 5 (§6.24)
@@ -354,18 +355,19 @@ def test_cycles_at_4_ms_without_wkc_errors_and_data_both_ways(session, full):
     assert snap["external"] and snap["stats"]["frames"] > 0
 
 
-def test_config_map_reads_every_mapping_without_an_sdo_abort(session):
+def test_config_map_reads_every_mapping_without_an_sdo_abort(session: SoemLine):
     """pysoem's config_map() raises ConfigMapError for any abort SOEM logged while it read the
     CoE mapping (0x1C00, 0x1C12 / 0x1C13, 0x16xx / 0x1Axx), even when it then fell back to the
     SII PDOs; a master should find every mapping it asks for."""
-    assert session[3] == []
+    assert session.at_least(Stage.MAPPED).map_errors == []
 
 
-def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
+def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session: SoemLine):
     """Seed 001 §9.3.2: 0xF030 (configured) differs from 0xF050 (detected) -> 0x0070. A TRS-XX-E
     in place of the TRS-IO-E keeps the image sizes (one word each way), so the sync managers
     config_map set up still fit and the check reached is the modules'."""
-    _, _, master, _ = session
+    master = session.at_least(Stage.OP).master
+    session.left(Stage.MAPPED)  # back in OP at the end
     assert master("slave_state", 1, AlState.PREOP, 3.0)[0] & 0x0F == AlState.PREOP
     original = master("sdo_read", 1, 0xF030, 2)
     master("sdo_write", 1, 0xF030, 2, struct.pack("<I", 0x58582D45))  # "TRS-XX-E" ident
@@ -377,14 +379,20 @@ def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session):
     assert (state & 0x1F, al_status) == (AlState.SAFEOP, 0)
     states = master("state", AlState.OP, 10.0)
     assert [s & 0x1F for s, _ in states] == [AlState.OP] * 4, states
+    session.stage = Stage.OP
 
 
-def test_fastcat_fault_reaches_the_master_as_the_seed_emergency(session):
+def test_fastcat_fault_reaches_the_master_as_the_seed_emergency(session: SoemLine):
     """Seed 000 §7.1: 'CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00)'."""
-    runtime, _, master, _ = session
+    runtime, master = session.at_least(Stage.OP).runtime, session.master
+    session.left(Stage.MAPPED)  # the FastCAT in fault: a test that needs OP brings it up again
     model_call(runtime, lambda: runtime.rig.apply("fastcat/2", "module_failure",
                                                   {"active": True}))
-    got = master("emergency", 0, 5.0)
+    try:
+        got = master("emergency", 0, 5.0)
+    finally:  # a sound module for the tests after: one that needs OP brings the line up again
+        model_call(runtime, lambda: runtime.rig.apply("fastcat/2", "module_failure",
+                                                      {"active": False}))
     assert got == (0xFF00, 0x81, 0x02, 0x0000, 0x0004)
 
 
@@ -453,7 +461,7 @@ def esc_errors(runtime: Runtime) -> list[dict]:
     return [s["esc_errors"] for s in panel["slaves"]]
 
 
-def test_a_damaged_cable_loses_the_masters_frames_and_the_escs_count_them(session):
+def test_a_damaged_cable_loses_the_masters_frames_and_the_escs_count_them(session: SoemLine):
     """The dashboard damages cable 1 (into the TRS-CAT), every crossing spoiled: none of the
     master's frames comes back and the ESC counters count each as in embedded mode
     (docs/ethercat-master.md "Damaged cable": the TRS-CAT first to receive it, invalid on
@@ -461,15 +469,18 @@ def test_a_damaged_cable_loses_the_masters_frames_and_the_escs_count_them(sessio
     positions 1-3; forwarded on port 1 on the way back). Repaired: the frames come back.
     The outage is long enough for the slaves to react (the TRS-CAT's missed SM events, seed
     001 §9.3.7): only lost frames are checked after it, not working counters."""
-    runtime, _, master, _ = session
+    runtime, master = session.at_least(Stage.MAPPED).runtime, session.master
+    session.left(Stage.MAPPED)  # the slaves may leave OP during the outage
     before = esc_errors(runtime)
     lost = model_call(runtime, lambda: runtime.rig.devices["master"].lost_frames)
     model_call(runtime, lambda: runtime.rig.apply("master", "damage_cable",
                                                   {"cable": 1, "percent": 100}))
-    time.sleep(0.1)
-    c = master("cycles", 20, PERIOD_S, {})
+    try:
+        time.sleep(0.1)
+        c = master("cycles", 20, PERIOD_S, {})
+    finally:  # repaired whatever happened: a cable left damaged would fail every test after
+        model_call(runtime, lambda: runtime.rig.apply("master", "repair_cable", {"cable": 1}))
     assert len(c.lost) == 20 and c.wrong == [], c
-    model_call(runtime, lambda: runtime.rig.apply("master", "repair_cable", {"cable": 1}))
     time.sleep(0.3)  # B's batches every 10 ms, its statistics every 100 ms
     after = esc_errors(runtime)
     n = after[1]["invalid"][0] - before[1]["invalid"][0]
@@ -485,20 +496,23 @@ def test_a_damaged_cable_loses_the_masters_frames_and_the_escs_count_them(sessio
     assert len(c.lost) <= 200 * CI_LOST_PER_1000 // 1000, c.lost
 
 
-def test_a_pulled_cable_makes_slaves_vanish_from_the_wire(session):
+def test_a_pulled_cable_makes_slaves_vanish_from_the_wire(session: SoemLine):
     """The dashboard pulls cable 2 (into the CPX-E-EC): the CPX-E-EC and the drive vanish, the
     master's working counter falls short and the master panel counts the WKC errors; plugged
-    back, the frames are whole again. Runs last: it leaves the two slaves to be re-started."""
-    runtime, _, master, _ = session
+    back, the frames are whole again. It leaves the line scanned again, not mapped."""
+    runtime, master = session.at_least(Stage.MAPPED).runtime, session.master
+    session.left(Stage.NONE)  # two slaves gone: a test that needs the line scans it again
     model_call(runtime, lambda: runtime.rig.apply("master", "pull_cable", {"cable": 2}))
-    time.sleep(0.3)
-    c = master("cycles", 50, PERIOD_S, {})
+    try:
+        time.sleep(0.3)
+        c = master("cycles", 50, PERIOD_S, {})
+        time.sleep(0.3)  # B reports its counters every 100 ms
+        panel = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
+    finally:  # plugged back whatever happened: the tests after need the whole line
+        model_call(runtime, lambda: runtime.rig.apply("master", "plug_cable", {"cable": 2}))
     assert len(c.wrong) + len(c.lost) == 50 and c.wrong, c  # short WKC: the slaves behind are gone
-    assert all(wkc < 3 * 4 for _, wkc in c.wrong)
-    time.sleep(0.3)  # B reports its counters every 100 ms
-    panel = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["master"])
+    assert all(wkc < EXPECTED_WKC for _, wkc in c.wrong)
     assert panel["slaves"][0]["counters"]["wkc_errors"] >= 50  # B's count, on the panel
-    model_call(runtime, lambda: runtime.rig.apply("master", "plug_cable", {"cable": 2}))
     time.sleep(0.3)
-    n, _ = master("init")  # a master re-scans after a topology change
+    n, _ = session.init()  # a master re-scans after a topology change
     assert n == 4
