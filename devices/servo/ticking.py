@@ -181,26 +181,8 @@ class DriveTick:
             if plant.jammed:
                 steady = False
                 plant.step(dt, demand, lag, vmax)
-            else:  # Plant.step following a demand, inline: the same expressions in order
-                before_theta, previous = plant.theta, plant._last_demand
-                if previous is None:
-                    previous = demand
-                rate = (demand - previous) / dt if dt > 0.0 else 0.0
-                decay = _exp(-dt / lag) if lag > 0.0 else 0.0
-                new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
-                if abs(demand - new) < _SETTLED_REV:
-                    new = demand
-                reach = vmax * dt
-                if new - before_theta > reach:
-                    new = before_theta + reach
-                elif before_theta - new > reach:
-                    new = before_theta - reach
-                plant._last_demand = demand
-                low, high = plant._end_stops
-                plant.blocked = not low <= new <= high
-                new = low if low > new else new
-                plant.theta = theta = high if high < new else new
-                plant.omega = (theta - before_theta) / dt if dt > 0.0 else 0.0
+            else:
+                _follow_free(plant, demand, lag, vmax, dt)
             # A quick stop or fault reaction ends at standstill (DSP 402 v1.1, seed 004 ch. 4;
             # F3 "Rampa di emergenza"): the demand at rest (trajectory.idle, inline) and the
             # motor, which lags it, stopped too (plant.standstill, inline) - else the torque
@@ -216,19 +198,7 @@ class DriveTick:
         accel = (trajectory.velocity - velocity_before) / dt
         if dt == 0.001 and self.state in _IN_TORQUE_ORDERED \
                 and not (plant.jammed or plant.blocked):
-            # CurrentMeter.update inline for a 1 ms tick in torque, the motor free: the same
-            # expressions in the same order (readings.py)
-            meter, config = self.meter, self.config
-            inertia = 1.0 + config.load_inertia
-            torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
-            cap = 3.0 * self.params[5]  # d5 caps the current
-            meter.instant = instant = cap if cap < torque else torque
-            mean_square = meter._mean_square
-            meter._mean_square = mean_square = mean_square + (instant ** 2 - mean_square) \
-                * _K_1MS
-            meter.rms = rms = _sqrt(mean_square)
-            overload = 100.0 * (rms / 100.0) ** 2
-            meter.overload = 999.0 if overload > 999.0 else overload
+            _meter_1ms(self, accel)
         else:
             self.meter.update(self, accel, dt)
         quiet_inputs = self._inputs_tick(wired, theta_before, plant.theta)
@@ -291,40 +261,13 @@ class DriveTick:
         trajectory._elapsed = elapsed = trajectory._elapsed + dt
         trajectory.velocity = v0 = segment.v0
         trajectory.position = demand = trajectory._segment_start + v0 * elapsed
-        # Plant.step following the demand, the motor free (a jam is a command: no record)
-        before_theta, previous = plant.theta, plant._last_demand
-        if previous is None:
-            previous = demand
-        rate = (demand - previous) / dt if dt > 0.0 else 0.0
-        decay = _exp(-dt / lag) if lag > 0.0 else 0.0
-        new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
-        if abs(demand - new) < _SETTLED_REV:
-            new = demand
-        reach = vmax * dt
-        if new - before_theta > reach:
-            new = before_theta + reach
-        elif before_theta - new > reach:
-            new = before_theta - reach
-        plant._last_demand = demand
-        low, high = plant._end_stops
-        plant.blocked = blocked = not low <= new <= high
-        new = low if low > new else new
-        plant.theta = theta = high if high < new else new
-        plant.omega = (theta - before_theta) / dt if dt > 0.0 else 0.0
+        # the motor free (a jam is a command: no record)
+        _follow_free(plant, demand, lag, vmax, dt)
+        blocked, theta = plant.blocked, plant.theta
         # (inside a cruise the plan goes on: no standstill ends a quick stop here)
         accel = (trajectory.velocity - velocity_before) / dt
-        if dt == 0.001 and not blocked:  # CurrentMeter.update inline, as in the full tick
-            meter, config = self.meter, self.config
-            inertia = 1.0 + config.load_inertia
-            torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
-            cap = 3.0 * self.params[5]
-            meter.instant = instant = cap if cap < torque else torque
-            mean_square = meter._mean_square
-            meter._mean_square = mean_square = mean_square + (instant ** 2 - mean_square) \
-                * _K_1MS
-            meter.rms = rms = _sqrt(mean_square)
-            overload = 100.0 * (rms / 100.0) ** 2
-            meter.overload = 999.0 if overload > 999.0 else overload
+        if dt == 0.001 and not blocked:
+            _meter_1ms(self, accel)
         else:
             self.meter.update(self, accel, dt)
         g = self.geometry
@@ -424,3 +367,43 @@ class DriveTick:
                 found.append((name, after[name], at))
         found += [("marker", True, m) for m in g.markers_between(theta0, theta1)]
         return sorted(found, key=lambda change: abs(change[2] - theta0))
+
+
+def _follow_free(plant: Plant, demand: float, lag: float, vmax: float, dt: float) -> None:
+    """Plant.step following ``demand`` with the motor free, for the full tick and the cruise
+    tick: the same expressions in the same order as plant.py (the same bits), without the
+    method's jam branch."""
+    before_theta, previous = plant.theta, plant._last_demand
+    if previous is None:
+        previous = demand
+    rate = (demand - previous) / dt if dt > 0.0 else 0.0
+    decay = _exp(-dt / lag) if lag > 0.0 else 0.0
+    new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
+    if abs(demand - new) < _SETTLED_REV:
+        new = demand
+    reach = vmax * dt
+    if new - before_theta > reach:
+        new = before_theta + reach
+    elif before_theta - new > reach:
+        new = before_theta - reach
+    plant._last_demand = demand
+    low, high = plant._end_stops
+    plant.blocked = not low <= new <= high
+    new = low if low > new else new
+    plant.theta = theta = high if high < new else new
+    plant.omega = (theta - before_theta) / dt if dt > 0.0 else 0.0
+
+
+def _meter_1ms(drive: ServoDrive, accel: float) -> None:
+    """CurrentMeter.update for a 1 ms tick in torque with the motor free (the full tick's and
+    the cruise tick's case): the same expressions in the same order (readings.py)."""
+    meter, config = drive.meter, drive.config
+    inertia = 1.0 + config.load_inertia
+    torque = 5.0 + 50.0 * abs(accel) / config.quick_stop_decel * inertia
+    cap = 3.0 * drive.params[5]  # d5 caps the current
+    meter.instant = instant = cap if cap < torque else torque
+    mean_square = meter._mean_square
+    meter._mean_square = mean_square = mean_square + (instant ** 2 - mean_square) * _K_1MS
+    meter.rms = rms = _sqrt(mean_square)
+    overload = 100.0 * (rms / 100.0) ** 2
+    meter.overload = 999.0 if overload > 999.0 else overload
