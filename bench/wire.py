@@ -130,10 +130,14 @@ def master_main(iface: str, n: int, seconds: float, periods_us: tuple[int, ...],
 def answer_al_control(conn, stop: threading.Event) -> None:
     """Process A's part, reduced to the ESM: every requested state is granted."""
     while not stop.is_set():
-        if conn.poll(0.05):
+        try:
+            if not conn.poll(0.05):
+                continue
             msg = conn.recv()
-            if msg[0] == messages.AL_CONTROL:
-                conn.send((messages.AL_STATUS, msg[1], msg[2] & 0x0F, 0))
+        except (EOFError, OSError):
+            return  # the wire process has gone: the run is over
+        if msg[0] == messages.AL_CONTROL:
+            conn.send((messages.AL_STATUS, msg[1], msg[2] & 0x0F, 0))
 
 
 def over_the_wire(n: int, seconds: float, periods_us: tuple[int, ...]) -> dict | str:
