@@ -217,9 +217,9 @@ class DriveActions:
         if self.mode not in control.POSITIONER:
             self.set_mode(1)
         self.write_register(R.TARGET_POSITION, position)
-        # Clear the mode bits 5..7 first (after homing R00 still holds bit 6, which reads as
-        # the same new-set-point bit), so the start below is a fresh 0 -> 1 edge, as the
-        # seed's example does after homing (CW = 3, then 0x23).
+        # Clear the mode bits 5..7 first (after homing R00 still holds bit 6, Upd_mod in mode
+        # 1), so the start below is a fresh 0 -> 1 edge of Pos_str alone, as the seed's
+        # example does after homing (CW = 3, then 0x23).
         r00 = self.regs[R.CONTROL_WORD] & ~(control.STP_CMD | control.BIT5 | control.BIT6
                                             | control.BIT7)
         self.write_register(R.CONTROL_WORD, r00)

@@ -346,6 +346,15 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
             return
         self.mode_logic.halted(self)
         self.regs[R.MODES_OF_OPERATION] = mode
+        # R00 bits 5-7 mean what the selected mode says (ch. 1 "specifico del modo
+        # selezionato"): the other view is read again in the new mode, with no edge. A
+        # register master's R00 = 0x43 after homing is Pos_str 0 in mode 1, so 0x23 starts;
+        # a CiA 402 master's 0x6040 stays as written (DSP 402) and R00 shows it in the new mode.
+        if self.cw_source == "register":
+            self.cw = control.controlword_from_register(self.regs[R.CONTROL_WORD], mode)
+        else:
+            self.regs[R.CONTROL_WORD] = control.register_from_controlword(self.cw, mode,
+                                                                          self.ien_cmd)
         self.mode_logic = MODE_CLASSES[mode]()
         self.mode_logic.enter(self)
         self._was_allowed = False

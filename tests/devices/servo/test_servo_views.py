@@ -121,3 +121,68 @@ def test_hardware_ten_low_removes_torque_and_returns_with_it() -> None:
     sim.drive.apply("set_input", {"name": "ten", "value": True})
     sim.run(1)
     assert sim.drive.state is State.OPERATION_ENABLED
+
+
+def _homed_with_r00_0x43(sim: Sim) -> None:
+    """Mode 6, R00 = 3 then 0x43 (ch. 2 example), homing method 35: R00 keeps bit 6."""
+    sim.w(2, 60)
+    sim.w(18, 35)
+    sim.w(1, 6)
+    sim.w(0, 0x03)
+    sim.w(0, 0x43)
+    sim.run_until(lambda: sim.r05 & 0x40, 3_000)  # Homing ok
+    assert sim.drive.read_register(0) == 0x43
+
+
+def test_after_a_mode_change_r00_bit_5_starts_the_positioner() -> None:
+    """R00's bits 5-7 are "specifico del modo selezionato" (ch. 1): after homing with 0x43 and
+    mode 1, R00 reads Pos_str = 0, so 0x23 is Pos_str 0 -> 1, "start nuovo posizionamento".
+    The drive kept homing's 0x6040 image (bit 4 set) and took 0x23 as no edge."""
+    sim = make_sim()
+    _homed_with_r00_0x43(sim)
+    sim.w(1, 1)
+    sim.w(9, 600)
+    sim.w(0, 0x23)
+    sim.run_until(lambda: sim.r05 & 0x40, 3_000)  # End of Job
+    assert sim.drive.position_user == 600
+
+
+def test_after_a_mode_change_the_interpolator_follows_r00_bit_5() -> None:
+    """Mode 7 entered with R00 = 0x43: Ip_str (bit 5) is 0, so the interpolator is not active
+    (R05 bit 5 Ip_st, 0x6041 bit 12); it starts with R00 bit 5."""
+    sim = make_sim()
+    _homed_with_r00_0x43(sim)
+    sim.w(1, 7)
+    sim.run(5)
+    assert not sim.r05 & 0x20
+    assert not sim.drive.statusword & ds402.SW_MODE_12
+    sim.w(0, 0x23)
+    sim.run(5)
+    assert sim.r05 & 0x20
+
+
+def test_after_a_mode_change_r00_bit_6_engages_the_electronic_axis() -> None:
+    """Mode -2 entered with R00 = 0x43: bit 6 "1: start, asse slave in asse col master" with the
+    Start input high (ch. 1, ch. 2 "I/O digitali") engages the axis (R05 bit 6)."""
+    sim = make_sim()
+    _homed_with_r00_0x43(sim)
+    sim.drive.apply("set_input", {"name": "start", "value": True})
+    sim.drive.apply("master_encoder", {"rpm": 60.0})
+    sim.w(1, -2)
+    sim.run(200)
+    assert sim.r05 & 0x40
+    assert sim.drive.velocity_user > 0
+
+
+def test_after_a_mode_change_r00_reads_the_cia402_master_s_command_in_the_new_mode() -> None:
+    """A CiA 402 master's 0x001F starts homing in mode 6 (R00 bit 6); in mode 1 the same
+    0x6040 bit 4 is the new set-point, R00 bit 5: the register view follows the mode."""
+    sim = make_sim()
+    sim.w(18, 35)
+    sim.cw(*CANOPEN_ENABLE)
+    sim.drive.set_mode(6)
+    sim.cw(0x001F)
+    assert sim.drive.read_register(0) & 0xE0 == 0x40
+    sim.drive.set_mode(1)
+    assert sim.drive.read_register(0) & 0xE0 == 0x20
+    assert sim.drive.cw == 0x001F  # DSP 402: the master's bits stay as written
