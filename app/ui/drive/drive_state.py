@@ -150,7 +150,9 @@ def state_rows(snap: Mapping[str, Any], node: Mapping[str, Any] | None = None,
          or '<span class="fr-muted">none</span>'),
         ("TEN / IEN", esc(consents)),
         *causes,
-        ("Outputs", esc(f"End of Job {_on(outputs.get('end_of_job'))} · Near to target "
+        # CN2's four outputs in pin order (seed 004 ch. 2): 12, 13 (R50 bit 1 only), 15, 16
+        ("Outputs", esc(f"End of Job {_on(outputs.get('end_of_job'))} · pin 13 "
+                        f"{_on(outputs.get('out1'))} · Near to target "
                         f"{_on(outputs.get('near_target'))} · Brake "
                         f"{_on(outputs.get('brake'), 'released', 'held')}")),
         ("Switches", esc(f"NL {_on(limits.get('neg'))} · home {_on(limits.get('home'))} · "
