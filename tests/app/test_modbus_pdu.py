@@ -514,3 +514,18 @@ def test_real_drive_save_first_method(servo) -> None:
     assert ask(d, "10 8000 0002 04 0000 0020") == Reply(h("10 8000 0002"), after_save=True)
     clock.until(lambda: d.responding, 10_000_000)
     assert d.flash.load() is not None
+
+
+def test_real_drive_second_first_method_save_needs_bit_5_low_first(servo) -> None:
+    """ch.1 R00 "Save ... 0 -> 1: salvataggio": the save is bit 5's edge. The same two writes
+    again (R01 and R00 unchanged) save nothing and are answered at once; R00 = 0, then 0x20
+    saves (docs/modbus.md "Save to flash")."""
+    d, clock = servo
+    assert ask(d, "10 8001 0002 04 FFFF FFCE") == Reply(h("10 8001 0002"))
+    assert ask(d, "10 8000 0002 04 0000 0020") == Reply(h("10 8000 0002"), after_save=True)
+    clock.until(lambda: d.responding, 10_000_000)
+    assert ask(d, "10 8001 0002 04 FFFF FFCE") == Reply(h("10 8001 0002"))
+    assert ask(d, "10 8000 0002 04 0000 0020") == Reply(h("10 8000 0002"))
+    assert d.responding
+    assert ask(d, "10 8000 0002 04 0000 0000") == Reply(h("10 8000 0002"))
+    assert ask(d, "10 8000 0002 04 0000 0020") == Reply(h("10 8000 0002"), after_save=True)
