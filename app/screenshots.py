@@ -9,8 +9,9 @@ lines ``scenario run`` prints; the CLI owns ``--out``: app/cli.py).
 
 What makes two runs give the same pictures: a fixed 1280x720 viewport at device pixel ratio 1
 (and viser's ``fixedDpr``, so slow software WebGL does not lower the resolution), the camera
-the dashboard sets, the mouse parked on the title bar, the "Software WebGL" notice closed, and
-the simulation standing still at the checkpoint's simulated instant, so LEDs are caught at the
+the dashboard sets, the mouse parked on the title bar, the "Software WebGL" notice closed, the
+3D canvas on whole pixels (app/whole_pixels.py, as the browser tests' baselines), and the
+simulation standing still at the checkpoint's simulated instant, so LEDs are caught at the
 same phase of their blinking. A picture is taken once the browser shows the frame of that
 instant (the player panel's ``data-frame`` marker) and has painted it.
 """
@@ -41,6 +42,7 @@ from app.ui.dashboard import Dashboard
 from app.ui.glyphs import glyph_order
 from app.ui.panels.scenario_player import PLAYER_FOLDER, STATUS_ID
 from app.ui.tab_switch import SNIPPET_ID
+from app.whole_pixels import pin_3d_canvas
 from devices.events import Event
 
 logger = logging.getLogger(__name__)
@@ -289,7 +291,8 @@ class DashboardPage:
             tabs.get_by_role("tab", name=selected, exact=True).click()
 
     def sync(self) -> None:
-        """Wait until the page shows the runtime's current frame, then until it painted it."""
+        """Wait until the page shows the runtime's current frame, with the 3D canvas on whole
+        pixels (:func:`pin_3d_canvas`), then until it painted it."""
         seq = self.served.runtime.frame.seq
         wait_until(lambda: self.served.dashboard.rendered_seq >= seq, "the dashboard update")
         self.page.wait_for_function(
@@ -301,6 +304,7 @@ class DashboardPage:
                                     ":not([data-done])')", timeout=WALL_TIMEOUT_S * 1000)
         if self.scroll_to_player:  # each time: the folders above may have grown since
             self.page.get_by_text(PLAYER_FOLDER, exact=True).first.evaluate(TITLE_TO_TOP_JS)
+        pin_3d_canvas(self.page, WALL_TIMEOUT_S)
         self.page.evaluate(RELAYOUT_PLOTS_JS)
         self.page.evaluate("() => new Promise(r => requestAnimationFrame("
                            "() => requestAnimationFrame(r)))")

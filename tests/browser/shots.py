@@ -6,9 +6,9 @@ notification (viser's "Software WebGL" notice closed), nothing focused (no caret
 border), the mouse parked (no hover, no tooltip), the plots laid out, and the same pixels
 painted three times in a row 250 ms apart (the 3D view drawn, the camera at rest, every 3D
 label placed: viser rasterises label glyphs within a per-frame budget, so labels come a few
-frames after the page), with the title bar rounded to whole pixels first (see
-``WHOLE_PIXEL_CANVAS_JS``). A picture taken earlier once lacked every 3D label of the line and
-passed the old 1 % tolerance.
+frames after the page), with the 3D canvas on whole pixels first (app/whole_pixels.py, which
+the ``--screenshots`` CLI uses too). A picture taken earlier once lacked every 3D label of the
+line and passed the old 1 % tolerance.
 
 The tolerance, :data:`MAX_DIFF_FRACTION`, was set by measurement: with baselines made on the
 same machine just before (``FIELDRIG_UPDATE_BASELINES=1``), each comparing test run three
@@ -33,6 +33,7 @@ from PIL import Image, ImageChops
 
 from app.screenshots import RELAYOUT_PLOTS_JS
 from app.screenshots import wait_until as _wait_until
+from app.whole_pixels import pin_3d_canvas
 
 HERE = Path(__file__).resolve().parent
 BASELINES = HERE / "baselines"
@@ -102,30 +103,6 @@ FONTS_LOADED_JS = "async () => { await document.fonts.ready; return document.fon
 # A focused input shows a caret and a coloured border, a clicked button may keep a focus ring
 BLUR_JS = ("() => { const el = document.activeElement;"
            " if (el && el !== document.body && el.blur) el.blur(); }")
-# viser's title bar is 47.36 px high, so the 3D canvas, below it, is 672.64 CSS px high over a
-# 672 px drawing buffer, and Chromium's compositor sometimes stretched that buffer over the
-# fraction and sometimes not: 3 of 49 test runs (2 under load) had the whole 3D view
-# stretched by 0.64 px from top to bottom (0.25-0.49 % of the pixels, all on edges). A title
-# bar of whole pixels leaves nothing to stretch; the canvas follows (viser's resize observer).
-WHOLE_PIXEL_CANVAS_JS = """() => {
-  const canvas = [...document.querySelectorAll('canvas')].find(c => c.width > 300);
-  if (!canvas) return 'no 3D canvas';
-  let area = canvas;
-  while (area.parentElement
-         && area.parentElement.getBoundingClientRect().top === canvas.getBoundingClientRect().top)
-    area = area.parentElement;
-  const bar = area.previousElementSibling;
-  if (!bar) return 'no title bar';
-  bar.style.height = Math.round(bar.getBoundingClientRect().height) + 'px';
-  bar.style.flex = '0 0 auto';
-  return '';
-}"""
-WHOLE_PIXEL_CANVAS_OK_JS = """() => {
-  const canvas = [...document.querySelectorAll('canvas')].find(c => c.width > 300);
-  const box = canvas.getBoundingClientRect();
-  return canvas.width === box.width && canvas.height === box.height
-         && Number.isInteger(box.top) && Number.isInteger(box.left);
-}"""
 # The 3D canvas's drawing buffer and CSS box, printed with each diff fraction
 CANVAS_JS = ("() => [...document.querySelectorAll('canvas')].filter(c => c.width > 300)"
              ".map(c => `${c.width}x${c.height} in ${c.getBoundingClientRect().width}x"
@@ -142,9 +119,7 @@ def steady_picture(page: Any) -> bytes:
         close_webgl_toast(page)
     toasts = page.locator(".mantine-Notification-root")
     wait_until(lambda: toasts.count() == 0, what="no notification on the page")
-    problem = page.evaluate(WHOLE_PIXEL_CANVAS_JS)
-    assert not problem, f"the page's layout changed: {problem}"
-    wait_until(lambda: page.evaluate(WHOLE_PIXEL_CANVAS_OK_JS), what="a 3D canvas of whole pixels")
+    pin_3d_canvas(page, WAIT_S)
     page.evaluate(BLUR_JS)
     page.evaluate(RELAYOUT_PLOTS_JS)
     quiet_pointer(page)
