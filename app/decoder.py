@@ -287,10 +287,13 @@ def _servo_emcy(code: int, vendor: bytes) -> list[Meaning]:
 
 def _trscat_emcy(code: int, vendor: bytes, register: int | None = None) -> list[Meaning]:
     """``register``: the emergency's 0x1001 byte, which tells 0x7100's two causes apart
-    (overcurrent sets the current bit, undervoltage the voltage bit); None for a bare code."""
+    (overcurrent sets the current bit, undervoltage the voltage bit); None for a bare code.
+    The byte holds every active error's bits (DS301), so a cause fits when its bits are all
+    in it; with both bits set (another error active) both causes are listed."""
     slot = f" (slot {vendor[0]})" if vendor and vendor[0] else ""
     faults = [f for f in FAULTS.values() if f.code == code]
-    faults = [f for f in faults if f.register == register] or faults
+    if register is not None:
+        faults = [f for f in faults if register & f.register == f.register] or faults
     out = []
     for fault in faults:
         effect = []

@@ -165,10 +165,10 @@ class AlarmsMixin:
         stored = self.diag.add(message)
         if not stored or fault is None or not self.diag.flags & FLAG_EMERGENCY:
             return
-        frame = emergency_frame(fault, slot)
+        frame = emergency_frame(fault, slot, self.od_error_register())
         self.mailbox = [*self.mailbox, frame][-MAILBOX_DEPTH:]
         self.emit(EmergencySent(self.now_us, self.device_id, code=fault.code,
-                                register=fault.register, data=frame[3:]))
+                                register=frame[2], data=frame[3:]))
 
     def _set_bus(self, state: TrsBus) -> None:
         if state is not self.bus:

@@ -183,10 +183,12 @@ def check_message(al_code: int, text: str, timestamp_ns: int) -> DiagMessage:
                        (), text)
 
 
-def emergency_frame(fault: AppFault, slot: int | None) -> bytes:
-    """8-byte CoE emergency: code (LE), error register, 5 bytes (byte 0 = slot, FieldRig)."""
+def emergency_frame(fault: AppFault, slot: int | None, register: int) -> bytes:
+    """8-byte CoE emergency: code (LE), error register, 5 bytes (byte 0 = slot, FieldRig).
+    ``register`` is 0x1001 as it reads now (DS301: the EMCY carries the error register, the
+    bits of every active error, not only those of ``fault``)."""
     data = bytes(((slot or 0) & 0xFF, 0, 0, 0, 0))
-    return struct.pack("<HB", fault.code, fault.register) + data
+    return struct.pack("<HB", fault.code, register & 0xFF) + data
 
 
 class DiagHistory:

@@ -168,7 +168,7 @@ def test_an_unknown_drive_alarm_number() -> None:
 # ---- TRS-CAT (seed 001 §9.3.7) ---------------------------------------------------------------
 @pytest.mark.parametrize("fault", list(FAULTS.values()), ids=lambda f: f.name)
 def test_trscat_emergency(fault) -> None:
-    found = family(decode(fmt_bytes(trs_frame(fault, 2))), TRSCAT)
+    found = family(decode(fmt_bytes(trs_frame(fault, 2, fault.register))), TRSCAT)
     assert any(m.text.startswith(fault.text + " (slot 2)") for m in found)
     shutdown = next(m for m in found if m.text.startswith(fault.text))
     assert ("TRS bus shuts down" in shutdown.text) == fault.bus_shutdown

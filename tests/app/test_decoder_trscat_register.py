@@ -13,7 +13,7 @@ from devices.trscat.diagnostics import FAULTS, emergency_frame
 @pytest.mark.parametrize("name", ["TRS_OVERCURRENT", "TRS_UNDERVOLTAGE"])
 def test_the_register_picks_the_power_error(name: str) -> None:
     fault = FAULTS[name]
-    frame = emergency_frame(fault, 0)
+    frame = emergency_frame(fault, 0, fault.register)
     logged = f"CoE - Emergency (Hex: {fault.code:04x}, {frame[2]:02x}, " \
              f"{frame[3:].hex(' ')}')."
     for query in (logged, frame.hex(" ")):
@@ -23,6 +23,22 @@ def test_the_register_picks_the_power_error(name: str) -> None:
 
 def test_the_bare_code_still_reads_both() -> None:
     found = [m for m in decode("0x7100") if m.family == TRSCAT]
+    assert len(found) == 2, found
+
+
+@pytest.mark.parametrize(("register", "name"), [(0x13, "TRS_OVERCURRENT"),
+                                              (0x15, "TRS_UNDERVOLTAGE")])
+def test_another_active_error_s_bits_do_not_hide_the_cause(register: int, name: str) -> None:
+    """The register is 0x1001 when the EMCY is sent (DS301): with a 0x7500 (0x11) active too
+    it holds that error's bits besides the cause's own."""
+    found = [m for m in decode(f"7100 {register:02x} 00 00 00 00 00") if m.family == TRSCAT]
+    assert [m.text.split(";")[0] for m in found] == [FAULTS[name].text], found
+
+
+def test_both_bits_set_reads_both() -> None:
+    """Current and voltage bits both set (an undervoltage and a 0x3220 active, say): no
+    guess, both causes."""
+    found = [m for m in decode("7100 07 00 00 00 00 00") if m.family == TRSCAT]
     assert len(found) == 2, found
 
 

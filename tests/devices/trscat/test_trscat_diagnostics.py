@@ -412,6 +412,23 @@ def test_emergency_only_with_flag_bit0() -> None:
     assert bench.trs.take_emergencies() == [bytes.fromhex("2032050000000000")]
 
 
+def test_emergency_carries_the_error_register_of_the_moment() -> None:
+    """§9.3.7 codes are DS301 emergencies: an EMCY's error register byte is 0x1001 as it
+    reads when the error is sent, the bits of every active error, not only the new one's."""
+    bench = Bench(["IO-E"], configured=["IO-E"])
+    bench.to_state(AlState.OP)
+    bench.write(0x10F3, 5, 0x0001)
+    bench.apply("inject_fault", fault="FIELD_SUPPLY")  # 0x05: generic + voltage
+    bench.run(0.002)
+    bench.apply("inject_fault", fault="TRS_COMM_ERROR")  # 0x11: generic + communication
+    bench.run(0.002)
+    assert bench.read(0x1001, 0) == 0x15
+    assert [(r["code"], r["register"]) for r in bench.records("emergency")] == [
+        ("0x3220", "0x05"), ("0x7500", "0x15")]
+    assert bench.trs.take_emergencies() == [bytes.fromhex("2032050000000000"),
+                                            bytes.fromhex("0075150000000000")]
+
+
 def unread_emergency() -> Bench:
     """FIELD_SUPPLY (0x3220) with the cable out: sent as an emergency the master cannot read."""
     bench = Bench()
