@@ -189,9 +189,11 @@ class AlarmsMixin:
         return bits
 
     def od_bus_ok(self, sub: int) -> bool:
-        """§9.3.4 0xF100:2..4 (TRUE = OK): FALSE once a fault of that kind shut the bus."""
+        """§9.3.4 0xF100:2..4 (TRUE = OK): FALSE while a fault of that kind is active. The one
+        that shut the bus stays active until power-off (irreversible); one raised with the
+        bus already down, which only an injection can, shows too, as its message does."""
         flag = {2: Bus.COMMUNICATION, 3: Bus.VOLTAGE, 4: Bus.CURRENT}[sub]
-        return self.shutdown is None or FAULTS[self.shutdown[0]].bus_flag is not flag
+        return all(fault.bus_flag is not flag for fault in self.active.values())
 
     def od_error_register(self) -> int:
         """DS301 0x1001: the error register bits of the active errors."""

@@ -122,6 +122,26 @@ def test_shutdown_is_irreversible_until_power_off(name: str) -> None:
     assert bench.read(0xF100, 1) == 1 and not bench.trs.snapshot()["alarms"]
 
 
+def test_each_bus_status_shows_its_own_fault_after_the_shutdown() -> None:
+    """§9.3.4 0xF100:2 / :3 / :4 (TRUE = OK) each report a kind of TRS bus fault: one raised
+    once the bus is already down (an instructor's second cause) makes its sub FALSE as well,
+    as its 0x10F3 message and 0x1001 say, and the sub is TRUE again when it is cleared while
+    the sub of the fault that shut the bus stays FALSE until power-off."""
+    bench = Bench(["IO-E"], configured=["IO-E"])
+    bench.to_state(AlState.OP)
+    bench.apply("inject_fault", fault="TRS_OVERCURRENT")
+    bench.run(0.002)
+    assert [bench.read(0xF100, s) for s in (2, 3, 4)] == [True, True, False]
+    bench.apply("inject_fault", fault="TRS_UNDERVOLTAGE")
+    bench.run(0.002)
+    assert bench.messages()[-1]["text"].endswith("undervoltage")
+    assert [bench.read(0xF100, s) for s in (2, 3, 4)] == [True, False, False]
+    bench.apply("clear_fault", fault="TRS_UNDERVOLTAGE")
+    bench.apply("clear_fault", fault="TRS_OVERCURRENT")
+    bench.run(0.002)
+    assert [bench.read(0xF100, s) for s in (2, 3, 4)] == [True, True, False]
+
+
 def test_reversible_faults_clear_with_their_cause() -> None:
     bench = Bench(["AN-E"], configured=["AN-E"])
     bench.to_state(AlState.OP)
