@@ -78,8 +78,17 @@ class LineBank:
         self._recompute_field()
 
     def set_external(self, line: int, volts: float) -> None:
+        """A sensor's voltage: the terminal's logic level follows at once (the I/O LED, §8.3),
+        local cycle or not; only the sample (§3) waits for one."""
         self.external_v[line] = volts
         self._recompute_field()
+        self._settle_level()
+
+    def _settle_level(self) -> None:
+        """The level on the terminals: a driven line is high, a free one the sensor's (§4;
+        in the undefined band it keeps its level)."""
+        free = self.full & ~self.driving
+        self.level = self.driving | (free & (self.ext_high | (self.ext_band & self.level)))
 
     def set_load(self, line: int, amps: float) -> None:
         self.load_a[line] = amps
@@ -107,8 +116,7 @@ class LineBank:
         if drv != self.driving:
             self.current_a = self._current(drv)
         self.driving = drv
-        free = self.full & ~drv  # lines left to the field
-        self.level = drv | (free & (self.ext_high | (self.ext_band & self.level)))
+        self._settle_level()
 
     def sample(self) -> int:
         """§3: a line takes a new state when its last 4 samples all show it."""

@@ -163,6 +163,27 @@ def test_yellow_led_follows_the_line() -> None:
     assert leds["I/O 16"] == "on" and leds["I/O 2"] == "on" and leds["I/O 1"] == "off"
 
 
+def test_yellow_led_follows_a_sensor_without_a_local_cycle() -> None:
+    """§8.3: the LED shows the logic state of the terminal, which is the sensor's voltage
+    (§4 thresholds), local cycle or not. With SYNC0 lost (DC-SYNC: no local cycle, §9.1.1) a
+    sensor switched on lights its LED at once; only the sampled input (0x6000, the §3
+    debounce) waits for a local cycle. It used to stay dark until SYNC0 came back."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.apply("lose_sync0", lost=True)
+    bench.run(0.01)
+    assert bench.trs.al_state is AlState.SAFEOP  # the fatal sync error (0x002C)
+    bench.apply("set_input", channel=1, on=True)
+    bench.apply("set_input_voltage", channel=2, volts=12.0)  # undefined band: stays 0
+    bench.step()
+    assert bench.leds()["I/O 1"] == "on" and bench.leds()["I/O 2"] == "off"
+    assert bench.trs.snapshot()["slots"][0]["lines"][0]["level"] is True
+    assert bench.read(0x6000, 1) == 0  # no sample without a local cycle
+    bench.apply("set_input", channel=1, on=False)
+    bench.step()
+    assert bench.leds()["I/O 1"] == "off"
+
+
 def test_outputs_only_in_op() -> None:
     """§9.2: in SAFE-OP the outputs stay in the safe state; OP applies the master's."""
     bench = Bench()
