@@ -273,5 +273,5 @@ class CommandsMixin:
             mode = SyncMode(value)
         except ValueError:
             raise SdoAbort(AbortCode.VALUE_RANGE, index, 1) from None
-        self.sync.mode = self.sync.requested = mode
+        self.sync.request(mode)
 

@@ -84,6 +84,7 @@ class SyncState(enum.Enum):
 class SyncUnit:
     mode: SyncMode = SyncMode.DC_SYNC  # 0x1C32:1: DC-SYNC "quella di default" until a PS
     requested: SyncMode | None = None  # 0x1C32:1 / 0x1C33:1 as written by the master
+    taken: SyncMode = SyncMode.DC_SYNC  # the mode the last PS took (the default before one)
     running: bool = False  # DC-SYNC started at PREOP -> SAFEOP (SAFEOP, OP)
     # The master's DC registers (0 at power-up, as the ESC's): 0x0981, 0x09A0, 0x0990.
     dc_activation: int = 0
@@ -215,12 +216,21 @@ class SyncUnit:
         mode = self.register_mode
         if mode is None or self.start_refusal() is not None:
             return
-        self.mode = mode
+        self.mode = self.taken = mode
         if mode is not SyncMode.DC_SYNC:
             return
         self.running = True
         self._first_sync0(now_us)
         self.arrivals, self.sm_missed, self.without_sync0, self.sync0_seen = [], 0, 0, True
+
+    def request(self, mode: SyncMode) -> None:
+        """0x1C32:1 / 0x1C33:1 written in PRE-OP: reported at once, checked at the next PS."""
+        self.mode = self.requested = mode
+
+    def forget_request(self) -> None:
+        """INIT: the master's written mode goes; 0x1C32:1 reports the mode last taken again."""
+        self.requested = None
+        self.mode = self.taken
 
     def stop(self) -> None:
         self.running = False

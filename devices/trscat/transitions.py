@@ -208,7 +208,7 @@ class TransitionsMixin:
             self.sync.stop()
             self.sync.restart_free_run(self.now_us)
         if target is AlState.INIT:  # the master's PRE-OP settings go; it writes them again
-            self.sync.requested = None
+            self.sync.forget_request()
         self._apply_output_image()  # §9.2 "safe-state" from now, SYNC0 or not
 
     def _fall_on_comm_error(self, code: int) -> None:

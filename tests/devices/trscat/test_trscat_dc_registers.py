@@ -239,6 +239,26 @@ def test_a_written_sync_mode_is_forgotten_in_init() -> None:
     assert bench.trs.al_state is AlState.SAFEOP and bench.read(0x1C32, 1) == 0x0002
 
 
+@pytest.mark.parametrize("first_ps", [False, True])
+def test_a_forgotten_sync_mode_is_no_longer_reported(first_ps: bool) -> None:
+    """§9.3.1 0x1C32:1 / 0x1C33:1 "Stato corrente del DC mode": once INIT has dropped the
+    mode the master wrote in PRE-OP, they report the mode last taken at a PS again (DC-SYNC,
+    the §9.1.1 default, before the first one), not the forgotten request."""
+    bench = Bench(dc=False)
+    bench.settle()
+    bench.request(AlState.PREOP)
+    if first_ps:  # FREE-RUN taken at a PS, then the master asks for DC-SYNC
+        _ps_with(bench, 0x00, 0)
+        assert bench.trs.al_state is AlState.SAFEOP
+        bench.request(AlState.PREOP)
+    taken = 0x0000 if first_ps else 0x0002
+    bench.write(0x1C32, 1, 0x0002 - taken)
+    assert bench.read(0x1C33, 1) == 0x0002 - taken  # reported at once
+    bench.request(AlState.INIT)
+    assert [bench.read(0x1C32, 1), bench.read(0x1C33, 1)] == [taken, taken]
+    assert bench.trs.snapshot()["sync"]["mode"] == ("FREE-RUN" if first_ps else "DC-SYNC")
+
+
 def test_sync0_switched_off_in_op_is_a_fatal_sync_error() -> None:
     """0x0981 = 0 while DC-SYNC runs: the SM events come without SYNC0; at 0x10F1:2 -> 0x002C
     (as lose_sync0)."""
