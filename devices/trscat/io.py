@@ -91,9 +91,14 @@ class LineBank:
         self.level = self.driving | (free & (self.ext_high | (self.ext_band & self.level)))
 
     def set_load(self, line: int, amps: float) -> None:
+        """What a load draws: the §4 protection is the high-side driver's own, so it acts at
+        once, local cycle or not: an output on trips when its load goes above 0.5 A and
+        drives again once it is back within (no reset command, §9.3). Unpowered, nothing is
+        commanded through (``drive``), so nothing trips."""
         self.load_a[line] = amps
         self._recompute_field()
-        self.current_a = self._current(self.driving)
+        self.drive(self.driving | self.tripped, True)
+        self.current_a = self._current(self.driving)  # a line that stays driven draws anew
 
     def _recompute_field(self) -> None:
         high = band = over = 0

@@ -81,6 +81,23 @@ def test_output_protection(load: float, driving: bool, tripped: bool) -> None:
     assert bank.current_a == (load if driving else 0.0)
 
 
+def test_output_protection_acts_on_the_load_at_once() -> None:
+    """§4: the protection is the high-side driver's own, so it acts on the load, not on the
+    next drive: a short on an output that is on switches it off at once, and the output comes
+    back by itself once the load is within 0.5 A again (no reset command in §9.3)."""
+    bank = LineBank(16)
+    bank.drive(0b101, True)
+    bank.set_load(2, 3.0)
+    assert (bank.driving, bank.tripped, bank.level) == (0b001, 0b100, 0b001)
+    assert bank.current_a == 0.0
+    bank.set_load(2, 0.4)
+    assert (bank.driving, bank.tripped, bank.level) == (0b101, 0, 0b101)
+    assert bank.current_a == 0.4
+    bank.drive(0, True)
+    bank.set_load(0, 9.0)  # an output that is off does not trip
+    assert (bank.driving, bank.tripped) == (0, 0)
+
+
 def test_output_needs_the_field_supply() -> None:
     """§3: the field supply is required to switch the outputs on."""
     bank = LineBank(16)
@@ -182,6 +199,36 @@ def test_yellow_led_follows_a_sensor_without_a_local_cycle() -> None:
     bench.apply("set_input", channel=1, on=False)
     bench.step()
     assert bench.leds()["I/O 1"] == "off"
+
+
+def test_output_protection_trips_without_a_local_cycle() -> None:
+    """§4 "Protezione degli Output contro: cortocircuito, sovraccarico": the driver's own
+    protection, local cycle or not. With SYNC0 lost (DC-SYNC: no local cycle, §9.1.1) the
+    fall on the fatal sync error holds the outputs (§9.3.5, 0xF701 = 0): a short on a held
+    output switches that output off at once (LED off, nothing drawn), and the TRS bus stays up.
+    The output used to keep driving it, and a 20 A short was counted on the TRS bus: 0x7100
+    overcurrent, the whole bus shut down until power-off."""
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    bench.apply("set_output", channel=1, value=1)
+    bench.run(0.01)
+    bench.apply("lose_sync0", lost=True)
+    bench.run(0.01)
+    assert bench.trs.al_state is AlState.SAFEOP and bench.leds()["I/O 1"] == "on"
+    bench.apply("set_load", channel=1, amps=2.0)
+    bench.step()
+    line = bench.trs.snapshot()["slots"][0]["lines"][0]
+    assert (line["driving"], line["tripped"]) == (False, True)
+    assert bench.leds()["I/O 1"] == "off"
+    bench.apply("set_load", channel=1, amps=20.0)
+    bench.run(0.01)
+    assert bench.trs.snapshot()["trs_bus"]["state"] == "running"
+    assert not bench.records("alarm")
+    bench.apply("set_load", channel=1, amps=0.2)  # the short removed: the output is back
+    bench.step()
+    line = bench.trs.snapshot()["slots"][0]["lines"][0]
+    assert (line["driving"], line["tripped"]) == (True, False)
+    assert bench.leds()["I/O 1"] == "on"
 
 
 def test_outputs_only_in_op() -> None:
