@@ -35,7 +35,7 @@ from app.ui.panels.page_prop import PageProp
 from app.ui.panels.per_client import instructor_for
 from app.ui.panels.widgets import Synced, set_options
 from app.ui.style import esc
-from devices.device import Action
+from devices.device import Action, CommandError
 from devices.fastcat.encoder import CMD_ZERO_CYCLE, COMMAND_INDEX
 from devices.fastcat.module_od import object_index
 
@@ -62,6 +62,19 @@ def encoder_text(entry: Mapping[str, Any]) -> str:
         rows.append(f"<tr><th>enc {k}</th><td>{esc(enc.get('position', 0))} "
                     f"· {rpm:g} rpm · {esc(state)} · {esc(faults)}</td></tr>")
     return f'<table class="fr-kv">{"".join(rows)}</table>' if rows else ""
+
+
+def command_index(entry: Mapping[str, Any]) -> int:
+    """The index of the AX2's 0x7600 in a rail entry: 0x7600 + 0x10 * (N - 1) with N the
+    module number the last scan gave it (seed 000 §6.30, §6.24: the modules detected along
+    the bus), not its slot, which differs behind an empty slot. A module the last scan did
+    not number has no object to write."""
+    number = entry.get("module_number")
+    if number is None:
+        raise CommandError(f"slot {entry.get('slot')}: the last scan did not number this "
+                           "module, so it has no 0x7600 yet (the coupler numbers the modules "
+                           "at a scan: CNF or a return to INIT)")
+    return object_index(COMMAND_INDEX, int(number))
 
 
 @dataclass(frozen=True)
@@ -273,16 +286,19 @@ class ModulePanel:
         slot = option_slot(self.pick.value_for(_id(client)))
         if slot is None:
             return
-        index, bit = object_index(COMMAND_INDEX, slot), CMD_ZERO_CYCLE[k]
+        bit = CMD_ZERO_CYCLE[k]
         rig = self._runtime.rig
 
         def read_modify_write() -> int:
+            # The module number as the coupler has it now: the click may follow a rescan.
+            entry = rig.device(self._id).snapshot()["rail"][slot - 1]
+            index = command_index(entry)
             word = int(rig.apply(self._id, "read_object", {"index": index, "sub": 0}))
             word = word | bit if on else word & ~bit
             rig.apply(self._id, "write_object", {"index": index, "sub": 0, "value": word})
             return word
 
-        self._sender.submit(client, f"0x{index:04X} zero-cycle command", read_modify_write)
+        self._sender.submit(client, f"slot {slot} 0x7600 zero-cycle command", read_modify_write)
 
     def _page_picked(self, client: viser.ClientHandle) -> None:
         """A page picked a module: its Plug type preset, its encoder section, the actions."""
