@@ -86,8 +86,10 @@ def describe(rig: Rig) -> list[SlaveDescription]:
 
 
 def variables(rig: Rig) -> list[Variable]:
-    """One PLC variable per process-data entry: MDP inputs 0x6000.., outputs 0x7000.. of
-    an object dictionary, the assigned PDOs' entries of a CoE drive."""
+    """One PLC variable per entry of the PDOs a slave assigns, as a configurator makes them
+    (seed 000 §4: the PLC variables go on the PDO entries): for an object dictionary the
+    entries of 0x1C13's and 0x1C12's PDOs, inputs then outputs, each by index; a CoE
+    drive's assigned PDOs."""
     master = rig.devices["master"]
     out: list[Variable] = []
     for link in master.links:  # type: ignore[attr-defined]
@@ -104,13 +106,28 @@ def variables(rig: Rig) -> list[Variable]:
         od = getattr(slave, "od", None)
         if od is None:
             continue
-        for entry in od:
-            if not entry.pdo_mappable or not 0x6000 <= entry.index < 0x8000 or entry.sub == 0:
-                continue
-            direction = "input" if entry.index < 0x7000 else "output"
-            out.append(Variable(f"{prefix}_{entry.index:04X}_{entry.sub:02X}", pos,
-                                entry.index, entry.sub, entry.bit_length, direction))
+        for index, sub, bits, direction in _assigned_entries(od):
+            out.append(Variable(f"{prefix}_{index:04X}_{sub:02X}", pos, index, sub, bits,
+                                direction))
     return out
+
+
+def _assigned_entries(od: Any) -> list[tuple[int, int, int, str]]:
+    """(index, sub, bits, direction) of every entry mapped in the assigned PDOs. The coupler
+    bits (0x5100:1, 0x5200:1, seed 000 §6.16 / §6.17) and the single-value objects mapped
+    at sub 0 (the AX2's 0x6600 / 0x7600, §6.27 / §6.30) are process data too; a gap (index
+    0) is none."""
+    out = []
+    for assign, direction in ((0x1C13, "input"), (0x1C12, "output")):
+        if (assign, 0) not in od:
+            continue
+        for k in range(1, od.peek(assign, 0) + 1):
+            pdo = od.peek(assign, k)
+            for j in range(1, od.peek(pdo, 0) + 1):
+                index, sub, bits = split_entry(od.peek(pdo, j))
+                if index:
+                    out.append((index, sub, bits, direction))
+    return sorted(out, key=lambda e: (e[3] != "input", e[0], e[1]))
 
 
 def eni_xml(slaves: list[SlaveDescription], source: str) -> str:

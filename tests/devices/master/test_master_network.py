@@ -158,3 +158,18 @@ def test_user_selected_station_addresses(tmp_path: Path) -> None:
     master = rig.devices["master"]
     assert master.slave_by_address(300)["device"] == "cpx"
     assert rig.devices["cpx"].station_address == 300
+
+
+def test_the_fastcat_s_variables_are_its_mapped_entries() -> None:
+    """Seed 000 §4: a PLC variable per PDO entry, 0x1AFF's coupler inputs first; §6.16 /
+    §6.17: Fault active and Reset fault are process data (§7: the reset is raised through
+    the exchanged data); §6.27 / §6.30: the AX2's status and command words (sub 0) are in
+    its TxPDO / RxPDO. Before, only 0x6000-0x7FFF entries with a sub > 0 got one."""
+    mapping = parse_mapping((NETWORKS / "default.mapping.xml").read_text())
+    fastcat = {(v.index, v.sub, v.bit_length, v.direction)
+               for v in mapping.variables if v.position == 0}
+    ax2 = 7  # default.toml: the AX2 is module 7
+    assert {(0x5100, 1, 1, "input"), (0x5200, 1, 1, "output"),
+            (0x6600 + 0x10 * (ax2 - 1), 0, 16, "input"),
+            (0x7600 + 0x10 * (ax2 - 1), 0, 16, "output")} <= fastcat
+    assert not any(index == 0 for index, *_rest in fastcat)  # the 7-bit gaps are no variable
