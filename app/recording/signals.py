@@ -93,6 +93,8 @@ def device_path(device_id: str, *parts: object) -> str:
     return "/".join([ROOT, *(rr.escape_entity_path_part(str(p)) for p in (device_id, *parts))])
 
 
+# The lane helpers run for every lane of every sample (~80 on the default rig): cached too.
+@functools.lru_cache(maxsize=1024)
 def state_lane(device_id: str, machine: str) -> str:
     """Entity path of a state machine's lane: ``rig/<device>/state[/<machine>]``."""
     return device_path(device_id, "state", machine) if machine else device_path(device_id,
@@ -108,11 +110,13 @@ def al_status_lane(device_id: str) -> str:
 SLAVE_LOST = "absent"
 
 
+@functools.lru_cache(maxsize=1024)
 def slave_lane(master_id: str, position: object) -> str:
     """The master's view of the slave at a line position (its slave_state events, seed 003)."""
     return device_path(master_id, "state", "slave", position)
 
 
+@functools.lru_cache(maxsize=4096)
 def led_lane(device_id: str, led: str) -> str:
     return device_path(device_id, "led", led)
 
@@ -126,8 +130,10 @@ def led_color(led: str) -> int:
 
 
 @functools.lru_cache(maxsize=1024)
-def _led_info(device_id: str, led: str) -> SeriesInfo:
-    return SeriesInfo((led,), f"{device_id} LEDs (lit)", step=True, colors=(led_color(led),))
+def _led_entity(device_id: str, led: str) -> tuple[str, SeriesInfo]:
+    """An LED's lit / dark entity: path and series."""
+    return led_lane(device_id, led), SeriesInfo((led,), f"{device_id} LEDs (lit)", step=True,
+                                                colors=(led_color(led),))
 
 
 @functools.lru_cache(maxsize=4096)
@@ -154,6 +160,17 @@ def _named(names: tuple[str, ...], view: str) -> SeriesInfo:
     return SeriesInfo(names, view, step=True)
 
 
+@functools.lru_cache(maxsize=4096)
+def _io_entity(device_id: str, number: object, label: object, key: str, title: str,
+               step: bool, count: int, first: int = 1) -> tuple[str, SeriesInfo]:
+    """A module's (slot's) process-data entity ``rig/<device>/io/<number>/<key>``: path and
+    series, its plot titled "<device> <number> <label> <title>". The same for every sample
+    while the module stays, so built once per layout, not at each sample (the title's
+    f-string and two more lookups per entity were a third of the extractors' time)."""
+    return (device_path(device_id, "io", number, key),
+            _series(key, count, f"{device_id} {number} {label} {title}", step, first))
+
+
 def _num(value: Any) -> float:
     if value is None:
         return math.nan
@@ -172,12 +189,22 @@ def _row(values: Iterable[Any]) -> tuple[float, ...]:
 
 def led_signals(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
     """LEDs as lit (1) / dark (0) at ``t_us``, from the pattern the snapshot shows."""
+    rows = _lit_rows(t_us)
     for led, name in (snap.get("leds") or {}).items():
-        pattern = _PATTERNS.get(name)
-        if pattern is None:
+        pattern_row = rows.get(name)
+        if pattern_row is None:
             continue  # not an ETG.1300 pattern name: nothing sensible to plot
-        yield Signal(device_path(device_id, "led", led), (1.0 if is_lit(pattern, t_us) else 0.0,),
-                     _led_info(device_id, led), pattern)
+        path, info = _led_entity(device_id, led)
+        yield Signal(path, pattern_row[1], info, pattern_row[0])
+
+
+@functools.lru_cache(maxsize=1)
+def _lit_rows(t_us: int) -> dict[str, tuple[LedPattern, tuple[float, ...]]]:
+    """Pattern name -> (pattern, its lit / dark row at ``t_us``): the seven patterns once per
+    sample time, not ``is_lit`` once per LED (a rig shows ~60 LEDs, every device at the same
+    time)."""
+    return {name: (pattern, (1.0 if is_lit(pattern, t_us) else 0.0,))
+            for name, pattern in _PATTERNS.items()}
 
 
 def main_machine(snap: Mapping[str, Any]) -> str | None:
@@ -243,16 +270,21 @@ def _fastcat(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Sig
         for key, title, step in _FASTCAT_IO:
             values = module.get(key)
             if values:
-                yield Signal(device_path(device_id, "io", slot, key), _row(values),
-                             _series(key, len(values), f"{device_id} {slot} {mtype} {title}",
-                                     step))
+                path, info = _io_entity(device_id, slot, mtype, key, title, step, len(values))
+                yield Signal(path, _row(values), info)
         encoders = module.get("encoders")
         if encoders:
             for key, title in _FASTCAT_ENCODER:
-                yield Signal(device_path(device_id, "io", slot, key),
-                             _row(e.get(key) for e in encoders),
-                             _series(f"{key} encoder", len(encoders),
-                                     f"{device_id} {slot} {mtype} {title}"))
+                path, info = _encoder_entity(device_id, slot, mtype, key, title, len(encoders))
+                yield Signal(path, _row(e.get(key) for e in encoders), info)
+
+
+@functools.lru_cache(maxsize=1024)
+def _encoder_entity(device_id: str, slot: object, mtype: object, key: str, title: str,
+                    count: int) -> tuple[str, SeriesInfo]:
+    """An AX2's encoder entity (series "position encoder 1", ...): see _io_entity."""
+    return (device_path(device_id, "io", slot, key),
+            _series(f"{key} encoder", count, f"{device_id} {slot} {mtype} {title}"))
 
 
 # A TRS-CAT slot's process data (slot 0 the integrated I/O, seed 001): key, plot, digital-like.
@@ -275,9 +307,8 @@ def _trscat(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Sign
         for key, title, step in _TRSCAT_IO:
             values = slot.get(key)
             if values:
-                yield Signal(device_path(device_id, "io", number, key), _row(values),
-                             _series(key, len(values), f"{device_id} {number} {stype} {title}",
-                                     step))
+                path, info = _io_entity(device_id, number, stype, key, title, step, len(values))
+                yield Signal(path, _row(values), info)
 
 
 # A CPX-E-EC module's process data (module 0 the bus module, seed 002), channels from 0.
@@ -299,9 +330,9 @@ def _cpx(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]
         for key, title, step in _CPX_IO:
             values = module.get(key)
             if values:
-                yield Signal(device_path(device_id, "io", number, key), _row(values),
-                             _series(key, len(values), f"{device_id} {number} {mtype} {title}",
-                                     step, first=0))
+                path, info = _io_entity(device_id, number, mtype, key, title, step,
+                                        len(values), 0)
+                yield Signal(path, _row(values), info)
 
 
 def _master(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
@@ -311,49 +342,72 @@ def _master(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Sign
         position = slave.get("position")
         counters = slave.get("counters")
         if isinstance(counters, Mapping) and counters:
-            yield Signal(device_path(device_id, "slave", position, "counters"),
-                         _row(counters.values()),
-                         _counter_info(tuple(counters), f"{device_id} slave {position} counters"))
+            path, info = _slave_entity(device_id, position, "counters", "counters",
+                                       tuple(counters))
+            yield Signal(path, _row(counters.values()), info)
         esc = slave.get("esc_errors")
         if isinstance(esc, Mapping) and esc:
             names, values = _flat(esc)
-            yield Signal(device_path(device_id, "slave", position, "esc_errors"), values,
-                         _counter_info(names, f"{device_id} slave {position} ESC errors"))
+            path, info = _slave_entity(device_id, position, "esc_errors", "ESC errors", names)
+            yield Signal(path, values, info)
 
 
 def _flat(counters: Mapping[str, Any]) -> tuple[tuple[str, ...], tuple[float, ...]]:
-    """ESC counters, per port where the ESC has one (``rx 0``, ``rx 1``, ``epu``)."""
-    names: list[str] = []
-    values: list[float] = []
-    for key, value in counters.items():
+    """ESC counters, per port where the ESC has one (``rx 0``, ``rx 1``, ``epu``). The names
+    follow from the keys and which of them have ports, how many: looked up, not formatted
+    anew at each sample."""
+    values: list[Any] = []
+    ports: list[int | None] = []
+    for value in counters.values():
         if isinstance(value, list | tuple):
-            names.extend(f"{key} {port}" for port in range(len(value)))
-            values.extend(_num(v) for v in value)
+            values.extend(value)
+            ports.append(len(value))
         else:
-            names.append(key)
-            values.append(_num(value))
-    return tuple(names), tuple(values)
+            values.append(value)
+            ports.append(None)
+    return _flat_names(tuple(counters), tuple(ports)), _row(values)
+
+
+@functools.lru_cache(maxsize=256)
+def _flat_names(keys: tuple[str, ...], ports: tuple[int | None, ...]) -> tuple[str, ...]:
+    names: list[str] = []
+    for key, count in zip(keys, ports, strict=True):
+        names.extend([key] if count is None else (f"{key} {port}" for port in range(count)))
+    return tuple(names)
 
 
 @functools.lru_cache(maxsize=1024)
-def _counter_info(names: tuple[str, ...], view: str) -> SeriesInfo:
-    return SeriesInfo(names, view, step=True)
+def _slave_entity(master_id: str, position: object, key: str, title: str,
+                  names: tuple[str, ...]) -> tuple[str, SeriesInfo]:
+    """The master's counters of a line position (``rig/<master>/slave/<position>/<key>``):
+    path and series, built once per layout."""
+    return (device_path(master_id, "slave", position, key),
+            SeriesInfo(names, f"{master_id} slave {position} {title}", step=True))
+
+
+@functools.lru_cache(maxsize=256)
+def _drive_entities(device_id: str) -> tuple[tuple[str, str, SeriesInfo], ...]:
+    """(snapshot key, path, series) of a drive's signals, then its words (step plots): the
+    same for every sample of the drive, so built once."""
+    return tuple((key, device_path(device_id, "drive", key),
+                  _single(key, f"{device_id} {key.replace('_', ' ')}", key in DRIVE_WORDS))
+                 for key in DRIVE_SIGNALS + DRIVE_WORDS)
+
+
+@functools.lru_cache(maxsize=256)
+def _pins_entity(device_id: str, key: str, names: tuple[str, ...]) -> tuple[str, SeriesInfo]:
+    return device_path(device_id, "io", key), _named(names, f"{device_id} {key}")
 
 
 def _servo(device_id: str, snap: Mapping[str, Any], t_us: int) -> Iterator[Signal]:
-    for key in DRIVE_SIGNALS:
+    for key, path, info in _drive_entities(device_id):
         if key in snap:
-            yield Signal(device_path(device_id, "drive", key), (_num(snap[key]),),
-                         _single(key, f"{device_id} {key.replace('_', ' ')}"))
-    for key in DRIVE_WORDS:
-        if key in snap:
-            yield Signal(device_path(device_id, "drive", key), (_num(snap[key]),),
-                         _single(key, f"{device_id} {key.replace('_', ' ')}", step=True))
+            yield Signal(path, (_num(snap[key]),), info)
     for key in DRIVE_PINS:
         pins = snap.get(key)
         if isinstance(pins, Mapping) and pins:
-            yield Signal(device_path(device_id, "io", key), _row(pins.values()),
-                         _named(tuple(pins), f"{device_id} {key}"))
+            path, info = _pins_entity(device_id, key, tuple(pins))
+            yield Signal(path, _row(pins.values()), info)
 
 
 Extractor = Callable[[str, Mapping[str, Any], int], Iterator[Signal]]
