@@ -29,7 +29,7 @@ import rerun as rr
 
 from app.recording import allocators, event_text
 from app.recording.blueprint import TIMELINE, lane_style, rig_blueprint, series_style
-from app.recording.signals import SeriesInfo, Signal, main_machine, rig_signals, state_values
+from app.recording.signals import SeriesInfo, Signal, device_signals, main_machine, state_values
 from devices.events import Event
 from devices.leds import LedPattern, is_lit
 
@@ -59,6 +59,7 @@ class _Column:
     values: Any = field(default_factory=list)  # texts, lane states; array("d") for scalars
     levels: list[str] = field(default_factory=list)  # text logs only
     width: int = 0  # scalars only: series per row
+    info: SeriesInfo | None = None  # scalars only: the series (style) the entity was given
     last: Any = None  # scalars only: the last row kept
     held_us: int | None = None  # scalars only: time of the last sample equal to ``last``
 
@@ -127,7 +128,6 @@ class RigRecorder:
         self._lane_now: dict[str, str] = {}  # last value sent or buffered per lane
         # Each device's main-machine lane as its snapshots show it (signals.main_machine).
         self._main: dict[str, str] = {}
-        self._styled: dict[str, SeriesInfo] = {}  # entity -> the style it was given
         self._buffered = 0  # rows waiting in all buffers (at least: a hold adds one more)
         # No entity can hold chunk_rows rows, nor all of them max_buffered_rows, before
         # _buffered reaches this: below it, a flush check costs one comparison.
@@ -326,9 +326,10 @@ class RigRecorder:
         over a batch's events after a sample already showed the change, the buffered row
         moves back to the event's time."""
         if self._lane_now.get(path) == value:
-            column = self._lanes[path]
-            if exact and column.times and column.values[-1] == value and t_us < column.times[-1]:
-                column.times[-1] = t_us
+            if exact:
+                column = self._lanes[path]
+                if column.times and column.values[-1] == value and t_us < column.times[-1]:
+                    column.times[-1] = t_us
             return
         if path not in self._lane_now:
             style = lane_style(path)
@@ -344,13 +345,28 @@ class RigRecorder:
         if not self._named:
             self._start(snapshot, t_us)
         at = t_us + self._offset_us
-        for device_id, snap in (snapshot.get("devices") or {}).items():
+        devices = snapshot.get("devices") or {}
+        for device_id, snap in devices.items():
             for path, value in state_values(device_id, snap):
                 self._lane(path, at, value)
+        # ~130 signals a sample on the default rig: the usual case (a known entity, its style
+        # and width as last time) is one lookup and two checks here; _scalar does the rest.
+        scalars = self._scalars
         repeat = []
-        for _device, signal in rig_signals(snapshot, t_us):
-            column = self._scalar(at, signal)
-            repeat.append((column, signal.values, signal.pattern))
+        buffered = 0
+        for device_id, snap in devices.items():
+            for signal in device_signals(device_id, snap, t_us):
+                values = signal.values
+                column = scalars.get(signal.path)
+                if column is None or column.info is not signal.info \
+                        or column.width != len(values):
+                    column = self._scalar(signal)
+                if values == column.last:  # add_sample's usual case, without the call
+                    column.held_us = at
+                else:
+                    buffered += column.add_sample(at, values)
+                repeat.append((column, values, signal.pattern))
+        self._buffered += buffered
         self._repeat = repeat
         period = self.sample_period_us
         self._next_sample_us = (t_us // period + 1) * period  # stay on a regular grid
@@ -366,7 +382,8 @@ class RigRecorder:
         if self._send_blueprint:
             self._rec.send_blueprint(rig_blueprint(snapshot, t_us))
 
-    def _scalar(self, t_us: int, signal: Signal) -> _Column:
+    def _scalar(self, signal: Signal) -> _Column:
+        """The column of a new entity, or of one whose width or series changed."""
         column = self._scalars.get(signal.path)
         if column is None:
             column = self._scalars[signal.path] = _Column.scalars(len(signal.values))
@@ -375,12 +392,9 @@ class RigRecorder:
             # so far keep their width; a new column starts with the new one.
             self._send_scalars(signal.path, column)
             column.width, column.last, column.held_us = len(signal.values), None, None
-        styled = self._styled.get(signal.path)
-        if styled is not signal.info and styled != signal.info:  # cached: usually the same
+        if column.info != signal.info:  # signals caches them: usually the very same object
             self._rec.log(signal.path, series_style(signal), static=True)
-            self._styled[signal.path] = signal.info
-        if column.add_sample(t_us, signal.values):
-            self._buffered += 1
+        column.info = signal.info
         return column
 
     # ---- sending -----------------------------------------------------------------------------
