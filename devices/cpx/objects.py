@@ -236,7 +236,7 @@ def _global_settings(od: ObjectDictionary) -> None:
         (2, "Monitor SCS", DataType.BOOLEAN, True),
         (3, "Monitor SCO", DataType.BOOLEAN, True),
         (4, "Monitor V_OUT", DataType.BOOLEAN, True),
-        (5, "Monitor V_VAL", DataType.BOOLEAN, True),  # printed "V_VEN" (OCR): valves
+        (5, "Monitor V_VEN", DataType.BOOLEAN, True),  # VEN: Ventile, the valves' supply
         (6, "Monitor SCV", DataType.BOOLEAN, True),
         (7, "Fail safe", DataType.UNSIGNED8, 0x00),
         (8, "System Start", DataType.UNSIGNED8, 0x00))

@@ -55,6 +55,18 @@ def test_tab27(od_bench: Bench, index: int, sub: int, dtype: DataType, access: A
         assert od_bench.apply("read_object", index=index, sub=sub) == value
 
 
+# Tab. 27 "Описание" of 0x2400 as the seed prints it. Sub 5 is "Monitor V_VEN", the load
+# voltage of the valves (German Ventile), not an OCR slip: V_OUT and V_SEN beside it are read
+# cleanly, and the name is what a configuration tool shows from the device.
+TAB27_2400_NAMES = ["Global CPX Settings", "Filter Alarm V_OUT/V_SEN", "Monitor SCS",
+                    "Monitor SCO", "Monitor V_OUT", "Monitor V_VEN", "Monitor SCV", "Fail safe",
+                    "System Start"]
+
+
+def test_tab27_global_settings_names(od_bench: Bench) -> None:
+    assert [od_bench.cpx.od.entry(0x2400, sub).name for sub in range(9)] == TAB27_2400_NAMES
+
+
 def test_new_message_available_is_pdo_mappable(od_bench: Bench) -> None:
     """Tab. 14 "RO P"; 0x1A40 maps it (printed "0x10F3:00,1", read as 0x10F3:04, 1 bit)."""
     assert od_bench.cpx.od.entry(0x10F3, 4).pdo_mappable
