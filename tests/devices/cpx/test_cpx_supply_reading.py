@@ -11,6 +11,7 @@ import pytest
 from cpx_bench import STI, tab9
 
 from devices.cpx.device import INJECTED_SAG_V, SUPPLY_MIN_V
+from devices.ethercat import AlState
 
 # fault -> (the snapshot's volts key, its ok key, its LED, the supply action's keyword)
 SUPPLIES = {"undervoltage_out": ("out_v", "out_ok", "PL", "out"),
@@ -65,3 +66,25 @@ def test_an_injected_undervoltage_is_the_supply_sagged(fault: str) -> None:
     """faults.py: a fault with a physical cause sets that condition, as the physical action
     does; the instructor's list of injections is all that tells the two apart."""
     assert _seen(fault, injected=True) == _seen(fault, injected=False)
+
+
+def test_a_bridged_dip_is_ridden_through_and_still_seen() -> None:
+    """Tab. 29's 20 ms bridging keeps the electronics running through a shorter dip of
+    U_EL/SEN, not the supply at [XD]: the bus module stays in OP with its history, and its
+    supply monitor sees the dip as any undervoltage — CPX error 8 on module 0 (0x3120), PS
+    dark while the terminals read 0 V — which goes when the supply is back
+    (docs/cpx-e-ec.md choice 27)."""
+    bench = tab9(history_flags=0x0001, **STI).to_op()
+    since = len(bench.events)
+    bench.apply("supply", el_sen=0.0)
+    bench.run(0.015)
+    assert bench.cpx.powered and bench.led("PS") == "off"
+    assert [e["name"] for e in bench.cpx.snapshot()["diagnosis"]["errors"]] == ["UNDERVOLTAGE"]
+    bench.apply("supply", el_sen=24.0)
+    bench.run(0.01)
+    assert bench.cpx.al_state is AlState.OP and bench.led("PS") == "on"
+    assert [(r["code"], r["active"]) for r in bench.records("alarm", since)] == [
+        ("0x3708", True), ("0x3708", False)]
+    assert [r["code"] for r in bench.records("emergency", since)] == ["0x3120", "0x0000"]
+    assert [m["text_id"] for m in bench.cpx.snapshot()["history"]["messages"]][-2:] == [
+        "0x3708", "0x3700"]
