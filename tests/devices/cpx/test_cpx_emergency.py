@@ -168,6 +168,20 @@ def test_unread_emergencies_wait_without_init() -> None:
     assert [f[:2] for f in bench.cpx.take_emergencies()] == [bytes((0x20, 0x33))]
 
 
+def test_the_mailbox_keeps_the_newest_16_before_preop() -> None:
+    """In INIT since power-up the mailbox does not run: the emergencies wait for PREOP, the
+    newest 16 of them (docs/cpx-e-ec.md choice 34, MAILBOX_DEPTH; the seed gives no depth)."""
+    bench = Bench(["16DI"], master=False, history_flags=0x0001, **STI)
+    # 21 emergencies: the sensor-supply short and its "no error" ten times, then the short
+    for on in [True, False] * 10 + [True]:
+        bench.apply("short_circuit", module=1, on=on)
+        bench.run(0.002)
+    assert bench.cpx.al_state is AlState.INIT and len(bench.records("emergency")) == 21
+    bench.cpx.request_state(AlState.PREOP)
+    codes = [parse_emergency(f)["code"] for f in bench.cpx.take_emergencies()]
+    assert codes == [0x0000, 0x2320] * 8  # the last 16: the first five went
+
+
 def test_status_bits_as_inputs() -> None:
     """§2.4.2: with status bits on, the 8 bits are the bus module's inputs I0 ... I7; the
     CPX system's example "short circuit at the output" sets bits 5 and 1."""
