@@ -38,8 +38,9 @@ _VOLTS = (0.0, 36.0)
 ACTIONS: dict[str, Action] = {a.name: a for a in (
     Action("power", "Switch U_EL/SEN on (24 V) or off; the module rides through 20 ms "
                     "(Tab. 29)", (Param("on", bool),)),
-    Action("supply", "Set the supply voltages at [XD]: U_EL/SEN (electronics and sensors) "
-                     "and U_OUT (outputs); 24 V +- 25 % is in tolerance (Tab. 29)",
+    Action("supply", "Set the supplies: U_EL/SEN at [XD] (electronics and sensors, Tab. 8) "
+                     "and the load supply U_OUT (outputs, PL); 24 V +- 25 % is in tolerance "
+                     "(Tab. 29)",
            (Param("el_sen", float, required=False, low=_VOLTS[0], high=_VOLTS[1]),
             Param("out", float, required=False, low=_VOLTS[0], high=_VOLTS[1]))),
     Action("cable", "Plug or pull the EtherCAT cable at [IN] or [OUT] (LA IN / LA OUT)",

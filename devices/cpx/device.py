@@ -392,8 +392,9 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             self.bus.in_values = [self.diagnosis.interface_word(self.bus.out_values[0])]
 
     def _at_terminals(self, set_v: float, fault: str) -> float:
-        """What a meter at [XD] reads: the set value, or the sag while its undervoltage is
-        injected (the fault only pulls the supply down)."""
+        """What a meter on the supply reads (U_EL/SEN at [XD], Tab. 8; U_OUT at its feed):
+        the set value, or the sag while its undervoltage is injected (the fault only pulls
+        the supply down)."""
         return min(set_v, INJECTED_SAG_V) if self.has_fault(fault) else set_v
 
     @property

@@ -10,6 +10,7 @@ from typing import Any
 import pytest
 from cpx_bench import STI, tab9
 
+from devices.cpx.actions import ACTIONS
 from devices.cpx.device import INJECTED_SAG_V, SUPPLY_MIN_V
 from devices.ethercat import AlState
 
@@ -88,3 +89,12 @@ def test_a_bridged_dip_is_ridden_through_and_still_seen() -> None:
     assert [r["code"] for r in bench.records("emergency", since)] == ["0x3120", "0x0000"]
     assert [m["text_id"] for m in bench.cpx.snapshot()["history"]["messages"]][-2:] == [
         "0x3708", "0x3700"]
+
+
+def test_the_supply_action_puts_only_u_el_sen_at_xd() -> None:
+    """Tab. 8: the bus module's [XD] carries +24 V / 0 V of U_EL/SEN (XD.0-XD.1, XD.2-XD.3
+    bridged), no U_OUT: the form's words must not send a trainee to [XD] to measure the load
+    supply (PL, Fig. 3), which the seed does not place."""
+    doc = ACTIONS["supply"].doc
+    assert "U_EL/SEN at [XD]" in doc and "U_OUT" in doc
+    assert "U_OUT at [XD]" not in doc and "voltages at [XD]" not in doc
