@@ -188,6 +188,24 @@ def test_short_circuit_message_on_the_device_matches_tab15() -> None:
     assert bench.apply("read_object", index=0x10F3, sub=4) is False  # read: newest seen
 
 
+def test_time_stamps_count_from_the_last_start() -> None:
+    """Tab. 16 [4]: «время с момента запуска шинного модуля»: a restart starts the count
+    again, DC or not (docs/cpx-e-ec.md choice 45); bit 4 of the flags (ETG.1020's "local
+    time stamp") stays clear, as in Tab. 15's «02 02»."""
+    bench = tab9(**STI).to_op()
+    bench.run(2.0)
+    bench.apply("restart")
+    restarted_at = bench.now
+    bench.run(0.5)
+    bench.apply("short_circuit", module=1, on=True)  # the 16DI's sensor supply
+    shorted_at = bench.now
+    bench.run(0.01)
+    message = bench.cpx.history.message(bench.cpx.history.newest)
+    assert message is not None and message.text_id == 0x3702
+    assert message.timestamp_ns == (shorted_at + 1000 - restarted_at) * 1000
+    assert message.encode()[4:6] == bytes((0x02, 0x01))  # one parameter, type 2 (error)
+
+
 def shorted_tab9() -> tuple[Bench, int, bytes]:
     """The Tab. 15 case (short circuit at output 0 of module 2): bench, newest sub, bytes."""
     bench = tab9(**STI).to_op()
