@@ -56,9 +56,7 @@ class ModuleFaults:
         copy = _Copy()
         with gui.add_folder("Module faults", expand_by_default=False):
             copy.module = gui.add_dropdown(
-                "Module",
-                tuple(module_options(self._rail())) or ("1",),
-                hint="the module the fault goes on",
+                "Module", self._options(), hint="the module the fault goes on"
             )
             copy.form = ActionForm(
                 gui,
@@ -97,12 +95,18 @@ class ModuleFaults:
         with self._lock:
             copy.available = names
 
+    def _options(self) -> tuple[str, ...]:
+        return tuple(module_options(list(self._rail()))) or ("1",)
+
     def update(self, rail_changed: bool) -> None:
-        """Per frame: new rail options (then a new read), and the parked actions shown."""
-        options = module_options(list(self._rail())) if rail_changed else None
+        """Per frame: new rail options (then a new read), and the parked actions shown.
+        Every copy whose options are not the rail's, not only on the frame the rail changed:
+        a copy built from the rail before that frame and stored after it (the promote runs
+        on another thread) kept the old options until the rail changed again."""
+        options = self._options()
         for copy in self._part.each():
-            if options is not None:
-                set_options(copy.module, options)
+            if rail_changed or tuple(copy.module.options) != options:
+                set_options(copy.module, list(options))
                 self._read(copy)
             with self._lock:
                 available, copy.available = copy.available, None

@@ -192,7 +192,7 @@ class ModulePanel:
         # With a token the rows get a Module picker of their own, in a folder of their own:
         # on the shared picker the instructor's pick of the module to pull or switch off went
         # to every trainee's page (docs/classroom.md).
-        options = tuple(module_options(self._rail)) or ("1",)
+        options = self._options()
         with gui.add_folder("Rail and power"):
             # Starts where a new page's Module picker does (public anyway).
             start = self.pick.default
@@ -210,7 +210,7 @@ class ModulePanel:
         plug_type = gui.add_dropdown("Plug type", self._catalog, initial_value=None
                                      if own is None else plug_preset(self._entry(own.value),
                                                                      self._catalog))
-        swap_with = gui.add_dropdown("Swap with", tuple(module_options(self._rail)) or ("1",))
+        swap_with = gui.add_dropdown("Swap with", self._options())
         powered = gui.add_checkbox("Module powered", True)
         if own is None:  # the shared rows: each page's own pick
             form = _RailForm(ops, ClientPick(self._server, plug_type),
@@ -244,6 +244,10 @@ class ModulePanel:
         return form
 
     # ---- helpers ------------------------------------------------------------------------
+    def _options(self) -> tuple[str, ...]:
+        """An own Module / Swap with picker's options: the rail's ("1" before there is one)."""
+        return tuple(module_options(self._rail)) or ("1",)
+
     def _target(self, option: Any) -> str | None:
         slot = option_slot(str(option))
         return None if slot is None else f"{self._id}/{slot}"
@@ -379,9 +383,15 @@ class ModulePanel:
             for form in self._rails.each():
                 if form.module is None:
                     form.swap_with.set_options(options)
-                    continue
-                set_options(form.swap_with, options)
-                set_options(form.module, options)
+        # An instructor's own rows: every copy whose options are not the rail's, not only on
+        # the frame the rail changed (a copy built from the rail before that frame and stored
+        # after it, by a promote on another thread, kept the old options for good).
+        own = list(self._options())
+        for form in self._rails.each():
+            if form.module is not None and (changed or list(form.module.options) != own
+                                            or list(form.swap_with.options) != own):
+                set_options(form.swap_with, own)
+                set_options(form.module, own)
                 self._preset(form)
         self._offer()
         self._show_pages()
