@@ -107,14 +107,28 @@ class Page:
         """The uuid of this page's own widget (one ``other`` never got: shared widgets have
         the same uuid on every page) offering ``option`` and labelled ``label``, waiting for
         it to arrive: per-client widgets are built on viser's thread after the promote, and on
-        a loaded machine the newest widget by that label can still be the shared one."""
+        a loaded machine the newest widget by that label can still be the shared one.
+
+        ``option`` is one the widget offers now: a copy built before the server knew its
+        options (an instructor's Module picker before the rail's first frame) gets them by a
+        later update, not in its creation message."""
         def find() -> str | None:
             shared = {m.get("uuid") for m in other.received() if "props" in m}
-            for m in reversed(self.received()):
-                props = m.get("props") or {}
-                if m.get("uuid") not in shared and (label is None or props.get("label") == label) \
-                        and option in (props.get("options") or ()):
-                    return str(m["uuid"])
+            labels: dict[str, Any] = {}
+            offered: dict[str, tuple[Any, ...]] = {}  # own widgets in creation order
+            for m in self.received():
+                uuid = m.get("uuid")
+                if uuid in shared:
+                    continue
+                if "props" in m:
+                    labels[uuid] = m["props"].get("label")
+                    offered[uuid] = tuple(m["props"].get("options") or ())
+                elif uuid in offered and m.get("type") == "GuiUpdateMessage" \
+                        and "options" in (m.get("updates") or {}):
+                    offered[uuid] = tuple(m["updates"]["options"] or ())
+            for uuid in reversed(offered):
+                if (label is None or labels[uuid] == label) and option in offered[uuid]:
+                    return str(uuid)
             return None
         return str(wait(find))
 
