@@ -5,6 +5,7 @@ Two websocket connections stand in for the browsers (tests/app/test_classroom_le
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -12,6 +13,7 @@ from typing import Any
 
 import msgspec
 import pytest
+from viser._messages import RunJavascriptMessage  # viser 1.1.1, pinned
 
 from app.classroom.roles import Access
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
@@ -62,15 +64,40 @@ def _settle(first: Page, second: Page, quiet_s: float = 1.5, timeout_s: float = 
             last, since = now, time.monotonic()
 
 
-def _moves_after(served: ServedRig, first: Page, second: Page, act: Any) -> tuple[int, int]:
+_probes = itertools.count()
+QUIET_S = 0.5  # how long a page that must not move is watched, once the server is through
+
+
+def _probe(served: ServedRig, *pages: Page) -> None:
+    """Until each page got a message the server queued for it now: what the server had
+    queued for a page before (a camera move of the same action) has reached it (a
+    connection's messages go out in the order they were queued)."""
+    source = f"// probe {next(_probes)}"
+    for client in served.server.get_clients().values():
+        client._websock_connection.queue_message(RunJavascriptMessage(source=source))
+    _wait(lambda: all(any(m.get("source") == source for m in page.received())
+                      for page in pages))
+
+
+def _moves_after(served: ServedRig, first: Page, second: Page, act: Any,
+                 expect: tuple[bool, bool]) -> tuple[int, int]:
+    """The camera moves each page got from ``act``. A page ``expect``ed to move is waited
+    for (a click's move comes CLICK_SETTLE_S after it); a page that must not move is watched
+    only after a positive sign that the server is through with the action: the other page's
+    move arrived, then a probe queued after it reached this page, and QUIET_S more."""
     _settle(first, second)
+    pages = first, second
     before = cameras(first), cameras(second)
+
+    def moved() -> tuple[int, int]:
+        return cameras(first) - before[0], cameras(second) - before[1]
+
     act()
-    time.sleep(CLICK_SETTLE_S + 0.7)
-    served.dashboard.tick()
-    served.server.flush()
-    time.sleep(0.3)
-    return cameras(first) - before[0], cameras(second) - before[1]
+    _wait(lambda: all(n >= 1 for n, want in zip(moved(), expect, strict=True) if want))
+    if not all(expect):
+        _probe(served, *pages)
+        time.sleep(QUIET_S)
+    return moved()
 
 
 def test_a_click_on_a_device_moves_only_the_clicking_browser_s_camera(
@@ -79,7 +106,7 @@ def test_a_click_on_a_device_moves_only_the_clicking_browser_s_camera(
     line = rig.dashboard.line
     assert line is not None
     node = line.scene.bodies["trscat"].clickables[0].name
-    moved = _moves_after(rig, first, second, lambda: click(first, node))
+    moved = _moves_after(rig, first, second, lambda: click(first, node), (True, False))
     assert line.focused == "trscat"  # the click did arrive
     assert moved[0] >= 1 and moved[1] == 0, moved
 
@@ -88,7 +115,7 @@ def test_show_the_whole_line_moves_only_that_browser_s_camera(
         served: tuple[ServedRig, Page, Page]) -> None:
     rig, first, second = served
     button = second.widget("Show the whole line")
-    moved = _moves_after(rig, first, second, lambda: second.set(button, True))
+    moved = _moves_after(rig, first, second, lambda: second.set(button, True), (False, True))
     assert moved[1] >= 1 and moved[0] == 0, moved
 
 
@@ -98,7 +125,7 @@ def test_a_scenario_focus_still_moves_every_browser(
     rig, first, second = served
     line = rig.dashboard.line
     assert line is not None
-    moved = _moves_after(rig, first, second, lambda: line.focus(None, "cpx"))
+    moved = _moves_after(rig, first, second, lambda: line.focus(None, "cpx"), (True, True))
     assert moved[0] >= 1 and moved[1] >= 1, moved
 
 
