@@ -35,7 +35,7 @@ from devices.device import UNKNOWN_MODULE, CommandError, UnknownArgument
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
 from devices.master.dc import DcState
 from devices.master.master import DC_MACHINE
-from devices.names import did_you_mean
+from devices.names import closest_slip, did_you_mean
 from devices.od import SdoAbort
 
 US = 1_000_000
@@ -63,14 +63,21 @@ def step_label(number: int) -> str:
 
 
 def _unknown_key(raw: Mapping[str, Any], known: tuple[str, ...], key: str,
-                 fail: Callable[[str, str], ScenarioError]) -> ScenarioError | None:
-    """A table that says what it is by none of its keys: name the first key that is not
-    a known one (``acton`` for ``action``), as the rig files do."""
+                 fail: Callable[[str, str], ScenarioError],
+                 meant: tuple[str, ...] | None = None) -> ScenarioError | None:
+    """A table that says what it is by none of its keys: name a key that is not a known one
+    (``acton`` for ``action``), as the rig files do: the closest slip of a known key (not an
+    argument that sorts before it: ``active``), else the first. ``meant``: only a slip of one
+    of these keys is named (None when there is none): the table lacks them, and its other
+    keys are arguments."""
     unknown = sorted(set(raw) - set(known))
-    if not unknown:
+    name = closest_slip(unknown, known if meant is None else meant)
+    if name is None and meant is None and unknown:
+        name = unknown[0]
+    if name is None:
         return None
-    return fail(f"{key}.{unknown[0]}", f"unknown key (known here: {', '.join(known)})"
-                                       f"{did_you_mean(unknown[0], known)}")
+    return fail(f"{key}.{name}", f"unknown key (known here: {', '.join(known)})"
+                                 f"{did_you_mean(name, known)}")
 
 
 @dataclass(frozen=True)
@@ -277,6 +284,10 @@ def _steps(raw_steps: list[Any], fail: Callable[[str, str], ScenarioError]) -> I
             continue
         target = _typed(raw, "target", str, None, fail, f"{key}.target")
         if target is None:
+            # A slip of the key (targt) landed among the action's arguments.
+            typo = _unknown_key(raw, _STEP_KEYS_SHOWN, key, fail, meant=("target",))
+            if typo is not None:
+                raise typo
             raise fail(key, "a command step needs target = \"device\" or \"device/N\"")
         action = _typed(raw, "action", str, "", fail, f"{key}.action")
         args = {k: v for k, v in raw.items() if k not in _STEP_KEYS}

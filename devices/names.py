@@ -31,6 +31,22 @@ def close_names(name: str, known: Iterable[str], n: int = 1,
     return [spelled[f] for f in found]
 
 
+def closest_slip(names: Iterable[str], known: Iterable[str]) -> str | None:
+    """The one of ``names`` that is most like one of ``known`` (a slip, as :func:`close_names`
+    judges), the first on a tie; None when none is a slip. Which of a table's unknown keys to
+    name: ``actoin`` of ``actoin`` and ``active`` (an argument) is the slip of ``action``."""
+    allowed = [str(one) for one in known]
+    best, score = None, 0.0
+    for name in names:
+        found = close_names(name, allowed)
+        if not found:
+            continue
+        ratio = difflib.SequenceMatcher(None, str(name).lower(), found[0].lower()).ratio()
+        if ratio > score:
+            best, score = name, ratio
+    return best
+
+
 def did_you_mean(name: str, known: Iterable[str]) -> str:
     """``"; did you mean 'slave'?"`` when ``name`` is a slip of one of ``known``, else ``""``:
     appended to an "unknown X" message after its list of what is allowed."""

@@ -310,6 +310,19 @@ def test_a_rig_the_scenario_names_that_is_not_there(tmp_path) -> None:
      r"step\[0\]\.acton: unknown key .*; did you mean 'action'\?$"),
     ("[[step]]\nat = 0\ncaption = \"x\"\ncaptoin = \"y\"\n",
      r"step\[0\]\.captoin: unknown key for a caption step; did you mean 'caption'\?$"),
+    # a command step (it has its action) whose target is misspelt: its other keys are the
+    # action's arguments, and it read "a command step needs target" with no hint
+    ("[[step]]\nat = 0\ntargt = \"fastcat\"\naction = \"power\"\non = true\n",
+     r"step\[0\]\.targt: unknown key \(known here: .*\); did you mean 'target'\?$"),
+    # the slip is named, not an argument that sorts before it, nor another slip
+    ("[[step]]\nat = 0\naftr = 1\nTraget = \"fastcat\"\naction = \"power\"\non = true\n",
+     r"step\[0\]\.Traget: unknown key \(known here: .*\); did you mean 'target'\?$"),
+    ("[[step]]\nat = 0\ntarget = \"fastcat\"\nactoin = \"power\"\nactive = true\n",
+     r"step\[0\]\.actoin: unknown key \(known here: .*\); did you mean 'action'\?$"),
+    ("[[step]]\nat = 0\nfocus = \"fastcat\"\nfocsu = \"trscat\"\n",
+     r"step\[0\]\.focsu: unknown key for a focus step; did you mean 'focus'\?$"),
+    ("[[step]]\nat = 0\ncheckpoint = \"x\"\nchekpoint = \"y\"\n",
+     r"step\[0\]\.chekpoint: unknown key for a checkpoint step; did you mean 'checkpoint'\?$"),
     ("[[on]]\nevent = \"resynch\"\ntarget = \"fastcat\"\naction = \"power\"\n",
      r"on\[0\]\.event: 'resynch' is not a master event .*; did you mean 'resync'\?$"),
     ("[[on]]\nevent = \"dc_state\"\nto = \"SYNCHRONIZNG\"\ntarget = \"fastcat\"\n"
@@ -320,6 +333,11 @@ def test_an_unknown_name_in_a_scenario_says_what_was_meant(text: str, message: s
     the list; the closest allowed name is offered (devices/names.py did_you_mean)."""
     with pytest.raises(ScenarioError, match=message):
         parse_scenario(text, "bad.toml")
+
+
+def test_a_command_step_without_target_and_no_slip_still_says_it_needs_one() -> None:
+    with pytest.raises(ScenarioError, match=r"step\[0\]: a command step needs target = "):
+        parse_scenario('[[step]]\nat = 0\naction = "power"\non = true\n', "bad.toml")
 
 
 @pytest.mark.parametrize(("text", "message"), [
