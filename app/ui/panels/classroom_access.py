@@ -67,6 +67,8 @@ def read_browser_token(client: viser.ClientHandle, access: Access, promoted: Pro
     """Blocking (run it in a worker thread): put the URL snippet on the page, then look for
     a token in the browser's storage for up to ``wait_s``; promote on the right one.
     ``alive``: False once the browser or the server is gone (stop asking)."""
+    if not alive():  # the thread starts late under load: the page may have left meanwhile
+        return False
     snippet = client.gui.add_html(URL_SNIPPET)
     deadline = time.monotonic() + wait_s
     try:
