@@ -22,7 +22,10 @@ from devices.servo.registers import REGISTER_BASE, R, register_spec
 if TYPE_CHECKING:
     from devices.servo.drive import ServoDrive
 
-PARAMETER_APPLY_US = 20_000  # "Ogni modifica è attiva dopo un intervallo di tempo di circa 20 ms"
+# 0x2000's parameter writes (ch. 4: "sfrutta l'oggetto 0x2000 ... Ogni modifica è attiva dopo
+# un intervallo di tempo di circa 20 ms"); 0x2006 writes parameters in HANDSHAKE_US (ch. 5:
+# "Affinché la scrittura sia effettiva occorre aspettare almeno 3ms", docs/servo-drive.md).
+PARAMETER_APPLY_US = 20_000
 HANDSHAKE_US = 3_000  # "occorre aspettare almeno 3 ms tra la scrittura dell'indirizzo e la lettura"
 # The modes 0x6060 takes and their 0x6502 bits: ch. 4 lists 1, 3, 6, 7, -1, -2, -127
 # (l. 3131-3145). DSP 402 bits 0 pp, 2 pv, 5 hm, 6 ip; bits 16.. manufacturer: -1, -2, -127 in
@@ -142,7 +145,7 @@ class IndirectAccess:
         else:
             pspec = parameter_spec(n)
             self.drive.check_parameter(pspec, value)
-            self._schedule(PARAMETER_APPLY_US, "var_write_address", address,
+            self._schedule(HANDSHAKE_US, "var_write_address", address,
                            lambda: self.drive.write_parameter(n, value))
 
     def _store(self, key: str, value: int) -> None:

@@ -96,6 +96,21 @@ def test_variable_read_and_write_by_address() -> None:
     assert (bench.read(0x2005, 1), bench.read(0x2005, 2)) == (0, 50)
 
 
+def test_parameter_written_by_address_is_in_force_after_3_ms() -> None:
+    """Ch. 5 "Lettura / Scrittura parametri del drive": 0x2006 writes "i parametri specifici
+    del drive" (the table of their addresses follows) and "Affinché la scrittura sia effettiva
+    occorre aspettare almeno 3ms". The "circa 20 ms" of ch. 4 is 0x2000's, not 0x2006's."""
+    bench = _preop()
+    bench.write(0x2006, 2, 60, 4)
+    bench.slave.sdo_download(0x2006, 1, (0x0003).to_bytes(2, "little"))  # d3
+    assert bench.drive.read_parameter(3) == 50
+    bench.run(3)
+    assert (bench.read(0x2006, 1), bench.drive.read_parameter(3)) == (0, 60)
+    bench.slave.sdo_download(0x2005, 1, (0x0003).to_bytes(2, "little"))
+    bench.run(3)
+    assert bench.read(0x2005, 2) == 60
+
+
 def test_save_with_0x2007() -> None:
     """Ch. 5 "Salvataggio in flash": axis disabled ("Fr"), 0x11 to 0x2007, two dashes while
     it saves, "Fr" again when done."""
