@@ -276,7 +276,7 @@ def _fastcat_alarm(row: fastcat.AlarmCode, module: int | None, title: str) -> Me
 
 def _servo_emcy(code: int, vendor: bytes) -> list[Meaning]:
     """Seed 004 ch. 5: each drive alarm sends its 0x603F code, the alarm number in byte 0."""
-    specs = [s for s in _drive_specs() if s.error_code_or_generic == code]
+    specs = [s for s in _drive_specs(servo.CODED_FIELDBUSES) if s.error_code_or_generic == code]
     if vendor and any(s.code == vendor[0] for s in specs):
         specs = [s for s in specs if s.code == vendor[0]]
     return [Meaning(SERVO, f"Drive error code {fmt_hex(code, 4)} (0x603F)",
@@ -425,7 +425,8 @@ def _error_field(value: int) -> list[Meaning]:
     code, number = ds301.ErrorHistory.fields(value)
     return [Meaning(SERVO, f"Drive 0x1003:1 (pre-defined error field) = {fmt_hex(value, 8)}",
                     servo.error_field_text(value, {s.code: s}) + ".", "seed 004 ch. 4, ch. 5")
-            for s in _drive_specs() if s.code == number and s.error_code_or_generic == code]
+            for s in _drive_specs(servo.CODED_FIELDBUSES)
+            if s.code == number and s.error_code_or_generic == code]
 
 
 def _diag_code(value: int) -> list[Meaning]:
@@ -471,20 +472,23 @@ def _fastcat_code(code: int) -> list[Meaning]:
 
 
 # ---- names -------------------------------------------------------------------------------
-def _drive_specs() -> list[servo.AlarmSpec]:
-    """Every drive alarm of every fieldbus table, once (alarms 30-35 differ by fieldbus)."""
+def _drive_specs(buses: tuple[str, ...] = _SERVO_FIELDBUSES) -> list[servo.AlarmSpec]:
+    """Every drive alarm of these fieldbuses' tables, once (alarms 30-35 differ by fieldbus);
+    by default of every table."""
     found: dict[tuple[int, str], servo.AlarmSpec] = {}
-    for bus in _SERVO_FIELDBUSES:
+    for bus in buses:
         for spec in servo.alarm_table(bus).values():
             found.setdefault((spec.code, spec.name), spec)
     return list(found.values())
 
 
 def _drive_alarm(spec: servo.AlarmSpec) -> Meaning:
+    coded = any(servo.alarm_table(bus).get(spec.code) == spec for bus in servo.CODED_FIELDBUSES)
+    code = (f"0x603F code {fmt_hex(spec.error_code_or_generic, 4)}" if coded else
+            "no 0x603F code (a Profinet drive has no 0x603F and sends no emergency, ch. 6)")
     return Meaning(SERVO, f"Drive alarm {spec.code} {spec.name}",
-                   f"{_first_capital(spec.description)}; {_SERVO_EFFECT[spec.effect]}; 0x603F code "
-                   f"{fmt_hex(spec.error_code_or_generic, 4)}{_reset_note(spec)}.",
-                   "seed 004 ch. 3, ch. 5")
+                   f"{_first_capital(spec.description)}; {_SERVO_EFFECT[spec.effect]}; "
+                   f"{code}{_reset_note(spec)}.", "seed 004 ch. 3, ch. 5")
 
 
 def _first_capital(text: str) -> str:

@@ -95,19 +95,24 @@ _FIELDBUS_ALARMS: tuple[AlarmSpec, ...] = (
 
 ECAT_EEPROM = 35
 
-# Ch. 6 (Profinet): 30-33 not resettable, 34 resettable with control word 0x08.
+# Ch. 6 (Profinet): 30-33 not resettable, 34 resettable with control word 0x08. Its table
+# prints no 0x603F code, and a Profinet drive has no 0x603F and sends no emergency (a 32-byte
+# shared memory): none of these has an error code (CODED_FIELDBUSES).
 _PROFINET_ALARMS: tuple[AlarmSpec, ...] = (
     AlarmSpec(30, "INTERNAL_COMM_TIMEOUT", "drive internal communication timeout", N, None,
               resettable=False),
     AlarmSpec(31, "PROFINET_INIT_1", "Profinet interface initialisation error, phase 1", N,
-              0x7500, resettable=False),
+              None, resettable=False),
     AlarmSpec(32, "PROFINET_INIT_2", "Profinet interface initialisation error, phase 2", N,
-              0x7500, resettable=False),
+              None, resettable=False),
     AlarmSpec(33, "PROFINET_NOT_STARTED", "Profinet fieldbus did not start correctly", N,
-              0x6320, resettable=False),
+              None, resettable=False),
     AlarmSpec(34, "PROFINET_SYNC_TIMEOUT", "synchronisation timeout with the Profinet master", N,
-              0x8700),
+              None),
 )
+# The fieldbuses on which the drive has 0x603F and sends emergencies (ch. 4 CANopen, ch. 5
+# CoE): an emergency or a 0x603F code is read against their tables only.
+CODED_FIELDBUSES: tuple[str, ...] = ("canopen", "ethercat")
 del R, N
 
 DRIVE_ALARMS: dict[int, AlarmSpec] = {a.code: a for a in _DRIVE_ALARMS}

@@ -45,8 +45,9 @@ def test_a_drive_alarm_says_how_it_is_reset(spec: servo.AlarmSpec) -> None:
     "Resettabile" NO for 30-33), and "if it fails the alarm condition may persist". The tab
     said nothing of it, for the alarm by number and for its emergency."""
     code = spec.error_code_or_generic
-    queries = (f"alarm {spec.code}",
-               f"CoE - Emergency (Hex: {code:04x}, 81, {spec.code:02x} 00 00 00 00').")
+    queries: tuple[str, ...] = (f"alarm {spec.code}",)
+    if any(servo.alarm_table(b)[spec.code] == spec for b in servo.CODED_FIELDBUSES):
+        queries += (f"CoE - Emergency (Hex: {code:04x}, 81, {spec.code:02x} 00 00 00 00').",)
     for query in queries:
         found = [m for m in decode(query) if m.family == SERVO and spec.name in m.title + m.text]
         assert found, (query, decode(query))
@@ -68,3 +69,24 @@ def test_a_drive_alarm_says_how_it_is_reset(spec: servo.AlarmSpec) -> None:
 def bus_name(bus: str) -> str:
     return {"modbus": "Modbus", "canopen": "CANopen", "ethercat": "EtherCAT",
             "profinet": "Profinet"}[bus]
+
+
+_PROFINET_ONLY = [s for s in servo.alarm_table("profinet").values()
+                  if servo.alarm_table("ethercat")[s.code].name != s.name]
+
+
+@pytest.mark.parametrize("spec", _PROFINET_ONLY, ids=lambda s: f"{s.code}-{s.name}")
+def test_a_profinet_alarm_has_no_0x603f_code(spec: servo.AlarmSpec) -> None:
+    """Seed 004 ch. 6 "Codici allarmi specifici" prints code, meaning and "Resettabile" only:
+    no 0x603F column (ch. 5's table is the EtherCAT one, "Codice Allarme ECO"). A Profinet drive
+    has no 0x603F and sends no emergency (ch. 6: a 32-byte shared memory). The tab offered
+    31-34's Profinet meanings for the EtherCAT codes 0x7500 / 0x6320 / 0x8700, so the emergency
+    of a refused PDO mapping read as "Profinet fieldbus did not start correctly" too."""
+    assert spec.error_code is None
+    coe = servo.alarm_table("ethercat")[spec.code]
+    frame = f"CoE - Emergency (Hex: {coe.error_code_or_generic:04x}, 81, {spec.code:02x} 00 00 " \
+            "00 00').'"
+    for query in (frame, f"0x{coe.error_code_or_generic:04X}"):
+        assert not [m for m in decode(query) if spec.name in m.title + m.text], decode(query)
+    found = [m for m in decode(f"alarm {spec.code}") if m.title.endswith(spec.name)]
+    assert found and "no 0x603F code" in found[0].text and "0x603F code 0x" not in found[0].text
