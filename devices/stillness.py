@@ -6,7 +6,11 @@ nothing" exactly. Two pieces serve every model that does so by comparing its sta
 - :func:`value_key`: a comparable copy of a value, containers and plain objects one value at
   a time all the way down, so ``value_key(x) == value_key(y)`` means the two hold the same
   values (not merely the same objects, which a step mutates in place); :func:`value_key_for`
-  makes one that takes a model's deeply immutable classes as they are;
+  makes one that takes a model's deeply immutable classes as they are. An object with
+  ``__slots__`` is read slot by slot (:func:`slot_names`), never through a ``__dict__``: on
+  CPython 3.11 reading an object's ``__dict__`` once leaves every later attribute access of
+  that object on the interpreter's slow path (docs/performance.md "Session 21"), so the
+  small objects a moving drive touches every tick have slots;
 - :class:`Backoff`: when a check for stillness failed, wait 1, 2, 4 .. :data:`MAX_WAIT` steps
   before the next one, so a model that looks still but is not (a filter settling, a timer
   counting) pays about 1 % of a step for the checks. Waiting only delays the skipping; it can
@@ -16,6 +20,7 @@ nothing" exactly. Two pieces serve every model that does so by comparing its sta
 from __future__ import annotations
 
 import enum
+import functools
 from collections.abc import Callable, Iterable
 from typing import Any
 
@@ -45,10 +50,29 @@ def value_key_for(values: Iterable[type] = ()) -> Callable[[Any], Any]:
         if isinstance(v, set):
             return frozenset(v)
         state = getattr(v, "__dict__", None)
-        if state is None:  # frozen values with slots (none today): compare the object itself
-            return v
+        if state is None:
+            names = slot_names(type(v))
+            if not names:  # nothing to read: compare the object itself
+                return v
+            return (type(v), tuple((k, key(getattr(v, k, _UNSET))) for k in names))
         return (type(v), tuple((k, key(x)) for k, x in state.items()))
     return key
+
+
+_UNSET = object()  # a slot not assigned (as a key a __dict__ would not have yet)
+
+
+@functools.cache
+def slot_names(cls: type) -> tuple[str, ...]:
+    """The slots of ``cls`` and its bases, bases first (``__weakref__`` and ``__dict__``
+    left out); empty for a class without slots."""
+    names: list[str] = []
+    for base in reversed(cls.__mro__):
+        slots = base.__dict__.get("__slots__", ())
+        for name in (slots,) if isinstance(slots, str) else slots:
+            if name not in ("__dict__", "__weakref__"):
+                names.append(name)
+    return tuple(names)
 
 
 value_key = value_key_for()

@@ -202,7 +202,7 @@ def lookup(fieldbus: str, key: int | str) -> AlarmSpec:
     return table[key]
 
 
-@dataclass
+@dataclass(slots=True)  # slots: read every tick of a drive, as Plant's (plant.py)
 class AlarmBank:
     """Latched alarms in the order they came, and the causes still present.
 

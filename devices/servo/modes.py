@@ -139,6 +139,10 @@ class SpeedMonitor:
     docs/servo-drive.md) and the flag is read off the clock.
     """
 
+    # Slots: read every tick of a moving drive, and a __dict__ read once (a stillness key)
+    # would slow each access for good on CPython 3.11 (devices/stillness.py slot_names).
+    __slots__ = ("below_threshold_since_us", "in_window_ms")
+
     def __init__(self) -> None:
         self.in_window_ms = 0.0
         #: start of the first tick of the current run within R16, us; None outside it

@@ -159,6 +159,11 @@ def plan_move(p0: float, v0: float, target: float, lim: Limits) -> list[Ramp]:
 class Trajectory:
     """The demand position and velocity, advanced through a plan."""
 
+    # Slots: read every tick of a moving drive, and a __dict__ read once (a stillness key)
+    # would slow each access for good on CPython 3.11 (devices/stillness.py slot_names).
+    __slots__ = ("_elapsed", "_index", "_plan", "_segment_start", "position", "target",
+                 "velocity")
+
     def __init__(self, position: float = 0.0) -> None:
         self.position = position
         self.velocity = 0.0

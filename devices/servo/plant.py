@@ -19,7 +19,7 @@ SETTLED_REV = 1e-7  # closer than this the position loop has settled (well below
 _exp = math.exp  # every tick of a drive in torque: no module attribute lookup
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)  # slots: as Plant's
 class AxisGeometry:
     neg_limit: float
     pos_limit: float
@@ -51,6 +51,11 @@ class AxisGeometry:
 
 
 class Plant:
+    # Slots: read every tick of a moving drive, and a __dict__ read once (a stillness key)
+    # would slow each access for good on CPython 3.11 (devices/stillness.py slot_names).
+    __slots__ = ("_end_stops", "_last_demand", "blocked", "geometry", "jammed", "omega",
+                 "theta")
+
     def __init__(self, geometry: AxisGeometry, position: float = 0.0) -> None:
         self.geometry = geometry
         self.theta = position

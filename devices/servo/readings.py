@@ -35,6 +35,10 @@ def _clamp(value: float, limit: int) -> int:
 class CurrentMeter:
     """o1 instantaneous current, o2 RMS current, o3 overload (% of I2T), all in % of nominal."""
 
+    # Slots: read every tick of a moving drive, and a __dict__ read once (a stillness key)
+    # would slow each access for good on CPython 3.11 (devices/stillness.py slot_names).
+    __slots__ = ("_mean_square", "instant", "overload", "rms")
+
     def __init__(self) -> None:
         self.instant = self.rms = self.overload = 0.0
         self._mean_square = 0.0

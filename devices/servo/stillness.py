@@ -21,7 +21,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 from devices.servo.ds402 import State
-from devices.stillness import Backoff
+from devices.stillness import Backoff, slot_names
 from devices.stillness import value_key as _value
 
 if TYPE_CHECKING:
@@ -48,7 +48,7 @@ def state_key(drive: ServoDrive) -> tuple[Any, ...]:
     flat = tuple(tuple(getattr(drive, name).items()) for name in FLAT)
     indirect = drive.indirect
     return own, flat, tuple(indirect.values.items()), len(indirect._jobs), \
-        tuple(vars(drive.meter).values())
+        tuple(getattr(drive.meter, name) for name in slot_names(type(drive.meter)))
 
 
 def filter_only(before: tuple[Any, ...], after: tuple[Any, ...]) -> bool:
