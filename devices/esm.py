@@ -45,7 +45,11 @@ def request_refusal(current: AlState, target: AlState,
     return INVALID_STATE_CHANGE
 
 
-@dataclass
+# Slots: every step reads a slave's state and error flag (the master, the slave's own step).
+# A field's default left in the class (an enum member: a mutable type's instance) keeps
+# CPython 3.11 from specialising those reads; slots take the defaults out of the class.
+# Each subclass is a slotted dataclass too, or its redeclared default would be back.
+@dataclass(slots=True)
 class Esm(Generic[K]):
     """One slave's ESM. A subclass names its ``ErrorKind`` enum in ``kinds`` (members NONE and
     REFUSED at least) and redeclares ``error`` with that enum's NONE as the default.

@@ -87,7 +87,7 @@ def controller_alarm(latched: list[int]) -> int | None:
 request_refusal = esm.request_refusal  # ch. 5, no BOOT: 0x0013; outside the table: 0x0011
 
 
-@dataclass
+@dataclass(slots=True)  # as devices/esm.py's
 class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
     kinds: ClassVar[type[ErrorKind]] = ErrorKind

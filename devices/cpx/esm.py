@@ -57,7 +57,7 @@ def request_refusal(current: AlState, target: AlState) -> int | None:
     return esm.request_refusal(current, target, TRANSITIONS, has_boot=True)
 
 
-@dataclass
+@dataclass(slots=True)  # as devices/esm.py's
 class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
     kinds: ClassVar[type[ErrorKind]] = ErrorKind

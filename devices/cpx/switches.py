@@ -47,7 +47,7 @@ def check_rotary(value: int) -> int:
     return value
 
 
-@dataclass
+@dataclass(slots=True)  # slots: as devices/esm.py's Esm (every frame reads active_mode)
 class Switches:
     """What the switches are set to now (``rotary``, ``dil1``, ``dil2``) and what the firmware
     read at its last start (``active_*``)."""

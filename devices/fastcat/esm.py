@@ -31,7 +31,7 @@ class ErrorKind(enum.Enum):
     AUTONOMOUS = "autonomous"  # the slave left OP/SAFEOP on its own: ERR single flash
 
 
-@dataclass
+@dataclass(slots=True)  # as devices/esm.py's
 class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
     kinds: ClassVar[type[ErrorKind]] = ErrorKind

@@ -90,7 +90,7 @@ DC_TRANSITIONS: dict[tuple[DcState, DcTrigger], DcState] = {
 DC_FAULTS = ("drift", "jitter", "sync0_lost")
 
 
-@dataclass
+@dataclass(slots=True)  # slots: as devices/esm.py's Esm (the master reads its state every step)
 class DcUnit:
     window_ns: int = DEFAULT_WINDOW_NS
     state: DcState = DcState.IDLE

@@ -64,7 +64,7 @@ FALL_KIND: dict[int, ErrorKind] = {
 request_refusal = esm.request_refusal  # no BOOT (§9.2): 0x0013; outside the table: 0x0011
 
 
-@dataclass
+@dataclass(slots=True)  # as devices/esm.py's
 class Esm(esm.Esm[ErrorKind]):
     error: ErrorKind = ErrorKind.NONE
     kinds: ClassVar[type[ErrorKind]] = ErrorKind

@@ -40,6 +40,7 @@ from devices.cpx.switches import DIL_MODES
 from devices.device import CommandError
 from devices.ethercat import AlState
 from devices.od import SdoAbort
+from devices.stillness import slot_names
 
 ROOT = Path(__file__).resolve().parents[2]
 CPX_SCENARIOS = ("cpx_short_circuit", "cable_pulled")
@@ -423,7 +424,8 @@ def test_values_taken_as_they_are_are_deeply_immutable() -> None:
         if depth > 6:
             return
         items = v.values() if isinstance(v, dict) else v if isinstance(v, (list, tuple)) \
-            else vars(v).values() if hasattr(v, "__dict__") and not callable(v) else ()
+            else vars(v).values() if hasattr(v, "__dict__") and not callable(v) \
+            else [getattr(v, name, None) for name in slot_names(type(v))]
         for x in items:
             walk(x, depth + 1)
 

@@ -26,6 +26,7 @@ from __future__ import annotations
 import enum
 import random
 from collections.abc import Callable
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -71,7 +72,7 @@ def master_state(rig: Rig) -> dict[str, Any]:
     slaves = [{k: v for k, v in vars(link.slave).items() if isinstance(v, PLAIN)}
               for link in m.links]
     return {"links": links, "slaves": slaves, "phys": (m.phys_in, m.phys_out), "cables": m.cables,
-            "dc": vars(m.dc), "dc_hold": m.dc_hold, "rng": m.rng.getstate(),
+            "dc": asdict(m.dc), "dc_hold": m.dc_hold, "rng": m.rng.getstate(),
             "counts": (m.frames, m.lost_frames, m.to_lose, m.next_cycle_us, m.network_op,
                        m.link_up, m._bursting, m.target), "log": list(m.log)}
 

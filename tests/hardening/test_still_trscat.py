@@ -36,6 +36,7 @@ from app.rig_config import build_rig, parse_rig_spec
 from app.scenario import load_scenario
 from devices.device import CommandError
 from devices.od import SdoAbort
+from devices.stillness import slot_names
 from devices.trscat.device import TrsCat
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -217,7 +218,9 @@ def value_of(obj: Any) -> Any:
         return obj.getstate()
     if callable(obj):
         return None  # the ESM's bound emit
-    return (type(obj).__name__, sorted((k, value_of(v)) for k, v in vars(obj).items()
+    attrs = vars(obj).items() if hasattr(obj, "__dict__") else \
+        [(name, getattr(obj, name)) for name in slot_names(type(obj))]  # the ESM has slots
+    return (type(obj).__name__, sorted((k, value_of(v)) for k, v in attrs
                                        if k not in _BOOKKEEPING))
 
 

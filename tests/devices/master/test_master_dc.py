@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import random
+from dataclasses import asdict
 
 import pytest
 from line_bench import IN_OP_US, LINE_RIG, US, line_in_op, master_view, records
@@ -255,7 +256,7 @@ def test_compensate_is_measure_and_trigger(window_ns: int) -> None:
         want = full.trigger(t, link=True, dc_slaves=1, dc_slaves_ready=True)
         got = None if short.compensate(rng_short) else \
             short.trigger(t, link=True, dc_slaves=1, dc_slaves_ready=True)
-        assert (got, vars(short)) == (want, vars(full))
+        assert (got, asdict(short)) == (want, asdict(full))
         for dc, trigger in ((short, got), (full, want)):
             if trigger is not None:
                 dc.state = DcState.COMPENSATING  # stay: only the counting is compared
