@@ -60,6 +60,9 @@ OUTBOX = 4096  # frames kept for an adapter that does not drain them (headless r
 CALM_FOREVER = 1 << 62  # _calm_until when neither heartbeat nor life guarding is running
 NO_STATE = "Off"  # the node is silent: drive off, or not on CANopen (c9 != 5)
 SECOND_US = 1_000_000  # the bus-load mark moves at each new second
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_OPERATIONAL = NmtState.OPERATIONAL
 
 
 class CanOpenNode(ProcessData, DeviceModel):
@@ -233,7 +236,7 @@ class CanOpenNode(ProcessData, DeviceModel):
             self._full_step(now_us)
             if not self.active:
                 return
-        elif self.state is NmtState.OPERATIONAL:
+        elif self.state is _OPERATIONAL:
             # The one part of a full step that may still act: the asynchronous TPDOs.
             sent = self._async_tpdos(now_us)
             if sent:

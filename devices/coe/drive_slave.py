@@ -85,6 +85,9 @@ SDO_LOG = 20
 QUIET_FOREVER_STEPS = 1 << 40
 OFF = "Off"  # the slave is not on the line (drive off, or c9 != 11)
 OFF_LED = LedPattern.OFF
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_PREOP, _OP = AlState.PREOP, AlState.OP
 
 
 class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceModel):
@@ -207,7 +210,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         self.last_frame_us = now_us
         self.frames += 1
         state = self.esm.state
-        if state is AlState.OP and self.outputs is not None:
+        if state is _OP and self.outputs is not None:
             self._apply_outputs(self.outputs)
             state = self.esm.state
         self._inputs_due = state in SAFEOP_OR_HIGHER if state in RANK \
@@ -401,13 +404,13 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
             self._follow_power()
         if self.on_line:
             last = self.last_frame_us
-            if self.esm.state is AlState.OP and (last is None or now_us - last > SM_WATCHDOG_US):
+            if self.esm.state is _OP and (last is None or now_us - last > SM_WATCHDOG_US):
                 self._check_watchdog()
             if drive.alarms.latched:  # empty in the usual case
                 self._check_controller()
             # watch() only when the latched alarms differ from the ones it saw (cheap check)
             seen = drive.alarms.latched if drive.powered else []
-            if seen != self.emergencies.known and self.esm.at_least(AlState.PREOP):
+            if seen != self.emergencies.known and self.esm.at_least(_PREOP):
                 for frame in self.emergencies.watch(drive):
                     self.emit(EmergencySent(now_us, self.drive.device_id,
                                             code=int.from_bytes(frame[:2], "little"),

@@ -46,12 +46,15 @@ ERROR_BY_ALARM: dict[int, LedPattern] = dict.fromkeys(sorted(CONTROLLER_ALARMS),
 _SEVERITY = (LedPattern.ON, LedPattern.FLICKERING, LedPattern.BLINKING,
              LedPattern.DOUBLE_FLASH, LedPattern.SINGLE_FLASH, LedPattern.OFF)
 _RANK = {p: i for i, p in enumerate(_SEVERITY)}
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_OFF = LedPattern.OFF
 
 
 def alarm_led(latched: list[int]) -> LedPattern:
     """The ERR pattern the latched drive alarms ask for by themselves (OFF for most)."""
     if not latched:
-        return LedPattern.OFF  # the usual case, checked every step
+        return _OFF  # the usual case, checked every step
     found = [ERROR_BY_ALARM[c] for c in latched if c in ERROR_BY_ALARM]
     return min(found, key=_RANK.__getitem__, default=LedPattern.OFF)
 

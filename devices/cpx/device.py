@@ -49,6 +49,9 @@ SYNC_MISSED_STEP = 3  # ETG.1020 sync error counter: +3 per missed event, -1 per
 SYNC_COUNTER_CAP = SYNC_ERROR_COUNTER_LIMIT + SYNC_MISSED_STEP  # recovers in a few cycles
 PD_STATES = frozenset({AlState.SAFEOP, AlState.OP})  # the sync error counter counts
 QUIET_HORIZON_STEPS = 1 << 40  # a quiet span with no clock comparison left to flip: "forever"
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_BOOTLOADER = DiagMode.BOOTLOADER
 
 
 class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, OperatorMixin,
@@ -184,7 +187,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         faults = self.fault_names
         if "watchdog" in faults or not (
                 self.powered and not self.boot_failed and "ac_failure" not in faults
-                and self.switches.active_mode is not DiagMode.BOOTLOADER):
+                and self.switches.active_mode is not _BOOTLOADER):
             return  # the frame passes the ESC, but no process data reach the application
         self.last_pd_us = now_us
         if self.esm.state in PD_STATES:

@@ -19,6 +19,9 @@ if TYPE_CHECKING:
     from devices.fastcat.modules import IoModule
 
 UDINT_MAX = 0xFFFF_FFFF
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_OP = AlState.OP
 
 
 class BusMixin:
@@ -50,7 +53,7 @@ class BusMixin:
         """One cycle on the internal bus. ``touched``: a command, AL control or object write
         came since the last step; without one, a module whose last step changed nothing and
         saw the same step length and output enable would do the same again: it is skipped."""
-        outputs_enabled = self.esm.state is AlState.OP and self.alarm is None
+        outputs_enabled = self.esm.state is _OP and self.alarm is None
         # The rail, the scan result and the binding change only by a command (which drops
         # the answer cache), a scan (which drops it too) or a rebind (after which it is
         # built): while the cache is there, its table is the table.

@@ -50,6 +50,9 @@ CNF_BUTTON = "cnf_button"  # StateChanged.machine of the button: released / pres
 CNF_PROCEDURE = "cnf"  # StateChanged.machine of the procedure: idle, resetting, scanning, ...
 ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this recently
 QUIET_FOREVER_STEPS = 1 << 40  # a quiet span with no end of its own (the rig caps it)
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_INIT, _NO_CNF = AlState.INIT, ScanPhase.IDLE
 
 
 class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, DeviceModel):
@@ -192,7 +195,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
 
     def take_emergencies(self) -> list[bytes]:
         """Emergency data queued in the mailbox; it runs from PREOP on (ETG.1000.6)."""
-        if not self.mailbox or not self.reachable() or self.esm.state is AlState.INIT:
+        if not self.mailbox or not self.reachable() or self.esm.state is _INIT:
             return []
         out, self.mailbox = self.mailbox, []
         return out
@@ -440,7 +443,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             if module is not None:
                 module.in_alarm = in_alarm
         scan = self.scan
-        phase = scan.phase(self.now_us) if scan is not None and scan.cnf else ScanPhase.IDLE
+        phase = scan.phase(self.now_us) if scan is not None and scan.cnf else _NO_CNF
         if phase is not self.cnf_phase:
             self.emit(StateChanged(self.now_us, self.device_id, from_state=self.cnf_phase.value,
                                    to_state=phase.value, machine=CNF_PROCEDURE))

@@ -68,6 +68,9 @@ def twincat_timestamp(epoch: dt.datetime, t_us: int) -> str:
 
 
 _LINE_PARAMS = frozenset({"cable", "position"})  # line positions 0 .. slaves - 1
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_SAFEOP, _COMPENSATING = AlState.SAFEOP, DcState.COMPENSATING
 
 
 class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel):
@@ -305,8 +308,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         exchange = cycle and not lost and not external
         target = self.target
         # The target of a DC slave (SAFEOP while DC holds): _target_of_dc, inlined.
-        held = AlState.SAFEOP if self.dc_hold and RANK[target] > RANK[AlState.SAFEOP] \
-            else target
+        held = _SAFEOP if self.dc_hold and RANK[target] > RANK[_SAFEOP] else target
         # quiet: every slave present, reachable and left unserved, each in the state the last
         # watch saw (still.py): the watch and the DC unit's trigger may take their short way.
         watched = self._watched
@@ -374,7 +376,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
         elif external or (cycle and not lost):  # states are read with the frames
             self._watch_states(skip)
         dc = self.dc
-        if quiet and dc.state is DcState.COMPENSATING and dc.fault is None and self._dc_links \
+        if quiet and dc.state is _COMPENSATING and dc.fault is None and self._dc_links \
                 and dc.compensate(self.rng):
             # Every DC slave present (quiet), link up, no fault, the deviation in the window:
             # compensate() did all measure() and trigger() would (dc.py).

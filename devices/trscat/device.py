@@ -48,6 +48,9 @@ from devices.trscat.transitions import OutputMode, TransitionsMixin
 
 DETECT_BASE_US = 200_000  # FieldRig: power-up until the TRS bus scan starts
 DETECT_PER_SLOT_US = 50_000  # FieldRig: per slot read on the TRS bus
+# Enum members read every step, bound once here: CPython 3.11 reads an enum class's
+# attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
+_LATCHING = (AlState.SAFEOP, AlState.OP)  # the states in which a frame latches the outputs
 
 
 class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsMixin, ModuleChecks,
@@ -162,7 +165,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         if not (self.powered and self.link_in):  # reachable(), inlined: called every cycle
             return
         self.last_frame_us = now_us
-        if self.sync.frame(now_us, self.rng) and self.esm.state in (AlState.SAFEOP, AlState.OP):
+        if self.sync.frame(now_us, self.rng) and self.esm.state in _LATCHING:
             self._latch_outputs(now_us)
 
     def take_emergencies(self) -> list[bytes]:
