@@ -330,7 +330,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
 
     def _enter(self, target: AlState) -> None:
         if target is AlState.SAFEOP:
-            self.drive.alarms.remove_cause(MAPPING_ALARM)  # a valid mapping passed
+            self.drive.alarms.condition_gone(MAPPING_ALARM)  # a valid mapping passed
             self._inputs_due = True
         if target is AlState.OP:
             self.pd_control = False

@@ -249,9 +249,19 @@ class AlarmBank:
         return True
 
     def remove_cause(self, code: int) -> None:
+        """clear_alarm: the instructor takes the cause away, injected or not."""
         self.changes += 1
         self.causes.discard(code)
         self.injected.discard(code)
+
+    def condition_gone(self, code: int) -> None:
+        """The model no longer sees the condition it raised ``code`` for (the CoE slave's valid
+        mapping at PREOP -> SAFEOP): its own cause goes, an injected one stands until
+        clear_alarm, or a trainee could reset what the instructor injected."""
+        if code in self.injected:
+            return
+        self.changes += 1
+        self.causes.discard(code)
 
     def reset(self, table: dict[int, AlarmSpec]) -> list[int]:
         """Alarm reset: drop the resettable alarms whose cause is gone; return them."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from servo_helpers import Sim, make_sim
 
+from devices.servo.alarms import AlarmBank, alarm_table
 from devices.servo.ds402 import State
 
 POSITION_SENSOR = 8
@@ -75,3 +76,18 @@ def test_two_injected_causes_come_back_in_their_order() -> None:
     _power_cycle(sim)
     assert sim.drive.alarms.latched == [24, 7]
     assert sim.drive.read_register(46) == 24
+
+
+def test_a_condition_the_model_sees_going_leaves_an_injected_cause() -> None:
+    """The CoE slave's mapping cause (alarm 33) goes when a valid mapping passes PREOP ->
+    SAFEOP; an injected 33 stands until clear_alarm, as every injected cause does."""
+    table = alarm_table("ethercat")
+    seen, injected = AlarmBank.empty(), AlarmBank.empty()
+    seen.latch(33, lasting_cause=True)
+    injected.latch(33, lasting_cause=True, injected=True)
+    for bank in (seen, injected):
+        bank.condition_gone(33)
+    assert (seen.causes, seen.reset(table), seen.latched) == (set(), [33], [])
+    assert (injected.reset(table), injected.latched, injected.injected_causes()) == ([], [33], [33])
+    injected.remove_cause(33)  # clear_alarm
+    assert (injected.reset(table), injected.injected_causes()) == ([33], [])
