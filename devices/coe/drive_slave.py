@@ -8,7 +8,8 @@ Stepped after its drive and before the master, like the CANopen node.
 
 - ESM (devices/coe/esm.py): mailbox from PREOP, the PDO assignment checked at PREOP -> SAFEOP
   (a bad one refuses with 0x0025 / 0x0024 and raises the drive's alarm 33 "mappatura pdo non
-  eseguita correttamente"), outputs needed for SAFEOP -> OP, no BOOT.
+  eseguita correttamente"; an injected 33 refuses with 0x0025 until cleared), outputs needed
+  for SAFEOP -> OP, no BOOT.
 - Process data: the master's frame (``exchange_frame``) carries the outputs image a PLC set
   with ``write_outputs``; it is applied in OP only, through the same object dictionary as an
   SDO, and it is the drive's Sync (SM-Synchron). Inputs are valid from SAFEOP. No frame for
@@ -297,6 +298,11 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         return None
 
     def check_output_mapping(self) -> int | None:
+        if MAPPING_ALARM in self.drive.alarms.injected:
+            # An injected 33 is a mapping fault in the drive: any mapping fails its check, on
+            # the RxPDO side, checked first (docs/ethercat-coe.md "Injected 33 and 34")
+            return self._refuse_mapping(f"alarm {MAPPING_ALARM} persists",
+                                        INVALID_OUTPUT_MAPPING)
         return self._check_mapping(self.rx_assign, self.rx_pdos, INVALID_OUTPUT_MAPPING)
 
     def check_input_mapping(self) -> int | None:
@@ -306,6 +312,9 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         problem = mapping_problem(assignment, pdos)
         if problem is None:
             return None
+        return self._refuse_mapping(problem, code)
+
+    def _refuse_mapping(self, problem: str, code: int) -> int:
         if self.esm.code != code:  # one message per refusal episode, not per retry
             self.drive.log(f"EtherCAT: PDO mapping refused at PREOP -> SAFEOP: {problem}")
         self.drive.raise_alarm(MAPPING_ALARM, lasting=True)

@@ -14,6 +14,7 @@ from coe_bench import Bench, make_bench
 from devices.ethercat import AlState
 
 PREOP, SAFEOP, OP = AlState.PREOP, AlState.SAFEOP, AlState.OP
+INVALID_OUTPUT_MAPPING = 0x0025
 
 
 def inject(bench: Bench, code: int) -> None:
@@ -44,4 +45,36 @@ def test_an_injected_33_stands_after_a_valid_mapping_passes_until_the_instructor
     reset_over_coe(bench)
     assert bench.drive.alarms.latched == []
     assert bench.drive.snapshot()["injected"] == []
+
+def test_an_injected_33_leaves_op_alone() -> None:
+    """The mapping is checked at PREOP -> SAFEOP: in OP the process data go on."""
+    bench = make_bench()
+    bench.up_to(OP)
+    inject(bench, 33)
+    slave = bench.slave
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (OP, 0x08, 0)
+    assert slave.leds.snapshot()["Error"] == "off"
+    assert [frame[:2] for frame in bench.emergencies] == [b"\x20\x63"]  # 0x6320
+
+
+def test_an_injected_33_refuses_safeop_with_0x0025_until_cleared() -> None:
+    bench = make_bench()
+    bench.up_to(PREOP)
+    inject(bench, 33)
+    bench.go(SAFEOP)
+    slave = bench.slave
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (
+        PREOP, 0x12, INVALID_OUTPUT_MAPPING)
+    assert slave.leds.snapshot()["Error"] == "blinking"  # ETG.1300 invalid configuration
+    assert bench.read(0x603F) == 0x6320
+    assert logged(bench, "PREOP -> SAFEOP", "alarm 33")
+    assert not logged(bench, "inject")  # the drive log reaches a trainee's page
+    bench.drive.apply("clear_alarm", {"code": "33"})
+    bench.go(SAFEOP)
+    assert (slave.al_state, slave.al_status_code) == (SAFEOP, 0)
+    reset_over_coe(bench)
+    assert bench.drive.alarms.latched == []
+    bench.go(OP)
+    assert (slave.al_state, slave.al_status_code) == (OP, 0)
+    assert slave.leds.snapshot()["Error"] == "off"
 
