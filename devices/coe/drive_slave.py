@@ -13,7 +13,8 @@ Stepped after its drive and before the master, like the CANopen node.
 - Process data: the master's frame (``exchange_frame``) carries the outputs image a PLC set
   with ``write_outputs``; it is applied in OP only, through the same object dictionary as an
   SDO, and it is the drive's Sync (SM-Synchron). Inputs are valid from SAFEOP. No frame for
-  the SM watchdog time in OP: back to SAFEOP with 0x001B and alarm 34 (sync timeout).
+  the SM watchdog time in OP: back to SAFEOP with 0x001B and alarm 34 (sync timeout); an
+  injected 34 does the same, and refuses SAFEOP -> OP with 0x001B until cleared.
 - A drive alarm of its controller (7, 30-32: esm.CONTROLLER_ALARMS) takes the process data
   away: SAFEOP / OP -> PREOP with 0x002B, SAFEOP refused until the alarm is reset; the
   mailbox goes on. Alarm 35 (the EtherCAT EEPROM, esm.EEPROM_ALARM) is a booting error:
@@ -330,6 +331,10 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         """No PREOP while the EtherCAT EEPROM alarm is latched (a booting error)."""
         return EEPROM_ERROR if EEPROM_ALARM in self.drive.alarms.latched else None
 
+    def check_sync(self) -> int | None:
+        """SAFEOP -> OP: no OP while an injected sync timeout (alarm 34) stands."""
+        return SM_WATCHDOG if SYNC_TIMEOUT_ALARM in self.drive.alarms.injected else None
+
     def check_outputs(self) -> int | None:
         """SAFEOP -> OP: the master must be sending process data (SM2) already."""
         if not self.rx_assigned:
@@ -364,6 +369,19 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
             return
         self.drive.log("EtherCAT: SM watchdog expired (no process data): OP -> SAFEOP")
         self.drive.raise_alarm(SYNC_TIMEOUT_ALARM)
+        self._sync_lost()
+
+    def _check_injected_sync(self) -> None:
+        """OP with an injected alarm 34: the sync timeout it names, the watchdog's own fall
+        (docs/ethercat-coe.md "Injected 33 and 34"); the alarm is latched already."""
+        if self.esm.state is not AlState.OP \
+                or SYNC_TIMEOUT_ALARM not in self.drive.alarms.injected:
+            return
+        self.drive.log(f"EtherCAT: alarm {SYNC_TIMEOUT_ALARM}: sync with the master lost "
+                       f"(0x{SM_WATCHDOG:04X}): OP -> SAFEOP")
+        self._sync_lost()
+
+    def _sync_lost(self) -> None:
         self._leave_op()
         self.esm.fall(AlState.SAFEOP, SM_WATCHDOG, ErrorKind.WATCHDOG, self.now_us)
 
@@ -417,6 +435,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
                 self._check_watchdog()
             if drive.alarms.latched:  # empty in the usual case
                 self._check_controller()
+                self._check_injected_sync()
             # watch() only when the latched alarms differ from the ones it saw (cheap check)
             seen = drive.alarms.latched if drive.powered else []
             if seen != self.emergencies.known and self.esm.at_least(_PREOP):
@@ -475,6 +494,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
                         return now  # the next step's watchdog check fires
                 elif self.rx_assigned:
                     end = last + SM_WATCHDOG_US  # the watchdog fires at the step after it
+            if state is AlState.OP and SYNC_TIMEOUT_ALARM in drive.alarms.injected:
+                return now  # the next step falls to SAFEOP (an injected alarm 34)
             seen = drive.alarms.latched if drive.powered else []
             if seen != self.emergencies.known and esm.at_least(AlState.PREOP):
                 return now  # the next step watches the alarms (emergencies)

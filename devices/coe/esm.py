@@ -50,12 +50,13 @@ EEPROM_ALARM = 35
 # EtherCAT EEPROM (alarm 35), then the mailbox sync managers the master set up (0x0016). P -> S:
 # the PDO mapping (0x0025 / 0x0024), then the sync managers of the process data
 # (0x001D / 0x001E), the ETG sample stack's order (the mapping gives the SM lengths);
-# devices/coe/sm_checks.py.
+# devices/coe/sm_checks.py. S -> O: an injected alarm 34 still standing (0x001B), then the
+# master's process data (0x0019).
 TRANSITION_CHECKS: dict[tuple[AlState, AlState], tuple[str, ...]] = {
     (AlState.INIT, AlState.PREOP): ("check_eeprom", "check_mailbox"),
     (AlState.PREOP, AlState.SAFEOP): ("check_controller", "check_output_mapping",
                                       "check_input_mapping", "check_sync_managers"),
-    (AlState.SAFEOP, AlState.OP): ("check_controller", "check_outputs"),
+    (AlState.SAFEOP, AlState.OP): ("check_controller", "check_sync", "check_outputs"),
 }
 
 RANK = esm.RANK
@@ -71,8 +72,10 @@ class ErrorKind(enum.Enum):
     BOOTING = "booting"  # in INIT with an EEPROM that did not load (alarm 35)
 
 
-# A refusal whose code is not an invalid configuration keeps its own ERR row (ETG.1300).
-REFUSAL_KIND: dict[int, ErrorKind] = {EEPROM_ERROR: ErrorKind.BOOTING}
+# A refusal whose code is not an invalid configuration keeps its own ERR row (ETG.1300): an
+# injected alarm 34 refuses SAFEOP -> OP with the SM watchdog's code, and ERR double flashes.
+REFUSAL_KIND: dict[int, ErrorKind] = {EEPROM_ERROR: ErrorKind.BOOTING,
+                                      SM_WATCHDOG: ErrorKind.WATCHDOG}
 
 
 def controller_alarm(latched: list[int]) -> int | None:

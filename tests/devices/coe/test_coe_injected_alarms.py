@@ -9,11 +9,15 @@ PREOP -> SAFEOP took the injected 33's cause away, so a trainee could reset it.
 
 from __future__ import annotations
 
+import random
+
 from coe_bench import Bench, make_bench
 
 from devices.ethercat import AlState
+from devices.master import EtherCatMaster
 
 PREOP, SAFEOP, OP = AlState.PREOP, AlState.SAFEOP, AlState.OP
+SM_WATCHDOG = 0x001B
 INVALID_OUTPUT_MAPPING = 0x0025
 
 
@@ -45,6 +49,7 @@ def test_an_injected_33_stands_after_a_valid_mapping_passes_until_the_instructor
     reset_over_coe(bench)
     assert bench.drive.alarms.latched == []
     assert bench.drive.snapshot()["injected"] == []
+
 
 def test_an_injected_33_leaves_op_alone() -> None:
     """The mapping is checked at PREOP -> SAFEOP: in OP the process data go on."""
@@ -78,3 +83,81 @@ def test_an_injected_33_refuses_safeop_with_0x0025_until_cleared() -> None:
     assert (slave.al_state, slave.al_status_code) == (OP, 0)
     assert slave.leds.snapshot()["Error"] == "off"
 
+
+# ---- 34: the sync timeout -----------------------------------------------------------------
+def test_an_injected_34_in_op_is_the_sm_watchdog_fall() -> None:
+    """As test_coe_esm's watchdog: SAFEOP + error with 0x001B, ERR double flash, 0x8700."""
+    bench = make_bench()
+    bench.up_to(OP)
+    inject(bench, 34)
+    slave = bench.slave
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (SAFEOP, 0x14, SM_WATCHDOG)
+    assert slave.leds.snapshot()["Error"] == "double_flash"
+    assert [frame[:2] for frame in bench.emergencies] == [b"\x00\x87"]  # 0x8700
+    assert bench.read(0x603F) == 0x8700
+    assert bench.kinds("state")[-1]["to"] == "SAFEOP"
+    assert bench.kinds("al_status")[-1]["code"] == "0x001B"
+    assert logged(bench, "alarm 34", "0x001B", "OP -> SAFEOP")
+    assert not logged(bench, "inject")
+
+
+def test_op_refused_with_0x001b_while_the_injected_34_stands_then_the_real_recovery() -> None:
+    bench = make_bench()
+    bench.up_to(OP)
+    inject(bench, 34)
+    slave = bench.slave
+    bench.go(OP)
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (SAFEOP, 0x14, SM_WATCHDOG)
+    assert slave.leds.snapshot()["Error"] == "double_flash"
+    reset_over_coe(bench)
+    assert bench.drive.alarms.latched == [34]  # the cause stands
+    bench.drive.apply("clear_alarm", {"code": "34"})
+    reset_over_coe(bench)
+    assert bench.drive.alarms.latched == []
+    bench.go(OP)
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (OP, 0x08, 0)
+    assert slave.leds.snapshot()["Error"] == "off"
+
+
+def test_an_injected_34_below_op_lets_the_slave_up_to_safeop_only() -> None:
+    bench = make_bench()
+    bench.up_to(PREOP)
+    inject(bench, 34)
+    assert bench.slave.al_status_code == 0  # nothing to fall from: no process data yet
+    bench.go(SAFEOP, OP)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (SAFEOP, SM_WATCHDOG)
+
+
+def test_the_built_in_master_keeps_an_injected_34_in_safeop_until_cleared() -> None:
+    bench = make_bench()
+    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
+                            retry_interval_us=200_000)
+    bench.cycling = False
+
+    def run(ms: int) -> None:
+        for _ in range(ms):
+            bench.step()
+            master.step(bench.t_us)
+
+    run(1000)
+    assert bench.slave.al_state is OP
+    bench.drive.apply("inject_alarm", {"code": "34"})
+    run(1000)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (SAFEOP, SM_WATCHDOG)
+    bench.drive.apply("clear_alarm", {"code": "34"})
+    run(1000)
+    assert (bench.slave.al_state, bench.slave.al_status_code) == (OP, 0)
+    bench.write(0x6040, 0, 0x0080, 2)
+    bench.write(0x6040, 0, 0x0000, 2)
+    assert bench.drive.alarms.latched == []
+
+
+
+def test_a_quiet_span_ends_at_an_injected_34_in_op() -> None:
+    """quiet_until must not let a span skip the step that takes the slave out of OP, even
+    with the emergency watch up to date (its own reason to end a span)."""
+    bench = make_bench()
+    bench.up_to(OP)
+    bench.drive.apply("inject_alarm", {"code": "34"})
+    bench.slave.emergencies.known = list(bench.drive.alarms.latched)
+    assert bench.slave.quiet_until(1_000) == bench.slave.now_us
