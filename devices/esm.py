@@ -84,6 +84,29 @@ class Esm(Generic[K]):
     def at_least(self, state: AlState) -> bool:
         return RANK[self.state] >= RANK[state]
 
+    def take_request(self, target: AlState, ack: bool) -> bool:
+        """An AL control write (0x0120) reaches the slave: bits 0-3 ``target``, bit 4 ``ack``
+        ("Error Ind Ack", ETG.1000.6; Beckhoff SSC AL_ControlInd, SOES alike). False: the
+        request is ignored and the slave must not process it.
+
+        While the error flag is set a request without the acknowledge is ignored, state, flag
+        and code as they are, except one for INIT (SSC: "Error Acknowledge with 0xX1 is
+        allowed"). With it the flag is cleared and the request processed; the code clears with
+        the answer (:meth:`settle_request`), so a request refused again keeps its code with no
+        0x0000 in between: the master reads 0x0130 / 0x0134 after the whole write."""
+        if not self.error_flag:
+            return True
+        if ack:
+            self.error = self.kinds.NONE  # type: ignore[assignment]
+            return True
+        return target is AlState.INIT
+
+    def settle_request(self, t_us: int) -> None:
+        """The end of a processed request: a flag the request left clear (an acknowledge the
+        transition did not raise again) leaves no AL status code behind (SSC SetALStatus)."""
+        if not self.error_flag:
+            self._set_code(NO_ERROR, t_us)
+
     def accept(self, target: AlState, t_us: int) -> None:
         """A requested transition done: the error flag is acknowledged, the code cleared."""
         self.requested = target

@@ -174,11 +174,13 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
     def powered(self) -> bool:
         return bool(self.drive.powered)
 
-    def request_state(self, target: AlState) -> None:
+    def request_state(self, target: AlState, ack: bool = False) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
         if not self.reachable():
             return
         now, esm, current = self.now_us, self.esm, self.esm.state
+        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+            return
         esm.requested = target
         refusal = request_refusal(current, target)
         if refusal is not None:
@@ -186,7 +188,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         elif target is current or RANK[target] < RANK[current]:
             if current is AlState.OP and target is not AlState.OP:
                 self._leave_op()
-            esm.accept(target, now)  # the same state again acknowledges the error flag
+            esm.accept(target, now)
             if not esm.at_least(AlState.SAFEOP):
                 self.inputs, self._inputs_due = None, False
         else:
@@ -195,6 +197,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
                 esm.refuse(code, now, REFUSAL_KIND.get(code))
             else:
                 self._enter(target)
+        esm.settle_request(now)
         self._refresh()
 
     def take_emergencies(self) -> list[bytes]:

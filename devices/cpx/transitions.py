@@ -45,16 +45,18 @@ SM_BAD_VALUE = {0x0011: 0x1001, 0x0012: 0x0081, 0x0013: 0x0000}
 class TransitionsMixin:
     """``request_state`` of :class:`~devices.cpx.device.CpxEEc` and its checks."""
 
-    def request_state(self: CpxEEc, target: AlState) -> None:
+    def request_state(self: CpxEEc, target: AlState, ack: bool = False) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
         self.touch()  # the next step runs in full (devices/cpx/stillness.py)
         if not self.reachable() or self.has_fault("ac_failure"):
             return  # the ESC takes the request, but no application answers it (Tab. 12)
         now, esm = self.now_us, self.esm
+        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+            return
         esm.requested = target
         refusal = request_refusal(esm.state, target)
         if target is esm.state:
-            esm.accept(target, now)  # the same state again acknowledges the error flag
+            esm.accept(target, now)
         elif refusal is not None:
             esm.refuse(refusal, now)
         elif target in (AlState.INIT, AlState.BOOT) or _down(esm.state, target):
@@ -67,6 +69,7 @@ class TransitionsMixin:
                 esm.refuse(refused[0], now, refused[1])
             else:
                 esm.refuse(refused, now)
+        esm.settle_request(now)
         self._refresh_leds()
 
     def _transition_check(self: CpxEEc, current: AlState,

@@ -205,16 +205,18 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         loss): the emergencies not read yet are lost. 0x5400 follows the latched alarm."""
         self.mailbox = []
 
-    def request_state(self, target: AlState) -> None:
+    def request_state(self, target: AlState, ack: bool = False) -> None:
         """AL control write. The answer is in ``al_status`` / ``al_status_code``."""
         self._touched = True
         if not self.reachable():
             return
         now, esm = self.now_us, self.esm
+        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+            return
         esm.requested = target
         refusal = request_refusal(esm.state, target)
         if target is esm.state:
-            esm.accept(target, now)  # the same state again acknowledges the error flag
+            esm.accept(target, now)
         elif refusal is not None:
             esm.refuse(refusal, now)
         elif target is AlState.INIT:
@@ -238,6 +240,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
                 esm.accept(target, now)
         else:
             esm.accept(target, now)
+        esm.settle_request(now)
         self._refresh()
 
     def frames_quiet(self) -> bool:

@@ -229,10 +229,11 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
     def set_external(self, on: bool) -> None:
         self.external = on
 
-    def external_request(self, position: int, state: AlState) -> None:
+    def external_request(self, position: int, state: AlState, ack: bool = False) -> None:
+        """A wire master's AL control write: ``ack`` is its bit 4 (ETG.1000.6), as written."""
         link = self.links[self._position(position, "position")]
         link.requested = state
-        link.slave.request_state(state)
+        link.slave.request_state(state, ack)
 
     def external_frame(self, position: int) -> None:
         """A wire master's frame reached ``position``: an exchange for a slave that answers;

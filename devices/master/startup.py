@@ -181,7 +181,11 @@ class StartupMixin:
         link.pending_floor = min(RANK.get(current, 0), RANK[target])
         link.requested, link.requested_at_us = target, self.now_us
         link.goal = self._target_of(link)
-        link.slave.request_state(target)
+        # AL control bit 4 "Error Ind Ack" with a request over the error flag read set, as
+        # TwinCAT acknowledges before it asks again (seed 000 §7.7 log): without it the slave
+        # ignores the request (ETG.1000.6; devices/esm.py Esm.take_request).
+        ack = bool(link.slave.al_status & AL_STATUS_ERROR_FLAG)
+        link.slave.request_state(target, ack)
 
     def _write_dc(self, link: SlaveLink) -> None:
         """The DC registers of a DC slave (seed 001 §9.2 IP "il master inizializza il DC clock

@@ -110,13 +110,15 @@ class TransitionsMixin:
         def _touch(self) -> None: ...
         def _apply_output_image(self) -> None: ...
 
-    def request_state(self, target: AlState) -> None:
+    def request_state(self, target: AlState, ack: bool = False) -> None:
         """AL control write; the answer is in ``al_status`` / ``al_status_code``."""
         if not self.reachable():
             return
         self._touch()
         now, esm = self.now_us, self.esm
         current = esm.state
+        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+            return
         esm.requested = target
         refusal = request_refusal(current, target)
         if refusal is not None:
@@ -125,7 +127,7 @@ class TransitionsMixin:
             if self.deadlocked and current is AlState.PREOP:
                 esm.refuse(UNSPECIFIED_ERROR, now)
             else:
-                esm.accept(target, now)  # the same state again acknowledges the error flag
+                esm.accept(target, now)
         elif _RANK[target] < _RANK[current]:
             self._leave_to(target)
             esm.accept(target, now)
@@ -137,6 +139,7 @@ class TransitionsMixin:
                 esm.refuse(code, now)
             else:
                 self._enter(target)
+        esm.settle_request(now)
         self._refresh()
 
     # ---- ESM --------------------------------------------------------------------------------

@@ -90,13 +90,18 @@ def test_esm_requests(current: AlState, target: AlState) -> None:
         assert bench.fc.snapshot()["leds"]["ERR"] == "blinking"  # ETG.1300: refused
 
 
-def test_requesting_the_current_state_acknowledges_the_error() -> None:
-    """ETG.1000.6: the master acknowledges the error flag by requesting the state again."""
+def test_the_error_flag_is_acknowledged_with_al_control_bit_4() -> None:
+    """ETG.1000.6 "Error Ind Ack" (SSC AL_ControlInd): without bit 4 a request over the
+    error flag is ignored, the ERR LED keeps blinking; with it the flag and code clear."""
     bench = Bench()
     bench.to_state(AlState.PREOP)
     bench.fc.request_state(AlState.OP)  # PREOP -> OP is not a transition: 0x0011
     assert (bench.fc.al_status, bench.fc.al_status_code) == (0x12, 0x0011)
-    bench.fc.request_state(AlState.PREOP)
+    for target in (AlState.PREOP, AlState.SAFEOP):
+        bench.fc.request_state(target)
+        assert (bench.fc.al_status, bench.fc.al_status_code) == (0x12, 0x0011)
+        assert bench.fc.snapshot()["leds"]["ERR"] == "blinking"
+    bench.fc.request_state(AlState.PREOP, ack=True)
     assert (bench.fc.al_status, bench.fc.al_status_code) == (0x02, 0)
     assert bench.fc.snapshot()["leds"]["ERR"] == "off"
 
@@ -397,7 +402,7 @@ def test_unplug_in_op_is_missing_node_answer() -> None:
     bench.step()
     bench.reset_fault()
     assert bench.fc.alarm is None
-    bench.fc.request_state(AlState.SAFEOP)
+    bench.fc.request_state(AlState.SAFEOP, ack=True)  # AL control bit 4 (ETG.1000.6)
     bench.fc.request_state(AlState.OP)
     assert bench.fc.al_state is AlState.OP
 

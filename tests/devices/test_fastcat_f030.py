@@ -130,7 +130,7 @@ def test_reset_fault_clears_0x14_once_the_list_is_right() -> None:
     bench.reset_fault()
     bench.step()
     assert bench.fc.alarm is None
-    to_safeop(bench)
+    bench.fc.request_state(AlState.SAFEOP, ack=True)  # AL control bit 4 (ETG.1000.6)
     assert bench.fc.al_state is AlState.SAFEOP
 
 

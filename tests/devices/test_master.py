@@ -156,6 +156,32 @@ def test_master_retries_every_interval_and_recovers_after_reset() -> None:
     assert bench.master.snapshot()["slaves"][0]["al_status_code"] == 0
 
 
+def test_the_master_acknowledges_the_error_flag_it_reads(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """AL control bit 4 (ETG.1000.6 "Error Ind Ack"): the master sets it on a request to a
+    slave whose AL status error flag it read set, as TwinCAT does before it asks again (seed
+    000 §7.7 log); to a slave without the flag it writes the request alone."""
+    bench = op_bench()
+    writes: list[tuple[AlState, int, bool]] = []
+    request = bench.fc.request_state
+
+    def recorded(target: AlState, ack: bool = False) -> None:
+        writes.append((target, bench.fc.al_status, ack))
+        request(target, ack)
+
+    monkeypatch.setattr(bench.fc, "request_state", recorded)
+    bench.run_to(UNPLUG_AT_US)
+    bench.apply("unplug", module=2)
+    bench.run(5.0)  # OP -> PREOP with 0x8204, then PREOP -> SAFEOP refused and retried
+    assert writes and all(ack == bool(status & 0x10) for _t, status, ack in writes)
+    assert any(ack for _t, _s, ack in writes)
+    bench.apply("plug", module=2, type="AI8D")
+    bench.step()
+    bench.reset_fault()
+    bench.run_until(lambda: bench.fc.al_state is AlState.OP, limit_s=3.0)
+    assert writes[-1] == (AlState.OP, int(AlState.SAFEOP), False)
+
+
 def test_resync_resets_an_alarm_that_reset_fault_cannot(monkeypatch: pytest.MonkeyPatch) -> None:
     """§7: a coupler code above 0x7F needs a resync of the line."""
     monkeypatch.setitem(COUPLER_CODES, 0x80, AlarmCode("coupler", 0x80, "TEST_FATAL", "test"))

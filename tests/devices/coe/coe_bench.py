@@ -61,7 +61,8 @@ class Bench:
     # ---- the master's side ---------------------------------------------------------------
     def go(self, *states: AlState) -> None:
         for state in states:
-            self.slave.request_state(state)
+            # A master acknowledges an error flag it reads (AL control bit 4, ETG.1000.6).
+            self.slave.request_state(state, ack=bool(self.slave.al_status & 0x10))
             self.step()
 
     def up_to(self, target: AlState) -> None:

@@ -70,7 +70,8 @@ def operate(bench: Bench, rng: random.Random) -> None:
         op = 4 if not slave.link else 5
     if op <= 1:  # the master's walk: the next state up
         up = {AlState.INIT: AlState.PREOP, AlState.PREOP: AlState.SAFEOP}
-        slave.request_state(up.get(slave.esm.state, AlState.OP))
+        slave.request_state(up.get(slave.esm.state, AlState.OP),  # acknowledging (bit 4)
+                            ack=bool(slave.al_status & 0x10))
     elif op == 2:
         slave.request_state(rng.choice((AlState.INIT, AlState.PREOP, AlState.SAFEOP)))
     elif op == 3 or (op == 9 and not bench.cycling):

@@ -215,7 +215,7 @@ def test_sync_manager_errors(fault: str, sm: int, target: AlState, code: int,
     assert message.text_id == text_id and message.params[0] == (DataType.UNSIGNED8, sm)
     assert message.params[1][0] is DataType.UNSIGNED16
     bench.apply("clear_fault", fault=fault, sm=sm)
-    bench.cpx.request_state(target)
+    bench.cpx.request_state(target, ack=True)  # AL control bit 4 (ETG.1000.6)
     assert bench.cpx.al_state is target
 
 

@@ -122,7 +122,7 @@ def test_safeop_refused_while_0x1c13_is_left_empty(bench: Bench) -> None:
     cpx.request_state(AlState.SAFEOP)
     assert cpx.al_state is AlState.PREOP and cpx.al_status_code == 0x0024
     cpx.cmd_write_object(TX_ASSIGN, 0, len(MODULE_TX))  # the entries are still there
-    cpx.request_state(AlState.SAFEOP)
+    cpx.request_state(AlState.SAFEOP, ack=True)  # AL control bit 4 (ETG.1000.6)
     assert cpx.al_state is AlState.SAFEOP and cpx.al_status_code == 0
 
 

@@ -201,12 +201,18 @@ def test_built_in_master_logs_the_mismatch() -> None:
                for t in logs)
 
 
-def test_requesting_the_state_again_acknowledges_the_error() -> None:
+def test_the_error_flag_is_acknowledged_with_al_control_bit_4() -> None:
+    """ETG.1000.6 "Error Ind Ack" (SSC AL_ControlInd): a request without bit 4 over the
+    error flag is ignored; the state requested again with it clears flag and code."""
     bench = Bench(["IO-E"])
     bench.to_state(AlState.PREOP)
     bench.request(AlState.SAFEOP)
     assert bench.trs.al_status == 0x12
-    bench.request(AlState.PREOP)
+    code = bench.trs.al_status_code
+    bench.trs.request_state(AlState.PREOP)
+    assert (bench.trs.al_status, bench.trs.al_status_code) == (0x12, code)
+    assert bench.leds()["ERROR"] != "off"
+    bench.trs.request_state(AlState.PREOP, ack=True)
     assert bench.trs.al_status == 0x02 and bench.trs.al_status_code == 0
     assert bench.leds()["ERROR"] == "off"
 

@@ -180,7 +180,8 @@ def test_master_switching_sync0_off_then_leaving_op(wait_s: float) -> None:
     bench = _op_with_io1_on(0)
     bench.configure_dc(0, bench.step_us * 1000)
     bench.run(wait_s)
-    bench.trs.request_state(AlState.SAFEOP)  # not bench.request: it would write SYNC0 on
+    # Not bench.request: it would write SYNC0 on. A master acknowledges the flag it reads.
+    bench.trs.request_state(AlState.SAFEOP, ack=bool(bench.trs.al_status & 0x10))
     bench.run(0.5)
     assert bench.trs.al_state is AlState.SAFEOP
     assert bench.trs.snapshot()["outputs_mode"] == ("error" if wait_s else "safe")

@@ -80,7 +80,8 @@ class Bench:
     def request(self, target: AlState) -> None:
         if self.dc and self.master is None and target in (AlState.PREOP, AlState.SAFEOP):
             self.configure_dc(SYNC0_ACTIVE, self.step_us * 1000)
-        self.trs.request_state(target)
+        # A master acknowledges an error flag it reads (AL control bit 4, ETG.1000.6).
+        self.trs.request_state(target, ack=bool(self.trs.al_status & 0x10))
         self._collect()
 
     def configure_dc(self, activation: int, cycle_ns: int) -> None:
