@@ -117,11 +117,12 @@ class FromWire:
         except ValueError:
             s.face.refuse_unknown_state(s.model, UNKNOWN_STATE)
         else:
+            ack = bool(value & AL_ACK)  # "Error Ind Ack": the slave model applies it
             external = getattr(self._master, "external_request", None)
             if external is not None:
-                external(s.position, state)  # the master notes it and asks the slave model
+                external(s.position, state, ack)  # the master notes it, asks the slave model
             else:
-                s.face.request_state(s.model, state)
+                s.face.request_state(s.model, state, ack)
         s.face.request_id(s.model, bool(value & AL_ID_REQUEST))
 
     def _schedule_frames(self: WireBridge, counts: dict[int, int], now_us: int) -> None:

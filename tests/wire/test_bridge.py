@@ -234,12 +234,36 @@ def test_sm_registers_reach_the_model_which_checks_them(wire):
     good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
             (0x1400, 6, 0x20, True))
     b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
-    b.send(msg.AL_CONTROL, 1, 0x02)
+    # PREOP + ack: the line was in OP and without frames the TRS-CAT falls to SAFE-OP with
+    # the error flag (0x001A); a master acknowledges it as SOEM's config_init does
+    b.send(msg.AL_CONTROL, 1, 0x12)
     b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
     b.send(msg.AL_CONTROL, 1, 0x04)
     b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
     b.send(msg.SM, 1, good)
-    b.send(msg.AL_CONTROL, 1, 0x04)
+    b.send(msg.AL_CONTROL, 1, 0x14)  # SAFE-OP + "Error Ind Ack" (EC_STATE_ACK)
+    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x04, 0))
+
+
+def test_a_request_over_the_error_flag_needs_the_ack_bit(wire):
+    """AL control bit 4 reaches the model (ETG.1000.6 "Error Ind Ack", SSC AL_ControlInd):
+    after a refused request the same request without it is ignored, with it it proceeds."""
+    runtime, _bridge, b = wire
+    trs = runtime.rig.devices["trscat"]
+    good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
+            (0x1400, 6, 0x20, True))
+    b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
+    b.send(msg.AL_CONTROL, 1, 0x12)  # PREOP + ack (the fall to SAFE-OP, as above)
+    b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
+    b.send(msg.AL_CONTROL, 1, 0x04)  # SM2 one byte short: refused with 0x001D
+    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
+    b.send(msg.SM, 1, good)
+    for request, state in ((0x02, "PREOP"), (0x04, "SAFEOP")):  # the current state, then on
+        b.send(msg.AL_CONTROL, 1, request)
+        wait_for(lambda state=state: sim(
+            runtime, lambda: master_view(runtime).links[1].requested.name) == state)
+        assert sim(runtime, lambda: (trs.al_status, trs.al_status_code)) == (0x12, 0x001D)
+    b.send(msg.AL_CONTROL, 1, 0x14)
     b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x04, 0))
 
 

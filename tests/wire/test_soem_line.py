@@ -139,14 +139,15 @@ def master_main(iface: str, conn) -> None:
 
     def state(target, timeout_s):
         """Request `target` for all and wait for it, the process data going every 4 ms
-        meanwhile (a DC slave counts every SYNC0 without a frame as a missed SM event)."""
+        meanwhile (a DC slave counts every SYNC0 without a frame as a missed SM event).
+        `target` may carry EC_STATE_ACK (0x10); the state read is compared without it."""
         t = time.perf_counter()
         for k in range(int(timeout_s / PERIOD_S) + 50):
             exchange()
             if k == 50:  # valid outputs for a while before the request, as a PLC does
                 master.state = target
                 master.write_state()
-            elif k > 50 and k % 10 == 0 and master.read_state() == target:
+            elif k > 50 and k % 10 == 0 and master.read_state() == target & 0x0F:
                 break
             t += PERIOD_S
             time.sleep(max(0.0, t - time.perf_counter()))
@@ -157,7 +158,8 @@ def master_main(iface: str, conn) -> None:
         slave = master.slaves[pos]
         slave.state = target
         slave.write_state()
-        slave.state_check(target, int(timeout_s * 1e6))
+        # bits 0-3: SOEM's ec_statecheck compares the state, a request may carry EC_STATE_ACK
+        slave.state_check(target & 0x0F, int(timeout_s * 1e6))
         master.read_state()
         return slave.state, slave.al_status
 
@@ -375,9 +377,13 @@ def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session: SoemLine)
     assert (state & 0x0F, state & 0x10) == (AlState.PREOP, 0x10)
     assert al_status == 0x0070
     master("sdo_write", 1, 0xF030, 2, original)
-    state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)  # SM sizes fit again
+    # The list put back: SAFE-OP again, acknowledging the error flag (EC_STATE_ACK, AL control
+    # bit 4, ETG.1000.6); without it the slave ignores the request.
+    state, al_status = master("slave_state", 1, AlState.SAFEOP | 0x10, 3.0)
     assert (state & 0x1F, al_status) == (AlState.SAFEOP, 0)
-    states = master("state", AlState.OP, 10.0)
+    # The CPX-E-EC and the drive fell to SAFE-OP with 0x001B meanwhile (slave_state sends no
+    # process data: SM watchdog): OP with EC_STATE_ACK, or they ignore the request (ETG.1000.6)
+    states = master("state", AlState.OP | 0x10, 10.0)
     assert [s & 0x1F for s, _ in states] == [AlState.OP] * 4, states
     session.stage = Stage.OP
 

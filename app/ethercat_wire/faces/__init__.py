@@ -44,8 +44,8 @@ def apply_outputs(model: Any, data: bytes, face: Face | None = None) -> None:
     (face or face_for(model)).apply_outputs(model, data)
 
 
-def request_state(model: Any, state: AlState) -> None:
-    face_for(model).request_state(model, state)
+def request_state(model: Any, state: AlState, ack: bool = False) -> None:
+    face_for(model).request_state(model, state, ack)
 
 
 def al_status(model: Any) -> tuple[int, int]:

@@ -309,9 +309,10 @@ class Face:
             logger.info("%s: output not applied: %s", model.device_id, exc)
 
     # ---- ESM and mailbox ------------------------------------------------------------------
-    def request_state(self, model: Any, state: AlState) -> None:
-        """AL control: the model accepts or refuses (with its own AL status code)."""
-        model.request_state(state)
+    def request_state(self, model: Any, state: AlState, ack: bool = False) -> None:
+        """AL control: the model accepts or refuses (with its own AL status code); ``ack`` is
+        bit 4, "Error Ind Ack" (ETG.1000.6, devices/esm.py Esm.take_request)."""
+        model.request_state(state, ack)
 
     def request_id(self, model: Any, on: bool) -> None:
         """AL control bit 5, ID request (ETG.1000.6): only a slave with an Explicit Device ID
