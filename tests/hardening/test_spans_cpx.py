@@ -117,8 +117,8 @@ class CpxRig(Rig):
             if isinstance(source, FrameSource):
                 source.sending = True
             model.exchange_frame(self.clock.now_us)
-            for state in ("INIT", "PREOP", "SAFEOP", "OP"):
-                model.request_state(AlState[state])
+            for state in ("INIT", "PREOP", "SAFEOP", "OP"):  # acknowledging a flag (bit 4)
+                model.request_state(AlState[state], ack=bool(model.al_status & 0x10))
         elif action == "heal":  # back to a CPX-E-EC that can run in OP, then brought up
             for op in HEAL:
                 super().apply(*op)
@@ -287,7 +287,7 @@ def test_frames_against_skip_frames(case: str) -> None:
         if going_down:  # OP -> SAFEOP, the counter at its cap (7); cleared, back in OP
             model.apply("clear_fault", {"fault": "sync_error"})
             rig.advance(4)  # 7 -> 3: under the limit (4), OP may be entered again
-            model.request_state(AlState.OP)
+            model.request_state(AlState.OP, ack=True)  # AL control bit 4 over the fall's flag
             rig.advance(2)  # 3 -> 1, the still step proved: the span's frames count it down
             assert model.esm.state is AlState.OP and model.sync_counter == 1
         return rig, model
