@@ -16,6 +16,7 @@ from devices.coe.drive_slave import DriveEcatSlave
 from devices.ethercat import AlState
 from devices.events import Event
 from devices.flash import MemoryFlash
+from devices.master import EtherCatMaster
 from devices.od import SdoAbort
 from devices.servo.drive import DriveConfig, ServoDrive
 
@@ -116,3 +117,18 @@ def make_bench(fieldbus: str = "ethercat", boot: bool = True, flash: MemoryFlash
     if boot:
         bench.run(60)  # past the drive's self test
     return bench
+
+
+def with_master(bench: Bench) -> tuple[EtherCatMaster, Callable[[int], None]]:
+    """The built-in master on the bench's slave, which now carries the process data instead
+    of the bench (``cycling`` off); ``run(ms)`` steps the bench, then the master, each ms."""
+    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
+                            retry_interval_us=200_000)
+    bench.cycling = False
+
+    def run(ms: int) -> None:
+        for _ in range(ms):
+            bench.step()
+            master.step(bench.t_us)
+
+    return master, run

@@ -11,13 +11,10 @@ Error" and stays there while the alarm is latched (docs/ethercat-coe.md §LEDs).
 
 from __future__ import annotations
 
-import random
-
 import pytest
-from coe_bench import Bench, make_bench
+from coe_bench import Bench, make_bench, with_master
 
 from devices.ethercat import AlState
-from devices.master import EtherCatMaster
 
 INIT, PREOP, SAFEOP, OP = AlState.INIT, AlState.PREOP, AlState.SAFEOP, AlState.OP
 EEPROM_ERROR = 0x0051
@@ -93,14 +90,7 @@ def test_init_to_preop_is_refused_while_alarm_35_is_latched() -> None:
 
 def test_the_built_in_master_reads_the_eeprom_error_and_retries() -> None:
     bench = make_bench()
-    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
-                            retry_interval_us=200_000)
-    bench.cycling = False
-
-    def run(ms: int) -> None:
-        for _ in range(ms):
-            bench.step()
-            master.step(bench.t_us)
+    master, run = with_master(bench)
 
     run(1000)
     assert bench.slave.al_state is OP

@@ -8,7 +8,7 @@ import json
 import random
 
 import pytest
-from coe_bench import CIA402_ENABLE, make_bench
+from coe_bench import CIA402_ENABLE, make_bench, with_master
 
 from devices.coe.drive_slave import DriveEcatSlave
 from devices.coe.mailbox import MailboxClosed
@@ -268,14 +268,7 @@ def test_a_drive_alarm_leaves_the_esm_in_op(code: int) -> None:
 
 def test_the_built_in_master_keeps_a_controller_alarm_in_preop_until_reset() -> None:
     bench = make_bench()
-    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
-                            retry_interval_us=200_000)
-    bench.cycling = False
-
-    def run(ms: int) -> None:
-        for _ in range(ms):
-            bench.step()
-            master.step(bench.t_us)
+    _, run = with_master(bench)
 
     run(1000)
     assert bench.slave.al_state is OP

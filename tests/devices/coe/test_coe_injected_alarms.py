@@ -9,12 +9,9 @@ PREOP -> SAFEOP took the injected 33's cause away, so a trainee could reset it.
 
 from __future__ import annotations
 
-import random
-
-from coe_bench import Bench, make_bench
+from coe_bench import Bench, make_bench, with_master
 
 from devices.ethercat import AlState
-from devices.master import EtherCatMaster
 
 PREOP, SAFEOP, OP = AlState.PREOP, AlState.SAFEOP, AlState.OP
 SM_WATCHDOG = 0x001B
@@ -130,14 +127,7 @@ def test_an_injected_34_below_op_lets_the_slave_up_to_safeop_only() -> None:
 
 def test_the_built_in_master_keeps_an_injected_34_in_safeop_until_cleared() -> None:
     bench = make_bench()
-    master = EtherCatMaster("master", random.Random(1), slaves=[bench.slave],
-                            retry_interval_us=200_000)
-    bench.cycling = False
-
-    def run(ms: int) -> None:
-        for _ in range(ms):
-            bench.step()
-            master.step(bench.t_us)
+    _, run = with_master(bench)
 
     run(1000)
     assert bench.slave.al_state is OP
