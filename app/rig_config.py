@@ -15,7 +15,7 @@ import tomllib
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from app.clock import SimClock
 from app.flash_file import FileFlash
@@ -23,6 +23,9 @@ from app.rig import Rig
 from devices.device import DeviceModel
 from devices.flash import FlashStore, MemoryFlash
 from devices.names import did_you_mean
+
+if TYPE_CHECKING:
+    from devices.master.network import SlaveDescription
 
 DEFAULT_RIG = Path(__file__).resolve().parent.parent / "static" / "rigs" / "default.toml"
 MAX_MODULES = 16  # seed 000 §2
@@ -376,6 +379,12 @@ def _slave(source: str, kind: str, i: int, data: Any) -> SlaveSpec:
                 if key in t.data}
     t.used.update(_SLAVE_KEYS[kind])
     t.finish()
+    if kind == "cpx" and "history_flags" in settings:
+        from devices.cpx.history import flags_error
+
+        wrong = flags_error(settings["history_flags"])
+        if wrong is not None:
+            raise RigConfigError(source, f"{kind}[{i}].history_flags", wrong)
     return SlaveSpec(kind, device_id, settings)
 
 
@@ -439,6 +448,7 @@ def _build_slave(spec: RigSpec, slave: SlaveSpec, rng: random.Random, position: 
             return TrsCat(slave.id, rng, out_link=not last, station_address=1000 + position,
                           **settings)
         settings.setdefault("box_name", f"Box {position} (CPX-E-EC)")
+        settings.pop("history_flags", None)  # the master's start-up write (app/network/startup)
         modules: list[Any] = []
         for j, m in enumerate(settings.pop("modules", [])):
             if isinstance(m, str):
@@ -452,6 +462,17 @@ def _build_slave(spec: RigSpec, slave: SlaveSpec, rng: random.Random, position: 
                       station_address=1000 + position, **settings)
     except (ValueError, TypeError) as exc:
         raise RigConfigError(spec.source, slave.kind, str(exc)) from None
+
+
+def _with_rig_commands(spec: RigSpec, descriptions: list[SlaveDescription] | None,
+                       dc: list[bool]) -> list[SlaveDescription | None] | None:
+    from app.network.startup import StartupConflict, rig_commands, with_rig_commands
+
+    commands = rig_commands([(s.kind, s.id, s.settings) for s in spec.slaves])
+    try:
+        return with_rig_commands(descriptions, spec.line, commands, dc, spec.eni)
+    except StartupConflict as exc:
+        raise RigConfigError(spec.source, exc.key, exc.reason) from None
 
 
 def build_rig(spec: RigSpec, state_dir: str | Path | None = None) -> Rig:
@@ -511,10 +532,11 @@ def build_rig(spec: RigSpec, state_dir: str | Path | None = None) -> Rig:
     if slaves:
         from app.network.files import load_description, load_mapping, uses_dc
 
-        descriptions = load_description(spec.source, spec.eni, spec.line) if spec.eni \
-            else None
-        mapping = load_mapping(spec.source, spec.mapping, descriptions, len(spec.line)) \
+        described = load_description(spec.source, spec.eni, spec.line) if spec.eni else None
+        mapping = load_mapping(spec.source, spec.mapping, described, len(spec.line)) \
             if spec.mapping else None
+        descriptions = _with_rig_commands(
+            spec, described, [uses_dc(slaves[device_id]) for device_id in spec.line])
         if mapping is not None and mapping.parameters.cycle_us % spec.step_us:
             raise RigConfigError(spec.source, "master.mapping", f"cycle time "
                                  f"{mapping.parameters.cycle_us} us is not a multiple of the "

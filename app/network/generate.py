@@ -4,8 +4,9 @@ What an EtherCAT configurator does from the slaves' ESI files, done from the mod
 from each model's 0x1018 constants, station addresses 1001.. in line order, DC use per model
 (TRS-CAT in DC-SYNC, seed 001 §9.1.1; CPX-E-EC with a DC-capable module, seed 002 §2.1.4),
 init commands written as CoE SDO downloads (the TRS-CAT's 0xF030 list in PS, seed 001 §9.2 /
-§9.3.2; the CPX-E-EC's 0xF030 in PS, seed 002 Tab. 17 Text-ID 0x3801) and one PLC variable
-per PDO entry. ``python -m app.network.generate RIG OUT_PREFIX`` writes OUT_PREFIX.eni.xml and
+§9.3.2; the CPX-E-EC's 0xF030 in PS, seed 002 Tab. 17 Text-ID 0x3801, and its rig
+``history_flags`` as 0x10F3:5 in PS, Tab. 14) and one PLC variable per PDO entry.
+``python -m app.network.generate RIG OUT_PREFIX`` writes OUT_PREFIX.eni.xml and
 OUT_PREFIX.mapping.xml (``--all`` regenerates the files under static/networks/).
 """
 
@@ -61,7 +62,7 @@ def _f030_commands(idents: list[int], count: bytes, what: str) -> tuple[InitCmd,
     return tuple(cmds)
 
 
-def _slave(device: Any, position: int) -> SlaveDescription:
+def _slave(device: Any, position: int, rig_cmds: tuple[InitCmd, ...]) -> SlaveDescription:
     kind = device.KIND
     vendor, product, revision = _identity(kind)
     cmds: tuple[InitCmd, ...] = ()
@@ -75,14 +76,18 @@ def _slave(device: Any, position: int) -> SlaveDescription:
         idents = [u.mtype.ident for u in device.units]
         cmds = _f030_commands(idents, _u16(len(idents)), "CPX-E-EC")
     return SlaveDescription(position, device.box_name, device.device_id, vendor, product,
-                            revision, device.station_address, dc, cmds)
+                            revision, device.station_address, dc, (*cmds, *rig_cmds))
 
 
 def describe(rig: Rig) -> list[SlaveDescription]:
     master = rig.devices.get("master")
     if master is None:
         return []
-    return [_slave(link.slave, link.position) for link in master.links]  # type: ignore[attr-defined]
+    # The rig's start-up values (app/network/startup.py) ride on the descriptions the rig
+    # derived for the master: written after the 0xF030 list, as a Startup tab lists them.
+    return [_slave(link.slave, link.position,
+                   link.description.init_cmds if link.description is not None else ())
+            for link in master.links]  # type: ignore[attr-defined]
 
 
 def variables(rig: Rig) -> list[Variable]:

@@ -64,7 +64,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
     def __init__(self, device_id: str, rng: random.Random,
                  modules: Sequence[str | tuple[str, Mapping[str, Any]]] = (),
                  rotary_switch: int = 0, dil1: bool = False, dil2: bool = False,
-                 history_flags: int = 0x0000, out_connected: bool = False,
+                 out_connected: bool = False,
                  box_name: str = "Box 3 (CPX-E-EC)", station_address: int = 1003) -> None:
         super().__init__(device_id=device_id, rng=rng)
         self._init_still()
@@ -78,10 +78,6 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
                 raise ValueError(f"module {number}: {exc.args[0]}") from None
         self.switches = Switches(check_rotary(rotary_switch), dil1, dil2)
         check_configuration(BUS_MODULE[self.switches.mode], [m.mtype for m in self.modules])
-        if history_flags & ~0x001F:
-            raise ValueError(f"history_flags 0x{history_flags:04X}: 0x10F3:5 takes bits 0-4 "
-                             f"(seed 002 Tab. 18, 19)")
-        self.history_flags = history_flags
         self.box_name = box_name
         self.station_address = station_address
         self.serial = self.rng.getrandbits(32)
@@ -110,7 +106,9 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         # 0x1C13 (RAM): the default at every start, written by a master in PREOP only
         self.tx_assign = tx_assignment(address_order(self.units, receive=False),
                                        lambda: self.esm.state is AlState.PREOP)
-        self.history = DiagHistory(flags=self.history_flags)
+        # 0x10F3:5 at Tab. 14's 0x0000 at every start: only a master's write sets it (the
+        # built-in master's PS init command from the rig's history_flags, choice 19)
+        self.history = DiagHistory()
         self.diagnosis = Diagnosis(self.device_id, self.emit, self.history,
                                    self._filter_no_error, self._reports_errors)
         self.od: ObjectDictionary | None = None

@@ -48,6 +48,16 @@ FLAG_TEXT: dict[int, tuple[str, str]] = {
                              "bus module)", "no message overwritten or discarded (ETG.1020)"),
 }
 FLAG_WORDS = FlagWords(FLAG_TEXT, "CPX-E-EC")
+
+
+def flags_error(value: int) -> str | None:
+    """Why 0x10F3:5 cannot take ``value`` (a master's start-up write), or None."""
+    if 0 <= value <= WRITABLE_FLAGS:
+        return None
+    shown = f"0x{value:04X}" if value >= 0 else str(value)
+    return f"{shown}: 0x10F3:5 takes bits 0-4 (seed 002 Tab. 18, 19)"
+
+
 DISABLE_FLAG: dict[DiagType, int] = {DiagType.INFO: FLAG_DISABLE_INFO,
                                      DiagType.WARNING: FLAG_DISABLE_WARNING,
                                      DiagType.ERROR: FLAG_DISABLE_ERROR}

@@ -83,7 +83,7 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
                  port: int = TWINCAT_PORT, epoch: dt.datetime = DEFAULT_EPOCH,
                  check_delay_us: int = STATE_CHECK_DELAY_US,
                  state_timeout_us: int = STATE_TIMEOUT_US,
-                 descriptions: Sequence[SlaveDescription] | None = None,
+                 descriptions: Sequence[SlaveDescription | None] | None = None,
                  mapping: NetworkMapping | None = None,
                  dc_slaves: Sequence[bool] | None = None,
                  step_us: int | None = None) -> None:

@@ -9,10 +9,12 @@ import random
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from app.network.startup import history_flags_command
 from devices.cpx.device import CpxEEc
 from devices.ethercat import AlState
 from devices.events import Event
 from devices.master import EtherCatMaster
+from devices.master.network import SlaveDescription
 
 STEP_US = 1_000
 US = 1_000_000
@@ -25,11 +27,20 @@ STI: dict[str, Any] = {"dil1": True, "dil2": False}
 
 
 class Bench:
+    """``history_flags``: 0x10F3:5 as a master's start-up writes it (the model powers up with
+    Tab. 14's 0x0000): the built-in master's PS init command, or without a master the bench's
+    own CoE write at power-up."""
+
     def __init__(self, modules: Sequence[Any] = TAB9_MODULES, master: bool = True,
-                 seed: int = 5, **kwargs: Any) -> None:
+                 seed: int = 5, history_flags: int | None = None, **kwargs: Any) -> None:
         self.cpx = CpxEEc("cpx", random.Random(seed), list(modules), **kwargs)
-        self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.cpx]) \
-            if master else None
+        startup = () if history_flags is None else (history_flags_command(history_flags),)
+        descriptions = [SlaveDescription(0, "", "cpx", None, None, None, 1001, False,
+                                         startup)] if startup else None
+        self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.cpx],
+                                     descriptions=descriptions) if master else None
+        if history_flags is not None and not master:
+            self.cpx.apply("write_object", {"index": 0x10F3, "sub": 5, "value": history_flags})
         self.now = 0
         self.events: list[Event] = []
         self._collect()

@@ -39,7 +39,6 @@ def test_snapshot_is_plain_json() -> None:
     ({"modules": [("16DI", {"debounce": 3})]}, "unknown option"),
     ({"modules": ["8DO"] * 11}, "at most 10"),
     ({"rotary_switch": 4096}, "0 ... 4095"),
-    ({"history_flags": 0x0100}, "bits 0-4"),
 ])
 def test_bad_configuration(kwargs: dict, match: str) -> None:
     with pytest.raises(ValueError, match=match):

@@ -88,4 +88,7 @@ def test_restart_into_sti_reports_what_is_still_there() -> None:
     bench.run(0.01)
     assert text_ids(bench).count(SHORT) == 1
     assert CPX_TEXT_ID_BASE not in text_ids(bench)
-    assert [r["code"] for r in bench.records("emergency", since)] == ["0x2320"]
+    # Reported at the start, before the master's PS write of 0x10F3:5 (Tab. 14: 0x0000 from
+    # power-up until then): in the history, no emergency (docs/cpx-e-ec.md choice 19).
+    assert bench.records("emergency", since) == []
+    assert bench.cpx.od.peek(0x10F3, 5) == 0x0001

@@ -88,7 +88,8 @@ def test_committed_files_are_what_the_generator_makes(name: str) -> None:
 
 def test_generated_description_of_the_line() -> None:
     """Identity from each model's 0x1018; 0xF030 written in PS (seed 001 §9.2, seed 002
-    Text-ID 0x3801); DC for the TRS-CAT in DC-SYNC and the CPX-E-EC with 16DI / 8DO."""
+    Text-ID 0x3801), then the CPX-E-EC's 0x10F3:5 (seed 002 Tab. 14); DC for the TRS-CAT in
+    DC-SYNC and the CPX-E-EC with 16DI / 8DO."""
     slaves = parse_eni((NETWORKS / "ethercat_line.eni.xml").read_text())
     rig = build_rig(load_rig_spec(LINE_RIG))
     assert [s.device for s in slaves] == ["fastcat", "trscat", "cpx", "drive_ec-ecat"]
@@ -103,8 +104,10 @@ def test_generated_description_of_the_line() -> None:
     assert trs[1].data == (0x494F2D42).to_bytes(4, "little")  # "IO-B" (§9.3.2)
     cmds = slaves[2].commands("PS")
     assert cmds[0].data == len(cpx.units).to_bytes(2, "little")
-    assert [int.from_bytes(c.data, "little") for c in cmds[1:]] == [
+    assert [int.from_bytes(c.data, "little") for c in cmds[1:-1]] == [
         u.mtype.ident for u in cpx.units]
+    # the rig's history_flags = 1 after the list (seed 002 Tab. 14: 0x0000 until written)
+    assert [(c.index, c.sub, c.data) for c in cmds[-1:]] == [(0x10F3, 5, b"\x01\x00")]
     master = rig.devices["master"]
     assert master.mapping is not None and master.mapping.parameters.cycle_us == 1000
     assert {v.position for v in master.mapping.variables} == {0, 1, 2, 3}
