@@ -1,9 +1,9 @@
 """An instructor's own Module pickers (the FastCAT tab's Module faults and Rail and power)
-follow the rail whenever they were built (docs/classroom.md "Per connection"). Before, a copy
-was brought up to date on the frame the rail changed only, for the copies there were then: a
-copy built from the rail before that frame and stored after it (the promote runs on another
-thread than the dashboard's update) kept the old options until the rail changed again. On a
-loaded machine the instructor's pickers then offered no "4 AI8D" on a freshly numbered rail
+follow the rail whenever they were built (docs/classroom.md "What a trainee does not see").
+Before, a copy was brought up to date on the frame the rail changed only, for the copies there
+were then: a copy built from the rail before that frame and stored after it (the promote runs on
+another thread than the dashboard's update) kept the old options until the rail changed again.
+On a loaded machine the instructor's pickers then offered no "4 AI8D" on a freshly numbered rail
 (test_classroom_leak's Page.own waited 20 s for it and failed)."""
 
 from __future__ import annotations

@@ -1,4 +1,5 @@
-"""A page that closes while its widgets are being built (docs/classroom.md "Per connection").
+"""A page that closes while its widgets are being built (docs/classroom.md "What a trainee
+does not see").
 
 viser drops a client from ``get_clients()`` and unhooks its elements from the server's
 containers before its disconnect callbacks run; whatever is built for it after that lands in

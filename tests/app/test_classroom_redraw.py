@@ -1,5 +1,5 @@
-"""A newly promoted instructor's tables are written by the next redraw (docs/classroom.md
-"Per connection"). Before: a copy built while the update thread showed new rows kept the
+"""A newly promoted instructor's tables are written by the next redraw (docs/classroom.md "What
+a trainee does not see"). Before: a copy built while the update thread showed new rows kept the
 old ones (``RoleHtml.show`` / ``InstructorHtml.show`` skipped content they had shown), and a
 redraw asked for while a tick was deciding was lost (``Dashboard._stale`` reset after it was
 read, without a lock): on a paused rig nothing else redraws."""
