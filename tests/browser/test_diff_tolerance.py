@@ -30,8 +30,7 @@ LOG = [
 
 def page(lines: list[str], down: int = 0) -> Image.Image:
     """A page with ``lines`` as the dashboard's event log shows them, ``down`` px lower."""
-    if not FONT.exists():
-        pytest.skip(f"{FONT} is missing (Debian's fonts-liberation, as Chromium uses)")
+    assert FONT.exists(), f"{FONT} is missing: Debian's fonts-liberation (bash .ci/setup --test)"
     font = ImageFont.truetype(str(FONT), 13)
     image = Image.new("RGB", PAGE, "white")
     draw = ImageDraw.Draw(image)
