@@ -311,6 +311,14 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         window = self.regs[_FOLLOWING_ERROR_WINDOW]
         return window != DISABLED_32 and abs(self.following_error_user) > window
 
+    @property
+    def following_error_below_window(self) -> bool:
+        """End of Job's condition, ch. 2: the error "inferiore a quello specificato nella
+        relativa finestra", strictly below R03 (an error equal to it is neither this nor
+        alarm 16's "superato"); R03 = 0xFFFFFFFF is no check (ch. 4, 0x6065), so always."""
+        window = self.regs[_FOLLOWING_ERROR_WINDOW]
+        return window == DISABLED_32 or abs(self.following_error_user) < window
+
     def log(self, text: str) -> None:
         self.emit(LogLine(self.now_us, self.device_id, text=text))
 

@@ -87,7 +87,7 @@ class Positioner(Mode):
             target, self.pending = self.pending, None
             self.go(d, target)
         if self.move_target is not None and not self.eoj and d.trajectory.at_target \
-                and not d.following_error_exceeded:
+                and d.following_error_below_window:
             self.eoj = True
 
     def halted(self, d: ServoDrive) -> None:
