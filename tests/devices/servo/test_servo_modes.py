@@ -461,6 +461,26 @@ def test_electronic_axis_follows_the_master_when_started() -> None:
     assert not sim.drive.outputs()["end_of_job"]  # always low in mode -2
 
 
+@pytest.mark.parametrize("r00", [0x23, 0x43])
+def test_electronic_axis_starts_with_r00_bit_5_or_bit_6(r00: int) -> None:
+    """Ch. 1 puts the electronic axis' Start/stop at R00 bit 6, ch. 2 "I/O digitali" says "il
+    bit 5 di ControlWord": either engages with the Start input high (docs/servo-drive.md, mode
+    -2), and neither without it; R05 bit 6 and 0x6040 bit 11 say the same."""
+    sim = make_sim()
+    sim.w(1, -2)
+    sim.drive.apply("master_encoder", {"rpm": 300.0})
+    sim.w(0, r00)
+    sim.run(100)
+    assert sim.drive.read_register(73) == 0 and not sim.r05 & 0x40
+    sim.drive.apply("set_input", {"name": "start", "value": True})
+    sim.run(100)
+    assert sim.drive.read_register(73) == 300 and sim.r05 & 0x40
+    assert sim.drive.cw & ds402.CW_AXIS_START
+    sim.w(0, 0x03)
+    sim.run(1)
+    assert not sim.r05 & 0x40 and not sim.drive.cw & ds402.CW_AXIS_START
+
+
 def test_the_motor_never_turns_faster_than_vmax_in_the_electronic_axis() -> None:
     """d3 "Velocità massima del motore, Vmax %" (ch. 1) is the motor's limit, whatever the
     mode: a master too fast for the gear ratio (1000 rpm x 2 with Vmax = 50 % of 3000 rpm)
