@@ -50,7 +50,7 @@ class Line:
     def esm_events(self) -> list[str]:
         """The ESM's events since the last call (state changes, AL status codes)."""
         return [f"{e.kind}:{e.to_record()}" for d in self.devices for e in d.drain_events()
-                if e.kind in ("state_changed", "al_status_changed")]
+                if e.kind in ("state", "al_status")]
 
     def answer(self) -> tuple[AlState, int, int]:
         s = self.slave
