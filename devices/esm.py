@@ -21,6 +21,7 @@ from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 # §7.7 codes for requests the ESM itself refuses.
 NO_ERROR = 0x0000
 INVALID_STATE_CHANGE = 0x0011  # "Invalid requested state change"
+UNKNOWN_REQUESTED_STATE = 0x0012  # "Unknown requested state" (AL control bits 0-3 no state)
 BOOTSTRAP_NOT_SUPPORTED = 0x0013  # "Bootstrap not supported" (a slave without a BOOT state)
 
 # Order of the states a slave steps up through (BOOT is outside it).
@@ -100,6 +101,15 @@ class Esm(Generic[K]):
             self.error = self.kinds.NONE  # type: ignore[assignment]
             return True
         return target is AlState.INIT
+
+    def request_unknown(self, value: int, ack: bool, t_us: int) -> None:
+        """An AL control write whose bits 0-3 (``value``) name no state: refused with 0x0012,
+        "Unknown requested state", the state kept. Over the error flag it is ignored without
+        the acknowledge like any request but INIT (SSC AL_ControlInd, SOES ESC_state), so a
+        trainee still reads the code of the original cause."""
+        if self.error_flag and not ack:
+            return
+        self.refuse(UNKNOWN_REQUESTED_STATE, t_us)
 
     def settle_request(self, t_us: int) -> None:
         """The end of a processed request: a flag the request left clear (an acknowledge the

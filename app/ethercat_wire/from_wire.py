@@ -24,7 +24,6 @@ if TYPE_CHECKING:
 # The bridge's logger: one name for every line the wire's A side logs.
 logger = logging.getLogger("app.ethercat_wire.bridge")
 
-UNKNOWN_STATE = 0x0012  # ETG.1000.6 / seed 000 §7.7 "Unknown requested state"
 AL_STATE_MASK, AL_ACK = 0x0F, 0x10  # AL control: requested state, error acknowledge
 AL_ID_REQUEST = 0x20  # AL control bit 5 (ETG.1000.6): the slave's face passes it on
 MAX_AL_DEFER_US = 100_000  # an AL control waits at most this long for the frames before it
@@ -112,12 +111,12 @@ class FromWire:
                 note(s.position, dict(payload))
 
     def _al_control(self: WireBridge, s: WireSlave, value: int) -> None:
+        ack = bool(value & AL_ACK)  # "Error Ind Ack": the slave model applies it
         try:
             state = AlState(value & AL_STATE_MASK)
         except ValueError:
-            s.face.refuse_unknown_state(s.model, UNKNOWN_STATE)
+            s.face.request_unknown_state(s.model, value & AL_STATE_MASK, ack)
         else:
-            ack = bool(value & AL_ACK)  # "Error Ind Ack": the slave model applies it
             external = getattr(self._master, "external_request", None)
             if external is not None:
                 external(s.position, state, ack)  # the master notes it, asks the slave model

@@ -116,3 +116,33 @@ def test_without_the_error_flag_the_ack_changes_nothing(kind: str) -> None:
     line.slave.request_state(AlState.PREOP)
     line.run(5)
     assert line.answer() == (AlState.PREOP, 0x02, 0)
+
+
+UNKNOWN_REQUESTED_STATE = 0x0012  # seed 000 §7.7
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_an_unknown_state_without_ack_over_the_error_flag_is_ignored(kind: str) -> None:
+    """SSC AL_ControlInd / SOES ESC_state: over the flag only INIT or the acknowledge gets
+    past; an unknown state code is neither, so the original cause (0x0011) stays."""
+    line = refused_in_preop(kind)
+    line.slave.esm.request_unknown(0x05, False, line.now)
+    line.run(5)
+    assert line.answer() == (AlState.PREOP, 0x12, INVALID_STATE_CHANGE)
+    assert line.esm_events() == []
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_an_unknown_state_with_ack_answers_0x0012(kind: str) -> None:
+    line = refused_in_preop(kind)
+    line.slave.esm.request_unknown(0x05, True, line.now)
+    assert line.answer() == (AlState.PREOP, 0x12, UNKNOWN_REQUESTED_STATE)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_an_unknown_state_without_the_error_flag_answers_0x0012(kind: str) -> None:
+    line = refused_in_preop(kind)
+    line.slave.request_state(AlState.PREOP, ack=True)
+    line.slave.esm.request_unknown(0x0F, False, line.now)
+    assert line.answer() == (AlState.PREOP, 0x12, UNKNOWN_REQUESTED_STATE)
+

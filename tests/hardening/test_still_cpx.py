@@ -277,7 +277,8 @@ def random_op(rng: random.Random) -> Op:
         lambda: ("cpx", "face_write", {"index": 0x7004, "sub": rng.randint(1, 4),
                                        "value": rng.choice((0, 5000, 20000))}),
         lambda: ("cpx", "face_read", {"index": 0x10F3, "sub": rng.choice((2, 6, 7))}),
-        lambda: ("cpx", "face_refuse", {"code": 0x0012}),
+        lambda: ("cpx", "face_unknown", {"value": rng.choice((0x05, 0x0F)),
+                                         "ack": rng.random() < 0.5}),
     ]
     return rng.choice(choices)()
 
@@ -288,8 +289,8 @@ def _wire(model: CpxEEc, action: str, args: dict[str, Any]) -> Any:
         return model.cmd_write_object(args["index"], args["sub"], args["value"])
     if action == "face_read":
         return model.cmd_read_object(args["index"], args["sub"])
-    if model.reachable():  # Face.refuse_unknown_state: the ESM holder answers
-        model.esm.refuse(args["code"], model.now_us)
+    if model.reachable():  # Face.request_unknown_state: the ESM holder answers
+        model.esm.request_unknown(args["value"], args["ack"], model.now_us)
     return None
 
 

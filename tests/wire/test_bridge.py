@@ -267,6 +267,28 @@ def test_a_request_over_the_error_flag_needs_the_ack_bit(wire):
     b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x04, 0))
 
 
+def test_an_unknown_state_over_the_error_flag_needs_the_ack_bit(wire):
+    """SSC AL_ControlInd / SOES ESC_state: over the error flag an unknown state code without
+    bit 4 is ignored like any request but INIT, so the original code (0x001D) stays; with
+    the bit it answers 0x0012 "Unknown requested state" (seed 000 §7.7)."""
+    runtime, _bridge, b = wire
+    trs = runtime.rig.devices["trscat"]
+    good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
+            (0x1400, 6, 0x20, True))
+    b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
+    b.send(msg.AL_CONTROL, 1, 0x12)  # PREOP + ack (the fall to SAFE-OP, as above)
+    b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
+    b.send(msg.AL_CONTROL, 1, 0x04)  # SM2 one byte short: refused with 0x001D
+    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
+    b.send(msg.AL_CONTROL, 1, 0x05)  # no such state, no ack: ignored
+    b.send(msg.AL_CONTROL, 1, 0x02)  # taken in order: once the master notes it, 0x05 was
+    wait_for(lambda: sim(runtime, lambda: master_view(runtime).links[1].requested.name)
+             == "PREOP")
+    assert sim(runtime, lambda: (trs.al_status, trs.al_status_code)) == (0x12, 0x001D)
+    b.send(msg.AL_CONTROL, 1, 0x15)
+    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x0012))
+
+
 def test_a_dead_wire_process_hands_the_line_back(wire):
     runtime, bridge, b = wire
     b.conn.close()  # process B gone: the pipe breaks

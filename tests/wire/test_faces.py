@@ -157,11 +157,17 @@ def test_trscat_refuses_safeop_when_0xf030_differs_from_0xf050():
 
 
 def test_an_unknown_al_control_state_answers_0x0012():
-    """Seed 000 §7.7 / ETG.1000.6: 0x0012 "Unknown requested state"."""
+    """Seed 000 §7.7 / ETG.1000.6: 0x0012 "Unknown requested state"; over the error flag an
+    unknown state without the acknowledge is ignored (SSC AL_ControlInd, SOES ESC_state)."""
     rig = line_rig("PREOP")
     rig.devices["master"].set_external(True)
     model = rig.devices["cpx"]
-    faces.face_for(model).refuse_unknown_state(model, 0x0012)
+    faces.face_for(model).request_unknown_state(model, 0x05, False)
+    assert faces.al_status(model) == (int(AlState.PREOP) | 0x10, 0x0012)
+    faces.face_for(model).request_state(model, AlState.OP, True)  # PREOP -> OP: 0x0011
+    faces.face_for(model).request_unknown_state(model, 0x0F, False)
+    assert faces.al_status(model) == (int(AlState.PREOP) | 0x10, 0x0011)
+    faces.face_for(model).request_unknown_state(model, 0x0F, True)
     assert faces.al_status(model) == (int(AlState.PREOP) | 0x10, 0x0012)
 
 

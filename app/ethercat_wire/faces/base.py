@@ -328,11 +328,12 @@ class Face:
         SII word 4 (only a slave with a station alias of its own needs it)."""
         return 0
 
-    def refuse_unknown_state(self, model: Any, code: int) -> None:
-        """An AL control value that is no ESM state: ETG.1000.6 code 0x0012 on the model's
-        ESM (the model never sees a non-state request, so the ESM holder answers it)."""
+    def request_unknown_state(self, model: Any, value: int, ack: bool) -> None:
+        """An AL control value whose bits 0-3 name no ESM state (``ack``: bit 4): the model's
+        ESM answers it (devices/esm.py ``Esm.request_unknown``: 0x0012, or ignored over the
+        error flag without the acknowledge); the model's ``request_state`` takes states only."""
         if model.reachable():
-            model.esm.refuse(code, model.now_us)
+            model.esm.request_unknown(value, ack, model.now_us)
 
     def configure_dc(self, model: Any, settings: dict[str, int]) -> bool:
         """The master's DC registers (0x0981 activation, 0x09A0 SYNC0 cycle, 0x0990 start
