@@ -14,8 +14,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar, Generic, TypeVar
 
-from devices.ethercat import AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
-from devices.events import AlStatusChanged, Event, StateChanged
+from devices.ethercat import AL_STATE_MASK, AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
+from devices.events import AlStatusChanged, EsmLogLine, Event, StateChanged, fmt_hex
 from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 
 # §7.7 codes for requests the ESM itself refuses.
@@ -69,6 +69,9 @@ class Esm(Generic[K]):
     error: K = None  # type: ignore[assignment]  # each subclass: its ErrorKind.NONE
     code: int = NO_ERROR
     stop_mailbox: Callable[[], None] | None = None
+    # AL control values (bit n for value n) already logged as ignored in this error episode:
+    # a master repeating a request every cycle gets one line, not one per cycle.
+    ignored: int = 0
 
     kinds: ClassVar[type[enum.Enum]]
     machine: ClassVar[str] = ""  # StateChanged.machine; empty for the device's main machine
@@ -85,22 +88,26 @@ class Esm(Generic[K]):
     def at_least(self, state: AlState) -> bool:
         return RANK[self.state] >= RANK[state]
 
-    def take_request(self, target: AlState, ack: bool) -> bool:
+    def take_request(self, target: AlState, ack: bool, t_us: int) -> bool:
         """An AL control write (0x0120) reaches the slave: bits 0-3 ``target``, bit 4 ``ack``
         ("Error Ind Ack", ETG.1000.6; Beckhoff SSC AL_ControlInd, SOES alike). False: the
         request is ignored and the slave must not process it.
 
         While the error flag is set a request without the acknowledge is ignored, state, flag
         and code as they are, except one for INIT (SSC: "Error Acknowledge with 0xX1 is
-        allowed"). With it the flag is cleared and the request processed; the code clears with
-        the answer (:meth:`settle_request`), so a request refused again keeps its code with no
-        0x0000 in between: the master reads 0x0130 / 0x0134 after the whole write."""
+        allowed"); the slave logs why (:meth:`_log_ignored`). With it the flag is cleared and
+        the request processed; the code clears with the answer (:meth:`settle_request`), so a
+        request refused again keeps its code with no 0x0000 in between: the master reads
+        0x0130 / 0x0134 after the whole write."""
         if not self.error_flag:
             return True
         if ack:
             self.error = self.kinds.NONE  # type: ignore[assignment]
             return True
-        return target is AlState.INIT
+        if target is AlState.INIT:
+            return True
+        self._log_ignored(int(target), f"'{target.label}'", t_us)
+        return False
 
     def request_unknown(self, value: int, ack: bool, t_us: int) -> None:
         """An AL control write whose bits 0-3 (``value``) name no state: refused with 0x0012,
@@ -108,8 +115,21 @@ class Esm(Generic[K]):
         the acknowledge like any request but INIT (SSC AL_ControlInd, SOES ESC_state), so a
         trainee still reads the code of the original cause."""
         if self.error_flag and not ack:
+            self._log_ignored(value, "unknown", t_us)
             return
         self.refuse(UNKNOWN_REQUESTED_STATE, t_us)
+
+    def _log_ignored(self, value: int, name: str, t_us: int) -> None:
+        """One log line per error episode and AL control value: the request went nowhere and
+        a trainee must see why (the slave answers nothing else)."""
+        bit = 1 << (value & AL_STATE_MASK)
+        if self.ignored & bit:
+            return
+        self.ignored |= bit
+        self.emit(EsmLogLine(t_us, self.device, text=(
+            f"Requested state 0x{value:02X} ({name}) ignored: error indication not acknowledged "
+            f"(AL control bit 4 'Error Ind Ack' not set); AL status 0x{self.register:02X}, "
+            f"AL status code {fmt_hex(self.code, 4)} kept")))
 
     def settle_request(self, t_us: int) -> None:
         """The end of a processed request: a flag the request left clear (an acknowledge the
@@ -129,11 +149,13 @@ class Esm(Generic[K]):
 
         ``kind`` (default REFUSED) says which ERR LED pattern tells why."""
         self.error = self.kinds.REFUSED if kind is None else kind  # type: ignore[assignment]
+        self.ignored = 0  # a new error episode
         self._set_code(code, t_us)
 
     def fall_to(self, target: AlState, kind: K, code: int, t_us: int) -> None:
         """Leave the state on the slave's own initiative: error flag (``kind``) + code."""
         self.error = kind
+        self.ignored = 0  # a new error episode
         self._set_code(code, t_us)
         self._move(target, t_us)
 

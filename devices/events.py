@@ -132,6 +132,12 @@ class LogLine(Event):
 
 
 @dataclass(frozen=True, slots=True)
+class EsmLogLine(LogLine):
+    """A slave ESM's own line (devices/esm.py): an AL control request it ignored. The same kind
+    and record as :class:`LogLine`; its own class so a view shows it for every slave kind."""
+
+
+@dataclass(frozen=True, slots=True)
 class Caption(Event):
     text: str = ""
     kind: ClassVar[str] = "caption"

@@ -179,7 +179,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         if not self.reachable():
             return
         now, esm, current = self.now_us, self.esm, self.esm.state
-        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+        if not esm.take_request(target, ack, now):  # bit 4 "Error Ind Ack" (ETG.1000.6)
             return
         esm.requested = target
         refusal = request_refusal(current, target)

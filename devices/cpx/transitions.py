@@ -51,7 +51,7 @@ class TransitionsMixin:
         if not self.reachable() or self.has_fault("ac_failure"):
             return  # the ESC takes the request, but no application answers it (Tab. 12)
         now, esm = self.now_us, self.esm
-        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+        if not esm.take_request(target, ack, now):  # bit 4 "Error Ind Ack" (ETG.1000.6)
             return
         esm.requested = target
         refusal = request_refusal(esm.state, target)

@@ -211,7 +211,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         if not self.reachable():
             return
         now, esm = self.now_us, self.esm
-        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+        if not esm.take_request(target, ack, now):  # bit 4 "Error Ind Ack" (ETG.1000.6)
             return
         esm.requested = target
         refusal = request_refusal(esm.state, target)

@@ -117,7 +117,7 @@ class TransitionsMixin:
         self._touch()
         now, esm = self.now_us, self.esm
         current = esm.state
-        if not esm.take_request(target, ack):  # bit 4 "Error Ind Ack" (ETG.1000.6)
+        if not esm.take_request(target, ack, now):  # bit 4 "Error Ind Ack" (ETG.1000.6)
             return
         esm.requested = target
         refusal = request_refusal(current, target)

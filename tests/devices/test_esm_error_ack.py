@@ -121,6 +121,12 @@ def test_without_the_error_flag_the_ack_changes_nothing(kind: str) -> None:
 UNKNOWN_REQUESTED_STATE = 0x0012  # seed 000 §7.7
 
 
+def ignored_lines(line: Line) -> list[str]:
+    """The slave's log lines since the last call that say a request was ignored."""
+    return [e.text for d in line.devices for e in d.drain_events()
+            if e.kind == "log" and e.device == line.slave.esm.device and "ignored" in e.text]
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_an_unknown_state_without_ack_over_the_error_flag_is_ignored(kind: str) -> None:
     """SSC AL_ControlInd / SOES ESC_state: over the flag only INIT or the acknowledge gets
@@ -146,3 +152,35 @@ def test_an_unknown_state_without_the_error_flag_answers_0x0012(kind: str) -> No
     line.slave.esm.request_unknown(0x0F, False, line.now)
     assert line.answer() == (AlState.PREOP, 0x12, UNKNOWN_REQUESTED_STATE)
 
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_an_ignored_request_is_logged_once_per_error_episode(kind: str) -> None:
+    """A master repeating a request without bit 4 every cycle gets one line per episode and
+    requested state, naming the state, the missing acknowledge and the code kept."""
+    line = refused_in_preop(kind)
+    ignored_lines(line)
+    for _ in range(5):
+        line.slave.request_state(AlState.SAFEOP)
+        line.run(1)
+    lines = ignored_lines(line)
+    assert len(lines) == 1
+    assert "'SAFEOP'" in lines[0] and "bit 4" in lines[0] and "0x0011" in lines[0]
+    for _ in range(3):
+        line.slave.request_state(AlState.OP)
+        line.slave.esm.request_unknown(0x05, False, line.now)
+        line.run(1)
+    lines = ignored_lines(line)
+    assert len(lines) == 2 and "'OP'" in lines[0] and "0x05" in lines[1]
+    line.slave.request_state(AlState.OP, ack=True)  # refused again: a new episode
+    assert line.answer() == (AlState.PREOP, 0x12, INVALID_STATE_CHANGE)
+    line.slave.request_state(AlState.SAFEOP)
+    assert len(ignored_lines(line)) == 1
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_processed_request_logs_no_ignore(kind: str) -> None:
+    line = refused_in_preop(kind)
+    ignored_lines(line)
+    line.slave.request_state(AlState.INIT)
+    line.slave.request_state(AlState.PREOP, ack=True)
+    assert ignored_lines(line) == []

@@ -27,6 +27,7 @@ from devices.events import (
     AlarmChanged,
     Caption,
     EmergencySent,
+    EsmLogLine,
     Event,
     LogLine,
     StateChanged,
@@ -80,6 +81,8 @@ def event_message(event: Event, device_kind: str = "") -> tuple[str, bool] | Non
         return f"alarm {event.code} {event.name}{where} {verb}", event.active
     if isinstance(event, Caption):
         return f"» {event.text}", False
+    if isinstance(event, EsmLogLine):  # an AL control request a slave ignored: every kind
+        return event.text, True
     if isinstance(event, LogLine) and device_kind in _LOGGED_KINDS:
         return event.text, "refused" in event.text.lower()
     return None
