@@ -27,6 +27,9 @@ BOOTSTRAP_NOT_SUPPORTED = 0x0013  # "Bootstrap not supported" (a slave without a
 # Order of the states a slave steps up through (BOOT is outside it).
 RANK: dict[AlState, int] = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2,
                             AlState.OP: 3}
+# ETG.1000.6: CoE (SDO, SDO information, emergencies) runs from PREOP on. INIT runs no
+# mailbox; BOOT only the bootstrap mailbox, which carries the firmware download (FoE).
+NO_COE_STATES = frozenset({AlState.INIT, AlState.BOOT})
 
 K = TypeVar("K", bound=enum.Enum)
 
@@ -231,8 +234,13 @@ class CoeMailbox:
         a controller that can fail while the ESC still passes frames overrides this."""
         return True
 
+    def bootstrap_mailbox(self) -> bool:
+        """Whether only the bootstrap mailbox runs (BOOT, ETG.1000.6): it answers a CoE
+        request with a mailbox error instead of serving it (docs/cpx-e-ec.md choice 47)."""
+        return self.esm.state is AlState.BOOT
+
     def _mailbox_od(self, index: int, sub: int) -> ObjectDictionary:
         if not self.reachable() or not self.mailbox_runs() or self.od is None or \
-                self.esm.state is AlState.INIT:  # type: ignore[attr-defined]
+                self.esm.state in NO_COE_STATES:  # type: ignore[attr-defined]
             raise SdoAbort(AbortCode.SDO_TIMEOUT, index, sub)
         return self.od

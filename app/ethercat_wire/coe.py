@@ -138,7 +138,9 @@ class CoeServer:
             return self._mailbox_error(MBXERR_SIZE_TOO_SHORT)
         length, _address, _prio, type_counter = MBX_HEADER.unpack_from(message)
         body = bytes(message[MBX_HEADER.size:MBX_HEADER.size + length])
-        if type_counter & 0x0F != MBX_TYPE_COE:
+        if type_counter & 0x0F != MBX_TYPE_COE or self.face.bootstrap_mailbox(self.model):
+            # BOOT runs the bootstrap mailbox, for FoE only (ETG.1000.6): CoE is refused
+            # there as any protocol FieldRig does not serve
             return self._mailbox_error(MBXERR_UNSUPPORTED_PROTOCOL)
         if len(body) < 2:
             return self._mailbox_error(MBXERR_SIZE_TOO_SHORT)

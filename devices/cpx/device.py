@@ -32,7 +32,7 @@ from devices.cpx.switches import BUS_MODULE, DiagMode, Switches, check_rotary
 from devices.cpx.transitions import WATCHDOG_US, TransitionsMixin
 from devices.cpx.unseen import undiagnosed
 from devices.device import Action, DeviceModel
-from devices.esm import AlStatusView, CoeMailbox
+from devices.esm import NO_COE_STATES, AlStatusView, CoeMailbox
 from devices.ethercat import AlState, sync_error_reached
 from devices.events import LogLine
 from devices.od import ObjectDictionary, TypeNames
@@ -212,7 +212,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         over while the mailbox is empty (quiet steps queue nothing)."""
         if not (self.powered and self.link_in):
             return True  # exchange_frame returns at once
-        if self.diagnosis.mailbox and self.esm.state is not AlState.INIT:
+        if self.diagnosis.mailbox and self.esm.state not in NO_COE_STATES:
             return False  # the cycle's take_emergencies would hand them over (and touch)
         step = self._still.dt
         if not step:
@@ -253,8 +253,8 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         """8-byte emergencies (§2.5.3) queued in the mailbox; it runs from PREOP on."""
         if not self.diagnosis.mailbox:  # the master asks every cycle: nothing to hand over
             return []
-        if not self.reachable() or not self.mailbox_runs() or self.esm.state is AlState.INIT:
-            return []
+        if not self.reachable() or not self.mailbox_runs() or self.esm.state in NO_COE_STATES:
+            return []  # emergencies are CoE: none in BOOT either (choice 47)
         out, self.diagnosis.mailbox = self.diagnosis.mailbox, []
         if out:
             self.touch()

@@ -157,6 +157,11 @@ class Face:
         extra = self.wire_objects(model)
         return sorted([*entries, *(extra or ())], key=lambda e: (e.index, e.sub))
 
+    def bootstrap_mailbox(self, model: Any) -> bool:
+        """Whether only the bootstrap mailbox runs (BOOT): CoE gets a mailbox error. A slave
+        without BOOT never is there."""
+        return False
+
     def _require_od(self, model: Any) -> Any:
         od = self.od(model)
         if od is None or not model.reachable():

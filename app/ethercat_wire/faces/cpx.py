@@ -54,6 +54,9 @@ class CpxFace(Face):
         except CommandError as exc:
             raise NoAnswer(str(exc)) from None
 
+    def bootstrap_mailbox(self, model: Any) -> bool:
+        return bool(model.bootstrap_mailbox())  # BOOT: firmware download only (choice 47)
+
     def request_id(self, model: Any, on: bool) -> None:
         model.request_id(on)  # seed 002 Tab. 5: the Explicit Device ID (devices/cpx/device_id.py)
 
