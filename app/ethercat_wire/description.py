@@ -44,6 +44,18 @@ class SlotModule:
     default: bool = False
 
 
+LCID_ENGLISH, LCID_RUSSIAN = 1033, 1049  # ESI LcId of a text (Windows locale ids)
+
+
+@dataclass(frozen=True)
+class DiagText:
+    """The text of a diagnosis Text-ID (ETG.2000 DiagMessage): a configurator shows it for a
+    0x10F3 history message carrying that Text-ID."""
+
+    text_id: int
+    texts: tuple[tuple[int, str], ...]  # (LcId, MessageText), 1033 English first
+
+
 @dataclass(frozen=True)
 class SyncManager:
     """SM0..SM3 as in SII category 41 (start, length, control, enable)."""
@@ -88,3 +100,7 @@ class SlaveDescription:
     slot_name: str = ""  # the one slot of a non-modular slave with slot_modules
     slot_modules: tuple[SlotModule, ...] = ()
     vendor_name: str = ""  # ESI Vendor Name, where the seed gives one
+    # ESI Profile: the CoE profile number (0x1000's low word) and the texts of the 0x10F3
+    # Text-IDs; written only for a slave with texts (the CPX-E-EC, seed 002 §2.5.2)
+    profile_no: int = 0
+    diag_texts: tuple[DiagText, ...] = ()

@@ -2,7 +2,8 @@
 
 Built from the same SlaveDescription as the SII image, so a configurator that imports them
 (TwinCAT, CODESYS, IgH `ethercat` tool users, ...) expects exactly what the wire shows:
-vendor, Type ProductCode / RevisionNo, Name, Fmmu, Sm, RxPdo / TxPdo (the assigned ones with
+vendor, Type ProductCode / RevisionNo, Name, Profile (DiagMessages: the texts of the 0x10F3
+Text-IDs, where the slave has them), Fmmu, Sm, RxPdo / TxPdo (the assigned ones with
 their Sm, the others a master may assign without), Mailbox / CoE, Dc, Slots (+ Descriptions /
 Modules: PDO sets a configurator selects, the drive's slots), Eeprom. One file per slave of
 the line.
@@ -78,6 +79,8 @@ def device_element(desc: SlaveDescription) -> ET.Element:
           RevisionNo=hexid(desc.revision))
     _text(dev, "Name", desc.name, LcId="1033")
     _text(dev, "GroupType", desc.group)
+    if desc.diag_texts:
+        _profile(dev, desc)
     fmmus = [sii.FMMU_OUTPUTS, sii.FMMU_INPUTS] + ([sii.FMMU_MBX_STATE] if desc.mailbox else [])
     for f in fmmus[:desc.fmmu_count]:
         _text(dev, "Fmmu", FMMU_NAMES[f])
@@ -122,6 +125,19 @@ def device_element(desc: SlaveDescription) -> ET.Element:
     _text(eeprom, "ByteSize", str(len(image)))
     _text(eeprom, "ConfigData", image[:14].hex().upper())
     return dev
+
+
+def _profile(dev: ET.Element, desc: SlaveDescription) -> None:
+    """ETG.2000 Profile (between GroupType and Fmmu): ProfileNo, then DiagMessages, the text
+    a configurator shows for a 0x10F3 message by its Text-ID, one MessageText per LcId."""
+    profile = ET.SubElement(dev, "Profile")
+    _text(profile, "ProfileNo", str(desc.profile_no))
+    messages = ET.SubElement(profile, "DiagMessages")
+    for diag in desc.diag_texts:
+        message = ET.SubElement(messages, "DiagMessage")
+        _text(message, "TextId", hexid(diag.text_id, 4))
+        for lcid, text in diag.texts:
+            _text(message, "MessageText", text, LcId=str(lcid))
 
 
 def _slots(dev: ET.Element, desc: SlaveDescription) -> None:

@@ -139,6 +139,22 @@ CPX_ERRORS: dict[int, CpxError] = {e.number: e for e in (
 )}
 
 
+# CPX error number 0 (Text-ID 0x3700): the message of a fault that has gone (FieldRig,
+# docs/cpx-e-ec.md choice 20; Tab. 21's "No error").
+NO_ERROR_TEXT = EMCY_CODES[EMCY_NO_ERROR]
+
+
+def text_id_texts() -> dict[int, tuple[str | None, str]]:
+    """Every Text-ID the bus module writes into 0x10F3, with its (Russian, English) text, as
+    the ESI gives them to a configurator (§2.5.2): Tab. 17's EtherCAT ones in both languages,
+    and 0x3700 + n for CPX error number 0 and those of CPX_ERRORS, in English (their Russian
+    is in the system description the seed does not include)."""
+    texts: dict[int, tuple[str | None, str]] = {CPX_TEXT_ID_BASE: (None, NO_ERROR_TEXT)}
+    texts.update((e.text_id, (None, e.text)) for e in CPX_ERRORS.values())
+    texts.update(TEXT_IDS)
+    return texts
+
+
 @dataclass(frozen=True)
 class Cause:
     """A physical cause and the codes it is reported with (docs/cpx-e-ec.md, cause -> code)."""

@@ -19,6 +19,7 @@ from devices.cpx.codes import (
     DIAG_CODE_CPX,
     DIAG_CODE_DS401,
     EMCY_CODES,
+    NO_ERROR_TEXT,
     TEXT_IDS,
     DiagType,
 )
@@ -79,7 +80,7 @@ class DiagMessage:
         if CPX_TEXT_ID_BASE <= self.text_id <= CPX_TEXT_ID_BASE + 0xFF:
             number = self.text_id - CPX_TEXT_ID_BASE
             known = CPX_ERRORS.get(number)
-            what = known.text if known else ("No error" if number == 0 else "CPX error")
+            what = known.text if known else (NO_ERROR_TEXT if number == 0 else "CPX error")
             body = f"CPX error {number}: {what}"
         else:
             body = TEXT_IDS.get(self.text_id, ("", f"Text-ID 0x{self.text_id:04X}"))[1]

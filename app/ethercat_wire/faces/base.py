@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
 from app.ethercat_wire.description import (
+    DiagText,
     Pdo,
     PdoEntry,
     SlaveDescription,
@@ -275,7 +276,17 @@ class Face:
             spare_rx_pdos=named(self.spare_pdos(model, True)),
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
             slot_modules=modules, station_alias=self.station_alias(model),
-            vendor_name=self.vendor_name)
+            vendor_name=self.vendor_name, profile_no=self.profile_no(model),
+            diag_texts=self.diag_texts())
+
+    def profile_no(self, model: Any) -> int:
+        """The CoE profile (0x1000 low word) for the ESI Profile; 0 while no dictionary."""
+        od = self.od(model)
+        return od.peek(0x1000, 0) & 0xFFFF if od is not None and (0x1000, 0) in od else 0
+
+    def diag_texts(self) -> tuple[DiagText, ...]:
+        """The texts of the Text-IDs the slave's 0x10F3 carries (ESI DiagMessages)."""
+        return ()
 
     def ready(self, model: Any) -> bool:
         """Whether the model has its dictionary (a description now is the one a master gets)."""

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo
+from app.ethercat_wire.description import LCID_ENGLISH, LCID_RUSSIAN, DiagText, Pdo
 from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import (
     COE_PDO_ASSIGN,
@@ -24,7 +24,7 @@ from app.ethercat_wire.faces.base import (
     Layout,
     NoAnswer,
 )
-from devices.cpx import objects
+from devices.cpx import codes, objects
 from devices.cpx.assignment import DIAG_PDO
 from devices.device import CommandError
 
@@ -56,6 +56,14 @@ class CpxFace(Face):
 
     def bootstrap_mailbox(self, model: Any) -> bool:
         return bool(model.bootstrap_mailbox())  # BOOT: firmware download only (choice 47)
+
+    def diag_texts(self) -> tuple[DiagText, ...]:
+        """§2.5.2: «Диагностические события транслируются с помощью файла ESI» — each Text-ID
+        the history carries, with the texts of the model's table (choice 48)."""
+        return tuple(
+            DiagText(text_id, ((LCID_ENGLISH, english),) +
+                     (((LCID_RUSSIAN, russian),) if russian else ()))
+            for text_id, (russian, english) in sorted(codes.text_id_texts().items()))
 
     def request_id(self, model: Any, on: bool) -> None:
         model.request_id(on)  # seed 002 Tab. 5: the Explicit Device ID (devices/cpx/device_id.py)
