@@ -99,6 +99,16 @@ class SlaveDescription:
     spare_tx_pdos: tuple[Pdo, ...] = ()
     slot_name: str = ""  # the one slot of a non-modular slave with slot_modules
     slot_modules: tuple[SlotModule, ...] = ()
+    # A modular device (ETG.2000): up to slot_count slots, each taking any of slot_modules; a
+    # module's PDO indices grow by slot_pdo_increment per slot, its objects by
+    # slot_index_increment; the ESI's Device then lists only the PDOs of device_pdos (the
+    # slave's own), the modules' come with the modules. download_module_idents: the master
+    # writes the configured modules to 0xF030 (ETG.5001).
+    slot_count: int = 1
+    slot_pdo_increment: int = 0
+    slot_index_increment: int = 0
+    device_pdos: frozenset[int] | None = None  # None: every PDO is the device's
+    download_module_idents: bool = False
     vendor_name: str = ""  # ESI Vendor Name, where the seed gives one
     # ESI Profile: the CoE profile number (0x1000's low word) and the texts of the 0x10F3
     # Text-IDs; written only for a slave with texts (the CPX-E-EC, seed 002 §2.5.2)

@@ -5,7 +5,8 @@ Built from the same SlaveDescription as the SII image, so a configurator that im
 vendor, Type ProductCode / RevisionNo, Name, Profile (DiagMessages: the texts of the 0x10F3
 Text-IDs, where the slave has them), Fmmu, Sm, RxPdo / TxPdo (the assigned ones with
 their Sm, the others a master may assign without), Mailbox / CoE, Dc, Slots (+ Descriptions /
-Modules: PDO sets a configurator selects, the drive's slots), Eeprom. One file per slave of
+Modules: PDO sets a configurator selects, the drive's slots; the FastCAT's 16 slots of
+catalog modules), Eeprom. One file per slave of
 the line.
 
     python -m app ethercat export-esi [--rig RIG] [--out static/esi/]
@@ -95,12 +96,16 @@ def device_element(desc: SlaveDescription) -> ET.Element:
     tx_sm = _sm_number(desc, sii.SM_TYPE_INPUTS, 3)
     # The assigned PDOs first, in assignment order (a configurator builds the image in the
     # order it reads them), then the ones the master may add.
+    own = desc.device_pdos
     for tag, assigned, spare, sm in (("RxPdo", desc.rx_pdos, desc.spare_rx_pdos, rx_sm),
                                      ("TxPdo", desc.tx_pdos, desc.spare_tx_pdos, tx_sm)):
+        # a modular device's module PDOs come with the modules in its slots
         for pdo in assigned:
-            _pdo(dev, tag, pdo, sm, desc.pdos_fixed)
+            if own is None or pdo.index in own:
+                _pdo(dev, tag, pdo, sm, desc.pdos_fixed)
         for pdo in spare:
-            _pdo(dev, tag, pdo, None, desc.pdos_fixed)
+            if own is None or pdo.index in own:
+                _pdo(dev, tag, pdo, None, desc.pdos_fixed)
     if desc.mailbox is not None:
         mbx = ET.SubElement(dev, "Mailbox", {"DataLinkLayer": "true"})
         ET.SubElement(mbx, "CoE", {name: "true" if desc.coe_details & bit else "false"
@@ -141,10 +146,17 @@ def _profile(dev: ET.Element, desc: SlaveDescription) -> None:
 
 
 def _slots(dev: ET.Element, desc: SlaveDescription) -> None:
-    """One slot taking exactly one of the modules (they are alternatives, not a modular
-    device): no 0xF030 module list to download, the slave has none."""
-    slots = ET.SubElement(dev, "Slots", {"DownloadModuleIdentList": "0"})
-    slot = ET.SubElement(slots, "Slot", {"MinInstances": "1", "MaxInstances": "1"})
+    """One Slot element: with slot_count 1 it takes exactly one of the modules (they are
+    alternatives: the drive); more, up to slot_count slots in a row, none required, each
+    module's PDOs and objects moved by the increments per slot (a modular device, the
+    FastCAT). DownloadModuleIdentList: whether the slave has a 0xF030 to write."""
+    attrs = {"DownloadModuleIdentList": "1" if desc.download_module_idents else "0"}
+    if desc.slot_count > 1:
+        attrs.update(SlotPdoIncrement=str(desc.slot_pdo_increment),
+                     SlotIndexIncrement=hexid(desc.slot_index_increment, 2))
+    slots = ET.SubElement(dev, "Slots", attrs)
+    slot = ET.SubElement(slots, "Slot", {"MinInstances": "1" if desc.slot_count == 1 else "0",
+                                         "MaxInstances": str(desc.slot_count)})
     _text(slot, "Name", desc.slot_name, LcId="1033")
     for module in desc.slot_modules:
         _text(slot, "ModuleIdent", hexid(module.ident), **({"Default": "1"} if module.default

@@ -7,13 +7,13 @@ ambiguous rows are in docs/fastcat-coupler.md.
 
 from __future__ import annotations
 
+import random
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import Any, Protocol
 
+from devices.fastcat.catalog import ModuleType
+from devices.fastcat.modules import IoModule
 from devices.od import Access, DataType, ObjectDictionary, OdEntry
-
-if TYPE_CHECKING:
-    from devices.fastcat.modules import IoModule
 
 DEVICE_TYPE = 0x0000_1389  # §6.1: 5001 = MDP (printed "0x000013989 (5001)")
 DEVICE_NAME = "FastCAT"  # §6.2
@@ -128,10 +128,7 @@ def _pdos(od: ObjectDictionary, modules: Sequence[IoModule]) -> None:
     _mapping(od, COUPLER_RXPDO, COUPLER_PDO_NAMES[0], [(0x5200, 1, 1), COUPLER_PDO_GAP])
     _mapping(od, COUPLER_TXPDO, COUPLER_PDO_NAMES[1], [(0x5100, 1, 1), COUPLER_PDO_GAP])
     for n, module in enumerate(modules, start=1):
-        rx, tx = module.rx_entries(n), module.tx_entries(n)
-        rx_name, tx_name = MODULE_PDO_NAMES[module.mtype.group]
-        _mapping(od, RXPDO_BASE + n - 1, rx_name, rx)
-        _mapping(od, TXPDO_BASE + n - 1, tx_name, tx)
+        rx, tx = module_pdos(od, module, n)
         if rx:
             rx_assigned.append(RXPDO_BASE + n - 1)
         if tx:
@@ -141,6 +138,27 @@ def _pdos(od: ObjectDictionary, modules: Sequence[IoModule]) -> None:
         _ro(od, index, 0, name, DataType.UNSIGNED8, len(assigned))
         for sub, pdo in enumerate(assigned, start=1):
             _ro(od, index, sub, f"{name} {sub}", DataType.UNSIGNED16, pdo)
+
+
+def module_pdos(od: ObjectDictionary, module: IoModule, n: int) -> tuple[bool, bool]:
+    """Module ``n``'s mapping objects 0x1600 / 0x1A00 + (n - 1) (§5); whether each maps
+    anything (an empty one is not assigned)."""
+    rx, tx = module.rx_entries(n), module.tx_entries(n)
+    rx_name, tx_name = MODULE_PDO_NAMES[module.mtype.group]
+    _mapping(od, RXPDO_BASE + n - 1, rx_name, rx)
+    _mapping(od, TXPDO_BASE + n - 1, tx_name, tx)
+    return bool(rx), bool(tx)
+
+
+def catalog_objects(mtype: ModuleType) -> ObjectDictionary:
+    """The objects and mapping objects a module of type ``mtype`` brings as module 1, apart
+    from any rig: a configurator's catalogue entry (the ESI's Modules), from the code that
+    builds the coupler's own dictionary. Values are a fresh module's (no rig options)."""
+    module = IoModule(mtype, random.Random(0))  # its values do not matter: only the layout
+    od = ObjectDictionary()
+    module_pdos(od, module, 1)
+    module.add_objects(od, 1)
+    return od
 
 
 def _coupler_objects(od: ObjectDictionary, c: CouplerObjects, count: int) -> None:

@@ -9,6 +9,7 @@ them); the entry names are the ESI's / SII's, the objects keep their §6 names (
 
 from __future__ import annotations
 
+import copy
 import random
 import xml.etree.ElementTree as ET
 
@@ -37,9 +38,50 @@ def sirio() -> FastCat:
     return coupler(["DB16", "AI8D", "AI8C"])  # the §4 example
 
 
-def device(fc: FastCat) -> ET.Element:
-    root = ET.fromstring(ET.tostring(esi.document(faces.describe(fc)).getroot()))
-    return root.find("Descriptions/Devices/Device")
+def hex_value(text: str) -> int:
+    return int(text[2:], 16) if text.startswith("#x") else int(text)
+
+
+def configured(root: ET.Element, idents: list[int], tag: str) -> list[ET.Element]:
+    """The PDOs a configurator builds from the ESI with module ``idents[k]`` in slot k
+    (ETG.2000): the device's own, then each module's, its PDO index + k * SlotPdoIncrement,
+    its entries' indices + k * SlotIndexIncrement (docs/fastcat-coupler.md)."""
+    device = root.find("Descriptions/Devices/Device")
+    slots = device.find("Slots")
+    pdo_step = hex_value(slots.get("SlotPdoIncrement"))
+    index_step = hex_value(slots.get("SlotIndexIncrement"))
+    modules = {hex_value(m.find("Type").get("ModuleIdent")): m
+               for m in root.findall("Descriptions/Modules/Module")}
+    out = list(device.findall(tag))
+    for k, ident in enumerate(idents):
+        for pdo in modules[ident].findall(tag):
+            pdo = copy.deepcopy(pdo)
+            pdo.find("Index").text = esi.hexid(hex_value(pdo.findtext("Index")) + k * pdo_step, 4)
+            for index in pdo.findall("Entry/Index"):
+                if hex_value(index.text):
+                    index.text = esi.hexid(hex_value(index.text) + k * index_step, 4)
+            out.append(pdo)
+    return out
+
+
+class Screen:
+    """The slave as the configurator shows it after the scan (§3): the slots filled with
+    the modules 0xF050 reports."""
+
+    def __init__(self, fc: FastCat) -> None:
+        self.root = ET.fromstring(ET.tostring(esi.document(faces.describe(fc)).getroot()))
+        count = fc.od.peek(0xF050, 0)
+        self.idents = [fc.od.peek(0xF050, n) for n in range(1, count + 1)]
+        self.device = self.root.find("Descriptions/Devices/Device")
+
+    def findall(self, tag: str) -> list[ET.Element]:
+        if tag in ("RxPdo", "TxPdo"):
+            return configured(self.root, self.idents, tag)
+        return self.device.findall(tag)
+
+
+def device(fc: FastCat) -> Screen:
+    return Screen(fc)
 
 
 def test_tx_pdos_as_the_section_4_screen(sirio):

@@ -227,6 +227,10 @@ class Face:
         """The ESI slot of a slave whose PDO sets are chosen as modules: name and modules."""
         return "", ()
 
+    def modular(self) -> dict[str, Any]:
+        """A modular device's slot layout (SlaveDescription's slot_count ... fields)."""
+        return {}
+
     def object_name(self, index: int, sub0_name: str) -> str:
         """The name SDO Information gives an object: its sub 0's, where the model names sub 0
         after the object (a record whose sub 0 is a count names it in ``object_name``)."""
@@ -277,7 +281,7 @@ class Face:
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
             slot_modules=modules, station_alias=self.station_alias(model),
             vendor_name=self.vendor_name, profile_no=self.profile_no(model),
-            diag_texts=self.diag_texts())
+            diag_texts=self.diag_texts(), **self.modular())
 
     def profile_no(self, model: Any) -> int:
         """The CoE profile (0x1000 low word) for the ESI Profile; 0 while no dictionary."""

@@ -6,15 +6,22 @@ listed in 0x1C12 / 0x1C13 in that order. The images are those mappings bit for b
 (:mod:`app.ethercat_wire.faces.image`): 0x16FF's Reset fault is bit 0 of SM2, then a 7-bit
 gap (§6.17 "2:8 Reserved (7)"), so module 1's outputs start at byte 1. Until a scan has
 built the dictionary (power-up, every return to INIT, §3) there is no mapping and no image.
+The ESI is a modular device: 16 slots taking any module of the catalog, the Device keeping
+0x16FF / 0x1AFF (§3 / §4, docs/fastcat-coupler.md "ESI: slots and modules").
 """
 
 from __future__ import annotations
 
-from typing import ClassVar
+from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo, PdoEntry
+from app.ethercat_wire.description import Pdo, PdoEntry, SlotModule
+from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import Face
 from devices.fastcat import module_od, objects
+from devices.fastcat.catalog import CATALOG
+from devices.od import ObjectDictionary
+
+SLOT_NAME = "I/O module"  # §4: the slots page, one slot per module along the internal bus
 
 
 class FastCatFace(Face):
@@ -37,3 +44,30 @@ class FastCatFace(Face):
     def pdo_mandatory(self, pdo: Pdo) -> bool:
         """§4's screen ticks Mandatory for 0x1AFF; §5 has 0x16FF / 0x1AFF always present."""
         return pdo.index in (objects.COUPLER_RXPDO, objects.COUPLER_TXPDO)
+
+    def slot(self, model: Any) -> tuple[str, tuple[SlotModule, ...]]:
+        """§3 / §4: the configurator fills the 16 slots (from the scan, or by hand on Sirio)
+        with modules of the catalog; each module brings its PDOs as module 1 (0x1600 / 0x1A00,
+        objects at their §6 base), moved per slot by the increments of :meth:`modular`."""
+        modules = []
+        for mtype in CATALOG.values():
+            od = objects.catalog_objects(mtype)
+            modules.append(SlotModule(mtype.product_code, mtype.name, mtype.description,
+                                      self._mapped(od, objects.RXPDO_BASE),
+                                      self._mapped(od, objects.TXPDO_BASE)))
+        return SLOT_NAME, tuple(modules)
+
+    def _mapped(self, od: ObjectDictionary, index: int) -> tuple[Pdo, ...]:
+        """The PDO of mapping object ``index``; none when it maps nothing (not assigned, §5)."""
+        if not od.peek(index, 0):
+            return ()
+        return (self.named_pdo(image.read_pdo(od.peek, od.entry, index)),)
+
+    def modular(self) -> dict[str, Any]:
+        """§4 «i 16 slot disponibili»; §5 PDO 0x1600 / 0x1A00 + (n - 1), §6 objects at base +
+        0x10 * (n - 1); the ESI's Device keeps 0x16FF / 0x1AFF, the coupler's own (§5); the
+        coupler compares a written 0xF030 with 0xF050 (§7.5 row 0x14)."""
+        return {"slot_count": objects.MAX_MODULES, "slot_pdo_increment": 1,
+                "slot_index_increment": module_od.MODULE_STRIDE,
+                "device_pdos": frozenset({objects.COUPLER_RXPDO, objects.COUPLER_TXPDO}),
+                "download_module_idents": True}
