@@ -22,6 +22,9 @@ from devices.fastcat.objects import MAX_MODULES
 COUPLER = "coupler"
 MODULE = "module"
 TABLES = (COUPLER, MODULE)
+# What an alarm of each table is, in the seed's words and section: the two tables number their
+# codes independently, so a reader needs the table next to the code (the State tab's Alarm row).
+TABLE_WORDS = {COUPLER: "coupler alarm (§7.5)", MODULE: "module alarm (§7.6)"}
 
 EMERGENCY_CODE = 0xFF00  # §7: "ErrorCode: 0xFF00 (device specific)"
 EMERGENCY_REGISTER = 0x81  # §7: "ErrorRegister: 0x81 (device error)"

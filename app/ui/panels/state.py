@@ -20,7 +20,7 @@ import viser
 from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.style import badge, esc, kv_table
 from devices.ethercat import al_status_name
-from devices.fastcat.alarms import al_status_meaning
+from devices.fastcat.alarms import TABLE_WORDS, al_status_meaning
 
 
 def al_code_text(code: int) -> str:
@@ -36,8 +36,9 @@ def alarm_text(alarm: Mapping[str, Any] | None) -> str:
     notes = ["resettable" if alarm.get("resettable") else "needs a resync"]
     notes.append("cause present" if alarm.get("cause_present") else "cause gone")
     title = f"0x{int(alarm['code']):02X} {alarm.get('name', '')}"
+    table = str(alarm.get("table", ""))
     return (f"{badge(title, 'bad')}"
-            f" <span>{esc(alarm.get('table', ''))}{esc(where)}</span><br>"
+            f" <span>{esc(TABLE_WORDS.get(table, table))}{esc(where)}</span><br>"
             f"{esc(alarm.get('description', ''))}"
             f" <span class=\"fr-muted\">({esc('; '.join(notes))})</span>")
 
