@@ -21,7 +21,7 @@ from app.modbus.line import ServedLine
 from app.ui.drive.bus_state import fieldbus_rows
 from app.ui.panels.client_pick import PickedHtml
 from app.ui.panels.per_client import InstructorHtml, instructor_for, split_instructor
-from app.ui.style import badge, esc, kv_table
+from app.ui.style import badge, clock, esc, kv_table
 from devices.events import US_PER_S, AlarmChanged, EmergencySent, Event, LogLine, StateChanged
 from devices.servo import control, ds402
 from devices.servo.actions import names_a_cause
@@ -62,7 +62,7 @@ def title(drive_id: str, snap: Mapping[str, Any], t_us: int,
     the EtherCAT line; ``modbus``: the Modbus line as the rig serves it, if it does."""
     bus = fieldbus_text(snap, slave, modbus)
     return (f'<p class="fr-title"><b>{esc(drive_id)}</b> · {esc(bus)} · '
-            f'<span class="fr-muted">t = {t_us // 100_000 / 10:.1f} s</span></p>')
+            f'{clock(t_us // 100_000 / 10)}</p>')
 
 
 def state_badge(snap: Mapping[str, Any]) -> str:

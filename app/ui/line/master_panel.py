@@ -25,7 +25,7 @@ from app.ui.line.cables import pulled_text
 from app.ui.panels.per_client import RoleHtml, instructor_for
 from app.ui.panels.widgets import Synced
 from app.ui.repeats import Run, collapse_repeats, repeat_suffix
-from app.ui.style import badge, esc, kv_table
+from app.ui.style import badge, clock, esc, kv_table
 from devices.ethercat import AL_STATUS_ERROR_FLAG, al_status_name, describe_al_status_code
 from devices.events import US_PER_S
 from devices.master.view import phase_text
@@ -153,7 +153,7 @@ def dc_text(dc: Mapping[str, Any]) -> str:
 def title(master: Mapping[str, Any], t_us: int) -> str:
     """``EtherCAT master · master · t = 12.3 s``: its own handle, as the state panel's."""
     return (f'<p class="fr-title"><b>EtherCAT master</b> · {esc(master.get("id", "master"))}'
-            f' · <span class="fr-muted">t = {t_us / US_PER_S:.1f} s</span></p>')
+            f' · {clock(t_us / US_PER_S)}</p>')
 
 
 def pulled_cables(master: Mapping[str, Any]) -> str:

@@ -18,7 +18,7 @@ from typing import Any
 import viser
 
 from app.ui.panels.per_client import RoleHtml, instructor_for
-from app.ui.style import badge, esc, kv_table
+from app.ui.style import badge, clock, esc, kv_table
 from devices.ethercat import al_status_name
 from devices.fastcat.alarms import TABLE_WORDS, al_status_meaning
 
@@ -154,7 +154,7 @@ def title(snap: Mapping[str, Any], master_snap: Mapping[str, Any] | None, t_us: 
     # Simulated time in tenths: the text changes 10 times a second at most, and a paused
     # rig shows a fixed value (screenshots).
     return (f'<p class="fr-title"><b>{esc(name)}</b> · station {esc(station)} · '
-            f'<span class="fr-muted">t = {t_us // 100_000 / 10:.1f} s</span></p>')
+            f'{clock(t_us // 100_000 / 10)}</p>')
 
 
 class StatePanel:
