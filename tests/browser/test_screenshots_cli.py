@@ -1,6 +1,6 @@
 """Headless screenshots for CI: one PNG per checkpoint plus events.jsonl, the same twice.
 
-static/scenarios/module_lost_in_op.toml (seed 000 §7.7) has three checkpoints: op (5 s),
+static/scenarios/module_lost_in_op.toml (seed 000 §7.7) has three checkpoints: op (5.2 s),
 in_alarm (7 s), recovered (15.5 s). Two runs must give the same pictures within the browser
 tests' tolerance, and events.jsonl must be the lines ``scenario run`` prints.
 """
