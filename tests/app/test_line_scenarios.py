@@ -179,3 +179,19 @@ def test_dc_sync_lost() -> None:
     last = {r["position"]: r["to"] for r in pick(name, "slave_state", "master")
             if r["t"] <= resynced}
     assert last == {0: "OP", 1: "OP", 2: "OP", 3: "OP"}
+
+
+def test_dc_sync_lost_caption_says_when_the_master_measures_again() -> None:
+    """The "SYNC0 is back" caption's timing is the master's: NOT_SYNCHRONIZED ends once the
+    fault is gone and 500 ms have passed in that state (docs/ethercat-master.md), and at 6.5 s
+    it has been there 1.5 s, so SYNCHRONIZING follows the clear within a cycle. The caption said
+    "Half a second later the master measures again" next to events that did it 1 ms later."""
+    name = "dc_sync_lost"
+    back = next(r for r in pick(name, "caption") if r["text"].startswith("SYNC0 is back"))
+    resync = next(r["t"] for r in pick(name, "state", "master", to="SYNCHRONIZING")
+                  if r.get("machine") == "dc" and r["t"] >= back["t"])
+    delay = resync - back["t"]
+    claims = {"half a second later": abs(delay - 0.5) <= 0.002, "at once": delay <= 0.002}
+    said = [words for words in claims if words in back["text"].lower()]
+    assert len(said) == 1, back["text"]
+    assert claims[said[0]], f"caption says {said[0]!r}, SYNCHRONIZING came {delay:.3f} s later"
