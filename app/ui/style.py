@@ -24,7 +24,7 @@ CSS = """
 .fr-bad { background: #fbd5d5; color: #a11616; }
 .fr-warn { background: #fdefc3; color: #7a5600; }
 .fr-muted { color: #888; }
-.fr-clock { white-space: nowrap; }
+.fr-nowrap { white-space: nowrap; }
 .fr-log { width: 100%; border-collapse: collapse; font-size: 0.72em; table-layout: fixed;
           font-family: ui-monospace, Menlo, Consolas, monospace; }
 .fr-log th { text-align: left; background: #eef0f3; color: #333; padding: 2px 4px;
@@ -63,7 +63,7 @@ def _escaped(text: str) -> str:
 def clock(seconds: float) -> str:
     """A title's simulated time, ``t = 12.3 s``, one unit: a long title (the Modbus drive's
     "served as Modbus TCP on :5020") broke it into "· t" and "= 116.3 s" on two lines."""
-    return f'<span class="fr-muted fr-clock">t = {seconds:.1f} s</span>'
+    return f'<span class="fr-muted fr-nowrap">t = {seconds:.1f} s</span>'
 
 
 def badge(text: str, tone: str) -> str:

@@ -12,6 +12,7 @@ from __future__ import annotations
 import re
 
 import pytest
+from test_title_clock import nowrap_classes
 
 from app.ui.panels.state import alarm_text
 
@@ -33,3 +34,15 @@ def test_the_alarm_row_names_the_seed_table(table: str, code: int, name: str, mo
                              "description": "d", "resettable": True, "cause_present": True}))
     assert text.startswith(said)
     assert "module, module" not in text and "coupler, module" not in text
+
+
+def test_the_table_words_wrap_whole() -> None:
+    """In the 400 px panel "coupler" fitted after the badge to the last pixel, its "r" under
+    the panel's scrollbar, and "alarm (§7.5), module 2" went on the next line (in_alarm at
+    1280 x 720): the words are one unit, on the badge's line or under it."""
+    html = alarm_text({"table": "coupler", "code": 4, "name": "MISSING_NODE_ANSWER",
+                       "module": 2, "description": "d", "resettable": True,
+                       "cause_present": True})
+    spans = re.findall(r'<span class="([^"]*)">([^<]*)</span>', html)
+    assert any(set(classes.split()) & nowrap_classes()
+               and text == "coupler alarm (§7.5), module 2" for classes, text in spans), html

@@ -38,7 +38,8 @@ def alarm_text(alarm: Mapping[str, Any] | None) -> str:
     title = f"0x{int(alarm['code']):02X} {alarm.get('name', '')}"
     table = str(alarm.get("table", ""))
     return (f"{badge(title, 'bad')}"
-            f" <span>{esc(TABLE_WORDS.get(table, table))}{esc(where)}</span><br>"
+            # one unit: "coupler" alone fitted the badge's line to the scrollbar's edge
+            f' <span class="fr-nowrap">{esc(TABLE_WORDS.get(table, table))}{esc(where)}</span><br>'
             f"{esc(alarm.get('description', ''))}"
             f" <span class=\"fr-muted\">({esc('; '.join(notes))})</span>")
 
