@@ -385,6 +385,13 @@ def _slave(source: str, kind: str, i: int, data: Any) -> SlaveSpec:
         wrong = flags_error(settings["history_flags"])
         if wrong is not None:
             raise RigConfigError(source, f"{kind}[{i}].history_flags", wrong)
+    if kind == "trscat" and "configured" in settings:
+        from devices.trscat.catalog import expansion_list
+
+        try:
+            expansion_list(settings["configured"], "configured expansion")
+        except ValueError as exc:
+            raise RigConfigError(source, f"{kind}[{i}].configured", str(exc)) from None
     return SlaveSpec(kind, device_id, settings)
 
 
@@ -445,6 +452,7 @@ def _build_slave(spec: RigSpec, slave: SlaveSpec, rng: random.Random, position: 
     try:
         if slave.kind == "trscat":
             settings.setdefault("box_name", f"Box {position} (TRS-CAT)")
+            settings.pop("configured", None)  # the master's 0xF030 list (app/network/startup)
             return TrsCat(slave.id, rng, out_link=not last, station_address=1000 + position,
                           **settings)
         settings.setdefault("box_name", f"Box {position} (CPX-E-EC)")

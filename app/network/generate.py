@@ -3,9 +3,10 @@
 What an EtherCAT configurator does from the slaves' ESI files, done from the models: identity
 from each model's 0x1018 constants, station addresses 1001.. in line order, DC use per model
 (TRS-CAT in DC-SYNC, seed 001 §9.1.1; CPX-E-EC with a DC-capable module, seed 002 §2.1.4),
-init commands written as CoE SDO downloads (the TRS-CAT's 0xF030 list in PS, seed 001 §9.2 /
-§9.3.2; the CPX-E-EC's 0xF030 in PS, seed 002 Tab. 17 Text-ID 0x3801, and its rig
-``history_flags`` as 0x10F3:5 in PS, Tab. 14) and one PLC variable per PDO entry.
+init commands written as CoE SDO downloads (the TRS-CAT's 0xF030 list in PS, the rig's
+``configured`` or else the expansions it has, seed 001 §9.2 / §9.3.2; the CPX-E-EC's 0xF030 in
+PS, seed 002 Tab. 17 Text-ID 0x3801, and its rig ``history_flags`` as 0x10F3:5 in PS, Tab. 14)
+and one PLC variable per PDO entry.
 ``python -m app.network.generate RIG OUT_PREFIX`` writes OUT_PREFIX.eni.xml and
 OUT_PREFIX.mapping.xml (``--all`` regenerates the files under static/networks/).
 """
@@ -20,6 +21,7 @@ from typing import Any
 from xml.sax.saxutils import escape
 
 from app.network.files import uses_dc
+from app.network.startup import MODULE_LIST, f030_commands, trscat_list_commands
 from app.rig import Rig
 from app.rig_config import build_rig, load_rig_spec, parse_rig_spec
 from devices.canopen.pdo import split_entry
@@ -43,23 +45,8 @@ def _identity(kind: str) -> tuple[int, int, int]:
     return o.VENDOR_ID, o.PRODUCT_CODE, o.REVISION
 
 
-def _u8(v: int) -> bytes:
-    return struct.pack("<B", v)
-
-
 def _u16(v: int) -> bytes:
     return struct.pack("<H", v)
-
-
-def _u32(v: int) -> bytes:
-    return struct.pack("<I", v)
-
-
-def _f030_commands(idents: list[int], count: bytes, what: str) -> tuple[InitCmd, ...]:
-    cmds = [InitCmd("PS", 0xF030, 0, count, f"{what}: configured module list, count")]
-    cmds += [InitCmd("PS", 0xF030, sub, _u32(ident), f"{what}: configured module {sub}")
-             for sub, ident in enumerate(idents, start=1)]
-    return tuple(cmds)
 
 
 def _slave(device: Any, position: int, rig_cmds: tuple[InitCmd, ...]) -> SlaveDescription:
@@ -67,14 +54,14 @@ def _slave(device: Any, position: int, rig_cmds: tuple[InitCmd, ...]) -> SlaveDe
     vendor, product, revision = _identity(kind)
     cmds: tuple[InitCmd, ...] = ()
     dc = uses_dc(device)
-    if kind == "trscat":
+    if kind == "trscat" and not any(c.index == MODULE_LIST for c in rig_cmds):
         from devices.trscat.catalog import INTEGRATED
 
-        kinds = device.startup_f030 or [INTEGRATED, *device._chain()]
-        cmds = _f030_commands([k.ident for k in kinds], _u8(len(kinds)), "TRS-CAT")
+        # No `configured` list in the rig: the expansions it has, as a configurator scans them.
+        cmds = trscat_list_commands([k.ident for k in (INTEGRATED, *device._chain())])
     elif kind == "cpx_e_ec":
         idents = [u.mtype.ident for u in device.units]
-        cmds = _f030_commands(idents, _u16(len(idents)), "CPX-E-EC")
+        cmds = f030_commands(idents, _u16(len(idents)), "CPX-E-EC")
     return SlaveDescription(position, device.box_name, device.device_id, vendor, product,
                             revision, device.station_address, dc, (*cmds, *rig_cmds))
 
@@ -84,7 +71,8 @@ def describe(rig: Rig) -> list[SlaveDescription]:
     if master is None:
         return []
     # The rig's start-up values (app/network/startup.py) ride on the descriptions the rig
-    # derived for the master: written after the 0xF030 list, as a Startup tab lists them.
+    # derived for the master: the TRS-CAT's `configured` list is its 0xF030 list; the others
+    # are written after the 0xF030 list, as a Startup tab lists them.
     return [_slave(link.slave, link.position,
                    link.description.init_cmds if link.description is not None else ())
             for link in master.links]  # type: ignore[attr-defined]

@@ -137,3 +137,23 @@ def ident_allowed_at(sub: int, ident: int) -> bool:
     if 2 <= sub <= 7:
         return not kind.integrated
     return sub == 8 and not kind.integrated and not kind.smart
+
+
+def expansion_list(names: Sequence[str], what: str) -> list[ModuleKind]:
+    """The expansions a list of names gives (integrated excluded); ValueError naming ``what``
+    when a name is unknown or the list does not fit §5."""
+    if isinstance(names, str):
+        raise ValueError(f"{what}s: give a list of names, not {names!r}")
+    if len(names) > MAX_EXPANSIONS:
+        raise ValueError(f"{len(names)} {what}s: a TRS-CAT takes at most {MAX_EXPANSIONS} "
+                         f"(seed 001 §5)")
+    kinds = []
+    for n, name in enumerate(names, start=1):
+        try:
+            kinds.append(expansion_kind(name))
+        except KeyError as exc:
+            raise ValueError(f"{what} {n}: {exc.args[0]}") from None
+    violation = limit_violation(kinds)
+    if violation is not None:
+        raise ValueError(f"{what}s: {violation}")
+    return kinds

@@ -25,12 +25,10 @@ from devices.trscat.alarms import OUTPUTS_STOPPED_BY, AlarmsMixin, FaultKey, Trs
 from devices.trscat.catalog import (
     BY_IDENT,
     INTEGRATED,
-    MAX_EXPANSIONS,
     MAX_SLOTS,
     ModuleKind,
-    expansion_kind,
+    expansion_list,
     ident_allowed_at,
-    limit_violation,
 )
 from devices.trscat.commands import ACTIONS, CommandsMixin
 from devices.trscat.diagnostics import AppFault, DiagHistory
@@ -61,14 +59,12 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
     TYPE_NAMES: ClassVar[TypeNames] = TYPE_NAMES  # seed 001 §9.3's U8, U16, U32, Bool
 
     def __init__(self, device_id: str, rng: random.Random, expansions: Sequence[str] = (),
-                 sync_mode: str = "dc", configured: Sequence[str] | None = None,
+                 sync_mode: str = "dc",
                  field_supply_v: float = 24.0, out_link: bool = False,
                  box_name: str = "Box 2 (TRS-CAT)", station_address: int = 1002) -> None:
         super().__init__(device_id=device_id, rng=rng)
         self._still_state()
-        kinds = _expansion_list(expansions, "expansion")
-        self.startup_f030 = None if configured is None else \
-            [INTEGRATED, *_expansion_list(configured, "configured expansion")]
+        kinds = expansion_list(expansions, "expansion")
         if str(sync_mode).lower() not in MODE_BY_NAME:
             raise ValueError(f"sync_mode {sync_mode!r}: the TRS-CAT runs 'dc' (DC-SYNC, "
                              f"default) or 'free_run' (seed 001 §9.1.1)")
@@ -251,11 +247,6 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         configured = [BY_IDENT.get(self.f030[s]) for s in range(1, self.f030[0] + 1)]
         self.od = build_od(self, configured, self.detected, self._touch)
 
-    def _write_f030_list(self, kinds: Sequence[ModuleKind]) -> None:
-        self.f030 = [len(kinds), *(k.ident for k in kinds)]
-        self.f030 += [0] * (MAX_SLOTS + 1 - len(self.f030))
-        self._rebuild_od()
-
     def od_write_f030(self, sub: int, value: int) -> None:
         """§9.3.2: written by the master in PRE-OP only; the PDO assignment follows."""
         if self.esm.state is not AlState.PREOP:
@@ -329,31 +320,12 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
 
     def _slot_snapshot(self, slot: int, io: SlotIo | None) -> dict[str, Any]:
         if io is None:
-            # An empty position: what the master configures there (0xF030 of the built-in
-            # master, None without one), so a view can name the module that is missing.
-            configured = self.startup_f030
+            # An empty position: what the master's 0xF030 names there (None while nothing
+            # was written there), so a view can name the module that is missing.
+            kind = BY_IDENT.get(self.f030[slot + 1]) if slot < self.f030[0] else None
             return {"slot": slot, "type": None,
-                    "configured": configured[slot].name
-                    if configured is not None and slot < len(configured) else None}
+                    "configured": kind.name if kind is not None else None}
         detected = self.detected[slot].name if slot < len(self.detected) else None
         return {"slot": slot, "type": io.kind.name, "ident": f"0x{io.kind.ident:08X}",
                 "detected_as": detected, "serviced": self.serviced(slot),
                 **io.snapshot()}
-
-
-def _expansion_list(names: Sequence[str], what: str) -> list[ModuleKind]:
-    if isinstance(names, str):
-        raise ValueError(f"{what}s: give a list of names, not {names!r}")
-    if len(names) > MAX_EXPANSIONS:
-        raise ValueError(f"{len(names)} {what}s: a TRS-CAT takes at most {MAX_EXPANSIONS} "
-                         f"(seed 001 §5)")
-    kinds = []
-    for n, name in enumerate(names, start=1):
-        try:
-            kinds.append(expansion_kind(name))
-        except KeyError as exc:
-            raise ValueError(f"{what} {n}: {exc.args[0]}") from None
-    violation = limit_violation(kinds)
-    if violation is not None:
-        raise ValueError(f"{what}s: {violation}")
-    return kinds

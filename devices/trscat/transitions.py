@@ -37,7 +37,6 @@ from devices.trscat.sync import SYNC_CONTROL, DcRefusal, SyncMode, SyncState, Sy
 
 if TYPE_CHECKING:
     from devices.events import Event
-    from devices.trscat.catalog import ModuleKind
     from devices.trscat.diagnostics import AppFault
     from devices.trscat.io import SlotIo
 
@@ -96,7 +95,6 @@ class TransitionsMixin:
     error_out: dict[int, list[int]]
     out_mode: OutputMode
     last_sm_event_us: int | None
-    startup_f030: list[ModuleKind] | None
     device_id: str
 
     if TYPE_CHECKING:  # defined by DeviceModel / TrsCat / AlarmsMixin
@@ -106,7 +104,6 @@ class TransitionsMixin:
                    slot: int | None = None) -> None: ...
         def _evaluate_alarms(self) -> None: ...
         def _refresh(self) -> None: ...
-        def _write_f030_list(self, kinds: Sequence[ModuleKind]) -> None: ...
         def _touch(self) -> None: ...
         def _apply_output_image(self) -> None: ...
 
@@ -193,8 +190,6 @@ class TransitionsMixin:
     def _enter(self, target: AlState) -> None:
         """An accepted upward transition."""
         now = self.now_us
-        if target is AlState.PREOP and self.startup_f030 is not None:
-            self._write_f030_list(self.startup_f030)  # the master's start-up list (§9.2 PS)
         if target is AlState.SAFEOP:
             self.config_error = None
             self.sync.start(now)

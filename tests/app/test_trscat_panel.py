@@ -65,10 +65,32 @@ def test_not_seen_sits_under_the_empty_plate(off: dict[str, Any]) -> None:
 
 
 def test_empty_slot_reads_as_such(off: dict[str, Any]) -> None:
+    """Powered off, the node holds no 0xF030 (RAM, §9.3.2's default at the next power-up):
+    the row names no configured module (it named the rig's, which the model no longer
+    reads; docs/trscat.md "Who writes 0xF030")."""
     html = slave_html("trscat", off)
     assert "None" not in html
     slot2 = io_rows(html)[2]
-    assert slot2.startswith("2 ") and "not seen" in slot2 and "TRS-AN-E" in slot2, slot2
+    assert slot2.startswith("2 ") and "not seen" in slot2 and "configured" not in slot2, slot2
+
+
+def test_empty_slot_names_what_the_masters_list_configures_there() -> None:
+    """Powered on again, the master writes its 0xF030 list at PS (seed 001 §9.2), refused
+    (0x0070): the empty position names the module that list puts there."""
+    rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
+    for _ in range(BOOT_STEPS):
+        rig.step()
+    rig.apply("master", "power_slave", {"position": 1, "on": False})
+    for _ in range(200):
+        rig.step()
+    rig.apply("trscat/2", "unplug", {})
+    rig.apply("master", "power_slave", {"position": 1, "on": True})
+    for _ in range(3000):
+        rig.step()
+    snap = rig.devices["trscat"].snapshot()
+    assert snap["al_status_code"] == 0x0070
+    slot2 = io_rows(slave_html("trscat", snap))[2]
+    assert "not seen" in slot2 and "(configured TRS-AN-E)" in slot2, slot2
 
 
 def test_field_supply_agrees_with_the_powered_off_node(off: dict[str, Any]) -> None:

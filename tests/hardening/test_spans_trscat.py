@@ -5,9 +5,9 @@
   expansions, sync faults, object writes) and stretches of 1 .. 3000 steps, a skipping rig
   against a plain one (tests/hardening/span_runs.py);
 - the same with a small master (``Wire``) that sends a frame every step, writes the DC
-  registers and walks the ESM (INIT .. OP, DC-SYNC or FREE-RUN), promises its frames
-  (``frames_promised``) and stops sending at random: the sync0 spans under frames, the free
-  spans bounded by the activity window and the SM watchdog when the frames stop;
+  registers and the 0xF030 list and walks the ESM (INIT .. OP, DC-SYNC or FREE-RUN), promises
+  its frames (``frames_promised``) and stops sending at random: the sync0 spans under frames,
+  the free spans bounded by the activity window and the SM watchdog when the frames stop;
 - frames_quiet / skip_frames directly: two identical devices in a quiet state, one stepped
   with a frame after every step, the other skip_to + skip_frames; the deep state compared.
 
@@ -34,6 +34,8 @@ from devices.trscat.sync import SYNC0_ACTIVE, SyncMode
 STEP_US = 1_000
 UP = {AlState.INIT: AlState.PREOP, AlState.PREOP: AlState.SAFEOP,
       AlState.SAFEOP: AlState.OP, AlState.OP: AlState.OP}
+# The 0xF030 list the master writes: the integrated module, TRS-IO-E, TRS-AN-E (§9.3.2).
+CONFIGURED = (3, 0x494F2D42, 0x494F2D45, 0x414E2D45)
 STATES = {"init": AlState.INIT, "preop": AlState.PREOP, "safeop": AlState.SAFEOP,
           "op": AlState.OP}
 
@@ -89,6 +91,9 @@ class Wire(DeviceModel):
             slave.master_sync_mode
         if target in (AlState.PREOP, AlState.SAFEOP) and mode is SyncMode.DC_SYNC:
             slave.configure_dc(SYNC0_ACTIVE, self.step_us * 1000, (self.now_us + 100) * 1000)
+        if target is AlState.SAFEOP and slave.esm.state is AlState.PREOP:
+            for sub, value in enumerate(CONFIGURED):  # its PS init commands (seed 001 §9.2)
+                slave.write_object(0xF030, sub, value)
         slave.request_state(target)
 
     def cmd_sending(self, on: bool) -> None:
@@ -102,8 +107,7 @@ class Wire(DeviceModel):
 
 
 def trscat(sync_mode: str = "dc") -> TrsCat:
-    return TrsCat("trscat", random.Random(7), ["TRS-IO-E", "TRS-AN-E"], sync_mode=sync_mode,
-                  configured=["TRS-IO-E", "TRS-AN-E"])
+    return TrsCat("trscat", random.Random(7), ["TRS-IO-E", "TRS-AN-E"], sync_mode=sync_mode)
 
 
 def alone() -> Rig:

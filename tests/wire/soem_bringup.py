@@ -15,6 +15,12 @@ from devices.ethercat import AlState
 
 SLAVES = 4
 EXPECTED_WKC = 3 * SLAVES  # every slave has outputs and inputs: LRW +2 +1 each
+# The TRS-CAT's 0xF030 (position 1: the integrated module, the line's TRS-IO-E), which the
+# master's start-up writes in PRE-OP (seed 001 §9.2 PS, §9.3.2): the slave powers up with
+# the integrated module alone there, and the rig file's `configured` is the built-in
+# master's list, not SOEM's (docs/trscat.md "Who writes 0xF030").
+TRSCAT_STARTUP = ((1, 0xF030, 0, b"\x02"), (1, 0xF030, 1, (0x494F2D42).to_bytes(4, "little")),
+                  (1, 0xF030, 2, (0x494F2D45).to_bytes(4, "little")))
 STATE_TIMEOUT_S = 10.0
 
 
@@ -69,10 +75,11 @@ class SoemLine:
         return self
 
     def map_to_op(self) -> None:
-        """config_map (SYNC0 on the DC slaves first), then SAFE-OP and OP for every slave."""
+        """The start-up writes and config_map (SYNC0 on the DC slaves first), then SAFE-OP and
+        OP for every slave."""
         assert self.stage == Stage.SCANNED, self.stage
         expected, errors = self.master("map", [i for i, d in enumerate(self.bridge.descriptions)
-                                               if d.dc_supported])
+                                               if d.dc_supported], TRSCAT_STARTUP)
         self.map_errors = errors
         self.stage = Stage.MAPPED
         assert expected == EXPECTED_WKC

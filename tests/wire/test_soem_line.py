@@ -32,7 +32,7 @@ import pytest
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem (the SOEM master) is not installed")
 
-from soem_bringup import EXPECTED_WKC, SoemLine, Stage  # noqa: E402
+from soem_bringup import EXPECTED_WKC, TRSCAT_STARTUP, SoemLine, Stage  # noqa: E402
 from wire_line import line_spec, veth_pair  # noqa: E402
 
 from app.ethercat_wire.bridge import start_wire  # noqa: E402
@@ -124,7 +124,11 @@ def master_main(iface: str, conn) -> None:
         for pos in dc_positions:
             master.slaves[pos].dc_sync(True, int(PERIOD_S * 1e9))
 
-    def map_(dc_positions):
+    def map_(dc_positions, startup=()):
+        """``startup``: (position, index, sub, data) written in PRE-OP first, as a SOEM
+        application writes its slaves' start-up objects (its PO2SO hook) before mapping."""
+        for pos, index, sub, data in startup:
+            master.slaves[pos].sdo_write(index, sub, data)
         dc(dc_positions)
         try:
             master.config_map()
@@ -323,6 +327,8 @@ def test_trscat_objects_read_and_written_whole_by_complete_access(session: SoemL
     out), 0x1C12 follows (§9.3.2), then the list put back."""
     master = session.scanned().master  # 0xF030 is written in PRE-OP
     session.left(Stage.NONE)  # until the expansion list is put back
+    for pos, index, sub, data in TRSCAT_STARTUP:  # the list, as map_to_op's start-up writes it
+        master("sdo_write", pos, index, sub, data)
     for index in (0x1C12, 0x1C13):
         n = master("sdo_read", 1, index, 0)[0]
         subs = b"".join(master("sdo_read", 1, index, s) for s in range(1, n + 1))
@@ -431,8 +437,12 @@ def test_the_app_serves_the_default_rig_on_the_wire(tmp_path):
             states = master("state", AlState.PREOP, 20.0)  # the FastCAT may still be scanning
             assert [s & 0x1F for s, _ in states] == [AlState.PREOP] * n, states
             master("drain")  # e.g. the drive's 0x8700 sync timeout, sent before we came
+            # The TRS-CAT's 0xF030 (integrated, TRS-IO-E, TRS-AN-E): the master's start-up
+            # writes it (seed 001 §9.2 PS); the rig file's `configured` is the built-in one's.
+            trs_list = [(1, 0xF030, sub, data) for sub, data in enumerate(
+                (b"\x03", *(struct.pack("<I", i) for i in (0x494F2D42, 0x494F2D45, 0x414E2D45))))]
             expected, errors = master("map", [i for i, d in enumerate(descriptions)
-                                              if d.dc_supported])
+                                              if d.dc_supported], trs_list)
             assert errors == [] and expected == 3 * n
             states = master("state", AlState.OP, 10.0)
             assert [s & 0x1F for s, _ in states] == [AlState.OP] * n, states

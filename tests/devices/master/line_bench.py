@@ -1,10 +1,11 @@
 """The line rig (master -> FastCAT -> TRS-CAT -> CPX-E-EC -> drive) for the master's tests:
-built and run to OP once, then deep-copied per test (the models are pure data)."""
+built and run to OP for each test. It used to be built once and deep-copied, but a model's
+object dictionary calls back into its device through closures, which copy.deepcopy shares
+with the original: a copy's SDO writes (the TRS-CAT's 0xF030 list the master writes again
+after a recovery) landed in the cached rig's device, and the copy refused them."""
 
 from __future__ import annotations
 
-import copy
-import functools
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +19,6 @@ US = 1_000_000
 IN_OP_US = 4 * US
 
 
-@functools.cache
 def _line_in_op() -> Rig:
     rig = build_rig(load_rig_spec(LINE_RIG))
     rig.run_until(IN_OP_US)
@@ -26,8 +26,8 @@ def _line_in_op() -> Rig:
 
 
 def line_in_op() -> Rig:
-    """A fresh copy of the line rig at 4 s: every slave in OP, DC COMPENSATING."""
-    return copy.deepcopy(_line_in_op())
+    """The line rig at 4 s: every slave in OP, DC COMPENSATING."""
+    return _line_in_op()
 
 
 def records(events: list[Event], kind: str, device: str | None = None) -> list[dict[str, Any]]:

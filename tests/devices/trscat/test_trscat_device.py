@@ -20,7 +20,6 @@ from devices.trscat.device import TrsCat
     ({"expansions": ["KK-E", "KK-E", "KK-E", "IO-E", "IO-E"]}, "do not fit"),  # §5
     ({"expansions": ["IO-E", "ZZ-E"]}, "expansion 2: unknown TRS expansion"),
     ({"expansions": "IO-E"}, "a list of names"),
-    ({"configured": ["AC-E"] * 4}, "configured expansions?.*do not fit"),
     ({"sync_mode": "sm"}, "'dc' .* or 'free_run'"),
     ({"field_supply_v": 50.0}, "0..40 V"),
 ])

@@ -176,10 +176,14 @@ def test_pdo_assignment_follows_the_configured_list() -> None:
     assert info.value.code is AbortCode.READ_ONLY
 
 
-def test_startup_list_is_written_on_the_way_to_preop() -> None:
-    """The ``configured`` rig value stands for the master's start-up list (§9.2 PS)."""
+def test_preop_keeps_the_default_list_until_the_master_writes_it_at_ps() -> None:
+    """§9.3.2: sub 0 "Default 1", sub 1 0x494F2D42 "(default)"; the list is the master's, sent
+    "durante la transizione PS" (§9.2, §9.3.2). The device writes nothing there itself."""
     bench = Bench(["IO-E", "AN-E"], configured=["IO-E", "AN-E"])
-    bench.to_state(AlState.OP)
+    bench.to_state(AlState.PREOP)
+    assert bench.trs.f030[:3] == [1, IO_B, 0]
+    bench.request(AlState.SAFEOP)
+    assert bench.trs.al_state is AlState.SAFEOP
     assert bench.trs.f030[:4] == [3, IO_B, IO_E, AN_E]
 
 

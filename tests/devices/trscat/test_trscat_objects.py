@@ -35,8 +35,11 @@ SEED_TABLE = [
 
 @pytest.fixture(scope="module")
 def od():
-    bench = Bench(["IO-E", "AN-E", "KK-E"], configured=["IO-E", "AN-E", "KK-E"])
+    bench = Bench(["IO-E", "AN-E", "KK-E"])
     bench.to_state(AlState.PREOP)
+    # The master's list (its PS init commands, written in PRE-OP): the PDO mappings follow it.
+    for sub, ident in enumerate((4, 0x494F2D42, 0x494F2D45, 0x414E2D45, 0x4B4B2D45)):
+        bench.write(0xF030, sub, ident)
     return bench.trs.od
 
 

@@ -7,6 +7,9 @@ INIT -> PREOP and PREOP -> SAFEOP as a DC master does (SYNC0 on, one pulse per s
 §9.1.1 / §9.2), so the TRS-CAT takes DC-SYNC at PS and runs 1:1 with the bench's frames.
 Left out, ``dc`` follows the rig's ``sync_mode`` as the built-in master does (uses_dc in
 app/network/files.py): a "free_run" bench leaves 0x0981 at 0, and the device runs FREE-RUN.
+``configured`` is the 0xF030 list a master writes in PS (seed 001 §9.2 / §9.3.2; the model
+powers up with the §9.3.2 default): the built-in master's init commands, or without a master
+the bench's own CoE writes as ``request`` asks PREOP -> SAFEOP.
 """
 
 from __future__ import annotations
@@ -15,9 +18,12 @@ import random
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from app.network.startup import trscat_list_commands
 from devices.ethercat import AlState
 from devices.events import Event
 from devices.master import EtherCatMaster
+from devices.master.network import SlaveDescription
+from devices.trscat.catalog import INTEGRATED, expansion_list
 from devices.trscat.device import TrsCat
 from devices.trscat.sync import MODE_BY_NAME, SYNC0_ACTIVE, SyncMode
 
@@ -34,12 +40,18 @@ def detect_us(slots: int) -> int:
 class Bench:
     def __init__(self, expansions: Sequence[str] = (), master: bool = False,
                  frames: bool = True, step_us: int = STEP_US, seed: int = 3,
-                 dc: bool | None = None, **kwargs: Any) -> None:
+                 dc: bool | None = None, configured: Sequence[str] | None = None,
+                 **kwargs: Any) -> None:
         self.trs = TrsCat("trscat", random.Random(seed), list(expansions), **kwargs)
         if dc is None:
             dc = MODE_BY_NAME[str(kwargs.get("sync_mode", "dc")).lower()] is SyncMode.DC_SYNC
+        self.configured = None if configured is None else \
+            [INTEGRATED.ident, *(k.ident for k in expansion_list(configured, "configured"))]
+        descriptions = None if self.configured is None else [SlaveDescription(
+            0, "", "trscat", None, None, None, 1001, dc, trscat_list_commands(self.configured))]
         self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.trs],
-                                     dc_slaves=[dc]) if master else None
+                                     dc_slaves=[dc], descriptions=descriptions) \
+            if master else None
         self.dc = dc
         self.frames = frames and not master
         self.step_us = step_us
@@ -80,6 +92,10 @@ class Bench:
     def request(self, target: AlState) -> None:
         if self.dc and self.master is None and target in (AlState.PREOP, AlState.SAFEOP):
             self.configure_dc(SYNC0_ACTIVE, self.step_us * 1000)
+        if self.configured is not None and self.master is None and \
+                target is AlState.SAFEOP and self.trs.al_state is AlState.PREOP:
+            for sub, value in enumerate([len(self.configured), *self.configured]):
+                self.trs.write_object(0xF030, sub, value)  # the master's PS init commands
         # A master acknowledges an error flag it reads (AL control bit 4, ETG.1000.6).
         self.trs.request_state(target, ack=bool(self.trs.al_status & 0x10))
         self._collect()
