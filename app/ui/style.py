@@ -12,6 +12,16 @@ import html
 
 CSS = """
 <style>
+/* viser's docked panels scroll in a Mantine ScrollArea whose vertical scrollbar lies over the
+   content's right edge (--scrollarea-scrollbar-size, 11 px at 1280x720), and viser's HTML
+   blocks, unlike its widgets and markdown, have no padding: the State tab's "zero-cycle
+   alarm" ran under it. Every HTML block of ours (viser's <div> holding an element with an
+   fr- class or id, neither one nor inside one) keeps that strip free, in every tab of both
+   panels (tests/browser/test_panel_scrollbar.py). */
+div:has(> :is([class^="fr-"], [class*=" fr-"], [id^="fr-"])):not(
+    [class^="fr-"], [class*=" fr-"], [id^="fr-"],
+    :is([class^="fr-"], [class*=" fr-"], [id^="fr-"]) div) {
+  padding-right: var(--scrollarea-scrollbar-size, 12px); }
 .fr-title { font-size: 0.9em; margin: 0 0 4px 0; }
 .fr-kv { width: 100%; border-collapse: collapse; font-size: 0.82em; }
 .fr-kv th { text-align: left; font-weight: 600; color: #555; padding: 2px 6px 2px 0;

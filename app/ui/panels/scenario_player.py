@@ -237,7 +237,8 @@ def instructor_text(view: PlayerView, title: str | None, loaded: str, hint: str,
         lines.extend(_author_lines(view))
     if picked:
         lines.append(picked)
-    return f'<div style="font-size:0.85em">{"<br>".join(lines)}</div>' if lines else ""
+    return (f'<div class="fr-player-note" style="font-size:0.85em">{"<br>".join(lines)}</div>'
+            if lines else "")
 
 
 def _headline(view: PlayerView, scenario: Scenario, title: str, t_us: int) -> str:
@@ -498,7 +499,7 @@ class ScenarioPlayerPanel:
     def page_picked(self, client_id: int | None) -> str:
         """The "Picked:" line under an open rig's controls on ``client_id``'s page."""
         text = self._picked(self._controls.each()[0], client_id)
-        return f'<div style="font-size:0.85em">{text}</div>' if text else ""
+        return f'<div class="fr-player-note" style="font-size:0.85em">{text}</div>' if text else ""
 
     def _show_pages(self, controls: _Controls) -> None:
         """Each page of an open rig its own pick's hint and "Picked:" line."""
