@@ -72,6 +72,9 @@ class Esm(Generic[K]):
     error: K = None  # type: ignore[assignment]  # each subclass: its ErrorKind.NONE
     code: int = NO_ERROR
     stop_mailbox: Callable[[], None] | None = None
+    # The slave's own way out of OP (outputs to their safe state, a drive stopped: what its
+    # OP -> SAFEOP does), run when a refusal in OP takes it to SAFEOP (:meth:`refuse`).
+    leave_op: Callable[[], None] | None = None
     # AL control values (bit n for value n) already logged as ignored in this error episode:
     # a master repeating a request every cycle gets one line, not one per cycle.
     ignored: int = 0
@@ -150,10 +153,19 @@ class Esm(Generic[K]):
     def refuse(self, code: int, t_us: int, kind: K | None = None) -> None:
         """A requested transition refused: stay, raise the error flag, report why.
 
+        In OP the slave does not stay: it goes to SAFEOP + error through its own way out of
+        OP (``leave_op``, outputs to their safe state), as ETG.1000.6 has it (Beckhoff SSC
+        ``AL_ControlInd``: a failed transition from OP goes to SAFEOP with the error flag;
+        SOES ``ESC_state``: OP -> BOOT and an unknown state stop the outputs, SAFEOP|ERR).
         ``kind`` (default REFUSED) says which ERR LED pattern tells why."""
         self.error = self.kinds.REFUSED if kind is None else kind  # type: ignore[assignment]
         self.ignored = 0  # a new error episode
+        leaving = self.state is AlState.OP
+        if leaving and self.leave_op is not None:
+            self.leave_op()
         self._set_code(code, t_us)
+        if leaving:
+            self._move(AlState.SAFEOP, t_us)
 
     def fall_to(self, target: AlState, kind: K, code: int, t_us: int) -> None:
         """Leave the state on the slave's own initiative: error flag (``kind``) + code."""

@@ -117,7 +117,8 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         self.esc = False  # powered: the ESC has its ports' links and passes frames, any c9
         self.sm_setup: tuple[SmSetup, ...] | None = None  # a master on the wire wrote them
         self.emergencies = EmergencyMailbox()
-        self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop)
+        self.esm = Esm(self.emit, drive.device_id, stop_mailbox=self.emergencies.stop,
+                       leave_op=self._leave_op)  # also when a request is refused in OP
         self.csp = Csp(drive)
         self.leds = drive.network_leds  # on the drive's front; this slave drives them
         self.sdo_log: deque[dict[str, Any]] = deque(maxlen=SDO_LOG)

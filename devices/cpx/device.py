@@ -92,7 +92,10 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         self.link_in, self.link_out = True, out_connected
         self.injected: list[Injected] = []
         self.fault_names: frozenset[str] = frozenset()
-        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
+        # A request refused in OP goes to SAFEOP (devices/esm.py Esm.leave_op): the outputs
+        # follow the ESM at the next step (_output_values, 0x2400:7), as after OP -> SAFEOP.
+        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox,
+                       leave_op=self.touch)
         self.leds = LedBank(device_id)
         self.powered = False
         self.low_since_us: int | None = None

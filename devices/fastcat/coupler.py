@@ -104,7 +104,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self._quiet = False  # faults.py: the last alarm search in a step found no cause
         self._scan_causes_key: tuple[Any, ...] | None = None
         self._led_key: tuple[Any, ...] = ()
-        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
+        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox,
+                       leave_op=self._leave_op)
         self.cnf = CnfButton()
         self.leds = LedBank(device_id)
         self.cnf_phase = ScanPhase.IDLE
@@ -204,6 +205,12 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         """Any state -> INIT (devices/esm.py; a master's request, the CNF procedure, power
         loss): the emergencies not read yet are lost. 0x5400 follows the latched alarm."""
         self.mailbox = []
+
+    def _leave_op(self) -> None:
+        """OP left (devices/esm.py ``Esm.leave_op``: a request refused in OP): as after a
+        requested OP -> SAFEOP, the outputs follow the ESM at the next exchange (bus.py: enabled
+        in OP only), so that step runs in full."""
+        self._touched = True
 
     def request_state(self, target: AlState, ack: bool = False) -> None:
         """AL control write. The answer is in ``al_status`` / ``al_status_code``."""

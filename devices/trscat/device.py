@@ -90,7 +90,8 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         self.injected: list[FaultKey] = []
         self.injected_sm: list[SmKey] = []
         self.sm_setup: tuple[SmSetup, ...] | None = None  # a master on the wire wrote them
-        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox)
+        self.esm = Esm(self.emit, device_id, stop_mailbox=self._stop_mailbox,
+                       leave_op=self._leave_op)
         self.leds = LedBank(device_id)
         self._led_inputs: LedInputs | None = None
         self.powered = False

@@ -209,6 +209,13 @@ class TransitionsMixin:
             self.sync.forget_request()
         self._apply_output_image()  # §9.2 "safe-state" from now, SYNC0 or not
 
+    def _leave_op(self) -> None:
+        """A request refused in OP takes the device to SAFE-OP + error (devices/esm.py
+        ``Esm.leave_op``). It is the master's request, no ETG.1020 communication error: the
+        outputs take the safe state of a requested SAFE-OP (§9.2), not §9.3.5's values."""
+        self._touch()
+        self._leave_to(AlState.SAFEOP)
+
     def _fall_on_comm_error(self, code: int) -> None:
         """ETG.1020: a communication error in OP -> SAFE-OP + error; outputs per §9.3.5."""
         for slot, io in enumerate(self.rail):

@@ -85,9 +85,38 @@ def test_esm_requests(current: AlState, target: AlState) -> None:
             (target, int(target), 0)
     else:
         code = 0x0013 if target is AlState.BOOT else 0x0011
+        # A refusal in OP lands in SAFEOP (ETG.1000.6; SSC AL_ControlInd, SOES ESC_state).
+        left = AlState.SAFEOP if current is AlState.OP else current
         assert (bench.fc.al_state, bench.fc.al_status, bench.fc.al_status_code) == \
-            (current, int(current) | 0x10, code)
+            (left, int(left) | 0x10, code)
         assert bench.fc.snapshot()["leds"]["ERR"] == "blinking"  # ETG.1300: refused
+
+
+@pytest.mark.parametrize("request_", ("boot", "unknown"))
+def test_a_request_refused_in_op_drops_to_safeop_with_outputs_off(request_: str) -> None:
+    """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state): a request the coupler refuses in OP
+    (BOOT: 0x0013, an unknown state: 0x0012) leaves it in SAFEOP + error, its outputs in the
+    safe state as after a requested OP -> SAFEOP; RUN single flash, ERR blinking."""
+    bench = Bench(["DO16", "AI8D"])
+    bench.to_state(AlState.OP)
+    bench.write(0x7000, 1, 1)
+    bench.step()
+    assert bench.fc.snapshot()["rail"][0]["do"][0] is True
+    mark = bench.mark()
+    if request_ == "boot":
+        bench.fc.request_state(AlState.BOOT)
+    else:  # AL control 0x05, as the wire face hands it to the ESM
+        bench.fc.esm.request_unknown(0x05, False, bench.fc.now_us)
+    bench.step()
+    code = "0x0013" if request_ == "boot" else "0x0012"
+    assert (bench.fc.al_state, bench.fc.al_status) == (AlState.SAFEOP, 0x14)
+    assert [(r["event"], r.get("code"), r.get("to")) for r in bench.records(since=mark)
+            if r["event"] in ("al_status", "state")] == [
+        ("al_status", code, None), ("state", None, "SAFEOP")]
+    snap = bench.fc.snapshot()
+    assert snap["rail"][0]["do"][0] is False
+    assert (snap["leds"]["RUN"], snap["leds"]["ERR"]) == ("single_flash", "blinking")
+    assert bench.read(0x7000, 1) == 1  # the master's image is kept for the next OP
 
 
 def test_the_error_flag_is_acknowledged_with_al_control_bit_4() -> None:

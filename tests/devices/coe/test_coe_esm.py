@@ -39,8 +39,11 @@ def test_requests_accepted_or_refused_with_the_al_code(start: AlState, target: A
         assert (bench.slave.al_state, bench.slave.al_status) == (target, int(target))
         assert bench.slave.al_status_code == 0
     else:
-        assert bench.slave.al_state is start
-        assert bench.slave.al_status == int(start) | 0x10  # error indication
+        # A refusal in OP lands in SAFEOP (ETG.1000.6; SSC AL_ControlInd, SOES ESC_state;
+        # ch. 5 lists "Error SafeOp", no "Error Op").
+        left = SAFEOP if start is OP else start
+        assert bench.slave.al_state is left
+        assert bench.slave.al_status == int(left) | 0x10  # error indication
         assert bench.slave.al_status_code == code
 
 
@@ -58,7 +61,7 @@ def test_esm_events_carry_the_drive_id_and_the_esm_machine() -> None:
     states = [(e["device"], e["from"], e["to"], e["machine"]) for e in bench.kinds("state")
               if e.get("machine") == "esm"]
     assert states == [("servo", "INIT", "PREOP", "esm"), ("servo", "PREOP", "SAFEOP", "esm"),
-                      ("servo", "SAFEOP", "OP", "esm")]
+                      ("servo", "SAFEOP", "OP", "esm"), ("servo", "OP", "SAFEOP", "esm")]
     assert [e["code"] for e in bench.kinds("al_status")] == ["0x0013"]
 
 
@@ -128,6 +131,30 @@ def test_leaving_op_under_process_data_control_stops_the_drive() -> None:
         bench.outputs("<Hi", value, 0, ms=2)
     assert bench.drive.state.label == "Operation enabled"
     bench.go(SAFEOP)
+    bench.run(300)
+    assert bench.drive.state.label == "Switch on disabled"  # quick stop, then released
+
+
+@pytest.mark.parametrize("request_", ("boot", "unknown"))
+def test_a_request_refused_in_op_drops_to_safeop_and_stops_the_drive(request_: str) -> None:
+    """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state; ch. 5 lists "Error SafeOp", no
+    "Error Op"): a request refused in OP (BOOT, "non presente nel drive": 0x0013; an unknown
+    state: 0x0012) leaves the slave in SAFEOP + error, and a drive under process-data control
+    stops as on any way out of OP."""
+    bench = make_bench()
+    bench.up_to(OP)
+    for value in CIA402_ENABLE:
+        bench.outputs("<Hi", value, 0, ms=2)
+    assert bench.drive.state.label == "Operation enabled"
+    if request_ == "boot":
+        bench.slave.request_state(BOOT)
+    else:  # AL control 0x05, as the wire face hands it to the ESM
+        bench.slave.esm.request_unknown(0x05, False, bench.t_us)
+    bench.step()
+    code = 0x0013 if request_ == "boot" else 0x0012
+    slave = bench.slave
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (SAFEOP, 0x14, code)
+    assert slave.leds.snapshot()["Error"] == "blinking"  # ETG.1300: refused
     bench.run(300)
     assert bench.drive.state.label == "Switch on disabled"  # quick stop, then released
 

@@ -68,6 +68,31 @@ def test_outputs_follow_the_plc_in_op_only() -> None:
     assert (dout.driven[0], dout.driven[1]) == (1, 0)
 
 
+@pytest.mark.parametrize(("request_", "code"), (("boot", 0x0011), ("unknown", 0x0012)))
+def test_a_request_refused_in_op_drops_to_safeop_with_outputs_off(request_: str,
+                                                                    code: int) -> None:
+    """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state): a request refused in OP (OP -> BOOT is
+    no transition, Tab. 11's BOOT is reached from INIT: 0x0011; an unknown state: 0x0012)
+    leaves the bus module in SAFEOP + error, the outputs as Tab. 11 has them there (0x2400:7
+    = 0: off); Error blinking red (Tab. 12 invalid configuration)."""
+    bench = tab9(master=False)
+    for target in (AlState.PREOP, AlState.SAFEOP, AlState.OP):
+        bench.cpx.request_state(target)
+    bench.apply("write_object", index=0x7002, sub=2, value=1)
+    bench.step()
+    dout = bench.cpx.modules[1]
+    assert dout.driven[1] == 1
+    if request_ == "boot":
+        bench.cpx.request_state(AlState.BOOT)
+    else:  # AL control 0x05, as the wire face hands it to the ESM
+        bench.cpx.esm.request_unknown(0x05, False, bench.cpx.now_us)
+    bench.step()
+    cpx = bench.cpx
+    assert (cpx.al_state, cpx.al_status, cpx.al_status_code) == (AlState.SAFEOP, 0x14, code)
+    assert dout.driven[1] == 0
+    assert bench.led_state("Error") == ("blinking", "red")
+
+
 def test_inputs_are_sampled_from_safeop_on() -> None:
     bench = tab9(master=False)
     bench.apply("set_input", module=1, channel=3, on=True)
