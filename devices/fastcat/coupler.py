@@ -150,6 +150,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self.fresh_raised: list[Alarm] = []  # raised during this exchange
         self.address_fault = False
         self.mailbox: list[bytes] = []
+        # The master's process-data outputs written before OP, (index, sub) -> value, in the
+        # order written: the SM2 buffer the coupler takes at its first OP cycle.
+        self.sm2_waiting: dict[tuple[int, int], int] = {}
         self.last_frame_us: int | None = None
         self.scan: BusScan | None = None
         self.scan_found: list[IoModule] = []
@@ -248,7 +251,37 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         else:
             esm.accept(target, now)
         esm.settle_request(now)
+        if esm.state is AlState.OP and self.sm2_waiting:
+            self._take_waiting_outputs()
         self._refresh()
+
+    def write_process_output(self, index: int, sub: int, value: int) -> None:
+        """An RxPDO entry of the master's process image (SM2; the wire face's outputs). The
+        coupler acts on its outputs in OP only: in PREOP / SAFEOP they stay in their safe
+        state (ETG.1000.6; seed 000 §7: Reset fault is "mappato nei dati scambiati con il
+        coupler"), so a value written before OP waits in the SM buffer for the first OP
+        cycle, where a Reset fault rising edge counts (docs/fastcat-coupler.md "Process data
+        before OP"). An SDO or the dashboard writes the object itself (``write_object``)."""
+        if self.esm.state is AlState.OP:
+            self._require_od().write(index, sub, value)
+            return
+        self.sm2_waiting.pop((index, sub), None)  # the order of the master's last writes
+        self.sm2_waiting[(index, sub)] = value
+
+    def _take_waiting_outputs(self) -> None:
+        """The first OP cycle reads the SM2 buffer the master wrote before OP."""
+        waiting, self.sm2_waiting = self.sm2_waiting, {}
+        od = self.od
+        if od is None:
+            return
+        for (index, sub), value in waiting.items():
+            if (index, sub) not in od:
+                continue  # the scan since changed the mapping: no such output now
+            try:
+                od.write(index, sub, value)
+            except SdoAbort as exc:
+                logger.info("%s: output 0x%04X:%d not applied: %s", self.device_id, index,
+                            sub, exc)
 
     def frames_quiet(self) -> bool:
         """Quiet spans (links.py): a frame now, and any number of them while the coupler's

@@ -121,6 +121,36 @@ def test_fastcat_do16_output_written_by_the_master_drives_the_terminal():
     assert not any(rig.snapshot()["devices"]["fastcat"]["rail"][1]["do"])
 
 
+@pytest.mark.parametrize("state", ["PREOP", "SAFEOP"])
+def test_fastcat_outputs_written_before_op_wait_for_the_first_op_cycle(state):
+    """ETG.1000.6: in PREOP / SAFEOP the outputs stay in their safe state, the slave does not
+    act on them (seed 000 §7: Reset fault is "mappato nei dati scambiati con il coupler").
+    A Reset fault edge in the image before OP resets nothing; the ESC keeps the SM2 buffer
+    (a master writes its image every cycle), so at the first OP cycle the coupler takes the
+    bit's edge and the DO16 channel (docs/fastcat-coupler.md "Process data before OP")."""
+    rig = line_rig(state)
+    model = rig.devices["fastcat"]
+    face = faces.face_for(model)
+    rig.apply("fastcat/2", "inject_fault", {"fault": "TARATURA"})
+    rig.run_until(rig.clock.now_us + 10_000)
+    rig.apply("fastcat/2", "clear_fault", {"fault": "TARATURA"})
+    rig.run_until(rig.clock.now_us + 10_000)
+    assert model.snapshot()["fault_active"]  # latched, its cause gone: a Reset fault clears it
+    face.apply_outputs(model, (1 | 1 << (8 + 2)).to_bytes(3, "little"))
+    rig.run_until(rig.clock.now_us + 10_000)
+    snap = model.snapshot()
+    assert model.al_state is AlState[state]
+    assert snap["fault_active"] and not snap["reset_fault"]
+    assert not any(snap["rail"][1]["do"])
+    rig.apply("master", "set_target", {"state": "OP"})
+    while model.al_state is not AlState.OP and rig.clock.now_us < TIMEOUT_US:
+        rig.run_until(rig.clock.now_us + 10_000)
+    rig.run_until(rig.clock.now_us + 10_000)
+    snap = model.snapshot()
+    assert not snap["fault_active"] and snap["reset_fault"]
+    assert snap["rail"][1]["do"] == [ch == 2 for ch in range(16)]
+
+
 def test_fastcat_input_reaches_the_image():
     """Seed 000 §6.24: DI16 (module 1) channel 5 -> 0x6000:5 -> bit 8 + 4 of SM3, after
     0x1AFF's byte (Fault active and §6.16's seven reserved bits)."""

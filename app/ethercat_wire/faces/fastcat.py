@@ -8,10 +8,13 @@ gap (§6.17 "2:8 Reserved (7)"), so module 1's outputs start at byte 1. Until a 
 built the dictionary (power-up, every return to INIT, §3) there is no mapping and no image.
 The ESI is a modular device: 16 slots taking any module of the catalog, the Device keeping
 0x16FF / 0x1AFF (§3 / §4, docs/fastcat-coupler.md "ESI: slots and modules").
+The image's entries are process data, not SDO writes: the coupler takes them in OP only
+(``FastCat.write_process_output``).
 """
 
 from __future__ import annotations
 
+import logging
 from typing import Any, ClassVar
 
 from app.ethercat_wire.description import Pdo, PdoEntry, SlotModule
@@ -19,9 +22,11 @@ from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import Face
 from devices.fastcat import module_od, objects
 from devices.fastcat.catalog import CATALOG
-from devices.od import ObjectDictionary
+from devices.od import ObjectDictionary, SdoAbort
 
 SLOT_NAME = "I/O module"  # §4: the slots page, one slot per module along the internal bus
+
+logger = logging.getLogger(__name__)
 
 
 class FastCatFace(Face):
@@ -32,6 +37,12 @@ class FastCatFace(Face):
     dc_supported = False  # seed 000 names no distributed clock
     identity_defaults: ClassVar[tuple[int, int, int]] = (
         objects.VENDOR_ID, objects.PRODUCT_CODE, objects.REVISION)
+
+    def write_output(self, model: Any, index: int, sub: int, value: int) -> None:
+        try:
+            model.write_process_output(index, sub, value)
+        except SdoAbort as exc:
+            logger.info("%s: output not applied: %s", model.device_id, exc)
 
     def pdo_entry_name(self, entry: PdoEntry) -> str:
         """§4's screen: 0x6420:1 is "Analog inp 1" in the PDO, "Analog input 1" in §6.25."""
