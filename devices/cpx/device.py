@@ -106,6 +106,7 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
     def _clear_runtime(self) -> None:
         self.bus = CpxModule(0, BUS_MODULE[self.switches.active_mode])
         self.units: list[CpxModule] = [self.bus, *self.modules]
+        self.sti_request = 0  # the I/O diagnostic interface's request word taken last in OP
         # 0x1C13 (RAM): the default at every start, written by a master in PREOP only
         self.tx_assign = tx_assignment(address_order(self.units, receive=False),
                                        lambda: self.esm.state is AlState.PREOP)
@@ -393,7 +394,11 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
             bits = self.diagnosis.status_bits
             self.bus.in_values = [bits >> i & 1 for i in range(8)]
         elif mode is DiagMode.IO_DIAGNOSIS:
-            self.bus.in_values = [self.diagnosis.interface_word(self.bus.out_values[0])]
+            # The request is an output word: taken in OP only (Tab. 11: SAFEOP updates the
+            # inputs only); the answer, an input, follows the request taken last.
+            if self.esm.state is AlState.OP:
+                self.sti_request = self.bus.out_values[0]
+            self.bus.in_values = [self.diagnosis.interface_word(self.sti_request)]
 
     def _at_terminals(self, set_v: float, fault: str) -> float:
         """What a meter on the supply reads (U_EL/SEN at [XD], Tab. 8; U_OUT at its feed):

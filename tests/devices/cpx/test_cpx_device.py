@@ -335,6 +335,26 @@ def test_io_diagnostic_interface() -> None:
     assert bench.apply("read_object", index=0x6000, sub=1) == 0
 
 
+def test_io_diagnostic_interface_takes_its_request_in_op_only() -> None:
+    """Tab. 11: in SAFEOP only the inputs are updated; the output word that asks (§2.4.3) is
+    an output like the others, not taken before OP. The answer (an input) keeps following the
+    request taken last in OP; a request written in SAFEOP is taken at the first OP cycle."""
+    bench = Bench(TAB9_MODULES, master=False, dil1=True)
+    for target in (AlState.PREOP, AlState.SAFEOP, AlState.OP):
+        bench.cpx.request_state(target)
+    bench.apply("short_circuit", module=1, on=True)
+    bench.apply("write_object", index=0x7000, sub=1, value=0x8000 | 1936)
+    bench.run(0.01)
+    assert bench.apply("read_object", index=0x6000, sub=1) == 0x8001
+    bench.cpx.request_state(AlState.SAFEOP)
+    bench.apply("write_object", index=0x7000, sub=1, value=0x8000 | 1938)
+    bench.run(0.005)
+    assert bench.apply("read_object", index=0x6000, sub=1) == 0x8001  # still 1936's answer
+    bench.cpx.request_state(AlState.OP)
+    bench.step()
+    assert bench.apply("read_object", index=0x6000, sub=1) == 0x8002  # 1938: error number
+
+
 def test_outputs_die_with_the_application() -> None:
     """No power or no application controller: nothing drives the outputs."""
     bench = tab9().to_op()
