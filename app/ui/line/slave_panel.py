@@ -6,6 +6,7 @@ the clicking page.
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -374,6 +375,10 @@ class SlavePanel:
         self._html = ClientHtml(server, server.gui.add_html(""))
         self._causes = None if instructor.shared else instructor.part(self._causes_form)
         self._devices: Mapping[str, Any] = {}
+        # A causes table's writers: its pick's callback and the dashboard's frame update.
+        # Each reads the pick and the frame and writes under it, or one wrote what it read
+        # before the other's write over it, and the table kept that until the next frame.
+        self._causes_lock = threading.Lock()
         self.on_pick: Callable[[viser.ClientHandle, str], None] | None = None  # LineView
         self.pick.on_pick(self._picked)
 
@@ -402,11 +407,12 @@ class SlavePanel:
                 form.picker.value = device
 
     def _show(self, form: _Causes) -> None:
-        device = str(form.picker.value)
-        html = split_instructor(slave_html(device, as_drawn(self._devices, device)),
-                                "fr-slave-causes")[1] or NO_CAUSE
-        if form.html.content != html:
-            form.html.content = html
+        with self._causes_lock:
+            device = str(form.picker.value)
+            html = split_instructor(slave_html(device, as_drawn(self._devices, device)),
+                                    "fr-slave-causes")[1] or NO_CAUSE
+            if form.html.content != html:
+                form.html.content = html
 
     @property
     def selected(self) -> str:
