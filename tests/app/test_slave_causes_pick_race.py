@@ -218,3 +218,25 @@ def test_a_frame_during_a_pick_is_not_undone_by_its_callback(
     finally:
         frames.end()
     _short(live, False)
+
+
+def test_a_pick_in_the_shared_picker_shows_its_causes_at_once(
+    served: tuple[ServedRig, Page],
+) -> None:
+    """The instructor's Slave causes picker follows its page's pick in the Slave tab
+    (SlavePanel._follow): viser runs the picker's callback on that assignment, which writes
+    the table under the lock, with no frame to wait for (and no lock held around it)."""
+    live, instructor = served
+    _picker_and_table(live, instructor)
+    _short(live, True)
+    _settled(live)
+    form = _panel(live)._causes.of(_instructor_id(live))
+    assert form is not None and "short 3" not in str(form.html.content)
+    frames = _NoFrames(live)
+    try:
+        instructor.set(instructor.widget("Slave", "trscat"), "cpx")  # the shared picker
+        _wait(lambda: form.picker.value == "cpx")
+        _wait(lambda: "short 3" in str(form.html.content))
+    finally:
+        frames.end()
+    _short(live, False)
