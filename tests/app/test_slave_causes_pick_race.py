@@ -166,8 +166,9 @@ def test_a_pick_during_a_frame_update_is_not_undone_by_it(
     finally:
         held.release.set()
     try:
-        time.sleep(0.5)  # every write of the pick and of that frame is done
-        assert "short 3" in str(form.html.content), form.html.content
+        _settled(live)  # the dashboard's update of that frame is done
+        # No frame comes to put it right: a stale write stays, and this times out.
+        _wait(lambda: "short 3" in str(form.html.content))
         _wait(lambda: "short 3" in _shown(instructor, table))
     finally:
         frames.end()
@@ -183,7 +184,7 @@ def test_a_frame_during_a_pick_is_not_undone_by_its_callback(
     picker, table = _picker_and_table(live, instructor)
     _settled(live)
     panel = _panel(live)
-    entered, release = threading.Event(), threading.Event()
+    entered, release, written = threading.Event(), threading.Event(), threading.Event()
     drawn, shown, callback = slave_panel.slave_html, panel._show, threading.local()
 
     def show(form: Any) -> None:  # this panel's, from a pick's callback (not another rig's)
@@ -191,6 +192,8 @@ def test_a_frame_during_a_pick_is_not_undone_by_its_callback(
         try:
             shown(form)
         finally:
+            if callback.mine and entered.is_set():
+                written.set()
             callback.mine = False
 
     def held_html(device: str, snap: Any) -> str:
@@ -212,8 +215,9 @@ def test_a_frame_during_a_pick_is_not_undone_by_its_callback(
     finally:
         release.set()
     try:
-        time.sleep(0.5)  # every write of the pick and of that frame is done
-        assert "short 3" in str(form.html.content), form.html.content
+        assert written.wait(HOLD_S), "the pick's callback did not finish"
+        # No frame comes to put it right: a stale write stays, and this times out.
+        _wait(lambda: "short 3" in str(form.html.content))
         _wait(lambda: "short 3" in _shown(instructor, table))
     finally:
         frames.end()
