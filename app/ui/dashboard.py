@@ -164,6 +164,7 @@ class Dashboard:
         self._redraws = self._redrawn = 0
         self._redraw_lock = threading.Lock()
         self._lock = threading.Lock()  # one tick at a time (thread, tests calling tick())
+        self._failing: set[str] = set()  # views whose last update raised (_view_update)
         self._tabs = TabSwitcher(server)  # a scenario focus step opens its device's tab
         self._configure_look()
         self._panels: _Panels | None = None
@@ -438,30 +439,46 @@ class Dashboard:
                 fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events \
                     or self._events_untold or redraws != self._redrawn
                 self._t_us, self._events_untold, self._redrawn = frame.t_us, False, redraws
+                view = self._view_update
                 if fresh:
                     snaps = [self._device_snap(frame.snapshot, d) for d in self.fastcat_ids]
-                    for scene, snap in zip(self._scenes, snaps, strict=True):
-                        scene.update(snap, frame.t_us)
-                    self._rail_powers.update(snaps)
+                    for i, (scene, snap) in enumerate(zip(self._scenes, snaps, strict=True)):
+                        view(f"rail {i + 1}", scene.update, snap, frame.t_us)
+                    view("rail power", self._rail_powers.update, snaps)
                     if panels is not None:
                         main = snaps[0]
                         master = self._device_snap(frame.snapshot, self.master_id)
-                        panels.state.update(main, master, frame.t_us)
-                        panels.control.update(main)
-                        panels.modules.update(main)
-                        panels.log.update(master)
+                        view("state", panels.state.update, main, master, frame.t_us)
+                        view("control", panels.control.update, main)
+                        view("modules", panels.modules.update, main)
+                        view("log", panels.log.update, master)
                     if self._drives is not None:
-                        self._drives.update(frame)
+                        view("drives", self._drives.update, frame)
                     if self._line is not None:
-                        self._line.update(frame)
+                        view("line", self._line.update, frame)
                 if panels is not None:
-                    panels.objects.tick()
+                    view("objects", panels.objects.tick)
                 if self._drives is not None:
-                    self._drives.tick(time.monotonic(), frame.t_us, force=self.draw_unwatched)
-                self.scenario_player.update(frame)  # scenario player, code decoder
-                self.decoder.update()
-                resend_overwritten(self.server)  # frame or not: a paused rig sends none
+                    view("drive plots", self._drives.tick, time.monotonic(), frame.t_us,
+                         self.draw_unwatched)
+                view("scenario player", self.scenario_player.update, frame)
+                view("decoder", self.decoder.update)
+                # frame or not: a paused rig sends none
+                view("resend", resend_overwritten, self.server)
             self._frame_seq = frame.seq
+
+    def _view_update(self, name: str, update: Callable[..., Any], *args: Any) -> None:
+        """One view's part of a tick. Its failure is logged once until it works again and the
+        views after it still update: one panel's bug left the Line tab, the drive panels and
+        an instructor's tables frozen for as long as it lasted."""
+        try:
+            update(*args)
+        except Exception:
+            if name not in self._failing:
+                self._failing.add(name)
+                logger.exception("dashboard view %r failed to update", name)
+        else:
+            self._failing.discard(name)
 
     def held(self) -> AbstractContextManager[Any]:
         """No view update while in it: a driver that steps the rig draws each step whole,
