@@ -69,7 +69,10 @@ def lock_memory() -> bool:
 
 
 def open_socket(iface: str) -> socket.socket:
-    sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(ETHERTYPE))
+    """A raw EtherCAT socket on `iface` alone. Opened with protocol 0, which receives nothing
+    (packet(7)), and given the EtherType by the bind: opened for 0x88A4 it would take every
+    interface's EtherCAT frames until bound, and run another master's through our ESCs."""
+    sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, 0)
     sock.bind((iface, ETHERTYPE))
     try:
         sock.setsockopt(SOL_PACKET, PACKET_IGNORE_OUTGOING, 1)

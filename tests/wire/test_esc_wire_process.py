@@ -173,3 +173,36 @@ def test_error_counters_read_at_0x0300_are_the_models_and_a_write_clears_them():
     after = one(line, Cmd.FPRD, 0x1002, 0x0300, bytes(20)).data
     assert after == bytes(12) + bytes([9, 0, 0, 0, 1, 3, 0, 0])
     assert (messages.ESC_ERRORS_WRITE, 1, 0x0300, 2, 1) in outbox  # the first numbered
+
+
+def test_the_wire_socket_takes_no_frame_another_interface_received(monkeypatch):
+    """packet(7): a packet socket opened for an EtherType receives that type from every
+    interface until it is bound to one. B's socket must take none of another NIC's frames
+    (another master's on another port of the machine): opened with protocol 0, which receives
+    nothing, and bound to its interface with the EtherType. Until session 22 it was opened for
+    0x88A4: a frame arriving elsewhere between the two calls was queued and B ran it through
+    its ESCs and answered it on its own line."""
+    real_socket = socket.socket
+    with veth_pair("o") as (_own_master, own), veth_pair("p") as (other_master, other):
+        foreign = D.build([Request(Cmd.BRD, 0, R.TYPE, b"\0\0", idx=0x66)])
+
+        def a_frame_arrives_elsewhere_meanwhile(*args: int) -> socket.socket:
+            sock = real_socket(*args)
+            with real_socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(D.ETHERTYPE)) \
+                    as seen, real_socket(socket.AF_PACKET, socket.SOCK_RAW, 0) as sender:
+                seen.bind((other, D.ETHERTYPE))
+                sender.bind((other_master, 0))
+                sender.send(foreign)
+                answer(seen, 20)  # arrived on `other`: every socket that takes it has it now
+            return sock
+
+        monkeypatch.setattr(wire_process.socket, "socket", a_frame_arrives_elsewhere_meanwhile)
+        sock = wire_process.open_socket(own)
+        monkeypatch.undo()
+        try:
+            taken = []
+            while select.select([sock], [], [], 0.2)[0]:
+                taken.append(sock.recvfrom(2048)[1][0])
+            assert taken == []
+        finally:
+            sock.close()
