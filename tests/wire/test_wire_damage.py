@@ -8,14 +8,18 @@ docs/ethercat-wire.md "Damaged cable"; docs/ethercat-master.md "Damaged cable".
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import random
+import select
 import socket
+import time
+from collections.abc import Iterator
 
 import pytest
 from test_bridge import WAIT_S, bridged, master_view, sim, wait_for
 from test_esc import description, make_line, one
-from test_esc_wire_process import answer, drain
+from test_esc_wire_process import answer
 from test_faces import line_rig
 from wire_line import veth_pair
 
@@ -31,10 +35,11 @@ from devices.master.esc_errors import EscErrors, frame_seed, run_frame
 IN, OUT = 0, 1
 SEED = 1234
 RUN = 0  # the rig's loads (messages.DAMAGE)
+DEADLINE_S = 20.0  # generous: a loaded shared host (load 7-9 on 2 cores) stalls B and A
 
 
-def frame() -> bytearray:
-    return D.build([Request(Cmd.BRD, 0, R.TYPE, b"\0\0", idx=0x11)])
+def frame(idx: int = 0x11) -> bytearray:
+    return D.build([Request(Cmd.BRD, 0, R.TYPE, b"\0\0", idx=idx)])
 
 
 def counters(line: Line, pos: int) -> bytes:
@@ -261,45 +266,73 @@ def veth():
 
 
 def test_the_wire_process_drops_what_a_damaged_cable_spoils(veth):
+    """Each frame carries its own index, so an answer is matched to its frame: on a loaded
+    machine an answer may come after the next frame went out. B has the damage once it sends
+    counts of spoiled frames (A's message may wait behind frames), not after some time."""
     master_if, slave_if = veth
     ctx = multiprocessing.get_context("spawn")
     a_end, b_end = ctx.Pipe()
     proc = ctx.Process(target=wire_process.run,
                        args=(slave_if, [description(i) for i in range(3)], b_end), daemon=True)
     proc.start()
-    sock = socket.socket(socket.AF_PACKET, socket.SOCK_RAW, socket.htons(D.ETHERTYPE))
+    sock = None
     try:
         assert a_end.poll(30) and a_end.recv() == (messages.READY, slave_if)
-        sock.bind((master_if, D.ETHERTYPE))
+        # B's own socket: bound before it receives, so no other test's frames (another veth)
+        sock = wire_process.open_socket(master_if)
+        sent, seen = (i & 0xFF for i in itertools.count(0x20)), set()
         for _ in range(5):  # undamaged: every frame answered
-            sock.send(frame())
-            assert D.replies(answer(sock, 2))[0].wkc == 3
+            assert _answered(sock, next(sent), 5, seen) == 3
         a_end.send((messages.DAMAGE, {1: 1.0}, SEED, RUN))
-        wait_for(lambda: _unanswered(sock))
-        got = drain(a_end)
-        deadline_msgs = [m for m in got if m[0] == messages.ESC_COUNTS]
-        while not deadline_msgs:
-            assert a_end.poll(5), "no esc_counts from B"
-            m = a_end.recv()
-            if m[0] == messages.ESC_COUNTS:
-                deadline_msgs.append(m)
-        counts = deadline_msgs[0][2]
+        counts = _spoiled_counts(sock, a_end, sent)
         assert EscErrors.from_registers(counts[1]).invalid[IN] >= 1
         assert EscErrors.from_registers(counts[0]).forwarded[OUT] >= 1
+        dropped = next(sent)
+        seen.clear()
+        assert _answered(sock, dropped, 0.5, seen) is None
         a_end.send((messages.DAMAGE, {}, SEED, RUN))
-        wait_for(lambda: not _unanswered(sock))
+        deadline = time.monotonic() + DEADLINE_S
+        while (wkc := _answered(sock, next(sent), 1, seen)) is None:
+            assert time.monotonic() < deadline, "no answer after the repair"
+        assert wkc == 3
+        # B answers in order: the answer after the repair came, so the one dropped never will
+        assert dropped not in seen
         a_end.send((messages.STOP,))
         proc.join(timeout=5)
     finally:
-        sock.close()
+        if sock is not None:
+            sock.close()
         if proc.is_alive():
             proc.terminate()
 
 
-def _unanswered(sock: socket.socket) -> bool:
-    sock.send(frame())
-    try:
-        answer(sock, 0.2)
-    except AssertionError:
-        return True
-    return False
+def _answered(sock: socket.socket, idx: int, timeout_s: float, seen: set[int]) -> int | None:
+    """Send a frame with datagram index ``idx``; its answer's working counter, or None when
+    none came within ``timeout_s``. The indices of answers to earlier frames go to ``seen``."""
+    sock.send(frame(idx))
+    end = time.monotonic() + timeout_s
+    while (left := end - time.monotonic()) > 0:
+        try:
+            reply = D.replies(answer(sock, left))[0]
+        except AssertionError:
+            return None
+        if reply.idx == idx:
+            return reply.wkc
+        seen.add(reply.idx)
+    return None
+
+
+def _spoiled_counts(sock: socket.socket, conn, sent: Iterator[int]) -> dict[int, bytes]:
+    """Frames sent until B's first batch of ESC counts (every 10 ms while it counts): the
+    sign that the damage reached B and spoiled frames, whatever the machine's load. Answers
+    to the frames B had before the damage are read and dropped on the way."""
+    deadline = time.monotonic() + DEADLINE_S
+    while time.monotonic() < deadline:
+        sock.send(frame(next(sent)))
+        while select.select([sock], [], [], 0)[0]:
+            sock.recv(2048)
+        while conn.poll(0.02):
+            m = conn.recv()
+            if m[0] == messages.ESC_COUNTS:
+                return m[2]
+    raise AssertionError("no esc_counts from B")
