@@ -9,7 +9,15 @@ from __future__ import annotations
 
 import time
 
-from test_soem_line import PERIOD_S, Master, favoured, model_call, powered_runtime
+from test_soem_line import (
+    DEADLINE_S,
+    PERIOD_S,
+    Master,
+    favoured,
+    model_call,
+    powered_runtime,
+    until,
+)
 from test_wire_silent import SILENT_DRIVE_FIRST
 from wire_line import veth_pair
 
@@ -28,14 +36,17 @@ def test_soem_finds_the_slave_behind_a_silent_drive():
             assert found[0][0] == "FastCAT"
             drive = runtime.rig.devices["drive_ec"]
             master("map", [])
-            time.sleep(0.2)  # no frame for longer than the 50 ms activity window
-            assert model_call(runtime, lambda: drive.snapshot()["leds"]["L/A IN"]) == "on"
-            master.conn.send(("cycles", 500, PERIOD_S, {}))  # 2 s of process data
-            leds, deadline = {}, time.monotonic() + 1.5
-            while time.monotonic() < deadline and leds.get("L/A IN") != "flickering":
-                time.sleep(0.02)
-                leds = model_call(runtime, lambda: drive.snapshot()["leds"])
-            assert master.conn.poll(30) and master.conn.recv()[0] == "ok"
+            # no frame for longer than the 50 ms activity window, in A's simulated time
+            until(lambda: model_call(runtime, lambda: drive.snapshot()["leds"]["L/A IN"]) ==
+                  "on", "the drive's L/A IN on (link, no traffic)")
+            leds: dict[str, str] = {}
+            deadline = time.monotonic() + DEADLINE_S
+            while leds.get("L/A IN") != "flickering":  # process data, 1 s at a time
+                assert time.monotonic() < deadline, leds
+                master.conn.send(("cycles", 250, PERIOD_S, {}))
+                while not master.conn.poll(0.02) and leds.get("L/A IN") != "flickering":
+                    leds = model_call(runtime, lambda: drive.snapshot()["leds"])
+                assert master.conn.poll(30) and master.conn.recv()[0] == "ok"
             assert leds == {"L/A IN": "flickering", "Status": "off", "L/A OUT": "flickering",
                             "Error": "off"}
         finally:
