@@ -32,7 +32,13 @@ import pytest
 
 pysoem = pytest.importorskip("pysoem", reason="pysoem (the SOEM master) is not installed")
 
-from soem_bringup import EXPECTED_WKC, TRSCAT_STARTUP, SoemLine, Stage  # noqa: E402
+from soem_bringup import (  # noqa: E402
+    EXPECTED_WKC,
+    STATE_TIMEOUT_S,
+    TRSCAT_STARTUP,
+    SoemLine,
+    Stage,
+)
 from wire_line import line_spec, veth_pair  # noqa: E402
 
 from app.ethercat_wire.bridge import start_wire  # noqa: E402
@@ -316,7 +322,8 @@ def test_trscat_refuses_safeop_before_its_process_data_sms_are_set_up(session: S
     state, al_status = master("slave_state", 1, AlState.SAFEOP, 3.0)
     assert (state & 0x0F, state & 0x10) == (AlState.PREOP, 0x10)
     assert al_status == 0x001D
-    state, _ = master("slave_state", 1, AlState.PREOP | 0x10, 3.0)  # acknowledge the error
+    # acknowledge the error
+    state, _ = master("slave_state", 1, AlState.PREOP | 0x10, STATE_TIMEOUT_S)
     assert state & 0x0F == AlState.PREOP
     session.stage = Stage.SCANNED
 
@@ -380,7 +387,7 @@ def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session: SoemLine)
     # Without process data since the last test the TRS-CAT falls from OP to SAFE-OP with an
     # error (SM watchdog, sync), sooner or later as the machine's load has it: PRE-OP with
     # EC_STATE_ACK, as a SOEM program asks where the flag may be set (ETG.1000.6).
-    state, _ = master("slave_state", 1, AlState.PREOP | 0x10, 3.0)
+    state, _ = master("slave_state", 1, AlState.PREOP | 0x10, STATE_TIMEOUT_S)
     assert state & 0x1F == AlState.PREOP  # no flag left: the refusal below is the mismatch's
     original = master("sdo_read", 1, 0xF030, 2)
     master("sdo_write", 1, 0xF030, 2, struct.pack("<I", 0x58582D45))  # "TRS-XX-E" ident
@@ -390,7 +397,7 @@ def test_trscat_expansion_mismatch_refuses_safeop_with_0x0070(session: SoemLine)
     master("sdo_write", 1, 0xF030, 2, original)
     # The list put back: SAFE-OP again, acknowledging the error flag (EC_STATE_ACK, AL control
     # bit 4, ETG.1000.6); without it the slave ignores the request.
-    state, al_status = master("slave_state", 1, AlState.SAFEOP | 0x10, 3.0)
+    state, al_status = master("slave_state", 1, AlState.SAFEOP | 0x10, STATE_TIMEOUT_S)
     assert (state & 0x1F, al_status) == (AlState.SAFEOP, 0)
     # The CPX-E-EC and the drive fell to SAFE-OP with 0x001B meanwhile (slave_state sends no
     # process data: SM watchdog): OP with EC_STATE_ACK, or they ignore the request (ETG.1000.6)
