@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 from app.clock import SimClock
 from app.targets import parse_target
 from devices.device import CommandError, DeviceModel
-from devices.events import Event
+from devices.events import LAST_PUT, Event
 from devices.names import did_you_mean
 from devices.stillness import Backoff
 
@@ -54,6 +54,7 @@ class Rig:
         # reset_in_place): what tells the recorder and the drive plots a new run started.
         # The clock going back does not: a load at 0 s puts nothing back.
         self.loads = 0
+        self._put_seen = -1  # LAST_PUT[0] at the last look into the queues (_collect)
 
     def device(self, device_id: str) -> DeviceModel:
         found = self.devices.get(device_id)
@@ -191,6 +192,10 @@ class Rig:
         return {"t": self.clock.now_s, "rig": self.name, "devices": devices}
 
     def _collect(self) -> None:
+        put = LAST_PUT[0]
+        if put == self._put_seen:
+            return  # no queue of the process was put into since the last look
+        self._put_seen = put
         devices = self.devices.values()
         # Most steps emit nothing: one C-level pass over the queues finds that (the loop's
         # own bytecode per device cost more than the steps of several idle devices).
