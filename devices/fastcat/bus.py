@@ -45,6 +45,7 @@ class BusMixin:
     _answer_cache: tuple[Any, ...] | None
     _moving: tuple[Any, list[tuple[int, IoModule]]]  # (bus table, modules left moving)
     _stepped: list[tuple[int, IoModule]] | None  # the modules this step's exchange stepped
+    _woken: list[IoModule]  # to step at the next cycle, still or not (rail.py FIELD_ACTIONS)
 
     if TYPE_CHECKING:  # defined by FastCat
         def _build_od(self) -> None: ...
@@ -52,7 +53,8 @@ class BusMixin:
     def _exchange(self, dt_us: int, touched: bool) -> None:
         """One cycle on the internal bus. ``touched``: a command, AL control or object write
         came since the last step; without one, a module whose last step changed nothing and
-        saw the same step length and output enable would do the same again: it is skipped."""
+        saw the same step length and output enable would do the same again: it is skipped,
+        unless a field command changed it (``_woken``, rail.py FIELD_ACTIONS)."""
         outputs_enabled = self.esm.state is _OP and self.alarm is None
         # The rail, the scan result and the binding change only by a command (which drops
         # the answer cache), a scan (which drops it too) or a rebind (after which it is
@@ -73,18 +75,26 @@ class BusMixin:
         last_bus, last_moving = self._moving
         # The (number, module) pairs this cycle steps, for the alarm search (faults.py).
         stepped: list[tuple[int, IoModule]] | None = cycle  # not a repeat: every one answering
+        skip_still = repeat
         if repeat:
-            if last_bus is bus:
+            woken = self._woken
+            if woken:  # the modules left moving (not still, as below) and the woken, in order
+                self._woken = []
+                stepped = cycle = [(n, m) for n, m in cycle if not m.still or m in woken]
+                skip_still = False
+            elif last_bus is bus:
                 # A module's still flag changes only in its own step (or a reset, which comes
                 # with a command or a scan): in a repeat, the modules the last cycle left
                 # moving are the only ones that are not skipped.
                 stepped = cycle = last_moving
             else:
                 stepped = None  # skipped one by one below: not listed
+        elif self._woken:
+            self._woken = []  # every answering module is stepped
         self._stepped = stepped
         moving = []
         for n, module in cycle:
-            if repeat and module.still:
+            if skip_still and module.still:
                 continue
             module.step(dt_us, outputs_enabled)
             if not module.still:

@@ -94,6 +94,7 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         # may have changed since (a command, an AL control write, an object write);
         # _modules_touched = a module's inputs may have (a command, a module object write).
         self._touched, self._modules_touched, self._settled = True, True, None
+        self._woken: list[IoModule] = []  # a field command's modules (rail.py FIELD_ACTIONS)
         self._bus_still = False
         # Derived tables with what they were computed from (bus.py, faults.py, LEDs).
         self._bus_key, self._bus, self._rebound_for, self._answering = (), [], None, None

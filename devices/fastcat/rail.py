@@ -71,6 +71,12 @@ COUPLER_ACTIONS: dict[str, Action] = {a.name: a for a in (
 MODULE_ACTIONS: dict[str, Action] = {
     name: replace(action, module="required") for name, action in IoModule.ACTIONS.items()
     if name not in COUPLER_ACTIONS}
+# Module commands that change only what a module's field terminals carry, which the module's
+# own step compares by value (AnalogInputs.step): the module is stepped at the next cycle
+# (bus.py, "woken") without a full step of the coupler. A full step would ask every module
+# whether it answers, step the still ones and search every alarm cause, and find each as it
+# was: a field value is an input of none of them (docs/performance.md "Session 22").
+FIELD_ACTIONS = frozenset({"set_analog"})
 
 
 class RailMixin:
@@ -92,6 +98,8 @@ class RailMixin:
     detected: list[tuple[int, str]]
     _touched: bool
     _modules_touched: bool
+    _woken: list[IoModule]  # bus.py
+    _settled: tuple[int, bool] | None
 
     def check_command(self, action: str, args: Mapping[str, Any],
                       module: int | None = None) -> dict[str, Any]:
@@ -111,6 +119,13 @@ class RailMixin:
         return kwargs
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
+        if action in FIELD_ACTIONS:
+            self.check_command(action, args, module)
+            target = self.rail_module(module)
+            done = target.apply(action, args)
+            self._woken.append(target)  # stepped at the next cycle, still or not (bus.py)
+            self._settled = None  # so there is a next cycle: no repeat of a settled step
+            return done
         self._touched = self._modules_touched = True  # a full next step (FastCat.step)
         if action in MODULE_ACTIONS:
             self.check_command(action, args, module)

@@ -262,6 +262,48 @@ def test_fast_twin_takes_the_shortcut() -> None:
     assert stepped == ["AI8D", "AO4", "AI8TC", "AX2"] * 9
 
 
+def test_field_command_steps_its_module_only() -> None:
+    """A field value on an analog input (set_analog) is no input of who answers, of the still
+    modules' steps or of any alarm cause (§6.18, §7): the next cycle steps the modules left
+    moving and that module, still or not, asks no module whether it answers and searches no
+    cause; the value reaches 0x6400 as in a full step (the differential above)."""
+    fast = Twin(plain=False)
+    for _ in range(4000):
+        fast.step()
+    for _ in range(5):
+        fast.step()  # everything settled: no module moving
+    stepped: list[str] = []
+    asked: list[str] = []
+    for module in fast.fc.modules():
+        step, responds = module.step, module.responds
+
+        def counted(dt_us: int, enabled: bool, m: Any = module, f: Any = step) -> None:
+            stepped.append(m.mtype.name)
+            f(dt_us, enabled)
+
+        def answers(m: Any = module, f: Any = responds) -> bool:
+            asked.append(m.mtype.name)
+            return bool(f())
+        module.step = counted  # type: ignore[method-assign]
+        module.responds = answers  # type: ignore[method-assign]
+    searched: list[int] = []
+    causes = fast.fc._causes
+
+    def counted_causes() -> Any:
+        searched.append(1)
+        return causes()
+    fast.fc._causes = counted_causes  # type: ignore[method-assign]
+    fast.step()
+    assert stepped == []  # settled: the step skipped whole
+    fast.apply("set_analog", module=4, channel=2, value=3.0)
+    fast.step()
+    assert stepped == ["AI8D"] and asked == [] and searched == []
+    for _ in range(20):
+        fast.step()
+    assert set(stepped) == {"AI8D"} and asked == [] and searched == []
+    assert fast.fc.od is not None and fast.fc.od.read(0x6400 + 0x10 * 3, 2) != 0
+
+
 # --- analog inputs: only the channels whose inputs changed are recomputed ----------------------
 @pytest.mark.parametrize("name", ["AI8D", "AI8TC", "AI8M", "AI4P", "AB4M4"])
 def test_analog_law_per_channel_matches_every_channel(name: str) -> None:
