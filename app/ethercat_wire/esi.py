@@ -46,21 +46,26 @@ def _text(parent: ET.Element, tag: str, text: str, **attrs: str) -> ET.Element:
     return el
 
 
-def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int | None, fixed: bool) -> None:
+def _pdo(parent: ET.Element, tag: str, pdo: Pdo, sm: int | None, fixed: bool,
+         per_slot: bool = False) -> None:
     """One RxPdo / TxPdo. ``sm``: the sync manager it is assigned to by default; None for a
     PDO the master may assign (ETG.2000: a PDO without Sm is not in the default assignment).
+    ``per_slot``: a module PDO of a modular device, whose index and entries' indices move by
+    the slot's increments; ETG.2000 moves only an Index marked DependOnSlot, so a
+    configurator reading the module without the mark puts every slot's PDO at module 1's.
     """
     attrs = {"Fixed": "1" if fixed else "0"}
     if pdo.mandatory:
         attrs["Mandatory"] = "1"
     if sm is not None:
         attrs["Sm"] = str(sm)
+    moves = {"DependOnSlot": "1"} if per_slot else {}
     el = ET.SubElement(parent, tag, attrs)
-    _text(el, "Index", hexid(pdo.index, 4))
+    _text(el, "Index", hexid(pdo.index, 4), **moves)
     _text(el, "Name", pdo.name)
     for e in pdo.entries:
         entry = ET.SubElement(el, "Entry")
-        _text(entry, "Index", hexid(e.index, 4))
+        _text(entry, "Index", hexid(e.index, 4), **(moves if e.index else {}))
         if e.index:
             _text(entry, "SubIndex", str(e.sub))
         _text(entry, "BitLen", str(e.bits))
@@ -167,15 +172,16 @@ def modules_element(desc: SlaveDescription) -> ET.Element:
     """Descriptions/Modules: each module's PDOs, assigned to SM2 / SM3 while it is plugged."""
     rx_sm = _sm_number(desc, sii.SM_TYPE_OUTPUTS, 2)
     tx_sm = _sm_number(desc, sii.SM_TYPE_INPUTS, 3)
+    per_slot = desc.slot_count > 1  # a modular device: its modules' indices move per slot
     modules = ET.Element("Modules")
     for module in desc.slot_modules:
         el = ET.SubElement(modules, "Module")
         _text(el, "Type", module.type_name, ModuleIdent=hexid(module.ident))
         _text(el, "Name", module.name, LcId="1033")
         for pdo in module.rx_pdos:
-            _pdo(el, "RxPdo", pdo, rx_sm, desc.pdos_fixed)
+            _pdo(el, "RxPdo", pdo, rx_sm, desc.pdos_fixed, per_slot)
         for pdo in module.tx_pdos:
-            _pdo(el, "TxPdo", pdo, tx_sm, desc.pdos_fixed)
+            _pdo(el, "TxPdo", pdo, tx_sm, desc.pdos_fixed, per_slot)
     return modules
 
 

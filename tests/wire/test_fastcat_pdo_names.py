@@ -45,7 +45,8 @@ def hex_value(text: str) -> int:
 def configured(root: ET.Element, idents: list[int], tag: str) -> list[ET.Element]:
     """The PDOs a configurator builds from the ESI with module ``idents[k]`` in slot k
     (ETG.2000): the device's own, then each module's, its PDO index + k * SlotPdoIncrement,
-    its entries' indices + k * SlotIndexIncrement (docs/fastcat-coupler.md)."""
+    its entries' indices + k * SlotIndexIncrement (docs/fastcat-coupler.md). Only an Index
+    marked DependOnSlot moves: a configurator leaves an unmarked one where the ESI says."""
     device = root.find("Descriptions/Devices/Device")
     slots = device.find("Slots")
     pdo_step = hex_value(slots.get("SlotPdoIncrement"))
@@ -56,12 +57,17 @@ def configured(root: ET.Element, idents: list[int], tag: str) -> list[ET.Element
     for k, ident in enumerate(idents):
         for pdo in modules[ident].findall(tag):
             pdo = copy.deepcopy(pdo)
-            pdo.find("Index").text = esi.hexid(hex_value(pdo.findtext("Index")) + k * pdo_step, 4)
+            moved(pdo.find("Index"), k * pdo_step)
             for index in pdo.findall("Entry/Index"):
-                if hex_value(index.text):
-                    index.text = esi.hexid(hex_value(index.text) + k * index_step, 4)
+                moved(index, k * index_step)
             out.append(pdo)
     return out
+
+
+def moved(index: ET.Element, offset: int) -> None:
+    """ETG.2000: an Index with DependOnSlot moves by the slot's increment, another stays."""
+    if index.get("DependOnSlot") in ("1", "true"):
+        index.text = esi.hexid(hex_value(index.text or "0") + offset, 4)
 
 
 class Screen:
