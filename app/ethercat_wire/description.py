@@ -44,6 +44,19 @@ class SlotModule:
     default: bool = False
 
 
+@dataclass(frozen=True)
+class SlotGroup:
+    """One ETG.2000 Slot element of a modular device: ``min_instances`` .. ``max_instances``
+    slots in a row, each taking a module of ``idents`` (``default``: the one a configurator
+    puts there by itself, 0 for none)."""
+
+    name: str
+    min_instances: int
+    max_instances: int
+    idents: tuple[int, ...]
+    default: int = 0
+
+
 LCID_ENGLISH, LCID_RUSSIAN = 1033, 1049  # ESI LcId of a text (Windows locale ids)
 
 
@@ -105,6 +118,9 @@ class SlaveDescription:
     # slave's own), the modules' come with the modules. download_module_idents: the master
     # writes the configured modules to 0xF030 (ETG.5001).
     slot_count: int = 1
+    # the Slot elements in slot order, where the slots do not all take the same modules (the
+    # TRS-CAT's integrated module fixed in the first); empty: one Slot of slot_count
+    slot_groups: tuple[SlotGroup, ...] = ()
     slot_pdo_increment: int = 0
     slot_index_increment: int = 0
     device_pdos: frozenset[int] | None = None  # None: every PDO is the device's

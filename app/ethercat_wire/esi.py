@@ -22,7 +22,7 @@ from typing import Any
 
 from app.cli_parser import Parser
 from app.ethercat_wire import sii
-from app.ethercat_wire.description import Pdo, SlaveDescription
+from app.ethercat_wire.description import Pdo, SlaveDescription, SlotGroup
 
 DEFAULT_OUT = Path("static/esi")
 BOOT_LIMIT_US = 20_000_000  # a FastCAT scans its modules for seconds after power-up
@@ -151,28 +151,39 @@ def _profile(dev: ET.Element, desc: SlaveDescription) -> None:
 
 
 def _slots(dev: ET.Element, desc: SlaveDescription) -> None:
-    """One Slot element: with slot_count 1 it takes exactly one of the modules (they are
-    alternatives: the drive); more, up to slot_count slots in a row, none required, each
+    """The Slot elements: with slot_count 1 one slot taking exactly one of the modules (they
+    are alternatives: the drive); more, up to slot_count slots in a row, none required, each
     module's PDOs and objects moved by the increments per slot (a modular device, the
-    FastCAT). DownloadModuleIdentList: whether the slave has a 0xF030 to write."""
+    FastCAT); or the slot_groups in order, where the slots take different modules (the
+    TRS-CAT). DownloadModuleIdentList: whether the slave has a 0xF030 to write."""
     attrs = {"DownloadModuleIdentList": "1" if desc.download_module_idents else "0"}
-    if desc.slot_count > 1:
+    if _modular(desc):
         attrs.update(SlotPdoIncrement=str(desc.slot_pdo_increment),
                      SlotIndexIncrement=hexid(desc.slot_index_increment, 2))
     slots = ET.SubElement(dev, "Slots", attrs)
-    slot = ET.SubElement(slots, "Slot", {"MinInstances": "1" if desc.slot_count == 1 else "0",
-                                         "MaxInstances": str(desc.slot_count)})
-    _text(slot, "Name", desc.slot_name, LcId="1033")
-    for module in desc.slot_modules:
-        _text(slot, "ModuleIdent", hexid(module.ident), **({"Default": "1"} if module.default
-                                                           else {}))
+    groups = desc.slot_groups or (SlotGroup(
+        desc.slot_name, 1 if desc.slot_count == 1 else 0, desc.slot_count,
+        tuple(m.ident for m in desc.slot_modules),
+        next((m.ident for m in desc.slot_modules if m.default), 0)),)
+    for group in groups:
+        slot = ET.SubElement(slots, "Slot", {"MinInstances": str(group.min_instances),
+                                             "MaxInstances": str(group.max_instances)})
+        _text(slot, "Name", group.name, LcId="1033")
+        for ident in group.idents:
+            _text(slot, "ModuleIdent", hexid(ident),
+                  **({"Default": "1"} if ident == group.default else {}))
+
+
+def _modular(desc: SlaveDescription) -> bool:
+    """A modular device: its modules' PDOs and objects move from slot to slot."""
+    return bool(desc.slot_pdo_increment or desc.slot_index_increment)
 
 
 def modules_element(desc: SlaveDescription) -> ET.Element:
     """Descriptions/Modules: each module's PDOs, assigned to SM2 / SM3 while it is plugged."""
     rx_sm = _sm_number(desc, sii.SM_TYPE_OUTPUTS, 2)
     tx_sm = _sm_number(desc, sii.SM_TYPE_INPUTS, 3)
-    per_slot = desc.slot_count > 1  # a modular device: its modules' indices move per slot
+    per_slot = _modular(desc)
     modules = ET.Element("Modules")
     for module in desc.slot_modules:
         el = ET.SubElement(modules, "Module")

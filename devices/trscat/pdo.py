@@ -69,28 +69,51 @@ def _mapping(od: ObjectDictionary, index: int, name: str,
         _ro(od, index, sub, f"{name} entry {sub}", DataType.UNSIGNED32, pdo_entry(*entry))
 
 
+def module_mappings(od: ObjectDictionary, slot: int, kind: ModuleKind,
+                    names: tuple[str, str]) -> tuple[bool, bool]:
+    """Slot ``slot``'s mapping objects 0x1600 / 0x1A00 + slot (§9.3.3), named ``names``
+    (outputs, inputs); whether each maps anything (an empty one is not assigned)."""
+    rx, tx = rx_entries(slot, kind), tx_entries(slot, kind)
+    if rx:
+        _mapping(od, RXPDO_BASE + slot, names[0], rx)
+    if tx:
+        _mapping(od, TXPDO_BASE + slot, names[1], tx)
+    return bool(rx), bool(tx)
+
+
 def add_pdo_mappings(od: ObjectDictionary, configured: Sequence[ModuleKind | None]) -> None:
     """0x16ss / 0x1Ass, 0x1AFF and the assignments 0x1C12 / 0x1C13 for the slots of 0xF030
-    (``None``: a slot 0xF030 leaves empty, which gets no PDO)."""
+    (``None``: a slot 0xF030 leaves empty, which gets no PDO). 0x1AFF, the device's own, is
+    assigned first and the slots' after it, the order a configurator builds a modular
+    device's image in from its ESI (docs/trscat.md "ESI: slots and modules")."""
     rx_assigned: list[int] = []
-    tx_assigned: list[int] = []
+    tx_assigned: list[int] = [DEVICE_TXPDO]
     for slot, kind in enumerate(configured):
         if kind is None:
             continue
-        rx, tx = rx_entries(slot, kind), tx_entries(slot, kind)
+        rx, tx = module_mappings(od, slot, kind, (f"Slot {slot} outputs", f"Slot {slot} inputs"))
         if rx:
-            _mapping(od, RXPDO_BASE + slot, f"Slot {slot} outputs", rx)
             rx_assigned.append(RXPDO_BASE + slot)
         if tx:
-            _mapping(od, TXPDO_BASE + slot, f"Slot {slot} inputs", tx)
             tx_assigned.append(TXPDO_BASE + slot)
     _mapping(od, DEVICE_TXPDO, "Device status", DEVICE_TXPDO_ENTRIES)
-    tx_assigned.append(DEVICE_TXPDO)
     for index, name, assigned in ((RXPDO_ASSIGN, "RxPDO assign", rx_assigned),
                                   (TXPDO_ASSIGN, "TxPDO assign", tx_assigned)):
         _ro(od, index, 0, name, DataType.UNSIGNED8, len(assigned))
         for sub, pdo in enumerate(assigned, start=1):
             _ro(od, index, sub, f"{name} {sub}", DataType.UNSIGNED16, pdo)
+
+
+def catalog_objects(kind: ModuleKind) -> ObjectDictionary:
+    """The objects and mapping objects a module of ``kind`` brings in the first slot (slot 0),
+    apart from any device: a configurator's catalogue entry (the ESI's Modules), from the
+    code that builds the TRS-CAT's own dictionary. Its PDOs are named after the module (the
+    configurator shows them under whichever slot holds it); values do not matter."""
+    od = ObjectDictionary()
+    module_mappings(od, 0, kind, (f"{kind.name} outputs", f"{kind.name} inputs"))
+    add_slot_objects(od, 0, kind, lambda slot, ch: 0, lambda slot, ch: 0,
+                     lambda slot, ch, value: None)
+    return od
 
 
 SlotGetter = Callable[[int, int], int]  # (slot, channel 0-based) -> value

@@ -165,14 +165,15 @@ def test_ps_compares_configured_and_detected(configured: list[int], slot: int | 
 
 
 def test_pdo_assignment_follows_the_configured_list() -> None:
-    """§9.3.2 footnote 4 / §9.3.3: writing 0xF030 implies 0x1C12 / 0x1C13, read-only."""
+    """§9.3.2 footnote 4 / §9.3.3: writing 0xF030 implies 0x1C12 / 0x1C13, read-only; 0x1AFF
+    first, as a configurator lists a modular device's own PDO (docs/trscat.md "ESI")."""
     bench = Bench(["IO-E", "AN-E"])
     bench.to_state(AlState.PREOP)
     assert [bench.read(0x1C12, s) for s in range(2)] == [1, 0x1600]
-    assert [bench.read(0x1C13, s) for s in range(3)] == [2, 0x1A00, 0x1AFF]
+    assert [bench.read(0x1C13, s) for s in range(3)] == [2, 0x1AFF, 0x1A00]
     _write_f030(bench, [IO_B, IO_E, AN_E])
     assert [bench.read(0x1C12, s) for s in range(4)] == [3, 0x1600, 0x1601, 0x1602]
-    assert [bench.read(0x1C13, s) for s in range(5)] == [4, 0x1A00, 0x1A01, 0x1A02, 0x1AFF]
+    assert [bench.read(0x1C13, s) for s in range(5)] == [4, 0x1AFF, 0x1A00, 0x1A01, 0x1A02]
     with pytest.raises(SdoAbort) as info:
         bench.write(0x1C12, 1, 0x1601)
     assert info.value.code is AbortCode.READ_ONLY
