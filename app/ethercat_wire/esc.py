@@ -61,18 +61,36 @@ class Esc:
         self._inputs = b""
         self.master_time: tuple[int, int] | None = None  # (time written to 0x0910, local ns)
         self.counters = WireCounters()  # 0x0300-0x0313: the model's and the wire's counts
+        self._mailbox_sms = tuple(n for n, sm in enumerate(desc.sync_managers)
+                                  if sii_image.sm_type(sm) in (sii_image.SM_TYPE_MBX_OUT,
+                                                               sii_image.SM_TYPE_MBX_IN))
+        self._deactivate_mailbox(True)  # powered up in INIT
 
     # ---- what process A tells the ESC ----
     def set_al_status(self, status: int, code: int) -> None:
         was = _U16.unpack_from(self.mem, R.AL_STATUS)[0] & R.AL_STATE_MASK
         _U16.pack_into(self.mem, R.AL_STATUS, status & 0xFFFF)
         _U16.pack_into(self.mem, R.AL_STATUS_CODE, code & 0xFFFF)
-        if status & R.AL_STATE_MASK == R.AL_STATE_INIT and was != R.AL_STATE_INIT:
+        init = status & R.AL_STATE_MASK == R.AL_STATE_INIT
+        if init and was != R.AL_STATE_INIT:
             # the slave stack stopped its mailbox (SSC MBX_StopMailboxHandler: SM1 disabled,
             # send queue freed): what the master has not read is lost, as in the model
             self._mbx_queue.clear()
             self._mbx_full = self._mbx_last = None
             self._set_mbx_status(self.sms.mbx_in, False)
+        self._deactivate_mailbox(init)
+
+    def _mailbox_stopped(self) -> bool:
+        """INIT runs no mailbox (ETG.1000.6): the stack starts it at INIT -> PREOP."""
+        return _U16.unpack_from(self.mem, R.AL_STATUS)[0] & R.AL_STATE_MASK == R.AL_STATE_INIT
+
+    def _deactivate_mailbox(self, off: bool) -> None:
+        """SM PDI control (offset 7) bit 0 of the mailbox SMs: set while the slave stack keeps
+        them deactivated from its side (INIT; SSC DisableSyncManChannel), so a master's write
+        to SM0 then is plain memory, no mailbox event, and nothing reaches the model."""
+        for n in self._mailbox_sms:
+            pdi = R.SM0 + R.SM_SIZE * n + 7
+            self.mem[pdi] = self.mem[pdi] | 0x01 if off else self.mem[pdi] & ~0x01 & 0xFF
 
     def set_alias(self, alias: int | None) -> None:
         """The slave restarted (an ESC power-up): with a configured station alias of its own,
@@ -84,6 +102,8 @@ class Esc:
         _U16.pack_into(self.mem, R.STATION_ALIAS, stored)
 
     def queue_mailbox(self, data: bytes) -> None:
+        if self._mailbox_stopped():
+            return  # a reply or emergency overtaken by the return to INIT: the stack drops it
         self._mbx_queue.append(bytes(data))
         self._load_mailbox()
 
@@ -184,7 +204,7 @@ class Esc:
     def _after_ram_write(self, ado: int, end: int) -> None:
         sms = self.sms
         mbx = sms.mbx_out
-        if mbx is not None and ado <= mbx.last < end:
+        if mbx is not None and ado <= mbx.last < end and not self._mailbox_stopped():
             self._mailbox_written(mbx)
         out = sms.outputs
         if out is not None and ado < out.end and end > out.start:

@@ -20,11 +20,14 @@ SM0_CFG = struct.pack("<HHBBBB", 0x1000, 128, 0x26, 0, 1, 0)
 SM1_CFG = struct.pack("<HHBBBB", 0x1080, 128, 0x22, 0, 1, 0)
 
 
-def mailbox_line(n: int = 1):
+def mailbox_line(n: int = 1, al_status: int = 0x0002):
+    """``n`` addressed slaves with SM0 / SM1 written, in PRE-OP (the mailbox runs from there)
+    unless ``al_status`` says otherwise."""
     line, outbox, t = make_line(n)
     addressed(line)
     for i in range(n):
         one(line, Cmd.FPWR, 0x1001 + i, R.SM0, SM0_CFG + SM1_CFG)
+        line.escs[i].set_al_status(al_status, 0)
     outbox.clear()
     return line, outbox, t
 
@@ -43,6 +46,23 @@ def test_write_covering_sm0_last_byte_delivers_the_message():
     line, outbox, _ = mailbox_line()
     one(line, Cmd.FPWR, 0x1001, 0x1000, request(1))
     assert outbox == [(messages.MAILBOX, 0, request(1)[:16])]
+
+
+def test_in_init_a_write_to_sm0_delivers_nothing():
+    """ETG.1000.6: INIT runs no mailbox; the slave stack keeps SM0 / SM1 deactivated from its
+    side (PDI control 0x0807 / 0x080F bit 0, SSC DisableSyncManChannel) until INIT -> PREOP
+    has checked them. A master that writes SM0 in INIT gets no answer, and nothing reaches the
+    model's CoE server. Before, the ESC delivered it and the slave answered in INIT."""
+    line, outbox, _ = mailbox_line(al_status=0x0001)
+    one(line, Cmd.FPWR, 0x1001, 0x1000, request(1))
+    assert outbox == []
+    assert one(line, Cmd.FPRD, 0x1001, R.SM0 + 7, b"\0").data[0] & 0x01  # deactivated by PDI
+    line.escs[0].queue_mailbox(b"\x0a\x00\x00\x00\x00\x13" + bytes(10))  # a late reply
+    assert sm1_status(line) & 0x08 == 0
+    line.escs[0].set_al_status(0x0002, 0)  # PRE-OP: the stack starts its mailbox
+    assert one(line, Cmd.FPRD, 0x1001, R.SM0 + 7, b"\0").data[0] & 0x01 == 0
+    one(line, Cmd.FPWR, 0x1001, 0x1000, request(2))
+    assert outbox == [(messages.MAILBOX, 0, request(2)[:16])]
 
 
 def test_a_repeated_counter_is_dropped():
@@ -93,6 +113,7 @@ def test_repeat_request_puts_the_last_reply_back_and_is_acknowledged():
 def test_replies_wait_for_sm1_and_a_disabled_sm1_drops_them():
     line, _, _ = make_line(1)
     addressed(line)
+    line.escs[0].set_al_status(0x0002, 0)  # PRE-OP: the slave has a mailbox
     line.escs[0].queue_mailbox(b"\x0a\x00\x00\x00\x00\x13" + bytes(10))  # no SM1 yet
     one(line, Cmd.FPWR, 0x1001, R.SM0, SM0_CFG + SM1_CFG)
     assert sm1_status(line) & 0x08

@@ -107,6 +107,10 @@ def master_main(iface: str, conn) -> None:
             n = master.config_init()
             if not any(s.name.startswith("? M:") for s in master.slaves):
                 break
+        # config_init asks PRE-OP and returns without waiting; the mailbox runs from PRE-OP
+        # (a slave in INIT answers no SDO), so wait as a master does before its first
+        # mailbox access (the FastCAT reaches PRE-OP after its module scan)
+        master.state_check(ps.PREOP_STATE, int(STATE_TIMEOUT_S * 1e6))
         for pos, slave in enumerate(master.slaves):
             slave.add_emergency_callback(lambda e, pos=pos: emergencies.append(
                 (pos, e.error_code, e.error_reg, e.b1, e.w1, e.w2)))
