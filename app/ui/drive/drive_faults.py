@@ -9,6 +9,7 @@ drive's fieldbus, and Inject / Clear send the clicking page's alarm to its own d
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -59,6 +60,10 @@ class AlarmForm:
     drive: Any = None
     fieldbus: list[str] = field(default_factory=lambda: ["modbus"])  # its drive's, as shown
     pages: PageAlarms | None = None
+    # The page lists' writers: a page's pick (viser's threads) and the frame update. Each
+    # reads the pages' fieldbus and picks and writes under it, or one wrote what it read
+    # before the other's write over it, and the page kept that list until the next frame.
+    lock: threading.Lock = field(default_factory=threading.Lock)
 
 
 class DriveFaults:
@@ -123,20 +128,22 @@ class DriveFaults:
         pages, pick = form.pages, form.alarm
         if pages is None or not isinstance(pick, ClientPick):
             return
-        buses = dict(pages.buses)
+        with form.lock:  # no callback of the form runs from within (set_for sends only)
+            buses = dict(pages.buses)
 
-        def bus(client_id: int | None) -> str:
-            return buses.get(client_id, buses.get(None, self._fieldbus))
+            def bus(client_id: int | None) -> str:
+                return buses.get(client_id, buses.get(None, self._fieldbus))
 
-        pages.options.show(lambda client_id: alarm_options(bus(client_id)))
-        pages.hint.show(lambda client_id: alarm_details(bus(client_id)).get(
-            pick.value_for(client_id)))
-        for client_id, client in self._server.get_clients().items():
-            offered = alarm_options(bus(client_id))
-            now = pick.value_for(client_id)
-            if now not in offered and page_ready(self._server, client):
-                pick.set_for(client, next((o for o in offered if same_head(now, o)),
-                                          offered[0]))
+            pages.options.show(lambda client_id: alarm_options(bus(client_id)))
+            for client_id, client in self._server.get_clients().items():
+                offered = alarm_options(bus(client_id))
+                now = pick.value_for(client_id)
+                if now not in offered and page_ready(self._server, client):
+                    pick.set_for(client, next((o for o in offered if same_head(now, o)),
+                                              offered[0]))
+            # After the moves: the hint of the pick before one described no alarm of the list
+            pages.hint.show(lambda client_id: alarm_details(bus(client_id)).get(
+                pick.value_for(client_id)))
 
     def _fault_form(self: DrivePanel, gui: Any, faults: Mapping[str, Action]) -> ActionForm:
         with gui.add_folder("Drive faults", expand_by_default=False):
