@@ -10,6 +10,7 @@ Tbus) end up showing the model's value in every browser whatever the clicks
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -133,6 +134,14 @@ class ControlPanel:
         self._id = device_id
         self._faults = {t: [f for f in faults if f.table == t] for t in TABLE_LABELS}
         self._modules: list[str] = []  # fault_targets of the last snapshot
+        # The Faults forms' writers: a pick (viser's threads) and the frame update. Each reads
+        # the picks and the rail and writes the Target list (and moves the pick) under it, or
+        # one wrote what it read before the other's write over it (a list of the rail before,
+        # a Target the new code does not take) and the form kept it until the next frame.
+        # Reentrant: an open rig's Table pick moves the page's code and shows the lists in one
+        # step, and a widget assigned under it runs its callbacks at once in this thread
+        # (viser 1.1.1).
+        self._faults_lock = threading.RLock()
         gui = server.gui
 
         with gui.add_folder("Power and CNF"):
@@ -240,8 +249,9 @@ class ControlPanel:
         self._target_options = PageProp(self._server, form.target.handle, "options")
 
         def table_picked(client: viser.ClientHandle, label: str) -> None:
-            form.fault.set_for(client, self._fault_labels(self._table_key(label))[0])
-            self._show_faults(form)
+            with self._faults_lock:
+                form.fault.set_for(client, self._fault_labels(self._table_key(label))[0])
+                self._show_faults(form)
 
         form.table.on_pick(table_picked)
         form.fault.on_pick(lambda _client, _label: self._show_faults(form))
@@ -258,9 +268,10 @@ class ControlPanel:
             fault = self._selected_fault(form, client_id)
             return None if fault is None else fault.detail
 
-        self._fault_options.show(labels)
-        self._fault_hints.show(hint)
-        self._show_targets(form)
+        with self._faults_lock:
+            self._fault_options.show(labels)
+            self._fault_hints.show(hint)
+            self._show_targets(form)
 
     def _show_targets(self, form: _FaultForm) -> None:
         """Each page the targets its own code takes (§7.5 / §7.6); a page whose Target its
@@ -390,4 +401,6 @@ class ControlPanel:
     def _offer_targets(self, form: _FaultForm) -> None:
         """Only the targets the picked code takes: a module pick for a code about no node
         was refused by the coupler once applied (§7.5)."""
-        set_options(form.target, taken_targets(self._selected_fault(form, None), self._modules))
+        with self._faults_lock:
+            set_options(form.target, taken_targets(self._selected_fault(form, None),
+                                                   self._modules))
