@@ -392,7 +392,9 @@ class SlavePanel:
 
     def _picked(self, client: viser.ClientHandle, device: str) -> None:
         self._follow(client.client_id, device)
-        self._refresh()  # at once: a paused rig sends no frame
+        # At once, not at the next frame: 1/30 s away on an idle rig (paused or not), as long
+        # as a busy simulation thread takes (a long advance, a catch-up) otherwise.
+        self._refresh()
         if self.on_pick is not None:
             self.on_pick(client, device)
 
