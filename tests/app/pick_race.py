@@ -10,6 +10,7 @@ the test goes on once it waits; without it, the test goes on once the other writ
 
 from __future__ import annotations
 
+import sys
 import threading
 from collections.abc import Callable
 from typing import Any
@@ -62,3 +63,14 @@ class SpyLock:
 
     def __exit__(self, *_exc: object) -> None:
         self._lock.release()
+
+
+def inside(thread: threading.Thread, function: str) -> bool:
+    """``thread`` runs ``function`` now (somewhere in its stack): a pick's callback, whose
+    function viser holds bound since the form was built, so no wrapper can tell its end."""
+    frame = sys._current_frames().get(thread.ident or -1)
+    while frame is not None:
+        if frame.f_code.co_name == function:
+            return True
+        frame = frame.f_back
+    return False

@@ -70,6 +70,12 @@ class ClientActionForm:
         self._actions = dict(sorted(actions.items()))
         self._apply = apply
         self._lock = threading.Lock()  # the dashboard thread and the pages' callbacks
+        # What a page is shown of its pick: written by its pick's callback and by the frame
+        # update that moves a pick its Target does not take. Each reads the pick and writes
+        # under it, or the callback showed the pick it read over the one the update had moved
+        # it to, for good (the update shows a page only a pick it moves). Reentrant: the
+        # update shows a moved pick under it; no callback of the form runs from within.
+        self._pick_lock = threading.RLock()
         self._offered: dict[int | None, tuple[str, ...]] = {}
         names = tuple(self._actions) or (NONE,)
         snapshot = current() if current is not None else None
@@ -98,19 +104,22 @@ class ClientActionForm:
         action = self._actions.get(name)
         return (action.doc or None) if action is not None else None
 
-    def _picked(self, client: viser.ClientHandle, name: str) -> None:
+    def _picked(self, client: viser.ClientHandle, _name: str = "") -> None:
         """``client``'s page shows the parameters of its pick, its description and, where a
-        parameter says so, the device's present values."""
-        for each, folder in self._folders.items():
-            send_on(client, folder, "visible", each == name)
-        send_on(client, self._pick.handle, "hint", self._hint(name))
-        snapshot = self._current() if self._current is not None else None
-        for p, form in self._fields.get(name, ()):
-            if p.current:
-                now = current_value(snapshot, p.current)
-                value = MISSING if now is MISSING else box_value(p, now)
-                if value is not MISSING:
-                    form.set_for(client, value)
+        parameter says so, the device's present values. The pick is read here, under the
+        lock, not taken from the callback's event: the frame update may have moved it."""
+        with self._pick_lock:
+            name = self._pick.value_for(client.client_id)
+            for each, folder in self._folders.items():
+                send_on(client, folder, "visible", each == name)
+            send_on(client, self._pick.handle, "hint", self._hint(name))
+            snapshot = self._current() if self._current is not None else None
+            for p, form in self._fields.get(name, ()):
+                if p.current:
+                    now = current_value(snapshot, p.current)
+                    value = MISSING if now is MISSING else box_value(p, now)
+                    if value is not MISSING:
+                        form.set_for(client, value)
 
     @property
     def choice(self) -> Any:
@@ -159,9 +168,10 @@ class ClientActionForm:
             if not page_ready(self._server, client):
                 continue  # the options go first (PageProp.show waits for it too)
             offered = self.options(client_id)
-            if self._pick.value_for(client_id) not in offered:
-                self._pick.set_for(client, offered[0])
-                self._picked(client, offered[0])
+            with self._pick_lock:
+                if self._pick.value_for(client_id) not in offered:
+                    self._pick.set_for(client, offered[0])
+                    self._picked(client)
 
     def submit(self, client: viser.ClientHandle | None) -> None:
         """Apply what ``client``'s page picked, with the values its boxes hold (a new page's
