@@ -50,7 +50,9 @@ class HeldProp:
 
 
 class SpyLock:
-    """A (reentrant) lock that sets ``waiting`` when a thread ``thread`` picks asks for it."""
+    """A (reentrant) lock that sets ``waiting`` when a thread ``thread`` picks asks for it.
+    Never cleared: that thread may have asked (and be waiting) before the test looks, and
+    going on early is harmless with the lock (the writers take turns whatever the order)."""
 
     def __init__(self, thread: Callable[[], bool]) -> None:
         self._lock, self._thread = threading.RLock(), thread

@@ -67,7 +67,6 @@ def test_a_frame_during_a_pick_is_not_undone_by_its_callback(
     first.set(uuid(form.choice), "set_dil")  # in the page's list still, not cpx/2's
     try:
         assert entered.wait(HOLD_S), "the pick's callback did not run"
-        spy.waiting.clear()
         frames = _NoFrames(live)
         frames.publish()
         seq = live.runtime.frame.seq

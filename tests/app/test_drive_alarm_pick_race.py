@@ -80,7 +80,6 @@ def test_a_frame_during_a_pick_is_not_undone_by_its_callback(
     first.set(alarm, FOLLOWING)
     assert held.entered.wait(HOLD_S), "the pick's callback did not run"
     try:
-        spy.waiting.clear()
         drives.select("drive_pn")  # every page's drive: Profinet's list at the next frame
         frames = _NoFrames(live)
         frames.publish()
