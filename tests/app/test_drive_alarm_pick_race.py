@@ -19,14 +19,19 @@ from typing import Any
 
 import pytest
 from form_page import uuid
-from pick_race import HOLD_S, HeldProp, SpyLock, off_dashboard, on_dashboard
+from pick_race import HOLD_S, HeldProp, SpyLock, inside, off_dashboard, on_dashboard
 from test_slave_causes_pick_race import _NoFrames
 from viser_page import Page, wait
 
+from app.classroom.roles import Access
+from app.rig_config import build_rig, load_rig_spec
+from app.screenshots import free_port
+from app.ui.drive import drive_faults
 from app.ui.drive.drive_faults import AlarmForm
 from app.ui.drive.drive_options import alarm_options
-from app.ui.panels.classroom_rig import ServedRig
+from app.ui.panels.classroom_rig import ServedRig, serve_rig
 from tests.app.test_action_forms_per_page import last_prop
+from tests.app.test_classroom_leak import TOKEN
 from tests.app.test_drive_alarm_per_page import TWO_BUSES
 from tests.app.two_pages import two_pages
 
@@ -123,3 +128,68 @@ def test_a_pick_moved_to_its_drive_s_code_gets_that_code_s_hint(
              timeout=5)
     finally:
         frames.end()
+
+
+def test_an_instructor_s_pick_during_a_change_of_drive_keeps_its_hint(
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """With a token and several drives an instructor's Alarms and load rows act on their own
+    Drive picker (docs/classroom.md): the list and hint follow that drive's fieldbus at the
+    next frame. The hint of a pick (DetailHint, the pick's callback) read the Modbus table, a
+    frame with the Profinet drive moved the pick 31 to "31 PROFINET_INIT_1" and wrote its
+    hint, then the callback wrote the Modbus table's hint of it (none) over it, for good: the
+    frame update writes the hint only when the fieldbus changes."""
+    path = tmp_path / "two_buses.toml"
+    path.write_text(TWO_BUSES)
+    rig = build_rig(load_rig_spec(path), state_dir=None)
+    live = serve_rig(rig, Access(TOKEN), port=free_port(), paused=True)
+    trainee, instructor = Page(live.port), Page(live.port)
+    frames = None
+    try:
+        clients = wait(lambda: len(live.server.get_clients()) == 2 and live.server.get_clients())
+        client_id = sorted(clients)[1]
+        assert live.classroom.access.present(client_id, TOKEN)
+        live.classroom._promoted(clients[client_id])
+        drives = live.dashboard.drives
+        assert drives is not None
+        form = wait(lambda: drives.controls._alarms.of(client_id))
+        assert form.drive is not None and form.hint is not None
+        _drawn(live)
+        entered, release = threading.Event(), threading.Event()
+        held_in: list[threading.Thread] = []
+        spy, details = SpyLock(on_dashboard), drive_faults.alarm_details
+        monkeypatch.setattr(form, "lock", spy, raising=False)  # the form's lock, if any
+        monkeypatch.setattr(form.hint, "_lock", spy, raising=False)
+
+        def held(fieldbus: str) -> Any:
+            table = details(fieldbus)
+            if off_dashboard() and not entered.is_set():
+                held_in.append(threading.current_thread())
+                entered.set()  # the table the callback read is fixed, its write is to come
+                assert release.wait(HOLD_S), "never released"
+            return table
+
+        monkeypatch.setattr(drive_faults, "alarm_details", held)
+        instructor.set(uuid(form.alarm), "31 INTERNAL_COMM_1")
+        try:
+            assert entered.wait(HOLD_S), "the pick's callback did not run"
+            frames = _NoFrames(live)
+            form.drive.value = "drive_pn"  # the instructor's own Drive picker
+            frames.publish()
+            seq = live.runtime.frame.seq
+            # The frame update has written, or waits for the callback to write first.
+            wait(lambda: spy.waiting.is_set() or live.dashboard.rendered_seq >= seq)
+        finally:
+            release.set()
+        wait(lambda: not inside(held_in[0], "refresh"), timeout=HOLD_S)
+        _drawn(live)
+        assert form.alarm.value == "31 PROFINET_INIT_1"
+        # No frame comes to put it right (nor would one): a stale hint stays.
+        wait(lambda: str(form.alarm.hint).startswith("31 PROFINET_INIT_1"), timeout=5)
+    finally:
+        if frames is not None:
+            frames.end()
+        trainee.close()
+        instructor.close()
+        live.stop()

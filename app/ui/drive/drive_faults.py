@@ -60,10 +60,12 @@ class AlarmForm:
     drive: Any = None
     fieldbus: list[str] = field(default_factory=lambda: ["modbus"])  # its drive's, as shown
     pages: PageAlarms | None = None
-    # The page lists' writers: a page's pick (viser's threads) and the frame update. Each
-    # reads the pages' fieldbus and picks and writes under it, or one wrote what it read
-    # before the other's write over it, and the page kept that list until the next frame.
-    lock: threading.Lock = field(default_factory=threading.Lock)
+    # The lists' and hints' writers: a pick (viser's threads) and the frame update. Each reads
+    # the fieldbus and the picks and writes under it, or one wrote what it read before the
+    # other's write over it: an open rig's page kept that list until the next frame, an
+    # instructor's hint for good. Reentrant: the frame update assigns the pick under it,
+    # which runs the pick's hint refresh at once in the same thread (viser 1.1.1).
+    lock: threading.RLock = field(default_factory=threading.RLock)
 
 
 class DriveFaults:
@@ -106,9 +108,10 @@ class DriveFaults:
                 PageProp(self._server, alarm, "options"), PageProp(self._server, alarm, "hint")))
             pick.on_pick(lambda _client, _label: self._show_alarms(form))
         else:
+            lock = threading.RLock()
             form = AlarmForm(alarm, ops, jam_box,
-                             DetailHint(alarm, lambda: alarm_details(fieldbus[0])), own,
-                             fieldbus)
+                             DetailHint(alarm, lambda: alarm_details(fieldbus[0]), lock), own,
+                             fieldbus, lock=lock)
         on_button(ops, lambda e, b: self._send_to(
             own, e.client, "inject_alarm" if b == "Inject alarm" else "clear_alarm",
             {"code": str(leading_int(self._alarm_of(form, e.client_id)))}))
@@ -166,12 +169,13 @@ class DriveFaults:
                 continue
             own = snap if form.drive is None else devices.get(str(form.drive.value))
             own = own or {}
-            bus = str(own.get("fieldbus", form.fieldbus[0]))
-            if bus != form.fieldbus[0]:  # Profinet numbers 30..33 differently (ch. 6)
-                form.fieldbus[0] = bus
-                set_options(form.alarm, list(alarm_options(bus)))
-                if form.hint is not None:
-                    form.hint.refresh()
+            with form.lock:  # the pick's hint refresh reads the fieldbus under it
+                bus = str(own.get("fieldbus", form.fieldbus[0]))
+                if bus != form.fieldbus[0]:  # Profinet numbers 30..33 differently (ch. 6)
+                    form.fieldbus[0] = bus
+                    set_options(form.alarm, list(alarm_options(bus)))
+                    if form.hint is not None:
+                        form.hint.refresh()
             if form.drive is None:
                 self._follow(form.jam, lambda s: bool(s.get("jammed")), page)
             else:

@@ -311,15 +311,20 @@ class DetailHint:
     text of the picked one ("No answer from the node") as the box's hint. A description glued
     to the label made the box cut it ("0x01 MODULE_CHANGED — A mod"): the box holds about 25
     characters. ``details`` maps a label to its hint; call :meth:`refresh` after replacing
-    the options."""
+    the options. ``lock``: held while the details and the pick are read and the hint written
+    (reentrant): the one the frame update holds while it replaces the details, the options and
+    the pick, so a pick's refresh does not write the hint of what it read before."""
 
-    def __init__(self, dropdown: Any, details: Callable[[], dict[str, str]]) -> None:
+    def __init__(self, dropdown: Any, details: Callable[[], dict[str, str]],
+                 lock: threading.RLock | None = None) -> None:
         self._dropdown = dropdown
         self._details = details
+        self._lock = lock if lock is not None else threading.RLock()
         dropdown.on_update(lambda _event: self.refresh())
         self.refresh()
 
     def refresh(self) -> None:
-        hint = self._details().get(str(self._dropdown.value))
-        if self._dropdown.hint != hint:
-            self._dropdown.hint = hint
+        with self._lock:
+            hint = self._details().get(str(self._dropdown.value))
+            if self._dropdown.hint != hint:
+                self._dropdown.hint = hint
