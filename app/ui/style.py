@@ -51,6 +51,8 @@ div:has(> :is([class^="fr-"], [class*=" fr-"], [id^="fr-"])):not(
             font-family: system-ui, sans-serif; }
 .fr-od td { padding: 1px 4px; border-bottom: 1px solid #eceef1; word-break: break-word; }
 .fr-od td:nth-child(1), .fr-od td:nth-child(3), .fr-od td:nth-child(4) { white-space: nowrap; }
+/* a one-cell row (no dictionary, no match) is the first cell too: its sentence wraps */
+.fr-od td[colspan] { white-space: normal; }
 .fr-od-wrap { max-height: 420px; overflow-y: auto; border: 1px solid #e3e5e8; }
 </style>
 """

@@ -176,3 +176,17 @@ def test_classroom_panels_keep_clear_of_the_scrollbar(tmp_path: Path, browser: A
         for context in contexts:
             context.close()
         served.stop()
+
+
+def test_the_objects_tab_without_a_dictionary_keeps_clear_of_the_scrollbar(
+        live: LiveDashboard, page: Any) -> None:
+    """The FastCAT off: the Objects tab's one-cell row says why there is no dictionary. CI
+    once caught the tab before its first read and the sentence ran 480 px past the panel: the
+    cell is the row's first and took the Index:Sub column's no-wrap."""
+    open_dashboard(page, live)
+    live.runtime.command("fastcat", "power", {"on": False}).result(timeout=10)
+    live.advance(1.0)
+    page.get_by_role("tab", name="Objects").click()
+    wait_until(lambda: "no object dictionary now" in page.locator("#fr-od").inner_text(),
+               what="the Objects tab's no-dictionary row")
+    _check(_every_tab(page))
