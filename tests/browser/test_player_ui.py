@@ -8,6 +8,8 @@ a code the rig reported.
 
 from __future__ import annotations
 
+from typing import Any
+
 import pytest
 from helpers import LiveDashboard, choose, open_dashboard, text_input, wait_until
 
@@ -82,20 +84,32 @@ def test_pick_play_caption_pause_step_restart(live: LiveDashboard, page) -> None
     assert "ready" in player_text(page) and live.dashboard.caption == ""
 
 
+def decode_typed(page: Any, code: str, meaning: str, what: str) -> None:
+    """Type ``code`` in the Codes tab, see ``meaning``, then press Decode and see it again.
+
+    The box decodes as it is typed into; the answer is awaited before the click because
+    viser's page sends the latest change of any control per 50 ms window (docs/dashboard.md
+    "Fast clicks and viser's client"): a Decode click inside the window the previous click
+    opened took the place of the typed text, and the server decoded the old code (a CI run
+    timed out on the Pegaso line that way)."""
+    result = page.locator("#fr-decoded")
+    text_input(page, "Code").fill(code)
+    wait_until(lambda: meaning in result.inner_text(), what=what)
+    page.get_by_role("button", name="Decode").click()
+    wait_until(lambda: meaning in result.inner_text(), what=f"{what} after Decode")
+
+
 def test_decoder_tab(live: LiveDashboard, page) -> None:
     open_dashboard(page, live)
     page.get_by_role("tab", name="Codes", exact=True).click()
-    text_input(page, "Code").fill("0x8204")
-    page.get_by_role("button", name="Decode").click()
     result = page.locator("#fr-decoded")
-    wait_until(lambda: "MISSING_NODE_ANSWER" in result.inner_text(), what="the meaning")
+    decode_typed(page, "0x8204", "MISSING_NODE_ANSWER", what="the meaning")
     assert "module 2" in result.inner_text()
 
     # §7.3 as printed, pasted into the box (which drops the line breaks): data high byte first
-    text_input(page, "Code").fill("ERR CODE\t[0xFF00]ERR REG\tByte 2 [0x81] Byte 0"
-                                  "ERR DATA\t[0x00 00 0B 00 02] basso")
-    page.get_by_role("button", name="Decode").click()
-    wait_until(lambda: "TARATURA on module 2" in result.inner_text(), what="the Pegaso line")
+    decode_typed(page, "ERR CODE\t[0xFF00]ERR REG\tByte 2 [0x81] Byte 0"
+                 "ERR DATA\t[0x00 00 0B 00 02] basso", "TARATURA on module 2",
+                 what="the Pegaso line")
 
     # §7.7: module 2 stops answering in OP; its emergency shows up under "Reported".
     live.advance(4.0)
