@@ -227,20 +227,30 @@ def test_dc_settings_are_kept_and_offered_to_the_model(wire):
     wait_for(lambda: bridge.dc.get(1) == settings)
 
 
-def test_sm_registers_reach_the_model_which_checks_them(wire):
-    """Seed 001 §9.2 PS: the TRS-CAT (position 1) refuses SAFE-OP when the SM2 the master
-    wrote is not as long as its outputs (2 bytes, the integrated module and a TRS-IO-E: 4)."""
-    _runtime, _bridge, b = wire
-    good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
+# The TRS-CAT's (position 1) sync managers as a master sets them: SM2 as long as its outputs
+# (2 bytes, the integrated module and a TRS-IO-E: 4, seed 001 §9.2 PS).
+GOOD_SMS = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
             (0x1400, 6, 0x20, True))
-    b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
-    # PREOP + ack: the line was in OP and without frames the TRS-CAT falls to SAFE-OP with
-    # the error flag (0x001A); a master acknowledges it as SOEM's config_init does
+
+
+def refused_for_a_short_sm2(b) -> None:
+    """The TRS-CAT in PRE-OP with SAFE-OP refused for an SM2 one byte short: AL status 0x12,
+    code 0x001D. PREOP goes with the ack: the line was in OP and without frames the TRS-CAT
+    falls to SAFE-OP with the error flag (0x001A); a master acknowledges it as SOEM's
+    config_init does."""
+    b.send(msg.SM, 1, (*GOOD_SMS[:2], (0x1100, 3, 0x64, True), GOOD_SMS[3]))
     b.send(msg.AL_CONTROL, 1, 0x12)
     b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
     b.send(msg.AL_CONTROL, 1, 0x04)
     b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
-    b.send(msg.SM, 1, good)
+
+
+def test_sm_registers_reach_the_model_which_checks_them(wire):
+    """Seed 001 §9.2 PS: the TRS-CAT (position 1) refuses SAFE-OP when the SM2 the master
+    wrote is not as long as its outputs (2 bytes, the integrated module and a TRS-IO-E: 4)."""
+    _runtime, _bridge, b = wire
+    refused_for_a_short_sm2(b)
+    b.send(msg.SM, 1, GOOD_SMS)
     b.send(msg.AL_CONTROL, 1, 0x14)  # SAFE-OP + "Error Ind Ack" (EC_STATE_ACK)
     b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x04, 0))
 
@@ -250,14 +260,8 @@ def test_a_request_over_the_error_flag_needs_the_ack_bit(wire):
     after a refused request the same request without it is ignored, with it it proceeds."""
     runtime, _bridge, b = wire
     trs = runtime.rig.devices["trscat"]
-    good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
-            (0x1400, 6, 0x20, True))
-    b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
-    b.send(msg.AL_CONTROL, 1, 0x12)  # PREOP + ack (the fall to SAFE-OP, as above)
-    b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
-    b.send(msg.AL_CONTROL, 1, 0x04)  # SM2 one byte short: refused with 0x001D
-    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
-    b.send(msg.SM, 1, good)
+    refused_for_a_short_sm2(b)
+    b.send(msg.SM, 1, GOOD_SMS)
     for request, state in ((0x02, "PREOP"), (0x04, "SAFEOP")):  # the current state, then on
         b.send(msg.AL_CONTROL, 1, request)
         wait_for(lambda state=state: sim(
@@ -273,13 +277,7 @@ def test_an_unknown_state_over_the_error_flag_needs_the_ack_bit(wire):
     the bit it answers 0x0012 "Unknown requested state" (seed 000 §7.7)."""
     runtime, _bridge, b = wire
     trs = runtime.rig.devices["trscat"]
-    good = ((0x1000, 128, 0x26, True), (0x1080, 128, 0x22, True), (0x1100, 4, 0x64, True),
-            (0x1400, 6, 0x20, True))
-    b.send(msg.SM, 1, (*good[:2], (0x1100, 3, 0x64, True), good[3]))
-    b.send(msg.AL_CONTROL, 1, 0x12)  # PREOP + ack (the fall to SAFE-OP, as above)
-    b.expect(lambda m: m[:2] == (msg.AL_STATUS, 1) and m[2] == 0x02)
-    b.send(msg.AL_CONTROL, 1, 0x04)  # SM2 one byte short: refused with 0x001D
-    b.expect(lambda m: m == (msg.AL_STATUS, 1, 0x12, 0x001D))
+    refused_for_a_short_sm2(b)
     b.send(msg.AL_CONTROL, 1, 0x05)  # no such state, no ack: ignored
     b.send(msg.AL_CONTROL, 1, 0x02)  # taken in order: once the master notes it, 0x05 was
     wait_for(lambda: sim(runtime, lambda: master_view(runtime).links[1].requested.name)
