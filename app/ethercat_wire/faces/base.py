@@ -257,6 +257,14 @@ class Face:
                                              data_type=self.pdo_entry_type(e))
                                      for e in pdo.entries))
 
+    def module_pdo(self, od: Any, index: int) -> tuple[Pdo, ...]:
+        """A catalogue module's PDO of mapping object ``index`` for the ESI's Modules; none
+        where the module has no such mapping or it maps nothing (no empty mapping is assigned:
+        FastCAT §5, TRS-CAT §9.3.3)."""
+        if (index, 0) not in od or not od.peek(index, 0):
+            return ()
+        return (self.named_pdo(image.read_pdo(od.peek, od.entry, index)),)
+
     def pdo_mandatory(self, pdo: Pdo) -> bool:
         """Whether the ESI marks the PDO Mandatory (a configurator cannot unassign it)."""
         return False

@@ -18,11 +18,10 @@ import logging
 from typing import Any, ClassVar
 
 from app.ethercat_wire.description import Pdo, PdoEntry, SlotModule
-from app.ethercat_wire.faces import image
 from app.ethercat_wire.faces.base import Face
 from devices.fastcat import module_od, objects
 from devices.fastcat.catalog import CATALOG
-from devices.od import ObjectDictionary, SdoAbort
+from devices.od import SdoAbort
 
 SLOT_NAME = "I/O module"  # §4: the slots page, one slot per module along the internal bus
 
@@ -64,15 +63,9 @@ class FastCatFace(Face):
         for mtype in CATALOG.values():
             od = objects.catalog_objects(mtype)
             modules.append(SlotModule(mtype.product_code, mtype.name, mtype.description,
-                                      self._mapped(od, objects.RXPDO_BASE),
-                                      self._mapped(od, objects.TXPDO_BASE)))
+                                      self.module_pdo(od, objects.RXPDO_BASE),
+                                      self.module_pdo(od, objects.TXPDO_BASE)))
         return SLOT_NAME, tuple(modules)
-
-    def _mapped(self, od: ObjectDictionary, index: int) -> tuple[Pdo, ...]:
-        """The PDO of mapping object ``index``; none when it maps nothing (not assigned, §5)."""
-        if not od.peek(index, 0):
-            return ()
-        return (self.named_pdo(image.read_pdo(od.peek, od.entry, index)),)
 
     def modular(self) -> dict[str, Any]:
         """§4 «i 16 slot disponibili»; §5 PDO 0x1600 / 0x1A00 + (n - 1), §6 objects at base +

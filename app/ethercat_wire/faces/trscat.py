@@ -13,8 +13,7 @@ from __future__ import annotations
 
 from typing import Any, ClassVar
 
-from app.ethercat_wire.description import Pdo, SlotGroup, SlotModule
-from app.ethercat_wire.faces import image
+from app.ethercat_wire.description import SlotGroup, SlotModule
 from app.ethercat_wire.faces.base import (
     COE_COMPLETE_ACCESS,
     COE_SDO,
@@ -23,7 +22,6 @@ from app.ethercat_wire.faces.base import (
     NoAnswer,
 )
 from devices.device import CommandError
-from devices.od import ObjectDictionary
 from devices.trscat import objects, pdo
 from devices.trscat.catalog import BY_IDENT, MAX_SLOTS, ident_allowed_at
 
@@ -67,14 +65,9 @@ class TrsCatFace(Face):
             modules.append(SlotModule(
                 kind.ident, kind.name,
                 f"{kind.name} ({kind.short}): {kind.inputs} inputs, {kind.outputs} outputs",
-                self._mapped(od, pdo.RXPDO_BASE), self._mapped(od, pdo.TXPDO_BASE),
+                self.module_pdo(od, pdo.RXPDO_BASE), self.module_pdo(od, pdo.TXPDO_BASE),
                 default=kind.integrated))
         return "", tuple(modules)
-
-    def _mapped(self, od: ObjectDictionary, index: int) -> tuple[Pdo, ...]:
-        if (index, 0) not in od:
-            return ()
-        return (self.named_pdo(image.read_pdo(od.peek, od.entry, index)),)
 
     def modular(self) -> dict[str, Any]:
         """§9.3.2: 0xF030 sub 1 the integrated module only, subs 2..7 any expansion, sub 8 no
