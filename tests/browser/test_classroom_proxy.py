@@ -6,7 +6,9 @@ nginx is not installed (Debian: ``apt-get install nginx-light``)."""
 from __future__ import annotations
 
 import shutil
+import socket
 import subprocess
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -69,6 +71,18 @@ def proxy(tmp_path: Path, rigs: list[ServedRig]) -> Iterator[str]:
     proc = subprocess.Popen([NGINX, "-c", str(conf), "-g", "daemon off;"],
                             stderr=subprocess.DEVNULL)
     try:
+        # nginx binds its port after it started: a page opened at once was refused once in CI
+        deadline = time.monotonic() + 20
+        while True:
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                log = d / "error.log"
+                assert proc.poll() is None and time.monotonic() < deadline, (
+                    f"nginx does not listen on {port}: "
+                    f"{log.read_text() if log.exists() else 'no error log'}")
+                time.sleep(0.05)
         yield f"http://127.0.0.1:{port}"
     finally:
         proc.terminate()
