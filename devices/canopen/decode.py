@@ -12,7 +12,7 @@ from typing import Any
 
 from devices.canopen.emcy import EMCY_BASE
 from devices.canopen.nmt import HEARTBEAT_BASE, NMT_COB_ID, STATE_CODE, NmtCommand
-from devices.canopen.sdo import SDO_RX_BASE, SDO_TX_BASE
+from devices.canopen.sdo import SDO_FRAME_BYTES, SDO_RX_BASE, SDO_TX_BASE
 from devices.od import ABORT_TEXT, AbortCode
 
 STATE_BY_CODE = {code: state.label for state, code in STATE_CODE.items() if code}
@@ -98,9 +98,11 @@ def sdo_parts(can_id: int, data: bytes) -> dict[str, Any] | None:
     another frame. ``service``: download, upload, download segment, upload segment, abort;
     ``value``: the expedited bytes ("0F 00"), ``size``: the bytes announced for a
     segmented transfer, ``last``: a segment with the "no more segments" bit."""
-    if SDO_RX_BASE < can_id <= SDO_RX_BASE + 127 and len(data) >= 4:
+    if len(data) != SDO_FRAME_BYTES:  # no SDO (describe: "malformed"), no exchange
+        return None
+    if SDO_RX_BASE < can_id <= SDO_RX_BASE + 127:
         node, request = can_id - SDO_RX_BASE, True
-    elif SDO_TX_BASE < can_id <= SDO_TX_BASE + 127 and len(data) >= 4:
+    elif SDO_TX_BASE < can_id <= SDO_TX_BASE + 127:
         node, request = can_id - SDO_TX_BASE, False
     else:
         return None
@@ -130,6 +132,10 @@ def sdo_parts(can_id: int, data: bytes) -> dict[str, Any] | None:
         # segment: specifier 0) has the "no more segments" bit.
         parts["last"] = specifier == 0 and bool(cmd & 1)
     return parts
+
+
+def _short_sdo(data: bytes) -> str:
+    return f"malformed ({len(data)} bytes, an SDO is always {SDO_FRAME_BYTES})"
 
 
 def describe(can_id: int, data: bytes, rtr: bool, ctx: Context) -> tuple[str, str]:
@@ -163,9 +169,13 @@ def describe(can_id: int, data: bytes, rtr: bool, ctx: Context) -> tuple[str, st
         meaning = ctx.emcy_text(can_id, code, data[3:8])
         return "EMCY", f"node {can_id - EMCY_BASE}: {what}, register 0x{data[2]:02X}, " \
                        f"data {vendor}" + (f": {meaning}" if meaning else "")
-    if SDO_RX_BASE < can_id <= SDO_RX_BASE + 127 and len(data) >= 4:
+    if SDO_RX_BASE < can_id <= SDO_RX_BASE + 127 and not rtr:
+        if len(data) != SDO_FRAME_BYTES:  # the server ignores it (devices/canopen/sdo.py)
+            return "SDO", f"-> node {can_id - SDO_RX_BASE}: {_short_sdo(data)}: not answered"
         return "SDO", f"-> node {can_id - SDO_RX_BASE}: {sdo_request(data)}"
-    if SDO_TX_BASE < can_id <= SDO_TX_BASE + 127 and len(data) >= 4:
+    if SDO_TX_BASE < can_id <= SDO_TX_BASE + 127 and not rtr:
+        if len(data) != SDO_FRAME_BYTES:
+            return "SDO", f"node {can_id - SDO_TX_BASE} ->: {_short_sdo(data)}"
         return "SDO", f"node {can_id - SDO_TX_BASE} ->: {sdo_response(data)}"
     text = ctx.pdo_text(can_id, data)
     if text is not None:

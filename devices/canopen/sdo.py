@@ -46,6 +46,7 @@ from devices.od import AbortCode, DataType, OdEntry, SdoAbort, encode
 
 SDO_RX_BASE = 0x600  # client -> server (request)
 SDO_TX_BASE = 0x580  # server -> client (response)
+SDO_FRAME_BYTES = 8  # "Un messaggio SDO è sempre otto byte" (ch. 4)
 CCS_DOWNLOAD, CCS_UPLOAD = 0x20, 0x40
 _CCS_DOWNLOAD_SEGMENT, _CCS_UPLOAD_SEGMENT, _CCS_ABORT = 0x00, 0x60, 0x80
 _CCS_BLOCK_UPLOAD, _BLOCK_SUBCOMMAND = 0xA0, 0x03  # cs (bits 0-1) 0: the initiate request
@@ -102,10 +103,12 @@ class SdoChannel:
         self._request = b""
 
     def on_request(self, data: bytes) -> None:
-        """One request frame (8 bytes; a shorter one is padded, "accetta ogni tipo di SDO")."""
-        if not data:
+        """One request frame. "Un messaggio SDO è sempre otto byte" (ch. 4): a frame of
+        another length is no request and gets no answer (CANopenNode's server takes DLC 8
+        only); "accetta ogni tipo di SDO" is about the size indicator (decode_download)."""
+        if len(data) != SDO_FRAME_BYTES:
             return
-        request = bytes(data[:8]).ljust(8, b"\0")
+        request = bytes(data)
         command, ccs = request[0], request[0] & 0xE0
         self._request = request
         if ccs == _CCS_ABORT:

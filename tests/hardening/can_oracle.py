@@ -108,7 +108,8 @@ class SdoOracle:
 
     def judge(self, node: CanOpenNode, request: bytes, answer: bytes | None) -> str | None:
         """Why ``answer`` (None: no answer) is wrong; ``node`` is read right after it."""
-        request = request[:8].ljust(8, b"\0")
+        if len(request) != 8:  # "Un messaggio SDO è sempre otto byte": no request at all
+            return None if answer is None else "a frame of another length was answered"
         ccs = request[0] & 0xE0
         if ccs == CCS_ABORT:
             self.transfer = None

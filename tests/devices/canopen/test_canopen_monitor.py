@@ -43,3 +43,20 @@ def test_a_state_change_is_a_row_again() -> None:
     states = [f["text"] for f in bench.node.snapshot()["frames"] if f["kind"] == "NMT-EC"]
     assert states == ["node 1: boot-up", "node 1: Pre-operational", "node 1: Stopped",
                       "node 1: Pre-operational"]
+
+
+def test_a_short_frame_on_the_sdo_id_reads_malformed_not_as_a_request() -> None:
+    """"Un messaggio SDO è sempre otto byte" (seed 004 ch. 4): the node does not answer a
+    shorter frame, so the log must not read it as the request it would have been padded
+    ("-> node 1: upload 0x1018:01" with no answer after it), and the Last SDO row keeps the
+    previous exchange."""
+    bench = make_bench()
+    assert bench.read(0x1018, 1) >= 0
+    before = bench.node.snapshot()["last_sdo_exchange"]
+    bench.send(0x601, bytes.fromhex("40 18 10 01"))
+    bench.run(5)
+    snap = bench.node.snapshot()
+    row = snap["frames"][-1]
+    assert (row["kind"], row["text"]) == ("SDO", "-> node 1: malformed (4 bytes, an SDO is "
+                                                 "always 8): not answered")
+    assert snap["last_sdo_exchange"] == before

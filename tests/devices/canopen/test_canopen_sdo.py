@@ -186,6 +186,21 @@ def test_expedited_download_without_size_is_accepted() -> None:
     assert bench.node.heartbeat_ms == 1000
 
 
+@pytest.mark.parametrize("data", ["40 18 10 01", "2B 17 10 00 A0 0F 00", "40", ""])
+def test_a_frame_shorter_than_eight_bytes_is_no_sdo(data: str) -> None:
+    """"Un messaggio SDO è sempre otto byte, i bit del campo dati che non sono necessari
+    devono essere impostati a 0" (ch. 4 "Device Configuration via SDOs"): a shorter frame on
+    the SDO COB-ID is no request; the node ignores it, as CANopenNode's server does (DLC 8
+    only), and the master times out. Before, it was padded and answered. The same request
+    padded to eight bytes is answered."""
+    bench = make_bench()
+    assert bench.request(0x601, h(data), 0x581, timeout_ms=20) is None
+    assert bench.node.heartbeat_ms == 0
+    padded = h(data).ljust(8, b"\0")
+    if padded[0]:
+        assert bench.request(0x601, padded, 0x581) is not None
+
+
 def test_segmented_download() -> None:
     """A value sent in segments (two bytes in one last segment, 5 bytes unused)."""
     bench = make_bench()
