@@ -108,6 +108,9 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         self.latched_flag = False
         self.homed = False
         self.ip_set_point = 0
+        # 0x60F8 max slippage: stored, not used, and not among the objects a save keeps (ch. 4
+        # "Salvataggio su flash"), so it starts from 0 at every power-up (Reset-Application)
+        self.max_slippage = 0
         self.saving_until: int | None = None
         self.save_pending: str | None = None
         self.save_trigger: str | None = None

@@ -258,7 +258,8 @@ def build_object_dictionary(drive: ServoDrive) -> ObjectDictionary:
     const(0x60C2, 0, "Interpolation time period", D.UNSIGNED8, 2)
     reg(0x60C2, 1, "Time period", D.UNSIGNED8, RW, R.IP_TIME_UNITS, mappable=False)
     add(0x60C2, 2, "Time index", D.INTEGER8, RO, lambda: -3, mappable=False)  # 10^-3 s
-    add(0x60F8, 0, "Max slippage", D.INTEGER32, RW)
+    add(0x60F8, 0, "Max slippage", D.INTEGER32, RW, lambda: drive.max_slippage,
+        lambda v: setattr(drive, "max_slippage", v))
     reg(0x60FD, 0, "Digital inputs", D.UNSIGNED32, RO, R.DIGITAL_INPUTS)
     const(0x60FE, 0, "Digital outputs", D.UNSIGNED8, 2)
     reg(0x60FE, 1, "Physical outputs", D.UNSIGNED32, RW, R.DIGITAL_OUTPUTS)

@@ -135,6 +135,29 @@ def test_reset_node_restores_power_on_values_reset_communication_keeps_them() ->
     assert bench.read(0x6081) != 12345
 
 
+@pytest.mark.parametrize("restart", ["reset node", "power cycle"])
+def test_objects_outside_the_save_list_come_back_at_their_power_on_value(restart: str) -> None:
+    """0x60F8 (max slippage, rw) is not among the objects a save keeps (ch. 4 "Salvataggio
+    su flash" lists them; 0x60F8 is not there), so a save does not keep it and "Reset-
+    Application" ("ripristinati ai valori di Power-On (corrisponde agli ultimi valori
+    salvati)") or a power cycle brings back its power-on value, as 0x607A's. Before, the
+    value written stayed in the dictionary through both."""
+    bench = make_bench()
+    bench.ok(0x60F8, 0, 4242, 4)
+    bench.ok(0x607A, 0, 4242, 4)
+    bench.ok(0x1010, 1, 0x65766173, 4)
+    bench.run_until(lambda: bench.drive.save_done, 5_000)
+    if restart == "reset node":
+        bench.nmt(NmtCommand.RESET_NODE)
+    else:
+        bench.drive.apply("power", {"on": False})
+        bench.run(5)
+        bench.drive.apply("power", {"on": True})
+    bench.run(80)
+    assert bench.node.state is NmtState.PRE_OPERATIONAL
+    assert (bench.read(0x60F8), bench.read(0x607A)) == (0, 0)
+
+
 @pytest.mark.parametrize("start", sorted(REACH, key=str))
 def test_power_off_reports_the_nmt_change(start: NmtState) -> None:
     """A node that falls silent with its drive reports it like every NMT change: the event
