@@ -99,6 +99,10 @@ class CanOpenNode(ProcessData, DeviceModel):
         self._known_alarms: list[int] = []
         self._t = 0  # the instant being processed (a frame's end, or the step)
         self._canopen_od: Any = None
+        # DSP 402 objects the drive model leaves to the node (0x6504, 0x6505, 0x67FF): device
+        # profile, not communication profile, so a Reset communication keeps them and only a
+        # power-up (Reset node included) makes them afresh (ch. 4 "Reset-Comunicazione").
+        self._profile_extras = build_profile_extras()
         self._reset_communication()
 
     def part_of(self) -> str:
@@ -117,7 +121,7 @@ class CanOpenNode(ProcessData, DeviceModel):
         self.rpdos = [Pdo.default(n, True, self.node_id) for n in range(1, 5)]
         self.tpdos = [Pdo.default(n, False, self.node_id) for n in range(1, 5)]
         self.dictionary = CanOpenDictionary(build_comm_objects(self), self.drive.od,
-                                            build_profile_extras())
+                                            self._profile_extras)
         if self._canopen_od is None:
             self._canopen_od = build_canopen_od(self.dictionary, self.node_id)
         self.sdo = SdoChannel(self.node_id, self.dictionary, self._canopen_od, self._send_now)
@@ -414,6 +418,7 @@ class CanOpenNode(ProcessData, DeviceModel):
             self.node_id = self.drive.node_id
             self.bitrate = bitrate_of_n1(self.drive.latched_at_power_up["n1"])
             self.line = CanLine(self.bitrate, busy_until_us=now_us)
+            self._profile_extras = build_profile_extras()
             self._enter_initialisation(now_us, now_us + BOOT_US)
         elif was_active:  # powered off, or c9 no longer CANopen: silent from now on
             # Reported like every NMT change (the recording's lane and the event log follow

@@ -135,6 +135,22 @@ def test_reset_node_restores_power_on_values_reset_communication_keeps_them() ->
     assert bench.read(0x6081) != 12345
 
 
+def test_reset_communication_keeps_the_device_profile_objects_of_the_node() -> None:
+    """"Reset-Comunicazione": "i parametri del profilo di comunicazione sono riportati ai
+    valori di Power-On" (ch. 4 "Stati e Cambiamento di stato"); 0x67FF (single device type,
+    rw in the ch. 4 table) is a device profile object (0x6000-0x9FFF, "Standardised Device
+    Profile Area"), so it keeps its value, as 0x6081 does; Reset node brings back its
+    power-on value (Reset-Application). Before, Reset communication rebuilt it."""
+    bench = make_bench()
+    bench.ok(0x67FF, 0, 0x0004_0192, 4)
+    bench.nmt(NmtCommand.RESET_COMMUNICATION)
+    bench.run(10)
+    assert bench.read(0x67FF) == 0x0004_0192
+    bench.nmt(NmtCommand.RESET_NODE)
+    bench.run(80)
+    assert bench.read(0x67FF) == 0x0002_0192
+
+
 @pytest.mark.parametrize("restart", ["reset node", "power cycle"])
 def test_objects_outside_the_save_list_come_back_at_their_power_on_value(restart: str) -> None:
     """0x60F8 (max slippage, rw) is not among the objects a save keeps (ch. 4 "Salvataggio
