@@ -372,6 +372,37 @@ def test_pulled_cable_the_master_loses_the_slave_and_brings_it_back() -> None:
     assert bench.drive.alarms.latched == [34]  # the drive still shows why it stopped
 
 
+@pytest.mark.parametrize("reset_by", ["sdo", "outputs"])
+def test_alarm_34_stays_latched_after_the_recovery_until_a_reset_over_coe(reset_by: str) -> None:
+    """Seed 004 ch. 5 "Reset allarmi" (l. 4870-4874): an alarm is reset "via coe ... scrittura
+    0x80 su oggetto 0x6040"; nothing in ch. 3 / 5 / 6 clears one by itself, and ch. 6 gives the
+    same sync timeout "Resettabile SI" (l. 5290). So the line back in OP does not clear 34: the
+    drive keeps its display, 0x603F and the Fault bit until the reset, then the error reset."""
+    bench = make_bench()
+    bench.go(PREOP, SAFEOP, OP)
+    bench.outputs("<Hi", 0x0000, 0)
+    bench.cycling = False
+    bench.run(150)
+    assert bench.drive.alarms.latched == [34]
+    bench.cycling = True
+    bench.run(5)
+    bench.go(SAFEOP, OP)  # the master acknowledges and takes it up again
+    bench.run(500)
+    slave = bench.slave
+    assert (slave.al_state, slave.al_status, slave.al_status_code) == (OP, 0x08, 0)
+    assert slave.leds.patterns["Error"].value == "off"
+    assert bench.drive.alarms.latched == [34]  # no reset yet: still latched
+    assert bench.read(0x603F) == 0x8700
+    assert bench.inputs("<Hi")[0] & 0x0008  # statusword bit 3, Fault
+    if reset_by == "sdo":
+        bench.cw(0x0080)
+    else:
+        bench.outputs("<Hi", 0x0080, 0, ms=5)
+    bench.run(5)
+    assert bench.drive.alarms.latched == []
+    assert bench.read(0x603F) == 0
+    assert bench.emergencies[-1][:3] == b"\x00\x00\x00"  # DS 301 error reset
+
 def test_slave_protocol_of_the_master() -> None:
     slave: DriveEcatSlave = make_bench().slave
     assert slave.box_name == "Drive 1 (SelemaDriveECAT)"
