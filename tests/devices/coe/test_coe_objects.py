@@ -10,6 +10,7 @@ from coe_bench import make_bench
 
 from devices.coe.objects import PRODUCT_CODE, REVISION
 from devices.ethercat import AlState
+from devices.servo.parameters import PARAMETERS
 
 P = AlState.PREOP
 
@@ -109,6 +110,34 @@ def test_parameter_written_by_address_is_in_force_after_3_ms() -> None:
     bench.slave.sdo_download(0x2005, 1, (0x0003).to_bytes(2, "little"))
     bench.run(3)
     assert bench.read(0x2005, 2) == 60
+
+
+def test_variable_write_takes_the_value_sub_2_holds_when_the_address_is_written() -> None:
+    """0x2006 as ch. 4 gives its procedure (l. 3244-3248: the value to sub 2, "Successivamente"
+    the address to sub 1), which ch. 5's two lines (address, then value, no order) do not
+    change (docs/ethercat-coe.md "0x2006: the value first"). The address written first
+    carries the old sub 2: 0 is out of d1's range, an abort at once, and d1 stays."""
+    bench = _preop()
+    assert bench.abort(lambda: bench.slave.sdo_download(
+        0x2006, 1, (0x0001).to_bytes(2, "little"))) == "0x06090030"
+    bench.write(0x2006, 2, 30, 4)
+    bench.run(5)
+    assert (bench.read(0x2006, 1), bench.drive.read_parameter(1)) == (0, 20)
+
+
+@pytest.mark.parametrize(("name", "address"), [
+    ("c9", 22), ("c7", 20), ("e3", 58), ("e4", 55), ("i6", 90), ("i7", 99), ("n1", 40),
+    ("o1", 81), ("o3", 83), ("a6", 53), ("h9", 67), ("f1", 11), ("p7", 47),
+])
+def test_parameter_addresses_of_the_ch5_table(name: str, address: int) -> None:
+    """Ch. 5 "Lettura / Scrittura parametri del drive": "una tabella riassuntiva degli
+    indirizzi per ogni parametro" (l. 4567-4589), read through 0x2005."""
+    bench = _preop()
+    bench.slave.sdo_download(0x2005, 1, address.to_bytes(2, "little"))
+    bench.run(3)
+    spec = next(s for s in PARAMETERS.values() if s.name == name)
+    assert spec.address == address
+    assert bench.read(0x2005, 2, signed=True) == bench.drive.read_parameter(address)
 
 
 def test_save_with_0x2007() -> None:
