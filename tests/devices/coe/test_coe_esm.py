@@ -259,11 +259,15 @@ def test_after_the_reset_err_shows_the_local_error_until_the_master_acknowledges
     assert bench.slave.leds.snapshot()["Error"] == "off"
 
 
-def test_safeop_refused_while_a_controller_alarm_is_latched_then_reset_over_coe() -> None:
-    """Ch. 5 "Reset allarmi": "via coe ... scrittura 0x80 su oggetto 0x6040" in PREOP."""
+@pytest.mark.parametrize("code", [7, 30, 31, 32])
+def test_safeop_refused_while_a_controller_alarm_is_latched_then_reset_over_coe(
+        code: int) -> None:
+    """Ch. 5 "Reset allarmi": "via coe ... scrittura 0x80 su oggetto 0x6040" in PREOP. 30 too:
+    ch. 6's "Resettabile NO" is Profinet's (docs/ethercat-coe.md "7 and 30-32 are resettable
+    on EtherCAT")."""
     bench = make_bench()
     bench.up_to(PREOP)
-    bench.drive.apply("inject_alarm", {"code": "31"})
+    bench.drive.apply("inject_alarm", {"code": str(code)})
     bench.run(1)
     assert bench.slave.al_state is PREOP and bench.slave.al_status_code == 0
     bench.go(SAFEOP)
@@ -272,7 +276,7 @@ def test_safeop_refused_while_a_controller_alarm_is_latched_then_reset_over_coe(
     bench.cw(0x0080, 0x0000)
     bench.go(SAFEOP)
     assert bench.slave.al_status_code == 0x002B  # the cause is still there
-    bench.drive.apply("clear_alarm", {"code": "31"})
+    bench.drive.apply("clear_alarm", {"code": str(code)})
     bench.cw(0x0080, 0x0000)
     assert bench.drive.alarms.latched == []
     bench.go(PREOP, SAFEOP, OP)
