@@ -47,6 +47,9 @@ if TYPE_CHECKING:
 
 D = DataType
 RO, RW, WO, CONST = Access.RO, Access.RW, Access.WO, Access.CONST
+# PDO mapping and assignment: read in every state, written in PREOP only (_in_preop), which
+# the Objects tab and SDO information then say (ETG.1000.6 access word 0x000F, not 0x003F)
+RW_PREOP = Access.RW_PREOP
 
 PRODUCT_CODE = 0x0000_0011  # not printed; 11 = c9's EtherCAT code
 REVISION = 0x0000_0305  # not printed; the firmware 3.05 of 0x100A
@@ -134,23 +137,23 @@ def _in_preop(slave: DriveEcatSlave, index: int, sub: int, change: Callable[[], 
 def _mapping_objects(od: ObjectDictionary, slave: DriveEcatSlave, pdo: Pdo) -> None:
     index, kind = pdo.map_index, "RxPDO" if pdo.receive else "TxPDO"
     lookup = slave.dictionary_entry
-    od.add(OdEntry(index, 0, "Number of mapped objects", D.UNSIGNED8, RW, pdo.count,
+    od.add(OdEntry(index, 0, "Number of mapped objects", D.UNSIGNED8, RW_PREOP, pdo.count,
                    getter=lambda: pdo.count,
                    setter=lambda v: _in_preop(slave, index, 0, lambda: pdo.set_count(v, lookup))))
     for sub in range(1, MAX_ENTRIES + 1):
-        od.add(OdEntry(index, sub, f"{kind} {pdo.number} mapping entry {sub}", D.UNSIGNED32, RW,
-                       pdo.entries[sub - 1], getter=lambda s=sub: pdo.entries[s - 1],
+        od.add(OdEntry(index, sub, f"{kind} {pdo.number} mapping entry {sub}", D.UNSIGNED32,
+                       RW_PREOP, pdo.entries[sub - 1], getter=lambda s=sub: pdo.entries[s - 1],
                        setter=lambda v, s=sub: _in_preop(
                            slave, index, s, lambda: pdo.set_entry(s, v, lookup))))
 
 
 def _assignment_objects(od: ObjectDictionary, slave: DriveEcatSlave, a: Assignment) -> None:
     kind = "RxPDO" if a.index == 0x1C12 else "TxPDO"
-    od.add(OdEntry(a.index, 0, f"{kind} assign", D.UNSIGNED8, RW, a.count,
+    od.add(OdEntry(a.index, 0, f"{kind} assign", D.UNSIGNED8, RW_PREOP, a.count,
                    getter=lambda: a.count,
                    setter=lambda v: _in_preop(slave, a.index, 0, lambda: a.set_count(v))))
     for sub in range(1, PDOS_PER_DIRECTION + 1):
-        od.add(OdEntry(a.index, sub, f"Assigned {kind} {sub}", D.UNSIGNED16, RW,
+        od.add(OdEntry(a.index, sub, f"Assigned {kind} {sub}", D.UNSIGNED16, RW_PREOP,
                        a.entries[sub - 1], getter=lambda s=sub: a.entries[s - 1],
                        setter=lambda v, s=sub: _in_preop(
                            slave, a.index, s, lambda: a.set_entry(s, v))))

@@ -268,6 +268,22 @@ def test_trscat_entry_access_as_its_tables_print_it(rig, index, sub, access):
     assert int.from_bytes(reply[20:22], "little") == access
 
 
+@pytest.mark.parametrize(("index", "sub", "access"), [
+    (0x1C12, 0, 0x000F), (0x1C13, 1, 0x000F), (0x1600, 1, 0x000F), (0x1A02, 0, 0x000F),
+    (0x6040, 0, 0x007F), (0x6041, 0, 0x0087), (0x1018, 1, 0x0007)])
+def test_drive_entry_access_as_it_answers_writes(rig, index, sub, access):
+    """Seed 004 ch. 5: the PDO mapping and assignment are configured in PRE-OP ("P -> S: Il
+    Master configura ... la mappatura dei process data"); the drive refuses their writes in
+    SAFE-OP / OP with 0x08000022, so their entry description says write in PRE-OP only
+    (ETG.1000.6 Table 59), not 0x003F; the controlword RxPDO-mappable, the statusword TxPDO."""
+    model = rig.devices["drive_ecat-ecat"]
+    srv = CoeServer(face_for(model), model)
+    request = f"00 80 05 00 00 00 {index & 0xFF:02x} {index >> 8:02x} {sub:02x} 07"
+    (reply,) = srv.handle(mbx(request))
+    assert reply[6:10].hex(" ") == "00 80 06 00"
+    assert int.from_bytes(reply[20:22], "little") == access
+
+
 def test_fastcat_module_2_stops_answering(rig):
     """Seed 000 §7.1: 'CoE - Emergency (Hex: ff00, 81, 02 00 00 04 00)'."""
     model = rig.devices["fastcat"]

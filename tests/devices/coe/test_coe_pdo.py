@@ -97,6 +97,19 @@ def test_mapping_and_assignment_are_written_in_preop_only(state: AlState, index:
     assert bench.read(index, 0) >= 1
 
 
+@pytest.mark.parametrize(("index", "sub"), [
+    (0x1C12, 0), (0x1C12, 4), (0x1C13, 1), (0x1600, 0), (0x1603, 8), (0x1A00, 1), (0x1A03, 0)])
+def test_sdo_information_says_mapping_and_assignment_are_written_in_preop_only(
+        index: int, sub: int) -> None:
+    """What SDO Information (ch. 5 "SDO Info support ... visualizzare l'elenco aggiornato degli
+    oggetti") describes is what the drive does: these objects refuse a write in SAFEOP / OP
+    (0x08000022, above), so their access is "read always, write in PREOP" (r-wps, ETG.1000.6
+    access word 0x000F), as the TRS-CAT's 0xF030; they used to say plain rw (0x003F)."""
+    bench = make_bench()
+    bench.up_to(PREOP)
+    assert bench.slave.sdo_info(index, sub)["access"] == "r-wps"
+
+
 def test_remapping_first_the_pdo_then_the_assignment() -> None:
     """Ch. 5: "agendo prima direttamente sugli oggetti 0x1600 - 0x1603 o 0x1A00 - 0x1A03. Ed in
     seguito su gli oggetti 0x1C12 e 0x1C13"."""
