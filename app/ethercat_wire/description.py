@@ -99,6 +99,9 @@ class SlaveDescription:
     # The slave runs DC-synchronous unless the master says otherwise: the ESI lists that OpMode
     # first, the one a configurator selects by default (the TRS-CAT, seed 001 §9.1.1)
     dc_default: bool = False
+    # The ESI Desc of the OpMode without SYNC0 (AssignActivate 0), the text a configurator's DC
+    # drop-down shows; the drive's is seed 004 ch. 5's TwinCAT screen's "SM-Synchron"
+    sm_mode_desc: str = "FreeRun/SM-Synchron"
     fmmu_count: int = 3
     # Configured station alias (SII word 4, loaded into 0x0012): the CPX-E-EC's Explicit
     # Device ID in force (seed 002 Tab. 5), None at its switch 0 (the stored alias, 0 in a

@@ -117,7 +117,7 @@ def device_element(desc: SlaveDescription) -> ET.Element:
                                    for name, bit in COE_FLAGS})
     if desc.dc_supported:
         dc = ET.SubElement(dev, "Dc")
-        modes = [("FreeRun", "FreeRun/SM-Synchron", 0), ("DC", "DC-Synchron", 0x0300)]
+        modes = [("FreeRun", desc.sm_mode_desc, 0), ("DC", "DC-Synchron", 0x0300)]
         if desc.dc_default:  # the first OpMode is the one a configurator selects
             modes.reverse()
         for name, desc_text, assign in modes:

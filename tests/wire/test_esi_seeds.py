@@ -74,6 +74,15 @@ def test_free_run_first_where_the_seed_names_no_default(line, name):
     assert modes == ["FreeRun", "DC"]
 
 
+def test_drive_offers_sm_synchron_as_its_twincat_screen_names_it(line):
+    """Seed 004 ch. 5 "Settaggi SM / DC" (l. 4613-4658): "impostare ... la sincronizzazione SM -
+    Synchron. Vedi figura seguente nel caso specifico di twincat", and the DC tab's drop-down
+    reads "Moda operativa: SM-Synchron" (l. 4620, 4645) next to DC-Synchron. A configurator
+    lists the OpModes by their Desc: the drive's must read SM-Synchron, not FreeRun/SM-Synchron."""
+    modes = [m.findtext("Desc") for m in device(line["SelemaDriveECAT"]).findall("Dc/OpMode")]
+    assert modes == ["SM-Synchron", "DC-Synchron"]
+
+
 def test_fastcat_has_no_dc(line):
     """Seed 000 names no distributed clock: no Dc element, nor DC in the ESC's features."""
     assert device(line["FastCAT"]).find("Dc") is None

@@ -111,6 +111,7 @@ class Face:
     vendor_name: ClassVar[str] = ""  # ESI Vendor Name (the configurator's catalogue folder)
     dc_supported: ClassVar[bool] = False
     dc_default: ClassVar[bool] = False  # DC-Synchron the slave's default mode (ESI order)
+    sm_mode_desc: ClassVar[str] = "FreeRun/SM-Synchron"  # the ESI Desc of the non-DC OpMode
     coe_details: ClassVar[int] = COE_SDO | COE_SDO_INFO
     identity_defaults: ClassVar[tuple[int, int, int]]  # vendor, product, revision (no OD yet)
 
@@ -284,7 +285,8 @@ class Face:
             coe_details=self.coe_details,
             sync_managers=sync_managers(image.byte_size(rx), image.byte_size(tx)),
             rx_pdos=named(rx), tx_pdos=named(tx), dc_supported=self.dc_supported,
-            dc_default=self.dc_default, pdos_fixed=self.mapping_fixed,
+            dc_default=self.dc_default, sm_mode_desc=self.sm_mode_desc,
+            pdos_fixed=self.mapping_fixed,
             spare_rx_pdos=named(self.spare_pdos(model, True)),
             spare_tx_pdos=named(self.spare_pdos(model, False)), slot_name=slot_name,
             slot_modules=modules, station_alias=self.station_alias(model),

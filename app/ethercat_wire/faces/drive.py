@@ -40,6 +40,8 @@ class DriveFace(Face):
     vendor_name = "Selema"  # ch. 5: the catalogue's vendor folder above "Selema Device"
     order_code = "SelemaDriveECAT"
     dc_supported = True  # ch. 5 "Distributed Clock"
+    # ch. 5 "Settaggi SM / DC": TwinCAT's DC tab offers it as "SM-Synchron" (l. 4620, 4645)
+    sm_mode_desc = "SM-Synchron"
     coe_details = COE_SDO | COE_SDO_INFO | COE_PDO_ASSIGN | COE_PDO_CONFIG  # ch. 5 dynamic PDOs
     mapping_fixed = False  # 0x1C12 / 0x1C13 and 0x160x / 0x1A0x are written in PREOP (ch. 5)
     identity_defaults: ClassVar[tuple[int, int, int]] = (
