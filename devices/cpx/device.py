@@ -19,7 +19,7 @@ from devices.cpx.assignment import address_order, tx_assignment
 from devices.cpx.catalog import ModuleType, module_type
 from devices.cpx.device_id import DeviceIdMixin
 from devices.cpx.diagnosis import Diagnosis
-from devices.cpx.esm import SM_WATCHDOG, SYNC_ERROR, ErrorKind, Esm
+from devices.cpx.esm import NO_VALID_FIRMWARE, SM_WATCHDOG, SYNC_ERROR, ErrorKind, Esm
 from devices.cpx.faults import Injected, held
 from devices.cpx.history import DiagHistory
 from devices.cpx.indicators import wanted_leds
@@ -143,6 +143,8 @@ class CpxEEc(StillStepping, TransitionsMixin, DeviceIdMixin, ModuleChecks, Opera
         self.od = build_od(self)
         self._announce_writes(self.od)
         self.esm.reset(self.now_us)
+        if self.boot_failed:  # ETG.1300 booting error: INIT with the error bit, unasked
+            self.esm.fall(AlState.INIT, ErrorKind.BOOTING, NO_VALID_FIRMWARE, self.now_us)
 
     def _stop(self) -> None:
         self.diagnosis.halt(self.now_us)

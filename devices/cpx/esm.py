@@ -42,6 +42,9 @@ class ErrorKind(enum.Enum):
     REFUSED = "refused"  # a requested transition refused: invalid configuration
     WATCHDOG = "watchdog"  # OP -> SAFEOP, Sync Manager watchdog
     SYNC = "sync"  # OP -> SAFEOP, sync error
+    # INIT + error from the start: the application controller's flash failed its checksum
+    # (Tab. 12 flickering, ETG.1300 "booting error": INIT reached, the error bit set)
+    BOOTING = "booting"
 
 
 ERROR_LED: dict[ErrorKind, ErrorShows] = {
@@ -49,6 +52,7 @@ ERROR_LED: dict[ErrorKind, ErrorShows] = {
     ErrorKind.REFUSED: ErrorShows.INVALID_CONFIGURATION,
     ErrorKind.WATCHDOG: ErrorShows.WATCHDOG,
     ErrorKind.SYNC: ErrorShows.SYNC_ERROR,
+    ErrorKind.BOOTING: ErrorShows.BOOTING_ERROR,
 }
 
 

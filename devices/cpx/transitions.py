@@ -77,6 +77,8 @@ class TransitionsMixin:
         """The checks of an upward transition: None, or the AL status code (with the error
         kind when it is not an invalid configuration)."""
         if current is AlState.INIT and target is AlState.PREOP:
+            if self.boot_failed:  # still the booting error of the start (Tab. 12)
+                return NO_VALID_FIRMWARE, ErrorKind.BOOTING
             if not self.application_runs:
                 return NO_VALID_FIRMWARE
             return self._sm_check((0, 1))

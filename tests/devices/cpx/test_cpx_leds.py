@@ -156,6 +156,44 @@ def test_error_flickering_on_booting_error() -> None:
     assert bench.cpx.al_state is AlState.INIT and bench.cpx.al_status_code == 0x0014
 
 
+@pytest.mark.parametrize("start", ["restart", "power cycle"])
+def test_a_booting_error_is_init_with_the_error_flag_before_any_request(start: str) -> None:
+    """Tab. 12 flickering «Ошибка загрузки (Booting Error)» is ETG.1300's row: "INIT state
+    reached, but the Error Indicator bit is set in the AL Status register". The bus module
+    starts in INIT + error (0x0014 "No valid firmware") on its own, so a master's scan reads
+    it before it asks for anything; a request for PREOP is refused again, the LED the same."""
+    bench = Bench(master=False)
+    bench.apply("inject_fault", fault="booting_error")
+    if start == "restart":
+        bench.apply("restart")
+    else:
+        bench.apply("power", on=False)
+        bench.run(0.05)
+        bench.apply("power", on=True)
+    bench.step()
+    cpx = bench.cpx
+    assert (cpx.al_state, cpx.al_status, cpx.al_status_code) == (AlState.INIT, 0x11, 0x0014)
+    assert bench.led_state("Error") == ("flickering", "red")
+    cpx.request_state(AlState.PREOP, ack=True)
+    bench.step()
+    assert (cpx.al_state, cpx.al_status, cpx.al_status_code) == (AlState.INIT, 0x11, 0x0014)
+    assert bench.led_state("Error") == ("flickering", "red")
+    bench.apply("clear_fault", fault="booting_error")
+    bench.apply("restart")
+    bench.step()
+    assert (cpx.al_state, cpx.al_status, cpx.al_status_code) == (AlState.INIT, 0x01, 0x0000)
+
+
+def test_bootloader_mode_starts_without_the_error_flag() -> None:
+    """Tab. 6 on / on is a mode the technician chose, not an error: INIT without the flag
+    until a request for PREOP is refused (Tab. 11 / 12 orange, choice 44)."""
+    bench = Bench(master=False, dil1=True, dil2=True)
+    bench.step()
+    cpx = bench.cpx
+    assert (cpx.al_state, cpx.al_status, cpx.al_status_code) == (AlState.INIT, 0x01, 0x0000)
+    assert bench.led_state("Error") == ("on", "orange")
+
+
 def test_la_in_and_la_out() -> None:
     """Tab. 13: on = link, flickering = traffic, off = no link."""
     bench = tab9(master=False, out_connected=True)
