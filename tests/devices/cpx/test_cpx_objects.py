@@ -148,6 +148,24 @@ def test_module_parameters_and_failsafe(od_bench: Bench) -> None:
     assert od_bench.cpx.modules[1].failsafe[7] == 1
 
 
+# Tab. 27 prints "yy Input yy", "yy Output yy", "yy Channel yy", "yy Parameter yy": the
+# model names each entry by what it is, its CPX channel counted from 0 (as 0x22xx:2 «Channel
+# (Start at 0)» and the 0x10F3 channel parameter count), so sub yy is channel yy - 1
+# (docs/cpx-e-ec.md choice 50). The mapping entries keep the sub: "Input Mapping 01".
+SUB_NAMES = [(0x6001, 1, "Input 0"), (0x6001, 16, "Input 15"), (0x7002, 8, "Output 7"),
+             (0x6004, 1, "Input channel 0"), (0x7005, 4, "Output channel 3"),
+             (0x2004, 1, "Signal range channel 0"), (0x2102, 1, "Channel 0"),
+             (0x2105, 4, "Channel 3"), (0x6000, 1, "Status bit 0"),
+             (0x1A01, 1, "Input Mapping 01"), (0x1602, 8, "Output Mapping 08")]
+
+
+@pytest.mark.parametrize(("index", "sub", "name"), SUB_NAMES,
+                         ids=[f"{r[0]:04X}:{r[1]}" for r in SUB_NAMES])
+def test_module_entries_are_named_by_channel_from_0(od_bench: Bench, index: int, sub: int,
+                                                    name: str) -> None:
+    assert od_bench.cpx.od.entry(index, sub).name == name
+
+
 def test_detected_module_list(od_bench: Bench) -> None:
     """0xF050: sub 0 the number of modules (bus module included), then one ident each."""
     idents = [BUS_STATUS_BITS.ident] + [module_type(n).ident for n in TAB9_MODULES]
