@@ -123,6 +123,26 @@ def test_no_emergency_unless_enabled() -> None:
     assert [r["code"] for r in bench.records("emergency")] == ["0x0000"]  # no error left
 
 
+def test_no_error_emergency_only_when_the_last_error_goes() -> None:
+    """Tab. 21 «00 00 Нет ошибок» (no errors): one of two errors going sends nothing, the
+    history gets its CPX error 0 message; the last one going sends 0x0000 with 0x1001 /
+    0x1002 clear (DS 301 leaves the partial "error reset" optional: choice 19)."""
+    bench = Bench(["16DI", "8DO"], history_flags=0x0001, **STI).to_op()
+    bench.apply("short_circuit", module=1, on=True)
+    bench.apply("inject_fault", module=2, fault="module_failure")
+    bench.run(0.01)
+    since = len(bench.events)
+    bench.apply("clear_fault", module=2, fault="module_failure")
+    bench.run(0.01)
+    assert bench.records("emergency", since) == []
+    assert bench.cpx.history.ordered()[-1][1].text_id == 0x3700
+    bench.apply("short_circuit", module=1, on=False)
+    bench.run(0.01)
+    sent = bench.records("emergency", since)
+    assert [(r["code"], r["register"], r["data"]) for r in sent] == [
+        ("0x0000", "0x00", "00 00 00 00 00")]
+
+
 def test_emergencies_reach_the_master() -> None:
     """8-byte frames through the mailbox: taken by the master from PREOP on."""
     bench = Bench(["8DO"], master=False, history_flags=0x0001, **STI)
