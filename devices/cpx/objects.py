@@ -145,11 +145,11 @@ def _assignment(od: ObjectDictionary, dev: CpxObjects) -> None:
     for sub, pdo in enumerate(rx, start=1):
         _ro(od, RX_ASSIGN, sub, f"RxPDO assign {sub}", DataType.UNSIGNED16, pdo)
     tx = dev.tx_assign
-    od.add(OdEntry(TX_ASSIGN, 0, "TxPDO assign", DataType.UNSIGNED8, Access.RW, tx.count,
+    od.add(OdEntry(TX_ASSIGN, 0, "TxPDO assign", DataType.UNSIGNED8, Access.RW_PREOP, tx.count,
                    getter=lambda: tx.count, setter=tx.set_count))
     for sub in range(1, len(tx.entries) + 1):
-        od.add(OdEntry(TX_ASSIGN, sub, f"TxPDO assign {sub}", DataType.UNSIGNED16, Access.RW,
-                       0, getter=lambda sub=sub: tx.entries[sub - 1],
+        od.add(OdEntry(TX_ASSIGN, sub, f"TxPDO assign {sub}", DataType.UNSIGNED16,
+                       Access.RW_PREOP, 0, getter=lambda sub=sub: tx.entries[sub - 1],
                        setter=lambda value, sub=sub: tx.set_entry(sub, value)))
 
 

@@ -9,7 +9,7 @@ from cpx_bench import STI, TAB9_MODULES, Bench
 
 from devices.cpx.assignment import DIAG_PDO, TX_ASSIGN
 from devices.ethercat import AlState
-from devices.od import AbortCode, SdoAbort
+from devices.od import AbortCode, Access, SdoAbort
 
 MODULE_TX = [0x1A00, 0x1A04, 0x1A01]  # Tab. 9 with STI: bus module, 4AI, 16DI
 
@@ -135,3 +135,13 @@ def test_an_empty_default_is_an_assignment() -> None:
     assert cpx.cmd_read_object(TX_ASSIGN, 0) == 0
     cpx.request_state(AlState.SAFEOP)
     assert cpx.al_state is AlState.SAFEOP
+
+
+@pytest.mark.parametrize("sub", [0, 1, 4])
+def test_0x1c13_says_it_is_written_in_preop_only(bench: Bench, sub: int) -> None:
+    """What the entry description tells a master (SDO Information, the Objects tab) is what
+    0x1C13 does: a write outside PREOP aborts 0x08000022 (above), so its access is "read
+    always, write in PREOP" (r-wps, ETG.1000.6 access word 0x000F), as the drive's and the
+    TRS-CAT's; it used to say plain rw (0x003F, writable in SAFEOP and OP too)."""
+    assert bench.cpx.od is not None
+    assert bench.cpx.od.entry(TX_ASSIGN, sub).access is Access.RW_PREOP
