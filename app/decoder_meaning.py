@@ -11,7 +11,12 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from app.modbus.pdu import EXCEPTION_FLAG, EXCEPTION_NAMES, ILLEGAL_DATA_ADDRESS
+from app.modbus.pdu import (
+    EXCEPTION_FLAG,
+    EXCEPTION_NAMES,
+    ILLEGAL_DATA_ADDRESS,
+    IMPLEMENTED_FUNCTIONS,
+)
 from devices.ethercat import AL_STATUS_ERROR_FLAG, AlState
 from devices.events import fmt_hex
 
@@ -66,12 +71,20 @@ def al_status_registers(text: str) -> list[Meaning]:
 
 
 def modbus_exception(function: int | None, code: int) -> Meaning:
-    """Seed 004 ch. 2 "Eccezioni": the drive answers 02 only and drops any other bad request."""
+    """Seed 004 ch. 2 "Eccezioni": the drive answers 02 only and drops any other bad request;
+    "Codici funzione": it implements 03, 06 and 16 only, so it drops a request of any other
+    function too, and no exception to one comes from it."""
     name = EXCEPTION_NAMES.get(code)
     if name is None:
         raise DecodeError(f"Modbus exception {code:02X} is not a Modbus exception code "
                           f"({', '.join(f'{c:02X}' for c in EXCEPTION_NAMES)})")
-    if code == ILLEGAL_DATA_ADDRESS:
+    if function is not None and function not in IMPLEMENTED_FUNCTIONS:
+        implemented = ", ".join(f"{fc:02d}" for fc in IMPLEMENTED_FUNCTIONS[:-1])
+        text = (f"the drive never sends it: it implements functions {implemented} and "
+                f"{IMPLEMENTED_FUNCTIONS[-1]:02d} only and drops a request of function "
+                f"{fmt_hex(function, 2)} without a reply; another server or a gateway sent "
+                "this")
+    elif code == ILLEGAL_DATA_ADDRESS:
         text = ("the address names nothing on the drive (no parameter or register there): "
                 "the only exception the drive answers")
     else:

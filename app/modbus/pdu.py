@@ -42,6 +42,10 @@ logger = logging.getLogger(__name__)
 FC_READ_HOLDING_REGISTERS = 0x03
 FC_WRITE_SINGLE_REGISTER = 0x06
 FC_WRITE_MULTIPLE_REGISTERS = 0x10
+# ch.2 "Codici funzione": "Le funzioni implementate sul drive sono" 03, 06 and 16; any other
+# request is dropped without a reply, so no exception to another function comes from the drive
+IMPLEMENTED_FUNCTIONS = (FC_READ_HOLDING_REGISTERS, FC_WRITE_SINGLE_REGISTER,
+                         FC_WRITE_MULTIPLE_REGISTERS)
 ILLEGAL_DATA_ADDRESS = 0x02  # the only exception code the drive implements (ch.2 "Eccezioni")
 EXCEPTION_FLAG = 0x80  # ch.2 "Eccezioni": an exception response sets the function code's MSB
 # The Modbus Application Protocol's exception codes, for the Codes tab (app/decoder.py): the
@@ -373,3 +377,4 @@ _HANDLERS: dict[int, Callable[[ModbusDrive, bytes], Outcome]] = {
     FC_WRITE_SINGLE_REGISTER: _write_single_register,
     FC_WRITE_MULTIPLE_REGISTERS: _write_multiple_registers,
 }
+assert set(_HANDLERS) == set(IMPLEMENTED_FUNCTIONS), "the Codes tab reads IMPLEMENTED_FUNCTIONS"

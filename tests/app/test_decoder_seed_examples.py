@@ -172,6 +172,23 @@ def test_an_exception_the_drive_never_sends() -> None:
     assert "01 Illegal Function" in m.text and "never" in m.text, m
 
 
+@pytest.mark.parametrize("text", ["81 02", "05 84 02", "0x8F 0x02"])
+def test_exception_02_to_a_function_the_drive_does_not_implement(text: str) -> None:
+    """Ch. 2 "Codici funzione": the drive implements 03, 06 and 16 only (their error codes
+    0x83, 0x86, 0x90) and drops any other request without a reply ("Eccezioni"): an 02 to
+    function 01, 04 or 15 came from another server, not from the drive."""
+    (m,) = [m for m in decode(text) if m.family == MODBUS]
+    assert "02 Illegal Data Address" in m.text, m
+    assert "never" in m.text and "03, 06 and 16" in m.text, m
+    assert "the only exception the drive answers" not in m.text, m
+
+
+@pytest.mark.parametrize("text", ["83 02", "86 02", "90 02"])
+def test_exception_02_to_an_implemented_function_is_the_drive_s(text: str) -> None:
+    (m,) = [m for m in decode(text) if m.family == MODBUS]
+    assert "the only exception the drive answers" in m.text and "never" not in m.text, m
+
+
 # ---- malformed input: one clear message -------------------------------------------------------
 @pytest.mark.parametrize(("text", "hint"), [
     ("Err. Reg.\t0081\t0x low 02 00 00 04 00 high", "Err. Code"),
