@@ -95,7 +95,7 @@ class RegisterSpec:
     saveable: bool  # the quick reference's "Si" / "no" column
     writable: bool = True
     default: int = 0
-    allowed: frozenset[int] | None = None  # a closed set of codes inside the range
+    allowed: tuple[int, ...] | None = None  # a closed set of codes inside the range, in order
 
     @property
     def address(self) -> int:
@@ -141,7 +141,7 @@ def _fmt_range(spec: RegisterSpec) -> str:
 def _r(n: int, name: str, rng: tuple[int, int], saveable: bool, writable: bool = True,
        default: int = 0, allowed: Mapping[int, str] | None = None) -> RegisterSpec:
     return RegisterSpec(n, name, rng[0], rng[1], saveable, writable, default,
-                        frozenset(allowed) if allowed is not None else None)
+                        tuple(allowed) if allowed is not None else None)
 
 
 # Defaults are not printed in the seed; each one is chosen in docs/servo-drive.md §Defaults.

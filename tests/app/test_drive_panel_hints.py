@@ -117,3 +117,22 @@ def test_the_panel_s_hints_follow_the_drive_s_map() -> None:
         assert hints()[1].endswith("; Modbus 0x0001")
     finally:
         loop.close()
+
+
+def test_a_closed_set_of_codes_is_named_in_the_hint() -> None:
+    """R01 takes the modes of ch. 1's list only and R27 the three profiles of ch. 4 (0x6086),
+    inside their printed ranges 0x81..0x7F and 0x8000..0x7FFF: the drive refuses R01 = 2 (no
+    reply on Modbus), so the hint names the codes it takes, not the range alone."""
+    registers = register_details()
+    assert registers["R01 modes_of_operation"].startswith(
+        "R01 modes_of_operation: one of 1, 3, 6, 7, -1, -2, -50, -127 (printed -127..127), ")
+    assert registers["R27 motion_profile_type"].startswith(
+        "R27 motion_profile_type: one of 0, -1, -2 (printed -32768..32767), ")
+
+
+def test_the_node_number_hint_gives_the_modbus_range() -> None:
+    """c7 is 1..99 (ch. 4), but "ogni valore tra 1 e 90" with c9 = 3 (ch. 2 "Configurazione
+    della rete"): a Modbus drive refuses c7 = 91, and its hint says so."""
+    parameters = parameter_details()
+    c7 = next(label for label in parameters if label.startswith("c7 "))
+    assert parameters[c7].startswith(f"{c7}: 1..99 (1..90 with c9 = 3, Modbus RTU), default 1;")

@@ -9,8 +9,14 @@ from typing import Any
 from devices.servo.alarms import alarm_table
 from devices.servo.flashsave import SAVED_REGISTERS
 from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, register_address
-from devices.servo.parameters import FIELDBUS_BY_C9, FIELDBUS_NAMES, PARAMETERS
-from devices.servo.registers import MODE_NAMES, REGISTERS
+from devices.servo.parameters import (
+    C9_BY_FIELDBUS,
+    FIELDBUS_BY_C9,
+    FIELDBUS_NAMES,
+    PARAMETERS,
+    node_range,
+)
+from devices.servo.registers import MODE_NAMES, REGISTERS, RegisterSpec
 
 MODE_OPTIONS = tuple(f"{mode} {name}" for mode, name in MODE_NAMES.items())
 REGISTER_OPTIONS = tuple(f"R{n:02d} {spec.name}" for n, spec in sorted(REGISTERS.items()))
@@ -46,9 +52,31 @@ def register_details(address_map: str = NORMAL) -> dict[str, str]:
         access = ("read only" if not spec.writable
                   else "kept by Save to flash" if n in SAVED_REGISTERS else "not saved")
         where = modbus_words(register_address(n, address_map), address_map)
-        out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {spec.low}..{spec.high}, "
+        out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {_register_values(spec)}, "
                                         f"{access}; {where}")
     return out
+
+
+def _register_values(spec: RegisterSpec) -> str:
+    """The values the drive takes: a closed set of codes (R01's modes, R27's profiles) is
+    named, as the drive refuses any other inside the printed range."""
+    printed = f"{spec.low}..{spec.high}"
+    if spec.allowed is None:
+        return printed
+    return f"one of {', '.join(str(v) for v in spec.allowed)} (printed {printed})"
+
+
+def _parameter_values(name: str, low: int, high: int) -> str:
+    """c7's range narrows on Modbus: "ogni valore tra 1 e 90" with c9 = 3 (ch. 2
+    "Configurazione della rete"), 1..99 otherwise (ch. 4)."""
+    if name != "c7":
+        return f"{low}..{high}"
+    narrower = []
+    for bus, c9 in C9_BY_FIELDBUS.items():
+        bus_low, bus_high = node_range(c9)
+        if (bus_low, bus_high) != (low, high):
+            narrower.append(f"{bus_low}..{bus_high} with c9 = {c9}, {FIELDBUS_NAMES[bus]}")
+    return f"{low}..{high}" + (f" ({'; '.join(narrower)})" if narrower else "")
 
 
 def parameter_details(address_map: str = NORMAL) -> dict[str, str]:
@@ -61,7 +89,8 @@ def parameter_details(address_map: str = NORMAL) -> dict[str, str]:
         access = "" if spec.writable else ", read only"
         where = modbus_words(parameter_address(spec.address, address_map), address_map)
         out[f"{spec.name} {spec.meaning}"] = (
-            f"{spec.name} {spec.meaning}: {spec.low}..{spec.high}{unit}, default "
+            f"{spec.name} {spec.meaning}: {_parameter_values(spec.name, spec.low, spec.high)}"
+            f"{unit}, default "
             f"{spec.default}{access}{when}; {where}")
     return out
 
