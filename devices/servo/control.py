@@ -51,7 +51,8 @@ _MODE_CW: tuple[tuple[frozenset[int], dict[int, str]], ...] = (
     (INTERPOLATOR, {5: "Ip_str"}),
     (SAVE_LOAD, {5: "Save", 6: "Load"}),
     (HOMING, {6: "Homing_start"}),
-    (ELECTRONIC_AXIS, {6: "Axis_start"}),
+    # Start/stop: bit 6 in the quick reference, bit 5 in ch. 2 "I/O digitali"; either engages
+    (ELECTRONIC_AXIS, {5: "Axis_start", 6: "Axis_start"}),
 )
 _MODE_SW: tuple[tuple[frozenset[int], dict[int, str]], ...] = (
     (POSITIONER, {5: "sp_rdy", 6: "EOJ", 7: "Following_error"}),

@@ -61,6 +61,34 @@ SW_MODE_SEED: dict[int, dict[int, str]] = {
 }
 
 
+# Ch. 1, R00: bit -> name, as the quick reference prints them; in the electronic axis the
+# quick reference puts Start/stop on bit 6, the I/O chapter on bit 5 ("il bit 5 di
+# ControlWord è a 1"), and the drive takes either (docs/servo-drive.md §Modes, -2).
+R00_COMMON = {0: "Ten_cmd", 1: "Ien_cmd", 2: "Stp_cmd", 3: "Alm_rst", 4: "Ltc_rst"}
+R00_SEED: dict[int, dict[int, str]] = {
+    1: {5: "Pos_str", 6: "Upd_mod", 7: "Inc_mod"},
+    -1: {5: "Pos_str", 6: "Upd_mod", 7: "Inc_mod"},
+    3: {}, -127: {},
+    6: {6: "Homing_start"},  # "0 -> 1: start operazioni homing"
+    7: {5: "Ip_str"},  # "1: start interpolatore"
+    -2: {5: "Axis_start", 6: "Axis_start"},  # "1: start, asse slave in asse col master"
+    -50: {5: "Save", 6: "Load"},
+}
+
+
+@pytest.mark.parametrize("mode", sorted(MODE_NAMES))
+def test_r00_names_per_mode_are_the_seeds(mode: int) -> None:
+    """Every R00 bit that acts in the mode has its name, so the Drive tab's "R00 control" row
+    never shows a bit the drive obeys as a bare "bit 5" (mode -2 with the I/O chapter's 0x23)."""
+    assert control.control_bit_names(mode) == R00_COMMON | R00_SEED[mode]
+
+
+def test_the_drive_tab_names_the_electronic_axis_start_on_bit_5() -> None:
+    snap = {"mode": -2, "control_register": 0x23, "controlword": 0x080F}
+    (r00_row, _cw_row) = drive_state.control_rows(snap)
+    assert r00_row[1] == "0x0023: Ten_cmd, Ien_cmd, Axis_start", r00_row
+
+
 @pytest.mark.parametrize("mode", sorted(MODE_NAMES))
 def test_r05_names_and_meanings_per_mode_are_the_seeds(mode: int) -> None:
     expected = R05_COMMON | R05_SEED[mode]
