@@ -71,7 +71,9 @@ def test_scan_time_grows_with_modules() -> None:
 @pytest.mark.parametrize("current", ESM_STATES)
 @pytest.mark.parametrize("target", (*ESM_STATES, AlState.BOOT))
 def test_esm_requests(current: AlState, target: AlState) -> None:
-    """ETG.1000.6 transitions; others answer §7.7 0x0011, BOOT 0x0013, with the error flag."""
+    """ETG.1000.6 transitions; others answer §7.7 0x0011 with the error flag, INIT -> BOOT
+    0x0013 "Bootstrap not supported" (ETG.1000.6 gives 0x0013 to I -> B only: P / S / O -> B
+    are invalid transitions, 0x0011, as Beckhoff SSC AL_ControlInd and SOES ESC_state answer)."""
     bench = Bench()
     if current is AlState.INIT:
         bench.settle()
@@ -84,7 +86,7 @@ def test_esm_requests(current: AlState, target: AlState) -> None:
         assert (bench.fc.al_state, bench.fc.al_status, bench.fc.al_status_code) == \
             (target, int(target), 0)
     else:
-        code = 0x0013 if target is AlState.BOOT else 0x0011
+        code = 0x0013 if (current, target) == (AlState.INIT, AlState.BOOT) else 0x0011
         # A refusal in OP lands in SAFEOP (ETG.1000.6; SSC AL_ControlInd, SOES ESC_state).
         left = AlState.SAFEOP if current is AlState.OP else current
         assert (bench.fc.al_state, bench.fc.al_status, bench.fc.al_status_code) == \
@@ -95,8 +97,9 @@ def test_esm_requests(current: AlState, target: AlState) -> None:
 @pytest.mark.parametrize("request_", ("boot", "unknown"))
 def test_a_request_refused_in_op_drops_to_safeop_with_outputs_off(request_: str) -> None:
     """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state): a request the coupler refuses in OP
-    (BOOT: 0x0013, an unknown state: 0x0012) leaves it in SAFEOP + error, its outputs in the
-    safe state as after a requested OP -> SAFEOP; RUN single flash, ERR blinking."""
+    (BOOT: 0x0011, an invalid transition from OP; an unknown state: 0x0012) leaves it in
+    SAFEOP + error, its outputs in the safe state as after a requested OP -> SAFEOP; RUN
+    single flash, ERR blinking."""
     bench = Bench(["DO16", "AI8D"])
     bench.to_state(AlState.OP)
     bench.write(0x7000, 1, 1)
@@ -108,7 +111,7 @@ def test_a_request_refused_in_op_drops_to_safeop_with_outputs_off(request_: str)
     else:  # AL control 0x05, as the wire face hands it to the ESM
         bench.fc.esm.request_unknown(0x05, False, bench.fc.now_us)
     bench.step()
-    code = "0x0013" if request_ == "boot" else "0x0012"
+    code = "0x0011" if request_ == "boot" else "0x0012"
     assert (bench.fc.al_state, bench.fc.al_status) == (AlState.SAFEOP, 0x14)
     assert [(r["event"], r.get("code"), r.get("to")) for r in bench.records(since=mark)
             if r["event"] in ("al_status", "state")] == [
