@@ -204,11 +204,12 @@ def _module_lists(od: ObjectDictionary, modules: Sequence[IoModule]) -> None:
 
 def _configured_list(od: ObjectDictionary, c: CouplerObjects) -> None:
     # ETG.5001 0xF030, named by §7.5 0x14 / §7.7 0x0070: the master's configured modules,
-    # written in PRE-OP (the setter refuses other states); sub 0 = how many entries count.
-    od.add(OdEntry(0xF030, 0, "N° of entries", DataType.UNSIGNED8, Access.RW, 0,
+    # written in PRE-OP (the setter refuses other states, and RW_PREOP says so to the Objects
+    # tab and to SDO information); sub 0 = how many entries count.
+    od.add(OdEntry(0xF030, 0, "N° of entries", DataType.UNSIGNED8, Access.RW_PREOP, 0,
                    high=MAX_MODULES, getter=lambda: c.od_configured(0),
                    setter=lambda v: c.od_set_configured(0, v)))
     for n in range(1, MAX_MODULES + 1):
         od.add(OdEntry(0xF030, n, f"Module configured in position {n}", DataType.UNSIGNED32,
-                       Access.RW, 0, getter=lambda n=n: c.od_configured(n),
+                       Access.RW_PREOP, 0, getter=lambda n=n: c.od_configured(n),
                        setter=lambda v, n=n: c.od_set_configured(n, v)))

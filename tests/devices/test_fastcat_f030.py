@@ -12,7 +12,7 @@ from devices.ethercat import AlState
 from devices.fastcat.alarms import COUPLER, Alarm
 from devices.master import EtherCatMaster
 from devices.master.network import InitCmd, SlaveDescription
-from devices.od import AbortCode, SdoAbort
+from devices.od import AbortCode, Access, SdoAbort
 
 DB16, AI8D, AI8C = 0xFA01, 0xFA05, 0xFA06  # 0xF050.1..3 of the bench's rail (catalog.py)
 
@@ -59,6 +59,21 @@ def test_f030_is_written_in_preop_only(state: AlState) -> None:
         bench.fc.od.write(0xF030, 1, DB16)
     assert info.value.code is AbortCode.CANNOT_STORE_STATE
     assert bench.read(0xF030, 1) == 0
+
+
+def test_f030_says_it_is_written_in_preop_only() -> None:
+    """What the entries say of their access matches what a write gets: "r-wps" (read always,
+    written in PRE-OP only, Access.RW_PREOP) in the Objects tab and the SDO information's
+    access word (write in PRE-OP only), as the TRS-CAT's 0xF030. Plain "rw" told a
+    configurator it could write the list in SAFEOP / OP, where the coupler aborts 0x08000022."""
+    from app.ethercat_wire.coe import READ_ALL, WRITE_PREOP, access_word
+    from app.ui.panels.object_dictionary import read_rows
+
+    bench = preop()
+    entries = [bench.fc.od.entry(0xF030, sub) for sub in range(17)]
+    assert {e.access for e in entries} == {Access.RW_PREOP}
+    assert {access_word(e) for e in entries} == {READ_ALL | WRITE_PREOP}
+    assert {r.access for r in read_rows(bench.fc) if r.index == 0xF030} == {"r-wps"}
 
 
 def test_matching_list_lets_the_coupler_reach_safeop() -> None:
