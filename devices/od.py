@@ -104,6 +104,7 @@ class AbortCode(enum.IntEnum):
     READ_ONLY = 0x0601_0002
     CA_VARIABLE_LENGTH = 0x0601_0004  # ETG.1000.6: complete access to a variable-length object
     NO_OBJECT = 0x0602_0000
+    HARDWARE_ERROR = 0x0606_0000
     NOT_MAPPABLE = 0x0604_0041
     PDO_TOO_LONG = 0x0604_0042
     TYPE_MISMATCH = 0x0607_0010
@@ -129,6 +130,7 @@ ABORT_TEXT: dict[AbortCode, str] = {
     AbortCode.CA_VARIABLE_LENGTH: "SDO complete access not supported for objects of variable "
                                   "length",
     AbortCode.NO_OBJECT: "Object does not exist in the object dictionary",
+    AbortCode.HARDWARE_ERROR: "Access failed due to a hardware error",
     AbortCode.NOT_MAPPABLE: "Object cannot be mapped to the PDO",
     AbortCode.PDO_TOO_LONG: "The number and length of the objects to be mapped would exceed "
                             "PDO length",
@@ -184,6 +186,10 @@ class OdEntry:
     # The value in words where the number alone misleads (0x1003:1 packs an alarm number in
     # hex into its upper word): the Objects tab shows this text instead of the bare number.
     explain: Callable[[Any], str] | None = None
+    # Whether the value can be reached now: a FastCAT module's own object lives in the module,
+    # which the coupler asks over its internal bus. False: a read or write from outside aborts
+    # 0x06060000 (the model and its views still peek / poke the last value).
+    reachable: Callable[[], bool] | None = None
 
     def check_value(self, value: Any) -> Any:
         if self.dtype is DataType.OCTET_STRING:
@@ -291,6 +297,8 @@ class ObjectDictionary:
         entry = self.entry(index, sub)
         if not entry.access.readable:
             raise SdoAbort(AbortCode.WRITE_ONLY, index, sub)
+        if entry.reachable is not None and not entry.reachable():
+            raise SdoAbort(AbortCode.HARDWARE_ERROR, index, sub)
         return self.peek(index, sub)
 
     def peek(self, index: int, sub: int) -> Any:
@@ -303,6 +311,8 @@ class ObjectDictionary:
         entry = self.entry(index, sub)
         if not entry.access.writable:
             raise SdoAbort(AbortCode.READ_ONLY, index, sub)
+        if entry.reachable is not None and not entry.reachable():
+            raise SdoAbort(AbortCode.HARDWARE_ERROR, index, sub)
         self.poke(index, sub, entry.check_value(value))
 
     def poke(self, index: int, sub: int, value: Any) -> None:

@@ -465,6 +465,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
     def od_rotary(self) -> int:
         return self.rotary_read
 
+    def od_module_answers(self, n: int) -> bool:
+        return self._answers(n)
+
     def od_configured(self, sub: int) -> int:
         return self.configured[sub]
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import random
 from collections.abc import Callable, Sequence
+from functools import partial
 from typing import Any, Protocol
 
 from devices.fastcat.catalog import ModuleType
@@ -55,6 +56,7 @@ class CouplerObjects(Protocol):
     def od_emergency_word(self) -> int: ...
     def od_configured(self, sub: int) -> int: ...
     def od_set_configured(self, sub: int, value: int) -> None: ...
+    def od_module_answers(self, n: int) -> bool: ...
     SKIP_SAME_WRITES: bool  # False: every write touches the coupler (the plain path, tests)
 
 
@@ -78,6 +80,7 @@ def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
     coupler_keys = {(entry.index, entry.sub) for entry in od}
     for n, module in enumerate(modules, start=1):
         module.add_objects(od, n)
+    _module_side(od, coupler, coupler_keys)
     if on_write is not None:
         announce = on_write
 
@@ -91,6 +94,21 @@ def build_od(coupler: CouplerObjects, modules: Sequence[IoModule], serial: int,
             announce((entry.index, entry.sub) not in coupler_keys)
         od.announce_writes(before)
     return od
+
+
+def _module_side(od: ObjectDictionary, coupler: CouplerObjects,
+                 coupler_keys: set[tuple[int, int]]) -> None:
+    """A module's settings (§6.6-§6.15: 0x2004 .. 0x4500) live in the module: the coupler
+    reads and writes them with SDORX commands on its internal bus (§7.5 0x07 / 0x08, 0x0A -
+    0x0E name their answers and timeouts), so a module that does not answer cannot give or take
+    one, and a master's access aborts. Its process data (0x6000 .. 0x7600, in the PDOs) is the
+    coupler's image, and sub 0's count is the coupler's own layout: both still answer."""
+    for entry in od:
+        if (entry.index, entry.sub) in coupler_keys or entry.pdo_mappable \
+                or entry.getter is None:
+            continue
+        n = (entry.index >> 4 & 0xF) + 1  # §6: base + 0x10 * (n - 1), every base ends in 0xN0X
+        entry.reachable = partial(coupler.od_module_answers, n)
 
 
 def _ro(od: ObjectDictionary, index: int, sub: int, name: str, dtype: DataType, value: Any,
