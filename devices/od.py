@@ -190,6 +190,10 @@ class OdEntry:
     # which the coupler asks over its internal bus. False: a read or write from outside aborts
     # 0x06060000 (the model and its views still peek / poke the last value).
     reachable: Callable[[], bool] | None = None
+    # Which PDO direction a mappable entry goes into: True an input (TxPDO), False an output
+    # (RxPDO); None: by its access, rw an output. Said where a writable entry is an input
+    # (a FastCAT encoder position 0x6500, preset by SDO, read in the TxPDO).
+    pdo_input: bool | None = None
 
     def check_value(self, value: Any) -> Any:
         if self.dtype is DataType.OCTET_STRING:

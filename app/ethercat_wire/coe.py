@@ -81,7 +81,8 @@ def access_word(entry: OdEntry) -> int:
     write = WRITE_PREOP if access is Access.RW_PREOP else WRITE_ALL if access.writable else 0
     word = (READ_ALL if access.readable else 0) | write
     if entry.pdo_mappable:
-        word |= RXPDO_MAPPABLE if entry.access is Access.RW else TXPDO_MAPPABLE
+        tx = entry.access is not Access.RW if entry.pdo_input is None else entry.pdo_input
+        word |= TXPDO_MAPPABLE if tx else RXPDO_MAPPABLE
     return word
 
 

@@ -98,11 +98,15 @@ def add_object(od: ObjectDictionary, base: int, n: int, count: int, get: Channel
     index = object_index(base, n)
     value_default = spec.default if default is None else default
 
+    # §6.24-§6.27: 0x6xxx are "mappati ... nei dati di processo TxPDO", 0x6500 rw included;
+    # §6.28-§6.30: 0x7xxx in the RxPDO.
+    pdo_input = (spec.base & 0xF000) == 0x6000 if spec.pdo else None
+
     def entry(sub: int, name: str, channel: int) -> OdEntry:
         return OdEntry(index, sub, name, spec.dtype, spec.access, value_default, spec.low,
                        spec.high, spec.pdo, getter=partial(get, channel),
                        setter=None if put is None else partial(put, channel),
-                       plain_store=plain_store)
+                       plain_store=plain_store, pdo_input=pdo_input)
 
     if spec.single:
         od.add(entry(0, spec.entry_name, 0))

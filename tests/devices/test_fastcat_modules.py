@@ -187,13 +187,21 @@ def test_sirio_example_third_module_ai8c():
     ("AX2", 5, [(0x7640, 0, 16)], [(0x6540, 1, 32), (0x6540, 2, 32), (0x6640, 0, 16)]),
 ])
 def test_pdo_entries(name, n, rx, tx):
-    """§5: outputs in RxPDO 0x1600+(N-1), inputs in TxPDO 0x1A00+(N-1)."""
+    """§5: outputs in RxPDO 0x1600+(N-1), inputs in TxPDO 0x1A00+(N-1). The SDO information
+    says which direction each entry maps into (ETG.1000.6 access bits 6 / 7): an AX2's 0x6500
+    is rw (§6.26, a preset) yet an input, mapped in the TxPDO."""
+    from app.ethercat_wire.coe import RXPDO_MAPPABLE, TXPDO_MAPPABLE, access_word
+
     m, od = make(name, n)
     assert m.rx_entries(n) == rx
     assert m.tx_entries(n) == tx
     for index, sub, bits in rx + tx:
         entry = od.entry(index, sub)
         assert entry.pdo_mappable and entry.bit_length == bits
+    directions = {(i, s): access_word(od.entry(i, s)) & (RXPDO_MAPPABLE | TXPDO_MAPPABLE)
+                  for i, s, _bits in rx + tx}
+    assert directions == {**{(i, s): RXPDO_MAPPABLE for i, s, _b in rx},
+                          **{(i, s): TXPDO_MAPPABLE for i, s, _b in tx}}
 
 
 # --- digital (§6.6, §6.24, §6.28, §7.6 0x02) -----------------------------------------------
