@@ -29,7 +29,7 @@ def outputs_on_error(kind: ModuleKind, held: Sequence[int], error_mode: int, err
                      sysok_mask: int = 0) -> list[int]:
     """The outputs of one slot after a communication error in OP.
 
-    ``held``: the last outputs applied (the "ultimo valore noto"); ``error_mode`` /
+    ``held``: the master's last outputs (the "ultimo valore noto"); ``error_mode`` /
     ``error_value``: 0xF701 / 0xF700 of this slot; ``sysok_mask``: 0xF710:1, used only for
     the integrated module, where a 1 bit forces the output to 0 whatever 0xF700/0xF701 say.
     """

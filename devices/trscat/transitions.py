@@ -217,11 +217,15 @@ class TransitionsMixin:
         self._leave_to(AlState.SAFEOP)
 
     def _fall_on_comm_error(self, code: int) -> None:
-        """ETG.1020: a communication error in OP -> SAFE-OP + error; outputs per §9.3.5."""
+        """ETG.1020: a communication error in OP -> SAFE-OP + error; outputs per §9.3.5.
+
+        The value held ("l'ultimo valore noto") is the master's last, as the last SM2 event
+        delivered it: what a working module drives in OP, and what one not driving now (a
+        TRS-AN-E without its ±12 V, §9.3.7) drives once it works again."""
         for slot, io in enumerate(self.rail):
             if io is not None:
                 self.error_out[slot] = outputs_on_error(
-                    io.kind, io.applied, self.error_modes[slot], self.error_values[slot],
+                    io.kind, io.latched, self.error_modes[slot], self.error_values[slot],
                     self.sysok_mask if slot == 0 else 0)
         self.out_mode = OutputMode.ERROR
         self._apply_output_image()  # §9.3.6 from now: a fatal sync error has no SYNC0 left

@@ -102,6 +102,33 @@ def test_comm_error_in_op_uses_the_objects() -> None:
     assert bench.trs.snapshot()["outputs_mode"] == "error"
 
 
+@pytest.mark.parametrize(("mode", "value", "volts"), [
+    (0x0000, 0x0000, 5.0),  # reset default: hold the last value the master sent
+    (0xFFFF, 0xE000, -2.5),  # 0xFFFF: ErrorVal2 (INT16 -8192), whatever was held
+])
+def test_a_module_not_driving_at_the_fall_holds_the_masters_value(
+        mode: int, value: int, volts: float) -> None:
+    """§9.3.5 "gli output (sia digitali che analogici) mantengano l'ultimo stato noto": the
+    last value known is the master's, not the 0 V of a TRS-AN-E whose ±12 V supply (0x5114,
+    §9.3.7) was out when the communication error came. Its supply back, it drives that value,
+    as it does in OP."""
+    bench = Bench(["AN-E"], configured=["AN-E"])
+    bench.to_state(AlState.OP)
+    bench.write(0xF701, 2, mode)
+    bench.write(0xF700, 2, value)
+    bench.apply("set_output", module=1, channel=1, value=0x4000)  # +5 V
+    bench.run(0.01)
+    bench.apply("inject_fault", module=1, fault="AN_PLUS_12V")
+    bench.run(0.01)
+    assert bench.trs.snapshot()["slots"][1]["analog_out_v"][0] == 0.0
+    bench.apply("drop_frames", count=10)
+    bench.run(0.01)
+    assert (bench.trs.al_state, bench.trs.al_status_code) == (AlState.SAFEOP, 0x001A)
+    bench.apply("clear_fault", module=1, fault="AN_PLUS_12V")
+    bench.run(0.01)
+    assert bench.trs.snapshot()["slots"][1]["analog_out_v"][0] == pytest.approx(volts, abs=1e-3)
+
+
 def test_requested_safeop_is_the_safe_state_not_the_error_values() -> None:
     """§9.2: a SAFE-OP the master asks for puts the outputs in the safe state (off); the
     0xF700 / 0xF701 values are for the communication errors only (§9.3.5)."""
