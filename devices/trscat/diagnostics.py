@@ -233,14 +233,19 @@ class DiagHistory:
 
     def acknowledge(self, sub: int) -> None:
         """A write of 0x10F3:3: that message and every older one are acknowledged; 0 deletes
-        all messages (ETG.1020)."""
+        all messages (ETG.1020). A message already acknowledged (older than the newest one
+        acknowledged) changes nothing: no acknowledgement is taken back, so :3 stays "the
+        newest message acknowledged" and :4 turns TRUE only for a new message (§9.3.7)."""
         if sub == 0:
             self.clear()
             return
         if sub not in self.messages:
             raise ValueError(f"0x10F3:3 = {sub}: no message in sub {sub}")
+        unacked = len(self.order) - 1 - self.order.index(sub)
+        if unacked >= self.unacked:
+            return
         self.newest_ack = sub
-        self.unacked = len(self.order) - 1 - self.order.index(sub)
+        self.unacked = unacked
 
     def set_flags(self, value: int) -> None:
         self.flags = value & FLAGS_WRITABLE

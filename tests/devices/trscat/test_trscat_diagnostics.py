@@ -337,6 +337,24 @@ def test_history_holds_twenty_unacknowledged_messages() -> None:
     assert not hist.new_available
 
 
+def test_acknowledging_an_older_message_takes_back_no_acknowledgement() -> None:
+    """§9.3.7: 0x10F3:3 is "il messaggio più recente che ha avuto ack", 0x10F3:4 "nuovo
+    messaggio disponibile". A master writing an older message's sub after a newer one was
+    acknowledged makes no message new again: :3 and :4 stay, and the messages already seen
+    may still be overwritten."""
+    hist = DiagHistory()
+    for n in range(MAX_MESSAGES):
+        hist.add(_msg(n))
+    hist.acknowledge(25)  # every message seen
+    hist.acknowledge(8)
+    assert (hist.newest_ack, hist.new_available) == (25, False)
+    assert hist.add(_msg(100)) and hist.newest == 6  # the oldest, acknowledged, overwritten
+    hist.acknowledge(20)  # older than 6 now: no effect either
+    assert (hist.newest_ack, hist.new_available) == (25, True)
+    hist.acknowledge(6)
+    assert (hist.newest_ack, hist.new_available) == (6, False)
+
+
 def test_acknowledging_zero_deletes_all() -> None:
     hist = DiagHistory()
     hist.add(_msg(1))
