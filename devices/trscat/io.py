@@ -197,6 +197,7 @@ class SlotIo:
         # (working, field supply in range) of the last drive: the driver follows a change of
         # either at once, local cycle or not (stepping.py _redrive_on_supply_change).
         self.driven_with = (False, False)
+        self.analog_powered = False  # the field supply reaches the output stage (§10.3)
         if self.lines is not None:
             self.lines.reset()
 
@@ -274,6 +275,10 @@ class SlotIo:
             lines.drive(self._applied_mask, powered)
             changed = changed or driving != lines.driving or tripped != lines.tripped \
                 or level != lines.level
+        elif powered is not self.analog_powered:
+            # §10.3: an AN-E's output stage runs on the field supply the TRS bus carries
+            self.analog_powered = powered
+            changed = changed or self.kind.shape is IoShape.ANALOG
         return changed
 
     def field_current_a(self) -> float:
@@ -286,7 +291,9 @@ class SlotIo:
             out["lines"] = self.lines.snapshot()
         elif self.kind.shape is IoShape.ANALOG:
             out["analog_in_v"] = list(self.analog_in_v)
-            out["analog_out_v"] = [round(counts_to_volts(c), 4) for c in self.applied]
+            # the terminals: no voltage without the field supply, whatever the image
+            out["analog_out_v"] = [round(counts_to_volts(c), 4) if self.analog_powered
+                                   else 0.0 for c in self.applied]
         else:
             out["words_in"] = list(self.words_in)
         return out

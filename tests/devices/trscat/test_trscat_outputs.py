@@ -407,3 +407,37 @@ def test_an_e_supply_fault_without_sync0_stops_the_module_at_once() -> None:
     bench.apply("clear_fault", module=1, fault="AN_PLUS_12V")
     bench.run(0.002)
     assert (an_e.applied, an_e.inputs) == ([1000, 0], [0] * len(inputs))
+
+
+# (cut, restore) of a TRS-AN-E's field supply at slot 1: the base's +24Vdc out of range, its
+# check failing (0x3220 on the base), or the module's own (0x3220 on slot 1).
+AN_E_SUPPLY = {**SUPPLY, "0x3220@1": (("inject_fault", {"fault": "0x3220", "module": 1}),
+                                      ("clear_fault", {"fault": "0x3220", "module": 1}))}
+
+
+@pytest.mark.parametrize("sync0", [True, False], ids=["sync0", "sync0-lost"])
+@pytest.mark.parametrize("supply", list(AN_E_SUPPLY))
+def test_an_e_outputs_need_the_field_supply(supply: str, sync0: bool) -> None:
+    """§10.3: the +24Vdc "viene utilizzata per il driver degli output" and reaches the
+    expansions over the TRS bus; §9.3.7 0x3220 "su modulo TRS-nn-E o su base". Without it a
+    TRS-AN-E drives no voltage, as a digital line drives nothing: its terminals read 0 V while
+    the module keeps the master's image, and the value is back with the supply, local cycle
+    or not."""
+    bench = Bench(["AN-E"], configured=["AN-E"])
+    bench.to_state(AlState.OP)
+    bench.apply("set_output", module=1, channel=1, value=-0x4000)  # -5 V
+    bench.run(0.01)
+    if not sync0:
+        bench.apply("lose_sync0", lost=True)
+        bench.run(0.5)
+    slot = bench.trs.snapshot()["slots"][1]
+    assert slot["analog_out_v"] == [pytest.approx(-5.0, abs=1e-3), 0.0]
+    (cut, cut_args), (restore, restore_args) = AN_E_SUPPLY[supply]
+    bench.apply(cut, **cut_args)
+    bench.step()
+    slot = bench.trs.snapshot()["slots"][1]
+    assert (slot["outputs"], slot["analog_out_v"]) == ([-0x4000, 0], [0.0, 0.0])
+    bench.apply(restore, **restore_args)
+    bench.step()
+    slot = bench.trs.snapshot()["slots"][1]
+    assert slot["analog_out_v"] == [pytest.approx(-5.0, abs=1e-3), 0.0]
