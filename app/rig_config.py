@@ -235,6 +235,11 @@ def parse_rig_spec(text: str, source: str = "<rig>") -> RigSpec:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise RigConfigError(source, "", not_toml(exc, text)) from None
+    if {"scenario", "step"} & set(data) and not DEVICE_KEYS & set(data):
+        # The other kind of file, not a broken rig: "did you mean 'servo'?" misled
+        raise RigConfigError(source, "", "a scenario file, not a rig file (a rig file has "
+                                         "[rig] and device tables: docs/rig-file.md); play it "
+                                         "with: python -m app scenario run FILE")
     top = _Table(source, "", data)
     rig = _Table(source, "rig", top.get("rig", dict, {}))
     name = rig.get("name", str, "rig")
@@ -368,6 +373,8 @@ _SLAVE_KEYS: dict[str, dict[str, type | tuple[type, ...]]] = {
     "cpx": {"modules": list, "rotary_switch": int, "dil1": bool, "dil2": bool,
             "history_flags": int, "box_name": str},
 }
+# A rig file's top-level tables: a file with none of them and a [scenario] is a scenario.
+DEVICE_KEYS = frozenset({"rig", "master", "fastcat", "servo", *_SLAVE_KEYS})
 
 
 def _slave(source: str, kind: str, i: int, data: Any) -> SlaveSpec:

@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from app.rig import Rig
-from app.rig_config import RigConfigError, not_toml, not_utf8, one_line
+from app.rig_config import DEVICE_KEYS, RigConfigError, not_toml, not_utf8, one_line
 from app.targets import parse_target
 from devices.device import UNKNOWN_MODULE, CommandError, UnknownArgument
 from devices.events import Caption, Checkpoint, Event, Focus, LogLine, ValueRead
@@ -172,6 +172,10 @@ def parse_scenario(text: str, source: str = "<scenario>",
         raise fail("[exercise]", "an exercise file, played with its hidden fault by the "
                                  "instructor's Play file and start (Classroom folder, python "
                                  "-m app --exercises DIR), not as a scenario")
+    if unknown and not set(_TABLES) & set(data) and all(
+            key in DEVICE_KEYS and isinstance(data[key], (Mapping, list)) for key in unknown):
+        raise fail("", "a rig file, not a scenario (a scenario has [scenario], [[step]] and "
+                       "[[on]] tables: docs/scenarios.md); give it with --rig")
     if unknown:
         raise fail(unknown[0], "unknown key (a scenario has [scenario], [[step]] and [[on]] "
                                f"tables){did_you_mean(unknown[0], _TABLES)}")
