@@ -148,6 +148,11 @@ def check_exercise(scenario: Scenario, spec: ExerciseSpec, rig: Rig,
     if spec.channel is not None and not base.channel:
         raise ScenarioError(f"{source}: exercise.channel: {spec.fault!r} takes no channel "
                             "(only a channel fault does: cpx short_circuit on an output)")
+    if spec.module is not None and not base.module:
+        # at() would drop it: the rig would show the fault with no module named
+        raise ScenarioError(f"{source}: exercise.module: {spec.fault!r} is put on no module "
+                            "(only a module fault is: a FastCAT §7.6 module code, a slave's "
+                            "module or slot fault); remove module = N")
     fault = base.at(spec.module, spec.channel)
     # where the fault goes, so that a refusal of the module's type names the key to change
     where = " ".join(f"{key} {value}" for key, value in
