@@ -31,6 +31,7 @@ from app.out_paths import (
     EVENTS_FILE,
     check_out,
     check_record,
+    check_recordings_dir,
     check_state_dir,
     event_lines,
     image_name,
@@ -340,6 +341,8 @@ def _serve(args: argparse.Namespace) -> int:
                   for i in range(count)]
     for state_dir in state_dirs:  # before build_rig reads the flash files there
         check_state_dir(state_dir, writable=False)
+        if not args.record and not args.no_record:  # the session's file goes in there
+            check_recordings_dir(state_dir / "recordings")
     rigs = [build_rig(load_rig_spec(rig_file), state_dir=state_dir)
             for rig_file, state_dir in zip(rig_files, state_dirs, strict=True)]
     exercises = _exercise_files(args.exercises, rigs[0])  # --rigs N: N copies of one file

@@ -112,6 +112,22 @@ def check_state_dir(path: str | Path, writable: bool = True) -> Path:
     return state
 
 
+def check_recordings_dir(recordings: Path) -> None:
+    """A served session records into ``STATE_DIR/recordings`` unless told otherwise: a state
+    directory that serves (its flash failing as the devices' simulated failure) but where no
+    file can be made cannot take the recording, and the recorder's own error named no flag."""
+    state = recordings.parent
+    way_out = "give --record PATH or --no-record"
+    try:
+        if recordings.is_dir():
+            _can_make_files(recordings, "--state-dir", f"{recordings}: cannot write in it")
+        else:
+            _writable_parent(recordings, "--state-dir")
+    except RigConfigError as exc:
+        raise RigConfigError("--state-dir", "", f"{state}: the session's recording cannot "
+                                                f"go there ({exc.reason}); {way_out}") from None
+
+
 def prepare_out(out: Path) -> list[Path]:
     """Create ``out`` and remove what an earlier run wrote there; the files removed."""
     try:

@@ -52,3 +52,19 @@ def test_a_state_dir_that_cannot_be_written_still_serves(
     code, out, err = _serve(state_dir, capsys)
     assert code == 0, err
     assert "FieldRig: serving" in out
+
+
+def test_a_recording_that_cannot_be_written_there_is_bad_input(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    """Recorded (the default), the session's file goes to STATE_DIR/recordings: a state
+    directory no file can be made in cannot take it. Before: ``fieldrig: error:
+    /proc/fieldrig-state: No such file or directory``, exit 3, no flag named, nor the way out."""
+    port = free_ports(4, 26000)
+    code = main(["--state-dir", "/proc/fieldrig-state", "--run-for", "0", "--port", str(port),
+                 "--modbus-port", str(port + 2)])
+    out, err = capsys.readouterr()
+    assert code == EXIT_BAD_INPUT, err
+    assert err.splitlines() == [err.strip()], err
+    assert err.startswith("fieldrig: error: --state-dir: /proc/fieldrig-state: "), err
+    assert "--record PATH" in err and "--no-record" in err, err
+    assert "FieldRig:" not in out
