@@ -22,7 +22,7 @@ from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
 NO_ERROR = 0x0000
 INVALID_STATE_CHANGE = 0x0011  # "Invalid requested state change"
 UNKNOWN_REQUESTED_STATE = 0x0012  # "Unknown requested state" (AL control bits 0-3 no state)
-BOOTSTRAP_NOT_SUPPORTED = 0x0013  # "Bootstrap not supported" (a slave without a BOOT state)
+BOOTSTRAP_NOT_SUPPORTED = 0x0013  # "Bootstrap not supported" (INIT -> BOOT, no BOOT state)
 
 # Order of the states a slave steps up through (BOOT is outside it).
 RANK: dict[AlState, int] = {AlState.INIT: 0, AlState.PREOP: 1, AlState.SAFEOP: 2,
@@ -39,11 +39,14 @@ def request_refusal(current: AlState, target: AlState,
                     *, has_boot: bool = False) -> int | None:
     """The AL status code for a request the transition table forbids, or None when allowed.
 
-    A slave without a BOOT state (``has_boot`` False) answers any request for BOOT with
-    0x0013; one with BOOT finds it in its own ``transitions``.
+    BOOT is entered from INIT only (ETG.1000.6), so a BOOT request from PREOP, SAFEOP or OP is
+    an invalid transition (0x0011) on every slave; 0x0013 "Bootstrap not supported" answers
+    INIT -> BOOT on a slave without a BOOT state (``has_boot`` False), as Beckhoff SSC
+    ``AL_ControlInd`` (INIT_2_BOOT -> BOOTNOTSUPP, PREOP / SAFEOP / OP_2_BOOT -> INVALIDALCONTROL)
+    and SOES ``ESC_state`` answer. A slave with BOOT finds it in its own ``transitions``.
     """
     if target is AlState.BOOT and not has_boot:
-        return BOOTSTRAP_NOT_SUPPORTED
+        return BOOTSTRAP_NOT_SUPPORTED if current is AlState.INIT else INVALID_STATE_CHANGE
     if target is current or (current, target) in transitions:
         return None
     return INVALID_STATE_CHANGE

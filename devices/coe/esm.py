@@ -87,7 +87,9 @@ def controller_alarm(latched: list[int]) -> int | None:
     return None
 
 
-request_refusal = esm.request_refusal  # ch. 5, no BOOT: 0x0013; outside the table: 0x0011
+# Ch. 5, no BOOT: INIT -> BOOT 0x0013; BOOT from PREOP / SAFEOP / OP and any other
+# request outside the table: 0x0011 (ETG.1000.6, the shared rule).
+request_refusal = esm.request_refusal
 
 
 @dataclass(slots=True)  # as devices/esm.py's

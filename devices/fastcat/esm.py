@@ -20,17 +20,9 @@ INVALID_STATE_CHANGE = esm.INVALID_STATE_CHANGE  # "Invalid requested state chan
 BOOTSTRAP_NOT_SUPPORTED = esm.BOOTSTRAP_NOT_SUPPORTED  # the FastCAT has no BOOT state
 NO_ERROR = esm.NO_ERROR
 
-
-def request_refusal(current: AlState, target: AlState) -> int | None:
-    """The §7.7 code for a request outside ALLOWED_TRANSITIONS, or None when allowed.
-
-    ETG.1000.6 gives 0x0013 "Bootstrap not supported" to INIT -> BOOT only: BOOT is reached
-    from INIT, so PREOP / SAFEOP / OP -> BOOT are invalid transitions (0x0011), whether or
-    not the slave has a bootloader; Beckhoff SSC ``AL_ControlInd`` and SOES ``ESC_state``
-    answer them so. The shared rule answers 0x0013 from every state."""
-    if target is AlState.BOOT and current is not AlState.INIT:
-        return INVALID_STATE_CHANGE
-    return esm.request_refusal(current, target)
+# INIT -> BOOT: 0x0013 (no BOOT state); BOOT from PREOP / SAFEOP / OP and any other request
+# outside ALLOWED_TRANSITIONS: 0x0011 (ETG.1000.6, the shared rule).
+request_refusal = esm.request_refusal
 
 
 class ErrorKind(enum.Enum):

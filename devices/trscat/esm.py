@@ -61,7 +61,9 @@ FALL_KIND: dict[int, ErrorKind] = {
 }
 
 
-request_refusal = esm.request_refusal  # no BOOT (§9.2): 0x0013; outside the table: 0x0011
+# No BOOT (§9.2): INIT -> BOOT 0x0013; BOOT from PREOP / SAFEOP / OP and any other
+# request outside the table: 0x0011 (ETG.1000.6, the shared rule).
+request_refusal = esm.request_refusal
 
 
 @dataclass(slots=True)  # as devices/esm.py's

@@ -20,10 +20,12 @@ BOOT = AlState.BOOT
 PATH = {INIT: (), PREOP: (PREOP,), SAFEOP: (PREOP, SAFEOP), OP: (PREOP, SAFEOP, OP)}
 
 # (from, requested) -> AL status code of the refusal; every other pair is accepted.
-# ETG.1000.6: no skipping upwards; ch. 5: "BOOT ... Nota: non presente nel drive".
+# ETG.1000.6: no skipping upwards; ch. 5: "BOOT ... Nota: non presente nel drive", and its
+# drawing enters Bootstrap from Init only: ETG.1000.6 gives 0x0013 "Bootstrap not supported" to
+# INIT -> BOOT, a BOOT request from PREOP / SAFEOP / OP is an invalid transition (0x0011).
 REFUSED = {
     (INIT, SAFEOP): 0x0011, (INIT, OP): 0x0011, (PREOP, OP): 0x0011,
-    (INIT, BOOT): 0x0013, (PREOP, BOOT): 0x0013, (SAFEOP, BOOT): 0x0013, (OP, BOOT): 0x0013,
+    (INIT, BOOT): 0x0013, (PREOP, BOOT): 0x0011, (SAFEOP, BOOT): 0x0011, (OP, BOOT): 0x0011,
 }
 
 
@@ -62,7 +64,7 @@ def test_esm_events_carry_the_drive_id_and_the_esm_machine() -> None:
               if e.get("machine") == "esm"]
     assert states == [("servo", "INIT", "PREOP", "esm"), ("servo", "PREOP", "SAFEOP", "esm"),
                       ("servo", "SAFEOP", "OP", "esm"), ("servo", "OP", "SAFEOP", "esm")]
-    assert [e["code"] for e in bench.kinds("al_status")] == ["0x0013"]
+    assert [e["code"] for e in bench.kinds("al_status")] == ["0x0011"]
 
 
 def test_mailbox_only_from_preop() -> None:
@@ -138,9 +140,9 @@ def test_leaving_op_under_process_data_control_stops_the_drive() -> None:
 @pytest.mark.parametrize("request_", ("boot", "unknown"))
 def test_a_request_refused_in_op_drops_to_safeop_and_stops_the_drive(request_: str) -> None:
     """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state; ch. 5 lists "Error SafeOp", no
-    "Error Op"): a request refused in OP (BOOT, "non presente nel drive": 0x0013; an unknown
-    state: 0x0012) leaves the slave in SAFEOP + error, and a drive under process-data control
-    stops as on any way out of OP."""
+    "Error Op"): a request refused in OP (BOOT, entered from INIT only: 0x0011; an
+    unknown state: 0x0012) leaves the slave in SAFEOP + error, and a drive under process-data
+    control stops as on any way out of OP."""
     bench = make_bench()
     bench.up_to(OP)
     for value in CIA402_ENABLE:
@@ -151,7 +153,7 @@ def test_a_request_refused_in_op_drops_to_safeop_and_stops_the_drive(request_: s
     else:  # AL control 0x05, as the wire face hands it to the ESM
         bench.slave.esm.request_unknown(0x05, False, bench.t_us)
     bench.step()
-    code = 0x0013 if request_ == "boot" else 0x0012
+    code = 0x0011 if request_ == "boot" else 0x0012
     slave = bench.slave
     assert (slave.al_state, slave.al_status, slave.al_status_code) == (SAFEOP, 0x14, code)
     assert slave.leds.snapshot()["Error"] == "blinking"  # ETG.1300: refused

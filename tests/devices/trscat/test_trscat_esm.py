@@ -19,7 +19,9 @@ IO_B, IO_E, AN_E, KK_E = (ascii_ident(t) for t in ("IO-B", "IO-E", "AN-E", "KK-E
 @pytest.mark.parametrize("current", ESM_STATES)
 @pytest.mark.parametrize("target", (*ESM_STATES, AlState.BOOT))
 def test_esm_requests(current: AlState, target: AlState) -> None:
-    """ETG.1000.6 transitions; others answer 0x0011, BOOT 0x0013 (§9.2 has no BOOT)."""
+    """ETG.1000.6 transitions; others answer 0x0011, INIT -> BOOT 0x0013 "Bootstrap not
+    supported" (§9.2 has no BOOT). §9.2 follows "the ETG specifications": ETG.1000.6 gives 0x0013
+    to INIT -> BOOT only, PREOP / SAFEOP / OP -> BOOT are invalid transitions (0x0011)."""
     bench = Bench()
     if current is AlState.INIT:
         bench.settle()
@@ -30,7 +32,8 @@ def test_esm_requests(current: AlState, target: AlState) -> None:
     if target is AlState.BOOT:
         # A refusal in OP lands in SAFEOP (ETG.1000.6; SSC AL_ControlInd, SOES ESC_state).
         left = AlState.SAFEOP if current is AlState.OP else current
-        assert (trs.al_state, trs.al_status_code) == (left, 0x0013)
+        code = 0x0013 if current is AlState.INIT else 0x0011
+        assert (trs.al_state, trs.al_status_code) == (left, code)
         assert trs.al_status & 0x10
     elif target is current or (current, target) in ALLOWED_TRANSITIONS:
         assert trs.al_state is target and trs.al_status == int(target)

@@ -142,9 +142,9 @@ def test_requested_safeop_is_the_safe_state_not_the_error_values() -> None:
 
 @pytest.mark.parametrize("request_", ("boot", "unknown"))
 def test_a_request_refused_in_op_drops_to_safeop_in_the_safe_state(request_: str) -> None:
-    """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state): a request refused in OP (BOOT: 0x0013,
-    §9.2 has none; an unknown state: 0x0012) leaves the device in SAFE-OP + error. No
-    communication error (§9.3.5 / §9.3.6 are for those only): the outputs go to the
+    """ETG.1000.6 (SSC AL_ControlInd, SOES ESC_state): a request refused in OP (BOOT: 0x0011,
+    an invalid transition from OP; an unknown state: 0x0012) leaves the device in SAFE-OP +
+    error. No communication error (§9.3.5 / §9.3.6 are for those only): the outputs go to the
     safe state of a requested SAFE-OP (§9.2), not to the 0xF700 / 0xF701 values."""
     bench = _op_with_pattern()
     bench.write(0xF701, 1, 0xFFFF)
@@ -154,7 +154,7 @@ def test_a_request_refused_in_op_drops_to_safeop_in_the_safe_state(request_: str
     else:  # AL control 0x05, as the wire face hands it to the ESM
         bench.trs.esm.request_unknown(0x05, False, bench.trs.now_us)
     bench.run(0.003)
-    code = 0x0013 if request_ == "boot" else 0x0012
+    code = 0x0011 if request_ == "boot" else 0x0012
     trs = bench.trs
     assert (trs.al_state, trs.al_status, trs.al_status_code) == (AlState.SAFEOP, 0x14, code)
     assert trs.rail[0].applied == [0] * 16
