@@ -16,7 +16,7 @@ from typing import ClassVar, Generic, TypeVar
 
 from devices.ethercat import AL_STATE_MASK, AL_STATUS_ERROR_FLAG, ALLOWED_TRANSITIONS, AlState
 from devices.events import AlStatusChanged, EsmLogLine, Event, StateChanged, fmt_hex
-from devices.od import AbortCode, ObjectDictionary, SdoAbort, decode, encode
+from devices.od import AbortCode, ObjectDictionary, SdoAbort, download_value, encode
 
 # §7.7 codes for requests the ESM itself refuses.
 NO_ERROR = 0x0000
@@ -230,7 +230,7 @@ class CoeMailbox:
 
     def sdo_download(self, index: int, sub: int, data: bytes) -> None:
         od = self._mailbox_od(index, sub)
-        self.mailbox_write(index, sub, decode(od.entry(index, sub).dtype, data))
+        self.mailbox_write(index, sub, download_value(od.entry(index, sub), data))
 
     def sdo_upload(self, index: int, sub: int) -> bytes:
         od = self._mailbox_od(index, sub)

@@ -249,6 +249,19 @@ def decode(dtype: DataType, raw: bytes) -> Any:
     return struct.unpack(fmt, raw)[0]
 
 
+def download_value(entry: OdEntry, raw: bytes) -> Any:
+    """The value an SDO download's bytes carry for ``entry``, checked in a slave's order:
+    a read-only object aborts 0x06010002 whatever the length, then a length unlike the
+    type's 0x06070012 / 0x06070013; each abort names the object written. The wire's path and
+    the built-in master's (devices/esm.py CoeMailbox) both take it, so they answer alike."""
+    if not entry.access.writable:
+        raise SdoAbort(AbortCode.READ_ONLY, entry.index, entry.sub)
+    try:
+        return decode(entry.dtype, bytes(raw))
+    except SdoAbort as exc:
+        raise SdoAbort(exc.code, entry.index, entry.sub) from None
+
+
 class ObjectDictionary:
     """Entries keyed by (index, sub), with stored values for entries without a getter."""
 

@@ -32,13 +32,12 @@ from app.ethercat_wire.description import (
 from app.ethercat_wire.faces import image
 from devices.ethercat import AlState
 from devices.od import (
-    AbortCode,
     Access,
     DataType,
     ObjectDictionary,
     OdEntry,
     SdoAbort,
-    decode,
+    download_value,
     encode,
 )
 from devices.sync_managers import (  # the layout the slaves check (their ESI)
@@ -178,14 +177,7 @@ class Face:
 
     def download_raw(self, model: Any, index: int, sub: int, data: bytes) -> None:
         """An SDO download's bytes: their length must be the object's (DS301 0x0607001x)."""
-        entry = self.entry(model, index, sub)
-        if not entry.access.writable:
-            raise SdoAbort(AbortCode.READ_ONLY, index, sub)
-        try:
-            value = decode(entry.dtype, bytes(data))
-        except SdoAbort as exc:
-            raise SdoAbort(exc.code, index, sub) from None
-        self.download(model, index, sub, value)
+        self.download(model, index, sub, download_value(self.entry(model, index, sub), data))
 
     # ---- identity and description ---------------------------------------------------------
     def identity(self, model: Any) -> tuple[int, int, int, int]:

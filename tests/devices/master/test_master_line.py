@@ -288,18 +288,23 @@ def test_snapshot_has_the_contract_keys() -> None:
     assert view["log_styles"] == ["twincat", "sirio", "pegaso", "aitraceprint"]
 
 
-def test_a_refused_init_command_stops_the_transition(tmp_path: Path) -> None:
+@pytest.mark.parametrize("data", ("01000000", "0100"))
+def test_a_refused_init_command_stops_the_transition(tmp_path: Path, data: str) -> None:
     """An init command the slave aborts (here a write of the read-only 0x1018:1): logged with
-    the SDO abort code, comm_error, the slave stays in PREOP."""
+    the SDO abort code, comm_error, the slave stays in PREOP. Sent with a wrong length (two
+    bytes for the UDINT) it is still "read only", for 0x1018:1, as on the wire: the access is
+    checked before the length (devices/esm.py CoeMailbox.sdo_download)."""
     rig = build_rig(load_rig_spec(_rig_with_eni(
         tmp_path, "<Index>#xF030</Index>\n              <SubIndex>0</SubIndex>\n"
                   "              <Data>0500</Data>",
         "<Index>#x1018</Index>\n              <SubIndex>1</SubIndex>\n"
-        "              <Data>01000000</Data>")))
+        f"              <Data>{data}</Data>")))
     events = rig.run_until(2 * US)
     cpx = master_view(rig)["slaves"][2]
     assert cpx["state"] == "PREOP"
     assert cpx["diagnosis"].startswith("init command 'CPX-E-EC: configured module list, count'")
+    assert cpx["diagnosis"].endswith(
+        "0x1018:1 -> abort 0x06010002 (Attempt to write a read only object)")
     assert [r["reason"] for r in records(events, "comm_error")] == ["init_command"]
     assert any("SDO download 0x1018:01 aborted with 0x06010002" in r["text"]
                for r in records(events, "log", "master"))
