@@ -5,10 +5,10 @@ as an emergency (Tab. 19), bit 4 chooses the mode (Tab. 18): 0 = Overwrite (the 
 is overwritten once 64 are stored), 1 = Acknowledge (with 64 unacknowledged messages new ones
 are lost). Bits 1-3 (disable info / warning / error messages) and the device-owned bit 5
 (a message was overwritten or discarded) are ETG.1020's, which the seed's object follows.
-Sub 3 takes the subindex of the newest message the master acknowledges; writing 0 clears
-the history (in Acknowledge mode only the acknowledged messages, once one was). "New Message
-Available" (sub 4) falls when the newest message is read (Overwrite) or acknowledged
-(Acknowledge).
+Sub 3 takes the subindex of the newest message the master acknowledges (that one and every
+older one; one older than sub 3's changes nothing); writing 0 clears the history (in
+Acknowledge mode only the acknowledged messages, once one was). "New Message Available"
+(sub 4) falls when the newest message is read (Overwrite) or acknowledged (Acknowledge).
 """
 
 from __future__ import annotations
@@ -133,6 +133,11 @@ class DiagHistory:
             return
         if not FIRST_SUB <= value <= self.sub0:
             raise SdoAbort(AbortCode.VALUE_RANGE, INDEX, 3)
+        if self.acknowledged and (self.newest - value) % MAX_MESSAGES > self.unacknowledged():
+            # Older than the newest acknowledged: already acknowledged (ETG.1020: a write
+            # acknowledges that message and every older one), and nothing takes an
+            # acknowledgement back, or the newer messages would be unacknowledged again.
+            return
         self.acknowledged = value
         self.flags &= ~FLAG_OVERWRITE_DISCARD
         if self.acknowledge_mode and value == self.newest:

@@ -312,3 +312,54 @@ def test_error_going_is_an_info_message_unless_filtered() -> None:
     bench.apply("short_circuit", module=1, on=False)
     bench.run(0.01)
     assert bench.cpx.history.count == count + 1  # the error, not its end
+
+
+@pytest.mark.parametrize("flags", [FLAG_ACKNOWLEDGE, 0x0000])
+def test_acknowledging_an_older_message_takes_back_no_acknowledgement(flags: int) -> None:
+    """Tab. 14: sub 3 is the "Newest Acknowledged Message"; ETG.1020: writing a sub
+    acknowledges that message and every older one, in both modes (Tab. 18). A master writing
+    an older message's sub after a newer one was acknowledged acknowledges nothing new and
+    takes no acknowledgement back: sub 3 stays, no message is unacknowledged again, so the
+    ring keeps its free places and a later 0 (delete the acknowledged) leaves sub 4 down."""
+    h = DiagHistory(flags=flags)
+    for n in range(MAX_MESSAGES):
+        h.add(msg(n))
+    newest = h.newest
+    h.read(newest)
+    h.write_acknowledged(newest)  # every message seen
+    h.write_acknowledged(FIRST_SUB + 9)
+    assert (h.acknowledged, h.unacknowledged(), h.new_message) == (newest, 0, False)
+    h.write_flags(FLAG_ACKNOWLEDGE)
+    h.write_acknowledged(0)
+    assert (h.count, h.newest, h.acknowledged, h.new_message) == (0, 0, 0, False)
+
+
+def test_an_older_acknowledgement_leaves_room_for_new_messages() -> None:
+    """Tab. 18 Acknowledge: an acknowledged message may be overwritten by a new one; writing
+    an older sub afterwards must not make 60 new messages lost."""
+    h = DiagHistory(flags=FLAG_ACKNOWLEDGE)
+    for n in range(MAX_MESSAGES):
+        h.add(msg(n))
+    h.write_acknowledged(h.newest)
+    h.write_acknowledged(FIRST_SUB + 3)
+    for n in range(MAX_MESSAGES):
+        assert h.add(msg(100 + n))
+    assert h.lost == 0
+    h.write_acknowledged(FIRST_SUB + 3)  # the message there is now new: acknowledged
+    assert (h.acknowledged, h.unacknowledged(), h.new_message) == (FIRST_SUB + 3, 60, True)
+
+
+def test_acknowledging_an_older_message_over_sdo_keeps_sub4_down() -> None:
+    """The master's view (0x10F3:3 written, 0x10F3:3 / :4 read) in Acknowledge mode."""
+    bench = tab9(**STI).to_op()
+    bench.apply("write_object", index=0x10F3, sub=5, value=FLAG_ACKNOWLEDGE)
+    for on in (True, False, True):
+        bench.apply("short_circuit", module=1, on=on)
+        bench.run(0.01)
+    newest = bench.apply("read_object", index=0x10F3, sub=2)
+    bench.apply("write_object", index=0x10F3, sub=3, value=newest)
+    bench.apply("write_object", index=0x10F3, sub=3, value=FIRST_SUB)
+    assert bench.apply("read_object", index=0x10F3, sub=3) == newest
+    bench.apply("write_object", index=0x10F3, sub=3, value=0)
+    assert bench.apply("read_object", index=0x10F3, sub=4) is False
+    assert bench.apply("read_object", index=0x10F3, sub=0) == FIRST_SUB - 1
