@@ -131,7 +131,13 @@ class DiagHistory:
         if value == 0:
             self._clear()
             return
-        if not FIRST_SUB <= value <= self.sub0:
+        # ETG.1020's answers: below the message subs too low, past them too high, a message
+        # sub that holds no message out of range.
+        if value < FIRST_SUB:
+            raise SdoAbort(AbortCode.VALUE_TOO_LOW, INDEX, 3)
+        if value >= FIRST_SUB + MAX_MESSAGES:
+            raise SdoAbort(AbortCode.VALUE_TOO_HIGH, INDEX, 3)
+        if value > self.sub0:
             raise SdoAbort(AbortCode.VALUE_RANGE, INDEX, 3)
         if self.acknowledged and (self.newest - value) % MAX_MESSAGES > self.unacknowledged():
             # Older than the newest acknowledged: already acknowledged (ETG.1020: a write

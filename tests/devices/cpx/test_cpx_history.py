@@ -142,13 +142,23 @@ def test_writing_zero_to_sub3_clears() -> None:
     assert h.newest == FIRST_SUB + 2 and h.new_message
 
 
-@pytest.mark.parametrize("value", [1, 5, FIRST_SUB + 3])
-def test_acknowledging_a_missing_message_is_refused(value: int) -> None:
-    h = DiagHistory()
+@pytest.mark.parametrize(("value", "code"), [
+    (1, AbortCode.VALUE_TOO_LOW), (5, AbortCode.VALUE_TOO_LOW),
+    (FIRST_SUB + 3, AbortCode.VALUE_RANGE),
+    (FIRST_SUB + MAX_MESSAGES - 1, AbortCode.VALUE_RANGE),
+    (FIRST_SUB + MAX_MESSAGES, AbortCode.VALUE_TOO_HIGH), (255, AbortCode.VALUE_TOO_HIGH)])
+@pytest.mark.parametrize("flags", [0x0000, FLAG_ACKNOWLEDGE])
+def test_acknowledging_a_missing_message_is_refused(value: int, code: AbortCode,
+                                                    flags: int) -> None:
+    """ETG.1020, sub 3 in both modes: 1 ... 5 (no message sub) 0x06090032 "value too low",
+    a message sub holding no message 0x06090030 "value range exceeded", above the last
+    message sub (69, choice 5) 0x06090031 "value too high"; nothing changes."""
+    h = DiagHistory(flags=flags)
     h.add(msg(0))
     with pytest.raises(SdoAbort) as info:
         h.write_acknowledged(value)
-    assert info.value.code is AbortCode.VALUE_RANGE
+    assert info.value.code is code
+    assert (h.acknowledged, h.count, h.new_message) == (0, 1, True)
 
 
 def test_flags_bits_and_disable_filters() -> None:
