@@ -7,7 +7,7 @@ are lost). Bits 1-3 (disable info / warning / error messages) and the device-own
 (a message was overwritten or discarded) are ETG.1020's, which the seed's object follows.
 Sub 3 takes the subindex of the newest message the master acknowledges (that one and every
 older one; one older than sub 3's changes nothing); writing 0 clears the history (in
-Acknowledge mode only the acknowledged messages, once one was). "New Message Available"
+Acknowledge mode only the acknowledged messages). "New Message Available"
 (sub 4) falls when the newest message is read (Overwrite) or acknowledged (Acknowledge).
 """
 
@@ -169,10 +169,10 @@ class DiagHistory:
         return out
 
     def _clear(self) -> None:
-        # ETG.1020: Acknowledge mode keeps the unacknowledged messages, unless none was
-        # acknowledged yet; then, as in Overwrite mode, everything goes.
+        # ETG.1020: Acknowledge mode deletes the acknowledged messages only (none, if none
+        # was): the master has not seen the others. Overwrite mode deletes them all.
         keep: list[DiagMessage] = []
-        if self.acknowledge_mode and self.acknowledged:
+        if self.acknowledge_mode:
             keep = [m for _sub, m in self.ordered()[self.count - self.unacknowledged():]]
         self.slots = [None] * MAX_MESSAGES
         for pos, message in enumerate(keep):

@@ -142,6 +142,21 @@ def test_writing_zero_to_sub3_clears() -> None:
     assert h.newest == FIRST_SUB + 2 and h.new_message
 
 
+def test_writing_zero_with_none_acknowledged_deletes_nothing_in_acknowledge_mode() -> None:
+    """ETG.1020, Acknowledge mode (Tab. 18 bit 4 = 1): 0 in sub 3 deletes the acknowledged
+    messages. None acknowledged, none goes: the master has not seen them, which is what the
+    mode is for; Overwrite mode deletes them all."""
+    h = DiagHistory(flags=FLAG_ACKNOWLEDGE)
+    for n in range(3):
+        h.add(msg(n))
+    h.write_acknowledged(0)
+    assert [m.timestamp_ns for _s, m in h.ordered()] == [0, 1, 2]
+    assert (h.newest, h.acknowledged, h.sub0, h.new_message) == (FIRST_SUB + 2, 0, 8, True)
+    h.write_acknowledged(FIRST_SUB + 2)
+    h.write_acknowledged(0)
+    assert (h.count, h.newest, h.sub0, h.new_message) == (0, 0, 5, False)
+
+
 @pytest.mark.parametrize(("value", "code"), [
     (1, AbortCode.VALUE_TOO_LOW), (5, AbortCode.VALUE_TOO_LOW),
     (FIRST_SUB + 3, AbortCode.VALUE_RANGE),
