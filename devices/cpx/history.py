@@ -7,8 +7,8 @@ are lost). Bits 1-3 (disable info / warning / error messages) and the device-own
 (a message was overwritten or discarded) are ETG.1020's, which the seed's object follows.
 Sub 3 takes the subindex of the newest message the master acknowledges (that one and every
 older one; one older than sub 3's changes nothing); writing 0 clears the history (in
-Acknowledge mode only the acknowledged messages). "New Message Available"
-(sub 4) falls when the newest message is read (Overwrite) or acknowledged (Acknowledge).
+Acknowledge mode only the acknowledged messages). "New Message Available" (sub 4) is TRUE
+while the newest message is unread (Overwrite) or a message unacknowledged (Acknowledge).
 """
 
 from __future__ import annotations
@@ -70,12 +70,21 @@ class DiagHistory:
     newest: int = 0  # subindex of the newest message, 0 = none
     acknowledged: int = 0  # subindex of the newest acknowledged message, 0 = none
     count: int = 0
-    new_message: bool = False
+    unread: bool = False  # the newest message not read yet
     lost: int = 0  # messages discarded in Acknowledge mode (for the view)
 
     @property
     def acknowledge_mode(self) -> bool:
         return bool(self.flags & FLAG_ACKNOWLEDGE)
+
+    @property
+    def new_message(self) -> bool:
+        """Sub 4 in the mode in force (ETG.1020): Overwrite, the newest message is unread;
+        Acknowledge, a message is unacknowledged (sub 2 != sub 3). Derived, not latched, so
+        a switch of Tab. 18 bit 4 shows the other mode's answer at once."""
+        if self.acknowledge_mode:
+            return self.unacknowledged() > 0
+        return self.unread
 
     @property
     def emergency_enabled(self) -> bool:
@@ -110,7 +119,7 @@ class DiagHistory:
         self.slots[pos] = message
         self.newest = FIRST_SUB + pos
         self.count = min(MAX_MESSAGES, self.count + 1)
-        self.new_message = True
+        self.unread = True
         return True
 
     def message(self, sub: int) -> DiagMessage | None:
@@ -123,8 +132,8 @@ class DiagHistory:
         if sub > self.sub0:
             raise SdoAbort(AbortCode.NO_SUBINDEX, INDEX, sub)
         found = self.message(sub)
-        if sub == self.newest and not self.acknowledge_mode:
-            self.new_message = False
+        if sub == self.newest:
+            self.unread = False
         return found
 
     def write_acknowledged(self, value: int) -> None:
@@ -146,8 +155,6 @@ class DiagHistory:
             return
         self.acknowledged = value
         self.flags &= ~FLAG_OVERWRITE_DISCARD
-        if self.acknowledge_mode and value == self.newest:
-            self.new_message = False
 
     def write_flags(self, value: int) -> None:
         if value & ~(WRITABLE_FLAGS | FLAG_OVERWRITE_DISCARD):
@@ -180,7 +187,7 @@ class DiagHistory:
         self.count = len(keep)
         self.newest = FIRST_SUB + len(keep) - 1 if keep else 0
         self.acknowledged = 0
-        self.new_message = bool(keep)
+        self.unread = self.unread and bool(keep)
         self.flags &= ~FLAG_OVERWRITE_DISCARD
 
     def snapshot(self) -> dict[str, object]:

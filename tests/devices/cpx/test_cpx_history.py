@@ -388,3 +388,24 @@ def test_acknowledging_an_older_message_over_sdo_keeps_sub4_down() -> None:
     bench.apply("write_object", index=0x10F3, sub=3, value=0)
     assert bench.apply("read_object", index=0x10F3, sub=4) is False
     assert bench.apply("read_object", index=0x10F3, sub=0) == FIRST_SUB - 1
+
+
+def test_new_message_available_follows_the_mode_in_force() -> None:
+    """ETG.1020 sub 4: Overwrite mode TRUE while the newest message is unread, Acknowledge
+    mode TRUE while a message is unacknowledged (sub 2 != sub 3). A master switching to
+    Acknowledge (Tab. 18 bit 4) after reading, never acknowledging, sees its messages wait;
+    acknowledged in Acknowledge mode and back to Overwrite, the newest read or not decides."""
+    h = DiagHistory()
+    h.add(msg(1))
+    h.read(h.newest)
+    assert not h.new_message
+    h.write_flags(FLAG_ACKNOWLEDGE)
+    assert h.new_message  # unacknowledged
+    h.write_acknowledged(h.newest)
+    assert not h.new_message
+    h.add(msg(2))
+    h.write_acknowledged(h.newest)  # acknowledged without a read
+    h.write_flags(0x0000)
+    assert h.new_message  # the newest is unread
+    h.read(h.newest)
+    assert not h.new_message
