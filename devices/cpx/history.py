@@ -4,7 +4,8 @@
 as an emergency (Tab. 19), bit 4 chooses the mode (Tab. 18): 0 = Overwrite (the oldest message
 is overwritten once 64 are stored), 1 = Acknowledge (with 64 unacknowledged messages new ones
 are lost). Bits 1-3 (disable info / warning / error messages) and the device-owned bit 5
-(a message was overwritten or discarded) are ETG.1020's, which the seed's object follows.
+(an unacknowledged message overwritten, or a new one discarded) are ETG.1020's, which the
+seed's object follows.
 Sub 3 takes the subindex of the newest message the master acknowledges (that one and every
 older one; one older than sub 3's changes nothing); writing 0 clears the history (in
 Acknowledge mode only the acknowledged messages). "New Message Available" (sub 4) is TRUE
@@ -44,8 +45,9 @@ FLAG_TEXT: dict[int, tuple[str, str]] = {
                        "may overwrite it (with 64 unacknowledged messages new ones are lost)",
                        "Overwrite mode (Tab. 18): once 64 messages are stored, new ones "
                        "overwrite the oldest"),
-    FLAG_OVERWRITE_DISCARD: ("a message was overwritten or discarded (ETG.1020, set by the "
-                             "bus module)", "no message overwritten or discarded (ETG.1020)"),
+    FLAG_OVERWRITE_DISCARD: ("an unacknowledged message was overwritten or a new one "
+                             "discarded (ETG.1020, set by the bus module)",
+                             "no message overwritten or discarded (ETG.1020)"),
 }
 FLAG_WORDS = FlagWords(FLAG_TEXT, "CPX-E-EC")
 
@@ -112,7 +114,9 @@ class DiagHistory:
             return False
         pos = 0 if self.count == 0 else (self.newest - FIRST_SUB + 1) % MAX_MESSAGES
         if self.slots[pos] is not None:
-            if not self.acknowledge_mode:
+            # The oldest goes; unacknowledged only when none is acknowledged. ETG.1020's bit 5
+            # in Overwrite mode reports that loss, not messages the master acknowledged.
+            if not self.acknowledge_mode and not self.acknowledged:
                 self.flags |= FLAG_OVERWRITE_DISCARD
             if self.acknowledged == FIRST_SUB + pos:
                 self.acknowledged = 0

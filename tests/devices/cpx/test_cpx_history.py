@@ -409,3 +409,20 @@ def test_new_message_available_follows_the_mode_in_force() -> None:
     assert h.new_message  # the newest is unread
     h.read(h.newest)
     assert not h.new_message
+
+
+def test_overwrite_mode_flags_only_unacknowledged_messages_overwritten() -> None:
+    """ETG.1020, sub 5 bit 5 in Overwrite mode (Tab. 18 bit 4 = 0): set when unacknowledged
+    messages were overwritten, sub 3 then 0. Messages the master acknowledged may go
+    without it: a full ring the master keeps acknowledging never reports a loss."""
+    h = DiagHistory()
+    for n in range(MAX_MESSAGES):
+        h.add(msg(n))
+    h.write_acknowledged(h.newest)  # all 64 acknowledged
+    for n in range(MAX_MESSAGES - 1):
+        h.add(msg(100 + n))  # overwrite the acknowledged ones, sub 3's message kept
+    assert (h.acknowledged, h.flags & FLAG_OVERWRITE_DISCARD) == (FIRST_SUB + 63, 0)
+    h.add(msg(200))  # sub 3's own message overwritten: none acknowledged is left
+    assert (h.acknowledged, h.flags & FLAG_OVERWRITE_DISCARD) == (0, 0)
+    h.add(msg(201))  # an unacknowledged message lost
+    assert (h.acknowledged, h.flags & FLAG_OVERWRITE_DISCARD) == (0, FLAG_OVERWRITE_DISCARD)
