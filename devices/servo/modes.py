@@ -94,7 +94,10 @@ class Positioner(Mode):
         self.move_target = self.pending = None
 
     def flags(self, d: ServoDrive) -> dict[str, bool]:
-        return {"set_point_ready": self.pending is None, "set_point_ack": self.sp_ack,
+        # sp_rdy, "pronto per un nuovo set-point" (ch. 1): a start now would be taken, so not
+        # while a Pos_str would be consumed and lost (no torque, motion off, stop, alarm)
+        ready = self.pending is None and d.motion_allowed
+        return {"set_point_ready": ready, "set_point_ack": self.sp_ack,
                 "end_of_job": self.eoj, "following_error": d.following_error_exceeded}
 
     def end_of_job(self, d: ServoDrive) -> bool:

@@ -67,3 +67,42 @@ def test_a_cia402_master_keeps_its_new_set_point_bit() -> None:
     sim.drive.apply("set_input", {"name": "ien", "value": False})
     sim.cw(0x0006, 0x0007, 0x000F, 0x001F)
     assert sim.drive.cw & ds402.CW_NEW_SET_POINT
+
+
+SP_RDY = 0x20
+
+
+@pytest.mark.parametrize("r00, ien", [
+    (0x00, True),  # fresh drive, no torque
+    (0x01, True),  # in torque, Ien_cmd off
+    (0x07, True),  # Stp_cmd held
+    (0x03, False),  # the IEN input low
+], ids=["no_torque", "ien_cmd_off", "stp_cmd_held", "ien_input_low"])
+def test_sp_rdy_is_low_while_a_start_would_be_lost(r00: int, ien: bool) -> None:
+    """sp_rdy "1: pronto per un nuovo set-point" (ch. 1, R05 bit 5): a drive that consumes a
+    Pos_str without moving is not ready for one, so a PLC that waits for sp_rdy before its
+    0x23 never loses the start (docs/servo-drive.md "sp_rdy")."""
+    sim = make_sim()
+    _positioner(sim)
+    sim.drive.apply("set_input", {"name": "ien", "value": ien})
+    sim.w(0, r00)
+    assert not sim.r05 & SP_RDY
+    sim.drive.apply("set_input", {"name": "ien", "value": True})
+    sim.w(0, 0x03)
+    assert sim.r05 & SP_RDY
+    sim.w(0, 0x23)  # the start the PLC sends once sp_rdy is up: it is taken
+    sim.run_until(lambda: sim.r05 & EOJ, 3_000)
+    sim.run(20)
+    assert sim.drive.position_user == 1000
+
+
+def test_a_fresh_drive_reads_r05_0_and_an_alarm_drops_sp_rdy() -> None:
+    sim = make_sim()
+    sim.run(100)
+    assert sim.r05 == 0x00  # mode 1, no torque: not ready for a set-point
+    _positioner(sim)
+    sim.w(0, 0x03)
+    assert sim.r05 & SP_RDY
+    sim.drive.apply("inject_alarm", {"code": "16"})
+    sim.run(200)
+    assert sim.r05 & 0x08 and not sim.r05 & SP_RDY
