@@ -179,6 +179,9 @@ class DriveActions:
             self._power_down()
 
     def cmd_enable(self: ServoDrive, on: bool) -> None:
+        if on and self.ten_cmd_held_at_reset:
+            # after an alarm reset with Ten_cmd held only a fresh 0 -> 1 enables (statemachine)
+            self.cmd_write_register(R.CONTROL_WORD, 0)
         self.cmd_write_register(R.CONTROL_WORD, control.TEN_CMD | control.IEN_CMD if on else 0)
 
     def cmd_alarm_reset(self: ServoDrive) -> str | None:

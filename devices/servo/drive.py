@@ -103,6 +103,9 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         self.cw = 0
         self.ien_cmd = False
         self.cw_source = "register"
+        # An alarm reset came with R00's Ten_cmd held: the register view enables again only
+        # on a fresh Ten_cmd 0 -> 1 (docs/servo-drive.md "Re-enabling after an alarm")
+        self.ten_cmd_held_at_reset = False
         self.alarms = AlarmBank.empty()
         self.latch = LatchFilter()
         self.latched_flag = False
@@ -295,6 +298,9 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         if self.state in (State.FAULT, State.FAULT_REACTION_ACTIVE):
             return (f"not enabled ({label}, alarm {self.alarms.active}) - reset the alarm, "
                     "then enable torque")
+        if self.ten_cmd_held_at_reset and self.state is State.SWITCH_ON_DISABLED:
+            return ("not enabled (Switch on disabled after the alarm reset, Ten_cmd held) - "
+                    "enable torque again: R00 = 0, then 3")
         if self.state is not State.OPERATION_ENABLED:
             return f"not enabled ({label}) - enable torque first"
         if not (self.ien_cmd and self.input_level("ien")):

@@ -35,6 +35,8 @@ class DriveStateMachine:
     def _write_control_register(self: ServoDrive, value: int) -> None:
         rising = value & ~self.regs[R.CONTROL_WORD]
         self.regs[R.CONTROL_WORD] = value
+        if not value & control.TEN_CMD:
+            self.ten_cmd_held_at_reset = False
         self.ien_cmd = bool(value & control.IEN_CMD)
         self.cw_source = "register"
         self._apply_controlword(control.controlword_from_register(value, self.mode))
@@ -50,6 +52,7 @@ class DriveStateMachine:
         self._require_power()
         self.ien_cmd = True
         self.cw_source = "cia402"
+        self.ten_cmd_held_at_reset = False  # DSP 402: after 15 it needs 6, 7, F anyway
         self.regs[R.CONTROL_WORD] = control.register_from_controlword(value, self.mode, True)
         self._apply_controlword(value)
 
@@ -134,6 +137,8 @@ class DriveStateMachine:
             step = command
             if step is Command.ENABLE_OPERATION and self.state is State.SWITCH_ON_DISABLED \
                     and self.cw_source == "register":
+                if self.ten_cmd_held_at_reset:
+                    break  # every reset in seed 004 drops the enable: no torque by itself
                 step = Command.SHUTDOWN  # Ten_cmd goes all the way into torque (2, 3, 4)
             if step is Command.ENABLE_OPERATION and self.state is State.SWITCHED_ON \
                     and not self.input_level("ten"):
@@ -180,6 +185,10 @@ class DriveStateMachine:
             self.log(f"alarm reset refused: {self.reset_refusal()}")
         else:
             self._transition(Command.FAULT_RESET)
+            # The seed resets with the enable off (ch. 2 / ch. 6: 0x08; ch. 4 / ch. 5: 0x80 in
+            # the enable sequence): a Ten_cmd held through the reset re-enables nothing
+            self.ten_cmd_held_at_reset = self.cw_source == "register" \
+                and bool(self.regs[R.CONTROL_WORD] & control.TEN_CMD)
 
     def reset_refusal(self: ServoDrive) -> str | None:
         """Why an alarm reset now leaves the drive in Fault, None when nothing holds it. In what

@@ -76,7 +76,10 @@ def test_enable_move_stop_and_alarm_reset() -> None:
     d.apply("clear_alarm", {"code": 3})
     d.apply("alarm_reset", {})
     assert d.read_register(46) == 0
-    assert d.state is State.OPERATION_ENABLED  # Ten_cmd still held: back in torque
+    # Ten_cmd held through the reset enables nothing (test_servo_reenable.py); Enable does
+    assert d.state is State.SWITCH_ON_DISABLED
+    d.apply("enable", {"on": True})
+    assert d.read_register(0) == 0x03 and d.state is State.OPERATION_ENABLED
 
 
 def test_jog_and_home() -> None:

@@ -46,6 +46,9 @@ def test_an_injected_cause_outlasts_a_power_cycle() -> None:
     sim.w(0, 0x03)
     sim.run(5)
     assert drive.read_register(46) == 0
+    assert drive.state is State.SWITCH_ON_DISABLED  # Ten_cmd held through the reset
+    sim.w(0, 0x00)
+    sim.w(0, 0x03)
     assert drive.state is State.OPERATION_ENABLED
 
 
