@@ -233,11 +233,12 @@ class DiagHistory:
 
     def acknowledge(self, sub: int) -> None:
         """A write of 0x10F3:3: that message and every older one are acknowledged; 0 deletes
-        all messages (ETG.1020). A message already acknowledged (older than the newest one
-        acknowledged) changes nothing: no acknowledgement is taken back, so :3 stays "the
-        newest message acknowledged" and :4 turns TRUE only for a new message (§9.3.7)."""
+        the acknowledged messages (ETG.1020, acknowledge mode). A message already acknowledged
+        (older than the newest one acknowledged) changes nothing: no acknowledgement is taken
+        back, so :3 stays "the newest message acknowledged" and :4 turns TRUE only for a new
+        message (§9.3.7)."""
         if sub == 0:
-            self.clear()
+            self._delete_acknowledged()
             return
         if sub not in self.messages:
             raise ValueError(f"0x10F3:3 = {sub}: no message in sub {sub}")
@@ -246,6 +247,16 @@ class DiagHistory:
             return
         self.newest_ack = sub
         self.unacked = unacked
+
+    def _delete_acknowledged(self) -> None:
+        # The master has not seen the others: they stay in their subs (all 20 exist for good,
+        # sub 0 = 25), so :2 still names the newest and the ring goes on after it.
+        for sub in self.order[:len(self.order) - self.unacked]:
+            del self.messages[sub]
+        self.order = self.order[len(self.order) - self.unacked:]
+        if not self.order:
+            self.newest = 0
+        self.newest_ack = 0
 
     def set_flags(self, value: int) -> None:
         self.flags = value & FLAGS_WRITABLE

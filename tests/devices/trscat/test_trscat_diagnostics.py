@@ -355,9 +355,11 @@ def test_acknowledging_an_older_message_takes_back_no_acknowledgement() -> None:
     assert (hist.newest_ack, hist.new_available) == (6, False)
 
 
-def test_acknowledging_zero_deletes_all() -> None:
+def test_acknowledging_zero_deletes_the_acknowledged_messages() -> None:
+    """ETG.1020, acknowledge mode (more in test_trscat_history.py)."""
     hist = DiagHistory()
     hist.add(_msg(1))
+    hist.acknowledge(hist.newest)
     hist.acknowledge(0)
     assert (hist.newest, hist.new_available, hist.messages) == (0, False, {})
 
