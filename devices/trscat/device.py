@@ -261,10 +261,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         self._rebuild_od()
 
     def od_acknowledge(self, value: int) -> None:
-        try:
-            self.diag.acknowledge(int(value))
-        except ValueError:
-            raise SdoAbort(AbortCode.VALUE_RANGE, 0x10F3, 3) from None
+        self.diag.acknowledge(int(value))
 
     def od_input(self, slot: int, channel: int) -> int:
         io = self.rail[slot] if slot < len(self.rail) else None

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 from devices.bitwords import FlagWords
 from devices.device import CommandError
 from devices.names import did_you_mean
+from devices.od import AbortCode, SdoAbort
 
 # ETG.1020 Diag Code, bits 16..31: 0xE800 = a DS301 / DS4xx emergency code in bits 0..15,
 # 0xE000 = manufacturer specific (FieldRig: the AL status code of an SM / DC check).
@@ -240,8 +241,14 @@ class DiagHistory:
         if sub == 0:
             self._delete_acknowledged()
             return
+        # ETG.1020's answers to a value naming no message: below the message subs too low,
+        # past them too high, a message sub holding no message out of range.
+        if sub < FIRST_MESSAGE_SUB:
+            raise SdoAbort(AbortCode.VALUE_TOO_LOW, 0x10F3, 3)
+        if sub > LAST_MESSAGE_SUB:
+            raise SdoAbort(AbortCode.VALUE_TOO_HIGH, 0x10F3, 3)
         if sub not in self.messages:
-            raise ValueError(f"0x10F3:3 = {sub}: no message in sub {sub}")
+            raise SdoAbort(AbortCode.VALUE_RANGE, 0x10F3, 3)
         unacked = len(self.order) - 1 - self.order.index(sub)
         if unacked >= self.unacked:
             return

@@ -4,6 +4,11 @@ acknowledge ("in modalità acknowledge"), 20 messages."""
 
 from __future__ import annotations
 
+import pytest
+from trscat_bench import Bench
+
+from devices.ethercat import AlState
+from devices.od import AbortCode, SdoAbort
 from devices.trscat.diagnostics import (
     FIRST_MESSAGE_SUB,
     MAX_MESSAGES,
@@ -52,3 +57,25 @@ def test_a_kept_message_is_acknowledged_and_deleted_later() -> None:
     hist.acknowledge(0)
     assert sorted(hist.messages) == list(range(FIRST_MESSAGE_SUB + 5, 26))
     assert hist.add(_msg(99)) and hist.newest == FIRST_MESSAGE_SUB  # a free place
+
+
+@pytest.mark.parametrize(("value", "code"), [
+    (1, AbortCode.VALUE_TOO_LOW), (5, AbortCode.VALUE_TOO_LOW),
+    (9, AbortCode.VALUE_RANGE), (25, AbortCode.VALUE_RANGE),
+    (26, AbortCode.VALUE_TOO_HIGH), (255, AbortCode.VALUE_TOO_HIGH)],
+    ids=lambda v: str(v) if isinstance(v, int) and not isinstance(v, AbortCode) else v.name)
+def test_sub3_naming_no_message_is_refused_with_etg1020s_code(value: int,
+                                                               code: AbortCode) -> None:
+    """ETG.1020: 1..5 "value too low" 0x06090032, a message sub holding no message "value
+    range exceeded" 0x06090030, past the last message sub (25 here) "value too high"
+    0x06090031. Nothing changes."""
+    bench = Bench(["AN-E"], configured=["AN-E"])
+    bench.to_state(AlState.OP)
+    bench.apply("inject_fault", module=1, fault="AN_PLUS_12V")
+    bench.apply("inject_fault", module=1, fault="AN_MINUS_12V")
+    bench.run(0.002)
+    bench.write(0x10F3, 3, 6)
+    with pytest.raises(SdoAbort) as info:
+        bench.write(0x10F3, 3, value)
+    assert info.value.code is code
+    assert [bench.read(0x10F3, s) for s in (2, 3, 4)] == [7, 6, True]
