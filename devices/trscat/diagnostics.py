@@ -226,6 +226,10 @@ class DiagHistory:
         sub = FIRST_MESSAGE_SUB if self.newest in (0, LAST_MESSAGE_SUB) else self.newest + 1
         if sub in self.messages:
             self.order.remove(sub)
+            if sub == self.newest_ack:
+                # ETG.1020: :3 names no message once its own is overwritten, or it would
+                # equal :2 while the new one waits for acknowledgement.
+                self.newest_ack = 0
         self.messages[sub] = message
         self.order.append(sub)
         self.newest = sub

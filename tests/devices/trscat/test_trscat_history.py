@@ -79,3 +79,17 @@ def test_sub3_naming_no_message_is_refused_with_etg1020s_code(value: int,
         bench.write(0x10F3, 3, value)
     assert info.value.code is code
     assert [bench.read(0x10F3, s) for s in (2, 3, 4)] == [7, 6, True]
+
+
+def test_overwriting_the_message_sub3_names_sets_sub3_to_zero() -> None:
+    """ETG.1020: sub 3 names an acknowledged message; once a new message takes its place it
+    names none, and reads 0. Else sub 3 = sub 2 (all acknowledged, to a master) while twenty
+    messages wait and sub 4 (0x1AFF:5) is TRUE."""
+    hist = _full()
+    hist.acknowledge(FIRST_MESSAGE_SUB)  # the oldest only
+    assert hist.add(_msg(99)) and hist.newest == FIRST_MESSAGE_SUB
+    assert (hist.newest_ack, hist.new_available) == (0, True)
+    hist.acknowledge(0)  # none acknowledged now: nothing goes
+    assert len(hist.messages) == MAX_MESSAGES
+    hist.acknowledge(FIRST_MESSAGE_SUB)
+    assert (hist.newest_ack, hist.new_available) == (FIRST_MESSAGE_SUB, False)
