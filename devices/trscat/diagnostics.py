@@ -4,9 +4,10 @@ Seed 001 §9.3.7: the application error codes (DS301 / DS4xx emergency numbering
 consequences (an internal hardware error shuts the TRS bus down for good, an internal software
 error also sends the ESM back to PRE-OP and deadlocks it), 0x10F3 in acknowledge mode with up
 to 20 messages, 0x10F3:5 flags (bits 1..3 disable info / warning / error messages) and
-0x10F1:2. The message layout, the Diag Code ranges and flag bit 0 (send as emergency) are
-ETG.1020's; the seed says the texts are in the ESI file, which we do not have, so the Text IDs
-and texts are FieldRig's (docs/trscat.md).
+0x10F1:2. The message layout, the Diag Code ranges, flag bits 0 (send as emergency) and 5 (a
+message discarded) and what a write of 0x10F3:3 does are ETG.1020's; the seed says the texts
+are in the ESI file, which we do not have, so the Text IDs and texts are FieldRig's
+(docs/trscat.md).
 """
 
 from __future__ import annotations
@@ -28,9 +29,12 @@ MAX_MESSAGES = 20  # §9.3.7 "coda fino a 20 messaggi diagnostici"
 FIRST_MESSAGE_SUB = 6  # ETG.1020: messages from sub 6
 LAST_MESSAGE_SUB = FIRST_MESSAGE_SUB + MAX_MESSAGES - 1
 FLAG_EMERGENCY = 0x0001  # ETG.1020 0x10F3:5 bit 0 (not printed in §9.3.7; default 0)
+# ETG.1020 0x10F3:5 bit 5, the device's: in acknowledge mode a new message was discarded.
+FLAG_OVERWRITE_DISCARD = 0x0020
 FLAG_LOCAL_TIMESTAMP = 0x0010  # message flags bit 4: the time stamp is the device's own time
 PARAM_UINT8 = 0x0005  # ETG.1020 parameter flags: data type UNSIGNED8
-FLAGS_WRITABLE = 0x000F  # bits 0..3; bit 4 (mode) is fixed: the TRS-CAT runs acknowledge mode
+# bits 0..3; bit 4 (mode) is fixed: the TRS-CAT runs acknowledge mode; bit 5 is the device's
+FLAGS_WRITABLE = 0x000F
 
 
 class DiagType(enum.IntEnum):
@@ -46,13 +50,16 @@ class DiagType(enum.IntEnum):
 
 # 0x10F3:5 in words, (bit = 1, bit = 0), for the Codes tab: §9.3.7 "Flag messaggi abilitati,
 # default 0x00 tutti abilitati. Bit1 = 1: disabilita messaggi informativi, Bit2 = 1: ... di
-# attenzione, Bit3 = 1: ... di errore"; bit 0 is ETG.1020's, which the model follows.
+# attenzione, Bit3 = 1: ... di errore"; bits 0 and 5 are ETG.1020's, which the model follows.
 FLAG_TEXT: dict[int, tuple[str, str]] = {
     FLAG_EMERGENCY: ("each new application error also sent as a CoE emergency (ETG.1020; "
                      "§9.3.7 does not print bit 0)", "no emergency (ETG.1020)"),
     DiagType.INFO.disable_bit: ("info messages disabled", "info messages enabled"),
     DiagType.WARNING.disable_bit: ("warning messages disabled", "warning messages enabled"),
     DiagType.ERROR.disable_bit: ("error messages disabled", "error messages enabled"),
+    FLAG_OVERWRITE_DISCARD: ("a new message discarded, 20 unacknowledged ones stored "
+                             "(ETG.1020, set by the TRS-CAT)",
+                             "no message discarded (ETG.1020)"),
 }
 FLAG_WORDS = FlagWords(FLAG_TEXT, "TRS-CAT")
 
@@ -194,7 +201,8 @@ def emergency_frame(fault: AppFault, slot: int | None, register: int) -> bytes:
 
 class DiagHistory:
     """0x10F3 in acknowledge mode (§9.3.7): a ring of 20 subs; an unacknowledged message is
-    never overwritten, so a 21st message waiting for acknowledgement is dropped (``lost``)."""
+    never overwritten, so a 21st message waiting for acknowledgement is dropped (``lost``,
+    ETG.1020's flag bit 5)."""
 
     def __init__(self) -> None:
         self.flags = 0
@@ -221,6 +229,7 @@ class DiagHistory:
         if not self.enabled(message.dtype):
             return False
         if self.unacked >= MAX_MESSAGES:
+            self.flags |= FLAG_OVERWRITE_DISCARD
             self.lost += 1
             return False
         sub = FIRST_MESSAGE_SUB if self.newest in (0, LAST_MESSAGE_SUB) else self.newest + 1
@@ -258,6 +267,7 @@ class DiagHistory:
             return
         self.newest_ack = sub
         self.unacked = unacked
+        self.flags &= ~FLAG_OVERWRITE_DISCARD
 
     def _delete_acknowledged(self) -> None:
         # The master has not seen the others: they stay in their subs (all 20 exist for good,
@@ -268,9 +278,11 @@ class DiagHistory:
         if not self.order:
             self.newest = 0
         self.newest_ack = 0
+        self.flags &= ~FLAG_OVERWRITE_DISCARD
 
     def set_flags(self, value: int) -> None:
-        self.flags = value & FLAGS_WRITABLE
+        # ETG.1020: bit 5 is read only, the master's write neither sets nor clears it.
+        self.flags = value & FLAGS_WRITABLE | self.flags & FLAG_OVERWRITE_DISCARD
 
     def raw(self, sub: int) -> bytes:
         found = self.messages.get(sub)

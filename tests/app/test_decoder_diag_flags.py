@@ -55,6 +55,12 @@ def test_a_bit_the_trscat_never_holds() -> None:
     assert "bit 4 = 1: not a bit of the TRS-CAT's 0x10F3:5" in m.text, m.text
 
 
+def test_the_trscat_reads_etg1020s_bit5() -> None:
+    """Set by the TRS-CAT when a new message is discarded (ETG.1020; §9.3.7 prints bits 1-3)."""
+    m = _one(decode("0x10F3:5 = 0x0020"), TRSCAT)
+    assert "bit 5 = 1: a new message discarded" in m.text, m.text
+
+
 def test_the_words_are_the_models() -> None:
     assert history.FLAG_TEXT[history.FLAG_ACKNOWLEDGE][0].startswith("Acknowledge mode")
     assert diagnostics.FLAG_TEXT[0x02][0] == "info messages disabled"

@@ -11,6 +11,7 @@ from devices.ethercat import AlState
 from devices.od import AbortCode, SdoAbort
 from devices.trscat.diagnostics import (
     FIRST_MESSAGE_SUB,
+    FLAG_OVERWRITE_DISCARD,
     MAX_MESSAGES,
     DiagHistory,
     DiagMessage,
@@ -93,3 +94,36 @@ def test_overwriting_the_message_sub3_names_sets_sub3_to_zero() -> None:
     assert len(hist.messages) == MAX_MESSAGES
     hist.acknowledge(FIRST_MESSAGE_SUB)
     assert (hist.newest_ack, hist.new_available) == (FIRST_MESSAGE_SUB, False)
+
+
+def test_a_discarded_message_sets_flags_bit5() -> None:
+    """ETG.1020 sub 5 bit 5 in acknowledge mode, set by the device: a new message was
+    discarded, twenty unacknowledged ones in the way. A flags write keeps it; a write of
+    sub 3 (an acknowledgement or 0) takes it away."""
+    hist = _full(extra=1)
+    assert (hist.lost, hist.flags) == (1, FLAG_OVERWRITE_DISCARD)
+    hist.set_flags(0x0001 | FLAG_OVERWRITE_DISCARD)
+    assert hist.flags == 0x0001 | FLAG_OVERWRITE_DISCARD
+    hist.set_flags(0x0000)
+    assert hist.flags == FLAG_OVERWRITE_DISCARD  # the device's bit, not the master's
+    hist.acknowledge(hist.newest)
+    assert hist.flags == 0
+    assert hist.add(_msg(100))  # an acknowledged one overwritten: no loss
+    assert hist.flags == 0
+    for n in range(MAX_MESSAGES):
+        hist.add(_msg(200 + n))
+    assert hist.flags == FLAG_OVERWRITE_DISCARD
+    hist.acknowledge(0)  # deletes nothing (none acknowledged), the bit goes
+    assert hist.flags == 0
+
+
+def test_bit5_in_the_object_dictionary() -> None:
+    bench = Bench()
+    bench.to_state(AlState.OP)
+    for n in range(MAX_MESSAGES + 1):
+        bench.trs.diag.add(_msg(n))
+    assert bench.read(0x10F3, 5) == FLAG_OVERWRITE_DISCARD
+    bench.write(0x10F3, 5, 0x0001)
+    assert bench.read(0x10F3, 5) == 0x0001 | FLAG_OVERWRITE_DISCARD
+    bench.apply("acknowledge_messages")
+    assert bench.read(0x10F3, 5) == 0x0001
