@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import viser
@@ -77,18 +77,25 @@ def command_index(entry: Mapping[str, Any]) -> int:
     return object_index(COMMAND_INDEX, int(number))
 
 
-@dataclass(frozen=True)
+@dataclass
 class _RailForm:
     """The rail rows of one instructor connection, or the shared ones of an open rig.
     ``module``: the connection's own Module picker (with a token); None for the shared rows,
     which act on each page's pick of the Module picker, with a Plug type and a Swap with of
-    each page's own (ClientPick) and a Module powered box per page (ClientSynced)."""
+    each page's own (ClientPick) and a Module powered box per page (ClientSynced).
+
+    ``lock``: held while a Plug type preset reads the pick and the rail and writes the type.
+    Its writers are a Module pick (viser's threads) and a rail change's frame update: the
+    update that read the pick before the page picked another empty slot wrote the old slot's
+    type over the pick's, and no frame presets again before the next rail change. Reentrant:
+    assigning a widget runs its callbacks at once in the assigning thread (viser 1.1.1)."""
 
     ops: Any
     plug_type: Any
     swap_with: Any
     powered: Synced | ClientSynced
     module: Any = None
+    lock: Any = field(default_factory=threading.RLock)
 
 
 def _value(widget: Any, client_id: int | None) -> str:
@@ -262,17 +269,20 @@ class ModulePanel:
 
     def _preset(self, form: _RailForm) -> None:
         """Offer the Plug type the model expects in an own picker's module (an empty slot)."""
-        preset = plug_preset(self._entry(form.module.value), self._catalog)
-        if preset is not None:
-            form.plug_type.value = preset
+        with form.lock:
+            preset = plug_preset(self._entry(form.module.value), self._catalog)
+            if preset is not None:
+                form.plug_type.value = preset
 
     def _preset_page(self, client: viser.ClientHandle) -> None:
         """The shared rows' Plug type on ``client``'s page: the type its empty slot expects."""
-        if self._shared_rail is None:
+        shared = self._shared_rail
+        if shared is None:
             return
-        preset = plug_preset(self._entry_for(client.client_id), self._catalog)
-        if preset is not None:
-            self._shared_rail.plug_type.set_for(client, preset)
+        with shared.lock:
+            preset = plug_preset(self._entry_for(client.client_id), self._catalog)
+            if preset is not None:
+                shared.plug_type.set_for(client, preset)
 
     def _apply_form(self, client: viser.ClientHandle | None, action: str,
                     args: dict[str, Any]) -> None:
