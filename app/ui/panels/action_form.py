@@ -100,12 +100,16 @@ class ActionForm:
         self._button = gui.add_button("Apply", disabled=not self._actions)
         self._widgets: list[tuple[Param, Any]] = []
         self._built_for: str | None = None
-        self._lock = threading.Lock()  # built from callbacks and from the dashboard thread
+        # The form's writers: a pick (viser stores it, then its callback runs in viser's
+        # threads) and the frame update's restrict (the dashboard thread). Each reads the pick
+        # and the list and writes under it. Reentrant: assigning the pick runs _picked at once
+        # in the assigning thread (viser 1.1.1), under the lock its writer holds.
+        self._lock = threading.RLock()
         self._build()
 
         @self._choice.on_update
         def _(event: viser.GuiEvent) -> None:
-            self._build()
+            self._picked()
 
         @self._button.on_click
         def _(event: viser.GuiEvent) -> None:
@@ -130,14 +134,26 @@ class ActionForm:
             return {p.name: handle.value for p, handle in self._widgets}
 
     def restrict(self, names: Sequence[str]) -> None:
-        """Offer only these actions (those the selected module accepts)."""
+        """Offer only these actions (those the selected module accepts). The pick stays where
+        the list holds it, else moves to the list's first: viser's options setter reads the
+        pick as it is then. A pick read before the list was written and written back after
+        it undid a pick made in between."""
         options = tuple(n for n in self._actions if n in set(names)) or ("(none)",)
-        if tuple(self._choice.options) != options:
-            keep = self._choice.value if self._choice.value in options else options[0]
-            self._choice.options = options
-            self._choice.value = keep
-        self._button.disabled = options == ("(none)",)
-        self._build()
+        with self._lock:
+            if tuple(self._choice.options) != options:
+                self._choice.options = options
+            self._button.disabled = options == ("(none)",)
+            self._build()
+
+    def _picked(self) -> None:
+        """A pick the list does not hold (made on the page's list before restrict's reached
+        it) moves to the list's first, as restrict moves one: it stayed, built, and Apply
+        sent the module an action it refuses."""
+        with self._lock:
+            options = tuple(self._choice.options)
+            if self._choice.value not in options:
+                self._choice.value = options[0]  # runs _picked in this thread
+            self._build()
 
     def _build(self) -> None:
         with self._lock:
