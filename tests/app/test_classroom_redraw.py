@@ -192,7 +192,7 @@ def test_a_page_that_left_gets_no_update_before_its_disconnect_callback() -> Non
             page.close()
             _wait(lambda: not served.server.get_clients())
             _wait(lambda: form.choice._impl.removed)  # viser let the page's widgets go
-            faults._park(copy, [])  # the picked module's actions, read meanwhile: none
+            faults._park(copy, copy.asked, [])  # the picked module's actions, read meanwhile: none
             faults.update(False)  # a frame update in that window
             assert form.options() != ("(none)",)  # the gone page's form left alone
         _wait(lambda: not faults._part.each())

@@ -28,12 +28,21 @@ Rail = Callable[[], Sequence[Mapping[str, Any]]]
 
 
 class _Copy:
-    """One connection's picker and form, and the actions its module takes (once read)."""
+    """One connection's picker and form, and the actions its module takes (once read).
+
+    Its readers of the pick and the rail are the picker's callback (viser's threads) and the
+    frame update of a rail change; each parks what the module takes (at once for an empty
+    slot, else from the simulation thread). ``lock`` holds each read, the number it takes
+    (``asked``) and each park: only the newest read parks. Before, a pick of the empty slot 3
+    that read the rail before a DO16 was plugged there parked "nothing" over the frame
+    update's DO16 actions, and the form offered "(none)" until the pick or the rail changed."""
 
     def __init__(self) -> None:
         self.module: Any = None
         self.form: ActionForm | None = None
         self.available: list[str] | None = None  # parked by the simulation thread
+        self.asked = 0
+        self.lock = threading.Lock()
 
 
 class ModuleFaults:
@@ -49,7 +58,6 @@ class ModuleFaults:
         self._runtime, self._sender, self._id = runtime, sender, device_id
         self._actions = dict(actions)
         self._rail = rail
-        self._lock = threading.Lock()
         self._part = instructor.part(self._build)
 
     def _build(self, gui: Any) -> _Copy:
@@ -77,10 +85,13 @@ class ModuleFaults:
 
     def _read(self, copy: _Copy) -> None:
         """Ask the model which actions the picked module takes (its type decides)."""
-        slot = option_slot(str(copy.module.value))
-        entry = next((e for e in self._rail() if e.get("slot") == slot), None)
+        with copy.lock:
+            copy.asked += 1
+            asked = copy.asked
+            slot = option_slot(str(copy.module.value))
+            entry = next((e for e in self._rail() if e.get("slot") == slot), None)
         if slot is None or not (entry and entry.get("type")):
-            self._park(copy, [])
+            self._park(copy, asked, [])
             return
         device = self._id
 
@@ -88,12 +99,13 @@ class ModuleFaults:
             return list(self._runtime.rig.device(device).rail_module(slot).available_actions())
 
         self._sender.submit(
-            None, "module actions", read, done=lambda names: self._park(copy, names)
+            None, "module actions", read, done=lambda names: self._park(copy, asked, names)
         )
 
-    def _park(self, copy: _Copy, names: list[str]) -> None:
-        with self._lock:
-            copy.available = names
+    def _park(self, copy: _Copy, asked: int, names: list[str]) -> None:
+        with copy.lock:
+            if asked == copy.asked:  # else a newer read of the pick or the rail parks
+                copy.available = names
 
     def _options(self) -> tuple[str, ...]:
         return tuple(module_options(list(self._rail()))) or ("1",)
@@ -108,7 +120,7 @@ class ModuleFaults:
             if rail_changed or tuple(copy.module.options) != options:
                 set_options(copy.module, list(options))
                 self._read(copy)
-            with self._lock:
+            with copy.lock:
                 available, copy.available = copy.available, None
             if available is not None and copy.form is not None:
                 copy.form.restrict(available)
