@@ -252,7 +252,7 @@ def _scenario_run(args: argparse.Namespace) -> int:
     elif args.record:
         from app.recording import RigRecorder, scenario_observer
 
-        recorder = RigRecorder(args.record)
+        recorder = RigRecorder(args.record, start_time=False)
         try:
             result = run_scenario(scenario, rig, on_tick=scenario_observer(recorder))
         finally:

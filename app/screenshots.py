@@ -372,7 +372,7 @@ def served_run(rig: Rig, *, record: str | None = None, quiet: bool = False,
     if record:
         from app.recording import RigRecorder
 
-        recorder = RigRecorder(record)
+        recorder = RigRecorder(record, start_time=False)  # a scenario run's: no wall clock
 
     def attach(runtime: Runtime) -> None:
         runtime.add_listener(events.extend)  # every journalled batch, in order

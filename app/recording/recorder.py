@@ -108,7 +108,7 @@ class RigRecorder:
                  flush_period_us: int = DEFAULT_FLUSH_PERIOD_US,
                  chunk_rows: int = DEFAULT_CHUNK_ROWS,
                  max_buffered_rows: int = DEFAULT_MAX_BUFFERED_ROWS,
-                 blueprint: bool = True) -> None:
+                 blueprint: bool = True, start_time: bool = True) -> None:
         if min(sample_period_us, flush_period_us, chunk_rows, max_buffered_rows) <= 0:
             raise ValueError("sample period, flush period, chunk and buffer sizes must be "
                              "positive")
@@ -119,7 +119,10 @@ class RigRecorder:
         self.chunk_rows = chunk_rows
         self.max_buffered_rows = max_buffered_rows
         allocators.use_system_pool()  # the sends' columns: see allocators.py
-        self._rec = rr.RecordingStream(application_id, recording_id=recording_id)
+        # rerun's default properties are the wall-clock instant the stream was made
+        # (RecordingInfo start_time): a scenario run's file is the same on every run without.
+        self._rec = rr.RecordingStream(application_id, recording_id=recording_id,
+                                       send_properties=start_time)
         self._rec.set_sinks(rr.FileSink(str(self.path)))
         self._lock = threading.Lock()
         self._scalars: dict[str, _Column] = {}
