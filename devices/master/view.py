@@ -32,6 +32,13 @@ def phase_text(phase: str) -> str:
     return PHASE_TEXT.get(phase, phase.replace("_", " "))
 
 
+def dc_words(state: str) -> str:
+    """Seed 003's DC phase as words for the master's screen, like its phase: NOT_SYNCHRONIZED
+    -> "not synchronized". The identifier broken at its underscore to fit the screen read
+    "NOT_" / "SYNCHRONIZED"; the words fit whole, and the Codes tab reads them too."""
+    return state.replace("_", " ").lower()
+
+
 def phase_note(lost: int, not_found: int, held: int) -> str:
     """What "running" (or "starting") leaves out: slaves lost, slaves never found, DC slaves
     held in SAFEOP below the master's target ("2 slaves lost, 1 DC slave held in SAFEOP").

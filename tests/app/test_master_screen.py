@@ -56,14 +56,14 @@ def test_screen_text_is_caption_size_in_a_focus_on_the_master(board: Dashboard,
                                                               key: str) -> None:
     line, camera = focused(board)
     label = screen_labels(line)[key]
-    assert str(label.text)  # "running", "DC COMPENSATING"
+    assert str(label.text)  # "running", "DC\ncompensating"
     px = px_per_unit(camera, label.position)
     assert em_px(label, px) >= EM_PX * CAPTION_SCALE, (key, em_px(label, px))
 
 
 @pytest.mark.parametrize("device", ["master", "fastcat", "trscat", "cpx"])
 def test_screen_text_stays_on_the_screen_in_a_focus(board: Dashboard, device: str) -> None:
-    """Grown for the zoom, "DC" / "COMPENSATING" and the phase still fit the screen, in a
+    """Grown for the zoom, "DC" / "compensating" and the phase still fit the screen, in a
     focus on the master and in the less zoomed ones that show it too."""
     line, camera = focused(board, device)
     handle = board.server.scene._handle_from_node_name["/line/master/screen"]

@@ -25,7 +25,7 @@ from app.ui.label_fit import EM_PX
 from app.ui.line.painter import FRONT_Y, Painter
 from app.ui.rail_scene import BODY_D, BODY_H, PATTERN_WORDS, RGB
 from devices.ethercat import AL_STATUS_ERROR_FLAG
-from devices.master.view import phase_text
+from devices.master.view import dc_words, phase_text
 
 BODY: RGB = (214, 219, 228)
 BODY_OFF: RGB = (150, 152, 158)
@@ -36,12 +36,12 @@ STILL_PATTERNS = ("off", "on")
 SCREEN_Z = 0.45  # the screen's centre over the master's
 MASTER_W = 2.6  # as wide as the FastCAT coupler: the longest DC state fits its screen
 SCREEN_SHARE = 0.92  # of the master's width
-DC_LINE = 13  # characters per line of the DC state ("SYNCHRONIZING")
 # The screen's texts (screen labels: one size on screen) at the whole line's camera, the
 # widest view, where they must fit the screen.
 SCREEN_SCALE = 0.62
 # In a scenario's focused view they grow with the zoom up to this share of a scene unit an em
-# (the widest line, "SYNCHRONIZING", about 9.3 em, then fills the screen): ~14 px an em in a
+# (sized when "SYNCHRONIZING", 9.3 em, was the widest line; now "waiting start time", 8.7
+# em, and "no slave answers", 8.5 em, fill most of the screen): ~14 px an em in a
 # focus on the master at 1280 x 720. At 0.62 everywhere they were ~7 px in dc_sync_lost's
 # three focused pictures, too small to read.
 SCREEN_EM = 0.24
@@ -60,8 +60,8 @@ LED_TOP_Z, LED_STEP_Z = 0.85, 0.42
 def wrap(text: str, width: int) -> str:
     """``text`` on lines of at most ``width`` characters where it allows, broken after a
     space, an underscore or a hyphen; the underscore or hyphen stays at the end of its line,
-    so "DC NOT_" / "SYNCHRONIZED" still spells the seed's NOT_SYNCHRONIZED. A longer piece
-    keeps a line of its own."""
+    so "4AI-" / "U-I" still spells the seed's 4AI-U-I. A longer piece keeps a line of its
+    own."""
     lines: list[str] = []
     line = ""
     for piece in re.findall(r"[^ _-]+[ _-]*|[ _-]+", text):
@@ -256,7 +256,7 @@ class MasterBody(Body):
         self.clickables.append(screen)
         self.paint.label("phase", "", self.at(self.width / 2, 0.8), anchor="center-center",
                          scale=SCREEN_SCALE)
-        # One or two lines from the top down ("DC NOT_" / "SYNCHRONIZED"), inside the screen.
+        # Two lines from the top down ("DC" / "not synchronized"), inside the screen.
         self.paint.label("dc", "", self.at(self.width / 2, 0.5), anchor="top-center",
                          scale=SCREEN_SCALE)
         self.paint.led("link", self.at(0.3, -0.9))
@@ -281,7 +281,7 @@ class MasterBody(Body):
         self.paint.set_text("phase", f"{phase_text(phase)}\n{note}" if note else
                             phase_text(phase))
         dc = snap.get("dc") or {}
-        self.paint.set_text("dc", wrap(f"DC {dc.get('state', '-')}", DC_LINE))
+        self.paint.set_text("dc", f"DC\n{dc_words(str(dc.get('state', '-')))}")
         link = snap.get("link", True)
         self.paint.set_led("link", "green", "on" if link else "off", t_us)
         return "external master" if snap.get("external") else ""
