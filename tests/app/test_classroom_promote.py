@@ -91,12 +91,12 @@ def test_a_page_gone_during_its_connect_build_logs_nothing(
 
     left = threading.Event()
 
-    def leave(*args: Any) -> str:  # inside the client's "Exercise" folder, being built
+    def leave(*args: Any, **kwargs: Any) -> str:  # inside the "Exercise" folder being built
         if not left.is_set():
             left.set()
             page, served = _wait(lambda: pages and pages[0]), servers[0]
             _left(page, served, next(iter(served.server.get_clients())))
-        return trainee_html(*args)
+        return trainee_html(*args, **kwargs)
 
     # Registered at construction: the patched callback is the one the server calls.
     monkeypatch.setattr(ClassroomPanel, "_connect", recording_connect)

@@ -29,12 +29,13 @@ import viser
 from app.classroom.exercise import Exercise, Phase
 from app.classroom.exercise_file import check_exercise, load_exercise, start_us
 from app.classroom.faults import Catalog, catalog
+from app.classroom.names import ConnectionNames
 from app.classroom.roles import Operation, Role
 from app.rig_config import RigConfigError
 from app.runtime import Runtime
 from app.ui.commands import CommandSender, Sent, notify
 from app.ui.panels.classroom_access import TokenForm, read_browser_token
-from app.ui.panels.classroom_html import history_html, instructor_html, trainee_html
+from app.ui.panels.classroom_html import Audience, history_html, instructor_html, trainee_html
 from app.ui.panels.per_client import connected, release_gone
 from app.ui.panels.widgets import instructor_folders, widget_uuid
 from app.ui.style import INSTRUCTOR_CLASS
@@ -127,6 +128,7 @@ class ClassroomPanel:
         self.exercise: Exercise | None = None
         self.history: list[dict[str, Any]] = []
         self.refusals: collections.deque[str] = collections.deque(maxlen=20)
+        self.names = ConnectionNames()  # "trainee 1", ...: the instructor's lists name them
         self._views: dict[int, _View] = {}
         self._folder = server.gui.add_folder("Classroom", expand_by_default=True)
         self._stop = threading.Event()
@@ -235,7 +237,8 @@ class ClassroomPanel:
             if right:
                 for command in exercise.fault.repair:
                     self._apply(command.target, command.action, dict(command.args))
-        self._log(f"connection {self._id(client)} named a cause")
+        who = self.names.name(self._id(client), self.access.role(self._id(client)))
+        self._log(f"{who} (connection {self._id(client)}) named a cause")
         return right
 
     def finish(self, client: viser.ClientHandle | None = None,
@@ -339,7 +342,8 @@ class ClassroomPanel:
         folder = gui.add_folder("Exercise")
         view.handles.append(folder)
         with folder:
-            view.trainee = gui.add_html(trainee_html(None, 0.0))
+            view.trainee = gui.add_html(trainee_html(None, 0.0,
+                                                     audience=self._audience(view.role)))
             cause = gui.add_dropdown("Cause", (NO_CAUSE, *self._causes))
             name = gui.add_button("Name the cause", icon=viser.Icon.CHECK)
             done = gui.add_button("Done", hint="the rig runs again: check and score")
@@ -430,17 +434,25 @@ class ClassroomPanel:
         self._runtime.journal([LogLine(t_us=self._runtime.frame.t_us, device="classroom",
                                        text=text)])
 
+    def _audience(self, role: Role) -> Audience:
+        """Whose words the Exercise box says (classroom_html.trainee_html)."""
+        if role is Role.TRAINEE:
+            return "trainee"
+        return "open" if self.access.open else "instructor"
+
     @staticmethod
     def _id(client: viser.ClientHandle | None) -> int | None:
         return None if client is None else client.client_id
 
     def _on_sent(self, sent: Sent) -> None:
         if sent.refused:
-            self.refusals.append(f"#{sent.client_id} {sent.target}: {sent.refused}")
+            who = self.names.name(sent.client_id, sent.role)
+            self.refusals.append(f"{who} {sent.target}: {sent.refused}")
         exercise = self.exercise
         if sent.role is Role.INSTRUCTOR and not self.access.open:
             return  # the instructor's own commands are not the trainees' actions
         if exercise is not None and sent.client_id is not None:
+            self.names.name(sent.client_id, sent.role)  # named at its first act
             args = " ".join(f"{k}={v}" for k, v in sent.args.items())
             exercise.record(time.monotonic(), sent.client_id, sent.role.value,
                             f"{sent.target}: {sent.action} {args}".strip(), sent.refused)
@@ -464,10 +476,12 @@ class ClassroomPanel:
             end = exercise.finished_s
             elapsed = end if end is not None else time.monotonic() - exercise.started_s
         mine = report is not None and report["answered_by"] == view.client_id
-        self._show(view, "trainee", view.trainee, trainee_html(report, elapsed, mine))
+        name = self.names.get(view.client_id) if view.role is Role.TRAINEE else None
+        self._show(view, "trainee", view.trainee, trainee_html(
+            report, elapsed, mine, audience=self._audience(view.role), name=name or ""))
         if view.instructor is not None:
             self._show(view, "instructor", view.instructor,
-                       instructor_html(report, elapsed, list(self.refusals)))
+                       instructor_html(report, elapsed, list(self.refusals), self.names))
             self._show(view, "history", view.history, history_html(self.history))
 
     @staticmethod

@@ -6,7 +6,7 @@ Each block carries an id (``fr-exercise-*``) and ``data-phase`` for browser test
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from typing import Any
+from typing import Any, Literal, Protocol
 
 from app.ui.style import esc
 
@@ -16,29 +16,64 @@ HISTORY_ID = "fr-exercise-history"
 MAX_ACTIONS_SHOWN = 12
 
 
+class Names(Protocol):
+    def get(self, client_id: int | None) -> str | None: ...
+
+
+Audience = Literal["trainee", "instructor", "open"]
+LATCHED = ("If the rig still shows an alarm, reset it (Reset fault, resync, alarm reset), then "
+           "press <i>Done</i>.")
+
+
 def trainee_html(report: Mapping[str, Any] | None, elapsed_s: float,
-                 mine: bool = True) -> str:
-    """No hidden fault, no answer, no score: what the trainee is asked and whether the
-    answer is in; ``mine``: this page named it (the first answer counts, another
-    trainee's was refused)."""
+                 mine: bool = True, *, audience: Audience = "trainee", name: str = "") -> str:
+    """The Exercise box. A trainee's: no hidden fault, no answer, no score: what the trainee
+    is asked and whether the answer is in; ``mine``: this page named it (the first answer
+    counts, another's was refused); ``name``: what the instructor's page calls this trainee
+    ("" not yet named). The instructor's (a rig with a token): what the trainees are doing and
+    where the result is, the Instructor folder under it. ``open``: a rig where every page is
+    the instructor and answers too."""
     phase = report["phase"] if report else "none"
-    if report is None:
-        body = ('<span class="fr-muted">No exercise is running. When the instructor starts '
-                "one, the rig gets a hidden fault: find its cause from the LEDs, the codes and "
-                "the log, name it below, then reset what stays latched and press Done.</span>")
+    if audience == "instructor":
+        body = _instructor_words(phase, elapsed_s)
+    elif report is None:
+        starts = ("Start one in the Instructor folder below" if audience == "open" else
+                  "When the instructor starts one")
+        body = (f'<span class="fr-muted">No exercise is running. {starts}, the rig gets a '
+                "hidden fault: find its cause from the LEDs, the codes and the log, name it "
+                "below, then reset what stays latched and press Done.</span>")
     elif phase == "running":
         body = (f"<b>Exercise running</b> ({elapsed_s:.0f} s): the rig has a fault. Find its "
                 "cause, pick it and press <i>Name the cause</i>.")
     elif phase == "answered" and mine:
-        body = ("<b>Answer recorded.</b> If the rig still shows an alarm, reset it (Reset "
-                "fault, resync, alarm reset), then press <i>Done</i>.")
+        body = f"<b>Answer recorded.</b> {LATCHED}"
     elif phase == "answered":
-        body = ("<b>Another trainee named a cause</b> (the first answer counts). If the rig "
-                "still shows an alarm, reset it (Reset fault, resync, alarm reset), then press "
-                "<i>Done</i>.")
+        other = "Another page" if audience == "open" else "Another trainee"
+        body = f"<b>{other} named a cause</b> (the first answer counts). {LATCHED}"
+    elif audience == "open":
+        body = "<b>Exercise finished.</b> The result and the score are in the Instructor folder."
     else:
         body = "<b>Exercise finished.</b> The instructor has your result."
+    if name:
+        body += f'<br><span class="fr-muted">The instructor\'s page calls you {esc(name)}.</span>'
     return f'<div id="{TRAINEE_ID}" data-phase="{phase}" style="font-size:0.85em">{body}</div>'
+
+
+def _instructor_words(phase: str, elapsed_s: float) -> str:
+    if phase == "none":
+        return ('<span class="fr-muted">No exercise is running. Start one in the Instructor '
+                "folder below: the trainees' pages ask them to find the hidden fault's cause, "
+                "name it and press Done. Their answer, their commands and the score show "
+                "there.</span>")
+    if phase == "running":
+        return (f"<b>Exercise running</b> ({elapsed_s:.0f} s): the trainees are looking for the "
+                "cause (the answer is theirs: <i>Name the cause</i> is refused on this page). "
+                "<i>End and score</i> in the Instructor folder ends it.")
+    if phase == "answered":
+        return ("<b>A trainee named a cause</b>: which, and whether it is right, is in the "
+                "Instructor folder. They reset what stays latched and press <i>Done</i>; "
+                "<i>End and score</i> ends it now.")
+    return "<b>Exercise finished.</b> The result and the score are in the Instructor folder."
 
 
 def _score_lines(score: Mapping[str, Any]) -> list[str]:
@@ -49,7 +84,13 @@ def _score_lines(score: Mapping[str, Any]) -> list[str]:
 
 
 def instructor_html(report: Mapping[str, Any] | None, elapsed_s: float,
-                    refusals: Iterable[str] = ()) -> str:
+                    refusals: Iterable[str] = (), names: Names | None = None) -> str:
+    """The instructor's board; ``names``: what it calls the connections (app/classroom/
+    names.py), "trainee 1", ..., never viser's connection numbers."""
+    def who(client_id: int | None) -> str:
+        found = names.get(client_id) if names is not None else None
+        return found or ("the server" if client_id is None else "a page")
+
     phase = report["phase"] if report else "none"
     lines: list[str] = []
     if report is None:
@@ -61,15 +102,15 @@ def instructor_html(report: Mapping[str, Any] | None, elapsed_s: float,
         lines.append(f"<b>Phase</b>: {esc(phase)} &middot; {elapsed_s:.0f} s")
         if report["answer"] is not None:
             verdict = "right" if report["right"] else "wrong"
-            lines.append(f"<b>Answer</b> ({verdict}, at {report['answered_s']:.0f} s): "
-                         f"{esc(report['answer'])}")
+            lines.append(f"<b>Answer</b> ({verdict}, at {report['answered_s']:.0f} s, by "
+                         f"{esc(who(report['answered_by']))}): {esc(report['answer'])}")
         if report["fixed"] is not None:
             lines.append(f"<b>Fault gone</b>: {'yes' if report['fixed'] else 'no'}")
         actions = report["actions"]
         if actions:
             shown = actions[-MAX_ACTIONS_SHOWN:]
             items = "".join(
-                f"<li>{a['t']:.0f} s #{a['client']} {esc(a['text'])}"
+                f"<li>{a['t']:.0f} s {esc(who(a['client']))} {esc(a['text'])}"
                 + (' <span style="color:#a11616">refused</span>' if a["refused"] else "")
                 + "</li>" for a in shown)
             more = len(actions) - len(shown)
