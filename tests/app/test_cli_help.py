@@ -75,6 +75,24 @@ def test_argparse_errors_start_as_ours(argv: list[str], capsys) -> None:
     assert "python -m app: error" not in err and "scenario: error" not in err
 
 
+@pytest.mark.parametrize(("argv", "usage"), [
+    (["scenario", "run", "x.toml", "--bogus"], "usage: python -m app scenario run "),
+    (["scenario", "list", "--bogus"], "usage: python -m app scenario list "),
+    (["ethercat", "export-esi", "--bogus"], "usage: python -m app ethercat export-esi "),
+    (["--bogus"], "usage: python -m app "),
+], ids=lambda v: " ".join(v) if isinstance(v, list) else "")
+def test_an_unknown_flag_shows_the_usage_it_was_given_to(argv: list[str], usage: str,
+                                                          capsys) -> None:
+    """argparse leaves a subcommand's unknown flags to the top parser, which printed its own
+    usage: ``scenario run FILE --bogus`` showed ``python -m app scenario [-h] {list,run} ...``,
+    which names none of run's flags."""
+    err = error_of(argv, capsys)
+    lines = err.splitlines()  # the usage (wrapped where argparse likes), then the error
+    assert lines[0].startswith(usage), err
+    assert not lines[0].startswith(usage + "[-h] {"), err  # not its parent's
+    assert lines[-1] == "fieldrig: error: unrecognized arguments: --bogus", err
+
+
 def test_every_serve_flag_is_in_the_readme() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     flags = [option for action in _serve_parser()._actions for option in action.option_strings
