@@ -6,9 +6,11 @@ external mode and then carries messages both ways (tags in :mod:`app.ethercat_wi
 
 - a pump thread only moves messages between the pipe and two queues;
 - everything that touches a model runs in the simulation thread, in a step listener: AL
-  control writes go to the master's ``external_request`` (the slave model decides), mailbox
-  messages to the slave's :class:`~app.ethercat_wire.coe.CoeServer`, SM2 images to its face,
-  frame counts to ``external_frame`` (one master cycle apart,
+  control writes go to the master's ``external_request`` (the slave model decides), a station
+  address the wire master wrote (0x0010) to ``external_station_address`` (given again to the
+  fresh model after a load), mailbox messages to the slave's
+  :class:`~app.ethercat_wire.coe.CoeServer`, SM2 images to its face, frame counts to
+  ``external_frame`` (one master cycle apart,
   :class:`~app.ethercat_wire.frame_clock.FrameClock`, so a model sees the master's cycle,
   not the report bursts), statistics to ``external_stats``;
 - back to B go the AL status / code when they change, the SM3 image when it changes (packed
@@ -207,6 +209,7 @@ class WireBridge(FromWire, ToWire):
                         for pos, model in enumerate(line)]
         for pos, s in enumerate(self._slaves):
             s.position = pos
+            self._give_station(s)  # a fresh model (a load): the address B's ESC still holds
 
     def _new_run(self) -> None:
         """The rig was loaded afresh: its clock went back to 0 and its master is a fresh one,
@@ -226,7 +229,7 @@ class WireBridge(FromWire, ToWire):
         s = WireSlave(position, model, face, CoeServer(face, model))
         if was is not None:
             s.status, s.inputs, s.alias = was.status, was.inputs, was.alias
-            s.esc_errors, s.clock = was.esc_errors, was.clock
+            s.esc_errors, s.clock, s.station = was.esc_errors, was.clock, was.station
         return s
 
     def _all_ready(self) -> bool:

@@ -157,7 +157,10 @@ class Esc:
 
     def _after_register_write(self, ado: int, end: int, data: bytes) -> None:
         if ado < R.STATION_ADDRESS + 2 and end > R.STATION_ADDRESS:
-            self.station = _U16.unpack_from(self.mem, R.STATION_ADDRESS)[0]
+            station = _U16.unpack_from(self.mem, R.STATION_ADDRESS)[0]
+            if station != self.station:  # the address the master gives the slave: A's too
+                self.station = station
+                self.outbox.append((messages.STATION, self.position, station))
         if ado < R.ERROR_COUNTERS_END and end > R.ERROR_COUNTERS:
             self._error_counters_written(ado, end)
         if ado < R.AL_CONTROL + 2 and end > R.AL_CONTROL:

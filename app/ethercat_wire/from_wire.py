@@ -4,7 +4,8 @@
 AL control writes go to the master's ``external_request`` (the slave model decides), mailbox
 messages to the slave's CoE server, SM2 images, sync manager and DC settings to its face,
 frame counts to the slave's frame clock, statistics to ``external_stats``, ESC counter
-batches and writes to the master's ``external_esc_counts`` / ``external_esc_write``.
+batches and writes to the master's ``external_esc_counts`` / ``external_esc_write``, a
+station address written to ``external_station_address``.
 """
 
 from __future__ import annotations
@@ -86,6 +87,11 @@ class FromWire:
             if s is not None and write is not None:
                 write(s.position, int(message[2]), int(message[3]))
                 self._sync_esc_errors(s, counted=True)  # acknowledged: B stops applying it
+        elif tag == msg.STATION:
+            s = self._slave(message[1])
+            if s is not None:
+                s.station = int(message[2])
+                self._give_station(s)
         elif tag in (msg.AL_CONTROL, msg.MAILBOX, msg.OUTPUTS, msg.DC, msg.SM):
             s = self._slave(message[1])
             if s is not None:
@@ -109,6 +115,13 @@ class FromWire:
             note = getattr(self._master, "external_dc", None)
             if note is not None:
                 note(s.position, dict(payload))
+
+    def _give_station(self: WireBridge, s: WireSlave) -> None:
+        """The station address the wire master wrote to the master model, which hands it to a
+        slave that checks it (the FastCAT, seed 000 §6.19)."""
+        give = getattr(self._master, "external_station_address", None)
+        if give is not None and s.station is not None:
+            give(s.position, s.station)
 
     def _al_control(self: WireBridge, s: WireSlave, value: int) -> None:
         ack = bool(value & AL_ACK)  # "Error Ind Ack": the slave model applies it

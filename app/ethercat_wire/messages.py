@@ -31,6 +31,9 @@ ESC_ERRORS_WRITE = "esc_errors_write"
 # as those registers) since the last batch, in A's run (the last "damage" run); seq numbers the
 # batches from 1, at most every 10 ms
 ESC_COUNTS = "esc_counts"
+# ("station", pos, address): a master's write changed the configured station address (0x0010),
+# the address it gives the slave on the line (the FastCAT compares it, seed 000 §6.19)
+STATION = "station"
 
 # A -> B
 AL_STATUS = "al_status"  # ("al_status", pos, status, code): shown at 0x0130 / 0x0134
@@ -51,7 +54,7 @@ DAMAGE = "damage"
 STOP = "stop"  # ("stop",)
 
 B_TO_A = (READY, AL_CONTROL, MAILBOX, OUTPUTS, CYCLE, DC, SM, STATS, ERROR, ESC_ERRORS_WRITE,
-          ESC_COUNTS)
+          ESC_COUNTS, STATION)
 A_TO_B = (AL_STATUS, MAILBOX_REPLY, INPUTS, LINK, SILENT, ALIAS, ESC_ERRORS, DAMAGE, STOP)
 
 CYCLE_REPORT_S = 0.010  # "cycle" at most this often

@@ -1,5 +1,6 @@
 """What the bridge keeps per slave of the line: its face, CoE server, frame clock, and what
-process B was last told of it (AL status, SM3 image, alias, ESC error counters)."""
+process B was last told of it (AL status, SM3 image, alias, ESC error counters) and the station
+address B last reported."""
 
 from __future__ import annotations
 
@@ -22,6 +23,9 @@ class WireSlave:
     # (starts, configured station alias) B was last told (the description's, then sent): a new
     # start reloads 0x0012 (None: from the stored SII word 4)
     alias: tuple[int, int | None] | None = None
+    # the configured station address (0x0010) the wire master last wrote, as B reported it
+    # (None: none yet; B's ESC powers up with 0): given again to a model reset in place
+    station: int | None = None
     inputs_due_us: int = 0
     esc_errors: bytes = bytes(20)  # 0x0300-0x0313 last sent (B powers on with zeros)
     clock: FrameClock = field(default_factory=lambda: FrameClock())

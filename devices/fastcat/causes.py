@@ -111,6 +111,9 @@ def _fact(fc: FastCat, alarm: Alarm) -> str:
     if key == (COUPLER, 0x02) and fc.stored is not None:
         return (f"flash has {len(fc.stored)} modules, the last scan found {len(fc.detected)}: "
                 f"module {n} ({fc.stored[n - 1]}) missing")
+    if key == (COUPLER, 0x12) and fc.wire_station is not None:
+        return (f"rotary switch read {fc.rotary_read} at power-up, the wire master's station "
+                f"address (0x0010) is {fc.wire_station}")
     if key == (COUPLER, 0x12):
         return (f"rotary switch read {fc.rotary_read} at power-up, the master's address is "
                 f"{fc.master_address}")

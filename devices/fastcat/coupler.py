@@ -79,7 +79,10 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         self.flash = flash if flash is not None else MemoryFlash()
         self.stored = self._load_stored()
         self.rotary_switch = rotary_switch
-        self.master_address = master_address
+        self.master_address = master_address  # the built-in master's, for §6.19's check
+        # §6.19 with a master on the wire: the configured station address (ESC 0x0010) it
+        # wrote; None while the built-in master drives the line (faults.py logical_address)
+        self.wire_station: int | None = None
         self.box_name = box_name
         self.station_address = station_address
         self.serial = self.rng.getrandbits(32)
@@ -215,6 +218,16 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         requested OP -> SAFEOP, the outputs follow the ESM at the next exchange (bus.py: enabled
         in OP only), so that step runs in full."""
         self._touched = True
+
+    def take_station_address(self, address: int | None) -> None:
+        """The master that drives the line gave the coupler its address: a wire master's
+        configured station address (ESC 0x0010), or None for the built-in master, whose own
+        setting is ``master_address`` (seed 000 §6.19, docs/fastcat-coupler.md "Address
+        check"). Kept over a power cycle: the register is the ESC's, which the wire keeps and
+        a master writes again, unchanged, when it brings the slave back."""
+        if address != self.wire_station:
+            self.wire_station = address
+            self._touched = True  # the cause of a latched 0x12 may be gone (faults.py)
 
     def request_state(self, target: AlState, ack: bool = False) -> None:
         """AL control write. The answer is in ``al_status`` / ``al_status_code``."""

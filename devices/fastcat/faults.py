@@ -65,6 +65,7 @@ class FaultsMixin:
     address_check: int
     rotary_read: int
     master_address: int
+    wire_station: int | None
     reset_bit: int
     mailbox: list[bytes]
     rail: list[IoModule | None]
@@ -153,8 +154,15 @@ class FaultsMixin:
         self._scan_causes_key = (self.detected, stored, tuple(out))
         return tuple(out)
 
+    def logical_address(self) -> int:
+        """§6.19's «indirizzo logico assegnato dal master Ethercat»: the configured station
+        address a wire master wrote (ESC 0x0010, whole: a value above 15 never matches the
+        switch), else the built-in master's own setting (the rig file's ``master_address``)."""
+        station = self.wire_station
+        return self.master_address if station is None else station
+
     def _address_mismatch(self) -> bool:
-        return self.rotary_read != self.master_address
+        return self.rotary_read != self.logical_address()
 
     def _slot_mismatch(self) -> int | None:
         """§7.5 0x14: the first slot n where the master's 0xF030.n is not the 0xF050.n found

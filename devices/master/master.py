@@ -227,7 +227,25 @@ class EtherCatMaster(LineMixin, StartupMixin, SpanMixin, ViewMixin, DeviceModel)
 
     # ---- external mode (a wire master drives the line, issue 8) -------------------------------
     def set_external(self, on: bool) -> None:
+        """A wire master takes the line (``on``) or hands it back. Who drives the line is who
+        gives each slave its station address: a slave that checks it (the FastCAT's address
+        check, seed 000 §6.19) compares the ESC's 0x0010, 0 until the wire master writes it
+        (:meth:`external_station_address`), or the built-in master's own setting (None)."""
         self.external = on
+        for link in self.links:
+            self._give_station(link.slave, 0 if on else None)
+
+    @staticmethod
+    def _give_station(slave: Slave, address: int | None) -> None:
+        take = getattr(slave, "take_station_address", None)
+        if take is not None:
+            take(address)
+
+    def external_station_address(self, position: int, address: int) -> None:
+        """A wire master wrote a slave's configured station address (ESC 0x0010, ETG.1000.4):
+        the address it gives that slave on the line. The master's own view (log lines, panel)
+        keeps naming the slave by the built-in master's address."""
+        self._give_station(self.links[self._position(position, "position")].slave, address)
 
     def external_request(self, position: int, state: AlState, ack: bool = False) -> None:
         """A wire master's AL control write: ``ack`` is its bit 4 (ETG.1000.6), as written."""

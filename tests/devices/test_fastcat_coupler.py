@@ -545,6 +545,42 @@ def test_address_check_on_the_transition_to_op() -> None:
     assert bench.fc.al_state is AlState.OP and bench.read(0x5302, 0) == 1
 
 
+@pytest.mark.parametrize(("rotary", "station", "op"), [
+    (3, 3, True),  # the wire master's 0x0010 decides, not master_address (1)
+    (1, 1001, False),  # TwinCAT's default EtherCAT Addr: above 15, never the switch
+    (3, 0x0103, False),  # compared whole: the low byte alone is not the address
+])
+def test_address_check_compares_the_wire_masters_station_address(rotary: int, station: int,
+                                                                  op: bool) -> None:
+    """§6.19 «l'indirizzo logico assegnato dal master Ethercat»: with a master on the wire, the
+    configured station address it wrote (ESC 0x0010); ``master_address`` is the built-in
+    master's (docs/fastcat-coupler.md "Address check")."""
+    bench = Bench(rotary_switch=rotary, master_address=1)
+    bench.fc.take_station_address(station)
+    bench.to_state(AlState.SAFEOP)
+    bench.write(0x5301, 0, 1)
+    bench.fc.request_state(AlState.OP)
+    assert (bench.fc.al_state is AlState.OP) is op
+    assert bench.read(0x5400, 0) == (0 if op else 0x1200_0000)
+
+
+def test_the_wire_masters_address_corrected_lets_reset_fault_clear_0x12() -> None:
+    """The cause of 0x12 is the mismatch: once the master writes the switch's address, the
+    Reset fault edge (§6.17) clears the alarm; None hands the check back to the built-in
+    master's master_address."""
+    bench = Bench(rotary_switch=3, master_address=3)
+    bench.fc.take_station_address(1001)
+    bench.to_state(AlState.SAFEOP)
+    bench.write(0x5301, 0, 1)
+    bench.fc.request_state(AlState.OP)
+    assert bench.fc.al_status_code == 0x8012
+    bench.reset_fault()
+    assert bench.fc.alarm is not None  # cause present: refused
+    bench.fc.take_station_address(None)  # the built-in master's 3 again
+    bench.reset_fault()
+    assert bench.fc.alarm is None
+
+
 def test_address_check_disabled_by_default() -> None:
     bench = Bench(rotary_switch=3, master_address=1)
     bench.to_state(AlState.OP)

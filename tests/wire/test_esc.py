@@ -188,6 +188,7 @@ def test_sm_registers_go_to_process_a_when_they_change():
     send nothing."""
     line, outbox, _ = make_line(1)
     addressed(line)
+    outbox.clear()  # the station address written (test_fastcat_address_wire.py)
     sm0 = struct.pack("<HHBBBB", 0x1000, 128, 0x26, 0, 1, 0)
     one(line, Cmd.FPWR, 0x1001, R.SM0, sm0)
     assert outbox == [(messages.SM, 0, ((0x1000, 128, 0x26, True), (0, 0, 0, False),

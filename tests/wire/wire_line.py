@@ -14,11 +14,12 @@ LINE = ("fastcat", "trscat", "cpx", "drive_ecat-ecat")
 
 
 def line_spec(name: str = "wire", seed: int = 3, cpx_dil: tuple[bool, bool] = (False, True),
-              cpx_rotary: int = 0) -> str:
+              cpx_rotary: int = 0, fastcat_rotary: int = 1) -> str:
     """A rig file with the master and the four slaves of the default line, one expansion and
     four CPX modules: every slave has outputs and inputs (SOEM's expected WKC 3 per slave).
     The CPX-E-EC runs with status bits unless ``cpx_dil`` (DIL 1, DIL 2; Tab. 6) says else,
-    its rotary switches (Explicit Device ID, Tab. 5) at ``cpx_rotary``."""
+    its rotary switches (Explicit Device ID, Tab. 5) at ``cpx_rotary``; the FastCAT's rotary
+    switch (seed 000 §6.19) at ``fastcat_rotary``, the built-in master's address for it at 1."""
     dil1, dil2 = (str(d).lower() for d in cpx_dil)
     return f"""
 [rig]
@@ -29,6 +30,8 @@ step_ms = 1
 line = {list(LINE)!r}
 [[fastcat]]
 id = "fastcat"
+rotary_switch = {fastcat_rotary}
+master_address = 1
 modules = ["DI16", "DO16", "AI8D"]
 [[trscat]]
 id = "trscat"
