@@ -424,6 +424,30 @@ def test_fastcat_fault_reaches_the_master_as_the_seed_emergency(session: SoemLin
     assert got == (0xFF00, 0x81, 0x02, 0x0000, 0x0004)
 
 
+def test_fastcat_address_check_compares_the_station_address_soem_gave_it(session: SoemLine):
+    """Seed 000 §6.19: with 0x5301 = 1 the coupler compares its rotary switch (1 here, as the
+    rig file's master_address) with «l'indirizzo logico assegnato dal master Ethercat», the
+    configured station address SOEM's config_init wrote (0x1001): different, so OP is refused
+    with CO_E_ADDRESS_MASTER_NOT_OK, emergency data 0x12000000 and AL status code 0x8012
+    (§7.5, §7.7). SOEM cannot give a slave another address (its configadr is 0x1000 + n): the
+    equal case is tests/wire/test_fastcat_address_wire.py's."""
+    runtime, master = session.at_least(Stage.OP).runtime, session.master
+    session.left(Stage.MAPPED)  # the FastCAT in PRE-OP with 0x12: brought up again from a scan
+    master("drain")
+    state, _ = master("slave_state", 0, AlState.SAFEOP | 0x10, STATE_TIMEOUT_S)
+    assert state & 0x1F == AlState.SAFEOP
+    master("sdo_write", 0, 0x5301, 0, b"\x01")
+    try:
+        state, al_status = master("slave_state", 0, AlState.OP, 3.0)
+        got = master("emergency", 0, 5.0)
+    finally:  # the check off again for the tests after
+        master("sdo_write", 0, 0x5301, 0, b"\x00")
+    assert (state & 0x0F, state & 0x10, al_status) == (AlState.PREOP, 0x10, 0x8012)
+    assert got == (0xFF00, 0x81, 0x00, 0x0000, 0x0012)  # data 00 00 00 12 00
+    alarm = model_call(runtime, lambda: runtime.rig.snapshot()["devices"]["fastcat"]["alarm"])
+    assert (alarm["code"], alarm["name"]) == (0x12, "ADDRESS_MASTER_NOT_OK")
+
+
 def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
