@@ -20,16 +20,20 @@ RAIL = ("DB16", "DI16", "DO16", "AI8D")
 
 
 class Coupler:
-    """A FastCAT stepped by hand, its configuration stored by a CNF press (§2)."""
+    """A FastCAT stepped by hand, its configuration stored by a CNF press (§2), brought to OP
+    with a master's frame after every step from SAFEOP on (its SM watchdog wants them)."""
 
     def __init__(self) -> None:
         self.fc = FastCat("fastcat", random.Random(3), [(m, {}) for m in RAIL],
                           flash=MemoryFlash())
         self.now = 0
+        self.frames = False
         self.run(3.0)
         self.fc.apply("hold_cnf", {"seconds": 3.5})
         self.run(7.0)
         assert self.fc.stored == list(RAIL)
+        self.frames = True
+        self.fc.exchange_frame(self.now)
         for target in (AlState.PREOP, AlState.SAFEOP, AlState.OP):
             self.fc.request_state(target)
         assert self.fc.al_state is AlState.OP
@@ -39,6 +43,8 @@ class Coupler:
         while self.now < end:
             self.now += STEP_US
             self.fc.step(self.now)
+            if self.frames:
+                self.fc.exchange_frame(self.now)
 
     def apply(self, action: str, module: int | None = None, **args: object) -> None:
         self.fc.apply(action, args, module)

@@ -1,7 +1,10 @@
 """Test bench for the FastCAT coupler and the built-in master: a 1 ms clock and an event log.
 
 Devices step in rig order (coupler first, master last, as app/rig.py does) and their events
-are collected in emission order, like the scenario runner prints them.
+are collected in emission order, like the scenario runner prints them. Without the master,
+``frames`` stands for its cyclic frames: a frame after every coupler step, as the built-in
+master sends them. ``to_state`` turns it on for SAFEOP and OP (a master that asks for them
+writes process data; the coupler's SM watchdog wants them, docs/fastcat-coupler.md).
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ class Bench:
             self.master = EtherCatMaster("master", random.Random(seed + 1), slaves=[self.fc],
                                          **extra)
         self.now = 0
+        self.frames = False  # the stand-in for the master's cyclic frames (no master only)
         self.events: list[Event] = []
         self._collect()
 
@@ -54,6 +58,8 @@ class Bench:
         self.now += STEP_US
         for device in self._devices():
             device.step(self.now)
+        if self.frames and self.master is None:
+            self.fc.exchange_frame(self.now)
         self._collect()
 
     def run(self, seconds: float) -> None:
@@ -79,13 +85,22 @@ class Bench:
         return result
 
     def to_state(self, state: AlState) -> None:
-        """Walk the ESM up without a master (each request answered at once)."""
+        """Walk the ESM up without a master (each request answered at once); from SAFEOP
+        on the frames run, and the step's frame is there when OP is asked."""
         self.settle()
         path = [AlState.PREOP, AlState.SAFEOP, AlState.OP]
         for target in path[:path.index(state) + 1]:
+            if target is AlState.SAFEOP and self.master is None:
+                self.start_frames()
             self.fc.request_state(target)
             self._collect()
         assert self.fc.al_state is state, self.fc.snapshot()
+
+    def start_frames(self) -> None:
+        """The master's cyclic frames from now on, this step's frame included."""
+        assert self.master is None, "the master sends its own frames"
+        self.frames = True
+        self.fc.exchange_frame(self.now)
 
     def records(self, kind: str | None = None, since: int = 0) -> list[dict[str, Any]]:
         return [e.to_record() for e in self.events[since:] if kind is None or e.kind == kind]

@@ -73,6 +73,7 @@ def test_a_module_alarm_refuses_no_state_request() -> None:
     bench.apply("inject_fault", module=2, fault="TARATURA")
     bench.step()
     assert bench.fc.alarm is not None
+    bench.start_frames()  # the master's process data (the SM watchdog wants them for OP)
     for target in (AlState.SAFEOP, AlState.OP):
         bench.fc.request_state(target)
         assert bench.fc.al_state is target
@@ -170,6 +171,7 @@ def test_an_address_check_behind_a_module_alarm_waits_and_op_is_reached() -> Non
     bench.write(0x5301, 0, 1)
     bench.apply("inject_fault", module=2, fault="TARATURA")
     bench.step()
+    bench.start_frames()  # the master's process data (the SM watchdog wants them for OP)
     bench.fc.request_state(AlState.SAFEOP)
     since = bench.mark()
     bench.fc.request_state(AlState.OP)
