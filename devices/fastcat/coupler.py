@@ -28,7 +28,7 @@ from devices.fastcat.bus import BusMixin
 from devices.fastcat.catalog import module_type
 from devices.fastcat.causes import cause_facts, config_view, expected_in_slot
 from devices.fastcat.cnf import BusScan, CnfButton, ScanPhase
-from devices.fastcat.esm import Esm, request_refusal
+from devices.fastcat.esm import SM_WATCHDOG, SM_WATCHDOG_US, ErrorKind, Esm, request_refusal
 from devices.fastcat.faults import FaultsMixin
 from devices.fastcat.leds_fastcat import (
     err_led,
@@ -52,7 +52,9 @@ ACTIVITY_WINDOW_US = 50_000  # LINK flickers while the master sent a frame this 
 QUIET_FOREVER_STEPS = 1 << 40  # a quiet span with no end of its own (the rig caps it)
 # Enum members read every step, bound once here: CPython 3.11 reads an enum class's
 # attribute on a slow path (EnumType.__getattr__; docs/performance.md "Session 21").
-_INIT, _NO_CNF = AlState.INIT, ScanPhase.IDLE
+_INIT, _OP, _NO_CNF = AlState.INIT, AlState.OP, ScanPhase.IDLE
+# A span with LINK activity ends at its lapse, before the SM watchdog can expire (quiet_until).
+assert ACTIVITY_WINDOW_US < SM_WATCHDOG_US
 
 
 class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, DeviceModel):
@@ -252,6 +254,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         elif target in (AlState.SAFEOP, AlState.OP) and self.alarm is not None \
                 and (code := self.alarm.refusal_code) is not None:
             esm.refuse(code, now)  # a coupler alarm; a module alarm bars nothing
+        elif esm.state is AlState.SAFEOP and target is AlState.OP \
+                and not self._process_data_fresh(now):
+            esm.refuse(SM_WATCHDOG, now, ErrorKind.WATCHDOG)  # SSC: outputs first (bWdTrigger)
         elif esm.state is AlState.PREOP and target is AlState.SAFEOP \
                 and self._slot_mismatch() is not None:
             self.slot_fault = True  # §7.5 0x14: checked on the transition to SAFEOP
@@ -268,6 +273,11 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         if esm.state is AlState.OP and self.sm2_waiting:
             self._take_waiting_outputs()
         self._refresh()
+
+    def _process_data_fresh(self, now_us: int) -> bool:
+        """A master's frame (its SM2 write) came within the SM watchdog time."""
+        last = self.last_frame_us
+        return last is not None and now_us - last <= SM_WATCHDOG_US
 
     def write_process_output(self, index: int, sub: int, value: int) -> None:
         """An RxPDO entry of the master's process image (SM2; the wire face's outputs). The
@@ -336,6 +346,10 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
             return now + max(0, (last + ACTIVITY_WINDOW_US - now) // step_us) * step_us
         if last is not None and now + step_us - last <= ACTIVITY_WINDOW_US:
             return now  # a frame since the settled step: the next step sees activity
+        if self.esm.state is _OP:  # the SM watchdog expires at the first step after last + WD
+            if last is None:
+                return now
+            return now + max(0, (last + SM_WATCHDOG_US - now) // step_us) * step_us
         return now + QUIET_FOREVER_STEPS * step_us  # off, and stays off without frames
 
     def skip_to(self, t_us: int, step_us: int) -> None:
@@ -354,7 +368,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         # LINK activity: only the master's frame (exchange_frame, outside this step) moves
         # last_frame_us, so it is the same at the start and the end of the step
         activity = self._activity(now_us)
-        if not self._touched and self._settled == (dt_us, activity):
+        if not self._touched and self._settled == (dt_us, activity) \
+                and (activity or not self._watchdog_due(now_us)):
             return  # the same inputs as a step that changed nothing: nothing changes
         touched = self._modules_touched
         if self._touched:
@@ -364,6 +379,8 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         queued = len(self.events.items)
         if self.cnf.release_due(now_us):
             self._on_cnf_release()
+        if self._watchdog_due(now_us):  # before the exchange: this cycle's outputs are safe
+            self.esm.fall_to(AlState.SAFEOP, ErrorKind.WATCHDOG, SM_WATCHDOG, now_us)
         if self.scan is not None:
             self._exchange_key = None  # no cycle: the next one starts afresh
             self._answer_cache = None  # the scan may bind other modules (bus.py)
@@ -388,6 +405,11 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
     def _build_od(self) -> None:
         """The object dictionary of the modules now bound; writes into it touch the model."""
         self.od = build_od(self, self.bound, self.serial, self._touch)
+
+    def _watchdog_due(self, now_us: int) -> bool:
+        """The SM watchdog expired in OP: no process data for more than SM_WATCHDOG_US (ESC
+        0x0420). Activity (a frame within ACTIVITY_WINDOW_US) rules it out."""
+        return self.esm.state is _OP and not self._process_data_fresh(now_us)
 
     def _activity(self, now_us: int) -> bool:
         """LINK traffic: the master sent a frame within the activity window."""

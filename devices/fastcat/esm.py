@@ -19,6 +19,11 @@ from devices.ethercat import AlState
 INVALID_STATE_CHANGE = esm.INVALID_STATE_CHANGE  # "Invalid requested state change"
 BOOTSTRAP_NOT_SUPPORTED = esm.BOOTSTRAP_NOT_SUPPORTED  # the FastCAT has no BOOT state
 NO_ERROR = esm.NO_ERROR
+# §7.7 "Sync manager watchdog": no process data (SM2) for the watchdog time, in OP it drops the
+# coupler to SAFEOP, and SAFEOP -> OP without process data in that time is refused (the ESI's
+# SM2 control 0x64 has the watchdog trigger on; SSC firmware, docs/fastcat-coupler.md).
+SM_WATCHDOG = 0x001B
+SM_WATCHDOG_US = 100_000  # ESC default: 0x0420 = 1000 x 100 us (the 0x0400 divider)
 
 # INIT -> BOOT: 0x0013 (no BOOT state); BOOT from PREOP / SAFEOP / OP and any other request
 # outside ALLOWED_TRANSITIONS: 0x0011 (ETG.1000.6, the shared rule).
@@ -31,6 +36,7 @@ class ErrorKind(enum.Enum):
     NONE = "none"
     REFUSED = "refused"  # a requested transition was refused: ERR blinking
     AUTONOMOUS = "autonomous"  # the slave left OP/SAFEOP on its own: ERR single flash
+    WATCHDOG = "watchdog"  # the SM watchdog (0x001B), a fall or a refusal: ERR double flash
 
 
 @dataclass(slots=True)  # as devices/esm.py's

@@ -39,6 +39,9 @@ ERR_BY_ESM_ERROR: dict[ErrorKind, LedPattern] = {
     ErrorKind.NONE: LedPattern.OFF,
     ErrorKind.REFUSED: LedPattern.BLINKING,
     ErrorKind.AUTONOMOUS: LedPattern.SINGLE_FLASH,
+    # ETG.1300 "double flash: an application watchdog timeout has occurred"; the SSC shows it
+    # for AL status code 0x001B with the error flag, whether the slave fell or refused OP
+    ErrorKind.WATCHDOG: LedPattern.DOUBLE_FLASH,
 }
 
 

@@ -105,10 +105,12 @@ def differential(build: Callable[[], Rig], ops: Callable[[random.Random], Op], s
     return skipping.skipped_steps
 
 
-def advance_alike(skipping: Rig, stepping: Rig, steps: int, why: object) -> None:
+def advance_alike(skipping: Rig, stepping: Rig, steps: int, why: object) -> list[Any]:
     """``Rig.advance(steps)`` on both, span by span: after each skipped span the stepping rig
     is stepped as far and the two snapshots compared, so a span one step too long shows where
-    it happened, even in a model that would catch up by the end of the stretch."""
+    it happened, even in a model that would catch up by the end of the stretch. Returns the
+    events, the same on both (a span has none)."""
+    events: list[Any] = []
     while steps > 0:
         span = skipping.quiet_steps(steps)
         if span:
@@ -117,5 +119,8 @@ def advance_alike(skipping: Rig, stepping: Rig, steps: int, why: object) -> None
             assert skipping.snapshot() == stepping.snapshot(), (why, "after a span", span)
             steps -= span
         else:
-            assert lines(skipping.step()) == lines(stepping.step()), why
+            stepped = skipping.step()
+            assert lines(stepped) == lines(stepping.step()), why
+            events += stepped
             steps -= 1
+    return events

@@ -24,8 +24,17 @@ from app.rig_config import build_rig, parse_rig_spec
 from devices.device import Action, DeviceModel, Param
 from devices.ethercat import AlState
 from devices.fastcat.coupler import ACTIVITY_WINDOW_US, FastCat
+from devices.fastcat.esm import SM_WATCHDOG_US
 from devices.flash import MemoryFlash
-from tests.hardening.span_runs import Op, deep_state, differential
+from tests.hardening.span_runs import (
+    Op,
+    advance_alike,
+    deep_state,
+    differential,
+    lines,
+    plain,
+    rig_state,
+)
 
 STEP_US = 1_000
 MODULES = ("DB16", "DI16", "DO16", "AI8D", "AO4", "AI8TC", "AX2")  # static/rigs/default.toml
@@ -252,6 +261,37 @@ def test_idle_op_spans_end_at_the_activity_window() -> None:
     assert not fc.frames_quiet()  # a frame now would light LINK activity
     rig.apply("fc", "power", {"on": False})
     assert fc.quiet_until(STEP_US) - fc.now_us > 10**6 * STEP_US and fc.frames_quiet()
+
+
+def test_the_sm_watchdog_expires_right_after_a_span() -> None:
+    """OP, the frames stop: once LINK activity has lapsed the span runs up to the last step
+    within the SM watchdog time (100 ms after the last frame, not one step more), and the
+    step after it takes the coupler to SAFEOP with 0x001B (docs/fastcat-coupler.md "SM
+    watchdog"), on the skipping rig as on the stepping one."""
+    def make() -> Rig:
+        rig = build(9, feeder=True)
+        settle(rig, feeder=True)
+        rig.advance(3)
+        rig.apply("feeder", "send", {"on": False})
+        return rig
+
+    skipping, stepping = make(), plain(make())
+    fc = skipping.devices["fc"]
+    assert isinstance(fc, FastCat) and fc.esm.state is AlState.OP
+    last = fc.last_frame_us
+    assert last is not None and last == fc.now_us
+    advance_alike(skipping, stepping, ACTIVITY_WINDOW_US // STEP_US + 2, "activity lapse")
+    assert lines(skipping.take_events()) == lines(stepping.take_events())
+    assert fc.quiet_until(STEP_US) == last + SM_WATCHDOG_US  # the last step still in OP
+    before = skipping.skipped_steps
+    stepped = advance_alike(skipping, stepping, 200, "watchdog")
+    assert skipping.skipped_steps - before >= 40  # the span up to the watchdog was skipped
+    assert rig_state(skipping) == rig_state(stepping)
+    events = [r for r in (e.to_record() for e in stepped) if r["event"] in ("al_status", "state")]
+    assert [(r["t"], r["event"], r.get("code"), r.get("to")) for r in events] == [
+        ((last + SM_WATCHDOG_US + STEP_US) / 1e6, "al_status", "0x001B", None),
+        ((last + SM_WATCHDOG_US + STEP_US) / 1e6, "state", None, "SAFEOP")]
+    assert fc.quiet_until(STEP_US) - fc.now_us > 10**6 * STEP_US  # SAFEOP: no watchdog
 
 
 def test_busy_coupler_has_no_span() -> None:
