@@ -436,8 +436,10 @@ class Dashboard:
             with self.server.atomic():
                 redraws = self._redraws  # first: one asked from here on is the next tick's
                 events = self._take_events()
+                # A view that failed runs again though the frame has not moved (a paused
+                # rig): what its failure skipped is sent now, not when the frame next moves.
                 fresh = frame.seq != self._frame_seq or frame.t_us != self._t_us or events \
-                    or self._events_untold or redraws != self._redrawn
+                    or self._events_untold or redraws != self._redrawn or bool(self._failing)
                 self._t_us, self._events_untold, self._redrawn = frame.t_us, False, redraws
                 view = self._view_update
                 if fresh:
@@ -470,7 +472,8 @@ class Dashboard:
     def _view_update(self, name: str, update: Callable[..., Any], *args: Any) -> None:
         """One view's part of a tick. Its failure is logged once until it works again and the
         views after it still update: one panel's bug left the Line tab, the drive panels and
-        an instructor's tables frozen for as long as it lasted."""
+        an instructor's tables frozen for as long as it lasted. Until it works again every
+        tick runs it (``tick``'s ``fresh``)."""
         try:
             update(*args)
         except Exception:

@@ -137,10 +137,11 @@ class Cable:
             plugged, at_start, self.master_plugged = True, False, True
         if (plugged, at_start) == self._drawn:
             return
-        self._drawn, self.plugged = (plugged, at_start), plugged
-        for node in self._nodes:
-            node.remove()
-        self._nodes = []
+        # Recorded once the drawing is whole: a write that fails half-way (the dashboard logs
+        # it) leaves it unrecorded, so the next frame draws the cable again, not never.
+        self._drawn, self.plugged = None, plugged
+        while self._nodes:  # each node forgotten as it goes: a retry removes only the rest
+            self._nodes.pop().remove()
         points = self.points if plugged else pulled_route(self.points, at_start)
         colour = PLUGGED if plugged else PULLED
         root = f"/line/cable{self.index}"
@@ -154,13 +155,14 @@ class Cable:
                 f"{root}/seg{n}", color=colour, dimensions=(length + THICK, THICK, THICK),
                 position=((a[0] + b[0]) / 2, CABLE_Y, (a[1] + b[1]) / 2),
                 wxyz=(math.cos(angle / 2), 0.0, math.sin(angle / 2), 0.0))
-            box.on_click(self._clicked)
             self._nodes.append(box)
+            box.on_click(self._clicked)
         x, z = label_point(self.points)
-        self.label_text = cable_label(self.index, plugged, self.points)
+        text = cable_label(self.index, plugged, self.points)
         self._nodes.append(self._scene.add_label(
-            f"{root}/label", self.label_text, position=(x, CABLE_Y, z + LABEL_LIFT),
+            f"{root}/label", text, position=(x, CABLE_Y, z + LABEL_LIFT),
             anchor="bottom-center", font_screen_scale=0.58))
+        self.label_text, self._drawn = text, (plugged, at_start)
 
     def _clicked(self, event: Any) -> None:
         self._on_click(event.client, self.index, self.master_plugged)
