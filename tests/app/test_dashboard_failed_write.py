@@ -21,6 +21,8 @@ import pytest
 from twin_dashboards import differing, failing_write, step, twin
 
 from app.ui.dashboard import Dashboard
+from app.ui.line import master_panel
+from app.ui.panels import event_log
 
 BOOT_STEPS = 5000  # the line in OP
 
@@ -80,4 +82,31 @@ def test_a_cable_whose_drawing_failed_is_drawn_again(
     for board in twins:
         step(board, 1)
         board.tick()
+    assert differing(reference, failing) == []
+
+
+@pytest.mark.parametrize(("module", "renderer"), [
+    (master_panel, "log_table"),  # the Line tab's master log
+    (event_log, "render_rows"),  # the State tab's event log, the master's lines in it
+])
+def test_a_log_that_failed_to_render_is_sent_at_the_next_tick(
+        twins: tuple[Dashboard, Dashboard], monkeypatch: pytest.MonkeyPatch, module: Any,
+        renderer: str) -> None:
+    """The log's signature was recorded before its table was rendered and written: the
+    retry found it unchanged and the page kept the old log until the master's next line."""
+    reference, failing = twins
+    for board in twins:
+        board.runtime.rig.apply("master", "pull_cable", {"cable": 1})  # the master logs it
+        step(board, 300)
+    reference.tick()
+    render = getattr(module, renderer)
+
+    def broken(*_args: Any) -> str:
+        raise RuntimeError("a renderer bug")
+
+    monkeypatch.setattr(module, renderer, broken)
+    failing.tick()
+    assert differing(reference, failing) != []
+    monkeypatch.setattr(module, renderer, render)
+    failing.tick()
     assert differing(reference, failing) == []

@@ -299,8 +299,9 @@ class MasterPanel:
         self._set("esc_errors", self._esc_errors, esc_errors_table(master.get("slaves") or []))
         seen = log_signature(master)
         if seen != self._log_seen:
-            self._log_seen = seen
+            # Recorded once written: a failure on the way is retried at the next tick.
             self._set("log", self._log, log_table(master.get("log") or []))
+            self._log_seen = seen
 
     def text(self, key: str) -> str:
         """What a block shows: ``title``, ``status``, ``live``, ``slaves``, ``esc_errors`` or

@@ -166,7 +166,6 @@ class EventLogPanel:
         seen = (self._order, *log_signature(master_snap or {}))
         if seen == self._seen:
             return
-        self._seen = seen
         rows = list(self._device_rows)
         for i, line in enumerate(log):
             text = str(line.get("text", ""))
@@ -182,3 +181,4 @@ class EventLogPanel:
         if content != self._last:
             self._html.content = content
             self._last = content
+        self._seen = seen  # once written: a failure on the way is retried at the next tick
