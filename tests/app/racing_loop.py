@@ -85,6 +85,8 @@ class LoopThread:
         self.loop.call_soon_threadsafe(cancel_all)
         self.loop.call_soon_threadsafe(self.loop.stop)
         self.thread.join(WAIT_S)
+        if not self.thread.is_alive():
+            self.loop.close()
 
 
 def message(n: int) -> _messages.Message:

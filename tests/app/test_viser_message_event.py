@@ -92,8 +92,11 @@ def test_the_served_buffers_have_the_guard() -> None:
         broadcast = server._websock_server._broadcast_buffer
         assert isinstance(broadcast.message_event, viser_event.LoopEvent)
     # a per-client buffer is built by the same class: the guard is on its __init__
-    assert isinstance(AsyncMessageBuffer(asyncio.new_event_loop(), False).message_event,
-                      viser_event.LoopEvent)
+    loop = asyncio.new_event_loop()
+    try:
+        assert isinstance(AsyncMessageBuffer(loop, False).message_event, viser_event.LoopEvent)
+    finally:
+        loop.close()
 
 
 def test_another_viser_version_is_not_guarded_blindly(
