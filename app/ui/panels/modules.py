@@ -379,6 +379,10 @@ class ModulePanel:
         changed = [(e.get("slot"), e.get("type"), e.get("encoders") is not None)
                    for e in rail] != [(e.get("slot"), e.get("type"),
                                        e.get("encoders") is not None) for e in self._rail]
+        # The Plug type presets again when what they read changes, an empty slot's
+        # ``expected`` too: a CNF or a restore changes flash, not the rail, and the box kept
+        # offering the old expected module until an unrelated rail change.
+        represet = changed or _preset_key(rail) != _preset_key(self._rail)
         self._rail = rail
         if self._faults is not None:
             self._faults.update(changed)
@@ -389,19 +393,24 @@ class ModulePanel:
                 self._rail_key += 1
                 self._actions_of.clear()
                 self._asked.clear()
-            self._preset_pages.clear()  # offered on a rail change: a type picked later stays
             for form in self._rails.each():
                 if form.module is None:
                     form.swap_with.set_options(options)
+        if represet:
+            self._preset_pages.clear()  # offered on such a change: a type picked later stays
         # An instructor's own rows: every copy whose options are not the rail's, not only on
         # the frame the rail changed (a copy built from the rail before that frame and stored
         # after it, by a promote on another thread, kept the old options for good).
         own = list(self._options())
         for form in self._rails.each():
-            if form.module is not None and (changed or list(form.module.options) != own
-                                            or list(form.swap_with.options) != own):
+            if form.module is None:
+                continue
+            moved = changed or list(form.module.options) != own \
+                or list(form.swap_with.options) != own
+            if moved:
                 set_options(form.swap_with, own)
                 set_options(form.module, own)
+            if moved or represet:
                 self._preset(form)
         self._offer()
         self._show_pages()
@@ -438,6 +447,12 @@ class ModulePanel:
             self._preset_pages.add(client_id)
             self._preset_page(client)
         self._preset_pages &= set(self._server.get_clients())
+
+
+def _preset_key(rail: Sequence[Mapping[str, Any]]) -> list[tuple[Any, Any, Any]]:
+    """What the Plug type presets read of the rail (``plug_preset``): each slot's type and,
+    for an empty one, the type it expects."""
+    return [(e.get("slot"), e.get("type"), e.get("expected")) for e in rail]
 
 
 def _id(client: viser.ClientHandle | None) -> int | None:
