@@ -177,13 +177,24 @@ class ActionForm:
             self._params.visible = bool(self._widgets)
 
     def submit(self, client: viser.ClientHandle | None) -> None:
-        name = self._choice.value
+        """Apply the picked action with its own Parameters, or nothing and say so. A pick is
+        two writes, the action (viser, on its loop) then its Parameters (the pick's callback,
+        in viser's threads, where this click runs too), and restrict writes both under the
+        lock: the pick read before the widgets paired one action with the other's Parameters
+        (module_failure sent with ao_overload's ticked ``active``). Read together, under the
+        lock, the pick and the action the Parameters were built for differ until the
+        callback has built them."""
+        with self._lock:
+            name, built = self._choice.value, self._built_for
+            typed = [(p, h.value) for p, h in self._widgets] if name == built else None
         if name not in self._actions:
             return
-        with self._lock:
-            widgets = list(self._widgets)
-        args = checked_args(client, name, self._actions[name],
-                            [(p, h.value) for p, h in widgets])
+        if typed is None:
+            shown = f"still showed {built}'s" if built in self._actions else "had no"
+            notify(client, f"{name} not applied",
+                   f"the form {shown} Parameters; check {name}'s and Apply again", error=True)
+            return
+        args = checked_args(client, name, self._actions[name], typed)
         if args is not None:
             self._apply(client, name, args)
 
