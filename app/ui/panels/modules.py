@@ -380,8 +380,8 @@ class ModulePanel:
                    for e in rail] != [(e.get("slot"), e.get("type"),
                                        e.get("encoders") is not None) for e in self._rail]
         # The Plug type presets again when what they read changes, an empty slot's
-        # ``expected`` too: a CNF or a restore changes flash, not the rail, and the box kept
-        # offering the old expected module until an unrelated rail change.
+        # ``expected`` too: a CNF (flash) or a scan (the last scan) changes it, not the rail,
+        # and the box kept offering the old expected module until an unrelated rail change.
         represet = changed or _preset_key(rail) != _preset_key(self._rail)
         self._rail = rail
         if self._faults is not None:
