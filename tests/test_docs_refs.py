@@ -200,3 +200,29 @@ def test_the_checks_see_a_renamed_name(tmp_path: Path) -> None:
     assert [b.split(": ", 1)[1] for b in rows] == [
         "app/rig.py `GoneClass`", "app/rig.py `GONE_TABLE`", "app/rig.py `gone()`",
         "app/rig.py `gone_name`"]
+
+
+def _map_rows(text: str) -> set[str]:
+    return set(re.findall(r"^\|\s*`((?:app|devices)/[\w/.]*)`\s*\|", text, re.M))
+
+
+def _modules_to_map() -> set[str]:
+    """Each module of app/ and devices/ (not their packages' insides) and each package at any
+    depth: what a newcomer looks for in the module map."""
+    found = set()
+    for top in ("app", "devices"):
+        found |= {f"{top}/{p.name}" for p in (ROOT / top).glob("*.py") if p.name != "__init__.py"}
+        found |= {f"{p.parent.relative_to(ROOT).as_posix()}/"
+                  for p in (ROOT / top).rglob("__init__.py") if p.parent != ROOT / top}
+    return found
+
+
+def test_the_architecture_module_map_names_every_module_and_package() -> None:
+    text = (ROOT / "docs" / "architecture.md").read_text(encoding="utf-8")
+    assert sorted(_modules_to_map() - _map_rows(text)) == []
+
+
+def test_the_module_map_check_sees_a_module_left_out() -> None:
+    text = "| `app/cli.py` | the commands |\n| `devices/servo/` | the drive |\n"
+    assert {"app/cli.py", "devices/servo/"} == _map_rows(text)
+    assert "app/cli.py" in _modules_to_map() and "app/ui/panels/" in _modules_to_map()
