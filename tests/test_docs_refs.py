@@ -226,3 +226,56 @@ def test_the_module_map_check_sees_a_module_left_out() -> None:
     text = "| `app/cli.py` | the commands |\n| `devices/servo/` | the drive |\n"
     assert {"app/cli.py", "devices/servo/"} == _map_rows(text)
     assert "app/cli.py" in _modules_to_map() and "app/ui/panels/" in _modules_to_map()
+
+
+CLASS_ATTR = re.compile(r"([A-Z]\w+)\.(\w+)(?:\(\))?")
+
+
+def _class_bodies() -> dict[str, list[tuple[str, str]]]:
+    """Each class of app/ and devices/ by name: (its bases, its body)."""
+    bodies: dict[str, list[tuple[str, str]]] = {}
+    for path in (p for d in ("app", "devices") for p in (ROOT / d).rglob("*.py")):
+        text = path.read_text(encoding="utf-8") + "\n."
+        for m in re.finditer(r"^class (\w+)(?:\((.*?)\))?:(.*?)(?=^\S)", text, re.M | re.S):
+            bodies.setdefault(m[1], []).append((m[2] or "", m[3]))
+    return bodies
+
+
+def _class_attr_known(cls: str, attr: str, bodies: dict[str, list[tuple[str, str]]],
+                      seen: frozenset[str] = frozenset()) -> bool:
+    """``Rig.touch``: class ``Rig`` of the project, or a base of it, has ``attr`` as a method,
+    a field or a ``self.`` attribute. A class the project does not define (a library's) is
+    not this check's."""
+    if cls not in bodies:
+        return not seen
+    for bases, body in bodies[cls]:
+        if re.search(rf"def {attr}\b|^\s+{attr}\s*[:=]|self\.{attr}\s*[:=]", body, re.M):
+            return True
+        if any(_class_attr_known(b, attr, bodies, seen | {cls}) for b in re.findall(r"\w+", bases)
+               if b in bodies and b not in seen):
+            return True
+    return False
+
+
+def _broken_class_attrs(doc: Path, bodies: dict[str, list[tuple[str, str]]]) -> list[str]:
+    return [f"{doc.name}:{n}: `{span}`" for n, span in _spans(doc.read_text(encoding="utf-8"))
+            if (m := CLASS_ATTR.fullmatch(span)) and not _class_attr_known(m[1], m[2], bodies)]
+
+
+# The docs a newcomer reads first; elsewhere `Class.name` also names LED channels
+# (`Run.orange`, docs/cpx-e-ec.md) and library classes.
+FIRST_READ = [ROOT / "README.md", *(ROOT / "docs" / f"{name}.md"
+                                    for name in ("architecture", "rig-file", "scenarios"))]
+
+
+def test_a_class_and_attribute_a_doc_names_exist() -> None:
+    bodies = _class_bodies()
+    assert [b for doc in FIRST_READ for b in _broken_class_attrs(doc, bodies)] == []
+
+
+def test_the_class_attribute_check_sees_a_renamed_one(tmp_path: Path) -> None:
+    doc = tmp_path / "probe.md"
+    doc.write_text("`Rig.touch` `Rig.revision` `Runtime.submit()` `FastCat.apply` `Rig.untouched`"
+                   " `FastCat.gone` `Library.x`\n")
+    assert [b.split(": ", 1)[1] for b in _broken_class_attrs(doc, _class_bodies())] == [
+        "`Rig.untouched`", "`FastCat.gone`"]
