@@ -19,7 +19,7 @@ from devices.servo import control, ds402
 from devices.servo.actions import DriveActions
 from devices.servo.alarms import AlarmBank, AlarmSpec, Effect, alarm_table
 from devices.servo.config import DriveConfig
-from devices.servo.ds402 import State
+from devices.servo.ds402 import Command, State
 from devices.servo.errors import AccessError
 from devices.servo.io import INPUT_NAMES, LatchFilter
 from devices.servo.leds import network_leds
@@ -301,10 +301,19 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         if self.ten_cmd_held_at_reset and self.state is State.SWITCH_ON_DISABLED:
             return ("not enabled (Switch on disabled after the alarm reset, Ten_cmd held) - "
                     "enable torque again: R00 = 0, then 3")
+        if not self.input_level("ten"):
+            # the consent, not the command: a held Ten_cmd / 0x000F takes 4 when TEN is back
+            if self.state is State.SWITCHED_ON \
+                    and ds402.decode(self.cw) is Command.ENABLE_OPERATION:
+                return ("no torque (TEN input low) - switch TEN on: the enable is held, "
+                        "torque comes back with it")
+            return f"not enabled ({label}, TEN input low) - switch TEN on and enable torque"
         if self.state is not State.OPERATION_ENABLED:
             return f"not enabled ({label}) - enable torque first"
-        if not (self.ien_cmd and self.input_level("ien")):
-            return "motion not enabled (IEN input or Ien_cmd off) - switch IEN on"
+        if not self.input_level("ien"):
+            return "motion not enabled (IEN input low) - switch IEN on: motion resumes with it"
+        if not self.ien_cmd:
+            return "motion not enabled (Ien_cmd off, R00 bit 1) - Enable sets it"
         if self.cw & ds402.CW_HALT:
             # The panel's Enable (R00 = 3) and Move write a control word without it
             stopped = control.HALT_HINT.get(self.fieldbus, control.HALT_HINT_ANY)

@@ -160,3 +160,28 @@ def test_the_ch4_enable_sequence_run_while_ten_is_low_waits_for_ten() -> None:
     _set(sim, "ten", True)
     sim.run(1)
     assert sim.drive.state is State.OPERATION_ENABLED
+
+
+def test_the_jog_notice_names_the_consent_that_is_low() -> None:
+    """The panel's Enable writes R00 = 3, which a held Ten_cmd already is: with TEN low the
+    notice sends the trainee to the input, and says whether the command is still there."""
+    sim = make_sim()
+    d = sim.drive
+    _set(sim, "ten", False)
+    sim.run(1)
+    assert d.motion_blocked() == \
+        "not enabled (Switch on disabled, TEN input low) - switch TEN on and enable torque"
+    d.apply("enable", {"on": True})
+    sim.run(1)
+    assert d.state is State.SWITCHED_ON
+    assert d.apply("jog", {"direction": 1}) == \
+        "no torque (TEN input low) - switch TEN on: the enable is held, torque comes back with it"
+    _set(sim, "ten", True)
+    sim.run(1)
+    assert d.motion_blocked() is None
+    _set(sim, "ien", False)
+    assert d.motion_blocked() == \
+        "motion not enabled (IEN input low) - switch IEN on: motion resumes with it"
+    _set(sim, "ien", True)
+    sim.w(0, 0x01)  # Ten_cmd only
+    assert d.motion_blocked() == "motion not enabled (Ien_cmd off, R00 bit 1) - Enable sets it"
