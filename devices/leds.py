@@ -11,6 +11,7 @@ import enum
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
+from devices.ethercat import AlState
 from devices.events import Event, LedChanged
 
 
@@ -51,6 +52,24 @@ def is_lit(pattern: LedPattern, t_us: int) -> bool:
         phase_ms -= span
         lit = not lit
     return False  # unreachable: the spans sum to the period
+
+
+# ETG.1300 RUN indicator, the same on every slave that follows it (the FastCAT, the TRS-CAT, the
+# drive's CoE Status LED); the CPX-E-EC's two-colour Run has its own table (seed 002 Tab. 11).
+RUN_BY_STATE: dict[AlState, LedPattern] = {
+    AlState.INIT: LedPattern.OFF,
+    AlState.PREOP: LedPattern.BLINKING,
+    AlState.SAFEOP: LedPattern.SINGLE_FLASH,
+    AlState.OP: LedPattern.ON,
+    AlState.BOOT: LedPattern.FLICKERING,
+}
+
+
+def link_led(powered: bool, link: bool, activity: bool) -> LedPattern:
+    """ETG.1300 L/A: off = no link, flickering = link and traffic, on = link, no traffic."""
+    if not powered or not link:
+        return LedPattern.OFF
+    return LedPattern.FLICKERING if activity else LedPattern.ON
 
 
 @dataclass

@@ -18,9 +18,8 @@ from dataclasses import dataclass
 
 from devices.coe.esm import CONTROLLER_ALARMS, ErrorKind
 from devices.ethercat import AlState
-from devices.leds import LedPattern
+from devices.leds import RUN_BY_STATE, LedPattern, link_led
 from devices.servo.leds import ERROR, LINK_IN, LINK_OUT, STATUS
-from devices.trscat.indicators import RUN_BY_STATE, link_led
 
 __all__ = ["ERROR", "LINK_IN", "LINK_OUT", "STATUS", "LedInputs", "alarm_led",
            "wanted_patterns"]

@@ -32,7 +32,6 @@ from devices.fastcat.esm import SM_WATCHDOG, SM_WATCHDOG_US, ErrorKind, Esm, req
 from devices.fastcat.faults import FaultsMixin
 from devices.fastcat.leds_fastcat import (
     err_led,
-    link_led,
     module_led_patterns,
     module_light,
     run_led,
@@ -41,7 +40,7 @@ from devices.fastcat.modules import IoModule
 from devices.fastcat.objects import MAX_MODULES, build_od
 from devices.fastcat.rail import COUPLER_ACTIONS, MODULE_ACTIONS, RailMixin
 from devices.flash import FlashError, FlashStore, MemoryFlash
-from devices.leds import LedBank
+from devices.leds import LedBank, link_led
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
 
 logger = logging.getLogger(__name__)

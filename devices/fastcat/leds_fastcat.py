@@ -14,16 +14,7 @@ from devices.ethercat import AlState
 from devices.fastcat.alarms import COUPLER, Alarm
 from devices.fastcat.cnf import BusScan, ScanPhase
 from devices.fastcat.esm import ErrorKind
-from devices.leds import LedPattern
-
-# ETG.1300 RUN indicator.
-RUN_BY_STATE: dict[AlState, LedPattern] = {
-    AlState.INIT: LedPattern.OFF,
-    AlState.PREOP: LedPattern.BLINKING,
-    AlState.SAFEOP: LedPattern.SINGLE_FLASH,
-    AlState.OP: LedPattern.ON,
-    AlState.BOOT: LedPattern.FLICKERING,
-}
+from devices.leds import RUN_BY_STATE, LedPattern
 
 # ETG.1300 ERR indicator: "blinking = invalid configuration", "flickering = booting error",
 # "single flash = local error". Latched alarms that say the hardware configuration is wrong
@@ -60,13 +51,6 @@ def err_led(powered: bool, alarm: Alarm | None, esm_error: ErrorKind) -> LedPatt
         # flag and keeps the ESM: ERR follows the flag (ETG.1300), the module reds show it.
         return LedPattern.SINGLE_FLASH
     return pattern
-
-
-def link_led(powered: bool, link: bool, activity: bool) -> LedPattern:
-    """ETG.1300 L/A: off = no link, flickering = link and traffic, on = link, no traffic."""
-    if not powered or not link:
-        return LedPattern.OFF
-    return LedPattern.FLICKERING if activity else LedPattern.ON
 
 
 class ModuleLight(enum.Enum):

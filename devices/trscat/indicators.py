@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from devices.ethercat import AlState
-from devices.leds import LedPattern
+from devices.leds import RUN_BY_STATE, LedPattern, link_led
 from devices.trscat.esm import ErrorKind
 
 RUN = "RUN"
@@ -20,15 +20,6 @@ LINK_OUT = "LINK-ACT OUT"
 BUS = "BUS"
 FIELD = "+24V"
 IO_LED = "I/O {}"  # §10: the terminals are labelled I/O 1 .. I/O 16
-
-# ETG.1300 RUN indicator.
-RUN_BY_STATE: dict[AlState, LedPattern] = {
-    AlState.INIT: LedPattern.OFF,
-    AlState.PREOP: LedPattern.BLINKING,
-    AlState.SAFEOP: LedPattern.SINGLE_FLASH,
-    AlState.OP: LedPattern.ON,
-    AlState.BOOT: LedPattern.FLICKERING,
-}
 
 # ETG.1300 ERR indicator: blinking = invalid configuration (a refused request), single flash =
 # local error (the device left OP on its own: sync error), double flash = process-data
@@ -51,13 +42,6 @@ _IO_NAMES = tuple(IO_LED.format(n) for n in range(1, 17))
 
 def _on(lit: bool) -> LedPattern:
     return LedPattern.ON if lit else LedPattern.OFF
-
-
-def link_led(powered: bool, link: bool, activity: bool) -> LedPattern:
-    """ETG.1300 L/A: off = no link, flickering = link and traffic, on = link, no traffic."""
-    if not powered or not link:
-        return LedPattern.OFF
-    return LedPattern.FLICKERING if activity else LedPattern.ON
 
 
 @dataclass(frozen=True)
