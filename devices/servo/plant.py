@@ -75,37 +75,51 @@ class Plant:
              vmax: float = math.inf) -> None:
         """Advance dt seconds following ``demand`` (None: no torque, the motor coasts) at no
         more than ``vmax`` rev/s (d3, the motor's maximum speed)."""
-        before = self.theta
         if self.jammed:
             self.omega = 0.0
             self._last_demand = demand
             return
-        if demand is None:
-            self.omega *= math.exp(-dt / COAST_TIME_CONSTANT_S)
-            if abs(self.omega) < STOPPED_REV_S:
-                self.omega = 0.0
-            new = self.theta + self.omega * dt
-        else:
-            # exact response of a first-order lag to a demand ramping linearly over the step
-            previous = self._last_demand
-            if previous is None:
-                previous = demand
-            rate = (demand - previous) / dt if dt > 0.0 else 0.0
-            decay = _exp(-dt / lag) if lag > 0.0 else 0.0
-            new = demand - rate * lag + (before - previous + rate * lag) * decay
-            if abs(demand - new) < SETTLED_REV:
-                new = demand
-            # the speed loop saturates at Vmax: a demand that runs away (electronic axis,
-            # interpolator) leaves the motor behind, and the following error grows
-            reach = vmax * dt
-            if new - before > reach:
-                new = before + reach
-            elif before - new > reach:
-                new = before - reach
+        if demand is not None:
+            follow_demand(self, demand, lag, vmax, dt)
+            return
+        before = self.theta
+        self.omega *= math.exp(-dt / COAST_TIME_CONSTANT_S)
+        if abs(self.omega) < STOPPED_REV_S:
+            self.omega = 0.0
+        new = self.theta + self.omega * dt
         self._last_demand = demand
         low, high = self._end_stops
         self.blocked = blocked = not low <= new <= high
-        new = low if low > new else new  # min(max(new, low), high), written out (every tick)
+        new = low if low > new else new
         self.theta = theta = high if high < new else new
-        if demand is not None or blocked:
+        if blocked:
             self.omega = (theta - before) / dt if dt > 0.0 else 0.0
+
+
+def follow_demand(plant: Plant, demand: float, lag: float, vmax: float, dt: float) -> None:
+    """One step of the free motor (not jammed) following ``demand``: Plant.step's torque case,
+    and what the drive's full tick and cruise tick call straight (devices/servo/ticking.py),
+    without the method's jam and coast branches."""
+    before = plant.theta
+    # exact response of a first-order lag to a demand ramping linearly over the step
+    previous = plant._last_demand
+    if previous is None:
+        previous = demand
+    rate = (demand - previous) / dt if dt > 0.0 else 0.0
+    decay = _exp(-dt / lag) if lag > 0.0 else 0.0
+    new = demand - rate * lag + (before - previous + rate * lag) * decay
+    if abs(demand - new) < SETTLED_REV:
+        new = demand
+    # the speed loop saturates at Vmax: a demand that runs away (electronic axis,
+    # interpolator) leaves the motor behind, and the following error grows
+    reach = vmax * dt
+    if new - before > reach:
+        new = before + reach
+    elif before - new > reach:
+        new = before - reach
+    plant._last_demand = demand
+    low, high = plant._end_stops
+    plant.blocked = not low <= new <= high
+    new = low if low > new else new  # min(max(new, low), high), written out (every tick)
+    plant.theta = theta = high if high < new else new
+    plant.omega = (theta - before) / dt if dt > 0.0 else 0.0

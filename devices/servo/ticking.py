@@ -30,9 +30,8 @@ from devices.servo.ds402 import Command, State
 from devices.servo.homing import limits_used as _limits_used
 from devices.servo.mode_base import Changes, Mode
 from devices.servo.modes import Velocity as _VELOCITY
-from devices.servo.plant import SETTLED_REV as _SETTLED_REV
 from devices.servo.plant import STOPPED_REV_S as _STOPPED_REV_S
-from devices.servo.plant import _exp
+from devices.servo.plant import follow_demand
 from devices.servo.readings import _K_1MS, _sqrt
 from devices.servo.registers import DISABLED_32, R
 
@@ -182,7 +181,7 @@ class DriveTick:
                 steady = False
                 plant.step(dt, demand, lag, vmax)
             else:
-                _follow_free(plant, demand, lag, vmax, dt)
+                follow_demand(plant, demand, lag, vmax, dt)
             # A quick stop or fault reaction ends at standstill (DSP 402 v1.1, seed 004 ch. 4;
             # F3 "Rampa di emergenza"): the demand at rest (trajectory.idle, inline) and the
             # motor, which lags it, stopped too (plant.standstill, inline) - else the torque
@@ -262,7 +261,7 @@ class DriveTick:
         trajectory.velocity = v0 = segment.v0
         trajectory.position = demand = trajectory._segment_start + v0 * elapsed
         # the motor free (a jam is a command: no record)
-        _follow_free(plant, demand, lag, vmax, dt)
+        follow_demand(plant, demand, lag, vmax, dt)
         blocked, theta = plant.blocked, plant.theta
         # (inside a cruise the plan goes on: no standstill ends a quick stop here)
         accel = (trajectory.velocity - velocity_before) / dt
@@ -367,31 +366,6 @@ class DriveTick:
                 found.append((name, after[name], at))
         found += [("marker", True, m) for m in g.markers_between(theta0, theta1)]
         return sorted(found, key=lambda change: abs(change[2] - theta0))
-
-
-def _follow_free(plant: Plant, demand: float, lag: float, vmax: float, dt: float) -> None:
-    """Plant.step following ``demand`` with the motor free, for the full tick and the cruise
-    tick: the same expressions in the same order as plant.py (the same bits), without the
-    method's jam branch."""
-    before_theta, previous = plant.theta, plant._last_demand
-    if previous is None:
-        previous = demand
-    rate = (demand - previous) / dt if dt > 0.0 else 0.0
-    decay = _exp(-dt / lag) if lag > 0.0 else 0.0
-    new = demand - rate * lag + (before_theta - previous + rate * lag) * decay
-    if abs(demand - new) < _SETTLED_REV:
-        new = demand
-    reach = vmax * dt
-    if new - before_theta > reach:
-        new = before_theta + reach
-    elif before_theta - new > reach:
-        new = before_theta - reach
-    plant._last_demand = demand
-    low, high = plant._end_stops
-    plant.blocked = not low <= new <= high
-    new = low if low > new else new
-    plant.theta = theta = high if high < new else new
-    plant.omega = (theta - before_theta) / dt if dt > 0.0 else 0.0
 
 
 def _meter_1ms(drive: ServoDrive, accel: float) -> None:
