@@ -96,6 +96,14 @@ def _parse_int(name: str, text: str) -> int:
         raise CommandError(f"'{name}' must be an integer, got {text!r}") from None
 
 
+def bool_value_as_int(action: str, args: Mapping[str, Any]) -> Mapping[str, Any]:
+    """A write_object's TOML ``value = true`` / ``false`` as 1 / 0, for a BOOL object: what the
+    FastCAT, the TRS-CAT and the CPX-E-EC take before their action table checks the value."""
+    if action == "write_object" and isinstance(args.get("value"), bool):
+        return {**args, "value": int(args["value"])}
+    return args
+
+
 @dataclass(frozen=True)
 class Action:
     name: str

@@ -23,7 +23,7 @@ from devices.cpx.module_checks import (
 )
 from devices.cpx.modules import CpxModule
 from devices.cpx.switches import ROTARY_MAX
-from devices.device import Action, CommandError, Param
+from devices.device import Action, CommandError, Param, bool_value_as_int
 from devices.od import ObjectDictionary
 
 if TYPE_CHECKING:
@@ -88,8 +88,7 @@ class OperatorMixin:
 
     def check_command(self, action: str, args: Mapping[str, Any],
                       module: int | None = None) -> dict[str, Any]:
-        if action == "write_object" and isinstance(args.get("value"), bool):
-            args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
+        args = bool_value_as_int(action, args)
         kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
         # Here, not in the handler: the checks before a run (a scenario's [[on]] commands, an
         # exercise file's fault) call this only.

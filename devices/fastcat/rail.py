@@ -14,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from devices.device import UNKNOWN_MODULE, Action, CommandError, Param
+from devices.device import UNKNOWN_MODULE, Action, CommandError, Param, bool_value_as_int
 from devices.fastcat.alarms import MODULE, parse_fault
 from devices.fastcat.catalog import CATALOG, a_module, module_type
 from devices.fastcat.modules import IoModule
@@ -103,8 +103,7 @@ class RailMixin:
 
     def check_command(self, action: str, args: Mapping[str, Any],
                       module: int | None = None) -> dict[str, Any]:
-        if action == "write_object" and isinstance(args.get("value"), bool):
-            args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
+        args = bool_value_as_int(action, args)
         kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
         # Here, not in the command itself: a scenario's check before the run calls this only.
         if action in _FAULT_ACTIONS:

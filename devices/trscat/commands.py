@@ -11,7 +11,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
-from devices.device import Action, CommandError, Param
+from devices.device import Action, CommandError, Param, bool_value_as_int
 from devices.ethercat import AlState
 from devices.od import AbortCode, ObjectDictionary, SdoAbort
 from devices.sync_managers import SM_FAULTS
@@ -132,8 +132,7 @@ class CommandsMixin:
 
     def check_command(self, action: str, args: Mapping[str, Any],
                       module: int | None = None) -> dict[str, Any]:
-        if action == "write_object" and isinstance(args.get("value"), bool):
-            args = {**args, "value": int(args["value"])}  # TOML true/false for BOOL objects
+        args = bool_value_as_int(action, args)
         kwargs: dict[str, Any] = super().check_command(action, args, module)  # type: ignore[misc]
         # Here, not only in the handlers: the checks before a run (a scenario's [[on]]
         # commands, an exercise file's fault) call this only. What depends on the expansions
