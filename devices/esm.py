@@ -10,7 +10,7 @@ package, which also keeps its own ``ErrorKind`` enum: it drives that device's ER
 from __future__ import annotations
 
 import enum
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import ClassVar, Generic, TypeVar
 
@@ -50,6 +50,20 @@ def request_refusal(current: AlState, target: AlState,
     if target is current or (current, target) in transitions:
         return None
     return INVALID_STATE_CHANGE
+
+
+def first_refusal(slave: object,
+                  checks: Mapping[tuple[AlState, AlState], tuple[str, ...]],
+                  current: AlState, target: AlState) -> int | None:
+    """The AL status code of the first check of ``current`` -> ``target`` that refuses it, None
+    when all pass. ``checks`` is a slave's table of them, in order, each the name of a method
+    of ``slave`` returning None or its refusing code (the TRS-CAT's and the drive's CoE side's
+    ``TRANSITION_CHECKS``)."""
+    for name in checks.get((current, target), ()):
+        code = getattr(slave, name)()
+        if code is not None:
+            return code
+    return None
 
 
 # Slots: every step reads a slave's state and error flag (the master, the slave's own step).

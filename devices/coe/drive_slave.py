@@ -63,7 +63,7 @@ from devices.coe.mailbox import SdoServices
 from devices.coe.objects import build_coe_dictionary
 from devices.coe.sm_checks import SmChecks
 from devices.device import Action, CommandError, DeviceModel
-from devices.esm import AlStatusView
+from devices.esm import AlStatusView, first_refusal
 from devices.ethercat import AlState, describe_al_status_code
 from devices.events import EmergencySent
 from devices.leds import LedPattern
@@ -193,7 +193,7 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
             if not esm.at_least(AlState.SAFEOP):
                 self.inputs, self._inputs_due = None, False
         else:
-            code = self._run_checks(current, target)
+            code = first_refusal(self, TRANSITION_CHECKS, current, target)
             if code is not None:
                 esm.refuse(code, now, REFUSAL_KIND.get(code))
             else:
@@ -295,13 +295,6 @@ class DriveEcatSlave(SlaveActions, SdoServices, SmChecks, AlStatusView, DeviceMo
         self._inputs_due = False
 
     # ---- ESM ----------------------------------------------------------------------------------
-    def _run_checks(self, current: AlState, target: AlState) -> int | None:
-        for name in TRANSITION_CHECKS.get((current, target), ()):
-            code = getattr(self, name)()
-            if code is not None:
-                return code
-        return None
-
     def check_output_mapping(self) -> int | None:
         if MAPPING_ALARM in self.drive.alarms.injected:
             # An injected 33 is a mapping fault in the drive: any mapping fails its check, on

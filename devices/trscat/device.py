@@ -16,7 +16,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 from devices.device import Action, DeviceModel
-from devices.esm import AlStatusView, CoeMailbox
+from devices.esm import AlStatusView, CoeMailbox, first_refusal
 from devices.ethercat import AlState
 from devices.leds import LedBank
 from devices.od import AbortCode, ObjectDictionary, SdoAbort, TypeNames
@@ -32,7 +32,7 @@ from devices.trscat.catalog import (
 )
 from devices.trscat.commands import ACTIONS, CommandsMixin
 from devices.trscat.diagnostics import AppFault, DiagHistory
-from devices.trscat.esm import Esm
+from devices.trscat.esm import TRANSITION_CHECKS, Esm
 from devices.trscat.indicators import LedInputs
 from devices.trscat.io import SlotIo
 from devices.trscat.module_checks import ModuleChecks
@@ -237,7 +237,7 @@ class TrsCat(SpansMixin, SteppingMixin, TransitionsMixin, SmChecksMixin, AlarmsM
         self._set_bus(TrsBus.RUNNING)
         self._rebuild_od()
         if self.esm.state is AlState.INIT and self.esm.requested is AlState.PREOP:
-            code = self._run_checks(AlState.INIT, AlState.PREOP)
+            code = first_refusal(self, TRANSITION_CHECKS, AlState.INIT, AlState.PREOP)
             if code is None:
                 self._enter(AlState.PREOP)
             else:

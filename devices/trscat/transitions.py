@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from devices import mdp
+from devices.esm import first_refusal
 from devices.ethercat import AlState
 from devices.events import StateChanged
 from devices.trscat.alarms import FaultKey, TrsBus
@@ -131,7 +132,7 @@ class TransitionsMixin:
         elif current is AlState.INIT and self.bus is TrsBus.DETECTING:
             pass  # INIT -> PREOP completes when the power-up detection is over
         else:
-            code = self._run_checks(current, target)
+            code = first_refusal(self, TRANSITION_CHECKS, current, target)
             if code is not None:
                 esm.refuse(code, now)
             else:
@@ -140,13 +141,6 @@ class TransitionsMixin:
         self._refresh()
 
     # ---- ESM --------------------------------------------------------------------------------
-    def _run_checks(self, current: AlState, target: AlState) -> int | None:
-        for name in TRANSITION_CHECKS.get((current, target), ()):
-            code = getattr(self, name)()
-            if code is not None:
-                return code
-        return None
-
     def check_not_deadlocked(self) -> int | None:
         return UNSPECIFIED_ERROR if self.deadlocked else None
 
