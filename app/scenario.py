@@ -136,14 +136,21 @@ class Scenario:
             object.__setattr__(self, "label", self.name)
 
 
-def load_scenario(path: str | Path) -> Scenario:
+def read_scenario_text(path: str | Path, cannot: str = "cannot read scenario") -> str:
+    """The text of a scenario or exercise file; a ScenarioError naming the file when it cannot
+    be read (``cannot`` starts the message) or is not UTF-8."""
     source = str(path)
     try:
-        text = Path(path).read_text(encoding="utf-8")
+        return Path(path).read_text(encoding="utf-8")
     except OSError as exc:
-        raise ScenarioError(f"{source}: cannot read scenario: {exc.strerror or exc}") from None
+        raise ScenarioError(f"{source}: {cannot}: {exc.strerror or exc}") from None
     except UnicodeDecodeError as exc:
         raise ScenarioError(f"{source}: {not_utf8(exc)}") from None
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    source = str(path)
+    text = read_scenario_text(path)
     scenario = parse_scenario(text, source, base_dir=Path(path).resolve().parent)
     # A file is a whole scenario: without its [scenario] table (an empty file, a step list
     # saved without its head) or without a step it is a wrong file, which CI must see as

@@ -32,8 +32,14 @@ from typing import Any
 
 from app.classroom.faults import Catalog, HiddenFault
 from app.rig import Rig
-from app.rig_config import not_toml, not_utf8
-from app.scenario import Scenario, ScenarioError, check_against, parse_scenario
+from app.rig_config import not_toml
+from app.scenario import (
+    Scenario,
+    ScenarioError,
+    check_against,
+    parse_scenario,
+    read_scenario_text,
+)
 from app.targets import parse_target
 from devices.device import CommandError
 from devices.names import close_names, did_you_mean
@@ -110,12 +116,7 @@ def parse_spec(table: Mapping[str, Any], source: str = "<exercise>") -> Exercise
 def load_exercise(path: str | Path) -> tuple[Scenario, ExerciseSpec]:
     """The scenario and the exercise of an exercise file; ScenarioError when it has none."""
     source = str(path)
-    try:
-        text = Path(path).read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"{source}: cannot read: {exc.strerror or exc}") from None
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(f"{source}: {not_utf8(exc)}") from None
+    text = read_scenario_text(path, "cannot read")
     rest, table = split_exercise(text, source)
     if table is None:
         raise ScenarioError(f"{source}: no [exercise] table")
