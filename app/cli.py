@@ -362,7 +362,7 @@ def _serve(args: argparse.Namespace) -> int:
             served.append(one)
             if one.port != args.port + i:  # taken between the check and now: viser moved on
                 raise RigConfigError("--port", "", f"{args.port + i} was taken while starting")
-            _power_on(one.runtime)
+            one.runtime.power_on()  # a served rig starts powered
             extras.append(_start_modbus(one.runtime, args, args.modbus_port + i))
             extras.append(_start_canopen(one.runtime, args,
                                          _can_channel(args, i) if count > 1 else None))
@@ -525,10 +525,3 @@ def _start_canopen(runtime: Any, args: argparse.Namespace, channel: str | None) 
     except CanBusError as exc:
         raise RigConfigError("--can-interface", "", str(exc)) from None
     return bus
-
-
-def _power_on(runtime: Any) -> None:
-    """A served rig starts powered, as a rig on a bench does when its supply is switched on."""
-    for device_id, info in runtime.rig.describe().items():
-        if "power" in info["actions"]:
-            runtime.command(device_id, "power", {"on": True})

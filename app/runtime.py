@@ -173,6 +173,13 @@ class Runtime:
             return self.rig.apply(target, action, dict(args or {}))
         return self.submit(run)
 
+    def power_on(self) -> list[Future[Any]]:
+        """Switch on every device with a power action, as a rig on a bench starts when its
+        supply is switched on (a served rig, the benchmarks); the commands' futures."""
+        return [self.command(device_id, "power", {"on": True})
+                for device_id, info in self.rig.describe().items()
+                if "power" in info["actions"]]
+
     def add_listener(self, fn: Callable[[list[Event]], None]) -> None:
         """``fn(events)`` runs after each batch, with the rig held (in the simulation thread,
         or in the thread of a :meth:`call`); keep it quick."""

@@ -103,9 +103,8 @@ def serve_dashboard(port: int, dashboard_cls: Any = None,
     dashboard = (dashboard_cls or Dashboard)(server, runtime)
     runtime.start()
     dashboard.start()
-    for device_id, info in rig.describe().items():  # powered, as `python -m app` starts it
-        if "power" in info["actions"]:
-            runtime.command(device_id, "power", {"on": True}).result(10)
+    for powered in runtime.power_on():  # as `python -m app` starts it
+        powered.result(10)
     if setup is not None:
         setup(rig, runtime, dashboard)
 

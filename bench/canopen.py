@@ -63,9 +63,8 @@ def _serve_drive(channel: str) -> None:
     bus.attach(runtime)
     bus.start()
     runtime.start()
-    for device_id, info in rig.describe().items():  # powered, as `python -m app` starts it
-        if "power" in info["actions"]:
-            runtime.command(device_id, "power", {"on": True}).result(5)
+    for powered in runtime.power_on():  # as `python -m app` starts it
+        powered.result(5)
     deadline = time.monotonic() + 10
     while not runtime.submit(lambda: nodes[0].state.label != "Initialisation" and
                              nodes[0].active).result(5):

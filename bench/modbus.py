@@ -49,9 +49,8 @@ def _serve_drive(framer: str) -> None:
     rig = build_rig(load_rig_spec(DEFAULT_RIG), state_dir=None)
     runtime = Runtime(rig)
     runtime.start()
-    for device_id, info in rig.describe().items():  # powered, as `python -m app` starts it
-        if "power" in info["actions"]:
-            runtime.command(device_id, "power", {"on": True}).result(5)
+    for powered in runtime.power_on():  # as `python -m app` starts it
+        powered.result(5)
     drives = [d for d in rig.devices.values() if isinstance(d, ServoDrive)]
     server = DriveModbusServer(drives, runtime.submit, port=0, framer=framer,
                                call=runtime.call)  # as python -m app serves it
