@@ -142,6 +142,14 @@ class _Table:
 _REQUIRED = object()
 
 
+def _id_problem(device_id: str) -> str | None:
+    """What is wrong with a device's ``id`` (the same rule for every kind of device: it is the
+    target of commands, scenarios and the event log), None when nothing."""
+    if device_id.replace("_", "").replace("-", "").isalnum():
+        return None
+    return "use letters, digits, '-' and '_' only"
+
+
 def _in_range(low: float, high: float) -> Callable[[Any], str | None]:
     return lambda v: None if low <= v <= high else f"must be between {low} and {high}, got {v}"
 
@@ -329,9 +337,7 @@ def _fastcat(source: str, i: int, data: Any) -> FastCatSpec:
     from devices.fastcat.catalog import CATALOG
 
     t = _Table(source, f"fastcat[{i}]", data)
-    device_id = t.get("id", str, "fastcat" if i == 0 else _REQUIRED,
-                      lambda v: None if v.replace("_", "").replace("-", "").isalnum()
-                      else "use letters, digits, '-' and '_' only")
+    device_id = t.get("id", str, "fastcat" if i == 0 else _REQUIRED, _id_problem)
     modules_raw = t.get("modules", list, _REQUIRED)
     if len(modules_raw) > MAX_MODULES:
         raise RigConfigError(source, t.key("modules"),
@@ -379,9 +385,7 @@ DEVICE_KEYS = frozenset({"rig", "master", "fastcat", "servo", *_SLAVE_KEYS})
 
 def _slave(source: str, kind: str, i: int, data: Any) -> SlaveSpec:
     t = _Table(source, f"{kind}[{i}]", data)
-    device_id = t.get("id", str, kind if i == 0 else _REQUIRED,
-                      lambda v: None if v.replace("_", "").replace("-", "").isalnum()
-                      else "use letters, digits, '-' and '_' only")
+    device_id = t.get("id", str, kind if i == 0 else _REQUIRED, _id_problem)
     settings = {key: t.get(key, kinds) for key, kinds in _SLAVE_KEYS[kind].items()
                 if key in t.data}
     t.used.update(_SLAVE_KEYS[kind])
@@ -408,9 +412,7 @@ def _servo(source: str, i: int, data: Any) -> ServoSpec:
     from devices.servo.config import DriveConfig
 
     t = _Table(source, f"servo[{i}]", data)
-    device_id = t.get("id", str, "drive" if i == 0 else _REQUIRED,
-                      lambda v: None if v.replace("_", "").replace("-", "").isalnum()
-                      else "use letters, digits, '-' and '_' only")
+    device_id = t.get("id", str, "drive" if i == 0 else _REQUIRED, _id_problem)
     flash = t.get("flash", str, MEMORY)
     settings: dict[str, Any] = {}
     for f in dataclasses.fields(DriveConfig):
