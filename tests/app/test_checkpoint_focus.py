@@ -59,6 +59,8 @@ EXPECTED: dict[tuple[str, str], str | None] = {
     ("dc_sync_lost", "not_synchronized"): "master",
     ("dc_sync_lost", "resynchronized"): "master",
     ("drive_jammed_load", "following_error"): "drive",  # alarm 16 on the Drive tab
+    # "... the alarm reset clears alarm 16 ... the drive is enabled again": its Drive tab.
+    ("drive_jammed_load", "recovered"): "drive",
     ("module_lost_in_op", "op"): None,  # the whole line in OP, the FastCAT's State tab
     ("module_lost_in_op", "recovered"): None,
     ("too_many_analog", "max_analog_alarm"): None,  # one coupler, no tabs: the whole rail
