@@ -37,3 +37,17 @@ def test_canopen_fault_reset_caption_with_the_reset() -> None:
     cooled = caption_at(name, "has cooled")
     assert cooled < shown and "EMCY 0x0000" not in next(
         r["text"] for r in pick(name, "caption", "scenario") if r["t"] == cooled)
+
+
+def test_fastcat_sm_watchdog_captions_with_the_fall_and_the_return() -> None:
+    name = "fastcat_sm_watchdog"
+    shown = caption_at(name, "sync error (0x001A)")
+    trscat = pick(name, "al_status", "trscat", code="0x001A")[0]["t"]
+    assert shown <= trscat <= shown + LEAD_S, (shown, trscat)
+    shown = caption_at(name, "SM watchdog takes it to SAFEOP")
+    fall = pick(name, "state", "fastcat", **{"from": "OP", "to": "SAFEOP"})[0]["t"]
+    assert shown <= fall <= shown + LEAD_S, (shown, fall)
+    assert pick(name, "al_status", "fastcat", t=fall, code="0x001B")
+    shown = caption_at(name, "The frames flow again")
+    back = pick(name, "state", "fastcat", **{"from": "SAFEOP", "to": "OP"})[-1]["t"]
+    assert shown <= back <= shown + LEAD_S, (shown, back)

@@ -55,3 +55,26 @@ def test_the_blinking_led_the_caption_names_is_lit_in_the_picture(
     t_us = round(t * 1_000_000)
     dark = sorted(led for led, p in patterns.items() if not is_lit(LedPattern(p), t_us))
     assert not dark, f"{stem} {checkpoint} at {t} s: {dark} blinking but dark in the picture"
+
+
+# (scenario, checkpoint, device, LED, the pattern the caption names, the caption's words):
+# a flash is lit for 200 ms of its 1.2 s / 1.6 s period, so most instants catch it dark.
+FLASHES = [
+    ("fastcat_sm_watchdog", "watchdog", "fastcat", "ERR", "double_flash", "ERR double flash"),
+    ("fastcat_sm_watchdog", "watchdog", "fastcat", "RUN", "single_flash", "RUN single flash"),
+]
+
+
+@pytest.mark.parametrize(("stem", "checkpoint", "device", "led", "pattern", "words"), FLASHES,
+                         ids=[f"{f[0]}-{f[1]}-{f[3]}" for f in FLASHES])
+def test_the_flashing_led_the_caption_names_is_lit_in_the_picture(
+        stem: str, checkpoint: str, device: str, led: str, pattern: str, words: str) -> None:
+    lines = records(stem)
+    t = next(r["t"] for r in lines if r["event"] == "checkpoint" and r["name"] == checkpoint)
+    caption = [r["text"] for r in lines if r["event"] == "caption" and r["t"] <= t][-1]
+    assert words in " ".join(caption.split())
+    shown = [r["pattern"] for r in lines if r["t"] <= t and r["event"] == "led"
+             and r["device"] == device and r["led"] == led][-1]
+    assert shown == pattern
+    assert is_lit(LedPattern(shown), round(t * 1_000_000)), f"{stem} {checkpoint} at {t} s: " \
+        f"{led} {pattern} but dark in the picture"

@@ -61,6 +61,12 @@ EXPECTED: dict[tuple[str, str], str | None] = {
     ("drive_jammed_load", "following_error"): "drive",  # alarm 16 on the Drive tab
     # "... the alarm reset clears alarm 16 ... the drive is enabled again": its Drive tab.
     ("drive_jammed_load", "recovered"): "drive",
+    # The FastCAT's own behaviour (seed 000 §7.7): its LEDs and its State tab.
+    ("fastcat_sm_watchdog", "outputs_on"): "fastcat",
+    # "... the FastCAT's SM watchdog ... The CPX-E-EC and the drive fall with 0x001B too": the
+    # coupler is the lesson, the others a side note.
+    ("fastcat_sm_watchdog", "watchdog"): "fastcat",
+    ("fastcat_sm_watchdog", "recovered"): "fastcat",
     ("module_lost_in_op", "op"): None,  # the whole line in OP, the FastCAT's State tab
     ("module_lost_in_op", "recovered"): None,
     ("too_many_analog", "max_analog_alarm"): None,  # one coupler, no tabs: the whole rail

@@ -25,7 +25,8 @@ from app.ui.panels.scenario_player import CHOOSE, PLAY, ScenarioPlayerPanel, lib
 
 NINE_RIG = Path("static/rigs/nine_analog.toml")
 LINE_SCENARIOS = ("cable_pulled", "cpx_short_circuit", "dc_sync_lost",
-                  "trscat_expansion_mismatch", "trscat_outputs_fallback")
+                  "trscat_expansion_mismatch", "trscat_outputs_fallback",
+                  "fastcat_sm_watchdog")
 
 
 class _Client:
