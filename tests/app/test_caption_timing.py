@@ -51,3 +51,16 @@ def test_fastcat_sm_watchdog_captions_with_the_fall_and_the_return() -> None:
     shown = caption_at(name, "The frames flow again")
     back = pick(name, "state", "fastcat", **{"from": "SAFEOP", "to": "OP"})[-1]["t"]
     assert shown <= back <= shown + LEAD_S, (shown, back)
+
+
+def test_fastcat_address_check_captions_with_the_alarm_its_reset_and_op() -> None:
+    name = "fastcat_address_check"
+    shown = caption_at(name, "compares its switch (3)")
+    alarm = pick(name, "alarm", "fastcat", code="0x12", active=True)[0]["t"]
+    assert shown <= alarm <= shown + LEAD_S, (shown, alarm)
+    shown = caption_at(name, "alarm 0x12 clears")
+    cleared = pick(name, "alarm", "fastcat", code="0x12", active=False)[0]["t"]
+    assert shown <= cleared <= shown + LEAD_S, (shown, cleared)
+    shown = caption_at(name, "in OP again")
+    back = pick(name, "state", "fastcat", **{"from": "SAFEOP", "to": "OP"})[-1]["t"]
+    assert shown <= back <= shown + LEAD_S, (shown, back)

@@ -62,6 +62,9 @@ def test_the_blinking_led_the_caption_names_is_lit_in_the_picture(
 FLASHES = [
     ("fastcat_sm_watchdog", "watchdog", "fastcat", "ERR", "double_flash", "ERR double flash"),
     ("fastcat_sm_watchdog", "watchdog", "fastcat", "RUN", "single_flash", "RUN single flash"),
+    ("fastcat_address_check", "address_alarm", "fastcat", "ERR", "single_flash",
+     "ERR single flash"),
+    ("fastcat_address_check", "address_alarm", "fastcat", "RUN", "blinking", "RUN blinking"),
 ]
 
 

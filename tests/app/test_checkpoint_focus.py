@@ -61,7 +61,10 @@ EXPECTED: dict[tuple[str, str], str | None] = {
     ("drive_jammed_load", "following_error"): "drive",  # alarm 16 on the Drive tab
     # "... the alarm reset clears alarm 16 ... the drive is enabled again": its Drive tab.
     ("drive_jammed_load", "recovered"): "drive",
-    # The FastCAT's own behaviour (seed 000 §7.7): its LEDs and its State tab.
+    # The FastCAT's own behaviours (seed 000 §6.19, §7.7): its LEDs and its State tab.
+    ("fastcat_address_check", "check_enabled"): "fastcat",
+    ("fastcat_address_check", "address_alarm"): "fastcat",
+    ("fastcat_address_check", "recovered"): "fastcat",
     ("fastcat_sm_watchdog", "outputs_on"): "fastcat",
     # "... the FastCAT's SM watchdog ... The CPX-E-EC and the drive fall with 0x001B too": the
     # coupler is the lesson, the others a side note.

@@ -1,5 +1,6 @@
 """The FastCAT examples of session 23 show what seed 000 names: the SM2 watchdog (§7.7 0x001B,
-docs/fastcat-coupler.md "SM watchdog"), at the pictures' instants."""
+docs/fastcat-coupler.md "SM watchdog") and the address check (§6.19 0x5301, §7.5 0x12,
+§7.7 0x8012, "Address check"), at the pictures' instants."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from typing import Any
 from app.rig import Rig
 from app.rig_config import DEFAULT_RIG, build_rig, load_rig_spec
 from app.scenario import Step, load_scenario, run_scenario
-from tests.app.test_line_scenarios import pick
+from tests.app.test_line_scenarios import at, pick
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "static" / "scenarios"
 
@@ -49,3 +50,25 @@ def test_sm_watchdog_drops_the_fastcat_to_safeop_with_0x001b_and_the_master_take
     assert do16 == {"outputs_on": [1, 3], "watchdog": [], "recovered": [1, 3]}
     assert [seen[k]["esm"] for k in ("outputs_on", "watchdog", "recovered")] == \
         ["OP", "SAFEOP", "OP"]
+
+
+def test_address_check_raises_0x12_at_the_op_request_and_clears_on_reset() -> None:
+    name = "fastcat_address_check"
+    switch = pick(name, "read", "fastcat", address="0x5302:0")
+    assert [r["value"] for r in switch] == [3]
+    raised = pick(name, "alarm", "fastcat", code="0x12", active=True)
+    assert len(raised) == 1
+    t = raised[0]["t"]
+    assert pick(name, "emergency", "fastcat", t=t, code="0xFF00", register="0x81",
+                data="00 00 00 12 00")
+    assert pick(name, "al_status", "fastcat", t=t, code="0x8012")
+    assert pick(name, "state", "fastcat", t=t, **{"from": "SAFEOP", "to": "PREOP"})
+    assert [r["hex"] for r in pick(name, "read", "fastcat", address="0x5400:0")] == \
+        ["0x12000000"]
+    assert at(name, "check_enabled") < t < at(name, "address_alarm")
+    cleared = pick(name, "alarm", "fastcat", code="0x12", active=False)[0]["t"]
+    back = pick(name, "state", "fastcat", **{"from": "SAFEOP", "to": "OP"})[-1]["t"]
+    assert at(name, "address_alarm") < cleared < back < at(name, "recovered")
+    seen = at_checkpoints(name)
+    assert [(seen[k]["esm"], seen[k]["address_check"]) for k in seen] == [
+        ("OP", True), ("PREOP", True), ("OP", False)]

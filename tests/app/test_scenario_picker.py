@@ -26,7 +26,10 @@ from app.ui.panels.scenario_player import CHOOSE, PLAY, ScenarioPlayerPanel, lib
 NINE_RIG = Path("static/rigs/nine_analog.toml")
 LINE_SCENARIOS = ("cable_pulled", "cpx_short_circuit", "dc_sync_lost",
                   "trscat_expansion_mismatch", "trscat_outputs_fallback",
-                  "fastcat_sm_watchdog")
+                  "fastcat_sm_watchdog", "fastcat_address_check")
+# Rig files with the default rig's devices, which a load installs in place (app/player.py
+# compatible): fastcat_switch_3.toml is the default rig with the FastCAT's switch at 3.
+PLAY_HERE = {DEFAULT_RIG.resolve(), (DEFAULT_RIG.parent / "fastcat_switch_3.toml").resolve()}
 
 
 class _Client:
@@ -62,7 +65,7 @@ def test_scenarios_for_another_rig_are_marked_and_listed_last(
     assert options[0] == CHOOSE
     entries = library()
     assert len(options) == 1 + len(entries)  # nothing left out
-    here = [e for e in entries if _rig_of(e.path) == DEFAULT_RIG.resolve()]
+    here = [e for e in entries if _rig_of(e.path) in PLAY_HERE]
     other = [e for e in entries if e not in here]
     assert here and other  # the library has both kinds
     # The ones that play here keep their plain name, first.
@@ -81,7 +84,8 @@ def test_scenarios_for_another_rig_are_marked_and_listed_last(
 @pytest.mark.parametrize("stem", LINE_SCENARIOS)
 def test_the_line_scenarios_play_on_the_default_rig(panel: ScenarioPlayerPanel,
                                                      stem: str) -> None:
-    """The default rig is the EtherCAT line: its scenarios are listed plainly, Play takes them."""
+    """The default rig is the EtherCAT line: its scenarios are listed plainly, Play takes them
+    (fastcat_address_check with its own rig file, whose devices are the default rig's)."""
     scenario = load_scenario(Path("static/scenarios") / f"{stem}.toml")
     assert panel.player.mismatch(scenario) is None
     assert scenario.label in panel._pick.options
