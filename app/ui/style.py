@@ -34,6 +34,7 @@ div:has(> :is([class^="fr-"], [class*=" fr-"], [id^="fr-"])):not(
 .fr-bad { background: #fbd5d5; color: #a11616; }
 .fr-warn { background: #fdefc3; color: #7a5600; }
 .fr-muted { color: #888; }
+.fr-next { color: #7a5600; }
 .fr-nowrap { white-space: nowrap; }
 .fr-log { width: 100%; border-collapse: collapse; font-size: 0.72em; table-layout: fixed;
           font-family: ui-monospace, Menlo, Consolas, monospace; }

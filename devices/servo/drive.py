@@ -298,7 +298,7 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
         if self.state in (State.FAULT, State.FAULT_REACTION_ACTIVE):
             return (f"not enabled ({label}, alarm {self.alarms.active}) - reset the alarm, "
                     "then enable torque")
-        if self.ten_cmd_held_at_reset and self.state is State.SWITCH_ON_DISABLED:
+        if self.released_by_reset:
             return ("not enabled (Switch on disabled after the alarm reset, Ten_cmd held) - "
                     "enable torque again: R00 = 0, then 3")
         if not self.input_level("ten"):
@@ -319,6 +319,12 @@ class ServoDrive(DriveTick, DriveStateMachine, DriveFlash, DriveReadings, DriveA
             stopped = control.HALT_HINT.get(self.fieldbus, control.HALT_HINT_ANY)
             return f"{stopped} - Enable or Move clears it"
         return None
+
+    @property
+    def released_by_reset(self) -> bool:
+        """An alarm reset found R00's Ten_cmd held and left the axis released: only a fresh
+        Ten_cmd 0 -> 1 enables (docs/servo-drive.md "Re-enabling after an alarm")."""
+        return self.ten_cmd_held_at_reset and self.state is State.SWITCH_ON_DISABLED
 
     @property
     def motion_allowed(self) -> bool:

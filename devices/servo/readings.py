@@ -238,6 +238,8 @@ class DriveReadings:
             # address hints follow it
             "modbus_map": active_map(self.params.get(E3_ADDRESS, 0)),
             "ds402_state": self.state.label, "controlword": self.cw, "statusword": sw,
+            # the panel's next step: R00 still reads Ten_cmd, yet only a fresh one enables
+            "released_by_reset": self.released_by_reset,
             "control_register": self.regs[R.CONTROL_WORD], "status_register": r05,
             "status_bits": {name: bool(r05 >> bit & 1)
                             for bit, name in control.status_bit_names(self.mode).items()},

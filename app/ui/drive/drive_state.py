@@ -78,6 +78,13 @@ def state_badge(snap: Mapping[str, Any]) -> str:
     return html
 
 
+# After an alarm reset with Ten_cmd held R00 still reads "Ten_cmd, Ien_cmd", yet the drive waits
+# for a fresh one (docs/servo-drive.md "Re-enabling after an alarm"): Home, Move and Start do
+# nothing until then, so the row says what to press
+REENABLE_NOTE = ("the alarm reset left the axis released (Ten_cmd held): press Enable "
+                 "(R00 = 0, then 3)")
+
+
 def effect_text(effect: Any) -> str:
     """The snapshot's effect in a trainee's words, as the Codes tab words it: its value is the
     model's note on the seed ("none printed: stop on ..."), which read as a second state."""
@@ -136,9 +143,11 @@ def state_rows(snap: Mapping[str, Any], node: Mapping[str, Any] | None = None,
     # instructor's row too, a trainee reads its symptoms only. Only while jammed, as the
     # badge it was in the TEN / IEN row.
     causes = [("Causes", badge("load jammed", "bad"))] if snap.get("jammed") else []
+    reenable = f'<br><span class="fr-next">{esc(REENABLE_NOTE)}</span>' \
+        if snap.get("released_by_reset") and snap.get("powered") else ""
     return [
         ("CiA 402 state", state_badge(snap) + ' <span class="fr-muted">display</span> '
-         f'<b>{esc(snap.get("display", "") or "(dark)")}</b>'),
+         f'<b>{esc(snap.get("display", "") or "(dark)")}</b>' + reenable),
         *fieldbus_rows(snap, node, slave),
         ("Mode", esc(mode_text(snap.get("mode")))),
         ("Position", position),
