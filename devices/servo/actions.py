@@ -198,7 +198,9 @@ class DriveActions:
             self.write_controlword(cw)
         return self.reset_refusal()
 
-    def cmd_start(self: ServoDrive) -> None:
+    def cmd_start(self: ServoDrive) -> str | None:
+        """The mode's start bit as a fresh edge; the answer says why the axis will not move
+        (``motion_blocked``, as Jog's), None when it will or for a save / load."""
         self._powered()
         mode = self.mode
         bit = control.BIT6 if mode in control.HOMING | control.ELECTRONIC_AXIS else control.BIT5
@@ -210,12 +212,15 @@ class DriveActions:
         self.write_register(R.CONTROL_WORD, r00 | bit)
         if mode in control.SAVE_LOAD:
             self.write_register(R.CONTROL_WORD, r00)
+            return None
+        return self.motion_blocked()
 
     def cmd_stop(self: ServoDrive) -> None:
         self._powered()
         self.write_register(R.CONTROL_WORD, self.regs[R.CONTROL_WORD] | control.STP_CMD)
 
-    def cmd_move(self: ServoDrive, position: int, relative: bool) -> None:
+    def cmd_move(self: ServoDrive, position: int, relative: bool) -> str | None:
+        """Target and a fresh Pos_str; the answer as :meth:`cmd_start`'s."""
         self._powered()
         if self.mode not in control.POSITIONER:
             self.set_mode(1)
@@ -228,6 +233,7 @@ class DriveActions:
         self.write_register(R.CONTROL_WORD, r00)
         self.write_register(R.CONTROL_WORD, r00 | control.BIT5
                             | (control.BIT7 if relative else 0))
+        return self.motion_blocked()
 
     def cmd_jog(self: ServoDrive, direction: int) -> str | None:
         """Mode 3 and R13 = direction * R12, taken in any state as a master's writes are;
@@ -239,10 +245,10 @@ class DriveActions:
         self.write_register(R.TARGET_VELOCITY, direction * self.regs[R.PROFILE_VELOCITY])
         return self.motion_blocked() if direction else None
 
-    def cmd_home(self: ServoDrive) -> None:
+    def cmd_home(self: ServoDrive) -> str | None:
         self._powered()
         self.set_mode(6)
-        self.cmd_start()
+        return self.cmd_start()
 
     def cmd_pulses(self: ServoDrive, count: int) -> None:
         self._powered()

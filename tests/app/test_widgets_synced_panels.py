@@ -298,6 +298,26 @@ def test_jog_tells_the_clicking_page_why_the_drive_does_not_move(
     assert client.notices == notices
 
 
+@pytest.mark.parametrize(("label", "click", "command"), [
+    ("Home", True, ("home", {})),
+    ("Positioner", "Start", ("start", {})),
+])
+def test_home_and_start_tell_the_clicking_page_why_the_drive_does_not_move(
+        loop, label: str, click: Any, command: tuple[str, dict[str, Any]]) -> None:
+    """As Jog: after an alarm reset that left the axis released, Home and Start did nothing with
+    no word (devices/servo/actions.py cmd_home / cmd_start answer as cmd_jog does)."""
+    answer = "not enabled (Switch on disabled) - enable torque first"
+    server, sender = Server(loop), _AnsweringSender(answer)
+    panel = DrivePanel(server, None, sender, lambda _client: "drive1", {})  # type: ignore[arg-type]
+    frames(loop, server, lambda: panel.update(DRIVE))
+    client = _Client()
+    server.gui.handles[label].user(client, click, click=True)  # type: ignore[arg-type]
+    turn(loop, server)
+    sender.drain()
+    assert sender.sent == [("drive1", *command)]
+    assert client.notices == [(f"drive1: {command[0]}", f"drive1: {answer}")]
+
+
 class _RoleSender(_AnsweringSender):
     def __init__(self, answer: Any, role: Role) -> None:
         super().__init__(answer)

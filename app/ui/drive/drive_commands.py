@@ -47,13 +47,24 @@ class DriveCommands:
     def _jog(self: DrivePanel, event: viser.GuiEvent, direction: int) -> None:
         """Jog; when the model answers why the axis will not move (a drive without torque
         only switches to mode 3), the clicking page is told, naming the drive."""
-        target, client = self._target(event.client), event.client
+        self._motion(event, "jog", direction=direction)
 
+    def _motion(self: DrivePanel, event: viser.GuiEvent, action: str, **args: Any) -> None:
+        """A motion command (jog, home, start); the model's answer why the axis will not
+        move goes to the clicking page as a notice naming the drive. Home and Start used to
+        say nothing, so after an alarm reset that left the axis released they did nothing
+        with no word."""
+        target, client = self._target(event.client), event.client
+        self._sender.send(client, target, action, args,
+                          done=self._motion_answer(client, f"{target}: {action}", target))
+
+    @staticmethod
+    def _motion_answer(client: viser.ClientHandle | None, title: str,
+                       target: str) -> Callable[[Any], None]:
         def answered(why: Any) -> None:
             if why:
-                notify(client, f"{target}: jog", f"{target}: {why}")
-
-        self._sender.send(client, target, "jog", {"direction": direction}, done=answered)
+                notify(client, title, f"{target}: {why}")
+        return answered
 
     def _alarm_reset(self: DrivePanel, event: viser.GuiEvent) -> None:
         """Alarm reset; when the drive stays in Fault the clicking page is told why (the model's
@@ -88,7 +99,7 @@ class DriveCommands:
 
     def _positioner(self: DrivePanel, event: viser.GuiEvent, button: str) -> None:
         if button == "Start":
-            self._do(event, "start")
+            self._motion(event, "start")
             return
         if button == "Stop":
             self._do(event, "stop")
@@ -96,7 +107,7 @@ class DriveCommands:
         position = int(self._field("position", event))
         relative = bool(self._field("relative", event))
 
-        def steps(apply: Callable[..., Any]) -> None:
+        def steps(apply: Callable[..., Any]) -> Any:
             # As the seed's Modbus example does before 0x23: the start bits low first, so
             # that the start is a rising edge in both views whatever the last mode left.
             if int(apply("read_register", register=R.MODES_OF_OPERATION)) != 1:
@@ -104,9 +115,11 @@ class DriveCommands:
             r00 = int(apply("read_register", register=R.CONTROL_WORD))
             if r00 & (START_BITS | control.STP_CMD):
                 apply("control_register", value=r00 & ~(START_BITS | control.STP_CMD))
-            apply("move", position=position, relative=relative)
+            return apply("move", position=position, relative=relative)
 
-        self._sequence(event, "move", steps)
+        target = self._target(event.client)
+        self._sequence(event, "move", steps,
+                       done=self._motion_answer(event.client, f"{target}: move", target))
 
     def _run_velocity(self: DrivePanel, event: viser.GuiEvent) -> None:
         velocity = int(self._field("velocity", event))

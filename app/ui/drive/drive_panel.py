@@ -178,7 +178,7 @@ class DrivePanel(DriveCommands, DriveFaults):
 
         on_button(torque, lambda e, b: self._do(e, "enable", on=b == "Enable"))
         reset.on_click(lambda e: self._alarm_reset(e))
-        home.on_click(lambda e: self._do(e, "home"))
+        home.on_click(lambda e: self._motion(e, "home"))
         on_button(jog, lambda e, b: self._jog(e, JOG[b]))
         on_button(moves, self._positioner)
         run.on_click(lambda e: self._run_velocity(e))
