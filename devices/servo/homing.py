@@ -96,6 +96,7 @@ METHODS: dict[int, HomingMethod] = {m.number: m for m in (
     HomingMethod(35, "the current position", ()),
 )}
 del P, U
+HOMING_ALARM = 14  # HOMING, "homing error" (ch. 3): what a failed or unsupported run raises
 NO_LIMITS: frozenset[str] = frozenset()
 
 
@@ -238,7 +239,7 @@ class Homing(Mode):
     def fail(self, d: ServoDrive, why: str) -> None:
         self.status = HomingStatus.ERROR
         d.log(f"homing error: {why}")
-        d.raise_alarm(14)
+        d.raise_alarm(HOMING_ALARM)
 
     def flags(self, d: ServoDrive) -> dict[str, bool]:
         return {"homing_attained": self.status is HomingStatus.ATTAINED,

@@ -136,3 +136,12 @@ def test_the_node_number_hint_gives_the_modbus_range() -> None:
     parameters = parameter_details()
     c7 = next(label for label in parameters if label.startswith("c7 "))
     assert parameters[c7].startswith(f"{c7}: 1..99 (1..90 with c9 = 3, Modbus RTU), default 1;")
+
+
+def test_r18_names_the_homing_methods_the_drive_runs() -> None:
+    """R18 takes 0..255 (ch. 1 prints 0x0 - ff) and Home with a method the drive has not is a
+    homing error, alarm 14 (docs/servo-drive.md "Homing"): a trainee who wrote R18 = 5 from the
+    panel got alarm 14 with a hint that said only "0..255". The hint names the methods."""
+    hint = register_details()["R18 homing_method"]
+    assert hint == ("R18 homing_method: 0..255 (Home runs methods 1-4, 17-20, 33-35; any "
+                    "other: alarm 14 HOMING), kept by Save to flash; Modbus 0x8012")

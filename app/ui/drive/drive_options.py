@@ -8,6 +8,7 @@ from typing import Any
 
 from devices.servo.alarms import alarm_table
 from devices.servo.flashsave import SAVED_REGISTERS
+from devices.servo.homing import HOMING_ALARM, METHODS
 from devices.servo.modbus_map import NORMAL, SIEMENS, parameter_address, register_address
 from devices.servo.parameters import (
     C9_BY_FIELDBUS,
@@ -16,7 +17,7 @@ from devices.servo.parameters import (
     PARAMETERS,
     node_range,
 )
-from devices.servo.registers import MODE_NAMES, REGISTERS, RegisterSpec
+from devices.servo.registers import MODE_NAMES, REGISTERS, R, RegisterSpec
 
 MODE_OPTIONS = tuple(f"{mode} {name}" for mode, name in MODE_NAMES.items())
 REGISTER_OPTIONS = tuple(f"R{n:02d} {spec.name}" for n, spec in sorted(REGISTERS.items()))
@@ -52,9 +53,23 @@ def register_details(address_map: str = NORMAL) -> dict[str, str]:
         access = ("read only" if not spec.writable
                   else "kept by Save to flash" if n in SAVED_REGISTERS else "not saved")
         where = modbus_words(register_address(n, address_map), address_map)
-        out[f"R{n:02d} {spec.name}"] = (f"R{n:02d} {spec.name}: {_register_values(spec)}, "
-                                        f"{access}; {where}")
+        values = _register_values(spec) + (_homing_methods() if n == R.HOMING_METHOD else "")
+        out[f"R{n:02d} {spec.name}"] = f"R{n:02d} {spec.name}: {values}, {access}; {where}"
     return out
+
+
+def _homing_methods() -> str:
+    """R18 takes 0..255, but Home with a method the drive has not is alarm 14 (docs/servo-
+    drive.md "Homing"): the hint names the ones it runs, runs of numbers joined ("1-4")."""
+    runs: list[list[int]] = []
+    for number in sorted(METHODS):
+        if runs and number == runs[-1][-1] + 1:
+            runs[-1].append(number)
+        else:
+            runs.append([number])
+    methods = ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 1 else str(r[0]) for r in runs)
+    name = alarm_table("modbus")[HOMING_ALARM].name
+    return f" (Home runs methods {methods}; any other: alarm {HOMING_ALARM} {name})"
 
 
 def _register_values(spec: RegisterSpec) -> str:
