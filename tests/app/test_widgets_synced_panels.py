@@ -56,8 +56,10 @@ class Gui:
     def add_text(self, label: str, initial_value: str, **_: Any) -> Handle:
         return self._add(label, initial_value)
 
-    def add_button(self, label: str, **_: Any) -> Handle:
-        return self._add(label, False)
+    def add_button(self, label: str, hint: str | None = None, **_: Any) -> Handle:
+        handle = self._add(label, False)
+        handle.hint = hint
+        return handle
 
     def add_folder(self, label: str, **_: Any) -> Handle:
         return self._add(f"folder {label}", None)
@@ -316,6 +318,15 @@ def test_home_and_start_tell_the_clicking_page_why_the_drive_does_not_move(
     sender.drain()
     assert sender.sent == [("drive1", *command)]
     assert client.notices == [(f"drive1: {command[0]}", f"drive1: {answer}")]
+
+
+def test_the_alarm_reset_hint_says_the_axis_waits_for_enable(loop) -> None:
+    """A reset leaves the axis released until the next Enable (docs/servo-drive.md
+    "Re-enabling after an alarm"); the button's hint said only "a 0 -> 1 -> 0 pulse"."""
+    server = Server(loop)
+    DrivePanel(server, None, Sender(), lambda _client: "drive1", {})  # type: ignore[arg-type]
+    hint = server.gui.handles["Alarm reset"].hint
+    assert hint == "a 0 -> 1 -> 0 pulse of the reset bit; the axis stays released until Enable"
 
 
 class _RoleSender(_AnsweringSender):

@@ -86,7 +86,9 @@ class DrivePanel(DriveCommands, DriveFaults):
             self._ten = gui.add_checkbox("TEN (24 V)", True, hint="hardware torque enable")
             self._ien = gui.add_checkbox("IEN (24 V)", True, hint="hardware motion enable")
             torque = gui.add_button_group("Torque", ("Enable", "Disable"))
-            reset = gui.add_button("Alarm reset", hint="a 0 -> 1 -> 0 pulse of the reset bit")
+            # seed 004 resets with the enable off: torque comes back with Enable only
+            reset = gui.add_button("Alarm reset", hint="a 0 -> 1 -> 0 pulse of the reset bit; "
+                                   "the axis stays released until Enable")
         with gui.add_folder("Motion"):
             self._mode = gui.add_dropdown("Mode", MODE_OPTIONS)
             self._position = gui.add_number("Target position", 0, step=1,
