@@ -275,17 +275,21 @@ class DriveTick:
             # The recorded tick's levels: no start edge, the latch idle, no limit input
             # active, no crossing to observe (a velocity mode). Nothing in this tick could
             # change the state or a register, so the following-error and R06 checks read
-            # the recorded values (the same numbers as floats).
+            # the recorded values (the same numbers as floats). An alarm ends the jog (Fault
+            # or its reaction): no record from here, since ServoDrive.step drops it only
+            # between steps and a step of more than 1 ms runs its next tick straight on.
             if fe_window is not None and abs((trajectory.position - theta) * feed) > fe_window:
                 self._fe_ms += dt * 1e3
                 if self._fe_ms > fe_timeout:
                     self._fe_ms = 0.0
+                    self._cruise = None
                     self.raise_alarm(16)
                     self._s32_check(plant)  # alarm 16 may have changed what it reads
                     return
             else:
                 self._fe_ms = 0.0
             if abs((theta - theta_zero) * feed) > S32_MAX:
+                self._cruise = None
                 self.raise_alarm(15)
             return
         # a switch moved: the inputs' part of the full tick, and no record from here

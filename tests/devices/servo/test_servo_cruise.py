@@ -126,10 +126,12 @@ def test_a_jog_cruises_and_a_write_ends_the_record() -> None:
     assert len(calls) == before + 1
 
 
-def test_the_cruise_raises_the_position_overflow_at_the_full_ticks_step() -> None:
+@pytest.mark.parametrize("step_us", [1000, 2000])
+def test_the_cruise_raises_the_position_overflow_at_the_full_ticks_step(step_us: int) -> None:
     """Alarm 15 (R06 no longer fits S32) reached while cruising: the cruise's own check, at
     the step the full tick raises it (a coarse feed constant and a fast motor bring the axis
-    to 2^31 units in about 82 s)."""
+    to 2^31 units in about 82 s). In 2 ms steps (after one of 1 ms) the alarm comes from the
+    first of a step's two ticks, and the second one must be the full tick's too."""
     config = DriveConfig(feed_constant=0x3FFFF, max_speed_rpm=12_000.0, pos_limit=3e9)
     fast = ServoDrive("drive", random.Random(7), config, MemoryFlash())
     full = FullDrive("drive", random.Random(7), config, MemoryFlash())
@@ -141,14 +143,57 @@ def test_the_cruise_raises_the_position_overflow_at_the_full_ticks_step() -> Non
         rig.apply("drive", "enable", {"on": True})
         rig.apply("drive", "jog", {"direction": 1})
     t_us, cruising, raised = 0, 0, None
+    span = 1000
     while raised is None and t_us < 90_000_000:
-        t_us += 1000
+        t_us += span
+        span = step_us
         for drive in (fast, full):
             drive.step(t_us)
         cruising += fast._cruise is not None
         events = fast.drain_events()
         assert events == full.drain_events()
-        if any(getattr(event, "code", None) == "15" for event in events):
-            raised = t_us
-    assert raised is not None and cruising > 80_000  # reached inside a cruise
+        raised = next((event.t_us for event in events
+                       if getattr(event, "code", None) == "15"), None)
+    assert raised == t_us - step_us + 1000  # the step's first tick
+    assert raised is not None and cruising > 80_000_000 // step_us  # reached inside a cruise
     assert fast.snapshot() == full.snapshot()
+    assert state_key(fast) == state_key(full)
+
+
+def test_an_alarm_raised_inside_a_cruise_ends_it_within_a_long_step() -> None:
+    """Seeds 3 and 4 of the --full run, reduced: a 2 ms step runs two 1 ms ticks; alarm 16
+    (R03 exceeded for longer than R04) raised by the first, a cruise tick, puts the drive in
+    Fault, and the second tick must be the full tick's (the fault's stop), not another
+    cruise of the jog the alarm ended."""
+    drives = [ServoDrive("drive", random.Random(7), DriveConfig(), MemoryFlash()),
+              FullDrive("drive", random.Random(7), DriveConfig(), MemoryFlash())]
+    rigs = [Rig("rig", {"drive": drive}) for drive in drives]
+    t_us, cruised = 0, False
+
+    def run(ms: int) -> None:
+        nonlocal t_us
+        for _ in range(ms):
+            t_us += 1000
+            for drive in drives:
+                drive.step(t_us)
+            assert drives[0].drain_events() == drives[1].drain_events()
+
+    run(100)  # the boot
+    for op in [("write_register", {"register": 12, "value": 3000}), ("enable", {"on": True}),
+               ("jog", {"direction": -1})]:
+        assert outcome(rigs[0], op) == outcome(rigs[1], op), op
+    run(1000)
+    assert drives[0].state is State.OPERATION_ENABLED and drives[0]._cruise is not None
+    for op in [("write_register", {"register": 3, "value": 1}),  # the window: 1 unit
+               ("write_register", {"register": 4, "value": 50})]:  # for more than 50 ms
+        assert outcome(rigs[0], op) == outcome(rigs[1], op), op
+    for _ in range(40):  # 80 ticks: alarm 16 at the 51st, the first tick of a step
+        t_us += 2000
+        for drive in drives:
+            drive.step(t_us)
+        cruised = cruised or drives[0]._cruise is not None
+        events = drives[0].drain_events()
+        assert events == drives[1].drain_events()
+        assert drives[0].snapshot() == drives[1].snapshot()
+        assert state_key(drives[0]) == state_key(drives[1])
+    assert cruised and drives[0].state is State.FAULT
