@@ -299,7 +299,12 @@ class IoModule:
             has = self.available_actions()
             raise CommandError(f"{a_module(self.mtype.name)} module has no action '{action}' "
                                f"(it has: {', '.join(has)}){did_you_mean(action, has)}")
-        kwargs = spec.check_args(args)
+        return self.run(action, spec.check_args(args))
+
+    def run(self, action: str, kwargs: Mapping[str, Any]) -> Any:
+        """``action`` with arguments already checked against ``ACTIONS[action]`` (the
+        coupler's command check: rail.py MODULE_ACTIONS carry the same parameters), so they
+        are not checked twice; what this module's type cannot take is refused here."""
         self.check_kind(self.mtype, action, kwargs)
         return getattr(self, f"cmd_{action}")(**kwargs)
 

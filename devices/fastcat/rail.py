@@ -119,16 +119,16 @@ class RailMixin:
 
     def apply(self, action: str, args: Mapping[str, Any], module: int | None = None) -> Any:
         if action in FIELD_ACTIONS:
-            self.check_command(action, args, module)
+            kwargs = self.check_command(action, args, module)
             target = self.rail_module(module)
-            done = target.apply(action, args)
+            done = target.run(action, kwargs)  # checked: the module's own check would repeat it
             self._woken.append(target)  # stepped at the next cycle, still or not (bus.py)
             self._settled = None  # so there is a next cycle: no repeat of a settled step
             return done
         self._touched = self._modules_touched = True  # a full next step (FastCat.step)
         if action in MODULE_ACTIONS:
-            self.check_command(action, args, module)
-            return self.rail_module(module).apply(action, args)
+            kwargs = self.check_command(action, args, module)
+            return self.rail_module(module).run(action, kwargs)
         return super().apply(action, args, module)  # type: ignore[misc]
 
     def module_layout(self) -> dict[int, Any]:

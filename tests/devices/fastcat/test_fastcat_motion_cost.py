@@ -24,6 +24,7 @@ from typing import Any
 
 import pytest
 
+from devices.device import Action, CommandError
 from devices.ethercat import AlState
 from devices.fastcat.analog import AnalogInputs, AnalogOutputs, ramp_toward
 from devices.fastcat.catalog import module_type
@@ -302,6 +303,34 @@ def test_field_command_steps_its_module_only() -> None:
         fast.step()
     assert set(stepped) == {"AI8D"} and asked == [] and searched == []
     assert fast.fc.od is not None and fast.fc.od.read(0x6400 + 0x10 * 3, 2) != 0
+
+
+def test_module_command_checks_its_arguments_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A module command through the coupler (fastcat/N) is checked once: the coupler's check
+    gives the arguments the module's own check would (rail.py MODULE_ACTIONS are the module's
+    actions with the same parameters), and what the module's type cannot take is still
+    refused; the module's own ``apply`` (rig-file options, module tests) still checks."""
+    fc = FastCat("fastcat", random.Random(1), [(m, {}) for m in DEFAULT], flash=MemoryFlash())
+    checks: list[str] = []
+    check_args = Action.check_args
+
+    def counted(spec: Action, args: Any) -> dict[str, Any]:
+        checks.append(spec.name)
+        return check_args(spec, args)
+    monkeypatch.setattr(Action, "check_args", counted)
+    fc.apply("set_analog", {"channel": 2, "value": 3}, 4)
+    fc.apply("set_input", {"channel": 1, "value": True}, 2)
+    assert checks == ["set_analog", "set_input"]
+    ai = fc.rail[3]
+    assert ai is not None and ai.ai is not None and ai.ai.field[1] == 3.0
+    assert type(ai.ai.field[1]) is float  # the checked (converted) value, as before
+    with pytest.raises(CommandError, match="needs a module with"):
+        fc.apply("set_analog", {"channel": 1, "value": 1.0}, 1)  # DB16: no analog input
+    with pytest.raises(CommandError, match="must be float"):
+        fc.apply("set_analog", {"channel": 1, "value": "x"}, 4)
+    checks.clear()
+    ai.apply("set_analog", {"channel": 2, "value": 4.0})
+    assert checks == ["set_analog"]
 
 
 # --- analog inputs: only the channels whose inputs changed are recomputed ----------------------
