@@ -199,7 +199,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
 
     def exchange_frame(self, now_us: int) -> None:
         """The master's frame passed through this slave (drives the LINK LED)."""
-        if self.reachable():
+        # reachable(), inline: the master calls this every cycle, and CPython 3.11 leaves the
+        # method lookups on this model unspecialised (docs/performance.md "Session 23")
+        if self.powered and self.link:
             self.last_frame_us = now_us
 
     def take_emergencies(self) -> list[bytes]:
@@ -378,7 +380,9 @@ class FastCat(BusMixin, FaultsMixin, RailMixin, CoeMailbox, AlStatusView, Device
         queued = len(self.events.items)
         if self.cnf.release_due(now_us):
             self._on_cnf_release()
-        if self._watchdog_due(now_us):  # before the exchange: this cycle's outputs are safe
+        # before the exchange: this cycle's outputs are safe. LINK activity (a frame within
+        # ACTIVITY_WINDOW_US <= SM_WATCHDOG_US) rules the watchdog out without asking it.
+        if not activity and self._watchdog_due(now_us):
             self.esm.fall_to(AlState.SAFEOP, ErrorKind.WATCHDOG, SM_WATCHDOG, now_us)
         if self.scan is not None:
             self._exchange_key = None  # no cycle: the next one starts afresh
