@@ -15,7 +15,7 @@ its read and its write while the page picks.
 from __future__ import annotations
 
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import pytest
@@ -57,6 +57,40 @@ class _HeldPreset:
         return preset
 
 
+def _pick_during_rail_change(live: ServedRig, monkeypatch: pytest.MonkeyPatch, form: Any,
+                             preset_name: str, pick: Callable[[], None]) -> None:
+    """Unplug module 2, hold that rail change's frame update in ``plug_preset`` of slot 3,
+    ``pick`` meanwhile, then let it go; returns once the pick's callback wrote its preset
+    (``preset_name``: the modules panel's method that callback runs) and a frame was drawn."""
+    modules = live.dashboard._panels.modules  # type: ignore[union-attr]
+    held, spy = _HeldPreset(), SpyLock(off_dashboard)
+    monkeypatch.setattr(modules_module, "plug_preset", held)
+    if hasattr(form, "lock"):  # the form's lock, if it has one
+        monkeypatch.setattr(form, "lock", spy)
+    written, real = threading.Event(), getattr(modules, preset_name)
+
+    def preset(arg: Any) -> None:
+        try:
+            real(arg)
+        finally:
+            if off_dashboard() and held.entered.is_set():
+                written.set()
+
+    monkeypatch.setattr(modules, preset_name, preset)
+    _drawn(live)  # no update under way: the next is the rail change's
+    held.armed = True
+    try:
+        live.runtime.command("fastcat/2", "unplug", {}).result(timeout=10)
+        assert held.entered.wait(HOLD_S), "the rail change's frame update did not preset"
+        pick()
+        # The pick's callback has written, or waits for the frame update to write first.
+        _wait(lambda: written.is_set() or spy.waiting.is_set())
+    finally:
+        held.release.set()
+    assert written.wait(HOLD_S), "the pick's callback did not finish"
+    _drawn(live)
+
+
 def test_a_pick_during_a_rail_change_frame_keeps_its_slot_s_preset(
     served: tuple[ServedRig, Page, Page],
     monkeypatch: pytest.MonkeyPatch,
@@ -72,32 +106,8 @@ def test_a_pick_during_a_rail_change_frame_keeps_its_slot_s_preset(
     plug_type = _widget(first, "Plug type", "DO16")
     first.set(picker, "3 (empty)")
     _wait(lambda: shared.plug_type.value_for(one) == "DO16")
-    held, spy = _HeldPreset(), SpyLock(off_dashboard)
-    monkeypatch.setattr(modules_module, "plug_preset", held)
-    if hasattr(shared, "lock"):  # the form's lock, if it has one
-        monkeypatch.setattr(shared, "lock", spy)
-    written, preset_page = threading.Event(), modules._preset_page
-
-    def preset(client: Any) -> None:
-        try:
-            preset_page(client)
-        finally:
-            if off_dashboard() and held.entered.is_set():
-                written.set()
-
-    monkeypatch.setattr(modules, "_preset_page", preset)
-    _drawn(live)  # no update under way: the next is the rail change's
-    held.armed = True
-    try:
-        live.runtime.command("fastcat/2", "unplug", {}).result(timeout=10)
-        assert held.entered.wait(HOLD_S), "the rail change's frame update did not preset"
-        first.set(picker, "2 (empty)")
-        # The pick's callback has written, or waits for the frame update to write first.
-        _wait(lambda: written.is_set() or spy.waiting.is_set())
-    finally:
-        held.release.set()
-    assert written.wait(HOLD_S), "the pick's callback did not finish"
-    _drawn(live)
+    _pick_during_rail_change(live, monkeypatch, shared, "_preset_page",
+                             lambda: first.set(picker, "2 (empty)"))
     assert modules.pick.value_for(one) == "2 (empty)"
     # No later frame presets the page again before the next rail change: a stale preset
     # stays, and these time out.
@@ -120,32 +130,8 @@ def test_an_instructor_s_pick_during_a_rail_change_frame_keeps_its_slot_s_preset
         _wait(lambda: "3 (empty)" in form.module.options)
         instructor.set(module, "3 (empty)")
         _wait(lambda: form.plug_type.value == "DO16")
-        held, spy = _HeldPreset(), SpyLock(off_dashboard)
-        monkeypatch.setattr(modules_module, "plug_preset", held)
-        if hasattr(form, "lock"):  # the form's lock, if it has one
-            monkeypatch.setattr(form, "lock", spy)
-        written, preset_own = threading.Event(), modules._preset
-
-        def preset(each: Any) -> None:
-            try:
-                preset_own(each)
-            finally:
-                if off_dashboard() and held.entered.is_set():
-                    written.set()
-
-        monkeypatch.setattr(modules, "_preset", preset)
-        _drawn(live)  # no update under way: the next is the rail change's
-        held.armed = True
-        try:
-            live.runtime.command("fastcat/2", "unplug", {}).result(timeout=10)
-            assert held.entered.wait(HOLD_S), "the rail change's frame update did not preset"
-            instructor.set(module, "2 (empty)")
-            # The pick's callback has written, or waits for the frame update to write first.
-            _wait(lambda: written.is_set() or spy.waiting.is_set())
-        finally:
-            held.release.set()
-        assert written.wait(HOLD_S), "the pick's callback did not finish"
-        _drawn(live)
+        _pick_during_rail_change(live, monkeypatch, form, "_preset",
+                                 lambda: instructor.set(module, "2 (empty)"))
         assert form.module.value == "2 (empty)"
         # No later frame presets the rows again before the next rail change.
         _wait(lambda: form.plug_type.value == "DI16", timeout=5)
